@@ -1,0 +1,219 @@
+//! The seed's box shrink by linear programs (seed 000, Algorithm 2), with verified bounds.
+//!
+//! Rows, all valid for every solution in the current box:
+//! - every linear equation, its coefficient uncertainty moved into the row bounds;
+//! - per circle `x² + y² = 1` whose box lies in one quadrant, the seed's chord cut (the arc lies
+//!   beyond the chord) with the tangent parallel to it, plus the tangents at the arc's ends;
+//! - per bilinear `z = x·y`, the four McCormick planes: the faces of the seed's tetrahedron.
+//!
+//! Then every primary variable is minimised and maximised (`lp::Relaxation::bound`).
+
+use super::{Contraction, Contractor};
+use crate::interval::{interval, point, Interval, IntervalBox};
+use crate::lp::{LpCounters, LpOutcome, Relaxation, Row, Sides};
+use crate::system::{EquationKind, EquationSystem, Monomial, VarId};
+
+/// The LP shrink contractor.
+pub struct LpShrink<'a> {
+    system: &'a EquationSystem,
+    targets: Vec<VarId>,
+    /// LPs solved and answers that proved nothing.
+    pub counters: LpCounters,
+}
+
+impl<'a> LpShrink<'a> {
+    /// Bounds every primary variable of `system`.
+    pub fn new(system: &'a EquationSystem) -> Self {
+        Self { system, targets: system.primaries(), counters: LpCounters::default() }
+    }
+}
+
+impl Contractor for LpShrink<'_> {
+    fn contract(&mut self, b: &mut IntervalBox) -> Contraction {
+        let rel = match relax(self.system, &b.dims) {
+            Some(r) => r,
+            None => return Contraction::Empty,
+        };
+        match rel.bound(&b.dims, &self.targets, &mut self.counters) {
+            LpOutcome::Infeasible => Contraction::Empty,
+            LpOutcome::Bounds(bounds) => {
+                let mut outcome = Contraction::Unchanged;
+                for (&t, nb) in self.targets.iter().zip(bounds) {
+                    let narrowed = b.dims[t].intersection(nb);
+                    if narrowed.is_empty() {
+                        return Contraction::Empty;
+                    }
+                    if narrowed != b.dims[t] {
+                        outcome = Contraction::Reduced;
+                        b.dims[t] = narrowed;
+                    }
+                }
+                outcome
+            }
+        }
+    }
+
+    fn name(&self) -> &'static str {
+        "lp-shrink"
+    }
+}
+
+/// Builds the linear relaxation of `system` over box `b`; `None` when a row is already proven
+/// unsatisfiable on `b`.
+pub fn relax(system: &EquationSystem, b: &[Interval]) -> Option<Relaxation> {
+    let mut rows = Vec::new();
+    for e in &system.equations {
+        match e.kind {
+            EquationKind::Linear => {
+                let mut coefs = Vec::with_capacity(e.terms.len());
+                // Σ mid(c)·x ∈ −constant − Σ (c − mid(c))·x
+                let mut rest = -e.constant;
+                for t in &e.terms {
+                    let Monomial::Linear(x) = t.mono else { unreachable!("invariant: linear kind") };
+                    let m = t.coef.mid();
+                    coefs.push((x, m));
+                    rest = rest - (t.coef - point(m)) * b[x];
+                }
+                let exact = rest.wid() == 0.0;
+                rows.push(Row { coefs, bounds: rest, sides: if exact { Sides::Equal } else { Sides::Both } });
+            }
+            EquationKind::Circle { x, y } => circle_cuts(x, y, b, &mut rows),
+            EquationKind::Bilinear { z, x, y } => mccormick(z, x, y, b, &mut rows),
+            EquationKind::Quadratic => {}
+        }
+    }
+    // Every cut's bounds are also cropped to the row's range over the box, so both ends are finite.
+    for r in &mut rows {
+        let range = r.coefs.iter().fold(point(0.0), |acc, &(j, a)| acc + point(a) * b[j]);
+        r.bounds = r.bounds.intersection(range);
+        if r.bounds.is_empty() {
+            return None;
+        }
+    }
+    Some(Relaxation { n: b.len(), rows })
+}
+
+/// Chord and tangent cuts for `x² + y² = 1` when `[x]×[y]` lies in one closed quadrant.
+///
+/// In the quadrant the circle is monotone, so its part in the box is one arc whose ends lie on
+/// the box's edges; `w·p` over an arc of a quarter circle is smallest at an end. The ends are
+/// enclosed by the edge candidates `(v, ±√(1−v²))` and `(±√(1−v²), v)` for the box's bounds `v`,
+/// kept when they may lie in the box, so the minimum over candidates is a verified chord bound.
+fn circle_cuts(x: VarId, y: VarId, b: &[Interval], rows: &mut Vec<Row>) {
+    let (bx, by) = (b[x], b[y]);
+    let sx = if bx.inf() >= 0.0 { 1.0 } else if bx.sup() <= 0.0 { -1.0 } else { return };
+    let sy = if by.inf() >= 0.0 { 1.0 } else if by.sup() <= 0.0 { -1.0 } else { return };
+    // Reflect into the first quadrant: u = sx·x, v = sy·y.
+    let (bu, bv) = (bx * point(sx), by * point(sy));
+    let one = point(1.0);
+    let mut ends: Vec<(Interval, Interval)> = Vec::with_capacity(4);
+    for u in [bu.inf(), bu.sup()] {
+        let v = (one - point(u).sqr()).intersection(interval(0.0, 1.0)).sqrt();
+        if !v.is_empty() && !v.disjoint(bv) {
+            ends.push((point(u), v));
+        }
+    }
+    for v in [bv.inf(), bv.sup()] {
+        let u = (one - point(v).sqr()).intersection(interval(0.0, 1.0)).sqrt();
+        if !u.is_empty() && !u.disjoint(bu) {
+            ends.push((u, point(v)));
+        }
+    }
+    if ends.is_empty() {
+        return;
+    }
+    let (mut mu, mut mv) = (0.0, 0.0);
+    for (u, v) in &ends {
+        mu += u.mid();
+        mv += v.mid();
+    }
+    let norm = (mu * mu + mv * mv).sqrt();
+    if !(norm > 1e-300) {
+        return;
+    }
+    let (wu, wv) = (mu / norm, mv / norm);
+    let d = ends.iter().map(|(u, v)| (point(wu) * *u + point(wv) * *v).inf()).fold(f64::INFINITY, f64::min);
+    let wlen = (point(wu).sqr() + point(wv).sqr()).sqrt().sup();
+    let coefs = vec![(x, sx * wu), (y, sy * wv)];
+    rows.push(Row { coefs, bounds: interval(d.min(wlen), wlen), sides: Sides::Both });
+    // Tangents at the ends: p·(u, v) ≤ |p| on the unit circle.
+    for (u, v) in &ends {
+        let (pu, pv) = (u.mid(), v.mid());
+        let plen = (point(pu).sqr() + point(pv).sqr()).sqrt().sup();
+        rows.push(Row { coefs: vec![(x, sx * pu), (y, sy * pv)], bounds: interval(-plen, plen), sides: Sides::Upper });
+    }
+}
+
+/// The four McCormick planes of `z = x·y` over `[x]×[y]`, the faces of the seed's tetrahedron.
+///
+/// From `(x − x₀)(y − y₀)·s ≥ 0` for the corner `(x₀, y₀)` and the matching sign `s`:
+/// `z − y₀·x − x₀·y` lies above (s = +1) or below (s = −1) `−x₀·y₀`.
+fn mccormick(z: VarId, x: VarId, y: VarId, b: &[Interval], rows: &mut Vec<Row>) {
+    let (bx, by) = (b[x], b[y]);
+    for (x0, y0, above) in [
+        (bx.inf(), by.inf(), true),
+        (bx.sup(), by.sup(), true),
+        (bx.sup(), by.inf(), false),
+        (bx.inf(), by.sup(), false),
+    ] {
+        let c = -(point(x0) * point(y0));
+        let bounds = if above { interval(c.inf(), f64::INFINITY) } else { interval(f64::NEG_INFINITY, c.sup()) };
+        let sides = if above { Sides::Lower } else { Sides::Upper };
+        rows.push(Row { coefs: vec![(z, 1.0), (x, -y0), (y, -x0)], bounds, sides });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::system::{Equation, Term, VarRole};
+    use proptest::prelude::*;
+
+    #[test]
+    fn chord_cut_holds_on_the_arc_and_cuts_the_corner() {
+        let b = [interval(0.2, 0.9), interval(0.3, 0.95)];
+        let mut rows = Vec::new();
+        circle_cuts(0, 1, &b, &mut rows);
+        assert!(rows.len() >= 3);
+        let chord = &rows[0];
+        for k in 0..=100 {
+            let t = k as f64 / 100.0 * std::f64::consts::FRAC_PI_2;
+            let (u, v) = (t.cos(), t.sin());
+            if b[0].contains(u) && b[1].contains(v) {
+                let val = chord.coefs[0].1 * u + chord.coefs[1].1 * v;
+                assert!(chord.bounds.contains(val), "arc point {u},{v} off the cut");
+            }
+        }
+        // The box corner (0.2, 0.3) lies inside the disc, off the arc: the chord excludes it.
+        assert!(!chord.bounds.contains(chord.coefs[0].1 * 0.2 + chord.coefs[1].1 * 0.3));
+    }
+
+    proptest! {
+        // Soundness: an arc point in a box of any quadrant survives the LP shrink.
+        #[test]
+        fn lp_shrink_keeps_circle_points(t in -3.14f64..3.14, w0 in 0.001f64..0.8, w1 in 0.001f64..0.8, f0 in 0.01f64..0.99, f1 in 0.01f64..0.99) {
+            let mut s = EquationSystem::default();
+            let x = s.add_var("x", VarRole::Primary, interval(-1.0, 1.0));
+            let y = s.add_var("y", VarRole::Primary, interval(-1.0, 1.0));
+            let z = s.add_var("z", VarRole::Primary, interval(-4.0, 4.0));
+            let d = s.add_var("d", VarRole::Primary, interval(0.0, 4.0));
+            s.add(Equation::circle(x, y));
+            s.add(Equation::bilinear(z, d, x));
+            // z + 0.5 y = given, so the linear part is active too.
+            let (c, sn) = (t.cos(), t.sin());
+            let dv = 1.0 + f0 * 2.0;
+            let zv = dv * c;
+            s.add(Equation::new(vec![Term { coef: point(1.0), mono: Monomial::Linear(z) }, Term { coef: point(0.5), mono: Monomial::Linear(y) }], -(point(zv) + point(0.5) * point(sn))));
+            let mut b = IntervalBox::new(vec![
+                interval(c - w0 * f0, c + w0 * (1.0 - f0)),
+                interval(sn - w1 * f1, sn + w1 * (1.0 - f1)),
+                interval(zv - 0.5, zv + 0.5),
+                interval(dv - 0.3, dv + 0.3),
+            ]);
+            let mut lp = LpShrink::new(&s);
+            prop_assert_ne!(lp.contract(&mut b), Contraction::Empty);
+            let near = |i: Interval, v: f64| i.inf() <= v + 1e-9 && i.sup() >= v - 1e-9;
+            prop_assert!(near(b.dims[0], c) && near(b.dims[1], sn) && near(b.dims[3], dv));
+        }
+    }
+}

@@ -1,0 +1,67 @@
+//! Contractors: box-shrinking steps that remove only what they prove holds no solution.
+//!
+//! Owns the `Contractor` trait, its outcome `Contraction`, the combinator `Sequence`, and the
+//! implementations: equation-wise interval propagation (`propagate`) and the seed's LP shrink
+//! (`lp_shrink`).
+//! A contractor does no IO; numerical trouble gives `Unchanged`, never `Empty`.
+
+mod lp_shrink;
+mod propagate;
+
+pub use lp_shrink::LpShrink;
+pub use propagate::Propagation;
+
+use crate::interval::IntervalBox;
+
+/// What a contractor did to a box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Contraction {
+    /// Proven to hold no solution; the box is left in an unspecified state.
+    Empty,
+    /// Some component narrowed.
+    Reduced,
+    /// Nothing proven; the box is as it was.
+    Unchanged,
+}
+
+impl Contraction {
+    /// Combines the outcomes of two steps applied one after the other.
+    pub fn then(self, next: Contraction) -> Contraction {
+        match (self, next) {
+            (Contraction::Empty, _) | (_, Contraction::Empty) => Contraction::Empty,
+            (Contraction::Reduced, _) | (_, Contraction::Reduced) => Contraction::Reduced,
+            _ => Contraction::Unchanged,
+        }
+    }
+}
+
+/// A sound box-shrinking step.
+///
+/// Contract: for every solution `x` of the problem with `x ∈ b` before the call, either the call
+/// returns `Empty` (and then no such `x` existed), or `x ∈ b` still holds after it.
+pub trait Contractor {
+    /// Narrows `b` to what may still hold solutions.
+    fn contract(&mut self, b: &mut IntervalBox) -> Contraction;
+    /// A short name for statistics and charts.
+    fn name(&self) -> &'static str;
+}
+
+/// Applies contractors in order and stops at the first `Empty`.
+pub struct Sequence<'a>(pub Vec<Box<dyn Contractor + Send + 'a>>);
+
+impl Contractor for Sequence<'_> {
+    fn contract(&mut self, b: &mut IntervalBox) -> Contraction {
+        let mut outcome = Contraction::Unchanged;
+        for c in &mut self.0 {
+            outcome = outcome.then(c.contract(b));
+            if outcome == Contraction::Empty {
+                break;
+            }
+        }
+        outcome
+    }
+
+    fn name(&self) -> &'static str {
+        "sequence"
+    }
+}

@@ -1,0 +1,143 @@
+//! Interval boxes: the unit of work of every solver in the crate.
+//!
+//! Owns `IntervalBox` (a vector of `inari::Interval`, one per variable, plus the tree level at
+//! which it was made), bisection, and the few set operations the driver needs.
+//! It does no IO and knows nothing of equations.
+
+pub use inari::Interval;
+
+/// The interval `[lo, hi]`, or `Interval::EMPTY` when `lo > hi` or either bound is NaN.
+///
+/// Bounds are taken as they are: callers that computed them in floating point must round
+/// outward themselves (or build them with inari arithmetic).
+pub fn interval(lo: f64, hi: f64) -> Interval {
+    Interval::try_from((lo, hi)).unwrap_or(Interval::EMPTY)
+}
+
+/// The point interval `[x, x]` (empty for NaN or an infinite `x`).
+pub fn point(x: f64) -> Interval {
+    if x.is_finite() {
+        interval(x, x)
+    } else {
+        Interval::EMPTY
+    }
+}
+
+/// A Cartesian product of intervals, one per variable of a system.
+///
+/// `level` is the depth in the branch-and-prune tree (0 for the initial box); it is kept for
+/// diagnostics and convergence measurements.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IntervalBox {
+    /// One interval per variable, in the system's variable order.
+    pub dims: Vec<Interval>,
+    /// Depth in the search tree.
+    pub level: u32,
+}
+
+impl IntervalBox {
+    /// A box at level 0.
+    pub fn new(dims: Vec<Interval>) -> Self {
+        Self { dims, level: 0 }
+    }
+
+    /// Number of variables.
+    pub fn len(&self) -> usize {
+        self.dims.len()
+    }
+
+    /// True for a box over zero variables.
+    pub fn is_empty(&self) -> bool {
+        self.dims.is_empty()
+    }
+
+    /// True when any component is empty: the box holds no point.
+    pub fn is_void(&self) -> bool {
+        self.dims.iter().any(|d| d.is_empty())
+    }
+
+    /// Width of component `i`.
+    pub fn width(&self, i: usize) -> f64 {
+        self.dims[i].wid()
+    }
+
+    /// The widest component among `among`, with its width; `None` if `among` is empty.
+    pub fn widest(&self, among: &[usize]) -> Option<(usize, f64)> {
+        among
+            .iter()
+            .map(|&i| (i, self.dims[i].wid()))
+            .fold(None, |best, (i, w)| match best {
+                Some((_, bw)) if bw >= w => best,
+                _ => Some((i, w)),
+            })
+    }
+
+    /// Euclidean length of the diagonal over the components `among` (rounded up).
+    pub fn diagonal(&self, among: &[usize]) -> f64 {
+        let sum = among.iter().fold(point(0.0), |acc, &i| acc + point(self.dims[i].wid()).sqr());
+        sum.sqrt().sup()
+    }
+
+    /// Splits component `i` at its midpoint into two boxes one level deeper; together they
+    /// cover `self` (they share the midpoint).
+    pub fn bisect(&self, i: usize) -> (IntervalBox, IntervalBox) {
+        let d = self.dims[i];
+        let m = d.mid();
+        let mut lower = self.clone();
+        let mut upper = self.clone();
+        lower.dims[i] = interval(d.inf(), m);
+        upper.dims[i] = interval(m, d.sup());
+        lower.level += 1;
+        upper.level += 1;
+        (lower, upper)
+    }
+
+    /// True when `x` (one value per variable) lies in the box.
+    pub fn contains(&self, x: &[f64]) -> bool {
+        self.dims.len() == x.len() && self.dims.iter().zip(x).all(|(d, &v)| d.contains(v))
+    }
+
+    /// True when the two boxes share at least one point.
+    pub fn intersects(&self, other: &IntervalBox) -> bool {
+        self.dims.iter().zip(&other.dims).all(|(a, b)| !a.disjoint(*b))
+    }
+
+    /// The midpoint of every component.
+    pub fn midpoint(&self) -> Vec<f64> {
+        self.dims.iter().map(|d| d.mid()).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn bisection_covers_parent_and_goes_one_level_deeper() {
+        let b = IntervalBox::new(vec![interval(-1.0, 1.0), interval(2.0, 6.0)]);
+        let (lo, hi) = b.bisect(1);
+        assert_eq!(lo.dims[1], interval(2.0, 4.0));
+        assert_eq!(hi.dims[1], interval(4.0, 6.0));
+        assert_eq!((lo.level, hi.level), (1, 1));
+        assert_eq!(b.widest(&[0, 1]), Some((1, 4.0)));
+    }
+
+    #[test]
+    fn invalid_bounds_give_empty_intervals() {
+        assert!(interval(1.0, 0.0).is_empty());
+        assert!(interval(f64::NAN, 0.0).is_empty());
+        assert!(point(f64::INFINITY).is_empty());
+        assert!(IntervalBox::new(vec![interval(0.0, 1.0), Interval::EMPTY]).is_void());
+    }
+
+    proptest! {
+        #[test]
+        fn halves_cover_every_point(lo in -10.0f64..10.0, w in 0.0f64..5.0, t in 0.0f64..=1.0) {
+            let b = IntervalBox::new(vec![interval(lo, lo + w)]);
+            let x = lo + t * w;
+            let (a, c) = b.bisect(0);
+            prop_assert!(!b.contains(&[x]) || a.contains(&[x]) || c.contains(&[x]));
+        }
+    }
+}

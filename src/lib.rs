@@ -1,0 +1,21 @@
+//! linkspace: every configuration a mechanism can take, with guarantees.
+//!
+//! A mechanism (from URDF, `model`) becomes a polynomial system (`problems`), which a
+//! branch-and-prune solver (`solve`) covers with interval boxes that provably enclose every
+//! solution, shrinking boxes with sound contractors (`contract`, `lp`).
+//! See ARCHITECTURE.md for the map.
+
+#![warn(missing_docs)]
+
+pub mod contract;
+pub mod interval;
+pub mod lp;
+pub mod model;
+pub mod problems;
+pub mod report;
+pub mod solve;
+pub mod system;
+
+pub use interval::{Interval, IntervalBox};
+pub use solve::{Solver, SolverSettings, Status};
+pub use system::EquationSystem;

@@ -1,0 +1,79 @@
+//! Linear relaxations and their verified bounds: the only importer of `clarabel`.
+//!
+//! A `Relaxation` is a set of rows `a·x ∈ [lo, hi]`, each valid for every solution in the box it
+//! was built for. `Relaxation::bound` minimises and maximises variables over the rows and the
+//! box with clarabel, then turns each floating-point answer into a *verified* bound with the
+//! Neumaier–Shcherbina argument (`safe_bound`): the LP solver only proposes multipliers, and
+//! interval arithmetic proves what they imply. A wrong or inaccurate LP answer can therefore only
+//! weaken a bound, never cut a solution.
+//!
+//! References: A. Neumaier, O. Shcherbina, "Safe bounds in linear and mixed-integer linear
+//! programming", Math. Programming 99 (2004); CuikSuite `simplex.h`.
+
+mod clarabel_lp;
+mod safe_bound;
+
+use crate::interval::Interval;
+use crate::system::VarId;
+
+pub use safe_bound::{certified_infeasible, lower_bound};
+
+/// One linear row `Σ coef·x ∈ bounds`, valid for every solution in the current box.
+#[derive(Clone, Debug)]
+pub struct Row {
+    /// Sparse coefficients (exact floats: the row *is* this linear form).
+    pub coefs: Vec<(VarId, f64)>,
+    /// Enclosure of the row's value over all solutions in the box; both ends finite.
+    pub bounds: Interval,
+    /// Which side(s) the LP should enforce: the other side only serves the safe bound.
+    pub sides: Sides,
+}
+
+/// The sides of a row handed to the LP solver.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sides {
+    /// `lo = hi`: an equality.
+    Equal,
+    /// Only `a·x ≤ hi`.
+    Upper,
+    /// Only `a·x ≥ lo`.
+    Lower,
+    /// Both `lo ≤ a·x ≤ hi`.
+    Both,
+}
+
+/// Rows over `n` variables.
+#[derive(Clone, Debug, Default)]
+pub struct Relaxation {
+    /// Number of variables (the box dimension).
+    pub n: usize,
+    /// The rows.
+    pub rows: Vec<Row>,
+}
+
+/// What bounding a set of variables proved.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LpOutcome {
+    /// No point of the box satisfies the rows: proven by a verified certificate or bound.
+    Infeasible,
+    /// Verified enclosures for the requested variables, in request order (each within the box).
+    Bounds(Vec<Interval>),
+}
+
+/// Counters for statistics.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub struct LpCounters {
+    /// Linear programs solved.
+    pub solved: u64,
+    /// LP answers that could not be turned into a useful verified bound.
+    pub unverified: u64,
+}
+
+impl Relaxation {
+    /// Verified bounds of each variable in `targets` over the rows and the box `b`.
+    ///
+    /// Inclusion: every `x ∈ b` satisfying all rows has `x[targets[k]] ∈ result[k]`.
+    pub fn bound(&self, b: &[Interval], targets: &[VarId], counters: &mut LpCounters) -> LpOutcome {
+        clarabel_lp::bound(self, b, targets, counters)
+    }
+}

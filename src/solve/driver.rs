@@ -1,0 +1,322 @@
+//! The branch-and-prune driver: the seed's Algorithm 1.
+//!
+//! Take a box from the pool; shrink it until it is proven empty, is no wider than sigma, or one
+//! round no longer removes a significant share of its volume (rho); bisect it in the last case.
+//! The pool is a stack (depth first, lowest half first), so runs are deterministic.
+//! Limits end a run `Incomplete`, and then every box still pending is reported as `Undecided`:
+//! nothing is silently dropped.
+
+use super::settings::{SettingsError, SolverSettings};
+use crate::contract::{Contraction, Contractor, LpShrink, Propagation};
+use crate::interval::IntervalBox;
+use crate::lp::LpCounters;
+use crate::system::{EquationSystem, SystemError, VarId};
+use std::ops::ControlFlow;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+use thiserror::Error;
+
+/// Why a run stopped early.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Limit {
+    /// `max_boxes` boxes were processed.
+    Boxes,
+    /// `timeout` elapsed.
+    Time,
+    /// The caller raised the cancel flag.
+    Cancelled,
+    /// The sink asked to stop.
+    Sink,
+}
+
+/// How a run ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case", tag = "status", content = "limit")]
+pub enum Status {
+    /// Every box was decided: the solution boxes enclose every solution in the initial box.
+    Complete,
+    /// Stopped by a limit; solution and undecided boxes together enclose every solution.
+    Incomplete(Limit),
+}
+
+/// The tag of a reported box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BoxStatus {
+    /// No wider than sigma and not proven empty.
+    Solution,
+    /// Left unprocessed when a limit stopped the run.
+    Undecided,
+}
+
+/// A snapshot of a run's progress.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Progress {
+    /// Boxes processed so far.
+    pub processed: u64,
+    /// Boxes waiting in the pool.
+    pub pending: usize,
+    /// Share of the initial (primary) volume already decided, in [0, 1].
+    pub decided: f64,
+}
+
+/// Where results go, as they are found.
+pub trait BoxSink {
+    /// Receives one box; `Break` stops the run (`Incomplete(Sink)`).
+    fn emit(&mut self, status: BoxStatus, b: &IntervalBox) -> ControlFlow<()>;
+    /// Receives progress now and then; the default ignores it.
+    fn progress(&mut self, _p: &Progress) {}
+}
+
+/// Collects boxes into vectors.
+#[derive(Clone, Debug, Default)]
+pub struct Collect {
+    /// Solution boxes, in the order found.
+    pub solutions: Vec<IntervalBox>,
+    /// Boxes left undecided by a limit.
+    pub undecided: Vec<IntervalBox>,
+}
+
+impl BoxSink for Collect {
+    fn emit(&mut self, status: BoxStatus, b: &IntervalBox) -> ControlFlow<()> {
+        match status {
+            BoxStatus::Solution => self.solutions.push(b.clone()),
+            BoxStatus::Undecided => self.undecided.push(b.clone()),
+        }
+        ControlFlow::Continue(())
+    }
+}
+
+/// Counters of a run.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Stats {
+    /// Boxes taken from the pool.
+    pub processed: u64,
+    /// Boxes proven empty.
+    pub empty: u64,
+    /// Boxes bisected.
+    pub bisected: u64,
+    /// Solution boxes reported.
+    pub solutions: u64,
+    /// Shrink rounds (propagation plus, where enabled, LP).
+    pub shrink_rounds: u64,
+    /// LP statistics.
+    pub lp: LpCounters,
+    /// Deepest tree level reached.
+    pub max_level: u32,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+/// What cannot be run.
+#[derive(Debug, Error, PartialEq)]
+#[non_exhaustive]
+pub enum SolveError {
+    /// Bad settings.
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
+    /// Bad system.
+    #[error(transparent)]
+    System(#[from] SystemError),
+}
+
+/// A validated system with validated settings.
+pub struct Solver<'a> {
+    system: &'a EquationSystem,
+    settings: SolverSettings,
+    primaries: Vec<VarId>,
+}
+
+impl<'a> Solver<'a> {
+    /// Validates both; after this, `run` cannot fail.
+    pub fn new(system: &'a EquationSystem, settings: SolverSettings) -> Result<Self, SolveError> {
+        settings.validate()?;
+        system.validate()?;
+        Ok(Self { system, primaries: system.primaries(), settings })
+    }
+
+    /// The settings in force.
+    pub fn settings(&self) -> &SolverSettings {
+        &self.settings
+    }
+
+    /// Runs branch and prune from the system's initial box.
+    pub fn run(&self, cancel: &AtomicBool, sink: &mut dyn BoxSink) -> (Status, Stats) {
+        self.run_from(self.system.initial_box(), cancel, sink)
+    }
+
+    /// Runs branch and prune from `start`.
+    pub fn run_from(&self, start: IntervalBox, cancel: &AtomicBool, sink: &mut dyn BoxSink) -> (Status, Stats) {
+        let t0 = Instant::now();
+        let mut stats = Stats::default();
+        let mut propagation = Propagation::new(self.system);
+        let mut lp = LpShrink::new(self.system);
+        let reference = start.clone();
+        let volume = |b: &IntervalBox| self.relative_volume(b, &reference);
+        let mut pool = vec![start];
+        let mut pending_volume = 1.0;
+        let mut status = Status::Complete;
+        let mut last_progress = Instant::now();
+
+        while let Some(mut b) = pool.pop() {
+            pending_volume -= volume(&b);
+            if let Some(limit) = self.limit_reached(&stats, t0, cancel) {
+                pool.push(b);
+                status = Status::Incomplete(limit);
+                break;
+            }
+            stats.processed += 1;
+            stats.max_level = stats.max_level.max(b.level);
+            match self.shrink(&mut b, &mut propagation, &mut lp, &mut stats) {
+                Shrunk::Empty => stats.empty += 1,
+                Shrunk::Solution => {
+                    stats.solutions += 1;
+                    if sink.emit(BoxStatus::Solution, &b).is_break() {
+                        status = Status::Incomplete(Limit::Sink);
+                        break;
+                    }
+                }
+                Shrunk::Stalled => {
+                    let (i, _) = b.widest(&self.primaries).expect("invariant: validated system has primaries");
+                    let (lower, upper) = b.bisect(i);
+                    stats.bisected += 1;
+                    pending_volume += volume(&lower) + volume(&upper);
+                    // Pushed last, popped first: the lower half is explored first.
+                    pool.push(upper);
+                    pool.push(lower);
+                }
+            }
+            if last_progress.elapsed().as_millis() >= 200 {
+                last_progress = Instant::now();
+                let decided = (1.0 - pending_volume).clamp(0.0, 1.0);
+                sink.progress(&Progress { processed: stats.processed, pending: pool.len(), decided });
+            }
+        }
+        if status != Status::Complete {
+            // Report what is left, in the order it would have been explored.
+            while let Some(b) = pool.pop() {
+                if sink.emit(BoxStatus::Undecided, &b).is_break() {
+                    break;
+                }
+            }
+        }
+        stats.lp = lp.counters;
+        stats.seconds = t0.elapsed().as_secs_f64();
+        (status, stats)
+    }
+
+    fn limit_reached(&self, stats: &Stats, t0: Instant, cancel: &AtomicBool) -> Option<Limit> {
+        if cancel.load(Ordering::Relaxed) {
+            return Some(Limit::Cancelled);
+        }
+        if stats.processed >= self.settings.max_boxes {
+            return Some(Limit::Boxes);
+        }
+        match self.settings.timeout {
+            Some(t) if t0.elapsed() >= t => Some(Limit::Time),
+            _ => None,
+        }
+    }
+
+    /// Lines 5–9 of the seed's Algorithm 1.
+    fn shrink(&self, b: &mut IntervalBox, propagation: &mut Propagation, lp: &mut LpShrink, stats: &mut Stats) -> Shrunk {
+        loop {
+            stats.shrink_rounds += 1;
+            let before = b.clone();
+            if propagation.contract(b) == Contraction::Empty {
+                return Shrunk::Empty;
+            }
+            if self.size(b) <= self.settings.sigma {
+                return Shrunk::Solution;
+            }
+            if self.settings.use_lp && lp.contract(b) == Contraction::Empty {
+                return Shrunk::Empty;
+            }
+            if self.size(b) <= self.settings.sigma {
+                return Shrunk::Solution;
+            }
+            if self.relative_volume(b, &before) > self.settings.rho {
+                return Shrunk::Stalled;
+            }
+        }
+    }
+
+    fn size(&self, b: &IntervalBox) -> f64 {
+        b.widest(&self.primaries).map_or(0.0, |(_, w)| w)
+    }
+
+    /// Volume of `b` over the primaries, relative to `reference`; components of zero width in
+    /// the reference are left out so that fixed values do not make every volume zero.
+    fn relative_volume(&self, b: &IntervalBox, reference: &IntervalBox) -> f64 {
+        self.primaries
+            .iter()
+            .filter(|&&i| reference.width(i) > 0.0)
+            .map(|&i| b.width(i) / reference.width(i))
+            .product()
+    }
+}
+
+enum Shrunk {
+    Empty,
+    Solution,
+    Stalled,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::interval::{interval, point};
+    use crate::system::{Equation, Monomial, Term, VarRole};
+
+    /// x² + y² = 1, x = y: two solutions at ±(1/√2, 1/√2).
+    fn two_points() -> EquationSystem {
+        let mut s = EquationSystem::default();
+        let x = s.add_var("x", VarRole::Primary, interval(-1.0, 1.0));
+        let y = s.add_var("y", VarRole::Primary, interval(-1.0, 1.0));
+        s.add(Equation::circle(x, y));
+        s.add(Equation::new(
+            vec![Term { coef: point(1.0), mono: Monomial::Linear(x) }, Term { coef: point(-1.0), mono: Monomial::Linear(y) }],
+            point(0.0),
+        ));
+        s
+    }
+
+    #[test]
+    fn finds_both_isolated_solutions() {
+        let s = two_points();
+        let solver = Solver::new(&s, SolverSettings { sigma: 1e-6, ..Default::default() }).expect("valid");
+        let mut out = Collect::default();
+        let (status, stats) = solver.run(&AtomicBool::new(false), &mut out);
+        assert_eq!(status, Status::Complete);
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        assert!(out.solutions.iter().any(|b| b.contains(&[h, h])));
+        assert!(out.solutions.iter().any(|b| b.contains(&[-h, -h])));
+        assert!(out.solutions.iter().all(|b| b.width(0) <= 1e-6 && b.width(1) <= 1e-6));
+        assert_eq!(stats.solutions as usize, out.solutions.len());
+    }
+
+    #[test]
+    fn a_limit_reports_every_pending_box() {
+        let s = two_points();
+        let solver = Solver::new(&s, SolverSettings { sigma: 1e-9, max_boxes: 2, ..Default::default() }).expect("valid");
+        let mut out = Collect::default();
+        let (status, _) = solver.run(&AtomicBool::new(false), &mut out);
+        assert_eq!(status, Status::Incomplete(Limit::Boxes));
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        for p in [[h, h], [-h, -h]] {
+            assert!(out.solutions.iter().chain(&out.undecided).any(|b| b.contains(&p)), "lost {p:?}");
+        }
+    }
+
+    #[test]
+    fn cancellation_stops_at_once() {
+        let s = two_points();
+        let solver = Solver::new(&s, SolverSettings::default()).expect("valid");
+        let mut out = Collect::default();
+        let (status, stats) = solver.run(&AtomicBool::new(true), &mut out);
+        assert_eq!(status, Status::Incomplete(Limit::Cancelled));
+        assert_eq!(stats.processed, 0);
+        assert_eq!(out.undecided.len(), 1);
+    }
+}

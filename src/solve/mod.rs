@@ -1,0 +1,9 @@
+//! Branch and prune: settings, the driver, and its outputs.
+//!
+//! Knows systems and contractors; does no IO and knows nothing of mechanisms, URDF or ROS.
+
+mod driver;
+mod settings;
+
+pub use driver::{BoxSink, BoxStatus, Collect, Limit, Progress, SolveError, Solver, Stats, Status};
+pub use settings::{SettingsError, SolverSettings};

@@ -1,0 +1,84 @@
+//! Settings of the branch-and-prune driver, validated once.
+
+use std::time::Duration;
+use thiserror::Error;
+
+/// What the driver is allowed to do, and when a box counts as a solution.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct SolverSettings {
+    /// A box whose primary components are all at most this wide is a solution box. Default 1e-3.
+    pub sigma: f64,
+    /// Keep shrinking a box while one round leaves less than this fraction of its (primary)
+    /// volume; otherwise bisect it. In (0, 1); default 0.95, the seed's value.
+    pub rho: f64,
+    /// Stop after processing this many boxes (the run ends `incomplete`). Default 1,000,000.
+    pub max_boxes: u64,
+    /// Stop after this much wall-clock time (the run ends `incomplete`). Default: none.
+    #[serde(serialize_with = "seconds")]
+    pub timeout: Option<Duration>,
+    /// Use the LP shrink after propagation. Default true; false leaves propagation alone.
+    pub use_lp: bool,
+}
+
+fn seconds<S: serde::Serializer>(d: &Option<Duration>, s: S) -> Result<S::Ok, S::Error> {
+    match d {
+        Some(d) => s.serialize_some(&d.as_secs_f64()),
+        None => s.serialize_none(),
+    }
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        Self { sigma: 1e-3, rho: 0.95, max_boxes: 1_000_000, timeout: None, use_lp: true }
+    }
+}
+
+/// A setting out of range.
+#[derive(Debug, Error, PartialEq)]
+#[non_exhaustive]
+pub enum SettingsError {
+    /// sigma must be a positive finite number.
+    #[error("sigma must be a positive finite number, got {0}")]
+    Sigma(f64),
+    /// rho must lie strictly between 0 and 1.
+    #[error("rho must lie strictly between 0 and 1, got {0}")]
+    Rho(f64),
+    /// max_boxes must be at least 1.
+    #[error("max-boxes must be at least 1")]
+    MaxBoxes,
+}
+
+impl SolverSettings {
+    /// Checks every field; the driver relies on it.
+    pub fn validate(&self) -> Result<(), SettingsError> {
+        if !(self.sigma.is_finite() && self.sigma > 0.0) {
+            return Err(SettingsError::Sigma(self.sigma));
+        }
+        if !(self.rho > 0.0 && self.rho < 1.0) {
+            return Err(SettingsError::Rho(self.rho));
+        }
+        if self.max_boxes == 0 {
+            return Err(SettingsError::MaxBoxes);
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rejects_nonsense() {
+        let bad = |f: fn(&mut SolverSettings)| {
+            let mut s = SolverSettings::default();
+            f(&mut s);
+            s.validate()
+        };
+        assert_eq!(bad(|s| s.sigma = 0.0), Err(SettingsError::Sigma(0.0)));
+        assert!(matches!(bad(|s| s.sigma = f64::NAN), Err(SettingsError::Sigma(_))));
+        assert_eq!(bad(|s| s.rho = 1.0), Err(SettingsError::Rho(1.0)));
+        assert_eq!(bad(|s| s.max_boxes = 0), Err(SettingsError::MaxBoxes));
+        assert_eq!(SolverSettings::default().validate(), Ok(()));
+    }
+}
