@@ -1,1 +1,156 @@
-//! x
+//! Solve reports: what `linkspace solve --json` writes (schema in README), built from a run.
+//!
+//! Pure data: no IO here; the CLI writes it, the ROS node will publish it.
+
+use crate::interval::IntervalBox;
+use crate::problems::LinkageProblem;
+use crate::solve::{SolverSettings, Stats, Status};
+use crate::system::VarRole;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// `[lower, upper]`
+pub type Bounds = [f64; 2];
+
+/// One reported box, in the user's terms.
+#[derive(Clone, Debug, Serialize)]
+pub struct BoxRecord {
+    /// Free joint values (radians or metres), keyed by joint name.
+    pub joints: BTreeMap<String, Bounds>,
+    /// Every link's world-frame orientation in the plane (radians), keyed by link name.
+    pub link_angles: BTreeMap<String, Bounds>,
+    /// Traced points' world coordinates, keyed by `LINK@X,Y`.
+    pub traces: BTreeMap<String, TracedPoint>,
+    /// The raw box, one entry per system variable (see `variables`).
+    #[serde(rename = "box")]
+    pub box_: Vec<Bounds>,
+    /// Depth in the search tree.
+    pub level: u32,
+}
+
+/// World coordinates of a traced point.
+#[derive(Clone, Debug, Serialize)]
+pub struct TracedPoint {
+    /// x interval
+    pub x: Bounds,
+    /// y interval
+    pub y: Bounds,
+}
+
+/// A system variable as listed in the report.
+#[derive(Clone, Debug, Serialize)]
+pub struct VariableInfo {
+    /// Name, e.g. `cos_link7`.
+    pub name: String,
+    /// `primary` or `derived`.
+    pub role: VarRole,
+}
+
+/// The whole result of `linkspace solve`.
+#[derive(Clone, Debug, Serialize)]
+pub struct SolveReport {
+    /// Robot name from the URDF.
+    pub mechanism: String,
+    /// Joints whose values were solved for.
+    pub free_joints: Vec<String>,
+    /// Joints fixed with `--fix`.
+    pub fixed_joints: BTreeMap<String, f64>,
+    /// The solver settings.
+    pub settings: SolverSettings,
+    /// `complete`, or `incomplete` with the limit.
+    #[serde(flatten)]
+    pub status: Status,
+    /// The system's variables, in box order.
+    pub variables: Vec<VariableInfo>,
+    /// Solution boxes.
+    pub solutions: Vec<BoxRecord>,
+    /// Connected components of the solution boxes (touching boxes share a component).
+    pub clusters: usize,
+    /// Boxes left undecided by a limit (empty when complete).
+    pub undecided: Vec<BoxRecord>,
+    /// Counters and time.
+    pub stats: Stats,
+}
+
+/// Labels each box with its connected component (boxes sharing a point are connected);
+/// returns the labels and the number of components.
+pub fn components(boxes: &[IntervalBox]) -> (Vec<usize>, usize) {
+    let mut parent: Vec<usize> = (0..boxes.len()).collect();
+    fn find(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    for i in 0..boxes.len() {
+        for j in (i + 1)..boxes.len() {
+            if boxes[i].intersects(&boxes[j]) {
+                let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+                if a != b {
+                    parent[a] = b;
+                }
+            }
+        }
+    }
+    let mut labels = vec![0; boxes.len()];
+    let mut ids = BTreeMap::new();
+    for i in 0..boxes.len() {
+        let r = find(&mut parent, i);
+        let next = ids.len();
+        labels[i] = *ids.entry(r).or_insert(next);
+    }
+    (labels, ids.len())
+}
+
+impl LinkageProblem {
+    /// One box in the user's terms.
+    pub fn record(&self, b: &IntervalBox) -> BoxRecord {
+        let pair = |(lo, hi): (f64, f64)| [lo, hi];
+        BoxRecord {
+            joints: self.joint_values(b).into_iter().map(|(k, v)| (k, pair(v))).collect(),
+            link_angles: self.link_angles(b).into_iter().map(|(k, v)| (k, pair(v))).collect(),
+            traces: self
+                .traces
+                .iter()
+                .map(|t| {
+                    let (x, y) = (b.dims[t.x], b.dims[t.y]);
+                    (t.name.clone(), TracedPoint { x: [x.inf(), x.sup()], y: [y.inf(), y.sup()] })
+                })
+                .collect(),
+            box_: b.dims.iter().map(|d| [d.inf(), d.sup()]).collect(),
+            level: b.level,
+        }
+    }
+
+    /// The report of a finished run.
+    pub fn report(&self, settings: &SolverSettings, status: Status, stats: Stats, solutions: &[IntervalBox], undecided: &[IntervalBox]) -> SolveReport {
+        SolveReport {
+            mechanism: self.name.clone(),
+            free_joints: self.free_joints.clone(),
+            fixed_joints: self.fixed_joints.iter().cloned().collect(),
+            settings: settings.clone(),
+            status,
+            variables: self.system.vars.iter().map(|v| VariableInfo { name: v.name.clone(), role: v.role }).collect(),
+            solutions: solutions.iter().map(|b| self.record(b)).collect(),
+            clusters: components(solutions).1,
+            undecided: undecided.iter().map(|b| self.record(b)).collect(),
+            stats,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::interval::interval;
+
+    #[test]
+    fn touching_boxes_form_one_component() {
+        let b = |lo: f64, hi: f64| IntervalBox::new(vec![interval(lo, hi)]);
+        let (labels, n) = components(&[b(0.0, 1.0), b(3.0, 4.0), b(1.0, 2.0)]);
+        assert_eq!(n, 2);
+        assert_eq!(labels[0], labels[2]);
+        assert_ne!(labels[0], labels[1]);
+    }
+}

@@ -1,1 +1,157 @@
-//! x
+//! Mechanisms: links, tree joints and loop closures, independent of any file format.
+//!
+//! `urdf` is the only reader (and the only importer of `urdf_rs`). A `Mechanism` is checked once
+//! when built: one root (the ground), every other link with exactly one parent joint, loop
+//! closures between known links, finite numbers.
+
+pub mod urdf;
+
+use nalgebra::{Isometry3, Vector3};
+use thiserror::Error;
+
+/// What a joint lets move.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum JointKind {
+    /// Rotation about the axis; `limits` in radians when the file gives a usable range.
+    Revolute {
+        /// `(lower, upper)`, or `None` for continuous joints.
+        limits: Option<(f64, f64)>,
+    },
+    /// Translation along the axis within `limits` (metres).
+    Prismatic {
+        /// `(lower, upper)`.
+        limits: (f64, f64),
+    },
+    /// No motion: the child is welded to the parent.
+    Fixed,
+}
+
+/// A tree joint: `child`'s frame is `parent`'s frame moved by `origin`, then by the joint motion
+/// along or about `axis` (a unit vector in the joint frame).
+#[derive(Clone, Debug)]
+pub struct Joint {
+    /// URDF name.
+    pub name: String,
+    /// Motion type.
+    pub kind: JointKind,
+    /// Index of the parent link.
+    pub parent: usize,
+    /// Index of the child link.
+    pub child: usize,
+    /// Pose of the joint frame in the parent frame.
+    pub origin: Isometry3<f64>,
+    /// Unit axis in the joint frame.
+    pub axis: Vector3<f64>,
+}
+
+/// A loop closure: a frame on `predecessor` and a frame on `successor` that must coincide up to
+/// the closure's own motion (our URDF extension, see README).
+#[derive(Clone, Debug)]
+pub struct LoopClosure {
+    /// Name of the `<loop>` element.
+    pub name: String,
+    /// Motion the closure allows (revolute or prismatic; limits as for joints).
+    pub kind: JointKind,
+    /// Index of the predecessor link.
+    pub predecessor: usize,
+    /// Closure frame in the predecessor's frame.
+    pub predecessor_origin: Isometry3<f64>,
+    /// Index of the successor link.
+    pub successor: usize,
+    /// Closure frame in the successor's frame.
+    pub successor_origin: Isometry3<f64>,
+    /// Unit axis in the predecessor's closure frame.
+    pub axis: Vector3<f64>,
+}
+
+/// A rigid body.
+#[derive(Clone, Debug)]
+pub struct Link {
+    /// URDF name.
+    pub name: String,
+    /// Index of the joint whose child this link is (`None` for the root).
+    pub parent_joint: Option<usize>,
+}
+
+/// A mechanism: a spanning tree of joints rooted at the ground, plus loop closures.
+#[derive(Clone, Debug)]
+pub struct Mechanism {
+    /// The robot's name.
+    pub name: String,
+    /// Links; `links[root]` is the ground.
+    pub links: Vec<Link>,
+    /// Tree joints.
+    pub joints: Vec<Joint>,
+    /// Loop closures.
+    pub loops: Vec<LoopClosure>,
+    /// Index of the ground link.
+    pub root: usize,
+}
+
+/// What is wrong with a mechanism description. Messages name the element at fault.
+#[derive(Debug, Error, PartialEq)]
+#[non_exhaustive]
+pub enum ModelError {
+    /// The file is not well-formed XML or not a URDF robot.
+    #[error("malformed URDF: {0}")]
+    Malformed(String),
+    /// A joint or loop names a link that does not exist.
+    #[error("{element} refers to unknown link '{link}'")]
+    UnknownLink {
+        /// the joint or loop
+        element: String,
+        /// the missing link
+        link: String,
+    },
+    /// The joints do not form a tree with a single root.
+    #[error("joints do not form a tree: {0}")]
+    NotATree(String),
+    /// A joint type the analysis does not handle.
+    #[error("joint '{joint}' has type {kind}, which linkspace does not support")]
+    UnsupportedJoint {
+        /// the joint
+        joint: String,
+        /// its type
+        kind: String,
+    },
+    /// A number is NaN or infinite, an axis is zero, or limits are inverted.
+    #[error("{element}: {problem}")]
+    BadValue {
+        /// where
+        element: String,
+        /// what
+        problem: String,
+    },
+    /// Two elements share a name.
+    #[error("duplicate name '{0}'")]
+    Duplicate(String),
+}
+
+impl Mechanism {
+    /// Index of the link named `name`.
+    pub fn link(&self, name: &str) -> Option<usize> {
+        self.links.iter().position(|l| l.name == name)
+    }
+
+    /// Index of the tree joint named `name`.
+    pub fn joint(&self, name: &str) -> Option<usize> {
+        self.joints.iter().position(|j| j.name == name)
+    }
+
+    /// Tree joints from the root down to `link`, root first.
+    pub fn path_to(&self, link: usize) -> Vec<usize> {
+        let mut path = Vec::new();
+        let mut at = link;
+        while let Some(j) = self.links[at].parent_joint {
+            path.push(j);
+            at = self.joints[j].parent;
+        }
+        path.reverse();
+        path
+    }
+
+    /// Number of independent cycles (one per loop closure on a spanning tree).
+    pub fn cycle_count(&self) -> usize {
+        self.loops.len()
+    }
+}

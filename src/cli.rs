@@ -1,0 +1,147 @@
+//! The command line: argument parsing and the `solve` command. `anyhow` lives here and in main.
+
+use anyhow::{bail, Context, Result};
+use clap::{Parser, Subcommand};
+use linkspace::model::urdf;
+use linkspace::problems::LinkageProblem;
+use linkspace::solve::{BoxSink, BoxStatus, Collect, Progress, Solver, SolverSettings};
+use linkspace::IntervalBox;
+use std::io::{IsTerminal, Write};
+use std::ops::ControlFlow;
+use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+#[derive(Parser)]
+#[command(name = "linkspace", version, about = "Every configuration a mechanism can take, with guarantees.")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Enclose every configuration of a planar closed-loop linkage described in URDF.
+    Solve(SolveArgs),
+}
+
+#[derive(clap::Args)]
+struct SolveArgs {
+    /// URDF file (loops closed with the <loop> extension, see README).
+    urdf: PathBuf,
+    /// Fix a joint (or loop) value: radians for revolute, metres for prismatic. Repeatable.
+    #[arg(long = "fix", value_name = "JOINT=VALUE")]
+    fix: Vec<String>,
+    /// Solution boxes are at most this wide in every primary variable.
+    #[arg(long, default_value_t = 1e-3)]
+    sigma: f64,
+    /// Keep shrinking a box while a round leaves less than this share of its volume.
+    #[arg(long, default_value_t = 0.95)]
+    rho: f64,
+    /// Stop after this many boxes (the run is then reported incomplete).
+    #[arg(long, default_value_t = 1_000_000)]
+    max_boxes: u64,
+    /// Stop after this many seconds (the run is then reported incomplete).
+    #[arg(long)]
+    timeout: Option<f64>,
+    /// Trace a point given in a link's frame: LINK@X,Y. Repeatable.
+    #[arg(long = "trace", value_name = "LINK@X,Y")]
+    trace: Vec<String>,
+    /// Shrink by interval propagation only (no LP): for comparisons.
+    #[arg(long)]
+    no_lp: bool,
+    /// Write the full report as JSON here.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+}
+
+/// Parses arguments and runs; errors come back as one chain of context.
+pub fn run() -> Result<()> {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Solve(args) => solve(args),
+    }
+}
+
+fn parse_fix(s: &str) -> Result<(String, f64)> {
+    let (name, value) = s.split_once('=').with_context(|| format!("--fix '{s}': expected JOINT=VALUE"))?;
+    let v: f64 = value.trim().parse().with_context(|| format!("--fix '{s}': '{value}' is not a number"))?;
+    Ok((name.trim().to_string(), v))
+}
+
+fn parse_trace(s: &str) -> Result<(String, f64, f64)> {
+    let (link, xy) = s.split_once('@').with_context(|| format!("--trace '{s}': expected LINK@X,Y"))?;
+    let (x, y) = xy.split_once(',').with_context(|| format!("--trace '{s}': expected LINK@X,Y"))?;
+    let x: f64 = x.trim().parse().with_context(|| format!("--trace '{s}': '{x}' is not a number"))?;
+    let y: f64 = y.trim().parse().with_context(|| format!("--trace '{s}': '{y}' is not a number"))?;
+    if !(x.is_finite() && y.is_finite()) {
+        bail!("--trace '{s}': coordinates must be finite");
+    }
+    Ok((link.to_string(), x, y))
+}
+
+/// Prints progress on a terminal, collects boxes.
+struct Terminal {
+    collect: Collect,
+    show: bool,
+}
+
+impl BoxSink for Terminal {
+    fn emit(&mut self, status: BoxStatus, b: &IntervalBox) -> ControlFlow<()> {
+        self.collect.emit(status, b)
+    }
+    fn progress(&mut self, p: &Progress) {
+        if self.show {
+            eprint!("\r{:5.1}% decided, {} boxes processed, {} pending, {} solutions   ", 100.0 * p.decided, p.processed, p.pending, self.collect.solutions.len());
+            let _ = std::io::stderr().flush();
+        }
+    }
+}
+
+fn solve(args: SolveArgs) -> Result<()> {
+    let timeout = match args.timeout {
+        Some(t) if t.is_finite() && t > 0.0 => Some(Duration::from_secs_f64(t.min(1e9))),
+        Some(t) => bail!("--timeout must be a positive number of seconds, got {t}"),
+        None => None,
+    };
+    let settings = SolverSettings { sigma: args.sigma, rho: args.rho, max_boxes: args.max_boxes, timeout, use_lp: !args.no_lp };
+    settings.validate()?;
+    let fixed = args.fix.iter().map(|s| parse_fix(s)).collect::<Result<Vec<_>>>()?;
+    let traces = args.trace.iter().map(|s| parse_trace(s)).collect::<Result<Vec<_>>>()?;
+    let xml = std::fs::read_to_string(&args.urdf).with_context(|| format!("reading {}", args.urdf.display()))?;
+    let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", args.urdf.display()))?;
+    let problem = LinkageProblem::new(&mechanism, &fixed, &traces).with_context(|| format!("building {}", args.urdf.display()))?;
+    let solver = Solver::new(&problem.system, settings.clone())?;
+    let mut sink = Terminal { collect: Collect::default(), show: std::io::stderr().is_terminal() };
+    let (status, stats) = solver.run(&AtomicBool::new(false), &mut sink);
+    if sink.show {
+        eprintln!();
+    }
+    let report = problem.report(&settings, status, stats, &sink.collect.solutions, &sink.collect.undecided);
+    println!(
+        "{}: {} solution boxes in {} clusters, status {}, {} boxes processed ({} empty, {} bisected), {} LPs, {:.3} s",
+        report.mechanism,
+        report.solutions.len(),
+        report.clusters,
+        match status {
+            linkspace::Status::Complete => "complete".to_string(),
+            linkspace::Status::Incomplete(l) => format!("incomplete ({l:?} limit, {} boxes undecided)", report.undecided.len()),
+        },
+        report.stats.processed,
+        report.stats.empty,
+        report.stats.bisected,
+        report.stats.lp.solved,
+        report.stats.seconds
+    );
+    if report.solutions.len() <= 20 {
+        for (k, s) in report.solutions.iter().enumerate() {
+            let joints: Vec<String> = s.joints.iter().map(|(n, [lo, hi])| format!("{n}={:.6}", 0.5 * (lo + hi))).collect();
+            println!("  #{k}: {}", joints.join(" "));
+        }
+    }
+    if let Some(path) = args.json {
+        let text = serde_json::to_string_pretty(&report)?;
+        std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}

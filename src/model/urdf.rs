@@ -1,0 +1,227 @@
+//! Reading a `Mechanism` from URDF: the only importer of `urdf_rs`.
+//!
+//! Links and joints come through `urdf_rs`; loop closures through our `<loop>` extension element,
+//! which `urdf_rs` (and every standard URDF tool) ignores, so it is read from the XML with
+//! `roxmltree`. The element follows URDF+ (Chignoli et al., 2024, arXiv:2411.19753):
+//!
+//! ```xml
+//! <loop name="loop15" type="revolute">
+//!   <predecessor link="link1"><origin xyz="7 0 0" rpy="0 0 0"/></predecessor>
+//!   <successor link="link5"><origin xyz="12 0 0" rpy="0 0 0"/></successor>
+//!   <axis xyz="0 0 1"/>
+//! </loop>
+//! ```
+
+use super::{Joint, JointKind, Link, LoopClosure, Mechanism, ModelError};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use std::collections::HashMap;
+
+/// Parses a URDF document (with optional `<loop>` elements) into a checked `Mechanism`.
+pub fn parse(xml: &str) -> Result<Mechanism, ModelError> {
+    let doc = roxmltree::Document::parse(xml).map_err(|e| ModelError::Malformed(e.to_string()))?;
+    let robot_el = doc.root_element();
+    if robot_el.tag_name().name() != "robot" {
+        return Err(ModelError::Malformed(format!("root element is <{}>, not <robot>", robot_el.tag_name().name())));
+    }
+    // urdf_rs is a foreign parser on untrusted input: a panic inside it must not take us down.
+    let robot = std::panic::catch_unwind(|| urdf_rs::read_from_string(xml))
+        .map_err(|_| ModelError::Malformed("the URDF parser failed on this document".into()))?
+        .map_err(|e| ModelError::Malformed(e.to_string()))?;
+
+    let mut index = HashMap::new();
+    let mut links = Vec::new();
+    for l in &robot.links {
+        if index.insert(l.name.clone(), links.len()).is_some() {
+            return Err(ModelError::Duplicate(l.name.clone()));
+        }
+        links.push(Link { name: l.name.clone(), parent_joint: None });
+    }
+    if links.is_empty() {
+        return Err(ModelError::Malformed("the robot has no links".into()));
+    }
+    let find = |element: &str, link: &str| {
+        index.get(link).copied().ok_or_else(|| ModelError::UnknownLink { element: element.into(), link: link.into() })
+    };
+
+    let mut joints = Vec::new();
+    let mut names = std::collections::HashSet::new();
+    for j in &robot.joints {
+        if !names.insert(j.name.clone()) {
+            return Err(ModelError::Duplicate(j.name.clone()));
+        }
+        let element = format!("joint '{}'", j.name);
+        let parent = find(&element, &j.parent.link)?;
+        let child = find(&element, &j.child.link)?;
+        let kind = match j.joint_type {
+            urdf_rs::JointType::Revolute => {
+                let (lo, hi) = (j.limit.lower, j.limit.upper);
+                check_finite(&element, &[lo, hi])?;
+                // urdf_rs fills a missing <limit> with 0..0; no range means no limit to use.
+                let limits = if lo < hi {
+                    Some((lo, hi))
+                } else if lo == hi {
+                    None
+                } else {
+                    return Err(bad(&element, "limit lower is above upper"));
+                };
+                JointKind::Revolute { limits }
+            }
+            urdf_rs::JointType::Continuous => JointKind::Revolute { limits: None },
+            urdf_rs::JointType::Prismatic => {
+                let (lo, hi) = (j.limit.lower, j.limit.upper);
+                check_finite(&element, &[lo, hi])?;
+                if !(lo < hi) {
+                    return Err(bad(&element, "a prismatic joint needs <limit lower < upper> to bound its travel"));
+                }
+                JointKind::Prismatic { limits: (lo, hi) }
+            }
+            urdf_rs::JointType::Fixed => JointKind::Fixed,
+            ref other => return Err(ModelError::UnsupportedJoint { joint: j.name.clone(), kind: format!("{other:?}").to_lowercase() }),
+        };
+        let origin = pose(&element, j.origin.xyz.0, j.origin.rpy.0)?;
+        let axis = unit_axis(&element, j.axis.xyz.0)?;
+        if links[child].parent_joint.is_some() {
+            return Err(ModelError::NotATree(format!("link '{}' is the child of two joints", links[child].name)));
+        }
+        links[child].parent_joint = Some(joints.len());
+        joints.push(Joint { name: j.name.clone(), kind, parent, child, origin, axis });
+    }
+
+    let roots: Vec<usize> = (0..links.len()).filter(|&i| links[i].parent_joint.is_none()).collect();
+    let root = match roots.as_slice() {
+        [r] => *r,
+        [] => return Err(ModelError::NotATree("every link has a parent: the joints form a cycle".into())),
+        many => {
+            let names: Vec<&str> = many.iter().map(|&i| links[i].name.as_str()).collect();
+            return Err(ModelError::NotATree(format!("several root links ({}); close loops with <loop>, not <joint>", names.join(", "))));
+        }
+    };
+    // With one root and one parent per link, a link that cannot reach the root sits on a cycle.
+    for start in 0..links.len() {
+        let mut at = start;
+        for _ in 0..=links.len() {
+            match links[at].parent_joint {
+                Some(j) => at = joints[j].parent,
+                None => break,
+            }
+        }
+        if at != root {
+            return Err(ModelError::NotATree(format!("link '{}' is on a cycle of joints", links[start].name)));
+        }
+    }
+
+    let mut loops = Vec::new();
+    for el in robot_el.children().filter(|n| n.has_tag_name("loop")) {
+        let name = el.attribute("name").unwrap_or("").to_string();
+        let element = format!("loop '{name}'");
+        if name.is_empty() {
+            return Err(bad("a <loop> element", "it has no name"));
+        }
+        if !names.insert(name.clone()) {
+            return Err(ModelError::Duplicate(name));
+        }
+        let side = |tag: &str| -> Result<(usize, Isometry3<f64>), ModelError> {
+            let s = el.children().find(|n| n.has_tag_name(tag)).ok_or_else(|| bad(&element, &format!("missing <{tag} link=\"…\">")))?;
+            let link = s.attribute("link").ok_or_else(|| bad(&element, &format!("<{tag}> has no link attribute")))?;
+            let link = find(&element, link)?;
+            let origin = s.children().find(|n| n.has_tag_name("origin"));
+            let xyz = triple(&element, origin.and_then(|o| o.attribute("xyz")), [0.0; 3])?;
+            let rpy = triple(&element, origin.and_then(|o| o.attribute("rpy")), [0.0; 3])?;
+            Ok((link, pose(&element, xyz, rpy)?))
+        };
+        let (predecessor, predecessor_origin) = side("predecessor")?;
+        let (successor, successor_origin) = side("successor")?;
+        let axis = unit_axis(&element, triple(&element, el.children().find(|n| n.has_tag_name("axis")).and_then(|a| a.attribute("xyz")), [1.0, 0.0, 0.0])?)?;
+        let limit = el.children().find(|n| n.has_tag_name("limit"));
+        let number = |attr: &str| -> Result<Option<f64>, ModelError> {
+            match limit.and_then(|l| l.attribute(attr)) {
+                None => Ok(None),
+                Some(t) => t.trim().parse::<f64>().ok().filter(|v| v.is_finite()).map(Some).ok_or_else(|| bad(&element, &format!("limit {attr}='{t}' is not a finite number"))),
+            }
+        };
+        let kind = match el.attribute("type").unwrap_or("revolute") {
+            "revolute" | "continuous" => JointKind::Revolute { limits: number("lower")?.zip(number("upper")?).filter(|(l, u)| l < u) },
+            "prismatic" => match number("lower")?.zip(number("upper")?) {
+                Some((l, u)) if l < u => JointKind::Prismatic { limits: (l, u) },
+                _ => return Err(bad(&element, "a prismatic loop needs <limit lower < upper>")),
+            },
+            other => return Err(ModelError::UnsupportedJoint { joint: name, kind: other.into() }),
+        };
+        if predecessor == successor {
+            return Err(bad(&element, "predecessor and successor are the same link"));
+        }
+        loops.push(LoopClosure { name, kind, predecessor, predecessor_origin, successor, successor_origin, axis });
+    }
+
+    Ok(Mechanism { name: robot.name.clone(), links, joints, loops, root })
+}
+
+fn bad(element: &str, problem: &str) -> ModelError {
+    ModelError::BadValue { element: element.into(), problem: problem.into() }
+}
+
+fn check_finite(element: &str, values: &[f64]) -> Result<(), ModelError> {
+    if values.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(bad(element, "a number is NaN or infinite"))
+    }
+}
+
+fn triple(element: &str, text: Option<&str>, default: [f64; 3]) -> Result<[f64; 3], ModelError> {
+    let Some(text) = text else { return Ok(default) };
+    let v: Vec<f64> = text.split_whitespace().map(|t| t.parse::<f64>()).collect::<Result<_, _>>().map_err(|_| bad(element, &format!("'{text}' is not three numbers")))?;
+    match v.as_slice() {
+        [a, b, c] => {
+            check_finite(element, &[*a, *b, *c])?;
+            Ok([*a, *b, *c])
+        }
+        _ => Err(bad(element, &format!("'{text}' is not three numbers"))),
+    }
+}
+
+fn pose(element: &str, xyz: [f64; 3], rpy: [f64; 3]) -> Result<Isometry3<f64>, ModelError> {
+    check_finite(element, &xyz)?;
+    check_finite(element, &rpy)?;
+    // URDF rpy is roll about x, then pitch about y, then yaw about z, all fixed axes.
+    Ok(Isometry3::from_parts(Translation3::new(xyz[0], xyz[1], xyz[2]), UnitQuaternion::from_euler_angles(rpy[0], rpy[1], rpy[2])))
+}
+
+fn unit_axis(element: &str, xyz: [f64; 3]) -> Result<Vector3<f64>, ModelError> {
+    check_finite(element, &xyz)?;
+    let v = Vector3::new(xyz[0], xyz[1], xyz[2]);
+    let n = v.norm();
+    if n > 1e-12 {
+        Ok(v / n)
+    } else {
+        Err(bad(element, "the axis is the zero vector"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bundled_butterfly_has_three_loops_on_a_tree() {
+        let m = parse(include_str!("../../urdf/double_butterfly.urdf")).expect("bundled file parses");
+        assert_eq!(m.name, "double_butterfly");
+        assert_eq!((m.links.len(), m.joints.len(), m.loops.len()), (8, 7, 3));
+        assert_eq!(m.links[m.root].name, "link0");
+    }
+
+    #[test]
+    fn bad_documents_give_errors_that_name_the_problem() {
+        let cases = [
+            ("<robot name='r'><link name='a'/>", "malformed URDF"),
+            ("<robot name='r'><link name='a'/><joint name='j' type='floating'><parent link='a'/><child link='b'/></joint><link name='b'/></robot>", "floating"),
+            ("<robot name='r'><link name='a'/><link name='b'/></robot>", "several root links"),
+            ("<robot name='r'><link name='a'/><loop name='l'><predecessor link='a'/><successor link='zz'/></loop></robot>", "unknown link 'zz'"),
+            ("<robot name='r'><link name='a'/><link name='b'/><joint name='j' type='continuous'><parent link='a'/><child link='b'/><axis xyz='0 0 0'/></joint></robot>", "zero vector"),
+        ];
+        for (xml, needle) in cases {
+            let err = parse(xml).expect_err(xml).to_string();
+            assert!(err.contains(needle), "{err} should mention {needle}");
+        }
+    }
+}

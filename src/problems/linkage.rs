@@ -1,0 +1,682 @@
+//! Planar linkages: a `Mechanism` whose joint axes are all parallel becomes the seed-000 system.
+//!
+//! One angle per rigid group of links (links joined by fixed, prismatic or fixed-by-the-user
+//! joints turn together), as `c = cos φ`, `s = sin φ` with `c² + s² = 1`; the ground's angle is 0.
+//! One loop-closure vector equation per `<loop>` (the fundamental cycles of the spanning tree):
+//! the closure point reached through the predecessor equals the one reached through the
+//! successor, which is linear in the `c, s` variables.
+//! Slider travel `d` enters as `d·c`, `d·s`: new variables defined by the bilinear equations
+//! `z = d·c` (the seed's hyperbolic equations).
+//! Traced points (the seed's equation 5) are derived variables defined by linear equations.
+//! Builds only; solving is `solve`'s job.
+
+use crate::contract::{Contraction, Contractor, Propagation};
+use crate::interval::{interval, point, Interval, IntervalBox};
+use crate::model::{JointKind, Mechanism, ModelError};
+use crate::system::{Equation, EquationSystem, Monomial, Term, VarId, VarRole};
+use nalgebra::{Rotation3, UnitQuaternion, Vector3};
+use std::collections::BTreeMap;
+use std::f64::consts::PI;
+use thiserror::Error;
+
+/// What stops a mechanism from becoming a planar linkage problem.
+#[derive(Debug, Error, PartialEq)]
+#[non_exhaustive]
+pub enum LinkageError {
+    /// The description itself is bad.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// Joint axes are not all parallel (or a slider axis is not in the plane).
+    #[error("not planar: {0} (only planar linkages are supported so far)")]
+    NonPlanar(String),
+    /// `--fix` names no joint or loop.
+    #[error("--fix: no joint or loop named '{0}'")]
+    UnknownJoint(String),
+    /// `--fix` on a joint that does not move.
+    #[error("--fix: joint '{0}' is fixed and takes no value")]
+    NotMovable(String),
+    /// A fixed value outside the joint's limits, or not finite.
+    #[error("--fix {joint}={value}: outside its limits [{lower}, {upper}]")]
+    OutsideLimits {
+        /// joint
+        joint: String,
+        /// value given
+        value: f64,
+        /// lower limit
+        lower: f64,
+        /// upper limit
+        upper: f64,
+    },
+    /// A value that is not a finite number.
+    #[error("--fix {0}: the value is not a finite number")]
+    NotFinite(String),
+    /// The loop provably cannot close for any joint values.
+    #[error("loop '{0}' cannot close: its links are too short or too long to meet (proven by interval propagation)")]
+    CannotClose(String),
+    /// Fixed angles around a cycle contradict each other.
+    #[error("loop '{0}': the fixed joint angles around it contradict each other")]
+    Contradiction(String),
+    /// A traced point names an unknown link.
+    #[error("--trace: no link named '{0}'")]
+    UnknownTraceLink(String),
+    /// Nothing moves.
+    #[error("the mechanism has no unknown: every joint is fixed")]
+    NothingToSolve,
+}
+
+/// The pair of variables of a rotating group, or the ground.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Angle {
+    Ground,
+    Free { c: VarId, s: VarId },
+}
+
+/// How a joint's value is read off a solution box.
+#[derive(Clone, Debug)]
+enum Reading {
+    /// `sign·(φ_b − φ_a) + offset`.
+    Revolute { a: usize, b: usize, sign: f64, offset: f64 },
+    /// A travel variable.
+    Travel(VarId),
+}
+
+/// A point whose world coordinates are traced (seed 000, eq. 5).
+#[derive(Clone, Debug)]
+pub struct Trace {
+    /// `LINK@X,Y` as given.
+    pub name: String,
+    /// World x variable.
+    pub x: VarId,
+    /// World y variable.
+    pub y: VarId,
+}
+
+/// A planar linkage as a polynomial system, with what is needed to read joint values back.
+#[derive(Clone, Debug)]
+pub struct LinkageProblem {
+    /// The system to solve.
+    pub system: EquationSystem,
+    /// Robot name.
+    pub name: String,
+    /// Joints (tree and loop) with unknown values, in file order.
+    pub free_joints: Vec<String>,
+    /// Joints fixed by the user, with their values.
+    pub fixed_joints: Vec<(String, f64)>,
+    /// Traced points.
+    pub traces: Vec<Trace>,
+    /// Per link: (name, group angle, offset to the group angle, rest yaw in the plane).
+    links: Vec<(String, Angle, f64, f64)>,
+    readings: Vec<(String, Reading)>,
+}
+
+/// A 2-D linear form `Σ coef·var + constant`, one per coordinate.
+#[derive(Clone, Debug, Default)]
+struct Form2 {
+    x: Vec<(VarId, f64)>,
+    y: Vec<(VarId, f64)>,
+    constant: [f64; 2],
+}
+
+fn rot(angle: f64, v: [f64; 2]) -> [f64; 2] {
+    let (s, c) = angle.sin_cos();
+    [c * v[0] - s * v[1], s * v[0] + c * v[1]]
+}
+
+/// Where a slider's travel lives.
+#[derive(Clone, Copy, Debug)]
+enum Travel {
+    Known(f64),
+    Var(VarId),
+}
+
+struct Builder<'m> {
+    m: &'m Mechanism,
+    system: EquationSystem,
+    /// Plane basis: e1, e2, normal.
+    basis: Rotation3<f64>,
+    /// Per link: rest rotation in the world.
+    rest: Vec<UnitQuaternion<f64>>,
+    /// Per link: (group, offset).
+    group: Vec<(usize, f64)>,
+    /// Per group: its angle variables.
+    angles: Vec<Angle>,
+    /// Cache of product variables `travel × (c or s)`.
+    products: BTreeMap<(VarId, VarId), VarId>,
+}
+
+impl Builder<'_> {
+    /// In-plane coordinates of a world vector.
+    fn planar(&self, v: Vector3<f64>) -> [f64; 2] {
+        let p = self.basis.inverse() * v;
+        [p.x, p.y]
+    }
+
+    /// Adds `R(φ_link)·v` where `v` is given in the link's rest orientation, projected.
+    fn add_rotated(&self, f: &mut Form2, link: usize, v: [f64; 2], scale: f64) {
+        let (g, off) = self.group[link];
+        let v = rot(off, v);
+        match self.angles[g] {
+            Angle::Ground => {
+                f.constant[0] += scale * v[0];
+                f.constant[1] += scale * v[1];
+            }
+            Angle::Free { c, s } => {
+                f.x.push((c, scale * v[0]));
+                f.x.push((s, -scale * v[1]));
+                f.y.push((s, scale * v[0]));
+                f.y.push((c, scale * v[1]));
+            }
+        }
+    }
+
+    /// Adds `d·R(φ_link)·w`.
+    fn add_travel(&mut self, f: &mut Form2, link: usize, w: [f64; 2], d: Travel) {
+        let d = match d {
+            Travel::Known(v) => return self.add_rotated(f, link, w, v),
+            Travel::Var(d) => d,
+        };
+        let (g, off) = self.group[link];
+        let w = rot(off, w);
+        match self.angles[g] {
+            Angle::Ground => {
+                f.x.push((d, w[0]));
+                f.y.push((d, w[1]));
+            }
+            Angle::Free { c, s } => {
+                let zc = self.product(d, c);
+                let zs = self.product(d, s);
+                f.x.push((zc, w[0]));
+                f.x.push((zs, -w[1]));
+                f.y.push((zs, w[0]));
+                f.y.push((zc, w[1]));
+            }
+        }
+    }
+
+    fn product(&mut self, d: VarId, c: VarId) -> VarId {
+        if let Some(&z) = self.products.get(&(d, c)) {
+            return z;
+        }
+        let dom = self.system.vars[d].domain;
+        let reach = dom.inf().abs().max(dom.sup().abs());
+        let name = format!("{}*{}", self.system.vars[d].name, self.system.vars[c].name);
+        let z = self.system.add_var(name, VarRole::Derived, interval(-reach, reach));
+        self.system.add(Equation::bilinear(z, d, c));
+        self.products.insert((d, c), z);
+        z
+    }
+
+    /// World position of `link`'s frame origin as a linear form.
+    fn position(&mut self, link: usize, travel: &BTreeMap<usize, Travel>) -> Form2 {
+        let mut f = Form2::default();
+        for j in self.m.path_to(link) {
+            let joint = &self.m.joints[j];
+            let r = self.rest[joint.parent];
+            let v = self.planar(r * joint.origin.translation.vector);
+            self.add_rotated(&mut f, joint.parent, v, 1.0);
+            if let Some(&d) = travel.get(&j) {
+                let w = self.planar(r * (joint.origin.rotation * joint.axis));
+                self.add_travel(&mut f, joint.parent, w, d);
+            }
+        }
+        f
+    }
+}
+
+fn equation_from(terms: &[(VarId, f64)], constant: f64, scale: f64) -> Option<Equation> {
+    let mut merged: BTreeMap<VarId, f64> = BTreeMap::new();
+    for &(v, c) in terms {
+        *merged.entry(v).or_insert(0.0) += c;
+    }
+    let terms: Vec<Term> = merged
+        .into_iter()
+        .filter(|&(_, c)| c.abs() > 1e-14 * scale)
+        .map(|(v, c)| Term { coef: point(c), mono: Monomial::Linear(v) })
+        .collect();
+    if terms.is_empty() {
+        None
+    } else {
+        Some(Equation::new(terms, point(constant)))
+    }
+}
+
+/// Interval of angles `atan2(s, c)` over the box `[c]×[s]` (may exceed (−π, π] to stay
+/// connected; the whole circle when the box holds the origin). Rounded outward by 1e-12.
+pub fn angle_interval(c: Interval, s: Interval) -> (f64, f64) {
+    if c.contains(0.0) && s.contains(0.0) {
+        return (-PI, PI);
+    }
+    let corners = [(c.inf(), s.inf()), (c.inf(), s.sup()), (c.sup(), s.inf()), (c.sup(), s.sup())];
+    // Behind the origin (c < 0) the branch cut of atan2 runs through the box: use [0, 2π).
+    let wrap = c.sup() < 0.0 && s.contains(0.0);
+    let angles = corners.map(|(x, y)| {
+        let a = y.atan2(x);
+        if wrap && a < 0.0 {
+            a + 2.0 * PI
+        } else {
+            a
+        }
+    });
+    let lo = angles.iter().cloned().fold(f64::INFINITY, f64::min);
+    let hi = angles.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    (lo - 1e-12, hi + 1e-12)
+}
+
+/// The bounding box of the arc of angles `[lo, hi]` on the unit circle, rounded outward.
+fn arc_box(lo: f64, hi: f64) -> (Interval, Interval) {
+    if hi - lo >= 2.0 * PI {
+        return (interval(-1.0, 1.0), interval(-1.0, 1.0));
+    }
+    let mut cs = vec![lo.cos(), hi.cos()];
+    let mut ss = vec![lo.sin(), hi.sin()];
+    // Extremes inside the arc sit at multiples of π/2.
+    let mut k = (lo / (PI / 2.0)).ceil();
+    while k * PI / 2.0 <= hi {
+        let a = k * PI / 2.0;
+        cs.push(a.cos());
+        ss.push(a.sin());
+        k += 1.0;
+    }
+    let pad = 1e-9;
+    let hull = |v: &[f64]| {
+        let lo = v.iter().cloned().fold(f64::INFINITY, f64::min);
+        let hi = v.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        interval((lo - pad).max(-1.0), (hi + pad).min(1.0))
+    };
+    (hull(&cs), hull(&ss))
+}
+
+/// Wraps an angle interval into the representation closest to `(−π, π]`, keeping it connected.
+fn wrap_angle((lo, hi): (f64, f64)) -> (f64, f64) {
+    if hi - lo >= 2.0 * PI {
+        return (-PI, PI);
+    }
+    let mid = 0.5 * (lo + hi);
+    let k = ((mid + PI) / (2.0 * PI)).floor();
+    (lo - 2.0 * PI * k, hi - 2.0 * PI * k)
+}
+
+impl LinkageProblem {
+    /// Builds the planar system of `m`, with `fixed` joint values and traced points
+    /// `(link name, x, y)` in the link's frame.
+    pub fn new(m: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f64, f64)]) -> Result<Self, LinkageError> {
+        // Rest orientation of every link (all joint values zero).
+        let n_links = m.links.len();
+        let mut rest = vec![UnitQuaternion::identity(); n_links];
+        let mut order: Vec<usize> = (0..n_links).collect();
+        order.sort_by_key(|&l| m.path_to(l).len());
+        for &l in &order {
+            if let Some(j) = m.links[l].parent_joint {
+                let joint = &m.joints[j];
+                rest[l] = rest[joint.parent] * joint.origin.rotation;
+            }
+        }
+
+        // The common axis: every revolute axis must be parallel to it, every slider across it.
+        let mut normal: Option<Vector3<f64>> = None;
+        let mut revolute_axes = Vec::new();
+        let mut slider_axes = Vec::new();
+        for j in &m.joints {
+            let w = rest[j.parent] * (j.origin.rotation * j.axis);
+            match j.kind {
+                JointKind::Revolute { .. } => revolute_axes.push((j.name.clone(), w)),
+                JointKind::Prismatic { .. } => slider_axes.push((j.name.clone(), w)),
+                JointKind::Fixed => {}
+            }
+        }
+        for l in &m.loops {
+            let w = rest[l.predecessor] * (l.predecessor_origin.rotation * l.axis);
+            match l.kind {
+                JointKind::Prismatic { .. } => slider_axes.push((l.name.clone(), w)),
+                _ => revolute_axes.push((l.name.clone(), w)),
+            }
+        }
+        for (name, w) in &revolute_axes {
+            match normal {
+                None => normal = Some(if w.z < 0.0 { -w } else { *w }),
+                Some(n) if n.cross(w).norm() > 1e-9 => {
+                    return Err(LinkageError::NonPlanar(format!("the axis of '{name}' is not parallel to the others")))
+                }
+                _ => {}
+            }
+        }
+        let n = normal.unwrap_or_else(Vector3::z);
+        for (name, w) in &slider_axes {
+            if n.dot(w).abs() > 1e-9 {
+                return Err(LinkageError::NonPlanar(format!("the slider axis of '{name}' leaves the plane of motion")));
+            }
+        }
+        // Any rotation taking z to n gives a right-handed plane basis (e1, e2).
+        let basis = Rotation3::rotation_between(&Vector3::z(), &n).unwrap_or_else(|| Rotation3::from_axis_angle(&Vector3::x_axis(), PI));
+
+        // Resolve --fix.
+        let mut fixed_tree: BTreeMap<usize, f64> = BTreeMap::new();
+        let mut fixed_loop: BTreeMap<usize, f64> = BTreeMap::new();
+        for (name, value) in fixed {
+            if !value.is_finite() {
+                return Err(LinkageError::NotFinite(name.clone()));
+            }
+            let (kind, slot) = if let Some(j) = m.joint(name) {
+                (m.joints[j].kind, (true, j))
+            } else if let Some(l) = m.loops.iter().position(|l| &l.name == name) {
+                (m.loops[l].kind, (false, l))
+            } else {
+                return Err(LinkageError::UnknownJoint(name.clone()));
+            };
+            let limits = match kind {
+                JointKind::Fixed => return Err(LinkageError::NotMovable(name.clone())),
+                JointKind::Revolute { limits } => limits,
+                JointKind::Prismatic { limits } => Some(limits),
+            };
+            if let Some((lower, upper)) = limits {
+                if *value < lower || *value > upper {
+                    return Err(LinkageError::OutsideLimits { joint: name.clone(), value: *value, lower, upper });
+                }
+            }
+            if slot.0 { fixed_tree.insert(slot.1, *value) } else { fixed_loop.insert(slot.1, *value) };
+        }
+
+        let sign_of = |w: Vector3<f64>| if w.dot(&n) < 0.0 { -1.0 } else { 1.0 };
+
+        // Rigid groups: walk the tree from the root.
+        let mut group = vec![(usize::MAX, 0.0); n_links];
+        let mut group_count = 1;
+        group[m.root] = (0, 0.0);
+        for &l in &order {
+            let Some(j) = m.links[l].parent_joint else { continue };
+            let joint = &m.joints[j];
+            let (pg, poff) = group[joint.parent];
+            group[l] = match (joint.kind, fixed_tree.get(&j)) {
+                (JointKind::Revolute { .. }, None) => {
+                    group_count += 1;
+                    (group_count - 1, 0.0)
+                }
+                (JointKind::Revolute { .. }, Some(&v)) => {
+                    let w = rest[joint.parent] * (joint.origin.rotation * joint.axis);
+                    (pg, poff + sign_of(w) * v)
+                }
+                _ => (pg, poff),
+            };
+        }
+        // Prismatic loops and fixed revolute loops weld their two sides' groups together.
+        for (k, l) in m.loops.iter().enumerate() {
+            let welded = match (l.kind, fixed_loop.get(&k)) {
+                (JointKind::Prismatic { .. }, _) => Some(0.0),
+                (JointKind::Revolute { .. }, Some(&v)) => {
+                    let w = rest[l.predecessor] * (l.predecessor_origin.rotation * l.axis);
+                    Some(sign_of(w) * v)
+                }
+                _ => None,
+            };
+            let Some(turn) = welded else { continue };
+            // φ_successor = φ_predecessor + turn + (rest yaw difference of the closure frames).
+            let yaw = |link: usize, o: &UnitQuaternion<f64>| {
+                let x = basis.inverse() * (rest[link] * (o * Vector3::x()));
+                x.y.atan2(x.x)
+            };
+            let rest_turn = yaw(l.predecessor, &l.predecessor_origin.rotation) - yaw(l.successor, &l.successor_origin.rotation);
+            let (gp, op) = group[l.predecessor];
+            let (gs, os) = group[l.successor];
+            let target = op + turn + rest_turn - os; // φ_gs = φ_gp + target
+            if gp == gs {
+                let miss = (target + PI).rem_euclid(2.0 * PI) - PI;
+                if miss.abs() > 1e-9 {
+                    return Err(LinkageError::Contradiction(l.name.clone()));
+                }
+                continue;
+            }
+            // Relabel the group that is not the ground.
+            let (from, into, off) = if gs != 0 { (gs, gp, target) } else { (gp, gs, -target) };
+            for g in group.iter_mut() {
+                if g.0 == from {
+                    *g = (into, g.1 + off);
+                }
+            }
+        }
+
+        let mut b = Builder { m, system: EquationSystem::default(), basis, rest: rest.clone(), group, angles: vec![Angle::Ground; group_count], products: BTreeMap::new() };
+
+        // Angle variables for every group still in use, named after its first link.
+        for l in 0..n_links {
+            let g = b.group[l].0;
+            if g != 0 && b.angles[g] == Angle::Ground {
+                let name = &m.links[l].name;
+                let (mut dc, mut ds) = (interval(-1.0, 1.0), interval(-1.0, 1.0));
+                // A limited joint to the ground bounds the group's angle to an arc.
+                if let Some(j) = m.links[l].parent_joint {
+                    let joint = &m.joints[j];
+                    if let (JointKind::Revolute { limits: Some((lo, hi)) }, 0) = (joint.kind, b.group[joint.parent].0) {
+                        let w = rest[joint.parent] * (joint.origin.rotation * joint.axis);
+                        let base = b.group[joint.parent].1 - b.group[l].1;
+                        let (a, z) = if sign_of(w) > 0.0 { (lo, hi) } else { (-hi, -lo) };
+                        (dc, ds) = arc_box(base + a, base + z);
+                    }
+                }
+                let c = b.system.add_var(format!("cos_{name}"), VarRole::Primary, dc);
+                let s = b.system.add_var(format!("sin_{name}"), VarRole::Primary, ds);
+                b.system.add(Equation::circle(c, s));
+                b.angles[g] = Angle::Free { c, s };
+            }
+        }
+
+        // Travel variables.
+        let mut travel: BTreeMap<usize, Travel> = BTreeMap::new();
+        let mut readings = Vec::new();
+        let mut free_joints = Vec::new();
+        for (j, joint) in m.joints.iter().enumerate() {
+            match joint.kind {
+                JointKind::Prismatic { limits } => {
+                    let t = match fixed_tree.get(&j) {
+                        Some(&v) => Travel::Known(v),
+                        None => {
+                            let v = b.system.add_var(format!("d_{}", joint.name), VarRole::Primary, interval(limits.0, limits.1));
+                            readings.push((joint.name.clone(), Reading::Travel(v)));
+                            free_joints.push(joint.name.clone());
+                            Travel::Var(v)
+                        }
+                    };
+                    travel.insert(j, t);
+                }
+                JointKind::Revolute { .. } if !fixed_tree.contains_key(&j) => {
+                    let w = rest[joint.parent] * (joint.origin.rotation * joint.axis);
+                    readings.push((joint.name.clone(), Reading::Revolute { a: joint.parent, b: joint.child, sign: sign_of(w), offset: 0.0 }));
+                    free_joints.push(joint.name.clone());
+                }
+                _ => {}
+            }
+        }
+
+        // One vector equation per loop.
+        let mut loop_equations: Vec<(String, Vec<usize>)> = Vec::new();
+        for (k, l) in m.loops.iter().enumerate() {
+            let mut f = b.position(l.predecessor, &travel);
+            let a = b.planar(rest[l.predecessor] * l.predecessor_origin.translation.vector);
+            b.add_rotated(&mut f, l.predecessor, a, 1.0);
+            if let JointKind::Prismatic { limits } = l.kind {
+                let t = match fixed_loop.get(&k) {
+                    Some(&v) => Travel::Known(v),
+                    None => {
+                        let v = b.system.add_var(format!("d_{}", l.name), VarRole::Primary, interval(limits.0, limits.1));
+                        readings.push((l.name.clone(), Reading::Travel(v)));
+                        free_joints.push(l.name.clone());
+                        Travel::Var(v)
+                    }
+                };
+                let w = b.planar(rest[l.predecessor] * (l.predecessor_origin.rotation * l.axis));
+                b.add_travel(&mut f, l.predecessor, w, t);
+            } else if !fixed_loop.contains_key(&k) {
+                let w = rest[l.predecessor] * (l.predecessor_origin.rotation * l.axis);
+                let yaw = |link: usize, o: &UnitQuaternion<f64>| {
+                    let x = basis.inverse() * (rest[link] * (o * Vector3::x()));
+                    x.y.atan2(x.x)
+                };
+                let offset = yaw(l.successor, &l.successor_origin.rotation) - yaw(l.predecessor, &l.predecessor_origin.rotation);
+                let sign = sign_of(w);
+                readings.push((l.name.clone(), Reading::Revolute { a: l.predecessor, b: l.successor, sign, offset: sign * offset }));
+                free_joints.push(l.name.clone());
+            }
+            let g = b.position(l.successor, &travel);
+            let s = b.planar(rest[l.successor] * l.successor_origin.translation.vector);
+            let mut minus = g;
+            b.add_rotated(&mut minus, l.successor, s, 1.0);
+            let scale = 1.0 + f.constant[0].abs().max(f.constant[1].abs());
+            let mut rows = Vec::new();
+            for (coord, (pos, neg)) in [(&f.x, &minus.x), (&f.y, &minus.y)].into_iter().enumerate() {
+                let mut terms = pos.clone();
+                terms.extend(neg.iter().map(|&(v, c)| (v, -c)));
+                let constant = f.constant[coord] - minus.constant[coord];
+                match equation_from(&terms, constant, scale) {
+                    Some(e) => {
+                        rows.push(b.system.equations.len());
+                        b.system.add(e);
+                    }
+                    None if constant.abs() > 1e-9 * scale => return Err(LinkageError::CannotClose(l.name.clone())),
+                    None => {}
+                }
+            }
+            loop_equations.push((l.name.clone(), rows));
+        }
+
+        // Traced points.
+        let mut trace_out = Vec::new();
+        for (link_name, x, y) in traces {
+            let link = m.link(link_name).ok_or_else(|| LinkageError::UnknownTraceLink(link_name.clone()))?;
+            let mut f = b.position(link, &travel);
+            let v = b.planar(rest[link] * Vector3::new(*x, *y, 0.0));
+            b.add_rotated(&mut f, link, v, 1.0);
+            let name = format!("{link_name}@{x},{y}");
+            let init = b.system.initial_box();
+            let reach = |terms: &[(VarId, f64)], c: f64| terms.iter().fold(point(c), |acc, &(v, k)| acc + point(k) * init.dims[v]);
+            let (rx, ry) = (reach(&f.x, f.constant[0]), reach(&f.y, f.constant[1]));
+            let tx = b.system.add_var(format!("x_{name}"), VarRole::Derived, rx);
+            let ty = b.system.add_var(format!("y_{name}"), VarRole::Derived, ry);
+            for (t, terms, c) in [(tx, &f.x, f.constant[0]), (ty, &f.y, f.constant[1])] {
+                let mut all = terms.clone();
+                all.push((t, -1.0));
+                if let Some(e) = equation_from(&all, c, 1.0) {
+                    b.system.add(e);
+                }
+            }
+            trace_out.push(Trace { name, x: tx, y: ty });
+        }
+
+        if b.system.primaries().is_empty() {
+            return Err(LinkageError::NothingToSolve);
+        }
+
+        // A loop that cannot close on its own is bad input, not an empty answer.
+        let start = b.system.initial_box();
+        for (name, rows) in &loop_equations {
+            let mut sub = EquationSystem { vars: b.system.vars.clone(), equations: rows.iter().map(|&r| b.system.equations[r].clone()).collect() };
+            sub.equations.extend(b.system.equations.iter().filter(|e| !matches!(e.kind, crate::system::EquationKind::Linear)).cloned());
+            let mut probe = start.clone();
+            if Propagation::new(&sub).contract(&mut probe) == Contraction::Empty {
+                return Err(LinkageError::CannotClose(name.clone()));
+            }
+        }
+
+        let links = (0..n_links)
+            .map(|l| {
+                let (g, off) = b.group[l];
+                let x = basis.inverse() * (rest[l] * Vector3::x());
+                (m.links[l].name.clone(), b.angles[g], off, x.y.atan2(x.x))
+            })
+            .collect();
+        let fixed_joints = fixed.to_vec();
+        Ok(Self { system: b.system, name: m.name.clone(), free_joints, fixed_joints, traces: trace_out, links, readings })
+    }
+
+    /// World orientation of every link over the box, radians, keyed by link name.
+    pub fn link_angles(&self, b: &IntervalBox) -> BTreeMap<String, (f64, f64)> {
+        self.links.iter().map(|(name, angle, off, yaw)| (name.clone(), wrap_angle(self.angle(b, *angle, off + yaw)))).collect()
+    }
+
+    fn angle(&self, b: &IntervalBox, angle: Angle, off: f64) -> (f64, f64) {
+        match angle {
+            Angle::Ground => (off, off),
+            Angle::Free { c, s } => {
+                let (lo, hi) = angle_interval(b.dims[c], b.dims[s]);
+                (lo + off, hi + off)
+            }
+        }
+    }
+
+    /// Values of the free joints over the box (radians or metres), keyed by joint name.
+    pub fn joint_values(&self, b: &IntervalBox) -> BTreeMap<String, (f64, f64)> {
+        self.readings
+            .iter()
+            .map(|(name, r)| {
+                let v = match *r {
+                    Reading::Travel(v) => (b.dims[v].inf(), b.dims[v].sup()),
+                    Reading::Revolute { a, b: c, sign, offset } => {
+                        let (la, oa) = (self.links[a].1, self.links[a].2);
+                        let (lc, oc) = (self.links[c].1, self.links[c].2);
+                        let pa = self.angle(b, la, oa);
+                        let pc = self.angle(b, lc, oc);
+                        let (lo, hi) = (pc.0 - pa.1, pc.1 - pa.0);
+                        let (lo, hi) = if sign > 0.0 { (lo, hi) } else { (-hi, -lo) };
+                        wrap_angle((lo + offset, hi + offset))
+                    }
+                };
+                (name.clone(), v)
+            })
+            .collect()
+    }
+
+    /// A box's point in the system's variables from link angles (radians, by link name) and
+    /// slider travels (by joint name): for tests and references. Traced and product variables
+    /// are filled in from the equations.
+    pub fn point_from(&self, angles: &BTreeMap<String, f64>, travels: &BTreeMap<String, f64>) -> Option<Vec<f64>> {
+        let mut x = vec![f64::NAN; self.system.vars.len()];
+        for (name, angle, off, yaw) in &self.links {
+            if let Angle::Free { c, s } = angle {
+                let phi = angles.get(name)? - off - yaw;
+                x[*c] = phi.cos();
+                x[*s] = phi.sin();
+            }
+        }
+        for (name, r) in &self.readings {
+            if let Reading::Travel(v) = r {
+                x[*v] = *travels.get(name)?;
+            }
+        }
+        // Derived variables: products, then traces (each defined by one equation).
+        for e in &self.system.equations {
+            if let crate::system::EquationKind::Bilinear { z, x: a, y: c } = e.kind {
+                x[z] = x[a] * x[c];
+            }
+        }
+        for t in &self.traces {
+            for v in [t.x, t.y] {
+                let e = self.system.equations.iter().find(|e| e.terms.iter().any(|k| k.mono == Monomial::Linear(v)))?;
+                let coef = e.terms.iter().find(|k| k.mono == Monomial::Linear(v))?.coef.mid();
+                x[v] = 0.0;
+                x[v] = -e.residual(&x) / coef;
+            }
+        }
+        Some(x)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn angle_interval_handles_the_branch_cut() {
+        let (lo, hi) = angle_interval(interval(-1.0, -0.9), interval(-0.1, 0.1));
+        assert!(lo < PI && hi > PI && hi - lo < 0.3);
+        let (lo, hi) = angle_interval(interval(0.5, 0.6), interval(0.7, 0.8));
+        assert!(lo <= 0.8f64.atan2(0.6) && hi >= 0.7f64.atan2(0.5));
+    }
+
+    #[test]
+    fn arc_box_encloses_the_arc() {
+        let (c, s) = arc_box(-0.3, 2.0);
+        for k in 0..=100 {
+            let a = -0.3 + 2.3 * k as f64 / 100.0;
+            assert!(c.contains(a.cos()) && s.contains(a.sin()));
+        }
+        assert!(c.sup() >= 1.0 && s.sup() >= 1.0 && s.inf() < -0.29);
+    }
+}
