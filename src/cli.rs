@@ -113,12 +113,20 @@ fn solve(args: SolveArgs) -> Result<()> {
     let problem = LinkageProblem::new(&mechanism, &fixed, &traces).with_context(|| format!("building {}", args.urdf.display()))?;
     let solver = Solver::new(&problem.system, settings.clone())?;
     let mut sink = Terminal { collect: Collect::default(), show: std::io::stderr().is_terminal() };
-    let (status, stats) = solver.run(&AtomicBool::new(false), &mut sink);
+    let cancel = AtomicBool::new(false);
+    let (status, mut stats) = solver.run(&cancel, &mut sink);
+    let (solutions, dropped) = solver.drop_spurious(std::mem::take(&mut sink.collect.solutions), 2, &cancel);
+    sink.collect.solutions = solutions;
+    stats.spurious_dropped = dropped;
+    stats.solutions -= dropped;
     if sink.show {
         eprintln!();
     }
     let report = problem.report(&settings, status, stats, &sink.collect.solutions, &sink.collect.undecided);
-    println!(
+    // Write through a handle: `println!` panics when the reader of a pipe has gone.
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
         "{}: {} solution boxes in {} clusters, status {}, {} boxes processed ({} empty, {} bisected), {} LPs, {:.3} s",
         report.mechanism,
         report.solutions.len(),
@@ -132,11 +140,12 @@ fn solve(args: SolveArgs) -> Result<()> {
         report.stats.bisected,
         report.stats.lp.solved,
         report.stats.seconds
-    );
+    )
+    .ok();
     if report.solutions.len() <= 20 {
         for (k, s) in report.solutions.iter().enumerate() {
             let joints: Vec<String> = s.joints.iter().map(|(n, [lo, hi])| format!("{n}={:.6}", 0.5 * (lo + hi))).collect();
-            println!("  #{k}: {}", joints.join(" "));
+            writeln!(out, "  #{k}: {}", joints.join(" ")).ok();
         }
     }
     if let Some(path) = args.json {

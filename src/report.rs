@@ -2,7 +2,7 @@
 //!
 //! Pure data: no IO here; the CLI writes it, the ROS node will publish it.
 
-use crate::interval::IntervalBox;
+use crate::interval::{components, IntervalBox};
 use crate::problems::LinkageProblem;
 use crate::solve::{SolverSettings, Stats, Status};
 use crate::system::VarRole;
@@ -72,37 +72,6 @@ pub struct SolveReport {
     pub stats: Stats,
 }
 
-/// Labels each box with its connected component (boxes sharing a point are connected);
-/// returns the labels and the number of components.
-pub fn components(boxes: &[IntervalBox]) -> (Vec<usize>, usize) {
-    let mut parent: Vec<usize> = (0..boxes.len()).collect();
-    fn find(p: &mut [usize], mut i: usize) -> usize {
-        while p[i] != i {
-            p[i] = p[p[i]];
-            i = p[i];
-        }
-        i
-    }
-    for i in 0..boxes.len() {
-        for j in (i + 1)..boxes.len() {
-            if boxes[i].intersects(&boxes[j]) {
-                let (a, b) = (find(&mut parent, i), find(&mut parent, j));
-                if a != b {
-                    parent[a] = b;
-                }
-            }
-        }
-    }
-    let mut labels = vec![0; boxes.len()];
-    let mut ids = BTreeMap::new();
-    for i in 0..boxes.len() {
-        let r = find(&mut parent, i);
-        let next = ids.len();
-        labels[i] = *ids.entry(r).or_insert(next);
-    }
-    (labels, ids.len())
-}
-
 impl LinkageProblem {
     /// One box in the user's terms.
     pub fn record(&self, b: &IntervalBox) -> BoxRecord {
@@ -137,20 +106,5 @@ impl LinkageProblem {
             undecided: undecided.iter().map(|b| self.record(b)).collect(),
             stats,
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::interval::interval;
-
-    #[test]
-    fn touching_boxes_form_one_component() {
-        let b = |lo: f64, hi: f64| IntervalBox::new(vec![interval(lo, hi)]);
-        let (labels, n) = components(&[b(0.0, 1.0), b(3.0, 4.0), b(1.0, 2.0)]);
-        assert_eq!(n, 2);
-        assert_eq!(labels[0], labels[2]);
-        assert_ne!(labels[0], labels[1]);
     }
 }

@@ -93,34 +93,42 @@ pub fn relax(system: &EquationSystem, b: &[Interval]) -> Option<Relaxation> {
     Some(Relaxation { n: b.len(), rows })
 }
 
-/// Chord and tangent cuts for `x² + y² = 1` when `[x]×[y]` lies in one closed quadrant.
+/// Chord and tangent cuts for `x² + y² = 1` over the box `[x]×[y]`.
 ///
-/// In the quadrant the circle is monotone, so its part in the box is one arc whose ends lie on
-/// the box's edges; `w·p` over an arc of a quarter circle is smallest at an end. The ends are
-/// enclosed by the edge candidates `(v, ±√(1−v²))` and `(±√(1−v²), v)` for the box's bounds `v`,
-/// kept when they may lie in the box, so the minimum over candidates is a verified chord bound.
+/// The circle meets the box in arcs whose ends lie on the box's edges. Those ends are enclosed
+/// by the edge candidates `(v, ±√(1−v²))` and `(±√(1−v²), v)` for each bound `v` of the box,
+/// kept when they may lie in the box. Along the circle, `w·p` has its only interior minimum at
+/// the antipode of `w`; when that point is outside the box, the smallest `w·p` over the
+/// candidates bounds `w·p` from below on every arc: the seed's chord cut, for boxes in any
+/// position. The tangent at any candidate, `p·x ≤ |p|`, holds on the whole circle.
 fn circle_cuts(x: VarId, y: VarId, b: &[Interval], rows: &mut Vec<Row>) {
     let (bx, by) = (b[x], b[y]);
-    let sx = if bx.inf() >= 0.0 { 1.0 } else if bx.sup() <= 0.0 { -1.0 } else { return };
-    let sy = if by.inf() >= 0.0 { 1.0 } else if by.sup() <= 0.0 { -1.0 } else { return };
-    // Reflect into the first quadrant: u = sx·x, v = sy·y.
-    let (bu, bv) = (bx * point(sx), by * point(sy));
     let one = point(1.0);
-    let mut ends: Vec<(Interval, Interval)> = Vec::with_capacity(4);
-    for u in [bu.inf(), bu.sup()] {
-        let v = (one - point(u).sqr()).intersection(interval(0.0, 1.0)).sqrt();
-        if !v.is_empty() && !v.disjoint(bv) {
-            ends.push((point(u), v));
+    let mut ends: Vec<(Interval, Interval)> = Vec::with_capacity(8);
+    let root = |v: f64| (one - point(v).sqr()).intersection(interval(0.0, 1.0)).sqrt();
+    for u in [bx.inf(), bx.sup()] {
+        let r = root(u);
+        for v in [r, -r] {
+            if !v.is_empty() && !v.disjoint(by) {
+                ends.push((point(u), v));
+            }
         }
     }
-    for v in [bv.inf(), bv.sup()] {
-        let u = (one - point(v).sqr()).intersection(interval(0.0, 1.0)).sqrt();
-        if !u.is_empty() && !u.disjoint(bu) {
-            ends.push((u, point(v)));
+    for v in [by.inf(), by.sup()] {
+        let r = root(v);
+        for u in [r, -r] {
+            if !u.is_empty() && !u.disjoint(bx) {
+                ends.push((u, point(v)));
+            }
         }
     }
     if ends.is_empty() {
         return;
+    }
+    for (u, v) in &ends {
+        let (pu, pv) = (u.mid(), v.mid());
+        let plen = (point(pu).sqr() + point(pv).sqr()).sqrt().sup();
+        rows.push(Row { coefs: vec![(x, pu), (y, pv)], bounds: interval(-plen, plen), sides: Sides::Upper });
     }
     let (mut mu, mut mv) = (0.0, 0.0);
     for (u, v) in &ends {
@@ -128,20 +136,19 @@ fn circle_cuts(x: VarId, y: VarId, b: &[Interval], rows: &mut Vec<Row>) {
         mv += v.mid();
     }
     let norm = (mu * mu + mv * mv).sqrt();
-    if !(norm > 1e-300) {
+    if !(norm > 1e-6) {
         return;
     }
     let (wu, wv) = (mu / norm, mv / norm);
+    // The antipode must lie clearly outside the box for the endpoint argument to hold.
+    let margin = 1e-6;
+    let outside = |p: f64, d: Interval| p < d.inf() - margin || p > d.sup() + margin;
+    if !(outside(-wu, bx) || outside(-wv, by)) {
+        return;
+    }
     let d = ends.iter().map(|(u, v)| (point(wu) * *u + point(wv) * *v).inf()).fold(f64::INFINITY, f64::min);
     let wlen = (point(wu).sqr() + point(wv).sqr()).sqrt().sup();
-    let coefs = vec![(x, sx * wu), (y, sy * wv)];
-    rows.push(Row { coefs, bounds: interval(d.min(wlen), wlen), sides: Sides::Both });
-    // Tangents at the ends: p·(u, v) ≤ |p| on the unit circle.
-    for (u, v) in &ends {
-        let (pu, pv) = (u.mid(), v.mid());
-        let plen = (point(pu).sqr() + point(pv).sqr()).sqrt().sup();
-        rows.push(Row { coefs: vec![(x, sx * pu), (y, sy * pv)], bounds: interval(-plen, plen), sides: Sides::Upper });
-    }
+    rows.push(Row { coefs: vec![(x, wu), (y, wv)], bounds: interval(d.min(wlen), wlen), sides: Sides::Both });
 }
 
 /// The four McCormick planes of `z = x·y` over `[x]×[y]`, the faces of the seed's tetrahedron.
@@ -175,7 +182,7 @@ mod tests {
         let mut rows = Vec::new();
         circle_cuts(0, 1, &b, &mut rows);
         assert!(rows.len() >= 3);
-        let chord = &rows[0];
+        let chord = rows.last().expect("a chord row");
         for k in 0..=100 {
             let t = k as f64 / 100.0 * std::f64::consts::FRAC_PI_2;
             let (u, v) = (t.cos(), t.sin());

@@ -12,6 +12,7 @@
 
 mod clarabel_lp;
 mod safe_bound;
+mod simplex;
 
 use crate::interval::Interval;
 use crate::system::VarId;
@@ -60,6 +61,16 @@ pub enum LpOutcome {
     Bounds(Vec<Interval>),
 }
 
+/// The LP solver that proposes multipliers to `safe_bound` (soundness never depends on it).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub enum LpBackend {
+    /// The dense bounded-variable simplex of this module, warm-started across objectives.
+    #[default]
+    Simplex,
+    /// The clarabel interior-point solver.
+    Clarabel,
+}
+
 /// Counters for statistics.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct LpCounters {
@@ -74,6 +85,20 @@ impl Relaxation {
     ///
     /// Inclusion: every `x ∈ b` satisfying all rows has `x[targets[k]] ∈ result[k]`.
     pub fn bound(&self, b: &[Interval], targets: &[VarId], counters: &mut LpCounters) -> LpOutcome {
-        clarabel_lp::bound(self, b, targets, counters)
+        self.bound_with(LpBackend::default(), b, targets, counters)
+    }
+
+    /// `bound` with an explicit LP solver; the same inclusion holds for every backend.
+    pub fn bound_with(
+        &self,
+        backend: LpBackend,
+        b: &[Interval],
+        targets: &[VarId],
+        counters: &mut LpCounters,
+    ) -> LpOutcome {
+        match backend {
+            LpBackend::Simplex => simplex::bound(self, b, targets, counters),
+            LpBackend::Clarabel => clarabel_lp::bound(self, b, targets, counters),
+        }
     }
 }

@@ -103,6 +103,8 @@ pub struct Stats {
     pub shrink_rounds: u64,
     /// LP statistics.
     pub lp: LpCounters,
+    /// Solution boxes later proven empty by `Solver::drop_spurious`.
+    pub spurious_dropped: u64,
     /// Deepest tree level reached.
     pub max_level: u32,
     /// Wall-clock seconds.
@@ -206,6 +208,42 @@ impl<'a> Solver<'a> {
         (status, stats)
     }
 
+    /// Re-examines solution boxes that sit in clusters of at most `max_cluster` boxes with a
+    /// deeper search (sigma / 16), and drops those it proves empty; returns the survivors and
+    /// the number dropped.
+    ///
+    /// Why: a box reaching sigma is accepted without proof that it holds a solution, and at
+    /// coarse sigma a few such near misses form clusters of their own. A solution curve never
+    /// leaves a lone box (it crosses into its neighbours, which then touch it), and an isolated
+    /// root survives the deeper search, so only proven-empty boxes go. The search is bounded;
+    /// a box it cannot decide stays.
+    pub fn drop_spurious(&self, boxes: Vec<IntervalBox>, max_cluster: usize, cancel: &AtomicBool) -> (Vec<IntervalBox>, u64) {
+        let (labels, n) = crate::interval::components(&boxes);
+        let mut sizes = vec![0usize; n];
+        for &l in &labels {
+            sizes[l] += 1;
+        }
+        let deeper = Solver {
+            system: self.system,
+            primaries: self.primaries.clone(),
+            settings: SolverSettings { sigma: self.settings.sigma / 16.0, max_boxes: 4_000, ..self.settings.clone() },
+        };
+        let mut kept = Vec::with_capacity(boxes.len());
+        let mut dropped = 0;
+        for (b, l) in boxes.into_iter().zip(labels) {
+            if sizes[l] <= max_cluster {
+                let mut probe = Collect::default();
+                let (status, _) = deeper.run_from(b.clone(), cancel, &mut probe);
+                if status == Status::Complete && probe.solutions.is_empty() {
+                    dropped += 1;
+                    continue;
+                }
+            }
+            kept.push(b);
+        }
+        (kept, dropped)
+    }
+
     fn limit_reached(&self, stats: &Stats, t0: Instant, cancel: &AtomicBool) -> Option<Limit> {
         if cancel.load(Ordering::Relaxed) {
             return Some(Limit::Cancelled);
@@ -227,9 +265,8 @@ impl<'a> Solver<'a> {
             if propagation.contract(b) == Contraction::Empty {
                 return Shrunk::Empty;
             }
-            if self.size(b) <= self.settings.sigma {
-                return Shrunk::Solution;
-            }
+            // The LP runs even when propagation alone reached sigma: it is what proves most
+            // near-miss boxes empty, and a spurious solution box costs the user more than an LP.
             if self.settings.use_lp && lp.contract(b) == Contraction::Empty {
                 return Shrunk::Empty;
             }

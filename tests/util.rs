@@ -1,0 +1,36 @@
+use linkspace::model::urdf;
+use linkspace::problems::LinkageProblem;
+use linkspace::solve::{Collect, Solver, SolverSettings, Stats, Status};
+use linkspace::IntervalBox;
+use std::sync::atomic::AtomicBool;
+
+pub fn urdf_text(name: &str) -> String {
+    std::fs::read_to_string(format!("{}/urdf/{name}", env!("CARGO_MANIFEST_DIR"))).expect("bundled URDF")
+}
+
+pub fn problem(name: &str, fixed: &[(&str, f64)], traces: &[(&str, f64, f64)]) -> LinkageProblem {
+    let m = urdf::parse(&urdf_text(name)).expect("bundled URDF parses");
+    let fixed: Vec<(String, f64)> = fixed.iter().map(|(n, v)| (n.to_string(), *v)).collect();
+    let traces: Vec<(String, f64, f64)> = traces.iter().map(|(n, x, y)| (n.to_string(), *x, *y)).collect();
+    LinkageProblem::new(&m, &fixed, &traces).expect("bundled mechanism builds")
+}
+
+pub struct Run {
+    pub status: Status,
+    pub stats: Stats,
+    pub solutions: Vec<IntervalBox>,
+}
+
+pub fn solve(p: &LinkageProblem, sigma: f64) -> Run {
+    let settings = SolverSettings { sigma, ..Default::default() };
+    let solver = Solver::new(&p.system, settings).expect("valid settings");
+    let mut out = Collect::default();
+    let (status, stats) = solver.run(&AtomicBool::new(false), &mut out);
+    assert!(out.undecided.is_empty() || status != Status::Complete);
+    Run { status, stats, solutions: out.solutions }
+}
+
+/// Does some box contain `x`, allowing `slack` for the rounding of the reference point itself?
+pub fn covered(boxes: &[IntervalBox], x: &[f64], slack: f64) -> bool {
+    boxes.iter().any(|b| b.dims.iter().zip(x).all(|(d, &v)| d.inf() - slack <= v && v <= d.sup() + slack))
+}
