@@ -4,10 +4,8 @@ use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use linkspace::model::urdf;
 use linkspace::problems::LinkageProblem;
-use linkspace::solve::{BoxSink, BoxStatus, Collect, Progress, Solver, SolverSettings};
-use linkspace::IntervalBox;
+use linkspace::solve::{Progress, Solver, SolverSettings};
 use std::io::{IsTerminal, Write};
-use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
@@ -80,24 +78,6 @@ fn parse_trace(s: &str) -> Result<(String, f64, f64)> {
     Ok((link.to_string(), x, y))
 }
 
-/// Prints progress on a terminal, collects boxes.
-struct Terminal {
-    collect: Collect,
-    show: bool,
-}
-
-impl BoxSink for Terminal {
-    fn emit(&mut self, status: BoxStatus, b: &IntervalBox) -> ControlFlow<()> {
-        self.collect.emit(status, b)
-    }
-    fn progress(&mut self, p: &Progress) {
-        if self.show {
-            eprint!("\r{:5.1}% decided, {} boxes processed, {} pending, {} solutions   ", 100.0 * p.decided, p.processed, p.pending, self.collect.solutions.len());
-            let _ = std::io::stderr().flush();
-        }
-    }
-}
-
 fn solve(args: SolveArgs) -> Result<()> {
     let timeout = match args.timeout {
         Some(t) if t.is_finite() && t > 0.0 => Some(Duration::from_secs_f64(t.min(1e9))),
@@ -112,17 +92,19 @@ fn solve(args: SolveArgs) -> Result<()> {
     let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", args.urdf.display()))?;
     let problem = LinkageProblem::new(&mechanism, &fixed, &traces).with_context(|| format!("building {}", args.urdf.display()))?;
     let solver = Solver::new(&problem.system, settings.clone())?;
-    let mut sink = Terminal { collect: Collect::default(), show: std::io::stderr().is_terminal() };
-    let cancel = AtomicBool::new(false);
-    let (status, mut stats) = solver.run(&cancel, &mut sink);
-    let (solutions, dropped) = solver.drop_spurious(std::mem::take(&mut sink.collect.solutions), 2, &cancel);
-    sink.collect.solutions = solutions;
-    stats.spurious_dropped = dropped;
-    stats.solutions -= dropped;
-    if sink.show {
+    let show = std::io::stderr().is_terminal();
+    let mut progress = |p: &Progress| {
+        if show {
+            eprint!("\r{:5.1}% decided, {} boxes processed, {} pending   ", 100.0 * p.decided, p.processed, p.pending);
+            let _ = std::io::stderr().flush();
+        }
+    };
+    let result = solver.enclose(&AtomicBool::new(false), &mut progress);
+    if show {
         eprintln!();
     }
-    let report = problem.report(&settings, status, stats, &sink.collect.solutions, &sink.collect.undecided);
+    let status = result.status;
+    let report = problem.report(&settings, result.status, result.stats, &result.solutions, &result.undecided);
     // Write through a handle: `println!` panics when the reader of a pipe has gone.
     let mut out = std::io::stdout().lock();
     writeln!(

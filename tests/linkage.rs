@@ -173,32 +173,112 @@ fn trace_branch(start: &[f64], h: f64) -> Vec<Vec<f64>> {
 }
 
 #[test]
-fn mobile_butterfly_boxes_cover_every_traced_branch() {
+fn mobile_butterfly_is_four_closed_branches_at_every_sigma() {
     let p = problem("double_butterfly.urdf", &[], &[]);
-    let run = solve(&p, 0.1);
-    assert_eq!(run.status, Status::Complete);
-    let (labels, clusters) = components(&run.solutions);
     // Trace from every rigid root; a root already on a traced branch adds nothing.
+    let wrap = |d: f64| (d + PI).rem_euclid(2.0 * PI) - PI;
     let mut branches: Vec<Vec<Vec<f64>>> = Vec::new();
     for row in table_one() {
         let root = refine_rigid(row);
-        let wrap = |d: f64| (d + PI).rem_euclid(2.0 * PI) - PI;
         let known = branches.iter().any(|b| b.iter().any(|q| (0..7).all(|i| wrap(q[i] - root[i]).abs() < 0.02)));
         if !known {
             branches.push(trace_branch(&root, 0.01));
         }
     }
-    let mut cluster_of_branch = Vec::new();
-    for branch in &branches {
-        let mut seen = std::collections::BTreeSet::new();
-        for q in branch {
-            let x = p.point_from(&angles_map(q), &BTreeMap::new()).expect("angles");
-            let k = run.solutions.iter().position(|b| b.dims.iter().zip(&x).all(|(d, &v)| d.inf() - 1e-12 <= v && v <= d.sup() + 1e-12));
-            let k = k.unwrap_or_else(|| panic!("curve point {q:?} is in no solution box"));
-            seen.insert(labels[k]);
+    assert_eq!(branches.len(), 4, "the six rigid roots lie on four branches");
+    let points: Vec<Vec<Vec<f64>>> = branches
+        .iter()
+        .map(|b| b.iter().map(|q| p.point_from(&angles_map(q), &BTreeMap::new()).expect("angles")).collect())
+        .collect();
+    for sigma in [0.5, 0.2, 0.1, 0.05] {
+        let run = solve(&p, sigma);
+        assert_eq!(run.status, Status::Complete);
+        let (labels, clusters) = components(&run.solutions);
+        assert_eq!(clusters, 4, "sigma {sigma}: {clusters} clusters");
+        let mut cluster_of_branch = std::collections::BTreeSet::new();
+        for branch in &points {
+            let mut seen = std::collections::BTreeSet::new();
+            for x in branch {
+                let k = run.solutions.iter().position(|b| b.dims.iter().zip(x).all(|(d, &v)| d.inf() - 1e-12 <= v && v <= d.sup() + 1e-12));
+                let k = k.unwrap_or_else(|| panic!("sigma {sigma}: curve point {x:?} is in no solution box"));
+                seen.insert(labels[k]);
+            }
+            assert_eq!(seen.len(), 1, "sigma {sigma}: a branch spans several clusters");
+            cluster_of_branch.extend(seen);
         }
-        assert_eq!(seen.len(), 1, "a branch spans several clusters");
-        cluster_of_branch.push(*seen.iter().next().expect("non-empty"));
+        assert_eq!(cluster_of_branch.len(), 4, "sigma {sigma}: two branches share a cluster");
     }
-    eprintln!("branches {} clusters {} boxes {}", branches.len(), clusters, run.solutions.len());
+}
+
+/// Both assembly modes of a four-bar by intersecting two circles: rocker angles and coupler
+/// points for crank angle `t2`.
+fn four_bar_closed_form(t2: f64) -> Vec<(f64, [f64; 2])> {
+    let (a, b, c, d) = (1.5, 4.0, 3.5, 4.0);
+    let pa = [a * t2.cos(), a * t2.sin()];
+    let q = [d, 0.0];
+    let (dx, dy) = (q[0] - pa[0], q[1] - pa[1]);
+    let dist = (dx * dx + dy * dy).sqrt();
+    let along = (b * b - c * c + dist * dist) / (2.0 * dist);
+    let h = (b * b - along * along).sqrt();
+    [-1.0, 1.0]
+        .iter()
+        .map(|s| {
+            let pb = [pa[0] + along * dx / dist - s * h * dy / dist, pa[1] + along * dy / dist + s * h * dx / dist];
+            let t4 = (pb[1] - q[1]).atan2(pb[0] - q[0]);
+            let t3 = (pb[1] - pa[1]).atan2(pb[0] - pa[0]);
+            // The coupler point (2, 1) in the coupler frame.
+            let cp = [pa[0] + 2.0 * t3.cos() - t3.sin(), pa[1] + 2.0 * t3.sin() + t3.cos()];
+            (t4, cp)
+        })
+        .collect()
+}
+
+#[test]
+fn four_bar_matches_the_closed_form_across_the_crank_range() {
+    for k in 0..12 {
+        let t2 = -PI + 2.0 * PI * (k as f64 + 0.5) / 12.0;
+        let p = problem("four_bar.urdf", &[("crank_joint", t2)], &[("coupler", 2.0, 1.0)]);
+        let run = solve(&p, 1e-6);
+        assert_eq!(run.status, Status::Complete);
+        assert_eq!(components(&run.solutions).1, 2, "crank {t2}: two assembly modes");
+        for (t4, cp) in four_bar_closed_form(t2) {
+            let hit = run.solutions.iter().any(|b| {
+                let rocker = p.link_angles(b)["rocker"];
+                let rec = p.record(b);
+                let tp = &rec.traces["coupler@2,1"];
+                let near = |v: f64, [lo, hi]: [f64; 2]| lo - 1e-9 <= v && v <= hi + 1e-9;
+                rocker.0 - 1e-9 <= t4 && t4 <= rocker.1 + 1e-9 && near(cp[0], tp.x) && near(cp[1], tp.y)
+            });
+            assert!(hit, "crank {t2}: rocker {t4} / coupler point {cp:?} in no box");
+        }
+    }
+}
+
+#[test]
+fn slider_crank_matches_the_closed_form() {
+    let (r, l) = (1.0f64, 3.0f64);
+    for k in 0..12 {
+        let t = -PI + 2.0 * PI * (k as f64 + 0.25) / 12.0;
+        let p = problem("slider_crank.urdf", &[("crank_joint", t)], &[]);
+        let run = solve(&p, 1e-6);
+        assert_eq!(run.status, Status::Complete);
+        // The other root, x = r cos t − √…, is negative: outside the slider's limits [0, 5].
+        assert_eq!(components(&run.solutions).1, 1);
+        let x = r * t.cos() + (l * l - r * r * t.sin().powi(2)).sqrt();
+        let travel = p.joint_values(&run.solutions[0])["slider_joint"];
+        assert!(travel.0 - 1e-12 <= x && x <= travel.1 + 1e-12, "crank {t}: slider {x} not in {travel:?}");
+    }
+}
+
+#[test]
+fn watt_six_bar_assembles_in_four_modes_for_a_driven_crank() {
+    // Two four-bar loops, two assembly modes each.
+    let p = problem("watt_six_bar.urdf", &[("crank_joint", 0.7)], &[]);
+    let run = solve(&p, 1e-6);
+    assert_eq!(run.status, Status::Complete);
+    assert_eq!(components(&run.solutions).1, 4);
+    for b in &run.solutions {
+        let x = b.midpoint();
+        assert!(p.system.max_residual(&x) < 1e-5);
+    }
 }

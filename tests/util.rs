@@ -1,6 +1,6 @@
 use linkspace::model::urdf;
 use linkspace::problems::LinkageProblem;
-use linkspace::solve::{Collect, Solver, SolverSettings, Stats, Status};
+use linkspace::solve::{Solver, SolverSettings, Stats, Status};
 use linkspace::IntervalBox;
 use std::sync::atomic::AtomicBool;
 
@@ -24,10 +24,9 @@ pub struct Run {
 pub fn solve(p: &LinkageProblem, sigma: f64) -> Run {
     let settings = SolverSettings { sigma, ..Default::default() };
     let solver = Solver::new(&p.system, settings).expect("valid settings");
-    let mut out = Collect::default();
-    let (status, stats) = solver.run(&AtomicBool::new(false), &mut out);
-    assert!(out.undecided.is_empty() || status != Status::Complete);
-    Run { status, stats, solutions: out.solutions }
+    let e = solver.enclose(&AtomicBool::new(false), &mut |_| {});
+    assert!(e.undecided.is_empty() || e.status != Status::Complete);
+    Run { status: e.status, stats: e.stats, solutions: e.solutions }
 }
 
 /// Does some box contain `x`, allowing `slack` for the rounding of the reference point itself?

@@ -111,6 +111,19 @@ pub struct Stats {
     pub seconds: f64,
 }
 
+/// The result of `Solver::enclose`.
+#[derive(Clone, Debug)]
+pub struct Enclosure {
+    /// How the run ended.
+    pub status: Status,
+    /// Its counters.
+    pub stats: Stats,
+    /// Solution boxes (spurious isolated ones dropped).
+    pub solutions: Vec<IntervalBox>,
+    /// Boxes a limit left undecided.
+    pub undecided: Vec<IntervalBox>,
+}
+
 /// What cannot be run.
 #[derive(Debug, Error, PartialEq)]
 #[non_exhaustive]
@@ -206,6 +219,29 @@ impl<'a> Solver<'a> {
         stats.lp = lp.counters;
         stats.seconds = t0.elapsed().as_secs_f64();
         (status, stats)
+    }
+
+    /// Runs to the end, then drops proven-empty isolated boxes (`drop_spurious` on clusters of
+    /// at most two boxes): what the CLI and the node report. `progress` sees the run's progress.
+    pub fn enclose(&self, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> Enclosure {
+        struct Sink<'p> {
+            collect: Collect,
+            progress: &'p mut dyn FnMut(&Progress),
+        }
+        impl BoxSink for Sink<'_> {
+            fn emit(&mut self, status: BoxStatus, b: &IntervalBox) -> ControlFlow<()> {
+                self.collect.emit(status, b)
+            }
+            fn progress(&mut self, p: &Progress) {
+                (self.progress)(p)
+            }
+        }
+        let mut sink = Sink { collect: Collect::default(), progress };
+        let (status, mut stats) = self.run(cancel, &mut sink);
+        let (solutions, dropped) = self.drop_spurious(std::mem::take(&mut sink.collect.solutions), 2, cancel);
+        stats.spurious_dropped = dropped;
+        stats.solutions -= dropped;
+        Enclosure { status, stats, solutions, undecided: sink.collect.undecided }
     }
 
     /// Re-examines solution boxes that sit in clusters of at most `max_cluster` boxes with a
