@@ -4,6 +4,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use linkspace::model::urdf;
 use linkspace::problems::LinkageProblem;
+use linkspace::lp::LpBackend;
 use linkspace::solve::{Progress, Solver, SolverSettings};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -21,6 +22,33 @@ struct Cli {
 enum Command {
     /// Enclose every configuration of a planar closed-loop linkage described in URDF.
     Solve(SolveArgs),
+    /// Time the bundled double butterfly, rigid and mobile, against a baseline in the same run.
+    Bench(BenchArgs),
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum Backend {
+    Simplex,
+    Clarabel,
+}
+
+impl From<Backend> for LpBackend {
+    fn from(b: Backend) -> Self {
+        match b {
+            Backend::Simplex => LpBackend::Simplex,
+            Backend::Clarabel => LpBackend::Clarabel,
+        }
+    }
+}
+
+#[derive(clap::Args)]
+struct BenchArgs {
+    /// Runs per case; the median is reported.
+    #[arg(long, default_value_t = 5)]
+    repeat: usize,
+    /// Mobile-case sigma.
+    #[arg(long, default_value_t = 0.05)]
+    mobile_sigma: f64,
 }
 
 #[derive(clap::Args)]
@@ -48,6 +76,9 @@ struct SolveArgs {
     /// Shrink by interval propagation only (no LP): for comparisons.
     #[arg(long)]
     no_lp: bool,
+    /// LP solver proposing the multipliers that the safe bound verifies.
+    #[arg(long, value_enum, default_value_t = Backend::Simplex)]
+    lp: Backend,
     /// Write the full report as JSON here.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
@@ -58,6 +89,7 @@ pub fn run() -> Result<()> {
     let cli = Cli::parse();
     match cli.command {
         Command::Solve(args) => solve(args),
+        Command::Bench(args) => bench(args),
     }
 }
 
@@ -84,7 +116,7 @@ fn solve(args: SolveArgs) -> Result<()> {
         Some(t) => bail!("--timeout must be a positive number of seconds, got {t}"),
         None => None,
     };
-    let settings = SolverSettings { sigma: args.sigma, rho: args.rho, max_boxes: args.max_boxes, timeout, use_lp: !args.no_lp };
+    let settings = SolverSettings { sigma: args.sigma, rho: args.rho, max_boxes: args.max_boxes, timeout, use_lp: !args.no_lp, lp_backend: args.lp.into() };
     settings.validate()?;
     let fixed = args.fix.iter().map(|s| parse_fix(s)).collect::<Result<Vec<_>>>()?;
     let traces = args.trace.iter().map(|s| parse_trace(s)).collect::<Result<Vec<_>>>()?;
@@ -133,6 +165,44 @@ fn solve(args: SolveArgs) -> Result<()> {
     if let Some(path) = args.json {
         let text = serde_json::to_string_pretty(&report)?;
         std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// The bundled butterfly, compiled in so `bench` runs from anywhere.
+const BUTTERFLY: &str = include_str!("../urdf/double_butterfly.urdf");
+
+fn bench(args: BenchArgs) -> Result<()> {
+    if args.repeat == 0 {
+        bail!("--repeat must be at least 1");
+    }
+    let mechanism = urdf::parse(BUTTERFLY).context("bundled double_butterfly.urdf")?;
+    let rigid = LinkageProblem::new(&mechanism, &[("joint6".to_string(), 12f64.atan2(5.0))], &[])?;
+    let mobile = LinkageProblem::new(&mechanism, &[], &[])?;
+    let cases = [("rigid, theta6 = atan2(12,5), sigma 1e-4", &rigid, 1e-4, 0.15, 15, 6), ("mobile", &mobile, args.mobile_sigma, 28.9, 2523, 1229)];
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "case | LP backend | median s | boxes processed | solution boxes | clusters | LPs | vs clarabel (same run)").ok();
+    for (name, problem, sigma, cuik_s, cuik_boxes, cuik_sol) in cases {
+        let mut medians = Vec::new();
+        for backend in [LpBackend::Clarabel, LpBackend::Simplex] {
+            let settings = SolverSettings { sigma, lp_backend: backend, ..Default::default() };
+            let solver = Solver::new(&problem.system, settings)?;
+            let mut times = Vec::new();
+            let mut last = None;
+            for _ in 0..args.repeat {
+                let e = solver.enclose(&AtomicBool::new(false), &mut |_| {});
+                times.push(e.stats.seconds);
+                last = Some(e);
+            }
+            times.sort_by(|a, b| a.total_cmp(b));
+            let median = times[times.len() / 2];
+            let e = last.expect("repeat >= 1");
+            let clusters = linkspace::interval::components(&e.solutions).1;
+            let ratio = medians.first().map_or("1.00x (baseline)".to_string(), |base: &f64| format!("{:.2}x faster", base / median));
+            writeln!(out, "{name} | {backend:?} | {median:.4} | {} | {} | {clusters} | {} | {ratio}", e.stats.processed, e.solutions.len(), e.stats.lp.solved).ok();
+            medians.push(median);
+        }
+        writeln!(out, "{name} | CuikSuite (published in research/double_butterfly.md, not run here) | {cuik_s} | {cuik_boxes} | {cuik_sol} | | | {:.1}x faster than CuikSuite", cuik_s / medians[1]).ok();
     }
     Ok(())
 }

@@ -10,13 +10,15 @@
 
 use super::{Contraction, Contractor};
 use crate::interval::{interval, point, Interval, IntervalBox};
-use crate::lp::{LpCounters, LpOutcome, Relaxation, Row, Sides};
+use crate::lp::{LpBackend, LpCounters, LpOutcome, Relaxation, Row, Sides};
 use crate::system::{EquationKind, EquationSystem, Monomial, VarId};
 
 /// The LP shrink contractor.
 pub struct LpShrink<'a> {
     system: &'a EquationSystem,
     targets: Vec<VarId>,
+    /// The LP solver used.
+    pub backend: LpBackend,
     /// LPs solved and answers that proved nothing.
     pub counters: LpCounters,
 }
@@ -24,7 +26,7 @@ pub struct LpShrink<'a> {
 impl<'a> LpShrink<'a> {
     /// Bounds every primary variable of `system`.
     pub fn new(system: &'a EquationSystem) -> Self {
-        Self { system, targets: system.primaries(), counters: LpCounters::default() }
+        Self { system, targets: system.primaries(), backend: LpBackend::default(), counters: LpCounters::default() }
     }
 }
 
@@ -34,7 +36,7 @@ impl Contractor for LpShrink<'_> {
             Some(r) => r,
             None => return Contraction::Empty,
         };
-        match rel.bound(&b.dims, &self.targets, &mut self.counters) {
+        match rel.bound_with(self.backend, &b.dims, &self.targets, &mut self.counters) {
             LpOutcome::Infeasible => Contraction::Empty,
             LpOutcome::Bounds(bounds) => {
                 let mut outcome = Contraction::Unchanged;

@@ -1,8 +1,9 @@
 //! A dense bounded-variable primal simplex for the tiny LPs of `Relaxation::bound`.
 //!
 //! Columns are the `n` variables and one slack per row: `A x − s = 0`, so every constraint is a
-//! variable bound (`l ≤ x ≤ u` from the box, `s_k` bounded by the enforced sides of row `k`) and
-//! the tableau `B⁻¹ [A | −I]` is `m × (n + m)`, starting from the slack basis (`B = −I`).
+//! variable bound (`l ≤ x ≤ u` from the box, `s_k` bounded by the enforced sides of row `k`).
+//! The tableau is kept condensed: only the `n` nonbasic columns of `B⁻¹ [A | −I]` are stored
+//! (`m × n`, basic values `x_B = −T x_N`), starting from the slack basis (`B = −I`, `T = −A`).
 //! Phase 1 (minimise the sum of infeasibilities, one breakpoint per step) runs once; every
 //! objective `±x_t` then re-optimises from the previous optimal basis, only the cost row changes.
 //! Pricing is Dantzig's rule, switching to Bland's rule after a run of degenerate steps; the
@@ -25,16 +26,17 @@ const TOL_PIV: f64 = 1e-9;
 /// Consecutive degenerate steps after which pricing falls back to Bland's rule.
 const DEGENERATE_RUN: usize = 12;
 
-/// Where a column stands.
+/// Where a variable (structural or slack) stands.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum State {
-    Basic,
-    /// Nonbasic at its lower bound.
-    Lower,
-    /// Nonbasic at its upper bound.
-    Upper,
-    /// Nonbasic free column, held at 0.
-    Free,
+    /// Basic in the given tableau row.
+    Basic(usize),
+    /// Nonbasic at its lower bound, in the given tableau column.
+    Lower(usize),
+    /// Nonbasic at its upper bound, in the given tableau column.
+    Upper(usize),
+    /// Nonbasic free variable held at 0, in the given tableau column.
+    Free(usize),
 }
 
 /// How a phase ended.
@@ -44,7 +46,7 @@ enum Status {
     /// Phase 1 only: no improving column while some basic variable is out of bounds.
     Infeasible,
     Unbounded,
-    /// Iteration cap, or no usable pivot.
+    /// Iteration cap, or no usable step.
     Stalled,
 }
 
@@ -60,22 +62,25 @@ enum Step {
 struct Tableau {
     n: usize,
     m: usize,
-    /// Row length: `n + m`.
-    w: usize,
-    /// `B⁻¹ [A | −I]`, row-major `m × w`.
+    /// Nonbasic columns of `B⁻¹ [A | −I]`, row-major `m × n`.
     t: Vec<f64>,
-    /// The basic column of each row.
+    /// The basic variable of each row.
     head: Vec<usize>,
+    /// The nonbasic variable of each column.
+    nb: Vec<usize>,
+    /// Per variable (`n` structural, then `m` slacks).
     state: Vec<State>,
     lo: Vec<f64>,
     hi: Vec<f64>,
     val: Vec<f64>,
-    /// Reduced costs.
+    /// Reduced costs of the nonbasic columns.
     d: Vec<f64>,
     /// Phase-1 costs of the basic variables.
     cb: Vec<f64>,
     /// Rates of change of the basic variables along the entering direction.
     alpha: Vec<f64>,
+    /// Exact blocking ratio of each row and whether it blocks at its upper bound.
+    exact: Vec<(f64, bool)>,
     degenerate: usize,
 }
 
@@ -83,30 +88,30 @@ impl Tableau {
     fn new(rel: &Relaxation, b: &[Interval]) -> Self {
         let (n, m) = (rel.n, rel.rows.len());
         let w = n + m;
-        let mut t = vec![0.0; m * w];
+        let mut t = vec![0.0; m * n];
         let (mut lo, mut hi) = (vec![0.0; w], vec![0.0; w]);
         let mut val = vec![0.0; w];
-        let mut state = vec![State::Basic; w];
+        let mut state: Vec<State> = (0..m).map(State::Basic).collect();
+        state.splice(0..0, (0..n).map(State::Lower));
         for (j, x) in b.iter().enumerate().take(n) {
             lo[j] = x.inf();
             hi[j] = x.sup();
             (state[j], val[j]) = if lo[j].is_finite() {
-                (State::Lower, lo[j])
+                (State::Lower(j), lo[j])
             } else if hi[j].is_finite() {
-                (State::Upper, hi[j])
+                (State::Upper(j), hi[j])
             } else {
-                (State::Free, 0.0)
+                (State::Free(j), 0.0)
             };
         }
         for (k, row) in rel.rows.iter().enumerate() {
-            // Slack basis: B⁻¹ = −I, so the row of s_k is [−a_k | e_k].
-            let r = &mut t[k * w..(k + 1) * w];
+            // Slack basis: B⁻¹ = −I, so the row of s_k is −a_k.
+            let r = &mut t[k * n..(k + 1) * n];
             let mut s = 0.0;
             for &(j, a) in &row.coefs {
                 r[j] -= a;
                 s += a * val[j];
             }
-            r[n + k] = 1.0;
             val[n + k] = s;
             let (l, u) = (row.bounds.inf(), row.bounds.sup());
             (lo[n + k], hi[n + k]) = match row.sides {
@@ -119,32 +124,37 @@ impl Tableau {
         Tableau {
             n,
             m,
-            w,
             t,
             head: (n..w).collect(),
+            nb: (0..n).collect(),
             state,
             lo,
             hi,
             val,
-            d: vec![0.0; w],
+            d: vec![0.0; n],
             cb: vec![0.0; m],
             alpha: vec![0.0; m],
+            exact: vec![(f64::INFINITY, false); m],
             degenerate: 0,
         }
     }
 
     fn row(&self, i: usize) -> &[f64] {
-        &self.t[i * self.w..(i + 1) * self.w]
+        &self.t[i * self.n..(i + 1) * self.n]
     }
 
-    /// Recomputes the basic values from the nonbasic ones: `x_B = −T_N x_N`.
+    /// The tableau row of `v` when it is basic.
+    fn basic_row(&self, v: usize) -> Option<usize> {
+        match self.state[v] {
+            State::Basic(r) => Some(r),
+            _ => None,
+        }
+    }
+
+    /// Recomputes the basic values from the nonbasic ones: `x_B = −T x_N`.
     fn refresh_values(&mut self) {
         for i in 0..self.m {
-            let r = &self.t[i * self.w..(i + 1) * self.w];
-            let s: f64 = (0..self.w)
-                .filter(|&j| self.state[j] != State::Basic && self.val[j] != 0.0)
-                .map(|j| r[j] * self.val[j])
-                .sum();
+            let s: f64 = self.row(i).iter().zip(&self.nb).map(|(a, &v)| a * self.val[v]).sum();
             self.val[self.head[i]] = -s;
         }
     }
@@ -154,58 +164,65 @@ impl Tableau {
         let bland = self.degenerate >= DEGENERATE_RUN;
         let mut best: Option<(usize, f64)> = None;
         let mut best_score = TOL_D;
-        for j in 0..self.w {
-            let dj = self.d[j];
-            let dir = match self.state[j] {
-                State::Basic => continue,
-                State::Lower if dj < -TOL_D && self.hi[j] > self.lo[j] => 1.0,
-                State::Upper if dj > TOL_D && self.hi[j] > self.lo[j] => -1.0,
-                State::Free if dj.abs() > TOL_D => -dj.signum(),
+        for (c, (&v, &dc)) in self.nb.iter().zip(&self.d).enumerate() {
+            let dir = match self.state[v] {
+                State::Lower(_) if dc < -TOL_D && self.hi[v] > self.lo[v] => 1.0,
+                State::Upper(_) if dc > TOL_D && self.hi[v] > self.lo[v] => -1.0,
+                State::Free(_) if dc.abs() > TOL_D => -dc.signum(),
                 _ => continue,
             };
-            if bland {
-                return Some((j, dir));
-            }
-            if dj.abs() > best_score {
-                best_score = dj.abs();
-                best = Some((j, dir));
+            let better = match best {
+                None => true,
+                Some((bc, _)) if bland => v < self.nb[bc],
+                Some(_) => dc.abs() > best_score,
+            };
+            if better {
+                best_score = dc.abs();
+                best = Some((c, dir));
             }
         }
         best
     }
 
-    /// The bound basic row `i` runs into when moving at rate `a`, relaxed by `tol` (feasible
-    /// variables only). In phase 1, an infeasible variable stops where it becomes feasible, and
-    /// never blocks when moving away.
-    fn target(&self, i: usize, a: f64, phase1: bool, tol: f64) -> Option<(f64, bool)> {
+    /// The bound basic row `i` runs into when moving at rate `a`, whether it is the upper one,
+    /// and the Harris tolerance to relax it by (feasible variables only). In phase 1, an
+    /// infeasible variable stops where it becomes feasible, and never blocks when moving away.
+    #[inline(always)]
+    fn target(&self, i: usize, a: f64, phase1: bool) -> Option<(f64, bool, f64)> {
         let p = self.head[i];
         let (x, l, u) = (self.val[p], self.lo[p], self.hi[p]);
         if phase1 && x < l - TOL_P {
-            return (a > 0.0).then_some((l, false));
+            return (a > 0.0).then_some((l, false, 0.0));
         }
         if phase1 && x > u + TOL_P {
-            return (a < 0.0).then_some((u, true));
+            return (a < 0.0).then_some((u, true, 0.0));
         }
         if a > 0.0 {
-            u.is_finite().then_some((u + tol, true))
+            u.is_finite().then_some((u, true, TOL_P))
         } else {
-            l.is_finite().then_some((l - tol, false))
+            l.is_finite().then_some((l, false, -TOL_P))
         }
     }
 
-    fn ratio(&mut self, q: usize, dir: f64, phase1: bool) -> Step {
+    /// Harris' two-pass ratio test along column `c` in direction `dir`.
+    fn ratio(&mut self, c: usize, dir: f64, phase1: bool) -> Step {
         let bland = self.degenerate >= DEGENERATE_RUN;
+        let q = self.nb[c];
         let range = self.hi[q] - self.lo[q];
         let mut theta_max = if range.is_finite() { range } else { f64::INFINITY };
+        // Pass 1: the largest step keeping every blocking variable within its relaxed bound;
+        // the exact ratios are kept for pass 2 (`∞`: does not block).
         for i in 0..self.m {
-            let a = -dir * self.t[i * self.w + q];
+            let a = -dir * self.t[i * self.n + c];
             self.alpha[i] = a;
+            self.exact[i] = (f64::INFINITY, false);
             if a.abs() < TOL_PIV {
                 continue;
             }
-            if let Some((bound, _)) = self.target(i, a, phase1, TOL_P) {
-                let r = ((bound - self.val[self.head[i]]) / a).max(0.0);
-                theta_max = theta_max.min(r);
+            if let Some((bound, at_upper, tol)) = self.target(i, a, phase1) {
+                let x = self.val[self.head[i]];
+                theta_max = theta_max.min(((bound + tol - x) / a).max(0.0));
+                self.exact[i] = (((bound - x) / a).max(0.0), at_upper);
             }
         }
         if theta_max == f64::INFINITY {
@@ -214,38 +231,36 @@ impl Tableau {
         if range <= theta_max {
             return Step::Flip;
         }
-        let mut chosen: Option<(usize, f64, bool)> = None;
+        // Pass 2: among the rows blocking within that step, the largest pivot (Bland: the
+        // smallest leaving variable).
+        let mut chosen: Option<usize> = None;
         let mut best = 0.0;
         for i in 0..self.m {
-            let a = self.alpha[i];
-            if a.abs() < TOL_PIV {
+            if self.exact[i].0 > theta_max {
                 continue;
             }
-            let Some((bound, at_upper)) = self.target(i, a, phase1, 0.0) else { continue };
-            let r = ((bound - self.val[self.head[i]]) / a).max(0.0);
-            if r > theta_max {
-                continue;
-            }
+            let a = self.alpha[i].abs();
             let better = match chosen {
                 None => true,
-                Some((ci, ..)) if bland => self.head[i] < self.head[ci],
-                Some(_) => a.abs() > best,
+                Some(ci) if bland => self.head[i] < self.head[ci],
+                Some(_) => a > best,
             };
             if better {
-                best = a.abs();
-                chosen = Some((i, r, at_upper));
+                best = a;
+                chosen = Some(i);
             }
         }
         match chosen {
-            Some((row, theta, at_upper)) => Step::Pivot { row, theta, at_upper },
+            Some(row) => Step::Pivot { row, theta: self.exact[row].0, at_upper: self.exact[row].1 },
             // Only reachable through rounding in the two passes: treat as a flip if possible.
             None if range.is_finite() => Step::Flip,
             None => Step::Unbounded,
         }
     }
 
-    /// Moves along column `q` as the ratio test says; false when no step was possible.
-    fn apply(&mut self, q: usize, dir: f64, step: Step) -> bool {
+    /// Moves along column `c` as the ratio test says; false when no step was possible.
+    fn apply(&mut self, c: usize, dir: f64, step: Step) -> bool {
+        let q = self.nb[c];
         let theta = match step {
             Step::Unbounded => return false,
             Step::Flip => self.hi[q] - self.lo[q],
@@ -261,39 +276,41 @@ impl Tableau {
         match step {
             Step::Flip => {
                 (self.state[q], self.val[q]) =
-                    if dir > 0.0 { (State::Upper, self.hi[q]) } else { (State::Lower, self.lo[q]) };
+                    if dir > 0.0 { (State::Upper(c), self.hi[q]) } else { (State::Lower(c), self.lo[q]) };
             }
             Step::Pivot { row, at_upper, .. } => {
                 self.val[q] += dir * theta;
                 let p = self.head[row];
                 (self.state[p], self.val[p]) =
-                    if at_upper { (State::Upper, self.hi[p]) } else { (State::Lower, self.lo[p]) };
-                self.state[q] = State::Basic;
+                    if at_upper { (State::Upper(c), self.hi[p]) } else { (State::Lower(c), self.lo[p]) };
+                self.state[q] = State::Basic(row);
                 self.head[row] = q;
-                self.pivot(row, q);
+                self.nb[c] = p;
+                self.pivot(row, c);
             }
             Step::Unbounded => unreachable!("handled above"),
         }
         true
     }
 
-    /// Gauss–Jordan pivot on `(r, q)`; also updates the reduced costs.
-    fn pivot(&mut self, r: usize, q: usize) {
-        let w = self.w;
-        let (before, rest) = self.t.split_at_mut(r * w);
-        let (prow, after) = rest.split_at_mut(w);
-        let inv = 1.0 / prow[q];
+    /// Condensed-tableau pivot on `(r, c)`: column `c` now holds the leaving variable. The
+    /// reduced costs transform as one more row.
+    fn pivot(&mut self, r: usize, c: usize) {
+        let n = self.n;
+        let (before, rest) = self.t.split_at_mut(r * n);
+        let (prow, after) = rest.split_at_mut(n);
+        let inv = 1.0 / prow[c];
         prow.iter_mut().for_each(|v| *v *= inv);
-        prow[q] = 1.0;
+        prow[c] = inv;
         let eliminate = |row: &mut [f64]| {
-            let f = row[q];
+            let f = row[c];
             if f != 0.0 {
                 row.iter_mut().zip(prow.iter()).for_each(|(v, p)| *v -= f * p);
-                row[q] = 0.0;
+                row[c] = -f * inv;
             }
         };
-        before.chunks_exact_mut(w).for_each(eliminate);
-        after.chunks_exact_mut(w).for_each(eliminate);
+        before.chunks_exact_mut(n).for_each(eliminate);
+        after.chunks_exact_mut(n).for_each(eliminate);
         eliminate(&mut self.d);
     }
 
@@ -317,18 +334,18 @@ impl Tableau {
             if !any {
                 return Status::Optimal;
             }
-            // d_j = c_j − c_Bᵀ T_j with c_N = 0.
+            // d_N = c_N − T_Nᵀ c_B with c_N = 0.
             self.d.iter_mut().for_each(|v| *v = 0.0);
             for i in 0..self.m {
-                let c = self.cb[i];
-                if c != 0.0 {
-                    let r = &self.t[i * self.w..(i + 1) * self.w];
-                    self.d.iter_mut().zip(r).for_each(|(v, a)| *v -= c * a);
+                let cost = self.cb[i];
+                if cost != 0.0 {
+                    let r = &self.t[i * self.n..(i + 1) * self.n];
+                    self.d.iter_mut().zip(r).for_each(|(v, a)| *v -= cost * a);
                 }
             }
-            let Some((q, dir)) = self.entering() else { return Status::Infeasible };
-            let step = self.ratio(q, dir, true);
-            if !self.apply(q, dir, step) {
+            let Some((c, dir)) = self.entering() else { return Status::Infeasible };
+            let step = self.ratio(c, dir, true);
+            if !self.apply(c, dir, step) {
                 return Status::Stalled;
             }
         }
@@ -344,28 +361,33 @@ impl Tableau {
         }
     }
 
-    /// Row duals `y = c_Bᵀ B⁻¹ = −c_Bᵀ T_S` for the phase-1 costs.
-    fn phase1_duals(&self, mu: &mut [f64]) {
-        mu.iter_mut().for_each(|v| *v = 0.0);
-        for i in 0..self.m {
-            let c = self.cb[i];
-            if c != 0.0 {
-                let r = &self.row(i)[self.n..];
-                mu.iter_mut().zip(r).for_each(|(v, a)| *v -= c * a);
-            }
+    /// Row duals `y = c_Bᵀ B⁻¹` for basic costs `cost(row)`: `B⁻¹` is minus the slack columns
+    /// of the full tableau, unit columns for basic slacks.
+    fn duals_for(&self, cost: impl Fn(usize) -> f64, mu: &mut [f64]) {
+        for (k, y) in mu.iter_mut().enumerate() {
+            *y = match self.state[self.n + k] {
+                State::Basic(i) => -cost(i),
+                State::Lower(c) | State::Upper(c) | State::Free(c) => {
+                    -(0..self.m).map(|i| cost(i) * self.t[i * self.n + c]).sum::<f64>()
+                }
+            };
         }
+    }
+
+    /// Row duals for the phase-1 costs.
+    fn phase1_duals(&self, mu: &mut [f64]) {
+        self.duals_for(|i| self.cb[i], mu);
     }
 
     /// Reduced costs for the objective `sign·x_t`.
     fn set_objective(&mut self, t: usize, sign: f64) {
         self.d.iter_mut().for_each(|v| *v = 0.0);
-        match self.head.iter().position(|&p| p == t) {
-            Some(r) => {
-                let row = &self.t[r * self.w..(r + 1) * self.w];
+        match self.state[t] {
+            State::Basic(r) => {
+                let row = &self.t[r * self.n..(r + 1) * self.n];
                 self.d.iter_mut().zip(row).for_each(|(v, a)| *v = -sign * a);
-                self.d[t] = 0.0;
             }
-            None => self.d[t] = sign,
+            State::Lower(c) | State::Upper(c) | State::Free(c) => self.d[c] = sign,
         }
         self.degenerate = 0;
     }
@@ -373,22 +395,28 @@ impl Tableau {
     /// Phase 2 from a feasible basis for the cost set by `set_objective`.
     fn phase2(&mut self, cap: usize) -> Status {
         for _ in 0..cap {
-            let Some((q, dir)) = self.entering() else { return Status::Optimal };
-            let step = self.ratio(q, dir, false);
+            let Some((c, dir)) = self.entering() else { return Status::Optimal };
+            let step = self.ratio(c, dir, false);
             if matches!(step, Step::Unbounded) {
                 return Status::Unbounded;
             }
-            self.apply(q, dir, step);
+            self.apply(c, dir, step);
         }
         Status::Stalled
     }
 
-    /// Row duals for the objective `sign·x_t` at the current basis.
+    /// Row duals for the objective `sign·x_t` at the current basis: only `x_t` has a cost.
     fn duals(&self, t: usize, sign: f64, mu: &mut [f64]) {
-        mu.iter_mut().for_each(|v| *v = 0.0);
-        if let Some(r) = self.head.iter().position(|&p| p == t) {
-            let row = &self.row(r)[self.n..];
-            mu.iter_mut().zip(row).for_each(|(v, a)| *v = -sign * a);
+        match self.basic_row(t) {
+            Some(r) => {
+                for (k, y) in mu.iter_mut().enumerate() {
+                    *y = match self.state[self.n + k] {
+                        State::Basic(_) => 0.0,
+                        State::Lower(c) | State::Upper(c) | State::Free(c) => -sign * self.t[r * self.n + c],
+                    };
+                }
+            }
+            None => mu.iter_mut().for_each(|v| *v = 0.0),
         }
     }
 }
@@ -406,7 +434,7 @@ pub(super) fn bound(rel: &Relaxation, b: &[Interval], targets: &[VarId], counter
         return unchanged();
     }
     let mut tab = Tableau::new(rel, b);
-    let cap = 50 * (tab.w + 1);
+    let cap = 50 * (tab.n + tab.m + 1);
     let mut mu = vec![0.0; tab.m];
     match tab.phase1(cap) {
         Status::Optimal => {}

@@ -167,6 +167,7 @@ impl<'a> Solver<'a> {
         let mut stats = Stats::default();
         let mut propagation = Propagation::new(self.system);
         let mut lp = LpShrink::new(self.system);
+        lp.backend = self.settings.lp_backend;
         let reference = start.clone();
         let volume = |b: &IntervalBox| self.relative_volume(b, &reference);
         let mut pool = vec![start];

@@ -1,5 +1,6 @@
 //! Settings of the branch-and-prune driver, validated once.
 
+use crate::lp::LpBackend;
 use std::time::Duration;
 use thiserror::Error;
 
@@ -18,6 +19,8 @@ pub struct SolverSettings {
     pub timeout: Option<Duration>,
     /// Use the LP shrink after propagation. Default true; false leaves propagation alone.
     pub use_lp: bool,
+    /// Which LP solver proposes the multipliers that the safe bound verifies. Default simplex.
+    pub lp_backend: LpBackend,
 }
 
 fn seconds<S: serde::Serializer>(d: &Option<Duration>, s: S) -> Result<S::Ok, S::Error> {
@@ -29,7 +32,7 @@ fn seconds<S: serde::Serializer>(d: &Option<Duration>, s: S) -> Result<S::Ok, S:
 
 impl Default for SolverSettings {
     fn default() -> Self {
-        Self { sigma: 1e-3, rho: 0.95, max_boxes: 1_000_000, timeout: None, use_lp: true }
+        Self { sigma: 1e-3, rho: 0.95, max_boxes: 1_000_000, timeout: None, use_lp: true, lp_backend: LpBackend::Simplex }
     }
 }
 
