@@ -58,6 +58,10 @@ impl Contractor for LpShrink<'_> {
     fn name(&self) -> &'static str {
         "lp-shrink"
     }
+
+    fn lp_counters(&self) -> LpCounters {
+        self.counters
+    }
 }
 
 /// Builds the linear relaxation of `system` over box `b`; `None` when a row is already proven

@@ -12,6 +12,7 @@ pub use lp_shrink::LpShrink;
 pub use propagate::Propagation;
 
 use crate::interval::IntervalBox;
+use crate::lp::LpCounters;
 
 /// What a contractor did to a box.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -44,6 +45,10 @@ pub trait Contractor {
     fn contract(&mut self, b: &mut IntervalBox) -> Contraction;
     /// A short name for statistics and charts.
     fn name(&self) -> &'static str;
+    /// LPs this contractor solved so far (zero for those that solve none).
+    fn lp_counters(&self) -> LpCounters {
+        LpCounters::default()
+    }
 }
 
 /// Applies contractors in order and stops at the first `Empty`.
@@ -63,5 +68,9 @@ impl Contractor for Sequence<'_> {
 
     fn name(&self) -> &'static str {
         "sequence"
+    }
+
+    fn lp_counters(&self) -> LpCounters {
+        self.0.iter().map(|c| c.lp_counters()).fold(LpCounters::default(), |a, b| LpCounters { solved: a.solved + b.solved, unverified: a.unverified + b.unverified })
     }
 }

@@ -7,7 +7,7 @@
 //! nothing is silently dropped.
 
 use super::settings::{SettingsError, SolverSettings};
-use crate::contract::{Contraction, Contractor, LpShrink, Propagation};
+use crate::contract::{Contraction, Contractor, LpShrink, Propagation, Sequence};
 use crate::interval::IntervalBox;
 use crate::lp::LpCounters;
 use crate::system::{EquationSystem, SystemError, VarId};
@@ -136,11 +136,26 @@ pub enum SolveError {
     System(#[from] SystemError),
 }
 
+/// Makes the shrink pipeline for one run (a run owns its contractors: they keep scratch state).
+pub type ContractorFactory<'a> = Box<dyn Fn(&'a EquationSystem, &SolverSettings) -> Box<dyn Contractor + Send + 'a> + Send + Sync + 'a>;
+
 /// A validated system with validated settings.
 pub struct Solver<'a> {
     system: &'a EquationSystem,
     settings: SolverSettings,
     primaries: Vec<VarId>,
+    factory: Option<std::sync::Arc<ContractorFactory<'a>>>,
+}
+
+/// The default pipeline: propagation, then (unless disabled) the LP shrink.
+pub fn default_contractor<'a>(system: &'a EquationSystem, settings: &SolverSettings) -> Box<dyn Contractor + Send + 'a> {
+    let mut steps: Vec<Box<dyn Contractor + Send + 'a>> = vec![Box::new(Propagation::new(system))];
+    if settings.use_lp {
+        let mut lp = LpShrink::new(system);
+        lp.backend = settings.lp_backend;
+        steps.push(Box::new(lp));
+    }
+    Box::new(Sequence(steps))
 }
 
 impl<'a> Solver<'a> {
@@ -148,7 +163,22 @@ impl<'a> Solver<'a> {
     pub fn new(system: &'a EquationSystem, settings: SolverSettings) -> Result<Self, SolveError> {
         settings.validate()?;
         system.validate()?;
-        Ok(Self { system, primaries: system.primaries(), settings })
+        Ok(Self { system, primaries: system.primaries(), settings, factory: None })
+    }
+
+    /// Replaces the default shrink pipeline (`default_contractor`) with `factory`'s, e.g. to add
+    /// interval Newton or trapezoid clipping. Every contractor must keep the `Contractor`
+    /// contract: only proven-empty parts go.
+    pub fn with_contractor(mut self, factory: ContractorFactory<'a>) -> Self {
+        self.factory = Some(std::sync::Arc::new(factory));
+        self
+    }
+
+    fn contractor(&self) -> Box<dyn Contractor + Send + 'a> {
+        match &self.factory {
+            Some(f) => f(self.system, &self.settings),
+            None => default_contractor(self.system, &self.settings),
+        }
     }
 
     /// The settings in force.
@@ -165,9 +195,7 @@ impl<'a> Solver<'a> {
     pub fn run_from(&self, start: IntervalBox, cancel: &AtomicBool, sink: &mut dyn BoxSink) -> (Status, Stats) {
         let t0 = Instant::now();
         let mut stats = Stats::default();
-        let mut propagation = Propagation::new(self.system);
-        let mut lp = LpShrink::new(self.system);
-        lp.backend = self.settings.lp_backend;
+        let mut contractor = self.contractor();
         let reference = start.clone();
         let volume = |b: &IntervalBox| self.relative_volume(b, &reference);
         let mut pool = vec![start];
@@ -184,7 +212,7 @@ impl<'a> Solver<'a> {
             }
             stats.processed += 1;
             stats.max_level = stats.max_level.max(b.level);
-            match self.shrink(&mut b, &mut propagation, &mut lp, &mut stats) {
+            match self.shrink(&mut b, contractor.as_mut(), &mut stats) {
                 Shrunk::Empty => stats.empty += 1,
                 Shrunk::Solution => {
                     stats.solutions += 1;
@@ -217,7 +245,7 @@ impl<'a> Solver<'a> {
                 }
             }
         }
-        stats.lp = lp.counters;
+        stats.lp = contractor.lp_counters();
         stats.seconds = t0.elapsed().as_secs_f64();
         (status, stats)
     }
@@ -264,6 +292,7 @@ impl<'a> Solver<'a> {
             system: self.system,
             primaries: self.primaries.clone(),
             settings: SolverSettings { sigma: self.settings.sigma / 16.0, max_boxes: 4_000, ..self.settings.clone() },
+            factory: self.factory.clone(),
         };
         let mut kept = Vec::with_capacity(boxes.len());
         let mut dropped = 0;
@@ -295,16 +324,13 @@ impl<'a> Solver<'a> {
     }
 
     /// Lines 5–9 of the seed's Algorithm 1.
-    fn shrink(&self, b: &mut IntervalBox, propagation: &mut Propagation, lp: &mut LpShrink, stats: &mut Stats) -> Shrunk {
+    fn shrink(&self, b: &mut IntervalBox, contractor: &mut dyn Contractor, stats: &mut Stats) -> Shrunk {
         loop {
             stats.shrink_rounds += 1;
             let before = b.clone();
-            if propagation.contract(b) == Contraction::Empty {
-                return Shrunk::Empty;
-            }
-            // The LP runs even when propagation alone reached sigma: it is what proves most
-            // near-miss boxes empty, and a spurious solution box costs the user more than an LP.
-            if self.settings.use_lp && lp.contract(b) == Contraction::Empty {
+            // The whole pipeline runs even when its first step reached sigma: the LP is what
+            // proves most near-miss boxes empty, and a spurious solution box costs more than it.
+            if contractor.contract(b) == Contraction::Empty {
                 return Shrunk::Empty;
             }
             if self.size(b) <= self.settings.sigma {

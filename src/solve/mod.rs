@@ -5,5 +5,5 @@
 mod driver;
 mod settings;
 
-pub use driver::{BoxSink, BoxStatus, Collect, Enclosure, Limit, Progress, SolveError, Solver, Stats, Status};
+pub use driver::{default_contractor, ContractorFactory, BoxSink, BoxStatus, Collect, Enclosure, Limit, Progress, SolveError, Solver, Stats, Status};
 pub use settings::{SettingsError, SolverSettings};
