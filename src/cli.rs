@@ -76,6 +76,9 @@ struct SolveArgs {
     /// Shrink by interval propagation only (no LP): for comparisons.
     #[arg(long)]
     no_lp: bool,
+    /// Interval Newton (square systems) once every primary is at most this wide; 0 disables it.
+    #[arg(long, default_value_t = 0.25)]
+    newton_width: f64,
     /// LP solver proposing the multipliers that the safe bound verifies.
     #[arg(long, value_enum, default_value_t = Backend::Simplex)]
     lp: Backend,
@@ -116,7 +119,7 @@ fn solve(args: SolveArgs) -> Result<()> {
         Some(t) => bail!("--timeout must be a positive number of seconds, got {t}"),
         None => None,
     };
-    let settings = SolverSettings { sigma: args.sigma, rho: args.rho, max_boxes: args.max_boxes, timeout, use_lp: !args.no_lp, lp_backend: args.lp.into() };
+    let settings = SolverSettings { sigma: args.sigma, rho: args.rho, max_boxes: args.max_boxes, timeout, use_lp: !args.no_lp, newton_width: args.newton_width, lp_backend: args.lp.into() };
     settings.validate()?;
     let fixed = args.fix.iter().map(|s| parse_fix(s)).collect::<Result<Vec<_>>>()?;
     let traces = args.trace.iter().map(|s| parse_trace(s)).collect::<Result<Vec<_>>>()?;

@@ -1,14 +1,16 @@
 //! Contractors: box-shrinking steps that remove only what they prove holds no solution.
 //!
 //! Owns the `Contractor` trait, its outcome `Contraction`, the combinator `Sequence`, and the
-//! implementations: equation-wise interval propagation (`propagate`) and the seed's LP shrink
-//! (`lp_shrink`).
+//! implementations: equation-wise interval propagation (`propagate`), the seed's LP shrink
+//! (`lp_shrink`) and interval Newton for square systems (`newton`).
 //! A contractor does no IO; numerical trouble gives `Unchanged`, never `Empty`.
 
 mod lp_shrink;
+mod newton;
 mod propagate;
 
 pub use lp_shrink::LpShrink;
+pub use newton::Newton;
 pub use propagate::Propagation;
 
 use crate::interval::IntervalBox;
@@ -23,6 +25,9 @@ pub enum Contraction {
     Reduced,
     /// Nothing proven; the box is as it was.
     Unchanged,
+    /// The box (possibly narrowed) holds exactly one solution: an existence and uniqueness
+    /// certificate.
+    Proven,
 }
 
 impl Contraction {
@@ -30,6 +35,7 @@ impl Contraction {
     pub fn then(self, next: Contraction) -> Contraction {
         match (self, next) {
             (Contraction::Empty, _) | (_, Contraction::Empty) => Contraction::Empty,
+            (Contraction::Proven, _) | (_, Contraction::Proven) => Contraction::Proven,
             (Contraction::Reduced, _) | (_, Contraction::Reduced) => Contraction::Reduced,
             _ => Contraction::Unchanged,
         }
@@ -51,7 +57,8 @@ pub trait Contractor {
     }
 }
 
-/// Applies contractors in order and stops at the first `Empty`.
+/// Applies contractors in order; stops at the first `Empty`, and after a `Proven` (the rest
+/// could only narrow a box already known to hold its one solution).
 pub struct Sequence<'a>(pub Vec<Box<dyn Contractor + Send + 'a>>);
 
 impl Contractor for Sequence<'_> {
@@ -59,7 +66,7 @@ impl Contractor for Sequence<'_> {
         let mut outcome = Contraction::Unchanged;
         for c in &mut self.0 {
             outcome = outcome.then(c.contract(b));
-            if outcome == Contraction::Empty {
+            if matches!(outcome, Contraction::Empty | Contraction::Proven) {
                 break;
             }
         }

@@ -55,7 +55,11 @@ enum Step {
     /// The entering column moves to its other bound; the basis is unchanged.
     Flip,
     /// The basic variable of `row` leaves at its upper (`true`) or lower bound, after `theta`.
-    Pivot { row: usize, theta: f64, at_upper: bool },
+    Pivot {
+        row: usize,
+        theta: f64,
+        at_upper: bool,
+    },
     Unbounded,
 }
 
@@ -567,7 +571,12 @@ mod tests {
             prop::collection::vec((0..=64i32).prop_map(|k| f64::from(k) / 64.0), n),
             prop::collection::vec(prop::collection::vec(dyadic(16, 3), n), 3),
             prop::collection::vec(
-                (prop::collection::vec(dyadic(16, 3), n), (0..=64i32).prop_map(|k| f64::from(k) / 32.0), (0..=64i32).prop_map(|k| f64::from(k) / 32.0), 0u8..4),
+                (
+                    prop::collection::vec(dyadic(16, 3), n),
+                    (0..=64i32).prop_map(|k| f64::from(k) / 32.0),
+                    (0..=64i32).prop_map(|k| f64::from(k) / 32.0),
+                    0u8..4,
+                ),
                 0..6,
             ),
         )

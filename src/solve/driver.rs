@@ -7,7 +7,7 @@
 //! nothing is silently dropped.
 
 use super::settings::{SettingsError, SolverSettings};
-use crate::contract::{Contraction, Contractor, LpShrink, Propagation, Sequence};
+use crate::contract::{Contraction, Contractor, LpShrink, Newton, Propagation, Sequence};
 use crate::interval::IntervalBox;
 use crate::lp::LpCounters;
 use crate::system::{EquationSystem, SystemError, VarId};
@@ -103,6 +103,8 @@ pub struct Stats {
     pub shrink_rounds: u64,
     /// LP statistics.
     pub lp: LpCounters,
+    /// Solution boxes certified by interval Newton to hold exactly one solution.
+    pub certified: u64,
     /// Solution boxes later proven empty by `Solver::drop_spurious`.
     pub spurious_dropped: u64,
     /// Deepest tree level reached.
@@ -147,9 +149,13 @@ pub struct Solver<'a> {
     factory: Option<std::sync::Arc<ContractorFactory<'a>>>,
 }
 
-/// The default pipeline: propagation, then (unless disabled) the LP shrink.
+/// The default pipeline: propagation, then interval Newton on small boxes of square systems,
+/// then (unless disabled, and unless Newton certified the box) the LP shrink.
 pub fn default_contractor<'a>(system: &'a EquationSystem, settings: &SolverSettings) -> Box<dyn Contractor + Send + 'a> {
     let mut steps: Vec<Box<dyn Contractor + Send + 'a>> = vec![Box::new(Propagation::new(system))];
+    if let Some(newton) = Newton::new(system, settings.newton_width) {
+        steps.push(Box::new(newton));
+    }
     if settings.use_lp {
         let mut lp = LpShrink::new(system);
         lp.backend = settings.lp_backend;
@@ -330,8 +336,13 @@ impl<'a> Solver<'a> {
             let before = b.clone();
             // The whole pipeline runs even when its first step reached sigma: the LP is what
             // proves most near-miss boxes empty, and a spurious solution box costs more than it.
-            if contractor.contract(b) == Contraction::Empty {
-                return Shrunk::Empty;
+            match contractor.contract(b) {
+                Contraction::Empty => return Shrunk::Empty,
+                Contraction::Proven if self.size(b) <= self.settings.sigma => {
+                    stats.certified += 1;
+                    return Shrunk::Solution;
+                }
+                _ => {}
             }
             if self.size(b) <= self.settings.sigma {
                 return Shrunk::Solution;

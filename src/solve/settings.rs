@@ -19,6 +19,9 @@ pub struct SolverSettings {
     pub timeout: Option<Duration>,
     /// Use the LP shrink after propagation. Default true; false leaves propagation alone.
     pub use_lp: bool,
+    /// Interval Newton runs on square systems once every primary is at most this wide.
+    /// Default 0.25; 0 switches it off.
+    pub newton_width: f64,
     /// Which LP solver proposes the multipliers that the safe bound verifies. Default simplex.
     pub lp_backend: LpBackend,
 }
@@ -32,7 +35,7 @@ fn seconds<S: serde::Serializer>(d: &Option<Duration>, s: S) -> Result<S::Ok, S:
 
 impl Default for SolverSettings {
     fn default() -> Self {
-        Self { sigma: 1e-3, rho: 0.95, max_boxes: 1_000_000, timeout: None, use_lp: true, lp_backend: LpBackend::Simplex }
+        Self { sigma: 1e-3, rho: 0.95, max_boxes: 1_000_000, timeout: None, use_lp: true, newton_width: 0.25, lp_backend: LpBackend::Simplex }
     }
 }
 
@@ -46,6 +49,9 @@ pub enum SettingsError {
     /// rho must lie strictly between 0 and 1.
     #[error("rho must lie strictly between 0 and 1, got {0}")]
     Rho(f64),
+    /// newton_width must be a non-negative finite number.
+    #[error("newton-width must be a non-negative finite number, got {0}")]
+    NewtonWidth(f64),
     /// max_boxes must be at least 1.
     #[error("max-boxes must be at least 1")]
     MaxBoxes,
@@ -59,6 +65,9 @@ impl SolverSettings {
         }
         if !(self.rho > 0.0 && self.rho < 1.0) {
             return Err(SettingsError::Rho(self.rho));
+        }
+        if !(self.newton_width >= 0.0 && self.newton_width.is_finite()) {
+            return Err(SettingsError::NewtonWidth(self.newton_width));
         }
         if self.max_boxes == 0 {
             return Err(SettingsError::MaxBoxes);
