@@ -139,7 +139,7 @@ fn solve(args: SolveArgs) -> Result<()> {
         eprintln!();
     }
     let status = result.status;
-    let report = problem.report(&settings, result.status, result.stats, &result.solutions, &result.undecided);
+    let report = problem.report(&settings, result.status, result.stats, &result.solutions, &result.unique, &result.undecided);
     // Write through a handle: `println!` panics when the reader of a pipe has gone.
     let mut out = std::io::stdout().lock();
     writeln!(

@@ -26,6 +26,8 @@ pub struct BoxRecord {
     pub box_: Vec<Bounds>,
     /// Depth in the search tree.
     pub level: u32,
+    /// Certified by interval Newton to hold exactly one solution (solution boxes only).
+    pub unique: bool,
 }
 
 /// World coordinates of a traced point.
@@ -89,11 +91,12 @@ impl LinkageProblem {
                 .collect(),
             box_: b.dims.iter().map(|d| [d.inf(), d.sup()]).collect(),
             level: b.level,
+            unique: false,
         }
     }
 
     /// The report of a finished run.
-    pub fn report(&self, settings: &SolverSettings, status: Status, stats: Stats, solutions: &[IntervalBox], undecided: &[IntervalBox]) -> SolveReport {
+    pub fn report(&self, settings: &SolverSettings, status: Status, stats: Stats, solutions: &[IntervalBox], unique: &[bool], undecided: &[IntervalBox]) -> SolveReport {
         SolveReport {
             mechanism: self.name.clone(),
             free_joints: self.free_joints.clone(),
@@ -101,7 +104,7 @@ impl LinkageProblem {
             settings: settings.clone(),
             status,
             variables: self.system.vars.iter().map(|v| VariableInfo { name: v.name.clone(), role: v.role }).collect(),
-            solutions: solutions.iter().map(|b| self.record(b)).collect(),
+            solutions: solutions.iter().zip(unique).map(|(b, &u)| BoxRecord { unique: u, ..self.record(b) }).collect(),
             clusters: components(solutions).1,
             undecided: undecided.iter().map(|b| self.record(b)).collect(),
             stats,

@@ -98,6 +98,8 @@ fn rigid_butterfly_has_exactly_the_six_table_one_solutions() {
     assert_eq!(run.status, Status::Complete);
     let (labels, clusters) = components(&run.solutions);
     assert_eq!(clusters, 6, "{} boxes", run.solutions.len());
+    // Regular roots: interval Newton certifies each box to hold exactly one solution.
+    assert!(run.unique.iter().all(|&u| u), "uncertified boxes: {:?}", run.unique);
     for b in &run.solutions {
         assert!(b.dims.iter().zip(&p.system.vars).all(|(d, v)| v.role != linkspace::system::VarRole::Primary || d.wid() <= sigma));
     }
@@ -175,16 +177,8 @@ fn trace_branch(start: &[f64], h: f64) -> Vec<Vec<f64>> {
 #[test]
 fn mobile_butterfly_is_four_closed_branches_at_every_sigma() {
     let p = problem("double_butterfly.urdf", &[], &[]);
-    // Trace from every rigid root; a root already on a traced branch adds nothing.
-    let wrap = |d: f64| (d + PI).rem_euclid(2.0 * PI) - PI;
-    let mut branches: Vec<Vec<Vec<f64>>> = Vec::new();
-    for row in table_one() {
-        let root = refine_rigid(row);
-        let known = branches.iter().any(|b| b.iter().any(|q| (0..7).all(|i| wrap(q[i] - root[i]).abs() < 0.02)));
-        if !known {
-            branches.push(trace_branch(&root, 0.01));
-        }
-    }
+    // Traced from every rigid root; a root already on a traced branch adds nothing.
+    let branches = mobile_branches();
     assert_eq!(branches.len(), 4, "the six rigid roots lie on four branches");
     let points: Vec<Vec<Vec<f64>>> = branches
         .iter()
@@ -281,4 +275,62 @@ fn watt_six_bar_assembles_in_four_modes_for_a_driven_crank() {
         let x = b.midpoint();
         assert!(p.system.max_residual(&x) < 1e-5);
     }
+}
+
+// Soundness of every contractor on the real system: a box around a true configuration of the
+// mobile butterfly (a point of a traced branch) never loses it, whatever the box.
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+    #[test]
+    fn no_contractor_removes_a_true_configuration(which in 0usize..4, at in 0.0f64..1.0, widths in proptest::collection::vec(1e-6f64..0.6, 14), offsets in proptest::collection::vec(0.0f64..1.0, 14)) {
+        use linkspace::contract::{Contraction, Contractor, LpShrink, Newton, Propagation};
+        use linkspace::lp::LpBackend;
+        let p = problem("double_butterfly.urdf", &[], &[]);
+        let branches = mobile_branches();
+        let branch = &branches[which % branches.len()];
+        let q = &branch[((at * branch.len() as f64) as usize).min(branch.len() - 1)];
+        let x = p.point_from(&angles_map(q), &BTreeMap::new()).expect("angles");
+        let mut b = p.system.initial_box();
+        for (i, d) in b.dims.iter_mut().enumerate() {
+            let (w, f) = (widths[i % 14], offsets[i % 14]);
+            // Margins of 1e-9 keep the real point, not just its float image, inside.
+            let lo = (x[i] - w * f - 1e-9).max(d.inf());
+            let hi = (x[i] + w * (1.0 - f) + 1e-9).min(d.sup());
+            *d = linkspace::interval::interval(lo, hi);
+        }
+        let inside = |b: &linkspace::IntervalBox| b.dims.iter().zip(&x).all(|(d, &v)| d.inf() - 1e-9 <= v && v <= d.sup() + 1e-9);
+        let mut steps: Vec<Box<dyn Contractor>> = vec![Box::new(Propagation::new(&p.system))];
+        for backend in [LpBackend::Simplex, LpBackend::Clarabel] {
+            let mut lp = LpShrink::new(&p.system);
+            lp.backend = backend;
+            steps.push(Box::new(lp));
+        }
+        if let Some(n) = Newton::new(&p.system, 1.0) {
+            steps.push(Box::new(n));
+        }
+        for step in &mut steps {
+            let mut c = b.clone();
+            for _ in 0..3 {
+                proptest::prop_assert_ne!(step.contract(&mut c), Contraction::Empty, "{} emptied a box holding {:?}", step.name(), q);
+            }
+            proptest::prop_assert!(inside(&c), "{} cut the true configuration {:?}", step.name(), q);
+        }
+    }
+}
+
+/// The four branches of the mobile butterfly, traced once per test binary.
+fn mobile_branches() -> &'static Vec<Vec<Vec<f64>>> {
+    static BRANCHES: std::sync::OnceLock<Vec<Vec<Vec<f64>>>> = std::sync::OnceLock::new();
+    BRANCHES.get_or_init(|| {
+        let wrap = |d: f64| (d + PI).rem_euclid(2.0 * PI) - PI;
+        let mut branches: Vec<Vec<Vec<f64>>> = Vec::new();
+        for row in table_one() {
+            let root = refine_rigid(row);
+            let known = branches.iter().any(|b| b.iter().any(|q| (0..7).all(|i| wrap(q[i] - root[i]).abs() < 0.02)));
+            if !known {
+                branches.push(trace_branch(&root, 0.01));
+            }
+        }
+        branches
+    })
 }

@@ -19,6 +19,7 @@ pub struct Run {
     pub status: Status,
     pub stats: Stats,
     pub solutions: Vec<IntervalBox>,
+    pub unique: Vec<bool>,
 }
 
 pub fn solve(p: &LinkageProblem, sigma: f64) -> Run {
@@ -26,7 +27,7 @@ pub fn solve(p: &LinkageProblem, sigma: f64) -> Run {
     let solver = Solver::new(&p.system, settings).expect("valid settings");
     let e = solver.enclose(&AtomicBool::new(false), &mut |_| {});
     assert!(e.undecided.is_empty() || e.status != Status::Complete);
-    Run { status: e.status, stats: e.stats, solutions: e.solutions }
+    Run { status: e.status, stats: e.stats, solutions: e.solutions, unique: e.unique }
 }
 
 /// Does some box contain `x`, allowing `slack` for the rounding of the reference point itself?

@@ -55,6 +55,11 @@ pub trait Contractor {
     fn lp_counters(&self) -> LpCounters {
         LpCounters::default()
     }
+    /// A box holding exactly one solution, and every solution of `b`, if this contractor can
+    /// prove one exists (e.g. interval Newton on a slightly inflated `b`); `None` otherwise.
+    fn certify(&mut self, _b: &IntervalBox) -> Option<IntervalBox> {
+        None
+    }
 }
 
 /// Applies contractors in order; stops at the first `Empty`, and after a `Proven` (the rest
@@ -75,6 +80,10 @@ impl Contractor for Sequence<'_> {
 
     fn name(&self) -> &'static str {
         "sequence"
+    }
+
+    fn certify(&mut self, b: &IntervalBox) -> Option<IntervalBox> {
+        self.0.iter_mut().find_map(|c| c.certify(b))
     }
 
     fn lp_counters(&self) -> LpCounters {

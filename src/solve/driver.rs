@@ -46,6 +46,8 @@ pub enum Status {
 pub enum BoxStatus {
     /// No wider than sigma and not proven empty.
     Solution,
+    /// A solution box proven (interval Newton) to hold exactly one solution.
+    Unique,
     /// Left unprocessed when a limit stopped the run.
     Undecided,
 }
@@ -74,6 +76,8 @@ pub trait BoxSink {
 pub struct Collect {
     /// Solution boxes, in the order found.
     pub solutions: Vec<IntervalBox>,
+    /// Per solution box: whether it is certified to hold exactly one solution.
+    pub unique: Vec<bool>,
     /// Boxes left undecided by a limit.
     pub undecided: Vec<IntervalBox>,
 }
@@ -81,7 +85,10 @@ pub struct Collect {
 impl BoxSink for Collect {
     fn emit(&mut self, status: BoxStatus, b: &IntervalBox) -> ControlFlow<()> {
         match status {
-            BoxStatus::Solution => self.solutions.push(b.clone()),
+            BoxStatus::Solution | BoxStatus::Unique => {
+                self.solutions.push(b.clone());
+                self.unique.push(status == BoxStatus::Unique);
+            }
             BoxStatus::Undecided => self.undecided.push(b.clone()),
         }
         ControlFlow::Continue(())
@@ -122,6 +129,8 @@ pub struct Enclosure {
     pub stats: Stats,
     /// Solution boxes (spurious isolated ones dropped).
     pub solutions: Vec<IntervalBox>,
+    /// Per solution box: certified to hold exactly one solution.
+    pub unique: Vec<bool>,
     /// Boxes a limit left undecided.
     pub undecided: Vec<IntervalBox>,
 }
@@ -218,11 +227,13 @@ impl<'a> Solver<'a> {
             }
             stats.processed += 1;
             stats.max_level = stats.max_level.max(b.level);
-            match self.shrink(&mut b, contractor.as_mut(), &mut stats) {
+            let shrunk = self.shrink(&mut b, contractor.as_mut(), &mut stats);
+            match shrunk {
                 Shrunk::Empty => stats.empty += 1,
-                Shrunk::Solution => {
+                Shrunk::Solution | Shrunk::Unique => {
                     stats.solutions += 1;
-                    if sink.emit(BoxStatus::Solution, &b).is_break() {
+                    let tag = if matches!(shrunk, Shrunk::Unique) { BoxStatus::Unique } else { BoxStatus::Solution };
+                    if sink.emit(tag, &b).is_break() {
                         status = Status::Incomplete(Limit::Sink);
                         break;
                     }
@@ -271,24 +282,26 @@ impl<'a> Solver<'a> {
                 (self.progress)(p)
             }
         }
+        let t0 = Instant::now();
         let mut sink = Sink { collect: Collect::default(), progress };
         let (status, mut stats) = self.run(cancel, &mut sink);
-        let (solutions, dropped) = self.drop_spurious(std::mem::take(&mut sink.collect.solutions), 2, cancel);
+        let (solutions, unique, dropped) = self.drop_spurious(std::mem::take(&mut sink.collect.solutions), std::mem::take(&mut sink.collect.unique), 2, cancel);
         stats.spurious_dropped = dropped;
         stats.solutions -= dropped;
-        Enclosure { status, stats, solutions, undecided: sink.collect.undecided }
+        stats.seconds = t0.elapsed().as_secs_f64();
+        Enclosure { status, stats, solutions, unique, undecided: sink.collect.undecided }
     }
 
     /// Re-examines solution boxes that sit in clusters of at most `max_cluster` boxes with a
-    /// deeper search (sigma / 16), and drops those it proves empty; returns the survivors and
-    /// the number dropped.
+    /// deeper search (sigma / 16), and drops those it proves empty; returns the survivors, their
+    /// uniqueness flags and the number dropped. Boxes flagged unique are certified and kept.
     ///
     /// Why: a box reaching sigma is accepted without proof that it holds a solution, and at
     /// coarse sigma a few such near misses form clusters of their own. A solution curve never
     /// leaves a lone box (it crosses into its neighbours, which then touch it), and an isolated
     /// root survives the deeper search, so only proven-empty boxes go. The search is bounded;
     /// a box it cannot decide stays.
-    pub fn drop_spurious(&self, boxes: Vec<IntervalBox>, max_cluster: usize, cancel: &AtomicBool) -> (Vec<IntervalBox>, u64) {
+    pub fn drop_spurious(&self, boxes: Vec<IntervalBox>, unique: Vec<bool>, max_cluster: usize, cancel: &AtomicBool) -> (Vec<IntervalBox>, Vec<bool>, u64) {
         let (labels, n) = crate::interval::components(&boxes);
         let mut sizes = vec![0usize; n];
         for &l in &labels {
@@ -301,9 +314,10 @@ impl<'a> Solver<'a> {
             factory: self.factory.clone(),
         };
         let mut kept = Vec::with_capacity(boxes.len());
+        let mut kept_unique = Vec::with_capacity(boxes.len());
         let mut dropped = 0;
-        for (b, l) in boxes.into_iter().zip(labels) {
-            if sizes[l] <= max_cluster {
+        for ((b, l), u) in boxes.into_iter().zip(labels).zip(unique) {
+            if !u && sizes[l] <= max_cluster {
                 let mut probe = Collect::default();
                 let (status, _) = deeper.run_from(b.clone(), cancel, &mut probe);
                 if status == Status::Complete && probe.solutions.is_empty() {
@@ -312,8 +326,9 @@ impl<'a> Solver<'a> {
                 }
             }
             kept.push(b);
+            kept_unique.push(u);
         }
-        (kept, dropped)
+        (kept, kept_unique, dropped)
     }
 
     fn limit_reached(&self, stats: &Stats, t0: Instant, cancel: &AtomicBool) -> Option<Limit> {
@@ -340,11 +355,18 @@ impl<'a> Solver<'a> {
                 Contraction::Empty => return Shrunk::Empty,
                 Contraction::Proven if self.size(b) <= self.settings.sigma => {
                     stats.certified += 1;
-                    return Shrunk::Solution;
+                    return Shrunk::Unique;
                 }
                 _ => {}
             }
             if self.size(b) <= self.settings.sigma {
+                if let Some(proven) = contractor.certify(b) {
+                    if self.size(&proven) <= self.settings.sigma {
+                        *b = IntervalBox { level: b.level, ..proven };
+                        stats.certified += 1;
+                        return Shrunk::Unique;
+                    }
+                }
                 return Shrunk::Solution;
             }
             if self.relative_volume(b, &before) > self.settings.rho {
@@ -371,6 +393,7 @@ impl<'a> Solver<'a> {
 enum Shrunk {
     Empty,
     Solution,
+    Unique,
     Stalled,
 }
 
