@@ -79,6 +79,9 @@ struct SolveArgs {
     /// Interval Newton (square systems) once every primary is at most this wide; 0 disables it.
     #[arg(long, default_value_t = 0.25)]
     newton_width: f64,
+    /// Worker threads (1: depth-first serial driver; more: breadth-first parallel, same boxes).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=1024))]
+    threads: u16,
     /// LP solver proposing the multipliers that the safe bound verifies.
     #[arg(long, value_enum, default_value_t = Backend::Simplex)]
     lp: Backend,
@@ -119,7 +122,7 @@ fn solve(args: SolveArgs) -> Result<()> {
         Some(t) => bail!("--timeout must be a positive number of seconds, got {t}"),
         None => None,
     };
-    let settings = SolverSettings { sigma: args.sigma, rho: args.rho, max_boxes: args.max_boxes, timeout, use_lp: !args.no_lp, newton_width: args.newton_width, lp_backend: args.lp.into() };
+    let settings = SolverSettings { sigma: args.sigma, rho: args.rho, max_boxes: args.max_boxes, timeout, use_lp: !args.no_lp, newton_width: args.newton_width, threads: usize::from(args.threads), lp_backend: args.lp.into() };
     settings.validate()?;
     let fixed = args.fix.iter().map(|s| parse_fix(s)).collect::<Result<Vec<_>>>()?;
     let traces = args.trace.iter().map(|s| parse_trace(s)).collect::<Result<Vec<_>>>()?;

@@ -334,3 +334,36 @@ fn mobile_branches() -> &'static Vec<Vec<Vec<f64>>> {
         branches
     })
 }
+
+/// Issue 4: the parallel driver gives exactly the serial set of boxes, on every bundled problem.
+#[test]
+fn parallel_and_serial_drivers_give_identical_box_sets() {
+    use linkspace::solve::{Solver, SolverSettings};
+    use std::sync::atomic::AtomicBool;
+    let cases: Vec<(linkspace::problems::LinkageProblem, f64)> = vec![
+        (problem("double_butterfly.urdf", &[("joint6", 12f64.atan2(5.0))], &[]), 1e-4),
+        (problem("double_butterfly.urdf", &[], &[]), 0.2),
+        (problem("four_bar.urdf", &[], &[("coupler", 2.0, 1.0)]), 0.05),
+        (problem("slider_crank.urdf", &[], &[]), 0.05),
+        (problem("watt_six_bar.urdf", &[], &[]), 0.2),
+    ];
+    let canonical = |mut v: Vec<(Vec<(u64, u64)>, bool)>| {
+        v.sort();
+        v
+    };
+    for (p, sigma) in &cases {
+        let mut sets = Vec::new();
+        for threads in [1, 2, 3] {
+            let settings = SolverSettings { sigma: *sigma, threads, ..Default::default() };
+            let e = Solver::new(&p.system, settings).expect("valid").enclose(&AtomicBool::new(false), &mut |_| {});
+            assert_eq!(e.status, Status::Complete);
+            let boxes = e.solutions.iter().zip(&e.unique).map(|(b, &u)| (b.dims.iter().map(|d| (d.inf().to_bits(), d.sup().to_bits())).collect(), u)).collect();
+            sets.push((threads, canonical(boxes), e.stats.processed));
+        }
+        for (threads, set, processed) in &sets[1..] {
+            assert_eq!(set.len(), sets[0].1.len(), "{}: {threads} threads", p.name);
+            assert!(*set == sets[0].1, "{}: {threads} threads give other boxes", p.name);
+            assert_eq!(*processed, sets[0].2, "{}: {threads} threads processed another tree", p.name);
+        }
+    }
+}

@@ -189,7 +189,29 @@ impl<'a> Solver<'a> {
         self
     }
 
-    fn contractor(&self) -> Box<dyn Contractor + Send + 'a> {
+    pub(super) fn primaries(&self) -> &[VarId] {
+        &self.primaries
+    }
+
+    pub(super) fn initial(&self) -> IntervalBox {
+        self.system.initial_box()
+    }
+
+    /// Bisects the widest primary at its midpoint: the fixed rule both drivers share.
+    pub(super) fn split(&self, b: &IntervalBox) -> (IntervalBox, IntervalBox) {
+        let (i, _) = b.widest(&self.primaries).expect("invariant: validated system has primaries");
+        b.bisect(i)
+    }
+
+    /// The limit that forbids processing `upcoming` more boxes now, if any.
+    pub(super) fn limit_before(&self, stats: &Stats, upcoming: u64, t0: Instant, cancel: &AtomicBool) -> Option<Limit> {
+        if stats.processed + upcoming > self.settings.max_boxes {
+            return Some(Limit::Boxes);
+        }
+        self.limit_reached(stats, t0, cancel)
+    }
+
+    pub(super) fn contractor(&self) -> Box<dyn Contractor + Send + 'a> {
         match &self.factory {
             Some(f) => f(self.system, &self.settings),
             None => default_contractor(self.system, &self.settings),
@@ -239,8 +261,7 @@ impl<'a> Solver<'a> {
                     }
                 }
                 Shrunk::Stalled => {
-                    let (i, _) = b.widest(&self.primaries).expect("invariant: validated system has primaries");
-                    let (lower, upper) = b.bisect(i);
+                    let (lower, upper) = self.split(&b);
                     stats.bisected += 1;
                     pending_volume += volume(&lower) + volume(&upper);
                     // Pushed last, popped first: the lower half is explored first.
@@ -284,7 +305,11 @@ impl<'a> Solver<'a> {
         }
         let t0 = Instant::now();
         let mut sink = Sink { collect: Collect::default(), progress };
-        let (status, mut stats) = self.run(cancel, &mut sink);
+        let (status, mut stats) = if self.settings.threads > 1 {
+            self.run_parallel(self.settings.threads, cancel, &mut sink, None)
+        } else {
+            self.run(cancel, &mut sink)
+        };
         let (solutions, unique, dropped) = self.drop_spurious(std::mem::take(&mut sink.collect.solutions), std::mem::take(&mut sink.collect.unique), 2, cancel);
         stats.spurious_dropped = dropped;
         stats.solutions -= dropped;
@@ -345,7 +370,7 @@ impl<'a> Solver<'a> {
     }
 
     /// Lines 5–9 of the seed's Algorithm 1.
-    fn shrink(&self, b: &mut IntervalBox, contractor: &mut dyn Contractor, stats: &mut Stats) -> Shrunk {
+    pub(super) fn shrink(&self, b: &mut IntervalBox, contractor: &mut dyn Contractor, stats: &mut Stats) -> Shrunk {
         loop {
             stats.shrink_rounds += 1;
             let before = b.clone();
@@ -390,7 +415,7 @@ impl<'a> Solver<'a> {
     }
 }
 
-enum Shrunk {
+pub(super) enum Shrunk {
     Empty,
     Solution,
     Unique,

@@ -3,6 +3,7 @@
 //! Knows systems and contractors; does no IO and knows nothing of mechanisms, URDF or ROS.
 
 mod driver;
+mod parallel;
 mod settings;
 
 pub use driver::{default_contractor, ContractorFactory, BoxSink, BoxStatus, Collect, Enclosure, Limit, Progress, SolveError, Solver, Stats, Status};

@@ -22,6 +22,9 @@ pub struct SolverSettings {
     /// Interval Newton runs on square systems once every primary is at most this wide.
     /// Default 0.25; 0 switches it off.
     pub newton_width: f64,
+    /// Worker threads: 1 runs the depth-first serial driver, more the breadth-first parallel
+    /// one (same set of boxes). Default 1.
+    pub threads: usize,
     /// Which LP solver proposes the multipliers that the safe bound verifies. Default simplex.
     pub lp_backend: LpBackend,
 }
@@ -35,7 +38,7 @@ fn seconds<S: serde::Serializer>(d: &Option<Duration>, s: S) -> Result<S::Ok, S:
 
 impl Default for SolverSettings {
     fn default() -> Self {
-        Self { sigma: 1e-3, rho: 0.95, max_boxes: 1_000_000, timeout: None, use_lp: true, newton_width: 0.25, lp_backend: LpBackend::Simplex }
+        Self { sigma: 1e-3, rho: 0.95, max_boxes: 1_000_000, timeout: None, use_lp: true, newton_width: 0.25, threads: 1, lp_backend: LpBackend::Simplex }
     }
 }
 
