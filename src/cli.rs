@@ -22,6 +22,8 @@ struct Cli {
 enum Command {
     /// Enclose every configuration of a planar closed-loop linkage described in URDF.
     Solve(SolveArgs),
+    /// Draw SVG charts from fresh runs of the bundled problems into a folder.
+    Chart(ChartArgs),
     /// Time the bundled double butterfly, rigid and mobile, against a baseline in the same run.
     Bench(BenchArgs),
 }
@@ -39,6 +41,15 @@ impl From<Backend> for LpBackend {
             Backend::Clarabel => LpBackend::Clarabel,
         }
     }
+}
+
+#[derive(clap::Args)]
+struct ChartArgs {
+    /// Folder for the SVG files (created if missing).
+    dir: PathBuf,
+    /// Shorter sweeps (a minute instead of several).
+    #[arg(long)]
+    quick: bool,
 }
 
 #[derive(clap::Args)]
@@ -96,6 +107,7 @@ pub fn run() -> Result<()> {
     match cli.command {
         Command::Solve(args) => solve(args),
         Command::Bench(args) => bench(args),
+        Command::Chart(args) => crate::charts::run(&args.dir, args.quick),
     }
 }
 

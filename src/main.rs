@@ -1,5 +1,6 @@
 //! The `linkspace` binary: a thin shell over `cli`.
 
+mod charts;
 mod cli;
 
 use std::process::ExitCode;

@@ -22,8 +22,8 @@ const CHUNK: usize = 4;
 
 impl Solver<'_> {
     /// Runs on `threads` worker threads (at least 1), breadth first. `level_diagonals`, when
-    /// given, receives the widest primary diagonal among the boxes of each tree level before
-    /// they are shrunk.
+    /// given, receives per tree level the widest primary diagonal among that level's boxes
+    /// after shrinking (those not proven empty): the enclosure reached at each iteration.
     pub fn run_parallel(&self, threads: usize, cancel: &AtomicBool, sink: &mut dyn BoxSink, mut level_diagonals: Option<&mut Vec<f64>>) -> (Status, Stats) {
         let t0 = Instant::now();
         let mut stats = Stats::default();
@@ -39,9 +39,6 @@ impl Solver<'_> {
             if let Some(limit) = self.limit_before(&stats, level.len() as u64, t0, cancel) {
                 status = Status::Incomplete(limit);
                 break;
-            }
-            if let Some(d) = level_diagonals.as_deref_mut() {
-                d.push(level.iter().map(|b| b.diagonal(self.primaries())).fold(0.0, f64::max));
             }
             let shrunk: Vec<(Vec<(Shrunk, IntervalBox, Stats)>, LpCounters)> = pool.install(|| {
                 level
@@ -62,6 +59,10 @@ impl Solver<'_> {
                     .collect()
             });
             let mut next = Vec::new();
+            if let Some(d) = level_diagonals.as_deref_mut() {
+                let widest = shrunk.iter().flat_map(|(c, _)| c).filter(|(r, _, _)| !matches!(r, Shrunk::Empty)).map(|(_, b, _)| b.diagonal(self.primaries())).fold(0.0, f64::max);
+                d.push(widest);
+            }
             for (chunk, counters) in shrunk {
                 lp.solved += counters.solved;
                 lp.unverified += counters.unverified;

@@ -1,0 +1,209 @@
+//! `linkspace chart`: runs the bundled problems and draws what the runs measured.
+//!
+//! Every number on a chart comes from a run made here and now: sweeps of sigma per method,
+//! box projections, traced coupler curves and the per-level convergence of the search tree.
+
+use anyhow::{Context, Result};
+use linkspace::chart::{box_panels, lines, Panel, Scale, Series};
+use linkspace::interval::IntervalBox;
+use linkspace::lp::LpBackend;
+use linkspace::model::urdf;
+use linkspace::problems::LinkageProblem;
+use linkspace::solve::{Collect, Enclosure, Solver, SolverSettings, Status};
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+const BUTTERFLY: &str = include_str!("../urdf/double_butterfly.urdf");
+const FOUR_BAR: &str = include_str!("../urdf/four_bar.urdf");
+
+/// A way of shrinking boxes, as the settings express it.
+struct Method {
+    label: &'static str,
+    settings: SolverSettings,
+}
+
+fn methods(with_clarabel: bool) -> Vec<Method> {
+    let base = SolverSettings { max_boxes: 200_000, timeout: Some(Duration::from_secs(30)), ..Default::default() };
+    let mut m = vec![
+        Method { label: "LP shrink (simplex) + interval Newton", settings: base.clone() },
+        Method { label: "LP shrink (simplex), no Newton", settings: SolverSettings { newton_width: 0.0, ..base.clone() } },
+        Method { label: "propagation + interval Newton", settings: SolverSettings { use_lp: false, ..base.clone() } },
+        Method { label: "propagation alone", settings: SolverSettings { use_lp: false, newton_width: 0.0, ..base.clone() } },
+    ];
+    if with_clarabel {
+        m.push(Method { label: "LP shrink (clarabel) + interval Newton", settings: SolverSettings { lp_backend: LpBackend::Clarabel, ..base } });
+    }
+    m
+}
+
+fn enclose(problem: &LinkageProblem, settings: SolverSettings) -> Result<Enclosure> {
+    Ok(Solver::new(&problem.system, settings)?.enclose(&AtomicBool::new(false), &mut |_| {}))
+}
+
+/// The run, with its time replaced by the median over `repeat` identical runs.
+fn timed(problem: &LinkageProblem, settings: SolverSettings, repeat: usize) -> Result<Enclosure> {
+    let mut times = Vec::new();
+    let mut last = None;
+    for _ in 0..repeat.max(1) {
+        let e = enclose(problem, settings.clone())?;
+        times.push(e.stats.seconds);
+        last = Some(e);
+    }
+    times.sort_by(f64::total_cmp);
+    let mut e = last.expect("at least one run");
+    e.stats.seconds = times[times.len() / 2];
+    Ok(e)
+}
+
+fn worst_diagonal(problem: &LinkageProblem, boxes: &[IntervalBox]) -> f64 {
+    let p = problem.system.primaries();
+    boxes.iter().map(|b| b.diagonal(&p)).fold(0.0, f64::max)
+}
+
+/// Largest distance from any corner of a solution box to its nearest reference root
+/// (reference roots are certified boxes of width ≤ 1e-10; their radius is added).
+fn worst_root_distance(problem: &LinkageProblem, boxes: &[IntervalBox], roots: &[IntervalBox]) -> f64 {
+    let p = problem.system.primaries();
+    let mut worst: f64 = 0.0;
+    for b in boxes {
+        let far = roots
+            .iter()
+            .map(|r| {
+                let sq: f64 = p
+                    .iter()
+                    .map(|&i| {
+                        let m = r.dims[i].mid();
+                        let d = (b.dims[i].inf() - m).abs().max((b.dims[i].sup() - m).abs()) + r.dims[i].rad();
+                        d * d
+                    })
+                    .sum();
+                sq.sqrt()
+            })
+            .fold(f64::INFINITY, f64::min);
+        worst = worst.max(far);
+    }
+    worst
+}
+
+fn write(dir: &Path, name: &str, svg: &str) -> Result<()> {
+    let path = dir.join(name);
+    std::fs::write(&path, svg).with_context(|| format!("writing {}", path.display()))?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
+
+/// Draws every chart into `dir`; `quick` uses shorter sweeps.
+pub fn run(dir: &Path, quick: bool) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let m = urdf::parse(BUTTERFLY).context("bundled double_butterfly.urdf")?;
+    let rigid = LinkageProblem::new(&m, &[("joint6".into(), 12f64.atan2(5.0))], &[])?;
+    let mobile = LinkageProblem::new(&m, &[], &[("link3".into(), 7.0, 0.0)])?;
+
+    // Reference roots for the rigid case: certified boxes at sigma 1e-10.
+    let reference = enclose(&rigid, SolverSettings { sigma: 1e-10, ..Default::default() })?;
+    anyhow::ensure!(reference.status == Status::Complete && reference.unique.iter().all(|&u| u), "reference run did not certify every root");
+
+    // 1. Speed against accuracy.
+    let rigid_sigmas: &[f64] = if quick { &[1e-1, 1e-3, 1e-6] } else { &[3e-1, 1e-1, 1e-2, 1e-3, 1e-4, 1e-6, 1e-8] };
+    let mobile_sigmas: &[f64] = if quick { &[0.5, 0.2] } else { &[0.5, 0.3, 0.2, 0.1, 0.05] };
+    let repeat = if quick { 1 } else { 5 };
+    let mut diag = Vec::new();
+    let mut dist = Vec::new();
+    for method in methods(true) {
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        for &sigma in rigid_sigmas {
+            let e = timed(&rigid, SolverSettings { sigma, ..method.settings.clone() }, repeat)?;
+            if e.status == Status::Complete {
+                a.push((worst_diagonal(&rigid, &e.solutions), e.stats.seconds));
+                b.push((worst_root_distance(&rigid, &e.solutions, &reference.solutions), e.stats.seconds));
+            }
+        }
+        diag.push(Series { label: method.label.into(), points: a });
+        dist.push(Series { label: method.label.into(), points: b });
+    }
+    let mut svg = String::new();
+    lines(&mut svg, "Rigid double butterfly: seconds (median) against worst box diagonal", "worst solution-box diagonal", "seconds", &diag, Scale::Log, Scale::Log)?;
+    write(dir, "speed_accuracy_rigid_diagonal.svg", &svg)?;
+    let mut svg = String::new();
+    lines(&mut svg, "Rigid double butterfly: seconds against worst distance to a certified root", "worst distance from a box to a certified root", "seconds", &dist, Scale::Log, Scale::Log)?;
+    write(dir, "speed_accuracy_rigid_root_distance.svg", &svg)?;
+
+    let mut diag = Vec::new();
+    for method in methods(false) {
+        let mut a = Vec::new();
+        for &sigma in mobile_sigmas {
+            let e = timed(&mobile, SolverSettings { sigma, ..method.settings.clone() }, 1)?;
+            if e.status == Status::Complete {
+                a.push((worst_diagonal(&mobile, &e.solutions), e.stats.seconds));
+            }
+        }
+        diag.push(Series { label: method.label.into(), points: a });
+    }
+    let mut svg = String::new();
+    lines(&mut svg, "Mobile double butterfly: seconds against worst box diagonal (incomplete runs omitted)", "worst solution-box diagonal", "seconds", &diag, Scale::Log, Scale::Log)?;
+    write(dir, "speed_accuracy_mobile_diagonal.svg", &svg)?;
+
+    // 2. Configuration-space projections like the seed's Fig. 3, and the traced coupler point.
+    let c2 = mobile.system.var("cos_link2").context("cos_link2")?;
+    let c4 = mobile.system.var("cos_link4").context("cos_link4")?;
+    let fig_sigmas: &[f64] = if quick { &[0.5, 0.2] } else { &[0.5, 0.2, 0.1, 0.05] };
+    let mut panels = Vec::new();
+    let mut coupler = Vec::new();
+    for &sigma in fig_sigmas {
+        let e = enclose(&mobile, SolverSettings { sigma, ..Default::default() })?;
+        let title = format!("sigma {sigma}: {} boxes, {:.2} s, d = {:.3}", e.solutions.len(), e.stats.seconds, worst_diagonal(&mobile, &e.solutions));
+        panels.push(Panel { title: title.clone(), rects: e.solutions.iter().map(|b| [b.dims[c2].inf(), b.dims[c2].sup(), b.dims[c4].inf(), b.dims[c4].sup()]).collect(), marks: vec![] });
+        let t = &mobile.traces[0];
+        coupler.push(Panel { title, rects: e.solutions.iter().map(|b| [b.dims[t.x].inf(), b.dims[t.x].sup(), b.dims[t.y].inf(), b.dims[t.y].sup()]).collect(), marks: vec![] });
+    }
+    let mut svg = String::new();
+    box_panels(&mut svg, "Mobile double butterfly: solution boxes on cos θ2 × cos θ4 (seed 000, Fig. 3)", "cos θ2", "cos θ4", &panels, (-1.05, 1.05), (-1.05, 1.05))?;
+    write(dir, "butterfly_fig3.svg", &svg)?;
+    let (xr, yr) = bounds(&coupler);
+    let mut svg = String::new();
+    box_panels(&mut svg, "Mobile double butterfly: traced point link3@7,0 (joint with link1)", "x", "y", &coupler, xr, yr)?;
+    write(dir, "butterfly_coupler.svg", &svg)?;
+
+    let fb = urdf::parse(FOUR_BAR).context("bundled four_bar.urdf")?;
+    let four = LinkageProblem::new(&fb, &[], &[("coupler".into(), 2.0, 1.0)])?;
+    let mut panels = Vec::new();
+    for sigma in [0.1, 0.02] {
+        let e = enclose(&four, SolverSettings { sigma, ..Default::default() })?;
+        let t = &four.traces[0];
+        panels.push(Panel { title: format!("sigma {sigma}: {} boxes, {:.2} s", e.solutions.len(), e.stats.seconds), rects: e.solutions.iter().map(|b| [b.dims[t.x].inf(), b.dims[t.x].sup(), b.dims[t.y].inf(), b.dims[t.y].sup()]).collect(), marks: vec![] });
+    }
+    let (xr, yr) = bounds(&panels);
+    let mut svg = String::new();
+    box_panels(&mut svg, "Four-bar: coupler curve of the point (2, 1) on the coupler, both assembly modes", "x", "y", &panels, xr, yr)?;
+    write(dir, "four_bar_coupler.svg", &svg)?;
+
+    // 3. Convergence: widest diagonal among the boxes of each tree level (breadth first).
+    let mut series = Vec::new();
+    for (label, problem, sigma) in [("rigid butterfly (isolated roots)", &rigid, 1e-9), ("mobile butterfly (curve)", &mobile, if quick { 0.1 } else { 0.02 })] {
+        let solver = Solver::new(&problem.system, SolverSettings { sigma, ..Default::default() })?;
+        let mut levels = Vec::new();
+        let mut sink = Collect::default();
+        solver.run_parallel(1, &AtomicBool::new(false), &mut sink, Some(&mut levels));
+        series.push(Series { label: label.into(), points: levels.iter().enumerate().map(|(k, &d)| (k as f64, d)).collect() });
+    }
+    let mut svg = String::new();
+    lines(&mut svg, "Convergence: widest box diagonal after each tree level (seed 000, section V)", "tree level", "widest diagonal", &series, Scale::Linear, Scale::Log)?;
+    write(dir, "convergence.svg", &svg)?;
+    Ok(())
+}
+
+fn bounds(panels: &[Panel]) -> ((f64, f64), (f64, f64)) {
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY);
+    for r in panels.iter().flat_map(|p| &p.rects) {
+        x0 = x0.min(r[0]);
+        x1 = x1.max(r[1]);
+        y0 = y0.min(r[2]);
+        y1 = y1.max(r[3]);
+    }
+    if !x0.is_finite() {
+        return ((-1.0, 1.0), (-1.0, 1.0));
+    }
+    let (px, py) = (0.05 * (x1 - x0).max(1e-6), 0.05 * (y1 - y0).max(1e-6));
+    ((x0 - px, x1 + px), (y0 - py, y1 + py))
+}
