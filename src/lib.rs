@@ -15,6 +15,7 @@ pub mod model;
 pub mod problems;
 pub mod report;
 pub mod solve;
+pub mod study;
 pub mod system;
 
 pub use interval::{Interval, IntervalBox};

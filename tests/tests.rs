@@ -6,3 +6,5 @@ mod util;
 mod linkage;
 /// The command line: bad input gives one clear line and a non-zero exit.
 mod cli;
+/// Instances built to break solvers: branch and prune against Newton–Raphson.
+mod stability;
