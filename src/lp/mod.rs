@@ -102,3 +102,35 @@ impl Relaxation {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::interval::interval;
+
+    #[test]
+    fn both_backends_bound_a_segment_and_prove_infeasibility() {
+        // x + y = 1, x − y ∈ [0, 0.5] on [0,1]²: x ∈ [0.5, 0.75], y ∈ [0.25, 0.5].
+        let rel = Relaxation {
+            n: 2,
+            rows: vec![
+                Row { coefs: vec![(0, 1.0), (1, 1.0)], bounds: interval(1.0, 1.0), sides: Sides::Equal },
+                Row { coefs: vec![(0, 1.0), (1, -1.0)], bounds: interval(0.0, 0.5), sides: Sides::Both },
+            ],
+        };
+        for backend in [LpBackend::Simplex, LpBackend::Clarabel] {
+            let b = [interval(0.0, 1.0), interval(0.0, 1.0)];
+            let mut c = LpCounters::default();
+            match rel.bound_with(backend, &b, &[0, 1], &mut c) {
+                LpOutcome::Bounds(v) => {
+                    assert!(v[0].inf() > 0.49 && v[0].inf() <= 0.5 && v[0].sup() >= 0.75 && v[0].sup() < 0.76, "{backend:?}");
+                    assert!(v[1].inf() > 0.24 && v[1].inf() <= 0.25 && v[1].sup() >= 0.5 && v[1].sup() < 0.51, "{backend:?}");
+                }
+                other => panic!("{backend:?}: expected bounds, got {other:?}"),
+            }
+            assert_eq!(c, LpCounters { solved: 4, unverified: 0 }, "{backend:?}");
+            let small = [interval(0.0, 0.2), interval(0.0, 0.2)];
+            assert_eq!(rel.bound_with(backend, &small, &[0, 1], &mut c), LpOutcome::Infeasible, "{backend:?}");
+        }
+    }
+}

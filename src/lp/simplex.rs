@@ -503,23 +503,6 @@ mod tests {
     }
 
     #[test]
-    fn bounds_a_segment_and_proves_infeasibility() {
-        let rel = segment();
-        let b = [interval(0.0, 1.0), interval(0.0, 1.0)];
-        let mut c = LpCounters::default();
-        match bound(&rel, &b, &[0, 1], &mut c) {
-            LpOutcome::Bounds(v) => {
-                assert!(v[0].inf() > 0.49 && v[0].inf() <= 0.5 && v[0].sup() >= 0.75 && v[0].sup() < 0.76);
-                assert!(v[1].inf() > 0.24 && v[1].inf() <= 0.25 && v[1].sup() >= 0.5 && v[1].sup() < 0.51);
-            }
-            other => panic!("expected bounds, got {other:?}"),
-        }
-        assert_eq!(c, LpCounters { solved: 4, unverified: 0 });
-        let small = [interval(0.0, 0.2), interval(0.0, 0.2)];
-        assert_eq!(bound(&rel, &small, &[0, 1], &mut c), LpOutcome::Infeasible);
-    }
-
-    #[test]
     fn one_sided_rows_and_fixed_variables() {
         // x + y ≤ 1 (Upper; the row's lower end 0.5 is not enforced), z = 0.25 fixed,
         // x − z ≥ 0 (Lower): x ∈ [0.25, 1], y ∈ [0, 0.75] on [0,1]³.
