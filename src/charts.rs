@@ -51,12 +51,12 @@ fn timed(problem: &LinkageProblem, settings: SolverSettings, repeat: usize) -> R
     let mut last = None;
     for _ in 0..repeat.max(1) {
         let e = enclose(problem, settings.clone())?;
-        times.push(e.stats.seconds);
+        times.push(e.stats.cpu_seconds);
         last = Some(e);
     }
     times.sort_by(f64::total_cmp);
     let mut e = last.expect("at least one run");
-    e.stats.seconds = times[times.len() / 2];
+    e.stats.cpu_seconds = times[times.len() / 2];
     Ok(e)
 }
 
@@ -119,18 +119,18 @@ pub fn run(dir: &Path, quick: bool) -> Result<()> {
         for &sigma in rigid_sigmas {
             let e = timed(&rigid, SolverSettings { sigma, ..method.settings.clone() }, repeat)?;
             if e.status == Status::Complete {
-                a.push((worst_diagonal(&rigid, &e.solutions), e.stats.seconds));
-                b.push((worst_root_distance(&rigid, &e.solutions, &reference.solutions), e.stats.seconds));
+                a.push((worst_diagonal(&rigid, &e.solutions), e.stats.cpu_seconds));
+                b.push((worst_root_distance(&rigid, &e.solutions, &reference.solutions), e.stats.cpu_seconds));
             }
         }
         diag.push(Series { label: method.label.into(), points: a });
         dist.push(Series { label: method.label.into(), points: b });
     }
     let mut svg = String::new();
-    lines(&mut svg, "Rigid double butterfly: seconds (median) against worst box diagonal", "worst solution-box diagonal", "seconds", &diag, Scale::Log, Scale::Log)?;
+    lines(&mut svg, "Rigid double butterfly: CPU seconds (median) against worst box diagonal", "worst solution-box diagonal", "CPU seconds", &diag, Scale::Log, Scale::Log)?;
     write(dir, "speed_accuracy_rigid_diagonal.svg", &svg)?;
     let mut svg = String::new();
-    lines(&mut svg, "Rigid double butterfly: seconds against worst distance to a certified root", "worst distance from a box to a certified root", "seconds", &dist, Scale::Log, Scale::Log)?;
+    lines(&mut svg, "Rigid double butterfly: CPU seconds against worst distance to a certified root", "worst distance from a box to a certified root", "CPU seconds", &dist, Scale::Log, Scale::Log)?;
     write(dir, "speed_accuracy_rigid_root_distance.svg", &svg)?;
 
     let mut diag = Vec::new();
@@ -139,13 +139,13 @@ pub fn run(dir: &Path, quick: bool) -> Result<()> {
         for &sigma in mobile_sigmas {
             let e = timed(&mobile, SolverSettings { sigma, ..method.settings.clone() }, repeat.min(3))?;
             if e.status == Status::Complete {
-                a.push((worst_diagonal(&mobile, &e.solutions), e.stats.seconds));
+                a.push((worst_diagonal(&mobile, &e.solutions), e.stats.cpu_seconds));
             }
         }
         diag.push(Series { label: method.label.into(), points: a });
     }
     let mut svg = String::new();
-    lines(&mut svg, "Mobile double butterfly: seconds (median) against worst box diagonal", "worst solution-box diagonal", "seconds", &diag, Scale::Log, Scale::Log)?;
+    lines(&mut svg, "Mobile double butterfly: CPU seconds (median) against worst box diagonal", "worst solution-box diagonal", "CPU seconds", &diag, Scale::Log, Scale::Log)?;
     write(dir, "speed_accuracy_mobile_diagonal.svg", &svg)?;
 
     // 2. Configuration-space projections like the seed's Fig. 3, and the traced coupler point.
@@ -156,7 +156,7 @@ pub fn run(dir: &Path, quick: bool) -> Result<()> {
     let mut coupler = Vec::new();
     for &sigma in fig_sigmas {
         let e = enclose(&mobile, SolverSettings { sigma, ..Default::default() })?;
-        let title = format!("sigma {sigma}: {} boxes, {:.2} s, d = {:.3}", e.solutions.len(), e.stats.seconds, worst_diagonal(&mobile, &e.solutions));
+        let title = format!("sigma {sigma}: {} boxes, {:.2} s CPU, d = {:.3}", e.solutions.len(), e.stats.cpu_seconds, worst_diagonal(&mobile, &e.solutions));
         panels.push(Panel { title: title.clone(), rects: e.solutions.iter().map(|b| [b.dims[c2].inf(), b.dims[c2].sup(), b.dims[c4].inf(), b.dims[c4].sup()]).collect(), marks: vec![] });
         let t = &mobile.traces[0];
         coupler.push(Panel { title, rects: e.solutions.iter().map(|b| [b.dims[t.x].inf(), b.dims[t.x].sup(), b.dims[t.y].inf(), b.dims[t.y].sup()]).collect(), marks: vec![] });
@@ -175,7 +175,7 @@ pub fn run(dir: &Path, quick: bool) -> Result<()> {
     for sigma in [0.1, 0.02] {
         let e = enclose(&four, SolverSettings { sigma, ..Default::default() })?;
         let t = &four.traces[0];
-        panels.push(Panel { title: format!("sigma {sigma}: {} boxes, {:.2} s", e.solutions.len(), e.stats.seconds), rects: e.solutions.iter().map(|b| [b.dims[t.x].inf(), b.dims[t.x].sup(), b.dims[t.y].inf(), b.dims[t.y].sup()]).collect(), marks: vec![] });
+        panels.push(Panel { title: format!("sigma {sigma}: {} boxes, {:.2} s CPU", e.solutions.len(), e.stats.cpu_seconds), rects: e.solutions.iter().map(|b| [b.dims[t.x].inf(), b.dims[t.x].sup(), b.dims[t.y].inf(), b.dims[t.y].sup()]).collect(), marks: vec![] });
     }
     let (xr, yr) = bounds(&panels);
     let mut svg = String::new();

@@ -10,7 +10,7 @@
 //! Breadth-first order also gives the convergence measurement of seed 000, section V: the
 //! widest diagonal among the boxes of each level.
 
-use super::driver::{BoxSink, BoxStatus, Limit, Progress, Shrunk, Solver, Stats, Status};
+use super::driver::{process_cpu_seconds, BoxSink, BoxStatus, Limit, Progress, Shrunk, Solver, Stats, Status};
 use crate::interval::IntervalBox;
 use crate::lp::LpCounters;
 use rayon::prelude::*;
@@ -26,6 +26,7 @@ impl Solver<'_> {
     /// after shrinking (those not proven empty): the enclosure reached at each iteration.
     pub fn run_parallel(&self, threads: usize, cancel: &AtomicBool, sink: &mut dyn BoxSink, mut level_diagonals: Option<&mut Vec<f64>>) -> (Status, Stats) {
         let t0 = Instant::now();
+        let c0 = process_cpu_seconds();
         let mut stats = Stats::default();
         let pool = match rayon::ThreadPoolBuilder::new().num_threads(threads.max(1)).build() {
             Ok(p) => p,
@@ -104,6 +105,7 @@ impl Solver<'_> {
         }
         stats.lp = lp;
         stats.seconds = t0.elapsed().as_secs_f64();
+        stats.cpu_seconds = process_cpu_seconds() - c0;
         (status, stats)
     }
 }
