@@ -9,7 +9,7 @@ use linkspace::interval::IntervalBox;
 use linkspace::lp::LpBackend;
 use linkspace::model::urdf;
 use linkspace::problems::LinkageProblem;
-use linkspace::solve::{Collect, Enclosure, Solver, SolverSettings, Status};
+use linkspace::solve::{Collect, Enclosure, SolverSettings, Status};
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
@@ -42,7 +42,7 @@ fn methods(with_clarabel: bool, square: bool) -> Vec<Method> {
 }
 
 fn enclose(problem: &LinkageProblem, settings: SolverSettings) -> Result<Enclosure> {
-    Ok(Solver::new(&problem.system, settings)?.enclose(&AtomicBool::new(false), &mut |_| {}))
+    Ok(problem.solver(settings)?.enclose(&AtomicBool::new(false), &mut |_| {}))
 }
 
 /// The run, with its time replaced by the median over `repeat` identical runs.
@@ -185,7 +185,7 @@ pub fn run(dir: &Path, quick: bool) -> Result<()> {
     // 3. Convergence: widest diagonal among the boxes of each tree level (breadth first).
     let mut series = Vec::new();
     for (label, problem, sigma) in [("rigid butterfly (isolated roots)", &rigid, 1e-9), ("mobile butterfly (curve)", &mobile, if quick { 0.1 } else { 0.02 })] {
-        let solver = Solver::new(&problem.system, SolverSettings { sigma, ..Default::default() })?;
+        let solver = problem.solver(SolverSettings { sigma, ..Default::default() })?;
         let mut levels = Vec::new();
         let mut sink = Collect::default();
         solver.run_parallel(1, &AtomicBool::new(false), &mut sink, Some(&mut levels));

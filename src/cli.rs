@@ -5,7 +5,7 @@ use clap::{Parser, Subcommand};
 use linkspace::model::urdf;
 use linkspace::problems::LinkageProblem;
 use linkspace::lp::LpBackend;
-use linkspace::solve::{Progress, Solver, SolverSettings};
+use linkspace::solve::{Progress, SolverSettings};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
@@ -141,7 +141,7 @@ fn solve(args: SolveArgs) -> Result<()> {
     let xml = std::fs::read_to_string(&args.urdf).with_context(|| format!("reading {}", args.urdf.display()))?;
     let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", args.urdf.display()))?;
     let problem = LinkageProblem::new(&mechanism, &fixed, &traces).with_context(|| format!("building {}", args.urdf.display()))?;
-    let solver = Solver::new(&problem.system, settings.clone())?;
+    let solver = problem.solver(settings.clone())?;
     let show = std::io::stderr().is_terminal();
     let mut progress = |p: &Progress| {
         if show {
@@ -204,7 +204,7 @@ fn bench(args: BenchArgs) -> Result<()> {
         let mut medians = Vec::new();
         for backend in [LpBackend::Clarabel, LpBackend::Simplex] {
             let settings = SolverSettings { sigma, lp_backend: backend, ..Default::default() };
-            let solver = Solver::new(&problem.system, settings)?;
+            let solver = problem.solver(settings)?;
             let mut times = Vec::new();
             let mut last = None;
             for _ in 0..args.repeat {

@@ -8,7 +8,7 @@
 
 use crate::model::urdf;
 use crate::problems::LinkageProblem;
-use crate::solve::{Solver, SolverSettings, Status};
+use crate::solve::{SolverSettings, Status};
 use crate::system::{EquationSystem, Monomial};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
@@ -102,7 +102,7 @@ fn distance(a: &[f64], b: &[f64]) -> f64 {
 
 fn study(i: &Instance) -> Finding {
     let settings = SolverSettings { sigma: i.sigma, max_boxes: 200_000, ..Default::default() };
-    let e = Solver::new(&i.problem.system, settings).expect("invariant: study settings are valid").enclose(&AtomicBool::new(false), &mut |_| {});
+    let e = i.problem.solver(settings).expect("invariant: study settings are valid").enclose(&AtomicBool::new(false), &mut |_| {});
     // The reference points are rounded to floats; allow that rounding and nothing more.
     let inside = |x: &[f64]| e.solutions.iter().any(|b| b.dims.iter().zip(x).all(|(d, &v)| d.inf() - 1e-9 <= v && v <= d.sup() + 1e-9));
     let lost = i.roots.iter().filter(|r| !inside(r)).count() + usize::from(e.status != Status::Complete);

@@ -355,7 +355,7 @@ fn parallel_and_serial_drivers_give_identical_box_sets() {
         let mut sets = Vec::new();
         for threads in [1, 2, 3] {
             let settings = SolverSettings { sigma: *sigma, threads, ..Default::default() };
-            let e = Solver::new(&p.system, settings).expect("valid").enclose(&AtomicBool::new(false), &mut |_| {});
+            let e = p.solver(settings).expect("valid").enclose(&AtomicBool::new(false), &mut |_| {});
             assert_eq!(e.status, Status::Complete);
             let boxes = e.solutions.iter().zip(&e.unique).map(|(b, &u)| (b.dims.iter().map(|d| (d.inf().to_bits(), d.sup().to_bits())).collect(), u)).collect();
             sets.push((threads, canonical(boxes), e.stats.processed));
@@ -364,6 +364,75 @@ fn parallel_and_serial_drivers_give_identical_box_sets() {
             assert_eq!(set.len(), sets[0].1.len(), "{}: {threads} threads", p.name);
             assert!(*set == sets[0].1, "{}: {threads} threads give other boxes", p.name);
             assert_eq!(*processed, sets[0].2, "{}: {threads} threads processed another tree", p.name);
+        }
+    }
+}
+
+#[test]
+fn limits_on_a_joint_away_from_the_ground_bound_the_search() {
+    use linkspace::model::urdf;
+    use linkspace::problems::LinkageProblem;
+    // The coupler may turn only within [-1, 1] rad relative to the crank: one of the two
+    // assembly modes of every crank angle violates it somewhere along the crank's turn.
+    let text = crate::util::urdf_text("four_bar.urdf").replacen(
+        "<joint name=\"coupler_joint\" type=\"continuous\">",
+        "<joint name=\"coupler_joint\" type=\"revolute\"><limit lower=\"-1\" upper=\"1\" effort=\"0\" velocity=\"0\"/>",
+        1,
+    );
+    let m = urdf::parse(&text).expect("variant parses");
+    for k in 0..8 {
+        let t2 = -PI + 2.0 * PI * (k as f64 + 0.5) / 8.0;
+        let limited = LinkageProblem::new(&m, &[("crank_joint".into(), t2)], &[]).expect("builds");
+        let run = solve(&limited, 1e-6);
+        assert_eq!(run.status, Status::Complete);
+        // Reference: the closed-form modes whose coupler angle relative to the crank is within the limits.
+        let expected: Vec<f64> = four_bar_closed_form(t2)
+            .into_iter()
+            .filter(|(t4, _)| {
+                let (a, b, c, d) = (1.5f64, 4.0f64, 3.5f64, 4.0f64);
+                let pa = [a * t2.cos(), a * t2.sin()];
+                let pb = [d + c * t4.cos(), c * t4.sin()];
+                let t3 = (pb[1] - pa[1]).atan2(pb[0] - pa[0]);
+                let _ = b;
+                let rel = (t3 - t2 + PI).rem_euclid(2.0 * PI) - PI;
+                rel.abs() <= 1.0
+            })
+            .map(|(t4, _)| t4)
+            .collect();
+        assert_eq!(components(&run.solutions).1, expected.len(), "crank {t2}");
+        for t4 in expected {
+            assert!(run.solutions.iter().any(|b| {
+                let r = limited.link_angles(b)["rocker"];
+                r.0 - 1e-9 <= t4 && t4 <= r.1 + 1e-9
+            }), "crank {t2}: mode with rocker {t4} lost");
+        }
+        for b in &run.solutions {
+            let (lo, hi) = limited.joint_values(b)["coupler_joint"];
+            assert!(hi >= -1.0 - 1e-9 && lo <= 1.0 + 1e-9, "crank {t2}: box outside the limits");
+        }
+    }
+    // With the crank free the coupler's parent moves: the limit filter must do the work.
+    let free = LinkageProblem::new(&m, &[], &[]).expect("builds");
+    let unlimited = problem("four_bar.urdf", &[], &[]);
+    let (with, without) = (solve(&free, 0.02), solve(&unlimited, 0.02));
+    assert!(with.solutions.len() < without.solutions.len());
+    for b in &with.solutions {
+        let (lo, hi) = free.joint_values(b)["coupler_joint"];
+        assert!(hi >= -1.0 - 1e-9 && lo <= 1.0 + 1e-9, "a box of the free run lies outside the limits: [{lo}, {hi}]");
+    }
+    // Nothing within the limits is lost: sampled closed-form configurations inside them are covered.
+    for k in 0..64 {
+        let t2 = -PI + 2.0 * PI * (k as f64 + 0.5) / 64.0;
+        for (t4, _) in four_bar_closed_form(t2) {
+            let (a, c, d) = (1.5f64, 3.5f64, 4.0f64);
+            let pa = [a * t2.cos(), a * t2.sin()];
+            let pb = [d + c * t4.cos(), c * t4.sin()];
+            let t3 = (pb[1] - pa[1]).atan2(pb[0] - pa[0]);
+            if ((t3 - t2 + PI).rem_euclid(2.0 * PI) - PI).abs() <= 1.0 {
+                let angles: BTreeMap<String, f64> = [("crank", t2), ("coupler", t3), ("rocker", t4), ("ground", 0.0)].iter().map(|(n, v)| (n.to_string(), *v)).collect();
+                let x = free.point_from(&angles, &BTreeMap::new()).expect("angles");
+                assert!(covered(&with.solutions, &x, 1e-9), "crank {t2}: a configuration within the limits was cut");
+            }
         }
     }
 }

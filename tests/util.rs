@@ -24,7 +24,7 @@ pub struct Run {
 
 pub fn solve(p: &LinkageProblem, sigma: f64) -> Run {
     let settings = SolverSettings { sigma, ..Default::default() };
-    let solver = Solver::new(&p.system, settings).expect("valid settings");
+    let solver = p.solver(settings).expect("valid settings");
     let e = solver.enclose(&AtomicBool::new(false), &mut |_| {});
     assert!(e.undecided.is_empty() || e.status != Status::Complete);
     Run { status: e.status, stats: e.stats, solutions: e.solutions, unique: e.unique }

@@ -10,7 +10,8 @@
 //! Traced points (the seed's equation 5) are derived variables defined by linear equations.
 //! Builds only; solving is `solve`'s job.
 
-use crate::contract::{Contraction, Contractor, Propagation};
+use crate::contract::{Contraction, Contractor, Propagation, Sequence};
+use crate::solve::{default_contractor, SolveError, Solver, SolverSettings};
 use crate::interval::{interval, point, Interval, IntervalBox};
 use crate::model::{JointKind, Mechanism, ModelError};
 use crate::system::{Equation, EquationSystem, Monomial, Term, VarId, VarRole};
@@ -107,6 +108,8 @@ pub struct LinkageProblem {
     /// Per link: (name, group angle, offset to the group angle, rest yaw in the plane).
     links: Vec<(String, Angle, f64, f64)>,
     readings: Vec<(String, Reading)>,
+    /// Revolute readings with limits: (index into `readings`, lower, upper).
+    limits: Vec<(usize, f64, f64)>,
 }
 
 /// A 2-D linear form `Σ coef·var + constant`, one per coordinate.
@@ -300,6 +303,18 @@ impl LinkageProblem {
     /// Builds the planar system of `m`, with `fixed` joint values and traced points
     /// `(link name, x, y)` in the link's frame.
     pub fn new(m: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f64, f64)]) -> Result<Self, LinkageError> {
+        // Whether a loop can close at all is a property of the geometry: judge it with every
+        // joint free and no revolute limits. A fixed value or a limit that leaves no
+        // configuration is an answer (complete, no box), not bad input.
+        let limited = m.joints.iter().any(|j| matches!(j.kind, JointKind::Revolute { limits: Some(_) }));
+        if fixed.is_empty() && !limited {
+            return Self::build(m, fixed, traces, true, true);
+        }
+        Self::build(m, &[], &[], false, true)?;
+        Self::build(m, fixed, traces, true, false)
+    }
+
+    fn build(m: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f64, f64)], respect_limits: bool, check_closure: bool) -> Result<Self, LinkageError> {
         // Rest orientation of every link (all joint values zero).
         let n_links = m.links.len();
         let mut rest = vec![UnitQuaternion::identity(); n_links];
@@ -445,7 +460,7 @@ impl LinkageProblem {
                 // A limited joint to the ground bounds the group's angle to an arc.
                 if let Some(j) = m.links[l].parent_joint {
                     let joint = &m.joints[j];
-                    if let (JointKind::Revolute { limits: Some((lo, hi)) }, 0) = (joint.kind, b.group[joint.parent].0) {
+                    if let (JointKind::Revolute { limits: Some((lo, hi)) }, 0, true) = (joint.kind, b.group[joint.parent].0, respect_limits) {
                         let w = rest[joint.parent] * (joint.origin.rotation * joint.axis);
                         let base = b.group[joint.parent].1 - b.group[l].1;
                         let (a, z) = if sign_of(w) > 0.0 { (lo, hi) } else { (-hi, -lo) };
@@ -462,6 +477,7 @@ impl LinkageProblem {
         // Travel variables.
         let mut travel: BTreeMap<usize, Travel> = BTreeMap::new();
         let mut readings = Vec::new();
+        let mut limit_list = Vec::new();
         let mut free_joints = Vec::new();
         for (j, joint) in m.joints.iter().enumerate() {
             match joint.kind {
@@ -477,8 +493,11 @@ impl LinkageProblem {
                     };
                     travel.insert(j, t);
                 }
-                JointKind::Revolute { .. } if !fixed_tree.contains_key(&j) => {
+                JointKind::Revolute { limits } if !fixed_tree.contains_key(&j) => {
                     let w = rest[joint.parent] * (joint.origin.rotation * joint.axis);
+                    if let (Some((lo, hi)), true) = (limits, respect_limits) {
+                        limit_list.push((readings.len(), lo, hi));
+                    }
                     readings.push((joint.name.clone(), Reading::Revolute { a: joint.parent, b: joint.child, sign: sign_of(w), offset: 0.0 }));
                     free_joints.push(joint.name.clone());
                 }
@@ -512,6 +531,9 @@ impl LinkageProblem {
                 };
                 let offset = yaw(l.successor, &l.successor_origin.rotation) - yaw(l.predecessor, &l.predecessor_origin.rotation);
                 let sign = sign_of(w);
+                if let (JointKind::Revolute { limits: Some((lo, hi)) }, true) = (l.kind, respect_limits) {
+                    limit_list.push((readings.len(), lo, hi));
+                }
                 readings.push((l.name.clone(), Reading::Revolute { a: l.predecessor, b: l.successor, sign, offset: sign * offset }));
                 free_joints.push(l.name.clone());
             }
@@ -566,7 +588,7 @@ impl LinkageProblem {
 
         // A loop that cannot close on its own is bad input, not an empty answer.
         let start = b.system.initial_box();
-        for (name, rows) in &loop_equations {
+        for (name, rows) in loop_equations.iter().filter(|_| check_closure) {
             let mut sub = EquationSystem { vars: b.system.vars.clone(), equations: rows.iter().map(|&r| b.system.equations[r].clone()).collect() };
             sub.equations.extend(b.system.equations.iter().filter(|e| !matches!(e.kind, crate::system::EquationKind::Linear)).cloned());
             let mut probe = start.clone();
@@ -583,7 +605,7 @@ impl LinkageProblem {
             })
             .collect();
         let fixed_joints = fixed.to_vec();
-        Ok(Self { system: b.system, name: m.name.clone(), free_joints, fixed_joints, traces: trace_out, links, readings })
+        Ok(Self { system: b.system, name: m.name.clone(), free_joints, fixed_joints, traces: trace_out, links, readings, limits: limit_list })
     }
 
     /// World orientation of every link over the box, radians, keyed by link name.
@@ -603,24 +625,49 @@ impl LinkageProblem {
 
     /// Values of the free joints over the box (radians or metres), keyed by joint name.
     pub fn joint_values(&self, b: &IntervalBox) -> BTreeMap<String, (f64, f64)> {
-        self.readings
-            .iter()
-            .map(|(name, r)| {
-                let v = match *r {
-                    Reading::Travel(v) => (b.dims[v].inf(), b.dims[v].sup()),
-                    Reading::Revolute { a, b: c, sign, offset } => {
-                        let (la, oa) = (self.links[a].1, self.links[a].2);
-                        let (lc, oc) = (self.links[c].1, self.links[c].2);
-                        let pa = self.angle(b, la, oa);
-                        let pc = self.angle(b, lc, oc);
-                        let (lo, hi) = (pc.0 - pa.1, pc.1 - pa.0);
-                        let (lo, hi) = if sign > 0.0 { (lo, hi) } else { (-hi, -lo) };
-                        wrap_angle((lo + offset, hi + offset))
-                    }
-                };
-                (name.clone(), v)
+        self.readings.iter().map(|(name, r)| (name.clone(), self.reading(r, b))).collect()
+    }
+
+    fn reading(&self, r: &Reading, b: &IntervalBox) -> (f64, f64) {
+        match *r {
+            Reading::Travel(v) => (b.dims[v].inf(), b.dims[v].sup()),
+            Reading::Revolute { a, b: c, sign, offset } => {
+                let (la, oa) = (self.links[a].1, self.links[a].2);
+                let (lc, oc) = (self.links[c].1, self.links[c].2);
+                let pa = self.angle(b, la, oa);
+                let pc = self.angle(b, lc, oc);
+                let (lo, hi) = (pc.0 - pa.1, pc.1 - pa.0);
+                let (lo, hi) = if sign > 0.0 { (lo, hi) } else { (-hi, -lo) };
+                wrap_angle((lo + offset, hi + offset))
+            }
+        }
+    }
+
+    /// True when some limited revolute joint's value over `b` lies wholly outside its limits
+    /// (for every turn: angles are compared modulo 2π).
+    pub fn violates_limits(&self, b: &IntervalBox) -> bool {
+        self.limits.iter().any(|&(k, lower, upper)| {
+            let (lo, hi) = self.reading(&self.readings[k].1, b);
+            if hi - lo >= 2.0 * PI {
+                return false;
+            }
+            !(-2..=2).any(|turn| {
+                let shift = 2.0 * PI * f64::from(turn);
+                lo + shift <= upper && hi + shift >= lower
             })
-            .collect()
+        })
+    }
+
+    /// A solver for this problem: the default pipeline, plus a joint-limit filter when joints
+    /// away from the ground carry limits (those next to it already bound the initial box).
+    pub fn solver(&self, settings: SolverSettings) -> Result<Solver<'_>, SolveError> {
+        let solver = Solver::new(&self.system, settings)?;
+        if self.limits.is_empty() {
+            return Ok(solver);
+        }
+        Ok(solver.with_contractor(Box::new(move |system, settings| {
+            Box::new(Sequence(vec![default_contractor(system, settings), Box::new(LimitFilter { problem: self })]))
+        })))
     }
 
     /// A box's point in the system's variables from link angles (radians, by link name) and
@@ -655,6 +702,29 @@ impl LinkageProblem {
             }
         }
         Some(x)
+    }
+}
+
+/// Drops boxes whose joint values lie wholly outside the joints' limits.
+///
+/// The joint intervals come from `angle_interval`, whose atan2 enclosures are padded by 1e-12
+/// rad, far above atan2's error of a few ulps; so a box is dropped only when no point in it
+/// respects the limits.
+struct LimitFilter<'a> {
+    problem: &'a LinkageProblem,
+}
+
+impl Contractor for LimitFilter<'_> {
+    fn contract(&mut self, b: &mut IntervalBox) -> Contraction {
+        if self.problem.violates_limits(b) {
+            Contraction::Empty
+        } else {
+            Contraction::Unchanged
+        }
+    }
+
+    fn name(&self) -> &'static str {
+        "joint-limits"
     }
 }
 
