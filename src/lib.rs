@@ -10,6 +10,7 @@
 pub mod contract;
 pub mod interval;
 pub mod lp;
+pub mod manip3r;
 pub mod model;
 pub mod problems;
 pub mod report;

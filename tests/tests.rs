@@ -6,3 +6,5 @@ mod util;
 mod linkage;
 /// The command line: bad input gives one clear line and a non-zero exit.
 mod cli;
+/// 3R manipulators from URDF: the seed-003 map, Table 1 counts, dense-sampling references.
+mod manip3r;
