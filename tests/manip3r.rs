@@ -68,3 +68,53 @@ fn cusp_counts_of_table_1() {
         assert_eq!(r.bands.is_empty(), case != "f", "internal motion only in f");
     }
 }
+
+#[test]
+fn zz_timing_probe() {
+    use linkspace::interval::interval;
+    let c = chain("a");
+    let b = [interval(0.1, 0.2), interval(0.3, 0.4)];
+    let t = std::time::Instant::now();
+    let mut acc = 0.0;
+    for _ in 0..10000 { acc += cusps::evaluate(&c, b).det.inf(); }
+    eprintln!("evaluate: {:?} per call {acc}", t.elapsed() / 10000);
+    let t = std::time::Instant::now();
+    for _ in 0..10000 { acc += c.jets(b, 3).rho.value().inf(); }
+    eprintln!("jets3: {:?} per call", t.elapsed() / 10000);
+    let t = std::time::Instant::now();
+    for _ in 0..10000 { acc += c.jets(b, 2).rho.value().inf(); }
+    eprintln!("jets2: {:?} per call", t.elapsed() / 10000);
+    let t = std::time::Instant::now();
+    for _ in 0..10000 { acc += linkspace::manip3r::trig::sin(b[0]).inf(); }
+    eprintln!("sin: {:?} per call {acc}", t.elapsed() / 10000);
+    let j = c.jets(b, 3);
+    let t = std::time::Instant::now();
+    for _ in 0..10000 { acc += j.tangency(0).value().inf(); }
+    eprintln!("tangency: {:?} per call {acc}", t.elapsed() / 10000);
+}
+#[test]
+fn zz_mul_probe() {
+    use linkspace::interval::interval;
+    let mut a = interval(0.1, 0.2);
+    let b = interval(-0.3, 0.4);
+    let t = std::time::Instant::now();
+    for _ in 0..1000000 { a = std::hint::black_box(a * b + b); }
+    eprintln!("mul+add: {:?} per call {a:?}", t.elapsed() / 1000000);
+    let mut a = interval(0.1, 0.2);
+    let t = std::time::Instant::now();
+    for _ in 0..1000000 { a = std::hint::black_box(a.mul_add(b, b)); }
+    eprintln!("mul_add: {:?} per call {a:?}", t.elapsed() / 1000000);
+}
+
+#[test]
+fn zz_node_counts() {
+    use linkspace::manip3r::nodes;
+    for case in ["a", "b", "d", "e", "f"] {
+        let c = chain(case);
+        let cs = cusps::search(&c, &cusps::CuspSettings::default()).expect("valid");
+        let r = nodes::search(&c, &cs.cusps, &cs.bands, &nodes::NodeSettings { timeout: Some(std::time::Duration::from_secs(60)), ..Default::default() }).expect("valid");
+        eprintln!("{case}: {} nodes, {} undecided, complete {}, {:?}", r.nodes.len(), r.undecided.len(), r.complete, r.stats);
+        for n in &r.nodes { eprintln!("   node {:?} rho {:?} z {:?}", n.theta, n.rho, n.z); }
+        for u in r.undecided.iter().take(5) { eprintln!("   undecided {:?}", u); }
+    }
+}

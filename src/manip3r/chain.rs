@@ -77,10 +77,34 @@ impl Jets {
     /// `∇f_k · T` with `T = (−∂det/∂θ₃, ∂det/∂θ₂)` the tangent of the singular curve.
     /// Two orders lower than the jets.
     pub fn tangency(&self, k: usize) -> Taylor {
-        let det = self.det();
-        let f = self.f(k);
-        f.d(1) * det.d(0) - f.d(0) * det.d(1)
+        self.derived().g[k]
     }
+
+    /// Df, det Df and system (2) at once, each computed once.
+    pub fn derived(&self) -> Derived {
+        let df = [[self.rho.d(0), self.rho.d(1)], [self.z.d(0), self.z.d(1)]];
+        let det = df[0][0] * df[1][1] - df[0][1] * df[1][0];
+        let g = if det.order() >= 1 {
+            let (d0, d1) = (det.d(0), det.d(1));
+            [0, 1].map(|k| df[k][1] * d0 - df[k][0] * d1)
+        } else {
+            [Taylor::constant(Interval::ENTIRE, 0); 2]
+        };
+        Derived { f: [self.rho, self.z], df, det, g }
+    }
+}
+
+/// Quantities derived from `Jets` (orders: f as the jets, Df and det one lower, g two lower).
+#[derive(Clone, Copy, Debug)]
+pub struct Derived {
+    /// (ρ, z)
+    pub f: [Taylor; 2],
+    /// `df[k][i] = ∂fₖ/∂θᵢ`
+    pub df: [[Taylor; 2]; 2],
+    /// det Df
+    pub det: Taylor,
+    /// System (2): `g[k] = ∇fₖ · T`
+    pub g: [Taylor; 2],
 }
 
 fn dot(a: &V3, b: &V3) -> Interval {
@@ -241,7 +265,7 @@ impl Chain3R {
     pub fn jets(&self, theta: [Interval; 2], order: usize) -> Jets {
         let (s2, c2) = Taylor::sin_cos(0, theta[0], order);
         let (s3, c3) = Taylor::sin_cos(1, theta[1], order);
-        let basis3 = |coef: [Interval; 3]| c3.scale(coef[0]) + s3.scale(coef[1]).shift(coef[2]);
+        let basis3 = |coef: [Interval; 3]| Taylor::theta3_combination(&c3, coef[0], &s3, coef[1], coef[2]);
         // The h's depend on θ₃ only, c2 and s2 on θ₂ only.
         let combine = |h: [Taylor; 3]| Taylor::outer(&c2, &h[0]) + Taylor::outer(&s2, &h[1]) + h[2];
         let mut rho = Taylor::constant(ZERO, order);

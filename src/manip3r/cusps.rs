@@ -142,30 +142,33 @@ pub struct BoxEval {
     pub grad_g: [[Interval; 2]; 2],
     /// ρ and z
     pub f: [Interval; 2],
+    /// det Df at the midpoint
+    pub det_mid: Interval,
+    /// system (2) at the midpoint
+    pub g_mid: [Interval; 2],
+    /// (ρ, z) at the midpoint
+    pub f_mid: [Interval; 2],
 }
 
 /// Evaluates everything a cusp or node test needs over `b`.
 pub fn evaluate(chain: &Chain3R, b: [Interval; 2]) -> BoxEval {
     let m = [b[0].mid(), b[1].mid()];
-    let over = chain.jets(b, 3);
-    let at = chain.jets([point(m[0]), point(m[1])], 2);
+    let over = chain.jets(b, 3).derived();
+    let at = chain.jets([point(m[0]), point(m[1])], 2).derived();
     let dx = [b[0] - point(m[0]), b[1] - point(m[1])];
     let centred = |whole: Interval, grad: [Interval; 2], mid: Interval| whole.intersection(mid + grad[0] * dx[0] + grad[1] * dx[1]);
-    let det_b = over.det();
-    let det = centred(det_b.value(), det_b.grad(), at.det().value());
+    let det = centred(over.det.value(), over.det.grad(), at.det.value());
     let mut g = [Interval::EMPTY; 2];
     let mut grad_g = [[Interval::EMPTY; 2]; 2];
     let mut df = [[Interval::EMPTY; 2]; 2];
     let mut f = [Interval::EMPTY; 2];
     for k in 0..2 {
-        let gk = over.tangency(k);
-        g[k] = centred(gk.value(), gk.grad(), at.tangency(k).value());
-        grad_g[k] = gk.grad();
-        let fk = over.f(k);
-        df[k] = fk.grad();
-        f[k] = centred(fk.value(), fk.grad(), at.f(k).value());
+        g[k] = centred(over.g[k].value(), over.g[k].grad(), at.g[k].value());
+        grad_g[k] = over.g[k].grad();
+        df[k] = over.f[k].grad();
+        f[k] = centred(over.f[k].value(), df[k], at.f[k].value());
     }
-    BoxEval { det, grad_det: det_b.grad(), df, g, grad_g, f }
+    BoxEval { det, grad_det: over.det.grad(), df, g, grad_g, f, det_mid: at.det.value(), g_mid: [at.g[0].value(), at.g[1].value()], f_mid: [at.f[0].value(), at.f[1].value()] }
 }
 
 fn excludes_zero(v: &[Interval]) -> bool {
@@ -188,11 +191,9 @@ pub fn bisect(b: [Interval; 2], cut_theta3: bool) -> ([Interval; 2], [Interval; 
 }
 
 /// Krawczyk on (det, gₖ) over `b` with `e` its evaluation.
-fn krawczyk_cusp(chain: &Chain3R, b: &[Interval; 2], e: &BoxEval, k: usize) -> Step<2> {
+fn krawczyk_cusp(b: &[Interval; 2], e: &BoxEval, k: usize) -> Step<2> {
     let m = [b[0].mid(), b[1].mid()];
-    let at = chain.jets([point(m[0]), point(m[1])], 2);
-    let fm = [at.det().value(), at.tangency(k).value()];
-    krawczyk::step(b, &m, &fm, &[e.grad_det, e.grad_g[k]])
+    krawczyk::step(b, &m, &[e.det_mid, e.g_mid[k]], &[e.grad_det, e.grad_g[k]])
 }
 
 /// Shrinks a proven cusp box by repeated Krawczyk steps until it is no wider than `precision`.
@@ -202,7 +203,7 @@ fn refine(chain: &Chain3R, mut b: [Interval; 2], k: usize, precision: f64) -> [I
             break;
         }
         let e = evaluate(chain, b);
-        match krawczyk_cusp(chain, &b, &e, k) {
+        match krawczyk_cusp(&b, &e, k) {
             Step::Unique(next) | Step::Contracted(next) if width(&next) < 0.9 * width(&b) => b = next,
             _ => break,
         }
@@ -261,7 +262,7 @@ pub fn search(chain: &Chain3R, settings: &CuspSettings) -> Result<CuspSearch, su
         let small = width(&b) <= eps;
         if settings.method == Method::Krawczyk {
             if let Some(k) = row {
-                match krawczyk_cusp(chain, &b, &e, k) {
+                match krawczyk_cusp(&b, &e, k) {
                     Step::Empty => {
                         stats.krawczyk_empty += 1;
                         continue;

@@ -19,13 +19,14 @@ pub mod cusps;
 // pub mod ik;
 pub mod krawczyk;
 pub mod motion;
-// pub mod nodes;
+pub mod nodes;
 // pub mod report;
 pub mod taylor;
 pub mod trig;
 
 pub use chain::{Chain3R, Jets};
 pub use cusps::{Cusp, CuspSearch};
+pub use nodes::{Node, NodeSearch};
 
 use thiserror::Error;
 

@@ -101,6 +101,19 @@ impl Taylor {
         out
     }
 
+    /// `a·c + b·d + e` for jets `a`, `b` of θ₃ only and interval constants `c`, `d`, `e`:
+    /// touches only the pure-θ₃ coefficients.
+    pub fn theta3_combination(a: &Taylor, c: Interval, b: &Taylor, d: Interval, e: Interval) -> Taylor {
+        let order = a.order.min(b.order);
+        let mut out = Self::constant(ZERO, order);
+        for j in 0..=order {
+            let at = index(j, j);
+            out.c[at] = a.c[at].mul_add(c, b.c[at] * d);
+        }
+        out.c[0] = out.c[0] + e;
+        out
+    }
+
     /// `self · s` for an interval constant `s`.
     pub fn scale(&self, s: Interval) -> Self {
         let mut out = *self;
