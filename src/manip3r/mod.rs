@@ -16,11 +16,11 @@
 pub mod chain;
 // pub mod collisions;
 pub mod cusps;
-// pub mod ik;
+pub mod ik;
 pub mod krawczyk;
 pub mod motion;
 pub mod nodes;
-// pub mod report;
+pub mod report;
 pub mod taylor;
 pub mod trig;
 

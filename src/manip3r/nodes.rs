@@ -173,13 +173,6 @@ fn injective_mean_value(chain: &Chain3R, h: [Interval; 2]) -> bool {
     })
 }
 
-/// det over the edge of `u` where coordinate `fixed` equals `at`.
-fn det_on_edge(chain: &Chain3R, u: &[Interval; 2], fixed: usize, at: f64) -> Interval {
-    let mut e = *u;
-    e[fixed] = point(at);
-    evaluate(chain, e).det
-}
-
 /// Splits `u` into `n × n` sub-boxes.
 fn grid(u: &[Interval; 2], n: usize) -> Vec<[Interval; 2]> {
     let cut = |x: Interval, k: usize| {
