@@ -211,6 +211,29 @@ fn refine(chain: &Chain3R, mut b: [Interval; 2], k: usize, precision: f64) -> [I
     b
 }
 
+/// Epsilon-inflation (Rump): from a box `x` that Krawczyk contracted but could not prove, try
+/// slightly larger boxes around it. With uncertain lengths the cusp moves with the geometry,
+/// so only a box wider than that motion can hold "one cusp for every geometry"; bisection alone
+/// would never produce one. Returns the proven box and its row.
+fn inflate(chain: &Chain3R, mut x: [Interval; 2], k: usize) -> Option<[Interval; 2]> {
+    for _ in 0..8 {
+        let grown = x.map(|d| {
+            let r = 0.1 * d.wid() + 1e-12;
+            interval(d.inf() - r, d.sup() + r)
+        });
+        let e = evaluate(chain, grown);
+        if !excludes_zero(&e.grad_det) || !excludes_zero(&e.df[k]) {
+            return None;
+        }
+        match krawczyk_cusp(&grown, &e, k) {
+            Step::Unique(inner) => return Some(inner),
+            Step::Contracted(next) => x = next,
+            Step::Empty | Step::Failed => return None,
+        }
+    }
+    None
+}
+
 /// True when the two boxes share a point of the torus (angles modulo 2π).
 pub fn meet_on_torus(a: &[Interval; 2], b: &[Interval; 2]) -> bool {
     let tau = Interval::TAU;
@@ -241,6 +264,10 @@ pub fn search(chain: &Chain3R, settings: &CuspSettings) -> Result<CuspSearch, su
             break;
         }
         stats.processed += 1;
+        // Inside a box already proven to hold exactly one cusp: nothing more to find.
+        if cusps.iter().any(|c| c.unique && (0..2).all(|i| c.theta[i].inf() <= b[i].inf() && b[i].sup() <= c.theta[i].sup())) {
+            continue;
+        }
         if bands.iter().any(|band| band.holds(b[1])) {
             stats.in_strips += 1;
             continue;
@@ -280,6 +307,31 @@ pub fn search(chain: &Chain3R, settings: &CuspSettings) -> Result<CuspSearch, su
                     Step::Unique(_) if small => {
                         undecided.push(Undecided { theta: b, reason: Reason::GradDetMayVanish });
                         continue;
+                    }
+                    Step::Contracted(k_box) if small && grad_det_ok && chain.uncertainty > 0.0 => {
+                        if let Some(inner) = inflate(chain, k_box, k) {
+                            let theta = refine(chain, inner, k, eps);
+                            let j = chain.jets(theta, 0);
+                            // A second proof of an overlapping box is the same cusp only if the
+                            // hull is proven too; otherwise both are kept, marked not unique.
+                            match cusps.iter().position(|c| (0..2).all(|i| !c.theta[i].disjoint(theta[i]))) {
+                                None => cusps.push(Cusp { theta, rho: j.rho.value(), z: j.z.value(), unique: true }),
+                                Some(at) => {
+                                    let hull = [cusps[at].theta[0].convex_hull(theta[0]), cusps[at].theta[1].convex_hull(theta[1])];
+                                    match inflate(chain, hull, k) {
+                                        Some(h) => {
+                                            let j = chain.jets(h, 0);
+                                            cusps[at] = Cusp { theta: h, rho: j.rho.value(), z: j.z.value(), unique: true };
+                                        }
+                                        None => {
+                                            cusps[at].unique = false;
+                                            cusps.push(Cusp { theta, rho: j.rho.value(), z: j.z.value(), unique: false });
+                                        }
+                                    }
+                                }
+                            }
+                            continue;
+                        }
                     }
                     // Contraction moves box edges off the dyadic grid, which only matters near
                     // strips.
