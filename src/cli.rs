@@ -44,13 +44,13 @@ struct SingularitiesArgs {
     /// URDF file: a serial chain with three revolute joints; the end point is the last link's origin.
     urdf: PathBuf,
     /// Largest width (radians) of reported and undecided boxes, in (0, 1).
-    #[arg(long, default_value_t = 1e-4)]
+    #[arg(long, default_value_t = 1e-4, allow_hyphen_values = true)]
     precision: f64,
     /// Also search nodes (pairs of singular points with one image).
     #[arg(long)]
     nodes: bool,
     /// Turn every length of the URDF into an interval of this half-width (metres).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     uncertainty: f64,
     /// Stop each search after this many boxes (or box pairs); the run is then incomplete.
     #[arg(long, default_value_t = 20_000_000)]
@@ -71,10 +71,10 @@ struct IkArgs {
     #[arg(long, value_name = "R,Z", allow_hyphen_values = true)]
     point: String,
     /// Largest width (radians) of reported boxes, in (0, 1).
-    #[arg(long, default_value_t = 1e-6)]
+    #[arg(long, default_value_t = 1e-6, allow_hyphen_values = true)]
     precision: f64,
     /// Turn every length of the URDF into an interval of this half-width (metres).
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     uncertainty: f64,
     /// Stop after this many boxes.
     #[arg(long, default_value_t = 200_000)]
