@@ -214,7 +214,7 @@ fn sign(x: Interval) -> Option<bool> {
 /// Each condition is checked on a grid of sub-boxes (one strict sign over all of them), and
 /// F''(c) on the cusp box itself, which keeps the enclosures tight.
 pub fn injective_near_cusp(chain: &Chain3R, u: [Interval; 2], c: [Interval; 2]) -> bool {
-    const N: usize = 8;
+    const N: usize = 16;
     let cells = grid(&u, N);
     let evals: Vec<BoxEval> = cells.iter().map(|b| evaluate(chain, *b)).collect();
     // (a) and (b): with ∂det/∂θₖ of one strict sign on u, every segment along θₖ meets S at most
@@ -252,16 +252,15 @@ pub fn injective_near_cusp(chain: &Chain3R, u: [Interval; 2], c: [Interval; 2]) 
     true
 }
 
-/// A box around `c` on which `injective_near_cusp` holds, trying radii from 0.2 down.
+/// A box around `c` on which `injective_near_cusp` holds, trying radii from 0.4 down.
 fn cusp_region(chain: &Chain3R, c: &Cusp) -> Option<[Interval; 2]> {
-    let mut r = 0.2;
+    let mut r = 0.4;
     while r > 1e-7 {
         let u = [0, 1].map(|i| interval(c.theta[i].inf() - r, c.theta[i].sup() + r));
         if injective_near_cusp(chain, u, c.theta) {
-            if std::env::var("LS_DEBUG").is_ok() { eprintln!("cusp {:?} region r={r}", c.theta.map(|x| x.mid())); }
             return Some(u);
         }
-        r *= 0.5;
+        r *= 0.7;
     }
     None
 }
