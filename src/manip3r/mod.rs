@@ -14,7 +14,6 @@
 //! Nullstellen mit Fehlerschranken*, Computing 4 (1969).
 
 pub mod chain;
-// pub mod collisions;
 pub mod cusps;
 pub mod ik;
 pub mod krawczyk;

@@ -152,15 +152,14 @@ fn nearest_copy(p: &[Interval; 2], q: &[Interval; 2]) -> [Interval; 2] {
     })
 }
 
-/// The mean-value injectivity certificate on `h` (see the module doc).
-fn injective_mean_value(chain: &Chain3R, h: [Interval; 2]) -> bool {
+/// The mean-value injectivity certificate on `h` (see the module doc); `tangent` is the image
+/// tangent `g` somewhere near `h`, the first direction tried.
+fn injective_mean_value(chain: &Chain3R, h: [Interval; 2], tangent: [Interval; 2]) -> bool {
     let d = chain.jets(h, 2).derived();
-    let m = [h[0].mid(), h[1].mid()];
-    let at = chain.jets([point(m[0]), point(m[1])], 2).derived();
     let grad_det = d.det.grad();
     let df = [[d.df[0][0].value(), d.df[0][1].value()], [d.df[1][0].value(), d.df[1][1].value()]];
     // Directions: the two axes and the image tangent at the midpoint (best where it is known).
-    let g = [at.g[0].value().mid(), at.g[1].value().mid()];
+    let g = [tangent[0].mid(), tangent[1].mid()];
     let norm = (g[0] * g[0] + g[1] * g[1]).sqrt();
     let mut dirs = vec![[1.0, 0.0], [0.0, 1.0]];
     if norm.is_finite() && norm > 0.0 {
@@ -348,7 +347,7 @@ pub fn search(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &NodeSe
         let disjoint = i != j && !meet_on_torus(&pb, &qb);
         // Far pairs first meet Krawczyk, which is cheap on cached evaluations; near ones the
         // injectivity certificate, for which Krawczyk cannot work (the diagonal is a curve of zeros).
-        if !disjoint && injective_mean_value(chain, hull) {
+        if !disjoint && injective_mean_value(chain, hull, p.eval.g_mid) {
             stats.injective += 1;
             continue;
         }
@@ -373,7 +372,7 @@ pub fn search(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &NodeSe
                 }
                 _ => {}
             }
-            if width(&hull) < 0.5 && injective_mean_value(chain, hull) {
+            if width(&hull) < 0.5 && injective_mean_value(chain, hull, p.eval.g_mid) {
                 stats.injective += 1;
                 continue;
             }
