@@ -5,6 +5,13 @@ use clap::{Parser, Subcommand};
 use linkspace::model::urdf;
 use linkspace::problems::LinkageProblem;
 use linkspace::lp::LpBackend;
+use linkspace::manip3r::{
+    self,
+    cusps::{self, CuspSettings, Method},
+    nodes::{self, NodeSettings},
+    report::{IkReport, SingularityReport},
+    Chain3R,
+};
 use linkspace::solve::{Progress, SolverSettings};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -26,6 +33,67 @@ enum Command {
     Chart(ChartArgs),
     /// Time the bundled double butterfly, rigid and mobile, against a baseline in the same run.
     Bench(BenchArgs),
+    /// Certified cusps, nodes and internal motions of a 3R chain described in URDF.
+    Singularities(SingularitiesArgs),
+    /// Every joint solution (joint 2, joint 3) of a 3R chain for a workspace point (radius, z).
+    Ik(IkArgs),
+    /// Time cusp and node searches on the bundled 3R robots against baselines in the same run.
+    Bench3r(Bench3rArgs),
+}
+
+#[derive(clap::Args)]
+struct SingularitiesArgs {
+    /// URDF file: a serial chain with three revolute joints; the end point is the last link's origin.
+    urdf: PathBuf,
+    /// Largest width (radians) of reported and undecided boxes, in (0, 1).
+    #[arg(long, default_value_t = 1e-4, allow_hyphen_values = true)]
+    precision: f64,
+    /// Also search nodes (pairs of singular points with one image).
+    #[arg(long)]
+    nodes: bool,
+    /// Turn every length of the URDF into an interval of this half-width (metres).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    uncertainty: f64,
+    /// Stop each search after this many boxes (or box pairs); the run is then incomplete.
+    #[arg(long, default_value_t = 20_000_000)]
+    max_boxes: u64,
+    /// Stop each search after this many seconds; the run is then incomplete.
+    #[arg(long)]
+    timeout: Option<f64>,
+    /// Write the full report as JSON here.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+struct IkArgs {
+    /// URDF file of a 3R chain.
+    urdf: PathBuf,
+    /// Workspace point: distance from the first axis, then height along it.
+    #[arg(long, value_name = "R,Z", allow_hyphen_values = true)]
+    point: String,
+    /// Largest width (radians) of reported boxes, in (0, 1).
+    #[arg(long, default_value_t = 1e-6, allow_hyphen_values = true)]
+    precision: f64,
+    /// Turn every length of the URDF into an interval of this half-width (metres).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    uncertainty: f64,
+    /// Stop after this many boxes.
+    #[arg(long, default_value_t = 200_000)]
+    max_boxes: u64,
+    /// Write the report as JSON here.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+struct Bench3rArgs {
+    /// Runs per case; the median is reported.
+    #[arg(long, default_value_t = 5)]
+    repeat: usize,
+    /// Precision of every search.
+    #[arg(long, default_value_t = 1e-4)]
+    precision: f64,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -108,6 +176,9 @@ pub fn run() -> Result<()> {
         Command::Solve(args) => solve(args),
         Command::Bench(args) => bench(args),
         Command::Chart(args) => crate::charts::run(&args.dir, args.quick),
+        Command::Singularities(args) => singularities(args),
+        Command::Ik(args) => ik(args),
+        Command::Bench3r(args) => bench3r(args),
     }
 }
 
@@ -222,5 +293,147 @@ fn bench(args: BenchArgs) -> Result<()> {
         }
         writeln!(out, "{name} | CuikSuite (published in research/double_butterfly.md, not run here) | {cuik_s} | {cuik_boxes} | {cuik_sol} | | | {:.1}x faster than CuikSuite", cuik_s / medians[1]).ok();
     }
+    Ok(())
+}
+
+fn load_chain(path: &std::path::Path, uncertainty: f64) -> Result<Chain3R> {
+    let xml = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", path.display()))?;
+    Chain3R::from_mechanism(&mechanism, uncertainty).with_context(|| format!("loading {}", path.display()))
+}
+
+fn seconds_arg(t: Option<f64>) -> Result<Option<Duration>> {
+    match t {
+        Some(t) if t.is_finite() && t > 0.0 => Ok(Some(Duration::from_secs_f64(t.min(1e9)))),
+        Some(t) => bail!("--timeout must be a positive number of seconds, got {t}"),
+        None => Ok(None),
+    }
+}
+
+fn singularities(args: SingularitiesArgs) -> Result<()> {
+    manip3r::check_precision(args.precision)?;
+    let timeout = seconds_arg(args.timeout)?;
+    let chain = load_chain(&args.urdf, args.uncertainty)?;
+    let start = std::time::Instant::now();
+    let cusp_settings = CuspSettings { precision: args.precision, max_boxes: args.max_boxes, timeout, method: Method::Krawczyk };
+    let found = cusps::search(&chain, &cusp_settings)?;
+    let node_search = if args.nodes {
+        let settings = NodeSettings { precision: args.precision, max_pairs: args.max_boxes, timeout };
+        Some(nodes::search(&chain, &found.cusps, &found.bands, &settings)?)
+    } else {
+        None
+    };
+    let report = SingularityReport::new(&chain, args.precision, &found, node_search.as_ref(), start.elapsed().as_secs_f64());
+    let mut out = std::io::stdout().lock();
+    let node_text = report.nodes.as_ref().map_or("nodes not searched".to_string(), |n| format!("{} nodes", n.len()));
+    let undecided = report.undecided.cusps.len() + report.undecided.nodes.len();
+    writeln!(
+        out,
+        "{}: {} cusps, {node_text}, {} internal-motion lines, {undecided} undecided, status {}, {:.3} s",
+        report.robot,
+        report.cusps.len(),
+        report.internal_motions.len(),
+        report.status,
+        report.stats.seconds
+    )
+    .ok();
+    let mid = |b: &[f64; 2]| 0.5 * (b[0] + b[1]);
+    let fmt = |j: &manip3r::report::Joints| j.iter().map(|(n, b)| format!("{n}={:.6}", mid(b))).collect::<Vec<_>>().join(" ");
+    for c in &report.cusps {
+        writeln!(out, "  cusp {} -> radius {:.6} z {:.6}", fmt(&c.joints), mid(&c.workspace.radius), mid(&c.workspace.z)).ok();
+    }
+    for n in report.nodes.iter().flatten() {
+        writeln!(out, "  node {} & {} -> radius {:.6} z {:.6}", fmt(&n.points[0]), fmt(&n.points[1]), mid(&n.workspace.radius), mid(&n.workspace.z)).ok();
+    }
+    for m in &report.internal_motions {
+        writeln!(out, "  internal motion {}", m.joints.iter().map(|(n, b)| format!("{n} in [{:.6}, {:.6}]", b[0], b[1])).collect::<Vec<_>>().join(", ")).ok();
+    }
+    if let Some(path) = args.json {
+        std::fs::write(&path, serde_json::to_string_pretty(&report)?).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+fn ik(args: IkArgs) -> Result<()> {
+    let (r, z) = args.point.split_once(',').with_context(|| format!("--point '{}': expected R,Z", args.point))?;
+    let r: f64 = r.trim().parse().with_context(|| format!("--point '{}': '{r}' is not a number", args.point))?;
+    let z: f64 = z.trim().parse().with_context(|| format!("--point '{}': '{z}' is not a number", args.point))?;
+    manip3r::check_precision(args.precision)?;
+    let chain = load_chain(&args.urdf, args.uncertainty)?;
+    let s = manip3r::ik::solve(&chain, r, z, args.precision, args.max_boxes)?;
+    let report = IkReport::new(&chain, [r, z], &s);
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{}: {} solutions proven unique, {} clusters undecided, status {}", report.robot, s.unique.len(), s.clusters.len(), report.status).ok();
+    for sol in &report.solutions {
+        let text: Vec<String> = sol.joints.iter().map(|(n, b)| format!("{n} in [{:.9}, {:.9}]", b[0], b[1])).collect();
+        let tag = if sol.unique { "unique".to_string() } else { format!("cluster of {} boxes (one or more solutions)", sol.boxes) };
+        writeln!(out, "  {} ({tag})", text.join(", ")).ok();
+    }
+    if let Some(path) = args.json {
+        std::fs::write(&path, serde_json::to_string_pretty(&report)?).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// The bundled 3R robots, compiled in so `bench3r` runs from anywhere, with the peers' CPU
+/// seconds from research/peers.md (Ibex, best formulation; nodes with a separation constraint).
+const ROBOTS: [(&str, &str, f64, f64); 5] = [
+    ("a", include_str!("../urdf/orthogonal_3r_a.urdf"), 0.034, 0.32),
+    ("b", include_str!("../urdf/orthogonal_3r_b.urdf"), 0.077, 0.54),
+    ("d", include_str!("../urdf/orthogonal_3r_d.urdf"), 0.019, 0.08),
+    ("e", include_str!("../urdf/orthogonal_3r_e.urdf"), 0.031, 0.44),
+    ("f", include_str!("../urdf/orthogonal_3r_f.urdf"), 59.0, 0.21),
+];
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+fn bench3r(args: Bench3rArgs) -> Result<()> {
+    if args.repeat == 0 {
+        bail!("--repeat must be at least 1");
+    }
+    manip3r::check_precision(args.precision)?;
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "robot | cusps: Krawczyk s | found | undecided | bisection baseline s | clusters | speed-up | Ibex s | vs Ibex | nodes s | found | undecided | Ibex s (separated) | vs Ibex").ok();
+    for (name, xml, ibex_cusps, ibex_nodes) in ROBOTS {
+        let chain = Chain3R::from_mechanism(&urdf::parse(xml)?, 0.0)?;
+        let run = |method| {
+            let settings = CuspSettings { precision: args.precision, method, ..Default::default() };
+            let mut times = Vec::new();
+            let mut last = None;
+            for _ in 0..args.repeat {
+                let r = cusps::search(&chain, &settings).expect("validated precision");
+                times.push(r.stats.seconds);
+                last = Some(r);
+            }
+            (median(times), last.expect("repeat >= 1"))
+        };
+        let (t_base, base) = run(Method::Bisection);
+        let (t_k, k) = run(Method::Krawczyk);
+        let mut node_times = Vec::new();
+        let mut node_run = None;
+        for _ in 0..args.repeat {
+            let r = nodes::search(&chain, &k.cusps, &k.bands, &NodeSettings { precision: args.precision, ..Default::default() })?;
+            node_times.push(r.stats.seconds);
+            node_run = Some(r);
+        }
+        let (t_n, n) = (median(node_times), node_run.expect("repeat >= 1"));
+        writeln!(
+            out,
+            "{name} | {t_k:.4} | {} | {} | {t_base:.4} | {} | {:.1}x | {ibex_cusps} | {:.1}x | {t_n:.4} | {} | {} | {ibex_nodes} | {:.1}x",
+            k.cusps.len(),
+            k.undecided.len(),
+            base.cusps.len(),
+            t_base / t_k,
+            ibex_cusps / t_k,
+            n.nodes.len(),
+            n.undecided.len(),
+            ibex_nodes / t_n
+        )
+        .ok();
+    }
+    writeln!(out, "Ibex figures are CPU seconds from research/peers.md (not run here); case f's cusp figure is Ibex at 1e-4 ending with 186,320 undecided boxes.").ok();
     Ok(())
 }

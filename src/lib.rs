@@ -11,6 +11,7 @@ pub mod chart;
 pub mod contract;
 pub mod interval;
 pub mod lp;
+pub mod manip3r;
 pub mod model;
 pub mod problems;
 pub mod report;

@@ -108,3 +108,88 @@ fn json_report_follows_the_documented_schema() {
     }
     assert_eq!(r["settings"]["sigma"], 1e-5);
 }
+
+/// A temporary 3R URDF from a bundled orthogonal robot with one replacement.
+fn robot_variant(case: &str, from: &str, to: &str) -> tempfile_path::Path {
+    variant(&format!("orthogonal_3r_{case}.urdf"), from, to)
+}
+
+#[test]
+fn singularities_bad_input_gives_one_clear_line() {
+    let e = fixture("orthogonal_3r_e.urdf");
+    assert_clear_error(&["singularities", "/nonexistent.urdf"], "reading /nonexistent.urdf");
+    assert_clear_error(&["singularities", &e, "--precision", "0"], "precision must be a number in (0, 1)");
+    assert_clear_error(&["singularities", &e, "--precision", "NaN"], "precision must be a number in (0, 1)");
+    assert_clear_error(&["singularities", &e, "--precision", "-1e-3"], "precision must be a number in (0, 1)");
+    assert_clear_error(&["singularities", &e, "--uncertainty", "-1"], "uncertainty must be a finite number >= 0");
+    // A planar linkage with loops is not a serial chain.
+    assert_clear_error(&["singularities", &fixture("four_bar.urdf")], "not a serial chain");
+    // Welding joint 3 leaves two revolute joints.
+    let two = robot_variant("e", "<joint name=\"joint3\" type=\"continuous\">", "<joint name=\"joint3\" type=\"fixed\">");
+    assert_clear_error(&["singularities", two.as_str()], "not a 3R chain: the chain to 'tool' has 2 revolute joints");
+    let prismatic = robot_variant("e", "<joint name=\"joint3\" type=\"continuous\">", "<joint name=\"joint3\" type=\"prismatic\"><limit lower=\"0\" upper=\"1\" effort=\"1\" velocity=\"1\"/>");
+    assert_clear_error(&["singularities", prismatic.as_str()], "joint 'joint3' is prismatic");
+    // All lengths zero: the tip sits on every axis and never moves.
+    let still = variant_all("orthogonal_3r_e.urdf", &[("xyz=\"1 0 0\"", "xyz=\"0 0 0\""), ("xyz=\"1.5 0.5 0\"", "xyz=\"0 0 0\""), ("xyz=\"0.7 0 0\"", "xyz=\"0 0 0\"")]);
+    assert_clear_error(&["singularities", still.as_str()], "does not move");
+    // Tip on the third axis: it moves with joint 2 only, det Df = 0 everywhere.
+    let on_axis3 = robot_variant("e", "<origin xyz=\"0.7 0 0\" rpy=\"0 0 0\"/>", "<origin xyz=\"0 0 0.3\" rpy=\"0 0 0\"/>");
+    assert_clear_error(&["singularities", on_axis3.as_str()], "degenerate");
+    assert_clear_error(&["ik", &e, "--point", "1.2"], "expected R,Z");
+    assert_clear_error(&["ik", &e, "--point", "-1,0"], "radius must be >= 0");
+    assert_clear_error(&["ik", &e, "--point", "x,0"], "'x' is not a number");
+}
+
+/// A variant with several replacements.
+fn variant_all(name: &str, edits: &[(&str, &str)]) -> tempfile_path::Path {
+    let mut text = std::fs::read_to_string(fixture(name)).expect("fixture");
+    for (from, to) in edits {
+        assert!(text.contains(from), "{from} not in {name}");
+        text = text.replacen(from, to, 1);
+    }
+    tempfile_path::Path::write(&text)
+}
+
+#[test]
+fn singularities_json_follows_the_documented_schema() {
+    let path = std::env::temp_dir().join(format!("linkspace-3r-{}.json", std::process::id()));
+    let (ok, out, err) = run(&["singularities", &fixture("orthogonal_3r_f.urdf"), "--nodes", "--json", path.to_str().expect("utf-8")]);
+    assert!(ok, "{err}");
+    assert!(out.starts_with("orthogonal_3r_f: 0 cusps, 2 nodes, 2 internal-motion lines, 0 undecided, status complete"), "{out}");
+    let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).expect("json")).expect("valid json");
+    let _ = std::fs::remove_file(&path);
+    assert_eq!(r["robot"], "orthogonal_3r_f");
+    assert_eq!(r["status"], "complete");
+    assert_eq!(r["joints"][1], "joint2");
+    assert_eq!(r["settings"]["precision"], 1e-4);
+    assert_eq!(r["cusps"].as_array().expect("array").len(), 0);
+    let node = &r["nodes"][0];
+    assert!(node["points"][0]["joint2"].is_array() && node["points"][1]["joint3"].is_array());
+    assert!(node["workspace"]["radius"].is_array() && node["workspace"]["z"].is_array());
+    assert_eq!(node["unique"], true);
+    let motion = &r["internal_motions"][0];
+    assert!(motion["joints"]["joint2"][0].as_f64().expect("number") < -3.14);
+    assert!(motion["strip"].is_array());
+    assert!(r["undecided"]["cusps"].as_array().expect("array").is_empty());
+    assert!(r["undecided"]["nodes"].as_array().expect("array").is_empty());
+    for key in ["processed", "regular", "not_tangent", "krawczyk_empty", "bisected", "in_strips", "seconds"] {
+        assert!(r["stats"]["cusps"][key].is_number(), "stats.cusps lacks {key}");
+    }
+    assert!(r["stats"]["nodes"]["pairs"].is_number());
+    // And a cusp record, from robot e.
+    let (ok, _, err) = run(&["singularities", &fixture("orthogonal_3r_e.urdf"), "--json", path.to_str().expect("utf-8")]);
+    assert!(ok, "{err}");
+    let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).expect("json")).expect("valid json");
+    let _ = std::fs::remove_file(&path);
+    assert_eq!(r["cusps"].as_array().expect("array").len(), 4);
+    assert_eq!(r["cusps"][0]["unique"], true);
+    assert!(r["cusps"][0]["joints"]["joint3"].is_array() && r["cusps"][0]["workspace"]["radius"].is_array());
+    assert!(r["nodes"].is_null());
+}
+
+#[test]
+fn ik_reports_every_solution() {
+    let (ok, out, err) = run(&["ik", &fixture("orthogonal_3r_e.urdf"), "--point", "1.3,0.2"]);
+    assert!(ok, "{err}");
+    assert!(out.starts_with("orthogonal_3r_e: 2 solutions proven unique, 0 clusters undecided, status complete"), "{out}");
+}

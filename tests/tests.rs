@@ -8,3 +8,5 @@ mod linkage;
 mod cli;
 /// Instances built to break solvers: branch and prune against Newton–Raphson.
 mod stability;
+/// 3R manipulators from URDF: the seed-003 map, Table 1 counts, dense-sampling references.
+mod manip3r;

@@ -1,0 +1,392 @@
+//! Cusps: singular points where the kernel of Df is tangent to the singular curve.
+//!
+//! Branch and prune over (θ₂, θ₃) ∈ [-π, π]². A box is discarded when det Df provably does not
+//! vanish on it, or when a row of the seed's system (2), `gₖ = ∇fₖ · T` with
+//! `T = (−∂det/∂θ₃, ∂det/∂θ₂)`, provably does not vanish (both rows vanish at a cusp).
+//! Otherwise Krawczyk runs on the square system `(det Df, gₖ)`, with `k` a row of Df that is
+//! provably non-zero on the box. Why that system and not (2) itself:
+//!
+//! - (2) alone also vanishes at every critical point of det Df, singular or not; adding
+//!   `det Df = 0` removes those.
+//! - `(det Df, gₖ)` also vanishes where row k of Df is zero (then `gₖ ≡ 0`); choosing `k` with
+//!   row k proven non-zero on the box removes those.
+//! - On a box where `det = 0`, row k ≠ 0 and `gₖ = 0`, Df has rank one with kernel ⊥ row k, so
+//!   `T ⊥ row k` puts `T` in the kernel: both rows of (2) vanish.
+//!
+//! A box is reported as a cusp when Krawczyk proves a unique zero of `(det, gₖ)` in it and
+//! interval arithmetic proves `∇det ≠ 0` (so the singular curve is smooth and `T` is its tangent)
+//! and row k ≠ 0 on it; the box is then shrunk by Krawczyk to the precision.
+//! The remaining spurious zeros of the square system are points where `∇det = 0` (crossings of
+//! the singular curve), which are never cusps: a box proven to hold one but where `∇det` may
+//! vanish is bisected, and if it reaches the precision so, it is left undecided with that reason.
+//! Boxes inside an internal-motion strip are set aside (see `motion`).
+
+use super::chain::Chain3R;
+use super::krawczyk::{self, Step};
+use super::motion::{self, Band};
+use crate::interval::{interval, point};
+use inari::Interval;
+use std::time::{Duration, Instant};
+
+/// How boxes are decided.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// Exclusion tests plus Krawczyk proofs (the default).
+    Krawczyk,
+    /// Exclusion tests and bisection only, down to the precision: the baseline for benchmarks.
+    /// Cusp boxes are then candidates, not proven.
+    Bisection,
+}
+
+/// Settings of a cusp search.
+#[derive(Clone, Copy, Debug)]
+pub struct CuspSettings {
+    /// Largest width of a reported box (radians); undecided boxes are at most this wide.
+    pub precision: f64,
+    /// Stop after this many boxes (the run is then incomplete).
+    pub max_boxes: u64,
+    /// Stop after this long.
+    pub timeout: Option<Duration>,
+    /// Krawczyk or the bisection baseline.
+    pub method: Method,
+}
+
+impl Default for CuspSettings {
+    fn default() -> Self {
+        CuspSettings { precision: 1e-4, max_boxes: 5_000_000, timeout: None, method: Method::Krawczyk }
+    }
+}
+
+/// A certified cusp.
+#[derive(Clone, Copy, Debug)]
+pub struct Cusp {
+    /// (θ₂, θ₃) box holding exactly one cusp.
+    pub theta: [Interval; 2],
+    /// ρ over the box.
+    pub rho: Interval,
+    /// z over the box.
+    pub z: Interval,
+    /// True when uniqueness (and existence) is proven; false for bisection-baseline candidates.
+    pub unique: bool,
+}
+
+/// Why a box was left undecided.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Reason {
+    /// A zero of (det, gₖ) is proven but ∇det Df may vanish there: a crossing, not a cusp, if
+    /// ∇det = 0 exactly.
+    GradDetMayVanish,
+    /// Reached the precision with nothing proven.
+    Precision,
+    /// Left pending by a limit.
+    Limit,
+}
+
+/// An undecided box.
+#[derive(Clone, Copy, Debug)]
+pub struct Undecided {
+    /// (θ₂, θ₃)
+    pub theta: [Interval; 2],
+    /// Why.
+    pub reason: Reason,
+}
+
+/// Counters of a cusp search.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct CuspStats {
+    /// Boxes taken from the stack.
+    pub processed: u64,
+    /// Discarded because det Df ≠ 0 on them.
+    pub regular: u64,
+    /// Discarded because a row of system (2) ≠ 0 on them.
+    pub not_tangent: u64,
+    /// Discarded by Krawczyk (no zero).
+    pub krawczyk_empty: u64,
+    /// Bisections.
+    pub bisected: u64,
+    /// Boxes set aside inside internal-motion strips.
+    pub in_strips: u64,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+/// The outcome of a cusp search.
+#[derive(Clone, Debug)]
+pub struct CuspSearch {
+    /// Certified cusps (candidates for `Method::Bisection`), one per cusp point of the torus.
+    pub cusps: Vec<Cusp>,
+    /// Undecided boxes.
+    pub undecided: Vec<Undecided>,
+    /// Internal-motion strips that were set aside.
+    pub bands: Vec<Band>,
+    /// True when every box was decided or set aside (no limit hit).
+    pub complete: bool,
+    /// Counters.
+    pub stats: CuspStats,
+}
+
+/// Enclosures over a box, each the intersection of the natural and the mean-value form.
+#[derive(Clone, Copy, Debug)]
+pub struct BoxEval {
+    /// det Df
+    pub det: Interval,
+    /// ∇det Df
+    pub grad_det: [Interval; 2],
+    /// rows of Df: `df[k] = ∇fₖ`
+    pub df: [[Interval; 2]; 2],
+    /// system (2): `g[k] = ∇fₖ · T`
+    pub g: [Interval; 2],
+    /// ∇gₖ
+    pub grad_g: [[Interval; 2]; 2],
+    /// ρ and z
+    pub f: [Interval; 2],
+    /// det Df at the midpoint
+    pub det_mid: Interval,
+    /// system (2) at the midpoint
+    pub g_mid: [Interval; 2],
+    /// (ρ, z) at the midpoint
+    pub f_mid: [Interval; 2],
+}
+
+/// Evaluates everything a cusp or node test needs over `b`.
+pub fn evaluate(chain: &Chain3R, b: [Interval; 2]) -> BoxEval {
+    let m = [b[0].mid(), b[1].mid()];
+    let over = chain.jets(b, 3).derived();
+    let at = chain.jets([point(m[0]), point(m[1])], 2).derived();
+    let dx = [b[0] - point(m[0]), b[1] - point(m[1])];
+    let centred = |whole: Interval, grad: [Interval; 2], mid: Interval| whole.intersection(mid + grad[0] * dx[0] + grad[1] * dx[1]);
+    let det = centred(over.det.value(), over.det.grad(), at.det.value());
+    let mut g = [Interval::EMPTY; 2];
+    let mut grad_g = [[Interval::EMPTY; 2]; 2];
+    let mut df = [[Interval::EMPTY; 2]; 2];
+    let mut f = [Interval::EMPTY; 2];
+    for k in 0..2 {
+        g[k] = centred(over.g[k].value(), over.g[k].grad(), at.g[k].value());
+        grad_g[k] = over.g[k].grad();
+        df[k] = over.f[k].grad();
+        f[k] = centred(over.f[k].value(), df[k], at.f[k].value());
+    }
+    BoxEval { det, grad_det: over.det.grad(), df, g, grad_g, f, det_mid: at.det.value(), g_mid: [at.g[0].value(), at.g[1].value()], f_mid: [at.f[0].value(), at.f[1].value()] }
+}
+
+fn excludes_zero(v: &[Interval]) -> bool {
+    v.iter().any(|x| !x.contains(0.0))
+}
+
+fn width(b: &[Interval; 2]) -> f64 {
+    b[0].wid().max(b[1].wid())
+}
+
+/// Bisects the widest side (θ₂ on ties), or θ₃ when `cut_theta3`. Midpoint cuts keep every θ₃
+/// interval one of the dyadic cells of `motion`.
+pub fn bisect(b: [Interval; 2], cut_theta3: bool) -> ([Interval; 2], [Interval; 2]) {
+    let i = if cut_theta3 || b[1].wid() > b[0].wid() { 1 } else { 0 };
+    let m = b[i].mid();
+    let (mut lo, mut hi) = (b, b);
+    lo[i] = interval(b[i].inf(), m);
+    hi[i] = interval(m, b[i].sup());
+    (lo, hi)
+}
+
+/// Krawczyk on (det, gₖ) over `b` with `e` its evaluation.
+fn krawczyk_cusp(b: &[Interval; 2], e: &BoxEval, k: usize) -> Step<2> {
+    let m = [b[0].mid(), b[1].mid()];
+    krawczyk::step(b, &m, &[e.det_mid, e.g_mid[k]], &[e.grad_det, e.grad_g[k]])
+}
+
+/// Shrinks a proven cusp box by repeated Krawczyk steps until it is no wider than `precision`.
+fn refine(chain: &Chain3R, mut b: [Interval; 2], k: usize, precision: f64) -> [Interval; 2] {
+    for _ in 0..30 {
+        if width(&b) <= precision {
+            break;
+        }
+        let e = evaluate(chain, b);
+        match krawczyk_cusp(&b, &e, k) {
+            Step::Unique(next) | Step::Contracted(next) if width(&next) < 0.9 * width(&b) => b = next,
+            _ => break,
+        }
+    }
+    b
+}
+
+/// Epsilon-inflation (Rump): from a box `x` that Krawczyk contracted but could not prove, try
+/// slightly larger boxes around it. With uncertain lengths the cusp moves with the geometry,
+/// so only a box wider than that motion can hold "one cusp for every geometry"; bisection alone
+/// would never produce one. Returns the proven box and its row.
+fn inflate(chain: &Chain3R, mut x: [Interval; 2], k: usize) -> Option<[Interval; 2]> {
+    for _ in 0..8 {
+        let grown = x.map(|d| {
+            let r = 0.1 * d.wid() + 1e-12;
+            interval(d.inf() - r, d.sup() + r)
+        });
+        let e = evaluate(chain, grown);
+        if !excludes_zero(&e.grad_det) || !excludes_zero(&e.df[k]) {
+            return None;
+        }
+        match krawczyk_cusp(&grown, &e, k) {
+            Step::Unique(inner) => return Some(inner),
+            Step::Contracted(next) => x = next,
+            Step::Empty | Step::Failed => return None,
+        }
+    }
+    None
+}
+
+/// True when the two boxes share a point of the torus (angles modulo 2π).
+pub fn meet_on_torus(a: &[Interval; 2], b: &[Interval; 2]) -> bool {
+    let tau = Interval::TAU;
+    (0..2).all(|i| [point(0.0), tau, -tau].iter().any(|s| !a[i].disjoint(b[i] + *s)))
+}
+
+/// True when the two boxes share a point of the torus only through the ±π seam.
+fn meet_across_seam(a: &[Interval; 2], b: &[Interval; 2]) -> bool {
+    meet_on_torus(a, b) && (0..2).any(|i| a[i].disjoint(b[i]))
+}
+
+/// Finds every cusp in [-π, π]² (see the module doc).
+pub fn search(chain: &Chain3R, settings: &CuspSettings) -> Result<CuspSearch, super::Manip3rError> {
+    super::check_precision(settings.precision)?;
+    let start = Instant::now();
+    let eps = settings.precision;
+    let bands = motion::bands(chain, eps);
+    let mut stats = CuspStats::default();
+    let mut cusps: Vec<Cusp> = Vec::new();
+    let mut undecided = Vec::new();
+    let mut stack = vec![[motion::full_range(), motion::full_range()]];
+    let mut complete = true;
+    while let Some(b) = stack.pop() {
+        if stats.processed >= settings.max_boxes || settings.timeout.is_some_and(|t| start.elapsed() > t) {
+            complete = false;
+            undecided.push(Undecided { theta: b, reason: Reason::Limit });
+            undecided.extend(stack.drain(..).map(|theta| Undecided { theta, reason: Reason::Limit }));
+            break;
+        }
+        stats.processed += 1;
+        // Inside a box already proven to hold exactly one cusp: nothing more to find.
+        if cusps.iter().any(|c| c.unique && (0..2).all(|i| c.theta[i].inf() <= b[i].inf() && b[i].sup() <= c.theta[i].sup())) {
+            continue;
+        }
+        if bands.iter().any(|band| band.holds(b[1])) {
+            stats.in_strips += 1;
+            continue;
+        }
+        let e = evaluate(chain, b);
+        if !e.det.contains(0.0) {
+            stats.regular += 1;
+            continue;
+        }
+        if !e.g[0].contains(0.0) || !e.g[1].contains(0.0) {
+            stats.not_tangent += 1;
+            continue;
+        }
+        let grad_det_ok = excludes_zero(&e.grad_det);
+        let row = (0..2).filter(|&k| excludes_zero(&e.df[k])).max_by(|&i, &j| {
+            let mig = |k: usize| e.df[k][0].mig().max(e.df[k][1].mig());
+            mig(i).total_cmp(&mig(j))
+        });
+        let small = width(&b) <= eps;
+        if settings.method == Method::Krawczyk {
+            if let Some(k) = row {
+                match krawczyk_cusp(&b, &e, k) {
+                    Step::Empty => {
+                        stats.krawczyk_empty += 1;
+                        continue;
+                    }
+                    Step::Unique(inner) if grad_det_ok => {
+                        let theta = refine(chain, inner, k, eps);
+                        let f = [chain.jets(theta, 0).rho.value(), chain.jets(theta, 0).z.value()];
+                        // Proven boxes lie in disjoint box interiors; only the ±π seam, where the
+                        // range overlaps itself by an ulp, can show one cusp twice.
+                        if !cusps.iter().any(|c| meet_across_seam(&c.theta, &theta)) {
+                            cusps.push(Cusp { theta, rho: f[0], z: f[1], unique: true });
+                        }
+                        continue;
+                    }
+                    Step::Unique(_) if small => {
+                        undecided.push(Undecided { theta: b, reason: Reason::GradDetMayVanish });
+                        continue;
+                    }
+                    Step::Contracted(k_box) if small && grad_det_ok && chain.uncertainty > 0.0 => {
+                        if let Some(inner) = inflate(chain, k_box, k) {
+                            let theta = refine(chain, inner, k, eps);
+                            let j = chain.jets(theta, 0);
+                            // A second proof of an overlapping box is the same cusp only if the
+                            // hull is proven too; otherwise both are kept, marked not unique.
+                            match cusps.iter().position(|c| (0..2).all(|i| !c.theta[i].disjoint(theta[i]))) {
+                                None => cusps.push(Cusp { theta, rho: j.rho.value(), z: j.z.value(), unique: true }),
+                                Some(at) => {
+                                    let hull = [cusps[at].theta[0].convex_hull(theta[0]), cusps[at].theta[1].convex_hull(theta[1])];
+                                    match inflate(chain, hull, k) {
+                                        Some(h) => {
+                                            let j = chain.jets(h, 0);
+                                            cusps[at] = Cusp { theta: h, rho: j.rho.value(), z: j.z.value(), unique: true };
+                                        }
+                                        None => {
+                                            cusps[at].unique = false;
+                                            cusps.push(Cusp { theta, rho: j.rho.value(), z: j.z.value(), unique: false });
+                                        }
+                                    }
+                                }
+                            }
+                            continue;
+                        }
+                    }
+                    // Contraction moves box edges off the dyadic grid, which only matters near
+                    // strips.
+                    Step::Contracted(k) if width(&k) < 0.7 * width(&b) && bands.is_empty() => {
+                        stack.push(k);
+                        continue;
+                    }
+                    _ => {}
+                }
+            }
+        } else if small {
+            // Baseline: a box at the precision that passed every exclusion test is a candidate.
+            let theta = b;
+            let f = [chain.jets(theta, 0).rho.value(), chain.jets(theta, 0).z.value()];
+            cusps.push(Cusp { theta, rho: f[0], z: f[1], unique: false });
+            continue;
+        }
+        if small {
+            undecided.push(Undecided { theta: b, reason: Reason::Precision });
+            continue;
+        }
+        stats.bisected += 1;
+        let (lo, hi) = bisect(b, motion::straddles(&bands, b[1]));
+        stack.push(hi);
+        stack.push(lo);
+    }
+    if settings.method == Method::Bisection {
+        cusps = merge_candidates(chain, cusps);
+    }
+    stats.seconds = start.elapsed().as_secs_f64();
+    Ok(CuspSearch { cusps, undecided, bands, complete, stats })
+}
+
+/// Merges touching candidate boxes (baseline only) into one hull per cluster.
+fn merge_candidates(chain: &Chain3R, boxes: Vec<Cusp>) -> Vec<Cusp> {
+    let mut clusters: Vec<[Interval; 2]> = Vec::new();
+    for c in boxes {
+        let mut hull = c.theta;
+        let mut i = 0;
+        while i < clusters.len() {
+            if (0..2).all(|d| !clusters[i][d].disjoint(hull[d])) {
+                let other = clusters.swap_remove(i);
+                hull = [hull[0].convex_hull(other[0]), hull[1].convex_hull(other[1])];
+                i = 0;
+            } else {
+                i += 1;
+            }
+        }
+        clusters.push(hull);
+    }
+    clusters
+        .into_iter()
+        .map(|theta| {
+            let j = chain.jets(theta, 0);
+            Cusp { theta, rho: j.rho.value(), z: j.z.value(), unique: false }
+        })
+        .collect()
+}

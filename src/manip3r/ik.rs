@@ -1,0 +1,161 @@
+//! Inverse kinematics of the half-section map: every (θ₂, θ₃) with `f(θ₂, θ₃) = (r², z)`.
+//!
+//! Branch and prune over [-π, π]² on `F(θ) = (ρ(θ) − r², z(θ) − z)`: a box goes when `F ≠ 0`
+//! on it (centred forms); Krawczyk proves a unique solution in a box, which is then shrunk to the
+//! precision. Near a singular point several solutions merge and Df is nearly singular there, so
+//! Krawczyk cannot separate them: such boxes reach the precision undecided, and touching ones
+//! are reported together as one cluster that may hold one or several solutions (or, on an
+//! internal-motion line, a whole line of them).
+
+use super::chain::Chain3R;
+use super::cusps::{bisect, meet_on_torus};
+use super::krawczyk::{self, Step};
+use super::motion;
+use super::Manip3rError;
+use crate::interval::point;
+use inari::Interval;
+
+/// The outcome of an inverse-kinematics query.
+#[derive(Clone, Debug)]
+pub struct IkSolutions {
+    /// Boxes each holding exactly one solution, for every geometry in the uncertainty box.
+    pub unique: Vec<[Interval; 2]>,
+    /// Hulls of clusters of undecided boxes: each may hold solutions, none elsewhere.
+    pub clusters: Vec<IkCluster>,
+    /// True when no limit was hit.
+    pub complete: bool,
+    /// Boxes processed.
+    pub processed: u64,
+}
+
+/// Touching undecided boxes, reported as one.
+#[derive(Clone, Copy, Debug)]
+pub struct IkCluster {
+    /// Hull of the boxes.
+    pub hull: [Interval; 2],
+    /// How many boxes.
+    pub boxes: usize,
+}
+
+/// Solves `f(θ₂, θ₃) = (radius², z)` (see the module doc).
+pub fn solve(chain: &Chain3R, radius: f64, z: f64, precision: f64, max_boxes: u64) -> Result<IkSolutions, Manip3rError> {
+    super::check_precision(precision)?;
+    if !(radius.is_finite() && z.is_finite() && radius >= 0.0) {
+        return Err(Manip3rError::BadPoint(radius, z));
+    }
+    let target = [point(radius).sqr(), point(z)];
+    let mut stack = vec![[motion::full_range(), motion::full_range()]];
+    let mut unique: Vec<[Interval; 2]> = Vec::new();
+    let mut undecided = Vec::new();
+    let mut processed = 0;
+    let mut complete = true;
+    while let Some(b) = stack.pop() {
+        if processed >= max_boxes {
+            complete = false;
+            undecided.push(b);
+            undecided.append(&mut stack);
+            break;
+        }
+        processed += 1;
+        let m = [b[0].mid(), b[1].mid()];
+        let over = chain.jets(b, 1);
+        let at = chain.jets([point(m[0]), point(m[1])], 0);
+        let dx = [b[0] - point(m[0]), b[1] - point(m[1])];
+        let mut fm = [Interval::EMPTY; 2];
+        let mut jac = [[Interval::EMPTY; 2]; 2];
+        let mut empty = false;
+        for k in 0..2 {
+            let (fk, ak) = (over.f(k), at.f(k));
+            let g = fk.grad();
+            let value = (fk.value() - target[k]).intersection(ak.value() - target[k] + g[0] * dx[0] + g[1] * dx[1]);
+            empty |= !value.contains(0.0);
+            fm[k] = ak.value() - target[k];
+            jac[k] = g;
+        }
+        if empty {
+            continue;
+        }
+        match krawczyk::step(&b, &m, &fm, &jac) {
+            Step::Empty => continue,
+            Step::Unique(mut k) => {
+                for _ in 0..30 {
+                    if k[0].wid().max(k[1].wid()) <= precision {
+                        break;
+                    }
+                    let mk = [k[0].mid(), k[1].mid()];
+                    let o = chain.jets(k, 1);
+                    let a = chain.jets([point(mk[0]), point(mk[1])], 0);
+                    let fmk = [a.rho.value() - target[0], a.z.value() - target[1]];
+                    match krawczyk::step(&k, &mk, &fmk, &[o.rho.grad(), o.z.grad()]) {
+                        Step::Unique(n) | Step::Contracted(n) if n[0].wid().max(n[1].wid()) < 0.9 * k[0].wid().max(k[1].wid()) => k = n,
+                        _ => break,
+                    }
+                }
+                // The ±π seam, where the range overlaps itself by an ulp, is the only place one
+                // solution can be proven twice.
+                if !unique.iter().any(|u| meet_on_torus(u, &k) && (0..2).any(|i| u[i].disjoint(k[i]))) {
+                    unique.push(k);
+                }
+                continue;
+            }
+            _ => {}
+        }
+        if b[0].wid().max(b[1].wid()) <= precision {
+            undecided.push(b);
+            continue;
+        }
+        let (lo, hi) = bisect(b, false);
+        stack.push(hi);
+        stack.push(lo);
+    }
+    Ok(IkSolutions { unique, clusters: cluster(&undecided), complete, processed })
+}
+
+/// Groups boxes that touch on the torus.
+fn cluster(boxes: &[[Interval; 2]]) -> Vec<IkCluster> {
+    let n = boxes.len();
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn find(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    // Sweep along θ₂ for ordinary contacts, then an all-pairs pass over the few boxes on the
+    // ±π edges for contacts across the seam.
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| boxes[a][0].inf().total_cmp(&boxes[b][0].inf()));
+    for x in 0..n {
+        let i = order[x];
+        for &j in &order[x + 1..] {
+            if boxes[j][0].inf() > boxes[i][0].sup() {
+                break;
+            }
+            if !boxes[i][1].disjoint(boxes[j][1]) {
+                let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+                parent[a] = b;
+            }
+        }
+    }
+    let edge: Vec<usize> = (0..n).filter(|&i| boxes[i].iter().any(|d| d.inf() <= -3.14159 || d.sup() >= 3.14159)).collect();
+    for (x, &i) in edge.iter().enumerate() {
+        for &j in &edge[x + 1..] {
+            if meet_on_torus(&boxes[i], &boxes[j]) {
+                let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+                parent[a] = b;
+            }
+        }
+    }
+    let mut out: std::collections::BTreeMap<usize, IkCluster> = std::collections::BTreeMap::new();
+    for (i, b) in boxes.iter().enumerate() {
+        let r = find(&mut parent, i);
+        out.entry(r)
+            .and_modify(|c| {
+                c.hull = [c.hull[0].convex_hull(b[0]), c.hull[1].convex_hull(b[1])];
+                c.boxes += 1;
+            })
+            .or_insert(IkCluster { hull: *b, boxes: 1 });
+    }
+    out.into_values().collect()
+}

@@ -1,0 +1,98 @@
+//! Internal motions: the lines θ₃ = const of joint space on which f is constant.
+//!
+//! f forgets θ₂ exactly when the end point lies on the second axis, which depends on θ₃ only:
+//! `a₂ × q(θ₃) = 0` with `q` the end point in the second joint's frame (`Chain3R::off_axis2`).
+//! Every θ₃ where that may hold is enclosed by bisecting [-π, π] into dyadic cells no wider
+//! than the precision and keeping the cells where all three components may vanish.
+//! A run of kept cells is one `Band`: its `theta3` encloses the line(s), and its `strip` adds
+//! one cell on each side, so every point outside the strip is at least one cell away from any
+//! internal motion (the searches decide such points; boxes inside strips are set aside).
+//! The cells are the very intervals the 2-D searches make by bisecting at midpoints, so a
+//! search box is either inside a strip or has no interior point in common with it.
+
+use super::chain::Chain3R;
+use crate::interval::interval;
+use inari::Interval;
+use serde::Serialize;
+
+/// Upper end of the joint range: the smallest double above π, so [-PI_UP, PI_UP] covers the
+/// whole circle.
+pub const PI_UP: f64 = 3.1415926535897936;
+
+/// The full joint range, as an interval.
+pub fn full_range() -> Interval {
+    interval(-PI_UP, PI_UP)
+}
+
+/// One internal-motion strip (see the module doc).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Band {
+    /// Encloses every θ₃ in the strip where the end point may lie on the second axis.
+    pub theta3: [f64; 2],
+    /// The strip set aside: `theta3` plus one cell on each side (radians).
+    pub strip: [f64; 2],
+}
+
+impl Band {
+    /// True when the interval `t3` lies inside the strip.
+    pub fn holds(&self, t3: Interval) -> bool {
+        self.strip[0] <= t3.inf() && t3.sup() <= self.strip[1]
+    }
+}
+
+/// The cell no wider than `precision` at the upper (`upper`) or lower end of `cell`, by
+/// repeated midpoint bisection.
+fn fine_end(mut cell: Interval, precision: f64, upper: bool) -> Interval {
+    while cell.wid() > precision {
+        let m = cell.mid();
+        cell = if upper { interval(m, cell.sup()) } else { interval(cell.inf(), m) };
+    }
+    cell
+}
+
+/// True when `t3` overlaps a strip without lying inside it: the searches then cut θ₃ first,
+/// so that the box soon lies inside the strip or away from it.
+pub fn straddles(bands: &[Band], t3: Interval) -> bool {
+    bands.iter().any(|b| t3.inf() < b.strip[1] && b.strip[0] < t3.sup() && !b.holds(t3))
+}
+
+/// The internal-motion strips of `chain`, from dyadic cells no wider than `precision`.
+pub fn bands(chain: &Chain3R, precision: f64) -> Vec<Band> {
+    // Cells in order of θ₃, each marked when the end point may lie on axis 2 there.
+    let mut cells: Vec<(Interval, bool)> = Vec::new();
+    let mut stack = vec![full_range()];
+    while let Some(t) = stack.pop() {
+        let off = chain.off_axis2(t);
+        let possible = off.iter().all(|c| c.contains(0.0));
+        if t.wid() <= precision {
+            cells.push((t, possible));
+        } else if !possible {
+            cells.push((t, false));
+        } else {
+            let m = t.mid();
+            // Upper half first on the stack so the lower one is popped first: cells stay ordered.
+            stack.push(interval(m, t.sup()));
+            stack.push(interval(t.inf(), m));
+        }
+    }
+    let mut out = Vec::new();
+    let n = cells.len();
+    let mut i = 0;
+    while i < n {
+        if !cells[i].1 {
+            i += 1;
+            continue;
+        }
+        let start = i;
+        while i < n && cells[i].1 {
+            i += 1;
+        }
+        let (lo, hi) = (cells[start].0.inf(), cells[i - 1].0.sup());
+        // One fine cell on each side as margin, cut out of the neighbour by the same midpoint
+        // bisections a search makes, so its outer end is a point every search cuts at too.
+        let below = if start > 0 { fine_end(cells[start - 1].0, precision, true).inf() } else { lo };
+        let above = if i < n { fine_end(cells[i].0, precision, false).sup() } else { hi };
+        out.push(Band { theta3: [lo, hi], strip: [below, above] });
+    }
+    out
+}

@@ -1,0 +1,405 @@
+//! Nodes: pairs of distinct singular points with the same image, the seed's system (3).
+//!
+//! The search runs on pairs of boxes `(P, Q)` of a binary tree over [-π, π]² (unordered, `P = Q`
+//! allowed), starting from the pair (whole range, whole range). A pair is dropped when
+//!
+//! 1. det Df ≠ 0 on `P` or on `Q` (proven), or their images are disjoint;
+//! 2. f restricted to the singular set `S` is proven injective on the hull `H` of `P ∪ Q`
+//!    (taken across the ±π seam when shorter). Two certificates:
+//!    - **mean value**: for a direction `m` of the workspace, the interval matrix with rows
+//!      `∇det(H)` and `mᵀDf(H)` is regular, i.e. `0 ∉ ∇det(H) × mᵀDf(H)`. If `x₁, x₂ ∈ S ∩ H`
+//!      had the same image, the mean value theorem along the segment gives `MΔ = 0` for some
+//!      `M` in that matrix and `Δ = x₂ − x₁`, so `Δ = 0`. No connectivity of `S ∩ H` is needed.
+//!      This fails near cusps, where `m·g` vanishes for every `m`.
+//!    - **cusp**: around each certified cusp `c` a box `U` where (a) `∇det ≠ 0`, (b) `S ∩ U` is
+//!      one arc (`∂det/∂θ₃ ≠ 0` on `U` and `det ≠ 0` on its lower and upper edges, or the same
+//!      with θ₂), and (c) `0 ∉ F''(U) × F'''(U)`, where `F(s) = f(γ(s))` along the flow
+//!      `γ' = T(γ)` of the tangent field `T = (−∂det/∂θ₃, ∂det/∂θ₂)`, so `F' = Df·T = g`,
+//!      `F'' = ∇g·T`, `F''' = ∇(∇g·T)·T` (fourth-order jets). Then with `F'(c) = 0`,
+//!      `F''(c) × (F(b) − F(a)) = ∫ₐᵇ ∫_c^σ (σ − τ) F''(c) × F'''(τ) dτ dσ`, whose weight is
+//!      positive for `a < b`: no two points of the arc share an image. Pairs inside `U` go.
+//! 3. Krawczyk on the four equations `f(x₁) − f(x₂) = 0, det(x₁) = 0, det(x₂) = 0` over
+//!    `P × Q` proves there is no zero (dropped) or exactly one (a node, when `P` and `Q` are
+//!    disjoint on the torus, so `x₁ ≠ x₂`).
+//!
+//! Otherwise the wider box is bisected (`P = Q` gives three pairs). So the diagonal `x₁ = x₂`,
+//! a whole curve of zeros of system (3), never reaches Krawczyk, and no separation constraint
+//! between the two points is assumed: every node, however close its two points, is found.
+//! Pairs touching an internal-motion strip are set aside.
+
+use super::chain::Chain3R;
+use super::cusps::{self, evaluate, meet_on_torus, BoxEval, Cusp};
+use super::krawczyk::{self, Step};
+use super::motion::{self, Band};
+use crate::interval::{interval, point};
+use inari::Interval;
+use std::time::{Duration, Instant};
+
+/// Settings of a node search.
+#[derive(Clone, Copy, Debug)]
+pub struct NodeSettings {
+    /// Largest width of a reported box (radians); undecided pairs are at most this wide.
+    pub precision: f64,
+    /// Stop after this many pairs (the run is then incomplete).
+    pub max_pairs: u64,
+    /// Stop after this long.
+    pub timeout: Option<Duration>,
+}
+
+impl Default for NodeSettings {
+    fn default() -> Self {
+        NodeSettings { precision: 1e-4, max_pairs: 20_000_000, timeout: None }
+    }
+}
+
+/// A certified node: exactly one pair of singular points `x₁ ∈ theta[0]`, `x₂ ∈ theta[1]` with
+/// `f(x₁) = f(x₂)`.
+#[derive(Clone, Copy, Debug)]
+pub struct Node {
+    /// The two joint boxes.
+    pub theta: [[Interval; 2]; 2],
+    /// ρ of the shared image.
+    pub rho: Interval,
+    /// z of the shared image.
+    pub z: Interval,
+}
+
+/// Counters of a node search.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct NodeStats {
+    /// Pairs taken from the stack.
+    pub pairs: u64,
+    /// Dropped because the images are disjoint.
+    pub apart: u64,
+    /// Dropped by the mean-value injectivity certificate.
+    pub injective: u64,
+    /// Dropped by a cusp-neighbourhood certificate.
+    pub near_cusp: u64,
+    /// Dropped by Krawczyk.
+    pub krawczyk_empty: u64,
+    /// Pairs set aside because a box lies in an internal-motion strip.
+    pub in_strips: u64,
+    /// Boxes of the tree.
+    pub cells: u64,
+    /// Cusp neighbourhoods certified (of all cusps given).
+    pub cusp_regions: u64,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+/// The outcome of a node search.
+#[derive(Clone, Debug)]
+pub struct NodeSearch {
+    /// Certified nodes, one per node point.
+    pub nodes: Vec<Node>,
+    /// Undecided pairs of boxes.
+    pub undecided: Vec<[[Interval; 2]; 2]>,
+    /// True when no limit was hit.
+    pub complete: bool,
+    /// Counters.
+    pub stats: NodeStats,
+}
+
+struct Cell {
+    b: [Interval; 2],
+    eval: BoxEval,
+    singular: bool,
+    in_strip: bool,
+    children: Option<(usize, usize)>,
+}
+
+struct Tree<'a> {
+    chain: &'a Chain3R,
+    bands: &'a [Band],
+    cells: Vec<Cell>,
+}
+
+impl Tree<'_> {
+    fn add(&mut self, b: [Interval; 2]) -> usize {
+        let eval = evaluate(self.chain, b);
+        let in_strip = self.bands.iter().any(|band| band.holds(b[1]));
+        self.cells.push(Cell { b, eval, singular: eval.det.contains(0.0), in_strip, children: None });
+        self.cells.len() - 1
+    }
+
+    /// The singular children of cell `i` (made on first use).
+    fn children(&mut self, i: usize) -> Vec<usize> {
+        let (a, c) = match self.cells[i].children {
+            Some(ch) => ch,
+            None => {
+                let (lo, hi) = cusps::bisect(self.cells[i].b, motion::straddles(self.bands, self.cells[i].b[1]));
+                let ch = (self.add(lo), self.add(hi));
+                self.cells[i].children = Some(ch);
+                ch
+            }
+        };
+        [a, c].into_iter().filter(|&k| self.cells[k].singular).collect()
+    }
+}
+
+fn width(b: &[Interval; 2]) -> f64 {
+    b[0].wid().max(b[1].wid())
+}
+
+/// `q` shifted by multiples of 2π per coordinate so that its hull with `p` is smallest.
+fn nearest_copy(p: &[Interval; 2], q: &[Interval; 2]) -> [Interval; 2] {
+    let tau = Interval::TAU;
+    [0, 1].map(|i| {
+        [q[i], q[i] + tau, q[i] - tau]
+            .into_iter()
+            .min_by(|a, b| p[i].convex_hull(*a).wid().total_cmp(&p[i].convex_hull(*b).wid()))
+            .expect("three candidates")
+    })
+}
+
+/// The mean-value injectivity certificate on `h` (see the module doc); `tangent` is the image
+/// tangent `g` somewhere near `h`, the first direction tried.
+fn injective_mean_value(chain: &Chain3R, h: [Interval; 2], tangent: [Interval; 2]) -> bool {
+    let d = chain.jets(h, 2).derived();
+    let grad_det = d.det.grad();
+    let df = [[d.df[0][0].value(), d.df[0][1].value()], [d.df[1][0].value(), d.df[1][1].value()]];
+    // Directions: the two axes and the image tangent at the midpoint (best where it is known).
+    let g = [tangent[0].mid(), tangent[1].mid()];
+    let norm = (g[0] * g[0] + g[1] * g[1]).sqrt();
+    let mut dirs = vec![[1.0, 0.0], [0.0, 1.0]];
+    if norm.is_finite() && norm > 0.0 {
+        dirs.insert(0, [g[0] / norm, g[1] / norm]);
+    }
+    dirs.into_iter().any(|m| {
+        let row = [point(m[0]) * df[0][0] + point(m[1]) * df[1][0], point(m[0]) * df[0][1] + point(m[1]) * df[1][1]];
+        let cross = grad_det[0] * row[1] - grad_det[1] * row[0];
+        !cross.contains(0.0)
+    })
+}
+
+/// Splits `u` into `n × n` sub-boxes.
+fn grid(u: &[Interval; 2], n: usize) -> Vec<[Interval; 2]> {
+    let cut = |x: Interval, k: usize| {
+        let (lo, w) = (x.inf(), x.wid() / n as f64);
+        let a = if k == 0 { lo } else { lo + w * k as f64 };
+        let b = if k + 1 == n { x.sup() } else { lo + w * (k + 1) as f64 };
+        interval(a, b)
+    };
+    let mut out = Vec::with_capacity(n * n);
+    for i in 0..n {
+        for j in 0..n {
+            out.push([cut(u[0], i), cut(u[1], j)]);
+        }
+    }
+    out
+}
+
+/// F'' = ∇g·T and F''' = ∇(∇g·T)·T over `b` (see the module doc).
+fn flow_derivatives(chain: &Chain3R, b: [Interval; 2]) -> ([Interval; 2], [Interval; 2]) {
+    let jets = chain.jets(b, 4).derived();
+    let t = [-jets.det.d(1), jets.det.d(0)];
+    let along = |h: &super::taylor::Taylor| h.d(0) * t[0] + h.d(1) * t[1];
+    let f2 = [along(&jets.g[0]), along(&jets.g[1])];
+    ([f2[0].value(), f2[1].value()], [along(&f2[0]).value(), along(&f2[1]).value()])
+}
+
+/// The sign of an interval that excludes zero.
+fn sign(x: Interval) -> Option<bool> {
+    if x.inf() > 0.0 {
+        Some(true)
+    } else if x.sup() < 0.0 {
+        Some(false)
+    } else {
+        None
+    }
+}
+
+/// The cusp certificate on `u` around the certified cusp box `c` ⊂ `u` (see the module doc).
+/// Each condition is checked on a grid of sub-boxes (one strict sign over all of them), and
+/// F''(c) on the cusp box itself, which keeps the enclosures tight.
+pub fn injective_near_cusp(chain: &Chain3R, u: [Interval; 2], c: [Interval; 2]) -> bool {
+    const N: usize = 16;
+    let cells = grid(&u, N);
+    let evals: Vec<BoxEval> = cells.iter().map(|b| evaluate(chain, *b)).collect();
+    // (a) and (b): with ∂det/∂θₖ of one strict sign on u, every segment along θₖ meets S at most
+    // once; with det ≠ 0 on the two edges θₖ = const, the signs there are fixed, so S ∩ u is
+    // empty or one arc across u.
+    let arc = (0..2).any(|k| {
+        let s = sign(evals[0].grad_det[k]);
+        s.is_some()
+            && evals.iter().all(|e| sign(e.grad_det[k]) == s)
+            && [u[k].inf(), u[k].sup()].into_iter().all(|at| {
+                cells.iter().filter(|b| b[k].inf() == cells[0][k].inf()).all(|b| {
+                    let mut edge = *b;
+                    edge[k] = point(at);
+                    !evaluate(chain, edge).det.contains(0.0)
+                })
+            })
+    });
+    if !arc {
+        return false;
+    }
+    // (c) F''(c) × F'''(τ) of one strict sign for τ on S ∩ u.
+    let (f2c, _) = flow_derivatives(chain, c);
+    let mut want = None;
+    for (b, e) in cells.iter().zip(&evals) {
+        if !e.det.contains(0.0) {
+            continue;
+        }
+        let (_, f3) = flow_derivatives(chain, *b);
+        let s = sign(f2c[0] * f3[1] - f2c[1] * f3[0]);
+        if s.is_none() || (want.is_some() && s != want) {
+            return false;
+        }
+        want = s;
+    }
+    true
+}
+
+/// A box around `c` on which `injective_near_cusp` holds, trying radii from 0.4 down.
+fn cusp_region(chain: &Chain3R, c: &Cusp) -> Option<[Interval; 2]> {
+    let mut r = 0.4;
+    while r > 1e-7 {
+        let u = [0, 1].map(|i| interval(c.theta[i].inf() - r, c.theta[i].sup() + r));
+        if injective_near_cusp(chain, u, c.theta) {
+            return Some(u);
+        }
+        r *= 0.7;
+    }
+    None
+}
+
+fn contains(outer: &[Interval; 2], inner: &[Interval; 2]) -> bool {
+    (0..2).all(|i| outer[i].inf() <= inner[i].inf() && inner[i].sup() <= outer[i].sup())
+}
+
+/// Krawczyk on system (3) over `p × q`.
+fn krawczyk_node(p: &[Interval; 2], ep: &BoxEval, q: &[Interval; 2], eq: &BoxEval) -> Step<4> {
+    let b = [p[0], p[1], q[0], q[1]];
+    let m = b.map(|x| x.mid());
+    let fm = [ep.f_mid[0] - eq.f_mid[0], ep.f_mid[1] - eq.f_mid[1], ep.det_mid, eq.det_mid];
+    let z = point(0.0);
+    let jac = [
+        [ep.df[0][0], ep.df[0][1], -eq.df[0][0], -eq.df[0][1]],
+        [ep.df[1][0], ep.df[1][1], -eq.df[1][0], -eq.df[1][1]],
+        [ep.grad_det[0], ep.grad_det[1], z, z],
+        [z, z, eq.grad_det[0], eq.grad_det[1]],
+    ];
+    krawczyk::step(&b, &m, &fm, &jac)
+}
+
+/// Shrinks a proven node to the precision.
+fn refine(chain: &Chain3R, mut p: [Interval; 2], mut q: [Interval; 2], precision: f64) -> ([Interval; 2], [Interval; 2]) {
+    for _ in 0..30 {
+        if width(&p).max(width(&q)) <= precision {
+            break;
+        }
+        let (ep, eq) = (evaluate(chain, p), evaluate(chain, q));
+        match krawczyk_node(&p, &ep, &q, &eq) {
+            Step::Unique(k) | Step::Contracted(k) if width(&[k[0], k[1]]).max(width(&[k[2], k[3]])) < 0.9 * width(&p).max(width(&q)) => {
+                p = [k[0], k[1]];
+                q = [k[2], k[3]];
+            }
+            _ => break,
+        }
+    }
+    (p, q)
+}
+
+/// Finds every node whose two points lie outside the internal-motion strips. `cusps` are the
+/// certified cusps (from `cusps::search` at any precision); they let pairs near a cusp go.
+pub fn search(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &NodeSettings) -> Result<NodeSearch, super::Manip3rError> {
+    super::check_precision(settings.precision)?;
+    let start = Instant::now();
+    let eps = settings.precision;
+    let mut stats = NodeStats::default();
+    let regions: Vec<[Interval; 2]> = cusps.iter().filter(|c| c.unique).filter_map(|c| cusp_region(chain, c)).collect();
+    stats.cusp_regions = regions.len() as u64;
+    let mut tree = Tree { chain, bands, cells: Vec::new() };
+    let root = tree.add([motion::full_range(), motion::full_range()]);
+    let mut stack = vec![(root, root)];
+    let mut nodes: Vec<Node> = Vec::new();
+    let mut undecided = Vec::new();
+    let mut complete = true;
+    while let Some((i, j)) = stack.pop() {
+        if stats.pairs >= settings.max_pairs || settings.timeout.is_some_and(|t| start.elapsed() > t) {
+            complete = false;
+            for (a, b) in std::iter::once((i, j)).chain(stack.drain(..)) {
+                undecided.push([tree.cells[a].b, tree.cells[b].b]);
+            }
+            break;
+        }
+        stats.pairs += 1;
+        let (p, q) = (&tree.cells[i], &tree.cells[j]);
+        if !p.singular || !q.singular {
+            continue;
+        }
+        if p.in_strip || q.in_strip {
+            stats.in_strips += 1;
+            continue;
+        }
+        if (0..2).any(|k| p.eval.f[k].disjoint(q.eval.f[k])) {
+            stats.apart += 1;
+            continue;
+        }
+        let (pb, qb) = (p.b, q.b);
+        let near = nearest_copy(&pb, &qb);
+        let hull = [pb[0].convex_hull(near[0]), pb[1].convex_hull(near[1])];
+        if regions.iter().any(|u| contains(u, &hull)) {
+            stats.near_cusp += 1;
+            continue;
+        }
+        let disjoint = i != j && !meet_on_torus(&pb, &qb);
+        // Far pairs first meet Krawczyk, which is cheap on cached evaluations; near ones the
+        // injectivity certificate, for which Krawczyk cannot work (the diagonal is a curve of zeros).
+        if !disjoint && injective_mean_value(chain, hull, p.eval.g_mid) {
+            stats.injective += 1;
+            continue;
+        }
+        if disjoint {
+            match krawczyk_node(&pb, &p.eval, &qb, &q.eval) {
+                Step::Empty => {
+                    stats.krawczyk_empty += 1;
+                    continue;
+                }
+                Step::Unique(k) => {
+                    let (a, b) = refine(chain, [k[0], k[1]], [k[2], k[3]], eps);
+                    let (ja, jb) = (chain.jets(a, 0), chain.jets(b, 0));
+                    let node = Node { theta: [a, b], rho: ja.rho.value().intersection(jb.rho.value()), z: ja.z.value().intersection(jb.z.value()) };
+                    // Only the ±π seam (where the range overlaps itself by an ulp) can repeat one.
+                    let seen = nodes.iter().any(|n| {
+                        (meet_on_torus(&n.theta[0], &a) && meet_on_torus(&n.theta[1], &b)) || (meet_on_torus(&n.theta[0], &b) && meet_on_torus(&n.theta[1], &a))
+                    });
+                    if !seen {
+                        nodes.push(node);
+                    }
+                    continue;
+                }
+                _ => {}
+            }
+            if width(&hull) < 0.5 && injective_mean_value(chain, hull, p.eval.g_mid) {
+                stats.injective += 1;
+                continue;
+            }
+        }
+        let (wp, wq) = (width(&pb), width(&qb));
+        if wp.max(wq) <= eps {
+            undecided.push([pb, qb]);
+            continue;
+        }
+        if i == j {
+            let ch = tree.children(i);
+            for (x, &a) in ch.iter().enumerate() {
+                for &b in &ch[x..] {
+                    stack.push((a, b));
+                }
+            }
+        } else if wp >= wq {
+            for a in tree.children(i) {
+                stack.push((a, j));
+            }
+        } else {
+            for b in tree.children(j) {
+                stack.push((i, b));
+            }
+        }
+    }
+    stats.cells = tree.cells.len() as u64;
+    stats.seconds = start.elapsed().as_secs_f64();
+    Ok(NodeSearch { nodes, undecided, complete, stats })
+}

@@ -1,0 +1,221 @@
+//! The JSON reports of `linkspace singularities` and `linkspace ik` (schema in README).
+//!
+//! Pure data built from search outcomes; no IO. Joint intervals are keyed by URDF joint name,
+//! workspace intervals give the radius (distance of the end point from the first axis, √ρ)
+//! and z (along the first axis, from the first joint's origin).
+
+use super::chain::Chain3R;
+use super::cusps::{CuspSearch, CuspStats, Reason};
+use super::ik::IkSolutions;
+use super::motion::Band;
+use super::nodes::{NodeSearch, NodeStats};
+use inari::Interval;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// `[lower, upper]`
+pub type Bounds = [f64; 2];
+
+fn bounds(x: Interval) -> Bounds {
+    [x.inf(), x.sup()]
+}
+
+/// Joint intervals keyed by joint name (the second and third joints).
+pub type Joints = BTreeMap<String, Bounds>;
+
+/// A workspace box.
+#[derive(Clone, Debug, Serialize)]
+pub struct Workspace {
+    /// Distance from the first axis.
+    pub radius: Bounds,
+    /// Coordinate along the first axis.
+    pub z: Bounds,
+}
+
+/// One cusp.
+#[derive(Clone, Debug, Serialize)]
+pub struct CuspRecord {
+    /// Joint box holding the cusp.
+    pub joints: Joints,
+    /// Its image.
+    pub workspace: Workspace,
+    /// True when exactly one cusp is proven in the box.
+    pub unique: bool,
+}
+
+/// One node: two joint boxes with a shared image.
+#[derive(Clone, Debug, Serialize)]
+pub struct NodeRecord {
+    /// The two joint boxes, each holding one of the two singular points.
+    pub points: [Joints; 2],
+    /// Their shared image.
+    pub workspace: Workspace,
+    /// True when exactly one pair is proven in the two boxes.
+    pub unique: bool,
+}
+
+/// An internal-motion strip.
+#[derive(Clone, Debug, Serialize)]
+pub struct MotionRecord {
+    /// Joint box covering the lines: the second joint over its whole range, the third in the
+    /// enclosure of the lines.
+    pub joints: Joints,
+    /// The strip of the third joint set aside by the searches (the lines plus one cell a side).
+    pub strip: Bounds,
+}
+
+/// An undecided box of the cusp search.
+#[derive(Clone, Debug, Serialize)]
+pub struct UndecidedCusp {
+    /// Joint box.
+    pub joints: Joints,
+    /// Why it is undecided.
+    pub reason: Reason,
+}
+
+/// An undecided pair of the node search.
+#[derive(Clone, Debug, Serialize)]
+pub struct UndecidedNode {
+    /// The two joint boxes.
+    pub points: [Joints; 2],
+}
+
+/// Undecided boxes, by search.
+#[derive(Clone, Debug, Serialize)]
+pub struct Undecided {
+    /// Of the cusp search.
+    pub cusps: Vec<UndecidedCusp>,
+    /// Of the node search.
+    pub nodes: Vec<UndecidedNode>,
+}
+
+/// Settings echoed in the report.
+#[derive(Clone, Debug, Serialize)]
+pub struct Settings {
+    /// Precision (radians).
+    pub precision: f64,
+    /// Whether nodes were searched.
+    pub nodes: bool,
+    /// Half-width added to every length.
+    pub uncertainty: f64,
+}
+
+/// Counters.
+#[derive(Clone, Debug, Serialize)]
+pub struct Stats {
+    /// Of the cusp search.
+    pub cusps: CuspStats,
+    /// Of the node search, when run.
+    pub nodes: Option<NodeStats>,
+    /// Total wall-clock seconds.
+    pub seconds: f64,
+}
+
+/// What `linkspace singularities --json` writes.
+#[derive(Clone, Debug, Serialize)]
+pub struct SingularityReport {
+    /// Robot name.
+    pub robot: String,
+    /// The three revolute joints, base first.
+    pub joints: [String; 3],
+    /// Link whose origin is the end point.
+    pub tip_link: String,
+    /// Settings.
+    pub settings: Settings,
+    /// `complete` or `incomplete`.
+    pub status: &'static str,
+    /// Certified cusps.
+    pub cusps: Vec<CuspRecord>,
+    /// Certified nodes (absent when not searched).
+    pub nodes: Option<Vec<NodeRecord>>,
+    /// Internal-motion lines.
+    pub internal_motions: Vec<MotionRecord>,
+    /// Undecided boxes.
+    pub undecided: Undecided,
+    /// Counters.
+    pub stats: Stats,
+}
+
+fn joints(chain: &Chain3R, theta: &[Interval; 2]) -> Joints {
+    BTreeMap::from([(chain.joints[1].clone(), bounds(theta[0])), (chain.joints[2].clone(), bounds(theta[1]))])
+}
+
+/// The radius √ρ over `rho` (ρ ≥ 0 always holds).
+pub fn radius(rho: Interval) -> Interval {
+    rho.intersection(crate::interval::interval(0.0, f64::INFINITY)).sqrt()
+}
+
+fn workspace(rho: Interval, z: Interval) -> Workspace {
+    Workspace { radius: bounds(radius(rho)), z: bounds(z) }
+}
+
+impl SingularityReport {
+    /// Builds the report from a cusp search and an optional node search.
+    pub fn new(chain: &Chain3R, precision: f64, cusps: &CuspSearch, nodes: Option<&NodeSearch>, seconds: f64) -> Self {
+        let complete = cusps.complete && nodes.is_none_or(|n| n.complete);
+        let internal_motions = cusps
+            .bands
+            .iter()
+            .map(|b: &Band| {
+                let full = super::motion::full_range();
+                MotionRecord { joints: joints(chain, &[full, crate::interval::interval(b.theta3[0], b.theta3[1])]), strip: b.strip }
+            })
+            .collect();
+        SingularityReport {
+            robot: chain.name.clone(),
+            joints: chain.joints.clone(),
+            tip_link: chain.tip_link.clone(),
+            settings: Settings { precision, nodes: nodes.is_some(), uncertainty: chain.uncertainty },
+            status: if complete { "complete" } else { "incomplete" },
+            cusps: cusps.cusps.iter().map(|c| CuspRecord { joints: joints(chain, &c.theta), workspace: workspace(c.rho, c.z), unique: c.unique }).collect(),
+            nodes: nodes.map(|n| {
+                n.nodes
+                    .iter()
+                    .map(|n| NodeRecord { points: [joints(chain, &n.theta[0]), joints(chain, &n.theta[1])], workspace: workspace(n.rho, n.z), unique: true })
+                    .collect()
+            }),
+            internal_motions,
+            undecided: Undecided {
+                cusps: cusps.undecided.iter().map(|u| UndecidedCusp { joints: joints(chain, &u.theta), reason: u.reason }).collect(),
+                nodes: nodes.map_or(Vec::new(), |n| n.undecided.iter().map(|p| UndecidedNode { points: [joints(chain, &p[0]), joints(chain, &p[1])] }).collect()),
+            },
+            stats: Stats { cusps: cusps.stats, nodes: nodes.map(|n| n.stats), seconds },
+        }
+    }
+}
+
+/// One inverse-kinematics solution box.
+#[derive(Clone, Debug, Serialize)]
+pub struct IkRecord {
+    /// Joint box.
+    pub joints: Joints,
+    /// True: exactly one solution in the box. False: a cluster that may hold several (near a
+    /// singularity) or a line (an internal motion).
+    pub unique: bool,
+    /// Undecided boxes merged into this record (0 for unique ones).
+    pub boxes: usize,
+}
+
+/// What `linkspace ik --json` writes.
+#[derive(Clone, Debug, Serialize)]
+pub struct IkReport {
+    /// Robot name.
+    pub robot: String,
+    /// The query (radius, z).
+    pub point: [f64; 2],
+    /// `complete` or `incomplete`.
+    pub status: &'static str,
+    /// Solutions, unique ones first.
+    pub solutions: Vec<IkRecord>,
+    /// Boxes processed.
+    pub processed: u64,
+}
+
+impl IkReport {
+    /// Builds the report of a query.
+    pub fn new(chain: &Chain3R, point: [f64; 2], s: &IkSolutions) -> Self {
+        let mut solutions: Vec<IkRecord> = s.unique.iter().map(|b| IkRecord { joints: joints(chain, b), unique: true, boxes: 0 }).collect();
+        solutions.extend(s.clusters.iter().map(|c| IkRecord { joints: joints(chain, &c.hull), unique: false, boxes: c.boxes }));
+        IkReport { robot: chain.name.clone(), point, status: if s.complete { "complete" } else { "incomplete" }, solutions, processed: s.processed }
+    }
+}
