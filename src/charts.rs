@@ -211,6 +211,9 @@ pub fn run(dir: &Path, quick: bool) -> Result<()> {
     report += &linkspace::study::markdown(&sweep.iter().map(|(_, f)| f.clone()).collect::<Vec<_>>());
     write(dir, "stability.md", &report)?;
 
+    // 5. 3R singular curves in joint space and workspace, with cusps and nodes.
+    singular_curves(dir, if quick { 96 } else { 256 })?;
+
     let mut svg = String::new();
     lines(&mut svg, "Convergence: widest box diagonal after each tree level (seed 000, section V)", "tree level", "widest diagonal", &series, Scale::Linear, Scale::Log)?;
     write(dir, "convergence.svg", &svg)?;
@@ -230,4 +233,60 @@ fn bounds(panels: &[Panel]) -> ((f64, f64), (f64, f64)) {
     }
     let (px, py) = (0.05 * (x1 - x0).max(1e-6), 0.05 * (y1 - y0).max(1e-6));
     ((x0 - px, x1 + px), (y0 - py, y1 + py))
+}
+
+const ROBOTS_3R: [(&str, &str); 3] = [
+    ("a", include_str!("../urdf/orthogonal_3r_a.urdf")),
+    ("e", include_str!("../urdf/orthogonal_3r_e.urdf")),
+    ("f", include_str!("../urdf/orthogonal_3r_f.urdf")),
+];
+
+/// Boxes of a `cells`×`cells` grid on (θ₂, θ₃) where det Df may vanish, their images, and the
+/// certified cusps and nodes marked on both.
+fn singular_curves(dir: &Path, cells: usize) -> Result<()> {
+    use linkspace::interval::interval;
+    use linkspace::manip3r::{cusps, nodes, report::radius, Chain3R};
+    let mut joint_panels = Vec::new();
+    let mut work_panels = Vec::new();
+    for (name, text) in ROBOTS_3R {
+        let chain = Chain3R::from_mechanism(&urdf::parse(text)?, 0.0)?;
+        let found = cusps::search(&chain, &cusps::CuspSettings::default())?;
+        let node_search = nodes::search(&chain, &found.cusps, &found.bands, &nodes::NodeSettings::default())?;
+        let step = 2.0 * std::f64::consts::PI / cells as f64;
+        let (mut joint, mut work) = (Vec::new(), Vec::new());
+        for i in 0..cells {
+            for j in 0..cells {
+                let t2 = -std::f64::consts::PI + step * i as f64;
+                let t3 = -std::f64::consts::PI + step * j as f64;
+                let b = [interval(t2, t2 + step), interval(t3, t3 + step)];
+                let e = cusps::evaluate(&chain, b);
+                if e.det.contains(0.0) {
+                    joint.push([b[0].inf(), b[0].sup(), b[1].inf(), b[1].sup()]);
+                    let r = radius(e.f[0]);
+                    work.push([r.inf(), r.sup(), e.f[1].inf(), e.f[1].sup()]);
+                }
+            }
+        }
+        let mid = |i: linkspace::Interval| i.mid();
+        let mut jmarks: Vec<(f64, f64)> = found.cusps.iter().map(|c| (mid(c.theta[0]), mid(c.theta[1]))).collect();
+        let mut wmarks: Vec<(f64, f64)> = found.cusps.iter().map(|c| (mid(radius(c.rho)), mid(c.z))).collect();
+        for n in &node_search.nodes {
+            for t in &n.theta {
+                jmarks.push((mid(t[0]), mid(t[1])));
+            }
+            wmarks.push((mid(radius(n.rho)), mid(n.z)));
+        }
+        let title = format!("robot {name}: {} cusps, {} nodes, {} motion lines", found.cusps.len(), node_search.nodes.len(), found.bands.len());
+        joint_panels.push(Panel { title: title.clone(), rects: joint, marks: jmarks });
+        work_panels.push(Panel { title, rects: work, marks: wmarks });
+    }
+    let pi = std::f64::consts::PI;
+    let mut svg = String::new();
+    box_panels(&mut svg, "3R singular curves in joint space (det Df may vanish), cusps and node points in red", "θ2", "θ3", &joint_panels, (-pi, pi), (-pi, pi))?;
+    write(dir, "singular_3r_joint.svg", &svg)?;
+    let (xr, yr) = bounds(&work_panels);
+    let mut svg = String::new();
+    box_panels(&mut svg, "3R singular curves in the workspace half-section, cusps and nodes in red", "radius", "z", &work_panels, (0.0, xr.1), yr)?;
+    write(dir, "singular_3r_workspace.svg", &svg)?;
+    Ok(())
 }
