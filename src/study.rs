@@ -265,3 +265,157 @@ pub fn markdown(findings: &[Finding]) -> String {
     }
     s
 }
+
+// ---------------------------------------------------------------------------------------------
+// 3R inverse kinematics where methods fail: next to a cusp, at a cusp, on an internal motion.
+
+use crate::manip3r::{cusps, ik, Chain3R};
+
+fn wrap(d: f64) -> f64 {
+    (d + PI).rem_euclid(2.0 * PI) - PI
+}
+
+fn torus_distance(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (wrap(a[0] - b[0]).powi(2) + wrap(a[1] - b[1]).powi(2)).sqrt()
+}
+
+/// Newton–Raphson on `f(θ) = target` with a central-difference Jacobian.
+fn newton_3r(chain: &Chain3R, target: [f64; 2], mut t: [f64; 2]) -> Option<[f64; 2]> {
+    for _ in 0..60 {
+        let f = chain.eval_f64(t[0], t[1]);
+        let r = [f[0] - target[0], f[1] - target[1]];
+        if (r[0] * r[0] + r[1] * r[1]).sqrt() < 1e-10 {
+            return Some([wrap(t[0]), wrap(t[1])]);
+        }
+        let h = 1e-7;
+        let col = |k: usize| {
+            let (mut p, mut m) = (t, t);
+            p[k] += h;
+            m[k] -= h;
+            let (fp, fm) = (chain.eval_f64(p[0], p[1]), chain.eval_f64(m[0], m[1]));
+            [(fp[0] - fm[0]) / (2.0 * h), (fp[1] - fm[1]) / (2.0 * h)]
+        };
+        let (c0, c1) = (col(0), col(1));
+        let det = c0[0] * c1[1] - c1[0] * c0[1];
+        if !(det.abs() > 1e-300) {
+            return None;
+        }
+        t[0] -= (r[0] * c1[1] - c1[0] * r[1]) / det;
+        t[1] -= (c0[0] * r[1] - r[0] * c0[1]) / det;
+        if !(t[0].is_finite() && t[1].is_finite()) {
+            return None;
+        }
+    }
+    None
+}
+
+/// Every isolated root of `f(θ) = target` by brute force: a 600×600 grid, Newton from every
+/// cell whose residual is a local minimum, duplicates merged. Independent of both solvers.
+fn brute_force_roots(chain: &Chain3R, target: [f64; 2]) -> Vec<[f64; 2]> {
+    let n = 600;
+    let step = 2.0 * PI / n as f64;
+    let res = |i: usize, j: usize| {
+        let f = chain.eval_f64(-PI + step * i as f64, -PI + step * j as f64);
+        ((f[0] - target[0]).powi(2) + (f[1] - target[1]).powi(2)).sqrt()
+    };
+    let grid: Vec<Vec<f64>> = (0..n).map(|i| (0..n).map(|j| res(i, j)).collect()).collect();
+    let mut roots: Vec<[f64; 2]> = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            let v = grid[i][j];
+            let is_min = (-1i64..=1).all(|di| (-1i64..=1).all(|dj| grid[((i as i64 + di).rem_euclid(n as i64)) as usize][((j as i64 + dj).rem_euclid(n as i64)) as usize] >= v));
+            if is_min {
+                if let Some(r) = newton_3r(chain, target, [-PI + step * i as f64, -PI + step * j as f64]) {
+                    if !roots.iter().any(|q| torus_distance(*q, r) < 1e-7) {
+                        roots.push(r);
+                    }
+                }
+            }
+        }
+    }
+    roots
+}
+
+fn study_ik(name: &str, difficulty: &str, chain: &Chain3R, target: [f64; 2], roots: Vec<[f64; 2]>, line: Option<f64>) -> Finding {
+    // A line of solutions needs about 2π/precision boxes to cover: a coarser precision there.
+    let precision = if line.is_some() { 1e-3 } else { 1e-6 };
+    let t0 = std::time::Instant::now();
+    let sol = ik::solve(chain, target[0].max(0.0).sqrt(), target[1], precision, 2_000_000).expect("invariant: valid query");
+    let seconds = t0.elapsed().as_secs_f64();
+    let inside = |b: &[crate::interval::Interval; 2], t: [f64; 2]| {
+        (0..2).all(|k| (-1..=1).any(|turn| {
+            let v = t[k] + 2.0 * PI * f64::from(turn);
+            b[k].inf() - 1e-9 <= v && v <= b[k].sup() + 1e-9
+        }))
+    };
+    let covered = |t: [f64; 2]| sol.unique.iter().any(|b| inside(b, t)) || sol.clusters.iter().any(|c| inside(&c.hull, t));
+    let mut lost = roots.iter().filter(|r| !covered(**r)).count() + usize::from(!sol.complete);
+    if let Some(t3) = line {
+        lost += (0..64).filter(|k| !covered([-PI + 2.0 * PI * (*k as f64 + 0.5) / 64.0, t3])).count();
+    }
+    let starts = grid(2, 256);
+    let mut converged = Vec::new();
+    let mut distinct: Vec<[f64; 2]> = Vec::new();
+    for s0 in &starts {
+        if let Some(x) = newton_3r(chain, target, [s0[0], s0[1]]) {
+            if !distinct.iter().any(|d| torus_distance(*d, x) < 1e-6) {
+                distinct.push(x);
+            }
+            converged.push(x);
+        }
+    }
+    let near_reference = |d: &[f64; 2]| roots.iter().any(|r| torus_distance(*r, *d) < 1e-6) || line.is_some_and(|t3| wrap(d[1] - t3).abs() < 1e-6);
+    let mut closest = f64::INFINITY;
+    for (k, a) in roots.iter().enumerate() {
+        for b in &roots[k + 1..] {
+            closest = closest.min(torus_distance(*a, *b));
+        }
+    }
+    Finding {
+        instance: name.into(),
+        difficulty: difficulty.into(),
+        reference_roots: roots.len() + usize::from(line.is_some()),
+        closest_pair: closest,
+        boxes: sol.unique.len() + sol.clusters.iter().map(|c| c.boxes).sum::<usize>(),
+        clusters: sol.unique.len() + sol.clusters.len(),
+        certified: sol.unique.len(),
+        lost,
+        seconds,
+        nr_starts: starts.len(),
+        nr_converged: converged.len(),
+        nr_distinct: distinct.len(),
+        nr_missed: roots.iter().filter(|r| !distinct.iter().any(|d| torus_distance(*d, **r) < 1e-6)).count(),
+        nr_spurious: distinct.iter().filter(|d| !near_reference(d)).count(),
+    }
+}
+
+/// The 3R instances: inverse kinematics at a regular point, next to a cusp, at a cusp, and on
+/// an internal motion.
+pub fn manip3r_findings() -> Vec<Finding> {
+    let load = |text: &str| Chain3R::from_mechanism(&urdf::parse(text).expect("invariant: bundled robot parses"), 0.0).expect("invariant: bundled robot is 3R");
+    let a = load(include_str!("../urdf/orthogonal_3r_a.urdf"));
+    let f = load(include_str!("../urdf/orthogonal_3r_f.urdf"));
+    let mut out = Vec::new();
+    let regular = a.eval_f64(0.4, -1.2);
+    out.push(study_ik("3R robot a, IK at a regular point", "isolated regular roots", &a, regular, brute_force_roots(&a, regular), None));
+    let found = cusps::search(&a, &cusps::CuspSettings { precision: 1e-12, ..Default::default() }).expect("invariant: valid settings");
+    let c = found.cusps.first().expect("robot a has cusps");
+    let cusp = [c.theta[0].mid(), c.theta[1].mid()];
+    let near = a.eval_f64(cusp[0] + 1e-3, cusp[1]);
+    out.push(study_ik("3R robot a, IK 1e-3 from a cusp", "three roots close together, nearly singular Jacobian", &a, near, brute_force_roots(&a, near), None));
+    let at = a.eval_f64(cusp[0], cusp[1]);
+    let mut at_roots = brute_force_roots(&a, at);
+    // The triple root itself: Newton from a grid only creeps towards it; the certified cusp box
+    // (a different solver from the IK search under study) gives it.
+    at_roots.retain(|r| torus_distance(*r, cusp) > 1e-3);
+    at_roots.push(cusp);
+    out.push(study_ik("3R robot a, IK at a cusp", "a triple root: singular Jacobian, quadratic-free convergence", &a, at, at_roots, None));
+    let bands = crate::manip3r::motion::bands(&f, 1e-9);
+    let band = bands.first().expect("robot f has internal motions");
+    let t3 = 0.5 * (band.theta3[0] + band.theta3[1]);
+    let line_point = f.eval_f64(0.0, t3);
+    let mut line_roots = brute_force_roots(&f, line_point);
+    line_roots.retain(|r| wrap(r[1] - t3).abs() > 1e-4);
+    out.push(study_ik("3R robot f, IK on an internal motion", "a whole line of solutions (θ2 free): every point has a singular Jacobian", &f, line_point, line_roots, Some(t3)));
+    out
+}

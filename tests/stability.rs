@@ -34,3 +34,17 @@ fn branch_and_prune_loses_nothing_where_newton_fails() {
     // or the instance made Newton succeed here, the instance would no longer test anything.
     assert!(t.nr_missed == 1 || t.nr_spurious > 0, "Newton found the double root cleanly: {t:?}");
 }
+
+#[test]
+fn ik_of_3r_robots_loses_nothing_at_cusps_and_internal_motions() {
+    let findings = linkspace::study::manip3r_findings();
+    eprintln!("{}", markdown(&findings));
+    for f in &findings {
+        assert_eq!(f.lost, 0, "{}: reference roots lost", f.instance);
+    }
+    let regular = &findings[0];
+    assert_eq!(regular.certified, regular.reference_roots, "regular roots are each certified");
+    let on_line = findings.iter().find(|f| f.instance.contains("internal motion")).expect("instance");
+    // Newton–Raphson lands on scattered points of the line: never the same point twice.
+    assert!(on_line.nr_distinct > 10, "{on_line:?}");
+}
