@@ -1,15 +1,17 @@
 //! Contractors: box-shrinking steps that remove only what they prove holds no solution.
 //!
 //! Owns the `Contractor` trait, its outcome `Contraction`, the combinator `Sequence`, and the
-//! implementations: equation-wise interval propagation (`propagate`) and the seed's LP shrink
-//! (`lp_shrink`).
+//! implementations: equation-wise interval propagation (`propagate`), the seed's LP shrink
+//! (`lp_shrink`), and trapezoid clipping of polynomial equations (`trapezoid`, seed 004).
 //! A contractor does no IO; numerical trouble gives `Unchanged`, never `Empty`.
 
 mod lp_shrink;
 mod propagate;
+mod trapezoid;
 
 pub use lp_shrink::LpShrink;
 pub use propagate::Propagation;
+pub use trapezoid::{clip_segment, ClipError, FaceBounds, TrapezoidClip, MAX_CONTROL_POINTS};
 
 use crate::interval::IntervalBox;
 use crate::lp::LpCounters;
