@@ -6,3 +6,5 @@ mod util;
 mod linkage;
 /// The command line: bad input gives one clear line and a non-zero exit.
 mod cli;
+/// Distance problems through Cayley–Menger determinants: octahedral platform, four spheres.
+mod cayley_menger;

@@ -138,13 +138,13 @@ impl Compiled {
 /// J. M. Porta, F. Thomas, L. Ros, C. Torras, "A branch-and-prune algorithm for solving systems
 /// of distance constraints", ICRA 2003. A. D. Rikun, "A convex envelope formula for multilinear
 /// functions", J. Global Optimization 10, 1997.
+#[derive(Clone, Debug)]
 pub struct TrapezoidClip {
     equations: Vec<Compiled>,
     /// Corners (the seed's method) or interval arithmetic (its comparison).
     pub faces: FaceBounds,
-    work: Vec<Interval>,
+    work: Vec<Nudged>,
     local: Vec<Interval>,
-    digits: Vec<usize>,
     lo: Vec<[f64; 3]>,
     hi: Vec<[f64; 3]>,
 }
@@ -154,7 +154,7 @@ impl TrapezoidClip {
     /// with more than `MAX_CONTROL_POINTS` control points.
     pub fn new(equations: &[Poly], faces: FaceBounds) -> Result<Self, ClipError> {
         let equations = equations.iter().enumerate().map(|(k, p)| Compiled::new(k, p)).collect::<Result<Vec<_>, _>>()?;
-        Ok(Self { equations, faces, work: Vec::new(), local: Vec::new(), digits: Vec::new(), lo: Vec::new(), hi: Vec::new() })
+        Ok(Self { equations, faces, work: Vec::new(), local: Vec::new(), lo: Vec::new(), hi: Vec::new() })
     }
 
     /// Number of equations.
@@ -173,6 +173,12 @@ impl TrapezoidClip {
     }
 
     /// Fills `lo[i][j]`, `hi[i][j]`: bounds of the control values at abscissa `j` of variable `i`.
+    ///
+    /// Per axis, the power basis on `[l, u]` becomes Bernstein coefficients (corner values for
+    /// degree one): `b0 = p(l)`, `b2 = p(u)`, and for degree two `b1 = a0 + a1 (l + u)/2 + a2 l u`.
+    /// Only exact scalars `l`, `u` multiply the coefficients, which lets the arithmetic be plain
+    /// `f64` rounded to nearest and then nudged one ulp outward (`Nudged`): sound, and several
+    /// times faster than general interval products.
     fn control_bounds(&mut self, e: usize, b: &[Interval]) {
         let eq = &self.equations[e];
         let k = eq.vars.len();
@@ -181,56 +187,47 @@ impl TrapezoidClip {
         self.hi.clear();
         self.hi.resize(k, [f64::NEG_INFINITY; 3]);
         self.work.clear();
-        self.work.extend_from_slice(&eq.power);
+        self.work.extend(eq.power.iter().map(|c| Nudged { lo: c.inf(), hi: c.sup() }));
         let size = self.work.len();
-        // Per axis, power basis on [l, u] → Bernstein coefficients (corner values for degree 1).
+        let w = &mut self.work;
         for i in 0..k {
             let d = b[eq.vars[i]];
-            let (l, u) = (point(d.inf()), point(d.sup()));
+            let (l, u) = (d.inf(), d.sup());
             let s = eq.strides[i];
             let n = eq.degrees[i] as usize + 1;
-            let w = &mut self.work;
             for start in (0..size).step_by(s * n) {
                 for at in start..start + s {
                     if n == 2 {
                         let (a0, a1) = (w[at], w[at + s]);
-                        w[at] = a0 + l * a1;
-                        w[at + s] = a0 + u * a1;
+                        w[at] = a0.add(a1.scale(l));
+                        w[at + s] = a0.add(a1.scale(u));
                     } else {
-                        // x = l + h t, t ∈ [0, 1]: p = A0 + A1 t + A2 t², then Bernstein.
-                        let h = u - l;
                         let (a0, a1, a2) = (w[at], w[at + s], w[at + 2 * s]);
-                        let c0 = a0 + l * (a1 + l * a2);
-                        let c1 = (a1 + point(2.0) * a2 * l) * h;
-                        let c2 = a2 * h.sqr();
-                        w[at] = c0;
-                        w[at + s] = c0 + c1 * point(0.5);
-                        w[at + 2 * s] = c0 + c1 + c2;
+                        let (a1l, a1u) = (a1.scale(l), a1.scale(u));
+                        let a2l = a2.scale(l);
+                        w[at] = a0.add(a1l).add(a2l.scale(l));
+                        w[at + s] = a0.add(a1l.add(a1u).scale(0.5)).add(a2l.scale(u));
+                        w[at + 2 * s] = a0.add(a1u).add(a2.scale(u).scale(u));
                     }
                 }
             }
         }
-        self.digits.clear();
-        self.digits.resize(k, 0);
-        for idx in 0..size {
-            let v = self.work[idx];
-            let (vl, vh) = (v.inf(), v.sup());
-            for i in 0..k {
-                let j = self.digits[i];
-                if vl < self.lo[i][j] {
-                    self.lo[i][j] = vl;
+        // ∞ − ∞ after an overflow: no bounds at all (the caller then clips nothing).
+        if w.iter().any(|v| v.lo.is_nan() || v.hi.is_nan()) {
+            return;
+        }
+        // Extremes over each slice x_i = abscissa j, one strided pass per axis.
+        for i in 0..k {
+            let s = eq.strides[i];
+            let n = eq.degrees[i] as usize + 1;
+            let (lo, hi) = (&mut self.lo[i], &mut self.hi[i]);
+            for start in (0..size).step_by(s * n) {
+                for j in 0..n {
+                    for v in &w[start + j * s..start + (j + 1) * s] {
+                        lo[j] = lo[j].min(v.lo);
+                        hi[j] = hi[j].max(v.hi);
+                    }
                 }
-                if vh > self.hi[i][j] {
-                    self.hi[i][j] = vh;
-                }
-            }
-            // Mixed-radix increment of the local index.
-            for i in 0..k {
-                self.digits[i] += 1;
-                if self.digits[i] <= eq.degrees[i] as usize {
-                    break;
-                }
-                self.digits[i] = 0;
             }
         }
     }
@@ -262,6 +259,34 @@ impl TrapezoidClip {
             self.local[i] = d;
         }
         true
+    }
+}
+
+/// `[lo, hi]` computed in round-to-nearest and then moved one ulp outward: the rounding error of
+/// one addition or one product by an exact scalar is at most half an ulp, so the result encloses
+/// the exact one. Overflow gives ±∞ on the side it belongs to; NaN (∞ − ∞) is caught by the
+/// caller, which then leaves the variable alone.
+#[derive(Clone, Copy, Debug)]
+struct Nudged {
+    lo: f64,
+    hi: f64,
+}
+
+impl Nudged {
+    #[inline]
+    fn add(self, o: Nudged) -> Nudged {
+        Nudged { lo: (self.lo + o.lo).next_down(), hi: (self.hi + o.hi).next_up() }
+    }
+
+    /// `s · self` for an exact `s`.
+    #[inline]
+    fn scale(self, s: f64) -> Nudged {
+        let (a, b) = (self.lo * s, self.hi * s);
+        if s >= 0.0 {
+            Nudged { lo: a.next_down(), hi: b.next_up() }
+        } else {
+            Nudged { lo: b.next_down(), hi: a.next_up() }
+        }
     }
 }
 
@@ -318,8 +343,8 @@ impl Contractor for TrapezoidClip {
             for (i, &v) in eq.vars.iter().enumerate() {
                 let d = b.dims[v];
                 let n = eq.degrees[i] as usize + 1;
-                if self.lo[i][0] > self.hi[i][0] {
-                    continue; // no bounds for this variable (interval arithmetic, degree two)
+                if !(self.lo[i][..n].iter().chain(&self.hi[i][..n]).all(|v| !v.is_nan()) && self.lo[i][0] <= self.hi[i][0]) {
+                    continue; // no usable bounds (interval arithmetic on degree two, or overflow)
                 }
                 let (l, u) = (point(d.inf()), point(d.sup()));
                 let xs: &[Interval] = if n == 2 { &[l, u] } else { &[l, (l + u) * point(0.5), u] };
