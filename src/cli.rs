@@ -11,6 +11,8 @@ use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
+mod distances;
+
 #[derive(Parser)]
 #[command(name = "linkspace", version, about = "Every configuration a mechanism can take, with guarantees.")]
 struct Cli {
@@ -24,6 +26,10 @@ enum Command {
     Solve(SolveArgs),
     /// Time the bundled double butterfly, rigid and mobile, against a baseline in the same run.
     Bench(BenchArgs),
+    /// Solve a distance problem by Cayley–Menger determinants: a platform in URDF or a JSON file.
+    Distances(distances::DistancesArgs),
+    /// Time the seed-004 cases (octahedral platform, four spheres) against baselines in the same run.
+    BenchDistances(distances::BenchArgs),
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -90,6 +96,8 @@ pub fn run() -> Result<()> {
     match cli.command {
         Command::Solve(args) => solve(args),
         Command::Bench(args) => bench(args),
+        Command::Distances(args) => distances::run(args),
+        Command::BenchDistances(args) => distances::bench(args),
     }
 }
 

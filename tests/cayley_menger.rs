@@ -100,3 +100,14 @@ fn four_spheres_timing_probe() {
         }
     }
 }
+#[test]
+fn dbg_embed() {
+    let cm = CayleyMenger::build(&octahedral(CONFIG_A), BuildOptions { formulation: Formulation::Shared, redundant: false }).unwrap();
+    let x = [4.25000001, 4.25008];
+    let r = cm.distances(&x);
+    for tol in [1e-9, 1.6e-3] {
+        let e = linkspace::problems::cayley_menger::embed(&cm.problem, &r, tol);
+        eprintln!("tol {tol}: {}", e.len());
+        for p in &e { eprintln!("  {:?}", p); }
+    }
+}

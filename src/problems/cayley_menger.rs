@@ -574,8 +574,8 @@ impl CayleyMenger {
     }
 
     /// Places every point from a solution's distances (see `embed`).
-    pub fn embed(&self, x: &[f64]) -> Vec<Vec<[f64; 3]>> {
-        embed(&self.problem, &self.distances(x))
+    pub fn embed(&self, x: &[f64], tol: f64) -> Vec<Vec<[f64; 3]>> {
+        embed(&self.problem, &self.distances(x), tol)
     }
 }
 
@@ -583,9 +583,11 @@ impl CayleyMenger {
 /// trilateration: the points with coordinates stay put (or, when fewer than three have them, the
 /// first triangle defines the frame), then each point is placed from three placed points it has
 /// distances to. Where a fourth placed point off their plane decides between the two candidates it
-/// does; otherwise both are kept, so the mirror images come out as separate embeddings.
+/// does; otherwise both are kept, so the mirror images come out as separate embeddings. Both are
+/// kept too when both fit the fourth point's distance within `tol` (squared-distance units): at a
+/// tangency of the determinant curves two configurations share the solved distances.
 /// Returns no embedding when some point cannot be reached.
-pub fn embed(p: &DistanceProblem, r: &[Vec<Option<f64>>]) -> Vec<Vec<[f64; 3]>> {
+pub fn embed(p: &DistanceProblem, r: &[Vec<Option<f64>>], tol: f64) -> Vec<Vec<[f64; 3]>> {
     let n = p.points.len();
     let mut start: Vec<Option<Vector3<f64>>> = p.points.iter().map(|q| q.xyz.map(|c| Vector3::new(c[0], c[1], c[2]))).collect();
     if start.iter().flatten().count() < 3 {
@@ -601,6 +603,14 @@ pub fn embed(p: &DistanceProblem, r: &[Vec<Option<f64>>]) -> Vec<Vec<[f64; 3]>> 
         start[t[1]] = Some(Vector3::new(d, 0.0, 0.0));
         start[t[2]] = Some(Vector3::new(x, y, 0.0));
     }
+    // When the fixed points are coplanar, the mirror image through their plane of any placement
+    // is another one.
+    let fixed: Vec<Vector3<f64>> = start.iter().flatten().copied().collect();
+    let plane = {
+        let (a, b, c) = (fixed[0], fixed[1], fixed[2]);
+        let nrm = (b - a).cross(&(c - a)).normalize();
+        fixed.iter().all(|q| nrm.dot(&(q - a)).abs() <= 1e-9 * (1.0 + (q - a).norm())).then_some((a, nrm))
+    };
     let mut done = Vec::new();
     let mut work = vec![start];
     while let Some(mut pos) = work.pop() {
@@ -645,7 +655,13 @@ pub fn embed(p: &DistanceProblem, r: &[Vec<Option<f64>>]) -> Vec<Vec<[f64; 3]>> 
                 let pe = pos[e].expect("placed");
                 let re = r[q][e].expect("has distance");
                 let miss = |v: &Vector3<f64>| ((v - pe).norm_squared() - re).abs();
-                pos[q] = Some(if miss(&candidates[0]) <= miss(&candidates[1]) { candidates[0] } else { candidates[1] });
+                let (m0, m1) = (miss(&candidates[0]), miss(&candidates[1]));
+                if m0 <= tol && m1 <= tol && done.len() + work.len() < 16 {
+                    let mut other = pos.clone();
+                    other[q] = Some(candidates[1]);
+                    work.push(other);
+                }
+                pos[q] = Some(if m0 <= m1 { candidates[0] } else { candidates[1] });
                 work.push(pos);
             }
             _ if z <= 1e-9 => {
@@ -661,7 +677,48 @@ pub fn embed(p: &DistanceProblem, r: &[Vec<Option<f64>>]) -> Vec<Vec<[f64; 3]>> 
             }
         }
     }
-    done
+    // Keep the placements that fit every distance within `tol`, or about as well as the best one
+    // (mirror images fit equally well; a box midpoint is not exactly on the solution, and the
+    // misfit it causes can exceed `tol`), and drop near-duplicates: a branch taken on a loose
+    // fit often lands next to the other one.
+    let misfit = |e: &Vec<[f64; 3]>| {
+        let mut worst: f64 = 0.0;
+        for a in 0..n {
+            for b in a + 1..n {
+                if let Some(rab) = r[a][b] {
+                    let d: f64 = (0..3).map(|k| (e[a][k] - e[b][k]).powi(2)).sum();
+                    worst = worst.max((d - rab).abs());
+                }
+            }
+        }
+        worst
+    };
+    let mut scored: Vec<(f64, Vec<[f64; 3]>)> = done.into_iter().map(|e| (misfit(&e), e)).collect();
+    scored.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let near = tol.sqrt().max(1e-6);
+    let accept = tol.max(4.0 * scored.first().map_or(0.0, |s| s.0));
+    let mut kept: Vec<Vec<[f64; 3]>> = Vec::new();
+    for (m, e) in scored {
+        if m > accept {
+            continue;
+        }
+        let mirror = plane.map(|(a, nrm)| {
+            e.iter()
+                .map(|q| {
+                    let v = Vector3::new(q[0], q[1], q[2]);
+                    let w = v - nrm * (2.0 * nrm.dot(&(v - a)));
+                    [w.x, w.y, w.z]
+                })
+                .collect::<Vec<_>>()
+        });
+        for f in std::iter::once(e).chain(mirror) {
+            let dup = kept.iter().any(|g| g.iter().zip(&f).all(|(x, y)| (0..3).all(|c| (x[c] - y[c]).abs() <= near)));
+            if !dup {
+                kept.push(f);
+            }
+        }
+    }
+    kept
 }
 
 /// All `k`-subsets of `0..n`, in lexicographic order.
@@ -894,7 +951,7 @@ mod tests {
             p.add_point(format!("p{k}"), (k < 3).then_some([v.x, v.y, v.z])).unwrap();
         }
         let r: Vec<Vec<Option<f64>>> = (0..6).map(|i| (0..6).map(|j| (i != j).then(|| (pts[i] - pts[j]).norm_squared())).collect()).collect();
-        let found = embed(&p, &r);
+        let found = embed(&p, &r, 1e-9);
         assert_eq!(found.len(), 2);
         let hit = found.iter().any(|e| e.iter().zip(&pts).all(|(a, b)| (Vector3::new(a[0], a[1], a[2]) - b).norm() < 1e-6));
         assert!(hit, "{found:?} vs {pts:?}");
