@@ -384,12 +384,12 @@ impl CayleyMenger {
         if n < 4 {
             return Err(DistanceError::Underdetermined { unknowns: 0, detail: format!("a problem in space needs at least 4 points, got {n}") });
         }
-        check_triangles(p)?;
-        check_tetrahedra(p)?;
         let based: Vec<usize> = (0..n).filter(|&i| p.points[i].xyz.is_some()).collect();
         if based.len() >= 3 && !has_triangle(p, &based) {
             return Err(DistanceError::DegenerateBase(names(&based)));
         }
+        check_triangles(p)?;
+        check_tetrahedra(p)?;
         // Degrees of freedom of n points up to a rigid motion, against the constraints given.
         let dof = 3 * n - 6;
         let constraints = p.known_count() + p.point_lines.len();
