@@ -214,6 +214,15 @@ mod tests {
     }
 
     #[test]
+    fn bundled_octahedral_has_spherical_loops_and_a_floating_platform() {
+        let m = parse(include_str!("../../urdf/octahedral.urdf")).expect("bundled file parses");
+        assert_eq!(m.loops.len(), 6);
+        assert!(m.loops.iter().all(|l| l.kind == JointKind::Spherical));
+        assert_eq!(m.joints.iter().filter(|j| j.kind == JointKind::Floating).count(), 1);
+        assert_eq!(m.joints.iter().filter(|j| j.kind == JointKind::Spherical).count(), 6);
+    }
+
+    #[test]
     fn bad_documents_give_errors_that_name_the_problem() {
         let cases = [
             ("<robot name='r'><link name='a'/>", "malformed URDF"),
