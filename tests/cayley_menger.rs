@@ -64,6 +64,7 @@ pub fn four_spheres(orient: bool) -> DistanceProblem {
     for c in 1..4 {
         p.add_point_line(c, t, u, point(rho2)).unwrap();
     }
+    p.lines.push((t, u));
     if orient {
         p.orientations.push(linkspace::problems::cayley_menger::Orientation { a: t, b: u, toward: 1 });
     }
@@ -374,19 +375,28 @@ fn the_bundled_file_is_the_seeds_four_spheres_and_c1_c2_alone_do_not_decide() {
 }
 
 /// Without the orientation choice each line comes twice (u on either side of t): at least 24
-/// clusters (a few near-miss clusters remain at this sigma), still 12 lines. Long (about 10 s):
-/// LINKSPACE_LONG=1.
+/// clusters (near a few solutions the clusters split at this sigma), and both orientations of
+/// every reference line lie in solution boxes. Long (about 10 s): LINKSPACE_LONG=1.
 #[test]
 fn both_orientations_give_each_line_twice() {
     if std::env::var("LINKSPACE_LONG").is_err() {
         return;
     }
-    let cm = CayleyMenger::build(&four_spheres(false), shared(false)).unwrap();
-    let settings = SolverSettings { sigma: 0.01, rho: 0.99, ..Default::default() };
+    let p = four_spheres(false);
+    let centres: Vec<Vector3<f64>> = p.points.iter().filter_map(|q| q.xyz).map(|c| Vector3::new(c[0], c[1], c[2])).collect();
+    let cm = CayleyMenger::build(&p, shared(false)).unwrap();
     let e = solve(&cm, FaceBounds::Corners, 0.01, 0.99);
+    assert_eq!(e.status, Status::Complete);
     assert!(components(&e.solutions).1 >= 24);
-    let r = report(&cm, None, BTreeMap::new(), FaceBounds::Corners, &settings, e.status, e.stats, &e.solutions, &e.undecided);
-    assert_eq!(r.placements, 12);
+    for (q, d) in reference_lines(&centres, 1.45) {
+        let t = q + d * (centres[0] - q).dot(&d);
+        for dir in [d, -d] {
+            let u = t + dir;
+            let want: Vec<(String, f64)> = (1..4).flat_map(|k| [(format!("r(c{},t)", k + 1), (centres[k] - t).norm_squared()), (format!("r(c{},u)", k + 1), (centres[k] - u).norm_squared())]).collect();
+            let want: Vec<(&str, f64)> = want.iter().map(|(n, v)| (n.as_str(), *v)).collect();
+            assert!(holds_within(&cm, &e.solutions, &want, 1e-7), "line {q:?} {dir:?} lost");
+        }
+    }
 }
 
 fn cli(args: &[&str]) -> (bool, String, String) {
