@@ -18,6 +18,8 @@ use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
+mod distances;
+
 #[derive(Parser)]
 #[command(name = "linkspace", version, about = "Every configuration a mechanism can take, with guarantees.")]
 struct Cli {
@@ -39,6 +41,10 @@ enum Command {
     Ik(IkArgs),
     /// Time cusp and node searches on the bundled 3R robots against baselines in the same run.
     Bench3r(Bench3rArgs),
+    /// Solve a distance problem by Cayley–Menger determinants: a platform in URDF or a JSON file.
+    Distances(distances::DistancesArgs),
+    /// Time the seed-004 cases (octahedral platform, four spheres) against baselines in the same run.
+    BenchDistances(distances::BenchArgs),
 }
 
 #[derive(clap::Args)]
@@ -179,6 +185,8 @@ pub fn run() -> Result<()> {
         Command::Singularities(args) => singularities(args),
         Command::Ik(args) => ik(args),
         Command::Bench3r(args) => bench3r(args),
+        Command::Distances(args) => distances::run(args),
+        Command::BenchDistances(args) => distances::bench(args),
     }
 }
 

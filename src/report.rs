@@ -7,6 +7,8 @@ use crate::problems::LinkageProblem;
 use crate::solve::{SolverSettings, Stats, Status};
 use crate::system::VarRole;
 use serde::Serialize;
+
+pub mod distances;
 use std::collections::BTreeMap;
 
 /// `[lower, upper]`

@@ -11,6 +11,8 @@
 use crate::interval::{point, Interval, IntervalBox};
 use thiserror::Error;
 
+pub mod multilinear;
+
 /// Index of a variable in its system (and of its component in an `IntervalBox`).
 pub type VarId = usize;
 

@@ -10,3 +10,5 @@ mod cli;
 mod stability;
 /// 3R manipulators from URDF: the seed-003 map, Table 1 counts, dense-sampling references.
 mod manip3r;
+/// Distance problems through Cayley–Menger determinants: octahedral platform, four spheres.
+mod cayley_menger;

@@ -2,16 +2,19 @@
 //!
 //! Owns the `Contractor` trait, its outcome `Contraction`, the combinator `Sequence`, and the
 //! implementations: equation-wise interval propagation (`propagate`), the seed's LP shrink
-//! (`lp_shrink`) and interval Newton for square systems (`newton`).
+//! (`lp_shrink`), interval Newton for square systems (`newton`), and trapezoid clipping of
+//! polynomial equations (`trapezoid`, seed 004).
 //! A contractor does no IO; numerical trouble gives `Unchanged`, never `Empty`.
 
 mod lp_shrink;
 mod newton;
 mod propagate;
+mod trapezoid;
 
 pub use lp_shrink::LpShrink;
 pub use newton::Newton;
 pub use propagate::Propagation;
+pub use trapezoid::{clip_segment, ClipError, FaceBounds, TrapezoidClip, MAX_CONTROL_POINTS};
 
 use crate::interval::IntervalBox;
 use crate::lp::LpCounters;

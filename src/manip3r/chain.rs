@@ -203,6 +203,7 @@ impl Chain3R {
                 JointKind::Revolute { .. } => revolute.push(j),
                 JointKind::Fixed => {}
                 JointKind::Prismatic { .. } => return Err(Manip3rError::NotThreeR(format!("joint '{}' is prismatic", m.joints[j].name))),
+                JointKind::Spherical | JointKind::Floating => return Err(Manip3rError::NotThreeR(format!("joint '{}' is not revolute", m.joints[j].name))),
             }
         }
         if revolute.len() != 3 {

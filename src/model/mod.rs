@@ -24,6 +24,10 @@ pub enum JointKind {
     },
     /// No motion: the child is welded to the parent.
     Fixed,
+    /// A ball joint: free rotation about the joint origin (tree joints and `<loop type="spherical">`).
+    Spherical,
+    /// No constraint at all: the child's pose is free (a platform whose pose the loops decide).
+    Floating,
 }
 
 /// A tree joint: `child`'s frame is `parent`'s frame moved by `origin`, then by the joint motion
@@ -50,7 +54,7 @@ pub struct Joint {
 pub struct LoopClosure {
     /// Name of the `<loop>` element.
     pub name: String,
-    /// Motion the closure allows (revolute or prismatic; limits as for joints).
+    /// Motion the closure allows (revolute, prismatic or spherical; limits as for joints).
     pub kind: JointKind,
     /// Index of the predecessor link.
     pub predecessor: usize,

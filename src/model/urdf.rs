@@ -5,7 +5,7 @@
 //! `roxmltree`. The element follows URDF+ (Chignoli et al., 2024, arXiv:2411.19753):
 //!
 //! ```xml
-//! <loop name="loop15" type="revolute">
+//! <loop name="loop15" type="revolute">   <!-- revolute | prismatic | spherical -->
 //!   <predecessor link="link1"><origin xyz="7 0 0" rpy="0 0 0"/></predecessor>
 //!   <successor link="link5"><origin xyz="12 0 0" rpy="0 0 0"/></successor>
 //!   <axis xyz="0 0 1"/>
@@ -76,6 +76,8 @@ pub fn parse(xml: &str) -> Result<Mechanism, ModelError> {
                 JointKind::Prismatic { limits: (lo, hi) }
             }
             urdf_rs::JointType::Fixed => JointKind::Fixed,
+            urdf_rs::JointType::Spherical => JointKind::Spherical,
+            urdf_rs::JointType::Floating => JointKind::Floating,
             ref other => return Err(ModelError::UnsupportedJoint { joint: j.name.clone(), kind: format!("{other:?}").to_lowercase() }),
         };
         let origin = pose(&element, j.origin.xyz.0, j.origin.rpy.0)?;
@@ -145,6 +147,7 @@ pub fn parse(xml: &str) -> Result<Mechanism, ModelError> {
                 Some((l, u)) if l < u => JointKind::Prismatic { limits: (l, u) },
                 _ => return Err(bad(&element, "a prismatic loop needs <limit lower < upper>")),
             },
+            "spherical" => JointKind::Spherical,
             other => return Err(ModelError::UnsupportedJoint { joint: name, kind: other.into() }),
         };
         if predecessor == successor {
@@ -211,10 +214,19 @@ mod tests {
     }
 
     #[test]
+    fn bundled_octahedral_has_spherical_loops_and_a_floating_platform() {
+        let m = parse(include_str!("../../urdf/octahedral.urdf")).expect("bundled file parses");
+        assert_eq!(m.loops.len(), 6);
+        assert!(m.loops.iter().all(|l| l.kind == JointKind::Spherical));
+        assert_eq!(m.joints.iter().filter(|j| j.kind == JointKind::Floating).count(), 1);
+        assert_eq!(m.joints.iter().filter(|j| j.kind == JointKind::Spherical).count(), 6);
+    }
+
+    #[test]
     fn bad_documents_give_errors_that_name_the_problem() {
         let cases = [
             ("<robot name='r'><link name='a'/>", "malformed URDF"),
-            ("<robot name='r'><link name='a'/><joint name='j' type='floating'><parent link='a'/><child link='b'/></joint><link name='b'/></robot>", "floating"),
+            ("<robot name='r'><link name='a'/><joint name='j' type='planar'><parent link='a'/><child link='b'/></joint><link name='b'/></robot>", "planar"),
             ("<robot name='r'><link name='a'/><link name='b'/></robot>", "several root links"),
             ("<robot name='r'><link name='a'/><loop name='l'><predecessor link='a'/><successor link='zz'/></loop></robot>", "unknown link 'zz'"),
             ("<robot name='r'><link name='a'/><link name='b'/><joint name='j' type='continuous'><parent link='a'/><child link='b'/><axis xyz='0 0 0'/></joint></robot>", "zero vector"),

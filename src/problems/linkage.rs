@@ -337,12 +337,14 @@ impl LinkageProblem {
                 JointKind::Revolute { .. } => revolute_axes.push((j.name.clone(), w)),
                 JointKind::Prismatic { .. } => slider_axes.push((j.name.clone(), w)),
                 JointKind::Fixed => {}
+                JointKind::Spherical | JointKind::Floating => return Err(LinkageError::NonPlanar(format!("joint '{}' is spherical or floating", j.name))),
             }
         }
         for l in &m.loops {
             let w = rest[l.predecessor] * (l.predecessor_origin.rotation * l.axis);
             match l.kind {
                 JointKind::Prismatic { .. } => slider_axes.push((l.name.clone(), w)),
+                JointKind::Spherical | JointKind::Floating => return Err(LinkageError::NonPlanar(format!("loop '{}' is spherical", l.name))),
                 _ => revolute_axes.push((l.name.clone(), w)),
             }
         }
@@ -379,7 +381,7 @@ impl LinkageProblem {
                 return Err(LinkageError::UnknownJoint(name.clone()));
             };
             let limits = match kind {
-                JointKind::Fixed => return Err(LinkageError::NotMovable(name.clone())),
+                JointKind::Fixed | JointKind::Spherical | JointKind::Floating => return Err(LinkageError::NotMovable(name.clone())),
                 JointKind::Revolute { limits } => limits,
                 JointKind::Prismatic { limits } => Some(limits),
             };

@@ -1,0 +1,269 @@
+//! `linkspace distances` and `linkspace bench-distances`: distance problems (seed 004) from a
+//! URDF platform or a JSON distance file.
+
+use super::parse_fix;
+use anyhow::{bail, Context, Result};
+use linkspace::contract::FaceBounds;
+use linkspace::interval::components;
+use linkspace::model::urdf;
+use linkspace::problems::cayley_menger::{BuildOptions, CayleyMenger, DistanceProblem, Formulation};
+use linkspace::problems::{distance_file, PlatformProblem};
+use linkspace::report::distances::{report, DistancesReport};
+use linkspace::solve::{Enclosure, Solver, SolverSettings};
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
+pub enum Form {
+    /// One variable per distance (degree two; Bernstein control points).
+    Shared,
+    /// The seed's: r_ij and r_ji separate, multilinear (corner values).
+    Split,
+}
+
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
+pub enum Faces {
+    /// Trapezoid sides from control points (the seed's method).
+    Corners,
+    /// Trapezoid sides by interval evaluation (the seed's comparison).
+    Interval,
+}
+
+#[derive(clap::Args)]
+pub struct DistancesArgs {
+    /// A platform in URDF (.urdf) or a distance problem in JSON (schema in README).
+    file: PathBuf,
+    /// Squared length of a leg (platform) or of a named distance (JSON). Repeatable.
+    #[arg(long = "fix", value_name = "LEG=VALUE")]
+    fix: Vec<String>,
+    /// Solution boxes are at most this wide in every unknown squared distance.
+    #[arg(long, default_value_t = 0.01)]
+    sigma: f64,
+    /// Keep clipping a box while a round leaves less than this share of its volume.
+    #[arg(long, default_value_t = 0.99)]
+    rho: f64,
+    /// Add the redundant determinants (platform: the seed's Eq. 7; JSON: six-point ones).
+    #[arg(long)]
+    redundant: bool,
+    /// Variables for the unknown distances.
+    #[arg(long, value_enum, default_value_t = Form::Shared)]
+    formulation: Form,
+    /// How the trapezoid sides are bounded.
+    #[arg(long, value_enum, default_value_t = Faces::Corners)]
+    faces: Faces,
+    /// Stop after this many boxes (the run is then reported incomplete).
+    #[arg(long, default_value_t = 1_000_000)]
+    max_boxes: u64,
+    /// Stop after this many seconds (the run is then reported incomplete).
+    #[arg(long)]
+    timeout: Option<f64>,
+    /// Write the full report as JSON here.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+}
+
+/// A loaded problem: the distances, and the platform when it came from URDF.
+pub struct Loaded {
+    pub distances: DistanceProblem,
+    pub platform: Option<PlatformProblem>,
+}
+
+pub fn load(path: &Path, text: &str, fixed: &[(String, f64)]) -> Result<Loaded> {
+    let is_urdf = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf")) || text.trim_start().starts_with('<');
+    if is_urdf {
+        let m = urdf::parse(text).with_context(|| format!("loading {}", path.display()))?;
+        let p = PlatformProblem::new(&m, fixed).with_context(|| format!("building {}", path.display()))?;
+        Ok(Loaded { distances: p.distances.clone(), platform: Some(p) })
+    } else {
+        let d = distance_file::parse(text, fixed).with_context(|| format!("loading {}", path.display()))?;
+        Ok(Loaded { distances: d, platform: None })
+    }
+}
+
+pub fn solve(cm: &CayleyMenger, faces: FaceBounds, settings: SolverSettings) -> Result<Enclosure> {
+    let clip = cm.contractor(faces)?;
+    let solver = Solver::new(&cm.system, settings)?.with_contractor(Box::new(move |_, _| Box::new(clip.clone())));
+    Ok(solver.enclose(&AtomicBool::new(false), &mut |_| {}))
+}
+
+fn options(form: Form, redundant: bool) -> BuildOptions {
+    BuildOptions { formulation: if form == Form::Split { Formulation::Split } else { Formulation::Shared }, redundant }
+}
+
+fn face_bounds(f: Faces) -> FaceBounds {
+    if f == Faces::Corners {
+        FaceBounds::Corners
+    } else {
+        FaceBounds::IntervalArithmetic
+    }
+}
+
+pub fn run(args: DistancesArgs) -> Result<()> {
+    let timeout = match args.timeout {
+        Some(t) if t.is_finite() && t > 0.0 => Some(Duration::from_secs_f64(t.min(1e9))),
+        Some(t) => bail!("--timeout must be a positive number of seconds, got {t}"),
+        None => None,
+    };
+    let settings = SolverSettings { sigma: args.sigma, rho: args.rho, max_boxes: args.max_boxes, timeout, ..Default::default() };
+    settings.validate()?;
+    let fixed = args.fix.iter().map(|s| parse_fix(s)).collect::<Result<Vec<_>>>()?;
+    let text = std::fs::read_to_string(&args.file).with_context(|| format!("reading {}", args.file.display()))?;
+    let loaded = load(&args.file, &text, &fixed)?;
+    let cm = CayleyMenger::build(&loaded.distances, options(args.formulation, args.redundant)).with_context(|| format!("building {}", args.file.display()))?;
+    let faces = face_bounds(args.faces);
+    let e = solve(&cm, faces, settings.clone())?;
+    let fixed_map: BTreeMap<String, f64> = fixed.into_iter().collect();
+    let rep = report(&cm, loaded.platform.as_ref(), fixed_map, faces, &settings, e.status, e.stats, &e.solutions, &e.undecided);
+    summarize(&rep)?;
+    if let Some(path) = args.json {
+        let text = serde_json::to_string_pretty(&rep)?;
+        std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+fn summarize(rep: &DistancesReport) -> Result<()> {
+    let mut out = std::io::stdout().lock();
+    let platform = rep.solutions.iter().any(|s| !s.poses.is_empty());
+    let status = match rep.status {
+        linkspace::Status::Complete => "complete".to_string(),
+        linkspace::Status::Incomplete(l) => format!("incomplete ({l:?} limit, {} boxes undecided)", rep.undecided.len()),
+    };
+    writeln!(
+        out,
+        "{}: {} solution boxes in {} clusters, {} distinct {}, status {status}, {} boxes processed ({} empty, {} bisected), {:.4} s",
+        rep.problem,
+        rep.solutions.len(),
+        rep.clusters,
+        rep.placements,
+        if platform { "poses" } else { "placements" },
+        rep.stats.processed,
+        rep.stats.empty,
+        rep.stats.bisected,
+        rep.stats.seconds
+    )
+    .ok();
+    // One line per cluster: the hull of its distances and what its first box places.
+    for c in 0..rep.clusters.min(40) {
+        let members: Vec<_> = rep.solutions.iter().filter(|s| s.cluster == c).collect();
+        let mut hull: BTreeMap<&String, [f64; 2]> = BTreeMap::new();
+        for m in &members {
+            for (n, [lo, hi]) in &m.distances {
+                let h = hull.entry(n).or_insert([*lo, *hi]);
+                h[0] = h[0].min(*lo);
+                h[1] = h[1].max(*hi);
+            }
+        }
+        let d: Vec<String> = hull.iter().map(|(n, [lo, hi])| format!("{n}={:.5}", 0.5 * (lo + hi))).collect();
+        writeln!(out, "  cluster {c} ({} boxes): {}", members.len(), d.join(" ")).ok();
+        let first = members[0];
+        for p in &first.poses {
+            writeln!(
+                out,
+                "    pose: position ({:.5}, {:.5}, {:.5}) rpy ({:.5}, {:.5}, {:.5}) leg residual {:.1e}",
+                p.position[0], p.position[1], p.position[2], p.rpy[0], p.rpy[1], p.rpy[2], p.leg_residual
+            )
+            .ok();
+        }
+        for l in &first.lines {
+            let dist: Vec<String> = l.distance_from.iter().map(|(n, d)| format!("{n} {d:.5}")).collect();
+            writeln!(
+                out,
+                "    line {}-{}: point ({:.5}, {:.5}, {:.5}) direction ({:.5}, {:.5}, {:.5}); distance from {}",
+                l.through[0], l.through[1], l.point[0], l.point[1], l.point[2], l.direction[0], l.direction[1], l.direction[2], dist.join(", ")
+            )
+            .ok();
+        }
+    }
+    Ok(())
+}
+
+#[derive(clap::Args)]
+pub struct BenchArgs {
+    /// Runs per case; the median is reported.
+    #[arg(long, default_value_t = 5)]
+    repeat: usize,
+    /// Time limit per four-spheres run of the seed's split formulation (seconds).
+    #[arg(long, default_value_t = 60.0)]
+    split_timeout: f64,
+}
+
+const OCTAHEDRAL: &str = include_str!("../../urdf/octahedral.urdf");
+const FOUR_SPHERES: &str = include_str!("../../urdf/four_spheres.json");
+
+/// The seed's Tables I and II, each case against a baseline measured in the same run.
+pub fn bench(args: BenchArgs) -> Result<()> {
+    if args.repeat == 0 {
+        bail!("--repeat must be at least 1");
+    }
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "case | method | median s | boxes processed | solution boxes | clusters | vs baseline (same run) | seed (Pentium IV 1.8 GHz)").ok();
+    let median = |cm: &CayleyMenger, faces: FaceBounds, settings: &SolverSettings| -> Result<(f64, Enclosure)> {
+        let mut times = Vec::new();
+        let mut last = None;
+        for _ in 0..args.repeat {
+            let e = solve(cm, faces, settings.clone())?;
+            times.push(e.stats.seconds);
+            last = Some(e);
+        }
+        times.sort_by(|a, b| a.total_cmp(b));
+        Ok((times[times.len() / 2], last.expect("repeat >= 1")))
+    };
+    let legs = ["leg15", "leg16", "leg26", "leg24", "leg34", "leg35"];
+    let configs = [("a", [4.25, 5.75, 4.25, 5.75, 4.25, 5.75]), ("b", [4.75; 6])];
+    // Table I: t, b_p, n_s, for corners and (in parentheses) interval arithmetic.
+    let seed_table = [[("<0.01", 7, 2, "0.09", 851, 86), ("<0.01", 3, 2, "0.35", 1477, 67)], [("0.03", 65, 27, "0.28", 2173, 680), ("0.03", 39, 8, "2.15", 6841, 764)]];
+    for (ci, (name, lengths)) in configs.iter().enumerate() {
+        let fixed: Vec<(String, f64)> = legs.iter().map(|l| l.to_string()).zip(lengths.iter().copied()).collect();
+        let m = urdf::parse(OCTAHEDRAL).context("bundled octahedral.urdf")?;
+        let p = PlatformProblem::new(&m, &fixed)?;
+        for (ri, redundant) in [false, true].into_iter().enumerate() {
+            let settings = SolverSettings { sigma: 0.1, rho: 0.9, ..Default::default() };
+            let case = format!("octahedral {name}, {}, sigma 0.1", if redundant { "redundant" } else { "non-redundant" });
+            let methods = [("split, interval-arithmetic faces (baseline)", Form::Split, FaceBounds::IntervalArithmetic), ("split, corners (the seed's)", Form::Split, FaceBounds::Corners), ("shared, Bernstein corners", Form::Shared, FaceBounds::Corners)];
+            let mut base = None;
+            for (label, form, faces) in methods {
+                let cm = CayleyMenger::build(&p.distances, options(form, redundant))?;
+                // The interval-arithmetic baseline takes up to a minute: it runs once.
+                let (t, e) = if faces == FaceBounds::IntervalArithmetic {
+                    let e = solve(&cm, faces, settings.clone())?;
+                    (e.stats.seconds, e)
+                } else {
+                    median(&cm, faces, &settings)?
+                };
+                let clusters = components(&e.solutions).1;
+                let ratio = base.map_or("1.00x (baseline)".to_string(), |b: f64| format!("{:.1}x faster", b / t));
+                base.get_or_insert(t);
+                let s = seed_table[ci][ri];
+                let seed = if faces == FaceBounds::IntervalArithmetic { format!("t {} s, b_p {}, n_s {}", s.3, s.4, s.5) } else { format!("t {} s, b_p {}, n_s {}", s.0, s.1, s.2) };
+                writeln!(out, "{case} | {label} | {t:.5} | {} | {} | {clusters} | {ratio} | {seed}", e.stats.processed, e.solutions.len()).ok();
+            }
+        }
+    }
+    // Table II: the four spheres, C1-C4 (redundant), rho 0.99.
+    let d = distance_file::parse(FOUR_SPHERES, &[])?;
+    for (sigma, seed) in [(0.1, "t 315 s, b_p 7875, n_s 870"), (0.01, "t 385 s, b_p 14579, n_s 813")] {
+        let case = format!("four spheres, C1-C4, sigma {sigma}");
+        let mut base = None;
+        for (label, form, timeout) in [("split, corners (the seed's; baseline)", Form::Split, Some(args.split_timeout)), ("shared, Bernstein corners", Form::Shared, None)] {
+            let settings = SolverSettings { sigma, rho: 0.99, timeout: timeout.map(Duration::from_secs_f64), ..Default::default() };
+            let cm = CayleyMenger::build(&d, options(form, true))?;
+            // The slow baseline runs once.
+            let (t, e) = if form == Form::Split {
+                let e = solve(&cm, FaceBounds::Corners, settings)?;
+                (e.stats.seconds, e)
+            } else {
+                median(&cm, FaceBounds::Corners, &settings)?
+            };
+            let clusters = components(&e.solutions).1;
+            let status = if e.status == linkspace::Status::Complete { String::new() } else { " (stopped by the time limit)".to_string() };
+            let ratio = base.map_or("1.00x (baseline)".to_string(), |b: f64| format!("at least {:.1}x faster", b / t));
+            base.get_or_insert(t);
+            writeln!(out, "{case} | {label}{status} | {t:.3} | {} | {} | {clusters} | {ratio} | {seed}", e.stats.processed, e.solutions.len()).ok();
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,176 @@
+//! Reports of `linkspace distances` (schema in README, "Distance problems"): the solution boxes
+//! over the unknown squared distances and, for each, the poses or lines placed from them.
+//! Pure data: no IO.
+
+use super::Bounds;
+use crate::contract::FaceBounds;
+use crate::interval::{components, IntervalBox};
+use crate::problems::cayley_menger::{BuildOptions, CayleyMenger};
+use crate::problems::platform::{PlatformProblem, Pose};
+use crate::solve::{SolverSettings, Stats, Status};
+use nalgebra::Vector3;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// A line placed from a solution: through two of the problem's points.
+#[derive(Clone, Debug, Serialize)]
+pub struct LineRecord {
+    /// The two points it passes through.
+    pub through: [String; 2],
+    /// Its point nearest to the origin.
+    pub point: [f64; 3],
+    /// Unit direction (from the first point to the second).
+    pub direction: [f64; 3],
+    /// Distance (not squared) from every point with given coordinates to the line, measured in
+    /// coordinates: an independent check of the point–line constraints.
+    pub distance_from: BTreeMap<String, f64>,
+}
+
+/// One solution box in the user's terms.
+#[derive(Clone, Debug, Serialize)]
+pub struct DistanceRecord {
+    /// Each unknown squared distance, e.g. `r(p1,p4)`.
+    pub distances: BTreeMap<String, Bounds>,
+    /// Index of the cluster (connected component) the box belongs to.
+    pub cluster: usize,
+    /// Platform poses placed from the box midpoint (platform problems only).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub poses: Vec<Pose>,
+    /// Every point's coordinates, once per placement (distance files only).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub points: Vec<BTreeMap<String, [f64; 3]>>,
+    /// The requested lines, once per placement.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub lines: Vec<LineRecord>,
+    /// The raw box, one interval per variable (see `variables`).
+    #[serde(rename = "box")]
+    pub box_: Vec<Bounds>,
+    /// Depth in the search tree.
+    pub level: u32,
+}
+
+/// The whole result of `linkspace distances`.
+#[derive(Clone, Debug, Serialize)]
+pub struct DistancesReport {
+    /// Problem name (robot name or the file's `name`).
+    pub problem: String,
+    /// Squared distances given with `--fix`.
+    pub fixed: BTreeMap<String, f64>,
+    /// Formulation and whether redundant equations were added.
+    pub build: BuildOptions,
+    /// How trapezoid sides were bounded.
+    pub faces: FaceBounds,
+    /// The equations, one label each.
+    pub equations: Vec<String>,
+    /// The system's variables, in box order.
+    pub variables: Vec<String>,
+    /// Solver settings.
+    pub settings: SolverSettings,
+    /// `complete`, or `incomplete` with the limit.
+    #[serde(flatten)]
+    pub status: Status,
+    /// Solution boxes.
+    pub solutions: Vec<DistanceRecord>,
+    /// Connected components of the solution boxes.
+    pub clusters: usize,
+    /// Distinct lines (or poses) placed from the first box of each cluster; see README.
+    pub placements: usize,
+    /// Boxes left undecided by a limit.
+    pub undecided: Vec<DistanceRecord>,
+    /// Counters and time.
+    pub stats: Stats,
+}
+
+/// The record of one box; `platform` given for platform problems.
+pub fn record(cm: &CayleyMenger, platform: Option<&PlatformProblem>, b: &IntervalBox, cluster: usize) -> DistanceRecord {
+    let distances = cm.unknown_intervals(b).into_iter().map(|(n, i)| (n, [i.inf(), i.sup()])).collect();
+    let (poses, points, lines) = match platform {
+        Some(p) => (p.poses(cm, b), Vec::new(), Vec::new()),
+        None => {
+            let width = cm.unknowns.iter().map(|u| b.width(u.var)).fold(0.0, f64::max);
+            let placed = cm.embed(&b.midpoint(), 1e-7 + 10.0 * width);
+            let names: Vec<String> = cm.problem.points.iter().map(|q| q.name.clone()).collect();
+            let points = placed.iter().map(|pts| names.iter().cloned().zip(pts.iter().copied()).collect()).collect();
+            let lines = placed.iter().flat_map(|pts| cm.problem.lines.iter().map(move |&(a, c)| line(cm, pts, a, c))).collect();
+            (Vec::new(), points, lines)
+        }
+    };
+    DistanceRecord { distances, cluster, poses, points, lines, box_: b.dims.iter().map(|d| [d.inf(), d.sup()]).collect(), level: b.level }
+}
+
+fn line(cm: &CayleyMenger, pts: &[[f64; 3]], a: usize, c: usize) -> LineRecord {
+    let v = |k: usize| Vector3::new(pts[k][0], pts[k][1], pts[k][2]);
+    let dir = (v(c) - v(a)).normalize();
+    let foot = v(a) - dir * v(a).dot(&dir);
+    let distance_from = cm
+        .problem
+        .points
+        .iter()
+        .enumerate()
+        .filter(|(_, q)| q.xyz.is_some())
+        .map(|(k, q)| (q.name.clone(), (v(k) - v(a)).cross(&dir).norm()))
+        .collect();
+    let name = |k: usize| cm.problem.points[k].name.clone();
+    LineRecord { through: [name(a), name(c)], point: [foot.x, foot.y, foot.z], direction: [dir.x, dir.y, dir.z], distance_from }
+}
+
+/// Number of distinct lines (direction up to sign, within `tol`), or of distinct poses for a
+/// platform, among the placements of the first box of every cluster.
+pub fn distinct_placements(records: &[DistanceRecord], tol: f64) -> usize {
+    let mut seen: Vec<Vec<f64>> = Vec::new();
+    let mut clusters_seen = std::collections::BTreeSet::new();
+    for r in records {
+        if !clusters_seen.insert(r.cluster) {
+            continue;
+        }
+        let keys: Vec<Vec<f64>> = if r.poses.is_empty() {
+            r.lines
+                .iter()
+                .map(|l| {
+                    // A line up to orientation: its foot point and the direction with a positive
+                    // first significant component.
+                    let s = if l.direction.iter().find(|c| c.abs() > 1e-9).is_some_and(|c| *c < 0.0) { -1.0 } else { 1.0 };
+                    vec![l.point[0], l.point[1], l.point[2], s * l.direction[0], s * l.direction[1], s * l.direction[2]]
+                })
+                .collect()
+        } else {
+            // q and −q are the same rotation.
+            r.poses
+                .iter()
+                .map(|p| {
+                    let s = if p.quaternion[0] < 0.0 { -1.0 } else { 1.0 };
+                    p.position.iter().copied().chain(p.quaternion.iter().map(|x| s * x)).collect()
+                })
+                .collect()
+        };
+        for k in keys {
+            if !seen.iter().any(|s| s.iter().zip(&k).all(|(a, b)| (a - b).abs() <= tol)) {
+                seen.push(k);
+            }
+        }
+    }
+    seen.len()
+}
+
+/// The report of a finished run.
+#[allow(clippy::too_many_arguments)]
+pub fn report(cm: &CayleyMenger, platform: Option<&PlatformProblem>, fixed: BTreeMap<String, f64>, faces: FaceBounds, settings: &SolverSettings, status: Status, stats: Stats, solutions: &[IntervalBox], undecided: &[IntervalBox]) -> DistancesReport {
+    let (labels, clusters) = components(solutions);
+    let records: Vec<DistanceRecord> = solutions.iter().zip(&labels).map(|(b, &l)| record(cm, platform, b, l)).collect();
+    let tol = 10.0 * settings.sigma.max(1e-6);
+    DistancesReport {
+        problem: cm.problem.name.clone(),
+        fixed,
+        build: cm.options,
+        faces,
+        equations: cm.labels.clone(),
+        variables: cm.system.vars.iter().map(|v| v.name.clone()).collect(),
+        settings: settings.clone(),
+        status,
+        placements: distinct_placements(&records, tol),
+        solutions: records,
+        clusters,
+        undecided: undecided.iter().map(|b| record(cm, platform, b, usize::MAX)).collect(),
+        stats,
+    }
+}
