@@ -216,6 +216,10 @@ pub fn run(dir: &Path, quick: bool) -> Result<()> {
     // 5. 3R singular curves in joint space and workspace, with cusps and nodes.
     singular_curves(dir, if quick { 96 } else { 256 })?;
 
+    // 6. Speed against accuracy for the other problem families: distances and 3R cusps.
+    distance_sweeps(dir, quick)?;
+    cusp_sweep(dir, quick)?;
+
     let mut svg = String::new();
     lines(&mut svg, "Convergence: widest box diagonal after each tree level (seed 000, section V)", "tree level", "widest diagonal", &series, Scale::Linear, Scale::Log)?;
     write(dir, "convergence.svg", &svg)?;
@@ -290,5 +294,92 @@ fn singular_curves(dir: &Path, cells: usize) -> Result<()> {
     let mut svg = String::new();
     box_panels(&mut svg, "3R singular curves in the workspace half-section, cusps and nodes in red", "radius", "z", &work_panels, (0.0, xr.1), yr)?;
     write(dir, "singular_3r_workspace.svg", &svg)?;
+    Ok(())
+}
+
+const OCTAHEDRAL: &str = include_str!("../urdf/octahedral.urdf");
+const FOUR_SPHERES: &str = include_str!("../urdf/four_spheres.json");
+
+/// Octahedral platform (configuration b) and the four spheres: CPU seconds against the worst
+/// box diagonal, per trapezoid method (seed 004's corners and interval-arithmetic faces, on its
+/// split formulation and on our shared one).
+fn distance_sweeps(dir: &Path, quick: bool) -> Result<()> {
+    use crate::cli::distances::{options, solve, Form};
+    use linkspace::contract::FaceBounds;
+    use linkspace::problems::cayley_menger::CayleyMenger;
+    let legs = ["leg15", "leg16", "leg26", "leg24", "leg34", "leg35"];
+    let fixed: Vec<(String, f64)> = legs.iter().map(|l| (l.to_string(), 4.75)).collect();
+    let platform = linkspace::problems::platform::PlatformProblem::new(&urdf::parse(OCTAHEDRAL)?, &fixed)?;
+    let sigmas: &[f64] = if quick { &[0.1, 1e-3] } else { &[0.1, 1e-2, 1e-3, 1e-4, 1e-6] };
+    let methods = [
+        ("split, corners (seed 004)", Form::Split, FaceBounds::Corners, false),
+        ("split, interval-arithmetic faces", Form::Split, FaceBounds::IntervalArithmetic, false),
+        ("shared, Bernstein corners", Form::Shared, FaceBounds::Corners, false),
+        ("shared, Bernstein corners, redundant equations", Form::Shared, FaceBounds::Corners, true),
+    ];
+    let mut series = Vec::new();
+    for (label, form, faces, redundant) in methods {
+        let cm = CayleyMenger::build(&platform.distances, options(form, redundant))?;
+        let primaries = cm.system.primaries();
+        let mut points = Vec::new();
+        for &sigma in sigmas {
+            let settings = SolverSettings { sigma, rho: 0.9, timeout: Some(Duration::from_secs(if quick { 5 } else { 20 })), ..Default::default() };
+            let e = solve(&cm, faces, settings)?;
+            if e.status == Status::Complete {
+                points.push((e.solutions.iter().map(|b| b.diagonal(&primaries)).fold(0.0, f64::max), e.stats.cpu_seconds));
+            }
+        }
+        series.push(Series { label: label.into(), points });
+    }
+    let mut svg = String::new();
+    lines(&mut svg, "Octahedral platform b: CPU seconds against worst box diagonal (runs that hit the time limit omitted)", "worst solution-box diagonal", "CPU seconds", &series, Scale::Log, Scale::Log)?;
+    write(dir, "speed_accuracy_octahedral.svg", &svg)?;
+
+    let spheres = linkspace::problems::distance_file::parse(FOUR_SPHERES, &[])?;
+    let sigmas: &[f64] = if quick { &[0.1] } else { &[0.1, 0.03, 0.01, 0.003] };
+    let mut series = Vec::new();
+    for (label, redundant) in [("shared, Bernstein corners", false), ("shared, Bernstein corners, redundant (C1-C4)", true)] {
+        let cm = CayleyMenger::build(&spheres, options(Form::Shared, redundant))?;
+        let primaries = cm.system.primaries();
+        let mut points = Vec::new();
+        for &sigma in sigmas {
+            let settings = SolverSettings { sigma, rho: 0.99, timeout: Some(Duration::from_secs(30)), ..Default::default() };
+            let e = solve(&cm, FaceBounds::Corners, settings)?;
+            if e.status == Status::Complete {
+                points.push((e.solutions.iter().map(|b| b.diagonal(&primaries)).fold(0.0, f64::max), e.stats.cpu_seconds));
+            }
+        }
+        series.push(Series { label: label.into(), points });
+    }
+    let mut svg = String::new();
+    lines(&mut svg, "Lines tangent to four spheres: CPU seconds against worst box diagonal", "worst solution-box diagonal", "CPU seconds", &series, Scale::Log, Scale::Log)?;
+    write(dir, "speed_accuracy_four_spheres.svg", &svg)?;
+    Ok(())
+}
+
+/// 3R cusps: CPU seconds against the widest cusp box, Krawczyk against bisection alone.
+fn cusp_sweep(dir: &Path, quick: bool) -> Result<()> {
+    use linkspace::manip3r::{cusps, Chain3R};
+    let precisions: &[f64] = if quick { &[1e-2, 1e-4] } else { &[1e-2, 1e-3, 1e-4, 1e-6, 1e-8] };
+    let mut series = Vec::new();
+    for (name, text) in ROBOTS_3R.iter().take(2) {
+        let chain = Chain3R::from_mechanism(&urdf::parse(text)?, 0.0)?;
+        for (label, method) in [("interval Newton (Krawczyk)", cusps::Method::Krawczyk), ("bisection only", cusps::Method::Bisection)] {
+            let mut points = Vec::new();
+            for &precision in precisions {
+                let c0 = linkspace::solve::process_cpu_seconds();
+                let found = cusps::search(&chain, &cusps::CuspSettings { precision, method, timeout: Some(Duration::from_secs(20)), ..Default::default() })?;
+                let cpu = linkspace::solve::process_cpu_seconds() - c0;
+                if found.complete {
+                    let widest = found.cusps.iter().map(|c| c.theta[0].wid().hypot(c.theta[1].wid())).fold(0.0, f64::max);
+                    points.push((widest, cpu));
+                }
+            }
+            series.push(Series { label: format!("robot {name}: {label}"), points });
+        }
+    }
+    let mut svg = String::new();
+    lines(&mut svg, "3R cusps: CPU seconds against the widest cusp box diagonal", "widest cusp-box diagonal (rad)", "CPU seconds", &series, Scale::Log, Scale::Log)?;
+    write(dir, "speed_accuracy_cusps.svg", &svg)?;
     Ok(())
 }

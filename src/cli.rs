@@ -18,7 +18,7 @@ use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
-mod distances;
+pub(crate) mod distances;
 
 #[derive(Parser)]
 #[command(name = "linkspace", version, about = "Every configuration a mechanism can take, with guarantees.")]

@@ -89,7 +89,7 @@ pub fn solve(cm: &CayleyMenger, faces: FaceBounds, settings: SolverSettings) -> 
     Ok(solver.enclose(&AtomicBool::new(false), &mut |_| {}))
 }
 
-fn options(form: Form, redundant: bool) -> BuildOptions {
+pub fn options(form: Form, redundant: bool) -> BuildOptions {
     BuildOptions { formulation: if form == Form::Split { Formulation::Split } else { Formulation::Shared }, redundant }
 }
 

@@ -423,7 +423,7 @@ impl<'a> Solver<'a> {
 }
 
 /// CPU time consumed by this process so far, in seconds (0 where the OS will not say).
-pub(super) fn process_cpu_seconds() -> f64 {
+pub fn process_cpu_seconds() -> f64 {
     let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
     // SAFETY: clock_gettime writes one timespec through a valid pointer and reads nothing else.
     let rc = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };

@@ -6,5 +6,5 @@ mod driver;
 mod parallel;
 mod settings;
 
-pub use driver::{default_contractor, ContractorFactory, BoxSink, BoxStatus, Collect, Enclosure, Limit, Progress, SolveError, Solver, Stats, Status};
+pub use driver::{default_contractor, process_cpu_seconds, ContractorFactory, BoxSink, BoxStatus, Collect, Enclosure, Limit, Progress, SolveError, Solver, Stats, Status};
 pub use settings::{SettingsError, SolverSettings};
