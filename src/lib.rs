@@ -7,6 +7,7 @@
 
 #![warn(missing_docs)]
 
+pub mod analysis;
 pub mod contract;
 pub mod interval;
 pub mod lp;
