@@ -1,5 +1,8 @@
 //! The command line: argument parsing and the `solve` command. `anyhow` lives here and in main.
 
+#[cfg(feature = "ros")]
+mod serve;
+
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use linkspace::model::urdf;
@@ -24,6 +27,9 @@ enum Command {
     Solve(SolveArgs),
     /// Time the bundled double butterfly, rigid and mobile, against a baseline in the same run.
     Bench(BenchArgs),
+    /// Run the ROS 2 node: analyse each URDF, publish the results, serve queries (launch_notes.md).
+    #[cfg(feature = "ros")]
+    Serve(serve::ServeArgs),
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -90,6 +96,8 @@ pub fn run() -> Result<()> {
     match cli.command {
         Command::Solve(args) => solve(args),
         Command::Bench(args) => bench(args),
+        #[cfg(feature = "ros")]
+        Command::Serve(args) => serve::serve(args),
     }
 }
 

@@ -12,6 +12,8 @@ pub mod contract;
 pub mod interval;
 pub mod lp;
 pub mod model;
+#[cfg(feature = "ros")]
+pub mod ros;
 pub mod problems;
 pub mod report;
 pub mod solve;
