@@ -6,3 +6,5 @@ mod util;
 mod linkage;
 /// The command line: bad input gives one clear line and a non-zero exit.
 mod cli;
+/// The ROS 2 node against real rclpy over DDS on loopback: topics, services, load.
+mod topics;

@@ -110,12 +110,13 @@ fn latched(depth: usize) -> QosProfile {
         .history(History::KeepLast { depth })
 }
 
-/// rclpy's default for services: reliable, volatile, keep last 10.
+/// Reliable and volatile like rclpy's service default, but deeper than its keep-last 10: a
+/// burst of requests (or of replies to one client) must not overwrite unacknowledged ones.
 fn service_qos() -> QosProfile {
     QosProfile::publisher_default()
         .reliability_reliable(WhenFull::Wait(Duration::from_secs(1)))
         .durability(Durability::Volatile)
-        .history(History::KeepLast { depth: 10 })
+        .history(History::KeepLast { depth: 256 })
 }
 
 fn publisher<M: Message>(node: &mut Node, prefix: &str, name: &str, package: &str, type_name: &str, qos: QosProfile) -> Result<Publisher<M>> {
@@ -263,7 +264,7 @@ impl State {
                 }
                 Err(e) => {
                     let m = &mut self.mechanisms[k];
-                    m.state = "failed".into();
+                    m.state = "unavailable".into();
                     m.message = e.to_string();
                     eprintln!("linkspace: {}: no configuration space: {e}", m.loaded.analysis.mechanism());
                 }
