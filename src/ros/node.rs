@@ -16,6 +16,7 @@ use super::{Limits, Loaded, Mapping, Network, ServeConfig};
 use crate::analysis::{self, BoxSetResult, PreparedRun, Service};
 use crate::solve::{SolverSettings, Status};
 use anyhow::{Context as _, Result};
+use futures::StreamExt;
 use ros2_client::dds::rustdds::DomainParticipantBuilder;
 use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{Context, Message, MessageTypeName, Name, Node, NodeName, NodeOptions, Publisher, QosProfile, RmwRequestId, Server, ServiceMapping, ServiceTypeName};
@@ -145,8 +146,11 @@ fn forward<Q: Message + Clone + 'static, A: Message + 'static>(
     events: smol::channel::Sender<Event>,
 ) {
     ex.spawn(async move {
-        loop {
-            match pick(&servers).async_receive_request().await {
+        // One stream for the server's life: a stream per request (`async_receive_request`)
+        // loses the requests that arrived together with the one it returns.
+        let mut requests = pick(&servers).receive_request_stream();
+        while let Some(r) = requests.next().await {
+            match r {
                 Ok((id, q)) => {
                     if events.send(Event::Request(wrap(id, q))).await.is_err() {
                         break;
