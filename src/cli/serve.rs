@@ -82,6 +82,10 @@ pub struct ServeArgs {
     /// Boxes drawn per marker namespace.
     #[arg(long, default_value_t = Limits::default().max_markers)]
     max_markers: usize,
+    /// Publish the configuration spaces and markers again every this many seconds (for
+    /// subscribers with volatile durability, such as RViz's default); 0: only when they change.
+    #[arg(long, default_value_t = 0.0)]
+    republish: f64,
 }
 
 /// `[ROBOT:]REST` → (robot, rest); the robot prefix ends at the first ':' before `stop`.
@@ -116,6 +120,11 @@ pub fn serve(args: ServeArgs) -> Result<()> {
         bail!("--max-request-boxes, --max-request-timeout and --max-runs must be positive, --max-wait at least 0");
     }
 
+    let republish = match args.republish {
+        t if t == 0.0 => None,
+        t if t.is_finite() && t >= 0.001 => Some(Duration::from_secs_f64(t)),
+        t => bail!("--republish must be 0 (off) or at least 0.001 seconds, got {t}"),
+    };
     let mut sources = Vec::new();
     for path in &args.urdf {
         let xml = if path.as_os_str() == "-" {
@@ -160,7 +169,7 @@ pub fn serve(args: ServeArgs) -> Result<()> {
         NetworkArg::Loopback => Network::Loopback,
         NetworkArg::All => Network::All,
     };
-    ros::serve(ServeConfig { sources, fixed, traces, settings, domain, namespace: args.namespace, node_name: args.node_name, mapping, network, limits })
+    ros::serve(ServeConfig { sources, fixed, traces, settings, domain, namespace: args.namespace, node_name: args.node_name, mapping, network, limits, republish })
 }
 
 #[cfg(test)]

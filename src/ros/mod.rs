@@ -91,6 +91,8 @@ pub struct ServeConfig {
     pub network: Network,
     /// Request limits.
     pub limits: Limits,
+    /// Publish the configuration spaces again at this period (none: only when they change).
+    pub republish: Option<std::time::Duration>,
 }
 
 /// A loaded mechanism, ready for the node.
@@ -194,6 +196,7 @@ mod tests {
             mapping: Mapping::Enhanced,
             network: Network::Loopback,
             limits: Limits::default(),
+            republish: None,
         };
         let src = |label: &str, xml: &str| Source { label: label.into(), xml: xml.into() };
         let err = |c: ServeConfig| format!("{:#}", load(&c).err().expect("should fail"));

@@ -35,6 +35,8 @@ enum Event {
     /// A run ended; `Err` when it panicked (its payload, as text).
     Finished { run: u64, result: Result<BoxSetResult, String> },
     Tick,
+    /// Time to publish the latest configuration spaces again (`--republish`).
+    Republish,
 }
 
 /// A decoded service request with the id its reply must carry.
@@ -85,8 +87,9 @@ struct Mechanism {
     loaded: Loaded,
     prefix: String,
     topics: Topics,
-    /// The latest configuration space.
+    /// The latest configuration space, and its messages (kept for `--republish`).
     configuration_space: Option<Arc<BoxSetResult>>,
+    published: Option<(BoxSet, MarkerArray)>,
     state: String,
     message: String,
 }
@@ -146,8 +149,8 @@ fn forward<Q: Message + Clone + 'static, A: Message + 'static>(
     events: smol::channel::Sender<Event>,
 ) {
     ex.spawn(async move {
-        // One stream for the server's life: a stream per request (`async_receive_request`)
-        // loses the requests that arrived together with the one it returns.
+        // One stream for the server's life, as ros2-client's own server example does, rather
+        // than a new reader stream per request.
         let mut requests = pick(&servers).receive_request_stream();
         while let Some(r) = requests.next().await {
             match r {
@@ -196,7 +199,7 @@ pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
             // Deep enough for every assembly mode of one result.
             assembly_modes: publisher(&mut node, &prefix, "assembly_modes", "sensor_msgs", "JointState", latched(64))?,
         };
-        mechanisms.push(Mechanism { loaded: l, prefix, topics, configuration_space: None, state: "running".into(), message: String::new() });
+        mechanisms.push(Mechanism { loaded: l, prefix, topics, configuration_space: None, published: None, state: "running".into(), message: String::new() });
     }
     let servers = Rc::new(Servers {
         solve: server(&mut node, mapping, &base, "solve", "Solve")?,
@@ -235,6 +238,19 @@ pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
         }
     })
     .detach();
+
+    if let Some(period) = config.republish {
+        let republish = tx.clone();
+        ex.spawn(async move {
+            loop {
+                smol::Timer::after(period).await;
+                if republish.send(Event::Republish).await.is_err() {
+                    break;
+                }
+            }
+        })
+        .detach();
+    }
 
     let mut state = State { mechanisms, servers, runs: BTreeMap::new(), finished: VecDeque::new(), next_run: 1, limits: config.limits.clone(), settings: config.settings.clone(), events: tx };
     state.start_load_time_runs();
@@ -320,6 +336,7 @@ impl State {
             Event::Progress { run, progress } => self.progress(run, progress, false),
             Event::Finished { run, result } => self.finished(run, result).await,
             Event::Tick => self.expire_waits(),
+            Event::Republish => self.republish().await,
         }
     }
 
@@ -384,12 +401,13 @@ impl State {
                 m.state = if result.status == Status::Complete { "complete".into() } else { "incomplete".into() };
                 m.message = format!("run {run}: {status}, {} boxes in {} clusters", result.boxes.len(), result.clusters);
                 let markers = convert::markers(&result, &m.loaded.root_link, self.limits.max_markers);
-                if let Err(e) = m.topics.configuration_space.async_publish(set).await {
+                if let Err(e) = m.topics.configuration_space.async_publish(set.clone()).await {
                     eprintln!("linkspace: publishing {}/configuration_space: {e:?}", m.prefix);
                 }
-                if let Err(e) = m.topics.markers.async_publish(markers).await {
+                if let Err(e) = m.topics.markers.async_publish(markers.clone()).await {
                     eprintln!("linkspace: publishing {}/markers: {e:?}", m.prefix);
                 }
+                m.published = Some((set, markers));
                 for js in convert::assembly_modes(&result) {
                     if let Err(e) = m.topics.assembly_modes.async_publish(js).await {
                         eprintln!("linkspace: publishing {}/assembly_modes: {e:?}", m.prefix);
@@ -407,6 +425,22 @@ impl State {
                     self.reply_solve(id, SolveResponse { ok: true, message: message.clone(), run_id: run, done: true, result: set.clone() });
                 }
                 eprintln!("linkspace: {name}: published solve_result of run {run}");
+            }
+        }
+    }
+
+    /// Publishes every latest configuration space (and its markers) again, stamped now: for
+    /// tools that subscribe with volatile durability (RViz's default), and for throughput
+    /// measurements.
+    async fn republish(&mut self) {
+        for m in &mut self.mechanisms {
+            let Some((set, markers)) = &mut m.published else { continue };
+            set.header = convert::header(&set.header.frame_id);
+            if let Err(e) = m.topics.configuration_space.async_publish(set.clone()).await {
+                eprintln!("linkspace: publishing {}/configuration_space: {e:?}", m.prefix);
+            }
+            if let Err(e) = m.topics.markers.async_publish(markers.clone()).await {
+                eprintln!("linkspace: publishing {}/markers: {e:?}", m.prefix);
             }
         }
     }
