@@ -451,3 +451,27 @@ fn a_hundred_requests_in_flight_are_all_answered_and_the_node_stays_small() {
     // an unbounded queue.
     assert!(peak < 256 * 1024, "peak RSS {peak} KiB");
 }
+
+#[test]
+fn bad_serve_input_stops_the_node_with_one_line_before_any_dds_traffic() {
+    let four_bar = format!("{ROOT}/urdf/four_bar.urdf");
+    let slider = format!("{ROOT}/urdf/slider_crank.urdf");
+    let cases: [(Vec<&str>, &str); 6] = [
+        (vec!["/nonexistent.urdf"], "reading /nonexistent.urdf"),
+        (vec![&four_bar, "--domain", "300"], "domain 300 is out of range"),
+        (vec![&four_bar, "--fix", "nope=1"], "no joint or loop named 'nope'"),
+        (vec![&four_bar, &slider, "--fix", "crank_joint=1"], "with several mechanisms, name the robot"),
+        (vec![&four_bar, &four_bar], "a mechanism named 'four_bar' is already loaded"),
+        (vec![&four_bar, "--robot-description", "<robot"], "--robot-description #1: malformed URDF"),
+    ];
+    for (args, needle) in cases {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_linkspace"));
+        // A domain of its own, in case a case wrongly starts the node.
+        cmd.arg("serve").args(&args).args(["--network", "loopback"]).env("ROS_DOMAIN_ID", "44");
+        let (ok, _, err) = run_with_timeout(cmd, Duration::from_secs(20));
+        assert!(!ok, "{args:?} should fail");
+        let lines: Vec<&str> = err.lines().collect();
+        assert_eq!(lines.len(), 1, "{args:?}: expected one line, got {err}");
+        assert!(lines[0].starts_with("error: ") && lines[0].contains(needle), "{args:?}: '{}' should mention '{needle}'", lines[0]);
+    }
+}
