@@ -113,7 +113,8 @@ def services(args):
             continue
         if "subscribe" in step:
             got = []
-            node.create_subscription(BoxSet, step["subscribe"], got.append, latched())
+            msg_type = {"BoxSet": BoxSet, "Progress": Progress}[step.get("type", "BoxSet")]
+            node.create_subscription(msg_type, step["subscribe"], got.append, latched())
             spin_until(node, lambda: bool(got), args.timeout)
             spin_until(node, lambda: False, step.get("settle", 0.5))
             results.append({"subscribe": step["subscribe"], "received": [to_plain(m) for m in got]})

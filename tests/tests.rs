@@ -7,4 +7,5 @@ mod linkage;
 /// The command line: bad input gives one clear line and a non-zero exit.
 mod cli;
 /// The ROS 2 node against real rclpy over DDS on loopback: topics, services, load.
+#[cfg(feature = "ros")]
 mod topics;

@@ -344,6 +344,7 @@ fn services_answer_good_requests_and_refuse_bad_ones_with_reasons() {
         call("classify", "Classify", json!({"mechanism": "ghost", "joint_names": names, "joint_values": values})),
         call("classify", "Classify", json!({"mechanism": "tilted", "joint_names": names, "joint_values": values})),
         call("list_mechanisms", "ListMechanisms", json!({})),
+        {"subscribe": "/linkspace/four_bar/progress", "type": "Progress"},
     ]);
     // serde_json writes NaN as null; the script file carries it as the string "NaN".
     let text = serde_json::to_string(&script).expect("json").replace("null", "\"NaN\"");
@@ -416,6 +417,11 @@ fn services_answer_good_requests_and_refuse_bad_ones_with_reasons() {
     refused(25, "no mechanism named 'ghost'");
     refused(26, "classify is not available for this mechanism ('tilted', unsupported)");
     assert_eq!(r[27]["mechanisms"].as_array().expect("mechanisms").len(), 2);
+    // The last progress is the cancelled run's end: done, part of the volume decided.
+    let progress = r[28]["received"].as_array().and_then(|v| v.last()).cloned().unwrap_or_default();
+    assert_eq!((progress["run_id"].clone(), progress["analysis"].clone(), progress["done"].clone()), (json!(4), json!("solve"), json!(true)), "{progress}");
+    let decided = progress["decided"].as_f64().expect("decided");
+    assert!((0.0..1.0).contains(&decided) && progress["processed"].as_u64().expect("processed") > 0, "{progress}");
     assert!(node.alive(), "the node died:\n{}", node.log());
 }
 

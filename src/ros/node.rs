@@ -81,6 +81,8 @@ struct Run {
     cancel: Arc<AtomicBool>,
     /// Solve requests waiting for this run, with when to stop waiting.
     waiters: Vec<(RmwRequestId, Instant)>,
+    /// The latest share of the volume decided.
+    decided: f64,
 }
 
 struct Mechanism {
@@ -316,7 +318,7 @@ impl State {
         let run = self.next_run;
         self.next_run += 1;
         let cancel = Arc::new(AtomicBool::new(false));
-        self.runs.insert(run, Run { mechanism, kind, cancel: cancel.clone(), waiters: Vec::new() });
+        self.runs.insert(run, Run { mechanism, kind, cancel: cancel.clone(), waiters: Vec::new(), decided: 0.0 });
         let events = self.events.clone();
         std::thread::spawn(move || {
             let progress_events = events.clone();
@@ -333,7 +335,12 @@ impl State {
     async fn handle(&mut self, event: Event) {
         match event {
             Event::Request(request) => self.request(request),
-            Event::Progress { run, progress } => self.progress(run, progress, false),
+            Event::Progress { run, progress } => {
+                if let Some(r) = self.runs.get_mut(&run) {
+                    r.decided = progress.decided;
+                }
+                self.progress(run, progress, false)
+            }
             Event::Finished { run, result } => self.finished(run, result).await,
             Event::Tick => self.expire_waits(),
             Event::Republish => self.republish().await,
@@ -364,7 +371,7 @@ impl State {
     async fn finished(&mut self, run: u64, result: Result<BoxSetResult, String>) {
         let decided = match &result {
             Ok(r) if r.status == Status::Complete => 1.0,
-            _ => f64::NAN,
+            _ => self.runs.get(&run).map_or(0.0, |r| r.decided),
         };
         let processed = result.as_ref().map_or(0, |r| r.stats.processed);
         self.progress(run, crate::solve::Progress { processed, pending: 0, decided }, true);
