@@ -481,3 +481,30 @@ fn bad_serve_input_stops_the_node_with_one_line_before_any_dds_traffic() {
         assert!(lines[0].starts_with("error: ") && lines[0].contains(needle), "{args:?}: '{}' should mention '{needle}'", lines[0]);
     }
 }
+
+#[test]
+fn a_cyclone_dds_client_gets_the_same_boxes_and_replies_with_the_cyclone_mapping() {
+    let Some(python) = python() else { return };
+    let domain = 45;
+    let four_bar = format!("{ROOT}/urdf/four_bar.urdf");
+    let mut node = Node::start(domain, &[&four_bar, "--fix", "crank_joint=0.5", "--sigma", "1e-5", "--service-mapping", "cyclone"]);
+    node.wait_for(&["Cyclone mapping", "four_bar: published configuration_space"], Duration::from_secs(60));
+    let reference = solve_json(&[&four_bar, "--fix", "crank_joint=0.5", "--sigma", "1e-5"]);
+    let mut cmd = Command::new(python);
+    cmd.arg(format!("{ROOT}/tests/cyclone_client.py"))
+        .args(["--prefix", "/linkspace/four_bar", "--mechanism", "four_bar"])
+        .env("CYCLONEDDS_URI", format!("file://{ROOT}/scripts/cyclonedds_loopback.xml"))
+        .env("ROS_DOMAIN_ID", domain.to_string());
+    let (ok, out, err) = run_with_timeout(cmd, Duration::from_secs(90));
+    assert!(ok, "cyclone_client.py failed:\n{out}\n{err}");
+    let got: Value = serde_json::from_str(out.lines().last().expect("a line")).expect("JSON");
+    assert_same_boxes(&got["configuration_space"], &reference);
+    let list = &got["list"];
+    assert!(list.get("error").is_none(), "{list}");
+    assert_eq!(list["mechanisms"][0]["name"], "four_bar");
+    assert_eq!(list["mechanisms"][0]["free_joints"], json!(["coupler_joint", "rocker_joint", "loop_coupler_rocker"]));
+    let refused = &got["classify_ghost"];
+    assert_eq!(refused["ok"], json!(false), "{refused}");
+    assert!(refused["message"].as_str().expect("message").contains("no mechanism named 'ghost'"));
+    assert!(node.alive());
+}

@@ -374,7 +374,9 @@ impl State {
             _ => self.runs.get(&run).map_or(0.0, |r| r.decided),
         };
         let processed = result.as_ref().map_or(0, |r| r.stats.processed);
-        self.progress(run, crate::solve::Progress { processed, pending: 0, decided }, true);
+        // What a limit left undecided is still pending.
+        let pending = result.as_ref().map_or(0, |r| r.boxes.iter().filter(|b| b.status == crate::solve::BoxStatus::Undecided).count());
+        self.progress(run, crate::solve::Progress { processed, pending, decided }, true);
         let Some(r) = self.runs.remove(&run) else { return };
         self.finished.push_back(run);
         if self.finished.len() > 4096 {
