@@ -1,5 +1,8 @@
 //! The command line: argument parsing and the `solve` command. `anyhow` lives here and in main.
 
+#[cfg(feature = "ros")]
+mod serve;
+
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use linkspace::model::urdf;
@@ -45,6 +48,9 @@ enum Command {
     Distances(distances::DistancesArgs),
     /// Time the seed-004 cases (octahedral platform, four spheres) against baselines in the same run.
     BenchDistances(distances::BenchArgs),
+    /// Run the ROS 2 node: analyse each URDF, publish the results, serve queries (launch_notes.md).
+    #[cfg(feature = "ros")]
+    Serve(serve::ServeArgs),
 }
 
 #[derive(clap::Args)]
@@ -187,6 +193,8 @@ pub fn run() -> Result<()> {
         Command::Bench3r(args) => bench3r(args),
         Command::Distances(args) => distances::run(args),
         Command::BenchDistances(args) => distances::bench(args),
+        #[cfg(feature = "ros")]
+        Command::Serve(args) => serve::serve(args),
     }
 }
 

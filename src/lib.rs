@@ -8,11 +8,14 @@
 #![warn(missing_docs)]
 
 pub mod chart;
+pub mod analysis;
 pub mod contract;
 pub mod interval;
 pub mod lp;
 pub mod manip3r;
 pub mod model;
+#[cfg(feature = "ros")]
+pub mod ros;
 pub mod problems;
 pub mod report;
 pub mod solve;

@@ -12,3 +12,6 @@ mod stability;
 mod manip3r;
 /// Distance problems through Cayley–Menger determinants: octahedral platform, four spheres.
 mod cayley_menger;
+/// The ROS 2 node against real rclpy over DDS on loopback: topics, services, load.
+#[cfg(feature = "ros")]
+mod topics;

@@ -1,0 +1,383 @@
+//! Analyses of a loaded mechanism, as a front end (the ROS node) runs them: one trait, one
+//! implementation per kind of mechanism, and the plain-data results they return.
+//!
+//! `load` picks the analysis that fits a `Mechanism`. Today that is `PlanarAnalysis` (planar
+//! closed-loop linkages: the configuration space) or `Unsupported`, which answers every query
+//! with `AnalysisError::NotAvailable`. The 3R singularity analysis and the Cayley–Menger
+//! formulation slot in as further `Analysis` implementations and one more arm in `load`.
+//!
+//! No IO and no async here: a front end prepares a run (all validation happens then, so bad
+//! requests are answered at once), moves it to a thread of its own and converts the result.
+
+mod planar;
+
+pub use planar::PlanarAnalysis;
+
+use crate::model::Mechanism;
+use crate::problems::LinkageError;
+use crate::solve::{BoxStatus, Progress, SolveError, SolverSettings, Stats, Status};
+use std::sync::atomic::AtomicBool;
+use thiserror::Error;
+
+/// `[lower, upper]`
+pub type Bounds = [f64; 2];
+
+/// The queries a mechanism can be asked; `Analysis::services` lists those it answers with
+/// real results.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Service {
+    /// Solve again with other settings or fixed joints.
+    Solve,
+    /// Singular curves, cusps, nodes.
+    Singularities,
+    /// Certified inverse kinematics of a workspace point.
+    InverseKinematics,
+    /// Which component of the configuration space a configuration belongs to.
+    Classify,
+}
+
+impl Service {
+    /// The name used in messages and service names.
+    pub fn name(self) -> &'static str {
+        match self {
+            Service::Solve => "solve",
+            Service::Singularities => "singularities",
+            Service::InverseKinematics => "inverse_kinematics",
+            Service::Classify => "classify",
+        }
+    }
+}
+
+/// Why a query cannot be answered.
+#[derive(Debug, Error, PartialEq)]
+#[non_exhaustive]
+pub enum AnalysisError {
+    /// The mechanism's analysis has no math for this query (yet).
+    #[error("{service} is not available for this mechanism ('{mechanism}', {kind}): {reason}")]
+    NotAvailable {
+        /// the query
+        service: &'static str,
+        /// the mechanism
+        mechanism: String,
+        /// its kind
+        kind: &'static str,
+        /// why
+        reason: String,
+    },
+    /// The mechanism cannot be formulated as asked (bad fixed joints, loop cannot close...).
+    #[error(transparent)]
+    Linkage(#[from] LinkageError),
+    /// Settings out of range.
+    #[error(transparent)]
+    Solve(#[from] SolveError),
+    /// Anything else wrong with the request, named.
+    #[error("{0}")]
+    BadRequest(String),
+}
+
+/// One box of a result, in the system's variables and in joint space.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResultBox {
+    /// Solution or undecided.
+    pub status: BoxStatus,
+    /// One interval per system variable (`BoxSetResult::variables`).
+    pub bounds: Vec<Bounds>,
+    /// One interval per free joint (`BoxSetResult::joint_names`): radians or metres.
+    pub joints: Vec<Bounds>,
+    /// Depth in the search tree.
+    pub level: u32,
+    /// Connected component among the solution boxes; `None` for undecided boxes.
+    pub cluster: Option<usize>,
+    /// World (x, y) of every traced point (`BoxSetResult::traces`).
+    pub traces: Vec<[Bounds; 2]>,
+}
+
+/// The result of one run: boxes that together enclose every solution.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BoxSetResult {
+    /// Robot name.
+    pub mechanism: String,
+    /// What was analysed, e.g. `configuration_space`.
+    pub analysis: String,
+    /// How the run ended.
+    pub status: Status,
+    /// The settings it ran with.
+    pub settings: SolverSettings,
+    /// System variable names, in box order.
+    pub variables: Vec<String>,
+    /// Indices of the primary variables (those measured against sigma).
+    pub primaries: Vec<usize>,
+    /// Free joint names, in file order.
+    pub joint_names: Vec<String>,
+    /// Joints fixed for this run, with their values.
+    pub fixed_joints: Vec<(String, f64)>,
+    /// Traced point names (`LINK@X,Y`).
+    pub traces: Vec<String>,
+    /// Solution boxes first (in the order found), then undecided ones.
+    pub boxes: Vec<ResultBox>,
+    /// Number of connected components of the solution boxes.
+    pub clusters: usize,
+    /// Counters and time.
+    pub stats: Stats,
+}
+
+/// An isolated solution: a cluster of solution boxes no wider than a few sigma, i.e. one
+/// assembly mode of a rigid (or fully fixed) mechanism.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AssemblyMode {
+    /// The cluster's index.
+    pub cluster: usize,
+    /// Joint values at the middle of the cluster's hull, free joints then fixed ones.
+    pub joints: Vec<(String, f64)>,
+}
+
+impl BoxSetResult {
+    /// The isolated solutions: clusters whose hull is at most `4·sigma` wide in every primary
+    /// variable. A curve of solutions spans far more than that.
+    pub fn assembly_modes(&self) -> Vec<AssemblyMode> {
+        let mut modes = Vec::new();
+        for cluster in 0..self.clusters {
+            let members: Vec<&ResultBox> = self.boxes.iter().filter(|b| b.cluster == Some(cluster)).collect();
+            let hull = |pick: &dyn Fn(&ResultBox) -> &Vec<Bounds>, i: usize| {
+                members.iter().map(|b| pick(b)[i]).fold([f64::INFINITY, f64::NEG_INFINITY], |h, x| [h[0].min(x[0]), h[1].max(x[1])])
+            };
+            let narrow = self.primaries.iter().all(|&i| {
+                let h = hull(&|b| &b.bounds, i);
+                h[1] - h[0] <= 4.0 * self.settings.sigma
+            });
+            if members.is_empty() || !narrow {
+                continue;
+            }
+            let mut joints: Vec<(String, f64)> = (0..self.joint_names.len())
+                .map(|i| {
+                    let h = hull(&|b| &b.joints, i);
+                    (self.joint_names[i].clone(), 0.5 * (h[0] + h[1]))
+                })
+                .collect();
+            joints.extend(self.fixed_joints.iter().cloned());
+            modes.push(AssemblyMode { cluster, joints });
+        }
+        modes
+    }
+}
+
+/// Where a joint configuration sits relative to a configuration-space result.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Classification {
+    /// A solution box contains the configuration.
+    pub inside: bool,
+    /// Component of the nearest solution box (`None` when there are no solution boxes).
+    pub component: Option<usize>,
+    /// Number of components.
+    pub components: usize,
+    /// Joint-space distance to the nearest solution box (0 when inside).
+    pub distance: f64,
+    /// Joint-space distance to the nearest singular box, when a singularity analysis exists.
+    pub singular_distance: Option<f64>,
+}
+
+/// Distance from `x` to the interval `[lo, hi]`; angles (`periodic`) are compared modulo 2π.
+fn gap(x: f64, [lo, hi]: Bounds, periodic: bool) -> f64 {
+    let plain = |x: f64| if x < lo { lo - x } else if x > hi { x - hi } else { 0.0 };
+    if !periodic {
+        return plain(x);
+    }
+    let tau = std::f64::consts::TAU;
+    // Try the nearest images of x on both sides of the interval.
+    let k = ((0.5 * (lo + hi) - x) / tau).round();
+    [-1.0, 0.0, 1.0].iter().map(|d| plain(x + (k + d) * tau)).fold(f64::INFINITY, f64::min)
+}
+
+/// Classifies a configuration given as a value per free joint, in `result.joint_names` order;
+/// `periodic[i]` says whether joint i is an angle.
+///
+/// The configuration is inside when some solution box holds every joint value; its component
+/// is that of the nearest box in the Euclidean joint-space distance.
+pub fn classify(result: &BoxSetResult, values: &[f64], periodic: &[bool], singular: Option<&BoxSetResult>) -> Classification {
+    let distance_to = |b: &ResultBox| -> f64 {
+        b.joints.iter().zip(values).zip(periodic).map(|((&iv, &x), &p)| gap(x, iv, p).powi(2)).sum::<f64>().sqrt()
+    };
+    let nearest = |r: &BoxSetResult| {
+        r.boxes
+            .iter()
+            .filter(|b| b.status == BoxStatus::Solution)
+            .map(|b| (distance_to(b), b.cluster))
+            .fold(None, |best: Option<(f64, Option<usize>)>, (d, c)| match best {
+                Some((bd, _)) if bd <= d => best,
+                _ => Some((d, c)),
+            })
+    };
+    let (distance, component) = nearest(result).map_or((f64::INFINITY, None), |(d, c)| (d, c));
+    Classification {
+        inside: distance == 0.0,
+        component,
+        components: result.clusters,
+        distance,
+        singular_distance: singular.and_then(|s| nearest(s)).map(|(d, _)| d),
+    }
+}
+
+/// A run that has been validated and only needs a thread: `run` cannot fail.
+pub trait PreparedRun: Send {
+    /// Runs to the end (or to a limit, or until `cancel` is raised), reporting progress.
+    fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> BoxSetResult;
+}
+
+/// What the node can do with one loaded mechanism.
+///
+/// Every query has a default that answers `NotAvailable`, so a new kind of mechanism
+/// implements only what its math backs.
+pub trait Analysis: Send + Sync {
+    /// Robot name.
+    fn mechanism(&self) -> &str;
+    /// Kind of mechanism, e.g. `planar_linkage`.
+    fn kind(&self) -> &'static str;
+    /// The queries answered with real results.
+    fn services(&self) -> Vec<Service>;
+    /// Why the other queries are not available (shown in their error replies).
+    fn limitation(&self) -> String;
+    /// Free joints, in file order.
+    fn free_joints(&self) -> Vec<String>;
+    /// Joints fixed at load time.
+    fn fixed_joints(&self) -> Vec<(String, f64)>;
+    /// Which free joints are angles (compared modulo 2π), in `free_joints` order.
+    fn periodic(&self) -> Vec<bool>;
+
+    /// The run made at load time (the configuration space), with `settings`.
+    fn configuration_space(&self, settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, AnalysisError> {
+        let _ = settings;
+        Err(self.not_available(Service::Solve))
+    }
+
+    /// A new run with other fixed joints (they replace the load-time ones) and settings.
+    fn solve(&self, fixed: &[(String, f64)], settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, AnalysisError> {
+        let _ = (fixed, settings);
+        Err(self.not_available(Service::Solve))
+    }
+
+    /// The singularity run (singular curves, cusps, nodes).
+    fn singularities(&self) -> Result<Box<dyn PreparedRun>, AnalysisError> {
+        Err(self.not_available(Service::Singularities))
+    }
+
+    /// Certified inverse kinematics of a workspace point.
+    fn inverse_kinematics(&self, point: [f64; 3], sigma: f64) -> Result<Box<dyn PreparedRun>, AnalysisError> {
+        let _ = (point, sigma);
+        Err(self.not_available(Service::InverseKinematics))
+    }
+
+    /// The `NotAvailable` error for `service`.
+    fn not_available(&self, service: Service) -> AnalysisError {
+        AnalysisError::NotAvailable { service: service.name(), mechanism: self.mechanism().to_string(), kind: self.kind(), reason: self.limitation() }
+    }
+}
+
+/// A mechanism no analysis handles yet: loaded and listed, every query answered `NotAvailable`.
+#[derive(Clone, Debug)]
+pub struct Unsupported {
+    name: String,
+    joints: Vec<String>,
+    reason: String,
+}
+
+impl Analysis for Unsupported {
+    fn mechanism(&self) -> &str {
+        &self.name
+    }
+    fn kind(&self) -> &'static str {
+        "unsupported"
+    }
+    fn services(&self) -> Vec<Service> {
+        Vec::new()
+    }
+    fn limitation(&self) -> String {
+        self.reason.clone()
+    }
+    fn free_joints(&self) -> Vec<String> {
+        self.joints.clone()
+    }
+    fn fixed_joints(&self) -> Vec<(String, f64)> {
+        Vec::new()
+    }
+    fn periodic(&self) -> Vec<bool> {
+        vec![true; self.joints.len()]
+    }
+}
+
+/// Picks the analysis that fits `mechanism`. `fixed` and `traces` are as for
+/// `LinkageProblem::new`.
+///
+/// A mechanism outside every analysis (today: not planar) loads as `Unsupported`, so the node
+/// can still list it and explain; a planar mechanism with bad fixed joints is an error.
+pub fn load(mechanism: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f64, f64)]) -> Result<Box<dyn Analysis>, AnalysisError> {
+    match PlanarAnalysis::new(mechanism, fixed, traces) {
+        Ok(a) => Ok(Box::new(a)),
+        Err(LinkageError::NonPlanar(why)) => Ok(Box::new(Unsupported {
+            name: mechanism.name.clone(),
+            joints: mechanism.joints.iter().filter(|j| j.kind != crate::model::JointKind::Fixed).map(|j| j.name.clone()).collect(),
+            reason: format!("not a planar linkage ({why}); only planar linkages are analysed so far"),
+        })),
+        Err(e) => Err(e.into()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn one_box(joints: Vec<Bounds>, cluster: usize) -> ResultBox {
+        ResultBox { status: BoxStatus::Solution, bounds: joints.clone(), joints, level: 0, cluster: Some(cluster), traces: vec![] }
+    }
+
+    fn result(boxes: Vec<ResultBox>, clusters: usize) -> BoxSetResult {
+        BoxSetResult {
+            mechanism: "m".into(),
+            analysis: "configuration_space".into(),
+            status: Status::Complete,
+            settings: SolverSettings { sigma: 0.1, ..Default::default() },
+            variables: vec!["a".into(), "b".into()],
+            primaries: vec![0, 1],
+            joint_names: vec!["a".into(), "b".into()],
+            fixed_joints: vec![("f".into(), 1.0)],
+            traces: vec![],
+            boxes,
+            clusters,
+            stats: Stats::default(),
+        }
+    }
+
+    #[test]
+    fn angles_are_compared_modulo_two_pi() {
+        assert_eq!(gap(0.5, [0.0, 1.0], true), 0.0);
+        // -3.1 + 2π = 3.183 lies in [3.1, 3.2]; -3.0 + 2π = 3.283 lies 0.083 above it.
+        assert_eq!(gap(-3.1, [3.1, 3.2], true), 0.0);
+        assert!((gap(-3.0, [3.1, 3.2], true) - (std::f64::consts::TAU - 6.2)).abs() < 1e-12);
+        assert!((gap(-3.0, [3.1, 3.2], false) - 6.1).abs() < 1e-12);
+        assert!((gap(2.0 + std::f64::consts::TAU * 3.0, [0.0, 1.0], true) - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn classification_names_the_nearest_component() {
+        let r = result(vec![one_box(vec![[0.0, 0.1], [0.0, 0.1]], 0), one_box(vec![[2.0, 2.1], [2.0, 2.1]], 1)], 2);
+        let c = classify(&r, &[2.05, 2.05], &[true, true], None);
+        assert!(c.inside);
+        assert_eq!((c.component, c.components, c.distance), (Some(1), 2, 0.0));
+        let c = classify(&r, &[0.4, 0.1], &[true, true], Some(&r));
+        assert!(!c.inside);
+        assert_eq!(c.component, Some(0));
+        assert!((c.distance - 0.3).abs() < 1e-12);
+        assert!((c.singular_distance.expect("given") - 0.3).abs() < 1e-12);
+    }
+
+    #[test]
+    fn only_narrow_clusters_are_assembly_modes() {
+        let r = result(vec![one_box(vec![[0.0, 0.1], [0.0, 0.1]], 0), one_box(vec![[1.0, 1.1], [1.0, 1.1]], 1), one_box(vec![[1.1, 1.2], [1.0, 1.1]], 1)], 2);
+        let modes = r.assembly_modes();
+        // Cluster 1 spans 0.2 in `a`, within 4 sigma = 0.4: both clusters are isolated.
+        assert_eq!(modes.len(), 2);
+        assert_eq!(modes[1].joints[0], ("a".to_string(), 1.1));
+        assert_eq!(modes[1].joints[2], ("f".to_string(), 1.0));
+        let wide = result(vec![one_box(vec![[0.0, 0.1], [0.0, 0.1]], 0), one_box(vec![[0.1, 0.5], [0.0, 0.1]], 0)], 1);
+        assert!(wide.assembly_modes().is_empty());
+    }
+}

@@ -1,0 +1,185 @@
+//! `linkspace serve`: arguments of the ROS 2 node, turned into `ros::ServeConfig`.
+
+use super::{parse_fix, parse_trace};
+use anyhow::{bail, Context, Result};
+use linkspace::ros::{self, Limits, Mapping, Network, ServeConfig, Source};
+use linkspace::solve::SolverSettings;
+use std::io::Read;
+use std::path::PathBuf;
+use std::time::Duration;
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum MappingArg {
+    /// rmw_fastrtps_cpp (Jazzy's default RMW) and rmw_connextdds.
+    Enhanced,
+    /// rmw_cyclonedds_cpp.
+    Cyclone,
+    /// RPC-over-DDS basic mapping.
+    Basic,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum NetworkArg {
+    /// 127.0.0.1 only.
+    Loopback,
+    /// Every interface, multicast discovery.
+    All,
+}
+
+#[derive(clap::Args)]
+pub struct ServeArgs {
+    /// URDF files to serve ('-' reads one from standard input).
+    urdf: Vec<PathBuf>,
+    /// A URDF given as a string, as the robot_description parameter holds it. Repeatable.
+    #[arg(long = "robot-description", value_name = "URDF_XML")]
+    robot_description: Vec<String>,
+    /// DDS domain; default: $ROS_DOMAIN_ID, else 0.
+    #[arg(long)]
+    domain: Option<u16>,
+    /// Node namespace.
+    #[arg(long, default_value = "/")]
+    namespace: String,
+    /// Node name.
+    #[arg(long, default_value = "linkspace")]
+    node_name: String,
+    /// Service mapping of the callers' RMW; default: cyclone when $RMW_IMPLEMENTATION is
+    /// rmw_cyclonedds_cpp, else enhanced (Jazzy's default, Fast DDS).
+    #[arg(long, value_enum)]
+    service_mapping: Option<MappingArg>,
+    /// Network interfaces DDS may use.
+    #[arg(long, value_enum, default_value_t = NetworkArg::Loopback)]
+    network: NetworkArg,
+    /// Fix a joint for the load-time analysis: [ROBOT:]JOINT=VALUE. Repeatable.
+    #[arg(long = "fix", value_name = "[ROBOT:]JOINT=VALUE")]
+    fix: Vec<String>,
+    /// Trace a point of a link: [ROBOT:]LINK@X,Y. Repeatable.
+    #[arg(long = "trace", value_name = "[ROBOT:]LINK@X,Y")]
+    trace: Vec<String>,
+    /// Load-time analyses: solution boxes are at most this wide.
+    #[arg(long, default_value_t = 1e-3)]
+    sigma: f64,
+    /// Load-time analyses: shrink while a round leaves less than this share of the volume.
+    #[arg(long, default_value_t = 0.95)]
+    rho: f64,
+    /// Load-time analyses: stop after this many boxes.
+    #[arg(long, default_value_t = 1_000_000)]
+    max_boxes: u64,
+    /// Load-time analyses: stop after this many seconds.
+    #[arg(long)]
+    timeout: Option<f64>,
+    /// Largest max_boxes a Solve request may ask for.
+    #[arg(long, default_value_t = Limits::default().max_boxes)]
+    max_request_boxes: u64,
+    /// Largest timeout (seconds) a Solve request may ask for.
+    #[arg(long, default_value_t = Limits::default().max_timeout)]
+    max_request_timeout: f64,
+    /// Longest a Solve request may wait for its result before the reply (seconds).
+    #[arg(long, default_value_t = Limits::default().max_wait)]
+    max_wait: f64,
+    /// Requested runs that may go on at once; more are refused.
+    #[arg(long, default_value_t = Limits::default().max_runs)]
+    max_runs: usize,
+    /// Boxes drawn per marker namespace.
+    #[arg(long, default_value_t = Limits::default().max_markers)]
+    max_markers: usize,
+    /// Publish the configuration spaces and markers again every this many seconds (for
+    /// subscribers with volatile durability, such as RViz's default); 0: only when they change.
+    #[arg(long, default_value_t = 0.0)]
+    republish: f64,
+}
+
+/// `[ROBOT:]REST` → (robot, rest); the robot prefix ends at the first ':' before `stop`.
+fn robot_prefix(s: &str, stop: char) -> (Option<String>, &str) {
+    match (s.find(':'), s.find(stop)) {
+        (Some(c), Some(e)) if c < e => (Some(s[..c].to_string()), &s[c + 1..]),
+        _ => (None, s),
+    }
+}
+
+pub fn serve(args: ServeArgs) -> Result<()> {
+    let domain = match args.domain {
+        Some(d) => d,
+        None => match std::env::var("ROS_DOMAIN_ID") {
+            Ok(v) if !v.trim().is_empty() => v.trim().parse().with_context(|| format!("ROS_DOMAIN_ID '{v}' is not a domain id"))?,
+            _ => 0,
+        },
+    };
+    // DDS port arithmetic (7400 + 250 * domain + ...) leaves u16 above 232.
+    if domain > 232 {
+        bail!("domain {domain} is out of range: ROS 2 domain ids go from 0 to 232");
+    }
+    let timeout = match args.timeout {
+        Some(t) if t.is_finite() && t > 0.0 => Some(Duration::from_secs_f64(t.min(1e9))),
+        Some(t) => bail!("--timeout must be a positive number of seconds, got {t}"),
+        None => None,
+    };
+    let settings = SolverSettings { sigma: args.sigma, rho: args.rho, max_boxes: args.max_boxes, timeout, ..Default::default() };
+    settings.validate()?;
+    let limits = Limits { max_boxes: args.max_request_boxes, max_timeout: args.max_request_timeout, max_wait: args.max_wait, max_runs: args.max_runs, max_markers: args.max_markers };
+    if limits.max_boxes == 0 || !(limits.max_timeout > 0.0 && limits.max_timeout.is_finite()) || !(limits.max_wait >= 0.0 && limits.max_wait.is_finite()) || limits.max_runs == 0 {
+        bail!("--max-request-boxes, --max-request-timeout and --max-runs must be positive, --max-wait at least 0");
+    }
+
+    let republish = match args.republish {
+        t if t == 0.0 => None,
+        t if t.is_finite() && t >= 0.001 => Some(Duration::from_secs_f64(t)),
+        t => bail!("--republish must be 0 (off) or at least 0.001 seconds, got {t}"),
+    };
+    let mut sources = Vec::new();
+    for path in &args.urdf {
+        let xml = if path.as_os_str() == "-" {
+            let mut s = String::new();
+            std::io::stdin().read_to_string(&mut s).context("reading a URDF from standard input")?;
+            s
+        } else {
+            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?
+        };
+        sources.push(Source { label: path.display().to_string(), xml });
+    }
+    for (k, xml) in args.robot_description.iter().enumerate() {
+        sources.push(Source { label: format!("--robot-description #{}", k + 1), xml: xml.clone() });
+    }
+    let several = sources.len() > 1;
+    let mut fixed = Vec::new();
+    for f in &args.fix {
+        let (robot, rest) = robot_prefix(f, '=');
+        if robot.is_none() && several {
+            bail!("--fix '{f}': with several mechanisms, name the robot: ROBOT:JOINT=VALUE");
+        }
+        let (joint, value) = parse_fix(rest)?;
+        fixed.push((robot, joint, value));
+    }
+    let mut traces = Vec::new();
+    for t in &args.trace {
+        let (robot, rest) = robot_prefix(t, '@');
+        if robot.is_none() && several {
+            bail!("--trace '{t}': with several mechanisms, name the robot: ROBOT:LINK@X,Y");
+        }
+        let (link, x, y) = parse_trace(rest)?;
+        traces.push((robot, link, x, y));
+    }
+    let mapping = match args.service_mapping {
+        Some(MappingArg::Enhanced) => Mapping::Enhanced,
+        Some(MappingArg::Cyclone) => Mapping::Cyclone,
+        Some(MappingArg::Basic) => Mapping::Basic,
+        None if std::env::var("RMW_IMPLEMENTATION").is_ok_and(|v| v == "rmw_cyclonedds_cpp") => Mapping::Cyclone,
+        None => Mapping::Enhanced,
+    };
+    let network = match args.network {
+        NetworkArg::Loopback => Network::Loopback,
+        NetworkArg::All => Network::All,
+    };
+    ros::serve(ServeConfig { sources, fixed, traces, settings, domain, namespace: args.namespace, node_name: args.node_name, mapping, network, limits, republish })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::robot_prefix;
+
+    #[test]
+    fn robot_prefixes_end_before_the_value() {
+        assert_eq!(robot_prefix("four_bar:crank=1", '='), (Some("four_bar".to_string()), "crank=1"));
+        assert_eq!(robot_prefix("crank=1", '='), (None, "crank=1"));
+        assert_eq!(robot_prefix("link@1:2,3", '@'), (None, "link@1:2,3"));
+    }
+}

@@ -1,0 +1,152 @@
+//! From the analysis layer's plain results to wire types: box sets, markers, joint states.
+
+use super::msgs::{self, BoxSet, ColorRGBA, Header, JointState, Marker, MarkerArray, Point, Pose, Quaternion, SolveStats, Time, Vector3};
+use crate::analysis::BoxSetResult;
+use crate::solve::{BoxStatus, Limit, SolverSettings, Status};
+
+/// A header stamped now (wall clock) in `frame`.
+pub fn header(frame: &str) -> Header {
+    let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap_or_default();
+    Header { stamp: Time { sec: now.as_secs().min(i32::MAX as u64) as i32, nanosec: now.subsec_nanos() }, frame_id: frame.to_string() }
+}
+
+/// The wire form of the settings (`timeout` 0 for none).
+pub fn settings(s: &SolverSettings) -> msgs::Settings {
+    msgs::Settings { sigma: s.sigma, rho: s.rho, max_boxes: s.max_boxes, timeout: s.timeout.map_or(0.0, |t| t.as_secs_f64()) }
+}
+
+/// The name of a limit, as in the JSON report.
+pub fn limit_name(l: Limit) -> &'static str {
+    match l {
+        Limit::Boxes => "boxes",
+        Limit::Time => "time",
+        Limit::Cancelled => "cancelled",
+        Limit::Sink => "sink",
+    }
+}
+
+/// A result as a `linkspace_msgs/BoxSet`, boxes in the result's order.
+pub fn box_set(r: &BoxSetResult, run_id: u64) -> BoxSet {
+    let n = r.boxes.len();
+    let (mut lower, mut upper) = (Vec::with_capacity(n * r.variables.len()), Vec::with_capacity(n * r.variables.len()));
+    let (mut joint_lower, mut joint_upper) = (Vec::with_capacity(n * r.joint_names.len()), Vec::with_capacity(n * r.joint_names.len()));
+    for b in &r.boxes {
+        lower.extend(b.bounds.iter().map(|x| x[0]));
+        upper.extend(b.bounds.iter().map(|x| x[1]));
+        joint_lower.extend(b.joints.iter().map(|x| x[0]));
+        joint_upper.extend(b.joints.iter().map(|x| x[1]));
+    }
+    let (status, limit) = match r.status {
+        Status::Complete => (msgs::SET_COMPLETE, ""),
+        Status::Incomplete(l) => (msgs::SET_INCOMPLETE, limit_name(l)),
+    };
+    BoxSet {
+        header: header(""),
+        mechanism: r.mechanism.clone(),
+        analysis: r.analysis.clone(),
+        run_id,
+        status,
+        limit: limit.to_string(),
+        settings: settings(&r.settings),
+        variable_names: r.variables.clone(),
+        dim: r.variables.len() as u32,
+        lower,
+        upper,
+        box_status: r.boxes.iter().map(|b| if b.status == BoxStatus::Solution { msgs::BOX_SOLUTION } else { msgs::BOX_UNDECIDED }).collect(),
+        level: r.boxes.iter().map(|b| b.level).collect(),
+        cluster: r.boxes.iter().map(|b| b.cluster.map_or(-1, |c| c as i32)).collect(),
+        clusters: r.clusters as u32,
+        joint_names: r.joint_names.clone(),
+        joint_lower,
+        joint_upper,
+        fixed_joint_names: r.fixed_joints.iter().map(|(n, _)| n.clone()).collect(),
+        fixed_joint_values: r.fixed_joints.iter().map(|(_, v)| *v).collect(),
+        stats: SolveStats {
+            processed: r.stats.processed,
+            empty: r.stats.empty,
+            bisected: r.stats.bisected,
+            solutions: r.stats.solutions,
+            spurious_dropped: r.stats.spurious_dropped,
+            max_level: r.stats.max_level,
+            seconds: r.stats.seconds,
+        },
+    }
+}
+
+/// A colour per cluster, cycling through a few distinct hues; undecided boxes are grey.
+fn colour(cluster: Option<usize>) -> ColorRGBA {
+    const HUES: [(f32, f32, f32); 6] = [(0.12, 0.47, 0.71), (1.0, 0.5, 0.05), (0.17, 0.63, 0.17), (0.84, 0.15, 0.16), (0.58, 0.4, 0.74), (0.55, 0.34, 0.29)];
+    match cluster {
+        Some(c) => {
+            let (r, g, b) = HUES[c % HUES.len()];
+            ColorRGBA { r, g, b, a: 0.8 }
+        }
+        None => ColorRGBA { r: 0.5, g: 0.5, b: 0.5, a: 0.3 },
+    }
+}
+
+fn cube(frame: &str, ns: &str, id: i32, centre: [f64; 3], size: [f64; 3], color: ColorRGBA) -> Marker {
+    Marker {
+        header: header(frame),
+        ns: ns.to_string(),
+        id,
+        r#type: msgs::marker::CUBE,
+        action: msgs::marker::ADD,
+        pose: Pose { position: Point { x: centre[0], y: centre[1], z: centre[2] }, orientation: Quaternion { w: 1.0, ..Default::default() } },
+        // RViz does not draw a cube of zero size: give flat boxes a sliver of thickness.
+        scale: Vector3 { x: size[0].max(1e-4), y: size[1].max(1e-4), z: size[2].max(1e-4) },
+        color,
+        ..Default::default()
+    }
+}
+
+/// Markers for RViz: a `DELETEALL` first (a new result replaces the old one), then
+/// - namespace `configuration_space`: one cube per box over the first three free joints
+///   (radians or metres as metres), in frame `<robot>/joint_space`;
+/// - namespace `trace:<LINK@X,Y>`: one flat cube per box for each traced point (a coupler
+///   curve), in the world frame `world_frame`.
+///
+/// At most `cap` boxes are drawn per namespace (the box-set topic always carries all of them).
+pub fn markers(r: &BoxSetResult, world_frame: &str, cap: usize) -> MarkerArray {
+    let mut markers = vec![Marker { header: header(world_frame), action: msgs::marker::DELETEALL, ..Default::default() }];
+    let joint_frame = format!("{}/joint_space", r.mechanism);
+    let axes = r.joint_names.len().min(3);
+    let mut id = 0;
+    for b in r.boxes.iter().take(cap) {
+        let (mut c, mut s) = ([0.0; 3], [0.0; 3]);
+        for k in 0..axes {
+            c[k] = 0.5 * (b.joints[k][0] + b.joints[k][1]);
+            s[k] = b.joints[k][1] - b.joints[k][0];
+        }
+        markers.push(cube(&joint_frame, "configuration_space", id, c, s, colour(b.cluster)));
+        id += 1;
+    }
+    for (t, name) in r.traces.iter().enumerate() {
+        let ns = format!("trace:{name}");
+        for b in r.boxes.iter().take(cap) {
+            let [x, y] = b.traces[t];
+            let c = [0.5 * (x[0] + x[1]), 0.5 * (y[0] + y[1]), 0.0];
+            markers.push(cube(world_frame, &ns, id, c, [x[1] - x[0], y[1] - y[0], 0.0], colour(b.cluster)));
+            id += 1;
+        }
+    }
+    MarkerArray { markers }
+}
+
+/// One `sensor_msgs/JointState` per isolated solution (assembly mode), in cluster order; the
+/// header's frame_id says which mode it is, e.g. `mode 1 of 2 (cluster 1)`.
+pub fn assembly_modes(r: &BoxSetResult) -> Vec<JointState> {
+    let modes = r.assembly_modes();
+    let n = modes.len();
+    modes
+        .into_iter()
+        .enumerate()
+        .map(|(k, m)| JointState {
+            header: header(&format!("mode {} of {n} (cluster {})", k + 1, m.cluster)),
+            name: m.joints.iter().map(|(j, _)| j.clone()).collect(),
+            position: m.joints.iter().map(|(_, v)| *v).collect(),
+            velocity: vec![],
+            effort: vec![],
+        })
+        .collect()
+}

@@ -1,0 +1,211 @@
+//! The ROS 2 node (`linkspace serve`): the only module that knows ros2-client, QoS, CDR and
+//! async.
+//!
+//! `serve` loads every mechanism first (bad input fails before any DDS traffic), then joins
+//! the DDS domain and runs the event loop of `node`. The analyses themselves (`crate::analysis`)
+//! run on threads of their own and know nothing of ROS.
+//!
+//! Files: `msgs` mirrors `msgs/` (the wire types), `convert` turns results into messages,
+//! `node` is the event loop with the publishers and service servers.
+
+mod convert;
+pub mod msgs;
+mod node;
+
+use crate::analysis::{self, Analysis};
+use crate::model::urdf;
+use crate::solve::SolverSettings;
+use anyhow::{bail, Context as _, Result};
+
+/// How service requests and replies are laid out on DDS; it must match the caller's RMW.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mapping {
+    /// rmw_fastrtps_cpp (Jazzy's default) and rmw_connextdds: the RPC-over-DDS "enhanced"
+    /// mapping, request ids in the sample metadata.
+    Enhanced,
+    /// rmw_cyclonedds_cpp: a 16-byte header (client id, sequence number) before the body.
+    Cyclone,
+    /// The RPC-over-DDS "basic" mapping (untested against any RMW).
+    Basic,
+}
+
+/// Which network interfaces DDS may use.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Network {
+    /// 127.0.0.1 only: discovery by unicast to the well-known ports on loopback.
+    Loopback,
+    /// Every interface, with multicast discovery: what a ROS 2 node normally does.
+    All,
+}
+
+/// What a request may ask for; beyond it the node refuses with a reason.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Limits {
+    /// Largest `settings.max_boxes` of a Solve request.
+    pub max_boxes: u64,
+    /// Largest `settings.timeout` of a Solve request, seconds.
+    pub max_timeout: f64,
+    /// Longest `wait` of a Solve request (and longest wait of the other queries), seconds.
+    pub max_wait: f64,
+    /// Requested runs that may go on at once; more are refused until one ends.
+    pub max_runs: usize,
+    /// Boxes drawn per marker namespace.
+    pub max_markers: usize,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Self { max_boxes: 200_000, max_timeout: 300.0, max_wait: 30.0, max_runs: 4, max_markers: 20_000 }
+    }
+}
+
+/// A URDF to load, with a label for error messages (its path, or `robot_description`).
+#[derive(Clone, Debug)]
+pub struct Source {
+    /// Where it came from.
+    pub label: String,
+    /// The URDF text.
+    pub xml: String,
+}
+
+/// Everything `serve` needs.
+#[derive(Clone, Debug)]
+pub struct ServeConfig {
+    /// The mechanisms.
+    pub sources: Vec<Source>,
+    /// Load-time fixed joints: (robot or `None` for every robot, joint, value).
+    pub fixed: Vec<(Option<String>, String, f64)>,
+    /// Traced points: (robot or `None`, link, x, y).
+    pub traces: Vec<(Option<String>, String, f64, f64)>,
+    /// Settings of the load-time analyses.
+    pub settings: SolverSettings,
+    /// DDS domain (ROS_DOMAIN_ID).
+    pub domain: u16,
+    /// Node namespace, e.g. `/` or `/robots`.
+    pub namespace: String,
+    /// Node name.
+    pub node_name: String,
+    /// Service mapping.
+    pub mapping: Mapping,
+    /// Network interfaces.
+    pub network: Network,
+    /// Request limits.
+    pub limits: Limits,
+    /// Publish the configuration spaces again at this period (none: only when they change).
+    pub republish: Option<std::time::Duration>,
+}
+
+/// A loaded mechanism, ready for the node.
+pub(crate) struct Loaded {
+    pub analysis: Box<dyn Analysis>,
+    /// The ground link, the frame of world-space markers.
+    pub root_link: String,
+    /// The robot name as a ROS name token.
+    pub token: String,
+}
+
+/// A robot name as one token of a ROS name: letters, digits and single underscores, not
+/// starting with a digit.
+pub(crate) fn name_token(name: &str) -> String {
+    let mut t = String::new();
+    for c in name.chars() {
+        let c = if c.is_ascii_alphanumeric() { c } else { '_' };
+        if !(c == '_' && t.ends_with('_')) {
+            t.push(c);
+        }
+    }
+    let t = t.trim_matches('_').to_string();
+    if t.is_empty() || t.starts_with(|c: char| c.is_ascii_digit()) {
+        format!("m_{t}")
+    } else {
+        t
+    }
+}
+
+/// Parses and formulates every mechanism of `config`.
+pub(crate) fn load(config: &ServeConfig) -> Result<Vec<Loaded>> {
+    let mut loaded: Vec<Loaded> = Vec::new();
+    let mut used_fixes = vec![false; config.fixed.len()];
+    let mut used_traces = vec![false; config.traces.len()];
+    for s in &config.sources {
+        let m = urdf::parse(&s.xml).with_context(|| format!("loading {}", s.label))?;
+        let mine = |robot: &Option<String>| robot.as_deref().is_none_or(|r| r == m.name);
+        let mut fixed = Vec::new();
+        for (k, (robot, joint, value)) in config.fixed.iter().enumerate() {
+            if mine(robot) {
+                used_fixes[k] = true;
+                fixed.push((joint.clone(), *value));
+            }
+        }
+        let mut traces = Vec::new();
+        for (k, (robot, link, x, y)) in config.traces.iter().enumerate() {
+            if mine(robot) {
+                used_traces[k] = true;
+                traces.push((link.clone(), *x, *y));
+            }
+        }
+        let analysis = analysis::load(&m, &fixed, &traces).with_context(|| format!("loading {}", s.label))?;
+        let token = name_token(&m.name);
+        if loaded.iter().any(|l| l.analysis.mechanism() == m.name || l.token == token) {
+            bail!("{}: a mechanism named '{}' is already loaded", s.label, m.name);
+        }
+        loaded.push(Loaded { analysis, root_link: m.links[m.root].name.clone(), token });
+    }
+    if let Some(k) = used_fixes.iter().position(|u| !u) {
+        bail!("--fix {}:{}: no mechanism of that name is loaded", config.fixed[k].0.as_deref().unwrap_or(""), config.fixed[k].1);
+    }
+    if let Some(k) = used_traces.iter().position(|u| !u) {
+        bail!("--trace {}:{}: no mechanism of that name is loaded", config.traces[k].0.as_deref().unwrap_or(""), config.traces[k].1);
+    }
+    if loaded.is_empty() {
+        bail!("no mechanism to serve: give at least one URDF or --robot-description");
+    }
+    Ok(loaded)
+}
+
+/// Runs the node until the process is stopped.
+pub fn serve(config: ServeConfig) -> Result<()> {
+    let loaded = load(&config)?;
+    node::run(config, loaded)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn robot_names_become_valid_tokens() {
+        assert_eq!(name_token("four_bar"), "four_bar");
+        assert_eq!(name_token("my-robot v2"), "my_robot_v2");
+        assert_eq!(name_token("__x__y"), "x_y");
+        assert_eq!(name_token("3r"), "m_3r");
+        assert_eq!(name_token("***"), "m_");
+    }
+
+    #[test]
+    fn loading_reports_bad_input_by_label() {
+        let four_bar = include_str!("../../urdf/four_bar.urdf");
+        let config = |sources: Vec<Source>, fixed: Vec<(Option<String>, String, f64)>| ServeConfig {
+            sources,
+            fixed,
+            traces: vec![],
+            settings: SolverSettings::default(),
+            domain: 0,
+            namespace: "/".into(),
+            node_name: "linkspace".into(),
+            mapping: Mapping::Enhanced,
+            network: Network::Loopback,
+            limits: Limits::default(),
+            republish: None,
+        };
+        let src = |label: &str, xml: &str| Source { label: label.into(), xml: xml.into() };
+        let err = |c: ServeConfig| format!("{:#}", load(&c).err().expect("should fail"));
+        assert!(err(config(vec![src("bad.urdf", "<robot")], vec![])).contains("loading bad.urdf: malformed URDF"));
+        assert!(err(config(vec![src("a", four_bar), src("b", four_bar)], vec![])).contains("b: a mechanism named 'four_bar' is already loaded"));
+        assert!(err(config(vec![src("a", four_bar)], vec![(Some("ghost".into()), "crank_joint".into(), 0.5)])).contains("no mechanism of that name"));
+        assert!(err(config(vec![src("a", four_bar)], vec![(None, "nope".into(), 0.5)])).contains("no joint or loop named 'nope'"));
+        let ok = load(&config(vec![src("a", four_bar)], vec![(Some("four_bar".into()), "crank_joint".into(), 0.5)])).expect("loads");
+        assert_eq!(ok[0].analysis.fixed_joints(), vec![("crank_joint".to_string(), 0.5)]);
+        assert_eq!(ok[0].root_link, "ground");
+    }
+}

@@ -1,0 +1,390 @@
+//! Wire types: `linkspace_msgs` (msgs/, the source of truth) mirrored field for field, plus the
+//! few standard ROS 2 types the node publishes (std_msgs, geometry_msgs, sensor_msgs,
+//! visualization_msgs as of Jazzy).
+//!
+//! CDR is positional: a field out of order or of another width garbles everything after it.
+//! So every struct is declared through `mirror!`, which also records its field names and Rust
+//! types; the test at the bottom parses `msgs/msg/*.msg` and `msgs/srv/*.srv` and checks them.
+//! A request or message without fields carries ROS's placeholder byte
+//! `structure_needs_at_least_one_member`, as rosidl generates it.
+
+use ros2_client::Message;
+use serde::{Deserialize, Serialize};
+
+/// The fields of a mirrored struct: (name, Rust type as written).
+pub trait Mirror {
+    /// In declaration (= wire) order.
+    const FIELDS: &'static [(&'static str, &'static str)];
+}
+
+macro_rules! mirror {
+    ($(#[$meta:meta])* $name:ident { $($(#[$fmeta:meta])* $field:ident : $ty:ty),* $(,)? }) => {
+        $(#[$meta])*
+        #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+        pub struct $name {
+            // Fields are documented in msgs/, the source of truth.
+            $($(#[$fmeta])* #[allow(missing_docs)] pub $field: $ty,)*
+        }
+        impl Message for $name {}
+        impl Mirror for $name {
+            const FIELDS: &'static [(&'static str, &'static str)] = &[$((stringify!($field), stringify!($ty))),*];
+        }
+    };
+}
+
+// ---- builtin_interfaces, std_msgs, geometry_msgs ----
+
+mirror! {
+    /// builtin_interfaces/Time
+    Time { sec: i32, nanosec: u32 }
+}
+mirror! {
+    /// builtin_interfaces/Duration
+    Duration { sec: i32, nanosec: u32 }
+}
+mirror! {
+    /// std_msgs/Header
+    Header { stamp: Time, frame_id: String }
+}
+mirror! {
+    /// std_msgs/ColorRGBA
+    ColorRGBA { r: f32, g: f32, b: f32, a: f32 }
+}
+mirror! {
+    /// geometry_msgs/Point
+    Point { x: f64, y: f64, z: f64 }
+}
+mirror! {
+    /// geometry_msgs/Vector3
+    Vector3 { x: f64, y: f64, z: f64 }
+}
+mirror! {
+    /// geometry_msgs/Quaternion
+    Quaternion { x: f64, y: f64, z: f64, w: f64 }
+}
+mirror! {
+    /// geometry_msgs/Pose
+    Pose { position: Point, orientation: Quaternion }
+}
+
+// ---- sensor_msgs, visualization_msgs ----
+
+mirror! {
+    /// sensor_msgs/JointState
+    JointState { header: Header, name: Vec<String>, position: Vec<f64>, velocity: Vec<f64>, effort: Vec<f64> }
+}
+mirror! {
+    /// sensor_msgs/CompressedImage
+    CompressedImage { header: Header, format: String, data: Vec<u8> }
+}
+mirror! {
+    /// visualization_msgs/UVCoordinate
+    UVCoordinate { u: f32, v: f32 }
+}
+mirror! {
+    /// visualization_msgs/MeshFile
+    MeshFile { filename: String, data: Vec<u8> }
+}
+mirror! {
+    /// visualization_msgs/Marker (Jazzy)
+    Marker {
+        header: Header,
+        ns: String,
+        id: i32,
+        r#type: i32,
+        action: i32,
+        pose: Pose,
+        scale: Vector3,
+        color: ColorRGBA,
+        lifetime: Duration,
+        frame_locked: bool,
+        points: Vec<Point>,
+        colors: Vec<ColorRGBA>,
+        texture_resource: String,
+        texture: CompressedImage,
+        uv_coordinates: Vec<UVCoordinate>,
+        text: String,
+        mesh_resource: String,
+        mesh_file: MeshFile,
+        mesh_use_embedded_materials: bool,
+    }
+}
+mirror! {
+    /// visualization_msgs/MarkerArray
+    MarkerArray { markers: Vec<Marker> }
+}
+
+/// `visualization_msgs/Marker` type and action constants used here.
+pub mod marker {
+    /// CUBE
+    pub const CUBE: i32 = 1;
+    /// SPHERE
+    pub const SPHERE: i32 = 2;
+    /// ADD
+    pub const ADD: i32 = 0;
+    /// DELETEALL
+    pub const DELETEALL: i32 = 3;
+}
+
+// ---- linkspace_msgs/msg ----
+
+mirror! {
+    /// linkspace_msgs/Interval
+    Interval { lower: f64, upper: f64 }
+}
+mirror! {
+    /// linkspace_msgs/Box (`LsBox` in Rust, where `Box` is taken)
+    LsBox { intervals: Vec<Interval>, status: u8, level: u32, cluster: i32 }
+}
+/// `Box.SOLUTION`
+pub const BOX_SOLUTION: u8 = 0;
+/// `Box.UNDECIDED`
+pub const BOX_UNDECIDED: u8 = 1;
+
+mirror! {
+    /// linkspace_msgs/Settings
+    Settings { sigma: f64, rho: f64, max_boxes: u64, timeout: f64 }
+}
+mirror! {
+    /// linkspace_msgs/SolveStats
+    SolveStats { processed: u64, empty: u64, bisected: u64, solutions: u64, spurious_dropped: u64, max_level: u32, seconds: f64 }
+}
+mirror! {
+    /// linkspace_msgs/BoxSet
+    BoxSet {
+        header: Header,
+        mechanism: String,
+        analysis: String,
+        run_id: u64,
+        status: u8,
+        limit: String,
+        settings: Settings,
+        variable_names: Vec<String>,
+        dim: u32,
+        lower: Vec<f64>,
+        upper: Vec<f64>,
+        box_status: Vec<u8>,
+        level: Vec<u32>,
+        cluster: Vec<i32>,
+        clusters: u32,
+        joint_names: Vec<String>,
+        joint_lower: Vec<f64>,
+        joint_upper: Vec<f64>,
+        fixed_joint_names: Vec<String>,
+        fixed_joint_values: Vec<f64>,
+        stats: SolveStats,
+    }
+}
+/// `BoxSet.COMPLETE`
+pub const SET_COMPLETE: u8 = 0;
+/// `BoxSet.INCOMPLETE`
+pub const SET_INCOMPLETE: u8 = 1;
+
+mirror! {
+    /// linkspace_msgs/CuspRecord
+    CuspRecord { joints: Vec<Interval>, workspace: Vec<Interval>, certified: bool }
+}
+mirror! {
+    /// linkspace_msgs/NodeRecord
+    NodeRecord { joints_a: Vec<Interval>, joints_b: Vec<Interval>, workspace: Vec<Interval>, certified: bool }
+}
+mirror! {
+    /// linkspace_msgs/SingularityReport
+    SingularityReport {
+        header: Header,
+        mechanism: String,
+        run_id: u64,
+        ok: bool,
+        message: String,
+        singular_curves: BoxSet,
+        cusps: Vec<CuspRecord>,
+        nodes: Vec<NodeRecord>,
+        internal_motions: BoxSet,
+    }
+}
+mirror! {
+    /// linkspace_msgs/Progress
+    Progress { header: Header, mechanism: String, analysis: String, run_id: u64, processed: u64, pending: u64, decided: f64, done: bool }
+}
+mirror! {
+    /// linkspace_msgs/MechanismInfo
+    MechanismInfo {
+        name: String,
+        kind: String,
+        services: Vec<String>,
+        free_joints: Vec<String>,
+        fixed_joint_names: Vec<String>,
+        fixed_joint_values: Vec<f64>,
+        state: String,
+        message: String,
+        topic_prefix: String,
+    }
+}
+
+// ---- linkspace_msgs/srv ----
+
+mirror! {
+    /// linkspace_msgs/Solve request
+    SolveRequest { mechanism: String, fixed_joint_names: Vec<String>, fixed_joint_values: Vec<f64>, settings: Settings, wait: f64 }
+}
+mirror! {
+    /// linkspace_msgs/Solve response
+    SolveResponse { ok: bool, message: String, run_id: u64, done: bool, result: BoxSet }
+}
+mirror! {
+    /// linkspace_msgs/Cancel request
+    CancelRequest { run_id: u64 }
+}
+mirror! {
+    /// linkspace_msgs/Cancel response
+    CancelResponse { ok: bool, message: String }
+}
+mirror! {
+    /// linkspace_msgs/Singularities request
+    SingularitiesRequest { mechanism: String }
+}
+mirror! {
+    /// linkspace_msgs/Singularities response
+    SingularitiesResponse { ok: bool, message: String, report: SingularityReport }
+}
+mirror! {
+    /// linkspace_msgs/InverseKinematics request
+    InverseKinematicsRequest { mechanism: String, point: Point, sigma: f64 }
+}
+mirror! {
+    /// linkspace_msgs/InverseKinematics response
+    InverseKinematicsResponse { ok: bool, message: String, complete: bool, solutions: Vec<LsBox> }
+}
+mirror! {
+    /// linkspace_msgs/Classify request
+    ClassifyRequest { mechanism: String, joint_names: Vec<String>, joint_values: Vec<f64> }
+}
+mirror! {
+    /// linkspace_msgs/Classify response
+    ClassifyResponse {
+        ok: bool,
+        message: String,
+        inside: bool,
+        component: i32,
+        components: u32,
+        distance: f64,
+        singular_distance_known: bool,
+        singular_distance: f64,
+    }
+}
+mirror! {
+    /// linkspace_msgs/ListMechanisms request (no fields: rosidl's placeholder byte)
+    ListMechanismsRequest { structure_needs_at_least_one_member: u8 }
+}
+mirror! {
+    /// linkspace_msgs/ListMechanisms response
+    ListMechanismsResponse { mechanisms: Vec<MechanismInfo> }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The Rust type a ROS field type must be mirrored by.
+    fn rust_type(ros: &str) -> String {
+        if let Some(inner) = ros.strip_suffix("[]") {
+            return format!("Vec<{}>", rust_type(inner));
+        }
+        let base = ros.rsplit('/').next().expect("split yields one item");
+        match base {
+            "bool" => "bool",
+            "uint8" | "byte" => "u8",
+            "int32" => "i32",
+            "uint32" => "u32",
+            "int64" => "i64",
+            "uint64" => "u64",
+            "float32" => "f32",
+            "float64" => "f64",
+            "string" => "String",
+            "Box" => "LsBox",
+            other => other,
+        }
+        .to_string()
+    }
+
+    /// (name, type) of every field of a .msg text (or one half of a .srv), constants and
+    /// comments left out.
+    fn fields(text: &str) -> Vec<(String, String)> {
+        let mut out: Vec<(String, String)> = text
+            .lines()
+            .map(|l| l.split('#').next().expect("split yields one item").trim())
+            .filter(|l| !l.is_empty() && !l.contains('='))
+            .map(|l| {
+                let mut parts = l.split_whitespace();
+                let ty = parts.next().expect("type").to_string();
+                let name = parts.next().unwrap_or_else(|| panic!("no field name in '{l}'")).to_string();
+                (name, rust_type(&ty))
+            })
+            .collect();
+        if out.is_empty() {
+            out.push(("structure_needs_at_least_one_member".into(), "u8".into()));
+        }
+        out
+    }
+
+    fn mirrored<T: Mirror>() -> Vec<(String, String)> {
+        T::FIELDS.iter().map(|(n, t)| (n.trim_start_matches("r#").to_string(), t.chars().filter(|c| !c.is_whitespace()).collect())).collect()
+    }
+
+    fn read(path: &str) -> String {
+        std::fs::read_to_string(format!("{}/msgs/{path}", env!("CARGO_MANIFEST_DIR"))).unwrap_or_else(|e| panic!("msgs/{path}: {e}"))
+    }
+
+    #[test]
+    fn rust_mirrors_match_the_interface_files() {
+        let msgs: Vec<(&str, Vec<(String, String)>)> = vec![
+            ("Interval", mirrored::<Interval>()),
+            ("Box", mirrored::<LsBox>()),
+            ("Settings", mirrored::<Settings>()),
+            ("SolveStats", mirrored::<SolveStats>()),
+            ("BoxSet", mirrored::<BoxSet>()),
+            ("CuspRecord", mirrored::<CuspRecord>()),
+            ("NodeRecord", mirrored::<NodeRecord>()),
+            ("SingularityReport", mirrored::<SingularityReport>()),
+            ("Progress", mirrored::<Progress>()),
+            ("MechanismInfo", mirrored::<MechanismInfo>()),
+        ];
+        let srvs: Vec<(&str, Vec<(String, String)>, Vec<(String, String)>)> = vec![
+            ("Solve", mirrored::<SolveRequest>(), mirrored::<SolveResponse>()),
+            ("Cancel", mirrored::<CancelRequest>(), mirrored::<CancelResponse>()),
+            ("Singularities", mirrored::<SingularitiesRequest>(), mirrored::<SingularitiesResponse>()),
+            ("InverseKinematics", mirrored::<InverseKinematicsRequest>(), mirrored::<InverseKinematicsResponse>()),
+            ("Classify", mirrored::<ClassifyRequest>(), mirrored::<ClassifyResponse>()),
+            ("ListMechanisms", mirrored::<ListMechanismsRequest>(), mirrored::<ListMechanismsResponse>()),
+        ];
+        for (name, mirror) in &msgs {
+            assert_eq!(&fields(&read(&format!("msg/{name}.msg"))), mirror, "msg/{name}.msg");
+        }
+        for (name, request, response) in &srvs {
+            let text = read(&format!("srv/{name}.srv"));
+            let (req, resp) = text.split_once("\n---").unwrap_or_else(|| panic!("srv/{name}.srv has no ---"));
+            assert_eq!(&fields(req), request, "srv/{name}.srv request");
+            assert_eq!(&fields(resp), response, "srv/{name}.srv response");
+        }
+        // Every interface file is mirrored and listed in CMakeLists.txt.
+        let cmake = read("CMakeLists.txt");
+        for dir in ["msg", "srv"] {
+            let files = std::fs::read_dir(format!("{}/msgs/{dir}", env!("CARGO_MANIFEST_DIR"))).expect("msgs dir");
+            for f in files {
+                let f = f.expect("entry").file_name().into_string().expect("utf-8");
+                let stem = f.split('.').next().expect("stem");
+                assert!(msgs.iter().any(|(n, _)| *n == stem) || srvs.iter().any(|(n, _, _)| *n == stem), "{dir}/{f} has no Rust mirror");
+                assert!(cmake.contains(&format!("\"{dir}/{f}\"")), "{dir}/{f} missing from CMakeLists.txt");
+            }
+        }
+    }
+
+    #[test]
+    fn the_check_catches_a_swapped_field() {
+        // The parser must see order: a swapped pair is a different list.
+        assert_ne!(fields("float64 upper\nfloat64 lower"), mirrored::<Interval>());
+        assert_eq!(fields("# c\nuint8 A=1\nfloat64 lower  # x\nfloat64 upper"), mirrored::<Interval>());
+        assert_eq!(rust_type("std_msgs/Header"), "Header");
+        assert_eq!(rust_type("Interval[]"), "Vec<Interval>");
+    }
+}

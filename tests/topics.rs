@@ -1,0 +1,510 @@
+//! Test idea: run `linkspace serve` as a subprocess and talk to it from real rclpy (ROS 2
+//! Jazzy with Fast DDS, pinned PyPI wheels in a venv that `scripts/ros_env.sh` makes), over
+//! real DDS on loopback only. What arrives must be what `linkspace solve --json` computes for
+//! the same URDF: same variables, same boxes bit for bit, same clusters. Subscribers start
+//! after the node has published, so every topic check is also a late-joiner check. Services
+//! are called with good and bad requests, and a load of 100 requests in flight must all be
+//! answered or refused with a reason while the node stays alive and small.
+//!
+//! Each test has its own DDS domain; every wait has a timeout. The Python side is
+//! `tests/ros_client.py` and `scripts/plot_boxes.py`. `LINKSPACE_SKIP_ROS=1` skips these tests
+//! (loudly) on a machine without PyPI.
+
+use serde_json::{json, Value};
+use std::io::Read;
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::sync::{Arc, Mutex, OnceLock};
+use std::time::{Duration, Instant};
+
+const ROOT: &str = env!("CARGO_MANIFEST_DIR");
+
+/// A finished subprocess: (success, stdout, stderr).
+fn run_with_timeout(mut cmd: Command, timeout: Duration) -> (bool, String, String) {
+    let mut child = cmd.stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().unwrap_or_else(|e| panic!("starting {cmd:?}: {e}"));
+    let drain = |mut r: Box<dyn Read + Send>| {
+        std::thread::spawn(move || {
+            let mut s = String::new();
+            let _ = r.read_to_string(&mut s);
+            s
+        })
+    };
+    let out = drain(Box::new(child.stdout.take().expect("piped")));
+    let err = drain(Box::new(child.stderr.take().expect("piped")));
+    let end = Instant::now() + timeout;
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("wait") {
+            break Some(status);
+        }
+        if Instant::now() > end {
+            let _ = child.kill();
+            let _ = child.wait();
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    let (out, err) = (out.join().expect("stdout reader"), err.join().expect("stderr reader"));
+    match status {
+        Some(s) => (s.success(), out, err),
+        None => panic!("{cmd:?} timed out after {timeout:?}\nstdout: {out}\nstderr: {err}"),
+    }
+}
+
+/// The venv's python, made once per test run by the project's own script; `None` when skipped.
+fn python() -> Option<&'static str> {
+    static PYTHON: OnceLock<Option<String>> = OnceLock::new();
+    PYTHON
+        .get_or_init(|| {
+            if std::env::var("LINKSPACE_SKIP_ROS").is_ok_and(|v| v == "1") {
+                eprintln!("LINKSPACE_SKIP_ROS=1: the ROS 2 tests are SKIPPED");
+                return None;
+            }
+            let venv = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("../ros-venv");
+            let mut cmd = Command::new("sh");
+            cmd.arg(format!("{ROOT}/scripts/ros_env.sh")).arg(&venv);
+            // Installing the wheels and building linkspace_msgs takes a few minutes the first time.
+            let (ok, out, err) = run_with_timeout(cmd, Duration::from_secs(1500));
+            assert!(ok, "scripts/ros_env.sh failed:\n{err}");
+            Some(out.lines().last().expect("ros_env.sh prints the python").trim().to_string())
+        })
+        .as_deref()
+}
+
+/// The environment a Python user sets to reach the node on loopback (launch_notes.md).
+fn ros_env(cmd: &mut Command, domain: u16) {
+    let logs = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("ros-log");
+    cmd.env("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
+        .env("ROS_AUTOMATIC_DISCOVERY_RANGE", "SYSTEM_DEFAULT")
+        .env("FASTRTPS_DEFAULT_PROFILES_FILE", format!("{ROOT}/scripts/fastdds_loopback.xml"))
+        .env("ROS_DOMAIN_ID", domain.to_string())
+        .env("ROS_LOG_DIR", logs)
+        .env_remove("ROS_LOCALHOST_ONLY")
+        .env_remove("ROS_STATIC_PEERS");
+}
+
+/// Runs a Python script of the repo; returns its stdout.
+fn py_run(python: &str, domain: u16, script: &str, args: &[&str], timeout: Duration) -> (String, String) {
+    let mut cmd = Command::new(python);
+    cmd.arg(format!("{ROOT}/{script}")).args(args);
+    ros_env(&mut cmd, domain);
+    let (ok, out, err) = run_with_timeout(cmd, timeout);
+    assert!(ok, "{script} {args:?} failed:\nstdout: {out}\nstderr: {err}");
+    (out, err)
+}
+
+/// Runs a Python script of the repo and parses the JSON on its last stdout line.
+fn py(python: &str, domain: u16, script: &str, args: &[&str], timeout: Duration) -> Value {
+    let (out, err) = py_run(python, domain, script, args, timeout);
+    let last = out.lines().last().unwrap_or_else(|| panic!("{script} printed nothing; stderr: {err}"));
+    serde_json::from_str(last).unwrap_or_else(|e| panic!("{script}: bad JSON ({e}): {last}\nstderr: {err}"))
+}
+
+/// `linkspace serve` as a subprocess, killed when dropped.
+struct Node {
+    child: Child,
+    log: Arc<Mutex<String>>,
+}
+
+impl Node {
+    fn start(domain: u16, args: &[&str]) -> Node {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_linkspace"))
+            .arg("serve")
+            .args(args)
+            .args(["--domain", &domain.to_string(), "--network", "loopback"])
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("starting linkspace serve");
+        let log = Arc::new(Mutex::new(String::new()));
+        let mut stderr = child.stderr.take().expect("piped");
+        let sink = log.clone();
+        std::thread::spawn(move || {
+            let mut buf = [0u8; 4096];
+            while let Ok(n) = stderr.read(&mut buf) {
+                if n == 0 {
+                    break;
+                }
+                sink.lock().expect("log lock").push_str(&String::from_utf8_lossy(&buf[..n]));
+            }
+        });
+        Node { child, log }
+    }
+
+    fn log(&self) -> String {
+        self.log.lock().expect("log lock").clone()
+    }
+
+    /// Waits until the node's stderr holds every needle.
+    fn wait_for(&mut self, needles: &[&str], timeout: Duration) {
+        let end = Instant::now() + timeout;
+        while Instant::now() < end {
+            let log = self.log();
+            if needles.iter().all(|n| log.contains(n)) {
+                return;
+            }
+            assert!(self.alive(), "the node exited:\n{log}");
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        panic!("the node did not print {needles:?} within {timeout:?}:\n{}", self.log());
+    }
+
+    fn alive(&mut self) -> bool {
+        self.child.try_wait().expect("wait").is_none()
+    }
+
+    /// A memory figure from /proc (VmRSS, VmHWM), in KiB.
+    fn memory_kib(&self, field: &str) -> u64 {
+        let status = std::fs::read_to_string(format!("/proc/{}/status", self.child.id())).expect("/proc status");
+        let line = status.lines().find(|l| l.starts_with(field)).unwrap_or_else(|| panic!("{field} not in /proc status"));
+        line.split_whitespace().nth(1).and_then(|v| v.parse().ok()).expect("a number of kB")
+    }
+}
+
+impl Drop for Node {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// `linkspace solve ARGS --json` → the report.
+fn solve_json(args: &[&str]) -> Value {
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("topics-ref-{}-{}.json", std::process::id(), args.join("_").replace(['/', '@', ',', '='], "-")));
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_linkspace"));
+    cmd.arg("solve").args(args).arg("--json").arg(&path);
+    let (ok, _, err) = run_with_timeout(cmd, Duration::from_secs(120));
+    assert!(ok, "linkspace solve {args:?}: {err}");
+    let v = serde_json::from_str(&std::fs::read_to_string(&path).expect("json written")).expect("valid json");
+    let _ = std::fs::remove_file(&path);
+    v
+}
+
+fn floats(v: &Value) -> Vec<f64> {
+    v.as_array().expect("array").iter().map(|x| x.as_f64().expect("number")).collect()
+}
+
+/// The BoxSet (as JSON from Python) holds exactly the report's boxes, in the same order.
+fn assert_same_boxes(set: &Value, report: &Value) {
+    let names: Vec<&str> = report["variables"].as_array().expect("variables").iter().map(|v| v["name"].as_str().expect("name")).collect();
+    let set_names: Vec<&str> = set["variable_names"].as_array().expect("names").iter().map(|v| v.as_str().expect("str")).collect();
+    assert_eq!(set_names, names);
+    let dim = names.len();
+    assert_eq!(set["dim"], json!(dim));
+    let solutions = report["solutions"].as_array().expect("solutions");
+    let undecided = report["undecided"].as_array().expect("undecided");
+    let records: Vec<&Value> = solutions.iter().chain(undecided).collect();
+    let (lower, upper) = (floats(&set["lower"]), floats(&set["upper"]));
+    assert_eq!(lower.len(), records.len() * dim, "box count");
+    assert_eq!(upper.len(), records.len() * dim);
+    let joint_names: Vec<&str> = set["joint_names"].as_array().expect("joint names").iter().map(|v| v.as_str().expect("str")).collect();
+    let (jl, ju) = (floats(&set["joint_lower"]), floats(&set["joint_upper"]));
+    for (i, r) in records.iter().enumerate() {
+        for (k, b) in r["box"].as_array().expect("box").iter().enumerate() {
+            assert_eq!([lower[i * dim + k], upper[i * dim + k]], [b[0].as_f64().expect("lo"), b[1].as_f64().expect("hi")], "box {i}, {}", names[k]);
+        }
+        for (k, j) in joint_names.iter().enumerate() {
+            let b = &r["joints"][j];
+            assert_eq!([jl[i * joint_names.len() + k], ju[i * joint_names.len() + k]], [b[0].as_f64().expect("lo"), b[1].as_f64().expect("hi")], "box {i}, joint {j}");
+        }
+        assert_eq!(set["level"][i], r["level"]);
+    }
+    let statuses = set["box_status"].as_array().expect("statuses");
+    assert_eq!(statuses.iter().filter(|s| **s == json!(0)).count(), solutions.len());
+    assert_eq!(set["clusters"], report["clusters"]);
+    let complete = report["status"] == "complete";
+    assert_eq!(set["status"], json!(if complete { 0 } else { 1 }));
+    assert_eq!(set["limit"], report.get("limit").cloned().filter(|l| !l.is_null()).unwrap_or(json!("")));
+    assert_eq!(set["stats"]["processed"], report["stats"]["processed"]);
+    let fixed: Vec<(String, f64)> = report["fixed_joints"].as_object().expect("fixed").iter().map(|(k, v)| (k.clone(), v.as_f64().expect("value"))).collect();
+    let set_fixed: Vec<(String, f64)> = set["fixed_joint_names"].as_array().expect("names").iter().zip(floats(&set["fixed_joint_values"])).map(|(n, v)| (n.as_str().expect("str").to_string(), v)).collect();
+    assert_eq!(set_fixed, fixed);
+}
+
+#[test]
+fn topics_carry_the_solver_result_to_late_rclpy_subscribers() {
+    let Some(python) = python() else { return };
+    let domain = 41;
+    let four_bar = format!("{ROOT}/urdf/four_bar.urdf");
+    let slider = format!("{ROOT}/urdf/slider_crank.urdf");
+    let mut node = Node::start(domain, &[&four_bar, &slider, "--fix", "four_bar:crank_joint=0.5", "--trace", "four_bar:coupler@2,1", "--sigma", "1e-3"]);
+    node.wait_for(&["four_bar: published configuration_space", "slider_crank: published configuration_space"], Duration::from_secs(120));
+
+    // Two isolated assembly modes, with a traced coupler point.
+    let reference = solve_json(&[&four_bar, "--fix", "crank_joint=0.5", "--trace", "coupler@2,1", "--sigma", "1e-3"]);
+    let got = py(python, domain, "tests/ros_client.py", &["topics", "--prefix", "/linkspace/four_bar", "--modes", "2"], Duration::from_secs(90));
+    assert_eq!(got["complete"], json!(true), "{got}");
+    let set = &got["configuration_space"];
+    assert_eq!(set["mechanism"], "four_bar");
+    assert_eq!(set["analysis"], "configuration_space");
+    assert_same_boxes(set, &reference);
+    assert_eq!(set["clusters"], json!(2));
+
+    // Markers: DELETEALL, then one cube per box in joint space and one per box for the trace.
+    let markers = got["markers"].as_array().expect("markers");
+    assert_eq!(markers[0]["action"], json!(3));
+    let n = reference["solutions"].as_array().expect("solutions").len();
+    assert_eq!(markers.iter().filter(|m| m["ns"] == "configuration_space").count(), n);
+    let traced: Vec<&Value> = markers.iter().filter(|m| m["ns"] == "trace:coupler@2,1").collect();
+    assert_eq!(traced.len(), n);
+    assert_eq!(traced[0]["frame"], "ground");
+    for (m, s) in traced.iter().zip(reference["solutions"].as_array().expect("solutions")) {
+        let x = floats(&s["traces"]["coupler@2,1"]["x"]);
+        assert!((m["position"][0].as_f64().expect("x") - 0.5 * (x[0] + x[1])).abs() < 1e-12);
+    }
+
+    // One JointState per assembly mode; each lies in its own solution box.
+    let modes = got["assembly_modes"].as_array().expect("modes");
+    assert_eq!(modes.len(), 2, "{modes:?}");
+    for (k, mode) in modes.iter().enumerate() {
+        let names: Vec<&str> = mode["name"].as_array().expect("names").iter().map(|v| v.as_str().expect("str")).collect();
+        let pos = floats(&mode["position"]);
+        assert_eq!(names.last(), Some(&"crank_joint"));
+        assert_eq!(pos.last(), Some(&0.5));
+        let inside = reference["solutions"].as_array().expect("solutions").iter().any(|s| {
+            names.iter().zip(&pos).all(|(n, p)| s["joints"].get(*n).is_none_or(|b| b[0].as_f64().expect("lo") <= *p && *p <= b[1].as_f64().expect("hi")))
+        });
+        assert!(inside, "mode {k} {mode} lies in no solution box");
+    }
+    assert_eq!(got["progress"]["done"], json!(true));
+    assert_eq!(got["progress"]["decided"], json!(1.0));
+    assert_eq!(got["singularities"]["ok"], json!(false));
+    assert!(got["singularities"]["message"].as_str().expect("message").contains("not available for this mechanism"));
+
+    // A curve of about 9,000 boxes (a sample of about a megabyte), through plot_boxes.py, which
+    // also draws it.
+    let reference = solve_json(&[&slider, "--sigma", "1e-3"]);
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let (png, dump) = (dir.join("slider_crank.png"), dir.join("slider_crank.json"));
+    let _ = std::fs::remove_file(&png);
+    let _ = std::fs::remove_file(&dump);
+    py_run(python, domain, "scripts/plot_boxes.py", &["--mechanism", "slider_crank", "--png", png.to_str().expect("utf-8"), "--json", dump.to_str().expect("utf-8")], Duration::from_secs(90));
+    let set: Value = serde_json::from_str(&std::fs::read_to_string(&dump).expect("plot_boxes wrote JSON")).expect("valid JSON");
+    assert!(reference["solutions"].as_array().expect("solutions").len() > 5_000);
+    assert_same_boxes(&set, &reference);
+    assert!(std::fs::metadata(&png).expect("plot_boxes wrote a PNG").len() > 10_000);
+    assert!(node.alive());
+}
+
+/// One service call for the script of `ros_client.py services`.
+fn call(service: &str, kind: &str, request: Value) -> Value {
+    json!({"service": format!("/linkspace/{service}"), "type": kind, "request": request})
+}
+
+fn settings(sigma: f64, max_boxes: u64, timeout: f64) -> Value {
+    json!({"sigma": sigma, "rho": 0.95, "max_boxes": max_boxes, "timeout": timeout})
+}
+
+#[test]
+fn services_answer_good_requests_and_refuse_bad_ones_with_reasons() {
+    let Some(python) = python() else { return };
+    let domain = 42;
+    let four_bar = format!("{ROOT}/urdf/four_bar.urdf");
+    // A spatial variant, given as a robot_description string: loaded, listed, and refused.
+    let tilted = std::fs::read_to_string(&four_bar).expect("fixture").replacen("<robot name=\"four_bar\"", "<robot name=\"tilted\"", 1).replacen("<axis xyz=\"0 0 1\"/>", "<axis xyz=\"1 0 0\"/>", 1);
+    assert!(tilted.contains("name=\"tilted\""));
+    let mut node = Node::start(domain, &[&four_bar, "--robot-description", &tilted, "--fix", "four_bar:crank_joint=0.5", "--trace", "four_bar:coupler@2,1", "--sigma", "1e-5", "--max-request-boxes", "500000"]);
+    node.wait_for(&["four_bar: published configuration_space"], Duration::from_secs(60));
+
+    let loaded = solve_json(&[&four_bar, "--fix", "crank_joint=0.5", "--trace", "coupler@2,1", "--sigma", "1e-5"]);
+    let again = solve_json(&[&four_bar, "--fix", "crank_joint=1", "--trace", "coupler@2,1", "--sigma", "1e-5", "--max-boxes", "100000", "--timeout", "60"]);
+    // A configuration of the first assembly mode, and one far from every box.
+    let mode: Vec<(String, f64)> = loaded["solutions"][0]["joints"].as_object().expect("joints").iter().map(|(k, v)| (k.clone(), 0.5 * (v[0].as_f64().expect("lo") + v[1].as_f64().expect("hi")))).collect();
+    let names: Vec<&str> = mode.iter().map(|(k, _)| k.as_str()).collect();
+    let values: Vec<f64> = mode.iter().map(|(_, v)| *v).collect();
+    let far: Vec<f64> = values.iter().map(|v| v + 1.0).collect();
+    let fine = settings(1e-5, 100_000, 60.0);
+    let long = settings(1e-7, 400_000, 120.0);
+    let script = json!([
+        call("list_mechanisms", "ListMechanisms", json!({})),
+        call("solve", "Solve", json!({"mechanism": "four_bar", "fixed_joint_names": ["crank_joint"], "fixed_joint_values": [1.0], "settings": fine, "wait": 20.0})),
+        call("solve", "Solve", json!({"mechanism": "four_bar", "fixed_joint_names": ["crank_joint"], "fixed_joint_values": [1.2], "settings": fine, "wait": 20.0})),
+        {"subscribe": "/linkspace/four_bar/solve_result"},
+        call("solve", "Solve", json!({"mechanism": "ghost", "settings": fine})),
+        call("solve", "Solve", json!({"mechanism": "four_bar", "settings": {"sigma": f64::NAN, "rho": 0.95, "max_boxes": 10, "timeout": 1.0}})),
+        call("solve", "Solve", json!({"mechanism": "four_bar", "fixed_joint_names": ["crank_joint"], "fixed_joint_values": [f64::NAN], "settings": fine})),
+        call("solve", "Solve", json!({"mechanism": "four_bar", "settings": settings(1e-3, 1_000_000_000_000, 10.0)})),
+        call("solve", "Solve", json!({"mechanism": "four_bar", "settings": settings(1e-3, 1000, 0.0)})),
+        call("solve", "Solve", json!({"mechanism": "four_bar", "fixed_joint_names": ["nope"], "fixed_joint_values": [1.0], "settings": fine})),
+        call("solve", "Solve", json!({"mechanism": "four_bar", "settings": fine, "wait": 1e9})),
+        call("solve", "Solve", json!({"mechanism": "four_bar", "settings": long, "wait": 0.0})),
+        call("cancel", "Cancel", json!({"run_id": 4})),
+        {"sleep": 2.0},
+        {"subscribe": "/linkspace/four_bar/solve_result"},
+        call("cancel", "Cancel", json!({"run_id": 4})),
+        call("cancel", "Cancel", json!({"run_id": 999_999})),
+        call("singularities", "Singularities", json!({"mechanism": "four_bar"})),
+        call("singularities", "Singularities", json!({"mechanism": "tilted"})),
+        call("inverse_kinematics", "InverseKinematics", json!({"mechanism": "four_bar", "point": [1.0, 2.0, 0.0], "sigma": 1e-3})),
+        call("inverse_kinematics", "InverseKinematics", json!({"mechanism": "tilted", "point": [f64::NAN, 0.0, 0.0], "sigma": 1e-3})),
+        call("classify", "Classify", json!({"mechanism": "four_bar", "joint_names": names, "joint_values": values})),
+        call("classify", "Classify", json!({"mechanism": "four_bar", "joint_names": names, "joint_values": far})),
+        call("classify", "Classify", json!({"mechanism": "four_bar", "joint_names": names, "joint_values": [f64::NAN, 0.0, 0.0]})),
+        call("classify", "Classify", json!({"mechanism": "four_bar", "joint_names": &names[..2], "joint_values": &values[..2]})),
+        call("classify", "Classify", json!({"mechanism": "ghost", "joint_names": names, "joint_values": values})),
+        call("classify", "Classify", json!({"mechanism": "tilted", "joint_names": names, "joint_values": values})),
+        call("list_mechanisms", "ListMechanisms", json!({})),
+        {"subscribe": "/linkspace/four_bar/progress", "type": "Progress"},
+    ]);
+    // serde_json writes NaN as null; the script file carries it as the string "NaN".
+    let text = serde_json::to_string(&script).expect("json").replace("null", "\"NaN\"");
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("services-{}.json", std::process::id()));
+    std::fs::write(&path, text).expect("script written");
+    let got = py(python, domain, "tests/ros_client.py", &["services", "--script", path.to_str().expect("utf-8")], Duration::from_secs(240));
+    let _ = std::fs::remove_file(&path);
+    let r = got["results"].as_array().expect("results");
+    for (k, x) in r.iter().enumerate() {
+        assert!(x.get("error").is_none(), "step {k}: {x}\nnode log:\n{}", node.log());
+    }
+    let refused = |k: usize, needle: &str| {
+        assert_eq!(r[k]["ok"], json!(false), "step {k} should be refused: {}", r[k]);
+        let m = r[k]["message"].as_str().expect("message");
+        assert!(m.contains(needle), "step {k}: '{m}' should mention '{needle}'");
+    };
+
+    // list_mechanisms: both, with their kinds and what they answer.
+    let list = r[0]["mechanisms"].as_array().expect("mechanisms");
+    assert_eq!(list.len(), 2);
+    assert_eq!((list[0]["name"].as_str(), list[0]["kind"].as_str(), list[0]["state"].as_str()), (Some("four_bar"), Some("planar_linkage"), Some("complete")));
+    assert_eq!(list[0]["services"], json!(["solve", "classify"]));
+    assert_eq!(list[0]["topic_prefix"], "/linkspace/four_bar");
+    assert_eq!((list[1]["name"].as_str(), list[1]["kind"].as_str()), (Some("tilted"), Some("unsupported")));
+    assert!(list[1]["message"].as_str().expect("message").contains("not a planar linkage"));
+
+    // Solve again with another crank angle: the same boxes as the CLI.
+    assert_eq!((r[1]["ok"].clone(), r[1]["done"].clone()), (json!(true), json!(true)), "{}", r[1]);
+    assert_eq!(r[1]["result"]["analysis"], "solve");
+    assert_same_boxes(&r[1]["result"], &again);
+    // A subscriber joining after two solves gets the latest. (RustDDS may still hold an older
+    // sample that another reader has not acknowledged and send it first; the last one counts.)
+    let latest = r[3]["received"].as_array().expect("received").last().expect("the late joiner got the latest result");
+    assert_eq!(latest["run_id"], r[2]["run_id"]);
+    assert_eq!(latest["fixed_joint_values"], json!([1.2]));
+
+    refused(4, "no mechanism named 'ghost' is loaded (loaded: four_bar, tilted)");
+    refused(5, "sigma must be a positive finite number");
+    refused(6, "not a finite number");
+    refused(7, "larger than this node's limit 500000");
+    refused(8, "settings.timeout 0 s is out of range");
+    refused(9, "no joint or loop named 'nope'");
+    refused(10, "wait 1000000000 s is out of range");
+
+    // A long run, answered at once with its id, cancelled, and published incomplete.
+    assert_eq!((r[11]["ok"].clone(), r[11]["done"].clone(), r[11]["run_id"].clone()), (json!(true), json!(false), json!(4)), "{}", r[11]);
+    assert!(r[11]["message"].as_str().expect("message").contains("/linkspace/four_bar/solve_result"));
+    assert_eq!(r[12]["ok"], json!(true), "{}", r[12]);
+    let cancelled = r[14]["received"].as_array().and_then(|v| v.last()).cloned().unwrap_or_default();
+    assert!(cancelled.is_object(), "no result after the cancel: {}\nnode log:\n{}", r[14], node.log());
+    assert_eq!((cancelled["run_id"].clone(), cancelled["status"].clone(), cancelled["limit"].clone()), (json!(4), json!(1), json!("cancelled")));
+    assert!(cancelled["box_status"].as_array().expect("statuses").contains(&json!(1)), "a cancelled run reports its undecided boxes");
+    refused(15, "run 4 has already finished");
+    refused(16, "no run 999999");
+
+    // Singularities and inverse kinematics have no math for these mechanisms yet.
+    refused(17, "singularities is not available for this mechanism ('four_bar', planar_linkage)");
+    refused(18, "singularities is not available for this mechanism ('tilted', unsupported): not a planar linkage");
+    refused(19, "inverse_kinematics is not available for this mechanism ('four_bar'");
+    refused(20, "is not finite");
+
+    // Classification: inside the first mode's component; outside, with the nearest component.
+    assert_eq!((r[21]["ok"].clone(), r[21]["inside"].clone(), r[21]["component"].clone(), r[21]["components"].clone()), (json!(true), json!(true), json!(0), json!(2)), "{}", r[21]);
+    assert_eq!(r[21]["singular_distance_known"], json!(false));
+    assert!(r[21]["message"].as_str().expect("message").contains("distance to singularities unknown"));
+    assert_eq!((r[22]["ok"].clone(), r[22]["inside"].clone()), (json!(true), json!(false)), "{}", r[22]);
+    assert!(r[22]["distance"].as_f64().expect("distance") > 0.1);
+    refused(23, "is not a finite number");
+    refused(24, "no value for free joint");
+    refused(25, "no mechanism named 'ghost'");
+    refused(26, "classify is not available for this mechanism ('tilted', unsupported)");
+    assert_eq!(r[27]["mechanisms"].as_array().expect("mechanisms").len(), 2);
+    // The last progress is the cancelled run's end: done, part of the volume decided.
+    let progress = r[28]["received"].as_array().and_then(|v| v.last()).cloned().unwrap_or_default();
+    assert_eq!((progress["run_id"].clone(), progress["analysis"].clone(), progress["done"].clone()), (json!(4), json!("solve"), json!(true)), "{progress}");
+    let decided = progress["decided"].as_f64().expect("decided");
+    assert!((0.0..1.0).contains(&decided) && progress["processed"].as_u64().expect("processed") > 0, "{progress}");
+    assert!(node.alive(), "the node died:\n{}", node.log());
+}
+
+#[test]
+fn a_hundred_requests_in_flight_are_all_answered_and_the_node_stays_small() {
+    let Some(python) = python() else { return };
+    let domain = 43;
+    let four_bar = format!("{ROOT}/urdf/four_bar.urdf");
+    // Two runs at a time, 20,000 boxes each at most: the bound the memory check relies on.
+    let mut node = Node::start(domain, &[&four_bar, "--fix", "four_bar:crank_joint=0.5", "--sigma", "1e-5", "--max-runs", "2", "--max-request-boxes", "20000"]);
+    node.wait_for(&["four_bar: published configuration_space"], Duration::from_secs(60));
+    let before = node.memory_kib("VmRSS:");
+    let joints = json!({"coupler_joint": 0.2668, "rocker_joint": 1.5145, "loop_coupler_rocker": 0.7477});
+    let got = py(python, domain, "tests/ros_client.py", &["load", "--mechanism", "four_bar", "--joints", &joints.to_string(), "--clients", "4", "--requests", "100", "--timeout", "60"], Duration::from_secs(180));
+    let replies = got["replies"].as_array().expect("replies");
+    assert_eq!(replies.len(), 100);
+    let unanswered: Vec<&Value> = replies.iter().filter(|r| r["answered"] != json!(true)).collect();
+    assert!(unanswered.is_empty(), "{} requests got no reply: {unanswered:?}\nnode log:\n{}", unanswered.len(), node.log());
+    for r in replies {
+        if r["ok"] != json!(true) {
+            assert!(!r["message"].as_str().unwrap_or("").is_empty(), "a refusal without a reason: {r}");
+        }
+    }
+    let busy = replies.iter().filter(|r| r["message"].as_str().is_some_and(|m| m.starts_with("busy"))).count();
+    let started = replies.iter().filter(|r| r["kind"] == "solve" && r["ok"] == json!(true)).count();
+    assert!(busy > 0 && started >= 2, "20 long solves against --max-runs 2: {started} started, {busy} refused as busy");
+    assert!(replies.iter().any(|r| r["kind"] == "classify" && r["ok"] == json!(true)));
+    assert!(replies.iter().any(|r| r["kind"] == "classify" && r["message"].as_str().is_some_and(|m| m.contains("ghost"))));
+    assert!(node.alive(), "the node died under load:\n{}", node.log());
+    let (after, peak) = (node.memory_kib("VmRSS:"), node.memory_kib("VmHWM:"));
+    eprintln!("node memory: {before} KiB before the load, {after} KiB after, peak {peak} KiB; {:.2} s for 100 requests", got["seconds"].as_f64().unwrap_or(f64::NAN));
+    // Two runs of at most 20,000 six-variable boxes are a few MB; 256 MiB would mean a leak or
+    // an unbounded queue.
+    assert!(peak < 256 * 1024, "peak RSS {peak} KiB");
+}
+
+#[test]
+fn bad_serve_input_stops_the_node_with_one_line_before_any_dds_traffic() {
+    let four_bar = format!("{ROOT}/urdf/four_bar.urdf");
+    let slider = format!("{ROOT}/urdf/slider_crank.urdf");
+    let cases: [(Vec<&str>, &str); 6] = [
+        (vec!["/nonexistent.urdf"], "reading /nonexistent.urdf"),
+        (vec![&four_bar, "--domain", "300"], "domain 300 is out of range"),
+        (vec![&four_bar, "--fix", "nope=1"], "no joint or loop named 'nope'"),
+        (vec![&four_bar, &slider, "--fix", "crank_joint=1"], "with several mechanisms, name the robot"),
+        (vec![&four_bar, &four_bar], "a mechanism named 'four_bar' is already loaded"),
+        (vec![&four_bar, "--robot-description", "<robot"], "--robot-description #1: malformed URDF"),
+    ];
+    for (args, needle) in cases {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_linkspace"));
+        // A domain of its own, in case a case wrongly starts the node.
+        cmd.arg("serve").args(&args).args(["--network", "loopback"]).env("ROS_DOMAIN_ID", "44");
+        let (ok, _, err) = run_with_timeout(cmd, Duration::from_secs(20));
+        assert!(!ok, "{args:?} should fail");
+        let lines: Vec<&str> = err.lines().collect();
+        assert_eq!(lines.len(), 1, "{args:?}: expected one line, got {err}");
+        assert!(lines[0].starts_with("error: ") && lines[0].contains(needle), "{args:?}: '{}' should mention '{needle}'", lines[0]);
+    }
+}
+
+#[test]
+fn a_cyclone_dds_client_gets_the_same_boxes_and_replies_with_the_cyclone_mapping() {
+    let Some(python) = python() else { return };
+    let domain = 45;
+    let four_bar = format!("{ROOT}/urdf/four_bar.urdf");
+    let mut node = Node::start(domain, &[&four_bar, "--fix", "crank_joint=0.5", "--sigma", "1e-5", "--service-mapping", "cyclone"]);
+    node.wait_for(&["Cyclone mapping", "four_bar: published configuration_space"], Duration::from_secs(60));
+    let reference = solve_json(&[&four_bar, "--fix", "crank_joint=0.5", "--sigma", "1e-5"]);
+    let mut cmd = Command::new(python);
+    cmd.arg(format!("{ROOT}/tests/cyclone_client.py"))
+        .args(["--prefix", "/linkspace/four_bar", "--mechanism", "four_bar"])
+        .env("CYCLONEDDS_URI", format!("file://{ROOT}/scripts/cyclonedds_loopback.xml"))
+        .env("ROS_DOMAIN_ID", domain.to_string());
+    let (ok, out, err) = run_with_timeout(cmd, Duration::from_secs(90));
+    assert!(ok, "cyclone_client.py failed:\n{out}\n{err}");
+    let got: Value = serde_json::from_str(out.lines().last().expect("a line")).expect("JSON");
+    assert_same_boxes(&got["configuration_space"], &reference);
+    let list = &got["list"];
+    assert!(list.get("error").is_none(), "{list}");
+    assert_eq!(list["mechanisms"][0]["name"], "four_bar");
+    assert_eq!(list["mechanisms"][0]["free_joints"], json!(["coupler_joint", "rocker_joint", "loop_coupler_rocker"]));
+    let refused = &got["classify_ghost"];
+    assert_eq!(refused["ok"], json!(false), "{refused}");
+    assert!(refused["message"].as_str().expect("message").contains("no mechanism named 'ghost'"));
+    assert!(node.alive());
+}
