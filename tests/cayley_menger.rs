@@ -460,3 +460,24 @@ fn distances_cli_reports_and_rejects_bad_input_in_one_line() {
         let _ = std::fs::remove_file(p);
     }
 }
+
+/// Issue 4: the parallel driver gives exactly the serial set of boxes on the distance problems.
+#[test]
+fn parallel_and_serial_drivers_agree_on_distance_problems() {
+    let cases = [(octahedral(CONFIG_A), 1e-3, 0.9), (octahedral(CONFIG_B), 1e-3, 0.9), (four_spheres(true), 0.1, 0.99)];
+    for (p, sigma, rho) in cases {
+        let cm = CayleyMenger::build(&p, BuildOptions { formulation: Formulation::Shared, redundant: true }).expect("builds");
+        let mut sets = Vec::new();
+        for threads in [1, 2] {
+            let clip = cm.contractor(FaceBounds::Corners).expect("compiles");
+            let settings = SolverSettings { sigma, rho, threads, ..Default::default() };
+            let e = Solver::new(&cm.system, settings).expect("valid").with_contractor(Box::new(move |_, _| Box::new(clip.clone()))).enclose(&AtomicBool::new(false), &mut |_| {});
+            assert_eq!(e.status, Status::Complete);
+            let mut boxes: Vec<Vec<(u64, u64)>> = e.solutions.iter().map(|b| b.dims.iter().map(|d| (d.inf().to_bits(), d.sup().to_bits())).collect()).collect();
+            boxes.sort();
+            sets.push((boxes, e.stats.processed));
+        }
+        assert!(!sets[0].0.is_empty());
+        assert_eq!(sets[0], sets[1], "{}: 2 threads give other boxes", p.name);
+    }
+}
