@@ -216,11 +216,7 @@ fn parse_trace(s: &str) -> Result<(String, f64, f64)> {
 }
 
 fn solve(args: SolveArgs) -> Result<()> {
-    let timeout = match args.timeout {
-        Some(t) if t.is_finite() && t > 0.0 => Some(Duration::from_secs_f64(t.min(1e9))),
-        Some(t) => bail!("--timeout must be a positive number of seconds, got {t}"),
-        None => None,
-    };
+    let timeout = seconds_arg(args.timeout)?;
     let settings = SolverSettings { sigma: args.sigma, rho: args.rho, max_boxes: args.max_boxes, timeout, use_lp: !args.no_lp, newton_width: args.newton_width, threads: usize::from(args.threads), lp_backend: args.lp.into() };
     settings.validate()?;
     let fixed = args.fix.iter().map(|s| parse_fix(s)).collect::<Result<Vec<_>>>()?;
@@ -318,7 +314,8 @@ fn load_chain(path: &std::path::Path, uncertainty: f64) -> Result<Chain3R> {
     Chain3R::from_mechanism(&mechanism, uncertainty).with_context(|| format!("loading {}", path.display()))
 }
 
-fn seconds_arg(t: Option<f64>) -> Result<Option<Duration>> {
+/// `--timeout` as a duration: positive and finite, or absent.
+pub(crate) fn seconds_arg(t: Option<f64>) -> Result<Option<Duration>> {
     match t {
         Some(t) if t.is_finite() && t > 0.0 => Ok(Some(Duration::from_secs_f64(t.min(1e9)))),
         Some(t) => bail!("--timeout must be a positive number of seconds, got {t}"),

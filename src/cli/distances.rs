@@ -102,11 +102,7 @@ fn face_bounds(f: Faces) -> FaceBounds {
 }
 
 pub fn run(args: DistancesArgs) -> Result<()> {
-    let timeout = match args.timeout {
-        Some(t) if t.is_finite() && t > 0.0 => Some(Duration::from_secs_f64(t.min(1e9))),
-        Some(t) => bail!("--timeout must be a positive number of seconds, got {t}"),
-        None => None,
-    };
+    let timeout = super::seconds_arg(args.timeout)?;
     let settings = SolverSettings { sigma: args.sigma, rho: args.rho, max_boxes: args.max_boxes, timeout, ..Default::default() };
     settings.validate()?;
     let fixed = args.fix.iter().map(|s| parse_fix(s)).collect::<Result<Vec<_>>>()?;

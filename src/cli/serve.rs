@@ -108,11 +108,7 @@ pub fn serve(args: ServeArgs) -> Result<()> {
     if domain > 232 {
         bail!("domain {domain} is out of range: ROS 2 domain ids go from 0 to 232");
     }
-    let timeout = match args.timeout {
-        Some(t) if t.is_finite() && t > 0.0 => Some(Duration::from_secs_f64(t.min(1e9))),
-        Some(t) => bail!("--timeout must be a positive number of seconds, got {t}"),
-        None => None,
-    };
+    let timeout = super::seconds_arg(args.timeout)?;
     let settings = SolverSettings { sigma: args.sigma, rho: args.rho, max_boxes: args.max_boxes, timeout, ..Default::default() };
     settings.validate()?;
     let limits = Limits { max_boxes: args.max_request_boxes, max_timeout: args.max_request_timeout, max_wait: args.max_wait, max_runs: args.max_runs, max_markers: args.max_markers };
