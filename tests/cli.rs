@@ -70,6 +70,9 @@ fn bad_input_gives_one_clear_line() {
     // A joint turning about x makes the mechanism spatial.
     let tilted = variant("four_bar.urdf", "<axis xyz=\"0 0 1\"/>", "<axis xyz=\"1 0 0\"/>");
     assert_clear_error(&["solve", tilted.as_str()], "not planar");
+    // A tree has nothing to close.
+    let tree = tempfile_path::Path::write("<robot name='arm'><link name='a'/><link name='b'/><joint name='j' type='continuous'><parent link='a'/><child link='b'/><axis xyz='0 0 1'/></joint></robot>");
+    assert_clear_error(&["solve", tree.as_str()], "no <loop> closure");
 }
 
 #[test]

@@ -312,10 +312,10 @@ impl Analysis for Unsupported {
 pub fn load(mechanism: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f64, f64)]) -> Result<Box<dyn Analysis>, AnalysisError> {
     match PlanarAnalysis::new(mechanism, fixed, traces) {
         Ok(a) => Ok(Box::new(a)),
-        Err(LinkageError::NonPlanar(why)) => Ok(Box::new(Unsupported {
+        Err(e @ (LinkageError::NonPlanar(_) | LinkageError::NoLoops)) => Ok(Box::new(Unsupported {
             name: mechanism.name.clone(),
             joints: mechanism.joints.iter().filter(|j| j.kind != crate::model::JointKind::Fixed).map(|j| j.name.clone()).collect(),
-            reason: format!("not a planar linkage ({why}); only planar linkages are analysed so far"),
+            reason: format!("not a planar linkage ({e}); only planar linkages are analysed so far"),
         })),
         Err(e) => Err(e.into()),
     }

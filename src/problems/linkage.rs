@@ -63,6 +63,9 @@ pub enum LinkageError {
     /// Nothing moves.
     #[error("the mechanism has no unknown: every joint is fixed")]
     NothingToSolve,
+    /// A tree has no loop to close: every joint value is a configuration.
+    #[error("the mechanism has no <loop> closure: every joint value is a configuration, there is nothing to enclose (serial chains: see `singularities`)")]
+    NoLoops,
 }
 
 /// The pair of variables of a rotating group, or the ground.
@@ -362,6 +365,10 @@ impl LinkageProblem {
             if n.dot(w).abs() > 1e-9 {
                 return Err(LinkageError::NonPlanar(format!("the slider axis of '{name}' leaves the plane of motion")));
             }
+        }
+        // Planarity first: a spatial serial chain is told to look elsewhere, not that it lacks loops.
+        if m.loops.is_empty() {
+            return Err(LinkageError::NoLoops);
         }
         // Any rotation taking z to n gives a right-handed plane basis (e1, e2).
         let basis = Rotation3::rotation_between(&Vector3::z(), &n).unwrap_or_else(|| Rotation3::from_axis_angle(&Vector3::x_axis(), PI));
