@@ -24,8 +24,8 @@ use crate::interval::{interval, point};
 use crate::model::{JointKind, Mechanism};
 use inari::Interval;
 
-type V3 = [Interval; 3];
-type M3 = [[Interval; 3]; 3];
+pub(super) type V3 = [Interval; 3];
+pub(super) type M3 = [[Interval; 3]; 3];
 
 /// A 3R chain reduced to its kinematic map (see the module doc).
 #[derive(Clone, Debug)]
@@ -107,41 +107,48 @@ pub struct Derived {
     pub g: [Taylor; 2],
 }
 
-fn dot(a: &V3, b: &V3) -> Interval {
+pub(super) fn dot(a: &V3, b: &V3) -> Interval {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-fn cross(a: &V3, b: &V3) -> V3 {
+pub(super) fn cross(a: &V3, b: &V3) -> V3 {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
-fn scale(a: &V3, s: Interval) -> V3 {
+pub(super) fn scale(a: &V3, s: Interval) -> V3 {
     [a[0] * s, a[1] * s, a[2] * s]
 }
 
-fn add(a: &V3, b: &V3) -> V3 {
+pub(super) fn add(a: &V3, b: &V3) -> V3 {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
 
-fn sub(a: &V3, b: &V3) -> V3 {
+pub(super) fn sub(a: &V3, b: &V3) -> V3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
-fn apply(m: &M3, v: &V3) -> V3 {
+pub(super) fn apply(m: &M3, v: &V3) -> V3 {
     [dot(&m[0], v), dot(&m[1], v), dot(&m[2], v)]
 }
 
-const ZERO: Interval = inari::const_interval!(0.0, 0.0);
+/// Rodrigues' formula: `R(a, θ) v = (v − a(a·v)) cos θ + (a × v) sin θ + a(a·v)`, as the three
+/// coefficients of (cos θ, sin θ, 1).
+pub(super) fn rodrigues(a: &V3, v: &V3) -> [V3; 3] {
+    let along = scale(a, dot(a, v));
+    [sub(v, &along), cross(a, v), along]
+}
+
+pub(super) const ZERO: Interval = inari::const_interval!(0.0, 0.0);
 
 /// A rigid transform with interval entries.
 #[derive(Clone, Copy, Debug)]
-struct Pose {
-    r: M3,
-    t: V3,
+pub(super) struct Pose {
+    pub(super) r: M3,
+    pub(super) t: V3,
 }
 
 impl Pose {
-    fn identity() -> Self {
+    pub(super) fn identity() -> Self {
         let mut r = [[ZERO; 3]; 3];
         for (i, row) in r.iter_mut().enumerate() {
             row[i] = point(1.0);
@@ -149,7 +156,7 @@ impl Pose {
         Pose { r, t: [ZERO; 3] }
     }
 
-    fn from_origin(iso: &nalgebra::Isometry3<f64>, h: f64) -> Self {
+    pub(super) fn from_origin(iso: &nalgebra::Isometry3<f64>, h: f64) -> Self {
         let m = iso.rotation.to_rotation_matrix();
         let mut r = [[ZERO; 3]; 3];
         for (i, row) in r.iter_mut().enumerate() {
@@ -164,7 +171,7 @@ impl Pose {
     }
 
     /// `self ∘ other`: first `other`, then `self`.
-    fn then(&self, other: &Pose) -> Pose {
+    pub(super) fn then(&self, other: &Pose) -> Pose {
         let mut r = [[ZERO; 3]; 3];
         for i in 0..3 {
             for j in 0..3 {
@@ -225,11 +232,6 @@ impl Chain3R {
         // segments[1]: second joint frame in the first link; [2]: third joint frame in the
         // second link; [3]: tip link in the third link.
         let tip_point = segments[3].t;
-        // Rodrigues: R(a, θ) v = (v − a(a·v)) cos θ + (a × v) sin θ + a(a·v).
-        let rodrigues = |a: &V3, v: &V3| -> [V3; 3] {
-            let along = scale(a, dot(a, v));
-            [sub(v, &along), cross(a, v), along]
-        };
         let in_third = rodrigues(&a3, &tip_point);
         let mut q = [0, 1, 2].map(|b| apply(&segments[2].r, &in_third[b]));
         q[2] = add(&q[2], &segments[2].t);
