@@ -172,22 +172,22 @@ fn injective_mean_value(chain: &Chain3R, h: [Interval; 2], tangent: [Interval; 2
     })
 }
 
-/// Splits `u` into `n × n` sub-boxes.
-fn grid(u: &[Interval; 2], n: usize) -> Vec<[Interval; 2]> {
-    let cut = |x: Interval, k: usize| {
-        let (lo, w) = (x.inf(), x.wid() / n as f64);
-        let a = if k == 0 { lo } else { lo + w * k as f64 };
-        let b = if k + 1 == n { x.sup() } else { lo + w * (k + 1) as f64 };
-        interval(a, b)
-    };
-    let mut out = Vec::with_capacity(n * n);
-    for i in 0..n {
-        for j in 0..n {
-            out.push([cut(u[0], i), cut(u[1], j)]);
-        }
+/// True when `test` holds on every part of `b`, trying `b` whole and then its halves down to
+/// `depth` bisections: the conditions of the cusp certificate are local, so most of a
+/// neighbourhood is decided on large cells and only the hard spots are refined.
+fn everywhere(b: [Interval; 2], depth: u32, test: &mut impl FnMut(&[Interval; 2]) -> bool) -> bool {
+    if test(&b) {
+        return true;
     }
-    out
+    if depth == 0 {
+        return false;
+    }
+    let (lo, hi) = cusps::bisect(b, false);
+    everywhere(lo, depth - 1, test) && everywhere(hi, depth - 1, test)
 }
+
+/// Bisections allowed per certificate condition: cells down to 1/64 of the neighbourhood.
+const DEPTH: u32 = 12;
 
 /// F'' = ∇g·T and F''' = ∇(∇g·T)·T over `b` (see the module doc).
 fn flow_derivatives(chain: &Chain3R, b: [Interval; 2]) -> ([Interval; 2], [Interval; 2]) {
@@ -210,45 +210,35 @@ fn sign(x: Interval) -> Option<bool> {
 }
 
 /// The cusp certificate on `u` around the certified cusp box `c` ⊂ `u` (see the module doc).
-/// Each condition is checked on a grid of sub-boxes (one strict sign over all of them), and
-/// F''(c) on the cusp box itself, which keeps the enclosures tight.
+/// Each condition is checked on adaptive sub-boxes (`everywhere`), with one strict sign over
+/// all of them, and F''(c) on the cusp box itself, which keeps the enclosures tight.
 pub fn injective_near_cusp(chain: &Chain3R, u: [Interval; 2], c: [Interval; 2]) -> bool {
-    const N: usize = 16;
-    let cells = grid(&u, N);
-    let evals: Vec<BoxEval> = cells.iter().map(|b| evaluate(chain, *b)).collect();
+    let at_c = evaluate(chain, c);
     // (a) and (b): with ∂det/∂θₖ of one strict sign on u, every segment along θₖ meets S at most
     // once; with det ≠ 0 on the two edges θₖ = const, the signs there are fixed, so S ∩ u is
     // empty or one arc across u.
     let arc = (0..2).any(|k| {
-        let s = sign(evals[0].grad_det[k]);
-        s.is_some()
-            && evals.iter().all(|e| sign(e.grad_det[k]) == s)
+        let Some(s) = sign(at_c.grad_det[k]) else { return false };
+        everywhere(u, DEPTH, &mut |b| sign(evaluate(chain, *b).grad_det[k]) == Some(s))
             && [u[k].inf(), u[k].sup()].into_iter().all(|at| {
-                cells.iter().filter(|b| b[k].inf() == cells[0][k].inf()).all(|b| {
-                    let mut edge = *b;
-                    edge[k] = point(at);
-                    !evaluate(chain, edge).det.contains(0.0)
-                })
+                let mut edge = u;
+                edge[k] = point(at);
+                everywhere(edge, DEPTH, &mut |b| !evaluate(chain, *b).det.contains(0.0))
             })
     });
     if !arc {
         return false;
     }
     // (c) F''(c) × F'''(τ) of one strict sign for τ on S ∩ u.
-    let (f2c, _) = flow_derivatives(chain, c);
-    let mut want = None;
-    for (b, e) in cells.iter().zip(&evals) {
-        if !e.det.contains(0.0) {
-            continue;
+    let (f2c, f3c) = flow_derivatives(chain, c);
+    let Some(want) = sign(f2c[0] * f3c[1] - f2c[1] * f3c[0]) else { return false };
+    everywhere(u, DEPTH, &mut |b| {
+        if !evaluate(chain, *b).det.contains(0.0) {
+            return true;
         }
         let (_, f3) = flow_derivatives(chain, *b);
-        let s = sign(f2c[0] * f3[1] - f2c[1] * f3[0]);
-        if s.is_none() || (want.is_some() && s != want) {
-            return false;
-        }
-        want = s;
-    }
-    true
+        sign(f2c[0] * f3[1] - f2c[1] * f3[0]) == Some(want)
+    })
 }
 
 /// A box around `c` on which `injective_near_cusp` holds, trying radii from 0.4 down.
