@@ -28,7 +28,7 @@
 //! Pairs touching an internal-motion strip are set aside.
 
 use super::chain::Chain3R;
-use super::cusps::{self, evaluate, meet_on_torus, BoxEval, Cusp};
+use super::cusps::{self, evaluate_without_tangency as evaluate, meet_on_torus, BoxEval, Cusp};
 use super::krawczyk::{self, Step};
 use super::motion::{self, Band};
 use crate::interval::{interval, point};
@@ -106,6 +106,8 @@ struct Cell {
     singular: bool,
     in_strip: bool,
     children: Option<(usize, usize)>,
+    parent: Option<usize>,
+    depth: u32,
 }
 
 struct Tree<'a> {
@@ -115,11 +117,26 @@ struct Tree<'a> {
 }
 
 impl Tree<'_> {
-    fn add(&mut self, b: [Interval; 2]) -> usize {
+    fn add(&mut self, b: [Interval; 2], parent: Option<usize>) -> usize {
         let eval = evaluate(self.chain, b);
         let in_strip = self.bands.iter().any(|band| band.holds(b[1]));
-        self.cells.push(Cell { b, eval, singular: eval.det.contains(0.0), in_strip, children: None });
+        let depth = parent.map_or(0, |p| self.cells[p].depth + 1);
+        self.cells.push(Cell { b, eval, singular: eval.det.contains(0.0), in_strip, children: None, parent, depth });
         self.cells.len() - 1
+    }
+
+    /// The smallest cell holding both `i` and `j`: its cached enclosures hold on their hull.
+    fn common_ancestor(&self, mut i: usize, mut j: usize) -> usize {
+        while i != j {
+            let (ci, cj) = (&self.cells[i], &self.cells[j]);
+            let up = |c: &Cell, k: usize| c.parent.unwrap_or(k);
+            if ci.depth >= cj.depth {
+                i = up(ci, i);
+            } else {
+                j = up(cj, j);
+            }
+        }
+        i
     }
 
     /// The singular children of cell `i` (made on first use).
@@ -128,7 +145,7 @@ impl Tree<'_> {
             Some(ch) => ch,
             None => {
                 let (lo, hi) = cusps::bisect(self.cells[i].b, motion::straddles(self.bands, self.cells[i].b[1]));
-                let ch = (self.add(lo), self.add(hi));
+                let ch = (self.add(lo, Some(i)), self.add(hi, Some(i)));
                 self.cells[i].children = Some(ch);
                 ch
             }
@@ -156,16 +173,17 @@ fn nearest_copy(p: &[Interval; 2], q: &[Interval; 2]) -> [Interval; 2] {
 /// tangent `g` somewhere near `h`, the first direction tried.
 fn injective_mean_value(chain: &Chain3R, h: [Interval; 2], tangent: [Interval; 2]) -> bool {
     let d = chain.jets(h, 2).derived();
-    let grad_det = d.det.grad();
     let df = [[d.df[0][0].value(), d.df[0][1].value()], [d.df[1][0].value(), d.df[1][1].value()]];
-    // Directions: the two axes and the image tangent at the midpoint (best where it is known).
+    injective_from(d.det.grad(), df, tangent)
+}
+
+/// The mean-value certificate from enclosures of ∇det and Df over a box holding the hull.
+fn injective_from(grad_det: [Interval; 2], df: [[Interval; 2]; 2], tangent: [Interval; 2]) -> bool {
+    // Directions: the image tangent at the midpoint (best where it is known), then the axes.
     let g = [tangent[0].mid(), tangent[1].mid()];
     let norm = (g[0] * g[0] + g[1] * g[1]).sqrt();
-    let mut dirs = vec![[1.0, 0.0], [0.0, 1.0]];
-    if norm.is_finite() && norm > 0.0 {
-        dirs.insert(0, [g[0] / norm, g[1] / norm]);
-    }
-    dirs.into_iter().any(|m| {
+    let along = if norm.is_finite() && norm > 0.0 { Some([g[0] / norm, g[1] / norm]) } else { None };
+    along.into_iter().chain([[1.0, 0.0], [0.0, 1.0]]).any(|m| {
         let row = [point(m[0]) * df[0][0] + point(m[1]) * df[1][0], point(m[0]) * df[0][1] + point(m[1]) * df[1][1]];
         let cross = grad_det[0] * row[1] - grad_det[1] * row[0];
         !cross.contains(0.0)
@@ -185,6 +203,9 @@ fn everywhere(b: [Interval; 2], depth: u32, test: &mut impl FnMut(&[Interval; 2]
     let (lo, hi) = cusps::bisect(b, false);
     everywhere(lo, depth - 1, test) && everywhere(hi, depth - 1, test)
 }
+
+/// Widest box of a pair on which the node search tries Krawczyk (radians).
+const KRAWCZYK_WIDTH: f64 = 1.0;
 
 /// Bisections allowed per certificate condition: cells down to 1/64 of the neighbourhood.
 const DEPTH: u32 = 12;
@@ -301,7 +322,7 @@ pub fn search(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &NodeSe
     let regions: Vec<[Interval; 2]> = cusps.iter().filter(|c| c.unique).filter_map(|c| cusp_region(chain, c)).collect();
     stats.cusp_regions = regions.len() as u64;
     let mut tree = Tree { chain, bands, cells: Vec::new() };
-    let root = tree.add([motion::full_range(), motion::full_range()]);
+    let root = tree.add([motion::full_range(), motion::full_range()], None);
     let mut stack = vec![(root, root)];
     let mut nodes: Vec<Node> = Vec::new();
     let mut undecided = Vec::new();
@@ -335,13 +356,35 @@ pub fn search(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &NodeSe
             continue;
         }
         let disjoint = i != j && !meet_on_torus(&pb, &qb);
+        // The smallest tree cell holding both boxes holds their hull too (unless the hull goes
+        // across the ±π seam); its cached enclosures often already prove injectivity, for
+        // siblings and for a box with itself exactly on the hull.
+        let unshifted = near[0] == qb[0] && near[1] == qb[1];
+        let g_mid = p.eval.g_mid;
+        let injective = |tree: &Tree| {
+            if unshifted {
+                let e = &tree.cells[tree.common_ancestor(i, j)].eval;
+                if injective_from(e.grad_det, e.df, g_mid) {
+                    return true;
+                }
+            }
+            // Enclosures over the hull contain those over each box, so the certificate can
+            // only hold on the hull if it holds on both boxes (cached): skip hopeless hulls.
+            let (ep, eq) = (&tree.cells[i].eval, &tree.cells[j].eval);
+            if !(injective_from(ep.grad_det, ep.df, g_mid) && injective_from(eq.grad_det, eq.df, g_mid)) {
+                return false;
+            }
+            injective_mean_value(chain, hull, g_mid)
+        };
         // Far pairs first meet Krawczyk, which is cheap on cached evaluations; near ones the
         // injectivity certificate, for which Krawczyk cannot work (the diagonal is a curve of zeros).
-        if !disjoint && injective_mean_value(chain, hull, p.eval.g_mid) {
+        if !disjoint && injective(&tree) {
             stats.injective += 1;
             continue;
         }
-        if disjoint {
+        // Krawczyk only below a width: on the bundled robots it never concluded on boxes a
+        // radian wide or more (thousands of calls on robot f), as its linearisation is too loose.
+        if disjoint && width(&pb).max(width(&qb)) < KRAWCZYK_WIDTH {
             match krawczyk_node(&pb, &p.eval, &qb, &q.eval) {
                 Step::Empty => {
                     stats.krawczyk_empty += 1;
@@ -362,7 +405,7 @@ pub fn search(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &NodeSe
                 }
                 _ => {}
             }
-            if width(&hull) < 0.5 && injective_mean_value(chain, hull, p.eval.g_mid) {
+            if width(&hull) < 0.5 && injective(&tree) {
                 stats.injective += 1;
                 continue;
             }
