@@ -224,27 +224,72 @@ fn internal_motion_lines_of_f_are_reported_as_lines() {
     assert!(found.undecided.is_empty() && found.complete);
 }
 
-/// Case c of the seed, with lengths known to ±H (H = 1e-4; the seed's ±5e-4 is not certified
-/// yet, see README). Every certified cusp box must hold a cusp of every geometry in the box;
-/// checked at corners, each solved nominally from its own URDF.
+/// Case c of the seed: d2 ∈ [1, 1.001], d3 ∈ [2, 2.001], d4 ∈ [1.5, 1.501], r2 ∈ [1, 1.001]
+/// (`urdf/orthogonal_3r_c.urdf`, the centres, with uncertainty 5e-4), at the seed's precision
+/// 1e-4: four cusps each proven unique for every geometry in the box, nothing undecided.
+/// Every cusp of each of the 16 corner geometries (and the centre), solved nominally from its
+/// own URDF, must lie in a certified box.
 #[test]
-fn uncertain_lengths_keep_four_cusps_valid_for_every_corner() {
-    let text = std::fs::read_to_string(format!("{}/urdf/orthogonal_3r_a.urdf", env!("CARGO_MANIFEST_DIR"))).expect("fixture");
-    let h = 1e-4;
-    let uncertain = Chain3R::from_mechanism(&urdf::parse(&text).expect("parses"), h).expect("3R");
-    let found = cusps::search(&uncertain, &cusps::CuspSettings { precision: 1e-3, ..Default::default() }).expect("valid");
+fn seed_case_c_four_cusps_valid_for_every_corner() {
+    let text = std::fs::read_to_string(format!("{}/urdf/orthogonal_3r_c.urdf", env!("CARGO_MANIFEST_DIR"))).expect("fixture");
+    let uncertain = Chain3R::from_mechanism(&urdf::parse(&text).expect("parses"), 5e-4).expect("3R");
+    let found = cusps::search(&uncertain, &cusps::CuspSettings { precision: 1e-4, ..Default::default() }).expect("valid");
     assert_eq!(found.cusps.len(), 4);
-    assert!(found.complete && found.undecided.is_empty());
-    for (d2, d3) in [(1.0 - h, 2.0 - h), (1.0 + h, 2.0 + h), (1.0 - h, 2.0 + h)] {
-        let corner = text.replace("xyz=\"1 0 0\"", &format!("xyz=\"{d2} 0 0\"")).replace("xyz=\"2 1 0\"", &format!("xyz=\"{d3} {} 0\"", 1.0 + h)).replace("xyz=\"1.5 0 0\"", &format!("xyz=\"{} 0 0\"", 1.5 - h));
-        assert_ne!(corner, text);
+    assert!(found.cusps.iter().all(|c| c.unique));
+    assert!(found.complete && found.undecided.is_empty(), "{} undecided", found.undecided.len());
+    let mut geometries: Vec<[f64; 4]> = (0..16u32).map(|k| [0, 1, 2, 3].map(|i| [1.0, 2.0, 1.0, 1.5][i] + if k >> i & 1 == 1 { 0.001 } else { 0.0 })).collect();
+    geometries.push([1.0005, 2.0005, 1.0005, 1.5005]);
+    for [d2, d3, r2, d4] in geometries {
+        let corner = text
+            .replace("xyz=\"1.0005 0 0\"", &format!("xyz=\"{d2} 0 0\""))
+            .replace("xyz=\"2.0005 1.0005 0\"", &format!("xyz=\"{d3} {r2} 0\""))
+            .replace("xyz=\"1.5005 0 0\"", &format!("xyz=\"{d4} 0 0\""));
         let c = Chain3R::from_mechanism(&urdf::parse(&corner).expect("parses"), 0.0).expect("3R");
-        let nominal = cusps::search(&c, &cusps::CuspSettings { precision: 1e-6, ..Default::default() }).expect("valid");
+        assert!((c.eval_f64(0.3, 0.2)[1] - seed_map((d2, d3, d4, r2, 0.0), 0.3, 0.2)[1]).abs() < 1e-12, "the corner URDF has the corner's lengths");
+        let nominal = cusps::search(&c, &cusps::CuspSettings { precision: 1e-7, ..Default::default() }).expect("valid");
         assert_eq!(nominal.cusps.len(), 4);
         for cusp in &nominal.cusps {
-            assert!(found.cusps.iter().any(|u| (0..2).all(|i| u.theta[i].inf() <= cusp.theta[i].inf() && cusp.theta[i].sup() <= u.theta[i].sup())), "corner ({d2}, {d3}): cusp {:?} outside every uncertain box", cusp.theta);
+            let inside = |u: &cusps::Cusp| (0..2).all(|i| u.theta[i].inf() <= cusp.theta[i].inf() && cusp.theta[i].sup() <= u.theta[i].sup());
+            assert!(found.cusps.iter().any(inside), "geometry ({d2}, {d3}, {r2}, {d4}): cusp {:?} outside every certified box", cusp.theta);
         }
     }
+}
+
+/// The mean-value form in the uncertain lengths (`Chain3R::derived`) encloses, over a narrow
+/// box of angles, the exact values of f, Df, det Df, system (2) and their gradients for sampled angles
+/// and sampled geometries of the box (each built as its own nominal URDF); and it is tighter
+/// than the natural enclosure, which is what certifies case c.
+#[test]
+fn uncertain_enclosures_hold_every_sampled_geometry() {
+    use linkspace::interval::{interval, point};
+    let text = std::fs::read_to_string(format!("{}/urdf/orthogonal_3r_c.urdf", env!("CARGO_MANIFEST_DIR"))).expect("fixture");
+    let h = 5e-4;
+    let uncertain = Chain3R::from_mechanism(&urdf::parse(&text).expect("parses"), h).expect("3R");
+    let geometry = |k: u32| {
+        let l = [0, 1, 2, 3].map(|i| [1.0005, 2.0005, 1.0005, 1.5005][i] + h * [-1.0, 1.0, 0.3, -0.7][(k as usize + i) % 4]);
+        let t = text.replace("xyz=\"1.0005 0 0\"", &format!("xyz=\"{} 0 0\"", l[0])).replace("xyz=\"2.0005 1.0005 0\"", &format!("xyz=\"{} {} 0\"", l[1], l[2])).replace("xyz=\"1.5005 0 0\"", &format!("xyz=\"{} 0 0\"", l[3]));
+        Chain3R::from_mechanism(&urdf::parse(&t).expect("parses"), 0.0).expect("3R")
+    };
+    let mut tighter = 0;
+    for k in 0..24u32 {
+        let lo = [-3.0 + 0.26 * k as f64, 2.9 - 0.25 * k as f64];
+        // Narrow boxes (and, on odd k, points), so that the width due to the lengths shows.
+        let w = if k % 2 == 0 { 1e-6 } else { 0.0 };
+        let b = [interval(lo[0], lo[0] + w), interval(lo[1], lo[1] + w)];
+        let over = uncertain.derived(b, 3);
+        tighter += (over.g[0].value().wid() < uncertain.jets(b, 3).derived().g[0].value().wid()) as usize;
+        let c = geometry(k);
+        let at = c.derived([point(lo[0] + 0.6 * w), point(lo[1] + 0.3 * w)], 3);
+        let inside = |outer: linkspace::Interval, inner: linkspace::Interval| outer.inf() <= inner.inf() && inner.sup() <= outer.sup();
+        for a in 0..2 {
+            assert!(inside(over.f[a].value(), at.f[a].value()) && inside(over.g[a].value(), at.g[a].value()), "box {k}, row {a}");
+            for i in 0..2 {
+                assert!(inside(over.df[a][i].value(), at.df[a][i].value()) && inside(over.g[a].grad()[i], at.g[a].grad()[i]), "box {k}, row {a}, {i}");
+            }
+        }
+        assert!(inside(over.det.value(), at.det.value()) && (0..2).all(|i| inside(over.det.grad()[i], at.det.grad()[i])), "box {k}");
+    }
+    assert!(tighter >= 20, "the mean-value form was tighter on only {tighter} of 24 boxes");
 }
 
 /// Inverse kinematics: joint points sampled on a grid map to workspace points; solving back

@@ -164,8 +164,8 @@ pub fn evaluate_without_tangency(chain: &Chain3R, b: [Interval; 2]) -> BoxEval {
 
 fn evaluate_to(chain: &Chain3R, b: [Interval; 2], order: usize) -> BoxEval {
     let m = [b[0].mid(), b[1].mid()];
-    let over = chain.jets(b, order).derived();
-    let at = chain.jets([point(m[0]), point(m[1])], 2).derived();
+    let over = chain.derived(b, order);
+    let at = chain.derived([point(m[0]), point(m[1])], 2);
     let dx = [b[0] - point(m[0]), b[1] - point(m[1])];
     let centred = |whole: Interval, grad: [Interval; 2], mid: Interval| whole.intersection(mid + grad[0] * dx[0] + grad[1] * dx[1]);
     let det = centred(over.det.value(), over.det.grad(), at.det.value());

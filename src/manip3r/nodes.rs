@@ -172,7 +172,7 @@ fn nearest_copy(p: &[Interval; 2], q: &[Interval; 2]) -> [Interval; 2] {
 /// The mean-value injectivity certificate on `h` (see the module doc); `tangent` is the image
 /// tangent `g` somewhere near `h`, the first direction tried.
 fn injective_mean_value(chain: &Chain3R, h: [Interval; 2], tangent: [Interval; 2]) -> bool {
-    let d = chain.jets(h, 2).derived();
+    let d = chain.derived(h, 2);
     let df = [[d.df[0][0].value(), d.df[0][1].value()], [d.df[1][0].value(), d.df[1][1].value()]];
     injective_from(d.det.grad(), df, tangent)
 }
@@ -212,7 +212,7 @@ const DEPTH: u32 = 12;
 
 /// F'' = ∇g·T and F''' = ∇(∇g·T)·T over `b` (see the module doc).
 fn flow_derivatives(chain: &Chain3R, b: [Interval; 2]) -> ([Interval; 2], [Interval; 2]) {
-    let jets = chain.jets(b, 4).derived();
+    let jets = chain.derived(b, 4);
     let t = [-jets.det.d(1), jets.det.d(0)];
     let along = |h: &super::taylor::Taylor| h.d(0) * t[0] + h.d(1) * t[1];
     let f2 = [along(&jets.g[0]), along(&jets.g[1])];

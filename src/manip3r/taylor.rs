@@ -193,6 +193,19 @@ impl Taylor {
         out
     }
 
+    /// Coefficient-wise intersection of two enclosures of the same jet (to the lower order).
+    /// Where the two are disjoint, which sound enclosures never are, `self` is kept.
+    pub fn intersect(&self, o: &Taylor) -> Taylor {
+        let order = self.order.min(o.order);
+        let mut out = Taylor::zero(order);
+        for n in 0..index(order + 1, 0) {
+            let (a, b) = (self.c[n], o.c[n]);
+            let (lo, hi) = (a.lo.max(b.lo), a.hi.min(b.hi));
+            out.c[n] = if lo <= hi { Iv { lo, hi } } else { a };
+        }
+        out
+    }
+
     /// `self · s` for an interval constant `s`.
     pub fn scale(&self, s: Interval) -> Self {
         let s = Iv::from(s);
