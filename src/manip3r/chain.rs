@@ -16,7 +16,9 @@
 //!
 //! With an uncertainty `h > 0`, every non-zero translation component of every joint origin on
 //! the chain becomes the interval `[v − h, v + h]`, and every enclosure holds for every geometry
-//! in that box.
+//! in that box. `derived` keeps the lengths correlated: the end point is linear in the joint
+//! translations, so its derivative along each length is exact, and the mean-value form in the
+//! lengths is intersected with the natural enclosure.
 
 use super::taylor::Taylor;
 use super::Manip3rError;
