@@ -12,7 +12,8 @@ use linkspace::manip3r::{
     self,
     cusps::{self, CuspSettings, Method},
     nodes::{self, NodeSettings},
-    report::{IkReport, SingularityReport},
+    collision::{self, CollisionSettings, Scene},
+    report::{CollisionReport, IkReport, SingularityReport},
     Chain3R,
 };
 use linkspace::solve::{Progress, SolverSettings};
@@ -51,6 +52,26 @@ enum Command {
     /// Run the ROS 2 node: analyse each URDF, publish the results, serve queries (launch_notes.md).
     #[cfg(feature = "ros")]
     Serve(serve::ServeArgs),
+    /// Joint configurations (joint 2, joint 3) of a 3R chain where its collision capsules meet.
+    Collisions(CollisionsArgs),
+}
+
+#[derive(clap::Args)]
+struct CollisionsArgs {
+    /// URDF file of a 3R chain with <collision> cylinders, capsules or spheres.
+    urdf: PathBuf,
+    /// Largest width (radians) of undecided boxes, in (0, 1).
+    #[arg(long, default_value_t = 1e-2, allow_hyphen_values = true)]
+    precision: f64,
+    /// Stop after this many boxes; the run is then incomplete.
+    #[arg(long, default_value_t = 5_000_000)]
+    max_boxes: u64,
+    /// Stop after this many seconds; the run is then incomplete.
+    #[arg(long)]
+    timeout: Option<f64>,
+    /// Write the full report as JSON here.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -195,6 +216,7 @@ pub fn run() -> Result<()> {
         Command::BenchDistances(args) => distances::bench(args),
         #[cfg(feature = "ros")]
         Command::Serve(args) => serve::serve(args),
+        Command::Collisions(args) => collisions(args),
     }
 }
 
@@ -360,6 +382,44 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     }
     for m in &report.internal_motions {
         writeln!(out, "  internal motion {}", m.joints.iter().map(|(n, b)| format!("{n} in [{:.6}, {:.6}]", b[0], b[1])).collect::<Vec<_>>().join(", ")).ok();
+    }
+    if let Some(path) = args.json {
+        std::fs::write(&path, serde_json::to_string_pretty(&report)?).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+fn collisions(args: CollisionsArgs) -> Result<()> {
+    manip3r::check_precision(args.precision)?;
+    let timeout = seconds_arg(args.timeout)?;
+    let xml = std::fs::read_to_string(&args.urdf).with_context(|| format!("reading {}", args.urdf.display()))?;
+    let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", args.urdf.display()))?;
+    let scene = Scene::from_mechanism(&mechanism).with_context(|| format!("loading {}", args.urdf.display()))?;
+    let settings = CollisionSettings { precision: args.precision, max_boxes: args.max_boxes, timeout };
+    let set = collision::classify(&scene, &settings)?;
+    let report = CollisionReport::new(&scene, args.precision, &set);
+    let s = &report.stats;
+    let total = s.colliding_area + s.free_area + s.undecided_area;
+    let pct = |a: f64| 100.0 * a / total;
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "{}: {} pairs; colliding {} boxes ({:.2} % of joint space), free {} ({:.2} %), undecided {} ({:.2} %), status {}, {:.3} s",
+        report.robot,
+        report.pairs.len(),
+        report.colliding.len(),
+        pct(s.colliding_area),
+        report.free.len(),
+        pct(s.free_area),
+        report.undecided.len(),
+        pct(s.undecided_area),
+        report.status,
+        s.seconds
+    )
+    .ok();
+    for (k, p) in report.pairs.iter().enumerate() {
+        let boxes = set.colliding.iter().filter(|c| c.pair == k).count();
+        writeln!(out, "  {} x {}: proven colliding on {boxes} boxes", p[0], p[1]).ok();
     }
     if let Some(path) = args.json {
         std::fs::write(&path, serde_json::to_string_pretty(&report)?).with_context(|| format!("writing {}", path.display()))?;

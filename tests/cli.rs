@@ -196,3 +196,34 @@ fn ik_reports_every_solution() {
     assert!(ok, "{err}");
     assert!(out.starts_with("orthogonal_3r_e: 2 solutions proven unique, 0 clusters undecided, status complete"), "{out}");
 }
+
+#[test]
+fn collisions_bad_input_and_json_schema() {
+    let scene = fixture("orthogonal_3r_a_column.urdf");
+    assert_clear_error(&["collisions", &fixture("orthogonal_3r_a.urdf")], "no collision geometry: no link of 'orthogonal_3r_a' has a <collision> cylinder, capsule or sphere");
+    assert_clear_error(&["collisions", &scene, "--precision", "0"], "precision must be a number in (0, 1)");
+    assert_clear_error(&["collisions", &scene, "--precision", "NaN"], "precision must be a number in (0, 1)");
+    assert_clear_error(&["collisions", &fixture("four_bar.urdf")], "not a serial chain");
+    let meshed = variant("orthogonal_3r_a_column.urdf", r#"<cylinder radius="0.3" length="3"/>"#, r#"<mesh filename="column.stl"/>"#);
+    assert_clear_error(&["collisions", meshed.as_str()], "link 'base': collision mesh is not supported");
+    let path = std::env::temp_dir().join(format!("linkspace-collisions-{}.json", std::process::id()));
+    let (ok, out, err) = run(&["collisions", &scene, "--precision", "0.05", "--json", path.to_str().expect("utf-8")]);
+    assert!(ok, "{err}");
+    assert!(out.starts_with("orthogonal_3r_a_column: 2 pairs; colliding "), "{out}");
+    let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).expect("json")).expect("valid json");
+    let _ = std::fs::remove_file(&path);
+    assert_eq!(r["robot"], "orthogonal_3r_a_column");
+    assert_eq!(r["status"], "complete");
+    assert_eq!(r["precision"], 0.05);
+    assert_eq!(r["bodies"][0]["name"], "column");
+    assert_eq!(r["bodies"][0]["link"], "base");
+    assert_eq!(r["bodies"][0]["radius"], 0.3);
+    assert!(r["bodies"][0]["segment"][1][2].as_f64().expect("number") == 2.0);
+    assert_eq!(r["pairs"][1][1], "forearm");
+    assert_eq!(r["colliding"][0]["pair"][0], "column");
+    assert!(r["colliding"][0]["joints"]["joint2"].is_array() && r["free"][0]["joints"]["joint3"].is_array());
+    assert!(r["undecided"][0]["joints"]["joint2"].is_array());
+    for key in ["processed", "bisected", "colliding_area", "free_area", "undecided_area", "seconds"] {
+        assert!(r["stats"][key].is_number(), "stats lacks {key}");
+    }
+}

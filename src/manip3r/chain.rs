@@ -16,7 +16,9 @@
 //!
 //! With an uncertainty `h > 0`, every non-zero translation component of every joint origin on
 //! the chain becomes the interval `[v − h, v + h]`, and every enclosure holds for every geometry
-//! in that box.
+//! in that box. `derived` keeps the lengths correlated: the end point is linear in the joint
+//! translations, so its derivative along each length is exact, and the mean-value form in the
+//! lengths is intersected with the natural enclosure.
 
 use super::taylor::Taylor;
 use super::Manip3rError;
@@ -24,8 +26,8 @@ use crate::interval::{interval, point};
 use crate::model::{JointKind, Mechanism};
 use inari::Interval;
 
-type V3 = [Interval; 3];
-type M3 = [[Interval; 3]; 3];
+pub(super) type V3 = [Interval; 3];
+pub(super) type M3 = [[Interval; 3]; 3];
 
 /// A 3R chain reduced to its kinematic map (see the module doc).
 #[derive(Clone, Debug)]
@@ -38,6 +40,20 @@ pub struct Chain3R {
     pub tip_link: String,
     /// Half-width added to every length (0 for the nominal geometry).
     pub uncertainty: f64,
+    /// The end point's coefficients over the whole box of lengths.
+    coef: Coefficients,
+    /// With uncertain lengths: the coefficients at the nominal lengths, and their derivatives
+    /// along each uncertain length (the map is linear in the lengths, so these are exact).
+    /// Empty `sensitivity` when the lengths are exact.
+    nominal: Coefficients,
+    sensitivity: Vec<Coefficients>,
+    /// The second axis in its joint frame.
+    axis2: V3,
+}
+
+/// The end point as coefficients of (cos θ₂, sin θ₂, 1) ⊗ (cos θ₃, sin θ₃, 1).
+#[derive(Clone, Copy, Debug)]
+struct Coefficients {
     /// Perpendicular part of `p` (relative to a₁): `perp[a][b]`, `a` over (cos θ₂, sin θ₂, 1),
     /// `b` over (cos θ₃, sin θ₃, 1).
     perp: [[V3; 3]; 3],
@@ -45,8 +61,6 @@ pub struct Chain3R {
     along: [[Interval; 3]; 3],
     /// The end point in the second joint's frame: `q(θ₃) = q[0] cos θ₃ + q[1] sin θ₃ + q[2]`.
     q: [V3; 3],
-    /// The second axis in its joint frame.
-    axis2: V3,
 }
 
 /// The map and its derivatives over a box, as jets.
@@ -107,41 +121,55 @@ pub struct Derived {
     pub g: [Taylor; 2],
 }
 
-fn dot(a: &V3, b: &V3) -> Interval {
+pub(super) fn dot(a: &V3, b: &V3) -> Interval {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-fn cross(a: &V3, b: &V3) -> V3 {
+pub(super) fn cross(a: &V3, b: &V3) -> V3 {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
-fn scale(a: &V3, s: Interval) -> V3 {
+pub(super) fn scale(a: &V3, s: Interval) -> V3 {
     [a[0] * s, a[1] * s, a[2] * s]
 }
 
-fn add(a: &V3, b: &V3) -> V3 {
+pub(super) fn add(a: &V3, b: &V3) -> V3 {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
 
-fn sub(a: &V3, b: &V3) -> V3 {
+pub(super) fn sub(a: &V3, b: &V3) -> V3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
-fn apply(m: &M3, v: &V3) -> V3 {
+pub(super) fn apply(m: &M3, v: &V3) -> V3 {
     [dot(&m[0], v), dot(&m[1], v), dot(&m[2], v)]
 }
 
-const ZERO: Interval = inari::const_interval!(0.0, 0.0);
+/// Rodrigues' formula: `R(a, θ) v = (v − a(a·v)) cos θ + (a × v) sin θ + a(a·v)`, as the three
+/// coefficients of (cos θ, sin θ, 1).
+pub(super) fn rodrigues(a: &V3, v: &V3) -> [V3; 3] {
+    let along = scale(a, dot(a, v));
+    [sub(v, &along), cross(a, v), along]
+}
+
+pub(super) const ZERO: Interval = inari::const_interval!(0.0, 0.0);
+
+/// Jets of sin θ₂, cos θ₂, sin θ₃, cos θ₃ over `theta`.
+fn trig_jets(theta: [Interval; 2], order: usize) -> [Taylor; 4] {
+    let (s2, c2) = Taylor::sin_cos(0, theta[0], order);
+    let (s3, c3) = Taylor::sin_cos(1, theta[1], order);
+    [s2, c2, s3, c3]
+}
 
 /// A rigid transform with interval entries.
 #[derive(Clone, Copy, Debug)]
-struct Pose {
-    r: M3,
-    t: V3,
+pub(super) struct Pose {
+    pub(super) r: M3,
+    pub(super) t: V3,
 }
 
 impl Pose {
-    fn identity() -> Self {
+    pub(super) fn identity() -> Self {
         let mut r = [[ZERO; 3]; 3];
         for (i, row) in r.iter_mut().enumerate() {
             row[i] = point(1.0);
@@ -149,7 +177,16 @@ impl Pose {
         Pose { r, t: [ZERO; 3] }
     }
 
-    fn from_origin(iso: &nalgebra::Isometry3<f64>, h: f64) -> Self {
+    pub(super) fn from_origin(iso: &nalgebra::Isometry3<f64>, h: f64) -> Self {
+        let tr = iso.translation.vector;
+        // Lengths given in the file carry the uncertainty; zero offsets are structure, not
+        // lengths. v ± h rounded outward, so every length within h of v is inside.
+        let t = [0, 1, 2].map(|i| if tr[i] != 0.0 && h > 0.0 { point(tr[i]) + interval(-h, h) } else { point(tr[i]) });
+        Self::with_translation(iso, t)
+    }
+
+    /// The rotation of `iso` with the translation `t`.
+    pub(super) fn with_translation(iso: &nalgebra::Isometry3<f64>, t: V3) -> Self {
         let m = iso.rotation.to_rotation_matrix();
         let mut r = [[ZERO; 3]; 3];
         for (i, row) in r.iter_mut().enumerate() {
@@ -157,14 +194,11 @@ impl Pose {
                 *v = point(m[(i, j)]);
             }
         }
-        let tr = iso.translation.vector;
-        // Lengths given in the file carry the uncertainty; zero offsets are structure, not lengths.
-        let t = [0, 1, 2].map(|i| if tr[i] != 0.0 && h > 0.0 { interval(tr[i] - h, tr[i] + h) } else { point(tr[i]) });
         Pose { r, t }
     }
 
     /// `self ∘ other`: first `other`, then `self`.
-    fn then(&self, other: &Pose) -> Pose {
+    pub(super) fn then(&self, other: &Pose) -> Pose {
         let mut r = [[ZERO; 3]; 3];
         for i in 0..3 {
             for j in 0..3 {
@@ -172,6 +206,58 @@ impl Pose {
             }
         }
         Pose { r, t: add(&apply(&self.r, &other.t), &self.t) }
+    }
+}
+
+impl Coefficients {
+    /// The coefficients of the chain along `path` (root first) with revolute axes `axes`, the
+    /// joint translations given by `translation(joint)` and the rotations from the file.
+    fn new(m: &Mechanism, path: &[usize], axes: &[V3; 3], translation: &dyn Fn(usize) -> V3) -> Self {
+        // Poses between consecutive revolute joints: each joint's origin, preceded by the fixed
+        // joints since the previous revolute one.
+        let mut segments = [Pose::identity(); 4];
+        let mut seg = 0;
+        for &j in path {
+            let joint = &m.joints[j];
+            segments[seg] = segments[seg].then(&Pose::with_translation(&joint.origin, translation(j)));
+            if matches!(joint.kind, JointKind::Revolute { .. }) {
+                seg += 1;
+            }
+        }
+        let [a1, a2, a3] = axes;
+        // segments[1]: second joint frame in the first link; [2]: third joint frame in the
+        // second link; [3]: tip link in the third link.
+        let tip_point = segments[3].t;
+        let in_third = rodrigues(a3, &tip_point);
+        let mut q = [0, 1, 2].map(|b| apply(&segments[2].r, &in_third[b]));
+        q[2] = add(&q[2], &segments[2].t);
+        let mut perp = [[[ZERO; 3]; 3]; 3];
+        let mut along = [[ZERO; 3]; 3];
+        for b in 0..3 {
+            let in_second = rodrigues(a2, &q[b]);
+            for a in 0..3 {
+                let mut p = apply(&segments[1].r, &in_second[a]);
+                if a == 2 && b == 2 {
+                    p = add(&p, &segments[1].t);
+                }
+                let z = dot(a1, &p);
+                along[a][b] = z;
+                perp[a][b] = sub(&p, &scale(a1, z));
+            }
+        }
+        Coefficients { perp, along, q }
+    }
+
+    /// Jets of the three components of the end point's perpendicular part and of z, from the
+    /// jets of (sin, cos) of θ₂ and θ₃.
+    fn point(&self, trig: &[Taylor; 4]) -> ([Taylor; 3], Taylor) {
+        let [s2, c2, s3, c3] = trig;
+        let basis3 = |coef: [Interval; 3]| Taylor::theta3_combination(c3, coef[0], s3, coef[1], coef[2]);
+        // The h's depend on θ₃ only, c2 and s2 on θ₂ only.
+        let combine = |h: [Taylor; 3]| Taylor::outer(c2, &h[0]) + Taylor::outer(s2, &h[1]) + h[2];
+        let p = [0, 1, 2].map(|i| combine([0, 1, 2].map(|a| basis3([self.perp[a][0][i], self.perp[a][1][i], self.perp[a][2][i]]))));
+        let z = combine([0, 1, 2].map(|a| basis3(self.along[a])));
+        (p, z)
     }
 }
 
@@ -209,74 +295,95 @@ impl Chain3R {
         if revolute.len() != 3 {
             return Err(Manip3rError::NotThreeR(format!("the chain to '{}' has {} revolute joints", m.links[tip].name, revolute.len())));
         }
-        // Poses between consecutive revolute joints: each joint's origin, preceded by the fixed
-        // joints since the previous revolute one.
         let h = uncertainty;
-        let mut segments = [Pose::identity(); 4];
-        let mut seg = 0;
-        for &j in &path {
-            let joint = &m.joints[j];
-            segments[seg] = segments[seg].then(&Pose::from_origin(&joint.origin, h));
-            if matches!(joint.kind, JointKind::Revolute { .. }) {
-                seg += 1;
-            }
-        }
         let axis = |k: usize| -> V3 { let a = m.joints[revolute[k]].axis; [point(a[0]), point(a[1]), point(a[2])] };
-        let (a1, a2, a3) = (axis(0), axis(1), axis(2));
-        // segments[1]: second joint frame in the first link; [2]: third joint frame in the
-        // second link; [3]: tip link in the third link.
-        let tip_point = segments[3].t;
-        // Rodrigues: R(a, θ) v = (v − a(a·v)) cos θ + (a × v) sin θ + a(a·v).
-        let rodrigues = |a: &V3, v: &V3| -> [V3; 3] {
-            let along = scale(a, dot(a, v));
-            [sub(v, &along), cross(a, v), along]
-        };
-        let in_third = rodrigues(&a3, &tip_point);
-        let mut q = [0, 1, 2].map(|b| apply(&segments[2].r, &in_third[b]));
-        q[2] = add(&q[2], &segments[2].t);
-        let mut perp = [[[ZERO; 3]; 3]; 3];
-        let mut along = [[ZERO; 3]; 3];
-        for b in 0..3 {
-            let in_second = rodrigues(&a2, &q[b]);
-            for a in 0..3 {
-                let mut p = apply(&segments[1].r, &in_second[a]);
-                if a == 2 && b == 2 {
-                    p = add(&p, &segments[1].t);
+        let axes = [axis(0), axis(1), axis(2)];
+        let coef = Coefficients::new(m, &path, &axes, &|j| Pose::from_origin(&m.joints[j].origin, h).t);
+        // The uncertain lengths, as (joint, component); the end point is linear in the joint
+        // translations (rotations are fixed), so its derivative along one length is the map
+        // built with that translation component 1 and every other translation 0.
+        let mut lengths = Vec::new();
+        if h > 0.0 {
+            for &j in &path {
+                for i in 0..3 {
+                    if m.joints[j].origin.translation.vector[i] != 0.0 {
+                        lengths.push((j, i));
+                    }
                 }
-                let z = dot(&a1, &p);
-                along[a][b] = z;
-                perp[a][b] = sub(&p, &scale(&a1, z));
             }
         }
+        let nominal = Coefficients::new(m, &path, &axes, &|j| Pose::from_origin(&m.joints[j].origin, 0.0).t);
+        let sensitivity = lengths
+            .iter()
+            .map(|&(jl, il)| Coefficients::new(m, &path, &axes, &|j| [0, 1, 2].map(|i| if (j, i) == (jl, il) { point(1.0) } else { ZERO })))
+            .collect();
         let chain = Chain3R {
             name: m.name.clone(),
             joints: [0, 1, 2].map(|k| m.joints[revolute[k]].name.clone()),
             tip_link: m.links[tip].name.clone(),
             uncertainty,
-            perp,
-            along,
-            q,
-            axis2: a2,
+            coef,
+            nominal,
+            sensitivity,
+            axis2: axes[1],
         };
         chain.check_not_degenerate()?;
         Ok(chain)
     }
 
-    /// Jets of ρ and z over the box `theta` = (θ₂, θ₃), to `order` (≤ 4).
+    /// Jets of ρ and z over the box `theta` = (θ₂, θ₃), to `order` (≤ 4): the natural
+    /// enclosure over every geometry in the box of lengths.
     pub fn jets(&self, theta: [Interval; 2], order: usize) -> Jets {
-        let (s2, c2) = Taylor::sin_cos(0, theta[0], order);
-        let (s3, c3) = Taylor::sin_cos(1, theta[1], order);
-        let basis3 = |coef: [Interval; 3]| Taylor::theta3_combination(&c3, coef[0], &s3, coef[1], coef[2]);
-        // The h's depend on θ₃ only, c2 and s2 on θ₂ only.
-        let combine = |h: [Taylor; 3]| Taylor::outer(&c2, &h[0]) + Taylor::outer(&s2, &h[1]) + h[2];
-        let mut rho = Taylor::constant(ZERO, order);
-        for i in 0..3 {
-            let h = [0, 1, 2].map(|a| basis3([self.perp[a][0][i], self.perp[a][1][i], self.perp[a][2][i]]));
-            let p = combine(h);
-            rho = rho + p * p;
+        let (p, z) = self.coef.point(&trig_jets(theta, order));
+        Jets { rho: p[0] * p[0] + p[1] * p[1] + p[2] * p[2], z }
+    }
+
+    /// `jets(theta, order).derived()`, tightened for uncertain lengths by the mean-value form in
+    /// the lengths: every quantity Q of `Derived` (each Taylor coefficient) lies in
+    /// `Q(θ, nominal) + Σₖ ∂Q/∂δₖ(θ, Δ) · [−h, h]` with `Δ` the box of lengths, which is
+    /// intersected with the natural enclosure. Shared lengths then stay correlated across
+    /// the terms of ρ, z and their derivatives (the dependency problem of the natural form),
+    /// and the width due to the lengths is their true effect plus O(h·(h + |θ box|)).
+    /// The derivatives are exact forward-mode ones: the end point is linear in the lengths.
+    pub fn derived(&self, theta: [Interval; 2], order: usize) -> Derived {
+        let trig = trig_jets(theta, order);
+        let (p, z) = self.coef.point(&trig);
+        let natural = Jets { rho: p[0] * p[0] + p[1] * p[1] + p[2] * p[2], z }.derived();
+        if self.sensitivity.is_empty() {
+            return natural;
         }
-        let z = combine([0, 1, 2].map(|a| basis3(self.along[a])));
-        Jets { rho, z }
+        let (pn, zn) = self.nominal.point(&trig);
+        let mut mv = Jets { rho: pn[0] * pn[0] + pn[1] * pn[1] + pn[2] * pn[2], z: zn }.derived();
+        let spread = interval(-self.uncertainty, self.uncertainty);
+        let nd = natural;
+        for s in &self.sensitivity {
+            let (pk, zk) = s.point(&trig);
+            // ∂ρ/∂δ = 2 p·∂p/∂δ with p over the whole box of lengths; ∂z/∂δ is exact.
+            let fk = [(p[0] * pk[0] + p[1] * pk[1] + p[2] * pk[2]).scale(point(2.0)), zk];
+            let dfk = [[fk[0].d(0), fk[0].d(1)], [fk[1].d(0), fk[1].d(1)]];
+            let detk = dfk[0][0] * nd.df[1][1] + nd.df[0][0] * dfk[1][1] - dfk[0][1] * nd.df[1][0] - nd.df[0][1] * dfk[1][0];
+            for a in 0..2 {
+                mv.f[a] = mv.f[a] + fk[a].scale(spread);
+                for i in 0..2 {
+                    mv.df[a][i] = mv.df[a][i] + dfk[a][i].scale(spread);
+                }
+            }
+            mv.det = mv.det + detk.scale(spread);
+            if nd.det.order() >= 1 {
+                let (d0, d1) = (nd.det.d(0), nd.det.d(1));
+                let (d0k, d1k) = (detk.d(0), detk.d(1));
+                for a in 0..2 {
+                    let gk = dfk[a][1] * d0 + nd.df[a][1] * d0k - dfk[a][0] * d1 - nd.df[a][0] * d1k;
+                    mv.g[a] = mv.g[a] + gk.scale(spread);
+                }
+            }
+        }
+        Derived {
+            f: [0, 1].map(|a| nd.f[a].intersect(&mv.f[a])),
+            df: [0, 1].map(|a| [0, 1].map(|i| nd.df[a][i].intersect(&mv.df[a][i]))),
+            det: nd.det.intersect(&mv.det),
+            g: if nd.det.order() >= 1 { [0, 1].map(|a| nd.g[a].intersect(&mv.g[a])) } else { nd.g },
+        }
     }
 
     /// f at a point, in plain floating point (midpoints of the coefficients): for sampling and
@@ -290,9 +397,9 @@ impl Chain3R {
             for b in 0..3 {
                 let w = e2[a] * e3[b];
                 for (i, pi) in p.iter_mut().enumerate() {
-                    *pi += self.perp[a][b][i].mid() * w;
+                    *pi += self.coef.perp[a][b][i].mid() * w;
                 }
-                z += self.along[a][b].mid() * w;
+                z += self.coef.along[a][b].mid() * w;
             }
         }
         [p[0] * p[0] + p[1] * p[1] + p[2] * p[2], z]
@@ -307,9 +414,9 @@ impl Chain3R {
             let (s, c) = (super::trig::sin(t), super::trig::cos(t));
             // q = q0 cos + q1 sin + q2; q' = −q0 sin + q1 cos.
             let v: V3 = if deriv {
-                add(&scale(&self.q[0], -s), &scale(&self.q[1], c))
+                add(&scale(&self.coef.q[0], -s), &scale(&self.coef.q[1], c))
             } else {
-                add(&add(&scale(&self.q[0], c), &scale(&self.q[1], s)), &self.q[2])
+                add(&add(&scale(&self.coef.q[0], c), &scale(&self.coef.q[1], s)), &self.coef.q[2])
             };
             cross(&self.axis2, &v)
         };

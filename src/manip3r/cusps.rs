@@ -152,9 +152,20 @@ pub struct BoxEval {
 
 /// Evaluates everything a cusp or node test needs over `b`.
 pub fn evaluate(chain: &Chain3R, b: [Interval; 2]) -> BoxEval {
+    evaluate_to(chain, b, 3)
+}
+
+/// As `evaluate`, but from second-order jets over the box: everything but `grad_g` (left
+/// whole) and the centred form of `g` (natural only). The node search needs no more, and
+/// second-order jets cost about half as much.
+pub fn evaluate_without_tangency(chain: &Chain3R, b: [Interval; 2]) -> BoxEval {
+    evaluate_to(chain, b, 2)
+}
+
+fn evaluate_to(chain: &Chain3R, b: [Interval; 2], order: usize) -> BoxEval {
     let m = [b[0].mid(), b[1].mid()];
-    let over = chain.jets(b, 3).derived();
-    let at = chain.jets([point(m[0]), point(m[1])], 2).derived();
+    let over = chain.derived(b, order);
+    let at = chain.derived([point(m[0]), point(m[1])], 2);
     let dx = [b[0] - point(m[0]), b[1] - point(m[1])];
     let centred = |whole: Interval, grad: [Interval; 2], mid: Interval| whole.intersection(mid + grad[0] * dx[0] + grad[1] * dx[1]);
     let det = centred(over.det.value(), over.det.grad(), at.det.value());
@@ -163,8 +174,13 @@ pub fn evaluate(chain: &Chain3R, b: [Interval; 2]) -> BoxEval {
     let mut df = [[Interval::EMPTY; 2]; 2];
     let mut f = [Interval::EMPTY; 2];
     for k in 0..2 {
-        g[k] = centred(over.g[k].value(), over.g[k].grad(), at.g[k].value());
-        grad_g[k] = over.g[k].grad();
+        if order >= 3 {
+            g[k] = centred(over.g[k].value(), over.g[k].grad(), at.g[k].value());
+            grad_g[k] = over.g[k].grad();
+        } else {
+            g[k] = over.g[k].value();
+            grad_g[k] = [Interval::ENTIRE; 2];
+        }
         df[k] = over.f[k].grad();
         f[k] = centred(over.f[k].value(), df[k], at.f[k].value());
     }

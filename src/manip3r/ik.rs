@@ -58,14 +58,15 @@ pub fn solve(chain: &Chain3R, radius: f64, z: f64, precision: f64, max_boxes: u6
         }
         processed += 1;
         let m = [b[0].mid(), b[1].mid()];
-        let over = chain.jets(b, 1);
-        let at = chain.jets([point(m[0]), point(m[1])], 0);
+        // `derived` tightens enclosures over uncertain lengths (mean-value form in them).
+        let over = chain.derived(b, 1);
+        let at = chain.derived([point(m[0]), point(m[1])], 1);
         let dx = [b[0] - point(m[0]), b[1] - point(m[1])];
         let mut fm = [Interval::EMPTY; 2];
         let mut jac = [[Interval::EMPTY; 2]; 2];
         let mut empty = false;
         for k in 0..2 {
-            let (fk, ak) = (over.f(k), at.f(k));
+            let (fk, ak) = (over.f[k], at.f[k]);
             let g = fk.grad();
             let value = (fk.value() - target[k]).intersection(ak.value() - target[k] + g[0] * dx[0] + g[1] * dx[1]);
             empty |= !value.contains(0.0);
@@ -83,10 +84,10 @@ pub fn solve(chain: &Chain3R, radius: f64, z: f64, precision: f64, max_boxes: u6
                         break;
                     }
                     let mk = [k[0].mid(), k[1].mid()];
-                    let o = chain.jets(k, 1);
-                    let a = chain.jets([point(mk[0]), point(mk[1])], 0);
-                    let fmk = [a.rho.value() - target[0], a.z.value() - target[1]];
-                    match krawczyk::step(&k, &mk, &fmk, &[o.rho.grad(), o.z.grad()]) {
+                    let o = chain.derived(k, 1);
+                    let a = chain.derived([point(mk[0]), point(mk[1])], 1);
+                    let fmk = [a.f[0].value() - target[0], a.f[1].value() - target[1]];
+                    match krawczyk::step(&k, &mk, &fmk, &[o.f[0].grad(), o.f[1].grad()]) {
                         Step::Unique(n) | Step::Contracted(n) if n[0].wid().max(n[1].wid()) < 0.9 * k[0].wid().max(k[1].wid()) => k = n,
                         _ => break,
                     }

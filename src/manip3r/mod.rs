@@ -3,7 +3,7 @@
 //! Owns the kinematic map of a serial chain of three revolute joints (`Chain3R`), its sound
 //! evaluation with derivatives over boxes (`taylor`, `trig`), and the searches built on it:
 //! internal-motion lines (`motion`), cusps (`cusps`), nodes (`nodes`), inverse kinematics
-//! (`ik`) and the report types (`report`).
+//! (`ik`), collision sets (`collision`) and the report types (`report`).
 //! Every search is branch and prune over (θ₂, θ₃) with interval Newton (Krawczyk) proofs; a box
 //! is discarded only when interval arithmetic proves it holds nothing sought.
 //! No IO here: the CLI reads files and writes reports.
@@ -14,6 +14,7 @@
 //! Nullstellen mit Fehlerschranken*, Computing 4 (1969).
 
 pub mod chain;
+pub mod collision;
 pub mod cusps;
 pub mod ik;
 pub mod krawczyk;
@@ -54,6 +55,20 @@ pub enum Manip3rError {
     /// A workspace point for inverse kinematics is not finite or has a negative radius.
     #[error("workspace point ({0}, {1}) is not valid: radius must be >= 0 and both finite")]
     BadPoint(f64, f64),
+    /// Nothing to check for collisions.
+    #[error("no collision geometry: {0}")]
+    NoCollisionGeometry(String),
+    /// A collision shape that is not a cylinder, capsule or sphere.
+    #[error("link '{link}': collision {shape} is not supported (use a cylinder, capsule or sphere)")]
+    UnsupportedShape {
+        /// the link
+        link: String,
+        /// the shape's kind
+        shape: String,
+    },
+    /// A base body whose distance to the arm would depend on joint 1.
+    #[error("collision body '{0}' on the base is not on the first joint's axis: its distance to the arm depends on joint 1, which collisions does not model")]
+    BaseBodyOffAxis(String),
 }
 
 /// Checks a precision argument once, before any search.

@@ -28,7 +28,7 @@
 //! Pairs touching an internal-motion strip are set aside.
 
 use super::chain::Chain3R;
-use super::cusps::{self, evaluate, meet_on_torus, BoxEval, Cusp};
+use super::cusps::{self, evaluate_without_tangency as evaluate, meet_on_torus, BoxEval, Cusp};
 use super::krawczyk::{self, Step};
 use super::motion::{self, Band};
 use crate::interval::{interval, point};
@@ -106,6 +106,8 @@ struct Cell {
     singular: bool,
     in_strip: bool,
     children: Option<(usize, usize)>,
+    parent: Option<usize>,
+    depth: u32,
 }
 
 struct Tree<'a> {
@@ -115,11 +117,26 @@ struct Tree<'a> {
 }
 
 impl Tree<'_> {
-    fn add(&mut self, b: [Interval; 2]) -> usize {
+    fn add(&mut self, b: [Interval; 2], parent: Option<usize>) -> usize {
         let eval = evaluate(self.chain, b);
         let in_strip = self.bands.iter().any(|band| band.holds(b[1]));
-        self.cells.push(Cell { b, eval, singular: eval.det.contains(0.0), in_strip, children: None });
+        let depth = parent.map_or(0, |p| self.cells[p].depth + 1);
+        self.cells.push(Cell { b, eval, singular: eval.det.contains(0.0), in_strip, children: None, parent, depth });
         self.cells.len() - 1
+    }
+
+    /// The smallest cell holding both `i` and `j`: its cached enclosures hold on their hull.
+    fn common_ancestor(&self, mut i: usize, mut j: usize) -> usize {
+        while i != j {
+            let (ci, cj) = (&self.cells[i], &self.cells[j]);
+            let up = |c: &Cell, k: usize| c.parent.unwrap_or(k);
+            if ci.depth >= cj.depth {
+                i = up(ci, i);
+            } else {
+                j = up(cj, j);
+            }
+        }
+        i
     }
 
     /// The singular children of cell `i` (made on first use).
@@ -128,7 +145,7 @@ impl Tree<'_> {
             Some(ch) => ch,
             None => {
                 let (lo, hi) = cusps::bisect(self.cells[i].b, motion::straddles(self.bands, self.cells[i].b[1]));
-                let ch = (self.add(lo), self.add(hi));
+                let ch = (self.add(lo, Some(i)), self.add(hi, Some(i)));
                 self.cells[i].children = Some(ch);
                 ch
             }
@@ -155,43 +172,47 @@ fn nearest_copy(p: &[Interval; 2], q: &[Interval; 2]) -> [Interval; 2] {
 /// The mean-value injectivity certificate on `h` (see the module doc); `tangent` is the image
 /// tangent `g` somewhere near `h`, the first direction tried.
 fn injective_mean_value(chain: &Chain3R, h: [Interval; 2], tangent: [Interval; 2]) -> bool {
-    let d = chain.jets(h, 2).derived();
-    let grad_det = d.det.grad();
+    let d = chain.derived(h, 2);
     let df = [[d.df[0][0].value(), d.df[0][1].value()], [d.df[1][0].value(), d.df[1][1].value()]];
-    // Directions: the two axes and the image tangent at the midpoint (best where it is known).
+    injective_from(d.det.grad(), df, tangent)
+}
+
+/// The mean-value certificate from enclosures of ∇det and Df over a box holding the hull.
+fn injective_from(grad_det: [Interval; 2], df: [[Interval; 2]; 2], tangent: [Interval; 2]) -> bool {
+    // Directions: the image tangent at the midpoint (best where it is known), then the axes.
     let g = [tangent[0].mid(), tangent[1].mid()];
     let norm = (g[0] * g[0] + g[1] * g[1]).sqrt();
-    let mut dirs = vec![[1.0, 0.0], [0.0, 1.0]];
-    if norm.is_finite() && norm > 0.0 {
-        dirs.insert(0, [g[0] / norm, g[1] / norm]);
-    }
-    dirs.into_iter().any(|m| {
+    let along = if norm.is_finite() && norm > 0.0 { Some([g[0] / norm, g[1] / norm]) } else { None };
+    along.into_iter().chain([[1.0, 0.0], [0.0, 1.0]]).any(|m| {
         let row = [point(m[0]) * df[0][0] + point(m[1]) * df[1][0], point(m[0]) * df[0][1] + point(m[1]) * df[1][1]];
         let cross = grad_det[0] * row[1] - grad_det[1] * row[0];
         !cross.contains(0.0)
     })
 }
 
-/// Splits `u` into `n × n` sub-boxes.
-fn grid(u: &[Interval; 2], n: usize) -> Vec<[Interval; 2]> {
-    let cut = |x: Interval, k: usize| {
-        let (lo, w) = (x.inf(), x.wid() / n as f64);
-        let a = if k == 0 { lo } else { lo + w * k as f64 };
-        let b = if k + 1 == n { x.sup() } else { lo + w * (k + 1) as f64 };
-        interval(a, b)
-    };
-    let mut out = Vec::with_capacity(n * n);
-    for i in 0..n {
-        for j in 0..n {
-            out.push([cut(u[0], i), cut(u[1], j)]);
-        }
+/// True when `test` holds on every part of `b`, trying `b` whole and then its halves down to
+/// `depth` bisections: the conditions of the cusp certificate are local, so most of a
+/// neighbourhood is decided on large cells and only the hard spots are refined.
+fn everywhere(b: [Interval; 2], depth: u32, test: &mut impl FnMut(&[Interval; 2]) -> bool) -> bool {
+    if test(&b) {
+        return true;
     }
-    out
+    if depth == 0 {
+        return false;
+    }
+    let (lo, hi) = cusps::bisect(b, false);
+    everywhere(lo, depth - 1, test) && everywhere(hi, depth - 1, test)
 }
+
+/// Widest box of a pair on which the node search tries Krawczyk (radians).
+const KRAWCZYK_WIDTH: f64 = 1.0;
+
+/// Bisections allowed per certificate condition: cells down to 1/64 of the neighbourhood.
+const DEPTH: u32 = 12;
 
 /// F'' = ∇g·T and F''' = ∇(∇g·T)·T over `b` (see the module doc).
 fn flow_derivatives(chain: &Chain3R, b: [Interval; 2]) -> ([Interval; 2], [Interval; 2]) {
-    let jets = chain.jets(b, 4).derived();
+    let jets = chain.derived(b, 4);
     let t = [-jets.det.d(1), jets.det.d(0)];
     let along = |h: &super::taylor::Taylor| h.d(0) * t[0] + h.d(1) * t[1];
     let f2 = [along(&jets.g[0]), along(&jets.g[1])];
@@ -210,45 +231,35 @@ fn sign(x: Interval) -> Option<bool> {
 }
 
 /// The cusp certificate on `u` around the certified cusp box `c` ⊂ `u` (see the module doc).
-/// Each condition is checked on a grid of sub-boxes (one strict sign over all of them), and
-/// F''(c) on the cusp box itself, which keeps the enclosures tight.
+/// Each condition is checked on adaptive sub-boxes (`everywhere`), with one strict sign over
+/// all of them, and F''(c) on the cusp box itself, which keeps the enclosures tight.
 pub fn injective_near_cusp(chain: &Chain3R, u: [Interval; 2], c: [Interval; 2]) -> bool {
-    const N: usize = 16;
-    let cells = grid(&u, N);
-    let evals: Vec<BoxEval> = cells.iter().map(|b| evaluate(chain, *b)).collect();
+    let at_c = evaluate(chain, c);
     // (a) and (b): with ∂det/∂θₖ of one strict sign on u, every segment along θₖ meets S at most
     // once; with det ≠ 0 on the two edges θₖ = const, the signs there are fixed, so S ∩ u is
     // empty or one arc across u.
     let arc = (0..2).any(|k| {
-        let s = sign(evals[0].grad_det[k]);
-        s.is_some()
-            && evals.iter().all(|e| sign(e.grad_det[k]) == s)
+        let Some(s) = sign(at_c.grad_det[k]) else { return false };
+        everywhere(u, DEPTH, &mut |b| sign(evaluate(chain, *b).grad_det[k]) == Some(s))
             && [u[k].inf(), u[k].sup()].into_iter().all(|at| {
-                cells.iter().filter(|b| b[k].inf() == cells[0][k].inf()).all(|b| {
-                    let mut edge = *b;
-                    edge[k] = point(at);
-                    !evaluate(chain, edge).det.contains(0.0)
-                })
+                let mut edge = u;
+                edge[k] = point(at);
+                everywhere(edge, DEPTH, &mut |b| !evaluate(chain, *b).det.contains(0.0))
             })
     });
     if !arc {
         return false;
     }
     // (c) F''(c) × F'''(τ) of one strict sign for τ on S ∩ u.
-    let (f2c, _) = flow_derivatives(chain, c);
-    let mut want = None;
-    for (b, e) in cells.iter().zip(&evals) {
-        if !e.det.contains(0.0) {
-            continue;
+    let (f2c, f3c) = flow_derivatives(chain, c);
+    let Some(want) = sign(f2c[0] * f3c[1] - f2c[1] * f3c[0]) else { return false };
+    everywhere(u, DEPTH, &mut |b| {
+        if !evaluate(chain, *b).det.contains(0.0) {
+            return true;
         }
         let (_, f3) = flow_derivatives(chain, *b);
-        let s = sign(f2c[0] * f3[1] - f2c[1] * f3[0]);
-        if s.is_none() || (want.is_some() && s != want) {
-            return false;
-        }
-        want = s;
-    }
-    true
+        sign(f2c[0] * f3[1] - f2c[1] * f3[0]) == Some(want)
+    })
 }
 
 /// A box around `c` on which `injective_near_cusp` holds, trying radii from 0.4 down.
@@ -311,7 +322,7 @@ pub fn search(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &NodeSe
     let regions: Vec<[Interval; 2]> = cusps.iter().filter(|c| c.unique).filter_map(|c| cusp_region(chain, c)).collect();
     stats.cusp_regions = regions.len() as u64;
     let mut tree = Tree { chain, bands, cells: Vec::new() };
-    let root = tree.add([motion::full_range(), motion::full_range()]);
+    let root = tree.add([motion::full_range(), motion::full_range()], None);
     let mut stack = vec![(root, root)];
     let mut nodes: Vec<Node> = Vec::new();
     let mut undecided = Vec::new();
@@ -345,13 +356,35 @@ pub fn search(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &NodeSe
             continue;
         }
         let disjoint = i != j && !meet_on_torus(&pb, &qb);
+        // The smallest tree cell holding both boxes holds their hull too (unless the hull goes
+        // across the ±π seam); its cached enclosures often already prove injectivity, for
+        // siblings and for a box with itself exactly on the hull.
+        let unshifted = near[0] == qb[0] && near[1] == qb[1];
+        let g_mid = p.eval.g_mid;
+        let injective = |tree: &Tree| {
+            if unshifted {
+                let e = &tree.cells[tree.common_ancestor(i, j)].eval;
+                if injective_from(e.grad_det, e.df, g_mid) {
+                    return true;
+                }
+            }
+            // Enclosures over the hull contain those over each box, so the certificate can
+            // only hold on the hull if it holds on both boxes (cached): skip hopeless hulls.
+            let (ep, eq) = (&tree.cells[i].eval, &tree.cells[j].eval);
+            if !(injective_from(ep.grad_det, ep.df, g_mid) && injective_from(eq.grad_det, eq.df, g_mid)) {
+                return false;
+            }
+            injective_mean_value(chain, hull, g_mid)
+        };
         // Far pairs first meet Krawczyk, which is cheap on cached evaluations; near ones the
         // injectivity certificate, for which Krawczyk cannot work (the diagonal is a curve of zeros).
-        if !disjoint && injective_mean_value(chain, hull, p.eval.g_mid) {
+        if !disjoint && injective(&tree) {
             stats.injective += 1;
             continue;
         }
-        if disjoint {
+        // Krawczyk only below a width: on the bundled robots it never concluded on boxes a
+        // radian wide or more (thousands of calls on robot f), as its linearisation is too loose.
+        if disjoint && width(&pb).max(width(&qb)) < KRAWCZYK_WIDTH {
             match krawczyk_node(&pb, &p.eval, &qb, &q.eval) {
                 Step::Empty => {
                     stats.krawczyk_empty += 1;
@@ -372,7 +405,7 @@ pub fn search(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &NodeSe
                 }
                 _ => {}
             }
-            if width(&hull) < 0.5 && injective_mean_value(chain, hull, p.eval.g_mid) {
+            if width(&hull) < 0.5 && injective(&tree) {
                 stats.injective += 1;
                 continue;
             }

@@ -219,3 +219,81 @@ impl IkReport {
         IkReport { robot: chain.name.clone(), point, status: if s.complete { "complete" } else { "incomplete" }, solutions, processed: s.processed }
     }
 }
+
+/// A capsule of the collision scene.
+#[derive(Clone, Debug, Serialize)]
+pub struct BodyRecord {
+    /// Collision element name (or `link/index`).
+    pub name: String,
+    /// Its link.
+    pub link: String,
+    /// Radius (metres).
+    pub radius: f64,
+    /// Segment end points in the link frame (metres).
+    pub segment: [[f64; 3]; 2],
+}
+
+/// A colliding box.
+#[derive(Clone, Debug, Serialize)]
+pub struct CollidingRecord {
+    /// Joint box.
+    pub joints: Joints,
+    /// The two bodies proven to collide on all of it.
+    pub pair: [String; 2],
+}
+
+/// A free or undecided box.
+#[derive(Clone, Debug, Serialize)]
+pub struct BoxRecord {
+    /// Joint box.
+    pub joints: Joints,
+}
+
+/// What `linkspace collisions --json` writes.
+#[derive(Clone, Debug, Serialize)]
+pub struct CollisionReport {
+    /// Robot name.
+    pub robot: String,
+    /// The three revolute joints, base first.
+    pub joints: [String; 3],
+    /// Precision (radians).
+    pub precision: f64,
+    /// The capsules.
+    pub bodies: Vec<BodyRecord>,
+    /// The pairs checked, by body name.
+    pub pairs: Vec<[String; 2]>,
+    /// `complete` or `incomplete`.
+    pub status: &'static str,
+    /// Boxes where a pair collides everywhere.
+    pub colliding: Vec<CollidingRecord>,
+    /// Boxes where no pair collides anywhere.
+    pub free: Vec<BoxRecord>,
+    /// The rest.
+    pub undecided: Vec<BoxRecord>,
+    /// Counters and areas.
+    pub stats: super::collision::CollisionStats,
+}
+
+impl CollisionReport {
+    /// Builds the report of a classification.
+    pub fn new(scene: &super::collision::Scene, precision: f64, set: &super::collision::CollisionSet) -> Self {
+        let capsules = scene.capsules();
+        let name = |k: usize| {
+            let (i, j) = scene.pairs()[k];
+            [capsules[i].name.clone(), capsules[j].name.clone()]
+        };
+        let joints = |theta: &[Interval; 2]| BTreeMap::from([(scene.joints[1].clone(), bounds(theta[0])), (scene.joints[2].clone(), bounds(theta[1]))]);
+        CollisionReport {
+            robot: scene.name.clone(),
+            joints: scene.joints.clone(),
+            precision,
+            bodies: capsules.iter().map(|c| BodyRecord { name: c.name.clone(), link: c.link.clone(), radius: c.radius, segment: c.segment }).collect(),
+            pairs: (0..scene.pairs().len()).map(name).collect(),
+            status: if set.complete { "complete" } else { "incomplete" },
+            colliding: set.colliding.iter().map(|c| CollidingRecord { joints: joints(&c.theta), pair: name(c.pair) }).collect(),
+            free: set.free.iter().map(|b| BoxRecord { joints: joints(b) }).collect(),
+            undecided: set.undecided.iter().map(|b| BoxRecord { joints: joints(b) }).collect(),
+            stats: set.stats,
+        }
+    }
+}

@@ -21,16 +21,16 @@ use inari::Interval;
 
 /// A closed interval `[lo, hi]` with outward-rounded arithmetic (see the module doc).
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct Iv {
-    lo: f64,
-    hi: f64,
+pub(super) struct Iv {
+    pub(super) lo: f64,
+    pub(super) hi: f64,
 }
 
 impl Iv {
-    const ZERO: Iv = Iv { lo: 0.0, hi: 0.0 };
+    pub(super) const ZERO: Iv = Iv { lo: 0.0, hi: 0.0 };
 
     #[inline(always)]
-    fn from(x: Interval) -> Iv {
+    pub(super) fn from(x: Interval) -> Iv {
         if x.is_empty() {
             Iv { lo: f64::NAN, hi: f64::NAN }
         } else {
@@ -39,27 +39,42 @@ impl Iv {
     }
 
     #[inline(always)]
-    fn to(self) -> Interval {
+    pub(super) fn to(self) -> Interval {
         crate::interval::interval(self.lo, self.hi)
     }
 
     #[inline(always)]
-    fn add(self, o: Iv) -> Iv {
+    pub(super) fn add(self, o: Iv) -> Iv {
         Iv { lo: (self.lo + o.lo).next_down(), hi: (self.hi + o.hi).next_up() }
     }
 
     #[inline(always)]
-    fn sub(self, o: Iv) -> Iv {
+    pub(super) fn sub(self, o: Iv) -> Iv {
         Iv { lo: (self.lo - o.hi).next_down(), hi: (self.hi - o.lo).next_up() }
     }
 
     #[inline(always)]
-    fn neg(self) -> Iv {
+    pub(super) fn neg(self) -> Iv {
         Iv { lo: -self.hi, hi: -self.lo }
     }
 
+    /// `y · self` for a finite double `y`.
     #[inline(always)]
-    fn mul(self, o: Iv) -> Iv {
+    pub(super) fn scale(self, y: f64) -> Iv {
+        if y == 0.0 {
+            // Exactly zero, even for unbounded `self` (where y·∞ would be NaN).
+            return Iv::ZERO;
+        }
+        let (a, b) = (y * self.lo, y * self.hi);
+        if y > 0.0 {
+            Iv { lo: a.next_down(), hi: b.next_up() }
+        } else {
+            Iv { lo: b.next_down(), hi: a.next_up() }
+        }
+    }
+
+    #[inline(always)]
+    pub(super) fn mul(self, o: Iv) -> Iv {
         let (a, b, c, d) = (self.lo * o.lo, self.lo * o.hi, self.hi * o.lo, self.hi * o.hi);
         // A product 0·∞ (NaN) stands for 0, which min and max then ignore rightly, as the other
         // products bound the set; a NaN operand (empty) makes every product NaN.
@@ -178,6 +193,19 @@ impl Taylor {
         out
     }
 
+    /// Coefficient-wise intersection of two enclosures of the same jet (to the lower order).
+    /// Where the two are disjoint, which sound enclosures never are, `self` is kept.
+    pub fn intersect(&self, o: &Taylor) -> Taylor {
+        let order = self.order.min(o.order);
+        let mut out = Taylor::zero(order);
+        for n in 0..index(order + 1, 0) {
+            let (a, b) = (self.c[n], o.c[n]);
+            let (lo, hi) = (a.lo.max(b.lo), a.hi.min(b.hi));
+            out.c[n] = if lo <= hi { Iv { lo, hi } } else { a };
+        }
+        out
+    }
+
     /// `self · s` for an interval constant `s`.
     pub fn scale(&self, s: Interval) -> Self {
         let s = Iv::from(s);
@@ -288,7 +316,8 @@ mod tests {
         fn iv_contains_inari(a in -1e3f64..1e3, w in 0.0f64..10.0, b in -1e3f64..1e3, v in 0.0f64..10.0) {
             let (x, y) = (interval(a, a + w), interval(b, b + v));
             let (p, q) = (Iv::from(x), Iv::from(y));
-            for (mine, theirs) in [(p.add(q), x + y), (p.sub(q), x - y), (p.mul(q), x * y), (p.neg(), -x)] {
+            let c = crate::interval::point(b);
+            for (mine, theirs) in [(p.add(q), x + y), (p.sub(q), x - y), (p.mul(q), x * y), (p.neg(), -x), (p.scale(b), c * x), (p.scale(0.0), x * crate::interval::point(0.0))] {
                 proptest::prop_assert!(mine.lo <= theirs.inf() && theirs.sup() <= mine.hi);
             }
         }

@@ -75,6 +75,54 @@ pub struct Link {
     pub name: String,
     /// Index of the joint whose child this link is (`None` for the root).
     pub parent_joint: Option<usize>,
+    /// The link's `<collision>` elements, in the link frame.
+    pub collisions: Vec<Collision>,
+}
+
+/// One `<collision>` element of a link.
+#[derive(Clone, Debug)]
+pub struct Collision {
+    /// Its `name` attribute, if any.
+    pub name: Option<String>,
+    /// Pose of the shape in the link frame.
+    pub origin: Isometry3<f64>,
+    /// The shape, in its own frame (cylinders and capsules along z, centred).
+    pub shape: Shape,
+}
+
+/// A collision shape as URDF gives it. Sizes are checked finite and non-negative.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Shape {
+    /// `<cylinder radius length>`: along z, centred.
+    Cylinder {
+        /// metres
+        radius: f64,
+        /// metres, end to end
+        length: f64,
+    },
+    /// `<capsule radius length>` (the SDF convention): the cylinder part along z, centred, with
+    /// hemispheres of `radius` on its ends.
+    Capsule {
+        /// metres
+        radius: f64,
+        /// metres, between the hemispheres' centres
+        length: f64,
+    },
+    /// `<sphere radius>`.
+    Sphere {
+        /// metres
+        radius: f64,
+    },
+    /// `<box size>`.
+    Box {
+        /// metres, full sizes along x, y, z
+        size: [f64; 3],
+    },
+    /// `<mesh filename>`.
+    Mesh {
+        /// As written in the file.
+        filename: String,
+    },
 }
 
 /// A mechanism: a spanning tree of joints rooted at the ground, plus loop closures.

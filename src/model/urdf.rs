@@ -12,7 +12,7 @@
 //! </loop>
 //! ```
 
-use super::{Joint, JointKind, Link, LoopClosure, Mechanism, ModelError};
+use super::{Collision, Joint, JointKind, Link, LoopClosure, Mechanism, ModelError, Shape};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use std::collections::HashMap;
 
@@ -34,7 +34,8 @@ pub fn parse(xml: &str) -> Result<Mechanism, ModelError> {
         if index.insert(l.name.clone(), links.len()).is_some() {
             return Err(ModelError::Duplicate(l.name.clone()));
         }
-        links.push(Link { name: l.name.clone(), parent_joint: None });
+        let collisions = l.collision.iter().map(|c| collision(&l.name, c)).collect::<Result<_, _>>()?;
+        links.push(Link { name: l.name.clone(), parent_joint: None, collisions });
     }
     if links.is_empty() {
         return Err(ModelError::Malformed("the robot has no links".into()));
@@ -157,6 +158,39 @@ pub fn parse(xml: &str) -> Result<Mechanism, ModelError> {
     }
 
     Ok(Mechanism { name: robot.name.clone(), links, joints, loops, root })
+}
+
+/// A `<collision>` element, with its sizes checked.
+fn collision(link: &str, c: &urdf_rs::Collision) -> Result<Collision, ModelError> {
+    let element = format!("collision of link '{link}'");
+    let origin = pose(&element, c.origin.xyz.0, c.origin.rpy.0)?;
+    let size = |values: &[f64]| -> Result<(), ModelError> {
+        check_finite(&element, values)?;
+        if values.iter().any(|&v| v < 0.0) {
+            return Err(bad(&element, "a size is negative"));
+        }
+        Ok(())
+    };
+    let shape = match &c.geometry {
+        urdf_rs::Geometry::Cylinder { radius, length } => {
+            size(&[*radius, *length])?;
+            Shape::Cylinder { radius: *radius, length: *length }
+        }
+        urdf_rs::Geometry::Capsule { radius, length } => {
+            size(&[*radius, *length])?;
+            Shape::Capsule { radius: *radius, length: *length }
+        }
+        urdf_rs::Geometry::Sphere { radius } => {
+            size(&[*radius])?;
+            Shape::Sphere { radius: *radius }
+        }
+        urdf_rs::Geometry::Box { size: s } => {
+            size(&s.0)?;
+            Shape::Box { size: s.0 }
+        }
+        urdf_rs::Geometry::Mesh { filename, .. } => Shape::Mesh { filename: filename.clone() },
+    };
+    Ok(Collision { name: c.name.clone(), origin, shape })
 }
 
 fn bad(element: &str, problem: &str) -> ModelError {
