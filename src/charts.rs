@@ -216,6 +216,9 @@ pub fn run(dir: &Path, quick: bool) -> Result<()> {
     // 5. 3R singular curves in joint space and workspace, with cusps and nodes.
     singular_curves(dir, if quick { 96 } else { 256 })?;
 
+    // 5b. Collision set of robot a beside a column (SIVIA on capsules).
+    collision_chart(dir)?;
+
     // 6. Speed against accuracy for the other problem families: distances and 3R cusps.
     distance_sweeps(dir, quick)?;
     cusp_sweep(dir, quick)?;
@@ -381,5 +384,23 @@ fn cusp_sweep(dir: &Path, quick: bool) -> Result<()> {
     let mut svg = String::new();
     lines(&mut svg, "3R cusps: CPU seconds against the widest cusp box diagonal", "widest cusp-box diagonal (rad)", "CPU seconds", &series, Scale::Log, Scale::Log)?;
     write(dir, "speed_accuracy_cusps.svg", &svg)?;
+    Ok(())
+}
+
+/// Robot a beside a column: colliding and undecided boxes of the SIVIA classification.
+fn collision_chart(dir: &Path) -> Result<()> {
+    use linkspace::manip3r::collision::{classify, CollisionSettings, Scene};
+    let scene = Scene::from_mechanism(&urdf::parse(include_str!("../urdf/orthogonal_3r_a_column.urdf"))?)?;
+    let set = classify(&scene, &CollisionSettings { precision: 1e-2, ..Default::default() })?;
+    let rect = |t: &[linkspace::Interval; 2]| [t[0].inf(), t[0].sup(), t[1].inf(), t[1].sup()];
+    let pct = |a: f64| 100.0 * a / (4.0 * std::f64::consts::PI * std::f64::consts::PI);
+    let panels = [
+        Panel { title: format!("colliding: {:.2} % of joint space", pct(set.stats.colliding_area)), rects: set.colliding.iter().map(|c| rect(&c.theta)).collect(), marks: vec![] },
+        Panel { title: format!("undecided at 1e-2: {:.2} %", pct(set.stats.undecided_area)), rects: set.undecided.iter().map(rect).collect(), marks: vec![] },
+    ];
+    let pi = std::f64::consts::PI;
+    let mut svg = String::new();
+    box_panels(&mut svg, "Robot a beside a column: collision set by SIVIA on capsules (the rest is proven free)", "θ2", "θ3", &panels, (-pi, pi), (-pi, pi))?;
+    write(dir, "collisions_3r_a_column.svg", &svg)?;
     Ok(())
 }
