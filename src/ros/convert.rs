@@ -1,7 +1,10 @@
 //! From the analysis layer's plain results to wire types: box sets, markers, joint states.
 
-use super::msgs::{self, BoxSet, ColorRGBA, Header, JointState, Marker, MarkerArray, Point, Pose, Quaternion, SolveStats, Time, Vector3};
-use crate::analysis::BoxSetResult;
+use super::msgs::{
+    self, BoxSet, ColorRGBA, CuspRecord, Header, InverseKinematicsResponse, JointState, LsBox, Marker, MarkerArray, NodeRecord, Point, Pose, Quaternion, SingularityReport, SolveStats,
+    Time, Vector3,
+};
+use crate::analysis::{Bounds, BoxSetResult, IkResult, SingularityResult};
 use crate::solve::{BoxStatus, Limit, SolverSettings, Status};
 
 /// A header stamped now (wall clock) in `frame`.
@@ -149,4 +152,97 @@ pub fn assembly_modes(r: &BoxSetResult) -> Vec<JointState> {
             effort: vec![],
         })
         .collect()
+}
+
+fn intervals(b: &[Bounds]) -> Vec<msgs::Interval> {
+    b.iter().map(|x| msgs::Interval { lower: x[0], upper: x[1] }).collect()
+}
+
+/// A singularity result as a `linkspace_msgs/SingularityReport`, records in the result's order.
+pub fn singularity_report(r: &SingularityResult, run_id: u64) -> SingularityReport {
+    SingularityReport {
+        header: header(""),
+        mechanism: r.mechanism.clone(),
+        run_id,
+        ok: true,
+        message: r.summary.clone(),
+        singular_curves: box_set(&r.singular_curves, run_id),
+        cusps: r.cusps.iter().map(|c| CuspRecord { joints: intervals(&c.joints), workspace: intervals(&c.workspace), certified: c.certified }).collect(),
+        nodes: r
+            .nodes
+            .iter()
+            .map(|n| NodeRecord { joints_a: intervals(&n.joints[0]), joints_b: intervals(&n.joints[1]), workspace: intervals(&n.workspace), certified: n.certified })
+            .collect(),
+        internal_motions: box_set(&r.internal_motions, run_id),
+        joint_names: r.joint_names.clone(),
+        workspace_names: r.workspace_names.clone(),
+        complete: r.status == Status::Complete,
+        precision: r.query.precision,
+    }
+}
+
+fn sphere(frame: &str, ns: &str, id: i32, centre: [f64; 3], size: f64, color: ColorRGBA) -> Marker {
+    Marker { r#type: msgs::marker::SPHERE, ..cube(frame, ns, id, centre, [size; 3], color) }
+}
+
+/// Markers for RViz of a singularity result, all in frame `<robot>/joint_space` over the
+/// record joints (x, y; radians as metres): a `DELETEALL`, then namespace `singular_curves`
+/// (one flat cube per cover box, coloured by piece), `internal_motions` (one flat cube per
+/// line), `cusps` (red spheres; grey when undecided) and `nodes` (blue spheres, one per point
+/// of each pair). At most `cap` markers per namespace.
+pub fn singularity_markers(r: &SingularityResult, cap: usize) -> MarkerArray {
+    let frame = format!("{}/joint_space", r.mechanism);
+    let mut markers = vec![Marker { header: header(&frame), action: msgs::marker::DELETEALL, ..Default::default() }];
+    let mut id = 0;
+    let centre = |j: &[Bounds]| [0.5 * (j[0][0] + j[0][1]), 0.5 * (j[1][0] + j[1][1]), 0.0];
+    let size = |j: &[Bounds]| [j[0][1] - j[0][0], j[1][1] - j[1][0], 0.0];
+    for (ns, set) in [("singular_curves", &r.singular_curves), ("internal_motions", &r.internal_motions)] {
+        for b in set.boxes.iter().take(cap) {
+            let mut c = colour(b.cluster);
+            c.a = 0.5;
+            markers.push(cube(&frame, ns, id, centre(&b.joints), size(&b.joints), c));
+            id += 1;
+        }
+    }
+    let grey = ColorRGBA { r: 0.5, g: 0.5, b: 0.5, a: 0.9 };
+    for c in r.cusps.iter().take(cap) {
+        let red = ColorRGBA { r: 0.9, g: 0.1, b: 0.1, a: 1.0 };
+        markers.push(sphere(&frame, "cusps", id, centre(&c.joints), 0.08, if c.certified { red } else { grey.clone() }));
+        id += 1;
+    }
+    for n in r.nodes.iter().take(cap) {
+        let blue = ColorRGBA { r: 0.1, g: 0.2, b: 0.9, a: 1.0 };
+        for point in &n.joints {
+            markers.push(sphere(&frame, "nodes", id, centre(point), 0.08, if n.certified { blue.clone() } else { grey.clone() }));
+            id += 1;
+        }
+    }
+    MarkerArray { markers }
+}
+
+/// The reply to an inverse-kinematics request.
+pub fn ik_response(r: &IkResult) -> InverseKinematicsResponse {
+    let unique = r.solutions.iter().filter(|s| s.unique).count();
+    let clusters = r.solutions.len() - unique;
+    let mut message = format!("{unique} solutions proven unique, {clusters} clusters undecided at sigma (each may hold one or several solutions, or a line of them)");
+    if !r.complete {
+        message.push_str("; incomplete: the box limit was reached, and the clusters include the boxes left pending");
+    }
+    InverseKinematicsResponse {
+        ok: true,
+        message,
+        complete: r.complete,
+        solutions: r
+            .solutions
+            .iter()
+            .enumerate()
+            .map(|(k, s)| LsBox { intervals: intervals(&s.joints), status: msgs::BOX_SOLUTION, level: 0, cluster: k as i32 })
+            .collect(),
+        joint_names: r.joint_names.clone(),
+        unique: r.solutions.iter().map(|s| s.unique).collect(),
+        merged_boxes: r.solutions.iter().map(|s| s.boxes.min(u32::MAX as usize) as u32).collect(),
+        point_names: r.point_names.clone(),
+        point_values: intervals(&r.point_values),
+        processed: r.processed,
+    }
 }
