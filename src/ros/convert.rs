@@ -246,3 +246,118 @@ pub fn ik_response(r: &IkResult) -> InverseKinematicsResponse {
         processed: r.processed,
     }
 }
+
+/// Largest service reply the node sends, in bytes of CDR (estimated). Replies sent as several
+/// DDS fragments never reached rclpy (Fast DDS 2.14) in our tests: a 35 KB Solve reply
+/// arrived, a 90 KB one did not, while box sets of a megabyte arrive on topics. So replies stay
+/// under one datagram, and what does not fit is on the mechanism's topics.
+pub const REPLY_BUDGET: usize = 48 * 1024;
+
+/// Estimated CDR size of a box set.
+pub fn box_set_bytes(s: &BoxSet) -> usize {
+    let names: usize = s.variable_names.iter().chain(&s.joint_names).chain(&s.fixed_joint_names).map(|n| n.len() + 8).sum();
+    8 * (s.lower.len() + s.upper.len() + s.joint_lower.len() + s.joint_upper.len() + s.fixed_joint_values.len()) + 9 * s.box_status.len() + names + 256
+}
+
+/// Clears the boxes of a set, keeping its header, status, settings, names and counters.
+pub fn strip_boxes(s: &mut BoxSet) {
+    for v in [&mut s.lower, &mut s.upper, &mut s.joint_lower, &mut s.joint_upper] {
+        v.clear();
+    }
+    s.box_status.clear();
+    s.level.clear();
+    s.cluster.clear();
+}
+
+fn record_bytes(joints: usize, workspace: usize) -> usize {
+    16 * (joints + workspace) + 16
+}
+
+/// Estimated CDR size of a singularity report.
+pub fn singularity_bytes(r: &SingularityReport) -> usize {
+    box_set_bytes(&r.singular_curves)
+        + box_set_bytes(&r.internal_motions)
+        + r.cusps.iter().map(|c| record_bytes(c.joints.len(), c.workspace.len())).sum::<usize>()
+        + r.nodes.iter().map(|n| record_bytes(n.joints_a.len() + n.joints_b.len(), n.workspace.len())).sum::<usize>()
+        + r.message.len()
+        + 512
+}
+
+/// Makes a singularity report fit in a service reply: the singular-curve cover goes (it is the
+/// same for every run and is on the `singularities` topic), then undecided records from the
+/// end, and the report is then marked incomplete. Returns what was left out, for the message.
+pub fn fit_singularity_reply(r: &mut SingularityReport, topic: &str) -> Option<String> {
+    if singularity_bytes(r) <= REPLY_BUDGET {
+        return None;
+    }
+    let mut notes = Vec::new();
+    if !r.singular_curves.box_status.is_empty() {
+        notes.push(format!("the {} boxes of the singular-curve cover are left out of this reply (they are on {topic})", r.singular_curves.box_status.len()));
+        strip_boxes(&mut r.singular_curves);
+    }
+    let mut dropped = 0;
+    while singularity_bytes(r) > REPLY_BUDGET {
+        if r.nodes.last().is_some_and(|n| !n.certified) {
+            r.nodes.pop();
+        } else if r.cusps.last().is_some_and(|c| !c.certified) {
+            r.cusps.pop();
+        } else {
+            break;
+        }
+        dropped += 1;
+    }
+    if dropped > 0 {
+        r.complete = false;
+        notes.push(format!("{dropped} undecided records are left out (a service reply must stay under {} KiB), so this reply does not enclose every singularity", REPLY_BUDGET / 1024));
+    }
+    Some(notes.join("; "))
+}
+
+/// Makes an inverse-kinematics reply fit: clusters go from the end, and the reply is then
+/// marked incomplete. Returns what was left out, for the message.
+pub fn fit_ik_reply(r: &mut InverseKinematicsResponse) -> Option<String> {
+    let bytes = |r: &InverseKinematicsResponse| r.solutions.iter().map(|b| 16 * b.intervals.len() + 24).sum::<usize>() + r.message.len() + 512;
+    let mut dropped = 0;
+    while bytes(r) > REPLY_BUDGET && r.unique.last() == Some(&false) {
+        r.solutions.pop();
+        r.unique.pop();
+        r.merged_boxes.pop();
+        dropped += 1;
+    }
+    (dropped > 0).then(|| {
+        r.complete = false;
+        format!("{dropped} clusters are left out (a service reply must stay under {} KiB), so this reply does not enclose every solution: ask again with a smaller max_boxes or a larger sigma", REPLY_BUDGET / 1024)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn set(boxes: usize, dim: usize) -> BoxSet {
+        BoxSet { lower: vec![0.0; boxes * dim], upper: vec![1.0; boxes * dim], box_status: vec![0; boxes], level: vec![0; boxes], cluster: vec![0; boxes], dim: dim as u32, ..Default::default() }
+    }
+
+    #[test]
+    fn replies_are_cut_to_the_budget_with_a_reason() {
+        let small = set(100, 2);
+        assert!(box_set_bytes(&small) < REPLY_BUDGET);
+        let mut r = SingularityReport { singular_curves: set(3000, 2), complete: true, ..Default::default() };
+        let certified = CuspRecord { joints: vec![Default::default(); 2], workspace: vec![Default::default(); 2], certified: true };
+        r.cusps = vec![certified.clone(); 4];
+        r.cusps.extend(vec![CuspRecord { certified: false, ..certified.clone() }; 2000]);
+        let note = fit_singularity_reply(&mut r, "/t").expect("too big");
+        assert!(note.contains("3000 boxes of the singular-curve cover") && note.contains("undecided records are left out"), "{note}");
+        assert!(singularity_bytes(&r) <= REPLY_BUDGET && !r.complete);
+        assert_eq!(r.cusps.iter().filter(|c| c.certified).count(), 4, "certified records stay");
+        let mut fits = SingularityReport { singular_curves: small, complete: true, ..Default::default() };
+        assert_eq!(fit_singularity_reply(&mut fits, "/t"), None);
+        assert!(fits.complete && fits.singular_curves.box_status.len() == 100);
+
+        let one = LsBox { intervals: vec![Default::default(); 3], ..Default::default() };
+        let mut ik = InverseKinematicsResponse { complete: true, solutions: vec![one; 3000], unique: vec![false; 3000], merged_boxes: vec![1; 3000], ..Default::default() };
+        ik.unique[0] = true;
+        assert!(fit_ik_reply(&mut ik).expect("too big").contains("clusters are left out"));
+        assert!(!ik.complete && ik.unique[0] && ik.solutions.len() == ik.unique.len() && ik.solutions.len() < 3000);
+    }
+}

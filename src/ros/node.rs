@@ -347,6 +347,16 @@ fn solve_error(message: String) -> SolveResponse {
     SolveResponse { ok: false, message, ..Default::default() }
 }
 
+/// A Singularities reply carrying `report`, cut to what a service reply can carry.
+fn singularity_reply(report: &SingularityReport, topic: &str) -> SingularitiesResponse {
+    let mut report = report.clone();
+    let mut message = report.message.clone();
+    if let Some(note) = convert::fit_singularity_reply(&mut report, topic) {
+        message = format!("{message}; {note}");
+    }
+    SingularitiesResponse { ok: true, message, report }
+}
+
 impl State {
     fn start_load_time_runs(&mut self) {
         for k in 0..self.mechanisms.len() {
@@ -479,7 +489,10 @@ impl State {
             Outcome::Singularities(result) => self.finished_singularities(run, r, result).await,
             Outcome::InverseKinematics(result) => {
                 eprintln!("linkspace: {name}: run {run} (inverse kinematics): {} solutions, {} boxes, {:.3} s", result.solutions.len(), result.processed, result.seconds);
-                let reply = convert::ik_response(&result);
+                let mut reply = convert::ik_response(&result);
+                if let Some(note) = convert::fit_ik_reply(&mut reply) {
+                    reply.message = format!("{}; {note}", reply.message);
+                }
                 for (id, _) in r.waiters {
                     self.reply_ik(id, reply.clone());
                 }
@@ -520,9 +533,19 @@ impl State {
                 if let Err(e) = m.topics.solve_result.async_publish(set.clone()).await {
                     eprintln!("linkspace: publishing {}/solve_result: {e:?}", m.prefix);
                 }
-                let message = format!("run {run}: {status}");
+                let mut message = format!("run {run}: {status}");
+                let mut reply_set = set.clone();
+                if convert::box_set_bytes(&set) > convert::REPLY_BUDGET {
+                    convert::strip_boxes(&mut reply_set);
+                    message.push_str(&format!(
+                        "; its {} boxes are left out of this reply (a service reply must stay under {} KiB) and are on {}/solve_result",
+                        set.box_status.len(),
+                        convert::REPLY_BUDGET / 1024,
+                        m.prefix
+                    ));
+                }
                 for (id, _) in r.waiters {
-                    self.reply_solve(id, SolveResponse { ok: true, message: message.clone(), run_id: run, done: true, result: set.clone() });
+                    self.reply_solve(id, SolveResponse { ok: true, message: message.clone(), run_id: run, done: true, result: reply_set.clone() });
                 }
                 eprintln!("linkspace: {name}: published solve_result of run {run}");
             }
@@ -550,8 +573,9 @@ impl State {
             m.singularity_run = None;
             eprintln!("linkspace: {name}: published singularities");
         }
+        let reply = singularity_reply(&report, &format!("{}/singularities", self.mechanisms[r.mechanism].prefix));
         for (id, _) in r.waiters {
-            self.reply_singularities(id, SingularitiesResponse { ok: true, message: report.message.clone(), report: report.clone() });
+            self.reply_singularities(id, reply.clone());
         }
     }
 
@@ -766,7 +790,7 @@ impl State {
         }
         if q.precision == 0.0 {
             if let Some((report, _)) = &m.published_singularities {
-                return Some(SingularitiesResponse { ok: true, message: report.message.clone(), report: report.clone() });
+                return Some(singularity_reply(report, &format!("{}/singularities", m.prefix)));
             }
             let Some(run) = m.singularity_run else { return refuse(format!("no singularity report for '{}': {}", q.mechanism, m.message)) };
             let deadline = Instant::now() + Duration::from_secs_f64(self.limits.max_wait);
