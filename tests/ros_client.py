@@ -3,6 +3,7 @@
 test makes the assertions. Every wait has a timeout.
 
     topics   --prefix /linkspace/four_bar              every topic of one mechanism
+    singular --prefix /linkspace/orthogonal_3r_e ...   singularities, markers, progress of each
     services --node /linkspace --script FILE           service calls listed in a JSON file
     load     --node /linkspace --mechanism four_bar    100 requests in flight from 4 clients
 """
@@ -58,6 +59,27 @@ def topics(args):
     out["progress"] = to_plain(got["progress"][-1]) if got["progress"] else None
     s = got["singularities"][-1] if got["singularities"] else None
     out["singularities"] = {"ok": s.ok, "message": s.message, "mechanism": s.mechanism} if s else None
+    print(json.dumps(out))
+
+
+def singular(args):
+    """The latched singularity report, markers and progress of each --prefix (3R robots)."""
+    node = rclpy.create_node("linkspace_test_singular")
+    got = {p: {"singularities": [], "markers": [], "progress": []} for p in args.prefix}
+    for p, g in got.items():
+        node.create_subscription(SingularityReport, f"{p}/singularities", g["singularities"].append, latched())
+        node.create_subscription(MarkerArray, f"{p}/markers", g["markers"].append, latched())
+        node.create_subscription(Progress, f"{p}/progress", g["progress"].append, latched())
+    ok = spin_until(node, lambda: all(v for g in got.values() for v in g.values()), args.timeout)
+    out = {"complete": ok}
+    for p, g in got.items():
+        out[p] = {
+            "singularities": to_plain(g["singularities"][-1]) if g["singularities"] else None,
+            "markers": [{"ns": m.ns, "type": m.type, "action": m.action, "frame": m.header.frame_id,
+                         "position": [m.pose.position.x, m.pose.position.y, m.pose.position.z]}
+                        for m in g["markers"][-1].markers] if g["markers"] else None,
+            "progress": to_plain(g["progress"][-1]) if g["progress"] else None,
+        }
     print(json.dumps(out))
 
 
@@ -225,6 +247,8 @@ def main():
     t = sub.add_parser("topics")
     t.add_argument("--prefix", required=True)
     t.add_argument("--modes", type=int, default=0, help="assembly modes to wait for")
+    sg = sub.add_parser("singular")
+    sg.add_argument("--prefix", action="append", required=True)
     s = sub.add_parser("services")
     s.add_argument("--script", required=True)
     lo = sub.add_parser("load")
@@ -235,12 +259,12 @@ def main():
     lo.add_argument("--requests", type=int, default=100)
     lo.add_argument("--solve-boxes", type=int, default=20000)
     lo.add_argument("--client-depth", type=int, default=100, help="history depth of the service clients")
-    for p in (t, s, lo):
+    for p in (t, sg, s, lo):
         p.add_argument("--timeout", type=float, default=20.0)
     args = ap.parse_args()
     rclpy.init()
     try:
-        {"topics": topics, "services": services, "load": load}[args.cmd](args)
+        {"topics": topics, "singular": singular, "services": services, "load": load}[args.cmd](args)
     finally:
         rclpy.try_shutdown()
 

@@ -508,3 +508,256 @@ fn a_cyclone_dds_client_gets_the_same_boxes_and_replies_with_the_cyclone_mapping
     assert!(refused["message"].as_str().expect("message").contains("no mechanism named 'ghost'"));
     assert!(node.alive());
 }
+
+/// `linkspace CMD ARGS --json FILE` → the report.
+fn cli_json(cmd: &str, args: &[&str]) -> Value {
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("topics-{cmd}-{}-{}.json", std::process::id(), args.join("_").replace(['/', '@', ',', '='], "-")));
+    let mut c = Command::new(env!("CARGO_BIN_EXE_linkspace"));
+    c.arg(cmd).args(args).arg("--json").arg(&path);
+    let (ok, _, err) = run_with_timeout(c, Duration::from_secs(120));
+    assert!(ok, "linkspace {cmd} {args:?}: {err}");
+    let v = serde_json::from_str(&std::fs::read_to_string(&path).expect("json written")).expect("valid json");
+    let _ = std::fs::remove_file(&path);
+    v
+}
+
+fn bounds(v: &Value) -> [f64; 2] {
+    [v[0].as_f64().expect("lo"), v[1].as_f64().expect("hi")]
+}
+
+/// Intervals of a message (`[{lower, upper}]`) as pairs.
+fn intervals(v: &Value) -> Vec<[f64; 2]> {
+    v.as_array().expect("intervals").iter().map(|i| [i["lower"].as_f64().expect("lower"), i["upper"].as_f64().expect("upper")]).collect()
+}
+
+/// Joint intervals of a CLI record (`{"joint2": [lo, hi], ...}`) in the order of `names`.
+fn by_name(record: &Value, names: &[&str]) -> Vec<[f64; 2]> {
+    names.iter().map(|n| bounds(&record[n])).collect()
+}
+
+/// The singularity report (as JSON from Python) holds exactly the CLI report's records, in
+/// the same order: certified ones, then undecided ones.
+fn assert_same_singularities(report: &Value, cli: &Value) {
+    assert_eq!(report["ok"], json!(true), "{}", report["message"]);
+    let names: Vec<&str> = report["joint_names"].as_array().expect("joint names").iter().map(|v| v.as_str().expect("str")).collect();
+    assert_eq!(names, vec![cli["joints"][1].as_str().expect("joint2"), cli["joints"][2].as_str().expect("joint3")]);
+    assert_eq!(report["workspace_names"], json!(["radius", "z"]));
+    assert_eq!(report["complete"], json!(cli["status"] == "complete"));
+    assert_eq!(report["precision"], cli["settings"]["precision"]);
+    let workspace = |w: &Value| vec![bounds(&w["radius"]), bounds(&w["z"])];
+    let cusps = report["cusps"].as_array().expect("cusps");
+    let (cli_cusps, cli_undecided) = (cli["cusps"].as_array().expect("cusps"), cli["undecided"]["cusps"].as_array().expect("undecided"));
+    assert_eq!(cusps.len(), cli_cusps.len() + cli_undecided.len(), "cusp records");
+    for (c, r) in cusps.iter().zip(cli_cusps) {
+        assert_eq!(intervals(&c["joints"]), by_name(&r["joints"], &names));
+        assert_eq!(intervals(&c["workspace"]), workspace(&r["workspace"]));
+        assert_eq!(c["certified"], r["unique"]);
+    }
+    for (c, r) in cusps[cli_cusps.len()..].iter().zip(cli_undecided) {
+        assert_eq!(intervals(&c["joints"]), by_name(&r["joints"], &names));
+        assert_eq!(c["certified"], json!(false));
+    }
+    let nodes = report["nodes"].as_array().expect("nodes");
+    let (cli_nodes, cli_pairs) = (cli["nodes"].as_array().expect("nodes searched"), cli["undecided"]["nodes"].as_array().expect("undecided"));
+    assert_eq!(nodes.len(), cli_nodes.len() + cli_pairs.len(), "node records");
+    for (n, r) in nodes.iter().zip(cli_nodes) {
+        assert_eq!(intervals(&n["joints_a"]), by_name(&r["points"][0], &names));
+        assert_eq!(intervals(&n["joints_b"]), by_name(&r["points"][1], &names));
+        assert_eq!(intervals(&n["workspace"]), workspace(&r["workspace"]));
+        assert_eq!(n["certified"], json!(true));
+    }
+    let motions = &report["internal_motions"];
+    let lines = cli["internal_motions"].as_array().expect("internal motions");
+    assert_eq!(motions["dim"], json!(2));
+    let (lower, upper) = (floats(&motions["lower"]), floats(&motions["upper"]));
+    assert_eq!(lower.len(), 2 * lines.len(), "internal-motion boxes");
+    for (k, line) in lines.iter().enumerate() {
+        let b = by_name(&line["joints"], &names);
+        assert_eq!([[lower[2 * k], upper[2 * k]], [lower[2 * k + 1], upper[2 * k + 1]]], [b[0], b[1]], "line {k}");
+    }
+    // The cover of the singular curves (no CLI counterpart; service replies leave its boxes
+    // out) must hold every certified cusp and node point: two independent computations of the
+    // same singular set.
+    let curves = &report["singular_curves"];
+    assert_eq!((curves["analysis"].as_str(), curves["dim"].as_u64(), curves["status"].as_u64()), (Some("singular_curves"), Some(2), Some(0)));
+    let (cl, cu) = (floats(&curves["lower"]), floats(&curves["upper"]));
+    assert_eq!(cl.len(), cu.len());
+    if cl.is_empty() {
+        return;
+    }
+    let covered = |b: &[[f64; 2]]| (0..cl.len() / 2).any(|k| (0..2).all(|d| cl[2 * k + d] <= b[d][1] && b[d][0] <= cu[2 * k + d]));
+    for c in cusps.iter().filter(|c| c["certified"] == json!(true)) {
+        assert!(covered(&intervals(&c["joints"])), "cusp {c} outside the curve cover");
+    }
+    for n in nodes.iter().filter(|n| n["certified"] == json!(true)) {
+        assert!(covered(&intervals(&n["joints_a"])) && covered(&intervals(&n["joints_b"])), "node {n} outside the curve cover");
+    }
+}
+
+/// The tip of a 3R URDF at joint values `q` (floating point), by composing the URDF transforms.
+fn forward_kinematics(urdf_path: &str, q: &[f64]) -> [f64; 3] {
+    use nalgebra::{Isometry3, Point3, Translation3, Unit, UnitQuaternion};
+    let m = linkspace::model::urdf::parse(&std::fs::read_to_string(urdf_path).expect("fixture")).expect("parses");
+    let tip = (0..m.links.len()).find(|&l| m.joints.iter().all(|j| j.parent != l)).expect("a leaf");
+    let mut pose = Isometry3::identity();
+    let mut k = 0;
+    for j in m.path_to(tip) {
+        let joint = &m.joints[j];
+        pose *= joint.origin;
+        if matches!(joint.kind, linkspace::model::JointKind::Revolute { .. }) {
+            pose *= Isometry3::from_parts(Translation3::identity(), UnitQuaternion::from_axis_angle(&Unit::new_normalize(joint.axis), q[k]));
+            k += 1;
+        }
+    }
+    let p = pose * Point3::origin();
+    [p.x, p.y, p.z]
+}
+
+#[test]
+fn a_3r_manipulator_publishes_its_singularities_and_answers_inverse_kinematics() {
+    let Some(python) = python() else { return };
+    let domain = 46;
+    let (e, f) = (format!("{ROOT}/urdf/orthogonal_3r_e.urdf"), format!("{ROOT}/urdf/orthogonal_3r_f.urdf"));
+    let mut node = Node::start(domain, &[&e, &f, "--max-request-boxes", "300000"]);
+    node.wait_for(&["orthogonal_3r_e: published singularities", "orthogonal_3r_f: published singularities"], Duration::from_secs(120));
+
+    // The latched topics, to a late subscriber: the same records as the CLI.
+    let got = py(python, domain, "tests/ros_client.py", &["singular", "--prefix", "/linkspace/orthogonal_3r_e", "--prefix", "/linkspace/orthogonal_3r_f"], Duration::from_secs(90));
+    assert_eq!(got["complete"], json!(true), "{got}");
+    let (ref_e, ref_f) = (cli_json("singularities", &[&e, "--nodes"]), cli_json("singularities", &[&f, "--nodes"]));
+    let report_e = &got["/linkspace/orthogonal_3r_e"]["singularities"];
+    assert_same_singularities(report_e, &ref_e);
+    assert_same_singularities(&got["/linkspace/orthogonal_3r_f"]["singularities"], &ref_f);
+    // Robot e: 4 cusps, 2 nodes; robot f: 2 nodes and its two internal-motion lines.
+    let certified = |r: &Value, k: &str| r[k].as_array().expect("records").iter().filter(|c| c["certified"] == json!(true)).count();
+    assert_eq!((certified(report_e, "cusps"), certified(report_e, "nodes")), (4, 2));
+    let report_f = &got["/linkspace/orthogonal_3r_f"]["singularities"];
+    for report in [report_e, report_f] {
+        assert!(floats(&report["singular_curves"]["lower"]).len() > 2 * 500, "the topic carries the whole curve cover");
+    }
+    assert_eq!((certified(report_f, "cusps"), certified(report_f, "nodes"), floats(&report_f["internal_motions"]["lower"]).len()), (0, 2, 4));
+    // Markers: DELETEALL, one cube per cover box and per line, a sphere per cusp and per node point.
+    let markers = got["/linkspace/orthogonal_3r_e"]["markers"].as_array().expect("markers");
+    assert_eq!(markers[0]["action"], json!(3));
+    let count = |ns: &str| markers.iter().filter(|m| m["ns"] == ns).count();
+    assert_eq!((count("singular_curves"), count("cusps"), count("nodes")), (floats(&report_e["singular_curves"]["lower"]).len() / 2, 4, 4));
+    assert_eq!(markers[1]["frame"], "orthogonal_3r_e/joint_space");
+    let progress = &got["/linkspace/orthogonal_3r_e"]["progress"];
+    assert_eq!((progress["analysis"].as_str(), progress["done"].clone(), progress["decided"].clone()), (Some("singularities"), json!(true), json!(1.0)));
+
+    // Services.
+    let (r, z) = (1.9, 0.4);
+    let ik_ref = cli_json("ik", &[&e, "--point", &format!("{r},{z}"), "--precision", "1e-6"]);
+    let ik_ref_short = cli_json("ik", &[&e, "--point", &format!("{r},{z}"), "--precision", "1e-6", "--max-boxes", "40"]);
+    let cusp = report_e["cusps"][0]["joints"].as_array().expect("cusp").iter().map(|i| 0.5 * (i["lower"].as_f64().expect("lo") + i["upper"].as_f64().expect("hi"))).collect::<Vec<f64>>();
+    let ik = |point: [f64; 3], sigma: f64, max_boxes: u64| call("inverse_kinematics", "InverseKinematics", json!({"mechanism": "orthogonal_3r_e", "point": point, "sigma": sigma, "max_boxes": max_boxes}));
+    let sing = |mechanism: &str, precision: f64, nodes: bool, max_boxes: u64, timeout: f64| {
+        call("singularities", "Singularities", json!({"mechanism": mechanism, "precision": precision, "nodes": nodes, "max_boxes": max_boxes, "timeout": timeout}))
+    };
+    let classify = |q: [f64; 3]| call("classify", "Classify", json!({"mechanism": "orthogonal_3r_e", "joint_names": ["joint1", "joint2", "joint3"], "joint_values": q}));
+    let phi: f64 = 0.7;
+    let script = json!([
+        call("list_mechanisms", "ListMechanisms", json!({})),
+        ik([r, 0.0, z], 1e-6, 0),
+        ik([r * phi.cos(), r * phi.sin(), z], 1e-6, 0),
+        ik([r, 0.0, z], 1e-6, 40),
+        ik([f64::NAN, 0.0, z], 1e-6, 0),
+        ik([r, 0.0, z], 2.0, 0),
+        ik([r, 0.0, z], 1e-6, 1_000_000_000),
+        sing("orthogonal_3r_e", 0.0, false, 0, 0.0),
+        sing("orthogonal_3r_f", 1e-3, true, 0, 0.0),
+        sing("orthogonal_3r_e", 2.0, true, 0, 0.0),
+        sing("orthogonal_3r_e", 1e-3, true, 1_000_000_000, 0.0),
+        sing("orthogonal_3r_e", 1e-3, true, 0, 1e9),
+        sing("orthogonal_3r_e", 1e-6, true, 50, 5.0),
+        classify([0.3, 0.0, 0.0]),
+        classify([0.3, cusp[0], cusp[1]]),
+        classify([0.3, f64::NAN, 0.0]),
+        call("solve", "Solve", json!({"mechanism": "orthogonal_3r_e", "settings": settings(1e-3, 1000, 1.0)})),
+    ]);
+    let text = serde_json::to_string(&script).expect("json").replace("null", "\"NaN\"");
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("services-3r-{}.json", std::process::id()));
+    std::fs::write(&path, text).expect("script written");
+    let got = py(python, domain, "tests/ros_client.py", &["services", "--script", path.to_str().expect("utf-8")], Duration::from_secs(180));
+    let _ = std::fs::remove_file(&path);
+    let r_ = got["results"].as_array().expect("results");
+    for (k, x) in r_.iter().enumerate() {
+        assert!(x.get("error").is_none(), "step {k}: {x}\nnode log:\n{}", node.log());
+    }
+    let refused = |k: usize, needle: &str| {
+        assert_eq!(r_[k]["ok"], json!(false), "step {k} should be refused: {}", r_[k]);
+        let m = r_[k]["message"].as_str().expect("message");
+        assert!(m.contains(needle), "step {k}: '{m}' should mention '{needle}'");
+    };
+
+    let list = r_[0]["mechanisms"].as_array().expect("mechanisms");
+    assert_eq!((list[0]["kind"].as_str(), list[0]["state"].as_str()), (Some("manipulator_3r"), Some("complete")));
+    assert_eq!(list[0]["services"], json!(["singularities", "inverse_kinematics", "classify"]));
+    assert_eq!(list[0]["free_joints"], json!(["joint1", "joint2", "joint3"]));
+
+    // Inverse kinematics of (r, 0, z): the CLI's boxes for joints 2 and 3, unique ones and
+    // clusters alike, and a first joint that puts the tip on the point.
+    let check_ik = |reply: &Value, reference: &Value| {
+        assert_eq!(reply["ok"], json!(true), "{reply}");
+        assert_eq!(reply["joint_names"], json!(["joint1", "joint2", "joint3"]));
+        assert_eq!(reply["complete"], json!(reference["status"] == "complete"));
+        assert_eq!(reply["processed"], reference["processed"]);
+        let sols = reply["solutions"].as_array().expect("solutions");
+        let refs = reference["solutions"].as_array().expect("solutions");
+        assert_eq!(sols.len(), refs.len());
+        for (k, (s, rf)) in sols.iter().zip(refs).enumerate() {
+            let iv = intervals(&s["intervals"]);
+            assert_eq!(iv[1..], by_name(&rf["joints"], &["joint2", "joint3"])[..], "solution {k}");
+            assert_eq!(reply["unique"][k], rf["unique"]);
+            assert_eq!(reply["merged_boxes"][k], rf["boxes"]);
+        }
+    };
+    check_ik(&r_[1], &ik_ref);
+    assert!(ik_ref["solutions"].as_array().expect("solutions").iter().filter(|s| s["unique"] == json!(true)).count() >= 2);
+    // The point seen by the analysis: radius and z of (r, 0, z), enclosed (√ρ rounds outward).
+    let seen = intervals(&r_[1]["point_values"]);
+    assert!(seen[0][0] <= r && r <= seen[0][1] && seen[0][1] - seen[0][0] < 1e-15 && seen[1] == [z, z], "{seen:?}");
+    for (k, point) in [(1, [r, 0.0, z]), (2, [r * phi.cos(), r * phi.sin(), z])] {
+        for (s, unique) in r_[k]["solutions"].as_array().expect("solutions").iter().zip(r_[k]["unique"].as_array().expect("unique")) {
+            if *unique != json!(true) {
+                continue;
+            }
+            let q: Vec<f64> = intervals(&s["intervals"]).iter().map(|b| 0.5 * (b[0] + b[1])).collect();
+            let tip = forward_kinematics(&e, &q);
+            let miss = (0..3).map(|i| (tip[i] - point[i]).powi(2)).sum::<f64>().sqrt();
+            assert!(miss < 1e-5, "step {k}: {q:?} puts the tip at {tip:?}, not {point:?}");
+        }
+    }
+    // The same unique solutions from the turned point, with θ1 turned by φ.
+    assert_eq!(r_[2]["unique"], r_[1]["unique"]);
+    // A box limit: incomplete, as the CLI with the same limit, pending boxes in clusters.
+    check_ik(&r_[3], &ik_ref_short);
+    assert_eq!(r_[3]["complete"], json!(false));
+    refused(4, "is not finite");
+    refused(5, "precision must be a number in (0, 1), got 2");
+    refused(6, "larger than this node's limit 300000");
+
+    // The load-time report again, and a new run at another precision for robot f.
+    assert_eq!(r_[7]["ok"], json!(true));
+    assert_eq!(r_[7]["report"]["cusps"], report_e["cusps"]);
+    assert_eq!(r_[7]["report"]["nodes"], report_e["nodes"]);
+    let f_coarse = cli_json("singularities", &[&f, "--nodes", "--precision", "1e-3"]);
+    assert_same_singularities(&r_[8]["report"], &f_coarse);
+    // Service replies stay under one datagram: the cover's boxes are on the topic only.
+    assert!(r_[8]["message"].as_str().expect("message").contains("boxes of the singular-curve cover are left out of this reply (they are on /linkspace/orthogonal_3r_f/singularities)"), "{}", r_[8]["message"]);
+    refused(9, "precision must be a number in (0, 1), got 2");
+    refused(10, "larger than this node's limit 300000");
+    refused(11, "timeout 1000000000 s is out of range");
+    // 50 boxes cannot decide robot e at 1e-6: an honest incomplete report with undecided records.
+    assert_eq!((r_[12]["ok"].clone(), r_[12]["report"]["complete"].clone()), (json!(true), json!(false)), "{}", r_[12]);
+    assert!(r_[12]["report"]["cusps"].as_array().expect("cusps").iter().any(|c| c["certified"] == json!(false)));
+
+    // Classification: a regular configuration lies in a proven region, away from the curves;
+    // a cusp is singular.
+    assert_eq!((r_[13]["ok"].clone(), r_[13]["inside"].clone(), r_[13]["singular_distance_known"].clone()), (json!(true), json!(true), json!(true)), "{}", r_[13]);
+    assert!(r_[13]["component"].as_i64().expect("component") >= 0 && r_[13]["singular_distance"].as_f64().expect("distance") > 0.0, "{}", r_[13]);
+    assert_eq!((r_[14]["component"].clone(), r_[14]["singular_distance"].clone()), (json!(-1), json!(0.0)), "{}", r_[14]);
+    refused(15, "is not a finite number");
+    refused(16, "solve is not available for this mechanism ('orthogonal_3r_e', manipulator_3r)");
+    assert!(node.alive(), "the node died:\n{}", node.log());
+}

@@ -1,22 +1,26 @@
 //! Analyses of a loaded mechanism, as a front end (the ROS node) runs them: one trait, one
 //! implementation per kind of mechanism, and the plain-data results they return.
 //!
-//! `load` picks the analysis that fits a `Mechanism`. Today that is `PlanarAnalysis` (planar
+//! `load` picks the analysis that fits a `Mechanism`: `Manip3rAnalysis` (a serial chain of
+//! three revolute joints: singularities, inverse kinematics), `PlanarAnalysis` (planar
 //! closed-loop linkages: the configuration space) or `Unsupported`, which answers every query
-//! with `AnalysisError::NotAvailable`. The 3R singularity analysis and the Cayley–Menger
-//! formulation slot in as further `Analysis` implementations and one more arm in `load`.
+//! with `AnalysisError::NotAvailable`. Another kind of mechanism slots in as a further
+//! `Analysis` implementation and one more arm in `load`.
 //!
 //! No IO and no async here: a front end prepares a run (all validation happens then, so bad
 //! requests are answered at once), moves it to a thread of its own and converts the result.
 
+mod manip3r;
 mod planar;
 
+pub use manip3r::Manip3rAnalysis;
 pub use planar::PlanarAnalysis;
 
 use crate::model::Mechanism;
 use crate::problems::LinkageError;
 use crate::solve::{BoxStatus, Progress, SolveError, SolverSettings, Stats, Status};
 use std::sync::atomic::AtomicBool;
+use std::time::Duration;
 use thiserror::Error;
 
 /// `[lower, upper]`
@@ -73,6 +77,13 @@ pub enum AnalysisError {
     /// Anything else wrong with the request, named.
     #[error("{0}")]
     BadRequest(String),
+    /// The query needs a load-time result that is not there yet (`what`, e.g.
+    /// `configuration_space`, is still being computed, or could not be).
+    #[error("the {what} is not known yet")]
+    NotReady {
+        /// the missing result
+        what: &'static str,
+    },
 }
 
 /// One box of a result, in the system's variables and in joint space.
@@ -174,6 +185,9 @@ pub struct Classification {
     pub distance: f64,
     /// Joint-space distance to the nearest singular box, when a singularity analysis exists.
     pub singular_distance: Option<f64>,
+    /// What the figures mean for this kind of mechanism, when it differs from the above
+    /// (one line, for the reply's message); empty otherwise.
+    pub note: String,
 }
 
 /// Distance from `x` to the interval `[lo, hi]`; angles (`periodic`) are compared modulo 2π.
@@ -214,13 +228,131 @@ pub fn classify(result: &BoxSetResult, values: &[f64], periodic: &[bool], singul
         components: result.clusters,
         distance,
         singular_distance: singular.and_then(|s| nearest(s)).map(|(d, _)| d),
+        note: String::new(),
     }
 }
 
-/// A run that has been validated and only needs a thread: `run` cannot fail.
-pub trait PreparedRun: Send {
+/// A run that has been validated and only needs a thread: `run` cannot fail. `T` is what it
+/// returns: a box set (configuration space, solve), a `SingularityResult` or an `IkResult`.
+pub trait PreparedRun<T = BoxSetResult>: Send {
     /// Runs to the end (or to a limit, or until `cancel` is raised), reporting progress.
-    fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> BoxSetResult;
+    fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> T;
+}
+
+/// What a singularity run is asked for.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SingularityQuery {
+    /// Largest width of certified and undecided boxes (radians), in (0, 1).
+    pub precision: f64,
+    /// Also search nodes.
+    pub nodes: bool,
+    /// Stop each search after this many boxes (box pairs for nodes); the run is then incomplete.
+    pub max_boxes: u64,
+    /// Stop after this long in all; the run is then incomplete.
+    pub timeout: Option<Duration>,
+}
+
+/// A singular point (a cusp), or a box that may hold one.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SingularPoint {
+    /// One interval per joint of `SingularityResult::joint_names` (radians).
+    pub joints: Vec<Bounds>,
+    /// Its image, one interval per `SingularityResult::workspace_names` coordinate (metres).
+    pub workspace: Vec<Bounds>,
+    /// True: exactly one cusp is proven in the box. False: the box was left undecided.
+    pub certified: bool,
+}
+
+/// Two singular points with one image (a node), or a pair of boxes that may hold one.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SingularPair {
+    /// The two joint boxes, each over `SingularityResult::joint_names`.
+    pub joints: [Vec<Bounds>; 2],
+    /// Their common image, over `SingularityResult::workspace_names`.
+    pub workspace: Vec<Bounds>,
+    /// True: exactly one pair is proven in the two boxes. False: left undecided.
+    pub certified: bool,
+}
+
+/// The result of a singularity run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SingularityResult {
+    /// Robot name.
+    pub mechanism: String,
+    /// Complete, or which limit stopped a search.
+    pub status: Status,
+    /// What was asked.
+    pub query: SingularityQuery,
+    /// The joints the records are over (the singular set does not depend on the others).
+    pub joint_names: Vec<String>,
+    /// The workspace coordinates of the records' images.
+    pub workspace_names: Vec<String>,
+    /// Cusps: certified ones first, then undecided boxes of the cusp search.
+    pub cusps: Vec<SingularPoint>,
+    /// Nodes (empty when not searched): certified ones first, then undecided pairs.
+    pub nodes: Vec<SingularPair>,
+    /// Boxes covering every singular configuration (where the Jacobian may drop rank).
+    pub singular_curves: BoxSetResult,
+    /// Boxes covering the configurations that move while the actuated joints are locked.
+    pub internal_motions: BoxSetResult,
+    /// Boxes processed by all searches.
+    pub processed: u64,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+    /// One line: what was found.
+    pub summary: String,
+}
+
+impl SingularityResult {
+    /// Undecided records (cusp boxes and node pairs).
+    pub fn undecided(&self) -> usize {
+        self.cusps.iter().filter(|c| !c.certified).count() + self.nodes.iter().filter(|n| !n.certified).count()
+    }
+}
+
+/// What an inverse-kinematics run is asked for.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IkQuery {
+    /// The point, in the frame of the URDF's root link (metres).
+    pub point: [f64; 3],
+    /// Largest width of the returned boxes (radians), in (0, 1).
+    pub precision: f64,
+    /// Stop after this many boxes; the run is then incomplete.
+    pub max_boxes: u64,
+}
+
+/// One inverse-kinematics solution box.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IkSolution {
+    /// One interval per joint of `IkResult::joint_names` (radians).
+    pub joints: Vec<Bounds>,
+    /// True: exactly one solution in the box. False: a cluster of undecided boxes that may
+    /// hold one solution, several (near a singularity), or a line of them (an internal motion).
+    pub unique: bool,
+    /// Undecided boxes merged into this one (0 for unique ones).
+    pub boxes: usize,
+}
+
+/// The result of an inverse-kinematics run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IkResult {
+    /// Robot name.
+    pub mechanism: String,
+    /// Every joint of the chain, base first.
+    pub joint_names: Vec<String>,
+    /// What the point is for the analysis (e.g. its distance from the first axis and its
+    /// height along it), with `point_values` enclosing each.
+    pub point_names: Vec<String>,
+    /// Enclosures of the point's coordinates named by `point_names`.
+    pub point_values: Vec<Bounds>,
+    /// Unique solutions first, then clusters.
+    pub solutions: Vec<IkSolution>,
+    /// True when no limit was hit.
+    pub complete: bool,
+    /// Boxes processed.
+    pub processed: u64,
+    /// Wall-clock seconds.
+    pub seconds: f64,
 }
 
 /// What the node can do with one loaded mechanism.
@@ -256,14 +388,24 @@ pub trait Analysis: Send + Sync {
     }
 
     /// The singularity run (singular curves, cusps, nodes).
-    fn singularities(&self) -> Result<Box<dyn PreparedRun>, AnalysisError> {
+    fn singularities(&self, query: &SingularityQuery) -> Result<Box<dyn PreparedRun<SingularityResult>>, AnalysisError> {
+        let _ = query;
         Err(self.not_available(Service::Singularities))
     }
 
     /// Certified inverse kinematics of a workspace point.
-    fn inverse_kinematics(&self, point: [f64; 3], sigma: f64) -> Result<Box<dyn PreparedRun>, AnalysisError> {
-        let _ = (point, sigma);
+    fn inverse_kinematics(&self, query: &IkQuery) -> Result<Box<dyn PreparedRun<IkResult>>, AnalysisError> {
+        let _ = query;
         Err(self.not_available(Service::InverseKinematics))
+    }
+
+    /// Classifies a configuration, a value per free joint in `free_joints` order, against the
+    /// latest load-time results. The default classifies against the configuration space
+    /// (`classify`), without a singular distance.
+    fn classify(&self, values: &[f64], configuration_space: Option<&BoxSetResult>, singularities: Option<&SingularityResult>) -> Result<Classification, AnalysisError> {
+        let _ = singularities;
+        let cspace = configuration_space.ok_or(AnalysisError::NotReady { what: "configuration_space" })?;
+        Ok(classify(cspace, values, &self.periodic(), None))
     }
 
     /// The `NotAvailable` error for `service`.
@@ -307,15 +449,29 @@ impl Analysis for Unsupported {
 /// Picks the analysis that fits `mechanism`. `fixed` and `traces` are as for
 /// `LinkageProblem::new`.
 ///
-/// A mechanism outside every analysis (today: not planar) loads as `Unsupported`, so the node
-/// can still list it and explain; a planar mechanism with bad fixed joints is an error.
+/// A serial chain of three revolute joints whose map is not degenerate is a 3R manipulator
+/// (it takes no fixed joints or traced points); otherwise a planar linkage is tried. A
+/// mechanism outside every analysis loads as `Unsupported`, so the node can still list it and
+/// explain; bad fixed joints are an error.
 pub fn load(mechanism: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f64, f64)]) -> Result<Box<dyn Analysis>, AnalysisError> {
+    let not_3r = match Manip3rAnalysis::new(mechanism) {
+        Ok(a) => {
+            if let Some((joint, _)) = fixed.first() {
+                return Err(AnalysisError::BadRequest(format!("--fix {joint}: '{}' is a 3R manipulator, whose analysis takes no fixed joints", mechanism.name)));
+            }
+            if let Some((link, _, _)) = traces.first() {
+                return Err(AnalysisError::BadRequest(format!("--trace {link}: '{}' is a 3R manipulator, whose analysis takes no traced points", mechanism.name)));
+            }
+            return Ok(Box::new(a));
+        }
+        Err(e) => e,
+    };
     match PlanarAnalysis::new(mechanism, fixed, traces) {
         Ok(a) => Ok(Box::new(a)),
         Err(e @ (LinkageError::NonPlanar(_) | LinkageError::NoLoops)) => Ok(Box::new(Unsupported {
             name: mechanism.name.clone(),
             joints: mechanism.joints.iter().filter(|j| j.kind != crate::model::JointKind::Fixed).map(|j| j.name.clone()).collect(),
-            reason: format!("not a planar linkage ({e}); only planar linkages are analysed so far"),
+            reason: format!("not a planar linkage ({e}), and {not_3r}; only planar linkages and 3R manipulators are analysed so far"),
         })),
         Err(e) => Err(e.into()),
     }

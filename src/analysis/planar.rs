@@ -48,7 +48,7 @@ impl Analysis for PlanarAnalysis {
     }
 
     fn limitation(&self) -> String {
-        "a planar linkage: only its configuration space is analysed so far (singularities and inverse kinematics come with the 3R and Cayley-Menger analyses)".to_string()
+        "a planar linkage: only its configuration space is analysed so far (no singularity or inverse-kinematics analysis for planar linkages yet)".to_string()
     }
 
     fn free_joints(&self) -> Vec<String> {
@@ -160,7 +160,9 @@ mod tests {
         assert!(err(a.solve(&[("nope".into(), 1.0)], &SolverSettings::default())).contains("no joint or loop named 'nope'"));
         assert!(err(a.solve(&[("crank_joint".into(), f64::NAN)], &SolverSettings::default())).contains("not a finite number"));
         assert!(err(a.solve(&[], &SolverSettings { sigma: f64::NAN, ..Default::default() })).contains("sigma"));
-        assert!(err(a.singularities()).contains("singularities is not available for this mechanism"));
-        assert!(err(a.inverse_kinematics([1.0, 0.0, 0.0], 1e-3)).contains("inverse_kinematics is not available"));
+        let query = crate::analysis::SingularityQuery { precision: 1e-4, nodes: true, max_boxes: 1000, timeout: None };
+        assert!(a.singularities(&query).err().map(|e| e.to_string()).unwrap_or_default().contains("singularities is not available for this mechanism"));
+        let query = crate::analysis::IkQuery { point: [1.0, 0.0, 0.0], precision: 1e-3, max_boxes: 1000 };
+        assert!(a.inverse_kinematics(&query).err().map(|e| e.to_string()).unwrap_or_default().contains("inverse_kinematics is not available"));
     }
 }

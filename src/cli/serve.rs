@@ -67,6 +67,10 @@ pub struct ServeArgs {
     /// Load-time analyses: stop after this many seconds.
     #[arg(long)]
     timeout: Option<f64>,
+    /// Load-time singularity analyses of 3R manipulators: largest width of the certified boxes
+    /// (radians), in (0, 1).
+    #[arg(long, default_value_t = 1e-4, allow_hyphen_values = true)]
+    precision: f64,
     /// Largest max_boxes a Solve request may ask for.
     #[arg(long, default_value_t = Limits::default().max_boxes)]
     max_request_boxes: u64,
@@ -111,6 +115,7 @@ pub fn serve(args: ServeArgs) -> Result<()> {
     let timeout = super::seconds_arg(args.timeout)?;
     let settings = SolverSettings { sigma: args.sigma, rho: args.rho, max_boxes: args.max_boxes, timeout, ..Default::default() };
     settings.validate()?;
+    linkspace::manip3r::check_precision(args.precision)?;
     let limits = Limits { max_boxes: args.max_request_boxes, max_timeout: args.max_request_timeout, max_wait: args.max_wait, max_runs: args.max_runs, max_markers: args.max_markers };
     if limits.max_boxes == 0 || !(limits.max_timeout > 0.0 && limits.max_timeout.is_finite()) || !(limits.max_wait >= 0.0 && limits.max_wait.is_finite()) || limits.max_runs == 0 {
         bail!("--max-request-boxes, --max-request-timeout and --max-runs must be positive, --max-wait at least 0");
@@ -165,7 +170,7 @@ pub fn serve(args: ServeArgs) -> Result<()> {
         NetworkArg::Loopback => Network::Loopback,
         NetworkArg::All => Network::All,
     };
-    ros::serve(ServeConfig { sources, fixed, traces, settings, domain, namespace: args.namespace, node_name: args.node_name, mapping, network, limits, republish })
+    ros::serve(ServeConfig { sources, fixed, traces, settings, precision: args.precision, domain, namespace: args.namespace, node_name: args.node_name, mapping, network, limits, republish })
 }
 
 #[cfg(test)]

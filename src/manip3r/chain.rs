@@ -386,6 +386,21 @@ impl Chain3R {
         }
     }
 
+    /// The end point's part perpendicular to the first axis, `p − (a₁·p) a₁`, over the box
+    /// `theta` = (θ₂, θ₃), in the first link's frame (so in the first joint's frame at θ₁ = 0):
+    /// its direction about a₁ gives θ₁ in inverse kinematics. Natural interval evaluation.
+    pub fn perp(&self, theta: [Interval; 2]) -> [Interval; 3] {
+        let e2 = [super::trig::cos(theta[0]), super::trig::sin(theta[0]), point(1.0)];
+        let e3 = [super::trig::cos(theta[1]), super::trig::sin(theta[1]), point(1.0)];
+        let mut p = [ZERO; 3];
+        for a in 0..3 {
+            for b in 0..3 {
+                p = add(&p, &scale(&self.coef.perp[a][b], e2[a] * e3[b]));
+            }
+        }
+        p
+    }
+
     /// f at a point, in plain floating point (midpoints of the coefficients): for sampling and
     /// tests only, never for decisions.
     pub fn eval_f64(&self, t2: f64, t3: f64) -> [f64; 2] {

@@ -39,11 +39,20 @@ pub struct IkCluster {
 
 /// Solves `f(θ₂, θ₃) = (radius², z)` (see the module doc).
 pub fn solve(chain: &Chain3R, radius: f64, z: f64, precision: f64, max_boxes: u64) -> Result<IkSolutions, Manip3rError> {
-    super::check_precision(precision)?;
     if !(radius.is_finite() && z.is_finite() && radius >= 0.0) {
         return Err(Manip3rError::BadPoint(radius, z));
     }
-    let target = [point(radius).sqr(), point(z)];
+    solve_target(chain, [point(radius).sqr(), point(z)], precision, max_boxes)
+}
+
+/// Solves `f(θ₂, θ₃) ∈ target`, with `target` enclosures of (ρ, z) (for a point known only up
+/// to rounding, e.g. after a change of frame): every solution for every target in the box is
+/// enclosed, and a box is unique when it holds exactly one for each. See `solve`.
+pub fn solve_target(chain: &Chain3R, target: [Interval; 2], precision: f64, max_boxes: u64) -> Result<IkSolutions, Manip3rError> {
+    super::check_precision(precision)?;
+    if target.iter().any(|t| t.is_empty() || !t.inf().is_finite() || !t.sup().is_finite()) {
+        return Err(Manip3rError::BadPoint(target[0].mid(), target[1].mid()));
+    }
     let mut stack = vec![[motion::full_range(), motion::full_range()]];
     let mut unique: Vec<[Interval; 2]> = Vec::new();
     let mut undecided = Vec::new();

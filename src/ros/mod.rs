@@ -79,6 +79,8 @@ pub struct ServeConfig {
     pub traces: Vec<(Option<String>, String, f64, f64)>,
     /// Settings of the load-time analyses.
     pub settings: SolverSettings,
+    /// Precision (radians) of the load-time singularity analyses of 3R manipulators.
+    pub precision: f64,
     /// DDS domain (ROS_DOMAIN_ID).
     pub domain: u16,
     /// Node namespace, e.g. `/` or `/robots`.
@@ -190,6 +192,7 @@ mod tests {
             fixed,
             traces: vec![],
             settings: SolverSettings::default(),
+            precision: 1e-4,
             domain: 0,
             namespace: "/".into(),
             node_name: "linkspace".into(),

@@ -200,6 +200,10 @@ mirror! {
         cusps: Vec<CuspRecord>,
         nodes: Vec<NodeRecord>,
         internal_motions: BoxSet,
+        joint_names: Vec<String>,
+        workspace_names: Vec<String>,
+        complete: bool,
+        precision: f64,
     }
 }
 mirror! {
@@ -241,7 +245,7 @@ mirror! {
 }
 mirror! {
     /// linkspace_msgs/Singularities request
-    SingularitiesRequest { mechanism: String }
+    SingularitiesRequest { mechanism: String, precision: f64, nodes: bool, max_boxes: u64, timeout: f64 }
 }
 mirror! {
     /// linkspace_msgs/Singularities response
@@ -249,11 +253,22 @@ mirror! {
 }
 mirror! {
     /// linkspace_msgs/InverseKinematics request
-    InverseKinematicsRequest { mechanism: String, point: Point, sigma: f64 }
+    InverseKinematicsRequest { mechanism: String, point: Point, sigma: f64, max_boxes: u64 }
 }
 mirror! {
     /// linkspace_msgs/InverseKinematics response
-    InverseKinematicsResponse { ok: bool, message: String, complete: bool, solutions: Vec<LsBox> }
+    InverseKinematicsResponse {
+        ok: bool,
+        message: String,
+        complete: bool,
+        solutions: Vec<LsBox>,
+        joint_names: Vec<String>,
+        unique: Vec<bool>,
+        merged_boxes: Vec<u32>,
+        point_names: Vec<String>,
+        point_values: Vec<Interval>,
+        processed: u64,
+    }
 }
 mirror! {
     /// linkspace_msgs/Classify request

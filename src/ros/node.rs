@@ -5,15 +5,15 @@
 //! out. The loop owns all state, so no locks; handlers run under `catch_unwind`, so a request
 //! that trips a bug is answered with an error instead of taking the node down.
 //!
-//! Runs (the load-time configuration-space analyses and requested solves) go on threads of
-//! their own. At most `Limits::max_runs` requested runs go on at once, each bounded by the
-//! request's `max_boxes` and `timeout` (within the node's limits), so memory stays bounded
-//! however many requests arrive: the excess is refused with a reason.
+//! Runs (the load-time analyses, requested solves, singularity and inverse-kinematics queries)
+//! go on threads of their own. At most `Limits::max_runs` requested runs go on at once, each
+//! bounded by the request's `max_boxes` and `timeout` (within the node's limits), so memory
+//! stays bounded however many requests arrive: the excess is refused with a reason.
 
 use super::convert;
 use super::msgs::{self, *};
 use super::{Limits, Loaded, Mapping, Network, ServeConfig};
-use crate::analysis::{self, BoxSetResult, PreparedRun, Service};
+use crate::analysis::{AnalysisError, BoxSetResult, IkQuery, IkResult, Service, SingularityQuery, SingularityResult};
 use crate::solve::{SolverSettings, Status};
 use anyhow::{Context as _, Result};
 use futures::StreamExt;
@@ -33,11 +33,32 @@ enum Event {
     Request(Request),
     Progress { run: u64, progress: crate::solve::Progress },
     /// A run ended; `Err` when it panicked (its payload, as text).
-    Finished { run: u64, result: Result<BoxSetResult, String> },
+    Finished { run: u64, result: Result<Outcome, String> },
     Tick,
     /// Time to publish the latest configuration spaces again (`--republish`).
     Republish,
 }
+
+/// What a run returns.
+enum Outcome {
+    BoxSet(BoxSetResult),
+    Singularities(SingularityResult),
+    InverseKinematics(IkResult),
+}
+
+impl Outcome {
+    /// (boxes processed, boxes left pending, complete) for the final progress message.
+    fn counts(&self) -> (u64, usize, bool) {
+        match self {
+            Outcome::BoxSet(r) => (r.stats.processed, r.boxes.iter().filter(|b| b.status == crate::solve::BoxStatus::Undecided).count(), r.status == Status::Complete),
+            Outcome::Singularities(r) => (r.processed, r.undecided(), r.status == Status::Complete),
+            Outcome::InverseKinematics(r) => (r.processed, 0, r.complete),
+        }
+    }
+}
+
+/// A run's work, moved to its thread.
+type Job = Box<dyn FnOnce(&AtomicBool, &mut dyn FnMut(&crate::solve::Progress)) -> Outcome + Send>;
 
 /// A decoded service request with the id its reply must carry.
 enum Request {
@@ -73,13 +94,35 @@ struct Servers {
 enum RunKind {
     ConfigurationSpace,
     Solve,
+    /// `load_time`: the run made at load, published on `~/<robot>/singularities`; otherwise a
+    /// Singularities request with its own settings, answered in the reply only.
+    Singularities { load_time: bool },
+    InverseKinematics,
+}
+
+impl RunKind {
+    /// Runs started by a request, which count against `Limits::max_runs`.
+    fn requested(self) -> bool {
+        matches!(self, RunKind::Solve | RunKind::Singularities { load_time: false } | RunKind::InverseKinematics)
+    }
+
+    /// The `analysis` field of its progress messages.
+    fn analysis(self) -> &'static str {
+        match self {
+            RunKind::ConfigurationSpace => "configuration_space",
+            RunKind::Solve => "solve",
+            RunKind::Singularities { .. } => "singularities",
+            RunKind::InverseKinematics => "inverse_kinematics",
+        }
+    }
 }
 
 struct Run {
     mechanism: usize,
     kind: RunKind,
     cancel: Arc<AtomicBool>,
-    /// Solve requests waiting for this run, with when to stop waiting.
+    /// Requests waiting for this run (of the service its kind answers), with when to stop
+    /// waiting.
     waiters: Vec<(RmwRequestId, Instant)>,
     /// The latest share of the volume decided.
     decided: f64,
@@ -92,6 +135,11 @@ struct Mechanism {
     /// The latest configuration space, and its messages (kept for `--republish`).
     configuration_space: Option<Arc<BoxSetResult>>,
     published: Option<(BoxSet, MarkerArray)>,
+    /// The latest load-time singularity result and its messages (kept for replies and
+    /// `--republish`), and the load-time run while it goes.
+    singularities: Option<Arc<SingularityResult>>,
+    published_singularities: Option<(SingularityReport, MarkerArray)>,
+    singularity_run: Option<u64>,
     state: String,
     message: String,
 }
@@ -105,6 +153,8 @@ struct State {
     next_run: u64,
     limits: Limits,
     settings: SolverSettings,
+    /// Precision of the load-time singularity analyses.
+    precision: f64,
     events: smol::channel::Sender<Event>,
 }
 
@@ -201,7 +251,18 @@ pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
             // Deep enough for every assembly mode of one result.
             assembly_modes: publisher(&mut node, &prefix, "assembly_modes", "sensor_msgs", "JointState", latched(64))?,
         };
-        mechanisms.push(Mechanism { loaded: l, prefix, topics, configuration_space: None, published: None, state: "running".into(), message: String::new() });
+        mechanisms.push(Mechanism {
+            loaded: l,
+            prefix,
+            topics,
+            configuration_space: None,
+            published: None,
+            singularities: None,
+            published_singularities: None,
+            singularity_run: None,
+            state: "running".into(),
+            message: String::new(),
+        });
     }
     let servers = Rc::new(Servers {
         solve: server(&mut node, mapping, &base, "solve", "Solve")?,
@@ -254,7 +315,17 @@ pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
         .detach();
     }
 
-    let mut state = State { mechanisms, servers, runs: BTreeMap::new(), finished: VecDeque::new(), next_run: 1, limits: config.limits.clone(), settings: config.settings.clone(), events: tx };
+    let mut state = State {
+        mechanisms,
+        servers,
+        runs: BTreeMap::new(),
+        finished: VecDeque::new(),
+        next_run: 1,
+        limits: config.limits.clone(),
+        settings: config.settings.clone(),
+        precision: config.precision,
+        events: tx,
+    };
     state.start_load_time_runs();
     eprintln!(
         "linkspace: ready: node {base} on domain {} ({:?} mapping, {:?} network), mechanisms: {}",
@@ -276,45 +347,59 @@ fn solve_error(message: String) -> SolveResponse {
     SolveResponse { ok: false, message, ..Default::default() }
 }
 
+/// A Singularities reply carrying `report`, cut to what a service reply can carry.
+fn singularity_reply(report: &SingularityReport, topic: &str) -> SingularitiesResponse {
+    let mut report = report.clone();
+    let mut message = report.message.clone();
+    if let Some(note) = convert::fit_singularity_reply(&mut report, topic) {
+        message = format!("{message}; {note}");
+    }
+    SingularitiesResponse { ok: true, message, report }
+}
+
 impl State {
     fn start_load_time_runs(&mut self) {
         for k in 0..self.mechanisms.len() {
-            let m = &self.mechanisms[k];
-            match m.loaded.analysis.configuration_space(&self.settings) {
+            let a = &self.mechanisms[k].loaded.analysis;
+            let cspace = a.configuration_space(&self.settings);
+            let query = SingularityQuery { precision: self.precision, nodes: true, max_boxes: self.settings.max_boxes, timeout: self.settings.timeout };
+            let singular = a.singularities(&query);
+            let mut started = false;
+            match cspace {
                 Ok(prepared) => {
-                    self.start(k, RunKind::ConfigurationSpace, prepared);
+                    self.start(k, RunKind::ConfigurationSpace, Box::new(move |c, p| Outcome::BoxSet(prepared.run(c, p))));
+                    started = true;
                 }
-                Err(e) => {
-                    let m = &mut self.mechanisms[k];
-                    m.state = "unavailable".into();
-                    m.message = e.to_string();
-                    eprintln!("linkspace: {}: no configuration space: {e}", m.loaded.analysis.mechanism());
-                }
+                Err(e) => eprintln!("linkspace: {}: no configuration space: {e}", self.mechanisms[k].loaded.analysis.mechanism()),
             }
-            self.publish_singularities(k);
+            match singular {
+                Ok(prepared) => {
+                    let run = self.start(k, RunKind::Singularities { load_time: true }, Box::new(move |c, p| Outcome::Singularities(prepared.run(c, p))));
+                    self.mechanisms[k].singularity_run = Some(run);
+                    started = true;
+                }
+                Err(e) => self.publish_no_singularities(k, e.to_string()),
+            }
+            if !started {
+                let m = &mut self.mechanisms[k];
+                m.state = "unavailable".into();
+                m.message = m.loaded.analysis.limitation();
+            }
         }
     }
 
-    /// Publishes what is known of the mechanism's singularities: today, for every analysis,
-    /// that there is no singularity analysis for it (ok = false, with the reason), so that a
-    /// subscriber learns why instead of waiting.
-    fn publish_singularities(&self, k: usize) {
+    /// Publishes that the mechanism has no singularity analysis (ok = false, with the reason),
+    /// so that a subscriber learns why instead of waiting.
+    fn publish_no_singularities(&self, k: usize, reason: String) {
         let m = &self.mechanisms[k];
-        let a = &m.loaded.analysis;
-        let report = SingularityReport {
-            header: convert::header(""),
-            mechanism: a.mechanism().to_string(),
-            ok: false,
-            message: a.not_available(Service::Singularities).to_string(),
-            ..Default::default()
-        };
+        let report = SingularityReport { header: convert::header(""), mechanism: m.loaded.analysis.mechanism().to_string(), ok: false, message: reason, ..Default::default() };
         if let Err(e) = m.topics.singularities.publish(report) {
             eprintln!("linkspace: publishing {}/singularities: {e:?}", m.prefix);
         }
     }
 
-    /// Starts `prepared` on a thread of its own; returns its run id.
-    fn start(&mut self, mechanism: usize, kind: RunKind, prepared: Box<dyn PreparedRun>) -> u64 {
+    /// Starts `job` on a thread of its own; returns its run id.
+    fn start(&mut self, mechanism: usize, kind: RunKind, job: Job) -> u64 {
         let run = self.next_run;
         self.next_run += 1;
         let cancel = Arc::new(AtomicBool::new(false));
@@ -326,7 +411,7 @@ impl State {
                 // Progress is lossy by design: a full queue drops a snapshot, not the run.
                 let _ = progress_events.try_send(Event::Progress { run, progress: *p });
             };
-            let result = catch_unwind(AssertUnwindSafe(|| prepared.run(&cancel, &mut progress))).map_err(|p| panic_text(p.as_ref()));
+            let result = catch_unwind(AssertUnwindSafe(|| job(&cancel, &mut progress))).map_err(|p| panic_text(p.as_ref()));
             let _ = events.send_blocking(Event::Finished { run, result });
         });
         run
@@ -349,14 +434,15 @@ impl State {
 
     fn progress(&self, run: u64, p: crate::solve::Progress, done: bool) {
         let Some(r) = self.runs.get(&run) else { return };
+        // An inverse-kinematics query is answered in its reply; it has no volume to report.
+        if r.kind == RunKind::InverseKinematics {
+            return;
+        }
         let m = &self.mechanisms[r.mechanism];
         let msg = msgs::Progress {
             header: convert::header(""),
             mechanism: m.loaded.analysis.mechanism().to_string(),
-            analysis: match r.kind {
-                RunKind::ConfigurationSpace => "configuration_space".into(),
-                RunKind::Solve => "solve".into(),
-            },
+            analysis: r.kind.analysis().into(),
             run_id: run,
             processed: p.processed,
             pending: p.pending as u64,
@@ -368,37 +454,55 @@ impl State {
         }
     }
 
-    async fn finished(&mut self, run: u64, result: Result<BoxSetResult, String>) {
-        let decided = match &result {
-            Ok(r) if r.status == Status::Complete => 1.0,
-            _ => self.runs.get(&run).map_or(0.0, |r| r.decided),
-        };
-        let processed = result.as_ref().map_or(0, |r| r.stats.processed);
+    async fn finished(&mut self, run: u64, result: Result<Outcome, String>) {
+        let (processed, pending, complete) = result.as_ref().map_or((0, 0, false), |o| o.counts());
         // What a limit left undecided is still pending.
-        let pending = result.as_ref().map_or(0, |r| r.boxes.iter().filter(|b| b.status == crate::solve::BoxStatus::Undecided).count());
+        let decided = if complete { 1.0 } else { self.runs.get(&run).map_or(0.0, |r| r.decided) };
         self.progress(run, crate::solve::Progress { processed, pending, decided }, true);
         let Some(r) = self.runs.remove(&run) else { return };
         self.finished.push_back(run);
         if self.finished.len() > 4096 {
             self.finished.pop_front();
         }
-        let m = &mut self.mechanisms[r.mechanism];
-        let name = m.loaded.analysis.mechanism().to_string();
-        let result = match result {
-            Ok(result) => result,
+        let name = self.mechanisms[r.mechanism].loaded.analysis.mechanism().to_string();
+        let outcome = match result {
+            Ok(outcome) => outcome,
             Err(panic) => {
                 let message = format!("run {run} of '{name}' failed: internal error: {panic}");
                 eprintln!("linkspace: {message}");
-                if r.kind == RunKind::ConfigurationSpace {
+                let m = &mut self.mechanisms[r.mechanism];
+                if matches!(r.kind, RunKind::ConfigurationSpace | RunKind::Singularities { load_time: true }) {
                     m.state = "failed".into();
                     m.message = message.clone();
                 }
+                if r.kind == (RunKind::Singularities { load_time: true }) {
+                    m.singularity_run = None;
+                }
                 for (id, _) in r.waiters {
-                    self.reply_solve(id, solve_error(message.clone()));
+                    self.reply_error(r.kind, id, message.clone());
                 }
                 return;
             }
         };
+        match outcome {
+            Outcome::BoxSet(result) => self.finished_box_set(run, r, result).await,
+            Outcome::Singularities(result) => self.finished_singularities(run, r, result).await,
+            Outcome::InverseKinematics(result) => {
+                eprintln!("linkspace: {name}: run {run} (inverse kinematics): {} solutions, {} boxes, {:.3} s", result.solutions.len(), result.processed, result.seconds);
+                let mut reply = convert::ik_response(&result);
+                if let Some(note) = convert::fit_ik_reply(&mut reply) {
+                    reply.message = format!("{}; {note}", reply.message);
+                }
+                for (id, _) in r.waiters {
+                    self.reply_ik(id, reply.clone());
+                }
+            }
+        }
+    }
+
+    async fn finished_box_set(&mut self, run: u64, r: Run, result: BoxSetResult) {
+        let m = &mut self.mechanisms[r.mechanism];
+        let name = m.loaded.analysis.mechanism().to_string();
         let set = convert::box_set(&result, run);
         let status = match result.status {
             Status::Complete => "complete".to_string(),
@@ -429,12 +533,49 @@ impl State {
                 if let Err(e) = m.topics.solve_result.async_publish(set.clone()).await {
                     eprintln!("linkspace: publishing {}/solve_result: {e:?}", m.prefix);
                 }
-                let message = format!("run {run}: {status}");
+                let mut message = format!("run {run}: {status}");
+                let mut reply_set = set.clone();
+                if convert::box_set_bytes(&set) > convert::REPLY_BUDGET {
+                    convert::strip_boxes(&mut reply_set);
+                    message.push_str(&format!(
+                        "; its {} boxes are left out of this reply (a service reply must stay under {} KiB) and are on {}/solve_result",
+                        set.box_status.len(),
+                        convert::REPLY_BUDGET / 1024,
+                        m.prefix
+                    ));
+                }
                 for (id, _) in r.waiters {
-                    self.reply_solve(id, SolveResponse { ok: true, message: message.clone(), run_id: run, done: true, result: set.clone() });
+                    self.reply_solve(id, SolveResponse { ok: true, message: message.clone(), run_id: run, done: true, result: reply_set.clone() });
                 }
                 eprintln!("linkspace: {name}: published solve_result of run {run}");
             }
+            RunKind::Singularities { .. } | RunKind::InverseKinematics => eprintln!("linkspace: {name}: run {run} returned a box set for a {:?} run", r.kind),
+        }
+    }
+
+    async fn finished_singularities(&mut self, run: u64, r: Run, result: SingularityResult) {
+        let report = convert::singularity_report(&result, run);
+        let m = &mut self.mechanisms[r.mechanism];
+        let name = m.loaded.analysis.mechanism().to_string();
+        eprintln!("linkspace: {name}: run {run} (singularities, precision {}): {}, {:.3} s", result.query.precision, result.summary, result.seconds);
+        if r.kind == (RunKind::Singularities { load_time: true }) {
+            m.state = if result.status == Status::Complete { "complete".into() } else { "incomplete".into() };
+            m.message = format!("run {run}: {}", result.summary);
+            let markers = convert::singularity_markers(&result, self.limits.max_markers);
+            if let Err(e) = m.topics.singularities.async_publish(report.clone()).await {
+                eprintln!("linkspace: publishing {}/singularities: {e:?}", m.prefix);
+            }
+            if let Err(e) = m.topics.markers.async_publish(markers.clone()).await {
+                eprintln!("linkspace: publishing {}/markers: {e:?}", m.prefix);
+            }
+            m.published_singularities = Some((report.clone(), markers));
+            m.singularities = Some(Arc::new(result));
+            m.singularity_run = None;
+            eprintln!("linkspace: {name}: published singularities");
+        }
+        let reply = singularity_reply(&report, &format!("{}/singularities", self.mechanisms[r.mechanism].prefix));
+        for (id, _) in r.waiters {
+            self.reply_singularities(id, reply.clone());
         }
     }
 
@@ -443,18 +584,30 @@ impl State {
     /// measurements.
     async fn republish(&mut self) {
         for m in &mut self.mechanisms {
-            let Some((set, markers)) = &mut m.published else { continue };
-            set.header = convert::header(&set.header.frame_id);
-            if let Err(e) = m.topics.configuration_space.async_publish(set.clone()).await {
-                eprintln!("linkspace: publishing {}/configuration_space: {e:?}", m.prefix);
+            if let Some((set, markers)) = &mut m.published {
+                set.header = convert::header(&set.header.frame_id);
+                if let Err(e) = m.topics.configuration_space.async_publish(set.clone()).await {
+                    eprintln!("linkspace: publishing {}/configuration_space: {e:?}", m.prefix);
+                }
+                if let Err(e) = m.topics.markers.async_publish(markers.clone()).await {
+                    eprintln!("linkspace: publishing {}/markers: {e:?}", m.prefix);
+                }
             }
-            if let Err(e) = m.topics.markers.async_publish(markers.clone()).await {
-                eprintln!("linkspace: publishing {}/markers: {e:?}", m.prefix);
+            if let Some((report, markers)) = &mut m.published_singularities {
+                report.header = convert::header(&report.header.frame_id);
+                if let Err(e) = m.topics.singularities.async_publish(report.clone()).await {
+                    eprintln!("linkspace: publishing {}/singularities: {e:?}", m.prefix);
+                }
+                if let Err(e) = m.topics.markers.async_publish(markers.clone()).await {
+                    eprintln!("linkspace: publishing {}/markers: {e:?}", m.prefix);
+                }
             }
         }
     }
 
-    /// Answers Solve requests whose wait ran out: the run goes on, its result will be published.
+    /// Answers requests whose wait ran out. A Solve run goes on and its result will be
+    /// published; so does the load-time singularity analysis. Other queries are answered only
+    /// in their reply, so theirs is an error (their runs are bounded, so this is rare).
     fn expire_waits(&mut self) {
         let now = Instant::now();
         let mut due = Vec::new();
@@ -463,11 +616,41 @@ impl State {
             r.waiters = kept;
             let prefix = &self.mechanisms[r.mechanism].prefix;
             for (id, _) in gone {
-                due.push((id, SolveResponse { ok: true, message: format!("run {run} is still going; its result will be published on {prefix}/solve_result"), run_id: run, done: false, ..Default::default() }));
+                due.push((r.kind, id, run, prefix.clone()));
             }
         }
-        for (id, reply) in due {
-            self.reply_solve(id, reply);
+        for (kind, id, run, prefix) in due {
+            match kind {
+                RunKind::Solve => self.reply_solve(
+                    id,
+                    SolveResponse { ok: true, message: format!("run {run} is still going; its result will be published on {prefix}/solve_result"), run_id: run, done: false, ..Default::default() },
+                ),
+                RunKind::Singularities { load_time: true } => {
+                    self.reply_error(kind, id, format!("the load-time singularity analysis (run {run}) is still going; its report will be published on {prefix}/singularities"))
+                }
+                _ => self.reply_error(kind, id, format!("run {run} did not finish within {} s (the node's --max-wait); its result will not be sent", self.limits.max_wait)),
+            }
+        }
+    }
+
+    /// An error reply of the service that `kind` answers.
+    fn reply_error(&self, kind: RunKind, id: RmwRequestId, message: String) {
+        match kind {
+            RunKind::Solve | RunKind::ConfigurationSpace => self.reply_solve(id, solve_error(message)),
+            RunKind::Singularities { .. } => self.reply_singularities(id, SingularitiesResponse { ok: false, message, ..Default::default() }),
+            RunKind::InverseKinematics => self.reply_ik(id, InverseKinematicsResponse { ok: false, message, ..Default::default() }),
+        }
+    }
+
+    fn reply_singularities(&self, id: RmwRequestId, reply: SingularitiesResponse) {
+        if let Err(e) = self.servers.singularities.send_response(id, reply) {
+            eprintln!("linkspace: sending a singularities reply: {e:?}");
+        }
+    }
+
+    fn reply_ik(&self, id: RmwRequestId, reply: InverseKinematicsResponse) {
+        if let Err(e) = self.servers.inverse_kinematics.send_response(id, reply) {
+            eprintln!("linkspace: sending an inverse_kinematics reply: {e:?}");
         }
     }
 
@@ -491,14 +674,16 @@ impl State {
                 let a = catch_unwind(AssertUnwindSafe(|| self.cancel(q))).unwrap_or_else(|p| CancelResponse { ok: false, message: internal(p) });
                 servers.cancel.send_response(id, a)
             }
-            Request::Singularities(id, q) => {
-                let a = catch_unwind(AssertUnwindSafe(|| self.singularities(q))).unwrap_or_else(|p| SingularitiesResponse { ok: false, message: internal(p), ..Default::default() });
-                servers.singularities.send_response(id, a)
-            }
-            Request::InverseKinematics(id, q) => {
-                let a = catch_unwind(AssertUnwindSafe(|| self.inverse_kinematics(q))).unwrap_or_else(|p| InverseKinematicsResponse { ok: false, message: internal(p), ..Default::default() });
-                servers.inverse_kinematics.send_response(id, a)
-            }
+            Request::Singularities(id, q) => match catch_unwind(AssertUnwindSafe(|| self.singularities(id, q))) {
+                Ok(None) => Ok(()),
+                Ok(Some(a)) => servers.singularities.send_response(id, a),
+                Err(p) => servers.singularities.send_response(id, SingularitiesResponse { ok: false, message: internal(p), ..Default::default() }),
+            },
+            Request::InverseKinematics(id, q) => match catch_unwind(AssertUnwindSafe(|| self.inverse_kinematics(id, q))) {
+                Ok(None) => Ok(()),
+                Ok(Some(a)) => servers.inverse_kinematics.send_response(id, a),
+                Err(p) => servers.inverse_kinematics.send_response(id, InverseKinematicsResponse { ok: false, message: internal(p), ..Default::default() }),
+            },
             Request::Classify(id, q) => {
                 let a = catch_unwind(AssertUnwindSafe(|| self.classify(q))).unwrap_or_else(|p| ClassifyResponse { ok: false, message: internal(p), component: -1, ..Default::default() });
                 servers.classify.send_response(id, a)
@@ -543,9 +728,8 @@ impl State {
         if !(q.wait >= 0.0 && q.wait <= limits.max_wait) {
             return Some(solve_error(format!("wait {} s is out of range: give 0 <= wait <= {} s", q.wait, limits.max_wait)));
         }
-        let busy = self.runs.values().filter(|r| r.kind == RunKind::Solve).count();
-        if busy >= limits.max_runs {
-            return Some(solve_error(format!("busy: {busy} requested runs are going on (the node's limit, --max-runs); retry when one ends or cancel one")));
+        if let Some(busy) = self.busy() {
+            return Some(solve_error(busy));
         }
         let settings = SolverSettings { sigma: s.sigma, rho: s.rho, max_boxes: s.max_boxes, timeout: Some(Duration::from_secs_f64(s.timeout)), ..self.settings.clone() };
         let fixed: Vec<(String, f64)> = q.fixed_joint_names.iter().cloned().zip(q.fixed_joint_values.iter().copied()).collect();
@@ -553,7 +737,7 @@ impl State {
             Ok(p) => p,
             Err(e) => return Some(solve_error(e.to_string())),
         };
-        let run = self.start(k, RunKind::Solve, prepared);
+        let run = self.start(k, RunKind::Solve, Box::new(move |c, p| Outcome::BoxSet(prepared.run(c, p))));
         if q.wait > 0.0 {
             let r = self.runs.get_mut(&run).expect("invariant: just started");
             r.waiters.push((id, Instant::now() + Duration::from_secs_f64(q.wait)));
@@ -576,21 +760,70 @@ impl State {
         }
     }
 
-    fn singularities(&mut self, q: SingularitiesRequest) -> SingularitiesResponse {
-        let k = match self.mechanism(&q.mechanism) {
-            Ok(k) => k,
-            Err(e) => return SingularitiesResponse { ok: false, message: e, ..Default::default() },
-        };
-        match self.mechanisms[k].loaded.analysis.singularities() {
-            Err(e) => SingularitiesResponse { ok: false, message: e.to_string(), ..Default::default() },
-            // No analysis offers singularities yet; the 3R analysis (issue 6) makes this a run
-            // like Solve whose report goes to ~/<robot>/singularities.
-            Ok(_) => SingularitiesResponse { ok: false, message: format!("singularities of '{}': the node does not run this analysis yet", q.mechanism), ..Default::default() },
+    /// Why a new requested run is refused, if it is: `max_runs` are going on.
+    fn busy(&self) -> Option<String> {
+        let busy = self.runs.values().filter(|r| r.kind.requested()).count();
+        (busy >= self.limits.max_runs).then(|| format!("busy: {busy} requested runs are going on (the node's limit, --max-runs); retry when one ends or cancel a solve"))
+    }
+
+    /// A request's box limit: 0 means the node's limit; more is refused.
+    fn box_limit(&self, max_boxes: u64) -> Result<u64, String> {
+        match max_boxes {
+            0 => Ok(self.limits.max_boxes),
+            n if n > self.limits.max_boxes => Err(format!("max_boxes {n} is larger than this node's limit {} (--max-request-boxes)", self.limits.max_boxes)),
+            n => Ok(n),
         }
     }
 
-    fn inverse_kinematics(&mut self, q: InverseKinematicsRequest) -> InverseKinematicsResponse {
-        let refuse = |message: String| InverseKinematicsResponse { ok: false, message, ..Default::default() };
+    /// Answers with the load-time report, or starts a run with the request's settings; `None`
+    /// when the reply waits for a run.
+    fn singularities(&mut self, id: RmwRequestId, q: SingularitiesRequest) -> Option<SingularitiesResponse> {
+        let refuse = |message: String| Some(SingularitiesResponse { ok: false, message, ..Default::default() });
+        let k = match self.mechanism(&q.mechanism) {
+            Ok(k) => k,
+            Err(e) => return refuse(e),
+        };
+        let m = &self.mechanisms[k];
+        let a = &m.loaded.analysis;
+        if !a.services().contains(&Service::Singularities) {
+            return refuse(a.not_available(Service::Singularities).to_string());
+        }
+        if q.precision == 0.0 {
+            if let Some((report, _)) = &m.published_singularities {
+                return Some(singularity_reply(report, &format!("{}/singularities", m.prefix)));
+            }
+            let Some(run) = m.singularity_run else { return refuse(format!("no singularity report for '{}': {}", q.mechanism, m.message)) };
+            let deadline = Instant::now() + Duration::from_secs_f64(self.limits.max_wait);
+            self.runs.get_mut(&run).expect("invariant: the load-time run is going").waiters.push((id, deadline));
+            return None;
+        }
+        let max_boxes = match self.box_limit(q.max_boxes) {
+            Ok(n) => n,
+            Err(e) => return refuse(e),
+        };
+        let longest = self.limits.max_timeout.min(self.limits.max_wait);
+        if !(q.timeout >= 0.0 && q.timeout <= longest) {
+            return refuse(format!("timeout {} s is out of range: give 0 (the node's limit) to {longest} s (--max-request-timeout and --max-wait)", q.timeout));
+        }
+        let timeout = if q.timeout == 0.0 { longest } else { q.timeout };
+        let query = SingularityQuery { precision: q.precision, nodes: q.nodes, max_boxes, timeout: Some(Duration::from_secs_f64(timeout)) };
+        let prepared = match a.singularities(&query) {
+            Ok(p) => p,
+            Err(e) => return refuse(e.to_string()),
+        };
+        if let Some(busy) = self.busy() {
+            return refuse(busy);
+        }
+        let run = self.start(k, RunKind::Singularities { load_time: false }, Box::new(move |c, p| Outcome::Singularities(prepared.run(c, p))));
+        // The searches stop at `timeout`; the margin covers building the report.
+        let deadline = Instant::now() + Duration::from_secs_f64(timeout + 10.0);
+        self.runs.get_mut(&run).expect("invariant: just started").waiters.push((id, deadline));
+        None
+    }
+
+    /// Validates and starts an inverse-kinematics run; `None` when the reply waits for it.
+    fn inverse_kinematics(&mut self, id: RmwRequestId, q: InverseKinematicsRequest) -> Option<InverseKinematicsResponse> {
+        let refuse = |message: String| Some(InverseKinematicsResponse { ok: false, message, ..Default::default() });
         let k = match self.mechanism(&q.mechanism) {
             Ok(k) => k,
             Err(e) => return refuse(e),
@@ -602,10 +835,22 @@ impl State {
         if !(q.sigma.is_finite() && q.sigma > 0.0) {
             return refuse(format!("sigma must be a positive finite number, got {}", q.sigma));
         }
-        match self.mechanisms[k].loaded.analysis.inverse_kinematics(p, q.sigma) {
-            Err(e) => refuse(e.to_string()),
-            Ok(_) => refuse(format!("inverse kinematics of '{}': the node does not run this analysis yet", q.mechanism)),
+        let max_boxes = match self.box_limit(q.max_boxes) {
+            Ok(n) => n,
+            Err(e) => return refuse(e),
+        };
+        let prepared = match self.mechanisms[k].loaded.analysis.inverse_kinematics(&IkQuery { point: p, precision: q.sigma, max_boxes }) {
+            Ok(p) => p,
+            Err(e) => return refuse(e.to_string()),
+        };
+        if let Some(busy) = self.busy() {
+            return refuse(busy);
         }
+        let run = self.start(k, RunKind::InverseKinematics, Box::new(move |c, p| Outcome::InverseKinematics(prepared.run(c, p))));
+        // Bounded by boxes, not time: the node's longest wait is the safety net.
+        let deadline = Instant::now() + Duration::from_secs_f64(self.limits.max_wait);
+        self.runs.get_mut(&run).expect("invariant: just started").waiters.push((id, deadline));
+        None
     }
 
     fn classify(&mut self, q: ClassifyRequest) -> ClassifyResponse {
@@ -636,19 +881,27 @@ impl State {
         if let Some(i) = values.iter().position(|v| v.is_nan()) {
             return refuse(format!("no value for free joint '{}' (give every free joint: {})", free[i], free.join(", ")));
         }
-        let Some(cspace) = &m.configuration_space else {
-            return refuse(format!("the configuration space of '{}' is not known yet ({}); retry when {}/configuration_space is published", q.mechanism, m.state, m.prefix));
+        let c = match a.classify(&values, m.configuration_space.as_deref(), m.singularities.as_deref()) {
+            Ok(c) => c,
+            Err(AnalysisError::NotReady { what }) => {
+                return refuse(format!("the {} of '{}' is not known yet ({}); retry when {}/{what} is published", what.replace('_', " "), q.mechanism, m.state, m.prefix));
+            }
+            Err(e) => return refuse(e.to_string()),
         };
-        let c = analysis::classify(cspace, &values, &a.periodic(), None);
         let mut message = match c.component {
             Some(comp) if c.inside => format!("inside component {comp} of {}", c.components),
             Some(comp) => format!("outside every box; nearest is component {comp} of {} at distance {:.6}", c.components, c.distance),
+            None if c.inside => format!("in no component of {}", c.components),
             None => "the configuration space is empty".to_string(),
         };
-        if c.singular_distance.is_none() {
-            message.push_str(&format!("; distance to singularities unknown: {}", a.not_available(Service::Singularities)));
+        match c.singular_distance {
+            None => message.push_str(&format!("; distance to singularities unknown: {}", a.not_available(Service::Singularities))),
+            Some(d) => message.push_str(&format!("; at least {d:.6} from every singular configuration")),
         }
-        if cspace.status != Status::Complete {
+        if !c.note.is_empty() {
+            message.push_str(&format!(" ({})", c.note));
+        }
+        if m.configuration_space.as_ref().is_some_and(|cs| cs.status != Status::Complete) {
             message.push_str("; the configuration space is incomplete (undecided boxes are not classified)");
         }
         ClassifyResponse {
