@@ -227,8 +227,14 @@ fn topics_carry_the_solver_result_to_late_rclpy_subscribers() {
     let domain = 41;
     let four_bar = format!("{ROOT}/urdf/four_bar.urdf");
     let slider = format!("{ROOT}/urdf/slider_crank.urdf");
-    let mut node = Node::start(domain, &[&four_bar, &slider, "--fix", "four_bar:crank_joint=0.5", "--trace", "four_bar:coupler@2,1", "--sigma", "1e-3"]);
-    node.wait_for(&["four_bar: published configuration_space", "slider_crank: published configuration_space"], Duration::from_secs(120));
+    let octahedral = format!("{ROOT}/urdf/octahedral.urdf");
+    let legs = [("leg15", 4.25), ("leg16", 5.75), ("leg26", 4.25), ("leg24", 5.75), ("leg34", 4.25), ("leg35", 5.75)].map(|(l, v)| format!("octahedral:{l}={v}"));
+    let mut args = vec![four_bar.as_str(), slider.as_str(), octahedral.as_str(), "--fix", "four_bar:crank_joint=0.5", "--trace", "four_bar:coupler@2,1", "--sigma", "1e-3"];
+    for l in &legs {
+        args.extend(["--fix", l.as_str()]);
+    }
+    let mut node = Node::start(domain, &args);
+    node.wait_for(&["four_bar: published configuration_space", "slider_crank: published configuration_space", "octahedral: published configuration_space"], Duration::from_secs(120));
 
     // Two isolated assembly modes, with a traced coupler point.
     let reference = solve_json(&[&four_bar, "--fix", "crank_joint=0.5", "--trace", "coupler@2,1", "--sigma", "1e-3"]);
@@ -269,6 +275,14 @@ fn topics_carry_the_solver_result_to_late_rclpy_subscribers() {
     assert_eq!(got["progress"]["done"], json!(true));
     assert_eq!(got["progress"]["decided"], json!(1.0));
     assert_eq!(got["singularities"]["ok"], json!(false));
+
+    // The octahedral platform, legs fixed at serve time (configuration a): its two assembly
+    // modes, as `linkspace distances --redundant` finds them.
+    let got = py(python, domain, "tests/ros_client.py", &["topics", "--prefix", "/linkspace/octahedral"], Duration::from_secs(90));
+    assert_eq!(got["complete"], json!(true), "{got}");
+    let set = &got["configuration_space"];
+    assert_eq!(set["mechanism"], "octahedral");
+    assert_eq!(set["clusters"], json!(2), "{set}");
     assert!(got["singularities"]["message"].as_str().expect("message").contains("not available for this mechanism"));
 
     // A curve of about 9,000 boxes (a sample of about a megabyte), through plot_boxes.py, which

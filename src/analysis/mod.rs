@@ -12,12 +12,14 @@
 
 mod manip3r;
 mod planar;
+mod platform;
 
 pub use manip3r::Manip3rAnalysis;
 pub use planar::PlanarAnalysis;
+pub use platform::PlatformAnalysis;
 
 use crate::model::Mechanism;
-use crate::problems::LinkageError;
+use crate::problems::{LinkageError, PlatformError};
 use crate::solve::{BoxStatus, Progress, SolveError, SolverSettings, Stats, Status};
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
@@ -71,6 +73,9 @@ pub enum AnalysisError {
     /// The mechanism cannot be formulated as asked (bad fixed joints, loop cannot close...).
     #[error(transparent)]
     Linkage(#[from] LinkageError),
+    /// The platform cannot be formulated as asked (legs not fixed, outside their limits...).
+    #[error(transparent)]
+    Platform(#[from] PlatformError),
     /// Settings out of range.
     #[error(transparent)]
     Solve(#[from] SolveError),
@@ -466,6 +471,35 @@ pub fn load(mechanism: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f
         }
         Err(e) => e,
     };
+    // A parallel platform: PlatformProblem reads it, or it closes spherical loops (then it is a
+    // platform the builder cannot take, and is explained rather than tried as planar).
+    let spherical = mechanism.loops.iter().any(|l| l.kind == crate::model::JointKind::Spherical);
+    let unsupported = |reason: String| -> Box<dyn Analysis> {
+        Box::new(Unsupported {
+            name: mechanism.name.clone(),
+            joints: mechanism.joints.iter().filter(|j| j.kind != crate::model::JointKind::Fixed).map(|j| j.name.clone()).collect(),
+            reason,
+        })
+    };
+    match PlatformAnalysis::new(mechanism, fixed) {
+        Ok(a) => {
+            if let Some((link, _, _)) = traces.first() {
+                return Err(AnalysisError::BadRequest(format!("--trace {link}: '{}' is a parallel platform, whose analysis takes no traced points", mechanism.name)));
+            }
+            return Ok(Box::new(a));
+        }
+        // No leg fixed at all: loaded and listed, with what it needs.
+        Err(AnalysisError::Platform(e @ PlatformError::NotFixed(_))) if fixed.is_empty() => {
+            return Ok(unsupported(format!("a parallel platform whose legs are not fixed ({e}); serve it with --fix {}:LEG=SQUARED_LENGTH for each of its six legs", mechanism.name)));
+        }
+        Err(AnalysisError::Platform(e @ (PlatformError::NotAPlatform(_) | PlatformError::Unsupported(_)))) if spherical => {
+            return Ok(unsupported(format!("spherical loops, but {e}; only octahedral platforms, planar linkages and 3R manipulators are analysed so far")));
+        }
+        Err(AnalysisError::Platform(PlatformError::NotAPlatform(_) | PlatformError::Unsupported(_))) => {}
+        // A platform with bad --fix values (unknown leg, out of limits, some legs missing).
+        Err(e) if spherical => return Err(e),
+        Err(_) => {}
+    }
     match PlanarAnalysis::new(mechanism, fixed, traces) {
         Ok(a) => Ok(Box::new(a)),
         Err(e @ (LinkageError::NonPlanar(_) | LinkageError::NoLoops)) => Ok(Box::new(Unsupported {

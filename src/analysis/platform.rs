@@ -1,0 +1,194 @@
+//! The parallel-platform analysis: the assembly modes of an octahedral platform with its legs
+//! fixed, as the enclosure of the unknown squared distances (`PlatformProblem` ->
+//! `CayleyMenger`, shared variables with the redundant determinants, clipped by
+//! `TrapezoidClip`). The boxes are those of `linkspace distances --redundant --json` for the same
+//! input; the "joints" of a box are those unknown squared distances.
+
+use super::{Analysis, AnalysisError, BoxSetResult, PreparedRun, ResultBox, Service};
+use crate::contract::{FaceBounds, TrapezoidClip};
+use crate::model::Mechanism;
+use crate::problems::cayley_menger::{BuildOptions, CayleyMenger, Formulation};
+use crate::problems::{PlatformError, PlatformProblem};
+use crate::report::distances::report;
+use crate::solve::{BoxStatus, Progress, Solver, SolverSettings};
+use crate::system::VarRole;
+use std::sync::atomic::AtomicBool;
+
+/// The formulation the node uses: the fastest of `bench-distances` (shared variables, redundant
+/// determinants, Bernstein corners).
+const BUILD: BuildOptions = BuildOptions { formulation: Formulation::Shared, redundant: true };
+const FACES: FaceBounds = FaceBounds::Corners;
+
+/// A parallel platform with its legs fixed, as loaded.
+#[derive(Clone, Debug)]
+pub struct PlatformAnalysis {
+    mechanism: Mechanism,
+    fixed: Vec<(String, f64)>,
+    /// The unknown squared distances of the load-time problem (they do not depend on the legs).
+    unknowns: Vec<String>,
+}
+
+/// A validated platform run.
+struct PlatformRun {
+    platform: PlatformProblem,
+    cm: CayleyMenger,
+    clip: TrapezoidClip,
+    fixed: Vec<(String, f64)>,
+    settings: SolverSettings,
+    analysis: String,
+}
+
+impl PlatformAnalysis {
+    /// Reads the platform of `mechanism` with the squared leg lengths `fixed`.
+    pub fn new(mechanism: &Mechanism, fixed: &[(String, f64)]) -> Result<Self, AnalysisError> {
+        let run = Self::build(mechanism, fixed, &SolverSettings::default(), "")?;
+        Ok(Self { mechanism: mechanism.clone(), fixed: fixed.to_vec(), unknowns: run.cm.unknowns.iter().map(|u| u.name.clone()).collect() })
+    }
+
+    /// Everything a run needs, validated (legs, determinants, clipper, settings).
+    fn build(mechanism: &Mechanism, fixed: &[(String, f64)], settings: &SolverSettings, analysis: &str) -> Result<PlatformRun, AnalysisError> {
+        let platform = PlatformProblem::new(mechanism, fixed)?;
+        let cm = CayleyMenger::build(&platform.distances, BUILD).map_err(PlatformError::Distance)?;
+        let clip = cm.contractor(FACES).map_err(|e| AnalysisError::BadRequest(e.to_string()))?;
+        Solver::new(&cm.system, settings.clone())?;
+        Ok(PlatformRun { platform, cm, clip, fixed: fixed.to_vec(), settings: settings.clone(), analysis: analysis.to_string() })
+    }
+}
+
+impl Analysis for PlatformAnalysis {
+    fn mechanism(&self) -> &str {
+        &self.mechanism.name
+    }
+
+    fn kind(&self) -> &'static str {
+        "parallel_platform"
+    }
+
+    fn services(&self) -> Vec<Service> {
+        vec![Service::Solve, Service::Classify]
+    }
+
+    fn limitation(&self) -> String {
+        "a parallel platform: only its assembly modes (the unknown squared distances for fixed legs) are analysed so far (no singularity or inverse-kinematics analysis for platforms yet)".to_string()
+    }
+
+    fn free_joints(&self) -> Vec<String> {
+        self.unknowns.clone()
+    }
+
+    fn fixed_joints(&self) -> Vec<(String, f64)> {
+        self.fixed.clone()
+    }
+
+    fn periodic(&self) -> Vec<bool> {
+        // Squared distances, not angles.
+        vec![false; self.unknowns.len()]
+    }
+
+    fn configuration_space(&self, settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, AnalysisError> {
+        Ok(Box::new(Self::build(&self.mechanism, &self.fixed, settings, "configuration_space")?))
+    }
+
+    fn solve(&self, fixed: &[(String, f64)], settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, AnalysisError> {
+        Ok(Box::new(Self::build(&self.mechanism, fixed, settings, "solve")?))
+    }
+}
+
+impl PreparedRun for PlatformRun {
+    fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> BoxSetResult {
+        let clip = self.clip.clone();
+        let solver = Solver::new(&self.cm.system, self.settings.clone()).expect("invariant: validated when prepared").with_contractor(Box::new(move |_, _| Box::new(clip.clone())));
+        let e = solver.enclose(cancel, progress);
+        // The CLI's report, so the published boxes are exactly those of `distances --json`.
+        let fixed_map = self.fixed.iter().cloned().collect();
+        let rep = report(&self.cm, Some(&self.platform), fixed_map, FACES, &self.settings, e.status, e.stats.clone(), &e.solutions, &e.undecided);
+        let joint_names: Vec<String> = self.cm.unknowns.iter().map(|u| u.name.clone()).collect();
+        let convert = |r: &crate::report::distances::DistanceRecord, status: BoxStatus, cluster: Option<usize>| ResultBox {
+            status,
+            bounds: r.box_.clone(),
+            joints: joint_names.iter().map(|n| r.distances.get(n).copied().unwrap_or([f64::NAN, f64::NAN])).collect(),
+            level: r.level,
+            cluster,
+            traces: Vec::new(),
+        };
+        let mut boxes: Vec<ResultBox> = rep.solutions.iter().map(|r| convert(r, BoxStatus::Solution, Some(r.cluster))).collect();
+        boxes.extend(rep.undecided.iter().map(|r| convert(r, BoxStatus::Undecided, None)));
+        BoxSetResult {
+            mechanism: rep.problem,
+            analysis: self.analysis,
+            status: rep.status,
+            settings: rep.settings,
+            variables: rep.variables,
+            primaries: self.cm.system.vars.iter().enumerate().filter(|(_, v)| v.role == VarRole::Primary).map(|(i, _)| i).collect(),
+            joint_names,
+            fixed_joints: self.fixed,
+            traces: Vec::new(),
+            boxes,
+            clusters: rep.clusters,
+            stats: rep.stats,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analysis::load;
+    use crate::model::urdf;
+    use crate::solve::Status;
+
+    const OCTAHEDRAL: &str = include_str!("../../urdf/octahedral.urdf");
+    const LEGS: [&str; 6] = ["leg15", "leg16", "leg26", "leg24", "leg34", "leg35"];
+
+    fn config_a() -> Vec<(String, f64)> {
+        LEGS.iter().map(|l| l.to_string()).zip([4.25, 5.75, 4.25, 5.75, 4.25, 5.75]).collect()
+    }
+
+    #[test]
+    fn octahedral_configuration_space_is_the_cli_enclosure() {
+        let m = urdf::parse(OCTAHEDRAL).expect("bundled");
+        let fixed = config_a();
+        let a = load(&m, &fixed, &[]).expect("platform");
+        assert_eq!(a.kind(), "parallel_platform");
+        // The CLI's defaults (`linkspace distances --redundant`).
+        let settings = SolverSettings { sigma: 0.01, rho: 0.99, ..Default::default() };
+        let r = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        assert_eq!(r.status, Status::Complete);
+        assert_eq!(r.clusters, 2);
+        // The CLI path (`cli::distances::solve`), built independently here.
+        let p = PlatformProblem::new(&m, &fixed).expect("platform");
+        let cm = CayleyMenger::build(&p.distances, BUILD).expect("builds");
+        let clip = cm.contractor(FACES).expect("clipper");
+        let e = Solver::new(&cm.system, settings.clone()).expect("valid").with_contractor(Box::new(move |_, _| Box::new(clip.clone()))).enclose(&AtomicBool::new(false), &mut |_| {});
+        let rep = report(&cm, Some(&p), fixed.iter().cloned().collect(), FACES, &settings, e.status, e.stats, &e.solutions, &e.undecided);
+        assert_eq!(rep.clusters, 2);
+        let published: Vec<&Vec<[f64; 2]>> = r.boxes.iter().filter(|b| b.status == BoxStatus::Solution).map(|b| &b.bounds).collect();
+        let cli: Vec<&Vec<[f64; 2]>> = rep.solutions.iter().map(|s| &s.box_).collect();
+        assert_eq!(published, cli);
+        assert_eq!(r.joint_names.len(), r.boxes[0].joints.len());
+        assert!(r.boxes.iter().all(|b| b.joints.iter().all(|j| j[0] <= j[1])));
+        // Re-solving with other legs: configuration b.
+        let b: Vec<(String, f64)> = LEGS.iter().map(|l| (l.to_string(), 4.75)).collect();
+        let rb = a.solve(&b, &settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        assert_eq!(rb.analysis, "solve");
+        assert_eq!(rb.fixed_joints, b);
+        assert!(rb.clusters > 0);
+    }
+
+    #[test]
+    fn octahedral_without_legs_is_unsupported_and_bad_legs_fail() {
+        let m = urdf::parse(OCTAHEDRAL).expect("bundled");
+        let a = load(&m, &[], &[]).expect("listed");
+        assert_eq!(a.kind(), "unsupported");
+        let err = a.configuration_space(&SolverSettings::default()).err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(err.contains("legs are not fixed") && err.contains("--fix"), "{err}");
+        let mut partial = config_a();
+        partial.pop();
+        assert!(load(&m, &partial, &[]).err().map(|e| e.to_string()).unwrap_or_default().contains("leg 'leg35' has no --fix value"));
+        assert!(load(&m, &[("nope".into(), 1.0)], &[]).err().map(|e| e.to_string()).unwrap_or_default().contains("no leg"));
+        let a = load(&m, &config_a(), &[]).expect("platform");
+        let query = crate::analysis::SingularityQuery { precision: 1e-4, nodes: false, max_boxes: 10, timeout: None };
+        assert!(a.singularities(&query).err().map(|e| e.to_string()).unwrap_or_default().contains("not available"));
+        assert!(a.solve(&config_a(), &SolverSettings { sigma: -1.0, ..Default::default() }).err().map(|e| e.to_string()).unwrap_or_default().contains("sigma"));
+    }
+}
