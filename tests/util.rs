@@ -1,6 +1,6 @@
 use linkspace::model::urdf;
 use linkspace::problems::LinkageProblem;
-use linkspace::solve::{Solver, SolverSettings, Stats, Status};
+use linkspace::solve::{SolverSettings, Status};
 use linkspace::IntervalBox;
 use std::sync::atomic::AtomicBool;
 
@@ -17,7 +17,6 @@ pub fn problem(name: &str, fixed: &[(&str, f64)], traces: &[(&str, f64, f64)]) -
 
 pub struct Run {
     pub status: Status,
-    pub stats: Stats,
     pub solutions: Vec<IntervalBox>,
     pub unique: Vec<bool>,
 }
@@ -27,7 +26,7 @@ pub fn solve(p: &LinkageProblem, sigma: f64) -> Run {
     let solver = p.solver(settings).expect("valid settings");
     let e = solver.enclose(&AtomicBool::new(false), &mut |_| {});
     assert!(e.undecided.is_empty() || e.status != Status::Complete);
-    Run { status: e.status, stats: e.stats, solutions: e.solutions, unique: e.unique }
+    Run { status: e.status, solutions: e.solutions, unique: e.unique }
 }
 
 /// Does some box contain `x`, allowing `slack` for the rounding of the reference point itself?
