@@ -10,7 +10,7 @@ use linkspace::model::urdf;
 use linkspace::problems::cayley_menger::{BuildOptions, CayleyMenger, DistanceProblem, Formulation};
 use linkspace::problems::{distance_file, PlatformProblem};
 use linkspace::report::distances::{report, DistancesReport};
-use linkspace::solve::{Enclosure, Solver, SolverSettings, Status};
+use linkspace::solve::{Enclosure, SolverSettings, Status};
 use linkspace::IntervalBox;
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
@@ -44,10 +44,8 @@ pub const CONFIG_A: [f64; 6] = [4.25, 5.75, 4.25, 5.75, 4.25, 5.75];
 pub const CONFIG_B: [f64; 6] = [4.75; 6];
 
 pub fn solve(cm: &CayleyMenger, faces: FaceBounds, sigma: f64, rho: f64) -> Enclosure {
-    let clip = cm.contractor(faces).expect("compiles");
     let settings = SolverSettings { sigma, rho, ..Default::default() };
-    let solver = Solver::new(&cm.system, settings).expect("valid").with_contractor(Box::new(move |_, _| Box::new(clip.clone())));
-    solver.enclose(&AtomicBool::new(false), &mut |_| {})
+    cm.solver(faces, settings).expect("valid").enclose(&AtomicBool::new(false), &mut |_| {})
 }
 
 pub fn four_spheres(orient: bool) -> DistanceProblem {
@@ -469,9 +467,8 @@ fn parallel_and_serial_drivers_agree_on_distance_problems() {
         let cm = CayleyMenger::build(&p, BuildOptions { formulation: Formulation::Shared, redundant: true }).expect("builds");
         let mut sets = Vec::new();
         for threads in [1, 2] {
-            let clip = cm.contractor(FaceBounds::Corners).expect("compiles");
             let settings = SolverSettings { sigma, rho, threads, ..Default::default() };
-            let e = Solver::new(&cm.system, settings).expect("valid").with_contractor(Box::new(move |_, _| Box::new(clip.clone()))).enclose(&AtomicBool::new(false), &mut |_| {});
+            let e = cm.solver(FaceBounds::Corners, settings).expect("valid").enclose(&AtomicBool::new(false), &mut |_| {});
             assert_eq!(e.status, Status::Complete);
             let mut boxes: Vec<Vec<(u64, u64)>> = e.solutions.iter().map(|b| b.dims.iter().map(|d| (d.inf().to_bits(), d.sup().to_bits())).collect()).collect();
             boxes.sort();

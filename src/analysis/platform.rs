@@ -5,12 +5,12 @@
 //! input; the "joints" of a box are those unknown squared distances.
 
 use super::{Analysis, AnalysisError, BoxSetResult, PreparedRun, ResultBox, Service};
-use crate::contract::{FaceBounds, TrapezoidClip};
+use crate::contract::FaceBounds;
 use crate::model::Mechanism;
-use crate::problems::cayley_menger::{BuildOptions, CayleyMenger, Formulation};
+use crate::problems::cayley_menger::{BuildOptions, CayleyMenger, DistanceSolverError, Formulation};
 use crate::problems::{PlatformError, PlatformProblem};
 use crate::report::distances::report;
-use crate::solve::{BoxStatus, Progress, Solver, SolverSettings};
+use crate::solve::{BoxStatus, Progress, SolverSettings};
 use crate::system::VarRole;
 use std::sync::atomic::AtomicBool;
 
@@ -32,7 +32,6 @@ pub struct PlatformAnalysis {
 struct PlatformRun {
     platform: PlatformProblem,
     cm: CayleyMenger,
-    clip: TrapezoidClip,
     fixed: Vec<(String, f64)>,
     settings: SolverSettings,
     analysis: String,
@@ -49,9 +48,13 @@ impl PlatformAnalysis {
     fn build(mechanism: &Mechanism, fixed: &[(String, f64)], settings: &SolverSettings, analysis: &str) -> Result<PlatformRun, AnalysisError> {
         let platform = PlatformProblem::new(mechanism, fixed)?;
         let cm = CayleyMenger::build(&platform.distances, BUILD).map_err(PlatformError::Distance)?;
-        let clip = cm.contractor(FACES).map_err(|e| AnalysisError::BadRequest(e.to_string()))?;
-        Solver::new(&cm.system, settings.clone())?;
-        Ok(PlatformRun { platform, cm, clip, fixed: fixed.to_vec(), settings: settings.clone(), analysis: analysis.to_string() })
+        // Validate now, so that a bad request is answered before any thread starts.
+        match cm.solver(FACES, settings.clone()) {
+            Ok(_) => {}
+            Err(DistanceSolverError::Solve(e)) => return Err(e.into()),
+            Err(e) => return Err(AnalysisError::BadRequest(e.to_string())),
+        }
+        Ok(PlatformRun { platform, cm, fixed: fixed.to_vec(), settings: settings.clone(), analysis: analysis.to_string() })
     }
 }
 
@@ -96,8 +99,7 @@ impl Analysis for PlatformAnalysis {
 
 impl PreparedRun for PlatformRun {
     fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> BoxSetResult {
-        let clip = self.clip.clone();
-        let solver = Solver::new(&self.cm.system, self.settings.clone()).expect("invariant: validated when prepared").with_contractor(Box::new(move |_, _| Box::new(clip.clone())));
+        let solver = self.cm.solver(FACES, self.settings.clone()).expect("invariant: validated when prepared");
         let e = solver.enclose(cancel, progress);
         // The CLI's report, so the published boxes are exactly those of `distances --json`.
         let fixed_map = self.fixed.iter().cloned().collect();
@@ -158,8 +160,7 @@ mod tests {
         // The CLI path (`cli::distances::solve`), built independently here.
         let p = PlatformProblem::new(&m, &fixed).expect("platform");
         let cm = CayleyMenger::build(&p.distances, BUILD).expect("builds");
-        let clip = cm.contractor(FACES).expect("clipper");
-        let e = Solver::new(&cm.system, settings.clone()).expect("valid").with_contractor(Box::new(move |_, _| Box::new(clip.clone()))).enclose(&AtomicBool::new(false), &mut |_| {});
+        let e = cm.solver(FACES, settings.clone()).expect("valid").enclose(&AtomicBool::new(false), &mut |_| {});
         let rep = report(&cm, Some(&p), fixed.iter().cloned().collect(), FACES, &settings, e.status, e.stats, &e.solutions, &e.undecided);
         assert_eq!(rep.clusters, 2);
         let published: Vec<&Vec<[f64; 2]>> = r.boxes.iter().filter(|b| b.status == BoxStatus::Solution).map(|b| &b.bounds).collect();

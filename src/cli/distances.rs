@@ -9,7 +9,7 @@ use linkspace::model::urdf;
 use linkspace::problems::cayley_menger::{BuildOptions, CayleyMenger, DistanceProblem, Formulation};
 use linkspace::problems::{distance_file, PlatformProblem};
 use linkspace::report::distances::{report, DistancesReport};
-use linkspace::solve::{Enclosure, Solver, SolverSettings};
+use linkspace::solve::{Enclosure, SolverSettings};
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -84,9 +84,7 @@ pub fn load(path: &Path, text: &str, fixed: &[(String, f64)]) -> Result<Loaded> 
 }
 
 pub fn solve(cm: &CayleyMenger, faces: FaceBounds, settings: SolverSettings) -> Result<Enclosure> {
-    let clip = cm.contractor(faces)?;
-    let solver = Solver::new(&cm.system, settings)?.with_contractor(Box::new(move |_, _| Box::new(clip.clone())));
-    Ok(solver.enclose(&AtomicBool::new(false), &mut |_| {}))
+    Ok(cm.solver(faces, settings)?.enclose(&AtomicBool::new(false), &mut |_| {}))
 }
 
 pub fn options(form: Form, redundant: bool) -> BuildOptions {

@@ -17,12 +17,25 @@
 //! Builds only; solving is `solve`'s job.
 
 use crate::contract::{ClipError, FaceBounds, TrapezoidClip};
+use crate::solve::{SolveError, Solver, SolverSettings};
 use crate::interval::{interval, point, Interval, IntervalBox};
 use crate::system::multilinear::Poly;
 use crate::system::{EquationSystem, VarId, VarRole};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
 use thiserror::Error;
+
+/// Why a solver for a distance problem could not be made.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum DistanceSolverError {
+    /// An equation the clipper cannot take.
+    #[error(transparent)]
+    Clip(#[from] ClipError),
+    /// Bad settings or system.
+    #[error(transparent)]
+    Solve(#[from] SolveError),
+}
 
 /// What makes a distance problem unusable. Messages name the points at fault.
 #[derive(Debug, Error, PartialEq)]
@@ -524,6 +537,13 @@ impl CayleyMenger {
     /// The seed's `Reduce_Box` over this system's equations, ready for `Solver::with_contractor`.
     pub fn contractor(&self, faces: FaceBounds) -> Result<TrapezoidClip, ClipError> {
         TrapezoidClip::new(&self.equations, faces)
+    }
+
+    /// A solver for this problem: the trapezoid clipper with `faces` as its shrink pipeline.
+    /// See also `LinkageProblem::solver`.
+    pub fn solver(&self, faces: FaceBounds, settings: SolverSettings) -> Result<Solver<'_>, DistanceSolverError> {
+        let clip = self.contractor(faces)?;
+        Ok(Solver::new(&self.system, settings)?.with_contractor(Box::new(move |_, _| Box::new(clip.clone()))))
     }
 
     /// The squared distance of every pair at a point `x` of the variable space (box midpoint,
