@@ -9,7 +9,7 @@ use linkspace::interval::IntervalBox;
 use linkspace::lp::LpBackend;
 use linkspace::model::urdf;
 use linkspace::problems::LinkageProblem;
-use linkspace::solve::{Collect, Enclosure, SolverSettings, Status};
+use linkspace::search::{Collect, Enclosure, SolverSettings, Status};
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
@@ -370,9 +370,9 @@ fn cusp_sweep(dir: &Path, quick: bool) -> Result<()> {
         for (label, method) in [("interval Newton (Krawczyk)", cusps::Method::Krawczyk), ("bisection only", cusps::Method::Bisection)] {
             let mut points = Vec::new();
             for &precision in precisions {
-                let c0 = linkspace::solve::process_cpu_seconds();
+                let c0 = linkspace::search::process_cpu_seconds();
                 let found = cusps::search(&chain, &cusps::CuspSettings { precision, method, timeout: Some(Duration::from_secs(20)), ..Default::default() })?;
-                let cpu = linkspace::solve::process_cpu_seconds() - c0;
+                let cpu = linkspace::search::process_cpu_seconds() - c0;
                 if found.complete {
                     let widest = found.cusps.iter().map(|c| c.theta[0].wid().hypot(c.theta[1].wid())).fold(0.0, f64::max);
                     points.push((widest, cpu));

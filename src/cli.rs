@@ -16,7 +16,7 @@ use linkspace::manip3r::{
     report::{CollisionReport, IkReport, SingularityReport},
     Chain3R,
 };
-use linkspace::solve::{Progress, SolverSettings};
+use linkspace::search::{Progress, SolverSettings};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
@@ -239,7 +239,7 @@ fn parse_trace(s: &str) -> Result<(String, f64, f64)> {
 
 fn solve(args: SolveArgs) -> Result<()> {
     let timeout = seconds_arg(args.timeout)?;
-    let settings = SolverSettings { sigma: args.sigma, rho: args.rho, max_boxes: args.max_boxes, timeout, use_lp: !args.no_lp, newton_width: args.newton_width, threads: usize::from(args.threads), lp_backend: args.lp.into() };
+    let settings = SolverSettings { sigma: args.sigma, rho: args.rho, max_boxes: args.max_boxes, timeout, use_lp: !args.no_lp, newton_width: args.newton_width, threads: usize::from(args.threads), lp_backend: args.lp.into(), ..SolverSettings::default() };
     settings.validate()?;
     let fixed = args.fix.iter().map(|s| parse_fix(s)).collect::<Result<Vec<_>>>()?;
     let traces = args.trace.iter().map(|s| parse_trace(s)).collect::<Result<Vec<_>>>()?;

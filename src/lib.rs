@@ -18,10 +18,10 @@ pub mod model;
 pub mod ros;
 pub mod problems;
 pub mod report;
-pub mod solve;
+pub mod search;
 pub mod study;
 pub mod system;
 
 pub use interval::{Interval, IntervalBox};
-pub use solve::{Solver, SolverSettings, Status};
+pub use search::{Solver, SolverSettings, Status};
 pub use system::EquationSystem;

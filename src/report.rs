@@ -4,7 +4,7 @@
 
 use crate::interval::{components, IntervalBox};
 use crate::problems::LinkageProblem;
-use crate::solve::{SolverSettings, Stats, Status};
+use crate::search::{SolveStats as Stats, SolverSettings, Status};
 use crate::system::VarRole;
 use serde::Serialize;
 

@@ -8,7 +8,7 @@
 
 use crate::model::urdf;
 use crate::problems::LinkageProblem;
-use crate::solve::{SolverSettings, Status};
+use crate::search::{SolverSettings, Status};
 use crate::system::{EquationSystem, Monomial};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;

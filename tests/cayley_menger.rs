@@ -10,7 +10,7 @@ use linkspace::model::urdf;
 use linkspace::problems::cayley_menger::{BuildOptions, CayleyMenger, DistanceProblem, Formulation};
 use linkspace::problems::{distance_file, PlatformProblem};
 use linkspace::report::distances::{report, DistancesReport};
-use linkspace::solve::{Enclosure, SolverSettings, Status};
+use linkspace::search::{Enclosure, SolverSettings, Status};
 use linkspace::IntervalBox;
 use nalgebra::Vector3;
 use std::collections::BTreeMap;

@@ -338,7 +338,7 @@ fn mobile_branches() -> &'static Vec<Vec<Vec<f64>>> {
 /// Issue 4: the parallel driver gives exactly the serial set of boxes, on every bundled problem.
 #[test]
 fn parallel_and_serial_drivers_give_identical_box_sets() {
-    use linkspace::solve::SolverSettings;
+    use linkspace::search::SolverSettings;
     use std::sync::atomic::AtomicBool;
     let cases: Vec<(linkspace::problems::LinkageProblem, f64)> = vec![
         (problem("double_butterfly.urdf", &[("joint6", 12f64.atan2(5.0))], &[]), 1e-4),

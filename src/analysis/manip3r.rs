@@ -18,7 +18,7 @@ use crate::manip3r::motion::{self, PI_UP};
 use crate::manip3r::report::radius;
 use crate::manip3r::{self, cusps, ik, nodes, Chain3R, Manip3rError};
 use crate::model::Mechanism;
-use crate::solve::{BoxStatus, Limit, Progress, SolverSettings, Stats, Status};
+use crate::search::{BoxStatus, Limit, Progress, SolveStats as Stats, SolverSettings, Status};
 use inari::Interval;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;

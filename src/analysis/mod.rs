@@ -20,7 +20,7 @@ pub use platform::PlatformAnalysis;
 
 use crate::model::Mechanism;
 use crate::problems::{LinkageError, PlatformError};
-use crate::solve::{BoxStatus, Progress, SolveError, SolverSettings, Stats, Status};
+use crate::search::{BoxStatus, Progress, SolveError, SolveStats as Stats, SolverSettings, Status};
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 use thiserror::Error;

@@ -6,7 +6,7 @@ use super::{Analysis, AnalysisError, BoxSetResult, PreparedRun, ResultBox, Servi
 use crate::interval::components;
 use crate::model::{JointKind, Mechanism};
 use crate::problems::{LinkageError, LinkageProblem};
-use crate::solve::{BoxStatus, Progress, SolverSettings};
+use crate::search::{BoxStatus, Progress, SolverSettings};
 use crate::system::VarRole;
 use std::sync::atomic::AtomicBool;
 

@@ -10,7 +10,7 @@ use crate::model::Mechanism;
 use crate::problems::cayley_menger::{BuildOptions, CayleyMenger, DistanceSolverError, Formulation};
 use crate::problems::{PlatformError, PlatformProblem};
 use crate::report::distances::report;
-use crate::solve::{BoxStatus, Progress, SolverSettings};
+use crate::search::{BoxStatus, Progress, SolverSettings};
 use crate::system::VarRole;
 use std::sync::atomic::AtomicBool;
 
@@ -137,7 +137,7 @@ mod tests {
     use super::*;
     use crate::analysis::load;
     use crate::model::urdf;
-    use crate::solve::Status;
+    use crate::search::Status;
 
     const OCTAHEDRAL: &str = include_str!("../../urdf/octahedral.urdf");
     const LEGS: [&str; 6] = ["leg15", "leg16", "leg26", "leg24", "leg34", "leg35"];

@@ -9,7 +9,7 @@ use linkspace::model::urdf;
 use linkspace::problems::cayley_menger::{BuildOptions, CayleyMenger, DistanceProblem, Formulation};
 use linkspace::problems::{distance_file, PlatformProblem};
 use linkspace::report::distances::{report, DistancesReport};
-use linkspace::solve::{Enclosure, SolverSettings};
+use linkspace::search::{Enclosure, SolverSettings};
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};

@@ -3,7 +3,7 @@
 use super::{parse_fix, parse_trace};
 use anyhow::{bail, Context, Result};
 use linkspace::ros::{self, Limits, Mapping, Network, ServeConfig, Source};
-use linkspace::solve::SolverSettings;
+use linkspace::search::SolverSettings;
 use std::io::Read;
 use std::path::PathBuf;
 use std::time::Duration;

@@ -17,7 +17,7 @@
 //! Builds only; solving is `solve`'s job.
 
 use crate::contract::{ClipError, FaceBounds, TrapezoidClip};
-use crate::solve::{SolveError, Solver, SolverSettings};
+use crate::search::{SolveError, Solver, SolverSettings};
 use crate::interval::{interval, point, Interval, IntervalBox};
 use crate::system::multilinear::Poly;
 use crate::system::{EquationSystem, VarId, VarRole};

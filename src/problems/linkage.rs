@@ -11,7 +11,7 @@
 //! Builds only; solving is `solve`'s job.
 
 use crate::contract::{Contraction, Contractor, Propagation, Sequence};
-use crate::solve::{default_contractor, SolveError, Solver, SolverSettings};
+use crate::search::{default_contractor, SolveError, Solver, SolverSettings};
 use crate::interval::{interval, point, Interval, IntervalBox};
 use crate::model::{JointKind, Mechanism, ModelError};
 use crate::system::{Equation, EquationSystem, Monomial, Term, VarId, VarRole};

@@ -7,7 +7,7 @@ use crate::contract::FaceBounds;
 use crate::interval::{components, IntervalBox};
 use crate::problems::cayley_menger::{BuildOptions, CayleyMenger};
 use crate::problems::platform::{PlatformProblem, Pose};
-use crate::solve::{SolverSettings, Stats, Status};
+use crate::search::{SolveStats as Stats, SolverSettings, Status};
 use nalgebra::Vector3;
 use serde::Serialize;
 use std::collections::BTreeMap;

@@ -5,7 +5,7 @@ use super::msgs::{
     Time, Vector3,
 };
 use crate::analysis::{Bounds, BoxSetResult, IkResult, SingularityResult};
-use crate::solve::{BoxStatus, Limit, SolverSettings, Status};
+use crate::search::{BoxStatus, Limit, SolverSettings, Status};
 
 /// A header stamped now (wall clock) in `frame`.
 pub fn header(frame: &str) -> Header {
@@ -20,12 +20,7 @@ pub fn settings(s: &SolverSettings) -> msgs::Settings {
 
 /// The name of a limit, as in the JSON report.
 pub fn limit_name(l: Limit) -> &'static str {
-    match l {
-        Limit::Boxes => "boxes",
-        Limit::Time => "time",
-        Limit::Cancelled => "cancelled",
-        Limit::Sink => "sink",
-    }
+    l.name()
 }
 
 /// A result as a `linkspace_msgs/BoxSet`, boxes in the result's order.

@@ -14,7 +14,7 @@ mod node;
 
 use crate::analysis::{self, Analysis};
 use crate::model::urdf;
-use crate::solve::SolverSettings;
+use crate::search::SolverSettings;
 use anyhow::{bail, Context as _, Result};
 
 /// How service requests and replies are laid out on DDS; it must match the caller's RMW.

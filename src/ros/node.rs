@@ -14,7 +14,7 @@ use super::convert;
 use super::msgs::{self, *};
 use super::{Limits, Loaded, Mapping, Network, ServeConfig};
 use crate::analysis::{AnalysisError, BoxSetResult, IkQuery, IkResult, Service, SingularityQuery, SingularityResult};
-use crate::solve::{SolverSettings, Status};
+use crate::search::{SolverSettings, Status};
 use anyhow::{Context as _, Result};
 use futures::StreamExt;
 use ros2_client::dds::rustdds::DomainParticipantBuilder;
@@ -31,7 +31,7 @@ use std::time::{Duration, Instant};
 /// Everything that makes the loop do something.
 enum Event {
     Request(Request),
-    Progress { run: u64, progress: crate::solve::Progress },
+    Progress { run: u64, progress: crate::search::Progress },
     /// A run ended; `Err` when it panicked (its payload, as text).
     Finished { run: u64, result: Result<Outcome, String> },
     Tick,
@@ -50,7 +50,7 @@ impl Outcome {
     /// (boxes processed, boxes left pending, complete) for the final progress message.
     fn counts(&self) -> (u64, usize, bool) {
         match self {
-            Outcome::BoxSet(r) => (r.stats.processed, r.boxes.iter().filter(|b| b.status == crate::solve::BoxStatus::Undecided).count(), r.status == Status::Complete),
+            Outcome::BoxSet(r) => (r.stats.processed, r.boxes.iter().filter(|b| b.status == crate::search::BoxStatus::Undecided).count(), r.status == Status::Complete),
             Outcome::Singularities(r) => (r.processed, r.undecided(), r.status == Status::Complete),
             Outcome::InverseKinematics(r) => (r.processed, 0, r.complete),
         }
@@ -58,7 +58,7 @@ impl Outcome {
 }
 
 /// A run's work, moved to its thread.
-type Job = Box<dyn FnOnce(&AtomicBool, &mut dyn FnMut(&crate::solve::Progress)) -> Outcome + Send>;
+type Job = Box<dyn FnOnce(&AtomicBool, &mut dyn FnMut(&crate::search::Progress)) -> Outcome + Send>;
 
 /// A decoded service request with the id its reply must carry.
 enum Request {
@@ -407,7 +407,7 @@ impl State {
         let events = self.events.clone();
         std::thread::spawn(move || {
             let progress_events = events.clone();
-            let mut progress = move |p: &crate::solve::Progress| {
+            let mut progress = move |p: &crate::search::Progress| {
                 // Progress is lossy by design: a full queue drops a snapshot, not the run.
                 let _ = progress_events.try_send(Event::Progress { run, progress: *p });
             };
@@ -432,7 +432,7 @@ impl State {
         }
     }
 
-    fn progress(&self, run: u64, p: crate::solve::Progress, done: bool) {
+    fn progress(&self, run: u64, p: crate::search::Progress, done: bool) {
         let Some(r) = self.runs.get(&run) else { return };
         // An inverse-kinematics query is answered in its reply; it has no volume to report.
         if r.kind == RunKind::InverseKinematics {
@@ -458,7 +458,7 @@ impl State {
         let (processed, pending, complete) = result.as_ref().map_or((0, 0, false), |o| o.counts());
         // What a limit left undecided is still pending.
         let decided = if complete { 1.0 } else { self.runs.get(&run).map_or(0.0, |r| r.decided) };
-        self.progress(run, crate::solve::Progress { processed, pending, decided }, true);
+        self.progress(run, crate::search::Progress { processed, pending, decided }, true);
         let Some(r) = self.runs.remove(&run) else { return };
         self.finished.push_back(run);
         if self.finished.len() > 4096 {

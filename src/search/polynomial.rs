@@ -1,44 +1,25 @@
-//! The branch-and-prune driver: the seed's Algorithm 1.
+//! The kernel's client for equation systems: the seed's Algorithm 1 as a `Prune`.
 //!
-//! Take a box from the pool; shrink it until it is proven empty, is no wider than sigma, or one
-//! round no longer removes a significant share of its volume (rho); bisect it in the last case.
-//! The pool is a stack (depth first, lowest half first), so runs are deterministic.
-//! Limits end a run `Incomplete`, and then every box still pending is reported as `Undecided`:
-//! nothing is silently dropped.
+//! A cell is an `IntervalBox`. `SystemPrune` shrinks it until it is proven empty, is no wider
+//! than sigma, or one round no longer removes a significant share of its volume (rho), and
+//! bisects it in the last case (widest primary at its midpoint, lower half first).
+//! `Solver` is the preset that wires a system, its contractors and the settings to the kernel
+//! (as ibex's `DefaultSolver`): depth first on one thread, level by level on several, with the
+//! same set of boxes. Limits end a run `Incomplete`, and then every box still pending is
+//! reported as `Undecided`: nothing is silently dropped.
 
+use super::limits::{process_cpu_seconds, Limits, Progress, Status};
 use super::settings::{SettingsError, SolverSettings};
+use super::{driver, Prune, Sink, Stats, Step, Store, Undecided};
 use crate::contract::{Contraction, Contractor, LpShrink, Newton, Propagation, Sequence};
 use crate::interval::IntervalBox;
 use crate::lp::LpCounters;
 use crate::system::{EquationSystem, SystemError, VarId};
+use smallvec::smallvec;
 use std::ops::ControlFlow;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 use thiserror::Error;
-
-/// Why a run stopped early.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Limit {
-    /// `max_boxes` boxes were processed.
-    Boxes,
-    /// `timeout` elapsed.
-    Time,
-    /// The caller raised the cancel flag.
-    Cancelled,
-    /// The sink asked to stop.
-    Sink,
-}
-
-/// How a run ended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case", tag = "status", content = "limit")]
-pub enum Status {
-    /// Every box was decided: the solution boxes enclose every solution in the initial box.
-    Complete,
-    /// Stopped by a limit; solution and undecided boxes together enclose every solution.
-    Incomplete(Limit),
-}
 
 /// The tag of a reported box.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -50,17 +31,6 @@ pub enum BoxStatus {
     Unique,
     /// Left unprocessed when a limit stopped the run.
     Undecided,
-}
-
-/// A snapshot of a run's progress.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct Progress {
-    /// Boxes processed so far.
-    pub processed: u64,
-    /// Boxes waiting in the pool.
-    pub pending: usize,
-    /// Share of the initial (primary) volume already decided, in [0, 1].
-    pub decided: f64,
 }
 
 /// Where results go, as they are found.
@@ -95,9 +65,9 @@ impl BoxSink for Collect {
     }
 }
 
-/// Counters of a run.
+/// Counters of a run of the polynomial solver (the kernel's `Stats` in the names of seed 000).
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
-pub struct Stats {
+pub struct SolveStats {
     /// Boxes taken from the pool.
     pub processed: u64,
     /// Boxes proven empty.
@@ -129,7 +99,7 @@ pub struct Enclosure {
     /// How the run ended.
     pub status: Status,
     /// Its counters.
-    pub stats: Stats,
+    pub stats: SolveStats,
     /// Solution boxes (spurious isolated ones dropped).
     pub solutions: Vec<IntervalBox>,
     /// Per solution box: certified to hold exactly one solution.
@@ -192,29 +162,7 @@ impl<'a> Solver<'a> {
         self
     }
 
-    pub(super) fn primaries(&self) -> &[VarId] {
-        &self.primaries
-    }
-
-    pub(super) fn initial(&self) -> IntervalBox {
-        self.system.initial_box()
-    }
-
-    /// Bisects the widest primary at its midpoint: the fixed rule both drivers share.
-    pub(super) fn split(&self, b: &IntervalBox) -> (IntervalBox, IntervalBox) {
-        let (i, _) = b.widest(&self.primaries).expect("invariant: validated system has primaries");
-        b.bisect(i)
-    }
-
-    /// The limit that forbids processing `upcoming` more boxes now, if any.
-    pub(super) fn limit_before(&self, stats: &Stats, upcoming: u64, t0: Instant, cancel: &AtomicBool) -> Option<Limit> {
-        if stats.processed + upcoming > self.settings.max_boxes {
-            return Some(Limit::Boxes);
-        }
-        self.limit_reached(stats, t0, cancel)
-    }
-
-    pub(super) fn contractor(&self) -> Box<dyn Contractor + Send + 'a> {
+    fn contractor(&self) -> Box<dyn Contractor + Send + 'a> {
         match &self.factory {
             Some(f) => f(self.system, &self.settings),
             None => default_contractor(self.system, &self.settings),
@@ -226,81 +174,70 @@ impl<'a> Solver<'a> {
         &self.settings
     }
 
-    /// Runs branch and prune from the system's initial box.
-    pub fn run(&self, cancel: &AtomicBool, sink: &mut dyn BoxSink) -> (Status, Stats) {
+    /// The kernel's limits for these settings.
+    fn limits(&self) -> Limits {
+        Limits { max_cells: self.settings.max_boxes, timeout: self.settings.timeout, max_memory: self.settings.max_memory }
+    }
+
+    /// A `Prune` over boxes of this system, measuring volumes against `reference`.
+    fn prune(&self, reference: &IntervalBox, diagonals: bool) -> SystemPrune<'a, '_> {
+        SystemPrune {
+            solver: self,
+            contractor: self.contractor(),
+            reference_widths: self.primaries.iter().map(|&i| reference.width(i)).collect(),
+            shrink_rounds: 0,
+            certified: 0,
+            diagonals: diagonals.then(Vec::new),
+        }
+    }
+
+    /// Runs branch and prune from the system's initial box, depth first.
+    pub fn run(&self, cancel: &AtomicBool, sink: &mut dyn BoxSink) -> (Status, SolveStats) {
         self.run_from(self.system.initial_box(), cancel, sink)
     }
 
-    /// Runs branch and prune from `start`.
-    pub fn run_from(&self, start: IntervalBox, cancel: &AtomicBool, sink: &mut dyn BoxSink) -> (Status, Stats) {
-        let t0 = Instant::now();
-        let c0 = process_cpu_seconds();
-        let mut stats = Stats::default();
-        let mut contractor = self.contractor();
-        let reference = start.clone();
-        let volume = |b: &IntervalBox| self.relative_volume(b, &reference);
-        let mut pool = vec![start];
-        let mut pending_volume = 1.0;
-        let mut status = Status::Complete;
-        let mut last_progress = Instant::now();
+    /// Runs branch and prune from `start`, depth first.
+    pub fn run_from(&self, start: IntervalBox, cancel: &AtomicBool, sink: &mut dyn BoxSink) -> (Status, SolveStats) {
+        let mut prune = self.prune(&start, false);
+        let (status, stats) = driver::run(&mut prune, start, Store::DepthFirst, &self.limits(), cancel, &mut Boxes(sink));
+        let mut out = SolveStats::from_kernel(&stats);
+        prune.add_counters(&mut out);
+        (status, out)
+    }
 
-        while let Some(mut b) = pool.pop() {
-            pending_volume -= volume(&b);
-            if let Some(limit) = self.limit_reached(&stats, t0, cancel) {
-                pool.push(b);
-                status = Status::Incomplete(limit);
-                break;
-            }
-            stats.processed += 1;
-            stats.max_level = stats.max_level.max(b.level);
-            let shrunk = self.shrink(&mut b, contractor.as_mut(), &mut stats);
-            match shrunk {
-                Shrunk::Empty => stats.empty += 1,
-                Shrunk::Solution | Shrunk::Unique => {
-                    stats.solutions += 1;
-                    let tag = if matches!(shrunk, Shrunk::Unique) { BoxStatus::Unique } else { BoxStatus::Solution };
-                    if sink.emit(tag, &b).is_break() {
-                        status = Status::Incomplete(Limit::Sink);
-                        break;
-                    }
+    /// Runs on `threads` worker threads (at least 1), breadth first: the same set of boxes as
+    /// `run`, reported level by level. `level_diagonals`, when given, receives per tree level
+    /// the widest primary diagonal among that level's boxes after shrinking (those not proven
+    /// empty): the enclosure reached at each iteration (seed 000, section V).
+    pub fn run_parallel(&self, threads: usize, cancel: &AtomicBool, sink: &mut dyn BoxSink, level_diagonals: Option<&mut Vec<f64>>) -> (Status, SolveStats) {
+        let start = self.system.initial_box();
+        let mut workers: Vec<_> = (0..threads.max(1)).map(|_| self.prune(&start, level_diagonals.is_some())).collect();
+        let (status, stats) = driver::run_by_level(&mut workers, start, &self.limits(), cancel, &mut Boxes(sink));
+        let mut out = SolveStats::from_kernel(&stats);
+        let mut widest: Vec<f64> = Vec::new();
+        for w in &workers {
+            w.add_counters(&mut out);
+            for (l, &d) in w.diagonals.iter().flatten().enumerate() {
+                if widest.len() <= l {
+                    widest.resize(l + 1, 0.0);
                 }
-                Shrunk::Stalled => {
-                    let (lower, upper) = self.split(&b);
-                    stats.bisected += 1;
-                    pending_volume += volume(&lower) + volume(&upper);
-                    // Pushed last, popped first: the lower half is explored first.
-                    pool.push(upper);
-                    pool.push(lower);
-                }
-            }
-            if last_progress.elapsed().as_millis() >= 200 {
-                last_progress = Instant::now();
-                let decided = (1.0 - pending_volume).clamp(0.0, 1.0);
-                sink.progress(&Progress { processed: stats.processed, pending: pool.len(), decided });
+                widest[l] = widest[l].max(d);
             }
         }
-        if status != Status::Complete {
-            // Report what is left, in the order it would have been explored.
-            while let Some(b) = pool.pop() {
-                if sink.emit(BoxStatus::Undecided, &b).is_break() {
-                    break;
-                }
-            }
+        if let Some(d) = level_diagonals {
+            *d = widest;
         }
-        stats.lp = contractor.lp_counters();
-        stats.seconds = t0.elapsed().as_secs_f64();
-        stats.cpu_seconds = process_cpu_seconds() - c0;
-        (status, stats)
+        (status, out)
     }
 
     /// Runs to the end, then drops proven-empty isolated boxes (`drop_spurious` on clusters of
     /// at most two boxes): what the CLI and the node report. `progress` sees the run's progress.
     pub fn enclose(&self, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> Enclosure {
-        struct Sink<'p> {
+        struct Forward<'p> {
             collect: Collect,
             progress: &'p mut dyn FnMut(&Progress),
         }
-        impl BoxSink for Sink<'_> {
+        impl BoxSink for Forward<'_> {
             fn emit(&mut self, status: BoxStatus, b: &IntervalBox) -> ControlFlow<()> {
                 self.collect.emit(status, b)
             }
@@ -310,7 +247,7 @@ impl<'a> Solver<'a> {
         }
         let t0 = Instant::now();
         let c0 = process_cpu_seconds();
-        let mut sink = Sink { collect: Collect::default(), progress };
+        let mut sink = Forward { collect: Collect::default(), progress };
         let (status, mut stats) = if self.settings.threads > 1 {
             self.run_parallel(self.settings.threads, cancel, &mut sink, None)
         } else {
@@ -363,78 +300,144 @@ impl<'a> Solver<'a> {
         (kept, kept_unique, dropped)
     }
 
-    fn limit_reached(&self, stats: &Stats, t0: Instant, cancel: &AtomicBool) -> Option<Limit> {
-        if cancel.load(Ordering::Relaxed) {
-            return Some(Limit::Cancelled);
-        }
-        if stats.processed >= self.settings.max_boxes {
-            return Some(Limit::Boxes);
-        }
-        match self.settings.timeout {
-            Some(t) if t0.elapsed() >= t => Some(Limit::Time),
-            _ => None,
-        }
+    fn size(&self, b: &IntervalBox) -> f64 {
+        b.widest(&self.primaries).map_or(0.0, |(_, w)| w)
     }
+}
 
+/// The seed's Algorithm 1 on one box: a `Prune` whose cells are boxes of the system.
+struct SystemPrune<'a, 's> {
+    solver: &'s Solver<'a>,
+    contractor: Box<dyn Contractor + Send + 'a>,
+    /// Widths of the primaries in the start box, for volume shares.
+    reference_widths: Vec<f64>,
+    shrink_rounds: u64,
+    certified: u64,
+    /// Per level, the widest diagonal of a box not proven empty, when asked for.
+    diagonals: Option<Vec<f64>>,
+}
+
+impl SystemPrune<'_, '_> {
     /// Lines 5–9 of the seed's Algorithm 1.
-    pub(super) fn shrink(&self, b: &mut IntervalBox, contractor: &mut dyn Contractor, stats: &mut Stats) -> Shrunk {
+    fn shrink(&mut self, b: &mut IntervalBox) -> Shrunk {
+        let sigma = self.solver.settings.sigma;
         loop {
-            stats.shrink_rounds += 1;
+            self.shrink_rounds += 1;
             let before = b.clone();
             // The whole pipeline runs even when its first step reached sigma: the LP is what
             // proves most near-miss boxes empty, and a spurious solution box costs more than it.
-            match contractor.contract(b) {
+            match self.contractor.contract(b) {
                 Contraction::Empty => return Shrunk::Empty,
-                Contraction::Proven if self.size(b) <= self.settings.sigma => {
-                    stats.certified += 1;
+                Contraction::Proven if self.solver.size(b) <= sigma => {
+                    self.certified += 1;
                     return Shrunk::Unique;
                 }
                 _ => {}
             }
-            if self.size(b) <= self.settings.sigma {
-                if let Some(proven) = contractor.certify(b) {
-                    if self.size(&proven) <= self.settings.sigma {
+            if self.solver.size(b) <= sigma {
+                if let Some(proven) = self.contractor.certify(b) {
+                    if self.solver.size(&proven) <= sigma {
                         *b = IntervalBox { level: b.level, ..proven };
-                        stats.certified += 1;
+                        self.certified += 1;
                         return Shrunk::Unique;
                     }
                 }
                 return Shrunk::Solution;
             }
-            if self.relative_volume(b, &before) > self.settings.rho {
+            if self.relative_volume(b, &before) > self.solver.settings.rho {
                 return Shrunk::Stalled;
             }
         }
     }
 
-    fn size(&self, b: &IntervalBox) -> f64 {
-        b.widest(&self.primaries).map_or(0.0, |(_, w)| w)
-    }
-
     /// Volume of `b` over the primaries, relative to `reference`; components of zero width in
-    /// the reference are left out so that fixed values do not make every volume zero.
+    /// the start box are left out so that fixed values do not make every volume zero.
     fn relative_volume(&self, b: &IntervalBox, reference: &IntervalBox) -> f64 {
-        self.primaries
-            .iter()
-            .filter(|&&i| reference.width(i) > 0.0)
-            .map(|&i| b.width(i) / reference.width(i))
-            .product()
+        self.solver.primaries.iter().filter(|&&i| reference.width(i) > 0.0).map(|&i| b.width(i) / reference.width(i)).product()
+    }
+
+    fn add_counters(&self, out: &mut SolveStats) {
+        out.shrink_rounds += self.shrink_rounds;
+        out.certified += self.certified;
+        let lp = self.contractor.lp_counters();
+        out.lp.solved += lp.solved;
+        out.lp.unverified += lp.unverified;
     }
 }
 
-/// CPU time consumed by this process so far, in seconds (0 where the OS will not say).
-pub fn process_cpu_seconds() -> f64 {
-    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
-    // SAFETY: clock_gettime writes one timespec through a valid pointer and reads nothing else.
-    let rc = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
-    if rc == 0 {
-        ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
-    } else {
-        0.0
+impl Prune for SystemPrune<'_, '_> {
+    type Cell = IntervalBox;
+    type Found = (BoxStatus, IntervalBox);
+
+    fn process(&mut self, mut b: IntervalBox) -> Step<IntervalBox, (BoxStatus, IntervalBox)> {
+        let shrunk = self.shrink(&mut b);
+        if let Some(d) = &mut self.diagonals {
+            if !matches!(shrunk, Shrunk::Empty) {
+                let l = b.level as usize;
+                if d.len() <= l {
+                    d.resize(l + 1, 0.0);
+                }
+                d[l] = d[l].max(b.diagonal(&self.solver.primaries));
+            }
+        }
+        match shrunk {
+            Shrunk::Empty => Step::Discard("empty"),
+            Shrunk::Solution => Step::Found((BoxStatus::Solution, b)),
+            Shrunk::Unique => Step::Found((BoxStatus::Unique, b)),
+            Shrunk::Stalled => {
+                let (i, _) = b.widest(&self.solver.primaries).expect("invariant: validated system has primaries");
+                let (lower, upper) = b.bisect(i);
+                Step::Split(smallvec![lower, upper])
+            }
+        }
+    }
+
+    fn share(&self, b: &IntervalBox) -> f64 {
+        self.solver.primaries.iter().zip(&self.reference_widths).filter(|(_, &w)| w > 0.0).map(|(&i, &w)| b.width(i) / w).product()
+    }
+
+    fn level(&self, b: &IntervalBox) -> u32 {
+        b.level
+    }
+
+    fn bytes(&self, b: &IntervalBox) -> usize {
+        std::mem::size_of::<IntervalBox>() + std::mem::size_of_val(b.dims.as_slice())
     }
 }
 
-pub(super) enum Shrunk {
+/// Routes the kernel's results to a `BoxSink`.
+struct Boxes<'s>(&'s mut dyn BoxSink);
+
+impl Sink<IntervalBox, (BoxStatus, IntervalBox)> for Boxes<'_> {
+    fn found(&mut self, (status, b): (BoxStatus, IntervalBox)) -> ControlFlow<()> {
+        self.0.emit(status, &b)
+    }
+
+    fn undecided(&mut self, b: IntervalBox, _why: Undecided) -> ControlFlow<()> {
+        self.0.emit(BoxStatus::Undecided, &b)
+    }
+
+    fn progress(&mut self, p: &Progress) {
+        self.0.progress(p)
+    }
+}
+
+impl SolveStats {
+    fn from_kernel(s: &Stats) -> Self {
+        SolveStats {
+            processed: s.processed,
+            empty: s.discarded("empty"),
+            bisected: s.split,
+            solutions: s.found,
+            max_level: s.max_level,
+            seconds: s.seconds,
+            cpu_seconds: s.cpu_seconds,
+            ..SolveStats::default()
+        }
+    }
+}
+
+enum Shrunk {
     Empty,
     Solution,
     Unique,
@@ -444,6 +447,7 @@ pub(super) enum Shrunk {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::search::Limit;
     use crate::interval::{interval, point};
     use crate::system::{Equation, Monomial, Term, VarRole};
 

@@ -1,4 +1,4 @@
-//! Settings of the branch-and-prune driver, validated once.
+//! Settings of the polynomial solver, validated once.
 
 use crate::lp::LpBackend;
 use std::time::Duration;
@@ -17,6 +17,9 @@ pub struct SolverSettings {
     /// Stop after this much wall-clock time (the run ends `incomplete`). Default: none.
     #[serde(serialize_with = "seconds")]
     pub timeout: Option<Duration>,
+    /// Stop before pending boxes hold more than this many bytes (the run ends `incomplete`).
+    /// Default 2 GiB.
+    pub max_memory: usize,
     /// Use the LP shrink after propagation. Default true; false leaves propagation alone.
     pub use_lp: bool,
     /// Interval Newton runs on square systems once every primary is at most this wide.
@@ -38,7 +41,7 @@ fn seconds<S: serde::Serializer>(d: &Option<Duration>, s: S) -> Result<S::Ok, S:
 
 impl Default for SolverSettings {
     fn default() -> Self {
-        Self { sigma: 1e-3, rho: 0.95, max_boxes: 1_000_000, timeout: None, use_lp: true, newton_width: 0.25, threads: 1, lp_backend: LpBackend::Simplex }
+        Self { sigma: 1e-3, rho: 0.95, max_boxes: 1_000_000, timeout: None, max_memory: super::limits::DEFAULT_MAX_MEMORY, use_lp: true, newton_width: 0.25, threads: 1, lp_backend: LpBackend::Simplex }
     }
 }
 

@@ -1,0 +1,300 @@
+//! The two drivers: one thread in any `Store` order, or many threads level by level.
+//!
+//! Both take a cell, check the limits, let the `Prune` decide it, and route the decision:
+//! discards to `Stats`, results and undecided cells to the `Sink`, children back to the pool.
+//! A run stopped by a limit reports every pending cell as `Undecided::Pending`: nothing is
+//! silently dropped.
+//!
+//! `run_by_level` walks the tree breadth first. The cells of a level are cut into chunks that
+//! workers take from a shared counter; each worker owns its `Prune` for the whole run (its
+//! scratch state is built once, not per chunk). The decisions are routed in level order on the
+//! calling thread, and `Prune::process` depends on the cell alone, so the cells reported, and
+//! their order, do not depend on the number of threads or on scheduling.
+
+use super::limits::{process_cpu_seconds, Budget, Limit, Limits, Progress, Status};
+use super::store::{Pool, Store};
+use super::{Prune, Sink, Stats, Step, Undecided};
+use std::ops::ControlFlow;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+
+/// How often a driver reports progress.
+const PROGRESS_EVERY: Duration = Duration::from_millis(200);
+
+/// Runs `prune` from `start` on the calling thread, taking pending cells in `store` order.
+///
+/// Returns how the run ended and its counters.
+///
+/// # Examples
+///
+/// Bisect [0, 1] until pieces are shorter than 1/8, keeping those that hold 0.3:
+///
+/// ```
+/// use linkspace::search::{run, Prune, Sink, Step, Store, Limits, Undecided, Status};
+/// use std::ops::ControlFlow;
+/// use std::sync::atomic::AtomicBool;
+///
+/// struct Bisect;
+/// impl Prune for Bisect {
+///     type Cell = (f64, f64);
+///     type Found = (f64, f64);
+///     fn process(&mut self, (a, b): (f64, f64)) -> Step<(f64, f64), (f64, f64)> {
+///         if !(a <= 0.3 && 0.3 <= b) {
+///             Step::Discard("apart")
+///         } else if b - a < 0.125 {
+///             Step::Found((a, b))
+///         } else {
+///             let m = 0.5 * (a + b);
+///             Step::Split([(a, m), (m, b)].into_iter().collect())
+///         }
+///     }
+/// }
+/// struct Keep(Vec<(f64, f64)>);
+/// impl Sink<(f64, f64), (f64, f64)> for Keep {
+///     fn found(&mut self, f: (f64, f64)) -> ControlFlow<()> { self.0.push(f); ControlFlow::Continue(()) }
+///     fn undecided(&mut self, _: (f64, f64), _: Undecided) -> ControlFlow<()> { ControlFlow::Continue(()) }
+/// }
+/// let mut keep = Keep(vec![]);
+/// let (status, stats) = run(&mut Bisect, (0.0, 1.0), Store::DepthFirst, &Limits::default(), &AtomicBool::new(false), &mut keep);
+/// assert_eq!(status, Status::Complete);
+/// assert_eq!(keep.0, vec![(0.25, 0.3125)]);
+/// assert_eq!(stats.discarded("apart"), 4);
+/// ```
+pub fn run<P: Prune>(prune: &mut P, start: P::Cell, store: Store, limits: &Limits, cancel: &AtomicBool, sink: &mut impl Sink<P::Cell, P::Found>) -> (Status, Stats) {
+    let budget = Budget::start(*limits, cancel);
+    let c0 = process_cpu_seconds();
+    let mut stats = Stats::default();
+    let mut pool = Pool::new(store);
+    let mut pending_share = prune.share(&start);
+    let mut pending_bytes = prune.bytes(&start);
+    let key = prune.key(&start);
+    pool.restore(start, key);
+    let mut status = Status::Complete;
+    let mut last_progress = Instant::now();
+    let mut report_pending = true;
+
+    while let Some(cell) = pool.pop() {
+        if let Some(limit) = budget.exhausted(stats.processed, pending_bytes) {
+            let key = prune.key(&cell);
+            pool.restore(cell, key);
+            status = Status::Incomplete(limit);
+            break;
+        }
+        pending_share -= prune.share(&cell);
+        pending_bytes = pending_bytes.saturating_sub(prune.bytes(&cell));
+        stats.processed += 1;
+        stats.max_level = stats.max_level.max(prune.level(&cell));
+        let flow = match prune.process(cell) {
+            Step::Discard(reason) => {
+                *stats.discarded.entry(reason).or_default() += 1;
+                ControlFlow::Continue(())
+            }
+            Step::Found(f) => {
+                stats.found += 1;
+                sink.found(f)
+            }
+            Step::Undecided(c, reason) => {
+                stats.undecided += 1;
+                sink.undecided(c, Undecided::Precision(reason))
+            }
+            Step::Split(children) => {
+                stats.split += 1;
+                for c in &children {
+                    pending_share += prune.share(c);
+                    pending_bytes += prune.bytes(c);
+                }
+                pool.push_children(children.into_iter().map(|c| {
+                    let k = prune.key(&c);
+                    (c, k)
+                }));
+                ControlFlow::Continue(())
+            }
+        };
+        if flow.is_break() {
+            status = Status::Incomplete(Limit::Sink);
+            report_pending = false;
+            break;
+        }
+        if last_progress.elapsed() >= PROGRESS_EVERY {
+            last_progress = Instant::now();
+            sink.progress(&Progress { processed: stats.processed, pending: pool.len(), decided: (1.0 - pending_share).clamp(0.0, 1.0) });
+        }
+    }
+    if report_pending {
+        report_undecided(pool.drain(), &mut stats, sink);
+    }
+    stats.seconds = budget.elapsed().as_secs_f64();
+    stats.cpu_seconds = process_cpu_seconds() - c0;
+    (status, stats)
+}
+
+/// Runs breadth first from `start` on one thread per element of `workers` (one `Prune` each;
+/// a single worker runs on the calling thread).
+///
+/// The cells reported, and their order, are those of a serial breadth-first walk whatever the
+/// number of workers. `on_level` sees the number of each level as it is finished.
+pub fn run_by_level<P>(workers: &mut [P], start: P::Cell, limits: &Limits, cancel: &AtomicBool, sink: &mut impl Sink<P::Cell, P::Found>) -> (Status, Stats)
+where
+    P: Prune + Send,
+{
+    assert!(!workers.is_empty(), "invariant: run_by_level needs at least one worker");
+    let budget = Budget::start(*limits, cancel);
+    let c0 = process_cpu_seconds();
+    let mut stats = Stats::default();
+    let mut level = vec![start];
+    let mut status = Status::Complete;
+    let mut report_pending = true;
+    let mut pending = Vec::new();
+
+    while !level.is_empty() {
+        if let Some(limit) = budget.exhausted(stats.processed, 0) {
+            status = Status::Incomplete(limit);
+            pending = level;
+            break;
+        }
+        // Process as much of the level as the cell budget allows: the same prefix for any
+        // thread count.
+        let take = level.len().min(usize::try_from(budget.cells_left(stats.processed)).unwrap_or(usize::MAX));
+        let rest = level.split_off(take);
+        let (steps, unprocessed) = process_level(workers, level, &budget);
+        let mut next = Vec::new();
+        let mut next_bytes = 0usize;
+        let mut steps = steps.into_iter();
+        for (level_of, step) in steps.by_ref() {
+            stats.processed += 1;
+            stats.max_level = stats.max_level.max(level_of);
+            let flow = match step {
+                Step::Discard(reason) => {
+                    *stats.discarded.entry(reason).or_default() += 1;
+                    ControlFlow::Continue(())
+                }
+                Step::Found(f) => {
+                    stats.found += 1;
+                    sink.found(f)
+                }
+                Step::Undecided(c, reason) => {
+                    stats.undecided += 1;
+                    sink.undecided(c, Undecided::Precision(reason))
+                }
+                Step::Split(children) => {
+                    stats.split += 1;
+                    next_bytes += children.iter().map(|c| workers[0].bytes(c)).sum::<usize>();
+                    next.extend(children);
+                    ControlFlow::Continue(())
+                }
+            };
+            if flow.is_break() {
+                status = Status::Incomplete(Limit::Sink);
+                report_pending = false;
+                break;
+            }
+        }
+        if !report_pending {
+            break;
+        }
+        let stopped = if !unprocessed.is_empty() {
+            budget.interrupted().or(Some(Limit::Time))
+        } else if !rest.is_empty() {
+            Some(Limit::Boxes)
+        } else if next_bytes > budget.max_memory() {
+            Some(Limit::Memory)
+        } else {
+            None
+        };
+        sink.progress(&Progress { processed: stats.processed, pending: next.len() + rest.len() + unprocessed.len(), decided: f64::NAN });
+        if let Some(limit) = stopped {
+            status = Status::Incomplete(limit);
+            pending = unprocessed;
+            pending.extend(rest);
+            pending.extend(next);
+            break;
+        }
+        level = next;
+    }
+    if report_pending {
+        report_undecided(pending, &mut stats, sink);
+    }
+    stats.seconds = budget.elapsed().as_secs_f64();
+    stats.cpu_seconds = process_cpu_seconds() - c0;
+    (status, stats)
+}
+
+/// Decides the cells of one level on the workers; returns the decisions in level order (with
+/// each cell's level) and, if cancel or time interrupted the level, the cells never taken.
+fn process_level<P>(workers: &mut [P], level: Vec<P::Cell>, budget: &Budget<'_>) -> (Vec<(u32, Step<P::Cell, P::Found>)>, Vec<P::Cell>)
+where
+    P: Prune + Send,
+{
+    let decide = |p: &mut P, c: P::Cell| {
+        let l = p.level(&c);
+        (l, p.process(c))
+    };
+    if workers.len() == 1 || level.len() < 2 {
+        let p = &mut workers[0];
+        let mut out = Vec::with_capacity(level.len());
+        let mut cells = level.into_iter();
+        for c in cells.by_ref() {
+            out.push(decide(p, c));
+            if budget.interrupted().is_some() {
+                break;
+            }
+        }
+        return (out, cells.collect());
+    }
+    // Chunks small enough to balance the load, large enough that taking one costs little.
+    let chunk = (level.len() / (workers.len() * 8)).clamp(1, 64);
+    let mut chunks: Vec<Mutex<Option<Vec<P::Cell>>>> = Vec::with_capacity(level.len().div_ceil(chunk));
+    let mut cells = level.into_iter().peekable();
+    while cells.peek().is_some() {
+        chunks.push(Mutex::new(Some(cells.by_ref().take(chunk).collect())));
+    }
+    let next_chunk = AtomicUsize::new(0);
+    let stop = AtomicBool::new(false);
+    let done: Vec<Vec<(usize, Vec<(u32, Step<P::Cell, P::Found>)>)>> = std::thread::scope(|s| {
+        let handles: Vec<_> = workers
+            .iter_mut()
+            .map(|p| {
+                let (chunks, next_chunk, stop) = (&chunks, &next_chunk, &stop);
+                s.spawn(move || {
+                    let mut mine = Vec::new();
+                    while !stop.load(Ordering::Relaxed) {
+                        let i = next_chunk.fetch_add(1, Ordering::Relaxed);
+                        let Some(slot) = chunks.get(i) else { break };
+                        let cells = slot.lock().expect("invariant: no worker panics holding a chunk").take().expect("invariant: each chunk is taken once");
+                        mine.push((i, cells.into_iter().map(|c| decide(p, c)).collect()));
+                        if budget.interrupted().is_some() {
+                            stop.store(true, Ordering::Relaxed);
+                        }
+                    }
+                    mine
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().expect("invariant: Prune::process does not panic")).collect()
+    });
+    let mut by_chunk: Vec<Option<Vec<(u32, Step<P::Cell, P::Found>)>>> = (0..chunks.len()).map(|_| None).collect();
+    for (i, steps) in done.into_iter().flatten() {
+        by_chunk[i] = Some(steps);
+    }
+    // Decisions in chunk order; the chunks no worker took (cancel or time) stay pending. Only
+    // an interrupted run, which depends on the clock anyway, has such gaps.
+    let mut out = Vec::new();
+    let mut unprocessed = Vec::new();
+    for (slot, steps) in chunks.into_iter().zip(by_chunk) {
+        match steps {
+            Some(steps) => out.extend(steps),
+            None => unprocessed.extend(slot.into_inner().expect("invariant: no worker panics holding a chunk").into_iter().flatten()),
+        }
+    }
+    (out, unprocessed)
+}
+
+fn report_undecided<C, F>(pending: impl IntoIterator<Item = C>, stats: &mut Stats, sink: &mut impl Sink<C, F>) {
+    for c in pending {
+        stats.undecided += 1;
+        if sink.undecided(c, Undecided::Pending).is_break() {
+            break;
+        }
+    }
+}

@@ -1,0 +1,145 @@
+//! The branch-and-prune kernel: one search loop for every analysis.
+//!
+//! The kernel knows *cells*, not equations: a cell is whatever a search splits (an interval
+//! box, a pair of boxes, a (θ₂, θ₃) square). A search plugs in a `Prune`, whose `process` step
+//! decides one cell: discard it (with a reason counted in `Stats`), report what it holds (a
+//! `Found` carrying its certificate), leave it undecided at precision (with a reason), or split
+//! it. The kernel owns the rest: the order of work (`Store`), `Limits` (cells, time, memory),
+//! cancellation, progress, the `Sink` that receives results as they come, per-reason `Stats`,
+//! and the one `Status { Complete, Incomplete(Limit) }`.
+//! This is ibex's `Solver(System, Ctc, Bsc, CellBuffer)` split, statically dispatched.
+//!
+//! `run` walks the tree on the calling thread in the chosen `Store` order; `run_by_level` walks
+//! it breadth first on as many threads as it is given `Prune`s, and reports exactly the cells
+//! the serial breadth-first walk would, in the same order, for any thread count.
+//!
+//! `polynomial` is the kernel's client for `EquationSystem`s (the seed-000 solver and the
+//! trapezoid distance solver): `Solver`, `SolverSettings`, `BoxSink`.
+//!
+//! Does no IO and knows nothing of mechanisms, URDF or ROS.
+
+mod driver;
+mod limits;
+mod polynomial;
+mod settings;
+mod store;
+
+pub use driver::{run, run_by_level};
+pub use limits::{process_cpu_seconds, Limit, Limits, Progress, Status};
+pub use polynomial::{default_contractor, BoxSink, BoxStatus, Collect, ContractorFactory, Enclosure, SolveError, SolveStats, Solver};
+pub use settings::{SettingsError, SolverSettings};
+pub use store::Store;
+
+use smallvec::SmallVec;
+use std::collections::BTreeMap;
+use std::ops::ControlFlow;
+
+/// One search: how a cell is decided.
+///
+/// Contract: `process` may keep scratch state, but its answer depends on the cell alone (not on
+/// the cells processed before), so that the parallel driver gives the serial answer. A cell is
+/// discarded only when it provably holds nothing the search looks for.
+pub trait Prune {
+    /// What is split: a box, a pair of boxes, ...
+    type Cell: Send;
+    /// What is reported, with its certificate (a unique root, a point inside a strip, ...).
+    type Found: Send;
+
+    /// Decides one cell.
+    fn process(&mut self, cell: Self::Cell) -> Step<Self::Cell, Self::Found>;
+
+    /// The cell's share of the start cell's measure, in [0, 1], for `Progress::decided`;
+    /// 0 (the default) when the search has no measure.
+    fn share(&self, _cell: &Self::Cell) -> f64 {
+        0.0
+    }
+
+    /// Depth of the cell in the search tree, for `Stats::max_level`.
+    fn level(&self, _cell: &Self::Cell) -> u32 {
+        0
+    }
+
+    /// Bytes the cell holds, for the memory limit; the default counts its inline size only.
+    fn bytes(&self, _cell: &Self::Cell) -> usize {
+        std::mem::size_of::<Self::Cell>()
+    }
+
+    /// Best-first key: `Store::BestFirst` takes the cell with the smallest key first.
+    fn key(&self, _cell: &Self::Cell) -> f64 {
+        0.0
+    }
+}
+
+/// What `Prune::process` decided.
+pub enum Step<C, F> {
+    /// Provably holds nothing sought; the reason is counted in `Stats::discarded`.
+    Discard(&'static str),
+    /// Holds what is sought, with the certificate inside `F`.
+    Found(F),
+    /// Neither discarded nor proven at the precision asked for; the reason travels to the sink.
+    Undecided(C, &'static str),
+    /// To be searched further as these children (in the order they should be explored).
+    Split(SmallVec<[C; 4]>),
+}
+
+/// Why a cell is reported undecided.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Undecided {
+    /// The search reached its precision without a proof; the reason names what was missing.
+    Precision(&'static str),
+    /// Never processed: a limit stopped the run first (`Status` names which).
+    Pending,
+}
+
+impl Undecided {
+    /// A short machine-readable reason: the precision reason, or `"limit"`.
+    pub fn reason(self) -> &'static str {
+        match self {
+            Undecided::Precision(r) => r,
+            Undecided::Pending => "limit",
+        }
+    }
+}
+
+/// Where results go, as they are found.
+pub trait Sink<C, F> {
+    /// Receives what a cell holds; `Break` stops the run (`Incomplete(Sink)`).
+    fn found(&mut self, found: F) -> ControlFlow<()>;
+    /// Receives an undecided cell; `Break` stops the run (pending cells are then not reported).
+    fn undecided(&mut self, cell: C, why: Undecided) -> ControlFlow<()>;
+    /// Receives progress now and then; the default ignores it.
+    fn progress(&mut self, _p: &Progress) {}
+}
+
+/// Counters of a run, the same for every search.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Stats {
+    /// Cells processed.
+    pub processed: u64,
+    /// Cells split.
+    pub split: u64,
+    /// Results reported (`Step::Found`).
+    pub found: u64,
+    /// Cells reported undecided (at precision or pending).
+    pub undecided: u64,
+    /// Discarded cells per reason.
+    pub discarded: BTreeMap<&'static str, u64>,
+    /// Deepest level reached.
+    pub max_level: u32,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+    /// CPU seconds of the process over the run (all threads).
+    pub cpu_seconds: f64,
+}
+
+impl Stats {
+    /// Cells discarded for any reason.
+    pub fn discarded_total(&self) -> u64 {
+        self.discarded.values().sum()
+    }
+
+    /// Cells discarded for `reason`.
+    pub fn discarded(&self, reason: &str) -> u64 {
+        self.discarded.get(reason).copied().unwrap_or(0)
+    }
+}
