@@ -16,7 +16,7 @@ use linkspace::manip3r::{
     report::{CollisionReport, IkReport, SingularityReport},
     Chain3R,
 };
-use linkspace::search::{Progress, SolverSettings};
+use linkspace::search::{Limits, Progress, SolverSettings};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
@@ -29,6 +29,54 @@ pub(crate) mod distances;
 struct Cli {
     #[command(subcommand)]
     command: Command,
+}
+
+/// The bounds every command takes: `#[command(flatten)]` into each command's arguments.
+#[derive(clap::Args, Clone, Debug)]
+pub(crate) struct LimitArgs {
+    /// Stop after processing this many boxes (box pairs for nodes); the run is then reported
+    /// incomplete. Default: the command's (solve, distances, serve 1,000,000; ik 200,000;
+    /// collisions 5,000,000; singularities 20,000,000 per search).
+    #[arg(long, value_name = "N")]
+    max_boxes: Option<u64>,
+    /// Stop after this many seconds; the run is then reported incomplete.
+    #[arg(long, value_name = "SECONDS")]
+    timeout: Option<f64>,
+    /// Stop before pending boxes hold more than this many MiB; the run is then reported
+    /// incomplete. Default 2048.
+    #[arg(long, value_name = "MIB")]
+    max_memory: Option<u64>,
+    /// Worker threads (1: depth first on one thread; more: breadth first level by level, the
+    /// same boxes).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=1024))]
+    threads: u16,
+}
+
+impl LimitArgs {
+    /// The kernel's limits, with `default_boxes` where `--max-boxes` is not given.
+    pub(crate) fn limits(&self, default_boxes: u64) -> Result<Limits> {
+        let max_cells = self.max_boxes.unwrap_or(default_boxes);
+        if max_cells == 0 {
+            bail!("--max-boxes must be at least 1");
+        }
+        let max_memory = match self.max_memory {
+            Some(0) => bail!("--max-memory must be at least 1 MiB"),
+            Some(m) => usize::try_from(m.saturating_mul(1 << 20)).unwrap_or(usize::MAX),
+            None => Limits::default().max_memory,
+        };
+        Ok(Limits { max_cells, timeout: seconds_arg(self.timeout)?, max_memory })
+    }
+
+    /// Worker threads asked for (at least 1).
+    pub(crate) fn threads(&self) -> usize {
+        usize::from(self.threads.max(1))
+    }
+
+    /// Solver settings with these limits (and `default_boxes`) over `base`.
+    pub(crate) fn solver_settings(&self, default_boxes: u64, base: SolverSettings) -> Result<SolverSettings> {
+        let l = self.limits(default_boxes)?;
+        Ok(SolverSettings { max_boxes: l.max_cells, timeout: l.timeout, max_memory: l.max_memory, threads: self.threads(), ..base })
+    }
 }
 
 #[derive(Subcommand)]
@@ -63,12 +111,8 @@ struct CollisionsArgs {
     /// Largest width (radians) of undecided boxes, in (0, 1).
     #[arg(long, default_value_t = 1e-2, allow_hyphen_values = true)]
     precision: f64,
-    /// Stop after this many boxes; the run is then incomplete.
-    #[arg(long, default_value_t = 5_000_000)]
-    max_boxes: u64,
-    /// Stop after this many seconds; the run is then incomplete.
-    #[arg(long)]
-    timeout: Option<f64>,
+    #[command(flatten)]
+    limits: LimitArgs,
     /// Write the full report as JSON here.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
@@ -87,12 +131,8 @@ struct SingularitiesArgs {
     /// Turn every length of the URDF into an interval of this half-width (metres).
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     uncertainty: f64,
-    /// Stop each search after this many boxes (or box pairs); the run is then incomplete.
-    #[arg(long, default_value_t = 20_000_000)]
-    max_boxes: u64,
-    /// Stop each search after this many seconds; the run is then incomplete.
-    #[arg(long)]
-    timeout: Option<f64>,
+    #[command(flatten)]
+    limits: LimitArgs,
     /// Write the full report as JSON here.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
@@ -111,9 +151,8 @@ struct IkArgs {
     /// Turn every length of the URDF into an interval of this half-width (metres).
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     uncertainty: f64,
-    /// Stop after this many boxes.
-    #[arg(long, default_value_t = 200_000)]
-    max_boxes: u64,
+    #[command(flatten)]
+    limits: LimitArgs,
     /// Write the report as JSON here.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
@@ -176,12 +215,8 @@ struct SolveArgs {
     /// Keep shrinking a box while a round leaves less than this share of its volume.
     #[arg(long, default_value_t = 0.95)]
     rho: f64,
-    /// Stop after this many boxes (the run is then reported incomplete).
-    #[arg(long, default_value_t = 1_000_000)]
-    max_boxes: u64,
-    /// Stop after this many seconds (the run is then reported incomplete).
-    #[arg(long)]
-    timeout: Option<f64>,
+    #[command(flatten)]
+    limits: LimitArgs,
     /// Trace a point given in a link's frame: LINK@X,Y. Repeatable.
     #[arg(long = "trace", value_name = "LINK@X,Y")]
     trace: Vec<String>,
@@ -191,9 +226,6 @@ struct SolveArgs {
     /// Interval Newton (square systems) once every primary is at most this wide; 0 disables it.
     #[arg(long, default_value_t = 0.25)]
     newton_width: f64,
-    /// Worker threads (1: depth-first serial driver; more: breadth-first parallel, same boxes).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=1024))]
-    threads: u16,
     /// LP solver proposing the multipliers that the safe bound verifies.
     #[arg(long, value_enum, default_value_t = Backend::Simplex)]
     lp: Backend,
@@ -238,8 +270,8 @@ fn parse_trace(s: &str) -> Result<(String, f64, f64)> {
 }
 
 fn solve(args: SolveArgs) -> Result<()> {
-    let timeout = seconds_arg(args.timeout)?;
-    let settings = SolverSettings { sigma: args.sigma, rho: args.rho, max_boxes: args.max_boxes, timeout, use_lp: !args.no_lp, newton_width: args.newton_width, threads: usize::from(args.threads), lp_backend: args.lp.into(), ..SolverSettings::default() };
+    let base = SolverSettings { sigma: args.sigma, rho: args.rho, use_lp: !args.no_lp, newton_width: args.newton_width, lp_backend: args.lp.into(), ..SolverSettings::default() };
+    let settings = args.limits.solver_settings(SolverSettings::default().max_boxes, base)?;
     settings.validate()?;
     let fixed = args.fix.iter().map(|s| parse_fix(s)).collect::<Result<Vec<_>>>()?;
     let traces = args.trace.iter().map(|s| parse_trace(s)).collect::<Result<Vec<_>>>()?;
@@ -347,13 +379,14 @@ pub(crate) fn seconds_arg(t: Option<f64>) -> Result<Option<Duration>> {
 
 fn singularities(args: SingularitiesArgs) -> Result<()> {
     manip3r::check_precision(args.precision)?;
-    let timeout = seconds_arg(args.timeout)?;
+    let limits = args.limits.limits(20_000_000)?;
+    let timeout = limits.timeout;
     let chain = load_chain(&args.urdf, args.uncertainty)?;
     let start = std::time::Instant::now();
-    let cusp_settings = CuspSettings { precision: args.precision, max_boxes: args.max_boxes, timeout, method: Method::Krawczyk };
+    let cusp_settings = CuspSettings { precision: args.precision, max_boxes: limits.max_cells, timeout, method: Method::Krawczyk };
     let found = cusps::search(&chain, &cusp_settings)?;
     let node_search = if args.nodes {
-        let settings = NodeSettings { precision: args.precision, max_pairs: args.max_boxes, timeout };
+        let settings = NodeSettings { precision: args.precision, max_pairs: limits.max_cells, timeout };
         Some(nodes::search(&chain, &found.cusps, &found.bands, &settings)?)
     } else {
         None
@@ -391,11 +424,12 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
 
 fn collisions(args: CollisionsArgs) -> Result<()> {
     manip3r::check_precision(args.precision)?;
-    let timeout = seconds_arg(args.timeout)?;
+    let limits = args.limits.limits(5_000_000)?;
+    let timeout = limits.timeout;
     let xml = std::fs::read_to_string(&args.urdf).with_context(|| format!("reading {}", args.urdf.display()))?;
     let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", args.urdf.display()))?;
     let scene = Scene::from_mechanism(&mechanism).with_context(|| format!("loading {}", args.urdf.display()))?;
-    let settings = CollisionSettings { precision: args.precision, max_boxes: args.max_boxes, timeout };
+    let settings = CollisionSettings { precision: args.precision, max_boxes: limits.max_cells, timeout };
     let set = collision::classify(&scene, &settings)?;
     let report = CollisionReport::new(&scene, args.precision, &set);
     let s = &report.stats;
@@ -433,7 +467,7 @@ fn ik(args: IkArgs) -> Result<()> {
     let z: f64 = z.trim().parse().with_context(|| format!("--point '{}': '{z}' is not a number", args.point))?;
     manip3r::check_precision(args.precision)?;
     let chain = load_chain(&args.urdf, args.uncertainty)?;
-    let s = manip3r::ik::solve(&chain, r, z, args.precision, args.max_boxes)?;
+    let s = manip3r::ik::solve(&chain, r, z, args.precision, args.limits.limits(200_000)?.max_cells)?;
     let report = IkReport::new(&chain, [r, z], &s);
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}: {} solutions proven unique, {} clusters undecided, status {}", report.robot, s.unique.len(), s.clusters.len(), report.status).ok();

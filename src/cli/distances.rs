@@ -54,12 +54,8 @@ pub struct DistancesArgs {
     /// How the trapezoid sides are bounded.
     #[arg(long, value_enum, default_value_t = Faces::Corners)]
     faces: Faces,
-    /// Stop after this many boxes (the run is then reported incomplete).
-    #[arg(long, default_value_t = 1_000_000)]
-    max_boxes: u64,
-    /// Stop after this many seconds (the run is then reported incomplete).
-    #[arg(long)]
-    timeout: Option<f64>,
+    #[command(flatten)]
+    limits: super::LimitArgs,
     /// Write the full report as JSON here.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
@@ -100,8 +96,7 @@ fn face_bounds(f: Faces) -> FaceBounds {
 }
 
 pub fn run(args: DistancesArgs) -> Result<()> {
-    let timeout = super::seconds_arg(args.timeout)?;
-    let settings = SolverSettings { sigma: args.sigma, rho: args.rho, max_boxes: args.max_boxes, timeout, ..Default::default() };
+    let settings = args.limits.solver_settings(SolverSettings::default().max_boxes, SolverSettings { sigma: args.sigma, rho: args.rho, ..Default::default() })?;
     settings.validate()?;
     let fixed = args.fix.iter().map(|s| parse_fix(s)).collect::<Result<Vec<_>>>()?;
     let text = std::fs::read_to_string(&args.file).with_context(|| format!("reading {}", args.file.display()))?;

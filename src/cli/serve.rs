@@ -61,12 +61,9 @@ pub struct ServeArgs {
     /// Load-time analyses: shrink while a round leaves less than this share of the volume.
     #[arg(long, default_value_t = 0.95)]
     rho: f64,
-    /// Load-time analyses: stop after this many boxes.
-    #[arg(long, default_value_t = 1_000_000)]
-    max_boxes: u64,
-    /// Load-time analyses: stop after this many seconds.
-    #[arg(long)]
-    timeout: Option<f64>,
+    /// Load-time analyses: bounds of each run.
+    #[command(flatten)]
+    limits: super::LimitArgs,
     /// Load-time singularity analyses of 3R manipulators: largest width of the certified boxes
     /// (radians), in (0, 1).
     #[arg(long, default_value_t = 1e-4, allow_hyphen_values = true)]
@@ -112,8 +109,7 @@ pub fn serve(args: ServeArgs) -> Result<()> {
     if domain > 232 {
         bail!("domain {domain} is out of range: ROS 2 domain ids go from 0 to 232");
     }
-    let timeout = super::seconds_arg(args.timeout)?;
-    let settings = SolverSettings { sigma: args.sigma, rho: args.rho, max_boxes: args.max_boxes, timeout, ..Default::default() };
+    let settings = args.limits.solver_settings(SolverSettings::default().max_boxes, SolverSettings { sigma: args.sigma, rho: args.rho, ..Default::default() })?;
     settings.validate()?;
     linkspace::manip3r::check_precision(args.precision)?;
     let limits = Limits { max_boxes: args.max_request_boxes, max_timeout: args.max_request_timeout, max_wait: args.max_wait, max_runs: args.max_runs, max_markers: args.max_markers };
