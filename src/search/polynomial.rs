@@ -282,20 +282,28 @@ impl<'a> Solver<'a> {
             settings: SolverSettings { sigma: self.settings.sigma / 16.0, max_boxes: 4_000, ..self.settings.clone() },
             factory: self.factory.clone(),
         };
+        // Each probe is an independent deterministic run: spread them over the workers.
+        let probe = |b: &IntervalBox| {
+            let mut found = Collect::default();
+            let (status, _) = deeper.run_from(b.clone(), cancel, &mut found);
+            status == Status::Complete && found.solutions.is_empty()
+        };
+        let candidates: Vec<usize> = (0..boxes.len()).filter(|&i| !unique[i] && sizes[labels[i]] <= max_cluster).collect();
+        let empty = for_each_parallel(&candidates, self.settings.threads, |&i| probe(&boxes[i]));
+        let mut drop = vec![false; boxes.len()];
+        for (&i, e) in candidates.iter().zip(empty) {
+            drop[i] = e;
+        }
         let mut kept = Vec::with_capacity(boxes.len());
         let mut kept_unique = Vec::with_capacity(boxes.len());
         let mut dropped = 0;
-        for ((b, l), u) in boxes.into_iter().zip(labels).zip(unique) {
-            if !u && sizes[l] <= max_cluster {
-                let mut probe = Collect::default();
-                let (status, _) = deeper.run_from(b.clone(), cancel, &mut probe);
-                if status == Status::Complete && probe.solutions.is_empty() {
-                    dropped += 1;
-                    continue;
-                }
+        for ((b, u), d) in boxes.into_iter().zip(unique).zip(drop) {
+            if d {
+                dropped += 1;
+            } else {
+                kept.push(b);
+                kept_unique.push(u);
             }
-            kept.push(b);
-            kept_unique.push(u);
         }
         (kept, kept_unique, dropped)
     }
@@ -435,6 +443,32 @@ impl SolveStats {
             ..SolveStats::default()
         }
     }
+}
+
+/// `f` of every item, in order, computed on up to `threads` threads.
+fn for_each_parallel<T: Sync, R: Send>(items: &[T], threads: usize, f: impl Fn(&T) -> R + Sync) -> Vec<R> {
+    if threads <= 1 || items.len() < 2 {
+        return items.iter().map(f).collect();
+    }
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let mut done: Vec<(usize, R)> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..threads.min(items.len()))
+            .map(|_| {
+                s.spawn(|| {
+                    let mut mine = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        let Some(item) = items.get(i) else { break };
+                        mine.push((i, f(item)));
+                    }
+                    mine
+                })
+            })
+            .collect();
+        handles.into_iter().flat_map(|h| h.join().expect("invariant: probes do not panic")).collect()
+    });
+    done.sort_unstable_by_key(|(i, _)| *i);
+    done.into_iter().map(|(_, r)| r).collect()
 }
 
 enum Shrunk {
