@@ -54,6 +54,7 @@ class SolveStats_(IdlStruct, typename="linkspace_msgs::msg::dds_::SolveStats_"):
     spurious_dropped: uint64
     max_level: uint32
     seconds: float64
+    certified: uint64
 
 
 @dataclass

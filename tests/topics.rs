@@ -210,7 +210,11 @@ fn assert_same_boxes(set: &Value, report: &Value) {
         assert_eq!(set["level"][i], r["level"]);
     }
     let statuses = set["box_status"].as_array().expect("statuses");
-    assert_eq!(statuses.iter().filter(|s| **s == json!(0)).count(), solutions.len());
+    // Box.SOLUTION (0) or Box.UNIQUE (2) for solutions, as the report's `unique` says.
+    let unique = solutions.iter().filter(|r| r["unique"] == json!(true)).count();
+    assert_eq!(statuses.iter().filter(|s| **s == json!(2)).count(), unique, "certified boxes travel as Box.UNIQUE");
+    assert_eq!(statuses.iter().filter(|s| **s == json!(0)).count(), solutions.len() - unique);
+    assert_eq!(set["stats"]["certified"], report["stats"]["certified"]);
     assert_eq!(set["clusters"], report["clusters"]);
     let complete = report["status"] == "complete";
     assert_eq!(set["status"], json!(if complete { 0 } else { 1 }));

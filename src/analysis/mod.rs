@@ -219,7 +219,7 @@ pub fn classify(result: &BoxSetResult, values: &[f64], periodic: &[bool], singul
     let nearest = |r: &BoxSetResult| {
         r.boxes
             .iter()
-            .filter(|b| b.status == BoxStatus::Solution)
+            .filter(|b| b.status.is_solution())
             .map(|b| (distance_to(b), b.cluster))
             .fold(None, |best: Option<(f64, Option<usize>)>, (d, c)| match best {
                 Some((bd, _)) if bd <= d => best,

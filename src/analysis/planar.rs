@@ -105,7 +105,7 @@ impl PreparedRun for PlanarRun {
             cluster,
             traces: traces.iter().map(|t| record.traces.get(t).map_or([[f64::NAN; 2]; 2], |p| [p.x, p.y])).collect(),
         };
-        let mut boxes: Vec<ResultBox> = report.solutions.iter().zip(&labels).map(|(r, &l)| convert(r, BoxStatus::Solution, Some(l))).collect();
+        let mut boxes: Vec<ResultBox> = report.solutions.iter().zip(&labels).map(|(r, &l)| convert(r, if r.unique { BoxStatus::Unique } else { BoxStatus::Solution }, Some(l))).collect();
         boxes.extend(report.undecided.iter().map(|r| convert(r, BoxStatus::Undecided, None)));
         BoxSetResult {
             mechanism: report.mechanism,

@@ -163,7 +163,7 @@ mod tests {
         let e = cm.solver(FACES, settings.clone()).expect("valid").enclose(&AtomicBool::new(false), &mut |_| {});
         let rep = report(&cm, Some(&p), fixed.iter().cloned().collect(), FACES, &settings, e.status, e.stats, &e.solutions, &e.undecided);
         assert_eq!(rep.clusters, 2);
-        let published: Vec<&Vec<[f64; 2]>> = r.boxes.iter().filter(|b| b.status == BoxStatus::Solution).map(|b| &b.bounds).collect();
+        let published: Vec<&Vec<[f64; 2]>> = r.boxes.iter().filter(|b| b.status.is_solution()).map(|b| &b.bounds).collect();
         let cli: Vec<&Vec<[f64; 2]>> = rep.solutions.iter().map(|s| &s.box_).collect();
         assert_eq!(published, cli);
         assert_eq!(r.joint_names.len(), r.boxes[0].joints.len());

@@ -23,6 +23,15 @@ pub fn limit_name(l: Limit) -> &'static str {
     l.name()
 }
 
+/// The wire value of a box's status (`Box.SOLUTION`, `Box.UNIQUE`, `Box.UNDECIDED`).
+pub fn box_status(s: BoxStatus) -> u8 {
+    match s {
+        BoxStatus::Solution => msgs::BOX_SOLUTION,
+        BoxStatus::Unique => msgs::BOX_UNIQUE,
+        BoxStatus::Undecided => msgs::BOX_UNDECIDED,
+    }
+}
+
 /// A result as a `linkspace_msgs/BoxSet`, boxes in the result's order.
 pub fn box_set(r: &BoxSetResult, run_id: u64) -> BoxSet {
     let n = r.boxes.len();
@@ -50,7 +59,7 @@ pub fn box_set(r: &BoxSetResult, run_id: u64) -> BoxSet {
         dim: r.variables.len() as u32,
         lower,
         upper,
-        box_status: r.boxes.iter().map(|b| if b.status == BoxStatus::Solution { msgs::BOX_SOLUTION } else { msgs::BOX_UNDECIDED }).collect(),
+        box_status: r.boxes.iter().map(|b| box_status(b.status)).collect(),
         level: r.boxes.iter().map(|b| b.level).collect(),
         cluster: r.boxes.iter().map(|b| b.cluster.map_or(-1, |c| c as i32)).collect(),
         clusters: r.clusters as u32,
@@ -67,6 +76,7 @@ pub fn box_set(r: &BoxSetResult, run_id: u64) -> BoxSet {
             spurious_dropped: r.stats.spurious_dropped,
             max_level: r.stats.max_level,
             seconds: r.stats.seconds,
+            certified: r.stats.certified,
         },
     }
 }

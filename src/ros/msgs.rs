@@ -140,6 +140,8 @@ mirror! {
 pub const BOX_SOLUTION: u8 = 0;
 /// `Box.UNDECIDED`
 pub const BOX_UNDECIDED: u8 = 1;
+/// `Box.UNIQUE`
+pub const BOX_UNIQUE: u8 = 2;
 
 mirror! {
     /// linkspace_msgs/Settings
@@ -147,7 +149,7 @@ mirror! {
 }
 mirror! {
     /// linkspace_msgs/SolveStats
-    SolveStats { processed: u64, empty: u64, bisected: u64, solutions: u64, spurious_dropped: u64, max_level: u32, seconds: f64 }
+    SolveStats { processed: u64, empty: u64, bisected: u64, solutions: u64, spurious_dropped: u64, max_level: u32, seconds: f64, certified: u64 }
 }
 mirror! {
     /// linkspace_msgs/BoxSet

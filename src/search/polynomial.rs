@@ -33,6 +33,13 @@ pub enum BoxStatus {
     Undecided,
 }
 
+impl BoxStatus {
+    /// A solution box, certified or not.
+    pub fn is_solution(self) -> bool {
+        matches!(self, BoxStatus::Solution | BoxStatus::Unique)
+    }
+}
+
 /// Where results go, as they are found.
 pub trait BoxSink {
     /// Receives one box; `Break` stops the run (`Incomplete(Sink)`).
