@@ -122,7 +122,9 @@ def make_request(kind, fields):
 def services(args):
     """Runs the calls of a script: a JSON list of {"service", "type", "request"} or
     {"subscribe": name} (a fresh subscriber to a latched topic, collected after a settle) or
-    {"sleep": seconds}. Service replies are printed in order."""
+    {"sleep": seconds} or {"cancel_during": call step, "progress": topic} (the call is sent, the
+    first Progress of a run not yet done on that topic gives the run id, Cancel is called with
+    it, and then the call's reply is awaited). Service replies are printed in order."""
     script = json.load(open(args.script))
     node = rclpy.create_node("linkspace_test_services")
     clients = {}
@@ -140,6 +142,9 @@ def services(args):
             spin_until(node, lambda: bool(got), args.timeout)
             spin_until(node, lambda: False, step.get("settle", 0.5))
             results.append({"subscribe": step["subscribe"], "received": [to_plain(m) for m in got]})
+            continue
+        if "cancel_during" in step:
+            results.append(cancel_during(node, step, args.timeout))
             continue
         cls, req = make_request(step["type"], step.get("request", {}))
         name = step["service"]
@@ -165,6 +170,31 @@ def services(args):
         reply["seconds"] = time.monotonic() - t
         results.append(reply)
     print(json.dumps({"results": results}))
+
+
+def cancel_during(node, step, timeout):
+    """Sends a call, cancels its run once its progress is seen, and returns what happened."""
+    call = step["cancel_during"]
+    cls, req = make_request(call["type"], call.get("request", {}))
+    client = node.create_client(cls, call["service"])
+    canceller = node.create_client(srv.Cancel, "cancel" if not call["service"].startswith("/") else call["service"].rsplit("/", 1)[0] + "/cancel")
+    if not (client.wait_for_service(timeout_sec=timeout) and canceller.wait_for_service(timeout_sec=timeout)):
+        return {"error": "service not available"}
+    seen = []
+    node.create_subscription(Progress, step["progress"], lambda m: seen.append(m) if not m.done else None, 10)
+    spin_until(node, lambda: False, 0.5)
+    future = client.call_async(req)
+    spin_until(node, lambda: bool(seen) or future.done(), timeout)
+    if not seen:
+        return {"error": "no progress seen before the reply" if future.done() else "no progress seen"}
+    progress = to_plain(seen[0])
+    cancel_req = srv.Cancel.Request()
+    cancel_req.run_id = seen[0].run_id
+    cancelled = canceller.call_async(cancel_req)
+    spin_until(node, lambda: cancelled.done() and future.done(), timeout)
+    if not future.done():
+        return {"error": "no reply after the cancel", "progress": progress}
+    return {"progress": progress, "cancel": to_plain(cancelled.result()) if cancelled.done() else None, "reply": to_plain(future.result())}
 
 
 def load(args):

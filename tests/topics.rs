@@ -779,3 +779,32 @@ fn a_3r_manipulator_publishes_its_singularities_and_answers_inverse_kinematics()
     refused(16, "solve is not available for this mechanism ('orthogonal_3r_e', manipulator_3r)");
     assert!(node.alive(), "the node died:\n{}", node.log());
 }
+
+/// Test idea: a singularity run requested through rclpy reports progress while it goes, and a
+/// Cancel with the run id seen in that progress ends it early. The reply is then an honest
+/// incomplete report that names the limit (cancelled), and the node stays up. The robot is one
+/// whose node search takes about a second, so the cancel lands while it runs.
+#[test]
+fn a_singularity_run_shows_progress_and_is_cancelled_from_rclpy() {
+    let Some(python) = python() else { return };
+    let domain = 47;
+    let g = format!("{ROOT}/urdf/orthogonal_3r_near_boundary.urdf");
+    let mut node = Node::start(domain, &[&g, "--max-request-boxes", "20000000", "--max-request-timeout", "120"]);
+    node.wait_for(&["orthogonal_3r_near_boundary: published singularities"], Duration::from_secs(120));
+    let request = json!({"mechanism": "orthogonal_3r_near_boundary", "precision": 1e-4, "nodes": true, "max_boxes": 0, "timeout": 0.0});
+    let script = json!([{"cancel_during": call("singularities", "Singularities", request), "progress": "/linkspace/orthogonal_3r_near_boundary/progress"}]);
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("cancel-3r-{}.json", std::process::id()));
+    std::fs::write(&path, serde_json::to_string(&script).expect("json")).expect("script written");
+    let got = py(python, domain, "tests/ros_client.py", &["services", "--script", path.to_str().expect("utf-8")], Duration::from_secs(120));
+    let _ = std::fs::remove_file(&path);
+    let step = &got["results"][0];
+    assert!(step.get("error").is_none(), "{step}\nnode log:\n{}", node.log());
+    let progress = &step["progress"];
+    assert_eq!((progress["analysis"].as_str(), progress["done"].clone()), (Some("singularities"), json!(false)), "{progress}");
+    assert_eq!(step["cancel"]["ok"], json!(true), "{step}");
+    assert!(step["cancel"]["message"].as_str().expect("message").contains("will be in the reply"), "{step}");
+    let report = &step["reply"]["report"];
+    assert_eq!((step["reply"]["ok"].clone(), report["run_id"].clone()), (json!(true), progress["run_id"].clone()), "{step}");
+    assert_eq!((report["complete"].clone(), report["limit"].clone()), (json!(false), json!("cancelled")), "{report}");
+    assert!(node.alive(), "the node died:\n{}", node.log());
+}

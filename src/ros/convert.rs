@@ -183,6 +183,10 @@ pub fn singularity_report(r: &SingularityResult, run_id: u64) -> SingularityRepo
         workspace_names: r.workspace_names.clone(),
         complete: r.status == Status::Complete,
         precision: r.query.precision,
+        limit: match r.status {
+            Status::Complete => String::new(),
+            Status::Incomplete(l) => l.name().to_string(),
+        },
     }
 }
 

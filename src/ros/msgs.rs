@@ -206,6 +206,7 @@ mirror! {
         workspace_names: Vec<String>,
         complete: bool,
         precision: f64,
+        limit: String,
     }
 }
 mirror! {

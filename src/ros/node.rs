@@ -434,10 +434,6 @@ impl State {
 
     fn progress(&self, run: u64, p: crate::search::Progress, done: bool) {
         let Some(r) = self.runs.get(&run) else { return };
-        // An inverse-kinematics query is answered in its reply; it has no volume to report.
-        if r.kind == RunKind::InverseKinematics {
-            return;
-        }
         let m = &self.mechanisms[r.mechanism];
         let msg = msgs::Progress {
             header: convert::header(""),
@@ -749,10 +745,14 @@ impl State {
 
     fn cancel(&mut self, q: CancelRequest) -> CancelResponse {
         match self.runs.get(&q.run_id) {
-            Some(r) if r.kind == RunKind::Solve => {
+            Some(r) if r.kind.requested() => {
                 r.cancel.store(true, Ordering::Relaxed);
                 let prefix = &self.mechanisms[r.mechanism].prefix;
-                CancelResponse { ok: true, message: format!("run {} cancelled; its incomplete result will be published on {prefix}/solve_result", q.run_id) }
+                let whereto = match r.kind {
+                    RunKind::Solve => format!("will be published on {prefix}/solve_result"),
+                    _ => "will be in the reply to its request".to_string(),
+                };
+                CancelResponse { ok: true, message: format!("run {} cancelled; its incomplete result {whereto}", q.run_id) }
             }
             Some(_) => CancelResponse { ok: false, message: format!("run {} is a load-time analysis and cannot be cancelled", q.run_id) },
             None if self.finished.contains(&q.run_id) => CancelResponse { ok: false, message: format!("run {} has already finished", q.run_id) },
