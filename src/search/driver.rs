@@ -14,6 +14,7 @@
 use super::limits::{process_cpu_seconds, Budget, Limit, Limits, Progress, Status};
 use super::store::{Pool, Store};
 use super::{Prune, Sink, Stats, Step, Undecided};
+use smallvec::SmallVec;
 use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -85,32 +86,16 @@ pub fn run<P: Prune>(prune: &mut P, start: P::Cell, store: Store, limits: &Limit
         pending_bytes = pending_bytes.saturating_sub(prune.bytes(&cell));
         stats.processed += 1;
         stats.max_level = stats.max_level.max(prune.level(&cell));
-        let flow = match prune.process(cell) {
-            Step::Discard(reason) => {
-                *stats.discarded.entry(reason).or_default() += 1;
-                ControlFlow::Continue(())
+        let flow = route(prune.process(cell), &mut stats, sink, |children| {
+            for c in &children {
+                pending_share += prune.share(c);
+                pending_bytes += prune.bytes(c);
             }
-            Step::Found(f) => {
-                stats.found += 1;
-                sink.found(f)
-            }
-            Step::Undecided(c, reason) => {
-                stats.undecided += 1;
-                sink.undecided(c, Undecided::Precision(reason))
-            }
-            Step::Split(children) => {
-                stats.split += 1;
-                for c in &children {
-                    pending_share += prune.share(c);
-                    pending_bytes += prune.bytes(c);
-                }
-                pool.push_children(children.into_iter().map(|c| {
-                    let k = prune.key(&c);
-                    (c, k)
-                }));
-                ControlFlow::Continue(())
-            }
-        };
+            pool.push_children(children.into_iter().map(|c| {
+                let k = prune.key(&c);
+                (c, k)
+            }));
+        });
         if flow.is_break() {
             status = Status::Incomplete(Limit::Sink);
             report_pending = false;
@@ -164,26 +149,10 @@ where
         for (level_of, step) in steps.by_ref() {
             stats.processed += 1;
             stats.max_level = stats.max_level.max(level_of);
-            let flow = match step {
-                Step::Discard(reason) => {
-                    *stats.discarded.entry(reason).or_default() += 1;
-                    ControlFlow::Continue(())
-                }
-                Step::Found(f) => {
-                    stats.found += 1;
-                    sink.found(f)
-                }
-                Step::Undecided(c, reason) => {
-                    stats.undecided += 1;
-                    sink.undecided(c, Undecided::Precision(reason))
-                }
-                Step::Split(children) => {
-                    stats.split += 1;
-                    next_bytes += children.iter().map(|c| workers[0].bytes(c)).sum::<usize>();
-                    next.extend(children);
-                    ControlFlow::Continue(())
-                }
-            };
+            let flow = route(step, &mut stats, sink, |children| {
+                next_bytes += children.iter().map(|c| workers[0].bytes(c)).sum::<usize>();
+                next.extend(children);
+            });
             if flow.is_break() {
                 status = Status::Incomplete(Limit::Sink);
                 report_pending = false;
@@ -290,11 +259,161 @@ where
     (out, unprocessed)
 }
 
+/// Counts a decision and passes it on: results and undecided cells to the sink, children to
+/// `split`. `Break` when the sink asks to stop.
+fn route<C, F>(step: Step<C, F>, stats: &mut Stats, sink: &mut impl Sink<C, F>, split: impl FnOnce(SmallVec<[C; 4]>)) -> ControlFlow<()> {
+    match step {
+        Step::Discard(reason) => {
+            *stats.discarded.entry(reason).or_default() += 1;
+            ControlFlow::Continue(())
+        }
+        Step::Found(f) => {
+            stats.found += 1;
+            sink.found(f)
+        }
+        Step::Undecided(c, reason) => {
+            stats.undecided += 1;
+            sink.undecided(c, Undecided::Precision(reason))
+        }
+        Step::Split(children) => {
+            stats.split += 1;
+            split(children);
+            ControlFlow::Continue(())
+        }
+    }
+}
+
 fn report_undecided<C, F>(pending: impl IntoIterator<Item = C>, stats: &mut Stats, sink: &mut impl Sink<C, F>) {
     for c in pending {
         stats.undecided += 1;
         if sink.undecided(c, Undecided::Pending).is_break() {
             break;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::search::Store;
+
+    /// Roots of sin(20 x) in [0, 3] (x = kπ/20), bracketed by bisection: a cell is an interval
+    /// and its depth; it is discarded when sin keeps one sign on it (monotone pieces, checked at
+    /// the ends plus a derivative bound), found when short.
+    #[derive(Clone)]
+    struct Roots;
+    type Cell = (f64, f64, u32);
+    impl Prune for Roots {
+        type Cell = Cell;
+        type Found = (f64, f64);
+        fn process(&mut self, (a, b, l): Cell) -> Step<Cell, (f64, f64)> {
+            let (fa, fb) = ((20.0 * a).sin(), (20.0 * b).sin());
+            // |f'| ≤ 20, so f cannot reach 0 on [a, b] when min(|fa|, |fb|) > 20 (b − a).
+            if fa * fb > 0.0 && fa.abs().min(fb.abs()) > 20.0 * (b - a) {
+                return Step::Discard("one sign");
+            }
+            if b - a < 1e-3 {
+                return Step::Found((a, b));
+            }
+            let m = 0.5 * (a + b);
+            Step::Split([(a, m, l + 1), (m, b, l + 1)].into_iter().collect())
+        }
+        fn level(&self, c: &Cell) -> u32 {
+            c.2
+        }
+        fn share(&self, c: &Cell) -> f64 {
+            (c.1 - c.0) / 3.0
+        }
+        fn key(&self, c: &Cell) -> f64 {
+            -c.0
+        }
+    }
+
+    #[derive(Default)]
+    struct Keep {
+        found: Vec<(f64, f64)>,
+        pending: Vec<Cell>,
+    }
+    impl Sink<Cell, (f64, f64)> for Keep {
+        fn found(&mut self, f: (f64, f64)) -> ControlFlow<()> {
+            self.found.push(f);
+            ControlFlow::Continue(())
+        }
+        fn undecided(&mut self, c: Cell, why: Undecided) -> ControlFlow<()> {
+            assert_eq!(why, Undecided::Pending);
+            self.pending.push(c);
+            ControlFlow::Continue(())
+        }
+    }
+
+    fn roots_in(found: &[(f64, f64)]) -> usize {
+        (0..=19).filter(|k| found.iter().any(|&(a, b)| a <= *k as f64 * std::f64::consts::PI / 20.0 && *k as f64 * std::f64::consts::PI / 20.0 <= b)).count()
+    }
+
+    #[test]
+    fn every_store_finds_every_root() {
+        for store in [Store::DepthFirst, Store::BreadthFirst, Store::BestFirst] {
+            let mut keep = Keep::default();
+            let (status, stats) = run(&mut Roots, (0.0, 3.0, 0), store, &Limits::default(), &AtomicBool::new(false), &mut keep);
+            assert_eq!(status, Status::Complete);
+            // kπ/20 ≤ 3 for k = 0..=19.
+            assert_eq!(roots_in(&keep.found), 20, "{store:?}");
+            assert_eq!(stats.found as usize, keep.found.len());
+            assert_eq!(stats.processed, stats.found + stats.split + stats.discarded_total());
+        }
+    }
+
+    #[test]
+    fn best_first_takes_the_smallest_key_first() {
+        // key = −a: the rightmost cell first, so the first root found is the largest.
+        let mut keep = Keep::default();
+        run(&mut Roots, (0.0, 3.0, 0), Store::BestFirst, &Limits::default(), &AtomicBool::new(false), &mut keep);
+        assert!(keep.found[0].0 > 2.8, "{:?}", keep.found[0]);
+    }
+
+    #[test]
+    fn levels_on_many_workers_report_what_one_worker_reports_in_the_same_order() {
+        let serial = {
+            let mut keep = Keep::default();
+            run(&mut Roots, (0.0, 3.0, 0), Store::BreadthFirst, &Limits::default(), &AtomicBool::new(false), &mut keep);
+            keep.found
+        };
+        for workers in [1, 2, 3] {
+            let mut keep = Keep::default();
+            let mut prunes = vec![Roots; workers];
+            let (status, _) = run_by_level(&mut prunes, (0.0, 3.0, 0), &Limits::default(), &AtomicBool::new(false), &mut keep);
+            assert_eq!(status, Status::Complete);
+            assert_eq!(keep.found, serial, "{workers} workers");
+        }
+    }
+
+    #[test]
+    fn a_limit_reports_pending_cells_that_still_hold_every_root() {
+        let limits = Limits { max_cells: 40, ..Limits::default() };
+        for workers in [0, 1, 2] {
+            let mut keep = Keep::default();
+            let (status, stats) = if workers == 0 {
+                run(&mut Roots, (0.0, 3.0, 0), Store::DepthFirst, &limits, &AtomicBool::new(false), &mut keep)
+            } else {
+                run_by_level(&mut vec![Roots; workers], (0.0, 3.0, 0), &limits, &AtomicBool::new(false), &mut keep)
+            };
+            assert_eq!(status, Status::Incomplete(Limit::Boxes));
+            assert_eq!(stats.processed, 40);
+            let mut all = keep.found.clone();
+            all.extend(keep.pending.iter().map(|&(a, b, _)| (a, b)));
+            assert_eq!(roots_in(&all), 20, "{workers} workers");
+        }
+    }
+
+    #[test]
+    fn memory_and_cancel_stop_a_run_with_everything_pending_reported() {
+        let tiny = Limits { max_memory: 3 * std::mem::size_of::<Cell>(), ..Limits::default() };
+        let mut keep = Keep::default();
+        let (status, _) = run(&mut Roots, (0.0, 3.0, 0), Store::BreadthFirst, &tiny, &AtomicBool::new(false), &mut keep);
+        assert_eq!(status, Status::Incomplete(Limit::Memory));
+        assert!(!keep.pending.is_empty());
+        let mut keep = Keep::default();
+        let (status, stats) = run_by_level(&mut [Roots, Roots], (0.0, 3.0, 0), &Limits::default(), &AtomicBool::new(true), &mut keep);
+        assert_eq!((status, stats.processed, keep.pending.len()), (Status::Incomplete(Limit::Cancelled), 0, 1));
     }
 }
