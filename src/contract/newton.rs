@@ -107,10 +107,17 @@ impl Contractor for Newton<'_> {
     /// Epsilon-inflation (Rump 1983): a box that is already tight around a root rarely shows
     /// `K(X) ⊂ int X`, so try on `X` widened by 10% of its radius plus a few ulps. If `K(X')`
     /// lies inside `X'`, the one root of `X'` lies in `X' ∩ K(X')`, and `b ⊂ X'` holds no other.
+    ///
+    /// Every component also gets 1% of the widest primary's radius: a component can be far
+    /// narrower than the box, e.g. `c = cos φ` near φ = 0, where `c ∈ [1 − w²/2, 1]` while `s`
+    /// is `w` wide. Krawczyk's image of such a component is about `w²` wide whatever its own
+    /// width, so inflating it by its own radius alone never shows `K(X) ⊂ int X`, and roots with
+    /// a link at 0, ±π/2 or π from its rest pose would never be certified.
     fn certify(&mut self, b: &IntervalBox) -> Option<IntervalBox> {
         let mut wide = b.clone();
+        let widest = self.primaries.iter().map(|&i| b.dims[i].rad()).fold(0.0, f64::max);
         for d in &mut wide.dims {
-            let pad = 0.1 * d.rad() + 4.0 * f64::EPSILON * d.mag().max(1.0);
+            let pad = 0.1 * d.rad() + 0.01 * widest + 4.0 * f64::EPSILON * d.mag().max(1.0);
             *d = interval(d.inf() - pad, d.sup() + pad);
         }
         let limit = self.max_width;
