@@ -4,6 +4,8 @@
 mod util;
 /// Planar linkages from URDF against closed forms and independently traced curves.
 mod linkage;
+/// Issue 9: every configuration of the stated mechanism, with limits, tiny and rounded coefficients.
+mod soundness;
 /// The command line: bad input gives one clear line and a non-zero exit.
 mod cli;
 /// Instances built to break solvers: branch and prune against Newton–Raphson.

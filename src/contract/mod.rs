@@ -3,14 +3,17 @@
 //! Owns the `Contractor` trait, its outcome `Contraction`, the combinator `Sequence`, and the
 //! implementations: equation-wise interval propagation (`propagate`), the seed's LP shrink
 //! (`lp_shrink`), interval Newton for square systems (`newton`), and trapezoid clipping of
-//! polynomial equations (`trapezoid`, seed 004).
+//! polynomial equations (`trapezoid`, seed 004); `filter` applies non-equation conditions
+//! (joint limits) to every box, certified or not.
 //! A contractor does no IO; numerical trouble gives `Unchanged`, never `Empty`.
 
+mod filter;
 mod lp_shrink;
 mod newton;
 mod propagate;
 mod trapezoid;
 
+pub use filter::{Filter, Filtered, Verdict};
 pub use lp_shrink::LpShrink;
 pub use newton::Newton;
 pub use propagate::Propagation;
@@ -66,7 +69,8 @@ pub trait Contractor {
 }
 
 /// Applies contractors in order; stops at the first `Empty`, and after a `Proven` (the rest
-/// could only narrow a box already known to hold its one solution).
+/// could only narrow a box already known to hold its one solution). So no step that must see
+/// every box belongs here: conditions like joint limits are `Filter`s, run by `Filtered`.
 pub struct Sequence<'a>(pub Vec<Box<dyn Contractor + Send + 'a>>);
 
 impl Contractor for Sequence<'_> {

@@ -47,25 +47,21 @@ impl<'a> Newton<'a> {
     }
 }
 
-impl Contractor for Newton<'_> {
-    fn contract(&mut self, b: &mut IntervalBox) -> Contraction {
-        let x = &b.dims;
+impl Newton<'_> {
+    /// Krawczyk's image `K(X)`, not yet intersected with `X`; `None` when `mid J(X)` cannot be
+    /// inverted or the image is not finite.
+    fn image(&self, x: &[Interval]) -> Option<Vec<Interval>> {
         let n = x.len();
-        if self.primaries.iter().any(|&i| !(x[i].wid() <= self.max_width)) {
-            return Contraction::Unchanged;
-        }
         let c: Vec<f64> = x.iter().map(|d| d.mid()).collect();
         let cpoint: Vec<Interval> = c.iter().map(|&v| point(v)).collect();
         let fc: Vec<Interval> = self.system.equations.iter().map(|e| e.eval(&cpoint)).collect();
         let j = self.jacobian(x);
         let jm = DMatrix::from_fn(n, n, |r, s| j[r][s].mid());
-        let Some(y) = jm.try_inverse() else { return Contraction::Unchanged };
+        let y = jm.try_inverse()?;
         if !y.iter().all(|v| v.is_finite()) {
-            return Contraction::Unchanged;
+            return None;
         }
-        let mut outcome = Contraction::Unchanged;
-        let mut unique = true;
-        let mut next = x.clone();
+        let mut out = Vec::with_capacity(n);
         for r in 0..n {
             // K_r = c_r − Σ_s Y_rs f_s(c) + Σ_s (δ_rs − Σ_t Y_rt J_ts)(X_s − c_s)
             let mut k = point(c[r]);
@@ -80,8 +76,25 @@ impl Contractor for Newton<'_> {
                 k = k + m * (x[s] - point(c[s]));
             }
             if k.is_empty() {
-                return Contraction::Unchanged;
+                return None;
             }
+            out.push(k);
+        }
+        Some(out)
+    }
+}
+
+impl Contractor for Newton<'_> {
+    fn contract(&mut self, b: &mut IntervalBox) -> Contraction {
+        let x = &b.dims;
+        if self.primaries.iter().any(|&i| !(x[i].wid() <= self.max_width)) {
+            return Contraction::Unchanged;
+        }
+        let Some(k) = self.image(x) else { return Contraction::Unchanged };
+        let mut outcome = Contraction::Unchanged;
+        let mut unique = true;
+        let mut next = x.clone();
+        for (r, k) in k.into_iter().enumerate() {
             unique &= k.inf() > x[r].inf() && k.sup() < x[r].sup();
             let narrowed = x[r].intersection(k);
             if narrowed.is_empty() {
@@ -105,25 +118,36 @@ impl Contractor for Newton<'_> {
     }
 
     /// Epsilon-inflation (Rump 1983): a box that is already tight around a root rarely shows
-    /// `K(X) ⊂ int X`, so try on `X` widened by 10% of its radius plus a few ulps. If `K(X')`
-    /// lies inside `X'`, the one root of `X'` lies in `X' ∩ K(X')`, and `b ⊂ X'` holds no other.
+    /// `K(X) ⊂ int X`, so try on `X` widened, then on the widened hull of `X` and `K(X)`, a few
+    /// times. Every root of `b` stays in every trial box (each holds `b`, and `K` keeps the roots
+    /// of its argument), so when `K(X') ⊂ int X'` the returned `K(X')` holds the one root of
+    /// `X'` and every root of `b`.
+    ///
+    /// Inflating by a component's own radius is not enough: a component can be far narrower
+    /// than the box (`c = cos φ` near φ = 0 is `w²/2` wide when `s` is `w` wide, and a box
+    /// Newton has shrunk to a few ulps is narrower than its coefficients' uncertainty), while
+    /// `K` of that component is as wide as the box's curvature or coefficients make it. So each
+    /// component also gets 1% of the widest primary radius, and later rounds inflate `K`'s own
+    /// hull: certification no longer depends on where a link's rest pose is.
     fn certify(&mut self, b: &IntervalBox) -> Option<IntervalBox> {
-        let mut wide = b.clone();
-        for d in &mut wide.dims {
-            let pad = 0.1 * d.rad() + 4.0 * f64::EPSILON * d.mag().max(1.0);
-            *d = interval(d.inf() - pad, d.sup() + pad);
-        }
-        let limit = self.max_width;
-        self.max_width = f64::INFINITY;
-        let mut outcome = Contraction::Unchanged;
-        for _ in 0..3 {
-            outcome = self.contract(&mut wide);
-            if outcome != Contraction::Reduced {
-                break;
+        let inflate = |dims: &mut Vec<Interval>, primaries: &[VarId]| {
+            let widest = primaries.iter().map(|&i| dims[i].rad()).fold(0.0, f64::max);
+            for d in dims.iter_mut() {
+                let pad = 0.1 * d.rad() + 0.01 * widest + 4.0 * f64::EPSILON * d.mag().max(1.0);
+                *d = interval(d.inf() - pad, d.sup() + pad);
             }
+        };
+        let mut x = b.dims.clone();
+        inflate(&mut x, &self.primaries);
+        for _ in 0..4 {
+            let k = self.image(&x)?;
+            if k.iter().zip(&x).all(|(k, x)| k.inf() > x.inf() && k.sup() < x.sup()) {
+                return Some(IntervalBox { dims: k, level: b.level });
+            }
+            x = k.iter().zip(&b.dims).map(|(k, b)| k.convex_hull(*b)).collect();
+            inflate(&mut x, &self.primaries);
         }
-        self.max_width = limit;
-        (outcome == Contraction::Proven).then_some(wide)
+        None
     }
 }
 

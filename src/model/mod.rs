@@ -44,6 +44,9 @@ pub struct Joint {
     pub child: usize,
     /// Pose of the joint frame in the parent frame.
     pub origin: Isometry3<f64>,
+    /// The origin's roll, pitch, yaw as parsed: builders that enclose the stated model take
+    /// their rotations from these, not from the rounded `origin`.
+    pub rpy: [f64; 3],
     /// Unit axis in the joint frame.
     pub axis: Vector3<f64>,
 }
@@ -60,10 +63,14 @@ pub struct LoopClosure {
     pub predecessor: usize,
     /// Closure frame in the predecessor's frame.
     pub predecessor_origin: Isometry3<f64>,
+    /// `predecessor_origin`'s roll, pitch, yaw as parsed.
+    pub predecessor_rpy: [f64; 3],
     /// Index of the successor link.
     pub successor: usize,
     /// Closure frame in the successor's frame.
     pub successor_origin: Isometry3<f64>,
+    /// `successor_origin`'s roll, pitch, yaw as parsed.
+    pub successor_rpy: [f64; 3],
     /// Unit axis in the predecessor's closure frame.
     pub axis: Vector3<f64>,
 }

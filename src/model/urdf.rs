@@ -87,7 +87,7 @@ pub fn parse(xml: &str) -> Result<Mechanism, ModelError> {
             return Err(ModelError::NotATree(format!("link '{}' is the child of two joints", links[child].name)));
         }
         links[child].parent_joint = Some(joints.len());
-        joints.push(Joint { name: j.name.clone(), kind, parent, child, origin, axis });
+        joints.push(Joint { name: j.name.clone(), kind, parent, child, origin, rpy: j.origin.rpy.0, axis });
     }
 
     let roots: Vec<usize> = (0..links.len()).filter(|&i| links[i].parent_joint.is_none()).collect();
@@ -123,17 +123,17 @@ pub fn parse(xml: &str) -> Result<Mechanism, ModelError> {
         if !names.insert(name.clone()) {
             return Err(ModelError::Duplicate(name));
         }
-        let side = |tag: &str| -> Result<(usize, Isometry3<f64>), ModelError> {
+        let side = |tag: &str| -> Result<(usize, Isometry3<f64>, [f64; 3]), ModelError> {
             let s = el.children().find(|n| n.has_tag_name(tag)).ok_or_else(|| bad(&element, &format!("missing <{tag} link=\"…\">")))?;
             let link = s.attribute("link").ok_or_else(|| bad(&element, &format!("<{tag}> has no link attribute")))?;
             let link = find(&element, link)?;
             let origin = s.children().find(|n| n.has_tag_name("origin"));
             let xyz = triple(&element, origin.and_then(|o| o.attribute("xyz")), [0.0; 3])?;
             let rpy = triple(&element, origin.and_then(|o| o.attribute("rpy")), [0.0; 3])?;
-            Ok((link, pose(&element, xyz, rpy)?))
+            Ok((link, pose(&element, xyz, rpy)?, rpy))
         };
-        let (predecessor, predecessor_origin) = side("predecessor")?;
-        let (successor, successor_origin) = side("successor")?;
+        let (predecessor, predecessor_origin, predecessor_rpy) = side("predecessor")?;
+        let (successor, successor_origin, successor_rpy) = side("successor")?;
         let axis = unit_axis(&element, triple(&element, el.children().find(|n| n.has_tag_name("axis")).and_then(|a| a.attribute("xyz")), [1.0, 0.0, 0.0])?)?;
         let limit = el.children().find(|n| n.has_tag_name("limit"));
         let number = |attr: &str| -> Result<Option<f64>, ModelError> {
@@ -154,7 +154,7 @@ pub fn parse(xml: &str) -> Result<Mechanism, ModelError> {
         if predecessor == successor {
             return Err(bad(&element, "predecessor and successor are the same link"));
         }
-        loops.push(LoopClosure { name, kind, predecessor, predecessor_origin, successor, successor_origin, axis });
+        loops.push(LoopClosure { name, kind, predecessor, predecessor_origin, predecessor_rpy, successor, successor_origin, successor_rpy, axis });
     }
 
     Ok(Mechanism { name: robot.name.clone(), links, joints, loops, root })

@@ -8,11 +8,14 @@
 //! Slider travel `d` enters as `d·c`, `d·s`: new variables defined by the bilinear equations
 //! `z = d·c` (the seed's hyperbolic equations).
 //! Traced points (the seed's equation 5) are derived variables defined by linear equations.
-//! Builds only; solving is `solve`'s job.
+//! Builds only; solving is `search`'s job.
 
-use crate::contract::{Contraction, Contractor, Propagation, Sequence};
+use super::angles::{self, against_limits, cos_sin, reduce, stated, wrap};
+use super::stated::{self, IMat3, IVec3};
+use crate::contract::{Contraction, Contractor, Filter, Filtered, Propagation, Verdict};
 use crate::search::{default_contractor, SolveError, Solver, SolverSettings};
 use crate::interval::{interval, point, Interval, IntervalBox};
+use crate::manip3r::trig;
 use crate::model::{JointKind, Mechanism, ModelError};
 use crate::system::{Equation, EquationSystem, Monomial, Term, VarId, VarRole};
 use nalgebra::{Rotation3, UnitQuaternion, Vector3};
@@ -48,6 +51,14 @@ pub enum LinkageError {
         /// upper limit
         upper: f64,
     },
+    /// A revolute value too large to reduce modulo 2π accurately.
+    #[error("--fix {joint}={value}: more than {max:e} rad, too many turns to reduce modulo 2π accurately; give the angle modulo 2π", max = angles::MAX_REDUCIBLE)]
+    TooManyTurns {
+        /// joint
+        joint: String,
+        /// value given
+        value: f64,
+    },
     /// A value that is not a finite number.
     #[error("--fix {0}: the value is not a finite number")]
     NotFinite(String),
@@ -75,11 +86,55 @@ enum Angle {
     Free { c: VarId, s: VarId },
 }
 
+/// A rotation of the plane known as an angle (for read-outs) and as its cosine and sine (for
+/// coefficients), both enclosures of the same exact rotation.
+#[derive(Clone, Copy, Debug)]
+struct Turn {
+    angle: Interval,
+    c: Interval,
+    s: Interval,
+}
+
+impl Turn {
+    fn zero() -> Self {
+        Self { angle: point(0.0), c: point(1.0), s: point(0.0) }
+    }
+
+    /// The turn by `angle` (already reduced to about a turn, so the read-out stays tight).
+    fn by(angle: Interval) -> Self {
+        let (c, s) = cos_sin(angle);
+        Self { angle, c, s }
+    }
+
+    /// The direction of the in-plane vector `(x, y)`, which must miss the origin.
+    fn towards(x: Interval, y: Interval) -> Self {
+        let len = (x.sqr() + y.sqr()).sqrt();
+        Self { angle: angles::angle_interval(x, y), c: x / len, s: y / len }
+    }
+
+    fn plus(self, o: Turn) -> Turn {
+        Turn { angle: self.angle + o.angle, c: self.c * o.c - self.s * o.s, s: self.s * o.c + self.c * o.s }
+    }
+
+    fn neg(self) -> Turn {
+        Turn { angle: -self.angle, c: self.c, s: -self.s }
+    }
+
+    fn minus(self, o: Turn) -> Turn {
+        self.plus(o.neg())
+    }
+
+    /// `R(self)·v`
+    fn rotate(&self, v: [Interval; 2]) -> [Interval; 2] {
+        [self.c * v[0] - self.s * v[1], self.s * v[0] + self.c * v[1]]
+    }
+}
+
 /// How a joint's value is read off a solution box.
 #[derive(Clone, Debug)]
 enum Reading {
     /// `sign·(φ_b − φ_a) + offset`.
-    Revolute { a: usize, b: usize, sign: f64, offset: f64 },
+    Revolute { a: usize, b: usize, sign: f64, offset: Interval },
     /// A travel variable.
     Travel(VarId),
 }
@@ -96,6 +151,9 @@ pub struct Trace {
 }
 
 /// A planar linkage as a polynomial system, with what is needed to read joint values back.
+///
+/// Every coefficient is an interval enclosing its value in the stated mechanism (the decimals of
+/// the file and of `--fix`, see `stated`), so the boxes enclose that mechanism's configurations.
 #[derive(Clone, Debug)]
 pub struct LinkageProblem {
     /// The system to solve.
@@ -109,41 +167,42 @@ pub struct LinkageProblem {
     /// Traced points.
     pub traces: Vec<Trace>,
     /// Per link: (name, group angle, offset to the group angle, rest yaw in the plane).
-    links: Vec<(String, Angle, f64, f64)>,
+    links: Vec<(String, Angle, Interval, Interval)>,
     readings: Vec<(String, Reading)>,
-    /// Revolute readings with limits: (index into `readings`, lower, upper).
-    limits: Vec<(usize, f64, f64)>,
+    /// Revolute readings with limits: (index into `readings`, lower, upper), enclosing the stated limits.
+    limits: Vec<(usize, Interval, Interval)>,
 }
 
 /// A 2-D linear form `Σ coef·var + constant`, one per coordinate.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 struct Form2 {
-    x: Vec<(VarId, f64)>,
-    y: Vec<(VarId, f64)>,
-    constant: [f64; 2],
+    x: Vec<(VarId, Interval)>,
+    y: Vec<(VarId, Interval)>,
+    constant: [Interval; 2],
 }
 
-fn rot(angle: f64, v: [f64; 2]) -> [f64; 2] {
-    let (s, c) = angle.sin_cos();
-    [c * v[0] - s * v[1], s * v[0] + c * v[1]]
+impl Default for Form2 {
+    fn default() -> Self {
+        Self { x: Vec::new(), y: Vec::new(), constant: [point(0.0); 2] }
+    }
 }
 
 /// Where a slider's travel lives.
 #[derive(Clone, Copy, Debug)]
 enum Travel {
-    Known(f64),
+    Known(Interval),
     Var(VarId),
 }
 
 struct Builder<'m> {
     m: &'m Mechanism,
     system: EquationSystem,
-    /// Plane basis: e1, e2, normal.
-    basis: Rotation3<f64>,
-    /// Per link: rest rotation in the world.
-    rest: Vec<UnitQuaternion<f64>>,
+    /// Plane basis as columns: e1, e2, normal.
+    basis: IMat3,
+    /// Per link: rest rotation in the world, enclosed.
+    rest: Vec<IMat3>,
     /// Per link: (group, offset).
-    group: Vec<(usize, f64)>,
+    group: Vec<(usize, Turn)>,
     /// Per group: its angle variables.
     angles: Vec<Angle>,
     /// Cache of product variables `travel × (c or s)`.
@@ -152,37 +211,49 @@ struct Builder<'m> {
 
 impl Builder<'_> {
     /// In-plane coordinates of a world vector.
-    fn planar(&self, v: Vector3<f64>) -> [f64; 2] {
-        let p = self.basis.inverse() * v;
-        [p.x, p.y]
+    fn planar(&self, v: IVec3) -> [Interval; 2] {
+        let p = stated::apply_transposed(&self.basis, &v);
+        [p[0], p[1]]
     }
 
-    /// Adds `R(φ_link)·v` where `v` is given in the link's rest orientation, projected.
-    fn add_rotated(&self, f: &mut Form2, link: usize, v: [f64; 2], scale: f64) {
+    /// In-plane coordinates of `rest[link]·v`.
+    fn planar_from(&self, link: usize, v: IVec3) -> [Interval; 2] {
+        self.planar(stated::apply(&self.rest[link], &v))
+    }
+
+    /// The rest direction of the x-axis of the frame `rot` on `link`, in the plane.
+    fn yaw(&self, link: usize, rot: &IMat3) -> Turn {
+        let x = stated::apply(&stated::mul(&self.rest[link], rot), &[point(1.0), point(0.0), point(0.0)]);
+        let [a, b] = self.planar(x);
+        Turn::towards(a, b)
+    }
+
+    /// Adds `scale·R(φ_link)·v` where `v` is given in the link's rest orientation, projected.
+    fn add_rotated(&self, f: &mut Form2, link: usize, v: [Interval; 2], scale: Interval) {
         let (g, off) = self.group[link];
-        let v = rot(off, v);
+        let v = off.rotate(v).map(|x| x * scale);
         match self.angles[g] {
             Angle::Ground => {
-                f.constant[0] += scale * v[0];
-                f.constant[1] += scale * v[1];
+                f.constant[0] = f.constant[0] + v[0];
+                f.constant[1] = f.constant[1] + v[1];
             }
             Angle::Free { c, s } => {
-                f.x.push((c, scale * v[0]));
-                f.x.push((s, -scale * v[1]));
-                f.y.push((s, scale * v[0]));
-                f.y.push((c, scale * v[1]));
+                f.x.push((c, v[0]));
+                f.x.push((s, -v[1]));
+                f.y.push((s, v[0]));
+                f.y.push((c, v[1]));
             }
         }
     }
 
     /// Adds `d·R(φ_link)·w`.
-    fn add_travel(&mut self, f: &mut Form2, link: usize, w: [f64; 2], d: Travel) {
+    fn add_travel(&mut self, f: &mut Form2, link: usize, w: [Interval; 2], d: Travel) {
         let d = match d {
             Travel::Known(v) => return self.add_rotated(f, link, w, v),
             Travel::Var(d) => d,
         };
         let (g, off) = self.group[link];
-        let w = rot(off, w);
+        let w = off.rotate(w);
         match self.angles[g] {
             Angle::Ground => {
                 f.x.push((d, w[0]));
@@ -204,7 +275,7 @@ impl Builder<'_> {
             return z;
         }
         let dom = self.system.vars[d].domain;
-        let reach = dom.inf().abs().max(dom.sup().abs());
+        let reach = dom.mag();
         let name = format!("{}*{}", self.system.vars[d].name, self.system.vars[c].name);
         let z = self.system.add_var(name, VarRole::Derived, interval(-reach, reach));
         self.system.add(Equation::bilinear(z, d, c));
@@ -212,16 +283,19 @@ impl Builder<'_> {
         z
     }
 
-    /// World position of `link`'s frame origin as a linear form.
-    fn position(&mut self, link: usize, travel: &BTreeMap<usize, Travel>) -> Form2 {
+    /// Position of `link`'s frame origin relative to the frame at the end of `from` (a prefix of
+    /// `link`'s path from the root), as a linear form. Starting below the common prefix of two
+    /// paths keeps terms that cancel exactly out of the equations, instead of leaving interval
+    /// coefficients that merely straddle zero.
+    fn position_after(&mut self, link: usize, skip: usize, travel: &BTreeMap<usize, Travel>) -> Form2 {
         let mut f = Form2::default();
-        for j in self.m.path_to(link) {
+        for j in self.m.path_to(link).into_iter().skip(skip) {
             let joint = &self.m.joints[j];
-            let r = self.rest[joint.parent];
-            let v = self.planar(r * joint.origin.translation.vector);
-            self.add_rotated(&mut f, joint.parent, v, 1.0);
+            let v = self.planar_from(joint.parent, stated::translation(&joint.origin.translation.vector));
+            self.add_rotated(&mut f, joint.parent, v, point(1.0));
             if let Some(&d) = travel.get(&j) {
-                let w = self.planar(r * (joint.origin.rotation * joint.axis));
+                let w = stated::apply(&stated::rpy(joint.rpy), &stated::axis(&joint.axis));
+                let w = self.planar_from(joint.parent, w);
                 self.add_travel(&mut f, joint.parent, w, d);
             }
         }
@@ -229,77 +303,38 @@ impl Builder<'_> {
     }
 }
 
-fn equation_from(terms: &[(VarId, f64)], constant: f64, scale: f64) -> Option<Equation> {
-    let mut merged: BTreeMap<VarId, f64> = BTreeMap::new();
+/// `constant + Σ coef·var ∋ 0`, merging repeated variables; only exactly-zero coefficients are
+/// left out (a tiny coefficient is a term like any other: dropping it could lose solutions).
+fn equation_from(terms: &[(VarId, Interval)], constant: Interval) -> Option<Equation> {
+    let mut merged: BTreeMap<VarId, Interval> = BTreeMap::new();
     for &(v, c) in terms {
-        *merged.entry(v).or_insert(0.0) += c;
+        let e = merged.entry(v).or_insert(point(0.0));
+        *e = *e + c;
     }
     let terms: Vec<Term> = merged
         .into_iter()
-        .filter(|&(_, c)| c.abs() > 1e-14 * scale)
-        .map(|(v, c)| Term { coef: point(c), mono: Monomial::Linear(v) })
+        .filter(|&(_, c)| !(c.inf() == 0.0 && c.sup() == 0.0))
+        .map(|(v, c)| Term { coef: c, mono: Monomial::Linear(v) })
         .collect();
     if terms.is_empty() {
         None
     } else {
-        Some(Equation::new(terms, point(constant)))
+        Some(Equation::new(terms, constant))
     }
 }
 
 /// Interval of angles `atan2(s, c)` over the box `[c]×[s]` (may exceed (−π, π] to stay
-/// connected; the whole circle when the box holds the origin). Rounded outward by 1e-12.
+/// connected; the whole circle when the box holds the origin), rounded outward.
 pub fn angle_interval(c: Interval, s: Interval) -> (f64, f64) {
-    if c.contains(0.0) && s.contains(0.0) {
-        return (-PI, PI);
-    }
-    let corners = [(c.inf(), s.inf()), (c.inf(), s.sup()), (c.sup(), s.inf()), (c.sup(), s.sup())];
-    // Behind the origin (c < 0) the branch cut of atan2 runs through the box: use [0, 2π).
-    let wrap = c.sup() < 0.0 && s.contains(0.0);
-    let angles = corners.map(|(x, y)| {
-        let a = y.atan2(x);
-        if wrap && a < 0.0 {
-            a + 2.0 * PI
-        } else {
-            a
-        }
-    });
-    let lo = angles.iter().cloned().fold(f64::INFINITY, f64::min);
-    let hi = angles.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
-    (lo - 1e-12, hi + 1e-12)
+    let a = angles::angle_interval(c, s);
+    (a.inf(), a.sup())
 }
 
-/// The bounding box of the arc of angles `[lo, hi]` on the unit circle, rounded outward.
-fn arc_box(lo: f64, hi: f64) -> (Interval, Interval) {
-    if hi - lo >= 2.0 * PI {
-        return (interval(-1.0, 1.0), interval(-1.0, 1.0));
-    }
-    let mut cs = vec![lo.cos(), hi.cos()];
-    let mut ss = vec![lo.sin(), hi.sin()];
-    // Extremes inside the arc sit at multiples of π/2.
-    let mut k = (lo / (PI / 2.0)).ceil();
-    while k * PI / 2.0 <= hi {
-        let a = k * PI / 2.0;
-        cs.push(a.cos());
-        ss.push(a.sin());
-        k += 1.0;
-    }
-    let pad = 1e-9;
-    let hull = |v: &[f64]| {
-        let lo = v.iter().cloned().fold(f64::INFINITY, f64::min);
-        let hi = v.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
-        interval((lo - pad).max(-1.0), (hi + pad).min(1.0))
-    };
-    (hull(&cs), hull(&ss))
-}
-
-/// Wraps an angle interval into the representation closest to `(−π, π]`, keeping it connected.
-fn wrap_angle((lo, hi): (f64, f64)) -> (f64, f64) {
-    if hi - lo >= 2.0 * PI {
-        return (-PI, PI);
-    }
-    let mid = 0.5 * (lo + hi);
-    let k = ((mid + PI) / (2.0 * PI)).floor();
-    (lo - 2.0 * PI * k, hi - 2.0 * PI * k)
+/// The bounding box on the unit circle of the arc of angles `arc` (sound cos and sin).
+fn arc_box(arc: Interval) -> (Interval, Interval) {
+    let (c, s) = (trig::cos(arc), trig::sin(arc));
+    let unit = interval(-1.0, 1.0);
+    (c.intersection(unit), s.intersection(unit))
 }
 
 impl LinkageProblem {
@@ -389,7 +424,12 @@ impl LinkageProblem {
             };
             let limits = match kind {
                 JointKind::Fixed | JointKind::Spherical | JointKind::Floating => return Err(LinkageError::NotMovable(name.clone())),
-                JointKind::Revolute { limits } => limits,
+                JointKind::Revolute { limits } => {
+                    if reduce(stated(*value)).is_none() {
+                        return Err(LinkageError::TooManyTurns { joint: name.clone(), value: *value });
+                    }
+                    limits
+                }
                 JointKind::Prismatic { limits } => Some(limits),
             };
             if let Some((lower, upper)) = limits {
@@ -401,11 +441,29 @@ impl LinkageProblem {
         }
 
         let sign_of = |w: Vector3<f64>| if w.dot(&n) < 0.0 { -1.0 } else { 1.0 };
+        // The turn of a revolute joint fixed at `v` about an axis of sign `sign`, reduced.
+        let fixed_turn = |sign: f64, v: f64| {
+            let t = Turn::by(reduce(stated(v)).expect("checked reducible above"));
+            if sign < 0.0 {
+                t.neg()
+            } else {
+                t
+            }
+        };
+
+        // Rest rotations enclosed, in the same order as the f64 ones above.
+        let mut rest_i = vec![stated::identity(); n_links];
+        for &l in &order {
+            if let Some(j) = m.links[l].parent_joint {
+                let joint = &m.joints[j];
+                rest_i[l] = stated::mul(&rest_i[joint.parent], &stated::rpy(joint.rpy));
+            }
+        }
 
         // Rigid groups: walk the tree from the root.
-        let mut group = vec![(usize::MAX, 0.0); n_links];
+        let mut group = vec![(usize::MAX, Turn::zero()); n_links];
         let mut group_count = 1;
-        group[m.root] = (0, 0.0);
+        group[m.root] = (0, Turn::zero());
         for &l in &order {
             let Some(j) = m.links[l].parent_joint else { continue };
             let joint = &m.joints[j];
@@ -413,52 +471,48 @@ impl LinkageProblem {
             group[l] = match (joint.kind, fixed_tree.get(&j)) {
                 (JointKind::Revolute { .. }, None) => {
                     group_count += 1;
-                    (group_count - 1, 0.0)
+                    (group_count - 1, Turn::zero())
                 }
                 (JointKind::Revolute { .. }, Some(&v)) => {
                     let w = rest[joint.parent] * (joint.origin.rotation * joint.axis);
-                    (pg, poff + sign_of(w) * v)
+                    (pg, poff.plus(fixed_turn(sign_of(w), v)))
                 }
                 _ => (pg, poff),
             };
         }
+        let mut b = Builder { m, system: EquationSystem::default(), basis: stated::basis(&basis), rest: rest_i, group, angles: vec![Angle::Ground; group_count], products: BTreeMap::new() };
+
         // Prismatic loops and fixed revolute loops weld their two sides' groups together.
         for (k, l) in m.loops.iter().enumerate() {
             let welded = match (l.kind, fixed_loop.get(&k)) {
-                (JointKind::Prismatic { .. }, _) => Some(0.0),
+                (JointKind::Prismatic { .. }, _) => Some(Turn::zero()),
                 (JointKind::Revolute { .. }, Some(&v)) => {
                     let w = rest[l.predecessor] * (l.predecessor_origin.rotation * l.axis);
-                    Some(sign_of(w) * v)
+                    Some(fixed_turn(sign_of(w), v))
                 }
                 _ => None,
             };
             let Some(turn) = welded else { continue };
             // φ_successor = φ_predecessor + turn + (rest yaw difference of the closure frames).
-            let yaw = |link: usize, o: &UnitQuaternion<f64>| {
-                let x = basis.inverse() * (rest[link] * (o * Vector3::x()));
-                x.y.atan2(x.x)
-            };
-            let rest_turn = yaw(l.predecessor, &l.predecessor_origin.rotation) - yaw(l.successor, &l.successor_origin.rotation);
-            let (gp, op) = group[l.predecessor];
-            let (gs, os) = group[l.successor];
-            let target = op + turn + rest_turn - os; // φ_gs = φ_gp + target
+            let rest_turn = b.yaw(l.predecessor, &stated::rpy(l.predecessor_rpy)).minus(b.yaw(l.successor, &stated::rpy(l.successor_rpy)));
+            let (gp, op) = b.group[l.predecessor];
+            let (gs, os) = b.group[l.successor];
+            let target = op.plus(turn).plus(rest_turn).minus(os); // φ_gs = φ_gp + target
             if gp == gs {
-                let miss = (target + PI).rem_euclid(2.0 * PI) - PI;
+                let miss = (target.angle.mid() + PI).rem_euclid(2.0 * PI) - PI;
                 if miss.abs() > 1e-9 {
                     return Err(LinkageError::Contradiction(l.name.clone()));
                 }
                 continue;
             }
             // Relabel the group that is not the ground.
-            let (from, into, off) = if gs != 0 { (gs, gp, target) } else { (gp, gs, -target) };
-            for g in group.iter_mut() {
+            let (from, into, off) = if gs != 0 { (gs, gp, target) } else { (gp, gs, target.neg()) };
+            for g in b.group.iter_mut() {
                 if g.0 == from {
-                    *g = (into, g.1 + off);
+                    *g = (into, g.1.plus(off));
                 }
             }
         }
-
-        let mut b = Builder { m, system: EquationSystem::default(), basis, rest: rest.clone(), group, angles: vec![Angle::Ground; group_count], products: BTreeMap::new() };
 
         // Angle variables for every group still in use, named after its first link.
         for l in 0..n_links {
@@ -471,9 +525,10 @@ impl LinkageProblem {
                     let joint = &m.joints[j];
                     if let (JointKind::Revolute { limits: Some((lo, hi)) }, 0, true) = (joint.kind, b.group[joint.parent].0, respect_limits) {
                         let w = rest[joint.parent] * (joint.origin.rotation * joint.axis);
-                        let base = b.group[joint.parent].1 - b.group[l].1;
-                        let (a, z) = if sign_of(w) > 0.0 { (lo, hi) } else { (-hi, -lo) };
-                        (dc, ds) = arc_box(base + a, base + z);
+                        let base = b.group[joint.parent].1.angle - b.group[l].1.angle;
+                        let limits = stated(lo).convex_hull(stated(hi));
+                        let arc = if sign_of(w) > 0.0 { base + limits } else { base - limits };
+                        (dc, ds) = arc_box(arc);
                     }
                 }
                 let c = b.system.add_var(format!("cos_{name}"), VarRole::Primary, dc);
@@ -488,13 +543,15 @@ impl LinkageProblem {
         let mut readings = Vec::new();
         let mut limit_list = Vec::new();
         let mut free_joints = Vec::new();
+        // A slider's travel domain encloses its stated limits.
+        let travel_domain = |(lo, hi): (f64, f64)| interval(stated(lo).inf(), stated(hi).sup());
         for (j, joint) in m.joints.iter().enumerate() {
             match joint.kind {
                 JointKind::Prismatic { limits } => {
                     let t = match fixed_tree.get(&j) {
-                        Some(&v) => Travel::Known(v),
+                        Some(&v) => Travel::Known(stated(v)),
                         None => {
-                            let v = b.system.add_var(format!("d_{}", joint.name), VarRole::Primary, interval(limits.0, limits.1));
+                            let v = b.system.add_var(format!("d_{}", joint.name), VarRole::Primary, travel_domain(limits));
                             readings.push((joint.name.clone(), Reading::Travel(v)));
                             free_joints.push(joint.name.clone());
                             Travel::Var(v)
@@ -505,63 +562,61 @@ impl LinkageProblem {
                 JointKind::Revolute { limits } if !fixed_tree.contains_key(&j) => {
                     let w = rest[joint.parent] * (joint.origin.rotation * joint.axis);
                     if let (Some((lo, hi)), true) = (limits, respect_limits) {
-                        limit_list.push((readings.len(), lo, hi));
+                        limit_list.push((readings.len(), stated(lo), stated(hi)));
                     }
-                    readings.push((joint.name.clone(), Reading::Revolute { a: joint.parent, b: joint.child, sign: sign_of(w), offset: 0.0 }));
+                    readings.push((joint.name.clone(), Reading::Revolute { a: joint.parent, b: joint.child, sign: sign_of(w), offset: point(0.0) }));
                     free_joints.push(joint.name.clone());
                 }
                 _ => {}
             }
         }
 
-        // One vector equation per loop.
+        // One vector equation per loop: the closure point through the predecessor minus the one
+        // through the successor, both from the last link their tree paths share.
         let mut loop_equations: Vec<(String, Vec<usize>)> = Vec::new();
         for (k, l) in m.loops.iter().enumerate() {
-            let mut f = b.position(l.predecessor, &travel);
-            let a = b.planar(rest[l.predecessor] * l.predecessor_origin.translation.vector);
-            b.add_rotated(&mut f, l.predecessor, a, 1.0);
+            let (pp, ps) = (m.path_to(l.predecessor), m.path_to(l.successor));
+            let shared = pp.iter().zip(&ps).take_while(|(a, b)| a == b).count();
+            let mut f = b.position_after(l.predecessor, shared, &travel);
+            let a = b.planar_from(l.predecessor, stated::translation(&l.predecessor_origin.translation.vector));
+            b.add_rotated(&mut f, l.predecessor, a, point(1.0));
             if let JointKind::Prismatic { limits } = l.kind {
                 let t = match fixed_loop.get(&k) {
-                    Some(&v) => Travel::Known(v),
+                    Some(&v) => Travel::Known(stated(v)),
                     None => {
-                        let v = b.system.add_var(format!("d_{}", l.name), VarRole::Primary, interval(limits.0, limits.1));
+                        let v = b.system.add_var(format!("d_{}", l.name), VarRole::Primary, travel_domain(limits));
                         readings.push((l.name.clone(), Reading::Travel(v)));
                         free_joints.push(l.name.clone());
                         Travel::Var(v)
                     }
                 };
-                let w = b.planar(rest[l.predecessor] * (l.predecessor_origin.rotation * l.axis));
+                let w = stated::apply(&stated::rpy(l.predecessor_rpy), &stated::axis(&l.axis));
+                let w = b.planar_from(l.predecessor, w);
                 b.add_travel(&mut f, l.predecessor, w, t);
             } else if !fixed_loop.contains_key(&k) {
                 let w = rest[l.predecessor] * (l.predecessor_origin.rotation * l.axis);
-                let yaw = |link: usize, o: &UnitQuaternion<f64>| {
-                    let x = basis.inverse() * (rest[link] * (o * Vector3::x()));
-                    x.y.atan2(x.x)
-                };
-                let offset = yaw(l.successor, &l.successor_origin.rotation) - yaw(l.predecessor, &l.predecessor_origin.rotation);
+                let offset = b.yaw(l.successor, &stated::rpy(l.successor_rpy)).angle - b.yaw(l.predecessor, &stated::rpy(l.predecessor_rpy)).angle;
                 let sign = sign_of(w);
                 if let (JointKind::Revolute { limits: Some((lo, hi)) }, true) = (l.kind, respect_limits) {
-                    limit_list.push((readings.len(), lo, hi));
+                    limit_list.push((readings.len(), stated(lo), stated(hi)));
                 }
-                readings.push((l.name.clone(), Reading::Revolute { a: l.predecessor, b: l.successor, sign, offset: sign * offset }));
+                readings.push((l.name.clone(), Reading::Revolute { a: l.predecessor, b: l.successor, sign, offset: if sign < 0.0 { -offset } else { offset } }));
                 free_joints.push(l.name.clone());
             }
-            let g = b.position(l.successor, &travel);
-            let s = b.planar(rest[l.successor] * l.successor_origin.translation.vector);
-            let mut minus = g;
-            b.add_rotated(&mut minus, l.successor, s, 1.0);
-            let scale = 1.0 + f.constant[0].abs().max(f.constant[1].abs());
+            let mut minus = b.position_after(l.successor, shared, &travel);
+            let s = b.planar_from(l.successor, stated::translation(&l.successor_origin.translation.vector));
+            b.add_rotated(&mut minus, l.successor, s, point(1.0));
             let mut rows = Vec::new();
             for (coord, (pos, neg)) in [(&f.x, &minus.x), (&f.y, &minus.y)].into_iter().enumerate() {
                 let mut terms = pos.clone();
                 terms.extend(neg.iter().map(|&(v, c)| (v, -c)));
                 let constant = f.constant[coord] - minus.constant[coord];
-                match equation_from(&terms, constant, scale) {
+                match equation_from(&terms, constant) {
                     Some(e) => {
                         rows.push(b.system.equations.len());
                         b.system.add(e);
                     }
-                    None if constant.abs() > 1e-9 * scale => return Err(LinkageError::CannotClose(l.name.clone())),
+                    None if !constant.contains(0.0) => return Err(LinkageError::CannotClose(l.name.clone())),
                     None => {}
                 }
             }
@@ -572,19 +627,19 @@ impl LinkageProblem {
         let mut trace_out = Vec::new();
         for (link_name, x, y) in traces {
             let link = m.link(link_name).ok_or_else(|| LinkageError::UnknownTraceLink(link_name.clone()))?;
-            let mut f = b.position(link, &travel);
-            let v = b.planar(rest[link] * Vector3::new(*x, *y, 0.0));
-            b.add_rotated(&mut f, link, v, 1.0);
+            let mut f = b.position_after(link, 0, &travel);
+            let v = b.planar_from(link, [stated(*x), stated(*y), point(0.0)]);
+            b.add_rotated(&mut f, link, v, point(1.0));
             let name = format!("{link_name}@{x},{y}");
             let init = b.system.initial_box();
-            let reach = |terms: &[(VarId, f64)], c: f64| terms.iter().fold(point(c), |acc, &(v, k)| acc + point(k) * init.dims[v]);
+            let reach = |terms: &[(VarId, Interval)], c: Interval| terms.iter().fold(c, |acc, &(v, k)| acc + k * init.dims[v]);
             let (rx, ry) = (reach(&f.x, f.constant[0]), reach(&f.y, f.constant[1]));
             let tx = b.system.add_var(format!("x_{name}"), VarRole::Derived, rx);
             let ty = b.system.add_var(format!("y_{name}"), VarRole::Derived, ry);
             for (t, terms, c) in [(tx, &f.x, f.constant[0]), (ty, &f.y, f.constant[1])] {
                 let mut all = terms.clone();
-                all.push((t, -1.0));
-                if let Some(e) = equation_from(&all, c, 1.0) {
+                all.push((t, point(-1.0)));
+                if let Some(e) = equation_from(&all, c) {
                     b.system.add(e);
                 }
             }
@@ -609,73 +664,74 @@ impl LinkageProblem {
         let links = (0..n_links)
             .map(|l| {
                 let (g, off) = b.group[l];
-                let x = basis.inverse() * (rest[l] * Vector3::x());
-                (m.links[l].name.clone(), b.angles[g], off, x.y.atan2(x.x))
+                let yaw = b.yaw(l, &stated::identity()).angle;
+                (m.links[l].name.clone(), b.angles[g], off.angle, yaw)
             })
             .collect();
         let fixed_joints = fixed.to_vec();
         Ok(Self { system: b.system, name: m.name.clone(), free_joints, fixed_joints, traces: trace_out, links, readings, limits: limit_list })
     }
 
-    /// World orientation of every link over the box, radians, keyed by link name.
+    /// World orientation of every link over the box, radians, keyed by link name; outward
+    /// rounded.
     pub fn link_angles(&self, b: &IntervalBox) -> BTreeMap<String, (f64, f64)> {
-        self.links.iter().map(|(name, angle, off, yaw)| (name.clone(), wrap_angle(self.angle(b, *angle, off + yaw)))).collect()
+        self.links.iter().map(|(name, angle, off, yaw)| (name.clone(), bounds(wrap(self.angle(b, *angle, *off + *yaw))))).collect()
     }
 
-    fn angle(&self, b: &IntervalBox, angle: Angle, off: f64) -> (f64, f64) {
+    fn angle(&self, b: &IntervalBox, angle: Angle, off: Interval) -> Interval {
         match angle {
-            Angle::Ground => (off, off),
-            Angle::Free { c, s } => {
-                let (lo, hi) = angle_interval(b.dims[c], b.dims[s]);
-                (lo + off, hi + off)
-            }
+            Angle::Ground => off,
+            Angle::Free { c, s } => angles::angle_interval(b.dims[c], b.dims[s]) + off,
         }
     }
 
-    /// Values of the free joints over the box (radians or metres), keyed by joint name.
+    /// Values of the free joints over the box (radians or metres), keyed by joint name; outward
+    /// rounded.
     pub fn joint_values(&self, b: &IntervalBox) -> BTreeMap<String, (f64, f64)> {
-        self.readings.iter().map(|(name, r)| (name.clone(), self.reading(r, b))).collect()
+        self.readings.iter().map(|(name, r)| (name.clone(), bounds(self.reading(r, b)))).collect()
     }
 
-    fn reading(&self, r: &Reading, b: &IntervalBox) -> (f64, f64) {
+    fn reading(&self, r: &Reading, b: &IntervalBox) -> Interval {
         match *r {
-            Reading::Travel(v) => (b.dims[v].inf(), b.dims[v].sup()),
+            Reading::Travel(v) => b.dims[v],
             Reading::Revolute { a, b: c, sign, offset } => {
-                let (la, oa) = (self.links[a].1, self.links[a].2);
-                let (lc, oc) = (self.links[c].1, self.links[c].2);
-                let pa = self.angle(b, la, oa);
-                let pc = self.angle(b, lc, oc);
-                let (lo, hi) = (pc.0 - pa.1, pc.1 - pa.0);
-                let (lo, hi) = if sign > 0.0 { (lo, hi) } else { (-hi, -lo) };
-                wrap_angle((lo + offset, hi + offset))
+                let pa = self.angle(b, self.links[a].1, self.links[a].2);
+                let pc = self.angle(b, self.links[c].1, self.links[c].2);
+                let d = pc - pa;
+                wrap(if sign > 0.0 { d } else { -d } + offset)
             }
         }
     }
 
-    /// True when some limited revolute joint's value over `b` lies wholly outside its limits
-    /// (for every turn: angles are compared modulo 2π).
-    pub fn violates_limits(&self, b: &IntervalBox) -> bool {
-        self.limits.iter().any(|&(k, lower, upper)| {
-            let (lo, hi) = self.reading(&self.readings[k].1, b);
-            if hi - lo >= 2.0 * PI {
-                return false;
+    /// Where the box lies against the limits of the limited revolute joints (angles compared
+    /// modulo 2π, any number of turns).
+    pub fn limit_verdict(&self, b: &IntervalBox) -> Verdict {
+        let mut verdict = Verdict::Inside;
+        for &(k, lower, upper) in &self.limits {
+            match against_limits(self.reading(&self.readings[k].1, b), lower, upper) {
+                Verdict::Outside => return Verdict::Outside,
+                Verdict::Straddles => verdict = Verdict::Straddles,
+                Verdict::Inside => {}
             }
-            !(-2..=2).any(|turn| {
-                let shift = 2.0 * PI * f64::from(turn);
-                lo + shift <= upper && hi + shift >= lower
-            })
-        })
+        }
+        verdict
+    }
+
+    /// True when some limited revolute joint's value over `b` lies wholly outside its limits.
+    pub fn violates_limits(&self, b: &IntervalBox) -> bool {
+        self.limit_verdict(b) == Verdict::Outside
     }
 
     /// A solver for this problem: the default pipeline, plus a joint-limit filter when joints
-    /// away from the ground carry limits (those next to it already bound the initial box).
+    /// away from the ground carry limits (those next to it already bound the initial box). The
+    /// filter sees every box, certified ones included.
     pub fn solver(&self, settings: SolverSettings) -> Result<Solver<'_>, SolveError> {
         let solver = Solver::new(&self.system, settings)?;
         if self.limits.is_empty() {
             return Ok(solver);
         }
         Ok(solver.with_contractor(Box::new(move |system, settings| {
-            Box::new(Sequence(vec![default_contractor(system, settings), Box::new(LimitFilter { problem: self })]))
+            Box::new(Filtered { inner: default_contractor(system, settings), filters: vec![Box::new(LimitFilter { problem: self })] })
         })))
     }
 
@@ -686,7 +742,7 @@ impl LinkageProblem {
         let mut x = vec![f64::NAN; self.system.vars.len()];
         for (name, angle, off, yaw) in &self.links {
             if let Angle::Free { c, s } = angle {
-                let phi = angles.get(name)? - off - yaw;
+                let phi = angles.get(name)? - off.mid() - yaw.mid();
                 x[*c] = phi.cos();
                 x[*s] = phi.sin();
             }
@@ -714,26 +770,22 @@ impl LinkageProblem {
     }
 }
 
-/// Drops boxes whose joint values lie wholly outside the joints' limits.
+fn bounds(x: Interval) -> (f64, f64) {
+    (x.inf(), x.sup())
+}
+
+/// Drops boxes whose joint values lie wholly outside the joints' limits, and keeps the
+/// certificate only of boxes wholly inside them.
 ///
-/// The joint intervals come from `angle_interval`, whose atan2 enclosures are padded by 1e-12
-/// rad, far above atan2's error of a few ulps; so a box is dropped only when no point in it
-/// respects the limits.
+/// The joint intervals are outward-rounded enclosures (`angles`), so a box is dropped only when
+/// no point in it respects the limits.
 struct LimitFilter<'a> {
     problem: &'a LinkageProblem,
 }
 
-impl Contractor for LimitFilter<'_> {
-    fn contract(&mut self, b: &mut IntervalBox) -> Contraction {
-        if self.problem.violates_limits(b) {
-            Contraction::Empty
-        } else {
-            Contraction::Unchanged
-        }
-    }
-
-    fn name(&self) -> &'static str {
-        "joint-limits"
+impl Filter for LimitFilter<'_> {
+    fn judge(&self, b: &IntervalBox) -> Verdict {
+        self.problem.limit_verdict(b)
     }
 }
 
@@ -751,7 +803,7 @@ mod tests {
 
     #[test]
     fn arc_box_encloses_the_arc() {
-        let (c, s) = arc_box(-0.3, 2.0);
+        let (c, s) = arc_box(interval(-0.3, 2.0));
         for k in 0..=100 {
             let a = -0.3 + 2.3 * k as f64 / 100.0;
             assert!(c.contains(a.cos()) && s.contains(a.sin()));
