@@ -64,6 +64,9 @@ impl Contractor for LpShrink<'_> {
     }
 }
 
+/// Relative width below which a linear row's range is rounding, not uncertainty.
+const NEGLIGIBLE_RANGE: f64 = 1e-10;
+
 /// Builds the linear relaxation of `system` over box `b`; `None` when a row is already proven
 /// unsatisfiable on `b`.
 pub fn relax(system: &EquationSystem, b: &[Interval]) -> Option<Relaxation> {
@@ -80,8 +83,13 @@ pub fn relax(system: &EquationSystem, b: &[Interval]) -> Option<Relaxation> {
                     coefs.push((x, m));
                     rest = rest - (t.coef - point(m)) * b[x];
                 }
-                let exact = rest.wid() == 0.0;
-                rows.push(Row { coefs, bounds: rest, sides: if exact { Sides::Equal } else { Sides::Both } });
+                // A row whose range comes only from rounding (coefficients that enclose the
+                // file's decimals are a few ulps wide) is handed to the LP as an equality at its
+                // midpoint: a ranged row costs the simplex a bounded slack and more pivots, for
+                // nothing. The LP only proposes multipliers; `safe_bound` still uses the whole
+                // range, so this costs at most |μ|·width of the bound, never soundness.
+                let negligible = rest.wid() <= NEGLIGIBLE_RANGE * (1.0 + rest.mag());
+                rows.push(Row { coefs, bounds: rest, sides: if negligible { Sides::Equal } else { Sides::Both } });
             }
             EquationKind::Circle { x, y } => circle_cuts(x, y, b, &mut rows),
             EquationKind::Bilinear { z, x, y } => mccormick(z, x, y, b, &mut rows),
