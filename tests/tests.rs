@@ -6,6 +6,8 @@ mod util;
 mod linkage;
 /// The command line: bad input gives one clear line and a non-zero exit.
 mod cli;
+/// What runs after branch and prune keeps the run's limits and says when it was cut short.
+mod post_processing;
 /// Instances built to break solvers: branch and prune against Newton–Raphson.
 mod stability;
 /// 3R manipulators from URDF: the seed-003 map, Table 1 counts, dense-sampling references.

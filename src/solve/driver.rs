@@ -114,6 +114,9 @@ pub struct Stats {
     pub certified: u64,
     /// Solution boxes later proven empty by `Solver::drop_spurious`.
     pub spurious_dropped: u64,
+    /// True when the time limit (or a cancel) stopped `drop_spurious` before it re-examined
+    /// every candidate box; the boxes it did not reach are reported as they were.
+    pub post_processing_cut_short: bool,
     /// Deepest tree level reached.
     pub max_level: u32,
     /// Wall-clock seconds.
@@ -316,8 +319,11 @@ impl<'a> Solver<'a> {
         } else {
             self.run(cancel, &mut sink)
         };
-        let (solutions, unique, dropped) = self.drop_spurious(std::mem::take(&mut sink.collect.solutions), std::mem::take(&mut sink.collect.unique), 2, cancel);
+        // The time limit covers the whole call, post-processing included (issue 9, item 6).
+        let deadline = self.settings.timeout.map(|t| t0 + t);
+        let (solutions, unique, dropped, cut_short) = self.drop_spurious(std::mem::take(&mut sink.collect.solutions), std::mem::take(&mut sink.collect.unique), 2, cancel, deadline);
         stats.spurious_dropped = dropped;
+        stats.post_processing_cut_short = cut_short;
         stats.solutions -= dropped;
         stats.seconds = t0.elapsed().as_secs_f64();
         stats.cpu_seconds = process_cpu_seconds() - c0;
@@ -326,20 +332,22 @@ impl<'a> Solver<'a> {
 
     /// Re-examines solution boxes that sit in clusters of at most `max_cluster` boxes with a
     /// deeper search (sigma / 16), and drops those it proves empty; returns the survivors, their
-    /// uniqueness flags and the number dropped. Boxes flagged unique are certified and kept.
+    /// uniqueness flags, the number dropped, and whether `deadline` (or `cancel`) cut the
+    /// re-examination short. Boxes flagged unique are certified and kept.
     ///
     /// Why: a box reaching sigma is accepted without proof that it holds a solution, and at
     /// coarse sigma a few such near misses form clusters of their own. A solution curve never
     /// leaves a lone box (it crosses into its neighbours, which then touch it), and an isolated
     /// root survives the deeper search, so only proven-empty boxes go. The search is bounded;
-    /// a box it cannot decide stays.
-    pub fn drop_spurious(&self, boxes: Vec<IntervalBox>, unique: Vec<bool>, max_cluster: usize, cancel: &AtomicBool) -> (Vec<IntervalBox>, Vec<bool>, u64) {
+    /// a box it cannot decide stays, and so does every box left when the deadline passes: each
+    /// deeper search gets only the time that remains, so the call ends near the deadline.
+    pub fn drop_spurious(&self, boxes: Vec<IntervalBox>, unique: Vec<bool>, max_cluster: usize, cancel: &AtomicBool, deadline: Option<Instant>) -> (Vec<IntervalBox>, Vec<bool>, u64, bool) {
         let (labels, n) = crate::interval::components(&boxes);
         let mut sizes = vec![0usize; n];
         for &l in &labels {
             sizes[l] += 1;
         }
-        let deeper = Solver {
+        let mut deeper = Solver {
             system: self.system,
             primaries: self.primaries.clone(),
             settings: SolverSettings { sigma: self.settings.sigma / 16.0, max_boxes: 4_000, ..self.settings.clone() },
@@ -348,19 +356,29 @@ impl<'a> Solver<'a> {
         let mut kept = Vec::with_capacity(boxes.len());
         let mut kept_unique = Vec::with_capacity(boxes.len());
         let mut dropped = 0;
+        let mut cut_short = false;
         for ((b, l), u) in boxes.into_iter().zip(labels).zip(unique) {
             if !u && sizes[l] <= max_cluster {
+                let remaining = deadline.map(|d| d.saturating_duration_since(Instant::now()));
+                if cut_short || cancel.load(Ordering::Relaxed) || remaining.is_some_and(|r| r.is_zero()) {
+                    cut_short = true;
+                    kept.push(b);
+                    kept_unique.push(u);
+                    continue;
+                }
+                deeper.settings.timeout = remaining.or(self.settings.timeout);
                 let mut probe = Collect::default();
                 let (status, _) = deeper.run_from(b.clone(), cancel, &mut probe);
                 if status == Status::Complete && probe.solutions.is_empty() {
                     dropped += 1;
                     continue;
                 }
+                cut_short |= matches!(status, Status::Incomplete(Limit::Time | Limit::Cancelled));
             }
             kept.push(b);
             kept_unique.push(u);
         }
-        (kept, kept_unique, dropped)
+        (kept, kept_unique, dropped, cut_short)
     }
 
     fn limit_reached(&self, stats: &Stats, t0: Instant, cancel: &AtomicBool) -> Option<Limit> {
