@@ -204,7 +204,7 @@ struct SolveArgs {
 
 /// Parses arguments and runs; errors come back as one chain of context.
 pub fn run() -> Result<()> {
-    let cli = Cli::parse();
+    let cli = parse_args(std::env::args_os());
     match cli.command {
         Command::Solve(args) => solve(args),
         Command::Bench(args) => bench(args),
@@ -218,6 +218,52 @@ pub fn run() -> Result<()> {
         Command::Serve(args) => serve::serve(args),
         Command::Collisions(args) => collisions(args),
     }
+}
+
+/// Parses the command line; on bad input prints one line and exits with clap's usage code (2).
+///
+/// Negative numbers are values everywhere (`--sigma -1` means the same as `--sigma=-1`, and
+/// gets the same one-line complaint from the settings' own check). Every other error of clap's
+/// (unknown flag, missing value, unparsable number) is flattened to one line: its multi-line
+/// usage text buried the message (issue 9, item 8). `--help` and `--version` print as usual.
+fn parse_args<I, T>(args: I) -> Cli
+where
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
+    use clap::{CommandFactory, FromArgMatches};
+    let command = Cli::command().mut_subcommands(|s| s.mut_args(|a| if a.get_action().takes_values() { a.allow_negative_numbers(true) } else { a }));
+    let parsed = command.try_get_matches_from(args).and_then(|m| Cli::from_arg_matches(&m));
+    match parsed {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand) {
+                e.exit();
+            }
+            eprintln!("error: {}", one_line(&e.to_string()));
+            std::process::exit(e.exit_code());
+        }
+    }
+}
+
+/// clap's error text as one line: the message and its tips, without the usage block.
+fn one_line(text: &str) -> String {
+    let mut out = String::new();
+    for line in text.lines().map(str::trim) {
+        if line.starts_with("Usage:") || line.starts_with("For more information") {
+            break;
+        }
+        if line.is_empty() {
+            continue;
+        }
+        let line = line.strip_prefix("error: ").unwrap_or(line);
+        if !out.is_empty() {
+            out.push_str(if out.ends_with(':') { " " } else { "; " });
+        }
+        out.push_str(line);
+    }
+    out
 }
 
 fn parse_fix(s: &str) -> Result<(String, f64)> {

@@ -8,6 +8,8 @@ mod linkage;
 mod cli;
 /// What runs after branch and prune keeps the run's limits and says when it was cut short.
 mod post_processing;
+/// Random four-bars, slider-cranks and six-bars against a high-precision reference.
+mod random_linkages;
 /// Instances built to break solvers: branch and prune against Newton–Raphson.
 mod stability;
 /// 3R manipulators from URDF: the seed-003 map, Table 1 counts, dense-sampling references.
