@@ -222,7 +222,7 @@ pub fn run() -> Result<()> {
 
 /// Parses the command line; on bad input prints one line and exits with clap's usage code (2).
 ///
-/// Negative numbers are values everywhere (`--sigma -1` means the same as `--sigma=-1`, and
+/// Values may be negative everywhere (`--sigma -1` means the same as `--sigma=-1`, and
 /// gets the same one-line complaint from the settings' own check). Every other error of clap's
 /// (unknown flag, missing value, unparsable number) is flattened to one line: its multi-line
 /// usage text buried the message (issue 9, item 8). `--help` and `--version` print as usual.
@@ -232,7 +232,16 @@ where
     T: Into<std::ffi::OsString> + Clone,
 {
     use clap::{CommandFactory, FromArgMatches};
-    let command = Cli::command().mut_subcommands(|s| s.mut_args(|a| if a.get_action().takes_values() { a.allow_negative_numbers(true) } else { a }));
+    // An option's value may start with a hyphen (`--sigma -1e-3`: clap's own test for a
+    // negative number misses exponents); positionals keep clap's rule, so a flag is never
+    // taken for a file name.
+    let command = Cli::command().mut_subcommands(|s| {
+        s.mut_args(|a| match (a.get_action().takes_values(), a.is_positional()) {
+            (true, false) => a.allow_hyphen_values(true),
+            (true, true) => a.allow_negative_numbers(true),
+            _ => a,
+        })
+    });
     let parsed = command.try_get_matches_from(args).and_then(|m| Cli::from_arg_matches(&m));
     match parsed {
         Ok(cli) => cli,
