@@ -109,6 +109,8 @@ fn json_report_follows_the_documented_schema() {
     for key in ["processed", "empty", "bisected", "solutions", "seconds"] {
         assert!(r["stats"][key].is_number(), "stats lacks {key}");
     }
+    // Without a time limit the spurious-box check runs to its end, and the report says so.
+    assert_eq!(r["stats"]["post_processing_cut_short"], false);
     assert_eq!(r["settings"]["sigma"], 1e-5);
 }
 
@@ -226,4 +228,60 @@ fn collisions_bad_input_and_json_schema() {
     for key in ["processed", "bisected", "colliding_area", "free_area", "undecided_area", "seconds"] {
         assert!(r["stats"][key].is_number(), "stats lacks {key}");
     }
+}
+
+/// Issue 9, item 8: a negative number after a flag used to be taken for a flag of its own, and
+/// clap answered with several lines of usage; `--sigma=-1` got the one-line error. Every
+/// spelling of bad input now gets one line, for every subcommand.
+#[test]
+fn bad_input_gets_one_line_however_it_is_spelled() {
+    let fb = fixture("four_bar.urdf");
+    let e = fixture("orthogonal_3r_e.urdf");
+    let scene = fixture("orthogonal_3r_a_column.urdf");
+    let platform = fixture("octahedral.urdf");
+    for sigma in [["--sigma", "-1"].as_slice(), ["--sigma=-1"].as_slice(), ["--sigma", "-1e-3"].as_slice()] {
+        let mut args = vec!["solve", fb.as_str()];
+        args.extend_from_slice(sigma);
+        assert_clear_error(&args, "sigma must be a positive");
+    }
+    assert_clear_error(&["solve", &fb, "--rho", "-0.5"], "rho must lie strictly between 0 and 1");
+    assert_clear_error(&["solve", &fb, "--timeout", "-10"], "--timeout must be a positive number of seconds");
+    assert_clear_error(&["solve", &fb, "--newton-width", "-1"], "newton");
+    // Errors clap itself finds: a count that cannot be negative, an unknown flag, a missing
+    // value, a missing file, a bad choice.
+    assert_clear_error(&["solve", &fb, "--max-boxes", "-1"], "invalid value '-1' for '--max-boxes");
+    assert_clear_error(&["solve", &fb, "--threads", "0"], "--threads");
+    assert_clear_error(&["solve", &fb, "--bogus"], "unexpected argument '--bogus'");
+    assert_clear_error(&["solve", &fb, "--sigma"], "a value is required for '--sigma");
+    assert_clear_error(&["solve"], "required arguments were not provided: <URDF>");
+    assert_clear_error(&["solve", &fb, "--lp", "gurobi"], "invalid value 'gurobi' for '--lp");
+    assert_clear_error(&["nonsense"], "unrecognized subcommand 'nonsense'");
+    // The other subcommands.
+    assert_clear_error(&["singularities", &e, "--precision", "-0.5"], "precision must be a number in (0, 1)");
+    assert_clear_error(&["singularities", &e, "--timeout", "-1"], "--timeout must be a positive number of seconds");
+    assert_clear_error(&["singularities", &e, "--max-boxes", "-5"], "invalid value '-5' for '--max-boxes");
+    assert_clear_error(&["ik", &e, "--point", "1,0", "--precision", "-1"], "precision must be a number in (0, 1)");
+    assert_clear_error(&["ik", &e], "--point");
+    assert_clear_error(&["collisions", &scene, "--precision", "-0.1"], "precision must be a number in (0, 1)");
+    assert_clear_error(&["collisions", &scene, "--timeout", "-3"], "--timeout must be a positive number of seconds");
+    assert_clear_error(&["distances", &platform, "--sigma", "-1"], "sigma must be a positive");
+    assert_clear_error(&["distances", &platform, "--timeout", "-1"], "--timeout must be a positive number of seconds");
+    assert_clear_error(&["bench", "--repeat", "-1"], "invalid value '-1' for '--repeat");
+    assert_clear_error(&["bench3r", "--repeat", "-2"], "invalid value '-2' for '--repeat");
+    assert_clear_error(&["bench-distances", "--repeat", "-1"], "invalid value '-1' for '--repeat");
+    assert_clear_error(&["chart"], "required arguments were not provided: <DIR>");
+    #[cfg(feature = "ros")]
+    assert_clear_error(&["serve", &fb, "--sigma", "-1"], "sigma must be a positive");
+}
+
+/// `--help` keeps clap's full text on stdout and succeeds; only errors are flattened.
+#[test]
+fn help_is_still_the_full_text() {
+    for args in [["--help"].as_slice(), ["solve", "--help"].as_slice(), ["distances", "-h"].as_slice()] {
+        let (ok, out, err) = run(args);
+        assert!(ok, "{args:?}: {err}");
+        assert!(out.contains("Usage:") && out.lines().count() > 5, "{args:?}: {out}");
+    }
+    let (ok, out, _) = run(&["--version"]);
+    assert!(ok && out.starts_with("linkspace "), "{out}");
 }

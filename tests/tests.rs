@@ -8,6 +8,10 @@ mod linkage;
 mod soundness;
 /// The command line: bad input gives one clear line and a non-zero exit.
 mod cli;
+/// What runs after branch and prune keeps the run's limits and says when it was cut short.
+mod post_processing;
+/// Random four-bars, slider-cranks and six-bars against a high-precision reference.
+mod random_linkages;
 /// Instances built to break solvers: branch and prune against Newton–Raphson.
 mod stability;
 /// 3R manipulators from URDF: the seed-003 map, Table 1 counts, dense-sampling references.

@@ -152,8 +152,15 @@ impl BoxSetResult {
     /// variable. A curve of solutions spans far more than that.
     pub fn assembly_modes(&self) -> Vec<AssemblyMode> {
         let mut modes = Vec::new();
-        for cluster in 0..self.clusters {
-            let members: Vec<&ResultBox> = self.boxes.iter().filter(|b| b.cluster == Some(cluster)).collect();
+        // Members of every cluster in one pass: filtering all boxes once per cluster is
+        // O(boxes × clusters), minutes for a large box set that a limit cut into many clusters.
+        let mut by_cluster: Vec<Vec<&ResultBox>> = vec![Vec::new(); self.clusters];
+        for b in &self.boxes {
+            if let Some(members) = b.cluster.and_then(|c| by_cluster.get_mut(c)) {
+                members.push(b);
+            }
+        }
+        for (cluster, members) in by_cluster.into_iter().enumerate() {
             let hull = |pick: &dyn Fn(&ResultBox) -> &Vec<Bounds>, i: usize| {
                 members.iter().map(|b| pick(b)[i]).fold([f64::INFINITY, f64::NEG_INFINITY], |h, x| [h[0].min(x[0]), h[1].max(x[1])])
             };

@@ -117,7 +117,15 @@ fn line(cm: &CayleyMenger, pts: &[[f64; 3]], a: usize, c: usize) -> LineRecord {
 /// Number of distinct lines (direction up to sign, within `tol`), or of distinct poses for a
 /// platform, among the placements of the first box of every cluster.
 pub fn distinct_placements(records: &[DistanceRecord], tol: f64) -> usize {
-    let mut seen: Vec<Vec<f64>> = Vec::new();
+    // Keys seen so far, ordered by their first coordinate: a new key is compared only with
+    // those within `2·tol` of it there (a margin over `tol` for the rounding of the bounds) (the same answer as comparing with all, without the
+    // O(clusters²) cost on large box sets). The map's key is the coordinate's order-preserving
+    // bit pattern, plus the key's index to keep equal first coordinates apart.
+    let mut seen: std::collections::BTreeMap<(i64, usize), Vec<f64>> = std::collections::BTreeMap::new();
+    let order = |x: f64| {
+        let b = x.to_bits() as i64;
+        b ^ ((b >> 63) as u64 >> 1) as i64
+    };
     let mut clusters_seen = std::collections::BTreeSet::new();
     for r in records {
         if !clusters_seen.insert(r.cluster) {
@@ -144,8 +152,19 @@ pub fn distinct_placements(records: &[DistanceRecord], tol: f64) -> usize {
                 .collect()
         };
         for k in keys {
-            if !seen.iter().any(|s| s.iter().zip(&k).all(|(a, b)| (a - b).abs() <= tol)) {
-                seen.push(k);
+            let Some(&first) = k.first() else {
+                // A key of no coordinate matches every other such key.
+                if !seen.contains_key(&(i64::MIN, 0)) {
+                    seen.insert((i64::MIN, 0), k);
+                }
+                continue;
+            };
+            let near = |s: &Vec<f64>| s.iter().zip(&k).all(|(a, b)| (a - b).abs() <= tol);
+            // NaN coordinates match nothing: such a key is distinct, as with the full scan.
+            let found = !first.is_nan() && seen.range((order(first - 2.0 * tol), 0)..=(order(first + 2.0 * tol), usize::MAX)).any(|(_, s)| near(s));
+            if !found {
+                let id = seen.len() + 1;
+                seen.insert((order(first), id), k);
             }
         }
     }

@@ -8,7 +8,7 @@
 //! same set of boxes. Limits end a run `Incomplete`, and then every box still pending is
 //! reported as `Undecided`: nothing is silently dropped.
 
-use super::limits::{process_cpu_seconds, Limits, Progress, Status};
+use super::limits::{process_cpu_seconds, Limit, Limits, Progress, Status};
 use super::settings::{SettingsError, SolverSettings};
 use super::{driver, Prune, Sink, Stats, Step, Store, Undecided};
 use crate::contract::{Contraction, Contractor, LpShrink, Newton, Propagation, Sequence};
@@ -17,7 +17,7 @@ use crate::lp::LpCounters;
 use crate::system::{EquationSystem, SystemError, VarId};
 use smallvec::smallvec;
 use std::ops::ControlFlow;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 use thiserror::Error;
 
@@ -91,6 +91,9 @@ pub struct SolveStats {
     pub certified: u64,
     /// Solution boxes later proven empty by `Solver::drop_spurious`.
     pub spurious_dropped: u64,
+    /// True when the time limit (or a cancel) stopped `drop_spurious` before it re-examined
+    /// every candidate box; the boxes it did not reach are reported as they were.
+    pub post_processing_cut_short: bool,
     /// Deepest tree level reached.
     pub max_level: u32,
     /// Wall-clock seconds.
@@ -260,8 +263,11 @@ impl<'a> Solver<'a> {
         } else {
             self.run(cancel, &mut sink)
         };
-        let (solutions, unique, dropped) = self.drop_spurious(std::mem::take(&mut sink.collect.solutions), std::mem::take(&mut sink.collect.unique), 2, cancel);
+        // The time limit covers the whole call, post-processing included (issue 9, item 6).
+        let deadline = self.settings.timeout.map(|t| t0 + t);
+        let (solutions, unique, dropped, cut_short) = self.drop_spurious(std::mem::take(&mut sink.collect.solutions), std::mem::take(&mut sink.collect.unique), 2, cancel, deadline);
         stats.spurious_dropped = dropped;
+        stats.post_processing_cut_short = cut_short;
         stats.solutions -= dropped;
         stats.seconds = t0.elapsed().as_secs_f64();
         stats.cpu_seconds = process_cpu_seconds() - c0;
@@ -270,14 +276,16 @@ impl<'a> Solver<'a> {
 
     /// Re-examines solution boxes that sit in clusters of at most `max_cluster` boxes with a
     /// deeper search (sigma / 16), and drops those it proves empty; returns the survivors, their
-    /// uniqueness flags and the number dropped. Boxes flagged unique are certified and kept.
+    /// uniqueness flags, the number dropped, and whether `deadline` (or `cancel`) cut the
+    /// re-examination short. Boxes flagged unique are certified and kept.
     ///
     /// Why: a box reaching sigma is accepted without proof that it holds a solution, and at
     /// coarse sigma a few such near misses form clusters of their own. A solution curve never
     /// leaves a lone box (it crosses into its neighbours, which then touch it), and an isolated
     /// root survives the deeper search, so only proven-empty boxes go. The search is bounded;
-    /// a box it cannot decide stays.
-    pub fn drop_spurious(&self, boxes: Vec<IntervalBox>, unique: Vec<bool>, max_cluster: usize, cancel: &AtomicBool) -> (Vec<IntervalBox>, Vec<bool>, u64) {
+    /// a box it cannot decide stays, and so does every box left when the deadline passes: each
+    /// deeper search gets only the time that remains, so the call ends near the deadline.
+    pub fn drop_spurious(&self, boxes: Vec<IntervalBox>, unique: Vec<bool>, max_cluster: usize, cancel: &AtomicBool, deadline: Option<Instant>) -> (Vec<IntervalBox>, Vec<bool>, u64, bool) {
         let (labels, n) = crate::interval::components(&boxes);
         let mut sizes = vec![0usize; n];
         for &l in &labels {
@@ -289,17 +297,27 @@ impl<'a> Solver<'a> {
             settings: SolverSettings { sigma: self.settings.sigma / 16.0, max_boxes: 4_000, ..self.settings.clone() },
             factory: self.factory.clone(),
         };
-        // Each probe is an independent deterministic run: spread them over the workers.
-        let probe = |b: &IntervalBox| {
+        // Each probe is an independent deterministic run: spread them over the workers. A probe
+        // gets only the time left before the deadline; none starts after it (or a cancel).
+        let probe = |b: &IntervalBox| -> Probe {
+            let remaining = deadline.map(|d| d.saturating_duration_since(Instant::now()));
+            if cancel.load(Ordering::Relaxed) || remaining.is_some_and(|r| r.is_zero()) {
+                return Probe::NotRun;
+            }
+            let timed = Solver { system: deeper.system, primaries: deeper.primaries.clone(), settings: SolverSettings { timeout: remaining.or(self.settings.timeout), ..deeper.settings.clone() }, factory: deeper.factory.clone() };
             let mut found = Collect::default();
-            let (status, _) = deeper.run_from(b.clone(), cancel, &mut found);
-            status == Status::Complete && found.solutions.is_empty()
+            match timed.run_from(b.clone(), cancel, &mut found) {
+                (Status::Complete, _) if found.solutions.is_empty() => Probe::Empty,
+                (Status::Incomplete(Limit::Time | Limit::Cancelled), _) => Probe::NotRun,
+                _ => Probe::Kept,
+            }
         };
         let candidates: Vec<usize> = (0..boxes.len()).filter(|&i| !unique[i] && sizes[labels[i]] <= max_cluster).collect();
-        let empty = for_each_parallel(&candidates, self.settings.threads, |&i| probe(&boxes[i]));
+        let probes = for_each_parallel(&candidates, self.settings.threads, |&i| probe(&boxes[i]));
+        let cut_short = probes.contains(&Probe::NotRun);
         let mut drop = vec![false; boxes.len()];
-        for (&i, e) in candidates.iter().zip(empty) {
-            drop[i] = e;
+        for (&i, p) in candidates.iter().zip(probes) {
+            drop[i] = p == Probe::Empty;
         }
         let mut kept = Vec::with_capacity(boxes.len());
         let mut kept_unique = Vec::with_capacity(boxes.len());
@@ -312,7 +330,7 @@ impl<'a> Solver<'a> {
                 kept_unique.push(u);
             }
         }
-        (kept, kept_unique, dropped)
+        (kept, kept_unique, dropped, cut_short)
     }
 
     fn size(&self, b: &IntervalBox) -> f64 {
@@ -452,6 +470,17 @@ impl SolveStats {
     }
 }
 
+/// What re-examining one box showed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Probe {
+    /// Proven to hold no solution.
+    Empty,
+    /// Not proven empty.
+    Kept,
+    /// Not (or not fully) re-examined: the deadline or a cancel came first.
+    NotRun,
+}
+
 /// `f` of every item, in order, computed on up to `threads` threads.
 fn for_each_parallel<T: Sync, R: Send>(items: &[T], threads: usize, f: impl Fn(&T) -> R + Sync) -> Vec<R> {
     if threads <= 1 || items.len() < 2 {
@@ -488,7 +517,6 @@ enum Shrunk {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::search::Limit;
     use crate::interval::{interval, point};
     use crate::system::{Equation, Monomial, Term, VarRole};
 

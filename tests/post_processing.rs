@@ -1,0 +1,60 @@
+//! Test idea: what runs after branch and prune (the spurious-box check, clustering, the report)
+//! keeps the run's limits (issue 9, item 6). No clock is read here: the properties are that a
+//! deadline already passed does no work and says so, and that nothing is dropped unexamined.
+
+use crate::util::problem;
+use linkspace::interval::interval;
+use linkspace::search::SolverSettings;
+use linkspace::IntervalBox;
+use std::sync::atomic::AtomicBool;
+use std::time::{Duration, Instant};
+
+/// Two lone boxes of sigma's width where the fixed-crank four-bar has no assembly: the
+/// spurious check proves them empty when it has time.
+fn lone_misses(p: &linkspace::problems::LinkageProblem, sigma: f64) -> Vec<IntervalBox> {
+    let primaries = p.system.primaries();
+    let start = p.system.initial_box();
+    [0.1, 0.9]
+        .iter()
+        .map(|&t| {
+            let mut b = start.clone();
+            for &v in &primaries {
+                // A point inside the initial box, away from every assembly (cos and sin of one
+                // angle cannot both be 0.1 or both 0.9: the circle equation fails).
+                let x = start.dims[v].inf() + t * start.dims[v].wid();
+                b.dims[v] = interval(x, x + 0.5 * sigma);
+            }
+            b
+        })
+        .collect()
+}
+
+#[test]
+fn spurious_check_with_a_passed_deadline_keeps_every_box_and_says_so() {
+    let p = problem("four_bar.urdf", &[("crank_joint", 0.5)], &[]);
+    let sigma = 1e-3;
+    let solver = p.solver(SolverSettings { sigma, ..Default::default() }).expect("valid");
+    let boxes = lone_misses(&p, sigma);
+    let cancel = AtomicBool::new(false);
+
+    // With time, both lone boxes are proven empty and dropped: the check has work to skip.
+    let (kept, _, dropped, cut_short) = solver.drop_spurious(boxes.clone(), vec![false; 2], 2, &cancel, None);
+    assert_eq!((kept.len(), dropped, cut_short), (0, 2, false));
+    let later = Instant::now() + Duration::from_secs(3600);
+    let (kept, _, dropped, cut_short) = solver.drop_spurious(boxes.clone(), vec![false; 2], 2, &cancel, Some(later));
+    assert_eq!((kept.len(), dropped, cut_short), (0, 2, false));
+
+    // Past the deadline: nothing is searched, nothing is dropped, and the result says so.
+    let passed = Instant::now();
+    let (kept, unique, dropped, cut_short) = solver.drop_spurious(boxes.clone(), vec![false; 2], 2, &cancel, Some(passed));
+    assert_eq!(kept, boxes);
+    assert_eq!((unique, dropped, cut_short), (vec![false, false], 0, true));
+
+    // Cancelled: the same.
+    let (kept, _, dropped, cut_short) = solver.drop_spurious(boxes.clone(), vec![false; 2], 2, &AtomicBool::new(true), None);
+    assert_eq!((kept.len(), dropped, cut_short), (2, 0, true));
+
+    // Nothing to examine is not cut short, deadline or not.
+    let (kept, _, dropped, cut_short) = solver.drop_spurious(Vec::new(), Vec::new(), 2, &cancel, Some(passed));
+    assert_eq!((kept.len(), dropped, cut_short), (0, 0, false));
+}
