@@ -509,7 +509,7 @@ pub fn load(mechanism: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f
     }
     match PlanarAnalysis::new(mechanism, fixed, traces) {
         Ok(a) => Ok(Box::new(a)),
-        Err(e @ (LinkageError::NonPlanar(_) | LinkageError::NoLoops)) => Ok(Box::new(Unsupported {
+        Err(e @ (LinkageError::NonPlanar(_) | LinkageError::NoLoops | LinkageError::Mimic { .. })) => Ok(Box::new(Unsupported {
             name: mechanism.name.clone(),
             joints: mechanism.joints.iter().filter(|j| j.kind != crate::model::JointKind::Fixed).map(|j| j.name.clone()).collect(),
             reason: format!("not a planar linkage ({e}), and {not_3r}; only planar linkages and 3R manipulators are analysed so far"),

@@ -286,6 +286,10 @@ impl Chain3R {
         let mut revolute = Vec::new();
         for &j in &path {
             match m.joints[j].kind {
+                JointKind::Revolute { .. } if m.joints[j].mimic.is_some() => {
+                    let leader = m.joints[j].mimic.as_ref().map_or("", |x| x.joint.as_str());
+                    return Err(Manip3rError::NotThreeR(format!("joint '{}' follows '{leader}' through <mimic>, which the 3R analyses do not model yet", m.joints[j].name)));
+                }
                 JointKind::Revolute { .. } => revolute.push(j),
                 JointKind::Fixed => {}
                 JointKind::Prismatic { .. } => return Err(Manip3rError::NotThreeR(format!("joint '{}' is prismatic", m.joints[j].name))),

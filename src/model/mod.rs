@@ -47,8 +47,21 @@ pub struct Joint {
     /// The origin's roll, pitch, yaw as parsed: builders that enclose the stated model take
     /// their rotations from these, not from the rounded `origin`.
     pub rpy: [f64; 3],
-    /// Unit axis in the joint frame.
+    /// Unit axis in the joint frame (+x for joints that have none: fixed, floating, spherical).
     pub axis: Vector3<f64>,
+    /// The joint this one follows through `<mimic>`, if any.
+    pub mimic: Option<Mimic>,
+}
+
+/// A URDF `<mimic>`: this joint's value is `multiplier · value(joint) + offset`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mimic {
+    /// The joint followed.
+    pub joint: String,
+    /// Default 1.
+    pub multiplier: f64,
+    /// Default 0.
+    pub offset: f64,
 }
 
 /// A loop closure: a frame on `predecessor` and a frame on `successor` that must coincide up to

@@ -12,7 +12,7 @@
 //! </loop>
 //! ```
 
-use super::{Collision, Joint, JointKind, Link, LoopClosure, Mechanism, ModelError, Shape};
+use super::{Collision, Joint, JointKind, Link, LoopClosure, Mechanism, Mimic, ModelError, Shape};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use std::collections::HashMap;
 
@@ -82,12 +82,18 @@ pub fn parse(xml: &str) -> Result<Mechanism, ModelError> {
             ref other => return Err(ModelError::UnsupportedJoint { joint: j.name.clone(), kind: format!("{other:?}").to_lowercase() }),
         };
         let origin = pose(&element, j.origin.xyz.0, j.origin.rpy.0)?;
-        let axis = unit_axis(&element, j.axis.xyz.0)?;
+        // As ROS's parser: only joints that move along or about an axis read it; a fixed joint's
+        // `<axis xyz="0 0 0"/>` (common in vendor files) is ignored, not refused.
+        let axis = match kind {
+            JointKind::Revolute { .. } | JointKind::Prismatic { .. } => unit_axis(&element, j.axis.xyz.0)?,
+            _ => Vector3::x(),
+        };
+        let mimic = j.mimic.as_ref().map(|m| Mimic { joint: m.joint.clone(), multiplier: m.multiplier.unwrap_or(1.0), offset: m.offset.unwrap_or(0.0) });
         if links[child].parent_joint.is_some() {
             return Err(ModelError::NotATree(format!("link '{}' is the child of two joints", links[child].name)));
         }
         links[child].parent_joint = Some(joints.len());
-        joints.push(Joint { name: j.name.clone(), kind, parent, child, origin, rpy: j.origin.rpy.0, axis });
+        joints.push(Joint { name: j.name.clone(), kind, parent, child, origin, rpy: j.origin.rpy.0, axis, mimic });
     }
 
     let roots: Vec<usize> = (0..links.len()).filter(|&i| links[i].parent_joint.is_none()).collect();
@@ -254,6 +260,18 @@ mod tests {
         assert!(m.loops.iter().all(|l| l.kind == JointKind::Spherical));
         assert_eq!(m.joints.iter().filter(|j| j.kind == JointKind::Floating).count(), 1);
         assert_eq!(m.joints.iter().filter(|j| j.kind == JointKind::Spherical).count(), 6);
+    }
+
+    #[test]
+    fn fixed_joints_ignore_their_axis_and_mimics_are_kept() {
+        // Vendor files (xacro-expanded) write `<axis xyz="0 0 0"/>` on fixed joints; ROS ignores it.
+        let xml = "<robot name='r'><link name='a'/><link name='b'/><link name='c'/>\
+            <joint name='weld' type='fixed'><parent link='a'/><child link='b'/><axis xyz='0 0 0'/></joint>\
+            <joint name='finger' type='revolute'><parent link='b'/><child link='c'/><axis xyz='0 0 1'/>\
+            <limit lower='-1' upper='1' effort='1' velocity='1'/><mimic joint='weld' multiplier='-2' offset='0.5'/></joint></robot>";
+        let m = parse(xml).expect("loads as ROS loads it");
+        assert_eq!(m.joints[0].kind, JointKind::Fixed);
+        assert_eq!(m.joints[1].mimic, Some(Mimic { joint: "weld".into(), multiplier: -2.0, offset: 0.5 }));
     }
 
     #[test]

@@ -68,6 +68,14 @@ pub enum LinkageError {
     /// Fixed angles around a cycle contradict each other.
     #[error("loop '{0}': the fixed joint angles around it contradict each other")]
     Contradiction(String),
+    /// A joint follows another through `<mimic>`.
+    #[error("joint '{joint}' follows '{leader}' through <mimic>, which planar linkages do not model yet")]
+    Mimic {
+        /// the follower
+        joint: String,
+        /// the joint it follows
+        leader: String,
+    },
     /// A traced point names an unknown link.
     #[error("--trace: no link named '{0}'")]
     UnknownTraceLink(String),
@@ -341,6 +349,12 @@ impl LinkageProblem {
     /// Builds the planar system of `m`, with `fixed` joint values and traced points
     /// `(link name, x, y)` in the link's frame.
     pub fn new(m: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f64, f64)]) -> Result<Self, LinkageError> {
+        // A mimic couples two joint values: an equation the builder does not write yet, so it is
+        // refused by name rather than silently ignored.
+        if let Some(j) = m.joints.iter().find(|j| j.mimic.is_some() && j.kind != JointKind::Fixed) {
+            let leader = j.mimic.as_ref().map_or("", |x| x.joint.as_str());
+            return Err(LinkageError::Mimic { joint: j.name.clone(), leader: leader.to_string() });
+        }
         // Whether a loop can close at all is a property of the geometry: judge it with every
         // joint free and no revolute limits. A fixed value or a limit that leaves no
         // configuration is an answer (complete, no box), not bad input.
