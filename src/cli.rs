@@ -23,6 +23,9 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 pub(crate) mod distances;
+mod figures;
+mod plot;
+mod study;
 
 #[derive(Parser)]
 #[command(name = "linkspace", version, about = "Every configuration a mechanism can take, with guarantees.")]
@@ -240,7 +243,7 @@ pub fn run() -> Result<()> {
     match cli.command {
         Command::Solve(args) => solve(args),
         Command::Bench(args) => bench(args),
-        Command::Chart(args) => crate::charts::run(&args.dir, args.quick),
+        Command::Chart(args) => figures::run(&args.dir, args.quick),
         Command::Singularities(args) => singularities(args),
         Command::Ik(args) => ik(args),
         Command::Bench3r(args) => bench3r(args),

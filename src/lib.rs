@@ -7,7 +7,6 @@
 
 #![warn(missing_docs)]
 
-pub mod chart;
 pub mod analysis;
 pub mod contract;
 pub mod interval;
@@ -19,7 +18,6 @@ pub mod ros;
 pub mod problems;
 pub mod report;
 pub mod search;
-pub mod study;
 pub mod system;
 
 pub use interval::{Interval, IntervalBox};

@@ -1,6 +1,5 @@
 //! The `linkspace` binary: a thin shell over `cli`.
 
-mod charts;
 mod cli;
 
 use std::process::ExitCode;

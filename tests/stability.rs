@@ -2,7 +2,13 @@
 //! near-root with no real root, many regular roots in many unknowns). Branch and prune must
 //! lose no reference root on any of them; the report says what plain Newton–Raphson misses.
 
-use linkspace::study::{markdown, planar_findings};
+// The study is the binary's (it feeds `linkspace chart`), not the library's: included here as
+// the same source file, so the test and the chart run one implementation.
+#[allow(dead_code)]
+#[path = "../src/cli/study.rs"]
+mod study;
+
+use study::{markdown, planar_findings};
 
 #[test]
 fn branch_and_prune_loses_nothing_where_newton_fails() {
@@ -37,7 +43,7 @@ fn branch_and_prune_loses_nothing_where_newton_fails() {
 
 #[test]
 fn ik_of_3r_robots_loses_nothing_at_cusps_and_internal_motions() {
-    let findings = linkspace::study::manip3r_findings();
+    let findings = study::manip3r_findings();
     eprintln!("{}", markdown(&findings));
     for f in &findings {
         assert_eq!(f.lost, 0, "{}: reference roots lost", f.instance);

@@ -6,10 +6,10 @@
 //! bundled four-bar) and Newton-refined roots of hand-written equations where no closed form
 //! exists. No timing is asserted anywhere; the figures are reported.
 
-use crate::model::urdf;
-use crate::problems::LinkageProblem;
-use crate::search::{SolverSettings, Status};
-use crate::system::{EquationSystem, Monomial};
+use linkspace::model::urdf;
+use linkspace::problems::LinkageProblem;
+use linkspace::search::{SolverSettings, Status};
+use linkspace::system::{EquationSystem, Monomial};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -130,7 +130,7 @@ fn study(i: &Instance) -> Finding {
         reference_roots: i.roots.len(),
         closest_pair: closest,
         boxes: e.solutions.len(),
-        clusters: crate::interval::components(&e.solutions).1,
+        clusters: linkspace::interval::components(&e.solutions).1,
         certified: e.unique.iter().filter(|&&u| u).count(),
         lost,
         seconds: e.stats.seconds,
@@ -198,7 +198,7 @@ fn grid(dims: usize, count: usize) -> Vec<Vec<f64>> {
 }
 
 fn four_bar_instance(delta: f64, sigma: f64) -> Instance {
-    let m = urdf::parse(include_str!("../urdf/four_bar.urdf")).expect("invariant: bundled four-bar parses");
+    let m = urdf::parse(include_str!("../../urdf/four_bar.urdf")).expect("invariant: bundled four-bar parses");
     // The rocker reaches angles at and above the limit: δ > 0 is inside, δ < 0 beyond.
     let t4 = four_bar_tangent_rocker_angle() + delta;
     let problem = LinkageProblem::new(&m, &[("rocker_joint".into(), t4)], &[]).expect("invariant: bundled four-bar builds");
@@ -219,7 +219,7 @@ fn four_bar_instance(delta: f64, sigma: f64) -> Instance {
 }
 
 fn butterfly_instance() -> Instance {
-    let m = urdf::parse(include_str!("../urdf/double_butterfly.urdf")).expect("invariant: bundled butterfly parses");
+    let m = urdf::parse(include_str!("../../urdf/double_butterfly.urdf")).expect("invariant: bundled butterfly parses");
     let t6 = 12f64.atan2(5.0);
     let problem = LinkageProblem::new(&m, &[("joint6".into(), t6)], &[]).expect("invariant: bundled butterfly builds");
     let point = |t: &[f64]| {
@@ -269,7 +269,7 @@ pub fn markdown(findings: &[Finding]) -> String {
 // ---------------------------------------------------------------------------------------------
 // 3R inverse kinematics where methods fail: next to a cusp, at a cusp, on an internal motion.
 
-use crate::manip3r::{cusps, ik, Chain3R};
+use linkspace::manip3r::{cusps, ik, Chain3R};
 
 fn wrap(d: f64) -> f64 {
     (d + PI).rem_euclid(2.0 * PI) - PI
@@ -342,7 +342,7 @@ fn study_ik(name: &str, difficulty: &str, chain: &Chain3R, target: [f64; 2], roo
     let t0 = std::time::Instant::now();
     let sol = ik::solve(chain, target[0].max(0.0).sqrt(), target[1], precision, 2_000_000).expect("invariant: valid query");
     let seconds = t0.elapsed().as_secs_f64();
-    let inside = |b: &[crate::interval::Interval; 2], t: [f64; 2]| {
+    let inside = |b: &[linkspace::interval::Interval; 2], t: [f64; 2]| {
         (0..2).all(|k| (-1..=1).any(|turn| {
             let v = t[k] + 2.0 * PI * f64::from(turn);
             b[k].inf() - 1e-9 <= v && v <= b[k].sup() + 1e-9
@@ -393,8 +393,8 @@ fn study_ik(name: &str, difficulty: &str, chain: &Chain3R, target: [f64; 2], roo
 /// an internal motion.
 pub fn manip3r_findings() -> Vec<Finding> {
     let load = |text: &str| Chain3R::from_mechanism(&urdf::parse(text).expect("invariant: bundled robot parses"), 0.0).expect("invariant: bundled robot is 3R");
-    let a = load(include_str!("../urdf/orthogonal_3r_a.urdf"));
-    let f = load(include_str!("../urdf/orthogonal_3r_f.urdf"));
+    let a = load(include_str!("../../urdf/orthogonal_3r_a.urdf"));
+    let f = load(include_str!("../../urdf/orthogonal_3r_f.urdf"));
     let mut out = Vec::new();
     let regular = a.eval_f64(0.4, -1.2);
     out.push(study_ik("3R robot a, IK at a regular point", "isolated regular roots", &a, regular, brute_force_roots(&a, regular), None));
@@ -410,7 +410,7 @@ pub fn manip3r_findings() -> Vec<Finding> {
     at_roots.retain(|r| torus_distance(*r, cusp) > 1e-3);
     at_roots.push(cusp);
     out.push(study_ik("3R robot a, IK at a cusp", "a triple root: singular Jacobian, quadratic-free convergence", &a, at, at_roots, None));
-    let bands = crate::manip3r::motion::bands(&f, 1e-9);
+    let bands = linkspace::manip3r::motion::bands(&f, 1e-9);
     let band = bands.first().expect("robot f has internal motions");
     let t3 = 0.5 * (band.theta3[0] + band.theta3[1]);
     let line_point = f.eval_f64(0.0, t3);
