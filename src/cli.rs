@@ -7,7 +7,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use linkspace::model::urdf;
 use linkspace::problems::LinkageProblem;
-use linkspace::lp::LpBackend;
+use linkspace::LpBackend;
 use linkspace::manip3r::{
     self,
     cusps::{self, CuspSettings, Method},

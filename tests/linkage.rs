@@ -284,7 +284,7 @@ proptest::proptest! {
     #[test]
     fn no_contractor_removes_a_true_configuration(which in 0usize..4, at in 0.0f64..1.0, widths in proptest::collection::vec(1e-6f64..0.6, 14), offsets in proptest::collection::vec(0.0f64..1.0, 14)) {
         use linkspace::contract::{Contraction, Contractor, LpShrink, Newton, Propagation};
-        use linkspace::lp::LpBackend;
+        use linkspace::LpBackend;
         let p = problem("double_butterfly.urdf", &[], &[]);
         let branches = mobile_branches();
         let branch = &branches[which % branches.len()];

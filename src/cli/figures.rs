@@ -6,7 +6,7 @@
 use anyhow::{Context, Result};
 use super::plot::{box_panels, lines, Panel, Scale, Series};
 use linkspace::interval::IntervalBox;
-use linkspace::lp::LpBackend;
+use linkspace::LpBackend;
 use linkspace::model::urdf;
 use linkspace::problems::LinkageProblem;
 use linkspace::search::{Collect, Enclosure, SolverSettings, Status};

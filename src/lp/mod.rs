@@ -17,7 +17,6 @@ mod simplex;
 use crate::interval::Interval;
 use crate::system::VarId;
 
-pub use safe_bound::{certified_infeasible, lower_bound};
 
 /// One linear row `Σ coef·x ∈ bounds`, valid for every solution in the current box.
 #[derive(Clone, Debug)]
@@ -81,14 +80,11 @@ pub struct LpCounters {
 }
 
 impl Relaxation {
-    /// Verified bounds of each variable in `targets` over the rows and the box `b`.
+    /// Verified bounds of each variable in `targets` over the rows and the box `b`, from the
+    /// multipliers `backend` proposes.
     ///
-    /// Inclusion: every `x ∈ b` satisfying all rows has `x[targets[k]] ∈ result[k]`.
-    pub fn bound(&self, b: &[Interval], targets: &[VarId], counters: &mut LpCounters) -> LpOutcome {
-        self.bound_with(LpBackend::default(), b, targets, counters)
-    }
-
-    /// `bound` with an explicit LP solver; the same inclusion holds for every backend.
+    /// Inclusion: every `x ∈ b` satisfying all rows has `x[targets[k]] ∈ result[k]`, for every
+    /// backend.
     pub fn bound_with(
         &self,
         backend: LpBackend,

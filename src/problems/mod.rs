@@ -1,12 +1,12 @@
 //! Problem builders: a model in, an `EquationSystem` (plus what is needed to read answers back)
 //! out. Builders never solve.
 
-pub mod angles;
+pub(crate) mod angles;
 pub mod cayley_menger;
 pub mod distance_file;
 pub mod linkage;
 pub mod platform;
-pub mod stated;
+pub(crate) mod stated;
 
 pub use cayley_menger::{CayleyMenger, DistanceError, DistanceProblem};
 pub use linkage::{LinkageError, LinkageProblem};
