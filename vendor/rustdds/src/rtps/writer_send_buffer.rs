@@ -83,11 +83,10 @@ struct Shared {
   writer_guid: GUID,
   reliable_writer: bool,
   is_builtin: bool,
-  // True for VOLATILE durability (the DDS default). When true, a reliable writer
-  // with no matched reliable reader trims KeepLast on insert (there is no
-  // late-joiner to serve, so retaining unacked samples is pointless). When false
-  // (TRANSIENT_LOCAL / TRANSIENT / PERSISTENT) the writer must retain samples for
-  // late-joining readers, so pre-match trimming is disabled.
+  // True for VOLATILE durability (the DDS default). linkspace patch: no longer
+  // decides trimming (see `insert_locked`); a durable writer keeps its History
+  // depth for late joiners, not every sample.
+  #[allow(dead_code)]
   volatile: bool,
   topic_name: String,
 }
@@ -288,16 +287,29 @@ impl WriterSendBuffer {
     //    durability); once a reliable reader matches, `reliable_readers_present`
     //    flips true and we retain everything again for repair.
     // Built-in (discovery) writers are always exempt to never lose discovery data.
+    //
+    // linkspace patch: durable (TRANSIENT_LOCAL) writers are trimmed too. DDS
+    // keeps at most the History depth for late joiners (DDS v1.4 2.2.3.4,
+    // 2.2.3.18), and unpatched 0.15.1 kept every sample of a durable writer
+    // with no matched reader until the 8192-sample backstop (the periodic
+    // cleaning counts nothing as acknowledged without readers): a KeepLast(1)
+    // topic of 2 MB samples written at 20 Hz grew by 40 MB/s. Likewise, once
+    // readers are matched, samples that every reader has acknowledged and that
+    // lie beyond the depth are dropped here rather than at the next 6 s
+    // cleaning; unacknowledged samples stay for repair as before.
     let trim_keep_last = !shared.is_builtin
-      && (!may_block
-        || (shared.reliable_writer && shared.volatile && !inner.reliable_readers_present));
-    if trim_keep_last {
+      && (!may_block || (shared.reliable_writer && !inner.reliable_readers_present));
+    let trim_acked = !shared.is_builtin && shared.reliable_writer && !trim_keep_last;
+    if trim_keep_last || trim_acked {
       while inner.changes.len() > inner.max_retain {
         // BTreeMap keeps keys sorted, so the first entry is the oldest SN.
         let oldest = match inner.changes.keys().next().copied() {
           Some(sn) => sn,
           None => break,
         };
+        if trim_acked && oldest >= inner.acked_before {
+          break; // not yet acknowledged by every reader: kept for repair
+        }
         inner.changes.remove(&oldest);
         inner.first_seq = oldest.plus_1();
       }
@@ -603,11 +615,11 @@ mod tests {
     assert!(buf.get_by_sn(SequenceNumber::new(1)).is_none());
   }
 
-  // A durable (non-VOLATILE) reliable writer must NOT drop on insert even before
-  // a reader matches: it retains samples for late-joining readers. The
-  // `max_retain` bound does not apply to it.
+  // linkspace patch: a durable (non-VOLATILE) reliable writer with no matched
+  // reader keeps its History depth (`max_retain`) for late joiners, not every
+  // sample (unpatched, it kept all 10 here, and in the node up to 8192).
   #[test]
-  fn durable_reliable_writer_not_trimmed_before_match() {
+  fn durable_reliable_writer_keeps_its_depth_before_match() {
     let max_retain = 2;
     let buf = WriterSendBuffer::new(
       GUID::GUID_UNKNOWN,
@@ -623,9 +635,34 @@ mod tests {
     for _ in 0..10 {
       assert!(admit_now(&buf, WriteOptions::default()));
     }
-    // Durable path keeps everything for potential late-joiner delivery / repair
-    // despite tiny max_retain.
-    assert_eq!(buf.retained_len(), 10);
+    // The newest `max_retain` samples, for late joiners.
+    assert_eq!(buf.retained_len(), max_retain);
+    assert_eq!(buf.first_change_sequence_number(), SequenceNumber::new(9));
+  }
+
+  // linkspace patch: with a reader matched, samples it has acknowledged beyond
+  // the depth go on insert; unacknowledged ones stay for repair.
+  #[test]
+  fn acknowledged_samples_beyond_depth_are_dropped_on_insert() {
+    let buf = WriterSendBuffer::new(
+      GUID::GUID_UNKNOWN,
+      "t".to_string(),
+      /* reliable_writer */ true,
+      /* is_builtin */ false,
+      /* volatile */ false,
+      /* window_limit */ 1000,
+      /* backlog_limit */ 1000,
+      /* max_retain */ 1,
+    );
+    buf.set_acked_frontier(Some(SequenceNumber::new(1)));
+    for _ in 0..5 {
+      assert!(admit_now(&buf, WriteOptions::default()));
+    }
+    assert_eq!(buf.retained_len(), 5, "nothing acknowledged: all kept for repair");
+    buf.set_acked_frontier(Some(SequenceNumber::new(5))); // 1..=4 acknowledged
+    assert!(admit_now(&buf, WriteOptions::default()));
+    assert_eq!(buf.retained_len(), 2, "5 (unacknowledged) and 6 stay");
+    assert_eq!(buf.first_change_sequence_number(), SequenceNumber::new(5));
   }
 
   // A VOLATILE reliable writer with no matched reliable reader trims KeepLast on
@@ -655,12 +692,13 @@ mod tests {
     }
     assert_eq!(buf.retained_len(), max_retain);
 
-    // A reliable reader matches: from now on the writer retains everything for
-    // repair (no trimming), even past max_retain.
+    // A reliable reader matches: from now on the writer retains every
+    // unacknowledged sample for repair, even past max_retain (linkspace patch:
+    // the 4 acknowledged ones beyond the depth go).
     buf.set_acked_frontier(Some(SequenceNumber::new(101)));
     for _ in 0..10 {
       assert!(admit_now(&buf, WriteOptions::default()));
     }
-    assert_eq!(buf.retained_len(), max_retain + 10);
+    assert_eq!(buf.retained_len(), 10);
   }
 }

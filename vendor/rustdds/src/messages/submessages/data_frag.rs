@@ -301,8 +301,10 @@ impl<C: Context> Writable<C> for DataFrag {
     writer.write_value(&self.fragments_in_submessage)?;
     writer.write_value(&self.fragment_size)?;
     writer.write_value(&self.data_size)?;
-    if self.inline_qos.is_some() && !self.inline_qos.as_ref().unwrap().parameters.is_empty() {
-      writer.write_value(&self.inline_qos)?;
+    // The parameter list itself, as in DATA: writing the Option would put speedy's one-byte
+    // Some-tag before it, where octetsToInlineQos says the list starts (linkspace patch).
+    if let Some(inline_qos) = self.inline_qos.as_ref().filter(|q| !q.parameters.is_empty()) {
+      writer.write_value(inline_qos)?;
     }
     writer.write_bytes(&self.serialized_payload)?;
     Ok(())
@@ -381,6 +383,43 @@ mod tests {
     };
     let bytes = serialize_body(&df);
     assert!(DataFrag::deserialize(&bytes, BitFlags::<DATAFRAG_Flags>::empty()).is_err());
+  }
+
+  // linkspace patch: a DATAFRAG with inline QoS reads back as written (the list starts where
+  // octetsToInlineQos says, with no Option tag before it) and its length is len_serialized().
+  #[test]
+  fn inline_qos_round_trips_without_an_option_tag() {
+    use crate::{
+      messages::submessages::elements::parameter::Parameter,
+      structure::parameter_id::ParameterId,
+    };
+    let qos = ParameterList {
+      parameters: vec![Parameter {
+        parameter_id: ParameterId::PID_RELATED_SAMPLE_IDENTITY,
+        value: vec![7u8; 24],
+      }],
+    };
+    let df = DataFrag {
+      writer_sn: SequenceNumber::new(1),
+      fragment_starting_num: FragmentNumber::new(1),
+      fragments_in_submessage: 1,
+      fragment_size: 256,
+      data_size: 512,
+      inline_qos: Some(qos.clone()),
+      serialized_payload: Bytes::from(vec![3u8; 256]),
+      ..Default::default()
+    };
+    let bytes = serialize_body(&df);
+    assert_eq!(bytes.len(), df.len_serialized());
+    // After the 32 fixed octets comes the first parameter id, not a tag byte.
+    let pid = ParameterId::PID_RELATED_SAMPLE_IDENTITY
+      .write_to_vec_with_ctx(Endianness::LittleEndian)
+      .expect("pid");
+    assert_eq!(bytes[32..34], pid[..]);
+    let back = DataFrag::deserialize(&bytes, BitFlags::from_flag(DATAFRAG_Flags::InlineQos))
+      .expect("deserializes");
+    assert_eq!(back.inline_qos, Some(qos));
+    assert_eq!(back.serialized_payload, df.serialized_payload);
   }
 
   #[test]
