@@ -192,18 +192,23 @@ def cancel_during(node, step, timeout):
     seen = []
     node.create_subscription(Progress, step["progress"], lambda m: seen.append(m) if not m.done else None, 10)
     spin_until(node, lambda: False, 0.5)
+    t0 = time.monotonic()
     future = client.call_async(req)
     spin_until(node, lambda: bool(seen) or future.done(), timeout)
+    t_progress = time.monotonic() - t0
     if not seen:
         return {"error": "no progress seen before the reply" if future.done() else "no progress seen"}
     progress = to_plain(seen[0])
     cancel_req = srv.Cancel.Request()
     cancel_req.run_id = seen[0].run_id
     cancelled = canceller.call_async(cancel_req)
-    spin_until(node, lambda: cancelled.done() and future.done(), timeout)
+    spin_until(node, cancelled.done, timeout)
+    t_cancel = time.monotonic() - t0
+    spin_until(node, future.done, timeout)
+    times = {"progress": t_progress, "cancel_reply": t_cancel, "reply": time.monotonic() - t0}
     if not future.done():
         return {"error": "no reply after the cancel", "progress": progress}
-    return {"progress": progress, "cancel": to_plain(cancelled.result()) if cancelled.done() else None, "reply": to_plain(future.result())}
+    return {"progress": progress, "cancel": to_plain(cancelled.result()) if cancelled.done() else None, "reply": to_plain(future.result()), "seconds": times}
 
 
 def load(args):

@@ -506,8 +506,13 @@ fn a_hundred_requests_in_flight_are_all_answered_and_the_node_stays_small() {
 fn bad_serve_input_stops_the_node_with_one_line_before_any_dds_traffic() {
     let four_bar = format!("{ROOT}/urdf/four_bar.urdf");
     let slider = format!("{ROOT}/urdf/slider_crank.urdf");
-    let cases: [(Vec<&str>, &str); 6] = [
+    let cases: [(Vec<&str>, &str); 11] = [
         (vec!["/nonexistent.urdf"], "reading /nonexistent.urdf"),
+        (vec![&four_bar, "--ros-args", "-r", "chatter:=talk"], "only the node's name and namespace can be remapped"),
+        (vec![&four_bar, "--ros-args", "-p", "sigma:=abc"], "parameter sigma: 'abc' is not a valid value"),
+        (vec![&four_bar, "--ros-args", "--params-file", "/nonexistent.yaml"], "--params-file /nonexistent.yaml"),
+        (vec!["--ros-args", "-p", "robot_description:=<robot"], "parameter robot_description: malformed URDF"),
+        (vec![], "no mechanism to serve"),
         (vec![&four_bar, "--domain", "300"], "domain 300 is out of range"),
         (vec![&four_bar, "--fix", "nope=1"], "no joint or loop named 'nope'"),
         (vec![&four_bar, &slider, "--fix", "crank_joint=1"], "with several mechanisms, name the robot"),
@@ -517,7 +522,7 @@ fn bad_serve_input_stops_the_node_with_one_line_before_any_dds_traffic() {
     for (args, needle) in cases {
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_linkspace"));
         // A domain of its own, in case a case wrongly starts the node.
-        cmd.arg("serve").args(&args).args(["--network", "loopback"]).env("ROS_DOMAIN_ID", "44");
+        cmd.arg("serve").args(["--network", "loopback"]).args(&args).env("ROS_DOMAIN_ID", "44");
         let (ok, _, err) = run_with_timeout(cmd, Duration::from_secs(20));
         assert!(!ok, "{args:?} should fail");
         let lines: Vec<&str> = err.lines().collect();
@@ -833,7 +838,7 @@ fn a_singularity_run_shows_progress_and_is_cancelled_from_rclpy() {
     assert!(step["cancel"]["message"].as_str().expect("message").contains("will be in the reply"), "{step}");
     let report = &step["reply"]["report"];
     assert_eq!((step["reply"]["ok"].clone(), report["run_id"].clone()), (json!(true), progress["run_id"].clone()), "{step}");
-    assert_eq!((report["complete"].clone(), report["limit"].clone()), (json!(false), json!("cancelled")), "{report}");
+    assert_eq!((report["complete"].clone(), report["limit"].clone()), (json!(false), json!("cancelled")), "{}\nprogress {progress}\ntimes {}\nnode log:\n{}", report["message"], step["seconds"], node.log());
     assert!(node.alive(), "the node died:\n{}", node.log());
 }
 
