@@ -329,7 +329,21 @@ pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
         options = options.declare_parameter(name, value);
     }
     let set_events = tx.clone();
-    options = options.parameter_validator(Box::new(check_parameter)).parameter_set_action(Box::new(move |name: &str, value: &ParameterValue| {
+    // A robot_description is checked as the node will load it (URDF, formulation, the
+    // load-time --fix and --trace that name its robot), so `ros2 param set` reports why not.
+    let load_config = config.clone();
+    let validator = move |name: &str, value: &ParameterValue| -> Result<(), String> {
+        check_parameter(name, value)?;
+        match value {
+            ParameterValue::String(xml) if name == "robot_description" && !xml.trim().is_empty() => {
+                let source = Source { label: "robot_description".into(), xml: xml.clone(), description: true };
+                let (mut fixes, mut traces) = (vec![false; load_config.fixed.len()], vec![false; load_config.traces.len()]);
+                super::load_one(&source, &load_config, &mut fixes, &mut traces).map(|_| ()).map_err(|e| convert::bounded(&format!("{e:#}"), convert::ECHO_MESSAGE))
+            }
+            _ => Ok(()),
+        }
+    };
+    options = options.parameter_validator(Box::new(validator)).parameter_set_action(Box::new(move |name: &str, value: &ParameterValue| {
         // Applied by the event loop; a full queue refuses the change rather than block DDS.
         set_events.try_send(Event::Parameter(name.to_string(), value.clone())).map_err(|_| "the node is busy; retry".to_string())
     }));
