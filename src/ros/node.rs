@@ -332,7 +332,7 @@ pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
     // A robot_description is checked as the node will load it (URDF, formulation, the
     // load-time --fix and --trace that name its robot), so `ros2 param set` reports why not.
     let load_config = config.clone();
-    let validator = move |name: &str, value: &ParameterValue| -> Result<(), String> {
+    let validate = move |name: &str, value: &ParameterValue| -> Result<(), String> {
         check_parameter(name, value)?;
         match value {
             ParameterValue::String(xml) if name == "robot_description" && !xml.trim().is_empty() => {
@@ -342,6 +342,10 @@ pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
             }
             _ => Ok(()),
         }
+    };
+    let validator = move |name: &str, value: &ParameterValue| -> Result<(), String> {
+        // It runs in ros2-client's spinner: a bug must refuse the value, not stop the spinner.
+        catch_unwind(AssertUnwindSafe(|| validate(name, value))).unwrap_or_else(|p| Err(format!("internal error while checking {name}: {}", panic_text(p.as_ref()))))
     };
     options = options.parameter_validator(Box::new(validator)).parameter_set_action(Box::new(move |name: &str, value: &ParameterValue| {
         // Applied by the event loop; a full queue refuses the change rather than block DDS.
@@ -682,8 +686,17 @@ impl State {
             Event::Finished { run, result } => self.finished(run, result).await,
             Event::Tick => self.expire_waits(),
             Event::Republish => self.republish().await,
-            Event::Parameter(name, value) => self.parameter(&name, value),
-            Event::RobotDescription(xml) => self.new_description(xml, "topic robot_description"),
+            // Under catch_unwind like requests: a bug logs an error and the node goes on.
+            Event::Parameter(name, value) => {
+                if let Err(p) = catch_unwind(AssertUnwindSafe(|| self.parameter(&name, value))) {
+                    self.log(LogLevel::Error, format!("internal error while applying parameter {name}: {}", panic_text(p.as_ref())));
+                }
+            }
+            Event::RobotDescription(xml) => {
+                if let Err(p) = catch_unwind(AssertUnwindSafe(|| self.new_description(xml, "topic robot_description"))) {
+                    self.log(LogLevel::Error, format!("internal error while loading a robot_description: {}", panic_text(p.as_ref())));
+                }
+            }
         }
     }
 
