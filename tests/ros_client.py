@@ -6,6 +6,7 @@ test makes the assertions. Every wait has a timeout.
     singular --prefix /linkspace/orthogonal_3r_e ...   singularities, markers, progress of each
     services --node /linkspace --script FILE           service calls listed in a JSON file
     load     --node /linkspace --mechanism four_bar    100 requests in flight from 4 clients
+    rosstart --node /lab/linkspace --urdf A --urdf2 B  robot_description by topic, then by parameter
 """
 import argparse
 import json
@@ -19,7 +20,8 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy, DurabilityPolicy, HistoryPo
 sys.path.insert(0, __file__.rsplit("/", 2)[0] + "/scripts")
 from plot_boxes import to_plain  # noqa: E402
 
-from linkspace_msgs.msg import BoxSet, Progress, SingularityReport, Settings  # noqa: E402
+from linkspace_msgs.msg import AssemblyMode, BoxSet, Progress, SingularityReport, Settings  # noqa: E402
+from rclpy.serialization import serialize_message  # noqa: E402
 from linkspace_msgs import srv  # noqa: E402
 from sensor_msgs.msg import JointState  # noqa: E402
 from visualization_msgs.msg import MarkerArray  # noqa: E402
@@ -39,15 +41,17 @@ def spin_until(node, done, timeout):
 
 def topics(args):
     node = rclpy.create_node("linkspace_test_topics")
-    got = {"configuration_space": [], "markers": [], "assembly_modes": [], "progress": [], "singularities": []}
+    got = {"configuration_space": [], "markers": [], "assembly_modes": [], "progress": [], "singularities": [], "assembly_mode": []}
     p = args.prefix
     node.create_subscription(BoxSet, f"{p}/configuration_space", got["configuration_space"].append, latched())
     node.create_subscription(MarkerArray, f"{p}/markers", got["markers"].append, latched())
     node.create_subscription(JointState, f"{p}/assembly_modes", got["assembly_modes"].append, latched(64))
+    node.create_subscription(AssemblyMode, f"{p}/assembly_mode", got["assembly_mode"].append, latched(64))
     node.create_subscription(Progress, f"{p}/progress", got["progress"].append, latched())
     node.create_subscription(SingularityReport, f"{p}/singularities", got["singularities"].append, latched())
     single = ["configuration_space", "markers", "progress", "singularities"]
-    ok = spin_until(node, lambda: all(got[k] for k in single) and len(got["assembly_modes"]) >= args.modes, args.timeout)
+    ok = spin_until(node, lambda: all(got[k] for k in single) and len(got["assembly_modes"]) >= args.modes
+                    and len(got["assembly_mode"]) >= args.modes, args.timeout)
     # The remaining assembly modes (if any beyond --modes) arrive with the first ones.
     spin_until(node, lambda: False, 0.3)
     out = {"complete": ok, "seen": {k: len(v) for k, v in got.items()}}
@@ -56,6 +60,10 @@ def topics(args):
                        "position": [m.pose.position.x, m.pose.position.y, m.pose.position.z],
                        "scale": [m.scale.x, m.scale.y, m.scale.z]} for m in got["markers"][-1].markers] if got["markers"] else None
     out["assembly_modes"] = [{"frame": j.header.frame_id, "name": list(j.name), "position": list(j.position)} for j in got["assembly_modes"]]
+    out["assembly_mode"] = [to_plain(m) for m in got["assembly_mode"]]
+    # tf2_msgs has no wheel here: the graph shows the node's /tf_static publisher and its type.
+    out["tf_static"] = [t for n, t in node.get_topic_names_and_types() if n == "/tf_static"]
+    out["tf_static_publishers"] = node.count_publishers("/tf_static")
     out["progress"] = to_plain(got["progress"][-1]) if got["progress"] else None
     s = got["singularities"][-1] if got["singularities"] else None
     out["singularities"] = {"ok": s.ok, "message": s.message, "mechanism": s.mechanism} if s else None
@@ -168,6 +176,7 @@ def services(args):
         reply = to_plain(future.result())
         reply["service"] = name
         reply["seconds"] = time.monotonic() - t
+        reply["bytes"] = len(serialize_message(future.result()))
         results.append(reply)
     print(json.dumps({"results": results}))
 
@@ -183,18 +192,23 @@ def cancel_during(node, step, timeout):
     seen = []
     node.create_subscription(Progress, step["progress"], lambda m: seen.append(m) if not m.done else None, 10)
     spin_until(node, lambda: False, 0.5)
+    t0 = time.monotonic()
     future = client.call_async(req)
     spin_until(node, lambda: bool(seen) or future.done(), timeout)
+    t_progress = time.monotonic() - t0
     if not seen:
         return {"error": "no progress seen before the reply" if future.done() else "no progress seen"}
     progress = to_plain(seen[0])
     cancel_req = srv.Cancel.Request()
     cancel_req.run_id = seen[0].run_id
     cancelled = canceller.call_async(cancel_req)
-    spin_until(node, lambda: cancelled.done() and future.done(), timeout)
+    spin_until(node, cancelled.done, timeout)
+    t_cancel = time.monotonic() - t0
+    spin_until(node, future.done, timeout)
+    times = {"progress": t_progress, "cancel_reply": t_cancel, "reply": time.monotonic() - t0}
     if not future.done():
         return {"error": "no reply after the cancel", "progress": progress}
-    return {"progress": progress, "cancel": to_plain(cancelled.result()) if cancelled.done() else None, "reply": to_plain(future.result())}
+    return {"progress": progress, "cancel": to_plain(cancelled.result()) if cancelled.done() else None, "reply": to_plain(future.result()), "seconds": times}
 
 
 def load(args):
@@ -271,6 +285,68 @@ def load(args):
     print(json.dumps({"replies": replies, "seconds": time.monotonic() - t0, "cancelled": cancelled}))
 
 
+def rosstart(args):
+    """The node started with --robot-description-topic and no URDF: publishes --urdf latched on
+    /robot_description (as robot_state_publisher does), waits for its configuration space, sets
+    the robot_description parameter to --urdf2 through the parameter service, waits for that
+    one's, reads parameters back, tries bad values, and collects /rosout lines of the node."""
+    from std_msgs.msg import String
+    from rcl_interfaces.msg import Log, Parameter, ParameterType, ParameterValue
+    from rcl_interfaces.srv import GetParameters, SetParameters
+    node = rclpy.create_node("linkspace_test_rosstart")
+    out = {}
+    logs = []
+    node.create_subscription(Log, "/rosout", lambda m: logs.append(m.msg),
+                             QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE,
+                                        durability=DurabilityPolicy.TRANSIENT_LOCAL, history=HistoryPolicy.KEEP_LAST))
+    pub = node.create_publisher(String, "/robot_description", latched())
+    pub.publish(String(data=open(args.urdf).read()))
+    sets = {}
+
+    def watch(prefix):
+        sets[prefix] = []
+        node.create_subscription(BoxSet, f"{prefix}/configuration_space", sets[prefix].append, latched())
+    base = args.node.rstrip("/")
+    watch(f"{base}/{args.mechanism}")
+    out["first"] = spin_until(node, lambda: bool(sets[f"{base}/{args.mechanism}"]), args.timeout)
+    if out["first"]:
+        out["first_set"] = {k: to_plain(getattr(sets[f"{base}/{args.mechanism}"][-1], k)) for k in ("mechanism", "clusters", "settings", "header")}
+        out["first_set"]["boxes"] = len(sets[f"{base}/{args.mechanism}"][-1].box_status)
+    setter = node.create_client(SetParameters, f"{base}/set_parameters")
+    getter = node.create_client(GetParameters, f"{base}/get_parameters")
+    if not (setter.wait_for_service(timeout_sec=args.timeout) and getter.wait_for_service(timeout_sec=args.timeout)):
+        out["error"] = "parameter services not available"
+        print(json.dumps(out))
+        return
+    spin_until(node, lambda: False, 0.5)
+
+    def call(client, req):
+        f = client.call_async(req)
+        spin_until(node, f.done, args.timeout)
+        return f.result() if f.done() else None
+
+    def param(name, kind, value):
+        v = ParameterValue(type=kind)
+        setattr(v, {ParameterType.PARAMETER_STRING: "string_value", ParameterType.PARAMETER_DOUBLE: "double_value",
+                    ParameterType.PARAMETER_INTEGER: "integer_value"}[kind], value)
+        return Parameter(name=name, value=v)
+    got = call(getter, GetParameters.Request(names=["sigma", "max_runs", "precision", "robot_description"]))
+    out["get"] = [to_plain(v) for v in got.values] if got else None
+    bad = call(setter, SetParameters.Request(parameters=[param("sigma", ParameterType.PARAMETER_DOUBLE, -1.0),
+                                                         param("robot_description", ParameterType.PARAMETER_STRING, "<robot"),
+                                                         param("ghost", ParameterType.PARAMETER_DOUBLE, 1.0)]))
+    out["bad"] = [to_plain(r) for r in bad.results] if bad else None
+    watch(f"{base}/{args.mechanism2}")
+    good = call(setter, SetParameters.Request(parameters=[param("robot_description", ParameterType.PARAMETER_STRING, open(args.urdf2).read())]))
+    out["good"] = [to_plain(r) for r in good.results] if good else None
+    out["second"] = spin_until(node, lambda: bool(sets[f"{base}/{args.mechanism2}"]), args.timeout)
+    if out["second"]:
+        out["second_set"] = {k: to_plain(getattr(sets[f"{base}/{args.mechanism2}"][-1], k)) for k in ("mechanism", "clusters", "settings")}
+    spin_until(node, lambda: any("new robot_description from parameter" in m for m in logs), 3.0)
+    out["rosout"] = logs
+    print(json.dumps(out))
+
+
 def main():
     ap = argparse.ArgumentParser()
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -289,12 +365,18 @@ def main():
     lo.add_argument("--requests", type=int, default=100)
     lo.add_argument("--solve-boxes", type=int, default=20000)
     lo.add_argument("--client-depth", type=int, default=100, help="history depth of the service clients")
-    for p in (t, sg, s, lo):
+    rs = sub.add_parser("rosstart")
+    rs.add_argument("--node", default="/linkspace")
+    rs.add_argument("--urdf", required=True)
+    rs.add_argument("--mechanism", required=True)
+    rs.add_argument("--urdf2", required=True)
+    rs.add_argument("--mechanism2", required=True)
+    for p in (t, sg, s, lo, rs):
         p.add_argument("--timeout", type=float, default=20.0)
     args = ap.parse_args()
     rclpy.init()
     try:
-        {"topics": topics, "singular": singular, "services": services, "load": load}[args.cmd](args)
+        {"topics": topics, "singular": singular, "services": services, "load": load, "rosstart": rosstart}[args.cmd](args)
     finally:
         rclpy.try_shutdown()
 

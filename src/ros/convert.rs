@@ -1,8 +1,8 @@
 //! From the analysis layer's plain results to wire types: box sets, markers, joint states.
 
 use super::msgs::{
-    self, BoxSet, ColorRGBA, CuspRecord, Header, InverseKinematicsResponse, JointState, LsBox, Marker, MarkerArray, NodeRecord, Point, Pose, Quaternion, SingularityReport, SolveStats,
-    Time, Vector3,
+    self, AssemblyMode, BoxSet, ColorRGBA, CuspRecord, Header, InverseKinematicsResponse, JointState, LsBox, Marker, MarkerArray, NodeRecord, Point, Pose, Quaternion, SingularityReport,
+    SolveStats, TfMessage, Time, Transform, TransformStamped, Vector3,
 };
 use crate::analysis::{Bounds, BoxSetResult, IkResult, SingularityResult};
 use crate::search::{BoxStatus, Limit, SolverSettings, Status};
@@ -32,7 +32,8 @@ pub fn box_status(s: BoxStatus) -> u8 {
     }
 }
 
-/// A result as a `linkspace_msgs/BoxSet`, boxes in the result's order.
+/// A result as a `linkspace_msgs/BoxSet`, boxes in the result's order, in frame
+/// `<robot>/joint_space`.
 pub fn box_set(r: &BoxSetResult, run_id: u64) -> BoxSet {
     let n = r.boxes.len();
     let (mut lower, mut upper) = (Vec::with_capacity(n * r.variables.len()), Vec::with_capacity(n * r.variables.len()));
@@ -48,7 +49,7 @@ pub fn box_set(r: &BoxSetResult, run_id: u64) -> BoxSet {
         Status::Incomplete(l) => (msgs::SET_INCOMPLETE, limit_name(l)),
     };
     BoxSet {
-        header: header(""),
+        header: header(&joint_frame(&r.mechanism)),
         mechanism: r.mechanism.clone(),
         analysis: r.analysis.clone(),
         run_id,
@@ -117,7 +118,7 @@ fn cube(frame: &str, ns: &str, id: i32, centre: [f64; 3], size: [f64; 3], color:
 /// At most `cap` boxes are drawn per namespace (the box-set topic always carries all of them).
 pub fn markers(r: &BoxSetResult, world_frame: &str, cap: usize) -> MarkerArray {
     let mut markers = vec![Marker { header: header(world_frame), action: msgs::marker::DELETEALL, ..Default::default() }];
-    let joint_frame = format!("{}/joint_space", r.mechanism);
+    let joint_frame = joint_frame(&r.mechanism);
     let axes = r.joint_names.len().min(3);
     let mut id = 0;
     for b in r.boxes.iter().take(cap) {
@@ -141,20 +142,34 @@ pub fn markers(r: &BoxSetResult, world_frame: &str, cap: usize) -> MarkerArray {
     MarkerArray { markers }
 }
 
-/// One `sensor_msgs/JointState` per isolated solution (assembly mode), in cluster order; the
-/// header's frame_id says which mode it is, e.g. `mode 1 of 2 (cluster 1)`.
-pub fn assembly_modes(r: &BoxSetResult) -> Vec<JointState> {
+/// One `sensor_msgs/JointState` per isolated solution (assembly mode), in cluster order, in
+/// frame `root_link`, with its `linkspace_msgs/AssemblyMode` (the same configuration with its
+/// index, count and cluster, and the same stamp). The names cover the free joints (loop joints
+/// included) and the fixed ones; values in REP-103 units: radians and metres. `lengths_squared`:
+/// the analysis's joint values are squared lengths (a Cayley–Menger platform), published as
+/// their square roots.
+pub fn assembly_modes(r: &BoxSetResult, run_id: u64, root_link: &str, lengths_squared: bool) -> Vec<(JointState, AssemblyMode)> {
     let modes = r.assembly_modes();
     let n = modes.len();
+    let h = header(root_link);
     modes
         .into_iter()
         .enumerate()
-        .map(|(k, m)| JointState {
-            header: header(&format!("mode {} of {n} (cluster {})", k + 1, m.cluster)),
-            name: m.joints.iter().map(|(j, _)| j.clone()).collect(),
-            position: m.joints.iter().map(|(_, v)| *v).collect(),
-            velocity: vec![],
-            effort: vec![],
+        .map(|(k, m)| {
+            let name: Vec<String> = m.joints.iter().map(|(j, _)| j.clone()).collect();
+            let position: Vec<f64> = m.joints.iter().map(|&(_, v)| if lengths_squared { v.max(0.0).sqrt() } else { v }).collect();
+            let js = JointState { header: h.clone(), name: name.clone(), position: position.clone(), velocity: vec![], effort: vec![] };
+            let mode = AssemblyMode {
+                header: h.clone(),
+                mechanism: r.mechanism.clone(),
+                run_id,
+                mode: k as u32,
+                modes: n as u32,
+                cluster: m.cluster as i32,
+                joint_names: name,
+                positions: position,
+            };
+            (js, mode)
         })
         .collect()
 }
@@ -166,7 +181,7 @@ fn intervals(b: &[Bounds]) -> Vec<msgs::Interval> {
 /// A singularity result as a `linkspace_msgs/SingularityReport`, records in the result's order.
 pub fn singularity_report(r: &SingularityResult, run_id: u64) -> SingularityReport {
     SingularityReport {
-        header: header(""),
+        header: header(&joint_frame(&r.mechanism)),
         mechanism: r.mechanism.clone(),
         run_id,
         ok: true,
@@ -200,7 +215,7 @@ fn sphere(frame: &str, ns: &str, id: i32, centre: [f64; 3], size: f64, color: Co
 /// line), `cusps` (red spheres; grey when undecided) and `nodes` (blue spheres, one per point
 /// of each pair). At most `cap` markers per namespace.
 pub fn singularity_markers(r: &SingularityResult, cap: usize) -> MarkerArray {
-    let frame = format!("{}/joint_space", r.mechanism);
+    let frame = joint_frame(&r.mechanism);
     let mut markers = vec![Marker { header: header(&frame), action: msgs::marker::DELETEALL, ..Default::default() }];
     let mut id = 0;
     let centre = |j: &[Bounds]| [0.5 * (j[0][0] + j[0][1]), 0.5 * (j[1][0] + j[1][1]), 0.0];
@@ -256,117 +271,52 @@ pub fn ik_response(r: &IkResult) -> InverseKinematicsResponse {
     }
 }
 
-/// Largest service reply the node sends, in bytes of CDR (estimated). Replies sent as several
-/// DDS fragments never reached rclpy (Fast DDS 2.14) in our tests: a 35 KB Solve reply
-/// arrived, a 90 KB one did not, while box sets of a megabyte arrive on topics. So replies stay
-/// under one datagram, and what does not fit is on the mechanism's topics.
-pub const REPLY_BUDGET: usize = 48 * 1024;
-
-/// Estimated CDR size of a box set.
-pub fn box_set_bytes(s: &BoxSet) -> usize {
-    let names: usize = s.variable_names.iter().chain(&s.joint_names).chain(&s.fixed_joint_names).map(|n| n.len() + 8).sum();
-    8 * (s.lower.len() + s.upper.len() + s.joint_lower.len() + s.joint_upper.len() + s.fixed_joint_values.len()) + 9 * s.box_status.len() + names + 256
+/// At most `max` characters of `s` (a string from a request echoed into a reply or a log), with
+/// how many were left out: replies stay small whatever a request carries.
+pub fn bounded(s: &str, max: usize) -> String {
+    let n = s.chars().count();
+    if n <= max {
+        return s.to_string();
+    }
+    let head: String = s.chars().take(max).collect();
+    format!("{head}... ({} more characters)", n - max)
 }
 
-/// Clears the boxes of a set, keeping its header, status, settings, names and counters.
-pub fn strip_boxes(s: &mut BoxSet) {
-    for v in [&mut s.lower, &mut s.upper, &mut s.joint_lower, &mut s.joint_upper] {
-        v.clear();
-    }
-    s.box_status.clear();
-    s.level.clear();
-    s.cluster.clear();
+/// Longest name (mechanism, joint) echoed from a request into a reply.
+pub const ECHO_NAME: usize = 120;
+/// Longest message built from request data (an analysis error quoting it).
+pub const ECHO_MESSAGE: usize = 2000;
+
+/// The frame of joint-space markers and box sets of `mechanism`.
+pub fn joint_frame(mechanism: &str) -> String {
+    format!("{mechanism}/joint_space")
 }
 
-fn record_bytes(joints: usize, workspace: usize) -> usize {
-    16 * (joints + workspace) + 16
-}
-
-/// Estimated CDR size of a singularity report.
-pub fn singularity_bytes(r: &SingularityReport) -> usize {
-    box_set_bytes(&r.singular_curves)
-        + box_set_bytes(&r.internal_motions)
-        + r.cusps.iter().map(|c| record_bytes(c.joints.len(), c.workspace.len())).sum::<usize>()
-        + r.nodes.iter().map(|n| record_bytes(n.joints_a.len() + n.joints_b.len(), n.workspace.len())).sum::<usize>()
-        + r.message.len()
-        + 512
-}
-
-/// Makes a singularity report fit in a service reply: the singular-curve cover goes (it is the
-/// same for every run and is on the `singularities` topic), then undecided records from the
-/// end, and the report is then marked incomplete. Returns what was left out, for the message.
-pub fn fit_singularity_reply(r: &mut SingularityReport, topic: &str) -> Option<String> {
-    if singularity_bytes(r) <= REPLY_BUDGET {
-        return None;
+/// `/tf_static`: the joint-space frame of each mechanism (child) as an identity transform from
+/// its root link (parent), so that RViz draws the joint-space markers without a hand-made one.
+pub fn static_transforms(frames: &[(String, String)]) -> TfMessage {
+    TfMessage {
+        transforms: frames
+            .iter()
+            .map(|(parent, child)| TransformStamped {
+                header: header(parent),
+                child_frame_id: child.clone(),
+                transform: Transform { translation: Vector3::default(), rotation: Quaternion { w: 1.0, ..Default::default() } },
+            })
+            .collect(),
     }
-    let mut notes = Vec::new();
-    if !r.singular_curves.box_status.is_empty() {
-        notes.push(format!("the {} boxes of the singular-curve cover are left out of this reply (they are on {topic})", r.singular_curves.box_status.len()));
-        strip_boxes(&mut r.singular_curves);
-    }
-    let mut dropped = 0;
-    while singularity_bytes(r) > REPLY_BUDGET {
-        if r.nodes.last().is_some_and(|n| !n.certified) {
-            r.nodes.pop();
-        } else if r.cusps.last().is_some_and(|c| !c.certified) {
-            r.cusps.pop();
-        } else {
-            break;
-        }
-        dropped += 1;
-    }
-    if dropped > 0 {
-        r.complete = false;
-        notes.push(format!("{dropped} undecided records are left out (a service reply must stay under {} KiB), so this reply does not enclose every singularity", REPLY_BUDGET / 1024));
-    }
-    Some(notes.join("; "))
-}
-
-/// Makes an inverse-kinematics reply fit: clusters go from the end, and the reply is then
-/// marked incomplete. Returns what was left out, for the message.
-pub fn fit_ik_reply(r: &mut InverseKinematicsResponse) -> Option<String> {
-    let bytes = |r: &InverseKinematicsResponse| r.solutions.iter().map(|b| 16 * b.intervals.len() + 24).sum::<usize>() + r.message.len() + 512;
-    let mut dropped = 0;
-    while bytes(r) > REPLY_BUDGET && r.unique.last() == Some(&false) {
-        r.solutions.pop();
-        r.unique.pop();
-        r.merged_boxes.pop();
-        dropped += 1;
-    }
-    (dropped > 0).then(|| {
-        r.complete = false;
-        format!("{dropped} clusters are left out (a service reply must stay under {} KiB), so this reply does not enclose every solution: ask again with a smaller max_boxes or a larger sigma", REPLY_BUDGET / 1024)
-    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn set(boxes: usize, dim: usize) -> BoxSet {
-        BoxSet { lower: vec![0.0; boxes * dim], upper: vec![1.0; boxes * dim], box_status: vec![0; boxes], level: vec![0; boxes], cluster: vec![0; boxes], dim: dim as u32, ..Default::default() }
-    }
-
     #[test]
-    fn replies_are_cut_to_the_budget_with_a_reason() {
-        let small = set(100, 2);
-        assert!(box_set_bytes(&small) < REPLY_BUDGET);
-        let mut r = SingularityReport { singular_curves: set(3000, 2), complete: true, ..Default::default() };
-        let certified = CuspRecord { joints: vec![Default::default(); 2], workspace: vec![Default::default(); 2], certified: true };
-        r.cusps = vec![certified.clone(); 4];
-        r.cusps.extend(vec![CuspRecord { certified: false, ..certified.clone() }; 2000]);
-        let note = fit_singularity_reply(&mut r, "/t").expect("too big");
-        assert!(note.contains("3000 boxes of the singular-curve cover") && note.contains("undecided records are left out"), "{note}");
-        assert!(singularity_bytes(&r) <= REPLY_BUDGET && !r.complete);
-        assert_eq!(r.cusps.iter().filter(|c| c.certified).count(), 4, "certified records stay");
-        let mut fits = SingularityReport { singular_curves: small, complete: true, ..Default::default() };
-        assert_eq!(fit_singularity_reply(&mut fits, "/t"), None);
-        assert!(fits.complete && fits.singular_curves.box_status.len() == 100);
-
-        let one = LsBox { intervals: vec![Default::default(); 3], ..Default::default() };
-        let mut ik = InverseKinematicsResponse { complete: true, solutions: vec![one; 3000], unique: vec![false; 3000], merged_boxes: vec![1; 3000], ..Default::default() };
-        ik.unique[0] = true;
-        assert!(fit_ik_reply(&mut ik).expect("too big").contains("clusters are left out"));
-        assert!(!ik.complete && ik.unique[0] && ik.solutions.len() == ik.unique.len() && ik.solutions.len() < 3000);
+    fn echoed_strings_are_bounded() {
+        let long = "x".repeat(65_300);
+        let b = bounded(&long, ECHO_NAME);
+        assert!(b.len() < 200 && b.ends_with("(65180 more characters)"), "{b}");
+        assert_eq!(bounded("four_bar", ECHO_NAME), "four_bar");
+        assert_eq!(bounded("ééé", 2), "éé... (1 more characters)");
     }
 }

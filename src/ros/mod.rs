@@ -12,6 +12,8 @@ mod convert;
 pub mod msgs;
 mod node;
 
+pub use convert::bounded;
+
 use crate::analysis::{self, Analysis};
 use crate::model::urdf;
 use crate::search::SolverSettings;
@@ -66,6 +68,9 @@ pub struct Source {
     pub label: String,
     /// The URDF text.
     pub xml: String,
+    /// It is the node's `robot_description` parameter: setting the parameter (or a message on
+    /// `--robot-description-topic`) replaces this mechanism.
+    pub description: bool,
 }
 
 /// Everything `serve` needs.
@@ -95,6 +100,10 @@ pub struct ServeConfig {
     pub limits: Limits,
     /// Publish the configuration spaces again at this period (none: only when they change).
     pub republish: Option<std::time::Duration>,
+    /// Take URDFs from this topic (std_msgs/String, TransientLocal), e.g. `/robot_description`.
+    pub robot_description_topic: Option<String>,
+    /// Log to `/rosout` as well as stderr.
+    pub rosout: bool,
 }
 
 /// A loaded mechanism, ready for the node.
@@ -104,6 +113,8 @@ pub(crate) struct Loaded {
     pub root_link: String,
     /// The robot name as a ROS name token.
     pub token: String,
+    /// It came from the `robot_description` parameter or topic (see `Source::description`).
+    pub description: bool,
 }
 
 /// A robot name as one token of a ROS name: letters, digits and single underscores, not
@@ -124,43 +135,55 @@ pub(crate) fn name_token(name: &str) -> String {
     }
 }
 
+/// Parses and formulates one URDF with the load-time fixes and traces that name its robot (or
+/// no robot); marks in `used_fixes`, `used_traces` which ones applied.
+pub(crate) fn load_one(s: &Source, config: &ServeConfig, used_fixes: &mut [bool], used_traces: &mut [bool]) -> Result<Loaded> {
+    let m = urdf::parse(&s.xml).with_context(|| format!("loading {}", s.label))?;
+    let mine = |robot: &Option<String>| robot.as_deref().is_none_or(|r| r == m.name);
+    let mut fixed: Vec<(String, f64)> = Vec::new();
+    for (k, (robot, joint, value)) in config.fixed.iter().enumerate() {
+        if mine(robot) {
+            used_fixes[k] = true;
+            if fixed.iter().any(|(j, _)| j == joint) {
+                bail!("loading {}: joint '{joint}' is fixed twice (--fix)", s.label);
+            }
+            fixed.push((joint.clone(), *value));
+        }
+    }
+    let mut traces = Vec::new();
+    for (k, (robot, link, x, y)) in config.traces.iter().enumerate() {
+        if mine(robot) {
+            used_traces[k] = true;
+            traces.push((link.clone(), *x, *y));
+        }
+    }
+    let analysis = analysis::load(&m, &fixed, &traces).with_context(|| format!("loading {}", s.label))?;
+    Ok(Loaded { analysis, root_link: m.links[m.root].name.clone(), token: name_token(&m.name), description: s.description })
+}
+
 /// Parses and formulates every mechanism of `config`.
 pub(crate) fn load(config: &ServeConfig) -> Result<Vec<Loaded>> {
     let mut loaded: Vec<Loaded> = Vec::new();
     let mut used_fixes = vec![false; config.fixed.len()];
     let mut used_traces = vec![false; config.traces.len()];
     for s in &config.sources {
-        let m = urdf::parse(&s.xml).with_context(|| format!("loading {}", s.label))?;
-        let mine = |robot: &Option<String>| robot.as_deref().is_none_or(|r| r == m.name);
-        let mut fixed = Vec::new();
-        for (k, (robot, joint, value)) in config.fixed.iter().enumerate() {
-            if mine(robot) {
-                used_fixes[k] = true;
-                fixed.push((joint.clone(), *value));
-            }
+        let l = load_one(s, config, &mut used_fixes, &mut used_traces)?;
+        let name = l.analysis.mechanism().to_string();
+        if loaded.iter().any(|o| o.analysis.mechanism() == name || o.token == l.token) {
+            bail!("{}: a mechanism named '{name}' is already loaded", s.label);
         }
-        let mut traces = Vec::new();
-        for (k, (robot, link, x, y)) in config.traces.iter().enumerate() {
-            if mine(robot) {
-                used_traces[k] = true;
-                traces.push((link.clone(), *x, *y));
-            }
-        }
-        let analysis = analysis::load(&m, &fixed, &traces).with_context(|| format!("loading {}", s.label))?;
-        let token = name_token(&m.name);
-        if loaded.iter().any(|l| l.analysis.mechanism() == m.name || l.token == token) {
-            bail!("{}: a mechanism named '{}' is already loaded", s.label, m.name);
-        }
-        loaded.push(Loaded { analysis, root_link: m.links[m.root].name.clone(), token });
+        loaded.push(l);
     }
-    if let Some(k) = used_fixes.iter().position(|u| !u) {
+    // With a description topic, a fix or trace may name a robot that has not arrived yet.
+    let later = config.robot_description_topic.is_some();
+    if let Some(k) = used_fixes.iter().position(|u| !u).filter(|_| !later) {
         bail!("--fix {}:{}: no mechanism of that name is loaded", config.fixed[k].0.as_deref().unwrap_or(""), config.fixed[k].1);
     }
-    if let Some(k) = used_traces.iter().position(|u| !u) {
+    if let Some(k) = used_traces.iter().position(|u| !u).filter(|_| !later) {
         bail!("--trace {}:{}: no mechanism of that name is loaded", config.traces[k].0.as_deref().unwrap_or(""), config.traces[k].1);
     }
-    if loaded.is_empty() {
-        bail!("no mechanism to serve: give at least one URDF or --robot-description");
+    if loaded.is_empty() && config.robot_description_topic.is_none() {
+        bail!("no mechanism to serve: give at least one URDF, --robot-description, -p robot_description:=... or --robot-description-topic");
     }
     Ok(loaded)
 }
@@ -200,13 +223,17 @@ mod tests {
             network: Network::Loopback,
             limits: Limits::default(),
             republish: None,
+            robot_description_topic: None,
+            rosout: false,
         };
-        let src = |label: &str, xml: &str| Source { label: label.into(), xml: xml.into() };
+        let src = |label: &str, xml: &str| Source { label: label.into(), xml: xml.into(), description: false };
         let err = |c: ServeConfig| format!("{:#}", load(&c).err().expect("should fail"));
         assert!(err(config(vec![src("bad.urdf", "<robot")], vec![])).contains("loading bad.urdf: malformed URDF"));
         assert!(err(config(vec![src("a", four_bar), src("b", four_bar)], vec![])).contains("b: a mechanism named 'four_bar' is already loaded"));
         assert!(err(config(vec![src("a", four_bar)], vec![(Some("ghost".into()), "crank_joint".into(), 0.5)])).contains("no mechanism of that name"));
         assert!(err(config(vec![src("a", four_bar)], vec![(None, "nope".into(), 0.5)])).contains("no joint or loop named 'nope'"));
+        let twice = vec![(None, "crank_joint".into(), 0.5), (Some("four_bar".into()), "crank_joint".into(), 0.7)];
+        assert!(err(config(vec![src("a", four_bar)], twice)).contains("joint 'crank_joint' is fixed twice"));
         let ok = load(&config(vec![src("a", four_bar)], vec![(Some("four_bar".into()), "crank_joint".into(), 0.5)])).expect("loads");
         assert_eq!(ok[0].analysis.fixed_joints(), vec![("crank_joint".to_string(), 0.5)]);
         assert_eq!(ok[0].root_link, "ground");

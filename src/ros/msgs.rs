@@ -298,6 +298,38 @@ mirror! {
     /// linkspace_msgs/ListMechanisms response
     ListMechanismsResponse { mechanisms: Vec<MechanismInfo> }
 }
+mirror! {
+    /// linkspace_msgs/AssemblyMode
+    AssemblyMode {
+        header: Header,
+        mechanism: String,
+        run_id: u64,
+        mode: u32,
+        modes: u32,
+        cluster: i32,
+        joint_names: Vec<String>,
+        positions: Vec<f64>,
+    }
+}
+
+// ---- tf2_msgs, std_msgs/String ----
+
+mirror! {
+    /// geometry_msgs/Transform
+    Transform { translation: Vector3, rotation: Quaternion }
+}
+mirror! {
+    /// geometry_msgs/TransformStamped
+    TransformStamped { header: Header, child_frame_id: String, transform: Transform }
+}
+mirror! {
+    /// tf2_msgs/TFMessage
+    TfMessage { transforms: Vec<TransformStamped> }
+}
+mirror! {
+    /// std_msgs/String (the `/robot_description` topic)
+    StringMsg { data: String }
+}
 
 #[cfg(test)]
 mod tests {
@@ -366,6 +398,7 @@ mod tests {
             ("SingularityReport", mirrored::<SingularityReport>()),
             ("Progress", mirrored::<Progress>()),
             ("MechanismInfo", mirrored::<MechanismInfo>()),
+            ("AssemblyMode", mirrored::<AssemblyMode>()),
         ];
         let srvs: Vec<(&str, Vec<(String, String)>, Vec<(String, String)>)> = vec![
             ("Solve", mirrored::<SolveRequest>(), mirrored::<SolveResponse>()),

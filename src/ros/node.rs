@@ -12,14 +12,15 @@
 
 use super::convert;
 use super::msgs::{self, *};
-use super::{Limits, Loaded, Mapping, Network, ServeConfig};
+use super::{Limits, Loaded, Mapping, Network, ServeConfig, Source};
 use crate::analysis::{AnalysisError, BoxSetResult, IkQuery, IkResult, Service, SingularityQuery, SingularityResult};
 use crate::search::{SolverSettings, Status};
 use anyhow::{Context as _, Result};
 use futures::StreamExt;
 use ros2_client::dds::rustdds::DomainParticipantBuilder;
 use ros2_client::qos::{Durability, History, WhenFull};
-use ros2_client::{Context, Message, MessageTypeName, Name, Node, NodeName, NodeOptions, Publisher, QosProfile, RmwRequestId, Server, ServiceMapping, ServiceTypeName};
+use ros2_client::log::LogLevel;
+use ros2_client::{rosout, Context, Message, MessageTypeName, Name, Node, NodeName, NodeOptions, ParameterValue, Publisher, QosProfile, RmwRequestId, Server, ServiceMapping, ServiceTypeName};
 use std::collections::{BTreeMap, VecDeque};
 use std::net::{IpAddr, Ipv4Addr};
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -37,6 +38,10 @@ enum Event {
     Tick,
     /// Time to publish the latest configuration spaces again (`--republish`).
     Republish,
+    /// A ROS parameter was set (already validated).
+    Parameter(String, ParameterValue),
+    /// A URDF arrived on `--robot-description-topic`.
+    RobotDescription(String),
 }
 
 /// What a run returns.
@@ -78,6 +83,7 @@ struct Topics {
     progress: Publisher<msgs::Progress>,
     markers: Publisher<MarkerArray>,
     assembly_modes: Publisher<JointState>,
+    assembly_mode: Publisher<AssemblyMode>,
 }
 
 struct Servers {
@@ -119,6 +125,9 @@ impl RunKind {
 
 struct Run {
     mechanism: usize,
+    /// The mechanism's generation when the run started: a run of a replaced mechanism (new
+    /// robot_description, new settings) is dropped when it ends.
+    generation: u64,
     kind: RunKind,
     cancel: Arc<AtomicBool>,
     /// Requests waiting for this run (of the service its kind answers), with when to stop
@@ -130,6 +139,7 @@ struct Run {
 
 struct Mechanism {
     loaded: Loaded,
+    generation: u64,
     prefix: String,
     topics: Topics,
     /// The latest configuration space, and its messages (kept for `--republish`).
@@ -145,6 +155,14 @@ struct Mechanism {
 }
 
 struct State {
+    node: Node,
+    base: String,
+    rosout: bool,
+    config: ServeConfig,
+    tf_static: Publisher<TfMessage>,
+    /// The robot_description the node holds (parameter and topic).
+    description: String,
+    next_generation: u64,
     mechanisms: Vec<Mechanism>,
     servers: Rc<Servers>,
     runs: BTreeMap<u64, Run>,
@@ -179,6 +197,78 @@ fn publisher<M: Message>(node: &mut Node, prefix: &str, name: &str, package: &st
     let topic_name = Name::new(prefix, name).with_context(|| format!("topic name {prefix}/{name}"))?;
     let topic = node.create_topic(&topic_name, MessageTypeName::new(package, type_name), &qos).with_context(|| format!("creating topic {prefix}/{name}"))?;
     node.create_publisher(&topic, None).with_context(|| format!("creating publisher {prefix}/{name}"))
+}
+
+/// Reliable + TransientLocal + KeepLast(depth) with the history depth explicit: RustDDS (patched,
+/// vendor/README.md) then holds at most `depth` samples while no reader is matched, and drops
+/// acknowledged ones beyond it.
+fn topics(node: &mut Node, prefix: &str) -> Result<Topics> {
+    Ok(Topics {
+        configuration_space: publisher(node, prefix, "configuration_space", "linkspace_msgs", "BoxSet", latched(1))?,
+        solve_result: publisher(node, prefix, "solve_result", "linkspace_msgs", "BoxSet", latched(1))?,
+        singularities: publisher(node, prefix, "singularities", "linkspace_msgs", "SingularityReport", latched(1))?,
+        progress: publisher(node, prefix, "progress", "linkspace_msgs", "Progress", latched(1))?,
+        markers: publisher(node, prefix, "markers", "visualization_msgs", "MarkerArray", latched(1))?,
+        // Deep enough for every assembly mode of one result.
+        assembly_modes: publisher(node, prefix, "assembly_modes", "sensor_msgs", "JointState", latched(64))?,
+        assembly_mode: publisher(node, prefix, "assembly_mode", "linkspace_msgs", "AssemblyMode", latched(64))?,
+    })
+}
+
+fn mechanism_entry(loaded: Loaded, prefix: String, topics: Topics, generation: u64) -> Mechanism {
+    Mechanism {
+        loaded,
+        generation,
+        prefix,
+        topics,
+        configuration_space: None,
+        published: None,
+        singularities: None,
+        published_singularities: None,
+        singularity_run: None,
+        state: "running".into(),
+        message: String::new(),
+    }
+}
+
+/// The node's ROS parameters: their initial values (from the command line, `-p` and
+/// `--params-file`), checked by `check_parameter` when set through the parameter services.
+fn declared_parameters(config: &ServeConfig) -> Vec<(&'static str, ParameterValue)> {
+    let description = config.sources.iter().find(|s| s.description).map_or(String::new(), |s| s.xml.clone());
+    let l = &config.limits;
+    vec![
+        ("robot_description", ParameterValue::String(description)),
+        ("sigma", ParameterValue::Double(config.settings.sigma)),
+        ("rho", ParameterValue::Double(config.settings.rho)),
+        ("precision", ParameterValue::Double(config.precision)),
+        ("max_request_boxes", ParameterValue::Integer(l.max_boxes.min(i64::MAX as u64) as i64)),
+        ("max_request_timeout", ParameterValue::Double(l.max_timeout)),
+        ("max_wait", ParameterValue::Double(l.max_wait)),
+        ("max_runs", ParameterValue::Integer(l.max_runs as i64)),
+        ("max_markers", ParameterValue::Integer(l.max_markers as i64)),
+    ]
+}
+
+/// Whether a parameter value is acceptable; the reason otherwise (one line, shown by
+/// `ros2 param set`). A URDF must parse.
+fn check_parameter(name: &str, value: &ParameterValue) -> Result<(), String> {
+    let positive = |v: f64| v.is_finite() && v > 0.0;
+    match (name, value) {
+        ("robot_description", ParameterValue::String(xml)) if xml.trim().is_empty() => Ok(()),
+        ("robot_description", ParameterValue::String(xml)) => crate::model::urdf::parse(xml).map(|_| ()).map_err(|e| format!("robot_description: {}", convert::bounded(&e.to_string(), convert::ECHO_MESSAGE))),
+        ("sigma", ParameterValue::Double(v)) if positive(*v) => Ok(()),
+        ("rho", ParameterValue::Double(v)) if *v > 0.0 && *v < 1.0 => Ok(()),
+        ("precision", ParameterValue::Double(v)) if *v > 0.0 && *v < 1.0 => Ok(()),
+        ("max_request_timeout", ParameterValue::Double(v)) if positive(*v) => Ok(()),
+        ("max_wait", ParameterValue::Double(v)) if v.is_finite() && *v >= 0.0 => Ok(()),
+        ("max_request_boxes" | "max_runs" | "max_markers", ParameterValue::Integer(v)) if *v > 0 => Ok(()),
+        ("robot_description", _) => Err("robot_description must be a string (URDF XML)".into()),
+        ("sigma" | "max_request_timeout", _) => Err(format!("{name} must be a positive finite double")),
+        ("rho" | "precision", _) => Err(format!("{name} must be a double in (0, 1)")),
+        ("max_wait", _) => Err("max_wait must be a finite double >= 0".into()),
+        ("max_request_boxes" | "max_runs" | "max_markers", _) => Err(format!("{name} must be a positive integer")),
+        _ => Err(format!("'{}' is not a parameter of this node", convert::bounded(name, convert::ECHO_NAME))),
+    }
 }
 
 fn server<Q: Message + Clone + 'static, A: Message + 'static>(node: &mut Node, mapping: ServiceMapping, prefix: &str, name: &str, type_name: &str) -> Result<Server<Q, A>> {
@@ -231,7 +321,37 @@ pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
     let participant = builder.build().with_context(|| format!("joining DDS domain {}", config.domain))?;
     let context = Context::from_domain_participant(participant).context("creating the ROS 2 context")?;
     let node_name = NodeName::new(&config.namespace, &config.node_name).with_context(|| format!("node name {}/{}", config.namespace, config.node_name))?;
-    let mut node = context.new_node(node_name, NodeOptions::new().enable_rosout(true)).context("creating the node")?;
+    // Bounded: a flood of requests waits in DDS (and is eventually refused) instead of
+    // growing this queue.
+    let (tx, rx) = smol::channel::bounded::<Event>(256);
+    let mut options = NodeOptions::new().enable_rosout(config.rosout).start_parameter_services(true);
+    for (name, value) in declared_parameters(&config) {
+        options = options.declare_parameter(name, value);
+    }
+    let set_events = tx.clone();
+    // A robot_description is checked as the node will load it (URDF, formulation, the
+    // load-time --fix and --trace that name its robot), so `ros2 param set` reports why not.
+    let load_config = config.clone();
+    let validate = move |name: &str, value: &ParameterValue| -> Result<(), String> {
+        check_parameter(name, value)?;
+        match value {
+            ParameterValue::String(xml) if name == "robot_description" && !xml.trim().is_empty() => {
+                let source = Source { label: "robot_description".into(), xml: xml.clone(), description: true };
+                let (mut fixes, mut traces) = (vec![false; load_config.fixed.len()], vec![false; load_config.traces.len()]);
+                super::load_one(&source, &load_config, &mut fixes, &mut traces).map(|_| ()).map_err(|e| convert::bounded(&format!("{e:#}"), convert::ECHO_MESSAGE))
+            }
+            _ => Ok(()),
+        }
+    };
+    let validator = move |name: &str, value: &ParameterValue| -> Result<(), String> {
+        // It runs in ros2-client's spinner: a bug must refuse the value, not stop the spinner.
+        catch_unwind(AssertUnwindSafe(|| validate(name, value))).unwrap_or_else(|p| Err(format!("internal error while checking {name}: {}", panic_text(p.as_ref()))))
+    };
+    options = options.parameter_validator(Box::new(validator)).parameter_set_action(Box::new(move |name: &str, value: &ParameterValue| {
+        // Applied by the event loop; a full queue refuses the change rather than block DDS.
+        set_events.try_send(Event::Parameter(name.to_string(), value.clone())).map_err(|_| "the node is busy; retry".to_string())
+    }));
+    let mut node = context.new_node(node_name, options).context("creating the node")?;
     let base = format!("{}/{}", config.namespace.trim_end_matches('/'), config.node_name);
     let mapping = match config.mapping {
         Mapping::Enhanced => ServiceMapping::Enhanced,
@@ -240,30 +360,15 @@ pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
     };
 
     let mut mechanisms = Vec::new();
-    for l in loaded {
+    for (k, l) in loaded.into_iter().enumerate() {
         let prefix = format!("{base}/{}", l.token);
-        let topics = Topics {
-            configuration_space: publisher(&mut node, &prefix, "configuration_space", "linkspace_msgs", "BoxSet", latched(1))?,
-            solve_result: publisher(&mut node, &prefix, "solve_result", "linkspace_msgs", "BoxSet", latched(1))?,
-            singularities: publisher(&mut node, &prefix, "singularities", "linkspace_msgs", "SingularityReport", latched(1))?,
-            progress: publisher(&mut node, &prefix, "progress", "linkspace_msgs", "Progress", latched(1))?,
-            markers: publisher(&mut node, &prefix, "markers", "visualization_msgs", "MarkerArray", latched(1))?,
-            // Deep enough for every assembly mode of one result.
-            assembly_modes: publisher(&mut node, &prefix, "assembly_modes", "sensor_msgs", "JointState", latched(64))?,
-        };
-        mechanisms.push(Mechanism {
-            loaded: l,
-            prefix,
-            topics,
-            configuration_space: None,
-            published: None,
-            singularities: None,
-            published_singularities: None,
-            singularity_run: None,
-            state: "running".into(),
-            message: String::new(),
-        });
+        let topics = topics(&mut node, &prefix)?;
+        mechanisms.push(mechanism_entry(l, prefix, topics, k as u64));
     }
+    let tf_topic = node
+        .create_topic(&Name::new("/", "tf_static").context("/tf_static")?, MessageTypeName::new("tf2_msgs", "TFMessage"), &latched(1))
+        .context("creating topic /tf_static")?;
+    let tf_static = node.create_publisher(&tf_topic, None).context("creating publisher /tf_static")?;
     let servers = Rc::new(Servers {
         solve: server(&mut node, mapping, &base, "solve", "Solve")?,
         cancel: server(&mut node, mapping, &base, "cancel", "Cancel")?,
@@ -282,9 +387,31 @@ pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
     })
     .detach();
 
-    // Bounded: a flood of requests waits in DDS (and is eventually refused) instead of
-    // growing this queue.
-    let (tx, rx) = smol::channel::bounded::<Event>(256);
+    if let Some(topic) = &config.robot_description_topic {
+        let (ns, name) = match topic.rsplit_once('/') {
+            Some((ns, name)) => (if ns.is_empty() { "/" } else { ns }, name),
+            None => ("/", topic.as_str()),
+        };
+        let name = Name::new(ns, name).with_context(|| format!("--robot-description-topic {topic}"))?;
+        let t = node.create_topic(&name, MessageTypeName::new("std_msgs", "String"), &latched(1)).with_context(|| format!("creating topic {topic}"))?;
+        let sub = node.create_subscription::<StringMsg>(&t, Some(latched(1))).with_context(|| format!("subscribing to {topic}"))?;
+        let events = tx.clone();
+        ex.spawn(async move {
+            let stream = sub.async_stream();
+            futures::pin_mut!(stream);
+            while let Some(r) = stream.next().await {
+                match r {
+                    Ok((msg, _)) => {
+                        if events.send(Event::RobotDescription(msg.data)).await.is_err() {
+                            break;
+                        }
+                    }
+                    Err(e) => eprintln!("linkspace: dropped an undecodable robot_description: {e:?}"),
+                }
+            }
+        })
+        .detach();
+    }
     forward(&ex, servers.clone(), |s| &s.solve, Request::Solve, tx.clone());
     forward(&ex, servers.clone(), |s| &s.cancel, Request::Cancel, tx.clone());
     forward(&ex, servers.clone(), |s| &s.singularities, Request::Singularities, tx.clone());
@@ -315,7 +442,16 @@ pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
         .detach();
     }
 
+    let next_generation = mechanisms.len() as u64;
+    let description = config.sources.iter().find(|s| s.description).map_or(String::new(), |s| s.xml.clone());
     let mut state = State {
+        node,
+        base: base.clone(),
+        rosout: config.rosout,
+        config: config.clone(),
+        tf_static,
+        description,
+        next_generation,
         mechanisms,
         servers,
         runs: BTreeMap::new(),
@@ -326,13 +462,19 @@ pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
         precision: config.precision,
         events: tx,
     };
-    state.start_load_time_runs();
-    eprintln!(
-        "linkspace: ready: node {base} on domain {} ({:?} mapping, {:?} network), mechanisms: {}",
-        config.domain,
-        config.mapping,
-        config.network,
-        state.mechanisms.iter().map(|m| m.prefix.as_str()).collect::<Vec<_>>().join(" ")
+    for k in 0..state.mechanisms.len() {
+        state.start_load_time(k);
+    }
+    state.publish_static_transforms();
+    state.log(
+        LogLevel::Info,
+        format!(
+            "ready: node {base} on domain {} ({:?} mapping, {:?} network), mechanisms: {}",
+            config.domain,
+            config.mapping,
+            config.network,
+            state.mechanisms.iter().map(|m| m.prefix.as_str()).collect::<Vec<_>>().join(" ")
+        ),
     );
 
     smol::block_on(ex.run(async {
@@ -347,43 +489,157 @@ fn solve_error(message: String) -> SolveResponse {
     SolveResponse { ok: false, message, ..Default::default() }
 }
 
-/// A Singularities reply carrying `report`, cut to what a service reply can carry.
-fn singularity_reply(report: &SingularityReport, topic: &str) -> SingularitiesResponse {
-    let mut report = report.clone();
-    let mut message = report.message.clone();
-    if let Some(note) = convert::fit_singularity_reply(&mut report, topic) {
-        message = format!("{message}; {note}");
-    }
-    SingularitiesResponse { ok: true, message, report }
+/// A Singularities reply carrying the whole `report` (the patched RustDDS sends replies of any
+/// size: vendor/README.md).
+fn singularity_reply(report: &SingularityReport) -> SingularitiesResponse {
+    SingularitiesResponse { ok: true, message: report.message.clone(), report: report.clone() }
 }
 
 impl State {
-    fn start_load_time_runs(&mut self) {
-        for k in 0..self.mechanisms.len() {
-            let a = &self.mechanisms[k].loaded.analysis;
-            let cspace = a.configuration_space(&self.settings);
-            let query = SingularityQuery { precision: self.precision, nodes: true, max_boxes: self.settings.max_boxes, timeout: self.settings.timeout };
-            let singular = a.singularities(&query);
-            let mut started = false;
-            match cspace {
-                Ok(prepared) => {
-                    self.start(k, RunKind::ConfigurationSpace, Box::new(move |c, p| Outcome::BoxSet(prepared.run(c, p))));
-                    started = true;
-                }
-                Err(e) => eprintln!("linkspace: {}: no configuration space: {e}", self.mechanisms[k].loaded.analysis.mechanism()),
+    /// Logs a line on stderr and, unless `--disable-rosout-logs`, on `/rosout`.
+    fn log(&self, level: LogLevel, message: String) {
+        eprintln!("linkspace: {message}");
+        if self.rosout {
+            rosout!(self.node, level, "{}", message);
+        }
+    }
+
+    /// Starts the load-time analyses of mechanism `k`.
+    fn start_load_time(&mut self, k: usize) {
+        let a = &self.mechanisms[k].loaded.analysis;
+        let cspace = a.configuration_space(&self.settings);
+        let query = SingularityQuery { precision: self.precision, nodes: true, max_boxes: self.settings.max_boxes, timeout: self.settings.timeout };
+        let singular = a.singularities(&query);
+        let mut started = false;
+        match cspace {
+            Ok(prepared) => {
+                self.start(k, RunKind::ConfigurationSpace, Box::new(move |c, p| Outcome::BoxSet(prepared.run(c, p))));
+                started = true;
             }
-            match singular {
-                Ok(prepared) => {
-                    let run = self.start(k, RunKind::Singularities { load_time: true }, Box::new(move |c, p| Outcome::Singularities(prepared.run(c, p))));
-                    self.mechanisms[k].singularity_run = Some(run);
-                    started = true;
-                }
-                Err(e) => self.publish_no_singularities(k, e.to_string()),
+            Err(e) => self.log(LogLevel::Warn, format!("{}: no configuration space: {e}", self.mechanisms[k].loaded.analysis.mechanism())),
+        }
+        match singular {
+            Ok(prepared) => {
+                let run = self.start(k, RunKind::Singularities { load_time: true }, Box::new(move |c, p| Outcome::Singularities(prepared.run(c, p))));
+                self.mechanisms[k].singularity_run = Some(run);
+                started = true;
             }
-            if !started {
-                let m = &mut self.mechanisms[k];
-                m.state = "unavailable".into();
-                m.message = m.loaded.analysis.limitation();
+            Err(e) => self.publish_no_singularities(k, e.to_string()),
+        }
+        let m = &mut self.mechanisms[k];
+        if started {
+            m.state = "running".into();
+            m.message = String::new();
+        } else {
+            m.state = "unavailable".into();
+            m.message = m.loaded.analysis.limitation();
+        }
+    }
+
+    /// Publishes `/tf_static`: each mechanism's `<robot>/joint_space` under its root link.
+    fn publish_static_transforms(&self) {
+        let frames: Vec<(String, String)> = self.mechanisms.iter().map(|m| (m.loaded.root_link.clone(), convert::joint_frame(m.loaded.analysis.mechanism()))).collect();
+        if let Err(e) = self.tf_static.publish(convert::static_transforms(&frames)) {
+            eprintln!("linkspace: publishing /tf_static: {e:?}");
+        }
+    }
+
+    /// Ends every run of mechanism `k` and clears its results: it is analysed again.
+    fn retire(&mut self, k: usize) {
+        for r in self.runs.values() {
+            if r.mechanism == k {
+                r.cancel.store(true, Ordering::Relaxed);
+            }
+        }
+        let generation = self.next_generation;
+        self.next_generation += 1;
+        let m = &mut self.mechanisms[k];
+        m.generation = generation;
+        m.configuration_space = None;
+        m.published = None;
+        m.singularities = None;
+        m.published_singularities = None;
+        m.singularity_run = None;
+    }
+
+    /// A new robot_description (parameter or topic): replaces the mechanism that came from
+    /// one (or adds it), and analyses it again. Errors are one line, logged.
+    fn new_description(&mut self, xml: String, origin: &str) {
+        if xml == self.description {
+            return;
+        }
+        if xml.trim().is_empty() {
+            self.description = xml;
+            return;
+        }
+        let source = Source { label: origin.to_string(), xml: xml.clone(), description: true };
+        let (mut fixes, mut traces) = (vec![false; self.config.fixed.len()], vec![false; self.config.traces.len()]);
+        let loaded = match super::load_one(&source, &self.config, &mut fixes, &mut traces) {
+            Ok(l) => l,
+            Err(e) => return self.log(LogLevel::Error, format!("{}", convert::bounded(&format!("{e:#}"), convert::ECHO_MESSAGE))),
+        };
+        let slot = self.mechanisms.iter().position(|m| m.loaded.description);
+        let name = loaded.analysis.mechanism().to_string();
+        if let Some(other) = self.mechanisms.iter().enumerate().find(|(k, m)| Some(*k) != slot && (m.loaded.analysis.mechanism() == name || m.loaded.token == loaded.token)) {
+            return self.log(LogLevel::Error, format!("{origin}: a mechanism named '{}' is already loaded from another source", other.1.loaded.analysis.mechanism()));
+        }
+        self.description = xml.clone();
+        if origin != "parameter robot_description" {
+            // Keep the parameter in step with what the node analyses (its set action sees
+            // the same text and does nothing).
+            let _ = self.node.set_parameter("robot_description", ParameterValue::String(xml));
+        }
+        let prefix = format!("{}/{}", self.base, loaded.token);
+        let k = match slot {
+            Some(k) => {
+                self.retire(k);
+                if self.mechanisms[k].prefix != prefix {
+                    match topics(&mut self.node, &prefix) {
+                        Ok(t) => self.mechanisms[k].topics = t,
+                        Err(e) => return self.log(LogLevel::Error, format!("{origin}: {e:#}")),
+                    }
+                    self.mechanisms[k].prefix = prefix;
+                }
+                self.mechanisms[k].loaded = loaded;
+                k
+            }
+            None => {
+                let t = match topics(&mut self.node, &prefix) {
+                    Ok(t) => t,
+                    Err(e) => return self.log(LogLevel::Error, format!("{origin}: {e:#}")),
+                };
+                let generation = self.next_generation;
+                self.next_generation += 1;
+                self.mechanisms.push(mechanism_entry(loaded, prefix, t, generation));
+                self.mechanisms.len() - 1
+            }
+        };
+        self.log(LogLevel::Info, format!("{name}: new robot_description from {origin}; analysing again"));
+        self.start_load_time(k);
+        self.publish_static_transforms();
+    }
+
+    /// A parameter set through the parameter services (validated by `check_parameter`).
+    fn parameter(&mut self, name: &str, value: ParameterValue) {
+        let before = (self.settings.clone(), self.precision);
+        match (name, value) {
+            ("robot_description", ParameterValue::String(xml)) => return self.new_description(xml, "parameter robot_description"),
+            ("sigma", ParameterValue::Double(v)) => self.settings.sigma = v,
+            ("rho", ParameterValue::Double(v)) => self.settings.rho = v,
+            ("precision", ParameterValue::Double(v)) => self.precision = v,
+            ("max_request_boxes", ParameterValue::Integer(v)) => self.limits.max_boxes = v.max(1) as u64,
+            ("max_request_timeout", ParameterValue::Double(v)) => self.limits.max_timeout = v,
+            ("max_wait", ParameterValue::Double(v)) => self.limits.max_wait = v,
+            ("max_runs", ParameterValue::Integer(v)) => self.limits.max_runs = v.max(1) as usize,
+            ("max_markers", ParameterValue::Integer(v)) => self.limits.max_markers = v.max(1) as usize,
+            _ => return,
+        }
+        // New load-time settings: every mechanism is analysed again with them.
+        if (self.settings.clone(), self.precision) != before {
+            self.log(LogLevel::Info, format!("parameter {name} changed: analysing every mechanism again"));
+            for k in 0..self.mechanisms.len() {
+                self.retire(k);
+                self.start_load_time(k);
             }
         }
     }
@@ -392,7 +648,7 @@ impl State {
     /// so that a subscriber learns why instead of waiting.
     fn publish_no_singularities(&self, k: usize, reason: String) {
         let m = &self.mechanisms[k];
-        let report = SingularityReport { header: convert::header(""), mechanism: m.loaded.analysis.mechanism().to_string(), ok: false, message: reason, ..Default::default() };
+        let report = SingularityReport { header: convert::header(&convert::joint_frame(m.loaded.analysis.mechanism())), mechanism: m.loaded.analysis.mechanism().to_string(), ok: false, message: reason, ..Default::default() };
         if let Err(e) = m.topics.singularities.publish(report) {
             eprintln!("linkspace: publishing {}/singularities: {e:?}", m.prefix);
         }
@@ -403,7 +659,8 @@ impl State {
         let run = self.next_run;
         self.next_run += 1;
         let cancel = Arc::new(AtomicBool::new(false));
-        self.runs.insert(run, Run { mechanism, kind, cancel: cancel.clone(), waiters: Vec::new(), decided: 0.0 });
+        let generation = self.mechanisms[mechanism].generation;
+        self.runs.insert(run, Run { mechanism, generation, kind, cancel: cancel.clone(), waiters: Vec::new(), decided: 0.0 });
         let events = self.events.clone();
         std::thread::spawn(move || {
             let progress_events = events.clone();
@@ -429,14 +686,28 @@ impl State {
             Event::Finished { run, result } => self.finished(run, result).await,
             Event::Tick => self.expire_waits(),
             Event::Republish => self.republish().await,
+            // Under catch_unwind like requests: a bug logs an error and the node goes on.
+            Event::Parameter(name, value) => {
+                if let Err(p) = catch_unwind(AssertUnwindSafe(|| self.parameter(&name, value))) {
+                    self.log(LogLevel::Error, format!("internal error while applying parameter {name}: {}", panic_text(p.as_ref())));
+                }
+            }
+            Event::RobotDescription(xml) => {
+                if let Err(p) = catch_unwind(AssertUnwindSafe(|| self.new_description(xml, "topic robot_description"))) {
+                    self.log(LogLevel::Error, format!("internal error while loading a robot_description: {}", panic_text(p.as_ref())));
+                }
+            }
         }
     }
 
     fn progress(&self, run: u64, p: crate::search::Progress, done: bool) {
         let Some(r) = self.runs.get(&run) else { return };
         let m = &self.mechanisms[r.mechanism];
+        if r.generation != m.generation {
+            return;
+        }
         let msg = msgs::Progress {
-            header: convert::header(""),
+            header: convert::header(&convert::joint_frame(m.loaded.analysis.mechanism())),
             mechanism: m.loaded.analysis.mechanism().to_string(),
             analysis: r.kind.analysis().into(),
             run_id: run,
@@ -461,6 +732,12 @@ impl State {
             self.finished.pop_front();
         }
         let name = self.mechanisms[r.mechanism].loaded.analysis.mechanism().to_string();
+        if r.generation != self.mechanisms[r.mechanism].generation {
+            for (id, _) in r.waiters {
+                self.reply_error(r.kind, id, format!("run {run} ended without a result: its mechanism was analysed again (new robot_description or settings)"));
+            }
+            return;
+        }
         let outcome = match result {
             Ok(outcome) => outcome,
             Err(panic) => {
@@ -485,10 +762,7 @@ impl State {
             Outcome::Singularities(result) => self.finished_singularities(run, r, result).await,
             Outcome::InverseKinematics(result) => {
                 eprintln!("linkspace: {name}: run {run} (inverse kinematics): {} solutions, {} boxes, {:.3} s", result.solutions.len(), result.processed, result.seconds);
-                let mut reply = convert::ik_response(&result);
-                if let Some(note) = convert::fit_ik_reply(&mut reply) {
-                    reply.message = format!("{}; {note}", reply.message);
-                }
+                let reply = convert::ik_response(&result);
                 for (id, _) in r.waiters {
                     self.reply_ik(id, reply.clone());
                 }
@@ -504,7 +778,7 @@ impl State {
             Status::Complete => "complete".to_string(),
             Status::Incomplete(l) => format!("incomplete ({} limit)", convert::limit_name(l)),
         };
-        eprintln!("linkspace: {name}: run {run} ({:?}) {status}: {} boxes, {} clusters, {:.3} s", r.kind, result.boxes.len(), result.clusters, result.stats.seconds);
+        let summary = format!("{name}: run {run} ({:?}) {status}: {} boxes, {} clusters, {:.3} s", r.kind, result.boxes.len(), result.clusters, result.stats.seconds);
         match r.kind {
             RunKind::ConfigurationSpace => {
                 m.state = if result.status == Status::Complete { "complete".into() } else { "incomplete".into() };
@@ -517,9 +791,13 @@ impl State {
                     eprintln!("linkspace: publishing {}/markers: {e:?}", m.prefix);
                 }
                 m.published = Some((set, markers));
-                for js in convert::assembly_modes(&result) {
+                let squared = m.loaded.analysis.kind() == "parallel_platform";
+                for (js, mode) in convert::assembly_modes(&result, run, &m.loaded.root_link, squared) {
                     if let Err(e) = m.topics.assembly_modes.async_publish(js).await {
                         eprintln!("linkspace: publishing {}/assembly_modes: {e:?}", m.prefix);
+                    }
+                    if let Err(e) = m.topics.assembly_mode.async_publish(mode).await {
+                        eprintln!("linkspace: publishing {}/assembly_mode: {e:?}", m.prefix);
                     }
                 }
                 m.configuration_space = Some(Arc::new(result));
@@ -529,24 +807,15 @@ impl State {
                 if let Err(e) = m.topics.solve_result.async_publish(set.clone()).await {
                     eprintln!("linkspace: publishing {}/solve_result: {e:?}", m.prefix);
                 }
-                let mut message = format!("run {run}: {status}");
-                let mut reply_set = set.clone();
-                if convert::box_set_bytes(&set) > convert::REPLY_BUDGET {
-                    convert::strip_boxes(&mut reply_set);
-                    message.push_str(&format!(
-                        "; its {} boxes are left out of this reply (a service reply must stay under {} KiB) and are on {}/solve_result",
-                        set.box_status.len(),
-                        convert::REPLY_BUDGET / 1024,
-                        m.prefix
-                    ));
-                }
+                let message = format!("run {run}: {status}");
                 for (id, _) in r.waiters {
-                    self.reply_solve(id, SolveResponse { ok: true, message: message.clone(), run_id: run, done: true, result: reply_set.clone() });
+                    self.reply_solve(id, SolveResponse { ok: true, message: message.clone(), run_id: run, done: true, result: set.clone() });
                 }
                 eprintln!("linkspace: {name}: published solve_result of run {run}");
             }
             RunKind::Singularities { .. } | RunKind::InverseKinematics => eprintln!("linkspace: {name}: run {run} returned a box set for a {:?} run", r.kind),
         }
+        self.log(LogLevel::Info, summary);
     }
 
     async fn finished_singularities(&mut self, run: u64, r: Run, result: SingularityResult) {
@@ -569,7 +838,7 @@ impl State {
             m.singularity_run = None;
             eprintln!("linkspace: {name}: published singularities");
         }
-        let reply = singularity_reply(&report, &format!("{}/singularities", self.mechanisms[r.mechanism].prefix));
+        let reply = singularity_reply(&report);
         for (id, _) in r.waiters {
             self.reply_singularities(id, reply.clone());
         }
@@ -697,7 +966,7 @@ impl State {
     fn mechanism(&self, name: &str) -> Result<usize, String> {
         self.mechanisms.iter().position(|m| m.loaded.analysis.mechanism() == name).ok_or_else(|| {
             let names: Vec<&str> = self.mechanisms.iter().map(|m| m.loaded.analysis.mechanism()).collect();
-            format!("no mechanism named '{name}' is loaded (loaded: {})", names.join(", "))
+            format!("no mechanism named '{}' is loaded (loaded: {})", convert::bounded(name, convert::ECHO_NAME), names.join(", "))
         })
     }
 
@@ -712,26 +981,33 @@ impl State {
         if q.fixed_joint_names.len() != q.fixed_joint_values.len() {
             return Some(solve_error(format!("{} fixed joint names but {} values", q.fixed_joint_names.len(), q.fixed_joint_values.len())));
         }
+        if let Some((i, name)) = q.fixed_joint_names.iter().enumerate().find(|(i, n)| q.fixed_joint_names[..*i].contains(n)) {
+            return Some(solve_error(format!("joint '{}' is fixed twice (fixed_joint_names[{i}])", convert::bounded(name, convert::ECHO_NAME))));
+        }
         if s.max_boxes == 0 {
             return Some(solve_error(format!("settings.max_boxes must be given: every run is bounded (1 to {})", limits.max_boxes)));
         }
         if s.max_boxes > limits.max_boxes {
             return Some(solve_error(format!("settings.max_boxes {} is larger than this node's limit {} (--max-request-boxes)", s.max_boxes, limits.max_boxes)));
         }
-        if !(s.timeout > 0.0 && s.timeout <= limits.max_timeout) {
-            return Some(solve_error(format!("settings.timeout {} s is out of range: give 0 < timeout <= {} s (--max-request-timeout)", s.timeout, limits.max_timeout)));
+        // Settings.msg: timeout 0 means no time limit of the request's own; the node's
+        // --max-request-timeout still bounds the run (and max_boxes always does).
+        if !(s.timeout >= 0.0 && s.timeout <= limits.max_timeout) {
+            return Some(solve_error(format!("settings.timeout {} s is out of range: give 0 (the node's limit) to {} s (--max-request-timeout)", s.timeout, limits.max_timeout)));
         }
+        let timeout = if s.timeout == 0.0 { limits.max_timeout } else { s.timeout };
         if !(q.wait >= 0.0 && q.wait <= limits.max_wait) {
             return Some(solve_error(format!("wait {} s is out of range: give 0 <= wait <= {} s", q.wait, limits.max_wait)));
         }
         if let Some(busy) = self.busy() {
             return Some(solve_error(busy));
         }
-        let settings = SolverSettings { sigma: s.sigma, rho: s.rho, max_boxes: s.max_boxes, timeout: Some(Duration::from_secs_f64(s.timeout)), ..self.settings.clone() };
+        let settings = SolverSettings { sigma: s.sigma, rho: s.rho, max_boxes: s.max_boxes, timeout: Some(Duration::from_secs_f64(timeout)), ..self.settings.clone() };
         let fixed: Vec<(String, f64)> = q.fixed_joint_names.iter().cloned().zip(q.fixed_joint_values.iter().copied()).collect();
         let prepared = match self.mechanisms[k].loaded.analysis.solve(&fixed, &settings) {
             Ok(p) => p,
-            Err(e) => return Some(solve_error(e.to_string())),
+            // The error may quote the request (a joint name): bounded.
+            Err(e) => return Some(solve_error(convert::bounded(&e.to_string(), convert::ECHO_MESSAGE))),
         };
         let run = self.start(k, RunKind::Solve, Box::new(move |c, p| Outcome::BoxSet(prepared.run(c, p))));
         if q.wait > 0.0 {
@@ -790,7 +1066,7 @@ impl State {
         }
         if q.precision == 0.0 {
             if let Some((report, _)) = &m.published_singularities {
-                return Some(singularity_reply(report, &format!("{}/singularities", m.prefix)));
+                return Some(singularity_reply(report));
             }
             let Some(run) = m.singularity_run else { return refuse(format!("no singularity report for '{}': {}", q.mechanism, m.message)) };
             let deadline = Instant::now() + Duration::from_secs_f64(self.limits.max_wait);
@@ -832,6 +1108,12 @@ impl State {
         if p.iter().any(|v| !v.is_finite()) {
             return refuse(format!("point ({}, {}, {}) is not finite", p[0], p[1], p[2]));
         }
+        // Squares of the coordinates must stay finite (the analysis works with radius²); no
+        // manipulator reaches that far anyway.
+        const FARTHEST: f64 = 1e100;
+        if p.iter().any(|v| v.abs() > FARTHEST) {
+            return refuse(format!("point ({:e}, {:e}, {:e}) is out of range: give coordinates of at most {FARTHEST:e} m in magnitude", p[0], p[1], p[2]));
+        }
         if !(q.sigma.is_finite() && q.sigma > 0.0) {
             return refuse(format!("sigma must be a positive finite number, got {}", q.sigma));
         }
@@ -841,7 +1123,7 @@ impl State {
         };
         let prepared = match self.mechanisms[k].loaded.analysis.inverse_kinematics(&IkQuery { point: p, precision: q.sigma, max_boxes }) {
             Ok(p) => p,
-            Err(e) => return refuse(e.to_string()),
+            Err(e) => return refuse(convert::bounded(&e.to_string(), convert::ECHO_MESSAGE)),
         };
         if let Some(busy) = self.busy() {
             return refuse(busy);
@@ -871,7 +1153,7 @@ impl State {
         let mut values = vec![f64::NAN; free.len()];
         for (name, &v) in q.joint_names.iter().zip(&q.joint_values) {
             let Some(i) = free.iter().position(|f| f == name) else {
-                return refuse(format!("'{name}' is not a free joint of '{}' (free joints: {})", q.mechanism, free.join(", ")));
+                return refuse(format!("'{}' is not a free joint of '{}' (free joints: {})", convert::bounded(name, convert::ECHO_NAME), q.mechanism, free.join(", ")));
             };
             if !v.is_finite() {
                 return refuse(format!("joint '{name}': {v} is not a finite number"));
