@@ -362,7 +362,7 @@ fn distance_sweeps(dir: &Path, quick: bool) -> Result<()> {
 
 /// 3R cusps: CPU seconds against the widest cusp box, Krawczyk against bisection alone.
 fn cusp_sweep(dir: &Path, quick: bool) -> Result<()> {
-    use linkspace::manip3r::{cusps, Chain3R};
+    use linkspace::manip3r::{cusps, Chain3R, Control};
     let precisions: &[f64] = if quick { &[1e-2, 1e-4] } else { &[1e-2, 1e-3, 1e-4, 1e-6, 1e-8] };
     let mut series = Vec::new();
     for (name, text) in ROBOTS_3R.iter().take(2) {
@@ -371,9 +371,10 @@ fn cusp_sweep(dir: &Path, quick: bool) -> Result<()> {
             let mut points = Vec::new();
             for &precision in precisions {
                 let c0 = linkspace::search::process_cpu_seconds();
-                let found = cusps::search(&chain, &cusps::CuspSettings { precision, method, timeout: Some(Duration::from_secs(20)), ..Default::default() })?;
+                let limits = linkspace::search::Limits { max_cells: cusps::DEFAULT_MAX_BOXES, timeout: Some(Duration::from_secs(20)), ..Default::default() };
+                let found = cusps::search_with(&chain, &cusps::CuspSettings { precision, method }, &Control::with_limits(limits), &mut |_| {})?;
                 let cpu = linkspace::search::process_cpu_seconds() - c0;
-                if found.complete {
+                if found.status.is_complete() {
                     let widest = found.cusps.iter().map(|c| c.theta[0].wid().hypot(c.theta[1].wid())).fold(0.0, f64::max);
                     points.push((widest, cpu));
                 }

@@ -14,7 +14,7 @@ use linkspace::manip3r::{
     nodes::{self, NodeSettings},
     collision::{self, CollisionSettings, Scene},
     report::{CollisionReport, IkReport, SingularityReport},
-    Chain3R,
+    Chain3R, Control,
 };
 use linkspace::search::{Limits, Progress, SolverSettings};
 use std::io::{IsTerminal, Write};
@@ -380,18 +380,11 @@ pub(crate) fn seconds_arg(t: Option<f64>) -> Result<Option<Duration>> {
 fn singularities(args: SingularitiesArgs) -> Result<()> {
     manip3r::check_precision(args.precision)?;
     let limits = args.limits.limits(20_000_000)?;
-    let timeout = limits.timeout;
     let chain = load_chain(&args.urdf, args.uncertainty)?;
-    let start = std::time::Instant::now();
-    let cusp_settings = CuspSettings { precision: args.precision, max_boxes: limits.max_cells, timeout, method: Method::Krawczyk };
-    let found = cusps::search(&chain, &cusp_settings)?;
-    let node_search = if args.nodes {
-        let settings = NodeSettings { precision: args.precision, max_pairs: limits.max_cells, timeout };
-        Some(nodes::search(&chain, &found.cusps, &found.bands, &settings)?)
-    } else {
-        None
-    };
-    let report = SingularityReport::new(&chain, args.precision, &found, node_search.as_ref(), start.elapsed().as_secs_f64());
+    let cancel = AtomicBool::new(false);
+    let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };
+    let run = manip3r::singularities(&chain, args.precision, args.nodes, &control, &mut |_| {})?;
+    let report = SingularityReport::new(&chain, args.precision, &run.cusps, run.nodes.as_ref(), run.seconds);
     let mut out = std::io::stdout().lock();
     let node_text = report.nodes.as_ref().map_or("nodes not searched".to_string(), |n| format!("{} nodes", n.len()));
     let undecided = report.undecided.cusps.len() + report.undecided.nodes.len();
@@ -507,12 +500,12 @@ fn bench3r(args: Bench3rArgs) -> Result<()> {
     for (name, xml, ibex_cusps, ibex_nodes) in ROBOTS {
         let chain = Chain3R::from_mechanism(&urdf::parse(xml)?, 0.0)?;
         let run = |method| {
-            let settings = CuspSettings { precision: args.precision, method, ..Default::default() };
+            let settings = CuspSettings { precision: args.precision, method };
             let mut times = Vec::new();
             let mut last = None;
             for _ in 0..args.repeat {
                 let r = cusps::search(&chain, &settings).expect("validated precision");
-                times.push(r.stats.seconds);
+                times.push(r.seconds);
                 last = Some(r);
             }
             (median(times), last.expect("repeat >= 1"))
@@ -523,7 +516,7 @@ fn bench3r(args: Bench3rArgs) -> Result<()> {
         let mut node_run = None;
         for _ in 0..args.repeat {
             let r = nodes::search(&chain, &k.cusps, &k.bands, &NodeSettings { precision: args.precision, ..Default::default() })?;
-            node_times.push(r.stats.seconds);
+            node_times.push(r.seconds);
             node_run = Some(r);
         }
         let (t_n, n) = (median(node_times), node_run.expect("repeat >= 1"));

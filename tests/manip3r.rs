@@ -176,12 +176,12 @@ fn table_1_matches_dense_sampling() {
     for ((case, n_cusps, n_nodes), (_, d2, d3, d4, r2, r3)) in want.into_iter().zip(CASES) {
         let c = chain(case);
         let found = cusps::search(&c, &cusps::CuspSettings::default()).expect("valid settings");
-        assert!(found.complete && found.undecided.is_empty(), "case {case}: {:?}", found.undecided.first());
+        assert!(found.status.is_complete() && found.undecided.is_empty(), "case {case}: {:?}", found.undecided.first());
         assert_eq!(found.cusps.len(), n_cusps, "case {case} cusps");
         assert!(found.cusps.iter().all(|c| c.unique && c.theta.iter().all(|t| t.wid() <= 1e-4)));
         assert_eq!(found.bands.is_empty(), case != "f", "internal motion only in f");
         let pairs = nodes::search(&c, &found.cusps, &found.bands, &nodes::NodeSettings::default()).expect("valid settings");
-        assert!(pairs.complete && pairs.undecided.is_empty(), "case {case}: {:?}", pairs.undecided.first());
+        assert!(pairs.status.is_complete() && pairs.undecided.is_empty(), "case {case}: {:?}", pairs.undecided.first());
         assert_eq!(pairs.nodes.len(), n_nodes, "case {case} nodes");
 
         let s = sample((d2, d3, d4, r2, r3), 1200);
@@ -221,7 +221,7 @@ fn internal_motion_lines_of_f_are_reported_as_lines() {
             assert!((f[0] - f0[0]).abs() < 1e-12 && (f[1] - f0[1]).abs() < 1e-12);
         }
     }
-    assert!(found.undecided.is_empty() && found.complete);
+    assert!(found.undecided.is_empty() && found.status.is_complete());
 }
 
 /// Case c of the seed: d2 ∈ [1, 1.001], d3 ∈ [2, 2.001], d4 ∈ [1.5, 1.501], r2 ∈ [1, 1.001]
@@ -236,7 +236,7 @@ fn seed_case_c_four_cusps_valid_for_every_corner() {
     let found = cusps::search(&uncertain, &cusps::CuspSettings { precision: 1e-4, ..Default::default() }).expect("valid");
     assert_eq!(found.cusps.len(), 4);
     assert!(found.cusps.iter().all(|c| c.unique));
-    assert!(found.complete && found.undecided.is_empty(), "{} undecided", found.undecided.len());
+    assert!(found.status.is_complete() && found.undecided.is_empty(), "{} undecided", found.undecided.len());
     let mut geometries: Vec<[f64; 4]> = (0..16u32).map(|k| [0, 1, 2, 3].map(|i| [1.0, 2.0, 1.0, 1.5][i] + if k >> i & 1 == 1 { 0.001 } else { 0.0 })).collect();
     geometries.push([1.0005, 2.0005, 1.0005, 1.5005]);
     for [d2, d3, r2, d4] in geometries {
@@ -346,7 +346,7 @@ fn non_orthogonal_chains_match_plain_forward_kinematics() {
     }
     // The searches run on it as on any chain.
     let found = cusps::search(&c, &cusps::CuspSettings { precision: 1e-3, ..Default::default() }).expect("valid");
-    assert!(found.complete);
+    assert!(found.status.is_complete());
 }
 
 /// The collision scene of `urdf/orthogonal_3r_a_column.urdf`, written out by hand from the

@@ -16,9 +16,9 @@ use super::{
 use crate::interval::{interval, point};
 use crate::manip3r::motion::{self, PI_UP};
 use crate::manip3r::report::radius;
-use crate::manip3r::{self, cusps, ik, nodes, Chain3R, Manip3rError};
+use crate::manip3r::{self, ik, Chain3R, Manip3rError};
 use crate::model::Mechanism;
-use crate::search::{BoxStatus, Limit, Progress, SolveStats as Stats, SolverSettings, Status};
+use crate::search::{BoxStatus, Limit, Limits, Progress, SolveStats as Stats, SolverSettings, Status};
 use inari::Interval;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -428,18 +428,12 @@ struct SingularityRun {
 }
 
 impl PreparedRun<SingularityResult> for SingularityRun {
-    fn run(self: Box<Self>, _cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> SingularityResult {
-        let start = Instant::now();
+    fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> SingularityResult {
         let (chain, q) = (&*self.chain, &self.query);
-        let settings = cusps::CuspSettings { precision: q.precision, max_boxes: q.max_boxes, timeout: q.timeout, method: cusps::Method::Krawczyk };
-        let found = cusps::search(chain, &settings).expect("invariant: precision validated when prepared");
-        progress(&Progress { processed: found.stats.processed, pending: 0, decided: if q.nodes { 0.5 } else { 1.0 } });
-        let node_search = q.nodes.then(|| {
-            // The time left of the request's budget (none left: the search stops at once).
-            let timeout = q.timeout.map(|t| t.saturating_sub(start.elapsed()));
-            let settings = nodes::NodeSettings { precision: q.precision, max_pairs: q.max_boxes, timeout };
-            nodes::search(chain, &found.cusps, &found.bands, &settings).expect("invariant: precision validated when prepared")
-        });
+        let limits = Limits { max_cells: q.max_boxes, timeout: q.timeout, ..Limits::default() };
+        let control = manip3r::Control { limits, threads: q.threads.max(1), cancel };
+        let run = manip3r::singularities(chain, q.precision, q.nodes, &control, progress).expect("invariant: precision validated when prepared");
+        let (found, node_search) = (&run.cusps, &run.nodes);
         let two = |t: &[Interval; 2]| vec![bounds(t[0]), bounds(t[1])];
         let image = |t: [Interval; 2]| {
             let j = chain.jets(t, 0);
@@ -459,16 +453,9 @@ impl PreparedRun<SingularityResult> for SingularityRun {
                 SingularPair { joints: [two(&p[0]), two(&p[1])], workspace: workspace(a[0].convex_hull(b[0]), a[1].convex_hull(b[1])), certified: false }
             }));
         }
-        let complete = found.complete && node_search.as_ref().is_none_or(|n| n.complete);
-        let status = if complete {
-            Status::Complete
-        } else if q.timeout.is_some_and(|t| start.elapsed() >= t) {
-            Status::Incomplete(Limit::Time)
-        } else {
-            Status::Incomplete(Limit::Boxes)
-        };
+        let status = run.status;
         let motions = internal_motions(chain, &found.bands, &self.joints, q.precision);
-        let processed = found.stats.processed + node_search.as_ref().map_or(0, |n| n.stats.pairs);
+        let processed = found.stats.processed + node_search.as_ref().map_or(0, |n| n.stats.processed);
         let certified_nodes = node_search.as_ref().map_or(0, |n| n.nodes.len());
         let summary = format!(
             "{} cusps, {}, {} internal-motion lines, {} undecided, {} cover boxes in {} pieces, {}",
@@ -478,7 +465,12 @@ impl PreparedRun<SingularityResult> for SingularityRun {
             found.undecided.len() + node_search.as_ref().map_or(0, |n| n.undecided.len()),
             self.cover.boxes.len(),
             self.cover.clusters,
-            if complete { "complete".to_string() } else { format!("incomplete ({})", if status == Status::Incomplete(Limit::Time) { "time limit" } else { "box limit" }) }
+            match status {
+                Status::Complete => "complete".to_string(),
+                Status::Incomplete(Limit::Cancelled) => "incomplete (cancelled)".to_string(),
+                Status::Incomplete(Limit::Boxes) => "incomplete (box limit)".to_string(),
+                Status::Incomplete(limit) => format!("incomplete ({} limit)", limit.name()),
+            }
         );
         SingularityResult {
             mechanism: chain.name.clone(),
@@ -491,7 +483,7 @@ impl PreparedRun<SingularityResult> for SingularityRun {
             singular_curves: self.cover.box_set(&chain.name, &self.joints),
             internal_motions: motions,
             processed,
-            seconds: start.elapsed().as_secs_f64() + self.cover.seconds,
+            seconds: run.seconds + self.cover.seconds,
             summary,
         }
     }
@@ -575,7 +567,7 @@ mod tests {
     const F: &str = include_str!("../../urdf/orthogonal_3r_f.urdf");
 
     fn query() -> SingularityQuery {
-        SingularityQuery { precision: 1e-4, nodes: true, max_boxes: 1_000_000, timeout: None }
+        SingularityQuery { precision: 1e-4, nodes: true, max_boxes: 1_000_000, timeout: None, threads: 1 }
     }
 
     fn revolute(m: &Mechanism) -> Vec<String> {
@@ -677,7 +669,7 @@ mod tests {
         let reference = ik::solve(&chain, r, z, 1e-8, 200_000).expect("valid");
         // The same (ρ, z) seen from a point turned by 0.7 rad about the first axis.
         let p = [r * 0.7f64.cos(), r * 0.7f64.sin(), z];
-        let got = a.inverse_kinematics(&IkQuery { point: p, precision: 1e-8, max_boxes: 200_000 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let got = a.inverse_kinematics(&IkQuery { point: p, precision: 1e-8, max_boxes: 200_000, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
         assert_eq!(got.joint_names, vec!["joint1", "joint2", "joint3"]);
         assert_eq!(got.solutions.iter().filter(|s| s.unique).count(), reference.unique.len());
         assert!(reference.unique.len() >= 2);
@@ -689,7 +681,7 @@ mod tests {
             assert!(s.joints[0][1] - s.joints[0][0] < 1e-6, "θ1 enclosed tightly: {:?}", s.joints[0]);
         }
         // On the point (r, 0, z) the boxes are the CLI's, bit for bit.
-        let got = a.inverse_kinematics(&IkQuery { point: [r, 0.0, z], precision: 1e-8, max_boxes: 200_000 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let got = a.inverse_kinematics(&IkQuery { point: [r, 0.0, z], precision: 1e-8, max_boxes: 200_000, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
         for (s, u) in got.solutions.iter().zip(&reference.unique) {
             assert_eq!(s.joints[1..], [bounds(u[0]), bounds(u[1])]);
         }
@@ -704,11 +696,11 @@ mod tests {
         assert!(r.nodes.is_empty());
         let err = |e: AnalysisError| e.to_string();
         assert!(err(a.singularities(&SingularityQuery { precision: 2.0, ..query() }).err().expect("refused")).contains("precision must be a number in (0, 1), got 2"));
-        let ik = |point: [f64; 3], precision: f64| a.inverse_kinematics(&IkQuery { point, precision, max_boxes: 1000 }).err().map(err).unwrap_or_default();
+        let ik = |point: [f64; 3], precision: f64| a.inverse_kinematics(&IkQuery { point, precision, max_boxes: 1000, threads: 1 }).err().map(err).unwrap_or_default();
         assert!(ik([f64::NAN, 0.0, 0.0], 1e-6).contains("is not finite"));
         assert!(ik([1.0, 0.0, 0.0], 0.0).contains("precision must be a number in (0, 1)"));
         // A tight box limit ends incomplete, with its pending boxes as clusters.
-        let short = a.inverse_kinematics(&IkQuery { point: [1.0, 0.0, 0.2], precision: 1e-9, max_boxes: 5 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let short = a.inverse_kinematics(&IkQuery { point: [1.0, 0.0, 0.2], precision: 1e-9, max_boxes: 5, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
         assert!(!short.complete && short.solutions.iter().any(|s| !s.unique));
         // 3R chains take no fixed joints.
         assert!(load(&m, &[("joint2".into(), 0.1)], &[]).err().map(err).unwrap_or_default().contains("takes no fixed joints"));

@@ -255,6 +255,8 @@ pub struct SingularityQuery {
     pub max_boxes: u64,
     /// Stop after this long in all; the run is then incomplete.
     pub timeout: Option<Duration>,
+    /// Worker threads (the results do not depend on them).
+    pub threads: usize,
 }
 
 /// A singular point (a cusp), or a box that may hold one.
@@ -324,6 +326,8 @@ pub struct IkQuery {
     pub precision: f64,
     /// Stop after this many boxes; the run is then incomplete.
     pub max_boxes: u64,
+    /// Worker threads (the results do not depend on them).
+    pub threads: usize,
 }
 
 /// One inverse-kinematics solution box.
