@@ -417,13 +417,13 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
 
 fn collisions(args: CollisionsArgs) -> Result<()> {
     manip3r::check_precision(args.precision)?;
-    let limits = args.limits.limits(5_000_000)?;
-    let timeout = limits.timeout;
+    let limits = args.limits.limits(collision::DEFAULT_MAX_BOXES)?;
     let xml = std::fs::read_to_string(&args.urdf).with_context(|| format!("reading {}", args.urdf.display()))?;
     let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", args.urdf.display()))?;
     let scene = Scene::from_mechanism(&mechanism).with_context(|| format!("loading {}", args.urdf.display()))?;
-    let settings = CollisionSettings { precision: args.precision, max_boxes: limits.max_cells, timeout };
-    let set = collision::classify(&scene, &settings)?;
+    let cancel = AtomicBool::new(false);
+    let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };
+    let set = collision::classify_with(&scene, &CollisionSettings { precision: args.precision }, &control, &mut |_| {})?;
     let report = CollisionReport::new(&scene, args.precision, &set);
     let s = &report.stats;
     let total = s.colliding_area + s.free_area + s.undecided_area;
@@ -460,7 +460,9 @@ fn ik(args: IkArgs) -> Result<()> {
     let z: f64 = z.trim().parse().with_context(|| format!("--point '{}': '{z}' is not a number", args.point))?;
     manip3r::check_precision(args.precision)?;
     let chain = load_chain(&args.urdf, args.uncertainty)?;
-    let s = manip3r::ik::solve(&chain, r, z, args.precision, args.limits.limits(200_000)?.max_cells)?;
+    let cancel = AtomicBool::new(false);
+    let control = Control { limits: args.limits.limits(200_000)?, threads: args.limits.threads(), cancel: &cancel };
+    let s = manip3r::ik::solve_with(&chain, r, z, args.precision, &control, &mut |_| {})?;
     let report = IkReport::new(&chain, [r, z], &s);
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}: {} solutions proven unique, {} clusters undecided, status {}", report.robot, s.unique.len(), s.clusters.len(), report.status).ok();

@@ -14,8 +14,9 @@ use super::{
     SingularityQuery, SingularityResult,
 };
 use crate::interval::{interval, point};
-use crate::manip3r::motion::{self, PI_UP};
+use crate::manip3r::motion;
 use crate::manip3r::report::radius;
+use crate::manip3r::curves::Cover;
 use crate::manip3r::{self, ik, Chain3R, Manip3rError};
 use crate::model::Mechanism;
 use crate::search::{BoxStatus, Limit, Limits, Progress, SolveStats as Stats, SolverSettings, Status};
@@ -87,7 +88,7 @@ impl Manip3rAnalysis {
         let n = (e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]).sqrt();
         e1 = e1.map(|x| x / n);
         let e2 = [a[1] * e1[2] - a[2] * e1[1], a[2] * e1[0] - a[0] * e1[2], a[0] * e1[1] - a[1] * e1[0]];
-        let cover = Arc::new(Cover::new(&chain, CURVE_DEPTH));
+        let cover = Arc::new(Cover::new(&chain, CURVE_DEPTH, &manip3r::Control::with_limits(Limits::default())));
         Ok(Self { chain: Arc::new(chain), base_rotation: r, base_translation: t, axis, e1: e1.map(point), e2: e2.map(point), cover })
     }
 
@@ -233,190 +234,32 @@ impl Analysis for Manip3rAnalysis {
     }
 }
 
-/// The singular-curve cover: cells of an `n` × `n` grid on [-π, π]² (slightly wider: the range
-/// of the searches) where det Df may vanish, and the regions between them.
-///
-/// A quadtree from the whole square drops a cell when the centred form of det Df over it
-/// excludes zero; what survives to the finest level covers every singular configuration
-/// (internal-motion lines included, where det Df = 0 too). Cells proven regular are grouped
-/// into regions (4-neighbours, across the ±π seams): det Df keeps one sign on a region, which
-/// therefore lies in one aspect.
-#[derive(Clone, Debug)]
-struct Cover {
-    n: usize,
-    /// Cover cells (i over θ₂, j over θ₃), in grid order.
-    boxes: Vec<(usize, usize)>,
-    /// Connected component of each cover cell (8-neighbours, across the seams).
-    cluster: Vec<usize>,
-    clusters: usize,
-    /// Per cell (`i·n + j`): its region, or -1 for a cover cell.
-    region: Vec<i32>,
-    regions: usize,
-    /// Quadtree cells processed.
-    processed: u64,
-    seconds: f64,
-}
-
-impl Cover {
-    fn new(chain: &Chain3R, depth: u32) -> Self {
-        let start = Instant::now();
-        let n = 1usize << depth;
-        let mut cover = Cover { n, boxes: Vec::new(), cluster: Vec::new(), clusters: 0, region: vec![0; n * n], regions: 0, processed: 0, seconds: 0.0 };
-        let mut stack = vec![(0usize, 0usize, n)];
-        while let Some((i, j, s)) = stack.pop() {
-            cover.processed += 1;
-            let [a, b] = cover.bounds_span(i, s);
-            let [c, d] = cover.bounds_span(j, s);
-            if !det_may_vanish(chain, [interval(a, b), interval(c, d)]) {
-                continue;
-            }
-            if s == 1 {
-                cover.boxes.push((i, j));
-                continue;
-            }
-            let h = s / 2;
-            for (di, dj) in [(h, h), (h, 0), (0, h), (0, 0)] {
-                stack.push((i + di, j + dj, h));
-            }
-        }
-        cover.boxes.sort_unstable();
-        for &(i, j) in &cover.boxes {
-            cover.region[i * n + j] = -1;
-        }
-        cover.label_clusters();
-        cover.label_regions();
-        cover.seconds = start.elapsed().as_secs_f64();
-        cover
+/// The cover as a box set over (θ₂, θ₃).
+fn box_set(cover: &Cover, mechanism: &str, joints: &[String]) -> BoxSetResult {
+    let boxes = cover
+        .boxes
+        .iter()
+        .zip(&cover.cluster)
+        .map(|(&(i, j), &c)| {
+            let b = vec![cover.bounds(i), cover.bounds(j)];
+            ResultBox { status: BoxStatus::Solution, bounds: b.clone(), joints: b, level: 2 * CURVE_DEPTH, cluster: Some(c), traces: vec![] }
+        })
+        .collect();
+    let width = cover.line(1) - cover.line(0);
+    BoxSetResult {
+        mechanism: mechanism.to_string(),
+        analysis: "singular_curves".into(),
+        status: Status::Complete,
+        settings: SolverSettings { sigma: width, max_boxes: cover.stats.processed, timeout: None, ..Default::default() },
+        variables: joints.to_vec(),
+        primaries: vec![0, 1],
+        joint_names: joints.to_vec(),
+        fixed_joints: vec![],
+        traces: vec![],
+        boxes,
+        clusters: cover.clusters,
+        stats: Stats { processed: cover.stats.processed, solutions: cover.boxes.len() as u64, max_level: 2 * CURVE_DEPTH, seconds: cover.seconds, ..Default::default() },
     }
-
-    /// Grid line `i` of `n`: -π (rounded up) + i·(2π/n), the same float for every cell that
-    /// shares it, with the last line exactly π (rounded up).
-    fn line(&self, i: usize) -> f64 {
-        if i == self.n {
-            PI_UP
-        } else {
-            -PI_UP + (2.0 * PI_UP / self.n as f64) * i as f64
-        }
-    }
-
-    fn bounds_span(&self, i: usize, s: usize) -> Bounds {
-        [self.line(i), self.line(i + s)]
-    }
-
-    fn bounds(&self, i: usize) -> Bounds {
-        self.bounds_span(i, 1)
-    }
-
-    /// The cell holding (θ₂, θ₃), angles taken modulo 2π (rounding the reduction).
-    fn cell_of(&self, t2: f64, t3: f64) -> Option<(usize, usize)> {
-        let index = |t: f64| -> Option<usize> {
-            if !t.is_finite() {
-                return None;
-            }
-            let t = if (-PI_UP..=PI_UP).contains(&t) { t } else { t - std::f64::consts::TAU * (t / std::f64::consts::TAU).round() };
-            let guess = (((t + PI_UP) / (2.0 * PI_UP) * self.n as f64).floor() as i64).clamp(0, self.n as i64 - 1) as usize;
-            // The guess may be one off at a grid line; the lines themselves decide.
-            (guess.saturating_sub(1)..=(guess + 1).min(self.n - 1)).find(|&k| self.line(k) <= t && t <= self.line(k + 1))
-        };
-        Some((index(t2)?, index(t3)?))
-    }
-
-    fn label_clusters(&mut self) {
-        let n = self.n;
-        let mut at = vec![usize::MAX; n * n];
-        for (k, &(i, j)) in self.boxes.iter().enumerate() {
-            at[i * n + j] = k;
-        }
-        self.cluster = vec![usize::MAX; self.boxes.len()];
-        for start in 0..self.boxes.len() {
-            if self.cluster[start] != usize::MAX {
-                continue;
-            }
-            let label = self.clusters;
-            self.clusters += 1;
-            self.cluster[start] = label;
-            let mut todo = vec![start];
-            while let Some(k) = todo.pop() {
-                let (i, j) = self.boxes[k];
-                for di in [n - 1, 0, 1] {
-                    for dj in [n - 1, 0, 1] {
-                        let m = at[((i + di) % n) * n + (j + dj) % n];
-                        if m != usize::MAX && self.cluster[m] == usize::MAX {
-                            self.cluster[m] = label;
-                            todo.push(m);
-                        }
-                    }
-                }
-            }
-        }
-    }
-
-    fn label_regions(&mut self) {
-        let n = self.n;
-        // 0 marks a regular cell not yet labelled; labels are stored as region + 1 meanwhile.
-        let mut next = 0;
-        for start in 0..n * n {
-            if self.region[start] != 0 {
-                continue;
-            }
-            next += 1;
-            self.region[start] = next;
-            let mut todo = vec![start];
-            while let Some(c) = todo.pop() {
-                let (i, j) = (c / n, c % n);
-                for (a, b) in [((i + 1) % n, j), ((i + n - 1) % n, j), (i, (j + 1) % n), (i, (j + n - 1) % n)] {
-                    if self.region[a * n + b] == 0 {
-                        self.region[a * n + b] = next;
-                        todo.push(a * n + b);
-                    }
-                }
-            }
-        }
-        for r in self.region.iter_mut() {
-            if *r > 0 {
-                *r -= 1;
-            }
-        }
-        self.regions = next as usize;
-    }
-
-    /// The cover as a box set over (θ₂, θ₃).
-    fn box_set(&self, mechanism: &str, joints: &[String]) -> BoxSetResult {
-        let boxes = self
-            .boxes
-            .iter()
-            .zip(&self.cluster)
-            .map(|(&(i, j), &c)| {
-                let b = vec![self.bounds(i), self.bounds(j)];
-                ResultBox { status: BoxStatus::Solution, bounds: b.clone(), joints: b, level: 2 * CURVE_DEPTH, cluster: Some(c), traces: vec![] }
-            })
-            .collect();
-        let width = self.line(1) - self.line(0);
-        BoxSetResult {
-            mechanism: mechanism.to_string(),
-            analysis: "singular_curves".into(),
-            status: Status::Complete,
-            settings: SolverSettings { sigma: width, max_boxes: self.processed, timeout: None, ..Default::default() },
-            variables: joints.to_vec(),
-            primaries: vec![0, 1],
-            joint_names: joints.to_vec(),
-            fixed_joints: vec![],
-            traces: vec![],
-            boxes,
-            clusters: self.clusters,
-            stats: Stats { processed: self.processed, solutions: self.boxes.len() as u64, max_level: 2 * CURVE_DEPTH, seconds: self.seconds, ..Default::default() },
-        }
-    }
-}
-
-/// False when det Df provably does not vanish on `b` (centred form with the natural one).
-fn det_may_vanish(chain: &Chain3R, b: [Interval; 2]) -> bool {
-    let m = [b[0].mid(), b[1].mid()];
-    let over = chain.jets(b, 2).det();
-    let at = chain.jets([point(m[0]), point(m[1])], 1).det().value();
-    let g = over.grad();
-    let centred = at + g[0] * (b[0] - point(m[0])) + g[1] * (b[1] - point(m[1]));
-    over.value().intersection(centred).contains(0.0)
 }
 
 /// A validated singularity run.
@@ -480,7 +323,7 @@ impl PreparedRun<SingularityResult> for SingularityRun {
             workspace_names: vec!["radius".into(), "z".into()],
             cusps: cusp_records,
             nodes: node_records,
-            singular_curves: self.cover.box_set(&chain.name, &self.joints),
+            singular_curves: box_set(&self.cover, &chain.name, &self.joints),
             internal_motions: motions,
             processed,
             seconds: run.seconds + self.cover.seconds,
@@ -528,11 +371,13 @@ struct IkRun {
 }
 
 impl PreparedRun<IkResult> for IkRun {
-    fn run(self: Box<Self>, _cancel: &AtomicBool, _progress: &mut dyn FnMut(&Progress)) -> IkResult {
+    fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> IkResult {
         let start = Instant::now();
         let a = &self.analysis;
         let chain = &*a.chain;
-        let s = ik::solve_target(chain, self.target, self.query.precision, self.query.max_boxes).expect("invariant: validated when prepared");
+        let limits = Limits { max_cells: self.query.max_boxes, ..Limits::default() };
+        let control = manip3r::Control { limits, threads: self.query.threads.max(1), cancel };
+        let s = ik::solve_target(chain, self.target, self.query.precision, &control, progress).expect("invariant: validated when prepared");
         // θ₁ turns the end point's direction about a₁ onto the point's.
         let theta1 = |b: &[Interval; 2]| -> Bounds {
             match (self.target_direction, a.direction(&chain.perp(*b))) {
@@ -549,8 +394,8 @@ impl PreparedRun<IkResult> for IkRun {
             point_names: vec!["radius".into(), "z".into()],
             point_values: vec![bounds(radius(self.target[0])), bounds(self.target[1])],
             solutions,
-            complete: s.complete,
-            processed: s.processed,
+            complete: s.status.is_complete(),
+            processed: s.stats.processed,
             seconds: start.elapsed().as_secs_f64(),
         }
     }

@@ -15,6 +15,7 @@
 
 pub mod chain;
 pub mod collision;
+pub mod curves;
 pub mod cusps;
 pub mod drive;
 pub mod ik;

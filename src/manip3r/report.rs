@@ -292,6 +292,9 @@ pub struct IkReport {
     pub point: [f64; 2],
     /// `complete` or `incomplete`.
     pub status: &'static str,
+    /// The limit that stopped an incomplete run: `boxes`, `time`, `memory` or `cancelled`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub limit: Option<&'static str>,
     /// Solutions, unique ones first.
     pub solutions: Vec<IkRecord>,
     /// Boxes processed.
@@ -303,7 +306,7 @@ impl IkReport {
     pub fn new(chain: &Chain3R, point: [f64; 2], s: &IkSolutions) -> Self {
         let mut solutions: Vec<IkRecord> = s.unique.iter().map(|b| IkRecord { joints: joints(chain, b), unique: true, boxes: 0 }).collect();
         solutions.extend(s.clusters.iter().map(|c| IkRecord { joints: joints(chain, &c.hull), unique: false, boxes: c.boxes }));
-        IkReport { robot: chain.name.clone(), point, status: if s.complete { "complete" } else { "incomplete" }, solutions, processed: s.processed }
+        IkReport { robot: chain.name.clone(), point, status: if s.status.is_complete() { "complete" } else { "incomplete" }, limit: limit_of(s.status), solutions, processed: s.stats.processed }
     }
 }
 
@@ -351,6 +354,9 @@ pub struct CollisionReport {
     pub pairs: Vec<[String; 2]>,
     /// `complete` or `incomplete`.
     pub status: &'static str,
+    /// The limit that stopped an incomplete run: `boxes`, `time`, `memory` or `cancelled`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub limit: Option<&'static str>,
     /// Boxes where a pair collides everywhere.
     pub colliding: Vec<CollidingRecord>,
     /// Boxes where no pair collides anywhere.
@@ -358,7 +364,24 @@ pub struct CollisionReport {
     /// The rest.
     pub undecided: Vec<BoxRecord>,
     /// Counters and areas.
-    pub stats: super::collision::CollisionStats,
+    pub stats: CollisionStats,
+}
+
+/// Counters and areas (rad²) of a classification.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct CollisionStats {
+    /// Boxes processed.
+    pub processed: u64,
+    /// Bisections.
+    pub bisected: u64,
+    /// Total area of the colliding boxes.
+    pub colliding_area: f64,
+    /// Total area of the free boxes.
+    pub free_area: f64,
+    /// Total area of the undecided boxes.
+    pub undecided_area: f64,
+    /// Wall-clock seconds.
+    pub seconds: f64,
 }
 
 impl CollisionReport {
@@ -376,11 +399,19 @@ impl CollisionReport {
             precision,
             bodies: capsules.iter().map(|c| BodyRecord { name: c.name.clone(), link: c.link.clone(), radius: c.radius, segment: c.segment }).collect(),
             pairs: (0..scene.pairs().len()).map(name).collect(),
-            status: if set.complete { "complete" } else { "incomplete" },
+            status: if set.status.is_complete() { "complete" } else { "incomplete" },
+            limit: limit_of(set.status),
             colliding: set.colliding.iter().map(|c| CollidingRecord { joints: joints(&c.theta), pair: name(c.pair) }).collect(),
             free: set.free.iter().map(|b| BoxRecord { joints: joints(b) }).collect(),
             undecided: set.undecided.iter().map(|b| BoxRecord { joints: joints(b) }).collect(),
-            stats: set.stats,
+            stats: CollisionStats {
+                processed: set.stats.processed,
+                bisected: set.stats.split,
+                colliding_area: set.colliding_area,
+                free_area: set.free_area,
+                undecided_area: set.undecided_area,
+                seconds: set.seconds,
+            },
         }
     }
 }
