@@ -489,3 +489,71 @@ fn collision_scenes_refuse_what_they_cannot_model() {
     let negative = text.replace(r#"radius="0.15""#, r#"radius="-0.15""#);
     assert!(urdf::parse(&negative).unwrap_err().to_string().contains("a size is negative"));
 }
+
+/// Every interval of a list of boxes, as bits: identical results, not merely close ones.
+fn bits(boxes: impl IntoIterator<Item = [linkspace::Interval; 2]>) -> Vec<[u64; 4]> {
+    boxes.into_iter().map(|b| [b[0].inf().to_bits(), b[0].sup().to_bits(), b[1].inf().to_bits(), b[1].sup().to_bits()]).collect()
+}
+
+/// Two threads walk the trees level by level, one walks them depth first: the same cusps,
+/// nodes and undecided boxes, bit for bit and in the same order (robot e has cusps and nodes,
+/// f internal-motion strips and nodes).
+#[test]
+fn two_threads_give_the_results_of_one() {
+    use linkspace::manip3r::{singularities, Control};
+    use linkspace::search::{Limits, Status};
+    use std::sync::atomic::AtomicBool;
+    for case in ["e", "f"] {
+        let c = chain(case);
+        let cancel = AtomicBool::new(false);
+        let run = |threads| singularities(&c, 1e-4, true, &Control { limits: Limits::default(), threads, cancel: &cancel }, &mut |_| {}).expect("valid");
+        let (one, two) = (run(1), run(2));
+        assert_eq!((one.status, two.status), (Status::Complete, Status::Complete));
+        assert_eq!(bits(one.cusps.cusps.iter().map(|c| c.theta)), bits(two.cusps.cusps.iter().map(|c| c.theta)), "case {case} cusps");
+        assert_eq!(bits(one.cusps.undecided.iter().map(|u| u.theta)), bits(two.cusps.undecided.iter().map(|u| u.theta)));
+        let (n1, n2) = (one.nodes.expect("searched"), two.nodes.expect("searched"));
+        assert!(!n1.nodes.is_empty(), "case {case} has nodes");
+        assert_eq!(bits(n1.nodes.iter().flat_map(|n| n.theta)), bits(n2.nodes.iter().flat_map(|n| n.theta)), "case {case} nodes");
+        assert_eq!(bits(n1.undecided.iter().flatten().copied()), bits(n2.undecided.iter().flatten().copied()));
+        // The same cells were decided, for the same reasons.
+        assert_eq!((one.cusps.stats.discarded, n1.stats.discarded, n1.cells), (two.cusps.stats.discarded, n2.stats.discarded, n2.cells));
+    }
+}
+
+/// A cancel flag raised before the run, or while it runs, ends it `Incomplete(Cancelled)`,
+/// with the cells it did not decide reported undecided (the whole square at the least), never
+/// silently dropped.
+#[test]
+fn a_cancelled_singularity_run_says_so_and_keeps_its_undecided_cells() {
+    use linkspace::manip3r::{cusps::Reason, singularities, Control};
+    use linkspace::search::{Limit, Limits, Status};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let c = chain("e");
+    // Raised before: nothing is decided, the start box and the start pair are pending.
+    let raised = AtomicBool::new(true);
+    let r = singularities(&c, 1e-4, true, &Control { limits: Limits::default(), threads: 1, cancel: &raised }, &mut |_| {}).expect("valid");
+    assert_eq!(r.status, Status::Incomplete(Limit::Cancelled));
+    assert_eq!(r.cusps.status, Status::Incomplete(Limit::Cancelled));
+    assert!(r.cusps.cusps.is_empty() && r.cusps.undecided.len() == 1 && r.cusps.undecided[0].reason == Reason::Limit);
+    let n = r.nodes.expect("searched");
+    assert_eq!((n.status, n.undecided.len()), (Status::Incomplete(Limit::Cancelled), 1));
+    // Raised during: by the first progress report of the level-by-level driver.
+    let flag = AtomicBool::new(false);
+    let mut reports = 0;
+    let r = singularities(&c, 1e-4, true, &Control { limits: Limits::default(), threads: 2, cancel: &flag }, &mut |_| {
+        reports += 1;
+        flag.store(true, Ordering::Relaxed);
+    })
+    .expect("valid");
+    assert!(reports >= 1);
+    assert_eq!(r.status, Status::Incomplete(Limit::Cancelled));
+    assert!(r.cusps.stats.processed >= 1 && !r.cusps.undecided.is_empty());
+    assert!(r.cusps.undecided.iter().all(|u| u.reason == Reason::Limit));
+    // Enclosure: every certified cusp of the complete run is in a pending box.
+    let full = cusps::search(&c, &cusps::CuspSettings::default()).expect("valid");
+    for cusp in &full.cusps {
+        let m = [cusp.theta[0].mid(), cusp.theta[1].mid()];
+        assert!(r.cusps.undecided.iter().any(|u| u.theta[0].contains(m[0]) && u.theta[1].contains(m[1])), "cusp {m:?} lost by the cancelled run");
+    }
+    assert!(!r.nodes.expect("searched").undecided.is_empty());
+}

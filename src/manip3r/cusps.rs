@@ -22,7 +22,7 @@
 //! Boxes inside an internal-motion strip are set aside (see `motion`).
 
 use super::chain::Chain3R;
-use super::drive::{drive, no_progress, Control, Order};
+use super::drive::{drive, no_progress, Control, Order, Outcome};
 use super::krawczyk::{self, Step as K};
 use super::motion::{self, Band};
 use crate::interval::{interval, point};
@@ -109,6 +109,8 @@ pub struct CuspSearch {
     /// The kernel's counters; discards by reason: `in_strips`, `regular` (det Df ≠ 0),
     /// `not_tangent` (a row of system (2) ≠ 0), `krawczyk_empty`.
     pub stats: Stats,
+    /// Krawczyk contractions among the kernel's splits (the others are bisections).
+    pub contracted: u64,
     /// Wall-clock seconds, the strips included.
     pub seconds: f64,
 }
@@ -282,6 +284,9 @@ struct CuspPrune<'a> {
     bands: &'a [Band],
     eps: f64,
     method: Method,
+    /// Krawczyk contractions (splits into one child), which the report does not count as
+    /// bisections.
+    contracted: u64,
 }
 
 /// Measure of the start box, for progress.
@@ -327,6 +332,7 @@ impl Prune for CuspPrune<'_> {
                     // Contraction moves box edges off the dyadic grid, which only matters near
                     // strips.
                     K::Contracted(k) if width(&k) < 0.7 * width(&b) && self.bands.is_empty() => {
+                        self.contracted += 1;
                         return Step::Split(smallvec![CuspCell { theta: k, order: cell.order.child(0, 1), level: cell.level + 1 }]);
                     }
                     _ => {}
@@ -382,14 +388,16 @@ pub fn search_with(chain: &Chain3R, settings: &CuspSettings, control: &Control, 
     let eps = settings.precision;
     let bands = motion::bands(chain, eps);
     let start = CuspCell { theta: [motion::full_range(), motion::full_range()], order: Order::ROOT, level: 0 };
-    let run = drive(|| CuspPrune { chain, bands: &bands, eps, method: settings.method }, start, control, progress);
+    let Outcome { status, stats, found, undecided: pending, workers } = drive(|| CuspPrune { chain, bands: &bands, eps, method: settings.method, contracted: 0 }, start, control, progress);
+    let contracted = workers.iter().map(|p| p.contracted).sum();
+    drop(workers);
     // The decisions that look at other cusps, in depth-first order (see `drive`).
     enum Event {
         Found(CuspFound),
         Undecided(CuspCell, search::Undecided),
     }
-    let mut events: Vec<(Order, Event)> = run.found.into_iter().map(|f| (f.order, Event::Found(f))).collect();
-    events.extend(run.undecided.into_iter().map(|(c, why)| (c.order, Event::Undecided(c, why))));
+    let mut events: Vec<(Order, Event)> = found.into_iter().map(|f| (f.order, Event::Found(f))).collect();
+    events.extend(pending.into_iter().map(|(c, why)| (c.order, Event::Undecided(c, why))));
     events.sort_by_key(|(order, _)| *order);
     let mut cusps: Vec<Cusp> = Vec::new();
     let mut undecided = Vec::new();
@@ -441,7 +449,7 @@ pub fn search_with(chain: &Chain3R, settings: &CuspSettings, control: &Control, 
     if settings.method == Method::Bisection {
         cusps = merge_candidates(chain, cusps);
     }
-    Ok(CuspSearch { cusps, undecided, bands, status: run.status, stats: run.stats, seconds: t0.elapsed().as_secs_f64() })
+    Ok(CuspSearch { cusps, undecided, bands, status, stats, contracted, seconds: t0.elapsed().as_secs_f64() })
 }
 
 /// Merges touching candidate boxes (baseline only) into one hull per cluster.

@@ -88,25 +88,44 @@ impl<C, F> Sink<C, F> for Gather<'_, C, F> {
     }
 }
 
-/// What a run gave: how it ended, its counters, and what it reported in driver order.
-pub(crate) struct Outcome<C, F> {
+/// What a run gave: how it ended, its counters, what it reported in driver order, and the
+/// workers (for counters a search keeps beyond the kernel's).
+pub(crate) struct Outcome<P: Prune> {
     pub status: Status,
     pub stats: Stats,
-    pub found: Vec<F>,
-    pub undecided: Vec<(C, Undecided)>,
+    pub found: Vec<P::Found>,
+    pub undecided: Vec<(P::Cell, Undecided)>,
+    pub workers: Vec<P>,
 }
 
 /// Runs the `Prune`s that `make` builds (one per worker) from `start` as `control` says.
-pub(crate) fn drive<P: Prune + Send>(mut make: impl FnMut() -> P, start: P::Cell, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Outcome<P::Cell, P::Found> {
+pub(crate) fn drive<P: Prune + Send>(mut make: impl FnMut() -> P, start: P::Cell, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Outcome<P> {
     let mut sink = Gather { found: Vec::new(), undecided: Vec::new(), progress };
-    let (status, stats) = if control.threads <= 1 {
-        search::run(&mut make(), start, Store::DepthFirst, &control.limits, control.cancel, &mut sink)
+    let mut workers: Vec<P> = (0..control.threads.max(1)).map(|_| make()).collect();
+    let (status, stats) = if workers.len() == 1 {
+        search::run(&mut workers[0], start, Store::DepthFirst, &control.limits, control.cancel, &mut sink)
     } else {
-        let mut workers: Vec<P> = (0..control.threads).map(|_| make()).collect();
         search::run_by_level(&mut workers, start, &control.limits, control.cancel, &mut sink)
     };
-    Outcome { status, stats, found: sink.found, undecided: sink.undecided }
+    Outcome { status, stats, found: sink.found, undecided: sink.undecided, workers }
 }
 
 /// Ignores progress.
 pub(crate) fn no_progress(_: &Progress) {}
+
+#[cfg(test)]
+mod tests {
+    use super::Order;
+
+    /// Leaves sorted by `Order` come in depth-first order, whatever the branching.
+    #[test]
+    fn orders_follow_the_depth_first_walk() {
+        let r = Order::ROOT;
+        let (a, b, c) = (r.child(0, 3), r.child(1, 3), r.child(2, 3));
+        let (a1, a2) = (a.child(0, 2), a.child(1, 2));
+        let b1 = b.child(0, 1);
+        let mut leaves = vec![c, b1.child(1, 2), a2, b1.child(0, 2), a1.child(0, 1)];
+        leaves.sort();
+        assert_eq!(leaves, vec![a1.child(0, 1), a2, b1.child(0, 2), b1.child(1, 2), c]);
+    }
+}

@@ -112,7 +112,7 @@ pub struct CuspStats {
     pub not_tangent: u64,
     /// Discarded by Krawczyk (no zero).
     pub krawczyk_empty: u64,
-    /// Bisections (and Krawczyk contractions).
+    /// Bisections.
     pub bisected: u64,
     /// Boxes set aside inside internal-motion strips.
     pub in_strips: u64,
@@ -128,7 +128,7 @@ impl From<&CuspSearch> for CuspStats {
             regular: s.discarded("regular"),
             not_tangent: s.discarded("not_tangent"),
             krawczyk_empty: s.discarded("krawczyk_empty"),
-            bisected: s.split,
+            bisected: s.split - c.contracted,
             in_strips: s.discarded("in_strips"),
             seconds: c.seconds,
         }

@@ -19,6 +19,9 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
+/// Levels with fewer cells are decided on the calling thread alone.
+const SERIAL_BELOW: usize = 8;
+
 /// How often a driver reports progress.
 const PROGRESS_EVERY: Duration = Duration::from_millis(200);
 
@@ -235,7 +238,9 @@ where
         let l = p.level(&c);
         (l, p.process(c))
     };
-    if workers.len() == 1 || level.len() < 2 {
+    // A level of a few cells costs less than starting threads for it (a 3R cell takes a few
+    // microseconds): the first worker decides it alone, with the same answers.
+    if workers.len() == 1 || level.len() < SERIAL_BELOW {
         let p = &mut workers[0];
         let mut out = Vec::with_capacity(level.len());
         let mut cells = level.into_iter();
@@ -256,27 +261,27 @@ where
     }
     let next_chunk = AtomicUsize::new(0);
     let stop = AtomicBool::new(false);
+    let work = |p: &mut P| {
+        let mut mine: Vec<(usize, Vec<(u32, Step<P::Cell, P::Found>)>)> = Vec::new();
+        while !stop.load(Ordering::Relaxed) {
+            let i = next_chunk.fetch_add(1, Ordering::Relaxed);
+            let Some(slot) = chunks.get(i) else { break };
+            let cells = slot.lock().expect("invariant: no worker panics holding a chunk").take().expect("invariant: each chunk is taken once");
+            mine.push((i, cells.into_iter().map(|c| decide(p, c)).collect()));
+            if budget.interrupted().is_some() {
+                stop.store(true, Ordering::Relaxed);
+            }
+        }
+        mine
+    };
+    let (first, rest) = workers.split_first_mut().expect("invariant: at least one worker");
+    // The calling thread is the first worker: one thread fewer to start per level.
     let done: Vec<Vec<(usize, Vec<(u32, Step<P::Cell, P::Found>)>)>> = std::thread::scope(|s| {
-        let handles: Vec<_> = workers
-            .iter_mut()
-            .map(|p| {
-                let (chunks, next_chunk, stop) = (&chunks, &next_chunk, &stop);
-                s.spawn(move || {
-                    let mut mine = Vec::new();
-                    while !stop.load(Ordering::Relaxed) {
-                        let i = next_chunk.fetch_add(1, Ordering::Relaxed);
-                        let Some(slot) = chunks.get(i) else { break };
-                        let cells = slot.lock().expect("invariant: no worker panics holding a chunk").take().expect("invariant: each chunk is taken once");
-                        mine.push((i, cells.into_iter().map(|c| decide(p, c)).collect()));
-                        if budget.interrupted().is_some() {
-                            stop.store(true, Ordering::Relaxed);
-                        }
-                    }
-                    mine
-                })
-            })
-            .collect();
-        handles.into_iter().map(|h| h.join().expect("invariant: Prune::process does not panic")).collect()
+        let work = &work;
+        let handles: Vec<_> = rest.iter_mut().map(|p| s.spawn(move || work(p))).collect();
+        let mut all = vec![work(first)];
+        all.extend(handles.into_iter().map(|h| h.join().expect("invariant: Prune::process does not panic")));
+        all
     });
     let mut by_chunk: Vec<Option<Vec<(u32, Step<P::Cell, P::Found>)>>> = (0..chunks.len()).map(|_| None).collect();
     for (i, steps) in done.into_iter().flatten() {
