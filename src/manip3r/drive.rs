@@ -60,7 +60,13 @@ impl Order {
     #[inline]
     pub fn child(self, i: usize, n: usize) -> Order {
         // at + span·(i + 1) ≤ at + parent span: no overflow.
-        let span = self.span / n.max(1) as u128;
+        // Shifts for the usual one, two or four children: a u128 division is a library call.
+        let span = match n {
+            0 | 1 => self.span,
+            2 => self.span >> 1,
+            4 => self.span >> 2,
+            _ => self.span / n as u128,
+        };
         Order { at: self.at + span * i as u128, span }
     }
 }

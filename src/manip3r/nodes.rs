@@ -37,7 +37,7 @@ use crate::search::{Limits, Progress, Prune, Stats, Status, Step};
 use inari::Interval;
 use smallvec::SmallVec;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
-use std::sync::{Arc, OnceLock};
+use std::sync::OnceLock;
 use std::time::Instant;
 
 /// Settings of a node search (its bounds are a `Control`).
@@ -90,13 +90,15 @@ pub struct NodeSearch {
 
 /// A box of the binary tree over [-π, π]², with its enclosures computed once: a box meets
 /// many others in pairs. The tree grows as the search asks for children (`children`); workers
-/// share it, and the children of a box are the same whoever makes them.
+/// share it, and the children of a box are the same whoever makes them. Boxes are never freed
+/// before the search ends, so cells hold plain references (no reference counts to update in
+/// the inner loop).
 struct TreeBox {
     b: [Interval; 2],
     eval: BoxEval,
     singular: bool,
     in_strip: bool,
-    children: OnceLock<[Arc<TreeBox>; 2]>,
+    children: OnceLock<[Box<TreeBox>; 2]>,
 }
 
 /// What the workers of a node search share.
@@ -111,36 +113,36 @@ struct Tree<'a> {
 }
 
 impl Tree<'_> {
-    fn make(&self, b: [Interval; 2]) -> Arc<TreeBox> {
+    fn make(&self, b: [Interval; 2]) -> Box<TreeBox> {
         self.boxes.fetch_add(1, Ordering::Relaxed);
         let eval = evaluate(self.chain, b);
         let in_strip = self.bands.iter().any(|band| band.holds(b[1]));
-        Arc::new(TreeBox { b, eval, singular: eval.det.contains(0.0), in_strip, children: OnceLock::new() })
+        Box::new(TreeBox { b, eval, singular: eval.det.contains(0.0), in_strip, children: OnceLock::new() })
     }
 
     /// The singular children of `x` (made on first use).
-    fn children(&self, x: &TreeBox) -> SmallVec<[Arc<TreeBox>; 2]> {
+    fn children<'r>(&self, x: &'r TreeBox) -> SmallVec<[&'r TreeBox; 2]> {
         let ch = x.children.get_or_init(|| {
             let (lo, hi) = cusps::bisect(x.b, motion::straddles(self.bands, x.b[1]));
             [self.make(lo), self.make(hi)]
         });
-        ch.iter().filter(|c| c.singular).cloned().collect()
+        ch.iter().map(|c| &**c).filter(|c| c.singular).collect()
     }
 }
 
 /// A pair of tree boxes (`p` may be `q`), with the smallest tree box holding both: its cached
 /// enclosures hold on their hull. When `p` is split, the pairs `(child, q)` keep that box (`q`
 /// is never inside `p`); the pairs of `p` with itself get `p`, or the child itself.
-#[derive(Clone)]
-pub struct NodeCell {
-    p: Arc<TreeBox>,
-    q: Arc<TreeBox>,
-    ancestor: Arc<TreeBox>,
+#[derive(Clone, Copy)]
+pub struct NodeCell<'r> {
+    p: &'r TreeBox,
+    q: &'r TreeBox,
+    ancestor: &'r TreeBox,
     order: Order,
     level: u32,
 }
 
-impl NodeCell {
+impl NodeCell<'_> {
     /// The two joint boxes.
     pub fn boxes(&self) -> [[Interval; 2]; 2] {
         [self.p.b, self.q.b]
@@ -312,19 +314,20 @@ fn refine(chain: &Chain3R, mut p: [Interval; 2], mut q: [Interval; 2], precision
 }
 
 /// The node test of the module doc, one pair at a time.
-struct NodePrune<'t, 'a> {
+struct NodePrune<'t, 'a, 'r> {
     tree: &'t Tree<'a>,
+    _boxes: std::marker::PhantomData<&'r TreeBox>,
 }
 
-impl Prune for NodePrune<'_, '_> {
-    type Cell = NodeCell;
+impl<'r> Prune for NodePrune<'_, '_, 'r> {
+    type Cell = NodeCell<'r>;
     type Found = NodeFound;
 
-    fn process(&mut self, cell: NodeCell) -> Step<NodeCell, NodeFound> {
+    fn process(&mut self, cell: NodeCell<'r>) -> Step<NodeCell<'r>, NodeFound> {
         let tree = self.tree;
         let (chain, eps) = (tree.chain, tree.eps);
-        let (p, q) = (&*cell.p, &*cell.q);
-        let same = Arc::ptr_eq(&cell.p, &cell.q);
+        let (p, q) = (cell.p, cell.q);
+        let same = std::ptr::eq(p, q);
         if !p.singular || !q.singular {
             return Step::Discard("regular");
         }
@@ -387,27 +390,35 @@ impl Prune for NodePrune<'_, '_> {
         if wp.max(wq) <= eps {
             return Step::Undecided(cell, "precision");
         }
-        // Children in the order the depth-first walk explores them.
-        let mut pairs: SmallVec<[(Arc<TreeBox>, Arc<TreeBox>, Arc<TreeBox>); 4]> = SmallVec::new();
+        // Children in the order the depth-first walk explores them: the loop this replaces
+        // pushed the pairs on a stack and took the last first.
+        let (level, order) = (cell.level + 1, cell.order);
+        let pair = |p, q, ancestor, i, n| NodeCell { p, q, ancestor, order: order.child(i, n), level };
+        let mut next: SmallVec<[NodeCell<'r>; 4]> = SmallVec::new();
         if same {
-            let ch = tree.children(p);
-            for (x, a) in ch.iter().enumerate() {
-                for b in &ch[x..] {
-                    let ancestor = if Arc::ptr_eq(a, b) { a.clone() } else { cell.p.clone() };
-                    pairs.push((a.clone(), b.clone(), ancestor));
+            match tree.children(p).as_slice() {
+                [] => {}
+                &[a] => next.push(pair(a, a, a, 0, 1)),
+                &[a, b] => {
+                    next.push(pair(b, b, b, 0, 3));
+                    next.push(pair(a, b, p, 1, 3));
+                    next.push(pair(a, a, a, 2, 3));
                 }
+                _ => unreachable!("a box has two children"),
             }
         } else if wp >= wq {
-            pairs.extend(tree.children(p).into_iter().map(|a| (a, cell.q.clone(), cell.ancestor.clone())));
+            let ch = tree.children(p);
+            let n = ch.len();
+            next.extend(ch.into_iter().rev().enumerate().map(|(i, a)| pair(a, q, cell.ancestor, i, n)));
         } else {
-            pairs.extend(tree.children(q).into_iter().map(|b| (cell.p.clone(), b, cell.ancestor.clone())));
+            let ch = tree.children(q);
+            let n = ch.len();
+            next.extend(ch.into_iter().rev().enumerate().map(|(i, b)| pair(p, b, cell.ancestor, i, n)));
         }
-        // The loop this replaces pushed the pairs on a stack and took the last first.
-        let n = pairs.len();
-        Step::Split(pairs.into_iter().rev().enumerate().map(|(i, (p, q, ancestor))| NodeCell { p, q, ancestor, order: cell.order.child(i, n), level: cell.level + 1 }).collect())
+        Step::Split(next)
     }
 
-    fn level(&self, cell: &NodeCell) -> u32 {
+    fn level(&self, cell: &NodeCell<'r>) -> u32 {
         cell.level
     }
 }
@@ -429,8 +440,8 @@ pub fn search_with(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &N
     let regions: Vec<[Interval; 2]> = in_parallel(&unique, control.threads, |c| cusp_region(chain, c)).into_iter().flatten().collect();
     let tree = Tree { chain, bands, regions: &regions, eps: settings.precision, boxes: AtomicU64::new(0) };
     let root = tree.make([motion::full_range(), motion::full_range()]);
-    let start_cell = NodeCell { p: root.clone(), q: root.clone(), ancestor: root.clone(), order: Order::ROOT, level: 0 };
-    let mut run = drive(|| NodePrune { tree: &tree }, start_cell, control, progress);
+    let start_cell = NodeCell { p: &root, q: &root, ancestor: &root, order: Order::ROOT, level: 0 };
+    let mut run = drive(|| NodePrune { tree: &tree, _boxes: std::marker::PhantomData }, start_cell, control, progress);
     // Only the ±π seam (where the range overlaps itself by an ulp) can repeat a node: the first
     // in depth-first order is kept.
     run.found.sort_by_key(|f| f.order);
