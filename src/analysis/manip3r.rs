@@ -394,7 +394,7 @@ impl PreparedRun<IkResult> for IkRun {
             point_names: vec!["radius".into(), "z".into()],
             point_values: vec![bounds(radius(self.target[0])), bounds(self.target[1])],
             solutions,
-            complete: s.status.is_complete(),
+            status: s.status,
             processed: s.stats.processed,
             seconds: start.elapsed().as_secs_f64(),
         }
@@ -546,7 +546,7 @@ mod tests {
         assert!(ik([1.0, 0.0, 0.0], 0.0).contains("precision must be a number in (0, 1)"));
         // A tight box limit ends incomplete, with its pending boxes as clusters.
         let short = a.inverse_kinematics(&IkQuery { point: [1.0, 0.0, 0.2], precision: 1e-9, max_boxes: 5, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
-        assert!(!short.complete && short.solutions.iter().any(|s| !s.unique));
+        assert!(short.status == Status::Incomplete(Limit::Boxes) && short.solutions.iter().any(|s| !s.unique));
         // 3R chains take no fixed joints.
         assert!(load(&m, &[("joint2".into(), 0.1)], &[]).err().map(err).unwrap_or_default().contains("takes no fixed joints"));
     }

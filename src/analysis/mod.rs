@@ -356,8 +356,8 @@ pub struct IkResult {
     pub point_values: Vec<Bounds>,
     /// Unique solutions first, then clusters.
     pub solutions: Vec<IkSolution>,
-    /// True when no limit was hit.
-    pub complete: bool,
+    /// Complete, or the limit that stopped the run (boxes, cancelled, ...).
+    pub status: Status,
     /// Boxes processed.
     pub processed: u64,
     /// Wall-clock seconds.

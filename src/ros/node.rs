@@ -52,7 +52,7 @@ impl Outcome {
         match self {
             Outcome::BoxSet(r) => (r.stats.processed, r.boxes.iter().filter(|b| b.status == crate::search::BoxStatus::Undecided).count(), r.status == Status::Complete),
             Outcome::Singularities(r) => (r.processed, r.undecided(), r.status == Status::Complete),
-            Outcome::InverseKinematics(r) => (r.processed, 0, r.complete),
+            Outcome::InverseKinematics(r) => (r.processed, 0, r.status == Status::Complete),
         }
     }
 }
