@@ -24,7 +24,8 @@ pub mod motion;
 pub mod nodes;
 pub mod report;
 pub mod taylor;
-pub mod trig;
+/// Sound interval sine and cosine, now `crate::interval::trig` (the path kept for callers).
+pub use crate::interval::trig;
 
 pub use chain::{Chain3R, Jets};
 pub use cusps::{Cusp, CuspSearch};
