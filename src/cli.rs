@@ -14,7 +14,7 @@ use linkspace::manip3r::{
     nodes::{self, NodeSettings},
     collision::{self, CollisionSettings, Scene},
     report::{CollisionReport, IkReport, SingularityReport},
-    Chain3R,
+    Chain3R, Control,
 };
 use linkspace::search::{Limits, Progress, SolverSettings};
 use std::io::{IsTerminal, Write};
@@ -443,18 +443,11 @@ pub(crate) fn seconds_arg(t: Option<f64>) -> Result<Option<Duration>> {
 fn singularities(args: SingularitiesArgs) -> Result<()> {
     manip3r::check_precision(args.precision)?;
     let limits = args.limits.limits(20_000_000)?;
-    let timeout = limits.timeout;
     let chain = load_chain(&args.urdf, args.uncertainty)?;
-    let start = std::time::Instant::now();
-    let cusp_settings = CuspSettings { precision: args.precision, max_boxes: limits.max_cells, timeout, method: Method::Krawczyk };
-    let found = cusps::search(&chain, &cusp_settings)?;
-    let node_search = if args.nodes {
-        let settings = NodeSettings { precision: args.precision, max_pairs: limits.max_cells, timeout };
-        Some(nodes::search(&chain, &found.cusps, &found.bands, &settings)?)
-    } else {
-        None
-    };
-    let report = SingularityReport::new(&chain, args.precision, &found, node_search.as_ref(), start.elapsed().as_secs_f64());
+    let cancel = AtomicBool::new(false);
+    let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };
+    let run = manip3r::singularities(&chain, args.precision, args.nodes, &control, &mut |_| {})?;
+    let report = SingularityReport::new(&chain, args.precision, &run.cusps, run.nodes.as_ref(), run.seconds);
     let mut out = std::io::stdout().lock();
     let node_text = report.nodes.as_ref().map_or("nodes not searched".to_string(), |n| format!("{} nodes", n.len()));
     let undecided = report.undecided.cusps.len() + report.undecided.nodes.len();
@@ -487,13 +480,13 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
 
 fn collisions(args: CollisionsArgs) -> Result<()> {
     manip3r::check_precision(args.precision)?;
-    let limits = args.limits.limits(5_000_000)?;
-    let timeout = limits.timeout;
+    let limits = args.limits.limits(collision::DEFAULT_MAX_BOXES)?;
     let xml = std::fs::read_to_string(&args.urdf).with_context(|| format!("reading {}", args.urdf.display()))?;
     let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", args.urdf.display()))?;
     let scene = Scene::from_mechanism(&mechanism).with_context(|| format!("loading {}", args.urdf.display()))?;
-    let settings = CollisionSettings { precision: args.precision, max_boxes: limits.max_cells, timeout };
-    let set = collision::classify(&scene, &settings)?;
+    let cancel = AtomicBool::new(false);
+    let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };
+    let set = collision::classify_with(&scene, &CollisionSettings { precision: args.precision }, &control, &mut |_| {})?;
     let report = CollisionReport::new(&scene, args.precision, &set);
     let s = &report.stats;
     let total = s.colliding_area + s.free_area + s.undecided_area;
@@ -530,7 +523,9 @@ fn ik(args: IkArgs) -> Result<()> {
     let z: f64 = z.trim().parse().with_context(|| format!("--point '{}': '{z}' is not a number", args.point))?;
     manip3r::check_precision(args.precision)?;
     let chain = load_chain(&args.urdf, args.uncertainty)?;
-    let s = manip3r::ik::solve(&chain, r, z, args.precision, args.limits.limits(200_000)?.max_cells)?;
+    let cancel = AtomicBool::new(false);
+    let control = Control { limits: args.limits.limits(200_000)?, threads: args.limits.threads(), cancel: &cancel };
+    let s = manip3r::ik::solve_with(&chain, r, z, args.precision, &control, &mut |_| {})?;
     let report = IkReport::new(&chain, [r, z], &s);
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}: {} solutions proven unique, {} clusters undecided, status {}", report.robot, s.unique.len(), s.clusters.len(), report.status).ok();
@@ -570,12 +565,12 @@ fn bench3r(args: Bench3rArgs) -> Result<()> {
     for (name, xml, ibex_cusps, ibex_nodes) in ROBOTS {
         let chain = Chain3R::from_mechanism(&urdf::parse(xml)?, 0.0)?;
         let run = |method| {
-            let settings = CuspSettings { precision: args.precision, method, ..Default::default() };
+            let settings = CuspSettings { precision: args.precision, method };
             let mut times = Vec::new();
             let mut last = None;
             for _ in 0..args.repeat {
                 let r = cusps::search(&chain, &settings).expect("validated precision");
-                times.push(r.stats.seconds);
+                times.push(r.seconds);
                 last = Some(r);
             }
             (median(times), last.expect("repeat >= 1"))
@@ -586,7 +581,7 @@ fn bench3r(args: Bench3rArgs) -> Result<()> {
         let mut node_run = None;
         for _ in 0..args.repeat {
             let r = nodes::search(&chain, &k.cusps, &k.bands, &NodeSettings { precision: args.precision, ..Default::default() })?;
-            node_times.push(r.stats.seconds);
+            node_times.push(r.seconds);
             node_run = Some(r);
         }
         let (t_n, n) = (median(node_times), node_run.expect("repeat >= 1"));

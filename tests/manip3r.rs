@@ -176,12 +176,12 @@ fn table_1_matches_dense_sampling() {
     for ((case, n_cusps, n_nodes), (_, d2, d3, d4, r2, r3)) in want.into_iter().zip(CASES) {
         let c = chain(case);
         let found = cusps::search(&c, &cusps::CuspSettings::default()).expect("valid settings");
-        assert!(found.complete && found.undecided.is_empty(), "case {case}: {:?}", found.undecided.first());
+        assert!(found.status.is_complete() && found.undecided.is_empty(), "case {case}: {:?}", found.undecided.first());
         assert_eq!(found.cusps.len(), n_cusps, "case {case} cusps");
         assert!(found.cusps.iter().all(|c| c.unique && c.theta.iter().all(|t| t.wid() <= 1e-4)));
         assert_eq!(found.bands.is_empty(), case != "f", "internal motion only in f");
         let pairs = nodes::search(&c, &found.cusps, &found.bands, &nodes::NodeSettings::default()).expect("valid settings");
-        assert!(pairs.complete && pairs.undecided.is_empty(), "case {case}: {:?}", pairs.undecided.first());
+        assert!(pairs.status.is_complete() && pairs.undecided.is_empty(), "case {case}: {:?}", pairs.undecided.first());
         assert_eq!(pairs.nodes.len(), n_nodes, "case {case} nodes");
 
         let s = sample((d2, d3, d4, r2, r3), 1200);
@@ -221,7 +221,7 @@ fn internal_motion_lines_of_f_are_reported_as_lines() {
             assert!((f[0] - f0[0]).abs() < 1e-12 && (f[1] - f0[1]).abs() < 1e-12);
         }
     }
-    assert!(found.undecided.is_empty() && found.complete);
+    assert!(found.undecided.is_empty() && found.status.is_complete());
 }
 
 /// Case c of the seed: d2 ∈ [1, 1.001], d3 ∈ [2, 2.001], d4 ∈ [1.5, 1.501], r2 ∈ [1, 1.001]
@@ -236,7 +236,7 @@ fn seed_case_c_four_cusps_valid_for_every_corner() {
     let found = cusps::search(&uncertain, &cusps::CuspSettings { precision: 1e-4, ..Default::default() }).expect("valid");
     assert_eq!(found.cusps.len(), 4);
     assert!(found.cusps.iter().all(|c| c.unique));
-    assert!(found.complete && found.undecided.is_empty(), "{} undecided", found.undecided.len());
+    assert!(found.status.is_complete() && found.undecided.is_empty(), "{} undecided", found.undecided.len());
     let mut geometries: Vec<[f64; 4]> = (0..16u32).map(|k| [0, 1, 2, 3].map(|i| [1.0, 2.0, 1.0, 1.5][i] + if k >> i & 1 == 1 { 0.001 } else { 0.0 })).collect();
     geometries.push([1.0005, 2.0005, 1.0005, 1.5005]);
     for [d2, d3, r2, d4] in geometries {
@@ -303,7 +303,7 @@ fn inverse_kinematics_recovers_sampled_configurations() {
         let f = c.eval_f64(t[0], t[1]);
         let r = f[0].sqrt();
         let s = ik::solve(&c, r, f[1], 1e-8, 200_000).expect("valid query");
-        assert!(s.complete);
+        assert!(s.status.is_complete());
         let inside = |b: &[linkspace::Interval; 2]| (0..2).all(|i| b[i].inf() - 1e-9 <= t[i] && t[i] <= b[i].sup() + 1e-9);
         assert!(s.unique.iter().any(inside) || s.clusters.iter().any(|c| inside(&c.hull)), "sample {t:?} lost: {:?}", s.unique);
         for b in &s.unique {
@@ -346,7 +346,7 @@ fn non_orthogonal_chains_match_plain_forward_kinematics() {
     }
     // The searches run on it as on any chain.
     let found = cusps::search(&c, &cusps::CuspSettings { precision: 1e-3, ..Default::default() }).expect("valid");
-    assert!(found.complete);
+    assert!(found.status.is_complete());
 }
 
 /// The collision scene of `urdf/orthogonal_3r_a_column.urdf`, written out by hand from the
@@ -414,7 +414,7 @@ fn collision_boxes_agree_with_sampling() {
         }
     }
     let set = classify(&scene, &CollisionSettings { precision: 0.02, ..Default::default() }).expect("valid settings");
-    assert!(set.complete);
+    assert!(set.status.is_complete());
     let collides = |t2: f64, t3: f64| -> [bool; 2] {
         let s = column_scene(t2, t3);
         [(0, 1), (0, 2)].map(|(i, j)| brute_distance(s[i].0, s[j].0) <= s[i].1 + s[j].1)
@@ -443,7 +443,7 @@ fn collision_boxes_agree_with_sampling() {
             assert!(collides(t2, t3) == [false, false] || margin(t2, t3) < 1e-9, "free box {b:?} has a colliding point ({t2}, {t3})");
         }
     }
-    let s = set.stats;
+    let s = &set;
     let total = s.colliding_area + s.free_area + s.undecided_area;
     let square = (2.0 * linkspace::manip3r::motion::PI_UP).powi(2);
     assert!((total - square).abs() < 1e-9 * square, "boxes tile the square: {total} vs {square}");
@@ -458,7 +458,7 @@ fn collision_boxes_agree_with_sampling() {
     });
     let fraction = hits.count() as f64 / (n * n) as f64;
     let (lo, hi) = (s.colliding_area / total, (s.colliding_area + s.undecided_area) / total);
-    assert!(lo > 0.02 && s.free_area / total > 0.9, "{s:?}");
+    assert!(lo > 0.02 && s.free_area / total > 0.9, "{:?}", (s.colliding_area, s.free_area, s.undecided_area));
     assert!(lo - 0.003 <= fraction && fraction <= hi + 0.003, "grid estimate {fraction} outside [{lo}, {hi}]");
 }
 
@@ -488,4 +488,72 @@ fn collision_scenes_refuse_what_they_cannot_model() {
     assert_eq!(scene(&capsule).expect("capsules are supported").pairs().len(), 2);
     let negative = text.replace(r#"radius="0.15""#, r#"radius="-0.15""#);
     assert!(urdf::parse(&negative).unwrap_err().to_string().contains("a size is negative"));
+}
+
+/// Every interval of a list of boxes, as bits: identical results, not merely close ones.
+fn bits(boxes: impl IntoIterator<Item = [linkspace::Interval; 2]>) -> Vec<[u64; 4]> {
+    boxes.into_iter().map(|b| [b[0].inf().to_bits(), b[0].sup().to_bits(), b[1].inf().to_bits(), b[1].sup().to_bits()]).collect()
+}
+
+/// Two threads walk the trees level by level, one walks them depth first: the same cusps,
+/// nodes and undecided boxes, bit for bit and in the same order (robot e has cusps and nodes,
+/// f internal-motion strips and nodes).
+#[test]
+fn two_threads_give_the_results_of_one() {
+    use linkspace::manip3r::{singularities, Control};
+    use linkspace::search::{Limits, Status};
+    use std::sync::atomic::AtomicBool;
+    for case in ["e", "f"] {
+        let c = chain(case);
+        let cancel = AtomicBool::new(false);
+        let run = |threads| singularities(&c, 1e-4, true, &Control { limits: Limits::default(), threads, cancel: &cancel }, &mut |_| {}).expect("valid");
+        let (one, two) = (run(1), run(2));
+        assert_eq!((one.status, two.status), (Status::Complete, Status::Complete));
+        assert_eq!(bits(one.cusps.cusps.iter().map(|c| c.theta)), bits(two.cusps.cusps.iter().map(|c| c.theta)), "case {case} cusps");
+        assert_eq!(bits(one.cusps.undecided.iter().map(|u| u.theta)), bits(two.cusps.undecided.iter().map(|u| u.theta)));
+        let (n1, n2) = (one.nodes.expect("searched"), two.nodes.expect("searched"));
+        assert!(!n1.nodes.is_empty(), "case {case} has nodes");
+        assert_eq!(bits(n1.nodes.iter().flat_map(|n| n.theta)), bits(n2.nodes.iter().flat_map(|n| n.theta)), "case {case} nodes");
+        assert_eq!(bits(n1.undecided.iter().flatten().copied()), bits(n2.undecided.iter().flatten().copied()));
+        // The same cells were decided, for the same reasons.
+        assert_eq!((one.cusps.stats.discarded, n1.stats.discarded, n1.cells), (two.cusps.stats.discarded, n2.stats.discarded, n2.cells));
+    }
+}
+
+/// A cancel flag raised before the run, or while it runs, ends it `Incomplete(Cancelled)`,
+/// with the cells it did not decide reported undecided (the whole square at the least), never
+/// silently dropped.
+#[test]
+fn a_cancelled_singularity_run_says_so_and_keeps_its_undecided_cells() {
+    use linkspace::manip3r::{cusps::Reason, singularities, Control};
+    use linkspace::search::{Limit, Limits, Status};
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let c = chain("e");
+    // Raised before: nothing is decided, the start box and the start pair are pending.
+    let raised = AtomicBool::new(true);
+    let r = singularities(&c, 1e-4, true, &Control { limits: Limits::default(), threads: 1, cancel: &raised }, &mut |_| {}).expect("valid");
+    assert_eq!(r.status, Status::Incomplete(Limit::Cancelled));
+    assert_eq!(r.cusps.status, Status::Incomplete(Limit::Cancelled));
+    assert!(r.cusps.cusps.is_empty() && r.cusps.undecided.len() == 1 && r.cusps.undecided[0].reason == Reason::Limit);
+    let n = r.nodes.expect("searched");
+    assert_eq!((n.status, n.undecided.len()), (Status::Incomplete(Limit::Cancelled), 1));
+    // Raised during: by the first progress report of the level-by-level driver.
+    let flag = AtomicBool::new(false);
+    let mut reports = 0;
+    let r = singularities(&c, 1e-4, true, &Control { limits: Limits::default(), threads: 2, cancel: &flag }, &mut |_| {
+        reports += 1;
+        flag.store(true, Ordering::Relaxed);
+    })
+    .expect("valid");
+    assert!(reports >= 1);
+    assert_eq!(r.status, Status::Incomplete(Limit::Cancelled));
+    assert!(r.cusps.stats.processed >= 1 && !r.cusps.undecided.is_empty());
+    assert!(r.cusps.undecided.iter().all(|u| u.reason == Reason::Limit));
+    // Enclosure: every certified cusp of the complete run is in a pending box.
+    let full = cusps::search(&c, &cusps::CuspSettings::default()).expect("valid");
+    for cusp in &full.cusps {
+        let m = [cusp.theta[0].mid(), cusp.theta[1].mid()];
+        assert!(r.cusps.undecided.iter().any(|u| u.theta[0].contains(m[0]) && u.theta[1].contains(m[1])), "cusp {m:?} lost by the cancelled run");
+    }
+    assert!(!r.nodes.expect("searched").undecided.is_empty());
 }

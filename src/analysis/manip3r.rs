@@ -14,11 +14,12 @@ use super::{
     SingularityQuery, SingularityResult,
 };
 use crate::interval::{interval, point};
-use crate::manip3r::motion::{self, PI_UP};
+use crate::manip3r::motion;
 use crate::manip3r::report::radius;
-use crate::manip3r::{self, cusps, ik, nodes, Chain3R, Manip3rError};
+use crate::manip3r::curves::Cover;
+use crate::manip3r::{self, ik, Chain3R, Manip3rError};
 use crate::model::Mechanism;
-use crate::search::{BoxStatus, Limit, Progress, SolveStats as Stats, SolverSettings, Status};
+use crate::search::{BoxStatus, Limit, Limits, Progress, SolveStats as Stats, SolverSettings, Status};
 use inari::Interval;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -87,7 +88,7 @@ impl Manip3rAnalysis {
         let n = (e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]).sqrt();
         e1 = e1.map(|x| x / n);
         let e2 = [a[1] * e1[2] - a[2] * e1[1], a[2] * e1[0] - a[0] * e1[2], a[0] * e1[1] - a[1] * e1[0]];
-        let cover = Arc::new(Cover::new(&chain, CURVE_DEPTH));
+        let cover = Arc::new(Cover::new(&chain, CURVE_DEPTH, &manip3r::Control::with_limits(Limits::default())));
         Ok(Self { chain: Arc::new(chain), base_rotation: r, base_translation: t, axis, e1: e1.map(point), e2: e2.map(point), cover })
     }
 
@@ -233,190 +234,32 @@ impl Analysis for Manip3rAnalysis {
     }
 }
 
-/// The singular-curve cover: cells of an `n` × `n` grid on [-π, π]² (slightly wider: the range
-/// of the searches) where det Df may vanish, and the regions between them.
-///
-/// A quadtree from the whole square drops a cell when the centred form of det Df over it
-/// excludes zero; what survives to the finest level covers every singular configuration
-/// (internal-motion lines included, where det Df = 0 too). Cells proven regular are grouped
-/// into regions (4-neighbours, across the ±π seams): det Df keeps one sign on a region, which
-/// therefore lies in one aspect.
-#[derive(Clone, Debug)]
-struct Cover {
-    n: usize,
-    /// Cover cells (i over θ₂, j over θ₃), in grid order.
-    boxes: Vec<(usize, usize)>,
-    /// Connected component of each cover cell (8-neighbours, across the seams).
-    cluster: Vec<usize>,
-    clusters: usize,
-    /// Per cell (`i·n + j`): its region, or -1 for a cover cell.
-    region: Vec<i32>,
-    regions: usize,
-    /// Quadtree cells processed.
-    processed: u64,
-    seconds: f64,
-}
-
-impl Cover {
-    fn new(chain: &Chain3R, depth: u32) -> Self {
-        let start = Instant::now();
-        let n = 1usize << depth;
-        let mut cover = Cover { n, boxes: Vec::new(), cluster: Vec::new(), clusters: 0, region: vec![0; n * n], regions: 0, processed: 0, seconds: 0.0 };
-        let mut stack = vec![(0usize, 0usize, n)];
-        while let Some((i, j, s)) = stack.pop() {
-            cover.processed += 1;
-            let [a, b] = cover.bounds_span(i, s);
-            let [c, d] = cover.bounds_span(j, s);
-            if !det_may_vanish(chain, [interval(a, b), interval(c, d)]) {
-                continue;
-            }
-            if s == 1 {
-                cover.boxes.push((i, j));
-                continue;
-            }
-            let h = s / 2;
-            for (di, dj) in [(h, h), (h, 0), (0, h), (0, 0)] {
-                stack.push((i + di, j + dj, h));
-            }
-        }
-        cover.boxes.sort_unstable();
-        for &(i, j) in &cover.boxes {
-            cover.region[i * n + j] = -1;
-        }
-        cover.label_clusters();
-        cover.label_regions();
-        cover.seconds = start.elapsed().as_secs_f64();
-        cover
+/// The cover as a box set over (θ₂, θ₃).
+fn box_set(cover: &Cover, mechanism: &str, joints: &[String]) -> BoxSetResult {
+    let boxes = cover
+        .boxes
+        .iter()
+        .zip(&cover.cluster)
+        .map(|(&(i, j), &c)| {
+            let b = vec![cover.bounds(i), cover.bounds(j)];
+            ResultBox { status: BoxStatus::Solution, bounds: b.clone(), joints: b, level: 2 * CURVE_DEPTH, cluster: Some(c), traces: vec![] }
+        })
+        .collect();
+    let width = cover.line(1) - cover.line(0);
+    BoxSetResult {
+        mechanism: mechanism.to_string(),
+        analysis: "singular_curves".into(),
+        status: Status::Complete,
+        settings: SolverSettings { sigma: width, max_boxes: cover.stats.processed, timeout: None, ..Default::default() },
+        variables: joints.to_vec(),
+        primaries: vec![0, 1],
+        joint_names: joints.to_vec(),
+        fixed_joints: vec![],
+        traces: vec![],
+        boxes,
+        clusters: cover.clusters,
+        stats: Stats { processed: cover.stats.processed, solutions: cover.boxes.len() as u64, max_level: 2 * CURVE_DEPTH, seconds: cover.seconds, ..Default::default() },
     }
-
-    /// Grid line `i` of `n`: -π (rounded up) + i·(2π/n), the same float for every cell that
-    /// shares it, with the last line exactly π (rounded up).
-    fn line(&self, i: usize) -> f64 {
-        if i == self.n {
-            PI_UP
-        } else {
-            -PI_UP + (2.0 * PI_UP / self.n as f64) * i as f64
-        }
-    }
-
-    fn bounds_span(&self, i: usize, s: usize) -> Bounds {
-        [self.line(i), self.line(i + s)]
-    }
-
-    fn bounds(&self, i: usize) -> Bounds {
-        self.bounds_span(i, 1)
-    }
-
-    /// The cell holding (θ₂, θ₃), angles taken modulo 2π (rounding the reduction).
-    fn cell_of(&self, t2: f64, t3: f64) -> Option<(usize, usize)> {
-        let index = |t: f64| -> Option<usize> {
-            if !t.is_finite() {
-                return None;
-            }
-            let t = if (-PI_UP..=PI_UP).contains(&t) { t } else { t - std::f64::consts::TAU * (t / std::f64::consts::TAU).round() };
-            let guess = (((t + PI_UP) / (2.0 * PI_UP) * self.n as f64).floor() as i64).clamp(0, self.n as i64 - 1) as usize;
-            // The guess may be one off at a grid line; the lines themselves decide.
-            (guess.saturating_sub(1)..=(guess + 1).min(self.n - 1)).find(|&k| self.line(k) <= t && t <= self.line(k + 1))
-        };
-        Some((index(t2)?, index(t3)?))
-    }
-
-    fn label_clusters(&mut self) {
-        let n = self.n;
-        let mut at = vec![usize::MAX; n * n];
-        for (k, &(i, j)) in self.boxes.iter().enumerate() {
-            at[i * n + j] = k;
-        }
-        self.cluster = vec![usize::MAX; self.boxes.len()];
-        for start in 0..self.boxes.len() {
-            if self.cluster[start] != usize::MAX {
-                continue;
-            }
-            let label = self.clusters;
-            self.clusters += 1;
-            self.cluster[start] = label;
-            let mut todo = vec![start];
-            while let Some(k) = todo.pop() {
-                let (i, j) = self.boxes[k];
-                for di in [n - 1, 0, 1] {
-                    for dj in [n - 1, 0, 1] {
-                        let m = at[((i + di) % n) * n + (j + dj) % n];
-                        if m != usize::MAX && self.cluster[m] == usize::MAX {
-                            self.cluster[m] = label;
-                            todo.push(m);
-                        }
-                    }
-                }
-            }
-        }
-    }
-
-    fn label_regions(&mut self) {
-        let n = self.n;
-        // 0 marks a regular cell not yet labelled; labels are stored as region + 1 meanwhile.
-        let mut next = 0;
-        for start in 0..n * n {
-            if self.region[start] != 0 {
-                continue;
-            }
-            next += 1;
-            self.region[start] = next;
-            let mut todo = vec![start];
-            while let Some(c) = todo.pop() {
-                let (i, j) = (c / n, c % n);
-                for (a, b) in [((i + 1) % n, j), ((i + n - 1) % n, j), (i, (j + 1) % n), (i, (j + n - 1) % n)] {
-                    if self.region[a * n + b] == 0 {
-                        self.region[a * n + b] = next;
-                        todo.push(a * n + b);
-                    }
-                }
-            }
-        }
-        for r in self.region.iter_mut() {
-            if *r > 0 {
-                *r -= 1;
-            }
-        }
-        self.regions = next as usize;
-    }
-
-    /// The cover as a box set over (θ₂, θ₃).
-    fn box_set(&self, mechanism: &str, joints: &[String]) -> BoxSetResult {
-        let boxes = self
-            .boxes
-            .iter()
-            .zip(&self.cluster)
-            .map(|(&(i, j), &c)| {
-                let b = vec![self.bounds(i), self.bounds(j)];
-                ResultBox { status: BoxStatus::Solution, bounds: b.clone(), joints: b, level: 2 * CURVE_DEPTH, cluster: Some(c), traces: vec![] }
-            })
-            .collect();
-        let width = self.line(1) - self.line(0);
-        BoxSetResult {
-            mechanism: mechanism.to_string(),
-            analysis: "singular_curves".into(),
-            status: Status::Complete,
-            settings: SolverSettings { sigma: width, max_boxes: self.processed, timeout: None, ..Default::default() },
-            variables: joints.to_vec(),
-            primaries: vec![0, 1],
-            joint_names: joints.to_vec(),
-            fixed_joints: vec![],
-            traces: vec![],
-            boxes,
-            clusters: self.clusters,
-            stats: Stats { processed: self.processed, solutions: self.boxes.len() as u64, max_level: 2 * CURVE_DEPTH, seconds: self.seconds, ..Default::default() },
-        }
-    }
-}
-
-/// False when det Df provably does not vanish on `b` (centred form with the natural one).
-fn det_may_vanish(chain: &Chain3R, b: [Interval; 2]) -> bool {
-    let m = [b[0].mid(), b[1].mid()];
-    let over = chain.jets(b, 2).det();
-    let at = chain.jets([point(m[0]), point(m[1])], 1).det().value();
-    let g = over.grad();
-    let centred = at + g[0] * (b[0] - point(m[0])) + g[1] * (b[1] - point(m[1]));
-    over.value().intersection(centred).contains(0.0)
 }
 
 /// A validated singularity run.
@@ -428,18 +271,12 @@ struct SingularityRun {
 }
 
 impl PreparedRun<SingularityResult> for SingularityRun {
-    fn run(self: Box<Self>, _cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> SingularityResult {
-        let start = Instant::now();
+    fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> SingularityResult {
         let (chain, q) = (&*self.chain, &self.query);
-        let settings = cusps::CuspSettings { precision: q.precision, max_boxes: q.max_boxes, timeout: q.timeout, method: cusps::Method::Krawczyk };
-        let found = cusps::search(chain, &settings).expect("invariant: precision validated when prepared");
-        progress(&Progress { processed: found.stats.processed, pending: 0, decided: if q.nodes { 0.5 } else { 1.0 } });
-        let node_search = q.nodes.then(|| {
-            // The time left of the request's budget (none left: the search stops at once).
-            let timeout = q.timeout.map(|t| t.saturating_sub(start.elapsed()));
-            let settings = nodes::NodeSettings { precision: q.precision, max_pairs: q.max_boxes, timeout };
-            nodes::search(chain, &found.cusps, &found.bands, &settings).expect("invariant: precision validated when prepared")
-        });
+        let limits = Limits { max_cells: q.max_boxes, timeout: q.timeout, ..Limits::default() };
+        let control = manip3r::Control { limits, threads: q.threads.max(1), cancel };
+        let run = manip3r::singularities(chain, q.precision, q.nodes, &control, progress).expect("invariant: precision validated when prepared");
+        let (found, node_search) = (&run.cusps, &run.nodes);
         let two = |t: &[Interval; 2]| vec![bounds(t[0]), bounds(t[1])];
         let image = |t: [Interval; 2]| {
             let j = chain.jets(t, 0);
@@ -459,16 +296,9 @@ impl PreparedRun<SingularityResult> for SingularityRun {
                 SingularPair { joints: [two(&p[0]), two(&p[1])], workspace: workspace(a[0].convex_hull(b[0]), a[1].convex_hull(b[1])), certified: false }
             }));
         }
-        let complete = found.complete && node_search.as_ref().is_none_or(|n| n.complete);
-        let status = if complete {
-            Status::Complete
-        } else if q.timeout.is_some_and(|t| start.elapsed() >= t) {
-            Status::Incomplete(Limit::Time)
-        } else {
-            Status::Incomplete(Limit::Boxes)
-        };
+        let status = run.status;
         let motions = internal_motions(chain, &found.bands, &self.joints, q.precision);
-        let processed = found.stats.processed + node_search.as_ref().map_or(0, |n| n.stats.pairs);
+        let processed = found.stats.processed + node_search.as_ref().map_or(0, |n| n.stats.processed);
         let certified_nodes = node_search.as_ref().map_or(0, |n| n.nodes.len());
         let summary = format!(
             "{} cusps, {}, {} internal-motion lines, {} undecided, {} cover boxes in {} pieces, {}",
@@ -478,7 +308,12 @@ impl PreparedRun<SingularityResult> for SingularityRun {
             found.undecided.len() + node_search.as_ref().map_or(0, |n| n.undecided.len()),
             self.cover.boxes.len(),
             self.cover.clusters,
-            if complete { "complete".to_string() } else { format!("incomplete ({})", if status == Status::Incomplete(Limit::Time) { "time limit" } else { "box limit" }) }
+            match status {
+                Status::Complete => "complete".to_string(),
+                Status::Incomplete(Limit::Cancelled) => "incomplete (cancelled)".to_string(),
+                Status::Incomplete(Limit::Boxes) => "incomplete (box limit)".to_string(),
+                Status::Incomplete(limit) => format!("incomplete ({} limit)", limit.name()),
+            }
         );
         SingularityResult {
             mechanism: chain.name.clone(),
@@ -488,10 +323,10 @@ impl PreparedRun<SingularityResult> for SingularityRun {
             workspace_names: vec!["radius".into(), "z".into()],
             cusps: cusp_records,
             nodes: node_records,
-            singular_curves: self.cover.box_set(&chain.name, &self.joints),
+            singular_curves: box_set(&self.cover, &chain.name, &self.joints),
             internal_motions: motions,
             processed,
-            seconds: start.elapsed().as_secs_f64() + self.cover.seconds,
+            seconds: run.seconds + self.cover.seconds,
             summary,
         }
     }
@@ -536,11 +371,13 @@ struct IkRun {
 }
 
 impl PreparedRun<IkResult> for IkRun {
-    fn run(self: Box<Self>, _cancel: &AtomicBool, _progress: &mut dyn FnMut(&Progress)) -> IkResult {
+    fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> IkResult {
         let start = Instant::now();
         let a = &self.analysis;
         let chain = &*a.chain;
-        let s = ik::solve_target(chain, self.target, self.query.precision, self.query.max_boxes).expect("invariant: validated when prepared");
+        let limits = Limits { max_cells: self.query.max_boxes, ..Limits::default() };
+        let control = manip3r::Control { limits, threads: self.query.threads.max(1), cancel };
+        let s = ik::solve_target(chain, self.target, self.query.precision, &control, progress).expect("invariant: validated when prepared");
         // θ₁ turns the end point's direction about a₁ onto the point's.
         let theta1 = |b: &[Interval; 2]| -> Bounds {
             match (self.target_direction, a.direction(&chain.perp(*b))) {
@@ -557,8 +394,8 @@ impl PreparedRun<IkResult> for IkRun {
             point_names: vec!["radius".into(), "z".into()],
             point_values: vec![bounds(radius(self.target[0])), bounds(self.target[1])],
             solutions,
-            complete: s.complete,
-            processed: s.processed,
+            status: s.status,
+            processed: s.stats.processed,
             seconds: start.elapsed().as_secs_f64(),
         }
     }
@@ -575,7 +412,7 @@ mod tests {
     const F: &str = include_str!("../../urdf/orthogonal_3r_f.urdf");
 
     fn query() -> SingularityQuery {
-        SingularityQuery { precision: 1e-4, nodes: true, max_boxes: 1_000_000, timeout: None }
+        SingularityQuery { precision: 1e-4, nodes: true, max_boxes: 1_000_000, timeout: None, threads: 1 }
     }
 
     fn revolute(m: &Mechanism) -> Vec<String> {
@@ -677,7 +514,7 @@ mod tests {
         let reference = ik::solve(&chain, r, z, 1e-8, 200_000).expect("valid");
         // The same (ρ, z) seen from a point turned by 0.7 rad about the first axis.
         let p = [r * 0.7f64.cos(), r * 0.7f64.sin(), z];
-        let got = a.inverse_kinematics(&IkQuery { point: p, precision: 1e-8, max_boxes: 200_000 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let got = a.inverse_kinematics(&IkQuery { point: p, precision: 1e-8, max_boxes: 200_000, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
         assert_eq!(got.joint_names, vec!["joint1", "joint2", "joint3"]);
         assert_eq!(got.solutions.iter().filter(|s| s.unique).count(), reference.unique.len());
         assert!(reference.unique.len() >= 2);
@@ -689,7 +526,7 @@ mod tests {
             assert!(s.joints[0][1] - s.joints[0][0] < 1e-6, "θ1 enclosed tightly: {:?}", s.joints[0]);
         }
         // On the point (r, 0, z) the boxes are the CLI's, bit for bit.
-        let got = a.inverse_kinematics(&IkQuery { point: [r, 0.0, z], precision: 1e-8, max_boxes: 200_000 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let got = a.inverse_kinematics(&IkQuery { point: [r, 0.0, z], precision: 1e-8, max_boxes: 200_000, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
         for (s, u) in got.solutions.iter().zip(&reference.unique) {
             assert_eq!(s.joints[1..], [bounds(u[0]), bounds(u[1])]);
         }
@@ -704,12 +541,12 @@ mod tests {
         assert!(r.nodes.is_empty());
         let err = |e: AnalysisError| e.to_string();
         assert!(err(a.singularities(&SingularityQuery { precision: 2.0, ..query() }).err().expect("refused")).contains("precision must be a number in (0, 1), got 2"));
-        let ik = |point: [f64; 3], precision: f64| a.inverse_kinematics(&IkQuery { point, precision, max_boxes: 1000 }).err().map(err).unwrap_or_default();
+        let ik = |point: [f64; 3], precision: f64| a.inverse_kinematics(&IkQuery { point, precision, max_boxes: 1000, threads: 1 }).err().map(err).unwrap_or_default();
         assert!(ik([f64::NAN, 0.0, 0.0], 1e-6).contains("is not finite"));
         assert!(ik([1.0, 0.0, 0.0], 0.0).contains("precision must be a number in (0, 1)"));
         // A tight box limit ends incomplete, with its pending boxes as clusters.
-        let short = a.inverse_kinematics(&IkQuery { point: [1.0, 0.0, 0.2], precision: 1e-9, max_boxes: 5 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
-        assert!(!short.complete && short.solutions.iter().any(|s| !s.unique));
+        let short = a.inverse_kinematics(&IkQuery { point: [1.0, 0.0, 0.2], precision: 1e-9, max_boxes: 5, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        assert!(short.status == Status::Incomplete(Limit::Boxes) && short.solutions.iter().any(|s| !s.unique));
         // 3R chains take no fixed joints.
         assert!(load(&m, &[("joint2".into(), 0.1)], &[]).err().map(err).unwrap_or_default().contains("takes no fixed joints"));
     }

@@ -262,6 +262,8 @@ pub struct SingularityQuery {
     pub max_boxes: u64,
     /// Stop after this long in all; the run is then incomplete.
     pub timeout: Option<Duration>,
+    /// Worker threads (the results do not depend on them).
+    pub threads: usize,
 }
 
 /// A singular point (a cusp), or a box that may hold one.
@@ -331,6 +333,8 @@ pub struct IkQuery {
     pub precision: f64,
     /// Stop after this many boxes; the run is then incomplete.
     pub max_boxes: u64,
+    /// Worker threads (the results do not depend on them).
+    pub threads: usize,
 }
 
 /// One inverse-kinematics solution box.
@@ -359,8 +363,8 @@ pub struct IkResult {
     pub point_values: Vec<Bounds>,
     /// Unique solutions first, then clusters.
     pub solutions: Vec<IkSolution>,
-    /// True when no limit was hit.
-    pub complete: bool,
+    /// Complete, or the limit that stopped the run (boxes, cancelled, ...).
+    pub status: Status,
     /// Boxes processed.
     pub processed: u64,
     /// Wall-clock seconds.

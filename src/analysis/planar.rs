@@ -160,9 +160,9 @@ mod tests {
         assert!(err(a.solve(&[("nope".into(), 1.0)], &SolverSettings::default())).contains("no joint or loop named 'nope'"));
         assert!(err(a.solve(&[("crank_joint".into(), f64::NAN)], &SolverSettings::default())).contains("not a finite number"));
         assert!(err(a.solve(&[], &SolverSettings { sigma: f64::NAN, ..Default::default() })).contains("sigma"));
-        let query = crate::analysis::SingularityQuery { precision: 1e-4, nodes: true, max_boxes: 1000, timeout: None };
+        let query = crate::analysis::SingularityQuery { precision: 1e-4, nodes: true, max_boxes: 1000, timeout: None, threads: 1 };
         assert!(a.singularities(&query).err().map(|e| e.to_string()).unwrap_or_default().contains("singularities is not available for this mechanism"));
-        let query = crate::analysis::IkQuery { point: [1.0, 0.0, 0.0], precision: 1e-3, max_boxes: 1000 };
+        let query = crate::analysis::IkQuery { point: [1.0, 0.0, 0.0], precision: 1e-3, max_boxes: 1000, threads: 1 };
         assert!(a.inverse_kinematics(&query).err().map(|e| e.to_string()).unwrap_or_default().contains("inverse_kinematics is not available"));
     }
 }

@@ -214,7 +214,7 @@ pub fn run(dir: &Path, quick: bool) -> Result<()> {
     write(dir, "stability.md", &report)?;
 
     // 5. 3R singular curves in joint space and workspace, with cusps and nodes.
-    singular_curves(dir, if quick { 96 } else { 256 })?;
+    singular_curves(dir, if quick { 7 } else { 8 })?;
 
     // 5b. Collision set of robot a beside a column (SIVIA on capsules).
     collision_chart(dir)?;
@@ -250,31 +250,25 @@ const ROBOTS_3R: [(&str, &str); 3] = [
     ("f", include_str!("../../urdf/orthogonal_3r_f.urdf")),
 ];
 
-/// Boxes of a `cells`×`cells` grid on (θ₂, θ₃) where det Df may vanish, their images, and the
-/// certified cusps and nodes marked on both.
-fn singular_curves(dir: &Path, cells: usize) -> Result<()> {
+/// The singular-curve cover (`manip3r::curves::Cover`, the one the ROS node publishes) on a
+/// `2^depth` grid, its images, and the certified cusps and nodes marked on both.
+fn singular_curves(dir: &Path, depth: u32) -> Result<()> {
     use linkspace::interval::interval;
-    use linkspace::manip3r::{cusps, nodes, report::radius, Chain3R};
+    use linkspace::manip3r::{curves::Cover, cusps, nodes, report::radius, Chain3R, Control};
     let mut joint_panels = Vec::new();
     let mut work_panels = Vec::new();
     for (name, text) in ROBOTS_3R {
         let chain = Chain3R::from_mechanism(&urdf::parse(text)?, 0.0)?;
         let found = cusps::search(&chain, &cusps::CuspSettings::default())?;
         let node_search = nodes::search(&chain, &found.cusps, &found.bands, &nodes::NodeSettings::default())?;
-        let step = 2.0 * std::f64::consts::PI / cells as f64;
+        let cover = Cover::new(&chain, depth, &Control::with_limits(linkspace::search::Limits::default()));
         let (mut joint, mut work) = (Vec::new(), Vec::new());
-        for i in 0..cells {
-            for j in 0..cells {
-                let t2 = -std::f64::consts::PI + step * i as f64;
-                let t3 = -std::f64::consts::PI + step * j as f64;
-                let b = [interval(t2, t2 + step), interval(t3, t3 + step)];
-                let e = cusps::evaluate(&chain, b);
-                if e.det.contains(0.0) {
-                    joint.push([b[0].inf(), b[0].sup(), b[1].inf(), b[1].sup()]);
-                    let r = radius(e.f[0]);
-                    work.push([r.inf(), r.sup(), e.f[1].inf(), e.f[1].sup()]);
-                }
-            }
+        for &(i, j) in &cover.boxes {
+            let ([a, b], [c, d]) = (cover.bounds(i), cover.bounds(j));
+            joint.push([a, b, c, d]);
+            let e = cusps::evaluate(&chain, [interval(a, b), interval(c, d)]);
+            let r = radius(e.f[0]);
+            work.push([r.inf(), r.sup(), e.f[1].inf(), e.f[1].sup()]);
         }
         let mid = |i: linkspace::Interval| i.mid();
         let mut jmarks: Vec<(f64, f64)> = found.cusps.iter().map(|c| (mid(c.theta[0]), mid(c.theta[1]))).collect();
@@ -362,7 +356,7 @@ fn distance_sweeps(dir: &Path, quick: bool) -> Result<()> {
 
 /// 3R cusps: CPU seconds against the widest cusp box, Krawczyk against bisection alone.
 fn cusp_sweep(dir: &Path, quick: bool) -> Result<()> {
-    use linkspace::manip3r::{cusps, Chain3R};
+    use linkspace::manip3r::{cusps, Chain3R, Control};
     let precisions: &[f64] = if quick { &[1e-2, 1e-4] } else { &[1e-2, 1e-3, 1e-4, 1e-6, 1e-8] };
     let mut series = Vec::new();
     for (name, text) in ROBOTS_3R.iter().take(2) {
@@ -371,9 +365,10 @@ fn cusp_sweep(dir: &Path, quick: bool) -> Result<()> {
             let mut points = Vec::new();
             for &precision in precisions {
                 let c0 = linkspace::search::process_cpu_seconds();
-                let found = cusps::search(&chain, &cusps::CuspSettings { precision, method, timeout: Some(Duration::from_secs(20)), ..Default::default() })?;
+                let limits = linkspace::search::Limits { max_cells: cusps::DEFAULT_MAX_BOXES, timeout: Some(Duration::from_secs(20)), ..Default::default() };
+                let found = cusps::search_with(&chain, &cusps::CuspSettings { precision, method }, &Control::with_limits(limits), &mut |_| {})?;
                 let cpu = linkspace::search::process_cpu_seconds() - c0;
-                if found.complete {
+                if found.status.is_complete() {
                     let widest = found.cusps.iter().map(|c| c.theta[0].wid().hypot(c.theta[1].wid())).fold(0.0, f64::max);
                     points.push((widest, cpu));
                 }
@@ -395,8 +390,8 @@ fn collision_chart(dir: &Path) -> Result<()> {
     let rect = |t: &[linkspace::Interval; 2]| [t[0].inf(), t[0].sup(), t[1].inf(), t[1].sup()];
     let pct = |a: f64| 100.0 * a / (4.0 * std::f64::consts::PI * std::f64::consts::PI);
     let panels = [
-        Panel { title: format!("colliding: {:.2} % of joint space", pct(set.stats.colliding_area)), rects: set.colliding.iter().map(|c| rect(&c.theta)).collect(), marks: vec![] },
-        Panel { title: format!("undecided at 1e-2: {:.2} %", pct(set.stats.undecided_area)), rects: set.undecided.iter().map(rect).collect(), marks: vec![] },
+        Panel { title: format!("colliding: {:.2} % of joint space", pct(set.colliding_area)), rects: set.colliding.iter().map(|c| rect(&c.theta)).collect(), marks: vec![] },
+        Panel { title: format!("undecided at 1e-2: {:.2} %", pct(set.undecided_area)), rects: set.undecided.iter().map(rect).collect(), marks: vec![] },
     ];
     let pi = std::f64::consts::PI;
     let mut svg = String::new();

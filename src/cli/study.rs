@@ -349,7 +349,7 @@ fn study_ik(name: &str, difficulty: &str, chain: &Chain3R, target: [f64; 2], roo
         }))
     };
     let covered = |t: [f64; 2]| sol.unique.iter().any(|b| inside(b, t)) || sol.clusters.iter().any(|c| inside(&c.hull, t));
-    let mut lost = roots.iter().filter(|r| !covered(**r)).count() + usize::from(!sol.complete);
+    let mut lost = roots.iter().filter(|r| !covered(**r)).count() + usize::from(!sol.status.is_complete());
     if let Some(t3) = line {
         lost += (0..64).filter(|k| !covered([-PI + 2.0 * PI * (*k as f64 + 0.5) / 64.0, t3])).count();
     }

@@ -43,11 +43,14 @@
 
 use super::chain::{self, Pose, V3, ZERO};
 use super::cusps::bisect;
+use super::drive::{drive, no_progress, Control, Order};
 use super::{motion, trig, Chain3R, Manip3rError};
 use crate::interval::point;
 use crate::model::{JointKind, Mechanism, Shape};
+use crate::search::{Limits, Progress, Prune, Stats, Status, Step};
 use inari::Interval;
-use std::time::{Duration, Instant};
+use smallvec::smallvec;
+use std::time::Instant;
 
 /// A body as a capsule, in its link's frame.
 #[derive(Clone, Debug, PartialEq)]
@@ -300,22 +303,21 @@ pub fn segment_distance(p: [[f64; 3]; 2], q: [[f64; 3]; 2]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
 }
 
-/// Settings of a collision classification.
+/// Settings of a collision classification (its bounds are a `Control`).
 #[derive(Clone, Copy, Debug)]
 pub struct CollisionSettings {
     /// Largest width of an undecided box (radians).
     pub precision: f64,
-    /// Stop after this many boxes (the run is then incomplete).
-    pub max_boxes: u64,
-    /// Stop after this long.
-    pub timeout: Option<Duration>,
 }
 
 impl Default for CollisionSettings {
     fn default() -> Self {
-        CollisionSettings { precision: 1e-2, max_boxes: 5_000_000, timeout: None }
+        CollisionSettings { precision: 1e-2 }
     }
 }
+
+/// Boxes a classification processes at most unless told otherwise (`classify`).
+pub const DEFAULT_MAX_BOXES: u64 = 5_000_000;
 
 /// A box proven colliding, with the pair that collides on all of it.
 #[derive(Clone, Copy, Debug)]
@@ -324,23 +326,6 @@ pub struct CollidingBox {
     pub theta: [Interval; 2],
     /// Index into `Scene::pairs`.
     pub pair: usize,
-}
-
-/// Counters and areas (rad²) of a classification.
-#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
-pub struct CollisionStats {
-    /// Boxes taken from the stack.
-    pub processed: u64,
-    /// Bisections.
-    pub bisected: u64,
-    /// Total area of the colliding boxes.
-    pub colliding_area: f64,
-    /// Total area of the free boxes.
-    pub free_area: f64,
-    /// Total area of the undecided boxes.
-    pub undecided_area: f64,
-    /// Wall-clock seconds.
-    pub seconds: f64,
 }
 
 /// The outcome: colliding, free and undecided boxes covering [-π, π]².
@@ -352,10 +337,19 @@ pub struct CollisionSet {
     pub free: Vec<[Interval; 2]>,
     /// Boxes at the precision with neither proven (or left by a limit).
     pub undecided: Vec<[Interval; 2]>,
-    /// True when no limit was hit.
-    pub complete: bool,
-    /// Counters.
-    pub stats: CollisionStats,
+    /// `Complete` when every box was decided; otherwise the limit that stopped the run.
+    pub status: Status,
+    /// The kernel's counters (nothing is discarded: every box is colliding, free, undecided
+    /// or split).
+    pub stats: Stats,
+    /// Total area of the colliding boxes (rad²).
+    pub colliding_area: f64,
+    /// Total area of the free boxes (rad²).
+    pub free_area: f64,
+    /// Total area of the undecided boxes (rad²).
+    pub undecided_area: f64,
+    /// Wall-clock seconds.
+    pub seconds: f64,
 }
 
 /// What the two tests prove for one pair over a box.
@@ -405,28 +399,43 @@ fn area(b: &[Interval; 2]) -> f64 {
     b[0].wid() * b[1].wid()
 }
 
-/// Classifies [-π, π]² into colliding, free and undecided boxes (see the module doc).
-pub fn classify(scene: &Scene, settings: &CollisionSettings) -> Result<CollisionSet, Manip3rError> {
-    super::check_precision(settings.precision)?;
-    let start = Instant::now();
-    let mut stats = CollisionStats::default();
-    let (mut colliding, mut free, mut undecided) = (Vec::new(), Vec::new(), Vec::new());
-    let all: Vec<usize> = (0..scene.pairs.len()).collect();
-    let mut stack = vec![([motion::full_range(), motion::full_range()], all)];
-    let mut complete = true;
-    while let Some((b, open)) = stack.pop() {
-        if stats.processed >= settings.max_boxes || settings.timeout.is_some_and(|t| start.elapsed() > t) {
-            complete = false;
-            undecided.push(b);
-            undecided.extend(stack.drain(..).map(|(b, _)| b));
-            break;
-        }
-        stats.processed += 1;
+/// A box with the pairs still open on it.
+#[derive(Clone, Debug)]
+pub struct CollisionCell {
+    b: [Interval; 2],
+    open: Vec<usize>,
+    order: Order,
+    level: u32,
+}
+
+/// What a box was proven to be.
+enum Class {
+    Colliding(CollidingBox),
+    Free([Interval; 2]),
+}
+
+/// The tests of the module doc, one box at a time.
+struct CollisionPrune<'a> {
+    scene: &'a Scene,
+    precision: f64,
+    /// Scratch: enclosed and midpoint end points per body, filled on first use in a box.
+    ends: Vec<Option<([V3; 2], [[f64; 3]; 2])>>,
+}
+
+impl Prune for CollisionPrune<'_> {
+    type Cell = CollisionCell;
+    type Found = (Order, Class);
+
+    fn process(&mut self, cell: CollisionCell) -> Step<CollisionCell, (Order, Class)> {
+        let scene = self.scene;
+        let b = cell.b;
         let e2 = [trig::cos(b[0]), trig::sin(b[0]), point(1.0)];
         let e3 = [trig::cos(b[1]), trig::sin(b[1]), point(1.0)];
         let m = [b[0].mid(), b[1].mid()];
         let (m2, m3) = ([m[0].cos(), m[0].sin(), 1.0], [m[1].cos(), m[1].sin(), 1.0]);
-        let mut ends: Vec<Option<([V3; 2], [[f64; 3]; 2])>> = vec![None; scene.bodies.len()];
+        self.ends.clear();
+        self.ends.resize(scene.bodies.len(), None);
+        let ends = &mut self.ends;
         let mut get = |i: usize| -> ([V3; 2], [[f64; 3]; 2]) {
             *ends[i].get_or_insert_with(|| {
                 let body = &scene.bodies[i];
@@ -434,37 +443,74 @@ pub fn classify(scene: &Scene, settings: &CollisionSettings) -> Result<Collision
             })
         };
         let mut still = Vec::new();
-        let mut hit = None;
-        for &k in &open {
+        for &k in &cell.open {
             let (i, j) = scene.pairs[k];
             let ((ei, mi), (ej, mj)) = (get(i), get(j));
             match test_pair(&scene.bodies[i], &ei, mi, &scene.bodies[j], &ej, mj) {
-                Verdict::Colliding => {
-                    hit = Some(k);
-                    break;
-                }
+                Verdict::Colliding => return Step::Found((cell.order, Class::Colliding(CollidingBox { theta: b, pair: k }))),
                 Verdict::Free => {}
                 Verdict::Open => still.push(k),
             }
         }
-        if let Some(pair) = hit {
-            colliding.push(CollidingBox { theta: b, pair });
-        } else if still.is_empty() {
-            free.push(b);
-        } else if b[0].wid().max(b[1].wid()) <= settings.precision {
-            undecided.push(b);
+        if still.is_empty() {
+            Step::Found((cell.order, Class::Free(b)))
+        } else if b[0].wid().max(b[1].wid()) <= self.precision {
+            Step::Undecided(cell, "precision")
         } else {
-            stats.bisected += 1;
             let (lo, hi) = bisect(b, false);
-            stack.push((hi, still.clone()));
-            stack.push((lo, still));
+            let (order, level) = (cell.order, cell.level + 1);
+            Step::Split(smallvec![
+                CollisionCell { b: lo, open: still.clone(), order: order.child(0, 2), level },
+                CollisionCell { b: hi, open: still, order: order.child(1, 2), level }
+            ])
         }
     }
-    stats.colliding_area = colliding.iter().map(|c| area(&c.theta)).sum();
-    stats.free_area = free.iter().map(area).sum();
-    stats.undecided_area = undecided.iter().map(area).sum();
-    stats.seconds = start.elapsed().as_secs_f64();
-    Ok(CollisionSet { colliding, free, undecided, complete, stats })
+
+    fn level(&self, cell: &CollisionCell) -> u32 {
+        cell.level
+    }
+
+    fn bytes(&self, cell: &CollisionCell) -> usize {
+        std::mem::size_of::<CollisionCell>() + cell.open.capacity() * std::mem::size_of::<usize>()
+    }
+}
+
+/// Classifies [-π, π]² into colliding, free and undecided boxes (see the module doc), depth
+/// first on one thread with at most `DEFAULT_MAX_BOXES` boxes.
+pub fn classify(scene: &Scene, settings: &CollisionSettings) -> Result<CollisionSet, Manip3rError> {
+    let control = Control::with_limits(Limits { max_cells: DEFAULT_MAX_BOXES, ..Limits::default() });
+    classify_with(scene, settings, &control, &mut no_progress)
+}
+
+/// As `classify`, within `control`, reporting progress.
+pub fn classify_with(scene: &Scene, settings: &CollisionSettings, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<CollisionSet, Manip3rError> {
+    super::check_precision(settings.precision)?;
+    let start = Instant::now();
+    let all: Vec<usize> = (0..scene.pairs.len()).collect();
+    let root = CollisionCell { b: [motion::full_range(), motion::full_range()], open: all, order: Order::ROOT, level: 0 };
+    let mut run = drive(|| CollisionPrune { scene, precision: settings.precision, ends: Vec::new() }, root, control, progress);
+    // Depth-first order, that of the loop this replaced: the areas are sums in that order.
+    run.found.sort_by_key(|(order, _)| *order);
+    run.undecided.sort_by_key(|(c, _)| c.order);
+    let (mut colliding, mut free) = (Vec::new(), Vec::new());
+    for (_, class) in run.found {
+        match class {
+            Class::Colliding(c) => colliding.push(c),
+            Class::Free(b) => free.push(b),
+        }
+    }
+    let undecided: Vec<[Interval; 2]> = run.undecided.into_iter().map(|(c, _)| c.b).collect();
+    Ok(CollisionSet {
+        colliding_area: colliding.iter().map(|c| area(&c.theta)).sum(),
+        free_area: free.iter().map(area).sum(),
+        undecided_area: undecided.iter().map(area).sum(),
+        colliding,
+        free,
+        undecided,
+        status: run.status,
+        stats: run.stats,
+        seconds: start.elapsed().as_secs_f64(),
+    })
 }
 
 #[cfg(test)]

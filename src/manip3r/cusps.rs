@@ -22,11 +22,14 @@
 //! Boxes inside an internal-motion strip are set aside (see `motion`).
 
 use super::chain::Chain3R;
-use super::krawczyk::{self, Step};
+use super::drive::{drive, no_progress, Control, Order, Outcome};
+use super::krawczyk::{self, Step as K};
 use super::motion::{self, Band};
 use crate::interval::{interval, point};
+use crate::search::{self, Limits, Progress, Prune, Stats, Status, Step};
 use inari::Interval;
-use std::time::{Duration, Instant};
+use smallvec::smallvec;
+use std::time::Instant;
 
 /// How boxes are decided.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -39,24 +42,23 @@ pub enum Method {
     Bisection,
 }
 
-/// Settings of a cusp search.
+/// Settings of a cusp search (its bounds are a `Control`).
 #[derive(Clone, Copy, Debug)]
 pub struct CuspSettings {
     /// Largest width of a reported box (radians); undecided boxes are at most this wide.
     pub precision: f64,
-    /// Stop after this many boxes (the run is then incomplete).
-    pub max_boxes: u64,
-    /// Stop after this long.
-    pub timeout: Option<Duration>,
     /// Krawczyk or the bisection baseline.
     pub method: Method,
 }
 
 impl Default for CuspSettings {
     fn default() -> Self {
-        CuspSettings { precision: 1e-4, max_boxes: 5_000_000, timeout: None, method: Method::Krawczyk }
+        CuspSettings { precision: 1e-4, method: Method::Krawczyk }
     }
 }
+
+/// Boxes a cusp search processes at most unless told otherwise (`search`).
+pub const DEFAULT_MAX_BOXES: u64 = 5_000_000;
 
 /// A certified cusp.
 #[derive(Clone, Copy, Debug)]
@@ -93,25 +95,6 @@ pub struct Undecided {
     pub reason: Reason,
 }
 
-/// Counters of a cusp search.
-#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
-pub struct CuspStats {
-    /// Boxes taken from the stack.
-    pub processed: u64,
-    /// Discarded because det Df ≠ 0 on them.
-    pub regular: u64,
-    /// Discarded because a row of system (2) ≠ 0 on them.
-    pub not_tangent: u64,
-    /// Discarded by Krawczyk (no zero).
-    pub krawczyk_empty: u64,
-    /// Bisections.
-    pub bisected: u64,
-    /// Boxes set aside inside internal-motion strips.
-    pub in_strips: u64,
-    /// Wall-clock seconds.
-    pub seconds: f64,
-}
-
 /// The outcome of a cusp search.
 #[derive(Clone, Debug)]
 pub struct CuspSearch {
@@ -121,10 +104,15 @@ pub struct CuspSearch {
     pub undecided: Vec<Undecided>,
     /// Internal-motion strips that were set aside.
     pub bands: Vec<Band>,
-    /// True when every box was decided or set aside (no limit hit).
-    pub complete: bool,
-    /// Counters.
-    pub stats: CuspStats,
+    /// `Complete` when every box was decided or set aside; otherwise the limit that stopped it.
+    pub status: Status,
+    /// The kernel's counters; discards by reason: `in_strips`, `regular` (det Df ≠ 0),
+    /// `not_tangent` (a row of system (2) ≠ 0), `krawczyk_empty`.
+    pub stats: Stats,
+    /// Krawczyk contractions among the kernel's splits (the others are bisections).
+    pub contracted: u64,
+    /// Wall-clock seconds, the strips included.
+    pub seconds: f64,
 }
 
 /// Enclosures over a box, each the intersection of the natural and the mean-value form.
@@ -207,7 +195,7 @@ pub fn bisect(b: [Interval; 2], cut_theta3: bool) -> ([Interval; 2], [Interval; 
 }
 
 /// Krawczyk on (det, gₖ) over `b` with `e` its evaluation.
-fn krawczyk_cusp(b: &[Interval; 2], e: &BoxEval, k: usize) -> Step<2> {
+fn krawczyk_cusp(b: &[Interval; 2], e: &BoxEval, k: usize) -> K<2> {
     let m = [b[0].mid(), b[1].mid()];
     krawczyk::step(b, &m, &[e.det_mid, e.g_mid[k]], &[e.grad_det, e.grad_g[k]])
 }
@@ -220,7 +208,7 @@ fn refine(chain: &Chain3R, mut b: [Interval; 2], k: usize, precision: f64) -> [I
         }
         let e = evaluate(chain, b);
         match krawczyk_cusp(&b, &e, k) {
-            Step::Unique(next) | Step::Contracted(next) if width(&next) < 0.9 * width(&b) => b = next,
+            K::Unique(next) | K::Contracted(next) if width(&next) < 0.9 * width(&b) => b = next,
             _ => break,
         }
     }
@@ -242,9 +230,9 @@ fn inflate(chain: &Chain3R, mut x: [Interval; 2], k: usize) -> Option<[Interval;
             return None;
         }
         match krawczyk_cusp(&grown, &e, k) {
-            Step::Unique(inner) => return Some(inner),
-            Step::Contracted(next) => x = next,
-            Step::Empty | Step::Failed => return None,
+            K::Unique(inner) => return Some(inner),
+            K::Contracted(next) => x = next,
+            K::Empty | K::Failed => return None,
         }
     }
     None
@@ -261,41 +249,67 @@ fn meet_across_seam(a: &[Interval; 2], b: &[Interval; 2]) -> bool {
     meet_on_torus(a, b) && (0..2).any(|i| a[i].disjoint(b[i]))
 }
 
-/// Finds every cusp in [-π, π]² (see the module doc).
-pub fn search(chain: &Chain3R, settings: &CuspSettings) -> Result<CuspSearch, super::Manip3rError> {
-    super::check_precision(settings.precision)?;
-    let start = Instant::now();
-    let eps = settings.precision;
-    let bands = motion::bands(chain, eps);
-    let mut stats = CuspStats::default();
-    let mut cusps: Vec<Cusp> = Vec::new();
-    let mut undecided = Vec::new();
-    let mut stack = vec![[motion::full_range(), motion::full_range()]];
-    let mut complete = true;
-    while let Some(b) = stack.pop() {
-        if stats.processed >= settings.max_boxes || settings.timeout.is_some_and(|t| start.elapsed() > t) {
-            complete = false;
-            undecided.push(Undecided { theta: b, reason: Reason::Limit });
-            undecided.extend(stack.drain(..).map(|theta| Undecided { theta, reason: Reason::Limit }));
-            break;
-        }
-        stats.processed += 1;
-        // Inside a box already proven to hold exactly one cusp: nothing more to find.
-        if cusps.iter().any(|c| c.unique && (0..2).all(|i| c.theta[i].inf() <= b[i].inf() && b[i].sup() <= c.theta[i].sup())) {
-            continue;
-        }
-        if bands.iter().any(|band| band.holds(b[1])) {
-            stats.in_strips += 1;
-            continue;
+/// A box of the cusp search, with its place in the depth-first walk.
+#[derive(Clone, Copy, Debug)]
+pub struct CuspCell {
+    theta: [Interval; 2],
+    order: Order,
+    level: u32,
+}
+
+/// How a reported box was proven.
+#[derive(Clone, Copy, Debug)]
+enum Proof {
+    /// Krawczyk proved a unique zero and ∇det ≠ 0 on the box.
+    Krawczyk,
+    /// ε-inflation proved one around a contracted box, with Df's row `k` (uncertain chains).
+    Inflated(usize),
+    /// Bisection baseline: a candidate at the precision, nothing proven.
+    Candidate,
+}
+
+/// What one box yielded: a cusp box, before the decisions that look at other cusps.
+#[derive(Clone, Copy, Debug)]
+pub struct CuspFound {
+    order: Order,
+    /// The box of the search that yielded it.
+    source: [Interval; 2],
+    theta: [Interval; 2],
+    proof: Proof,
+}
+
+/// The cusp test of the module doc, one box at a time.
+struct CuspPrune<'a> {
+    chain: &'a Chain3R,
+    bands: &'a [Band],
+    eps: f64,
+    method: Method,
+    /// Krawczyk contractions (splits into one child), which the report does not count as
+    /// bisections.
+    contracted: u64,
+}
+
+/// Measure of the start box, for progress.
+fn full_area() -> f64 {
+    (2.0 * motion::PI_UP) * (2.0 * motion::PI_UP)
+}
+
+impl Prune for CuspPrune<'_> {
+    type Cell = CuspCell;
+    type Found = CuspFound;
+
+    fn process(&mut self, cell: CuspCell) -> Step<CuspCell, CuspFound> {
+        let (chain, eps) = (self.chain, self.eps);
+        let b = cell.theta;
+        if self.bands.iter().any(|band| band.holds(b[1])) {
+            return Step::Discard("in_strips");
         }
         let e = evaluate(chain, b);
         if !e.det.contains(0.0) {
-            stats.regular += 1;
-            continue;
+            return Step::Discard("regular");
         }
         if !e.g[0].contains(0.0) || !e.g[1].contains(0.0) {
-            stats.not_tangent += 1;
-            continue;
+            return Step::Discard("not_tangent");
         }
         let grad_det_ok = excludes_zero(&e.grad_det);
         let row = (0..2).filter(|&k| excludes_zero(&e.df[k])).max_by(|&i, &j| {
@@ -303,82 +317,139 @@ pub fn search(chain: &Chain3R, settings: &CuspSettings) -> Result<CuspSearch, su
             mig(i).total_cmp(&mig(j))
         });
         let small = width(&b) <= eps;
-        if settings.method == Method::Krawczyk {
+        let found = |theta, proof| Step::Found(CuspFound { order: cell.order, source: b, theta, proof });
+        if self.method == Method::Krawczyk {
             if let Some(k) = row {
                 match krawczyk_cusp(&b, &e, k) {
-                    Step::Empty => {
-                        stats.krawczyk_empty += 1;
-                        continue;
-                    }
-                    Step::Unique(inner) if grad_det_ok => {
-                        let theta = refine(chain, inner, k, eps);
-                        let f = [chain.jets(theta, 0).rho.value(), chain.jets(theta, 0).z.value()];
-                        // Proven boxes lie in disjoint box interiors; only the ±π seam, where the
-                        // range overlaps itself by an ulp, can show one cusp twice.
-                        if !cusps.iter().any(|c| meet_across_seam(&c.theta, &theta)) {
-                            cusps.push(Cusp { theta, rho: f[0], z: f[1], unique: true });
-                        }
-                        continue;
-                    }
-                    Step::Unique(_) if small => {
-                        undecided.push(Undecided { theta: b, reason: Reason::GradDetMayVanish });
-                        continue;
-                    }
-                    Step::Contracted(k_box) if small && grad_det_ok && chain.uncertainty > 0.0 => {
+                    K::Empty => return Step::Discard("krawczyk_empty"),
+                    K::Unique(inner) if grad_det_ok => return found(refine(chain, inner, k, eps), Proof::Krawczyk),
+                    K::Unique(_) if small => return Step::Undecided(cell, GRAD_DET_MAY_VANISH),
+                    K::Contracted(k_box) if small && grad_det_ok && chain.uncertainty > 0.0 => {
                         if let Some(inner) = inflate(chain, k_box, k) {
-                            let theta = refine(chain, inner, k, eps);
-                            let j = chain.jets(theta, 0);
-                            // A second proof of an overlapping box is the same cusp only if the
-                            // hull is proven too; otherwise both are kept, marked not unique.
-                            match cusps.iter().position(|c| (0..2).all(|i| !c.theta[i].disjoint(theta[i]))) {
-                                None => cusps.push(Cusp { theta, rho: j.rho.value(), z: j.z.value(), unique: true }),
-                                Some(at) => {
-                                    let hull = [cusps[at].theta[0].convex_hull(theta[0]), cusps[at].theta[1].convex_hull(theta[1])];
-                                    match inflate(chain, hull, k) {
-                                        Some(h) => {
-                                            let j = chain.jets(h, 0);
-                                            cusps[at] = Cusp { theta: h, rho: j.rho.value(), z: j.z.value(), unique: true };
-                                        }
-                                        None => {
-                                            cusps[at].unique = false;
-                                            cusps.push(Cusp { theta, rho: j.rho.value(), z: j.z.value(), unique: false });
-                                        }
-                                    }
-                                }
-                            }
-                            continue;
+                            return found(refine(chain, inner, k, eps), Proof::Inflated(k));
                         }
                     }
                     // Contraction moves box edges off the dyadic grid, which only matters near
                     // strips.
-                    Step::Contracted(k) if width(&k) < 0.7 * width(&b) && bands.is_empty() => {
-                        stack.push(k);
-                        continue;
+                    K::Contracted(k) if width(&k) < 0.7 * width(&b) && self.bands.is_empty() => {
+                        self.contracted += 1;
+                        return Step::Split(smallvec![CuspCell { theta: k, order: cell.order.child(0, 1), level: cell.level + 1 }]);
                     }
                     _ => {}
                 }
             }
         } else if small {
             // Baseline: a box at the precision that passed every exclusion test is a candidate.
-            let theta = b;
-            let f = [chain.jets(theta, 0).rho.value(), chain.jets(theta, 0).z.value()];
-            cusps.push(Cusp { theta, rho: f[0], z: f[1], unique: false });
-            continue;
+            return found(b, Proof::Candidate);
         }
         if small {
-            undecided.push(Undecided { theta: b, reason: Reason::Precision });
-            continue;
+            return Step::Undecided(cell, PRECISION);
         }
-        stats.bisected += 1;
-        let (lo, hi) = bisect(b, motion::straddles(&bands, b[1]));
-        stack.push(hi);
-        stack.push(lo);
+        let (lo, hi) = bisect(b, motion::straddles(self.bands, b[1]));
+        let child = |theta, i| CuspCell { theta, order: cell.order.child(i, 2), level: cell.level + 1 };
+        Step::Split(smallvec![child(lo, 0), child(hi, 1)])
+    }
+
+    fn share(&self, cell: &CuspCell) -> f64 {
+        cell.theta[0].wid() * cell.theta[1].wid() / full_area()
+    }
+
+    fn level(&self, cell: &CuspCell) -> u32 {
+        cell.level
+    }
+}
+
+const GRAD_DET_MAY_VANISH: &str = "grad_det_may_vanish";
+const PRECISION: &str = "precision";
+
+fn reason(why: search::Undecided) -> Reason {
+    match why {
+        search::Undecided::Precision(GRAD_DET_MAY_VANISH) => Reason::GradDetMayVanish,
+        search::Undecided::Precision(_) => Reason::Precision,
+        search::Undecided::Pending => Reason::Limit,
+    }
+}
+
+fn inside(outer: &[Interval; 2], inner: &[Interval; 2]) -> bool {
+    (0..2).all(|i| outer[i].inf() <= inner[i].inf() && inner[i].sup() <= outer[i].sup())
+}
+
+/// Finds every cusp in [-π, π]² (see the module doc), depth first on one thread, with at most
+/// `DEFAULT_MAX_BOXES` boxes.
+pub fn search(chain: &Chain3R, settings: &CuspSettings) -> Result<CuspSearch, super::Manip3rError> {
+    let control = Control::with_limits(Limits { max_cells: DEFAULT_MAX_BOXES, ..Limits::default() });
+    search_with(chain, settings, &control, &mut no_progress)
+}
+
+/// Finds every cusp in [-π, π]² within `control`, reporting progress.
+pub fn search_with(chain: &Chain3R, settings: &CuspSettings, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<CuspSearch, super::Manip3rError> {
+    super::check_precision(settings.precision)?;
+    let t0 = Instant::now();
+    let eps = settings.precision;
+    let bands = motion::bands(chain, eps);
+    let start = CuspCell { theta: [motion::full_range(), motion::full_range()], order: Order::ROOT, level: 0 };
+    let Outcome { status, stats, found, undecided: pending, workers } = drive(|| CuspPrune { chain, bands: &bands, eps, method: settings.method, contracted: 0 }, start, control, progress);
+    let contracted = workers.iter().map(|p| p.contracted).sum();
+    drop(workers);
+    // The decisions that look at other cusps, in depth-first order (see `drive`).
+    enum Event {
+        Found(CuspFound),
+        Undecided(CuspCell, search::Undecided),
+    }
+    let mut events: Vec<(Order, Event)> = found.into_iter().map(|f| (f.order, Event::Found(f))).collect();
+    events.extend(pending.into_iter().map(|(c, why)| (c.order, Event::Undecided(c, why))));
+    events.sort_by_key(|(order, _)| *order);
+    let mut cusps: Vec<Cusp> = Vec::new();
+    let mut undecided = Vec::new();
+    for (_, event) in events {
+        // A box inside one already proven to hold exactly one cusp holds nothing more.
+        let proven = |cusps: &[Cusp], b: &[Interval; 2]| cusps.iter().any(|c| c.unique && inside(&c.theta, b));
+        match event {
+            Event::Undecided(cell, why) => {
+                if !proven(&cusps, &cell.theta) {
+                    undecided.push(Undecided { theta: cell.theta, reason: reason(why) });
+                }
+            }
+            Event::Found(f) if proven(&cusps, &f.source) => {}
+            Event::Found(CuspFound { theta, proof: Proof::Krawczyk, .. }) => {
+                // Proven boxes lie in disjoint box interiors; only the ±π seam, where the range
+                // overlaps itself by an ulp, can show one cusp twice.
+                if !cusps.iter().any(|c| meet_across_seam(&c.theta, &theta)) {
+                    let j = chain.jets(theta, 0);
+                    cusps.push(Cusp { theta, rho: j.rho.value(), z: j.z.value(), unique: true });
+                }
+            }
+            Event::Found(CuspFound { theta, proof: Proof::Inflated(k), .. }) => {
+                let j = chain.jets(theta, 0);
+                // A second proof of an overlapping box is the same cusp only if the hull is
+                // proven too; otherwise both are kept, marked not unique.
+                match cusps.iter().position(|c| (0..2).all(|i| !c.theta[i].disjoint(theta[i]))) {
+                    None => cusps.push(Cusp { theta, rho: j.rho.value(), z: j.z.value(), unique: true }),
+                    Some(at) => {
+                        let hull = [cusps[at].theta[0].convex_hull(theta[0]), cusps[at].theta[1].convex_hull(theta[1])];
+                        match inflate(chain, hull, k) {
+                            Some(h) => {
+                                let j = chain.jets(h, 0);
+                                cusps[at] = Cusp { theta: h, rho: j.rho.value(), z: j.z.value(), unique: true };
+                            }
+                            None => {
+                                cusps[at].unique = false;
+                                cusps.push(Cusp { theta, rho: j.rho.value(), z: j.z.value(), unique: false });
+                            }
+                        }
+                    }
+                }
+            }
+            Event::Found(CuspFound { theta, proof: Proof::Candidate, .. }) => {
+                let j = chain.jets(theta, 0);
+                cusps.push(Cusp { theta, rho: j.rho.value(), z: j.z.value(), unique: false });
+            }
+        }
     }
     if settings.method == Method::Bisection {
         cusps = merge_candidates(chain, cusps);
     }
-    stats.seconds = start.elapsed().as_secs_f64();
-    Ok(CuspSearch { cusps, undecided, bands, complete, stats })
+    Ok(CuspSearch { cusps, undecided, bands, status, stats, contracted, seconds: t0.elapsed().as_secs_f64() })
 }
 
 /// Merges touching candidate boxes (baseline only) into one hull per cluster.

@@ -9,11 +9,14 @@
 
 use super::chain::Chain3R;
 use super::cusps::{bisect, meet_on_torus};
-use super::krawczyk::{self, Step};
+use super::drive::{drive, no_progress, Control, Order};
+use super::krawczyk::{self, Step as K};
 use super::motion;
 use super::Manip3rError;
 use crate::interval::point;
+use crate::search::{Limits, Progress, Prune, Stats, Status, Step};
 use inari::Interval;
+use smallvec::smallvec;
 
 /// The outcome of an inverse-kinematics query.
 #[derive(Clone, Debug)]
@@ -22,10 +25,11 @@ pub struct IkSolutions {
     pub unique: Vec<[Interval; 2]>,
     /// Hulls of clusters of undecided boxes: each may hold solutions, none elsewhere.
     pub clusters: Vec<IkCluster>,
-    /// True when no limit was hit.
-    pub complete: bool,
-    /// Boxes processed.
-    pub processed: u64,
+    /// `Complete` when every box was decided; otherwise the limit that stopped the run.
+    pub status: Status,
+    /// The kernel's counters; discards by reason: `no_solution` (F ≠ 0 on the box),
+    /// `krawczyk_empty`.
+    pub stats: Stats,
 }
 
 /// Touching undecided boxes, reported as one.
@@ -37,35 +41,43 @@ pub struct IkCluster {
     pub boxes: usize,
 }
 
-/// Solves `f(θ₂, θ₃) = (radius², z)` (see the module doc).
+/// Solves `f(θ₂, θ₃) = (radius², z)` (see the module doc), depth first on one thread, with at
+/// most `max_boxes` boxes.
 pub fn solve(chain: &Chain3R, radius: f64, z: f64, precision: f64, max_boxes: u64) -> Result<IkSolutions, Manip3rError> {
+    let control = Control::with_limits(Limits { max_cells: max_boxes, ..Limits::default() });
+    solve_with(chain, radius, z, precision, &control, &mut no_progress)
+}
+
+/// As `solve`, within `control`, reporting progress.
+pub fn solve_with(chain: &Chain3R, radius: f64, z: f64, precision: f64, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<IkSolutions, Manip3rError> {
     if !(radius.is_finite() && z.is_finite() && radius >= 0.0) {
         return Err(Manip3rError::BadPoint(radius, z));
     }
-    solve_target(chain, [point(radius).sqr(), point(z)], precision, max_boxes)
+    solve_target(chain, [point(radius).sqr(), point(z)], precision, control, progress)
 }
 
-/// Solves `f(θ₂, θ₃) ∈ target`, with `target` enclosures of (ρ, z) (for a point known only up
-/// to rounding, e.g. after a change of frame): every solution for every target in the box is
-/// enclosed, and a box is unique when it holds exactly one for each. See `solve`.
-pub fn solve_target(chain: &Chain3R, target: [Interval; 2], precision: f64, max_boxes: u64) -> Result<IkSolutions, Manip3rError> {
-    super::check_precision(precision)?;
-    if target.iter().any(|t| t.is_empty() || !t.inf().is_finite() || !t.sup().is_finite()) {
-        return Err(Manip3rError::BadPoint(target[0].mid(), target[1].mid()));
-    }
-    let mut stack = vec![[motion::full_range(), motion::full_range()]];
-    let mut unique: Vec<[Interval; 2]> = Vec::new();
-    let mut undecided = Vec::new();
-    let mut processed = 0;
-    let mut complete = true;
-    while let Some(b) = stack.pop() {
-        if processed >= max_boxes {
-            complete = false;
-            undecided.push(b);
-            undecided.append(&mut stack);
-            break;
-        }
-        processed += 1;
+/// A box of the search, with its place in the depth-first walk.
+#[derive(Clone, Copy, Debug)]
+pub struct IkCell {
+    b: [Interval; 2],
+    order: Order,
+    level: u32,
+}
+
+/// The test of the module doc, one box at a time.
+struct IkPrune<'a> {
+    chain: &'a Chain3R,
+    target: [Interval; 2],
+    precision: f64,
+}
+
+impl Prune for IkPrune<'_> {
+    type Cell = IkCell;
+    type Found = (Order, [Interval; 2]);
+
+    fn process(&mut self, cell: IkCell) -> Step<IkCell, (Order, [Interval; 2])> {
+        let (chain, target, precision) = (self.chain, self.target, self.precision);
+        let b = cell.b;
         let m = [b[0].mid(), b[1].mid()];
         // `derived` tightens enclosures over uncertain lengths (mean-value form in them).
         let over = chain.derived(b, 1);
@@ -83,11 +95,11 @@ pub fn solve_target(chain: &Chain3R, target: [Interval; 2], precision: f64, max_
             jac[k] = g;
         }
         if empty {
-            continue;
+            return Step::Discard("no_solution");
         }
         match krawczyk::step(&b, &m, &fm, &jac) {
-            Step::Empty => continue,
-            Step::Unique(mut k) => {
+            K::Empty => return Step::Discard("krawczyk_empty"),
+            K::Unique(mut k) => {
                 for _ in 0..30 {
                     if k[0].wid().max(k[1].wid()) <= precision {
                         break;
@@ -97,28 +109,49 @@ pub fn solve_target(chain: &Chain3R, target: [Interval; 2], precision: f64, max_
                     let a = chain.derived([point(mk[0]), point(mk[1])], 1);
                     let fmk = [a.f[0].value() - target[0], a.f[1].value() - target[1]];
                     match krawczyk::step(&k, &mk, &fmk, &[o.f[0].grad(), o.f[1].grad()]) {
-                        Step::Unique(n) | Step::Contracted(n) if n[0].wid().max(n[1].wid()) < 0.9 * k[0].wid().max(k[1].wid()) => k = n,
+                        K::Unique(n) | K::Contracted(n) if n[0].wid().max(n[1].wid()) < 0.9 * k[0].wid().max(k[1].wid()) => k = n,
                         _ => break,
                     }
                 }
-                // The ±π seam, where the range overlaps itself by an ulp, is the only place one
-                // solution can be proven twice.
-                if !unique.iter().any(|u| meet_on_torus(u, &k) && (0..2).any(|i| u[i].disjoint(k[i]))) {
-                    unique.push(k);
-                }
-                continue;
+                return Step::Found((cell.order, k));
             }
             _ => {}
         }
         if b[0].wid().max(b[1].wid()) <= precision {
-            undecided.push(b);
-            continue;
+            return Step::Undecided(cell, "precision");
         }
         let (lo, hi) = bisect(b, false);
-        stack.push(hi);
-        stack.push(lo);
+        let child = |b, i| IkCell { b, order: cell.order.child(i, 2), level: cell.level + 1 };
+        Step::Split(smallvec![child(lo, 0), child(hi, 1)])
     }
-    Ok(IkSolutions { unique, clusters: cluster(&undecided), complete, processed })
+
+    fn level(&self, cell: &IkCell) -> u32 {
+        cell.level
+    }
+}
+
+/// Solves `f(θ₂, θ₃) ∈ target`, with `target` enclosures of (ρ, z) (for a point known only up
+/// to rounding, e.g. after a change of frame): every solution for every target in the box is
+/// enclosed, and a box is unique when it holds exactly one for each. See `solve`.
+pub fn solve_target(chain: &Chain3R, target: [Interval; 2], precision: f64, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<IkSolutions, Manip3rError> {
+    super::check_precision(precision)?;
+    if target.iter().any(|t| t.is_empty() || !t.inf().is_finite() || !t.sup().is_finite()) {
+        return Err(Manip3rError::BadPoint(target[0].mid(), target[1].mid()));
+    }
+    let start = IkCell { b: [motion::full_range(), motion::full_range()], order: Order::ROOT, level: 0 };
+    let mut run = drive(|| IkPrune { chain, target, precision }, start, control, progress);
+    run.found.sort_by_key(|(order, _)| *order);
+    let mut unique: Vec<[Interval; 2]> = Vec::new();
+    for (_, k) in run.found {
+        // The ±π seam, where the range overlaps itself by an ulp, is the only place one
+        // solution can be proven twice: the first in depth-first order is kept.
+        if !unique.iter().any(|u| meet_on_torus(u, &k) && (0..2).any(|i| u[i].disjoint(k[i]))) {
+            unique.push(k);
+        }
+    }
+    run.undecided.sort_by_key(|(c, _)| c.order);
+    let undecided: Vec<[Interval; 2]> = run.undecided.iter().map(|(c, _)| c.b).collect();
+    Ok(IkSolutions { unique, clusters: cluster(&undecided), status: run.status, stats: run.stats })
 }
 
 /// Groups boxes that touch on the torus.

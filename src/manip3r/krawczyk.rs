@@ -20,7 +20,7 @@
 //! R. Krawczyk, Computing 4 (1969); A. Neumaier, *Interval methods for systems of equations*,
 //! Cambridge University Press (1990), section 5.
 
-use super::taylor::Iv;
+use crate::interval::fast::Iv;
 use inari::Interval;
 use nalgebra::SMatrix;
 
@@ -39,7 +39,7 @@ pub enum Step<const N: usize> {
 
 /// One Krawczyk step on `b`, with `fm ⊇ F(m)` at the point `m` and `jac ⊇ J(b)` (row i = ∇Fᵢ).
 ///
-/// The arithmetic is `taylor::Iv` (inlined, one ulp outward per operation) rather than inari's:
+/// The arithmetic is `interval::fast::Iv` (inlined, one ulp outward per operation) rather than inari's:
 /// this step runs once per pair of boxes in the node search, where inari's out-of-line calls
 /// dominated. Products with the point matrix `Y` scale by a double, and zero entries of `J`
 /// (the node system has four) are skipped.

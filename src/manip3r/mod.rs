@@ -15,19 +15,25 @@
 
 pub mod chain;
 pub mod collision;
+pub mod curves;
 pub mod cusps;
+pub mod drive;
 pub mod ik;
 pub mod krawczyk;
 pub mod motion;
 pub mod nodes;
 pub mod report;
 pub mod taylor;
-pub mod trig;
+/// Sound interval sine and cosine, now `crate::interval::trig` (the path kept for callers).
+pub use crate::interval::trig;
 
 pub use chain::{Chain3R, Jets};
 pub use cusps::{Cusp, CuspSearch};
+pub use drive::{Control, Order};
 pub use nodes::{Node, NodeSearch};
 
+use crate::search::{Limits, Progress, Status};
+use std::time::Instant;
 use thiserror::Error;
 
 /// What is wrong with a 3R problem. Messages are one line and name the culprit.
@@ -78,4 +84,47 @@ pub fn check_precision(precision: f64) -> Result<(), Manip3rError> {
     } else {
         Err(Manip3rError::BadPrecision(precision))
     }
+}
+
+/// Cusps, internal motions and (when asked) nodes of one chain, from one run.
+#[derive(Clone, Debug)]
+pub struct Singularities {
+    /// The cusp search, with the internal-motion bands.
+    pub cusps: CuspSearch,
+    /// The node search, when asked for.
+    pub nodes: Option<NodeSearch>,
+    /// `Complete` when both searches are; otherwise the first limit that stopped one.
+    pub status: Status,
+    /// Wall-clock seconds of the whole run.
+    pub seconds: f64,
+}
+
+/// Cusps, then nodes, within one `control`: the CLI and the ROS node both run this, so they
+/// bound a request the same way.
+///
+/// - One deadline for the whole run: the node search gets what the cusp search left of
+///   `control.limits.timeout` (none left: it stops at once, its start pair pending).
+/// - The cell budget `control.limits.max_cells` holds for each search (boxes, then pairs).
+/// - One cancel flag; a cancelled cusp search still hands its certified cusps to the node
+///   search, which then stops at once too (cancelled), so every pending cell is reported.
+///
+/// `progress` sees the cusp search's share decided in [0, ½] and the node search's in [½, 1]
+/// (when nodes are searched).
+pub fn singularities(chain: &Chain3R, precision: f64, with_nodes: bool, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<Singularities, Manip3rError> {
+    check_precision(precision)?;
+    let start = Instant::now();
+    let share = if with_nodes { 0.5 } else { 1.0 };
+    let found = cusps::search_with(chain, &cusps::CuspSettings { precision, method: cusps::Method::Krawczyk }, control, &mut |p| {
+        progress(&Progress { decided: p.decided * share, ..*p })
+    })?;
+    let node_search = if with_nodes {
+        let left = control.limits.timeout.map(|t| t.saturating_sub(start.elapsed()));
+        let control = Control { limits: Limits { timeout: left, ..control.limits }, ..*control };
+        let settings = nodes::NodeSettings { precision };
+        Some(nodes::search_with(chain, &found.cusps, &found.bands, &settings, &control, &mut |p| progress(&Progress { decided: 0.5 + 0.5 * p.decided, ..*p }))?)
+    } else {
+        None
+    };
+    let status = node_search.as_ref().map_or(found.status, |n| found.status.and(n.status));
+    Ok(Singularities { cusps: found, nodes: node_search, status, seconds: start.elapsed().as_secs_f64() })
 }

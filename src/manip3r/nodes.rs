@@ -29,28 +29,32 @@
 
 use super::chain::Chain3R;
 use super::cusps::{self, evaluate_without_tangency as evaluate, meet_on_torus, BoxEval, Cusp};
-use super::krawczyk::{self, Step};
+use super::drive::{drive, no_progress, Control, Order};
+use super::krawczyk::{self, Step as K};
 use super::motion::{self, Band};
 use crate::interval::{interval, point};
+use crate::search::{Limits, Progress, Prune, Stats, Status, Step};
 use inari::Interval;
-use std::time::{Duration, Instant};
+use smallvec::SmallVec;
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::OnceLock;
+use std::time::Instant;
 
-/// Settings of a node search.
+/// Settings of a node search (its bounds are a `Control`).
 #[derive(Clone, Copy, Debug)]
 pub struct NodeSettings {
     /// Largest width of a reported box (radians); undecided pairs are at most this wide.
     pub precision: f64,
-    /// Stop after this many pairs (the run is then incomplete).
-    pub max_pairs: u64,
-    /// Stop after this long.
-    pub timeout: Option<Duration>,
 }
 
 impl Default for NodeSettings {
     fn default() -> Self {
-        NodeSettings { precision: 1e-4, max_pairs: 20_000_000, timeout: None }
+        NodeSettings { precision: 1e-4 }
     }
 }
+
+/// Pairs a node search processes at most unless told otherwise (`search`).
+pub const DEFAULT_MAX_PAIRS: u64 = 20_000_000;
 
 /// A certified node: exactly one pair of singular points `x₁ ∈ theta[0]`, `x₂ ∈ theta[1]` with
 /// `f(x₁) = f(x₂)`.
@@ -64,29 +68,6 @@ pub struct Node {
     pub z: Interval,
 }
 
-/// Counters of a node search.
-#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
-pub struct NodeStats {
-    /// Pairs taken from the stack.
-    pub pairs: u64,
-    /// Dropped because the images are disjoint.
-    pub apart: u64,
-    /// Dropped by the mean-value injectivity certificate.
-    pub injective: u64,
-    /// Dropped by a cusp-neighbourhood certificate.
-    pub near_cusp: u64,
-    /// Dropped by Krawczyk.
-    pub krawczyk_empty: u64,
-    /// Pairs set aside because a box lies in an internal-motion strip.
-    pub in_strips: u64,
-    /// Boxes of the tree.
-    pub cells: u64,
-    /// Cusp neighbourhoods certified (of all cusps given).
-    pub cusp_regions: u64,
-    /// Wall-clock seconds.
-    pub seconds: f64,
-}
-
 /// The outcome of a node search.
 #[derive(Clone, Debug)]
 pub struct NodeSearch {
@@ -94,64 +75,84 @@ pub struct NodeSearch {
     pub nodes: Vec<Node>,
     /// Undecided pairs of boxes.
     pub undecided: Vec<[[Interval; 2]; 2]>,
-    /// True when no limit was hit.
-    pub complete: bool,
-    /// Counters.
-    pub stats: NodeStats,
+    /// `Complete` when every pair was decided or set aside; otherwise the limit that stopped it.
+    pub status: Status,
+    /// The kernel's counters (pairs); discards by reason: `regular`, `in_strips`, `apart`,
+    /// `near_cusp`, `injective`, `krawczyk_empty`.
+    pub stats: Stats,
+    /// Boxes of the tree.
+    pub cells: u64,
+    /// Cusp neighbourhoods certified (of all cusps given).
+    pub cusp_regions: u64,
+    /// Wall-clock seconds, the cusp neighbourhoods included.
+    pub seconds: f64,
 }
 
-struct Cell {
+/// A box of the binary tree over [-π, π]², with its enclosures computed once: a box meets
+/// many others in pairs. The tree grows as the search asks for children (`children`); workers
+/// share it, and the children of a box are the same whoever makes them. Boxes are never freed
+/// before the search ends, so cells hold plain references (no reference counts to update in
+/// the inner loop).
+struct TreeBox {
     b: [Interval; 2],
     eval: BoxEval,
     singular: bool,
     in_strip: bool,
-    children: Option<(usize, usize)>,
-    parent: Option<usize>,
-    depth: u32,
+    children: OnceLock<[Box<TreeBox>; 2]>,
 }
 
+/// What the workers of a node search share.
 struct Tree<'a> {
     chain: &'a Chain3R,
     bands: &'a [Band],
-    cells: Vec<Cell>,
+    /// Cusp neighbourhoods on which f restricted to S is proven injective.
+    regions: &'a [[Interval; 2]],
+    eps: f64,
+    /// Boxes made so far.
+    boxes: AtomicU64,
 }
 
 impl Tree<'_> {
-    fn add(&mut self, b: [Interval; 2], parent: Option<usize>) -> usize {
+    fn make(&self, b: [Interval; 2]) -> Box<TreeBox> {
+        self.boxes.fetch_add(1, Ordering::Relaxed);
         let eval = evaluate(self.chain, b);
         let in_strip = self.bands.iter().any(|band| band.holds(b[1]));
-        let depth = parent.map_or(0, |p| self.cells[p].depth + 1);
-        self.cells.push(Cell { b, eval, singular: eval.det.contains(0.0), in_strip, children: None, parent, depth });
-        self.cells.len() - 1
+        Box::new(TreeBox { b, eval, singular: eval.det.contains(0.0), in_strip, children: OnceLock::new() })
     }
 
-    /// The smallest cell holding both `i` and `j`: its cached enclosures hold on their hull.
-    fn common_ancestor(&self, mut i: usize, mut j: usize) -> usize {
-        while i != j {
-            let (ci, cj) = (&self.cells[i], &self.cells[j]);
-            let up = |c: &Cell, k: usize| c.parent.unwrap_or(k);
-            if ci.depth >= cj.depth {
-                i = up(ci, i);
-            } else {
-                j = up(cj, j);
-            }
-        }
-        i
+    /// The singular children of `x` (made on first use).
+    fn children<'r>(&self, x: &'r TreeBox) -> SmallVec<[&'r TreeBox; 2]> {
+        let ch = x.children.get_or_init(|| {
+            let (lo, hi) = cusps::bisect(x.b, motion::straddles(self.bands, x.b[1]));
+            [self.make(lo), self.make(hi)]
+        });
+        ch.iter().map(|c| &**c).filter(|c| c.singular).collect()
     }
+}
 
-    /// The singular children of cell `i` (made on first use).
-    fn children(&mut self, i: usize) -> Vec<usize> {
-        let (a, c) = match self.cells[i].children {
-            Some(ch) => ch,
-            None => {
-                let (lo, hi) = cusps::bisect(self.cells[i].b, motion::straddles(self.bands, self.cells[i].b[1]));
-                let ch = (self.add(lo, Some(i)), self.add(hi, Some(i)));
-                self.cells[i].children = Some(ch);
-                ch
-            }
-        };
-        [a, c].into_iter().filter(|&k| self.cells[k].singular).collect()
+/// A pair of tree boxes (`p` may be `q`), with the smallest tree box holding both: its cached
+/// enclosures hold on their hull. When `p` is split, the pairs `(child, q)` keep that box (`q`
+/// is never inside `p`); the pairs of `p` with itself get `p`, or the child itself.
+#[derive(Clone, Copy)]
+pub struct NodeCell<'r> {
+    p: &'r TreeBox,
+    q: &'r TreeBox,
+    ancestor: &'r TreeBox,
+    order: Order,
+    level: u32,
+}
+
+impl NodeCell<'_> {
+    /// The two joint boxes.
+    pub fn boxes(&self) -> [[Interval; 2]; 2] {
+        [self.p.b, self.q.b]
     }
+}
+
+/// A node proven in one pair, before the seam check against the others.
+pub struct NodeFound {
+    order: Order,
+    node: Node,
 }
 
 fn width(b: &[Interval; 2]) -> f64 {
@@ -280,7 +281,7 @@ fn contains(outer: &[Interval; 2], inner: &[Interval; 2]) -> bool {
 }
 
 /// Krawczyk on system (3) over `p × q`.
-fn krawczyk_node(p: &[Interval; 2], ep: &BoxEval, q: &[Interval; 2], eq: &BoxEval) -> Step<4> {
+fn krawczyk_node(p: &[Interval; 2], ep: &BoxEval, q: &[Interval; 2], eq: &BoxEval) -> K<4> {
     let b = [p[0], p[1], q[0], q[1]];
     let m = b.map(|x| x.mid());
     let fm = [ep.f_mid[0] - eq.f_mid[0], ep.f_mid[1] - eq.f_mid[1], ep.det_mid, eq.det_mid];
@@ -302,7 +303,7 @@ fn refine(chain: &Chain3R, mut p: [Interval; 2], mut q: [Interval; 2], precision
         }
         let (ep, eq) = (evaluate(chain, p), evaluate(chain, q));
         match krawczyk_node(&p, &ep, &q, &eq) {
-            Step::Unique(k) | Step::Contracted(k) if width(&[k[0], k[1]]).max(width(&[k[2], k[3]])) < 0.9 * width(&p).max(width(&q)) => {
+            K::Unique(k) | K::Contracted(k) if width(&[k[0], k[1]]).max(width(&[k[2], k[3]])) < 0.9 * width(&p).max(width(&q)) => {
                 p = [k[0], k[1]];
                 q = [k[2], k[3]];
             }
@@ -312,65 +313,52 @@ fn refine(chain: &Chain3R, mut p: [Interval; 2], mut q: [Interval; 2], precision
     (p, q)
 }
 
-/// Finds every node whose two points lie outside the internal-motion strips. `cusps` are the
-/// certified cusps (from `cusps::search` at any precision); they let pairs near a cusp go.
-pub fn search(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &NodeSettings) -> Result<NodeSearch, super::Manip3rError> {
-    super::check_precision(settings.precision)?;
-    let start = Instant::now();
-    let eps = settings.precision;
-    let mut stats = NodeStats::default();
-    let regions: Vec<[Interval; 2]> = cusps.iter().filter(|c| c.unique).filter_map(|c| cusp_region(chain, c)).collect();
-    stats.cusp_regions = regions.len() as u64;
-    let mut tree = Tree { chain, bands, cells: Vec::new() };
-    let root = tree.add([motion::full_range(), motion::full_range()], None);
-    let mut stack = vec![(root, root)];
-    let mut nodes: Vec<Node> = Vec::new();
-    let mut undecided = Vec::new();
-    let mut complete = true;
-    while let Some((i, j)) = stack.pop() {
-        if stats.pairs >= settings.max_pairs || settings.timeout.is_some_and(|t| start.elapsed() > t) {
-            complete = false;
-            for (a, b) in std::iter::once((i, j)).chain(stack.drain(..)) {
-                undecided.push([tree.cells[a].b, tree.cells[b].b]);
-            }
-            break;
-        }
-        stats.pairs += 1;
-        let (p, q) = (&tree.cells[i], &tree.cells[j]);
+/// The node test of the module doc, one pair at a time.
+struct NodePrune<'t, 'a, 'r> {
+    tree: &'t Tree<'a>,
+    _boxes: std::marker::PhantomData<&'r TreeBox>,
+}
+
+impl<'r> Prune for NodePrune<'_, '_, 'r> {
+    type Cell = NodeCell<'r>;
+    type Found = NodeFound;
+
+    fn process(&mut self, cell: NodeCell<'r>) -> Step<NodeCell<'r>, NodeFound> {
+        let tree = self.tree;
+        let (chain, eps) = (tree.chain, tree.eps);
+        let (p, q) = (cell.p, cell.q);
+        let same = std::ptr::eq(p, q);
         if !p.singular || !q.singular {
-            continue;
+            return Step::Discard("regular");
         }
         if p.in_strip || q.in_strip {
-            stats.in_strips += 1;
-            continue;
+            return Step::Discard("in_strips");
         }
         if (0..2).any(|k| p.eval.f[k].disjoint(q.eval.f[k])) {
-            stats.apart += 1;
-            continue;
+            return Step::Discard("apart");
         }
         let (pb, qb) = (p.b, q.b);
         let near = nearest_copy(&pb, &qb);
         let hull = [pb[0].convex_hull(near[0]), pb[1].convex_hull(near[1])];
-        if regions.iter().any(|u| contains(u, &hull)) {
-            stats.near_cusp += 1;
-            continue;
+        if tree.regions.iter().any(|u| contains(u, &hull)) {
+            return Step::Discard("near_cusp");
         }
-        let disjoint = i != j && !meet_on_torus(&pb, &qb);
-        // The smallest tree cell holding both boxes holds their hull too (unless the hull goes
+        let disjoint = !same && !meet_on_torus(&pb, &qb);
+        // The smallest tree box holding both boxes holds their hull too (unless the hull goes
         // across the ±π seam); its cached enclosures often already prove injectivity, for
         // siblings and for a box with itself exactly on the hull.
         let unshifted = near[0] == qb[0] && near[1] == qb[1];
         let g_mid = p.eval.g_mid;
-        let injective = |tree: &Tree| {
+        let injective = || {
             if unshifted {
-                let e = &tree.cells[tree.common_ancestor(i, j)].eval;
+                let e = &cell.ancestor.eval;
                 if injective_from(e.grad_det, e.df, g_mid) {
                     return true;
                 }
             }
             // Enclosures over the hull contain those over each box, so the certificate can
             // only hold on the hull if it holds on both boxes (cached): skip hopeless hulls.
-            let (ep, eq) = (&tree.cells[i].eval, &tree.cells[j].eval);
+            let (ep, eq) = (&p.eval, &q.eval);
             if !(injective_from(ep.grad_det, ep.df, g_mid) && injective_from(eq.grad_det, eq.df, g_mid)) {
                 return false;
             }
@@ -378,61 +366,121 @@ pub fn search(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &NodeSe
         };
         // Far pairs first meet Krawczyk, which is cheap on cached evaluations; near ones the
         // injectivity certificate, for which Krawczyk cannot work (the diagonal is a curve of zeros).
-        if !disjoint && injective(&tree) {
-            stats.injective += 1;
-            continue;
+        if !disjoint && injective() {
+            return Step::Discard("injective");
         }
         // Krawczyk only below a width: on the bundled robots it never concluded on boxes a
         // radian wide or more (thousands of calls on robot f), as its linearisation is too loose.
         if disjoint && width(&pb).max(width(&qb)) < KRAWCZYK_WIDTH {
             match krawczyk_node(&pb, &p.eval, &qb, &q.eval) {
-                Step::Empty => {
-                    stats.krawczyk_empty += 1;
-                    continue;
-                }
-                Step::Unique(k) => {
+                K::Empty => return Step::Discard("krawczyk_empty"),
+                K::Unique(k) => {
                     let (a, b) = refine(chain, [k[0], k[1]], [k[2], k[3]], eps);
                     let (ja, jb) = (chain.jets(a, 0), chain.jets(b, 0));
                     let node = Node { theta: [a, b], rho: ja.rho.value().intersection(jb.rho.value()), z: ja.z.value().intersection(jb.z.value()) };
-                    // Only the ±π seam (where the range overlaps itself by an ulp) can repeat one.
-                    let seen = nodes.iter().any(|n| {
-                        (meet_on_torus(&n.theta[0], &a) && meet_on_torus(&n.theta[1], &b)) || (meet_on_torus(&n.theta[0], &b) && meet_on_torus(&n.theta[1], &a))
-                    });
-                    if !seen {
-                        nodes.push(node);
-                    }
-                    continue;
+                    return Step::Found(NodeFound { order: cell.order, node });
                 }
                 _ => {}
             }
-            if width(&hull) < 0.5 && injective(&tree) {
-                stats.injective += 1;
-                continue;
+            if width(&hull) < 0.5 && injective() {
+                return Step::Discard("injective");
             }
         }
         let (wp, wq) = (width(&pb), width(&qb));
         if wp.max(wq) <= eps {
-            undecided.push([pb, qb]);
-            continue;
+            return Step::Undecided(cell, "precision");
         }
-        if i == j {
-            let ch = tree.children(i);
-            for (x, &a) in ch.iter().enumerate() {
-                for &b in &ch[x..] {
-                    stack.push((a, b));
+        // Children in the order the depth-first walk explores them: the loop this replaces
+        // pushed the pairs on a stack and took the last first.
+        let (level, order) = (cell.level + 1, cell.order);
+        let pair = |p, q, ancestor, i, n| NodeCell { p, q, ancestor, order: order.child(i, n), level };
+        let mut next: SmallVec<[NodeCell<'r>; 4]> = SmallVec::new();
+        if same {
+            match tree.children(p).as_slice() {
+                [] => {}
+                &[a] => next.push(pair(a, a, a, 0, 1)),
+                &[a, b] => {
+                    next.push(pair(b, b, b, 0, 3));
+                    next.push(pair(a, b, p, 1, 3));
+                    next.push(pair(a, a, a, 2, 3));
                 }
+                _ => unreachable!("a box has two children"),
             }
         } else if wp >= wq {
-            for a in tree.children(i) {
-                stack.push((a, j));
-            }
+            let ch = tree.children(p);
+            let n = ch.len();
+            next.extend(ch.into_iter().rev().enumerate().map(|(i, a)| pair(a, q, cell.ancestor, i, n)));
         } else {
-            for b in tree.children(j) {
-                stack.push((i, b));
-            }
+            let ch = tree.children(q);
+            let n = ch.len();
+            next.extend(ch.into_iter().rev().enumerate().map(|(i, b)| pair(p, b, cell.ancestor, i, n)));
+        }
+        Step::Split(next)
+    }
+
+    fn level(&self, cell: &NodeCell<'r>) -> u32 {
+        cell.level
+    }
+}
+
+/// Finds every node whose two points lie outside the internal-motion strips, depth first on
+/// one thread with at most `DEFAULT_MAX_PAIRS` pairs. `cusps` are the certified cusps (from
+/// `cusps::search` at any precision); they let pairs near a cusp go.
+pub fn search(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &NodeSettings) -> Result<NodeSearch, super::Manip3rError> {
+    let control = Control::with_limits(Limits { max_cells: DEFAULT_MAX_PAIRS, ..Limits::default() });
+    search_with(chain, cusps, bands, settings, &control, &mut no_progress)
+}
+
+/// As `search`, within `control`, reporting progress. The cusp neighbourhoods are certified
+/// first, on `control.threads` threads.
+pub fn search_with(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &NodeSettings, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<NodeSearch, super::Manip3rError> {
+    super::check_precision(settings.precision)?;
+    let start = Instant::now();
+    let unique: Vec<&Cusp> = cusps.iter().filter(|c| c.unique).collect();
+    let regions: Vec<[Interval; 2]> = in_parallel(&unique, control.threads, |c| cusp_region(chain, c)).into_iter().flatten().collect();
+    let tree = Tree { chain, bands, regions: &regions, eps: settings.precision, boxes: AtomicU64::new(0) };
+    let root = tree.make([motion::full_range(), motion::full_range()]);
+    let start_cell = NodeCell { p: &root, q: &root, ancestor: &root, order: Order::ROOT, level: 0 };
+    let mut run = drive(|| NodePrune { tree: &tree, _boxes: std::marker::PhantomData }, start_cell, control, progress);
+    // Only the ±π seam (where the range overlaps itself by an ulp) can repeat a node: the first
+    // in depth-first order is kept.
+    run.found.sort_by_key(|f| f.order);
+    let mut nodes: Vec<Node> = Vec::new();
+    for NodeFound { node, .. } in run.found {
+        let [a, b] = node.theta;
+        let seen = nodes.iter().any(|n| (meet_on_torus(&n.theta[0], &a) && meet_on_torus(&n.theta[1], &b)) || (meet_on_torus(&n.theta[0], &b) && meet_on_torus(&n.theta[1], &a)));
+        if !seen {
+            nodes.push(node);
         }
     }
-    stats.cells = tree.cells.len() as u64;
-    stats.seconds = start.elapsed().as_secs_f64();
-    Ok(NodeSearch { nodes, undecided, complete, stats })
+    run.undecided.sort_by_key(|(c, _)| c.order);
+    let undecided = run.undecided.iter().map(|(c, _)| c.boxes()).collect();
+    let cells = tree.boxes.load(Ordering::Relaxed);
+    Ok(NodeSearch { nodes, undecided, status: run.status, stats: run.stats, cells, cusp_regions: regions.len() as u64, seconds: start.elapsed().as_secs_f64() })
+}
+
+/// `f` on each item, on up to `threads` threads, results in item order.
+fn in_parallel<T: Sync, R: Send>(items: &[T], threads: usize, f: impl Fn(&T) -> R + Sync) -> Vec<R> {
+    if threads <= 1 || items.len() <= 1 {
+        return items.iter().map(f).collect();
+    }
+    let next = AtomicUsize::new(0);
+    let mut done: Vec<(usize, R)> = std::thread::scope(|s| {
+        let handles: Vec<_> = (0..threads.min(items.len()))
+            .map(|_| {
+                s.spawn(|| {
+                    let mut mine = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, Ordering::Relaxed);
+                        let Some(item) = items.get(i) else { break };
+                        mine.push((i, f(item)));
+                    }
+                    mine
+                })
+            })
+            .collect();
+        handles.into_iter().flat_map(|h| h.join().expect("invariant: the certificates do not panic")).collect()
+    });
+    done.sort_by_key(|(i, _)| *i);
+    done.into_iter().map(|(_, r)| r).collect()
 }

@@ -5,11 +5,12 @@
 //! and z (along the first axis, from the first joint's origin).
 
 use super::chain::Chain3R;
-use super::cusps::{CuspSearch, CuspStats, Reason};
+use super::cusps::{CuspSearch, Reason};
 use super::ik::IkSolutions;
 use super::motion::Band;
-use super::nodes::{NodeSearch, NodeStats};
+use super::nodes::NodeSearch;
 use inari::Interval;
+use crate::search::Status;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -100,6 +101,88 @@ pub struct Settings {
     pub uncertainty: f64,
 }
 
+/// Counters of the cusp search: the kernel's `Stats` under the report's names.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct CuspStats {
+    /// Boxes processed.
+    pub processed: u64,
+    /// Discarded because det Df ≠ 0 on them.
+    pub regular: u64,
+    /// Discarded because a row of system (2) ≠ 0 on them.
+    pub not_tangent: u64,
+    /// Discarded by Krawczyk (no zero).
+    pub krawczyk_empty: u64,
+    /// Bisections.
+    pub bisected: u64,
+    /// Boxes set aside inside internal-motion strips.
+    pub in_strips: u64,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+impl From<&CuspSearch> for CuspStats {
+    fn from(c: &CuspSearch) -> Self {
+        let s = &c.stats;
+        CuspStats {
+            processed: s.processed,
+            regular: s.discarded("regular"),
+            not_tangent: s.discarded("not_tangent"),
+            krawczyk_empty: s.discarded("krawczyk_empty"),
+            bisected: s.split - c.contracted,
+            in_strips: s.discarded("in_strips"),
+            seconds: c.seconds,
+        }
+    }
+}
+
+/// Counters of the node search: the kernel's `Stats` under the report's names.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct NodeStats {
+    /// Pairs processed.
+    pub pairs: u64,
+    /// Dropped because the images are disjoint.
+    pub apart: u64,
+    /// Dropped by the mean-value injectivity certificate.
+    pub injective: u64,
+    /// Dropped by a cusp-neighbourhood certificate.
+    pub near_cusp: u64,
+    /// Dropped by Krawczyk.
+    pub krawczyk_empty: u64,
+    /// Pairs set aside because a box lies in an internal-motion strip.
+    pub in_strips: u64,
+    /// Boxes of the tree.
+    pub cells: u64,
+    /// Cusp neighbourhoods certified (of all cusps given).
+    pub cusp_regions: u64,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+impl From<&NodeSearch> for NodeStats {
+    fn from(n: &NodeSearch) -> Self {
+        let s = &n.stats;
+        NodeStats {
+            pairs: s.processed,
+            apart: s.discarded("apart"),
+            injective: s.discarded("injective"),
+            near_cusp: s.discarded("near_cusp"),
+            krawczyk_empty: s.discarded("krawczyk_empty"),
+            in_strips: s.discarded("in_strips"),
+            cells: n.cells,
+            cusp_regions: n.cusp_regions,
+            seconds: n.seconds,
+        }
+    }
+}
+
+/// The name of the limit that stopped a run, for `limit` fields.
+fn limit_of(status: Status) -> Option<&'static str> {
+    match status {
+        Status::Complete => None,
+        Status::Incomplete(l) => Some(l.name()),
+    }
+}
+
 /// Counters.
 #[derive(Clone, Debug, Serialize)]
 pub struct Stats {
@@ -124,6 +207,9 @@ pub struct SingularityReport {
     pub settings: Settings,
     /// `complete` or `incomplete`.
     pub status: &'static str,
+    /// The limit that stopped an incomplete run: `boxes`, `time`, `memory` or `cancelled`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub limit: Option<&'static str>,
     /// Certified cusps.
     pub cusps: Vec<CuspRecord>,
     /// Certified nodes (absent when not searched).
@@ -152,7 +238,7 @@ fn workspace(rho: Interval, z: Interval) -> Workspace {
 impl SingularityReport {
     /// Builds the report from a cusp search and an optional node search.
     pub fn new(chain: &Chain3R, precision: f64, cusps: &CuspSearch, nodes: Option<&NodeSearch>, seconds: f64) -> Self {
-        let complete = cusps.complete && nodes.is_none_or(|n| n.complete);
+        let status = nodes.map_or(cusps.status, |n| cusps.status.and(n.status));
         let internal_motions = cusps
             .bands
             .iter()
@@ -166,7 +252,8 @@ impl SingularityReport {
             joints: chain.joints.clone(),
             tip_link: chain.tip_link.clone(),
             settings: Settings { precision, nodes: nodes.is_some(), uncertainty: chain.uncertainty },
-            status: if complete { "complete" } else { "incomplete" },
+            status: if status.is_complete() { "complete" } else { "incomplete" },
+            limit: limit_of(status),
             cusps: cusps.cusps.iter().map(|c| CuspRecord { joints: joints(chain, &c.theta), workspace: workspace(c.rho, c.z), unique: c.unique }).collect(),
             nodes: nodes.map(|n| {
                 n.nodes
@@ -179,7 +266,7 @@ impl SingularityReport {
                 cusps: cusps.undecided.iter().map(|u| UndecidedCusp { joints: joints(chain, &u.theta), reason: u.reason }).collect(),
                 nodes: nodes.map_or(Vec::new(), |n| n.undecided.iter().map(|p| UndecidedNode { points: [joints(chain, &p[0]), joints(chain, &p[1])] }).collect()),
             },
-            stats: Stats { cusps: cusps.stats, nodes: nodes.map(|n| n.stats), seconds },
+            stats: Stats { cusps: CuspStats::from(cusps), nodes: nodes.map(NodeStats::from), seconds },
         }
     }
 }
@@ -205,6 +292,9 @@ pub struct IkReport {
     pub point: [f64; 2],
     /// `complete` or `incomplete`.
     pub status: &'static str,
+    /// The limit that stopped an incomplete run: `boxes`, `time`, `memory` or `cancelled`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub limit: Option<&'static str>,
     /// Solutions, unique ones first.
     pub solutions: Vec<IkRecord>,
     /// Boxes processed.
@@ -216,7 +306,7 @@ impl IkReport {
     pub fn new(chain: &Chain3R, point: [f64; 2], s: &IkSolutions) -> Self {
         let mut solutions: Vec<IkRecord> = s.unique.iter().map(|b| IkRecord { joints: joints(chain, b), unique: true, boxes: 0 }).collect();
         solutions.extend(s.clusters.iter().map(|c| IkRecord { joints: joints(chain, &c.hull), unique: false, boxes: c.boxes }));
-        IkReport { robot: chain.name.clone(), point, status: if s.complete { "complete" } else { "incomplete" }, solutions, processed: s.processed }
+        IkReport { robot: chain.name.clone(), point, status: if s.status.is_complete() { "complete" } else { "incomplete" }, limit: limit_of(s.status), solutions, processed: s.stats.processed }
     }
 }
 
@@ -264,6 +354,9 @@ pub struct CollisionReport {
     pub pairs: Vec<[String; 2]>,
     /// `complete` or `incomplete`.
     pub status: &'static str,
+    /// The limit that stopped an incomplete run: `boxes`, `time`, `memory` or `cancelled`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub limit: Option<&'static str>,
     /// Boxes where a pair collides everywhere.
     pub colliding: Vec<CollidingRecord>,
     /// Boxes where no pair collides anywhere.
@@ -271,7 +364,24 @@ pub struct CollisionReport {
     /// The rest.
     pub undecided: Vec<BoxRecord>,
     /// Counters and areas.
-    pub stats: super::collision::CollisionStats,
+    pub stats: CollisionStats,
+}
+
+/// Counters and areas (rad²) of a classification.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct CollisionStats {
+    /// Boxes processed.
+    pub processed: u64,
+    /// Bisections.
+    pub bisected: u64,
+    /// Total area of the colliding boxes.
+    pub colliding_area: f64,
+    /// Total area of the free boxes.
+    pub free_area: f64,
+    /// Total area of the undecided boxes.
+    pub undecided_area: f64,
+    /// Wall-clock seconds.
+    pub seconds: f64,
 }
 
 impl CollisionReport {
@@ -289,11 +399,19 @@ impl CollisionReport {
             precision,
             bodies: capsules.iter().map(|c| BodyRecord { name: c.name.clone(), link: c.link.clone(), radius: c.radius, segment: c.segment }).collect(),
             pairs: (0..scene.pairs().len()).map(name).collect(),
-            status: if set.complete { "complete" } else { "incomplete" },
+            status: if set.status.is_complete() { "complete" } else { "incomplete" },
+            limit: limit_of(set.status),
             colliding: set.colliding.iter().map(|c| CollidingRecord { joints: joints(&c.theta), pair: name(c.pair) }).collect(),
             free: set.free.iter().map(|b| BoxRecord { joints: joints(b) }).collect(),
             undecided: set.undecided.iter().map(|b| BoxRecord { joints: joints(b) }).collect(),
-            stats: set.stats,
+            stats: CollisionStats {
+                processed: set.stats.processed,
+                bisected: set.stats.split,
+                colliding_area: set.colliding_area,
+                free_area: set.free_area,
+                undecided_area: set.undecided_area,
+                seconds: set.seconds,
+            },
         }
     }
 }

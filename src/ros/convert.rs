@@ -249,13 +249,13 @@ pub fn ik_response(r: &IkResult) -> InverseKinematicsResponse {
     let unique = r.solutions.iter().filter(|s| s.unique).count();
     let clusters = r.solutions.len() - unique;
     let mut message = format!("{unique} solutions proven unique, {clusters} clusters undecided at sigma (each may hold one or several solutions, or a line of them)");
-    if !r.complete {
-        message.push_str("; incomplete: the box limit was reached, and the clusters include the boxes left pending");
+    if let crate::search::Status::Incomplete(limit) = r.status {
+        message.push_str(&format!("; incomplete ({} limit): the clusters include the boxes left pending", limit.name()));
     }
     InverseKinematicsResponse {
         ok: true,
         message,
-        complete: r.complete,
+        complete: r.status.is_complete(),
         solutions: r
             .solutions
             .iter()

@@ -57,7 +57,7 @@ impl Outcome {
         match self {
             Outcome::BoxSet(r) => (r.stats.processed, r.boxes.iter().filter(|b| b.status == crate::search::BoxStatus::Undecided).count(), r.status == Status::Complete),
             Outcome::Singularities(r) => (r.processed, r.undecided(), r.status == Status::Complete),
-            Outcome::InverseKinematics(r) => (r.processed, 0, r.complete),
+            Outcome::InverseKinematics(r) => (r.processed, 0, r.status == Status::Complete),
         }
     }
 }
@@ -508,7 +508,7 @@ impl State {
     fn start_load_time(&mut self, k: usize) {
         let a = &self.mechanisms[k].loaded.analysis;
         let cspace = a.configuration_space(&self.settings);
-        let query = SingularityQuery { precision: self.precision, nodes: true, max_boxes: self.settings.max_boxes, timeout: self.settings.timeout };
+        let query = SingularityQuery { precision: self.precision, nodes: true, max_boxes: self.settings.max_boxes, timeout: self.settings.timeout, threads: self.settings.threads };
         let singular = a.singularities(&query);
         let mut started = false;
         match cspace {
@@ -1082,7 +1082,7 @@ impl State {
             return refuse(format!("timeout {} s is out of range: give 0 (the node's limit) to {longest} s (--max-request-timeout and --max-wait)", q.timeout));
         }
         let timeout = if q.timeout == 0.0 { longest } else { q.timeout };
-        let query = SingularityQuery { precision: q.precision, nodes: q.nodes, max_boxes, timeout: Some(Duration::from_secs_f64(timeout)) };
+        let query = SingularityQuery { precision: q.precision, nodes: q.nodes, max_boxes, timeout: Some(Duration::from_secs_f64(timeout)), threads: self.settings.threads };
         let prepared = match a.singularities(&query) {
             Ok(p) => p,
             Err(e) => return refuse(e.to_string()),
@@ -1121,7 +1121,7 @@ impl State {
             Ok(n) => n,
             Err(e) => return refuse(e),
         };
-        let prepared = match self.mechanisms[k].loaded.analysis.inverse_kinematics(&IkQuery { point: p, precision: q.sigma, max_boxes }) {
+        let prepared = match self.mechanisms[k].loaded.analysis.inverse_kinematics(&IkQuery { point: p, precision: q.sigma, max_boxes, threads: self.settings.threads }) {
             Ok(p) => p,
             Err(e) => return refuse(convert::bounded(&e.to_string(), convert::ECHO_MESSAGE)),
         };

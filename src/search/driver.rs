@@ -14,11 +14,13 @@
 use super::limits::{process_cpu_seconds, Budget, Limit, Limits, Progress, Status};
 use super::store::{Pool, Store};
 use super::{Prune, Sink, Stats, Step, Undecided};
-use smallvec::SmallVec;
 use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::Mutex;
+use std::sync::{mpsc, Arc, Mutex};
 use std::time::{Duration, Instant};
+
+/// Levels with fewer cells are decided on the calling thread alone.
+const SERIAL_BELOW: usize = 8;
 
 /// How often a driver reports progress.
 const PROGRESS_EVERY: Duration = Duration::from_millis(200);
@@ -66,6 +68,7 @@ pub fn run<P: Prune>(prune: &mut P, start: P::Cell, store: Store, limits: &Limit
     let budget = Budget::start(*limits, cancel);
     let c0 = process_cpu_seconds();
     let mut stats = Stats::default();
+    let mut discards = Discards::default();
     let mut pool = Pool::new(store);
     let mut pending_share = prune.share(&start);
     let mut pending_bytes = prune.bytes(&start);
@@ -86,22 +89,39 @@ pub fn run<P: Prune>(prune: &mut P, start: P::Cell, store: Store, limits: &Limit
         pending_bytes = pending_bytes.saturating_sub(prune.bytes(&cell));
         stats.processed += 1;
         stats.max_level = stats.max_level.max(prune.level(&cell));
-        let flow = route(prune.process(cell), &mut stats, sink, |children| {
-            for c in &children {
-                pending_share += prune.share(c);
-                pending_bytes += prune.bytes(c);
+        let flow = match prune.process(cell) {
+            Step::Discard(reason) => {
+                discards.count(reason);
+                ControlFlow::Continue(())
             }
-            pool.push_children(children.into_iter().map(|c| {
-                let k = prune.key(&c);
-                (c, k)
-            }));
-        });
+            Step::Found(f) => {
+                stats.found += 1;
+                sink.found(f)
+            }
+            Step::Undecided(c, reason) => {
+                stats.undecided += 1;
+                sink.undecided(c, Undecided::Precision(reason))
+            }
+            Step::Split(children) => {
+                stats.split += 1;
+                for c in &children {
+                    pending_share += prune.share(c);
+                    pending_bytes += prune.bytes(c);
+                }
+                pool.push_children(children.into_iter().map(|c| {
+                    let k = prune.key(&c);
+                    (c, k)
+                }));
+                ControlFlow::Continue(())
+            }
+        };
         if flow.is_break() {
             status = Status::Incomplete(Limit::Sink);
             report_pending = false;
             break;
         }
-        if last_progress.elapsed() >= PROGRESS_EVERY {
+        // The clock is read every 64 cells only: a cell can cost less than reading it.
+        if stats.processed % 64 == 0 && last_progress.elapsed() >= PROGRESS_EVERY {
             last_progress = Instant::now();
             sink.progress(&Progress { processed: stats.processed, pending: pool.len(), decided: (1.0 - pending_share).clamp(0.0, 1.0) });
         }
@@ -109,6 +129,7 @@ pub fn run<P: Prune>(prune: &mut P, start: P::Cell, store: Store, limits: &Limit
     if report_pending {
         report_undecided(pool.drain(), &mut stats, sink);
     }
+    discards.into_stats(&mut stats);
     stats.seconds = budget.elapsed().as_secs_f64();
     stats.cpu_seconds = process_cpu_seconds() - c0;
     (status, stats)
@@ -118,15 +139,65 @@ pub fn run<P: Prune>(prune: &mut P, start: P::Cell, store: Store, limits: &Limit
 /// a single worker runs on the calling thread).
 ///
 /// The cells reported, and their order, are those of a serial breadth-first walk whatever the
-/// number of workers. `on_level` sees the number of each level as it is finished.
+/// number of workers. The calling thread is the first worker; the others are started once for
+/// the whole run (not per level: starting a thread costs as much as deciding a few 3R cells)
+/// and are handed each level through a channel.
 pub fn run_by_level<P>(workers: &mut [P], start: P::Cell, limits: &Limits, cancel: &AtomicBool, sink: &mut impl Sink<P::Cell, P::Found>) -> (Status, Stats)
 where
     P: Prune + Send,
 {
     assert!(!workers.is_empty(), "invariant: run_by_level needs at least one worker");
     let budget = Budget::start(*limits, cancel);
+    let (first, rest) = workers.split_first_mut().expect("invariant: at least one worker");
+    if rest.is_empty() {
+        return walk_levels(start, &budget, sink, |level| decide_alone(first, level, &budget));
+    }
+    std::thread::scope(|s| {
+        let (done_tx, done_rx) = mpsc::channel();
+        let mut job_txs = Vec::with_capacity(rest.len());
+        for p in rest.iter_mut() {
+            let (job_tx, job_rx) = mpsc::channel::<Arc<LevelJob<P::Cell>>>();
+            job_txs.push(job_tx);
+            let (done_tx, budget) = (done_tx.clone(), &budget);
+            s.spawn(move || {
+                for job in job_rx {
+                    if done_tx.send(take_chunks(p, &job, budget)).is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        drop(done_tx);
+        let out = walk_levels(start, &budget, sink, |level| {
+            // A level of a few cells costs less than waking the crew for it: the first worker
+            // decides it alone, with the same answers.
+            if level.len() < SERIAL_BELOW {
+                return decide_alone(first, level, &budget);
+            }
+            let job = Arc::new(LevelJob::new(level, job_txs.len() + 1));
+            for tx in &job_txs {
+                tx.send(job.clone()).expect("invariant: the crew lives as long as the run");
+            }
+            let mut done = vec![take_chunks(first, &job, &budget)];
+            done.extend((0..job_txs.len()).map(|_| done_rx.recv().expect("invariant: Prune::process does not panic")));
+            collect(job, done)
+        });
+        // Dropping the senders ends the crew's loops; the scope joins them.
+        drop(job_txs);
+        out
+    })
+}
+
+/// The decisions of a level, in level order: each with its cell's level and the bytes of the
+/// children it made (for the memory limit).
+type Decided<C, F> = Vec<(u32, usize, Step<C, F>)>;
+
+/// The breadth-first walk: takes each level's decisions from `decide_level` (which also returns
+/// the cells cancel or time kept it from taking) and routes them in level order.
+fn walk_levels<C, F>(start: C, budget: &Budget<'_>, sink: &mut impl Sink<C, F>, mut decide_level: impl FnMut(Vec<C>) -> (Decided<C, F>, Vec<C>)) -> (Status, Stats) {
     let c0 = process_cpu_seconds();
     let mut stats = Stats::default();
+    let mut discards = Discards::default();
     let mut level = vec![start];
     let mut status = Status::Complete;
     let mut report_pending = true;
@@ -142,17 +213,32 @@ where
         // thread count.
         let take = level.len().min(usize::try_from(budget.cells_left(stats.processed)).unwrap_or(usize::MAX));
         let rest = level.split_off(take);
-        let (steps, unprocessed) = process_level(workers, level, &budget);
+        let (steps, unprocessed) = decide_level(level);
         let mut next = Vec::new();
         let mut next_bytes = 0usize;
-        let mut steps = steps.into_iter();
-        for (level_of, step) in steps.by_ref() {
+        for (level_of, bytes, step) in steps {
             stats.processed += 1;
             stats.max_level = stats.max_level.max(level_of);
-            let flow = route(step, &mut stats, sink, |children| {
-                next_bytes += children.iter().map(|c| workers[0].bytes(c)).sum::<usize>();
-                next.extend(children);
-            });
+            let flow = match step {
+                Step::Discard(reason) => {
+                    discards.count(reason);
+                    ControlFlow::Continue(())
+                }
+                Step::Found(f) => {
+                    stats.found += 1;
+                    sink.found(f)
+                }
+                Step::Undecided(c, reason) => {
+                    stats.undecided += 1;
+                    sink.undecided(c, Undecided::Precision(reason))
+                }
+                Step::Split(children) => {
+                    stats.split += 1;
+                    next_bytes += bytes;
+                    next.extend(children);
+                    ControlFlow::Continue(())
+                }
+            };
             if flow.is_break() {
                 status = Status::Incomplete(Limit::Sink);
                 report_pending = false;
@@ -184,103 +270,89 @@ where
     if report_pending {
         report_undecided(pending, &mut stats, sink);
     }
+    discards.into_stats(&mut stats);
     stats.seconds = budget.elapsed().as_secs_f64();
     stats.cpu_seconds = process_cpu_seconds() - c0;
     (status, stats)
 }
 
-/// Decides the cells of one level on the workers; returns the decisions in level order (with
-/// each cell's level) and, if cancel or time interrupted the level, the cells never taken.
-fn process_level<P>(workers: &mut [P], level: Vec<P::Cell>, budget: &Budget<'_>) -> (Vec<(u32, Step<P::Cell, P::Found>)>, Vec<P::Cell>)
-where
-    P: Prune + Send,
-{
-    let decide = |p: &mut P, c: P::Cell| {
-        let l = p.level(&c);
-        (l, p.process(c))
+/// Decides one cell: its level, the bytes of its children, the step.
+fn decide<P: Prune>(p: &mut P, c: P::Cell) -> (u32, usize, Step<P::Cell, P::Found>) {
+    let l = p.level(&c);
+    let step = p.process(c);
+    let bytes = match &step {
+        Step::Split(children) => children.iter().map(|c| p.bytes(c)).sum(),
+        _ => 0,
     };
-    if workers.len() == 1 || level.len() < 2 {
-        let p = &mut workers[0];
-        let mut out = Vec::with_capacity(level.len());
-        let mut cells = level.into_iter();
-        for c in cells.by_ref() {
-            out.push(decide(p, c));
-            if budget.interrupted().is_some() {
-                break;
-            }
+    (l, bytes, step)
+}
+
+/// Decides a level on one worker, stopping when cancel or time interrupts it.
+fn decide_alone<P: Prune>(p: &mut P, level: Vec<P::Cell>, budget: &Budget<'_>) -> (Decided<P::Cell, P::Found>, Vec<P::Cell>) {
+    let mut out = Vec::with_capacity(level.len());
+    let mut cells = level.into_iter();
+    for c in cells.by_ref() {
+        out.push(decide(p, c));
+        if budget.interrupted().is_some() {
+            break;
         }
-        return (out, cells.collect());
     }
-    // Chunks small enough to balance the load, large enough that taking one costs little.
-    let chunk = (level.len() / (workers.len() * 8)).clamp(1, 64);
-    let mut chunks: Vec<Mutex<Option<Vec<P::Cell>>>> = Vec::with_capacity(level.len().div_ceil(chunk));
-    let mut cells = level.into_iter().peekable();
-    while cells.peek().is_some() {
-        chunks.push(Mutex::new(Some(cells.by_ref().take(chunk).collect())));
+    (out, cells.collect())
+}
+
+/// One level cut into chunks that workers take from a shared counter.
+struct LevelJob<C> {
+    chunks: Vec<Mutex<Option<Vec<C>>>>,
+    next: AtomicUsize,
+    stop: AtomicBool,
+}
+
+impl<C> LevelJob<C> {
+    fn new(level: Vec<C>, workers: usize) -> Self {
+        // Chunks small enough to balance the load, large enough that taking one costs little.
+        let chunk = (level.len() / (workers * 8)).clamp(1, 64);
+        let mut chunks = Vec::with_capacity(level.len().div_ceil(chunk));
+        let mut cells = level.into_iter().peekable();
+        while cells.peek().is_some() {
+            chunks.push(Mutex::new(Some(cells.by_ref().take(chunk).collect())));
+        }
+        LevelJob { chunks, next: AtomicUsize::new(0), stop: AtomicBool::new(false) }
     }
-    let next_chunk = AtomicUsize::new(0);
-    let stop = AtomicBool::new(false);
-    let done: Vec<Vec<(usize, Vec<(u32, Step<P::Cell, P::Found>)>)>> = std::thread::scope(|s| {
-        let handles: Vec<_> = workers
-            .iter_mut()
-            .map(|p| {
-                let (chunks, next_chunk, stop) = (&chunks, &next_chunk, &stop);
-                s.spawn(move || {
-                    let mut mine = Vec::new();
-                    while !stop.load(Ordering::Relaxed) {
-                        let i = next_chunk.fetch_add(1, Ordering::Relaxed);
-                        let Some(slot) = chunks.get(i) else { break };
-                        let cells = slot.lock().expect("invariant: no worker panics holding a chunk").take().expect("invariant: each chunk is taken once");
-                        mine.push((i, cells.into_iter().map(|c| decide(p, c)).collect()));
-                        if budget.interrupted().is_some() {
-                            stop.store(true, Ordering::Relaxed);
-                        }
-                    }
-                    mine
-                })
-            })
-            .collect();
-        handles.into_iter().map(|h| h.join().expect("invariant: Prune::process does not panic")).collect()
-    });
-    let mut by_chunk: Vec<Option<Vec<(u32, Step<P::Cell, P::Found>)>>> = (0..chunks.len()).map(|_| None).collect();
+}
+
+/// A worker's share of a level: the chunks it took, by index.
+type Taken<C, F> = Vec<(usize, Decided<C, F>)>;
+
+fn take_chunks<P: Prune>(p: &mut P, job: &LevelJob<P::Cell>, budget: &Budget<'_>) -> Taken<P::Cell, P::Found> {
+    let mut mine = Vec::new();
+    while !job.stop.load(Ordering::Relaxed) {
+        let i = job.next.fetch_add(1, Ordering::Relaxed);
+        let Some(slot) = job.chunks.get(i) else { break };
+        let cells = slot.lock().expect("invariant: no worker panics holding a chunk").take().expect("invariant: each chunk is taken once");
+        mine.push((i, cells.into_iter().map(|c| decide(p, c)).collect()));
+        if budget.interrupted().is_some() {
+            job.stop.store(true, Ordering::Relaxed);
+        }
+    }
+    mine
+}
+
+/// The decisions in chunk order; the chunks no worker took (cancel or time) stay pending. Only
+/// an interrupted run, which depends on the clock anyway, has such gaps.
+fn collect<C, F>(job: Arc<LevelJob<C>>, done: Vec<Taken<C, F>>) -> (Decided<C, F>, Vec<C>) {
+    let mut by_chunk: Vec<Option<Decided<C, F>>> = (0..job.chunks.len()).map(|_| None).collect();
     for (i, steps) in done.into_iter().flatten() {
         by_chunk[i] = Some(steps);
     }
-    // Decisions in chunk order; the chunks no worker took (cancel or time) stay pending. Only
-    // an interrupted run, which depends on the clock anyway, has such gaps.
     let mut out = Vec::new();
     let mut unprocessed = Vec::new();
-    for (slot, steps) in chunks.into_iter().zip(by_chunk) {
+    for (slot, steps) in job.chunks.iter().zip(by_chunk) {
         match steps {
             Some(steps) => out.extend(steps),
-            None => unprocessed.extend(slot.into_inner().expect("invariant: no worker panics holding a chunk").into_iter().flatten()),
+            None => unprocessed.extend(slot.lock().expect("invariant: no worker panics holding a chunk").take().into_iter().flatten()),
         }
     }
     (out, unprocessed)
-}
-
-/// Counts a decision and passes it on: results and undecided cells to the sink, children to
-/// `split`. `Break` when the sink asks to stop.
-fn route<C, F>(step: Step<C, F>, stats: &mut Stats, sink: &mut impl Sink<C, F>, split: impl FnOnce(SmallVec<[C; 4]>)) -> ControlFlow<()> {
-    match step {
-        Step::Discard(reason) => {
-            *stats.discarded.entry(reason).or_default() += 1;
-            ControlFlow::Continue(())
-        }
-        Step::Found(f) => {
-            stats.found += 1;
-            sink.found(f)
-        }
-        Step::Undecided(c, reason) => {
-            stats.undecided += 1;
-            sink.undecided(c, Undecided::Precision(reason))
-        }
-        Step::Split(children) => {
-            stats.split += 1;
-            split(children);
-            ControlFlow::Continue(())
-        }
-    }
 }
 
 fn report_undecided<C, F>(pending: impl IntoIterator<Item = C>, stats: &mut Stats, sink: &mut impl Sink<C, F>) {
@@ -288,6 +360,28 @@ fn report_undecided<C, F>(pending: impl IntoIterator<Item = C>, stats: &mut Stat
         stats.undecided += 1;
         if sink.undecided(c, Undecided::Pending).is_break() {
             break;
+        }
+    }
+}
+
+/// Per-reason discard counts of a run, kept in a short list while it runs: a search has a
+/// handful of reasons, and a scan of a few string compares costs less per cell than a
+/// `BTreeMap` entry (the 3R searches decide a cell in a few microseconds).
+#[derive(Default)]
+struct Discards(Vec<(&'static str, u64)>);
+
+impl Discards {
+    #[inline]
+    fn count(&mut self, reason: &'static str) {
+        match self.0.iter_mut().find(|(r, _)| *r == reason) {
+            Some((_, n)) => *n += 1,
+            None => self.0.push((reason, 1)),
+        }
+    }
+
+    fn into_stats(self, stats: &mut Stats) {
+        for (r, n) in self.0 {
+            *stats.discarded.entry(r).or_default() += n;
         }
     }
 }

@@ -4,6 +4,9 @@
 //! which it was made), bisection, and the few set operations the driver needs.
 //! It does no IO and knows nothing of equations.
 
+pub mod fast;
+pub mod trig;
+
 pub use inari::Interval;
 
 /// The interval `[lo, hi]`, or `Interval::EMPTY` when `lo > hi` or either bound is NaN.

@@ -1,0 +1,224 @@
+//! The singular-curve cover of a 3R chain: the cells of a grid on (θ₂, θ₃) where det Df may
+//! vanish, found by a quadtree on the kernel, and the regions between them. The ROS node's
+//! `singular_curves` and `classify`, and the README's charts, all draw this one cover.
+
+use super::drive::{drive, no_progress, Control};
+use super::motion::PI_UP;
+use super::Chain3R;
+use crate::interval::{interval, point};
+use crate::search::{Prune, Stats, Status, Step};
+use inari::Interval;
+use std::time::Instant;
+
+/// `[lower, upper]`
+pub type Bounds = [f64; 2];
+
+/// The singular-curve cover: cells of an `n` × `n` grid on [-π, π]² (slightly wider: the range
+/// of the searches) where det Df may vanish, and the regions between them.
+///
+/// A quadtree from the whole square drops a cell when the centred form of det Df over it
+/// excludes zero; what survives to the finest level covers every singular configuration
+/// (internal-motion lines included, where det Df = 0 too). Cells proven regular are grouped
+/// into regions (4-neighbours, across the ±π seams): det Df keeps one sign on a region, which
+/// therefore lies in one aspect.
+#[derive(Clone, Debug)]
+pub struct Cover {
+    /// Cells per axis.
+    pub n: usize,
+    /// Cover cells (i over θ₂, j over θ₃), in grid order.
+    pub boxes: Vec<(usize, usize)>,
+    /// Connected component of each cover cell (8-neighbours, across the seams).
+    pub cluster: Vec<usize>,
+    /// Number of components.
+    pub clusters: usize,
+    /// Per cell (`i·n + j`): its region, or -1 for a cover cell.
+    pub region: Vec<i32>,
+    /// Number of regions.
+    pub regions: usize,
+    /// The quadtree run: `Complete` unless a limit stopped it (its pending cells are then in
+    /// the cover whole, which keeps it sound).
+    pub status: Status,
+    /// Quadtree cells processed, and discarded as `regular`.
+    pub stats: Stats,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+/// A quadtree cell: grid cell (i, j) and side s (cells).
+#[derive(Clone, Copy, Debug)]
+pub struct QuadCell {
+    i: usize,
+    j: usize,
+    s: usize,
+    level: u32,
+}
+
+/// Drops a quadtree cell where det Df provably does not vanish.
+struct CoverPrune<'a> {
+    chain: &'a Chain3R,
+    lines: &'a Lines,
+}
+
+impl Prune for CoverPrune<'_> {
+    type Cell = QuadCell;
+    type Found = (usize, usize);
+
+    fn process(&mut self, c: QuadCell) -> Step<QuadCell, (usize, usize)> {
+        let [a, b] = self.lines.span(c.i, c.s);
+        let [d, e] = self.lines.span(c.j, c.s);
+        if !det_may_vanish(self.chain, [interval(a, b), interval(d, e)]) {
+            return Step::Discard("regular");
+        }
+        if c.s == 1 {
+            return Step::Found((c.i, c.j));
+        }
+        let h = c.s / 2;
+        let level = c.level + 1;
+        Step::Split([(0, 0), (0, h), (h, 0), (h, h)].into_iter().map(|(di, dj)| QuadCell { i: c.i + di, j: c.j + dj, s: h, level }).collect())
+    }
+
+    fn level(&self, c: &QuadCell) -> u32 {
+        c.level
+    }
+}
+
+/// The grid lines of an `n` × `n` grid (see `Cover::line`).
+struct Lines {
+    n: usize,
+}
+
+impl Lines {
+    fn line(&self, i: usize) -> f64 {
+        if i == self.n {
+            PI_UP
+        } else {
+            -PI_UP + (2.0 * PI_UP / self.n as f64) * i as f64
+        }
+    }
+
+    fn span(&self, i: usize, s: usize) -> Bounds {
+        [self.line(i), self.line(i + s)]
+    }
+}
+
+impl Cover {
+    /// The cover of `chain` on a `2^depth` × `2^depth` grid, within `control`.
+    pub fn new(chain: &Chain3R, depth: u32, control: &Control) -> Self {
+        let start = Instant::now();
+        let n = 1usize << depth;
+        let lines = Lines { n };
+        let root = QuadCell { i: 0, j: 0, s: n, level: 0 };
+        let run = drive(|| CoverPrune { chain, lines: &lines }, root, control, &mut no_progress);
+        let mut boxes = run.found;
+        // A cell a limit left pending may hold singular points: all of it is in the cover.
+        for (c, _) in &run.undecided {
+            for di in 0..c.s {
+                boxes.extend((0..c.s).map(|dj| (c.i + di, c.j + dj)));
+            }
+        }
+        boxes.sort_unstable();
+        let mut cover = Cover { n, boxes, cluster: Vec::new(), clusters: 0, region: vec![0; n * n], regions: 0, status: run.status, stats: run.stats, seconds: 0.0 };
+        for &(i, j) in &cover.boxes {
+            cover.region[i * n + j] = -1;
+        }
+        cover.label_clusters();
+        cover.label_regions();
+        cover.seconds = start.elapsed().as_secs_f64();
+        cover
+    }
+
+    /// Grid line `i` of `n`: -π (rounded up) + i·(2π/n), the same float for every cell that
+    /// shares it, with the last line exactly π (rounded up).
+    pub fn line(&self, i: usize) -> f64 {
+        Lines { n: self.n }.line(i)
+    }
+
+    /// Bounds of grid column (or row) `i`.
+    pub fn bounds(&self, i: usize) -> Bounds {
+        Lines { n: self.n }.span(i, 1)
+    }
+
+    /// The cell holding (θ₂, θ₃), angles taken modulo 2π (rounding the reduction).
+    pub fn cell_of(&self, t2: f64, t3: f64) -> Option<(usize, usize)> {
+        let index = |t: f64| -> Option<usize> {
+            if !t.is_finite() {
+                return None;
+            }
+            let t = if (-PI_UP..=PI_UP).contains(&t) { t } else { t - std::f64::consts::TAU * (t / std::f64::consts::TAU).round() };
+            let guess = (((t + PI_UP) / (2.0 * PI_UP) * self.n as f64).floor() as i64).clamp(0, self.n as i64 - 1) as usize;
+            // The guess may be one off at a grid line; the lines themselves decide.
+            (guess.saturating_sub(1)..=(guess + 1).min(self.n - 1)).find(|&k| self.line(k) <= t && t <= self.line(k + 1))
+        };
+        Some((index(t2)?, index(t3)?))
+    }
+
+    fn label_clusters(&mut self) {
+        let n = self.n;
+        let mut at = vec![usize::MAX; n * n];
+        for (k, &(i, j)) in self.boxes.iter().enumerate() {
+            at[i * n + j] = k;
+        }
+        self.cluster = vec![usize::MAX; self.boxes.len()];
+        for start in 0..self.boxes.len() {
+            if self.cluster[start] != usize::MAX {
+                continue;
+            }
+            let label = self.clusters;
+            self.clusters += 1;
+            self.cluster[start] = label;
+            let mut todo = vec![start];
+            while let Some(k) = todo.pop() {
+                let (i, j) = self.boxes[k];
+                for di in [n - 1, 0, 1] {
+                    for dj in [n - 1, 0, 1] {
+                        let m = at[((i + di) % n) * n + (j + dj) % n];
+                        if m != usize::MAX && self.cluster[m] == usize::MAX {
+                            self.cluster[m] = label;
+                            todo.push(m);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    fn label_regions(&mut self) {
+        let n = self.n;
+        // 0 marks a regular cell not yet labelled; labels are stored as region + 1 meanwhile.
+        let mut next = 0;
+        for start in 0..n * n {
+            if self.region[start] != 0 {
+                continue;
+            }
+            next += 1;
+            self.region[start] = next;
+            let mut todo = vec![start];
+            while let Some(c) = todo.pop() {
+                let (i, j) = (c / n, c % n);
+                for (a, b) in [((i + 1) % n, j), ((i + n - 1) % n, j), (i, (j + 1) % n), (i, (j + n - 1) % n)] {
+                    if self.region[a * n + b] == 0 {
+                        self.region[a * n + b] = next;
+                        todo.push(a * n + b);
+                    }
+                }
+            }
+        }
+        for r in self.region.iter_mut() {
+            if *r > 0 {
+                *r -= 1;
+            }
+        }
+        self.regions = next as usize;
+    }
+}
+
+/// False when det Df provably does not vanish on `b` (centred form with the natural one).
+fn det_may_vanish(chain: &Chain3R, b: [Interval; 2]) -> bool {
+    let m = [b[0].mid(), b[1].mid()];
+    let over = chain.jets(b, 2).det();
+    let at = chain.jets([point(m[0]), point(m[1])], 1).det().value();
+    let g = over.grad();
+    let centred = at + g[0] * (b[0] - point(m[0])) + g[1] * (b[1] - point(m[1]));
+    over.value().intersection(centred).contains(0.0)
+}
+
