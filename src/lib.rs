@@ -10,6 +10,7 @@
 pub mod chart;
 pub mod analysis;
 pub mod contract;
+pub mod distances;
 pub mod interval;
 pub mod lp;
 pub mod manip3r;

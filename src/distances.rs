@@ -1,0 +1,352 @@
+//! Solving distance problems with every answer certified or labelled (issue 15).
+//!
+//! `solve` picks a formulation (`Choice`), runs the kernel on it, then settles every cluster of
+//! solution boxes (connected component of touching boxes) as follows:
+//! - **points** (`problems::coordinates::Placed`, square): the kernel's Krawczyk already marks
+//!   boxes holding exactly one placement (`unique`). Each box it could not prove is searched
+//!   again, deeper (sigma / 16, bounded): the box is replaced by what that search certifies, or
+//!   removed when the search proves it empty, or stays with the reason it is undecided.
+//! - **shared / split** (the seed's determinants, not square or singular where two assembly
+//!   modes share their distances): placements are embedded from each box midpoint, polished by
+//!   Newton in coordinates and certified by Krawczyk on the points system; a certified placement
+//!   is attributed to the cluster whose boxes its distance enclosure meets (the root exists and
+//!   the solver never loses one, so its distances lie in some solution box). Boxes that meet no
+//!   certified placement get the deeper search: removed when proven empty, undecided otherwise.
+//! A cluster then counts its proven solutions (distinct certified placements) and is undecided
+//! when some box of it is still unproven, with the reason. "Complete" means nothing undecided.
+
+use crate::contract::{Contractor, FaceBounds, Newton};
+use crate::interval::{components, IntervalBox};
+use crate::problems::cayley_menger::{BuildOptions, CayleyMenger, DistanceError, DistanceProblem, DistanceSolverError, Formulation};
+use crate::problems::coordinates::{Placed, PlacedError};
+use crate::search::{Collect, SolveStats, Solver, SolverSettings, Status};
+use std::sync::atomic::AtomicBool;
+
+/// Which formulation to solve.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Choice {
+    /// Let the builder pick (see `choose`).
+    Auto,
+    /// Coordinates of the free points (`Placed`).
+    Points,
+    /// Determinants, one variable per distance.
+    Shared,
+    /// Determinants, the seed's split variables.
+    Split,
+}
+
+/// Why a problem cannot be solved.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum DistancesError {
+    /// Bad problem.
+    #[error(transparent)]
+    Problem(#[from] DistanceError),
+    /// The points formulation was asked for but does not apply.
+    #[error(transparent)]
+    Placed(#[from] PlacedError),
+    /// The solver could not be made.
+    #[error(transparent)]
+    Solver(#[from] DistanceSolverError),
+}
+
+/// What was settled about one cluster.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ClusterVerdict {
+    /// Distinct solutions proven (certified placements) in the cluster.
+    pub proven: usize,
+    /// `None` when every box of the cluster is accounted for by a proof; otherwise why not.
+    pub undecided: Option<&'static str>,
+    /// Solution boxes in the cluster.
+    pub boxes: usize,
+}
+
+/// A placement proven to be the only one in its coordinate box.
+#[derive(Clone, Debug)]
+pub struct Root {
+    /// Cluster it belongs to.
+    pub cluster: usize,
+    /// The certified box over `Placed::system`'s variables.
+    pub certified: IntervalBox,
+    /// Coordinates of every point at the box midpoint.
+    pub points: Vec<[f64; 3]>,
+}
+
+/// The result of `solve`.
+pub struct Certified {
+    /// The formulation solved: `points`, `shared` or `split`.
+    pub formulation: Choice,
+    /// Determinant system (always built: it names the unknown distances in reports).
+    pub cm: CayleyMenger,
+    /// Coordinate system, when the problem has a frame.
+    pub placed: Option<Placed>,
+    /// How the kernel's run ended.
+    pub status: Status,
+    /// Counters of the run (the deeper searches' boxes are added to `processed`).
+    pub stats: SolveStats,
+    /// Solution boxes over the solved system's variables.
+    pub solutions: Vec<IntervalBox>,
+    /// Per box: proven (Krawczyk) to hold exactly one solution.
+    pub unique: Vec<bool>,
+    /// Per box: its cluster.
+    pub cluster: Vec<usize>,
+    /// Per cluster: the verdict.
+    pub clusters: Vec<ClusterVerdict>,
+    /// Certified placements, each once.
+    pub roots: Vec<Root>,
+    /// Boxes a limit left unprocessed.
+    pub undecided: Vec<IntervalBox>,
+}
+
+impl Certified {
+    /// Proven solutions in all clusters.
+    pub fn proven(&self) -> usize {
+        self.clusters.iter().map(|c| c.proven).sum()
+    }
+
+    /// True when the search finished and nothing is undecided.
+    pub fn complete(&self) -> bool {
+        self.status == Status::Complete && self.undecided_regions() == 0
+    }
+
+    /// Clusters with something unproven (regions that may or may not hold solutions).
+    pub fn undecided_regions(&self) -> usize {
+        self.clusters.iter().filter(|c| c.undecided.is_some()).count()
+    }
+}
+
+/// The formulation `Auto` picks: points when the problem has a frame (three fixed points, not
+/// collinear) and its coordinate system is square, else the shared determinants.
+///
+/// Measured (`bench-distances`): on the four spheres the points system is solved and certified
+/// by Krawczyk at the kernel's pace, while the nine determinants, not square, leave clusters no
+/// interval Newton can certify in distance space.
+pub fn choose(problem: &DistanceProblem) -> Choice {
+    match Placed::build(problem) {
+        Ok(p) if p.is_square() => Choice::Points,
+        _ => Choice::Shared,
+    }
+}
+
+/// Builds, solves and settles `problem` (see the module documentation).
+/// `stats.seconds` and `stats.cpu_seconds` cover the whole call: build, search and settling.
+pub fn solve(problem: &DistanceProblem, choice: Choice, redundant: bool, faces: FaceBounds, settings: SolverSettings, cancel: &AtomicBool) -> Result<Certified, DistancesError> {
+    let t0 = std::time::Instant::now();
+    let c0 = crate::search::process_cpu_seconds();
+    let mut out = solve_inner(problem, choice, redundant, faces, settings, cancel)?;
+    out.stats.seconds = t0.elapsed().as_secs_f64();
+    out.stats.cpu_seconds = crate::search::process_cpu_seconds() - c0;
+    Ok(out)
+}
+
+fn solve_inner(problem: &DistanceProblem, choice: Choice, redundant: bool, faces: FaceBounds, settings: SolverSettings, cancel: &AtomicBool) -> Result<Certified, DistancesError> {
+    let choice = if choice == Choice::Auto { choose(problem) } else { choice };
+    let formulation = if choice == Choice::Split { Formulation::Split } else { Formulation::Shared };
+    let cm = CayleyMenger::build(problem, BuildOptions { formulation, redundant })?;
+    let placed = match Placed::build(problem) {
+        Ok(p) => Some(p),
+        Err(e) if choice == Choice::Points => return Err(e.into()),
+        Err(_) => None,
+    };
+    if choice == Choice::Points {
+        let placed = placed.expect("built above");
+        let mut out = {
+            let solver = Solver::new(&placed.system, settings.clone()).map_err(DistanceSolverError::from)?;
+            let e = solver.enclose(cancel, &mut |_| {});
+            let solver = Solver::new(&placed.system, deeper_settings(&settings)).map_err(DistanceSolverError::from)?;
+            let mut out = Certified { formulation: choice, cm, placed: None, status: e.status, stats: e.stats, solutions: e.solutions, unique: e.unique, cluster: Vec::new(), clusters: Vec::new(), roots: Vec::new(), undecided: e.undecided };
+            settle_points(&placed, &solver, &mut out, cancel);
+            out
+        };
+        out.placed = Some(placed);
+        Ok(out)
+    } else {
+        let solver = cm.solver(faces, settings.clone())?;
+        let e = solver.enclose(cancel, &mut |_| {});
+        let solver = cm.solver(faces, deeper_settings(&settings))?;
+        let unique = vec![false; e.solutions.len()];
+        let mut out = Certified { formulation: choice, cm: cm.clone(), placed: None, status: e.status, stats: e.stats, solutions: e.solutions, unique, cluster: Vec::new(), clusters: Vec::new(), roots: Vec::new(), undecided: e.undecided };
+        settle_determinants(&cm, placed.as_ref(), &solver, &mut out, cancel);
+        out.placed = placed;
+        Ok(out)
+    }
+}
+
+/// The deeper search's settings: sigma / 16, at most 4000 boxes per box, one thread (the
+/// searches are small), and the run's time limit.
+fn deeper_settings(s: &SolverSettings) -> SolverSettings {
+    SolverSettings { sigma: s.sigma / 16.0, max_boxes: 4_000, threads: 1, ..s.clone() }
+}
+
+/// Bounded deeper search of one box: `Some(certified boxes)` when it finishes with every box it
+/// finds proven unique (none: the box held no solution), `None` otherwise.
+fn deeper(solver: &Solver<'_>, b: &IntervalBox, cancel: &AtomicBool, stats: &mut SolveStats) -> Result<Vec<IntervalBox>, &'static str> {
+    let mut found = Collect::default();
+    let (status, st) = solver.run_from(b.clone(), cancel, &mut found);
+    stats.processed += st.processed;
+    stats.certified += st.certified;
+    if status != Status::Complete {
+        return Err("the deeper search (sigma / 16) hit its box limit");
+    }
+    if found.unique.iter().all(|&u| u) {
+        Ok(found.solutions)
+    } else {
+        Err("no proof of a single solution, nor of none, after a deeper search (sigma / 16)")
+    }
+}
+
+/// Groups boxes by overlap (union-find on pairwise intersection).
+fn overlap_groups(boxes: &[&IntervalBox]) -> Vec<usize> {
+    let n = boxes.len();
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn find(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    for i in 0..n {
+        for j in i + 1..n {
+            if boxes[i].intersects(boxes[j]) {
+                let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+                parent[a] = b;
+            }
+        }
+    }
+    (0..n).map(|i| find(&mut parent, i)).collect()
+}
+
+fn settle_points(placed: &Placed, solver: &Solver<'_>, out: &mut Certified, cancel: &AtomicBool) {
+    // Unproven boxes: replace each by what a deeper search certifies in it, or keep it with why.
+    let mut boxes = Vec::new();
+    let mut unique = Vec::new();
+    let mut why: Vec<Option<&'static str>> = Vec::new();
+    for (b, u) in std::mem::take(&mut out.solutions).into_iter().zip(std::mem::take(&mut out.unique)) {
+        if u {
+            boxes.push(b);
+            unique.push(true);
+            why.push(None);
+            continue;
+        }
+        match deeper(solver, &b, cancel, &mut out.stats) {
+            Ok(found) => {
+                for f in found {
+                    boxes.push(f);
+                    unique.push(true);
+                    why.push(None);
+                }
+            }
+            Err(reason) => {
+                boxes.push(b);
+                unique.push(false);
+                why.push(Some(reason));
+            }
+        }
+    }
+    let (labels, n) = components(&boxes);
+    let mut newton = Newton::new(&placed.system, f64::INFINITY);
+    let mut clusters = vec![ClusterVerdict { proven: 0, undecided: None, boxes: 0 }; n];
+    for c in 0..n {
+        let members: Vec<usize> = (0..boxes.len()).filter(|&i| labels[i] == c).collect();
+        clusters[c].boxes = members.len();
+        if let Some(r) = members.iter().find_map(|&i| why[i]) {
+            clusters[c].undecided = Some(r);
+        }
+        // Certified boxes that overlap may hold the same placement: one root when Krawczyk
+        // certifies their hull, otherwise the cluster is left undecided about the count.
+        let certified: Vec<&IntervalBox> = members.iter().filter(|&&i| unique[i]).map(|&i| &boxes[i]).collect();
+        let groups = overlap_groups(&certified);
+        let mut seen = Vec::new();
+        for (k, &g) in groups.iter().enumerate() {
+            if seen.contains(&g) {
+                continue;
+            }
+            seen.push(g);
+            let group: Vec<&IntervalBox> = certified.iter().zip(&groups).filter(|(_, &h)| h == g).map(|(b, _)| *b).collect();
+            let hull = group.iter().skip(1).fold(group[0].clone(), |h, b| IntervalBox { dims: h.dims.iter().zip(&b.dims).map(|(x, y)| x.convex_hull(*y)).collect(), level: h.level });
+            let single = group.len() == 1 || newton.as_mut().and_then(|nw| nw.certify(&hull)).is_some();
+            if !single {
+                clusters[c].undecided.get_or_insert("overlapping certified boxes: one solution or two");
+            }
+            clusters[c].proven += 1;
+            out.roots.push(Root { cluster: c, certified: certified[k].clone(), points: placed.points(&certified[k].midpoint()) });
+        }
+    }
+    out.solutions = boxes;
+    out.unique = unique;
+    out.cluster = labels;
+    out.clusters = clusters;
+}
+
+fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solver<'_>, out: &mut Certified, cancel: &AtomicBool) {
+    let (labels, _) = components(&out.solutions);
+    // Certified placements from every box midpoint, each once.
+    let mut roots: Vec<(IntervalBox, Vec<[f64; 3]>)> = Vec::new();
+    let mut meets: Vec<Vec<usize>> = Vec::new();
+    if let Some(pl) = placed.filter(|p| p.is_square()) {
+        for b in &out.solutions {
+            let width = cm.unknowns.iter().map(|u| b.width(u.var)).fold(0.0, f64::max);
+            for pts in cm.embed(&b.midpoint(), 1e-7 + 10.0 * width) {
+                let Some(x) = pl.certify_near(&pts) else { continue };
+                if roots.iter().any(|(r, _)| r.intersects(&x)) {
+                    continue;
+                }
+                // The root's distances, enclosed over its certified box.
+                let d: Vec<_> = cm.unknowns.iter().map(|u| pl.distance_over(u.a, u.b, &x)).collect();
+                let hit: Vec<usize> = (0..out.solutions.len())
+                    .filter(|&i| cm.unknowns.iter().zip(&d).all(|(u, d)| out.solutions[i].dims[u.var].intersection(*d).is_empty() == false && u.twin.is_none_or(|t| !out.solutions[i].dims[t].intersection(*d).is_empty())))
+                    .collect();
+                if hit.is_empty() {
+                    // Not a solution of the determinant system as solved (an orientation
+                    // choice excludes it): not counted.
+                    continue;
+                }
+                let pts = pl.points(&x.midpoint());
+                roots.push((x, pts));
+                meets.push(hit);
+            }
+        }
+    }
+    // Boxes that meet no certified placement: deeper search, removed when proven empty.
+    let covered: Vec<bool> = (0..out.solutions.len()).map(|i| meets.iter().any(|m| m.contains(&i))).collect();
+    let mut keep = Vec::new();
+    let mut why: Vec<Option<&'static str>> = Vec::new();
+    for (i, b) in out.solutions.iter().enumerate() {
+        if covered[i] {
+            keep.push(i);
+            why.push(None);
+            continue;
+        }
+        match deeper(solver, b, cancel, &mut out.stats) {
+            Ok(found) if found.is_empty() => {}
+            Ok(_) | Err(_) => {
+                keep.push(i);
+                why.push(Some(if placed.is_some_and(|p| p.is_square()) { "no certified placement in this box, and a deeper search (sigma / 16) did not prove it empty" } else { "no frame to certify placements in (fewer than three fixed points), and a deeper search did not prove the box empty" }));
+            }
+        }
+    }
+    let _ = labels;
+    let old_index: Vec<usize> = keep.clone();
+    out.solutions = keep.iter().map(|&i| out.solutions[i].clone()).collect();
+    out.unique = vec![false; out.solutions.len()];
+    let (labels, n) = components(&out.solutions);
+    let mut clusters = vec![ClusterVerdict { proven: 0, undecided: None, boxes: 0 }; n];
+    for (k, &l) in labels.iter().enumerate() {
+        clusters[l].boxes += 1;
+        if let Some(r) = why[k] {
+            clusters[l].undecided.get_or_insert(r);
+        }
+    }
+    for ((x, pts), hit) in roots.into_iter().zip(meets) {
+        // Attributed to the cluster of the first box it meets (all such boxes touch or overlap
+        // through the root's distances in practice; several clusters would share one root).
+        let Some(k) = old_index.iter().position(|&i| i == hit[0]) else { continue };
+        let c = labels[k];
+        clusters[c].proven += 1;
+        out.roots.push(Root { cluster: c, certified: x, points: pts });
+    }
+    out.cluster = labels;
+    out.clusters = clusters;
+}
