@@ -309,21 +309,56 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
             }
         }
     }
-    // Boxes that meet no certified placement: deeper search, removed when proven empty.
+    // Boxes that meet no certified placement: searched again in coordinates, with the box's
+    // distances as bounds (square, so Krawczyk certifies what it finds); a box is removed when
+    // that search proves it empty, gains the placements it certifies, or stays undecided. The
+    // determinants themselves cannot do this near a tangency (singular) or when not square.
     let covered: Vec<bool> = (0..out.solutions.len()).map(|i| meets.iter().any(|m| m.contains(&i))).collect();
+    let pairs: Vec<(usize, usize)> = cm.unknowns.iter().map(|u| (u.a, u.b)).collect();
+    let with_r = placed.filter(|p| p.is_square()).and_then(|_| Placed::build_with(&cm.problem, &pairs).ok());
     let mut keep = Vec::new();
     let mut why: Vec<Option<&'static str>> = Vec::new();
-    for (i, b) in out.solutions.iter().enumerate() {
+    for i in 0..out.solutions.len() {
         if covered[i] {
             keep.push(i);
             why.push(None);
             continue;
         }
-        match deeper(solver, b, cancel, &mut out.stats) {
+        let b = out.solutions[i].clone();
+        let verdict = match &with_r {
+            Some(pr) => {
+                let bounds: Vec<_> = cm.unknown_intervals(&b).into_iter().map(|(_, d)| d).collect();
+                match pr.start_from(&bounds) {
+                    None => Ok(Vec::new()),
+                    Some(start) => {
+                        let s = solver.settings();
+                        let settings = SolverSettings { sigma: s.sigma.min(1e-3), ..s.clone() };
+                        match Solver::new(&pr.system, settings) {
+                            Ok(ps) => deeper(&ps, &start, cancel, &mut out.stats).map(|found| found.into_iter().map(|f| (f.clone(), pr.points(&f.midpoint()))).collect()),
+                            Err(_) => Err("the coordinate search could not be set up"),
+                        }
+                    }
+                }
+            }
+            None => deeper(solver, &b, cancel, &mut out.stats).and_then(|f| if f.is_empty() { Ok(Vec::new()) } else { Err("no frame to certify placements in (fewer than three fixed points)") }),
+        };
+        match verdict {
             Ok(found) if found.is_empty() => {}
-            Ok(_) | Err(_) => {
+            Ok(found) => {
                 keep.push(i);
-                why.push(Some(if placed.is_some_and(|p| p.is_square()) { "no certified placement in this box, and a deeper search (sigma / 16) did not prove it empty" } else { "no frame to certify placements in (fewer than three fixed points), and a deeper search did not prove the box empty" }));
+                why.push(None);
+                for (x, pts) in found {
+                    // Placements are compared by their points (the two systems' variables differ).
+                    let same = roots.iter().any(|(_, q)| q.iter().zip(&pts).all(|(a, b)| (0..3).all(|k| (a[k] - b[k]).abs() <= 1e-6)));
+                    if !same {
+                        roots.push((x, pts));
+                        meets.push(vec![i]);
+                    }
+                }
+            }
+            Err(reason) => {
+                keep.push(i);
+                why.push(Some(reason));
             }
         }
     }

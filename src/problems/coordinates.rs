@@ -41,6 +41,8 @@ pub struct Placed {
     pub labels: Vec<String>,
     /// Derived variables and what they stand for, in order of definition.
     derived: Vec<(VarId, Poly)>,
+    /// Squared distances held as derived variables (`build_with`): pair and variable.
+    pub distance_vars: Vec<((usize, usize), VarId)>,
 }
 
 /// Why the points formulation does not apply (the determinant formulation still may).
@@ -61,6 +63,13 @@ pub enum PlacedError {
 impl Placed {
     /// Builds the coordinate system of `problem`.
     pub fn build(problem: &DistanceProblem) -> Result<Self, PlacedError> {
+        Self::build_with(problem, &[])
+    }
+
+    /// `build`, plus a derived variable `R = ‖p_a − p_b‖²` (with its equation: still square)
+    /// for each pair of `pairs`: a box of the determinant formulation then bounds placements
+    /// directly (`start_from`), which is how its clusters are searched again in coordinates.
+    pub fn build_with(problem: &DistanceProblem, pairs: &[(usize, usize)]) -> Result<Self, PlacedError> {
         let p = problem;
         let n = p.points.len();
         let fixed: Vec<usize> = (0..n).filter(|&i| p.points[i].xyz.is_some()).collect();
@@ -93,7 +102,7 @@ impl Placed {
             let ids = [0, 1, 2].map(|k| system.add_var(format!("{name}.{}", ["x", "y", "z"][k]), VarRole::Primary, dom[k]));
             coords[q] = Some(ids);
         }
-        let mut placed = Self { problem: p.clone(), system, coords, labels: Vec::new(), derived: Vec::new() };
+        let mut placed = Self { problem: p.clone(), system, coords, labels: Vec::new(), derived: Vec::new(), distance_vars: Vec::new() };
         let start = placed.system.initial_box();
         let mut equations: Vec<(Poly, String)> = Vec::new();
         // Known distances with a free end.
@@ -142,6 +151,12 @@ impl Placed {
             let hi = poly.eval(&start.dims).sup().max(0.0);
             derived(&mut placed, &mut equations, format!("orient({} {} toward {})", nm(o.a), nm(o.b), nm(o.toward)), poly, interval(0.0, hi));
         }
+        for &(a, b) in pairs {
+            let poly = placed.sq(a, b);
+            let r = derived(&mut placed, &mut equations, format!("r({},{})", p.points[a].name, p.points[b].name), poly, smooth[a][b]);
+            let v = r.vars()[0];
+            placed.distance_vars.push(((a, b), v));
+        }
         for (poly, label) in equations {
             placed.system.add(to_equation(&poly)?);
             placed.labels.push(label);
@@ -169,6 +184,20 @@ impl Placed {
     /// `(p_a − p_b)·(p_c − p_d)`
     fn dot(&self, a: usize, b: usize, c: usize, d: usize) -> Poly {
         (0..3).fold(Poly::zero(), |acc, k| acc.add(&self.diff(a, b, k).mul(&self.diff(c, d, k))))
+    }
+
+    /// The start box with each distance variable cut to `bounds` (per `distance_vars` entry);
+    /// `None` when a cut is empty (no placement has these distances).
+    pub fn start_from(&self, bounds: &[Interval]) -> Option<IntervalBox> {
+        let mut b = self.system.initial_box();
+        for (&(_, v), &r) in self.distance_vars.iter().zip(bounds) {
+            let cut = b.dims[v].intersection(r);
+            if cut.is_empty() {
+                return None;
+            }
+            b.dims[v] = cut;
+        }
+        Some(b)
     }
 
     /// True when the system is square: Krawczyk applies, and certifies regular roots.
