@@ -116,20 +116,19 @@ impl Certified {
     }
 }
 
-/// The formulation `Auto` picks: points when the problem has a frame (three fixed points, not
-/// collinear) and its coordinate system is square, else the shared determinants.
+/// The formulation `Auto` picks: the shared determinants, certified in coordinates.
 ///
-/// Measured (`bench-distances`): on the four spheres the points system is solved and certified
-/// by Krawczyk at the kernel's pace, while the nine determinants, not square, leave clusters no
-/// interval Newton can certify in distance space.
-pub fn choose(problem: &DistanceProblem) -> Choice {
-    match Placed::build(problem) {
-        Ok(p) if p.is_square() => Choice::Points,
-        _ => Choice::Shared,
-    }
+/// Measured (`bench-distances`, issue 15): the determinants prune far better than the points
+/// formulation as the kernel propagates it today (four spheres at sigma 0.01: about 900 boxes
+/// against over a million; octahedral b: 20 to 100 boxes against 130 000), because expanding
+/// `‖p_a − p_b‖²` into monomials loses the dependency between the squares and the products
+/// that interval propagation needs. So points are used to certify and to search the clusters
+/// the determinants leave, not to search the whole space; `--formulation points` keeps them
+/// available.
+pub fn choose(_problem: &DistanceProblem) -> Choice {
+    Choice::Shared
 }
 
-/// Builds, solves and settles `problem` (see the module documentation).
 /// `stats.seconds` and `stats.cpu_seconds` cover the whole call: build, search and settling.
 pub fn solve(problem: &DistanceProblem, choice: Choice, redundant: bool, faces: FaceBounds, settings: SolverSettings, cancel: &AtomicBool) -> Result<Certified, DistancesError> {
     let t0 = std::time::Instant::now();
@@ -349,10 +348,12 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
                 why.push(None);
                 for (x, pts) in found {
                     // Placements are compared by their points (the two systems' variables differ).
-                    let same = roots.iter().any(|(_, q)| q.iter().zip(&pts).all(|(a, b)| (0..3).all(|k| (a[k] - b[k]).abs() <= 1e-6)));
-                    if !same {
-                        roots.push((x, pts));
-                        meets.push(vec![i]);
+                    match roots.iter().position(|(_, q)| q.iter().zip(&pts).all(|(a, b)| (0..3).all(|k| (a[k] - b[k]).abs() <= 1e-6))) {
+                        Some(r) => meets[r].push(i),
+                        None => {
+                            roots.push((x, pts));
+                            meets.push(vec![i]);
+                        }
                     }
                 }
             }
@@ -366,7 +367,37 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
     let old_index: Vec<usize> = keep.clone();
     out.solutions = keep.iter().map(|&i| out.solutions[i].clone()).collect();
     out.unique = vec![false; out.solutions.len()];
-    let (labels, n) = components(&out.solutions);
+    // Clusters: touching boxes, and boxes that hold the same certified placement (a root on the
+    // boundary of two clusters' boxes is one solution, counted once).
+    let (touch, n0) = components(&out.solutions);
+    let mut parent: Vec<usize> = (0..n0).collect();
+    fn find(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    let pos = |i: usize| old_index.iter().position(|&j| j == i);
+    for hit in &meets {
+        let ks: Vec<usize> = hit.iter().filter_map(|&i| pos(i)).collect();
+        for w in ks.windows(2) {
+            let (a, b) = (find(&mut parent, touch[w[0]]), find(&mut parent, touch[w[1]]));
+            parent[a] = b;
+        }
+    }
+    let mut renumber: Vec<Option<usize>> = vec![None; n0];
+    let mut n = 0;
+    let labels: Vec<usize> = touch
+        .iter()
+        .map(|&t| {
+            let r = find(&mut parent, t);
+            *renumber[r].get_or_insert_with(|| {
+                n += 1;
+                n - 1
+            })
+        })
+        .collect();
     let mut clusters = vec![ClusterVerdict { proven: 0, undecided: None, boxes: 0 }; n];
     for (k, &l) in labels.iter().enumerate() {
         clusters[l].boxes += 1;
@@ -375,9 +406,7 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
         }
     }
     for ((x, pts), hit) in roots.into_iter().zip(meets) {
-        // Attributed to the cluster of the first box it meets (all such boxes touch or overlap
-        // through the root's distances in practice; several clusters would share one root).
-        let Some(k) = old_index.iter().position(|&i| i == hit[0]) else { continue };
+        let Some(k) = hit.iter().find_map(|&i| pos(i)) else { continue };
         let c = labels[k];
         clusters[c].proven += 1;
         out.roots.push(Root { cluster: c, certified: x, points: pts });
