@@ -27,6 +27,7 @@
 
 pub mod analysis;
 pub mod contract;
+pub mod distances;
 pub mod interval;
 mod lp;
 pub mod manip3r;

@@ -18,6 +18,8 @@ mod stability;
 mod manip3r;
 /// Distance problems through Cayley–Menger determinants: octahedral platform, four spheres.
 mod cayley_menger;
+/// Issue 15: distance answers certified (Krawczyk in coordinates) or labelled undecided.
+mod certified_distances;
 /// The ROS 2 node against real rclpy over DDS on loopback: topics, services, load.
 #[cfg(feature = "ros")]
 mod topics;

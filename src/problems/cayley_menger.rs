@@ -817,7 +817,7 @@ fn has_triangle(p: &DistanceProblem, pts: &[usize]) -> bool {
 /// Domains of every pair's squared distance: known values, given ranges, and the triangle
 /// inequality (bound smoothing on distances: `d_ij ≤ d_ik + d_kj`, `d_ij ≥ d_ik − d_kj`), all in
 /// outward-rounded interval arithmetic.
-fn bound_smoothing(p: &DistanceProblem) -> Result<Vec<Vec<Interval>>, DistanceError> {
+pub(crate) fn bound_smoothing(p: &DistanceProblem) -> Result<Vec<Vec<Interval>>, DistanceError> {
     let n = p.points.len();
     let mut lo = vec![vec![0.0f64; n]; n];
     let mut hi = vec![vec![f64::INFINITY; n]; n];

@@ -3,6 +3,7 @@
 
 pub(crate) mod angles;
 pub mod cayley_menger;
+pub mod coordinates;
 pub mod distance_file;
 pub mod linkage;
 pub mod platform;

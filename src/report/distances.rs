@@ -5,7 +5,8 @@
 use super::Bounds;
 use crate::contract::FaceBounds;
 use crate::interval::{components, IntervalBox};
-use crate::problems::cayley_menger::{BuildOptions, CayleyMenger};
+use crate::distances::{Certified, Choice, ClusterVerdict};
+use crate::problems::cayley_menger::{BuildOptions, CayleyMenger, Formulation};
 use crate::problems::platform::{PlatformProblem, Pose};
 use crate::search::{SolveStats as Stats, SolverSettings, Status};
 use nalgebra::Vector3;
@@ -42,6 +43,8 @@ pub struct DistanceRecord {
     /// The requested lines, once per placement.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub lines: Vec<LineRecord>,
+    /// Proven (Krawczyk, in the variables solved) to hold exactly one solution.
+    pub unique: bool,
     /// The raw box, one interval per variable (see `variables`).
     #[serde(rename = "box")]
     pub box_: Vec<Bounds>,
@@ -71,6 +74,17 @@ pub struct DistancesReport {
     pub status: Status,
     /// Solution boxes.
     pub solutions: Vec<DistanceRecord>,
+    /// The formulation solved (`points`, `shared`, `split`).
+    pub formulation: Choice,
+    /// True when the search finished and nothing is undecided: every solution is proven and
+    /// every other part of the domain proven empty.
+    pub complete: bool,
+    /// Distinct solutions proven (certified placements, mirror images counted apart).
+    pub proven: usize,
+    /// Clusters with something unproven: regions that may or may not hold solutions.
+    pub undecided_regions: usize,
+    /// Per cluster: proven solutions, and why it is undecided (absent when settled).
+    pub cluster_verdicts: Vec<ClusterVerdict>,
     /// Connected components of the solution boxes.
     pub clusters: usize,
     /// Distinct lines (or poses) placed from the first box of each cluster; see README.
@@ -95,7 +109,7 @@ pub fn record(cm: &CayleyMenger, platform: Option<&PlatformProblem>, b: &Interva
             (Vec::new(), points, lines)
         }
     };
-    DistanceRecord { distances, cluster, poses, points, lines, box_: b.dims.iter().map(|d| [d.inf(), d.sup()]).collect(), level: b.level }
+    DistanceRecord { distances, cluster, poses, points, lines, unique: false, box_: b.dims.iter().map(|d| [d.inf(), d.sup()]).collect(), level: b.level }
 }
 
 fn line(cm: &CayleyMenger, pts: &[[f64; 3]], a: usize, c: usize) -> LineRecord {
@@ -188,8 +202,62 @@ pub fn report(cm: &CayleyMenger, platform: Option<&PlatformProblem>, fixed: BTre
         status,
         placements: distinct_placements(&records, tol),
         solutions: records,
+        formulation: if cm.options.formulation == Formulation::Split { Choice::Split } else { Choice::Shared },
+        complete: false,
+        proven: 0,
+        undecided_regions: clusters,
+        cluster_verdicts: vec![ClusterVerdict { proven: 0, undecided: Some("not certified: this report does not certify"), boxes: 0 }; clusters],
         clusters,
         undecided: undecided.iter().map(|b| record(cm, platform, b, usize::MAX)).collect(),
         stats,
     }
+}
+
+/// The report of a certified run (`distances::solve`): boxes with their `unique` flags, clusters
+/// with their verdicts, and "N proven, M undecided".
+pub fn report_certified(c: &Certified, platform: Option<&PlatformProblem>, fixed: BTreeMap<String, f64>, faces: FaceBounds, settings: &SolverSettings) -> DistancesReport {
+    let tol = 10.0 * settings.sigma.max(1e-6);
+    let mut rep = report(&c.cm, platform, fixed, faces, settings, c.status, c.stats.clone(), &[], &[]);
+    let records: Vec<DistanceRecord> = match (&c.placed, c.formulation) {
+        (Some(pl), Choice::Points) => c.solutions.iter().zip(&c.cluster).zip(&c.unique).map(|((b, &l), &u)| placed_record(c, pl, platform, b, l, u)).collect(),
+        _ => c.solutions.iter().zip(&c.cluster).zip(&c.unique).map(|((b, &l), &u)| DistanceRecord { unique: u, ..record(&c.cm, platform, b, l) }).collect(),
+    };
+    rep.undecided = match (&c.placed, c.formulation) {
+        (Some(pl), Choice::Points) => c.undecided.iter().map(|b| placed_record(c, pl, platform, b, usize::MAX, false)).collect(),
+        _ => c.undecided.iter().map(|b| record(&c.cm, platform, b, usize::MAX)).collect(),
+    };
+    if c.formulation == Choice::Points {
+        if let Some(pl) = &c.placed {
+            rep.equations = pl.labels.clone();
+            rep.variables = pl.system.vars.iter().map(|v| v.name.clone()).collect();
+        }
+    }
+    rep.placements = distinct_placements(&records, tol);
+    rep.solutions = records;
+    rep.formulation = c.formulation;
+    rep.proven = c.proven();
+    rep.complete = c.complete();
+    rep.undecided_regions = c.undecided_regions();
+    rep.cluster_verdicts = c.clusters.clone();
+    rep.clusters = c.clusters.len();
+    rep
+}
+
+/// A box of the points formulation: coordinates at its midpoint, distances enclosed over it.
+fn placed_record(c: &Certified, pl: &crate::problems::coordinates::Placed, platform: Option<&PlatformProblem>, b: &IntervalBox, cluster: usize, unique: bool) -> DistanceRecord {
+    let distances = c.cm.unknowns.iter().map(|u| {
+        let d = pl.distance_over(u.a, u.b, b);
+        (u.name.clone(), [d.inf(), d.sup()])
+    }).collect();
+    let pts = pl.points(&b.midpoint());
+    let (poses, points, lines) = match platform {
+        Some(p) => (p.pose_of(&pts).into_iter().collect(), Vec::new(), Vec::new()),
+        None => {
+            let names = c.cm.problem.points.iter().map(|q| q.name.clone());
+            let points = vec![names.zip(pts.iter().copied()).collect()];
+            let lines = c.cm.problem.lines.iter().map(|&(a, e)| line(&c.cm, &pts, a, e)).collect();
+            (Vec::new(), points, lines)
+        }
+    };
+    DistanceRecord { distances, cluster, poses, points, lines, unique, box_: b.dims.iter().map(|d| [d.inf(), d.sup()]).collect(), level: b.level }
 }

@@ -1,0 +1,416 @@
+//! Solving distance problems with every answer certified or labelled (issue 15).
+//!
+//! `solve` picks a formulation (`Choice`), runs the kernel on it, then settles every cluster of
+//! solution boxes (connected component of touching boxes) as follows:
+//! - **points** (`problems::coordinates::Placed`, square): the kernel's Krawczyk already marks
+//!   boxes holding exactly one placement (`unique`). Each box it could not prove is searched
+//!   again, deeper (sigma / 16, bounded): the box is replaced by what that search certifies, or
+//!   removed when the search proves it empty, or stays with the reason it is undecided.
+//! - **shared / split** (the seed's determinants, not square or singular where two assembly
+//!   modes share their distances): placements are embedded from each box midpoint, polished by
+//!   Newton in coordinates and certified by Krawczyk on the points system; a certified placement
+//!   is attributed to the cluster whose boxes its distance enclosure meets (the root exists and
+//!   the solver never loses one, so its distances lie in some solution box). Boxes that meet no
+//!   certified placement get the deeper search: removed when proven empty, undecided otherwise.
+//! A cluster then counts its proven solutions (distinct certified placements) and is undecided
+//! when some box of it is still unproven, with the reason. "Complete" means nothing undecided.
+
+use crate::contract::{Contractor, FaceBounds, Newton};
+use crate::interval::{components, IntervalBox};
+use crate::problems::cayley_menger::{BuildOptions, CayleyMenger, DistanceError, DistanceProblem, DistanceSolverError, Formulation};
+use crate::problems::coordinates::{Placed, PlacedError};
+use crate::search::{Collect, SolveStats, Solver, SolverSettings, Status};
+use std::sync::atomic::AtomicBool;
+
+/// Which formulation to solve.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Choice {
+    /// Let the builder pick (see `choose`).
+    Auto,
+    /// Coordinates of the free points (`Placed`).
+    Points,
+    /// Determinants, one variable per distance.
+    Shared,
+    /// Determinants, the seed's split variables.
+    Split,
+}
+
+/// Why a problem cannot be solved.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum DistancesError {
+    /// Bad problem.
+    #[error(transparent)]
+    Problem(#[from] DistanceError),
+    /// The points formulation was asked for but does not apply.
+    #[error(transparent)]
+    Placed(#[from] PlacedError),
+    /// The solver could not be made.
+    #[error(transparent)]
+    Solver(#[from] DistanceSolverError),
+}
+
+/// What was settled about one cluster.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ClusterVerdict {
+    /// Distinct solutions proven (certified placements) in the cluster.
+    pub proven: usize,
+    /// `None` when every box of the cluster is accounted for by a proof; otherwise why not.
+    pub undecided: Option<&'static str>,
+    /// Solution boxes in the cluster.
+    pub boxes: usize,
+}
+
+/// A placement proven to be the only one in its coordinate box.
+#[derive(Clone, Debug)]
+pub struct Root {
+    /// Cluster it belongs to.
+    pub cluster: usize,
+    /// The certified box over `Placed::system`'s variables.
+    pub certified: IntervalBox,
+    /// Coordinates of every point at the box midpoint.
+    pub points: Vec<[f64; 3]>,
+}
+
+/// The result of `solve`.
+pub struct Certified {
+    /// The formulation solved: `points`, `shared` or `split`.
+    pub formulation: Choice,
+    /// Determinant system (always built: it names the unknown distances in reports).
+    pub cm: CayleyMenger,
+    /// Coordinate system, when the problem has a frame.
+    pub placed: Option<Placed>,
+    /// How the kernel's run ended.
+    pub status: Status,
+    /// Counters of the run (the deeper searches' boxes are added to `processed`).
+    pub stats: SolveStats,
+    /// Solution boxes over the solved system's variables.
+    pub solutions: Vec<IntervalBox>,
+    /// Per box: proven (Krawczyk) to hold exactly one solution.
+    pub unique: Vec<bool>,
+    /// Per box: its cluster.
+    pub cluster: Vec<usize>,
+    /// Per cluster: the verdict.
+    pub clusters: Vec<ClusterVerdict>,
+    /// Certified placements, each once.
+    pub roots: Vec<Root>,
+    /// Boxes a limit left unprocessed.
+    pub undecided: Vec<IntervalBox>,
+}
+
+impl Certified {
+    /// Proven solutions in all clusters.
+    pub fn proven(&self) -> usize {
+        self.clusters.iter().map(|c| c.proven).sum()
+    }
+
+    /// True when the search finished and nothing is undecided.
+    pub fn complete(&self) -> bool {
+        self.status == Status::Complete && self.undecided_regions() == 0
+    }
+
+    /// Clusters with something unproven (regions that may or may not hold solutions).
+    pub fn undecided_regions(&self) -> usize {
+        self.clusters.iter().filter(|c| c.undecided.is_some()).count()
+    }
+}
+
+/// The formulation `Auto` picks: the shared determinants, certified in coordinates.
+///
+/// Measured (`bench-distances`, issue 15): the determinants prune far better than the points
+/// formulation as the kernel propagates it today (four spheres at sigma 0.01: about 900 boxes
+/// against over a million; octahedral b: 20 to 100 boxes against 130 000), because expanding
+/// `‖p_a − p_b‖²` into monomials loses the dependency between the squares and the products
+/// that interval propagation needs. So points are used to certify and to search the clusters
+/// the determinants leave, not to search the whole space; `--formulation points` keeps them
+/// available.
+pub fn choose(_problem: &DistanceProblem) -> Choice {
+    Choice::Shared
+}
+
+/// `stats.seconds` and `stats.cpu_seconds` cover the whole call: build, search and settling.
+pub fn solve(problem: &DistanceProblem, choice: Choice, redundant: bool, faces: FaceBounds, settings: SolverSettings, cancel: &AtomicBool) -> Result<Certified, DistancesError> {
+    let t0 = std::time::Instant::now();
+    let c0 = crate::search::process_cpu_seconds();
+    let mut out = solve_inner(problem, choice, redundant, faces, settings, cancel)?;
+    out.stats.seconds = t0.elapsed().as_secs_f64();
+    out.stats.cpu_seconds = crate::search::process_cpu_seconds() - c0;
+    Ok(out)
+}
+
+fn solve_inner(problem: &DistanceProblem, choice: Choice, redundant: bool, faces: FaceBounds, settings: SolverSettings, cancel: &AtomicBool) -> Result<Certified, DistancesError> {
+    let choice = if choice == Choice::Auto { choose(problem) } else { choice };
+    let formulation = if choice == Choice::Split { Formulation::Split } else { Formulation::Shared };
+    let cm = CayleyMenger::build(problem, BuildOptions { formulation, redundant })?;
+    let placed = match Placed::build(problem) {
+        Ok(p) => Some(p),
+        Err(e) if choice == Choice::Points => return Err(e.into()),
+        Err(_) => None,
+    };
+    if choice == Choice::Points {
+        let placed = placed.expect("built above");
+        let mut out = {
+            let solver = Solver::new(&placed.system, settings.clone()).map_err(DistanceSolverError::from)?;
+            let e = solver.enclose(cancel, &mut |_| {});
+            let solver = Solver::new(&placed.system, deeper_settings(&settings)).map_err(DistanceSolverError::from)?;
+            let mut out = Certified { formulation: choice, cm, placed: None, status: e.status, stats: e.stats, solutions: e.solutions, unique: e.unique, cluster: Vec::new(), clusters: Vec::new(), roots: Vec::new(), undecided: e.undecided };
+            settle_points(&placed, &solver, &mut out, cancel);
+            out
+        };
+        out.placed = Some(placed);
+        Ok(out)
+    } else {
+        let solver = cm.solver(faces, settings.clone())?;
+        let e = solver.enclose(cancel, &mut |_| {});
+        let solver = cm.solver(faces, deeper_settings(&settings))?;
+        let unique = vec![false; e.solutions.len()];
+        let mut out = Certified { formulation: choice, cm: cm.clone(), placed: None, status: e.status, stats: e.stats, solutions: e.solutions, unique, cluster: Vec::new(), clusters: Vec::new(), roots: Vec::new(), undecided: e.undecided };
+        settle_determinants(&cm, placed.as_ref(), &solver, &mut out, cancel);
+        out.placed = placed;
+        Ok(out)
+    }
+}
+
+/// The deeper search's settings: sigma / 16, at most 4000 boxes per box, one thread (the
+/// searches are small), and the run's time limit.
+fn deeper_settings(s: &SolverSettings) -> SolverSettings {
+    SolverSettings { sigma: s.sigma / 16.0, max_boxes: 4_000, threads: 1, ..s.clone() }
+}
+
+/// Bounded deeper search of one box: `Some(certified boxes)` when it finishes with every box it
+/// finds proven unique (none: the box held no solution), `None` otherwise.
+fn deeper(solver: &Solver<'_>, b: &IntervalBox, cancel: &AtomicBool, stats: &mut SolveStats) -> Result<Vec<IntervalBox>, &'static str> {
+    let mut found = Collect::default();
+    let (status, st) = solver.run_from(b.clone(), cancel, &mut found);
+    stats.processed += st.processed;
+    stats.certified += st.certified;
+    if status != Status::Complete {
+        return Err("the deeper search (sigma / 16) hit its box limit");
+    }
+    if found.unique.iter().all(|&u| u) {
+        Ok(found.solutions)
+    } else {
+        Err("no proof of a single solution, nor of none, after a deeper search (sigma / 16)")
+    }
+}
+
+/// Groups boxes by overlap (union-find on pairwise intersection).
+fn overlap_groups(boxes: &[&IntervalBox]) -> Vec<usize> {
+    let n = boxes.len();
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn find(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    for i in 0..n {
+        for j in i + 1..n {
+            if boxes[i].intersects(boxes[j]) {
+                let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+                parent[a] = b;
+            }
+        }
+    }
+    (0..n).map(|i| find(&mut parent, i)).collect()
+}
+
+fn settle_points(placed: &Placed, solver: &Solver<'_>, out: &mut Certified, cancel: &AtomicBool) {
+    // Unproven boxes: replace each by what a deeper search certifies in it, or keep it with why.
+    let mut boxes = Vec::new();
+    let mut unique = Vec::new();
+    let mut why: Vec<Option<&'static str>> = Vec::new();
+    for (b, u) in std::mem::take(&mut out.solutions).into_iter().zip(std::mem::take(&mut out.unique)) {
+        if u {
+            boxes.push(b);
+            unique.push(true);
+            why.push(None);
+            continue;
+        }
+        match deeper(solver, &b, cancel, &mut out.stats) {
+            Ok(found) => {
+                for f in found {
+                    boxes.push(f);
+                    unique.push(true);
+                    why.push(None);
+                }
+            }
+            Err(reason) => {
+                boxes.push(b);
+                unique.push(false);
+                why.push(Some(reason));
+            }
+        }
+    }
+    let (labels, n) = components(&boxes);
+    let mut newton = Newton::new(&placed.system, f64::INFINITY);
+    let mut clusters = vec![ClusterVerdict { proven: 0, undecided: None, boxes: 0 }; n];
+    for c in 0..n {
+        let members: Vec<usize> = (0..boxes.len()).filter(|&i| labels[i] == c).collect();
+        clusters[c].boxes = members.len();
+        if let Some(r) = members.iter().find_map(|&i| why[i]) {
+            clusters[c].undecided = Some(r);
+        }
+        // Certified boxes that overlap may hold the same placement: one root when Krawczyk
+        // certifies their hull, otherwise the cluster is left undecided about the count.
+        let certified: Vec<&IntervalBox> = members.iter().filter(|&&i| unique[i]).map(|&i| &boxes[i]).collect();
+        let groups = overlap_groups(&certified);
+        let mut seen = Vec::new();
+        for (k, &g) in groups.iter().enumerate() {
+            if seen.contains(&g) {
+                continue;
+            }
+            seen.push(g);
+            let group: Vec<&IntervalBox> = certified.iter().zip(&groups).filter(|(_, &h)| h == g).map(|(b, _)| *b).collect();
+            let hull = group.iter().skip(1).fold(group[0].clone(), |h, b| IntervalBox { dims: h.dims.iter().zip(&b.dims).map(|(x, y)| x.convex_hull(*y)).collect(), level: h.level });
+            let single = group.len() == 1 || newton.as_mut().and_then(|nw| nw.certify(&hull)).is_some();
+            if !single {
+                clusters[c].undecided.get_or_insert("overlapping certified boxes: one solution or two");
+            }
+            clusters[c].proven += 1;
+            out.roots.push(Root { cluster: c, certified: certified[k].clone(), points: placed.points(&certified[k].midpoint()) });
+        }
+    }
+    out.solutions = boxes;
+    out.unique = unique;
+    out.cluster = labels;
+    out.clusters = clusters;
+}
+
+fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solver<'_>, out: &mut Certified, cancel: &AtomicBool) {
+    let (labels, _) = components(&out.solutions);
+    // Certified placements from every box midpoint, each once.
+    let mut roots: Vec<(IntervalBox, Vec<[f64; 3]>)> = Vec::new();
+    let mut meets: Vec<Vec<usize>> = Vec::new();
+    if let Some(pl) = placed.filter(|p| p.is_square()) {
+        for b in &out.solutions {
+            let width = cm.unknowns.iter().map(|u| b.width(u.var)).fold(0.0, f64::max);
+            for pts in cm.embed(&b.midpoint(), 1e-7 + 10.0 * width) {
+                let Some(x) = pl.certify_near(&pts) else { continue };
+                if roots.iter().any(|(r, _)| r.intersects(&x)) {
+                    continue;
+                }
+                // The root's distances, enclosed over its certified box.
+                let d: Vec<_> = cm.unknowns.iter().map(|u| pl.distance_over(u.a, u.b, &x)).collect();
+                let hit: Vec<usize> = (0..out.solutions.len())
+                    .filter(|&i| cm.unknowns.iter().zip(&d).all(|(u, d)| out.solutions[i].dims[u.var].intersection(*d).is_empty() == false && u.twin.is_none_or(|t| !out.solutions[i].dims[t].intersection(*d).is_empty())))
+                    .collect();
+                if hit.is_empty() {
+                    // Not a solution of the determinant system as solved (an orientation
+                    // choice excludes it): not counted.
+                    continue;
+                }
+                let pts = pl.points(&x.midpoint());
+                roots.push((x, pts));
+                meets.push(hit);
+            }
+        }
+    }
+    // Boxes that meet no certified placement: searched again in coordinates, with the box's
+    // distances as bounds (square, so Krawczyk certifies what it finds); a box is removed when
+    // that search proves it empty, gains the placements it certifies, or stays undecided. The
+    // determinants themselves cannot do this near a tangency (singular) or when not square.
+    let covered: Vec<bool> = (0..out.solutions.len()).map(|i| meets.iter().any(|m| m.contains(&i))).collect();
+    let pairs: Vec<(usize, usize)> = cm.unknowns.iter().map(|u| (u.a, u.b)).collect();
+    let with_r = placed.filter(|p| p.is_square()).and_then(|_| Placed::build_with(&cm.problem, &pairs).ok());
+    let mut keep = Vec::new();
+    let mut why: Vec<Option<&'static str>> = Vec::new();
+    for i in 0..out.solutions.len() {
+        if covered[i] {
+            keep.push(i);
+            why.push(None);
+            continue;
+        }
+        let b = out.solutions[i].clone();
+        let verdict = match &with_r {
+            Some(pr) => {
+                let bounds: Vec<_> = cm.unknown_intervals(&b).into_iter().map(|(_, d)| d).collect();
+                match pr.start_from(&bounds) {
+                    None => Ok(Vec::new()),
+                    Some(start) => {
+                        let s = solver.settings();
+                        let settings = SolverSettings { sigma: s.sigma.min(1e-3), ..s.clone() };
+                        match Solver::new(&pr.system, settings) {
+                            Ok(ps) => deeper(&ps, &start, cancel, &mut out.stats).map(|found| found.into_iter().map(|f| (f.clone(), pr.points(&f.midpoint()))).collect()),
+                            Err(_) => Err("the coordinate search could not be set up"),
+                        }
+                    }
+                }
+            }
+            None => deeper(solver, &b, cancel, &mut out.stats).and_then(|f| if f.is_empty() { Ok(Vec::new()) } else { Err("no frame to certify placements in (fewer than three fixed points)") }),
+        };
+        match verdict {
+            Ok(found) if found.is_empty() => {}
+            Ok(found) => {
+                keep.push(i);
+                why.push(None);
+                for (x, pts) in found {
+                    // Placements are compared by their points (the two systems' variables differ).
+                    match roots.iter().position(|(_, q)| q.iter().zip(&pts).all(|(a, b)| (0..3).all(|k| (a[k] - b[k]).abs() <= 1e-6))) {
+                        Some(r) => meets[r].push(i),
+                        None => {
+                            roots.push((x, pts));
+                            meets.push(vec![i]);
+                        }
+                    }
+                }
+            }
+            Err(reason) => {
+                keep.push(i);
+                why.push(Some(reason));
+            }
+        }
+    }
+    let _ = labels;
+    let old_index: Vec<usize> = keep.clone();
+    out.solutions = keep.iter().map(|&i| out.solutions[i].clone()).collect();
+    out.unique = vec![false; out.solutions.len()];
+    // Clusters: touching boxes, and boxes that hold the same certified placement (a root on the
+    // boundary of two clusters' boxes is one solution, counted once).
+    let (touch, n0) = components(&out.solutions);
+    let mut parent: Vec<usize> = (0..n0).collect();
+    fn find(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    let pos = |i: usize| old_index.iter().position(|&j| j == i);
+    for hit in &meets {
+        let ks: Vec<usize> = hit.iter().filter_map(|&i| pos(i)).collect();
+        for w in ks.windows(2) {
+            let (a, b) = (find(&mut parent, touch[w[0]]), find(&mut parent, touch[w[1]]));
+            parent[a] = b;
+        }
+    }
+    let mut renumber: Vec<Option<usize>> = vec![None; n0];
+    let mut n = 0;
+    let labels: Vec<usize> = touch
+        .iter()
+        .map(|&t| {
+            let r = find(&mut parent, t);
+            *renumber[r].get_or_insert_with(|| {
+                n += 1;
+                n - 1
+            })
+        })
+        .collect();
+    let mut clusters = vec![ClusterVerdict { proven: 0, undecided: None, boxes: 0 }; n];
+    for (k, &l) in labels.iter().enumerate() {
+        clusters[l].boxes += 1;
+        if let Some(r) = why[k] {
+            clusters[l].undecided.get_or_insert(r);
+        }
+    }
+    for ((x, pts), hit) in roots.into_iter().zip(meets) {
+        let Some(k) = hit.iter().find_map(|&i| pos(i)) else { continue };
+        let c = labels[k];
+        clusters[c].proven += 1;
+        out.roots.push(Root { cluster: c, certified: x, points: pts });
+    }
+    out.cluster = labels;
+    out.clusters = clusters;
+}

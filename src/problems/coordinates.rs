@@ -1,0 +1,302 @@
+//! Distance problems in placed coordinates: the "points" formulation (issue 15).
+//!
+//! The seed's determinants (`cayley_menger`) work on squared distances only; here every point
+//! without given coordinates gets three coordinate variables instead, in the frame the fixed
+//! points define, and every constraint becomes a polynomial equation of degree two:
+//! - a known squared distance: `‖p_a − p_b‖² − r = 0`;
+//! - a point–line distance `d` of `p` from the line `a b`: with `w = p − a`, `v = b − a`,
+//!   `‖w‖²‖v‖² − (w·v)² = d²‖v‖²` (Lagrange's identity) is of degree four, so `S = ‖w‖²`,
+//!   `W = w·v` (and `Q = ‖v‖²` when `r_ab` is unknown) become derived variables with their own
+//!   degree-two equations, and the constraint reads `S·Q − W² − d²·Q = 0`;
+//! - an orientation `(toward − a)·(b − a) ≥ 0`: a derived variable with domain `[0, …]`.
+//! This is the point-and-direction formulation ibexsolve uses for lines tangent to spheres
+//! (here the line's points `t`, `u` of the problem file), written for any distance problem.
+//!
+//! Why it exists: the system is square whenever the problem is well constrained (each derived
+//! variable brings its own equation), so the kernel's Krawczyk operator (`contract::Newton`)
+//! both contracts and certifies: a box it proves holds exactly one placement. The determinant
+//! systems are not square (the four spheres: 6 unknowns, 9 equations) or singular where two
+//! assembly modes share their distances (octahedral b), so their answers are certified here too
+//! (`Placed::certify_near`), from the placements `cayley_menger::embed` finds.
+//! It needs at least three fixed points that are not collinear: they fix the frame (with exactly
+//! three, the mirror image through their plane of every placement is another placement).
+//! Builds only; solving is the kernel's job.
+
+use super::cayley_menger::{bound_smoothing, DistanceError, DistanceProblem};
+use crate::contract::{Contractor, Newton};
+use crate::interval::{interval, point, Interval, IntervalBox};
+use crate::system::multilinear::Poly;
+use crate::system::{Equation, EquationSystem, Monomial, Term, VarId, VarRole};
+
+/// A distance problem as a system over point coordinates.
+#[derive(Clone, Debug)]
+pub struct Placed {
+    /// The problem it came from.
+    pub problem: DistanceProblem,
+    /// Coordinates (primary) and the derived variables, with their equations.
+    pub system: EquationSystem,
+    /// Per point: its three coordinate variables, or `None` for a fixed point.
+    pub coords: Vec<Option<[VarId; 3]>>,
+    /// One label per equation.
+    pub labels: Vec<String>,
+    /// Derived variables and what they stand for, in order of definition.
+    derived: Vec<(VarId, Poly)>,
+    /// Squared distances held as derived variables (`build_with`): pair and variable.
+    pub distance_vars: Vec<((usize, usize), VarId)>,
+}
+
+/// Why the points formulation does not apply (the determinant formulation still may).
+#[derive(Debug, thiserror::Error, PartialEq)]
+#[non_exhaustive]
+pub enum PlacedError {
+    /// The problem itself is bad (same checks as the determinant builder).
+    #[error(transparent)]
+    Problem(#[from] DistanceError),
+    /// Fewer than three fixed points, or they are collinear: no frame.
+    #[error("the points formulation needs three fixed points that are not collinear")]
+    NoFrame,
+    /// An equation of degree above two (cannot happen for the constraints above).
+    #[error("internal: an equation of degree {0} in coordinates")]
+    Degree(usize),
+}
+
+impl Placed {
+    /// Builds the coordinate system of `problem`.
+    pub fn build(problem: &DistanceProblem) -> Result<Self, PlacedError> {
+        Self::build_with(problem, &[])
+    }
+
+    /// `build`, plus a derived variable `R = ‖p_a − p_b‖²` (with its equation: still square)
+    /// for each pair of `pairs`: a box of the determinant formulation then bounds placements
+    /// directly (`start_from`), which is how its clusters are searched again in coordinates.
+    pub fn build_with(problem: &DistanceProblem, pairs: &[(usize, usize)]) -> Result<Self, PlacedError> {
+        let p = problem;
+        let n = p.points.len();
+        let fixed: Vec<usize> = (0..n).filter(|&i| p.points[i].xyz.is_some()).collect();
+        let frame = fixed.len() >= 3 && super::cayley_menger::combinations(fixed.len(), 3).into_iter().any(|t| {
+            let c = |k: usize| nalgebra::Vector3::from(p.points[fixed[t[k]]].xyz.expect("fixed"));
+            let (a, b, d) = (c(0), c(1), c(2));
+            let s = (b - a).norm().max((d - a).norm()).max(1e-300);
+            (b - a).cross(&(d - a)).norm() > 1e-9 * s * s
+        });
+        if !frame {
+            return Err(PlacedError::NoFrame);
+        }
+        let smooth = bound_smoothing(p)?;
+        let mut system = EquationSystem::default();
+        let mut coords = vec![None; n];
+        for q in 0..n {
+            if p.points[q].xyz.is_some() {
+                continue;
+            }
+            // Bound smoothing bounds q's distance to every fixed point: a cube around each.
+            let mut dom = [interval(f64::NEG_INFINITY, f64::INFINITY); 3];
+            for &c in &fixed {
+                let reach = smooth[q][c].sqrt().sup();
+                let xyz = p.points[c].xyz.expect("fixed");
+                for k in 0..3 {
+                    dom[k] = dom[k].intersection(interval((point(xyz[k]) - point(reach)).inf(), (point(xyz[k]) + point(reach)).sup()));
+                }
+            }
+            let name = &p.points[q].name;
+            let ids = [0, 1, 2].map(|k| system.add_var(format!("{name}.{}", ["x", "y", "z"][k]), VarRole::Primary, dom[k]));
+            coords[q] = Some(ids);
+        }
+        let mut placed = Self { problem: p.clone(), system, coords, labels: Vec::new(), derived: Vec::new(), distance_vars: Vec::new() };
+        let start = placed.system.initial_box();
+        let mut equations: Vec<(Poly, String)> = Vec::new();
+        // Known distances with a free end.
+        for a in 0..n {
+            for b in a + 1..n {
+                if placed.coords[a].is_none() && placed.coords[b].is_none() {
+                    continue;
+                }
+                if let Some(r) = p.known(a, b) {
+                    equations.push((placed.sq(a, b).add(&Poly::constant(-r)), format!("|{} {}|² = {}", p.points[a].name, p.points[b].name, r.mid())));
+                }
+            }
+        }
+        // A derived variable `v = poly`: its domain is the natural enclosure of `poly` over the
+        // start box cut by what bound smoothing knows (an empty cut would mean no placement, which
+        // the solver proves on its own; keep the enclosure then).
+        let derived = |placed: &mut Placed, equations: &mut Vec<(Poly, String)>, name: String, poly: Poly, bound: Interval| -> Poly {
+            let dom = poly.eval(&start.dims).intersection(bound);
+            let dom = if dom.is_empty() { poly.eval(&start.dims) } else { dom };
+            let v = placed.system.add_var(name.clone(), VarRole::Derived, dom);
+            equations.push((Poly::var(v).add(&poly.scale(point(-1.0))), format!("{name} defined")));
+            placed.derived.push((v, poly));
+            Poly::var(v)
+        };
+        for pl in &p.point_lines {
+            let (q, a, b) = (pl.point, pl.line.0, pl.line.1);
+            let nm = |i: usize| p.points[i].name.clone();
+            let label = format!("dist({}, line {} {})² = {}", nm(q), nm(a), nm(b), pl.squared.mid());
+            let (s_poly, w_poly) = (placed.sq(q, a), placed.dot(q, a, b, a));
+            let s = if placed.coords[q].is_none() && placed.coords[a].is_none() { s_poly } else { derived(&mut placed, &mut equations, format!("S({},{})", nm(q), nm(a)), s_poly, smooth[q][a]) };
+            let q_len = match p.known(a, b) {
+                Some(r) => Poly::constant(r),
+                None => {
+                    let q_poly = placed.sq(a, b);
+                    derived(&mut placed, &mut equations, format!("Q({},{})", nm(a), nm(b)), q_poly, smooth[a][b])
+                }
+            };
+            let reach = (smooth[q][a] * smooth[a][b]).sqrt().sup();
+            let w = derived(&mut placed, &mut equations, format!("W({};{},{})", nm(q), nm(a), nm(b)), w_poly, interval(-reach, reach));
+            let e = s.mul(&q_len).add(&w.mul(&w).scale(point(-1.0))).add(&q_len.scale(-pl.squared));
+            equations.push((e, label));
+        }
+        for o in &p.orientations {
+            let nm = |i: usize| p.points[i].name.clone();
+            let poly = placed.dot(o.toward, o.a, o.b, o.a);
+            let hi = poly.eval(&start.dims).sup().max(0.0);
+            derived(&mut placed, &mut equations, format!("orient({} {} toward {})", nm(o.a), nm(o.b), nm(o.toward)), poly, interval(0.0, hi));
+        }
+        for &(a, b) in pairs {
+            let poly = placed.sq(a, b);
+            let r = derived(&mut placed, &mut equations, format!("r({},{})", p.points[a].name, p.points[b].name), poly, smooth[a][b]);
+            let v = r.vars()[0];
+            placed.distance_vars.push(((a, b), v));
+        }
+        for (poly, label) in equations {
+            placed.system.add(to_equation(&poly)?);
+            placed.labels.push(label);
+        }
+        Ok(placed)
+    }
+
+    /// Coordinate `k` of point `i`: a constant or a variable.
+    fn coord(&self, i: usize, k: usize) -> Poly {
+        match self.coords[i] {
+            Some(ids) => Poly::var(ids[k]),
+            None => Poly::constant(point(self.problem.points[i].xyz.expect("fixed")[k])),
+        }
+    }
+
+    fn diff(&self, a: usize, b: usize, k: usize) -> Poly {
+        self.coord(a, k).add(&self.coord(b, k).scale(point(-1.0)))
+    }
+
+    /// `‖p_a − p_b‖²`
+    fn sq(&self, a: usize, b: usize) -> Poly {
+        self.dot(a, b, a, b)
+    }
+
+    /// `(p_a − p_b)·(p_c − p_d)`
+    fn dot(&self, a: usize, b: usize, c: usize, d: usize) -> Poly {
+        (0..3).fold(Poly::zero(), |acc, k| acc.add(&self.diff(a, b, k).mul(&self.diff(c, d, k))))
+    }
+
+    /// The start box with each distance variable cut to `bounds` (per `distance_vars` entry);
+    /// `None` when a cut is empty (no placement has these distances).
+    pub fn start_from(&self, bounds: &[Interval]) -> Option<IntervalBox> {
+        let mut b = self.system.initial_box();
+        for (&(_, v), &r) in self.distance_vars.iter().zip(bounds) {
+            let cut = b.dims[v].intersection(r);
+            if cut.is_empty() {
+                return None;
+            }
+            b.dims[v] = cut;
+        }
+        Some(b)
+    }
+
+    /// True when the system is square: Krawczyk applies, and certifies regular roots.
+    pub fn is_square(&self) -> bool {
+        self.system.equations.len() == self.system.vars.len()
+    }
+
+    /// Every point's coordinates at `x` (a point of the variable space).
+    pub fn points(&self, x: &[f64]) -> Vec<[f64; 3]> {
+        (0..self.problem.points.len())
+            .map(|i| match self.coords[i] {
+                Some(ids) => ids.map(|v| x[v]),
+                None => self.problem.points[i].xyz.expect("fixed"),
+            })
+            .collect()
+    }
+
+    /// Enclosure of the squared distance between points `a` and `b` over the box `b`.
+    pub fn distance_over(&self, a: usize, c: usize, b: &IntervalBox) -> Interval {
+        self.sq(a, c).eval(&b.dims)
+    }
+
+    /// The variable-space point of a placement `pts` (derived variables evaluated there).
+    pub fn state(&self, pts: &[[f64; 3]]) -> Vec<f64> {
+        let mut x = vec![0.0; self.system.vars.len()];
+        for (i, c) in self.coords.iter().enumerate() {
+            if let Some(ids) = c {
+                for k in 0..3 {
+                    x[ids[k]] = pts[i][k];
+                }
+            }
+        }
+        // Derived variables are polynomials in the coordinates, defined in order.
+        for (v, poly) in &self.derived {
+            x[*v] = poly.eval_point(&x);
+        }
+        x
+    }
+
+    /// Tries to prove that exactly one placement lies near `pts`: the certified box, or `None`.
+    /// Needs a square system.
+    ///
+    /// Floating-point Newton first polishes the placement (the embedding of a box midpoint is
+    /// only as close as the box is narrow); then Krawczyk with ε-inflation (`Newton::certify`)
+    /// proves a tiny box around the polished point holds exactly one root. The polish needs no
+    /// accuracy: only the Krawczyk test is a proof.
+    pub fn certify_near(&self, pts: &[[f64; 3]]) -> Option<IntervalBox> {
+        let mut newton = Newton::new(&self.system, f64::INFINITY)?;
+        let mut x = self.state(pts);
+        let n = x.len();
+        for _ in 0..30 {
+            let f: Vec<f64> = self.system.equations.iter().map(|e| e.residual(&x)).collect();
+            let mut j = nalgebra::DMatrix::zeros(n, n);
+            for (r, e) in self.system.equations.iter().enumerate() {
+                for t in &e.terms {
+                    let c = t.coef.mid();
+                    match t.mono {
+                        Monomial::Linear(v) => j[(r, v)] += c,
+                        Monomial::Square(v) => j[(r, v)] += 2.0 * c * x[v],
+                        Monomial::Product(a, b) => {
+                            j[(r, a)] += c * x[b];
+                            j[(r, b)] += c * x[a];
+                        }
+                    }
+                }
+            }
+            let step = j.lu().solve(&nalgebra::DVector::from_vec(f))?;
+            for k in 0..n {
+                x[k] -= step[k];
+            }
+            if step.amax() <= 1e-14 * (1.0 + x.iter().fold(0.0f64, |m, v| m.max(v.abs()))) {
+                break;
+            }
+        }
+        if !x.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let r = |v: f64| 1e-9 * (1.0 + v.abs());
+        let b = IntervalBox::new(x.iter().map(|&v| interval(v - r(v), v + r(v))).collect());
+        newton.certify(&b)
+    }
+}
+
+/// A `Poly` of degree at most two as an `Equation` (`poly = 0`).
+fn to_equation(p: &Poly) -> Result<Equation, PlacedError> {
+    let mut constant = point(0.0);
+    let mut terms = Vec::with_capacity(p.len());
+    for (m, c) in p.terms() {
+        let mono = match m.as_slice() {
+            [] => {
+                constant = constant + c;
+                continue;
+            }
+            [(v, 1)] => Monomial::Linear(*v),
+            [(v, 2)] => Monomial::Square(*v),
+            [(a, 1), (b, 1)] => Monomial::Product(*a, *b),
+            other => return Err(PlacedError::Degree(other.iter().map(|&(_, e)| e as usize).sum())),
+        };
+        terms.push(Term { coef: c, mono });
+    }
+    Ok(Equation::new(terms, constant))
+}
