@@ -419,8 +419,11 @@ struct CollisionPrune<'a> {
     scene: &'a Scene,
     precision: f64,
     /// Scratch: enclosed and midpoint end points per body, filled on first use in a box.
-    ends: Vec<Option<([V3; 2], [[f64; 3]; 2])>>,
+    ends: Vec<Option<Ends>>,
 }
+
+/// A body's end points over a box (enclosed) and at its midpoint (floating point).
+type Ends = ([V3; 2], [[f64; 3]; 2]);
 
 impl Prune for CollisionPrune<'_> {
     type Cell = CollisionCell;

@@ -5,7 +5,9 @@
 //! internal-motion lines (`motion`), cusps (`cusps`), nodes (`nodes`), inverse kinematics
 //! (`ik`), collision sets (`collision`) and the report types (`report`).
 //! Every search is branch and prune over (θ₂, θ₃) with interval Newton (Krawczyk) proofs; a box
-//! is discarded only when interval arithmetic proves it holds nothing sought.
+//! is discarded only when interval arithmetic proves it holds nothing sought. Each is a
+//! `search::Prune` run by the kernel within a `Control` (`drive`); `singularities` runs cusps
+//! then nodes for every front end.
 //! No IO here: the CLI reads files and writes reports.
 //!
 //! # References

@@ -192,9 +192,12 @@ where
 /// children it made (for the memory limit).
 type Decided<C, F> = Vec<(u32, usize, Step<C, F>)>;
 
+/// A level's decisions, and the cells cancel or time kept from being taken.
+type LevelOutcome<C, F> = (Decided<C, F>, Vec<C>);
+
 /// The breadth-first walk: takes each level's decisions from `decide_level` (which also returns
 /// the cells cancel or time kept it from taking) and routes them in level order.
-fn walk_levels<C, F>(start: C, budget: &Budget<'_>, sink: &mut impl Sink<C, F>, mut decide_level: impl FnMut(Vec<C>) -> (Decided<C, F>, Vec<C>)) -> (Status, Stats) {
+fn walk_levels<C, F>(start: C, budget: &Budget<'_>, sink: &mut impl Sink<C, F>, mut decide_level: impl FnMut(Vec<C>) -> LevelOutcome<C, F>) -> (Status, Stats) {
     let c0 = process_cpu_seconds();
     let mut stats = Stats::default();
     let mut discards = Discards::default();
@@ -288,7 +291,7 @@ fn decide<P: Prune>(p: &mut P, c: P::Cell) -> (u32, usize, Step<P::Cell, P::Foun
 }
 
 /// Decides a level on one worker, stopping when cancel or time interrupts it.
-fn decide_alone<P: Prune>(p: &mut P, level: Vec<P::Cell>, budget: &Budget<'_>) -> (Decided<P::Cell, P::Found>, Vec<P::Cell>) {
+fn decide_alone<P: Prune>(p: &mut P, level: Vec<P::Cell>, budget: &Budget<'_>) -> LevelOutcome<P::Cell, P::Found> {
     let mut out = Vec::with_capacity(level.len());
     let mut cells = level.into_iter();
     for c in cells.by_ref() {
@@ -339,7 +342,7 @@ fn take_chunks<P: Prune>(p: &mut P, job: &LevelJob<P::Cell>, budget: &Budget<'_>
 
 /// The decisions in chunk order; the chunks no worker took (cancel or time) stay pending. Only
 /// an interrupted run, which depends on the clock anyway, has such gaps.
-fn collect<C, F>(job: Arc<LevelJob<C>>, done: Vec<Taken<C, F>>) -> (Decided<C, F>, Vec<C>) {
+fn collect<C, F>(job: Arc<LevelJob<C>>, done: Vec<Taken<C, F>>) -> LevelOutcome<C, F> {
     let mut by_chunk: Vec<Option<Decided<C, F>>> = (0..job.chunks.len()).map(|_| None).collect();
     for (i, steps) in done.into_iter().flatten() {
         by_chunk[i] = Some(steps);
