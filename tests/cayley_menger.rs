@@ -418,7 +418,7 @@ fn distances_cli_reports_and_rejects_bad_input_in_one_line() {
     args.extend(["--json".into(), json.to_str().unwrap().into()]);
     let (ok, out, err) = cli(&args.iter().map(|s| s.as_str()).collect::<Vec<_>>());
     assert!(ok, "{err}");
-    assert!(out.starts_with("octahedral: 2 solution boxes in 2 clusters, 4 distinct poses"), "{out}");
+    assert!(out.starts_with("octahedral: 4 proven, 0 undecided (2 solution boxes in 2 clusters, 4 distinct poses"), "{out}");
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let _ = std::fs::remove_file(&json);
     assert_eq!(v["status"], "complete");
