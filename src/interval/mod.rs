@@ -4,7 +4,7 @@
 //! which it was made), bisection, and the few set operations the driver needs.
 //! It does no IO and knows nothing of equations.
 
-pub mod fast;
+pub(crate) mod fast;
 pub mod trig;
 
 pub use inari::Interval;

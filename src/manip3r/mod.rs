@@ -21,13 +21,13 @@ pub mod curves;
 pub mod cusps;
 pub mod drive;
 pub mod ik;
-pub mod krawczyk;
+pub(crate) mod krawczyk;
 pub mod motion;
 pub mod nodes;
 pub mod report;
-pub mod taylor;
+pub(crate) mod taylor;
 /// Sound interval sine and cosine, now `crate::interval::trig` (the path kept for callers).
-pub use crate::interval::trig;
+pub(crate) use crate::interval::trig;
 
 pub use chain::{Chain3R, Jets};
 pub use cusps::{Cusp, CuspSearch};
