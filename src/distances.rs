@@ -195,28 +195,6 @@ fn deeper(solver: &Solver<'_>, b: &IntervalBox, cancel: &AtomicBool, stats: &mut
     }
 }
 
-/// Groups boxes by overlap (union-find on pairwise intersection).
-fn overlap_groups(boxes: &[&IntervalBox]) -> Vec<usize> {
-    let n = boxes.len();
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn find(p: &mut [usize], mut i: usize) -> usize {
-        while p[i] != i {
-            p[i] = p[p[i]];
-            i = p[i];
-        }
-        i
-    }
-    for i in 0..n {
-        for j in i + 1..n {
-            if boxes[i].intersects(boxes[j]) {
-                let (a, b) = (find(&mut parent, i), find(&mut parent, j));
-                parent[a] = b;
-            }
-        }
-    }
-    (0..n).map(|i| find(&mut parent, i)).collect()
-}
-
 fn settle_points(placed: &Placed, solver: &Solver<'_>, out: &mut Certified, cancel: &AtomicBool) {
     // Unproven boxes: replace each by what a deeper search certifies in it, or keep it with why.
     let mut boxes = Vec::new();
@@ -256,7 +234,7 @@ fn settle_points(placed: &Placed, solver: &Solver<'_>, out: &mut Certified, canc
         // Certified boxes that overlap may hold the same placement: one root when Krawczyk
         // certifies their hull, otherwise the cluster is left undecided about the count.
         let certified: Vec<&IntervalBox> = members.iter().filter(|&&i| unique[i]).map(|&i| &boxes[i]).collect();
-        let groups = overlap_groups(&certified);
+        let (groups, _) = components(&certified.iter().map(|b| (*b).clone()).collect::<Vec<_>>());
         let mut seen = Vec::new();
         for (k, &g) in groups.iter().enumerate() {
             if seen.contains(&g) {
@@ -370,20 +348,13 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
     // Clusters: touching boxes, and boxes that hold the same certified placement (a root on the
     // boundary of two clusters' boxes is one solution, counted once).
     let (touch, n0) = components(&out.solutions);
-    let mut parent: Vec<usize> = (0..n0).collect();
-    fn find(p: &mut [usize], mut i: usize) -> usize {
-        while p[i] != i {
-            p[i] = p[p[i]];
-            i = p[i];
-        }
-        i
-    }
+    let mut uf = crate::interval::UnionFind::new(n0);
     let pos = |i: usize| old_index.iter().position(|&j| j == i);
     for hit in &meets {
         let ks: Vec<usize> = hit.iter().filter_map(|&i| pos(i)).collect();
         for w in ks.windows(2) {
-            let (a, b) = (find(&mut parent, touch[w[0]]), find(&mut parent, touch[w[1]]));
-            parent[a] = b;
+            let (a, b) = (uf.find(touch[w[0]]), uf.find(touch[w[1]]));
+            uf.link(a, b);
         }
     }
     let mut renumber: Vec<Option<usize>> = vec![None; n0];
@@ -391,7 +362,7 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
     let labels: Vec<usize> = touch
         .iter()
         .map(|&t| {
-            let r = find(&mut parent, t);
+            let r = uf.find(t);
             *renumber[r].get_or_insert_with(|| {
                 n += 1;
                 n - 1

@@ -130,14 +130,7 @@ pub fn components(boxes: &[IntervalBox]) -> (Vec<usize>, usize) {
 /// for tests that check the cost without timing it.
 pub fn components_counted(boxes: &[IntervalBox]) -> (Vec<usize>, usize, u64) {
     let n = boxes.len();
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn find(p: &mut [usize], mut i: usize) -> usize {
-        while p[i] != i {
-            p[i] = p[p[i]];
-            i = p[i];
-        }
-        i
-    }
+    let mut uf = UnionFind::new(n);
     let mut compared = 0u64;
     // A void box shares no point with anything: it is its own component.
     let live: Vec<usize> = (0..n).filter(|&i| !boxes[i].is_void()).collect();
@@ -145,9 +138,9 @@ pub fn components_counted(boxes: &[IntervalBox]) -> (Vec<usize>, usize, u64) {
     if dims == 0 {
         // Boxes over no variable are all the one point of a zero-dimensional space.
         for w in live.windows(2) {
-            let (a, b) = (find(&mut parent, w[0]), find(&mut parent, w[1]));
+            let (a, b) = (uf.find(w[0]), uf.find(w[1]));
             if a != b {
-                parent[a] = b;
+                uf.link(a, b);
             }
         }
     } else if live.len() > 1 {
@@ -185,9 +178,9 @@ pub fn components_counted(boxes: &[IntervalBox]) -> (Vec<usize>, usize, u64) {
                 }
                 compared += 1;
                 if boxes[i].intersects(&boxes[j]) {
-                    let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+                    let (a, b) = (uf.find(i), uf.find(j));
                     if a != b {
-                        parent[a] = b;
+                        uf.link(a, b);
                     }
                 }
             }
@@ -196,30 +189,49 @@ pub fn components_counted(boxes: &[IntervalBox]) -> (Vec<usize>, usize, u64) {
     let mut labels = vec![0; n];
     let mut ids = std::collections::HashMap::new();
     for i in 0..n {
-        let r = find(&mut parent, i);
+        let r = uf.find(i);
         let next = ids.len();
         labels[i] = *ids.entry(r).or_insert(next);
     }
     (labels, ids.len(), compared)
 }
 
-/// The all-pairs definition of `components`, O(n²): the reference the tests hold the sweep to.
-#[doc(hidden)]
-pub fn components_all_pairs(boxes: &[IntervalBox]) -> (Vec<usize>, usize) {
-    let mut parent: Vec<usize> = (0..boxes.len()).collect();
-    fn find(p: &mut [usize], mut i: usize) -> usize {
-        while p[i] != i {
-            p[i] = p[p[i]];
-            i = p[i];
+/// Disjoint sets over `0..n` (union–find with path halving), for grouping boxes.
+pub(crate) struct UnionFind {
+    parent: Vec<usize>,
+}
+
+impl UnionFind {
+    /// `n` singletons.
+    pub(crate) fn new(n: usize) -> Self {
+        UnionFind { parent: (0..n).collect() }
+    }
+
+    /// The representative of `i`'s set.
+    pub(crate) fn find(&mut self, mut i: usize) -> usize {
+        while self.parent[i] != i {
+            self.parent[i] = self.parent[self.parent[i]];
+            i = self.parent[i];
         }
         i
     }
+
+    /// Puts the set whose representative is `a` under representative `b`.
+    pub(crate) fn link(&mut self, a: usize, b: usize) {
+        self.parent[a] = b;
+    }
+}
+
+/// The all-pairs definition of `components`, O(n²): the reference the tests hold the sweep to.
+#[doc(hidden)]
+pub fn components_all_pairs(boxes: &[IntervalBox]) -> (Vec<usize>, usize) {
+    let mut uf = UnionFind::new(boxes.len());
     for i in 0..boxes.len() {
         for j in (i + 1)..boxes.len() {
             if boxes[i].intersects(&boxes[j]) {
-                let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+                let (a, b) = (uf.find(i), uf.find(j));
                 if a != b {
-                    parent[a] = b;
+                    uf.link(a, b);
                 }
             }
         }
@@ -227,7 +239,7 @@ pub fn components_all_pairs(boxes: &[IntervalBox]) -> (Vec<usize>, usize) {
     let mut labels = vec![0; boxes.len()];
     let mut ids = std::collections::HashMap::new();
     for i in 0..boxes.len() {
-        let r = find(&mut parent, i);
+        let r = uf.find(i);
         let next = ids.len();
         labels[i] = *ids.entry(r).or_insert(next);
     }

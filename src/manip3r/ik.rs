@@ -157,14 +157,7 @@ pub fn solve_target(chain: &Chain3R, target: [Interval; 2], precision: f64, cont
 /// Groups boxes that touch on the torus.
 fn cluster(boxes: &[[Interval; 2]]) -> Vec<IkCluster> {
     let n = boxes.len();
-    let mut parent: Vec<usize> = (0..n).collect();
-    fn find(p: &mut [usize], mut i: usize) -> usize {
-        while p[i] != i {
-            p[i] = p[p[i]];
-            i = p[i];
-        }
-        i
-    }
+    let mut uf = crate::interval::UnionFind::new(n);
     // Sweep along θ₂ for ordinary contacts, then an all-pairs pass over the few boxes on the
     // ±π edges for contacts across the seam.
     let mut order: Vec<usize> = (0..n).collect();
@@ -176,8 +169,8 @@ fn cluster(boxes: &[[Interval; 2]]) -> Vec<IkCluster> {
                 break;
             }
             if !boxes[i][1].disjoint(boxes[j][1]) {
-                let (a, b) = (find(&mut parent, i), find(&mut parent, j));
-                parent[a] = b;
+                let (a, b) = (uf.find(i), uf.find(j));
+                uf.link(a, b);
             }
         }
     }
@@ -185,14 +178,14 @@ fn cluster(boxes: &[[Interval; 2]]) -> Vec<IkCluster> {
     for (x, &i) in edge.iter().enumerate() {
         for &j in &edge[x + 1..] {
             if meet_on_torus(&boxes[i], &boxes[j]) {
-                let (a, b) = (find(&mut parent, i), find(&mut parent, j));
-                parent[a] = b;
+                let (a, b) = (uf.find(i), uf.find(j));
+                uf.link(a, b);
             }
         }
     }
     let mut out: std::collections::BTreeMap<usize, IkCluster> = std::collections::BTreeMap::new();
     for (i, b) in boxes.iter().enumerate() {
-        let r = find(&mut parent, i);
+        let r = uf.find(i);
         out.entry(r)
             .and_modify(|c| {
                 c.hull = [c.hull[0].convex_hull(b[0]), c.hull[1].convex_hull(b[1])];

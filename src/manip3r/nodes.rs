@@ -36,7 +36,7 @@ use crate::interval::{interval, point};
 use crate::search::{Limits, Progress, Prune, Stats, Status, Step};
 use inari::Interval;
 use smallvec::SmallVec;
-use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::OnceLock;
 use std::time::Instant;
 
@@ -437,7 +437,7 @@ pub fn search_with(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &N
     super::check_precision(settings.precision)?;
     let start = Instant::now();
     let unique: Vec<&Cusp> = cusps.iter().filter(|c| c.unique).collect();
-    let regions: Vec<[Interval; 2]> = in_parallel(&unique, control.threads, |c| cusp_region(chain, c)).into_iter().flatten().collect();
+    let regions: Vec<[Interval; 2]> = crate::search::map_parallel(&unique, control.threads, |c| cusp_region(chain, c)).into_iter().flatten().collect();
     let tree = Tree { chain, bands, regions: &regions, eps: settings.precision, boxes: AtomicU64::new(0) };
     let root = tree.make([motion::full_range(), motion::full_range()]);
     let start_cell = NodeCell { p: &root, q: &root, ancestor: &root, order: Order::ROOT, level: 0 };
@@ -459,28 +459,3 @@ pub fn search_with(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &N
     Ok(NodeSearch { nodes, undecided, status: run.status, stats: run.stats, cells, cusp_regions: regions.len() as u64, seconds: start.elapsed().as_secs_f64() })
 }
 
-/// `f` on each item, on up to `threads` threads, results in item order.
-fn in_parallel<T: Sync, R: Send>(items: &[T], threads: usize, f: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    if threads <= 1 || items.len() <= 1 {
-        return items.iter().map(f).collect();
-    }
-    let next = AtomicUsize::new(0);
-    let mut done: Vec<(usize, R)> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..threads.min(items.len()))
-            .map(|_| {
-                s.spawn(|| {
-                    let mut mine = Vec::new();
-                    loop {
-                        let i = next.fetch_add(1, Ordering::Relaxed);
-                        let Some(item) = items.get(i) else { break };
-                        mine.push((i, f(item)));
-                    }
-                    mine
-                })
-            })
-            .collect();
-        handles.into_iter().flat_map(|h| h.join().expect("invariant: the certificates do not panic")).collect()
-    });
-    done.sort_by_key(|(i, _)| *i);
-    done.into_iter().map(|(_, r)| r).collect()
-}

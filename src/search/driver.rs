@@ -14,6 +14,7 @@
 use super::limits::{process_cpu_seconds, Budget, Limit, Limits, Progress, Status};
 use super::store::{Pool, Store};
 use super::{Prune, Sink, Stats, Step, Undecided};
+use smallvec::SmallVec;
 use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{mpsc, Arc, Mutex};
@@ -89,32 +90,16 @@ pub fn run<P: Prune>(prune: &mut P, start: P::Cell, store: Store, limits: &Limit
         pending_bytes = pending_bytes.saturating_sub(prune.bytes(&cell));
         stats.processed += 1;
         stats.max_level = stats.max_level.max(prune.level(&cell));
-        let flow = match prune.process(cell) {
-            Step::Discard(reason) => {
-                discards.count(reason);
-                ControlFlow::Continue(())
+        let flow = route(prune.process(cell), &mut stats, &mut discards, sink, |children| {
+            for c in &children {
+                pending_share += prune.share(c);
+                pending_bytes += prune.bytes(c);
             }
-            Step::Found(f) => {
-                stats.found += 1;
-                sink.found(f)
-            }
-            Step::Undecided(c, reason) => {
-                stats.undecided += 1;
-                sink.undecided(c, Undecided::Precision(reason))
-            }
-            Step::Split(children) => {
-                stats.split += 1;
-                for c in &children {
-                    pending_share += prune.share(c);
-                    pending_bytes += prune.bytes(c);
-                }
-                pool.push_children(children.into_iter().map(|c| {
-                    let k = prune.key(&c);
-                    (c, k)
-                }));
-                ControlFlow::Continue(())
-            }
-        };
+            pool.push_children(children.into_iter().map(|c| {
+                let k = prune.key(&c);
+                (c, k)
+            }));
+        });
         if flow.is_break() {
             status = Status::Incomplete(Limit::Sink);
             report_pending = false;
@@ -222,26 +207,10 @@ fn walk_levels<C, F>(start: C, budget: &Budget<'_>, sink: &mut impl Sink<C, F>, 
         for (level_of, bytes, step) in steps {
             stats.processed += 1;
             stats.max_level = stats.max_level.max(level_of);
-            let flow = match step {
-                Step::Discard(reason) => {
-                    discards.count(reason);
-                    ControlFlow::Continue(())
-                }
-                Step::Found(f) => {
-                    stats.found += 1;
-                    sink.found(f)
-                }
-                Step::Undecided(c, reason) => {
-                    stats.undecided += 1;
-                    sink.undecided(c, Undecided::Precision(reason))
-                }
-                Step::Split(children) => {
-                    stats.split += 1;
-                    next_bytes += bytes;
-                    next.extend(children);
-                    ControlFlow::Continue(())
-                }
-            };
+            let flow = route(step, &mut stats, &mut discards, sink, |children| {
+                next_bytes += bytes;
+                next.extend(children);
+            });
             if flow.is_break() {
                 status = Status::Incomplete(Limit::Sink);
                 report_pending = false;
@@ -363,6 +332,30 @@ fn report_undecided<C, F>(pending: impl IntoIterator<Item = C>, stats: &mut Stat
         stats.undecided += 1;
         if sink.undecided(c, Undecided::Pending).is_break() {
             break;
+        }
+    }
+}
+
+/// Counts a decision and passes it on: results and undecided cells to the sink, children to
+/// `split`. `Break` when the sink asks to stop.
+fn route<C, F>(step: Step<C, F>, stats: &mut Stats, discards: &mut Discards, sink: &mut impl Sink<C, F>, split: impl FnOnce(SmallVec<[C; 4]>)) -> ControlFlow<()> {
+    match step {
+        Step::Discard(reason) => {
+            discards.count(reason);
+            ControlFlow::Continue(())
+        }
+        Step::Found(f) => {
+            stats.found += 1;
+            sink.found(f)
+        }
+        Step::Undecided(c, reason) => {
+            stats.undecided += 1;
+            sink.undecided(c, Undecided::Precision(reason))
+        }
+        Step::Split(children) => {
+            stats.split += 1;
+            split(children);
+            ControlFlow::Continue(())
         }
     }
 }

@@ -313,7 +313,7 @@ impl<'a> Solver<'a> {
             }
         };
         let candidates: Vec<usize> = (0..boxes.len()).filter(|&i| !unique[i] && sizes[labels[i]] <= max_cluster).collect();
-        let probes = for_each_parallel(&candidates, self.settings.threads, |&i| probe(&boxes[i]));
+        let probes = super::map_parallel(&candidates, self.settings.threads, |&i| probe(&boxes[i]));
         let cut_short = probes.contains(&Probe::NotRun);
         let mut drop = vec![false; boxes.len()];
         for (&i, p) in candidates.iter().zip(probes) {
@@ -479,32 +479,6 @@ enum Probe {
     Kept,
     /// Not (or not fully) re-examined: the deadline or a cancel came first.
     NotRun,
-}
-
-/// `f` of every item, in order, computed on up to `threads` threads.
-fn for_each_parallel<T: Sync, R: Send>(items: &[T], threads: usize, f: impl Fn(&T) -> R + Sync) -> Vec<R> {
-    if threads <= 1 || items.len() < 2 {
-        return items.iter().map(f).collect();
-    }
-    let next = std::sync::atomic::AtomicUsize::new(0);
-    let mut done: Vec<(usize, R)> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..threads.min(items.len()))
-            .map(|_| {
-                s.spawn(|| {
-                    let mut mine = Vec::new();
-                    loop {
-                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                        let Some(item) = items.get(i) else { break };
-                        mine.push((i, f(item)));
-                    }
-                    mine
-                })
-            })
-            .collect();
-        handles.into_iter().flat_map(|h| h.join().expect("invariant: probes do not panic")).collect()
-    });
-    done.sort_unstable_by_key(|(i, _)| *i);
-    done.into_iter().map(|(_, r)| r).collect()
 }
 
 enum Shrunk {
