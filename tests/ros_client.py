@@ -7,6 +7,7 @@ test makes the assertions. Every wait has a timeout.
     services --node /linkspace --script FILE           service calls listed in a JSON file
     load     --node /linkspace --mechanism four_bar    100 requests in flight from 4 clients
     rosstart --node /lab/linkspace --urdf A --urdf2 B  robot_description by topic, then by parameter
+    action   --node /linkspace --script FILE           Solve action goals (feedback, cancel, result)
 """
 import argparse
 import json
@@ -347,6 +348,48 @@ def rosstart(args):
     print(json.dumps(out))
 
 
+def action(args):
+    """Sends the Solve action goals of a JSON list of {"goal": fields, "cancel": bool} one after
+    the other; a goal with "cancel" is cancelled once its first feedback arrives. For each:
+    accepted, final status, result, feedback count and the first feedback."""
+    from rclpy.action import ActionClient
+    from linkspace_msgs.action import Solve as SolveAction
+    node = rclpy.create_node("linkspace_test_action")
+    client = ActionClient(node, SolveAction, f"{args.node.rstrip('/')}/solve")
+    if not client.wait_for_server(timeout_sec=args.timeout):
+        print(json.dumps({"error": "action server not available"}))
+        return
+    spin_until(node, lambda: False, 0.5)
+    results = []
+    for step in json.load(open(args.script)):
+        feedback = []
+        goal = SolveAction.Goal()
+        fill(goal, step["goal"])
+        sent = client.send_goal_async(goal, feedback_callback=lambda m: feedback.append(m.feedback.progress))
+        if not spin_until(node, sent.done, args.timeout):
+            results.append({"error": "no goal response"})
+            continue
+        handle = sent.result()
+        out = {"accepted": bool(handle.accepted)}
+        if step.get("cancel"):
+            spin_until(node, lambda: bool(feedback), args.timeout)
+            out["feedback_before_cancel"] = len(feedback)
+            cancelled = handle.cancel_goal_async()
+            spin_until(node, cancelled.done, args.timeout)
+            out["cancel_return_code"] = cancelled.result().return_code if cancelled.done() else None
+        got = handle.get_result_async()
+        if not spin_until(node, got.done, args.timeout):
+            out["error"] = "no result"
+            results.append(out)
+            continue
+        out["status"] = got.result().status
+        out["result"] = to_plain(got.result().result)
+        out["feedback_count"] = len(feedback)
+        out["first_feedback"] = to_plain(feedback[0]) if feedback else None
+        results.append(out)
+    print(json.dumps({"results": results}))
+
+
 def main():
     ap = argparse.ArgumentParser()
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -371,12 +414,15 @@ def main():
     rs.add_argument("--mechanism", required=True)
     rs.add_argument("--urdf2", required=True)
     rs.add_argument("--mechanism2", required=True)
-    for p in (t, sg, s, lo, rs):
+    ac = sub.add_parser("action")
+    ac.add_argument("--node", default="/linkspace")
+    ac.add_argument("--script", required=True)
+    for p in (t, sg, s, lo, rs, ac):
         p.add_argument("--timeout", type=float, default=20.0)
     args = ap.parse_args()
     rclpy.init()
     try:
-        {"topics": topics, "singular": singular, "services": services, "load": load, "rosstart": rosstart}[args.cmd](args)
+        {"topics": topics, "singular": singular, "services": services, "load": load, "rosstart": rosstart, "action": action}[args.cmd](args)
     finally:
         rclpy.try_shutdown()
 

@@ -312,6 +312,21 @@ mirror! {
     }
 }
 
+// ---- linkspace_msgs/action/Solve (goal, result, feedback) ----
+
+mirror! {
+    /// linkspace_msgs/action/Solve goal
+    SolveGoal { mechanism: String, fixed_joint_names: Vec<String>, fixed_joint_values: Vec<f64>, settings: Settings }
+}
+mirror! {
+    /// linkspace_msgs/action/Solve result
+    SolveActionResult { ok: bool, message: String, run_id: u64, result: BoxSet }
+}
+mirror! {
+    /// linkspace_msgs/action/Solve feedback
+    SolveFeedback { progress: Progress }
+}
+
 // ---- tf2_msgs, std_msgs/String ----
 
 mirror! {
@@ -411,6 +426,15 @@ mod tests {
         for (name, mirror) in &msgs {
             assert_eq!(&fields(&read(&format!("msg/{name}.msg"))), mirror, "msg/{name}.msg");
         }
+        let actions: Vec<(&str, [Vec<(String, String)>; 3])> = vec![("Solve", [mirrored::<SolveGoal>(), mirrored::<SolveActionResult>(), mirrored::<SolveFeedback>()])];
+        for (name, parts) in &actions {
+            let text = read(&format!("action/{name}.action"));
+            let got: Vec<&str> = text.split("\n---").collect();
+            assert_eq!(got.len(), 3, "action/{name}.action has goal, result and feedback");
+            for (k, (part, mirror)) in got.iter().zip(parts).enumerate() {
+                assert_eq!(&fields(part), mirror, "action/{name}.action part {k}");
+            }
+        }
         for (name, request, response) in &srvs {
             let text = read(&format!("srv/{name}.srv"));
             let (req, resp) = text.split_once("\n---").unwrap_or_else(|| panic!("srv/{name}.srv has no ---"));
@@ -419,12 +443,17 @@ mod tests {
         }
         // Every interface file is mirrored and listed in CMakeLists.txt.
         let cmake = read("CMakeLists.txt");
-        for dir in ["msg", "srv"] {
+        for dir in ["msg", "srv", "action"] {
             let files = std::fs::read_dir(format!("{}/msgs/{dir}", env!("CARGO_MANIFEST_DIR"))).expect("msgs dir");
             for f in files {
                 let f = f.expect("entry").file_name().into_string().expect("utf-8");
                 let stem = f.split('.').next().expect("stem");
-                assert!(msgs.iter().any(|(n, _)| *n == stem) || srvs.iter().any(|(n, _, _)| *n == stem), "{dir}/{f} has no Rust mirror");
+                let mirrored = match dir {
+                    "msg" => msgs.iter().any(|(n, _)| *n == stem),
+                    "srv" => srvs.iter().any(|(n, _, _)| *n == stem),
+                    _ => actions.iter().any(|(n, _)| *n == stem),
+                };
+                assert!(mirrored, "{dir}/{f} has no Rust mirror");
                 assert!(cmake.contains(&format!("\"{dir}/{f}\"")), "{dir}/{f} missing from CMakeLists.txt");
             }
         }

@@ -19,7 +19,9 @@ use anyhow::{Context as _, Result};
 use futures::StreamExt;
 use ros2_client::dds::rustdds::DomainParticipantBuilder;
 use ros2_client::qos::{Durability, History, WhenFull};
+use ros2_client::action::{ActionServerQosPolicies, AsyncActionServer, CancelHandle, ExecutingGoalHandle, GoalEndStatus, GoalError, NewGoalHandle};
 use ros2_client::log::LogLevel;
+use ros2_client::ActionTypeName;
 use ros2_client::{rosout, Context, Message, MessageTypeName, Name, Node, NodeName, NodeOptions, ParameterValue, Publisher, QosProfile, RmwRequestId, Server, ServiceMapping, ServiceTypeName};
 use std::collections::{BTreeMap, VecDeque};
 use std::net::{IpAddr, Ipv4Addr};
@@ -42,7 +44,14 @@ enum Event {
     Parameter(String, ParameterValue),
     /// A URDF arrived on `--robot-description-topic`.
     RobotDescription(String),
+    /// A goal of the Solve action.
+    Goal(NewGoalHandle<SolveGoal>),
+    /// A cancel request of the Solve action.
+    GoalCancel(CancelHandle),
 }
+
+/// The Solve action server (`~/solve`, `linkspace_msgs/action/Solve`).
+type SolveAction = AsyncActionServer<SolveGoal, SolveActionResult, SolveFeedback>;
 
 /// What a run returns.
 enum Outcome {
@@ -100,6 +109,8 @@ struct Servers {
 enum RunKind {
     ConfigurationSpace,
     Solve,
+    /// A goal of the Solve action: feedback is its progress, its result goes to the action.
+    SolveAction,
     /// `load_time`: the run made at load, published on `~/<robot>/singularities`; otherwise a
     /// Singularities request with its own settings, answered in the reply only.
     Singularities { load_time: bool },
@@ -109,14 +120,14 @@ enum RunKind {
 impl RunKind {
     /// Runs started by a request, which count against `Limits::max_runs`.
     fn requested(self) -> bool {
-        matches!(self, RunKind::Solve | RunKind::Singularities { load_time: false } | RunKind::InverseKinematics)
+        matches!(self, RunKind::Solve | RunKind::SolveAction | RunKind::Singularities { load_time: false } | RunKind::InverseKinematics)
     }
 
     /// The `analysis` field of its progress messages.
     fn analysis(self) -> &'static str {
         match self {
             RunKind::ConfigurationSpace => "configuration_space",
-            RunKind::Solve => "solve",
+            RunKind::Solve | RunKind::SolveAction => "solve",
             RunKind::Singularities { .. } => "singularities",
             RunKind::InverseKinematics => "inverse_kinematics",
         }
@@ -135,6 +146,8 @@ struct Run {
     waiters: Vec<(RmwRequestId, Instant)>,
     /// The latest share of the volume decided.
     decided: f64,
+    /// The action goal this run executes (`RunKind::SolveAction`).
+    goal: Option<ExecutingGoalHandle<SolveGoal>>,
 }
 
 struct Mechanism {
@@ -160,6 +173,7 @@ struct State {
     rosout: bool,
     config: ServeConfig,
     tf_static: Publisher<TfMessage>,
+    action: Arc<SolveAction>,
     /// The robot_description the node holds (parameter and topic).
     description: String,
     next_generation: u64,
@@ -365,6 +379,17 @@ pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
         let topics = topics(&mut node, &prefix)?;
         mechanisms.push(mechanism_entry(l, prefix, topics, k as u64));
     }
+    let action_qos = ActionServerQosPolicies {
+        goal_service: service_qos(),
+        result_service: service_qos(),
+        cancel_service: service_qos(),
+        feedback_publisher: QosProfile::publisher_default().reliability_reliable(WhenFull::Wait(Duration::from_secs(1))).durability(Durability::Volatile).history(History::KeepLast { depth: 16 }),
+        status_publisher: latched(1),
+    };
+    let action_name = Name::new(&base, "solve").context("action name solve")?;
+    let action = Arc::new(AsyncActionServer::new(
+        node.create_action_server::<SolveGoal, SolveActionResult, SolveFeedback>(mapping, &action_name, &ActionTypeName::new("linkspace_msgs", "Solve"), action_qos).context("creating the Solve action")?,
+    ));
     let tf_topic = node
         .create_topic(&Name::new("/", "tf_static").context("/tf_static")?, MessageTypeName::new("tf2_msgs", "TFMessage"), &latched(1))
         .context("creating topic /tf_static")?;
@@ -412,6 +437,36 @@ pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
         })
         .detach();
     }
+    {
+        let (goals, events) = (action.clone(), tx.clone());
+        ex.spawn(async move {
+            loop {
+                match goals.receive_new_goal().await {
+                    Ok(h) => {
+                        if events.send(Event::Goal(h)).await.is_err() {
+                            break;
+                        }
+                    }
+                    Err(e) => eprintln!("linkspace: dropped an undecodable Solve goal: {e:?}"),
+                }
+            }
+        })
+        .detach();
+        let (cancels, events) = (action.clone(), tx.clone());
+        ex.spawn(async move {
+            loop {
+                match cancels.receive_cancel_request().await {
+                    Ok(c) => {
+                        if events.send(Event::GoalCancel(c)).await.is_err() {
+                            break;
+                        }
+                    }
+                    Err(e) => eprintln!("linkspace: dropped an undecodable Solve cancel request: {e:?}"),
+                }
+            }
+        })
+        .detach();
+    }
     forward(&ex, servers.clone(), |s| &s.solve, Request::Solve, tx.clone());
     forward(&ex, servers.clone(), |s| &s.cancel, Request::Cancel, tx.clone());
     forward(&ex, servers.clone(), |s| &s.singularities, Request::Singularities, tx.clone());
@@ -450,6 +505,7 @@ pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
         rosout: config.rosout,
         config: config.clone(),
         tf_static,
+        action,
         description,
         next_generation,
         mechanisms,
@@ -660,7 +716,7 @@ impl State {
         self.next_run += 1;
         let cancel = Arc::new(AtomicBool::new(false));
         let generation = self.mechanisms[mechanism].generation;
-        self.runs.insert(run, Run { mechanism, generation, kind, cancel: cancel.clone(), waiters: Vec::new(), decided: 0.0 });
+        self.runs.insert(run, Run { mechanism, generation, kind, cancel: cancel.clone(), waiters: Vec::new(), decided: 0.0, goal: None });
         let events = self.events.clone();
         std::thread::spawn(move || {
             let progress_events = events.clone();
@@ -692,6 +748,8 @@ impl State {
                     self.log(LogLevel::Error, format!("internal error while applying parameter {name}: {}", panic_text(p.as_ref())));
                 }
             }
+            Event::Goal(h) => self.goal(h).await,
+            Event::GoalCancel(c) => self.goal_cancel(c).await,
             Event::RobotDescription(xml) => {
                 if let Err(p) = catch_unwind(AssertUnwindSafe(|| self.new_description(xml, "topic robot_description"))) {
                     self.log(LogLevel::Error, format!("internal error while loading a robot_description: {}", panic_text(p.as_ref())));
@@ -716,6 +774,13 @@ impl State {
             decided: p.decided,
             done,
         };
+        if let Some(h) = r.goal.clone() {
+            let (action, feedback) = (self.action.clone(), SolveFeedback { progress: msg.clone() });
+            smol::spawn(async move {
+                let _ = action.publish_feedback(h, feedback).await;
+            })
+            .detach();
+        }
         if let Err(e) = m.topics.progress.publish(msg) {
             eprintln!("linkspace: publishing {}/progress: {e:?}", m.prefix);
         }
@@ -733,6 +798,9 @@ impl State {
         }
         let name = self.mechanisms[r.mechanism].loaded.analysis.mechanism().to_string();
         if r.generation != self.mechanisms[r.mechanism].generation {
+            if let Some(h) = r.goal {
+                self.goal_result(h, GoalEndStatus::Aborted, SolveActionResult { ok: false, message: format!("run {run} ended without a result: its mechanism was analysed again"), run_id: run, ..Default::default() });
+            }
             for (id, _) in r.waiters {
                 self.reply_error(r.kind, id, format!("run {run} ended without a result: its mechanism was analysed again (new robot_description or settings)"));
             }
@@ -750,6 +818,9 @@ impl State {
                 }
                 if r.kind == (RunKind::Singularities { load_time: true }) {
                     m.singularity_run = None;
+                }
+                if let Some(h) = r.goal {
+                    self.goal_result(h, GoalEndStatus::Aborted, SolveActionResult { ok: false, message: message.clone(), run_id: run, ..Default::default() });
                 }
                 for (id, _) in r.waiters {
                     self.reply_error(r.kind, id, message.clone());
@@ -812,6 +883,16 @@ impl State {
                     self.reply_solve(id, SolveResponse { ok: true, message: message.clone(), run_id: run, done: true, result: set.clone() });
                 }
                 eprintln!("linkspace: {name}: published solve_result of run {run}");
+            }
+            RunKind::SolveAction => {
+                if let Err(e) = m.topics.solve_result.async_publish(set.clone()).await {
+                    eprintln!("linkspace: publishing {}/solve_result: {e:?}", m.prefix);
+                }
+                let cancelled = matches!(result.status, Status::Incomplete(l) if convert::limit_name(l) == "cancelled");
+                if let Some(h) = r.goal {
+                    let end = if cancelled { GoalEndStatus::Canceled } else { GoalEndStatus::Succeeded };
+                    self.goal_result(h, end, SolveActionResult { ok: true, message: format!("run {run}: {status}"), run_id: run, result: set });
+                }
             }
             RunKind::Singularities { .. } | RunKind::InverseKinematics => eprintln!("linkspace: {name}: run {run} returned a box set for a {:?} run", r.kind),
         }
@@ -901,7 +982,7 @@ impl State {
     /// An error reply of the service that `kind` answers.
     fn reply_error(&self, kind: RunKind, id: RmwRequestId, message: String) {
         match kind {
-            RunKind::Solve | RunKind::ConfigurationSpace => self.reply_solve(id, solve_error(message)),
+            RunKind::Solve | RunKind::SolveAction | RunKind::ConfigurationSpace => self.reply_solve(id, solve_error(message)),
             RunKind::Singularities { .. } => self.reply_singularities(id, SingularitiesResponse { ok: false, message, ..Default::default() }),
             RunKind::InverseKinematics => self.reply_ik(id, InverseKinematicsResponse { ok: false, message, ..Default::default() }),
         }
@@ -972,50 +1053,113 @@ impl State {
 
     /// Validates and starts a run; `None` when the reply waits for the run.
     fn solve(&mut self, id: RmwRequestId, q: SolveRequest) -> Option<SolveResponse> {
-        let k = match self.mechanism(&q.mechanism) {
-            Ok(k) => k,
+        let (k, job) = match self.solve_job(&q) {
+            Ok(j) => j,
             Err(e) => return Some(solve_error(e)),
         };
-        let limits = &self.limits;
-        let s = &q.settings;
-        if q.fixed_joint_names.len() != q.fixed_joint_values.len() {
-            return Some(solve_error(format!("{} fixed joint names but {} values", q.fixed_joint_names.len(), q.fixed_joint_values.len())));
-        }
-        if let Some((i, name)) = q.fixed_joint_names.iter().enumerate().find(|(i, n)| q.fixed_joint_names[..*i].contains(n)) {
-            return Some(solve_error(format!("joint '{}' is fixed twice (fixed_joint_names[{i}])", convert::bounded(name, convert::ECHO_NAME))));
-        }
-        if s.max_boxes == 0 {
-            return Some(solve_error(format!("settings.max_boxes must be given: every run is bounded (1 to {})", limits.max_boxes)));
-        }
-        if s.max_boxes > limits.max_boxes {
-            return Some(solve_error(format!("settings.max_boxes {} is larger than this node's limit {} (--max-request-boxes)", s.max_boxes, limits.max_boxes)));
-        }
-        // Settings.msg: timeout 0 means no time limit of the request's own; the node's
-        // --max-request-timeout still bounds the run (and max_boxes always does).
-        if !(s.timeout >= 0.0 && s.timeout <= limits.max_timeout) {
-            return Some(solve_error(format!("settings.timeout {} s is out of range: give 0 (the node's limit) to {} s (--max-request-timeout)", s.timeout, limits.max_timeout)));
-        }
-        let timeout = if s.timeout == 0.0 { limits.max_timeout } else { s.timeout };
-        if !(q.wait >= 0.0 && q.wait <= limits.max_wait) {
-            return Some(solve_error(format!("wait {} s is out of range: give 0 <= wait <= {} s", q.wait, limits.max_wait)));
-        }
-        if let Some(busy) = self.busy() {
-            return Some(solve_error(busy));
-        }
-        let settings = SolverSettings { sigma: s.sigma, rho: s.rho, max_boxes: s.max_boxes, timeout: Some(Duration::from_secs_f64(timeout)), ..self.settings.clone() };
-        let fixed: Vec<(String, f64)> = q.fixed_joint_names.iter().cloned().zip(q.fixed_joint_values.iter().copied()).collect();
-        let prepared = match self.mechanisms[k].loaded.analysis.solve(&fixed, &settings) {
-            Ok(p) => p,
-            // The error may quote the request (a joint name): bounded.
-            Err(e) => return Some(solve_error(convert::bounded(&e.to_string(), convert::ECHO_MESSAGE))),
-        };
-        let run = self.start(k, RunKind::Solve, Box::new(move |c, p| Outcome::BoxSet(prepared.run(c, p))));
+        let run = self.start(k, RunKind::Solve, job);
         if q.wait > 0.0 {
             let r = self.runs.get_mut(&run).expect("invariant: just started");
             r.waiters.push((id, Instant::now() + Duration::from_secs_f64(q.wait)));
             None
         } else {
             Some(SolveResponse { ok: true, message: format!("run {run} started; its result will be published on {}/solve_result", self.mechanisms[k].prefix), run_id: run, done: false, ..Default::default() })
+        }
+    }
+
+    /// A Solve request checked and prepared (the mechanism and the run), or why not.
+    fn solve_job(&self, q: &SolveRequest) -> Result<(usize, Job), String> {
+        let k = self.mechanism(&q.mechanism)?;
+        let limits = &self.limits;
+        let s = &q.settings;
+        if q.fixed_joint_names.len() != q.fixed_joint_values.len() {
+            return Err(format!("{} fixed joint names but {} values", q.fixed_joint_names.len(), q.fixed_joint_values.len()));
+        }
+        if let Some((i, name)) = q.fixed_joint_names.iter().enumerate().find(|(i, n)| q.fixed_joint_names[..*i].contains(n)) {
+            return Err(format!("joint '{}' is fixed twice (fixed_joint_names[{i}])", convert::bounded(name, convert::ECHO_NAME)));
+        }
+        if s.max_boxes == 0 {
+            return Err(format!("settings.max_boxes must be given: every run is bounded (1 to {})", limits.max_boxes));
+        }
+        if s.max_boxes > limits.max_boxes {
+            return Err(format!("settings.max_boxes {} is larger than this node's limit {} (--max-request-boxes)", s.max_boxes, limits.max_boxes));
+        }
+        // Settings.msg: timeout 0 means no time limit of the request's own; the node's
+        // --max-request-timeout still bounds the run (and max_boxes always does).
+        if !(s.timeout >= 0.0 && s.timeout <= limits.max_timeout) {
+            return Err(format!("settings.timeout {} s is out of range: give 0 (the node's limit) to {} s (--max-request-timeout)", s.timeout, limits.max_timeout));
+        }
+        let timeout = if s.timeout == 0.0 { limits.max_timeout } else { s.timeout };
+        if !(q.wait >= 0.0 && q.wait <= limits.max_wait) {
+            return Err(format!("wait {} s is out of range: give 0 <= wait <= {} s", q.wait, limits.max_wait));
+        }
+        if let Some(busy) = self.busy() {
+            return Err(busy);
+        }
+        let settings = SolverSettings { sigma: s.sigma, rho: s.rho, max_boxes: s.max_boxes, timeout: Some(Duration::from_secs_f64(timeout)), ..self.settings.clone() };
+        let fixed: Vec<(String, f64)> = q.fixed_joint_names.iter().cloned().zip(q.fixed_joint_values.iter().copied()).collect();
+        let prepared = match self.mechanisms[k].loaded.analysis.solve(&fixed, &settings) {
+            Ok(p) => p,
+            // The error may quote the request (a joint name): bounded.
+            Err(e) => return Err(convert::bounded(&e.to_string(), convert::ECHO_MESSAGE)),
+        };
+        Ok((k, Box::new(move |c, p| Outcome::BoxSet(prepared.run(c, p)))))
+    }
+
+    /// A goal of the Solve action: accepted and executed at once; a goal the Solve service
+    /// would refuse ends ABORTED with the reason in its result (a rejected goal carries none).
+    async fn goal(&mut self, h: NewGoalHandle<SolveGoal>) {
+        let Some(goal) = self.action.get_new_goal(h.clone()) else { return };
+        let q = SolveRequest { mechanism: goal.mechanism, fixed_joint_names: goal.fixed_joint_names, fixed_joint_values: goal.fixed_joint_values, settings: goal.settings, wait: 0.0 };
+        let prepared = catch_unwind(AssertUnwindSafe(|| self.solve_job(&q))).unwrap_or_else(|p| Err(format!("internal error while handling the goal: {}", panic_text(p.as_ref()))));
+        let executing = match self.action.accept_goal(h).await {
+            Ok(accepted) => self.action.start_executing_goal(accepted).await,
+            Err(e) => Err(e),
+        };
+        let executing = match executing {
+            Ok(x) => x,
+            Err(e) => return eprintln!("linkspace: a Solve goal could not be started: {e:?}"),
+        };
+        match prepared {
+            Err(message) => self.goal_result(executing, GoalEndStatus::Aborted, SolveActionResult { ok: false, message, ..Default::default() }),
+            Ok((k, job)) => {
+                let run = self.start(k, RunKind::SolveAction, job);
+                self.runs.get_mut(&run).expect("invariant: just started").goal = Some(executing);
+            }
+        }
+    }
+
+    /// Sends a goal's result when its client asks for it (on smol's global executor, so the
+    /// loop does not wait for the client); a client that never asks is given up after 60 s.
+    fn goal_result(&self, h: ExecutingGoalHandle<SolveGoal>, end: GoalEndStatus, result: SolveActionResult) {
+        let action = self.action.clone();
+        smol::spawn(async move {
+            let send = action.send_result_response(h, end, result);
+            let give_up = async {
+                smol::Timer::after(Duration::from_secs(60)).await;
+                Err(GoalError::NoSuchGoal)
+            };
+            if let Err(e) = futures::future::select(Box::pin(send), Box::pin(give_up)).await.factor_first().0 {
+                eprintln!("linkspace: sending a Solve action result: {e:?}");
+            }
+        })
+        .detach();
+    }
+
+    /// A cancel request of the Solve action: the runs of the goals it names are cancelled
+    /// (their incomplete results end the goals as CANCELED).
+    async fn goal_cancel(&mut self, c: CancelHandle) {
+        let mut cancelling = Vec::new();
+        for r in self.runs.values() {
+            if let Some(h) = &r.goal {
+                if c.contains_goal(&h.goal_id()) {
+                    r.cancel.store(true, Ordering::Relaxed);
+                    cancelling.push(h.goal_id());
+                }
+            }
+        }
+        if let Err(e) = self.action.respond_to_cancel_requests(&c, cancelling.into_iter()).await {
+            eprintln!("linkspace: answering a Solve action cancel: {e:?}");
         }
     }
 
@@ -1026,6 +1170,7 @@ impl State {
                 let prefix = &self.mechanisms[r.mechanism].prefix;
                 let whereto = match r.kind {
                     RunKind::Solve => format!("will be published on {prefix}/solve_result"),
+                    RunKind::SolveAction => format!("will be the action's result (status CANCELED) and published on {prefix}/solve_result"),
                     _ => "will be in the reply to its request".to_string(),
                 };
                 CancelResponse { ok: true, message: format!("run {} cancelled; its incomplete result {whereto}", q.run_id) }

@@ -416,7 +416,8 @@ mod tests {
       .write_to_vec_with_ctx(Endianness::LittleEndian)
       .expect("pid");
     assert_eq!(bytes[32..34], pid[..]);
-    let back = DataFrag::deserialize(&bytes, BitFlags::from_flag(DATAFRAG_Flags::InlineQos))
+    let flags = DATAFRAG_Flags::Endianness | DATAFRAG_Flags::InlineQos; // little endian, as written
+    let back = DataFrag::deserialize(&bytes, flags)
       .expect("deserializes");
     assert_eq!(back.inline_qos, Some(qos));
     assert_eq!(back.serialized_payload, df.serialized_payload);
