@@ -207,7 +207,8 @@ pub struct SingularityReport {
     pub settings: Settings,
     /// `complete` or `incomplete`.
     pub status: &'static str,
-    /// The limit that stopped an incomplete run: `boxes`, `time`, `memory` or `cancelled`.
+    /// Why the run is incomplete: the limit that stopped it (`boxes`, `time`, `memory` or
+    /// `cancelled`), or `precision` when it ran to its end with boxes left undecided.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub limit: Option<&'static str>,
     /// Certified cusps.
@@ -239,6 +240,7 @@ impl SingularityReport {
     /// Builds the report from a cusp search and an optional node search.
     pub fn new(chain: &Chain3R, precision: f64, cusps: &CuspSearch, nodes: Option<&NodeSearch>, seconds: f64) -> Self {
         let status = nodes.map_or(cusps.status, |n| cusps.status.and(n.status));
+        let undecided = cusps.undecided.len() + nodes.map_or(0, |n| n.undecided.len());
         let internal_motions = cusps
             .bands
             .iter()
@@ -252,8 +254,10 @@ impl SingularityReport {
             joints: chain.joints.clone(),
             tip_link: chain.tip_link.clone(),
             settings: Settings { precision, nodes: nodes.is_some(), uncertainty: chain.uncertainty },
-            status: if status.is_complete() { "complete" } else { "incomplete" },
-            limit: limit_of(status),
+            status: if status.is_complete() && undecided == 0 { "complete" } else { "incomplete" },
+            // "Complete" means nothing is left undecided: a search that ran to its end but left
+            // boxes undecided at the precision says so.
+            limit: limit_of(status).or((undecided > 0).then_some("precision")),
             cusps: cusps.cusps.iter().map(|c| CuspRecord { joints: joints(chain, &c.theta), workspace: workspace(c.rho, c.z), unique: c.unique }).collect(),
             nodes: nodes.map(|n| {
                 n.nodes

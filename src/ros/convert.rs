@@ -196,9 +196,11 @@ pub fn singularity_report(r: &SingularityResult, run_id: u64) -> SingularityRepo
         internal_motions: box_set(&r.internal_motions, run_id),
         joint_names: r.joint_names.clone(),
         workspace_names: r.workspace_names.clone(),
-        complete: r.status == Status::Complete,
+        // Complete means nothing undecided, as in the CLI's report.
+        complete: r.status == Status::Complete && r.undecided() == 0,
         precision: r.query.precision,
         limit: match r.status {
+            Status::Complete if r.undecided() > 0 => "precision".to_string(),
             Status::Complete => String::new(),
             Status::Incomplete(l) => l.name().to_string(),
         },
