@@ -269,9 +269,11 @@ where
     use clap::{CommandFactory, FromArgMatches};
     // An option's value may start with a hyphen (`--sigma -1e-3`: clap's own test for a
     // negative number misses exponents); positionals keep clap's rule, so a flag is never
-    // taken for a file name.
+    // taken for a file name. An option whose value is optional (`--robot-description-topic
+    // [TOPIC]`) keeps clap's rule too, or it would swallow the next flag as its value.
     let command = Cli::command().mut_subcommands(|s| {
         s.mut_args(|a| match (a.get_action().takes_values(), a.is_positional()) {
+            (true, false) if a.get_num_args().is_some_and(|r| r.min_values() == 0) => a,
             (true, false) => a.allow_hyphen_values(true),
             (true, true) => a.allow_negative_numbers(true),
             _ => a,
