@@ -18,6 +18,8 @@ mod stability;
 mod manip3r;
 /// Distance problems through Cayley–Menger determinants: octahedral platform, four spheres.
 mod cayley_menger;
+/// Issue 13: singular sets of planar closed-loop linkages against closed forms, grids and Newton.
+mod closed_loop_singularities;
 /// The ROS 2 node against real rclpy over DDS on loopback: topics, services, load.
 #[cfg(feature = "ros")]
 mod topics;
