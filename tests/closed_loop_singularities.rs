@@ -178,3 +178,372 @@ fn bad_actuation_gets_one_clear_line() {
         assert!(err.contains(expected), "{args:?}: {err}");
     }
 }
+
+/// The double butterfly of the bundled URDF, from the loop equations in its header comment:
+///   A: l7 u7 + a2 u2 + a1 u1 − l5 u5 + (b0, 0) = 0
+///   B: l7 u7 + a2 u2 + b1 R(γ1) u1 − l3 u3 − c6 R(η6) u6 + a0 (cos γ0, −sin γ0) = 0
+///   C: l7 u7 + b2 R(γ2) u2 − l4 u4 − b6 u6 + a0 (cos γ0, −sin γ0) = 0
+/// Given (θ7, θ6), C leaves |·| = l4 for θ2 (two circle intersections, sheet σ1), then A leaves
+/// |·| = l5 for θ1 (sheet σ2); B becomes one scalar h_σ(θ7, θ6) = |…|² − l3² on each of the 4
+/// sheets. The curve of the mechanism is {h_σ = 0}; θ6 is stationary along it where
+/// ∂h_σ/∂θ7 = 0 (its tangent is then along θ7).
+mod butterfly {
+    const A0: f64 = 7.0;
+    const B0: f64 = 13.0;
+    const A1: f64 = 7.0;
+    const B1: f64 = 6.0;
+    const A2: f64 = 5.0;
+    const B2: f64 = 3.0;
+    const B6: f64 = 3.0;
+    const C6: f64 = 2.0;
+    const L3: f64 = 7.0;
+    const L4: f64 = 9.0;
+    const L5: f64 = 12.0;
+    const L7: f64 = 11.0;
+
+    fn u(t: f64) -> [f64; 2] {
+        [t.cos(), t.sin()]
+    }
+
+    /// h on sheet (s1, s2), or None where the sheet does not exist.
+    pub fn h(t7: f64, t6: f64, s1: f64, s2: f64) -> Option<f64> {
+        sheet(t7, t6, s1, s2).map(|x| x.0)
+    }
+
+    /// (θ2, θ1) of the sheet point.
+    pub fn angles(t7: f64, t6: f64, s1: f64, s2: f64) -> Option<(f64, f64)> {
+        sheet(t7, t6, s1, s2).map(|x| (x.1, x.2))
+    }
+
+    fn sheet(t7: f64, t6: f64, s1: f64, s2: f64) -> Option<(f64, f64, f64)> {
+        let (g0, g1, g2) = (3f64.atan2(4.0), 5f64.atan2(12.0), 4f64.atan2(3.0));
+        let base = [A0 * g0.cos(), -A0 * g0.sin()];
+        let (u7, u6) = (u(t7), u(t6));
+        let p = [L7 * u7[0] - B6 * u6[0] + base[0], L7 * u7[1] - B6 * u6[1] + base[1]];
+        let np = p[0].hypot(p[1]);
+        let r = (L4 * L4 - np * np - B2 * B2) / (2.0 * B2 * np);
+        if !(r.abs() <= 1.0) {
+            return None;
+        }
+        let t2 = p[1].atan2(p[0]) + s1 * r.acos() - g2;
+        let u2 = u(t2);
+        let q = [L7 * u7[0] + A2 * u2[0] + B0, L7 * u7[1] + A2 * u2[1]];
+        let nq = q[0].hypot(q[1]);
+        let r2 = (L5 * L5 - nq * nq - A1 * A1) / (2.0 * A1 * nq);
+        if !(r2.abs() <= 1.0) {
+            return None;
+        }
+        let t1 = q[1].atan2(q[0]) + s2 * r2.acos();
+        let (v1, v6) = (u(t1 + g1), u(t6 + g0));
+        let w = [
+            L7 * u7[0] + A2 * u2[0] + B1 * v1[0] - C6 * v6[0] + base[0],
+            L7 * u7[1] + A2 * u2[1] + B1 * v1[1] - C6 * v6[1] + base[1],
+        ];
+        Some((w[0] * w[0] + w[1] * w[1] - L3 * L3, t2, t1))
+    }
+
+    /// ∂h/∂θ7 by a central difference on the same sheet.
+    pub fn h7(t7: f64, t6: f64, s1: f64, s2: f64) -> Option<f64> {
+        let d = 1e-6;
+        Some((h(t7 + d, t6, s1, s2)? - h(t7 - d, t6, s1, s2)?) / (2.0 * d))
+    }
+
+    /// Newton on (h, ∂h/∂θ7) = 0 from (t7, t6), finite-difference Jacobian; None unless it
+    /// converges within `reach` of the start.
+    pub fn polish(mut t7: f64, mut t6: f64, s1: f64, s2: f64, reach: f64) -> Option<(f64, f64)> {
+        let (t7_0, t6_0) = (t7, t6);
+        let e = 1e-5;
+        for _ in 0..40 {
+            let f = [h(t7, t6, s1, s2)?, h7(t7, t6, s1, s2)?];
+            let j = [
+                [(h(t7 + e, t6, s1, s2)? - h(t7 - e, t6, s1, s2)?) / (2.0 * e), (h(t7, t6 + e, s1, s2)? - h(t7, t6 - e, s1, s2)?) / (2.0 * e)],
+                [(h7(t7 + e, t6, s1, s2)? - h7(t7 - e, t6, s1, s2)?) / (2.0 * e), (h7(t7, t6 + e, s1, s2)? - h7(t7, t6 - e, s1, s2)?) / (2.0 * e)],
+            ];
+            let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+            if det == 0.0 || !det.is_finite() {
+                return None;
+            }
+            let d7 = (f[0] * j[1][1] - f[1] * j[0][1]) / det;
+            let d6 = (j[0][0] * f[1] - j[1][0] * f[0]) / det;
+            t7 -= d7;
+            t6 -= d6;
+            if (t7 - t7_0).abs() > reach || (t6 - t6_0).abs() > reach {
+                return None;
+            }
+            if d7.abs() < 1e-12 && d6.abs() < 1e-12 {
+                break;
+            }
+        }
+        let f = [h(t7, t6, s1, s2)?, h7(t7, t6, s1, s2)?];
+        (f[0].abs() < 1e-8 && f[1].abs() < 1e-5).then_some((t7, t6))
+    }
+
+    /// Every stationary point of θ6 on the curve, as (θ7, θ6): on an n × n grid of each sheet,
+    /// every cell whose corners show sign changes of both h and ∂h/∂θ7 is polished by Newton;
+    /// duplicates (the same point from neighbouring cells) are merged.
+    pub fn turning_points(n: usize) -> Vec<(f64, f64)> {
+        use std::f64::consts::PI;
+        let step = 2.0 * PI / n as f64;
+        let at = |k: usize| -PI + step * (k % n) as f64;
+        let mut found: Vec<(f64, f64)> = Vec::new();
+        for (s1, s2) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+            let grid: Vec<Option<(f64, f64)>> = (0..n * n)
+                .map(|k| {
+                    let (i, j) = (k / n, k % n);
+                    Some((h(at(i), at(j), s1, s2)?, h7(at(i), at(j), s1, s2)?))
+                })
+                .collect();
+            for i in 0..n {
+                for j in 0..n {
+                    let corners = [(i, j), ((i + 1) % n, j), (i, (j + 1) % n), ((i + 1) % n, (j + 1) % n)].map(|(a, b)| grid[a * n + b]);
+                    if corners.iter().any(|c| c.is_none()) {
+                        continue;
+                    }
+                    let c: Vec<(f64, f64)> = corners.iter().flatten().copied().collect();
+                    let changes = |f: &dyn Fn(&(f64, f64)) -> f64| c.iter().any(|x| f(x) <= 0.0) && c.iter().any(|x| f(x) >= 0.0);
+                    if !(changes(&|x| x.0) && changes(&|x| x.1)) {
+                        continue;
+                    }
+                    if let Some((t7, t6)) = polish(at(i) + 0.5 * step, at(j) + 0.5 * step, s1, s2, 3.0 * step) {
+                        let gap = |a: f64, b: f64| super::angle_gap(a, b);
+                        if !found.iter().any(|&(a, b)| gap(a, t7) < 1e-6 && gap(b, t6) < 1e-6) {
+                            found.push((t7, t6));
+                        }
+                    }
+                }
+            }
+        }
+        found
+    }
+}
+
+
+/// Continuation of the double butterfly's curve in all seven link angles, where it has no fold:
+/// pseudo-arclength steps along the tangent (the generalised cross product of the 6 × 7
+/// Jacobian of loops A, B, C), a sign change of the tangent's θ6 component marks a stationary
+/// point of θ6, polished by Newton on the augmented system (loops, det of the passive Jacobian).
+/// Branches are started from points of the sheet grid until every grid point lies on a traced
+/// branch, so no branch the grid touches is missed.
+mod trace {
+    use nalgebra::{DMatrix, DVector};
+    use std::f64::consts::PI;
+
+    /// (coefficient, angle index 0..7 for θ1..θ7, offset): the terms of loops A, B, C.
+    fn loops() -> [(Vec<(f64, usize, f64)>, [f64; 2]); 3] {
+        let (g0, g1, g2) = (3f64.atan2(4.0), 5f64.atan2(12.0), 4f64.atan2(3.0));
+        let base = [7.0 * g0.cos(), -7.0 * g0.sin()];
+        [
+            (vec![(11.0, 6, 0.0), (5.0, 1, 0.0), (7.0, 0, 0.0), (-12.0, 4, 0.0)], [13.0, 0.0]),
+            (vec![(11.0, 6, 0.0), (5.0, 1, 0.0), (6.0, 0, g1), (-7.0, 2, 0.0), (-2.0, 5, g0)], base),
+            (vec![(11.0, 6, 0.0), (3.0, 1, g2), (-9.0, 3, 0.0), (-3.0, 5, 0.0)], base),
+        ]
+    }
+
+    pub fn f(q: &[f64]) -> DVector<f64> {
+        let mut out = DVector::zeros(6);
+        for (k, (terms, c)) in loops().iter().enumerate() {
+            let (mut x, mut y) = (c[0], c[1]);
+            for &(a, i, o) in terms {
+                x += a * (q[i] + o).cos();
+                y += a * (q[i] + o).sin();
+            }
+            out[2 * k] = x;
+            out[2 * k + 1] = y;
+        }
+        out
+    }
+
+    pub fn jac(q: &[f64]) -> DMatrix<f64> {
+        let mut j = DMatrix::zeros(6, 7);
+        for (k, (terms, _)) in loops().iter().enumerate() {
+            for &(a, i, o) in terms {
+                j[(2 * k, i)] -= a * (q[i] + o).sin();
+                j[(2 * k + 1, i)] += a * (q[i] + o).cos();
+            }
+        }
+        j
+    }
+
+    /// Generalised cross product of the rows: the tangent, oriented continuously.
+    pub fn tangent(q: &[f64]) -> DVector<f64> {
+        let j = jac(q);
+        DVector::from_fn(7, |i, _| {
+            let minor = j.clone().remove_column(i);
+            if i % 2 == 0 { minor.determinant() } else { -minor.determinant() }
+        })
+    }
+
+    /// Newton on `F(q) = 0` plus `extra(q) = 0` (7 × 7, finite-difference row for `extra`).
+    fn newton(mut q: Vec<f64>, extra: &dyn Fn(&[f64]) -> f64) -> Option<Vec<f64>> {
+        for _ in 0..30 {
+            let mut m = DMatrix::zeros(7, 7);
+            m.view_mut((0, 0), (6, 7)).copy_from(&jac(&q));
+            let e = extra(&q);
+            for i in 0..7 {
+                let (mut a, mut b) = (q.clone(), q.clone());
+                a[i] += 1e-7;
+                b[i] -= 1e-7;
+                m[(6, i)] = (extra(&a) - extra(&b)) / 2e-7;
+            }
+            let mut r = f(&q).insert_row(6, e);
+            r.neg_mut();
+            let d = m.lu().solve(&r)?;
+            for i in 0..7 {
+                q[i] += d[i];
+            }
+            if d.amax() < 1e-13 {
+                break;
+            }
+        }
+        (f(&q).amax() < 1e-10).then_some(q)
+    }
+
+    /// Full configuration from (θ7, θ6, θ2, θ1) of a sheet point, corrected with θ6 held.
+    pub fn lift(t7: f64, t6: f64, t2: f64, t1: f64) -> Option<Vec<f64>> {
+        let (g0, g1, g2) = (3f64.atan2(4.0), 5f64.atan2(12.0), 4f64.atan2(3.0));
+        let base = [7.0 * g0.cos(), -7.0 * g0.sin()];
+        let ang = |x: f64, y: f64| y.atan2(x);
+        let t4 = ang(11.0 * t7.cos() + 3.0 * (t2 + g2).cos() - 3.0 * t6.cos() + base[0], 11.0 * t7.sin() + 3.0 * (t2 + g2).sin() - 3.0 * t6.sin() + base[1]);
+        let t5 = ang(11.0 * t7.cos() + 5.0 * t2.cos() + 7.0 * t1.cos() + 13.0, 11.0 * t7.sin() + 5.0 * t2.sin() + 7.0 * t1.sin());
+        let t3 = ang(
+            11.0 * t7.cos() + 5.0 * t2.cos() + 6.0 * (t1 + g1).cos() - 2.0 * (t6 + g0).cos() + base[0],
+            11.0 * t7.sin() + 5.0 * t2.sin() + 6.0 * (t1 + g1).sin() - 2.0 * (t6 + g0).sin() + base[1],
+        );
+        let q = vec![t1, t2, t3, t4, t5, t6, t7];
+        newton(q, &|x: &[f64]| x[5] - t6)
+    }
+
+    fn gap(a: &[f64], b: &[f64]) -> f64 {
+        a.iter().zip(b).map(|(x, y)| super::angle_gap(*x, *y)).fold(0.0, f64::max)
+    }
+
+    /// Traces the closed branch through `start`; returns its points and its stationary points
+    /// of θ6.
+    pub fn branch(start: &[f64]) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+        let h = 0.01;
+        let mut q = start.to_vec();
+        let mut t = tangent(&q).normalize();
+        let mut points = vec![q.clone()];
+        let mut stationary: Vec<Vec<f64>> = Vec::new();
+        for step in 0..200_000 {
+            let mut len = h;
+            let next = loop {
+                let pred: Vec<f64> = (0..7).map(|i| q[i] + len * t[i]).collect();
+                let tt = t.clone();
+                let pc = pred.clone();
+                if let Some(n) = newton(pred, &move |x: &[f64]| (0..7).map(|i| tt[i] * (x[i] - pc[i])).sum()) {
+                    if gap(&n, &q) < 2.0 * len {
+                        break n;
+                    }
+                }
+                len *= 0.5;
+                assert!(len > 1e-9, "continuation stalled at {q:?}");
+            };
+            let mut tn = tangent(&next).normalize();
+            if tn.dot(&t) < 0.0 {
+                tn.neg_mut();
+            }
+            if t[5].signum() != tn[5].signum() {
+                // det of the passive Jacobian (θ6's column removed) vanishes in between.
+                let mid: Vec<f64> = (0..7).map(|i| 0.5 * (q[i] + next[i])).collect();
+                let p = newton(mid, &|x: &[f64]| jac(x).remove_column(5).determinant()).expect("stationary point polishes");
+                stationary.push(p);
+            }
+            q = next;
+            t = tn;
+            points.push(q.clone());
+            if step > 10 && gap(&q, start) < 0.5 * h {
+                break;
+            }
+        }
+        (points, stationary)
+    }
+
+    /// Every stationary point of θ6 over every branch that one of `starts` lies on.
+    pub fn all(starts: &[Vec<f64>]) -> (usize, Vec<Vec<f64>>) {
+        let mut covered = vec![false; starts.len()];
+        let mut branches = 0;
+        let mut out: Vec<Vec<f64>> = Vec::new();
+        while let Some(k) = covered.iter().position(|c| !c) {
+            let (points, stationary) = branch(&starts[k]);
+            branches += 1;
+            for (i, s) in starts.iter().enumerate() {
+                covered[i] = covered[i] || points.iter().any(|p| gap(p, s) < 0.02);
+            }
+            assert!(covered[k]);
+            for p in stationary {
+                if !out.iter().any(|o| gap(o, &p) < 1e-7) {
+                    out.push(p);
+                }
+            }
+        }
+        let _ = PI;
+        (branches, out)
+    }
+}
+
+/// Starting points for `trace`: zeros of h along θ7 on rows of θ6, every sheet, lifted.
+fn butterfly_starts() -> Vec<Vec<f64>> {
+    let mut starts = Vec::new();
+    let n = 1000;
+    let step = 2.0 * PI / n as f64;
+    for row in 0..60 {
+        let t6 = -PI + row as f64 * 2.0 * PI / 60.0;
+        for (s1, s2) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+            for i in 0..n {
+                let (a, b) = (-PI + i as f64 * step, -PI + (i + 1) as f64 * step);
+                let (Some(ha), Some(hb)) = (butterfly::h(a, t6, s1, s2), butterfly::h(b, t6, s1, s2)) else { continue };
+                if ha.signum() == hb.signum() {
+                    continue;
+                }
+                let (mut lo, mut hi) = (a, b);
+                for _ in 0..60 {
+                    let m = 0.5 * (lo + hi);
+                    match butterfly::h(m, t6, s1, s2) {
+                        Some(hm) if hm.signum() == ha.signum() => lo = m,
+                        Some(_) => hi = m,
+                        None => break,
+                    }
+                }
+                let t7 = 0.5 * (lo + hi);
+                if let Some((t2, t1)) = butterfly::angles(t7, t6, s1, s2) {
+                    if let Some(q) = trace::lift(t7, t6, t2, t1) {
+                        starts.push(q);
+                    }
+                }
+            }
+        }
+    }
+    starts
+}
+
+#[test]
+fn double_butterfly_turning_points_of_theta6_match_an_independent_grid_and_newton() {
+    let (branches, stationary) = trace::all(&butterfly_starts());
+    assert_eq!(branches, 4, "the butterfly's curve has 4 branches (seed 000)");
+    let reference: Vec<(f64, f64)> = stationary.iter().map(|q| (q[6], q[5])).collect();
+    // The grid-and-Newton reference on the sheets finds a subset (it skips cells at the sheets'
+    // folds): every point it finds is one of the continuation's.
+    for (r7, r6) in butterfly::turning_points(400) {
+        assert!(reference.iter().any(|&(a, b)| angle_gap(a, r7) < 1e-5 && angle_gap(b, r6) < 1e-5), "grid point ({r7}, {r6}) not found by continuation");
+    }
+    let (p, set) = run(&urdf_text("double_butterfly.urdf"), SingularKind::Input, &["joint6"], None, 1e-4);
+    assert_eq!(set.status, Status::Complete);
+    let got: Vec<((f64, f64), (f64, f64), bool)> = cluster_values(&p, &set, "joint7")
+        .into_iter()
+        .zip(cluster_values(&p, &set, "joint6"))
+        .map(|((t7, c), (t6, _))| (t7, t6, c))
+        .collect();
+    assert_eq!(got.len(), reference.len(), "solver {got:?}\nreference {reference:?}");
+    let slack = 1e-5;
+    for (t7, t6, certified) in &got {
+        assert!(certified, "cluster at joint7 {t7:?}, joint6 {t6:?} not certified");
+        let n = reference.iter().filter(|&&(r7, r6)| holds_angle(*t7, r7, slack) && holds_angle(*t6, r6, slack)).count();
+        assert_eq!(n, 1, "cluster at joint7 {t7:?}, joint6 {t6:?} holds {n} reference points");
+    }
+    for &(r7, r6) in &reference {
+        assert!(got.iter().any(|(t7, t6, _)| holds_angle(*t7, r7, slack) && holds_angle(*t6, r6, slack)), "reference turning point ({r7}, {r6}) missed");
+    }
+    // Every box is certified (the ±v symmetry is gone: one chart owns each direction).
+    assert!(set.boxes.iter().all(|b| b.status == BoxKind::Certified));
+}
