@@ -547,3 +547,115 @@ fn double_butterfly_turning_points_of_theta6_match_an_independent_grid_and_newto
     // Every box is certified (the ±v symmetry is gone: one chart owns each direction).
     assert!(set.boxes.iter().all(|b| b.status == BoxKind::Certified));
 }
+
+/// The bundled five-bar: A1 = (0, 0), A2 = (1.5, 0), cranks 2, rods 2.5, both cranks actuated.
+/// Dense-grid reference in actuator space: at each (θ1, θ2) the assembly modes are the two
+/// intersections of the rods' circles about the crank tips B1, B2; the passive Jacobian (rod
+/// angles) is singular where the rods are in line. On the grid, the rods can be in line only
+/// where the modes appear or vanish (the grid edges where their number changes, refined by
+/// bisection on that predicate) or where B1 = B2 (grid cells where |B1 − B2| is small, refined
+/// by Newton on B1 − B2 = 0). The grid also checks that the rods' cross product never changes
+/// sign within a mode between neighbours: no other singular curve exists.
+#[test]
+fn five_bar_type_two_curves_match_a_dense_grid() {
+    let tips = |t1: f64, t2: f64| ([2.0 * t1.cos(), 2.0 * t1.sin()], [1.5 + 2.0 * t2.cos(), 2.0 * t2.sin()]);
+    // The rods' cross product in each mode, or None where the mechanism does not assemble.
+    let modes = |t1: f64, t2: f64| -> Option<[f64; 2]> {
+        let (b1, b2) = tips(t1, t2);
+        let d = [b2[0] - b1[0], b2[1] - b1[1]];
+        let n = d[0].hypot(d[1]);
+        if n > 5.0 || n == 0.0 {
+            return None;
+        }
+        let along = 0.5 * n;
+        let across = (2.5f64 * 2.5 - along * along).max(0.0).sqrt();
+        let e = [d[0] / n, d[1] / n];
+        Some([1.0, -1.0].map(|s| {
+            let p = [b1[0] + along * e[0] - s * across * e[1], b1[1] + along * e[1] + s * across * e[0]];
+            let (r1, r2) = ([p[0] - b1[0], p[1] - b1[1]], [p[0] - b2[0], p[1] - b2[1]]);
+            r1[0] * r2[1] - r1[1] * r2[0]
+        }))
+    };
+    let n = 400;
+    let step = 2.0 * PI / n as f64;
+    let at = |k: usize| -PI + step * k as f64;
+    let mut reference: Vec<(f64, f64)> = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            let here = modes(at(i), at(j));
+            for (di, dj) in [(1, 0), (0, 1)] {
+                let (a, b) = ((at(i), at(j)), (at(i) + di as f64 * step, at(j) + dj as f64 * step));
+                let there = modes(b.0, b.1);
+                match (here, there) {
+                    (Some(x), Some(y)) => {
+                        for m in 0..2 {
+                            assert!(x[m].signum() == y[m].signum() || x[m].abs() < 1e-9 || y[m].abs() < 1e-9, "rods' cross product changes sign inside mode {m} at {a:?}");
+                        }
+                    }
+                    (None, None) => {}
+                    _ => {
+                        let (mut lo, mut hi) = (0.0, 1.0);
+                        for _ in 0..50 {
+                            let m = 0.5 * (lo + hi);
+                            let x = (a.0 + m * (b.0 - a.0), a.1 + m * (b.1 - a.1));
+                            if modes(x.0, x.1).is_some() == here.is_some() {
+                                lo = m;
+                            } else {
+                                hi = m;
+                            }
+                        }
+                        let m = 0.5 * (lo + hi);
+                        reference.push((a.0 + m * (b.0 - a.0), a.1 + m * (b.1 - a.1)));
+                    }
+                }
+            }
+        }
+    }
+    // B1 = B2: Newton from cells where the tips nearly meet.
+    let mut folded: Vec<(f64, f64)> = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            let (b1, b2) = tips(at(i), at(j));
+            if (b1[0] - b2[0]).hypot(b1[1] - b2[1]) > 4.0 * step {
+                continue;
+            }
+            let (mut t1, mut t2) = (at(i), at(j));
+            for _ in 0..30 {
+                let (b1, b2) = tips(t1, t2);
+                let f = [b1[0] - b2[0], b1[1] - b2[1]];
+                let jm = [[-2.0 * t1.sin(), 2.0 * t2.sin()], [2.0 * t1.cos(), -2.0 * t2.cos()]];
+                let det = jm[0][0] * jm[1][1] - jm[0][1] * jm[1][0];
+                t1 -= (f[0] * jm[1][1] - f[1] * jm[0][1]) / det;
+                t2 -= (jm[0][0] * f[1] - jm[1][0] * f[0]) / det;
+            }
+            if !folded.iter().any(|&(a, b)| angle_gap(a, t1) < 1e-6 && angle_gap(b, t2) < 1e-6) {
+                folded.push((t1, t2));
+            }
+        }
+    }
+    assert_eq!(folded.len(), 2, "the tips meet at two actuator points: {folded:?}");
+    assert!(reference.len() > 500);
+
+    let sigma = 1e-2;
+    let (p, set) = run(&urdf_text("five_bar.urdf"), SingularKind::Input, &["crank1_joint", "crank2_joint"], None, sigma);
+    assert_eq!(set.status, Status::Complete);
+    let images: Vec<[(f64, f64); 2]> = set.boxes.iter().map(|b| {
+        let v = p.actuator_values(&b.b);
+        [v[0], v[1]]
+    }).collect();
+    // None missed: every reference point lies in the image of some box (slack: the bisection's
+    // and the read-out's rounding only).
+    for &(r1, r2) in reference.iter().chain(&folded) {
+        assert!(images.iter().any(|im| holds_angle(im[0], r1, 1e-6) && holds_angle(im[1], r2, 1e-6)), "reference point ({r1}, {r2}) not covered");
+    }
+    // None extra: every box lies near a reference point (within its own width plus a grid
+    // step, the reference's spacing along the curve).
+    for im in &images {
+        let c = (0.5 * (im[0].0 + im[0].1), 0.5 * (im[1].0 + im[1].1));
+        let reach = (im[0].1 - im[0].0).max(im[1].1 - im[1].0) + 2.0 * step;
+        assert!(reference.iter().chain(&folded).any(|&(r1, r2)| angle_gap(c.0, r1) <= reach && angle_gap(c.1, r2) <= reach), "box at {im:?} is far from every reference point");
+    }
+    // Three clusters in configuration space: the stretched-rods curve and, over each point
+    // where the tips meet, the circle of overlapping rods.
+    assert_eq!(set.clusters.len(), 3);
+}
