@@ -108,6 +108,8 @@ enum Command {
     Collisions(CollisionsArgs),
     /// Certified singular sets (C-space, input/type II, output/type I) of a planar closed-loop linkage.
     LoopSingularities(loop_singularities::LoopSingularitiesArgs),
+    /// Time singular-set searches of closed-loop linkages against baselines in the same run.
+    BenchLoopSingularities(loop_singularities::BenchArgs),
 }
 
 #[derive(clap::Args)]
@@ -256,6 +258,7 @@ pub fn run() -> Result<()> {
         Command::Serve(args) => serve::serve(args),
         Command::Collisions(args) => collisions(args),
         Command::LoopSingularities(args) => loop_singularities::run(args),
+        Command::BenchLoopSingularities(args) => loop_singularities::bench(args),
     }
 }
 

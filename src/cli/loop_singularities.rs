@@ -137,3 +137,60 @@ pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
     }
     Ok(())
 }
+
+#[derive(clap::Args)]
+pub(crate) struct BenchArgs {
+    /// Runs per case; the median is reported.
+    #[arg(long, default_value_t = 3)]
+    repeat: usize,
+    /// Also time the double butterfly's turning points of θ6 (about half a minute a run).
+    #[arg(long)]
+    butterfly: bool,
+}
+
+const FOUR_BAR: &str = include_str!("../../urdf/four_bar.urdf");
+const FIVE_BAR: &str = include_str!("../../urdf/five_bar.urdf");
+const BUTTERFLY: &str = include_str!("../../urdf/double_butterfly.urdf");
+
+/// Singular-set searches against a baseline in the same run: the same search with propagation
+/// only (no LP shrink), which shows what the LP relaxation of the bilinear null-vector rows buys.
+pub(crate) fn bench(args: BenchArgs) -> Result<()> {
+    if args.repeat == 0 {
+        bail!("--repeat must be at least 1");
+    }
+    let mut cases: Vec<(&str, &str, SingularKind, Vec<String>, Option<Output>, f64)> = vec![
+        ("four-bar dead centres (output rocker_joint)", FOUR_BAR, SingularKind::Output, vec!["crank_joint".into()], Some(Output::Joints(vec!["rocker_joint".into()])), 1e-6),
+        ("five-bar type-II curves", FIVE_BAR, SingularKind::Input, vec!["crank1_joint".into(), "crank2_joint".into()], None, 2e-2),
+    ];
+    if args.butterfly {
+        cases.push(("double butterfly turning points of joint6", BUTTERFLY, SingularKind::Input, vec!["joint6".into()], None, 1e-4));
+    }
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "case | shrink | median CPU s | boxes processed | boxes | clusters (certified) | vs propagation only (same run)").ok();
+    for (name, xml, kind, actuated, output, sigma) in cases {
+        let m = urdf::parse(xml)?;
+        let p = SingularProblem::new(&m, &[], kind, &actuated, output)?;
+        let mut medians = Vec::new();
+        for use_lp in [false, true] {
+            // The baseline is bounded: without the LP the curves take many more boxes.
+            let settings = SolverSettings { sigma, use_lp, max_boxes: 2_000_000, ..SolverSettings::default() };
+            let mut times = Vec::new();
+            let mut last = None;
+            for _ in 0..args.repeat {
+                let c0 = linkspace::search::process_cpu_seconds();
+                let set = p.solve(&settings, &AtomicBool::new(false))?;
+                times.push(linkspace::search::process_cpu_seconds() - c0);
+                last = Some(set);
+            }
+            times.sort_by(|a, b| a.total_cmp(b));
+            let median = times[times.len() / 2];
+            let set = last.expect("repeat >= 1");
+            let processed: u64 = set.stats.iter().map(|s| s.processed).sum();
+            let ratio = medians.first().map_or("1.00x (baseline)".to_string(), |base: &f64| format!("{:.2}x faster", base / median));
+            let status = if set.status == linkspace::Status::Complete { "" } else { " (incomplete)" };
+            writeln!(out, "{name} | {} | {median:.4}{status} | {processed} | {} | {} ({}) | {ratio}", if use_lp { "propagation + LP" } else { "propagation" }, set.boxes.len(), set.clusters.len(), set.certified_clusters()).ok();
+            medians.push(median);
+        }
+    }
+    Ok(())
+}
