@@ -23,6 +23,7 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 pub(crate) mod distances;
+mod loop_singularities;
 mod figures;
 mod plot;
 mod study;
@@ -105,6 +106,10 @@ enum Command {
     Serve(serve::ServeArgs),
     /// Joint configurations (joint 2, joint 3) of a 3R chain where its collision capsules meet.
     Collisions(CollisionsArgs),
+    /// Certified singular sets (C-space, input/type II, output/type I) of a planar closed-loop linkage.
+    LoopSingularities(loop_singularities::LoopSingularitiesArgs),
+    /// Time singular-set searches of closed-loop linkages against baselines in the same run.
+    BenchLoopSingularities(loop_singularities::BenchArgs),
 }
 
 #[derive(clap::Args)]
@@ -252,6 +257,8 @@ pub fn run() -> Result<()> {
         #[cfg(feature = "ros")]
         Command::Serve(args) => serve::serve(args),
         Command::Collisions(args) => collisions(args),
+        Command::LoopSingularities(args) => loop_singularities::run(args),
+        Command::BenchLoopSingularities(args) => loop_singularities::bench(args),
     }
 }
 

@@ -9,6 +9,7 @@ use crate::system::VarRole;
 use serde::Serialize;
 
 pub mod distances;
+pub mod singular;
 use std::collections::BTreeMap;
 
 /// `[lower, upper]`

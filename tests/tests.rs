@@ -20,6 +20,8 @@ mod manip3r;
 mod cayley_menger;
 /// Issue 15: distance answers certified (Krawczyk in coordinates) or labelled undecided.
 mod certified_distances;
+/// Issue 13: singular sets of planar closed-loop linkages against closed forms, grids and Newton.
+mod closed_loop_singularities;
 /// The ROS 2 node against real rclpy over DDS on loopback: topics, services, load.
 #[cfg(feature = "ros")]
 mod topics;

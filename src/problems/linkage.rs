@@ -784,6 +784,53 @@ impl LinkageProblem {
     }
 }
 
+/// How a free joint's value moves with the system's variables: what velocity-level analyses
+/// (singularities, `problems::singular`) need. `Angles` is `φ_plus − φ_minus` (plus a constant),
+/// each group angle given by its `(cos, sin)` variables, `None` for the ground.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum JointCoordinate {
+    /// A revolute joint: the difference of two group angles.
+    Angles {
+        /// the group angle that enters with a plus sign
+        plus: Option<(VarId, VarId)>,
+        /// the group angle that enters with a minus sign
+        minus: Option<(VarId, VarId)>,
+    },
+    /// A slider: its travel variable.
+    Travel(VarId),
+}
+
+impl LinkageProblem {
+    /// How the free joint `name` depends on the system's variables; `None` for a joint that is
+    /// not free (unknown, fixed by `--fix`, or welded).
+    pub fn joint_coordinate(&self, name: &str) -> Option<JointCoordinate> {
+        let (_, r) = self.readings.iter().find(|(n, _)| n == name)?;
+        let pair = |link: usize| match self.links[link].1 {
+            Angle::Ground => None,
+            Angle::Free { c, s } => Some((c, s)),
+        };
+        Some(match *r {
+            Reading::Travel(v) => JointCoordinate::Travel(v),
+            Reading::Revolute { a, b, sign, .. } if sign > 0.0 => JointCoordinate::Angles { plus: pair(b), minus: pair(a) },
+            Reading::Revolute { a, b, .. } => JointCoordinate::Angles { plus: pair(a), minus: pair(b) },
+        })
+    }
+
+    /// A solver for `system`, which must extend this problem's system (the same variables
+    /// first, in order, then its own): the default pipeline plus this problem's joint-limit
+    /// filter, which reads only the shared variables. Used by augmented systems (singular sets).
+    pub fn extended_solver<'s>(&'s self, system: &'s EquationSystem, settings: SolverSettings) -> Result<Solver<'s>, SolveError> {
+        debug_assert!(system.vars.len() >= self.system.vars.len());
+        let solver = Solver::new(system, settings)?;
+        if self.limits.is_empty() {
+            return Ok(solver);
+        }
+        Ok(solver.with_contractor(Box::new(move |system, settings| {
+            Box::new(Filtered { inner: default_contractor(system, settings), filters: vec![Box::new(LimitFilter { problem: self })] })
+        })))
+    }
+}
+
 fn bounds(x: Interval) -> (f64, f64) {
     (x.inf(), x.sup())
 }

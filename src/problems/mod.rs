@@ -7,6 +7,7 @@ pub mod coordinates;
 pub mod distance_file;
 pub mod linkage;
 pub mod platform;
+pub mod singular;
 pub(crate) mod stated;
 
 pub use cayley_menger::{CayleyMenger, DistanceError, DistanceProblem};

@@ -1,0 +1,196 @@
+//! `linkspace loop-singularities`: certified singular sets of planar closed-loop linkages
+//! (issue 13), on the polynomial solver through `problems::singular`.
+
+use super::{parse_fix, LimitArgs};
+use anyhow::{bail, Context, Result};
+use linkspace::model::urdf;
+use linkspace::problems::singular::{transmission_joints, Output, SingularKind, SingularProblem};
+use linkspace::report::singular::SingularReport;
+use linkspace::search::SolverSettings;
+use std::io::Write;
+use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub(crate) enum Kind {
+    /// C-space singularities (bifurcations): the loop constraints lose rank.
+    Cspace,
+    /// Input (type II): locked actuators, the mechanism still moves.
+    Input,
+    /// Output (type I): the output stands still, the mechanism moves.
+    Output,
+    /// All three.
+    All,
+}
+
+#[derive(clap::Args)]
+pub(crate) struct LoopSingularitiesArgs {
+    /// URDF file of a planar closed-loop linkage (loops closed with <loop>, see README).
+    urdf: PathBuf,
+    /// Which singular set(s).
+    #[arg(long, value_enum, default_value_t = Kind::All)]
+    kind: Kind,
+    /// Actuated joints, comma separated. Default: the joints of the URDF's <transmission> elements.
+    #[arg(long, value_name = "J1,J2,...")]
+    actuated: Option<String>,
+    /// Output of type-I singularities: a point LINK@X,Y, or joints J1,J2 (default: every passive joint).
+    #[arg(long, value_name = "LINK@X,Y | J1,J2")]
+    output: Option<String>,
+    /// Fix a joint value (radians or metres). Repeatable.
+    #[arg(long = "fix", value_name = "JOINT=VALUE")]
+    fix: Vec<String>,
+    /// Boxes are at most this wide in every primary variable (configuration and null vector).
+    #[arg(long, default_value_t = 1e-4)]
+    sigma: f64,
+    #[command(flatten)]
+    limits: LimitArgs,
+    /// Write the reports (one per set, as a JSON array) here.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+}
+
+/// `LINK@X,Y` or `J1,J2`.
+pub(crate) fn parse_output(s: &str) -> Result<Output> {
+    if let Some((link, xy)) = s.split_once('@') {
+        let (x, y) = xy.split_once(',').with_context(|| format!("--output '{s}': expected LINK@X,Y"))?;
+        let x: f64 = x.trim().parse().with_context(|| format!("--output '{s}': '{x}' is not a number"))?;
+        let y: f64 = y.trim().parse().with_context(|| format!("--output '{s}': '{y}' is not a number"))?;
+        if !(x.is_finite() && y.is_finite()) || link.trim().is_empty() {
+            bail!("--output '{s}': expected LINK@X,Y with finite coordinates");
+        }
+        return Ok(Output::Point { link: link.trim().to_string(), x, y });
+    }
+    Ok(Output::Joints(names(s, "--output")?))
+}
+
+fn names(s: &str, flag: &str) -> Result<Vec<String>> {
+    let v: Vec<String> = s.split(',').map(|x| x.trim().to_string()).collect();
+    if v.iter().any(|x| x.is_empty()) {
+        bail!("{flag} '{s}': expected joint names separated by commas");
+    }
+    Ok(v)
+}
+
+pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
+    let base = SolverSettings { sigma: args.sigma, ..SolverSettings::default() };
+    let settings = args.limits.solver_settings(SolverSettings::default().max_boxes, base)?;
+    settings.validate()?;
+    let fixed = args.fix.iter().map(|s| parse_fix(s)).collect::<Result<Vec<_>>>()?;
+    let output = args.output.as_deref().map(parse_output).transpose()?;
+    let xml = std::fs::read_to_string(&args.urdf).with_context(|| format!("reading {}", args.urdf.display()))?;
+    let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", args.urdf.display()))?;
+    let actuated = match &args.actuated {
+        Some(a) => names(a, "--actuated")?,
+        None => transmission_joints(&xml),
+    };
+    let kinds: Vec<SingularKind> = match args.kind {
+        Kind::Cspace => vec![SingularKind::Cspace],
+        Kind::Input => vec![SingularKind::Input],
+        Kind::Output => vec![SingularKind::Output],
+        // Input singularities need actuators: without any, `all` runs the other two.
+        Kind::All if actuated.is_empty() => vec![SingularKind::Cspace, SingularKind::Output],
+        Kind::All => vec![SingularKind::Cspace, SingularKind::Input, SingularKind::Output],
+    };
+    let mut reports = Vec::new();
+    let mut out = std::io::stdout().lock();
+    for kind in kinds {
+        let p = SingularProblem::new(&mechanism, &fixed, kind, &actuated, output.clone()).with_context(|| format!("building {}", args.urdf.display()))?;
+        let set = p.solve(&settings, &AtomicBool::new(false))?;
+        let r = SingularReport::new(&p, &settings, &set);
+        let s = &r.summary;
+        let shape = match r.expected_dimension {
+            0 => "points",
+            1 => "curves",
+            d if d < 0 => "generically none",
+            _ => "surfaces",
+        };
+        writeln!(
+            out,
+            "{} {}: {} clusters ({} certified, {} unproven), {} boxes, {} undecided, status {}, {} charts, {} dof ({shape}), {:.3} s",
+            r.mechanism,
+            r.kind,
+            s.clusters,
+            s.certified_clusters,
+            s.unproven_clusters,
+            s.boxes,
+            s.undecided_boxes,
+            match r.status {
+                linkspace::Status::Complete => "complete".to_string(),
+                linkspace::Status::Incomplete(l) => format!("incomplete ({l:?} limit)"),
+            },
+            r.charts,
+            r.dof,
+            r.seconds
+        )
+        .ok();
+        if r.clusters.len() <= 40 {
+            for c in &r.clusters {
+                let joints: Vec<String> = c.joints.iter().map(|(n, b)| format!("{n}={:.6}", 0.5 * (b[0] + b[1]))).collect();
+                let tag = if c.certified { "certified" } else if c.undecided { "undecided" } else { "unproven" };
+                writeln!(out, "  {tag} ({} boxes): {}", c.boxes, joints.join(" ")).ok();
+            }
+        }
+        reports.push(r);
+    }
+    if let Some(path) = args.json {
+        std::fs::write(&path, serde_json::to_string_pretty(&reports)?).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+#[derive(clap::Args)]
+pub(crate) struct BenchArgs {
+    /// Runs per case; the median is reported.
+    #[arg(long, default_value_t = 3)]
+    repeat: usize,
+    /// Also time the double butterfly's turning points of θ6 (about half a minute a run).
+    #[arg(long)]
+    butterfly: bool,
+}
+
+const FOUR_BAR: &str = include_str!("../../urdf/four_bar.urdf");
+const FIVE_BAR: &str = include_str!("../../urdf/five_bar.urdf");
+const BUTTERFLY: &str = include_str!("../../urdf/double_butterfly.urdf");
+
+/// Singular-set searches against a baseline in the same run: the same search with propagation
+/// only (no LP shrink), which shows what the LP relaxation of the bilinear null-vector rows buys.
+pub(crate) fn bench(args: BenchArgs) -> Result<()> {
+    if args.repeat == 0 {
+        bail!("--repeat must be at least 1");
+    }
+    let mut cases: Vec<(&str, &str, SingularKind, Vec<String>, Option<Output>, f64)> = vec![
+        ("four-bar dead centres (output rocker_joint)", FOUR_BAR, SingularKind::Output, vec!["crank_joint".into()], Some(Output::Joints(vec!["rocker_joint".into()])), 1e-6),
+        ("five-bar type-II curves", FIVE_BAR, SingularKind::Input, vec!["crank1_joint".into(), "crank2_joint".into()], None, 2e-2),
+    ];
+    if args.butterfly {
+        cases.push(("double butterfly turning points of joint6", BUTTERFLY, SingularKind::Input, vec!["joint6".into()], None, 1e-4));
+    }
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "case | shrink | median CPU s | boxes processed | boxes | clusters (certified) | vs propagation only (same run)").ok();
+    for (name, xml, kind, actuated, output, sigma) in cases {
+        let m = urdf::parse(xml)?;
+        let p = SingularProblem::new(&m, &[], kind, &actuated, output)?;
+        let mut medians = Vec::new();
+        for use_lp in [false, true] {
+            // The baseline is bounded: without the LP the curves take many more boxes.
+            let settings = SolverSettings { sigma, use_lp, max_boxes: 2_000_000, ..SolverSettings::default() };
+            let mut times = Vec::new();
+            let mut last = None;
+            for _ in 0..args.repeat {
+                let c0 = linkspace::search::process_cpu_seconds();
+                let set = p.solve(&settings, &AtomicBool::new(false))?;
+                times.push(linkspace::search::process_cpu_seconds() - c0);
+                last = Some(set);
+            }
+            times.sort_by(|a, b| a.total_cmp(b));
+            let median = times[times.len() / 2];
+            let set = last.expect("repeat >= 1");
+            let processed: u64 = set.stats.iter().map(|s| s.processed).sum();
+            let ratio = medians.first().map_or("1.00x (baseline)".to_string(), |base: &f64| format!("{:.2}x faster", base / median));
+            let status = if set.status == linkspace::Status::Complete { "" } else { " (incomplete)" };
+            writeln!(out, "{name} | {} | {median:.4}{status} | {processed} | {} | {} ({}) | {ratio}", if use_lp { "propagation + LP" } else { "propagation" }, set.boxes.len(), set.clusters.len(), set.certified_clusters()).ok();
+            medians.push(median);
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,540 @@
+//! Singular sets of planar closed-loop linkages: the loop constraints of `LinkageProblem` plus a
+//! null vector of the relevant Jacobian block (Bohigas, Porta, Ros, *Singularities of Robot
+//! Mechanisms*, 2017), as one more `EquationSystem` for the unchanged `Solver`.
+//!
+//! Coordinates `q`: one angle φ per free rigid group (held as `c = cos φ`, `s = sin φ`) and one
+//! travel `d` per free slider. The loop rows `F(q) = 0` are linear in `c, s` and in the
+//! products `z = d·c`, `d·s`, so their derivatives are linear in the same variables:
+//! `d/dt c = −s·φ̇`, `d/dt s = c·φ̇`, `d/dt (d·c) = c·ḋ − (d·s)·φ̇`, `d/dt (d·s) = s·ḋ + (d·c)·φ̇`.
+//! A null vector `m` of a Jacobian block therefore enters through products (variable × `m_i`),
+//! each a new derived variable defined by a bilinear equation: the augmented system keeps the
+//! three shapes (linear, circle, bilinear) the LP relaxation knows, and degree two.
+//!
+//! - C-space singularities (bifurcations): `λᵀ F_q = 0`, `λ ≠ 0` (the loop rows lose rank).
+//! - Input (type II): `F_q v = 0`, `A v = 0`, `v ≠ 0`, `A` the rates of the actuated joints:
+//!   with the actuators locked the mechanism still moves.
+//! - Output (type I): `F_q v = 0`, `O v = 0`, `v ≠ 0`, `O` the rates of the output (a point's
+//!   velocity or output joints; by default every passive joint): the mechanism moves while the
+//!   output stands still.
+//!
+//! `v ≠ 0` up to scale and sign: the direction lies on the projective sphere, covered by charts
+//! `m_k = 1, |m_j| ≤ 1.05` (k over the components: the max-norm sphere, whose face `m_k = −1`
+//! is the antipode of `m_k = 1`). Each chart is a linear normalisation, so no solution is lost
+//! and each chart's system is square when the singular set is made of points (Krawczyk can
+//! certify them). A direction whose largest component is at `k` lies strictly inside chart
+//! `k`'s domain; a box of chart `k` proven to hold only directions owned by another chart (the
+//! first index of largest |m|) is dropped, because that chart finds them; the rest are merged
+//! by their configuration parts.
+//! Builds only; `SingularProblem::solve` runs the kernel's `Solver` on each chart.
+
+use super::linkage::{JointCoordinate, LinkageError, LinkageProblem};
+use crate::interval::{components, interval, point, Interval, IntervalBox};
+use crate::model::Mechanism;
+use crate::search::{Limit, SolveError, SolveStats, SolverSettings, Status};
+use crate::system::{Equation, EquationKind, EquationSystem, Monomial, Term, VarId, VarRole};
+use std::collections::BTreeMap;
+use std::sync::atomic::AtomicBool;
+use std::time::Instant;
+use thiserror::Error;
+
+/// Half-width of a chart's free components: above 1, so a direction whose largest components
+/// tie (|m_j| = |m_k| = 1) lies inside both charts' domains, not on their boundary.
+const CHART_REACH: f64 = 1.05;
+
+/// Which singular set.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SingularKind {
+    /// C-space singularities: the loop constraints lose rank (branches cross).
+    Cspace,
+    /// Input (type II): the passive coordinates' Jacobian loses rank; an uncontrolled motion.
+    Input,
+    /// Output (type I): the output stands still while the mechanism moves.
+    Output,
+}
+
+impl SingularKind {
+    /// The name used on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            SingularKind::Cspace => "cspace",
+            SingularKind::Input => "input",
+            SingularKind::Output => "output",
+        }
+    }
+}
+
+/// The output whose rate vanishes at output (type I) singularities.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Output {
+    /// A point `(x, y)` of a link's frame (its world velocity vanishes).
+    Point {
+        /// link name
+        link: String,
+        /// x in the link's frame
+        x: f64,
+        /// y in the link's frame
+        y: f64,
+    },
+    /// Joints (their rates vanish).
+    Joints(Vec<String>),
+}
+
+/// What stops a singular-set problem from being built.
+#[derive(Debug, Error, PartialEq)]
+#[non_exhaustive]
+pub enum SingularError {
+    /// The linkage itself does not build.
+    #[error(transparent)]
+    Linkage(#[from] LinkageError),
+    /// `--actuated` names a joint that is not a free joint of the linkage.
+    #[error("--actuated: '{0}' is not a free joint of the mechanism (free joints: {1})")]
+    UnknownActuated(String, String),
+    /// `--output` names a joint that is not free.
+    #[error("--output: '{0}' is not a free joint of the mechanism (free joints: {1})")]
+    UnknownOutput(String, String),
+    /// Input singularities need as many actuators as degrees of freedom.
+    #[error("input singularities need as many actuated joints as degrees of freedom: {actuated} actuated ({names}), {dof} degrees of freedom (set them with --actuated J1,J2,... or <transmission> elements)")]
+    ActuatorCount {
+        /// number given
+        actuated: usize,
+        /// their names
+        names: String,
+        /// degrees of freedom
+        dof: isize,
+    },
+    /// A joint named twice.
+    #[error("joint '{0}' is named twice")]
+    Repeated(String),
+    /// The system has an equation shape the differentiation does not know.
+    #[error("internal: loop row {0} mentions a variable that is neither an angle, a travel nor a product")]
+    Unexpected(usize),
+}
+
+/// The velocity coordinates: a free group angle or a slider travel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Coord {
+    Angle { c: VarId, s: VarId },
+    Travel(VarId),
+}
+
+/// What a base variable is, for differentiation.
+#[derive(Clone, Copy, Debug)]
+enum Role {
+    Cos { coord: usize, s: VarId },
+    Sin { coord: usize, c: VarId },
+    Travel { coord: usize },
+    /// `z = d·f`, `f` the cosine or sine of an angle coordinate.
+    Product { d: VarId, f: VarId },
+    Other,
+}
+
+/// `coef · factor · ṁ_coord`, `factor` a variable or 1: one term of a row's time derivative.
+#[derive(Clone, Copy, Debug)]
+struct Rate {
+    coef: Interval,
+    factor: Option<VarId>,
+    coord: usize,
+}
+
+/// The augmented systems of one singular set: the linkage's system, the multiplier variables
+/// and their equations, one system per chart.
+#[derive(Clone, Debug)]
+pub struct SingularProblem {
+    /// The linkage (with the output point traced, if any).
+    pub linkage: LinkageProblem,
+    /// Which set.
+    pub kind: SingularKind,
+    /// Actuated joints.
+    pub actuated: Vec<String>,
+    /// The output, for output singularities.
+    pub output: Option<Output>,
+    /// Degrees of freedom, counted as coordinates minus loop rows (full rank assumed: a
+    /// mechanism whose rows are dependent everywhere has more).
+    pub dof: isize,
+    /// Expected dimension of the set for generic geometry (negative: generically empty).
+    pub expected_dimension: isize,
+    /// One system per chart; they share every variable id.
+    pub charts: Vec<EquationSystem>,
+    /// Ids of the multiplier variables `m` (velocity or row multipliers), chart `k` fixing `m[k] = 1`.
+    pub multipliers: Vec<VarId>,
+    /// Number of the linkage's variables (the configuration part of every box).
+    pub base_vars: usize,
+}
+
+/// Joints named in a URDF's `<transmission>` elements (`<joint name="..."/>` children), in file
+/// order: the default actuated joints. Malformed XML gives none (the model loader reports it).
+pub fn transmission_joints(xml: &str) -> Vec<String> {
+    let Ok(doc) = roxmltree::Document::parse(xml) else { return Vec::new() };
+    let mut out: Vec<String> = Vec::new();
+    for t in doc.root_element().children().filter(|n| n.has_tag_name("transmission")) {
+        for j in t.children().filter(|n| n.has_tag_name("joint")) {
+            if let Some(name) = j.attribute("name") {
+                if !out.iter().any(|n| n == name) {
+                    out.push(name.to_string());
+                }
+            }
+        }
+    }
+    out
+}
+
+impl SingularProblem {
+    /// Builds the augmented systems of `kind` for `m` with joints `fixed`.
+    pub fn new(m: &Mechanism, fixed: &[(String, f64)], kind: SingularKind, actuated: &[String], output: Option<Output>) -> Result<Self, SingularError> {
+        let traces: Vec<(String, f64, f64)> = match (&output, kind) {
+            (Some(Output::Point { link, x, y }), SingularKind::Output) => vec![(link.clone(), *x, *y)],
+            _ => Vec::new(),
+        };
+        let linkage = LinkageProblem::new(m, fixed, &traces)?;
+        for (k, a) in actuated.iter().enumerate() {
+            if actuated[..k].contains(a) {
+                return Err(SingularError::Repeated(a.clone()));
+            }
+        }
+        let free = || linkage.free_joints.join(", ");
+        let rate_of = |name: &str| linkage.joint_coordinate(name);
+        for a in actuated {
+            if rate_of(a).is_none() {
+                return Err(SingularError::UnknownActuated(a.clone(), free()));
+            }
+        }
+        if let Some(Output::Joints(js)) = &output {
+            for j in js {
+                if rate_of(j).is_none() {
+                    return Err(SingularError::UnknownOutput(j.clone(), free()));
+                }
+            }
+        }
+        let system = &linkage.system;
+        let base_vars = system.vars.len();
+
+        // Coordinates and the role of every variable.
+        let mut coords: Vec<Coord> = Vec::new();
+        let mut roles = vec![Role::Other; base_vars];
+        for e in &system.equations {
+            if let EquationKind::Circle { x, y } = e.kind {
+                roles[x] = Role::Cos { coord: coords.len(), s: y };
+                roles[y] = Role::Sin { coord: coords.len(), c: x };
+                coords.push(Coord::Angle { c: x, s: y });
+            }
+        }
+        for v in system.primaries() {
+            if matches!(roles[v], Role::Other) {
+                roles[v] = Role::Travel { coord: coords.len() };
+                coords.push(Coord::Travel(v));
+            }
+        }
+        let mut products: BTreeMap<(VarId, VarId), VarId> = BTreeMap::new();
+        for e in &system.equations {
+            if let EquationKind::Bilinear { z, x, y } = e.kind {
+                // linkage writes z = d·f with the travel first.
+                let (d, f) = if matches!(roles[x], Role::Travel { .. }) { (x, y) } else { (y, x) };
+                roles[z] = Role::Product { d, f };
+                products.insert((d, f), z);
+            }
+        }
+        let traced: Vec<VarId> = linkage.traces.iter().flat_map(|t| [t.x, t.y]).collect();
+        let mut loop_rows = Vec::new();
+        let mut trace_rows = Vec::new();
+        for (k, e) in system.equations.iter().enumerate() {
+            if e.kind != EquationKind::Linear {
+                continue;
+            }
+            if e.vars().any(|v| traced.contains(&v)) {
+                trace_rows.push(k);
+            } else {
+                loop_rows.push(k);
+            }
+        }
+        let dof = coords.len() as isize - loop_rows.len() as isize;
+
+        // The augmented system, built once; charts differ only in the normalisation.
+        let mut aug = system.clone();
+        let coord_name = |c: &Coord| match *c {
+            Coord::Angle { c, .. } => system.vars[c].name.trim_start_matches("cos_").to_string(),
+            Coord::Travel(d) => system.vars[d].name.trim_start_matches("d_").to_string(),
+        };
+        // Time derivative of a linear row, as rates; every variable but the traced ones.
+        let mut derivative = |row: usize, aug: &mut EquationSystem| -> Result<Vec<Rate>, SingularError> {
+            let mut out = Vec::new();
+            for t in &system.equations[row].terms {
+                let Monomial::Linear(v) = t.mono else { return Err(SingularError::Unexpected(row)) };
+                let coef = t.coef;
+                match roles[v] {
+                    Role::Cos { coord, s } => out.push(Rate { coef: -coef, factor: Some(s), coord }),
+                    Role::Sin { coord, c } => out.push(Rate { coef, factor: Some(c), coord }),
+                    Role::Travel { coord } => out.push(Rate { coef, factor: None, coord }),
+                    Role::Product { d, f } => {
+                        let Role::Travel { coord: dc } = roles[d] else { return Err(SingularError::Unexpected(row)) };
+                        out.push(Rate { coef, factor: Some(f), coord: dc });
+                        let (coord, partner, sign) = match roles[f] {
+                            Role::Cos { coord, s } => (coord, s, -1.0),
+                            Role::Sin { coord, c } => (coord, c, 1.0),
+                            _ => return Err(SingularError::Unexpected(row)),
+                        };
+                        let zp = match products.get(&(d, partner)) {
+                            Some(&z) => z,
+                            None => {
+                                let reach = aug.vars[d].domain.mag();
+                                let z = aug.add_var(format!("{}*{}", aug.vars[d].name, aug.vars[partner].name), VarRole::Derived, interval(-reach, reach));
+                                aug.add(Equation::bilinear(z, d, partner));
+                                products.insert((d, partner), z);
+                                z
+                            }
+                        };
+                        out.push(Rate { coef: coef * point(sign), factor: Some(zp), coord });
+                    }
+                    Role::Other if traced.contains(&v) => {}
+                    Role::Other => return Err(SingularError::Unexpected(row)),
+                }
+            }
+            Ok(out)
+        };
+        let loop_rates: Vec<Vec<Rate>> = loop_rows.iter().map(|&r| derivative(r, &mut aug)).collect::<Result<_, _>>()?;
+        let trace_rates: Vec<Vec<Rate>> = trace_rows.iter().map(|&r| derivative(r, &mut aug)).collect::<Result<_, _>>()?;
+        let coord_of = |var: VarId| match roles[var] {
+            Role::Cos { coord, .. } | Role::Travel { coord } => Some(coord),
+            _ => None,
+        };
+        // The rate of a joint as rates with factor 1.
+        let joint_rates = |name: &str| -> Vec<Rate> {
+            match linkage.joint_coordinate(name) {
+                Some(JointCoordinate::Travel(v)) => coord_of(v).map(|coord| Rate { coef: point(1.0), factor: None, coord }).into_iter().collect(),
+                Some(JointCoordinate::Angles { plus, minus }) => {
+                    let mut r = Vec::new();
+                    if let Some(coord) = plus.and_then(|(c, _)| coord_of(c)) {
+                        r.push(Rate { coef: point(1.0), factor: None, coord });
+                    }
+                    if let Some(coord) = minus.and_then(|(c, _)| coord_of(c)) {
+                        r.push(Rate { coef: point(-1.0), factor: None, coord });
+                    }
+                    r
+                }
+                None => Vec::new(),
+            }
+        };
+
+        // Multipliers: velocities (input, output) or row multipliers (C-space).
+        let n_mult = if kind == SingularKind::Cspace { loop_rows.len() } else { coords.len() };
+        let multipliers: Vec<VarId> = (0..n_mult)
+            .map(|i| {
+                let name = if kind == SingularKind::Cspace { format!("lambda_{i}") } else { format!("v_{}", coord_name(&coords[i])) };
+                aug.add_var(name, VarRole::Primary, interval(-CHART_REACH, CHART_REACH))
+            })
+            .collect();
+        // factor·m as a linear term, through a cached bilinear product variable.
+        let mut prod_cache: BTreeMap<(VarId, VarId), VarId> = BTreeMap::new();
+        let mut term = |aug: &mut EquationSystem, coef: Interval, factor: Option<VarId>, m: VarId| -> Term {
+            let Some(f) = factor else { return Term { coef, mono: Monomial::Linear(m) } };
+            let p = *prod_cache.entry((f, m)).or_insert_with(|| {
+                let dom = aug.vars[f].domain * aug.vars[m].domain;
+                let p = aug.add_var(format!("{}*{}", aug.vars[f].name, aug.vars[m].name), VarRole::Derived, dom);
+                aug.add(Equation::bilinear(p, f, m));
+                p
+            });
+            Term { coef, mono: Monomial::Linear(p) }
+        };
+        let mut rows: Vec<Vec<Term>> = Vec::new();
+        match kind {
+            SingularKind::Cspace => {
+                // Column i of λᵀ F_q: Σ_r λ_r ∂F_r/∂q_i.
+                for i in 0..coords.len() {
+                    let mut row = Vec::new();
+                    for (r, rates) in loop_rates.iter().enumerate() {
+                        for rate in rates.iter().filter(|x| x.coord == i) {
+                            row.push(term(&mut aug, rate.coef, rate.factor, multipliers[r]));
+                        }
+                    }
+                    rows.push(row);
+                }
+            }
+            SingularKind::Input | SingularKind::Output => {
+                let mut velocity_rows: Vec<Vec<Rate>> = loop_rates.clone();
+                if kind == SingularKind::Input {
+                    if actuated.len() as isize != dof {
+                        return Err(SingularError::ActuatorCount { actuated: actuated.len(), names: actuated.join(","), dof });
+                    }
+                    velocity_rows.extend(actuated.iter().map(|a| joint_rates(a)));
+                } else {
+                    match &output {
+                        Some(Output::Point { .. }) => velocity_rows.extend(trace_rates.iter().cloned()),
+                        Some(Output::Joints(js)) => velocity_rows.extend(js.iter().map(|j| joint_rates(j))),
+                        // Default: every passive joint stands still (the Jacobian with respect
+                        // to the actuated coordinates loses rank).
+                        None => velocity_rows.extend(linkage.free_joints.iter().filter(|j| !actuated.contains(j)).map(|j| joint_rates(j))),
+                    }
+                }
+                for rates in velocity_rows {
+                    let row = rates.iter().map(|r| term(&mut aug, r.coef, r.factor, multipliers[r.coord])).collect();
+                    rows.push(row);
+                }
+            }
+        }
+        let n_rows = rows.len() as isize;
+        for row in rows {
+            // A row without terms reads 0 = 0: it constrains nothing (e.g. a joint to the ground
+            // of a welded group), so it is left out rather than written.
+            if !row.is_empty() {
+                aug.add(Equation::new(merge(row), point(0.0)));
+            }
+        }
+        // Unknowns added: the multipliers (one fixed by the chart); equations added: the rows.
+        let expected_dimension = dof + (n_mult as isize - 1) - n_rows;
+        let charts = (0..n_mult)
+            .map(|k| {
+                let mut s = aug.clone();
+                s.vars[multipliers[k]].domain = point(1.0);
+                s.add(Equation::new(vec![Term { coef: point(1.0), mono: Monomial::Linear(multipliers[k]) }], point(-1.0)));
+                s
+            })
+            .collect();
+        let output = if kind == SingularKind::Output { output } else { None };
+        Ok(Self { linkage, kind, actuated: actuated.to_vec(), output, dof, expected_dimension, charts, multipliers, base_vars })
+    }
+
+    /// Runs the solver on every chart and merges the results. `settings.max_boxes` applies per
+    /// chart; `settings.timeout` to the whole call.
+    pub fn solve(&self, settings: &SolverSettings, cancel: &AtomicBool) -> Result<SingularSet, SolveError> {
+        let t0 = Instant::now();
+        let mut boxes = Vec::new();
+        let mut status = Status::Complete;
+        let mut stats = Vec::new();
+        let mut dropped_other_chart = 0u64;
+        for (k, chart) in self.charts.iter().enumerate() {
+            let remaining = settings.timeout.map(|t| t.saturating_sub(t0.elapsed()));
+            if remaining.is_some_and(|r| r.is_zero()) {
+                // No time left: the whole chart is undecided.
+                status = Status::Incomplete(Limit::Time);
+                boxes.push(SingularBox { chart: k, b: chart.initial_box(), status: BoxKind::Undecided });
+                continue;
+            }
+            let s = SolverSettings { timeout: remaining, ..settings.clone() };
+            let solver = self.linkage.extended_solver(chart, s)?;
+            let e = solver.enclose(cancel, &mut |_| {});
+            if e.status != Status::Complete {
+                status = e.status;
+            }
+            for (b, u) in e.solutions.into_iter().zip(e.unique) {
+                if self.owned_elsewhere(k, &b) {
+                    dropped_other_chart += 1;
+                    continue;
+                }
+                boxes.push(SingularBox { chart: k, b, status: if u { BoxKind::Certified } else { BoxKind::Solution } });
+            }
+            for b in e.undecided {
+                boxes.push(SingularBox { chart: k, b, status: BoxKind::Undecided });
+            }
+            stats.push(e.stats);
+        }
+        // Clusters by configuration part: the same configuration found in two charts (or a
+        // curve crossing from one chart to the next) is one cluster.
+        let projected: Vec<IntervalBox> = boxes.iter().map(|x| IntervalBox::new(x.b.dims[..self.base_vars].to_vec())).collect();
+        let (labels, n) = components(&projected);
+        let mut clusters = vec![Cluster::default(); n];
+        for (i, &l) in labels.iter().enumerate() {
+            clusters[l].boxes.push(i);
+            match boxes[i].status {
+                BoxKind::Certified => clusters[l].certified = true,
+                BoxKind::Undecided => clusters[l].undecided = true,
+                BoxKind::Solution => {}
+            }
+        }
+        Ok(SingularSet { status, boxes, labels, clusters, stats, dropped_other_chart, seconds: t0.elapsed().as_secs_f64() })
+    }
+
+    /// True when every direction in `b` (chart `k`, `m_k = 1`) is owned by another chart: some
+    /// earlier component has |m_j| ≥ 1 or some later one |m_j| > 1, so the largest |m| is first
+    /// reached elsewhere, inside that chart's domain, and that chart reports it.
+    fn owned_elsewhere(&self, k: usize, b: &IntervalBox) -> bool {
+        self.multipliers.iter().enumerate().any(|(j, &m)| {
+            let mig = b.dims[m].mig();
+            (j < k && mig >= 1.0) || (j > k && mig > 1.0)
+        })
+    }
+
+    /// Values of the actuated joints over a box (radians or metres), outward rounded.
+    pub fn actuator_values(&self, b: &IntervalBox) -> Vec<(f64, f64)> {
+        let base = IntervalBox::new(b.dims[..self.base_vars].to_vec());
+        let all = self.linkage.joint_values(&base);
+        self.actuated.iter().map(|a| all.get(a).copied().unwrap_or((f64::NAN, f64::NAN))).collect()
+    }
+
+    /// Free joint values over a box.
+    pub fn joint_values(&self, b: &IntervalBox) -> BTreeMap<String, (f64, f64)> {
+        self.linkage.joint_values(&IntervalBox::new(b.dims[..self.base_vars].to_vec()))
+    }
+}
+
+/// Merges repeated monomials (a product met twice) into one term.
+fn merge(terms: Vec<Term>) -> Vec<Term> {
+    let mut out: Vec<Term> = Vec::new();
+    for t in terms {
+        match out.iter_mut().find(|o| o.mono == t.mono) {
+            Some(o) => o.coef = o.coef + t.coef,
+            None => out.push(t),
+        }
+    }
+    out
+}
+
+/// What a reported box is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BoxKind {
+    /// Certified (Krawczyk) to hold exactly one solution of its chart's system.
+    Certified,
+    /// At sigma, not proven empty, no proof of a solution.
+    Solution,
+    /// Left by a limit.
+    Undecided,
+}
+
+/// One box of a singular set, in its chart's variables.
+#[derive(Clone, Debug)]
+pub struct SingularBox {
+    /// The chart (index of the multiplier fixed to 1).
+    pub chart: usize,
+    /// The box.
+    pub b: IntervalBox,
+    /// Its status.
+    pub status: BoxKind,
+}
+
+/// Boxes whose configuration parts touch.
+#[derive(Clone, Debug, Default)]
+pub struct Cluster {
+    /// Indices into `SingularSet::boxes`.
+    pub boxes: Vec<usize>,
+    /// Holds a certified box: at least one singular configuration is proven inside.
+    pub certified: bool,
+    /// Holds an undecided box.
+    pub undecided: bool,
+}
+
+/// Every singular configuration lies in one of `boxes` (when `status` is complete, in a
+/// certified or solution box).
+#[derive(Clone, Debug)]
+pub struct SingularSet {
+    /// Complete, or the last limit met.
+    pub status: Status,
+    /// The boxes of all charts, minus those proven to belong to another chart.
+    pub boxes: Vec<SingularBox>,
+    /// Per box, its cluster.
+    pub labels: Vec<usize>,
+    /// Clusters by configuration part.
+    pub clusters: Vec<Cluster>,
+    /// Per chart, the solver's counters.
+    pub stats: Vec<SolveStats>,
+    /// Boxes dropped as duplicates owned by another chart.
+    pub dropped_other_chart: u64,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+impl SingularSet {
+    /// Clusters with a certified box.
+    pub fn certified_clusters(&self) -> usize {
+        self.clusters.iter().filter(|c| c.certified).count()
+    }
+}

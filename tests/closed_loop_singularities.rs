@@ -1,0 +1,661 @@
+//! Issue 13: singular sets of planar closed-loop linkages (`problems::singular`) against
+//! references of our own that never call the solver: closed forms for four-bars, a sheet-wise
+//! grid plus Newton for the double butterfly's turning points of θ6, a dense actuator grid for
+//! the five-bar's type-II curves.
+
+use super::util::urdf_text;
+use linkspace::model::urdf;
+use linkspace::problems::singular::{BoxKind, Output, SingularKind, SingularProblem, SingularSet};
+use linkspace::search::{SolverSettings, Status};
+use std::f64::consts::PI;
+use std::process::Command;
+use std::sync::atomic::AtomicBool;
+
+/// A four-bar in URDF: ground pivots (0, 0) and (d, 0), crank a, coupler b, rocker c, joints named
+/// as in the bundled `four_bar.urdf`.
+fn four_bar(d: f64, a: f64, b: f64, c: f64) -> String {
+    format!(
+        r#"<?xml version="1.0"?>
+<robot name="four_bar_{d}_{a}_{b}_{c}">
+  <link name="ground"/><link name="crank"/><link name="coupler"/><link name="rocker"/>
+  <joint name="crank_joint" type="continuous"><parent link="ground"/><child link="crank"/>
+    <origin xyz="0 0 0" rpy="0 0 0"/><axis xyz="0 0 1"/></joint>
+  <joint name="coupler_joint" type="continuous"><parent link="crank"/><child link="coupler"/>
+    <origin xyz="{a} 0 0" rpy="0 0 0"/><axis xyz="0 0 1"/></joint>
+  <joint name="rocker_joint" type="continuous"><parent link="ground"/><child link="rocker"/>
+    <origin xyz="{d} 0 0" rpy="0 0 0"/><axis xyz="0 0 1"/></joint>
+  <loop name="loop_coupler_rocker" type="revolute">
+    <predecessor link="coupler"><origin xyz="{b} 0 0" rpy="0 0 0"/></predecessor>
+    <successor link="rocker"><origin xyz="{c} 0 0" rpy="0 0 0"/></successor>
+    <axis xyz="0 0 1"/>
+  </loop>
+</robot>"#
+    )
+}
+
+fn run(xml: &str, kind: SingularKind, actuated: &[&str], output: Option<Output>, sigma: f64) -> (SingularProblem, SingularSet) {
+    let m = urdf::parse(xml).expect("URDF parses");
+    let actuated: Vec<String> = actuated.iter().map(|s| s.to_string()).collect();
+    let p = SingularProblem::new(&m, &[], kind, &actuated, output).expect("builds");
+    let set = p.solve(&SolverSettings { sigma, ..Default::default() }, &AtomicBool::new(false)).expect("valid settings");
+    (p, set)
+}
+
+/// Distance between two angles modulo 2π.
+fn angle_gap(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(2.0 * PI);
+    d.min(2.0 * PI - d)
+}
+
+/// Does the interval [lo, hi] (radians) hold `x` modulo 2π, within `slack`?
+fn holds_angle(iv: (f64, f64), x: f64, slack: f64) -> bool {
+    let k = ((x - iv.0) / (2.0 * PI)).floor();
+    let x0 = x - k * 2.0 * PI; // x0 in [lo, lo + 2π)
+    (x0 <= iv.1 + slack) || (x0 - 2.0 * PI >= iv.0 - slack) || angle_gap(x, iv.0) <= slack || angle_gap(x, iv.1) <= slack
+}
+
+/// One value of `joint` per cluster (its hull over the cluster's boxes), with the certificate.
+fn cluster_values(p: &SingularProblem, set: &SingularSet, joint: &str) -> Vec<((f64, f64), bool)> {
+    set.clusters
+        .iter()
+        .map(|c| {
+            let mut lo = f64::INFINITY;
+            let mut hi = f64::NEG_INFINITY;
+            for &i in &c.boxes {
+                let v = p.joint_values(&set.boxes[i].b)[joint];
+                lo = lo.min(v.0);
+                hi = hi.max(v.1);
+            }
+            ((lo, hi), c.certified)
+        })
+        .collect()
+}
+
+/// Every reference value in exactly one cluster, every cluster holding exactly one reference,
+/// all certified, the run complete: none missed, none extra.
+fn same_points(p: &SingularProblem, set: &SingularSet, joint: &str, reference: &[f64], what: &str) {
+    same_points_with(p, set, joint, reference, what, true, 1e-6)
+}
+
+/// `same_points`, with or without requiring certificates, clusters up to `width` wide.
+fn same_points_with(p: &SingularProblem, set: &SingularSet, joint: &str, reference: &[f64], what: &str, certified_only: bool, width: f64) {
+    assert_eq!(set.status, Status::Complete, "{what}");
+    let got = cluster_values(p, set, joint);
+    assert_eq!(got.len(), reference.len(), "{what}: clusters {got:?} against the closed form {reference:?}");
+    for (iv, certified) in &got {
+        assert!(*certified || !certified_only, "{what}: cluster {iv:?} not certified");
+        assert!(iv.1 - iv.0 < width, "{what}: cluster {iv:?} is not a point");
+        let n = reference.iter().filter(|&&r| holds_angle(*iv, r, 1e-9)).count();
+        assert_eq!(n, 1, "{what}: cluster {iv:?} holds {n} closed-form values of {reference:?}");
+    }
+}
+
+/// `±acos(x)` when |x| < 1.
+fn both_signs(x: f64) -> Vec<f64> {
+    if x.abs() < 1.0 {
+        vec![x.acos(), -x.acos()]
+    } else {
+        Vec::new()
+    }
+}
+
+/// Closed forms. Input (crank driving): coupler and rocker in line, |A − O4| = b + c or |b − c|
+/// with A = a(cos θ2, sin θ2). Output (rocker angle): crank and coupler in line, |B − O2| = a + b
+/// or |a − b| with B = (d, 0) + c(cos θ4, sin θ4). Both by the law of cosines.
+fn four_bar_reference(d: f64, a: f64, b: f64, c: f64) -> (Vec<f64>, Vec<f64>) {
+    let input = [b + c, (b - c).abs()].iter().flat_map(|l| both_signs((a * a + d * d - l * l) / (2.0 * a * d))).collect();
+    let output = [a + b, (a - b).abs()].iter().flat_map(|l| both_signs((l * l - d * d - c * c) / (2.0 * d * c))).collect();
+    (input, output)
+}
+
+fn check_four_bar(xml: &str, (d, a, b, c): (f64, f64, f64, f64), counts: (usize, usize)) {
+    let (input_ref, output_ref) = four_bar_reference(d, a, b, c);
+    assert_eq!((input_ref.len(), output_ref.len()), counts, "the closed form itself");
+    let (p, set) = run(xml, SingularKind::Input, &["crank_joint"], None, 1e-6);
+    same_points(&p, &set, "crank_joint", &input_ref, "input singularities (crank driving)");
+    let (p, set) = run(xml, SingularKind::Output, &["crank_joint"], Some(Output::Joints(vec!["rocker_joint".into()])), 1e-6);
+    same_points(&p, &set, "rocker_joint", &output_ref, "output singularities (rocker angle)");
+    // The same set through the velocity of the rocker's tip: it stands still exactly when the
+    // rocker does. Two velocity rows for one condition (the tip moves on a circle) make the
+    // system overdetermined, so Krawczyk cannot certify: unproven clusters, honestly reported,
+    // at the same places and no others.
+    let tip = Output::Point { link: "rocker".into(), x: c, y: 0.0 };
+    let (p, set) = run(xml, SingularKind::Output, &["crank_joint"], Some(tip), 1e-6);
+    assert_eq!(set.certified_clusters(), 0);
+    same_points_with(&p, &set, "rocker_joint", &output_ref, "output singularities (rocker tip)", false, 1e-4);
+    // A generic four-bar has no bifurcation: proven by an empty, complete run.
+    let (_, set) = run(xml, SingularKind::Cspace, &[], None, 1e-6);
+    assert_eq!((set.status, set.boxes.len()), (Status::Complete, 0), "C-space singularities of a generic four-bar");
+}
+
+#[test]
+fn grashof_four_bar_dead_centres_match_the_closed_form() {
+    // The bundled crank-rocker: the crank turns fully (no input singularity), the rocker has
+    // its two dead centres on each assembly branch (4 in all).
+    check_four_bar(&urdf_text("four_bar.urdf"), (4.0, 1.5, 4.0, 3.5), (0, 4));
+}
+
+#[test]
+fn non_grashof_four_bar_turning_points_match_the_closed_form() {
+    // s + l = 2.5 + 4 > p + q = 3 + 3: a triple rocker; the crank turns back where coupler and
+    // rocker stretch out in line (2 points), the rocker where crank and coupler do (2 points).
+    let (d, a, b, c) = (4.0, 3.0, 2.5, 3.0);
+    check_four_bar(&four_bar(d, a, b, c), (d, a, b, c), (2, 2));
+}
+
+#[test]
+fn a_folding_parallelogram_has_certified_free_bifurcations() {
+    // d = b, a = c: the parallelogram branch crosses the anti-parallelogram branch where all bars
+    // are in line (θ2 = 0 and θ2 = π): the loop rows lose rank there. The C-space system is
+    // overdetermined at those points (no Krawczyk certificate), so they come as unproven boxes
+    // near the two closed-form configurations, and nowhere else.
+    let xml = four_bar(3.0, 1.0, 3.0, 1.0);
+    let (p, set) = run(&xml, SingularKind::Cspace, &[], None, 1e-5);
+    assert_eq!(set.status, Status::Complete);
+    let got = cluster_values(&p, &set, "crank_joint");
+    assert_eq!(got.len(), 2, "{got:?}");
+    for r in [0.0, PI] {
+        assert!(got.iter().any(|(iv, _)| holds_angle(*iv, r, 1e-4)), "bifurcation at crank {r} missing from {got:?}");
+    }
+}
+
+#[test]
+fn bad_actuation_gets_one_clear_line() {
+    let bin = env!("CARGO_BIN_EXE_linkspace");
+    let four = format!("{}/urdf/four_bar.urdf", env!("CARGO_MANIFEST_DIR"));
+    let cases: [(&[&str], &str); 5] = [
+        (&["--kind", "input", "--actuated", "nope"], "'nope' is not a free joint"),
+        (&["--kind", "input", "--actuated", "crank_joint,rocker_joint"], "as many actuated joints as degrees of freedom"),
+        (&["--kind", "input"], "as many actuated joints as degrees of freedom"),
+        (&["--kind", "output", "--output", "rocker@1,x"], "is not a number"),
+        (&["--kind", "input", "--actuated", "crank_joint,crank_joint"], "named twice"),
+    ];
+    for (args, expected) in cases {
+        let out = Command::new(bin).arg("loop-singularities").arg(&four).args(args).output().expect("binary runs");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert_eq!(err.trim().lines().count(), 1, "{args:?}: {err}");
+        assert!(err.contains(expected), "{args:?}: {err}");
+    }
+}
+
+/// The double butterfly of the bundled URDF, from the loop equations in its header comment:
+///   A: l7 u7 + a2 u2 + a1 u1 − l5 u5 + (b0, 0) = 0
+///   B: l7 u7 + a2 u2 + b1 R(γ1) u1 − l3 u3 − c6 R(η6) u6 + a0 (cos γ0, −sin γ0) = 0
+///   C: l7 u7 + b2 R(γ2) u2 − l4 u4 − b6 u6 + a0 (cos γ0, −sin γ0) = 0
+/// Given (θ7, θ6), C leaves |·| = l4 for θ2 (two circle intersections, sheet σ1), then A leaves
+/// |·| = l5 for θ1 (sheet σ2); B becomes one scalar h_σ(θ7, θ6) = |…|² − l3² on each of the 4
+/// sheets. The curve of the mechanism is {h_σ = 0}; θ6 is stationary along it where
+/// ∂h_σ/∂θ7 = 0 (its tangent is then along θ7).
+mod butterfly {
+    const A0: f64 = 7.0;
+    const B0: f64 = 13.0;
+    const A1: f64 = 7.0;
+    const B1: f64 = 6.0;
+    const A2: f64 = 5.0;
+    const B2: f64 = 3.0;
+    const B6: f64 = 3.0;
+    const C6: f64 = 2.0;
+    const L3: f64 = 7.0;
+    const L4: f64 = 9.0;
+    const L5: f64 = 12.0;
+    const L7: f64 = 11.0;
+
+    fn u(t: f64) -> [f64; 2] {
+        [t.cos(), t.sin()]
+    }
+
+    /// h on sheet (s1, s2), or None where the sheet does not exist.
+    pub fn h(t7: f64, t6: f64, s1: f64, s2: f64) -> Option<f64> {
+        sheet(t7, t6, s1, s2).map(|x| x.0)
+    }
+
+    /// (θ2, θ1) of the sheet point.
+    pub fn angles(t7: f64, t6: f64, s1: f64, s2: f64) -> Option<(f64, f64)> {
+        sheet(t7, t6, s1, s2).map(|x| (x.1, x.2))
+    }
+
+    fn sheet(t7: f64, t6: f64, s1: f64, s2: f64) -> Option<(f64, f64, f64)> {
+        let (g0, g1, g2) = (3f64.atan2(4.0), 5f64.atan2(12.0), 4f64.atan2(3.0));
+        let base = [A0 * g0.cos(), -A0 * g0.sin()];
+        let (u7, u6) = (u(t7), u(t6));
+        let p = [L7 * u7[0] - B6 * u6[0] + base[0], L7 * u7[1] - B6 * u6[1] + base[1]];
+        let np = p[0].hypot(p[1]);
+        let r = (L4 * L4 - np * np - B2 * B2) / (2.0 * B2 * np);
+        if !(r.abs() <= 1.0) {
+            return None;
+        }
+        let t2 = p[1].atan2(p[0]) + s1 * r.acos() - g2;
+        let u2 = u(t2);
+        let q = [L7 * u7[0] + A2 * u2[0] + B0, L7 * u7[1] + A2 * u2[1]];
+        let nq = q[0].hypot(q[1]);
+        let r2 = (L5 * L5 - nq * nq - A1 * A1) / (2.0 * A1 * nq);
+        if !(r2.abs() <= 1.0) {
+            return None;
+        }
+        let t1 = q[1].atan2(q[0]) + s2 * r2.acos();
+        let (v1, v6) = (u(t1 + g1), u(t6 + g0));
+        let w = [
+            L7 * u7[0] + A2 * u2[0] + B1 * v1[0] - C6 * v6[0] + base[0],
+            L7 * u7[1] + A2 * u2[1] + B1 * v1[1] - C6 * v6[1] + base[1],
+        ];
+        Some((w[0] * w[0] + w[1] * w[1] - L3 * L3, t2, t1))
+    }
+
+    /// ∂h/∂θ7 by a central difference on the same sheet.
+    pub fn h7(t7: f64, t6: f64, s1: f64, s2: f64) -> Option<f64> {
+        let d = 1e-6;
+        Some((h(t7 + d, t6, s1, s2)? - h(t7 - d, t6, s1, s2)?) / (2.0 * d))
+    }
+
+    /// Newton on (h, ∂h/∂θ7) = 0 from (t7, t6), finite-difference Jacobian; None unless it
+    /// converges within `reach` of the start.
+    pub fn polish(mut t7: f64, mut t6: f64, s1: f64, s2: f64, reach: f64) -> Option<(f64, f64)> {
+        let (t7_0, t6_0) = (t7, t6);
+        let e = 1e-5;
+        for _ in 0..40 {
+            let f = [h(t7, t6, s1, s2)?, h7(t7, t6, s1, s2)?];
+            let j = [
+                [(h(t7 + e, t6, s1, s2)? - h(t7 - e, t6, s1, s2)?) / (2.0 * e), (h(t7, t6 + e, s1, s2)? - h(t7, t6 - e, s1, s2)?) / (2.0 * e)],
+                [(h7(t7 + e, t6, s1, s2)? - h7(t7 - e, t6, s1, s2)?) / (2.0 * e), (h7(t7, t6 + e, s1, s2)? - h7(t7, t6 - e, s1, s2)?) / (2.0 * e)],
+            ];
+            let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+            if det == 0.0 || !det.is_finite() {
+                return None;
+            }
+            let d7 = (f[0] * j[1][1] - f[1] * j[0][1]) / det;
+            let d6 = (j[0][0] * f[1] - j[1][0] * f[0]) / det;
+            t7 -= d7;
+            t6 -= d6;
+            if (t7 - t7_0).abs() > reach || (t6 - t6_0).abs() > reach {
+                return None;
+            }
+            if d7.abs() < 1e-12 && d6.abs() < 1e-12 {
+                break;
+            }
+        }
+        let f = [h(t7, t6, s1, s2)?, h7(t7, t6, s1, s2)?];
+        (f[0].abs() < 1e-8 && f[1].abs() < 1e-5).then_some((t7, t6))
+    }
+
+    /// Every stationary point of θ6 on the curve, as (θ7, θ6): on an n × n grid of each sheet,
+    /// every cell whose corners show sign changes of both h and ∂h/∂θ7 is polished by Newton;
+    /// duplicates (the same point from neighbouring cells) are merged.
+    pub fn turning_points(n: usize) -> Vec<(f64, f64)> {
+        use std::f64::consts::PI;
+        let step = 2.0 * PI / n as f64;
+        let at = |k: usize| -PI + step * (k % n) as f64;
+        let mut found: Vec<(f64, f64)> = Vec::new();
+        for (s1, s2) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+            let grid: Vec<Option<(f64, f64)>> = (0..n * n)
+                .map(|k| {
+                    let (i, j) = (k / n, k % n);
+                    Some((h(at(i), at(j), s1, s2)?, h7(at(i), at(j), s1, s2)?))
+                })
+                .collect();
+            for i in 0..n {
+                for j in 0..n {
+                    let corners = [(i, j), ((i + 1) % n, j), (i, (j + 1) % n), ((i + 1) % n, (j + 1) % n)].map(|(a, b)| grid[a * n + b]);
+                    if corners.iter().any(|c| c.is_none()) {
+                        continue;
+                    }
+                    let c: Vec<(f64, f64)> = corners.iter().flatten().copied().collect();
+                    let changes = |f: &dyn Fn(&(f64, f64)) -> f64| c.iter().any(|x| f(x) <= 0.0) && c.iter().any(|x| f(x) >= 0.0);
+                    if !(changes(&|x| x.0) && changes(&|x| x.1)) {
+                        continue;
+                    }
+                    if let Some((t7, t6)) = polish(at(i) + 0.5 * step, at(j) + 0.5 * step, s1, s2, 3.0 * step) {
+                        let gap = |a: f64, b: f64| super::angle_gap(a, b);
+                        if !found.iter().any(|&(a, b)| gap(a, t7) < 1e-6 && gap(b, t6) < 1e-6) {
+                            found.push((t7, t6));
+                        }
+                    }
+                }
+            }
+        }
+        found
+    }
+}
+
+
+/// Continuation of the double butterfly's curve in all seven link angles, where it has no fold:
+/// pseudo-arclength steps along the tangent (the generalised cross product of the 6 × 7
+/// Jacobian of loops A, B, C), a sign change of the tangent's θ6 component marks a stationary
+/// point of θ6, polished by Newton on the augmented system (loops, det of the passive Jacobian).
+/// Branches are started from points of the sheet grid until every grid point lies on a traced
+/// branch, so no branch the grid touches is missed.
+mod trace {
+    use nalgebra::{DMatrix, DVector};
+    use std::f64::consts::PI;
+
+    /// (coefficient, angle index 0..7 for θ1..θ7, offset): the terms of loops A, B, C.
+    fn loops() -> [(Vec<(f64, usize, f64)>, [f64; 2]); 3] {
+        let (g0, g1, g2) = (3f64.atan2(4.0), 5f64.atan2(12.0), 4f64.atan2(3.0));
+        let base = [7.0 * g0.cos(), -7.0 * g0.sin()];
+        [
+            (vec![(11.0, 6, 0.0), (5.0, 1, 0.0), (7.0, 0, 0.0), (-12.0, 4, 0.0)], [13.0, 0.0]),
+            (vec![(11.0, 6, 0.0), (5.0, 1, 0.0), (6.0, 0, g1), (-7.0, 2, 0.0), (-2.0, 5, g0)], base),
+            (vec![(11.0, 6, 0.0), (3.0, 1, g2), (-9.0, 3, 0.0), (-3.0, 5, 0.0)], base),
+        ]
+    }
+
+    pub fn f(q: &[f64]) -> DVector<f64> {
+        let mut out = DVector::zeros(6);
+        for (k, (terms, c)) in loops().iter().enumerate() {
+            let (mut x, mut y) = (c[0], c[1]);
+            for &(a, i, o) in terms {
+                x += a * (q[i] + o).cos();
+                y += a * (q[i] + o).sin();
+            }
+            out[2 * k] = x;
+            out[2 * k + 1] = y;
+        }
+        out
+    }
+
+    pub fn jac(q: &[f64]) -> DMatrix<f64> {
+        let mut j = DMatrix::zeros(6, 7);
+        for (k, (terms, _)) in loops().iter().enumerate() {
+            for &(a, i, o) in terms {
+                j[(2 * k, i)] -= a * (q[i] + o).sin();
+                j[(2 * k + 1, i)] += a * (q[i] + o).cos();
+            }
+        }
+        j
+    }
+
+    /// Generalised cross product of the rows: the tangent, oriented continuously.
+    pub fn tangent(q: &[f64]) -> DVector<f64> {
+        let j = jac(q);
+        DVector::from_fn(7, |i, _| {
+            let minor = j.clone().remove_column(i);
+            if i % 2 == 0 { minor.determinant() } else { -minor.determinant() }
+        })
+    }
+
+    /// Newton on `F(q) = 0` plus `extra(q) = 0` (7 × 7, finite-difference row for `extra`).
+    fn newton(mut q: Vec<f64>, extra: &dyn Fn(&[f64]) -> f64) -> Option<Vec<f64>> {
+        for _ in 0..30 {
+            let mut m = DMatrix::zeros(7, 7);
+            m.view_mut((0, 0), (6, 7)).copy_from(&jac(&q));
+            let e = extra(&q);
+            for i in 0..7 {
+                let (mut a, mut b) = (q.clone(), q.clone());
+                a[i] += 1e-7;
+                b[i] -= 1e-7;
+                m[(6, i)] = (extra(&a) - extra(&b)) / 2e-7;
+            }
+            let mut r = f(&q).insert_row(6, e);
+            r.neg_mut();
+            let d = m.lu().solve(&r)?;
+            for i in 0..7 {
+                q[i] += d[i];
+            }
+            if d.amax() < 1e-13 {
+                break;
+            }
+        }
+        (f(&q).amax() < 1e-10).then_some(q)
+    }
+
+    /// Full configuration from (θ7, θ6, θ2, θ1) of a sheet point, corrected with θ6 held.
+    pub fn lift(t7: f64, t6: f64, t2: f64, t1: f64) -> Option<Vec<f64>> {
+        let (g0, g1, g2) = (3f64.atan2(4.0), 5f64.atan2(12.0), 4f64.atan2(3.0));
+        let base = [7.0 * g0.cos(), -7.0 * g0.sin()];
+        let ang = |x: f64, y: f64| y.atan2(x);
+        let t4 = ang(11.0 * t7.cos() + 3.0 * (t2 + g2).cos() - 3.0 * t6.cos() + base[0], 11.0 * t7.sin() + 3.0 * (t2 + g2).sin() - 3.0 * t6.sin() + base[1]);
+        let t5 = ang(11.0 * t7.cos() + 5.0 * t2.cos() + 7.0 * t1.cos() + 13.0, 11.0 * t7.sin() + 5.0 * t2.sin() + 7.0 * t1.sin());
+        let t3 = ang(
+            11.0 * t7.cos() + 5.0 * t2.cos() + 6.0 * (t1 + g1).cos() - 2.0 * (t6 + g0).cos() + base[0],
+            11.0 * t7.sin() + 5.0 * t2.sin() + 6.0 * (t1 + g1).sin() - 2.0 * (t6 + g0).sin() + base[1],
+        );
+        let q = vec![t1, t2, t3, t4, t5, t6, t7];
+        newton(q, &|x: &[f64]| x[5] - t6)
+    }
+
+    fn gap(a: &[f64], b: &[f64]) -> f64 {
+        a.iter().zip(b).map(|(x, y)| super::angle_gap(*x, *y)).fold(0.0, f64::max)
+    }
+
+    /// Traces the closed branch through `start`; returns its points and its stationary points
+    /// of θ6.
+    pub fn branch(start: &[f64]) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+        let h = 0.01;
+        let mut q = start.to_vec();
+        let mut t = tangent(&q).normalize();
+        let mut points = vec![q.clone()];
+        let mut stationary: Vec<Vec<f64>> = Vec::new();
+        for step in 0..200_000 {
+            let mut len = h;
+            let next = loop {
+                let pred: Vec<f64> = (0..7).map(|i| q[i] + len * t[i]).collect();
+                let tt = t.clone();
+                let pc = pred.clone();
+                if let Some(n) = newton(pred, &move |x: &[f64]| (0..7).map(|i| tt[i] * (x[i] - pc[i])).sum()) {
+                    if gap(&n, &q) < 2.0 * len {
+                        break n;
+                    }
+                }
+                len *= 0.5;
+                assert!(len > 1e-9, "continuation stalled at {q:?}");
+            };
+            let mut tn = tangent(&next).normalize();
+            if tn.dot(&t) < 0.0 {
+                tn.neg_mut();
+            }
+            if t[5].signum() != tn[5].signum() {
+                // det of the passive Jacobian (θ6's column removed) vanishes in between.
+                let mid: Vec<f64> = (0..7).map(|i| 0.5 * (q[i] + next[i])).collect();
+                let p = newton(mid, &|x: &[f64]| jac(x).remove_column(5).determinant()).expect("stationary point polishes");
+                stationary.push(p);
+            }
+            q = next;
+            t = tn;
+            points.push(q.clone());
+            if step > 10 && gap(&q, start) < 0.5 * h {
+                break;
+            }
+        }
+        (points, stationary)
+    }
+
+    /// Every stationary point of θ6 over every branch that one of `starts` lies on.
+    pub fn all(starts: &[Vec<f64>]) -> (usize, Vec<Vec<f64>>) {
+        let mut covered = vec![false; starts.len()];
+        let mut branches = 0;
+        let mut out: Vec<Vec<f64>> = Vec::new();
+        while let Some(k) = covered.iter().position(|c| !c) {
+            let (points, stationary) = branch(&starts[k]);
+            branches += 1;
+            for (i, s) in starts.iter().enumerate() {
+                covered[i] = covered[i] || points.iter().any(|p| gap(p, s) < 0.02);
+            }
+            assert!(covered[k]);
+            for p in stationary {
+                if !out.iter().any(|o| gap(o, &p) < 1e-7) {
+                    out.push(p);
+                }
+            }
+        }
+        let _ = PI;
+        (branches, out)
+    }
+}
+
+/// Starting points for `trace`: zeros of h along θ7 on rows of θ6, every sheet, lifted.
+fn butterfly_starts() -> Vec<Vec<f64>> {
+    let mut starts = Vec::new();
+    let n = 1000;
+    let step = 2.0 * PI / n as f64;
+    for row in 0..60 {
+        let t6 = -PI + row as f64 * 2.0 * PI / 60.0;
+        for (s1, s2) in [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)] {
+            for i in 0..n {
+                let (a, b) = (-PI + i as f64 * step, -PI + (i + 1) as f64 * step);
+                let (Some(ha), Some(hb)) = (butterfly::h(a, t6, s1, s2), butterfly::h(b, t6, s1, s2)) else { continue };
+                if ha.signum() == hb.signum() {
+                    continue;
+                }
+                let (mut lo, mut hi) = (a, b);
+                for _ in 0..60 {
+                    let m = 0.5 * (lo + hi);
+                    match butterfly::h(m, t6, s1, s2) {
+                        Some(hm) if hm.signum() == ha.signum() => lo = m,
+                        Some(_) => hi = m,
+                        None => break,
+                    }
+                }
+                let t7 = 0.5 * (lo + hi);
+                if let Some((t2, t1)) = butterfly::angles(t7, t6, s1, s2) {
+                    if let Some(q) = trace::lift(t7, t6, t2, t1) {
+                        starts.push(q);
+                    }
+                }
+            }
+        }
+    }
+    starts
+}
+
+#[test]
+fn double_butterfly_turning_points_of_theta6_match_an_independent_grid_and_newton() {
+    let (branches, stationary) = trace::all(&butterfly_starts());
+    assert_eq!(branches, 4, "the butterfly's curve has 4 branches (seed 000)");
+    let reference: Vec<(f64, f64)> = stationary.iter().map(|q| (q[6], q[5])).collect();
+    // The grid-and-Newton reference on the sheets finds a subset (it skips cells at the sheets'
+    // folds): every point it finds is one of the continuation's.
+    for (r7, r6) in butterfly::turning_points(400) {
+        assert!(reference.iter().any(|&(a, b)| angle_gap(a, r7) < 1e-5 && angle_gap(b, r6) < 1e-5), "grid point ({r7}, {r6}) not found by continuation");
+    }
+    let (p, set) = run(&urdf_text("double_butterfly.urdf"), SingularKind::Input, &["joint6"], None, 1e-4);
+    assert_eq!(set.status, Status::Complete);
+    let got: Vec<((f64, f64), (f64, f64), bool)> = cluster_values(&p, &set, "joint7")
+        .into_iter()
+        .zip(cluster_values(&p, &set, "joint6"))
+        .map(|((t7, c), (t6, _))| (t7, t6, c))
+        .collect();
+    assert_eq!(got.len(), reference.len(), "solver {got:?}\nreference {reference:?}");
+    let slack = 1e-5;
+    for (t7, t6, certified) in &got {
+        assert!(certified, "cluster at joint7 {t7:?}, joint6 {t6:?} not certified");
+        let n = reference.iter().filter(|&&(r7, r6)| holds_angle(*t7, r7, slack) && holds_angle(*t6, r6, slack)).count();
+        assert_eq!(n, 1, "cluster at joint7 {t7:?}, joint6 {t6:?} holds {n} reference points");
+    }
+    for &(r7, r6) in &reference {
+        assert!(got.iter().any(|(t7, t6, _)| holds_angle(*t7, r7, slack) && holds_angle(*t6, r6, slack)), "reference turning point ({r7}, {r6}) missed");
+    }
+    // Every box is certified (the ±v symmetry is gone: one chart owns each direction).
+    assert!(set.boxes.iter().all(|b| b.status == BoxKind::Certified));
+}
+
+/// The bundled five-bar: A1 = (0, 0), A2 = (1.5, 0), cranks 2, rods 2.5, both cranks actuated.
+/// Dense-grid reference in actuator space: at each (θ1, θ2) the assembly modes are the two
+/// intersections of the rods' circles about the crank tips B1, B2; the passive Jacobian (rod
+/// angles) is singular where the rods are in line. On the grid, the rods can be in line only
+/// where the modes appear or vanish (the grid edges where their number changes, refined by
+/// bisection on that predicate) or where B1 = B2 (grid cells where |B1 − B2| is small, refined
+/// by Newton on B1 − B2 = 0). The grid also checks that the rods' cross product never changes
+/// sign within a mode between neighbours: no other singular curve exists.
+#[test]
+fn five_bar_type_two_curves_match_a_dense_grid() {
+    let tips = |t1: f64, t2: f64| ([2.0 * t1.cos(), 2.0 * t1.sin()], [1.5 + 2.0 * t2.cos(), 2.0 * t2.sin()]);
+    // The rods' cross product in each mode, or None where the mechanism does not assemble.
+    let modes = |t1: f64, t2: f64| -> Option<[f64; 2]> {
+        let (b1, b2) = tips(t1, t2);
+        let d = [b2[0] - b1[0], b2[1] - b1[1]];
+        let n = d[0].hypot(d[1]);
+        if n > 5.0 || n == 0.0 {
+            return None;
+        }
+        let along = 0.5 * n;
+        let across = (2.5f64 * 2.5 - along * along).max(0.0).sqrt();
+        let e = [d[0] / n, d[1] / n];
+        Some([1.0, -1.0].map(|s| {
+            let p = [b1[0] + along * e[0] - s * across * e[1], b1[1] + along * e[1] + s * across * e[0]];
+            let (r1, r2) = ([p[0] - b1[0], p[1] - b1[1]], [p[0] - b2[0], p[1] - b2[1]]);
+            r1[0] * r2[1] - r1[1] * r2[0]
+        }))
+    };
+    let n = 400;
+    let step = 2.0 * PI / n as f64;
+    let at = |k: usize| -PI + step * k as f64;
+    let mut reference: Vec<(f64, f64)> = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            let here = modes(at(i), at(j));
+            for (di, dj) in [(1, 0), (0, 1)] {
+                let (a, b) = ((at(i), at(j)), (at(i) + di as f64 * step, at(j) + dj as f64 * step));
+                let there = modes(b.0, b.1);
+                match (here, there) {
+                    (Some(x), Some(y)) => {
+                        for m in 0..2 {
+                            assert!(x[m].signum() == y[m].signum() || x[m].abs() < 1e-9 || y[m].abs() < 1e-9, "rods' cross product changes sign inside mode {m} at {a:?}");
+                        }
+                    }
+                    (None, None) => {}
+                    _ => {
+                        let (mut lo, mut hi) = (0.0, 1.0);
+                        for _ in 0..50 {
+                            let m = 0.5 * (lo + hi);
+                            let x = (a.0 + m * (b.0 - a.0), a.1 + m * (b.1 - a.1));
+                            if modes(x.0, x.1).is_some() == here.is_some() {
+                                lo = m;
+                            } else {
+                                hi = m;
+                            }
+                        }
+                        let m = 0.5 * (lo + hi);
+                        reference.push((a.0 + m * (b.0 - a.0), a.1 + m * (b.1 - a.1)));
+                    }
+                }
+            }
+        }
+    }
+    // B1 = B2: Newton from cells where the tips nearly meet.
+    let mut folded: Vec<(f64, f64)> = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            let (b1, b2) = tips(at(i), at(j));
+            if (b1[0] - b2[0]).hypot(b1[1] - b2[1]) > 4.0 * step {
+                continue;
+            }
+            let (mut t1, mut t2) = (at(i), at(j));
+            for _ in 0..30 {
+                let (b1, b2) = tips(t1, t2);
+                let f = [b1[0] - b2[0], b1[1] - b2[1]];
+                let jm = [[-2.0 * t1.sin(), 2.0 * t2.sin()], [2.0 * t1.cos(), -2.0 * t2.cos()]];
+                let det = jm[0][0] * jm[1][1] - jm[0][1] * jm[1][0];
+                t1 -= (f[0] * jm[1][1] - f[1] * jm[0][1]) / det;
+                t2 -= (jm[0][0] * f[1] - jm[1][0] * f[0]) / det;
+            }
+            if !folded.iter().any(|&(a, b)| angle_gap(a, t1) < 1e-6 && angle_gap(b, t2) < 1e-6) {
+                folded.push((t1, t2));
+            }
+        }
+    }
+    assert_eq!(folded.len(), 2, "the tips meet at two actuator points: {folded:?}");
+    assert!(reference.len() > 500);
+
+    let sigma = 1e-2;
+    let (p, set) = run(&urdf_text("five_bar.urdf"), SingularKind::Input, &["crank1_joint", "crank2_joint"], None, sigma);
+    assert_eq!(set.status, Status::Complete);
+    let images: Vec<[(f64, f64); 2]> = set.boxes.iter().map(|b| {
+        let v = p.actuator_values(&b.b);
+        [v[0], v[1]]
+    }).collect();
+    // None missed: every reference point lies in the image of some box (slack: the bisection's
+    // and the read-out's rounding only).
+    for &(r1, r2) in reference.iter().chain(&folded) {
+        assert!(images.iter().any(|im| holds_angle(im[0], r1, 1e-6) && holds_angle(im[1], r2, 1e-6)), "reference point ({r1}, {r2}) not covered");
+    }
+    // None extra: every box lies near a reference point (within its own width plus a grid
+    // step, the reference's spacing along the curve).
+    for im in &images {
+        let c = (0.5 * (im[0].0 + im[0].1), 0.5 * (im[1].0 + im[1].1));
+        let reach = (im[0].1 - im[0].0).max(im[1].1 - im[1].0) + 2.0 * step;
+        assert!(reference.iter().chain(&folded).any(|&(r1, r2)| angle_gap(c.0, r1) <= reach && angle_gap(c.1, r2) <= reach), "box at {im:?} is far from every reference point");
+    }
+    // Three clusters in configuration space: the stretched-rods curve and, over each point
+    // where the tips meet, the circle of overlapping rods.
+    assert_eq!(set.clusters.len(), 3);
+}
