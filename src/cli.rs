@@ -189,6 +189,10 @@ struct SingularitiesArgs {
     /// Turn every length of the URDF into an interval of this half-width (metres).
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     uncertainty: f64,
+    /// Run the interval searches even when the verdict is structural (parallel axes 2 and 3),
+    /// where they cannot complete (crossing branches, curves of nodes); bounded by the limits.
+    #[arg(long)]
+    search_anyway: bool,
     #[command(flatten)]
     limits: LimitArgs,
     /// Write the full report as JSON here.
@@ -496,6 +500,9 @@ fn load_chain(path: &std::path::Path, uncertainty: f64, args: &ChainArgs) -> Res
     Ok((chain, prepared))
 }
 
+/// Default `--max-memory` of `singularities` (bytes of pending cells): 256 MiB.
+const SINGULARITIES_MAX_MEMORY: usize = 256 << 20;
+
 /// `--timeout` as a duration: positive and finite, or absent.
 pub(crate) fn seconds_arg(t: Option<f64>) -> Result<Option<Duration>> {
     match t {
@@ -507,11 +514,21 @@ pub(crate) fn seconds_arg(t: Option<f64>) -> Result<Option<Duration>> {
 
 fn singularities(args: SingularitiesArgs) -> Result<()> {
     manip3r::check_precision(args.precision)?;
-    let limits = args.limits.limits(20_000_000)?;
+    let mut limits = args.limits.limits(20_000_000)?;
+    if args.limits.max_memory.is_none() {
+        // Pending cells of a flooding search (near-degenerate geometry) are bounded well below
+        // the kernel's general default: the run stops on `memory` with its cells listed.
+        limits.max_memory = SINGULARITIES_MAX_MEMORY;
+    }
     let (chain, prepared) = load_chain(&args.urdf, args.uncertainty, &args.chain)?;
     let cancel = AtomicBool::new(false);
     let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };
-    let mut run = manip3r::singularities(&chain, args.precision, args.nodes, &control, &mut |_| {})?;
+    let structural = args.uncertainty == 0.0 && !args.search_anyway && manip3r::verdict::parallel_structure(&prepared.mechanism).is_some();
+    let mut run = if structural {
+        manip3r::structural_singularities(&chain, args.precision)?
+    } else {
+        manip3r::singularities(&chain, args.precision, args.nodes, &control, &mut |_| {})?
+    };
     // The verdict reads the full-torus run; the limits then filter what is listed.
     let verdict = manip3r::verdict::decide(&prepared.mechanism, &chain, &run, &prepared.limits);
     let effect = prepared.limits.apply(&mut run);
@@ -520,6 +537,12 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     report.chain = Some(prepared.choice.clone());
     report.rounding = Some(manip3r::report::Rounding::of(&prepared));
     report.joint_limits = Some(effect.clone());
+    if structural {
+        report.not_searched = Some(format!(
+            "axes 2 and 3 are parallel: no cusp point, by the verdict's proof; {} (--search-anyway runs the interval searches, which cannot complete here)",
+            if args.nodes { "nodes not enumerated: the singular branches cross and map onto shared curves (curves of nodes), which the isolated-node search does not model" } else { "nodes not asked" }
+        ));
+    }
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}", verdict.line()).ok();
     let node_text = report.nodes.as_ref().map_or("nodes not searched".to_string(), |n| format!("{} nodes", n.len()));
@@ -536,6 +559,9 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     .ok();
     let mid = |b: &[f64; 2]| 0.5 * (b[0] + b[1]);
     let fmt = |j: &manip3r::report::Joints| j.iter().map(|(n, b)| format!("{n}={:.6}", mid(b))).collect::<Vec<_>>().join(" ");
+    if let Some(why) = &report.not_searched {
+        writeln!(out, "  not searched: {why}").ok();
+    }
     writeln!(out, "  chain: {}", prepared.choice.reason).ok();
     let snaps = &prepared.snaps;
     if prepared.exact_geometry {

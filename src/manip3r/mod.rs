@@ -172,3 +172,22 @@ pub fn prepare(m: &crate::model::Mechanism, options: &LoadOptions) -> Result<Pre
     let limits = limits::JointLimits::of(&mechanism, &choice.joints, options.ignore_limits);
     Ok(Prepared { mechanism, choice, snaps, exact_geometry: options.exact_geometry, limits })
 }
+
+/// For an arm whose verdict is structural (`verdict::parallel_structure`): the cusp search's
+/// answer without a search, and no node search.
+///
+/// Cusp points are excluded by the proof (f is injective on every aspect, and three solutions
+/// merge at a cusp value, two of them in one aspect), so the cusp list is empty and complete.
+/// The interval search would not say so: where the two singular branches (elbow fold, and the
+/// fold of (ρ, z) where the point crosses the plane of axis 1) cross, ∇det = 0 and every box
+/// there satisfies the seed's system (2) without Krawczyk being able to decide it, and branches
+/// mapped onto one curve (curves of nodes) flood the node search. Internal-motion lines are
+/// still searched (cheap, and they exist when the point can reach axis 2).
+pub fn structural_singularities(chain: &Chain3R, precision: f64) -> Result<Singularities, Manip3rError> {
+    check_precision(precision)?;
+    let start = Instant::now();
+    let bands = motion::bands(chain, precision);
+    let seconds = start.elapsed().as_secs_f64();
+    let cusps = CuspSearch { cusps: Vec::new(), undecided: Vec::new(), bands, status: Status::Complete, stats: Default::default(), contracted: 0, seconds };
+    Ok(Singularities { cusps, nodes: None, status: Status::Complete, seconds })
+}

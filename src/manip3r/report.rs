@@ -234,6 +234,9 @@ pub struct SingularityReport {
     /// Joint limits and what they removed.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub joint_limits: Option<super::limits::LimitEffect>,
+    /// Searches not run, and why (structural arms: the cusp answer comes from the proof).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub not_searched: Option<String>,
 }
 
 /// Undecided boxes listed in a report, at most, per search: the counts are always given, and
@@ -308,6 +311,7 @@ impl SingularityReport {
             chain: None,
             rounding: None,
             joint_limits: None,
+            not_searched: None,
         }
     }
 }
