@@ -83,6 +83,57 @@ impl LimitArgs {
     }
 }
 
+/// How a real arm's file becomes the analysed 3R chain (every 3R command takes these).
+#[derive(clap::Args, Clone, Debug, Default)]
+pub(crate) struct ChainArgs {
+    /// Base link of the chain (KDL/MoveIt convention). Default: the root link.
+    #[arg(long, value_name = "LINK")]
+    base: Option<String>,
+    /// Tip link of the chain. Default: the end link of the longest revolute path (side links
+    /// such as tool0 or flange on fixed joints are not candidates).
+    #[arg(long, value_name = "LINK")]
+    tip: Option<String>,
+    /// Analyse this point (coordinates in LINK's frame) instead of the tip's origin or the
+    /// wrist centre; joints after the third must not move it.
+    #[arg(long, value_name = "LINK@X,Y,Z", allow_hyphen_values = true)]
+    tip_point: Option<String>,
+    /// Hold a revolute joint at a value (radians), e.g. one joint of a 7R arm. Repeatable.
+    #[arg(long, value_name = "JOINT=VALUE", allow_hyphen_values = true)]
+    lock: Vec<String>,
+    /// Take every angle as written: no snapping of near quarter turns (see README).
+    #[arg(long)]
+    exact_geometry: bool,
+    /// Analyse the full torus, ignoring the file's joint limits.
+    #[arg(long)]
+    ignore_limits: bool,
+}
+
+impl ChainArgs {
+    /// The options, with every flag parsed (one clear line on bad input).
+    pub(crate) fn options(&self) -> Result<manip3r::LoadOptions> {
+        let tip_point = match &self.tip_point {
+            None => None,
+            Some(text) => {
+                let (link, xyz) = text.split_once('@').with_context(|| format!("--tip-point '{text}': expected LINK@X,Y,Z"))?;
+                let v: Vec<f64> = xyz.split(',').map(|t| t.trim().parse::<f64>()).collect::<Result<_, _>>().map_err(|_| anyhow::anyhow!("--tip-point '{text}': X,Y,Z must be three numbers"))?;
+                let [x, y, z] = v.as_slice() else { bail!("--tip-point '{text}': X,Y,Z must be three numbers") };
+                Some((link.to_string(), [*x, *y, *z]))
+            }
+        };
+        let locks = self
+            .lock
+            .iter()
+            .map(|text| {
+                let (j, v) = text.split_once('=').with_context(|| format!("--lock '{text}': expected JOINT=VALUE"))?;
+                let v: f64 = v.trim().parse().map_err(|_| anyhow::anyhow!("--lock '{text}': '{v}' is not a number"))?;
+                Ok((j.to_string(), v))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let spec = manip3r::select::ChainSpec { base: self.base.clone(), tip: self.tip.clone(), tip_point, locks, length_tolerance: 0.0 };
+        Ok(manip3r::LoadOptions { spec, exact_geometry: self.exact_geometry, ignore_limits: self.ignore_limits })
+    }
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Enclose every configuration of a planar closed-loop linkage described in URDF.
@@ -116,6 +167,8 @@ enum Command {
 struct CollisionsArgs {
     /// URDF file of a 3R chain with <collision> cylinders, capsules or spheres.
     urdf: PathBuf,
+    #[command(flatten)]
+    chain: ChainArgs,
     /// Largest width (radians) of undecided boxes, in (0, 1).
     #[arg(long, default_value_t = 1e-2, allow_hyphen_values = true)]
     precision: f64,
@@ -128,8 +181,10 @@ struct CollisionsArgs {
 
 #[derive(clap::Args)]
 struct SingularitiesArgs {
-    /// URDF file: a serial chain with three revolute joints; the end point is the last link's origin.
+    /// URDF file of an arm: its 3R positioning structure is analysed (see --base, --tip, --tip-point, --lock).
     urdf: PathBuf,
+    #[command(flatten)]
+    chain: ChainArgs,
     /// Largest width (radians) of reported and undecided boxes, in (0, 1).
     #[arg(long, default_value_t = 1e-4, allow_hyphen_values = true)]
     precision: f64,
@@ -139,6 +194,10 @@ struct SingularitiesArgs {
     /// Turn every length of the URDF into an interval of this half-width (metres).
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     uncertainty: f64,
+    /// Run the interval searches even when the verdict is structural (parallel axes 2 and 3),
+    /// where they cannot complete (crossing branches, curves of nodes); bounded by the limits.
+    #[arg(long)]
+    search_anyway: bool,
     #[command(flatten)]
     limits: LimitArgs,
     /// Write the full report as JSON here.
@@ -148,8 +207,10 @@ struct SingularitiesArgs {
 
 #[derive(clap::Args)]
 struct IkArgs {
-    /// URDF file of a 3R chain.
+    /// URDF file of an arm (its 3R positioning structure, as for singularities).
     urdf: PathBuf,
+    #[command(flatten)]
+    chain: ChainArgs,
     /// Workspace point: distance from the first axis, then height along it.
     #[arg(long, value_name = "R,Z", allow_hyphen_values = true)]
     point: String,
@@ -434,11 +495,22 @@ fn bench(args: BenchArgs) -> Result<()> {
     Ok(())
 }
 
-fn load_chain(path: &std::path::Path, uncertainty: f64) -> Result<Chain3R> {
+/// Reads a file as every 3R command does: rounding policy, chain choice, limits.
+fn load_prepared(path: &std::path::Path, args: &ChainArgs) -> Result<manip3r::Prepared> {
+    let options = args.options()?;
     let xml = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", path.display()))?;
-    Chain3R::from_mechanism(&mechanism, uncertainty).with_context(|| format!("loading {}", path.display()))
+    manip3r::prepare(&mechanism, &options).with_context(|| format!("loading {}", path.display()))
 }
+
+fn load_chain(path: &std::path::Path, uncertainty: f64, args: &ChainArgs) -> Result<(Chain3R, manip3r::Prepared)> {
+    let prepared = load_prepared(path, args)?;
+    let chain = Chain3R::from_mechanism(&prepared.mechanism, uncertainty).with_context(|| format!("loading {}", path.display()))?;
+    Ok((chain, prepared))
+}
+
+/// Default `--max-memory` of `singularities` (bytes of pending cells): 256 MiB.
+const SINGULARITIES_MAX_MEMORY: usize = 256 << 20;
 
 /// `--timeout` as a duration: positive and finite, or absent.
 pub(crate) fn seconds_arg(t: Option<f64>) -> Result<Option<Duration>> {
@@ -451,15 +523,39 @@ pub(crate) fn seconds_arg(t: Option<f64>) -> Result<Option<Duration>> {
 
 fn singularities(args: SingularitiesArgs) -> Result<()> {
     manip3r::check_precision(args.precision)?;
-    let limits = args.limits.limits(20_000_000)?;
-    let chain = load_chain(&args.urdf, args.uncertainty)?;
+    let mut limits = args.limits.limits(20_000_000)?;
+    if args.limits.max_memory.is_none() {
+        // Pending cells of a flooding search (near-degenerate geometry) are bounded well below
+        // the kernel's general default: the run stops on `memory` with its cells listed.
+        limits.max_memory = SINGULARITIES_MAX_MEMORY;
+    }
+    let (chain, prepared) = load_chain(&args.urdf, args.uncertainty, &args.chain)?;
     let cancel = AtomicBool::new(false);
     let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };
-    let run = manip3r::singularities(&chain, args.precision, args.nodes, &control, &mut |_| {})?;
-    let report = SingularityReport::new(&chain, args.precision, &run.cusps, run.nodes.as_ref(), run.seconds);
+    let structural = args.uncertainty == 0.0 && !args.search_anyway && manip3r::verdict::parallel_structure(&prepared.mechanism).is_some();
+    let mut run = if structural {
+        manip3r::structural_singularities(&chain, args.precision)?
+    } else {
+        manip3r::singularities(&chain, args.precision, args.nodes, &control, &mut |_| {})?
+    };
+    // The verdict reads the full-torus run; the limits then filter what is listed.
+    let verdict = manip3r::verdict::decide(&prepared.mechanism, &chain, &run, &prepared.limits);
+    let effect = prepared.limits.apply(&mut run);
+    let mut report = SingularityReport::new(&chain, args.precision, &run.cusps, run.nodes.as_ref(), run.seconds);
+    report.verdict = Some(verdict.clone());
+    report.chain = Some(prepared.choice.clone());
+    report.rounding = Some(manip3r::report::Rounding::of(&prepared));
+    report.joint_limits = Some(effect.clone());
+    if structural {
+        report.not_searched = Some(format!(
+            "axes 2 and 3 are parallel: no cusp point, by the verdict's proof; {} (--search-anyway runs the interval searches, which cannot complete here)",
+            if args.nodes { "nodes not enumerated: the singular branches cross and map onto shared curves (curves of nodes), which the isolated-node search does not model" } else { "nodes not asked" }
+        ));
+    }
     let mut out = std::io::stdout().lock();
+    writeln!(out, "{}", verdict.line()).ok();
     let node_text = report.nodes.as_ref().map_or("nodes not searched".to_string(), |n| format!("{} nodes", n.len()));
-    let undecided = report.undecided.cusps.len() + report.undecided.nodes.len();
+    let undecided = report.undecided_total[0] + report.undecided_total[1];
     writeln!(
         out,
         "{}: {} cusps, {node_text}, {} internal-motion lines, {undecided} undecided, status {}, {:.3} s",
@@ -472,6 +568,20 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     .ok();
     let mid = |b: &[f64; 2]| 0.5 * (b[0] + b[1]);
     let fmt = |j: &manip3r::report::Joints| j.iter().map(|(n, b)| format!("{n}={:.6}", mid(b))).collect::<Vec<_>>().join(" ");
+    if let Some(why) = &report.not_searched {
+        writeln!(out, "  not searched: {why}").ok();
+    }
+    writeln!(out, "  chain: {}", prepared.choice.reason).ok();
+    let snaps = &prepared.snaps;
+    if prepared.exact_geometry {
+        writeln!(out, "  rounding: off (--exact-geometry): angles taken as written").ok();
+    } else {
+        writeln!(out, "  rounding: {} values snapped to quarter turns / coordinate axes (tolerance {:e} rad)", snaps.len(), linkspace::model::rounding::ANGLE_TOLERANCE).ok();
+        for sn in snaps {
+            writeln!(out, "    {} {}: {:?} -> {:?}", sn.joint, sn.what, sn.original, sn.snapped).ok();
+        }
+    }
+    writeln!(out, "  {}", effect.text).ok();
     for c in &report.cusps {
         writeln!(out, "  cusp {} -> radius {:.6} z {:.6}", fmt(&c.joints), mid(&c.workspace.radius), mid(&c.workspace.z)).ok();
     }
@@ -492,9 +602,11 @@ fn collisions(args: CollisionsArgs) -> Result<()> {
     let limits = args.limits.limits(collision::DEFAULT_MAX_BOXES)?;
     let xml = std::fs::read_to_string(&args.urdf).with_context(|| format!("reading {}", args.urdf.display()))?;
     let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", args.urdf.display()))?;
-    let scene = Scene::from_mechanism(&mechanism).with_context(|| format!("loading {}", args.urdf.display()))?;
+    let prepared = manip3r::prepare(&mechanism, &args.chain.options()?).with_context(|| format!("loading {}", args.urdf.display()))?;
+    let scene = Scene::from_mechanism(&prepared.mechanism).with_context(|| format!("loading {}", args.urdf.display()))?;
     let cancel = AtomicBool::new(false);
     let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };
+    eprintln!("chain: {}", prepared.choice.reason);
     let set = collision::classify_with(&scene, &CollisionSettings { precision: args.precision }, &control, &mut |_| {})?;
     let report = CollisionReport::new(&scene, args.precision, &set);
     let s = &report.stats;
@@ -531,13 +643,19 @@ fn ik(args: IkArgs) -> Result<()> {
     let r: f64 = r.trim().parse().with_context(|| format!("--point '{}': '{r}' is not a number", args.point))?;
     let z: f64 = z.trim().parse().with_context(|| format!("--point '{}': '{z}' is not a number", args.point))?;
     manip3r::check_precision(args.precision)?;
-    let chain = load_chain(&args.urdf, args.uncertainty)?;
+    let (chain, prepared) = load_chain(&args.urdf, args.uncertainty, &args.chain)?;
     let cancel = AtomicBool::new(false);
     let control = Control { limits: args.limits.limits(200_000)?, threads: args.limits.threads(), cancel: &cancel };
-    let s = manip3r::ik::solve_with(&chain, r, z, args.precision, &control, &mut |_| {})?;
-    let report = IkReport::new(&chain, [r, z], &s);
+    let mut s = manip3r::ik::solve_with(&chain, r, z, args.precision, &control, &mut |_| {})?;
+    let effect = prepared.limits.apply_ik(&mut s);
+    let mut report = IkReport::new(&chain, [r, z], &s);
+    report.chain = Some(prepared.choice.clone());
+    report.rounding = Some(manip3r::report::Rounding::of(&prepared));
+    report.joint_limits = Some(effect.clone());
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}: {} solutions proven unique, {} clusters undecided, status {}", report.robot, s.unique.len(), s.clusters.len(), report.status).ok();
+    writeln!(out, "  chain: {}", prepared.choice.reason).ok();
+    writeln!(out, "  {}", effect.text).ok();
     for sol in &report.solutions {
         let text: Vec<String> = sol.joints.iter().map(|(n, b)| format!("{n} in [{:.9}, {:.9}]", b[0], b[1])).collect();
         let tag = if sol.unique { "unique".to_string() } else { format!("cluster of {} boxes (one or more solutions)", sol.boxes) };

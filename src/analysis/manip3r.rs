@@ -68,8 +68,8 @@ impl Manip3rAnalysis {
         let mut t: V3 = [point(0.0); 3];
         for j in mechanism.path_to(mechanism.joints[first].child) {
             let iso = &mechanism.joints[j].origin;
-            let m = iso.rotation.to_rotation_matrix();
-            let o: [V3; 3] = [0, 1, 2].map(|i| [0, 1, 2].map(|k| point(m[(i, k)])));
+            let m = mechanism.joints[j].rotation_matrix();
+            let o: [V3; 3] = [0, 1, 2].map(|i| [0, 1, 2].map(|k| point(m[i][k])));
             let v = iso.translation.vector;
             let ov: V3 = [point(v[0]), point(v[1]), point(v[2])];
             // (r, t) ∘ (o, ov) = (r·o, r·ov + t)

@@ -23,7 +23,7 @@
 use super::taylor::Taylor;
 use super::Manip3rError;
 use crate::interval::{interval, point};
-use crate::model::{JointKind, Mechanism};
+use crate::model::{Joint, JointKind, Mechanism};
 use inari::Interval;
 
 pub(super) type V3 = [Interval; 3];
@@ -177,24 +177,19 @@ impl Pose {
         Pose { r, t: [ZERO; 3] }
     }
 
-    pub(super) fn from_origin(iso: &nalgebra::Isometry3<f64>, h: f64) -> Self {
-        let tr = iso.translation.vector;
+    pub(super) fn from_origin(joint: &Joint, h: f64) -> Self {
+        let tr = joint.origin.translation.vector;
         // Lengths given in the file carry the uncertainty; zero offsets are structure, not
         // lengths. v ± h rounded outward, so every length within h of v is inside.
         let t = [0, 1, 2].map(|i| if tr[i] != 0.0 && h > 0.0 { point(tr[i]) + interval(-h, h) } else { point(tr[i]) });
-        Self::with_translation(iso, t)
+        Self::with_translation(joint, t)
     }
 
-    /// The rotation of `iso` with the translation `t`.
-    pub(super) fn with_translation(iso: &nalgebra::Isometry3<f64>, t: V3) -> Self {
-        let m = iso.rotation.to_rotation_matrix();
-        let mut r = [[ZERO; 3]; 3];
-        for (i, row) in r.iter_mut().enumerate() {
-            for (j, v) in row.iter_mut().enumerate() {
-                *v = point(m[(i, j)]);
-            }
-        }
-        Pose { r, t }
+    /// The rotation of `joint`'s origin (exact when the rounding policy made it so) with the
+    /// translation `t`.
+    pub(super) fn with_translation(joint: &Joint, t: V3) -> Self {
+        let m = joint.rotation_matrix();
+        Pose { r: m.map(|row| row.map(point)), t }
     }
 
     /// `self ∘ other`: first `other`, then `self`.
@@ -219,7 +214,7 @@ impl Coefficients {
         let mut seg = 0;
         for &j in path {
             let joint = &m.joints[j];
-            segments[seg] = segments[seg].then(&Pose::with_translation(&joint.origin, translation(j)));
+            segments[seg] = segments[seg].then(&Pose::with_translation(joint, translation(j)));
             if matches!(joint.kind, JointKind::Revolute { .. }) {
                 seg += 1;
             }
@@ -302,7 +297,7 @@ impl Chain3R {
         let h = uncertainty;
         let axis = |k: usize| -> V3 { let a = m.joints[revolute[k]].axis; [point(a[0]), point(a[1]), point(a[2])] };
         let axes = [axis(0), axis(1), axis(2)];
-        let coef = Coefficients::new(m, &path, &axes, &|j| Pose::from_origin(&m.joints[j].origin, h).t);
+        let coef = Coefficients::new(m, &path, &axes, &|j| Pose::from_origin(&m.joints[j], h).t);
         // The uncertain lengths, as (joint, component); the end point is linear in the joint
         // translations (rotations are fixed), so its derivative along one length is the map
         // built with that translation component 1 and every other translation 0.
@@ -316,7 +311,7 @@ impl Chain3R {
                 }
             }
         }
-        let nominal = Coefficients::new(m, &path, &axes, &|j| Pose::from_origin(&m.joints[j].origin, 0.0).t);
+        let nominal = Coefficients::new(m, &path, &axes, &|j| Pose::from_origin(&m.joints[j], 0.0).t);
         let sensitivity = lengths
             .iter()
             .map(|&(jl, il)| Coefficients::new(m, &path, &axes, &|j| [0, 1, 2].map(|i| if (j, i) == (jl, il) { point(1.0) } else { ZERO })))

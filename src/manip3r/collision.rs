@@ -156,7 +156,7 @@ impl Scene {
         let (mut stage, mut acc) = (0, Pose::identity());
         for &j in &path {
             let joint = &m.joints[j];
-            acc = acc.then(&Pose::from_origin(&joint.origin, 0.0));
+            acc = acc.then(&Pose::from_origin(joint, 0.0));
             if matches!(joint.kind, JointKind::Revolute { .. }) {
                 segments[stage] = acc;
                 axes[stage] = [0, 1, 2].map(|i| point(joint.axis[i]));

@@ -22,10 +22,13 @@ pub mod cusps;
 pub mod drive;
 pub mod ik;
 pub(crate) mod krawczyk;
+pub mod limits;
 pub mod motion;
 pub mod nodes;
 pub mod report;
+pub mod select;
 pub(crate) mod taylor;
+pub mod verdict;
 /// Sound interval sine and cosine, now `crate::interval::trig` (the path kept for callers).
 pub(crate) use crate::interval::trig;
 
@@ -45,6 +48,9 @@ pub enum Manip3rError {
     /// The mechanism is not a serial chain.
     #[error("not a serial chain: {0}")]
     NotSerial(String),
+    /// `--base`, `--tip`, `--tip-point` or `--lock` cannot be honoured.
+    #[error("cannot choose the chain: {0}")]
+    Selection(String),
     /// The chain does not have exactly three revolute joints (or has a prismatic one).
     #[error("not a 3R chain: {0}")]
     NotThreeR(String),
@@ -129,4 +135,61 @@ pub fn singularities(chain: &Chain3R, precision: f64, with_nodes: bool, control:
     };
     let status = node_search.as_ref().map_or(found.status, |n| found.status.and(n.status));
     Ok(Singularities { cusps: found, nodes: node_search, status, seconds: start.elapsed().as_secs_f64() })
+}
+
+/// How a mechanism is turned into the analysed 3R chain: the rounding policy, the chain
+/// choice and the joint limits (CLI flags `--exact-geometry`, `--base`, `--tip`, `--tip-point`,
+/// `--lock`, `--ignore-limits`).
+#[derive(Clone, Debug, Default)]
+pub struct LoadOptions {
+    /// Which chain and point.
+    pub spec: select::ChainSpec,
+    /// Skip the rounding policy (`crate::model::rounding`).
+    pub exact_geometry: bool,
+    /// Analyse the full torus whatever the files' limits say.
+    pub ignore_limits: bool,
+}
+
+/// A real arm made ready for the 3R analyses.
+#[derive(Clone, Debug)]
+pub struct Prepared {
+    /// The reduced serial mechanism (base to the analysed point), rounded unless exact geometry.
+    pub mechanism: crate::model::Mechanism,
+    /// What was chosen and why.
+    pub choice: select::Choice,
+    /// What the rounding policy changed (empty with exact geometry).
+    pub snaps: Vec<crate::model::rounding::Snap>,
+    /// Whether the rounding policy was skipped.
+    pub exact_geometry: bool,
+    /// Limits of the three joints, `None` where absent or ignored.
+    pub limits: limits::JointLimits,
+}
+
+/// Rounding, then chain choice: the one way every 3R command reads a file.
+pub fn prepare(m: &crate::model::Mechanism, options: &LoadOptions) -> Result<Prepared, Manip3rError> {
+    let (rounded, snaps) = if options.exact_geometry { (m.clone(), Vec::new()) } else { crate::model::rounding::snap(m) };
+    let (mechanism, choice) = select::positioning(&rounded, &options.spec)?;
+    // Snaps of joints outside the chosen chain are irrelevant to the analysis; keep them listed
+    // anyway: the report says what was read differently from the file.
+    let limits = limits::JointLimits::of(&mechanism, &choice.joints, options.ignore_limits);
+    Ok(Prepared { mechanism, choice, snaps, exact_geometry: options.exact_geometry, limits })
+}
+
+/// For an arm whose verdict is structural (`verdict::parallel_structure`): the cusp search's
+/// answer without a search, and no node search.
+///
+/// Cusp points are excluded by the proof (f is injective on every aspect, and three solutions
+/// merge at a cusp value, two of them in one aspect), so the cusp list is empty and complete.
+/// The interval search would not say so: where the two singular branches (elbow fold, and the
+/// fold of (ρ, z) where the point crosses the plane of axis 1) cross, ∇det = 0 and every box
+/// there satisfies the seed's system (2) without Krawczyk being able to decide it, and branches
+/// mapped onto one curve (curves of nodes) flood the node search. Internal-motion lines are
+/// still searched (cheap, and they exist when the point can reach axis 2).
+pub fn structural_singularities(chain: &Chain3R, precision: f64) -> Result<Singularities, Manip3rError> {
+    check_precision(precision)?;
+    let start = Instant::now();
+    let bands = motion::bands(chain, precision);
+    let seconds = start.elapsed().as_secs_f64();
+    let cusps = CuspSearch { cusps: Vec::new(), undecided: Vec::new(), bands, status: Status::Complete, stats: Default::default(), contracted: 0, seconds };
+    Ok(Singularities { cusps, nodes: None, status: Status::Complete, seconds })
 }

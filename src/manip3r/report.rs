@@ -217,10 +217,49 @@ pub struct SingularityReport {
     pub nodes: Option<Vec<NodeRecord>>,
     /// Internal-motion lines.
     pub internal_motions: Vec<MotionRecord>,
-    /// Undecided boxes.
+    /// Undecided boxes (at most `MAX_LISTED` of each search; `undecided_total` counts all).
     pub undecided: Undecided,
+    /// Undecided boxes (cusp search) and pairs (node search), all of them.
+    pub undecided_total: [usize; 2],
     /// Counters.
     pub stats: Stats,
+    /// The first answer: cuspidal or not, aspects, IK solutions, and the argument.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub verdict: Option<super::verdict::Verdict>,
+    /// Which chain and point of the file were analysed, and why.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub chain: Option<super::select::Choice>,
+    /// The rounding policy's changes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rounding: Option<Rounding>,
+    /// Joint limits and what they removed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub joint_limits: Option<super::limits::LimitEffect>,
+    /// Searches not run, and why (structural arms: the cusp answer comes from the proof).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub not_searched: Option<String>,
+}
+
+/// Undecided boxes listed in a report, at most, per search: the counts are always given, and
+/// a flooded run must not write gigabytes of JSON.
+pub const MAX_LISTED: usize = 10_000;
+
+/// The rounding policy as applied.
+#[derive(Clone, Debug, Serialize)]
+pub struct Rounding {
+    /// `false` with `--exact-geometry`.
+    pub snapping: bool,
+    /// Angle tolerance (radians).
+    pub tolerance: f64,
+    /// Every value changed.
+    pub snaps: Vec<crate::model::rounding::Snap>,
+}
+
+impl Rounding {
+    /// From a prepared arm.
+    pub fn of(p: &super::Prepared) -> Self {
+        Rounding { snapping: !p.exact_geometry, tolerance: crate::model::rounding::ANGLE_TOLERANCE, snaps: p.snaps.clone() }
+    }
 }
 
 fn joints(chain: &Chain3R, theta: &[Interval; 2]) -> Joints {
@@ -267,10 +306,16 @@ impl SingularityReport {
             }),
             internal_motions,
             undecided: Undecided {
-                cusps: cusps.undecided.iter().map(|u| UndecidedCusp { joints: joints(chain, &u.theta), reason: u.reason }).collect(),
-                nodes: nodes.map_or(Vec::new(), |n| n.undecided.iter().map(|p| UndecidedNode { points: [joints(chain, &p[0]), joints(chain, &p[1])] }).collect()),
+                cusps: cusps.undecided.iter().take(MAX_LISTED).map(|u| UndecidedCusp { joints: joints(chain, &u.theta), reason: u.reason }).collect(),
+                nodes: nodes.map_or(Vec::new(), |n| n.undecided.iter().take(MAX_LISTED).map(|p| UndecidedNode { points: [joints(chain, &p[0]), joints(chain, &p[1])] }).collect()),
             },
+            undecided_total: [cusps.undecided.len(), nodes.map_or(0, |n| n.undecided.len())],
             stats: Stats { cusps: CuspStats::from(cusps), nodes: nodes.map(NodeStats::from), seconds },
+            verdict: None,
+            chain: None,
+            rounding: None,
+            joint_limits: None,
+            not_searched: None,
         }
     }
 }
@@ -303,6 +348,15 @@ pub struct IkReport {
     pub solutions: Vec<IkRecord>,
     /// Boxes processed.
     pub processed: u64,
+    /// Which chain and point of the file were analysed, and why.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub chain: Option<super::select::Choice>,
+    /// The rounding policy's changes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rounding: Option<Rounding>,
+    /// Joint limits and what they removed.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub joint_limits: Option<super::limits::LimitEffect>,
 }
 
 impl IkReport {
@@ -310,7 +364,7 @@ impl IkReport {
     pub fn new(chain: &Chain3R, point: [f64; 2], s: &IkSolutions) -> Self {
         let mut solutions: Vec<IkRecord> = s.unique.iter().map(|b| IkRecord { joints: joints(chain, b), unique: true, boxes: 0 }).collect();
         solutions.extend(s.clusters.iter().map(|c| IkRecord { joints: joints(chain, &c.hull), unique: false, boxes: c.boxes }));
-        IkReport { robot: chain.name.clone(), point, status: if s.status.is_complete() { "complete" } else { "incomplete" }, limit: limit_of(s.status), solutions, processed: s.stats.processed }
+        IkReport { robot: chain.name.clone(), point, status: if s.status.is_complete() { "complete" } else { "incomplete" }, limit: limit_of(s.status), solutions, processed: s.stats.processed, chain: None, rounding: None, joint_limits: None }
     }
 }
 

@@ -4,6 +4,7 @@
 //! when built: one root (the ground), every other link with exactly one parent joint, loop
 //! closures between known links, finite numbers.
 
+pub mod rounding;
 pub mod urdf;
 
 use nalgebra::{Isometry3, Vector3};
@@ -51,6 +52,21 @@ pub struct Joint {
     pub axis: Vector3<f64>,
     /// The joint this one follows through `<mimic>`, if any.
     pub mimic: Option<Mimic>,
+    /// The origin's rotation as an exact matrix, set by the rounding policy (`rounding`) when
+    /// `rpy` are exact quarter turns: the quaternion in `origin` cannot hold cos(π/2) = 0
+    /// exactly, and an entry of 1e-17 is a different (near-degenerate) robot.
+    pub exact_rotation: Option<[[f64; 3]; 3]>,
+}
+
+impl Joint {
+    /// The origin's rotation matrix: exact when the rounding policy set it, else from `origin`.
+    pub fn rotation_matrix(&self) -> [[f64; 3]; 3] {
+        if let Some(r) = self.exact_rotation {
+            return r;
+        }
+        let m = self.origin.rotation.to_rotation_matrix();
+        [0, 1, 2].map(|i| [0, 1, 2].map(|j| m[(i, j)]))
+    }
 }
 
 /// A URDF `<mimic>`: this joint's value is `multiplier · value(joint) + offset`.

@@ -93,7 +93,7 @@ pub fn parse(xml: &str) -> Result<Mechanism, ModelError> {
             return Err(ModelError::NotATree(format!("link '{}' is the child of two joints", links[child].name)));
         }
         links[child].parent_joint = Some(joints.len());
-        joints.push(Joint { name: j.name.clone(), kind, parent, child, origin, rpy: j.origin.rpy.0, axis, mimic });
+        joints.push(Joint { name: j.name.clone(), kind, parent, child, origin, rpy: j.origin.rpy.0, axis, mimic, exact_rotation: None });
     }
 
     let roots: Vec<usize> = (0..links.len()).filter(|&i| links[i].parent_joint.is_none()).collect();

@@ -1,0 +1,232 @@
+//! The verdict a designer asks for first: is the arm cuspidal, how many aspects, how many
+//! inverse-kinematics solutions at most.
+//!
+//! Arguments, in the order tried:
+//!
+//! 1. **Parallel axes 2 and 3** (PUMA, KUKA KR, ABB IRB, UR positioning structures), proven on the
+//!    exact (rounded) geometry. Then f = g∘h with h the planar 2R map of joints 2, 3 into the
+//!    plane ⟂ a₂ (lengths l₂ = dist(axis 2, axis 3) > 0, l₃ = dist(point, axis 3) > 0) and
+//!    g(w) = (ρ, z) of the in-plane point w. With a₁ ∦ a₂, z is affine on the plane with
+//!    parallel level lines, and along each ρ is a strictly convex parabola (leading coefficient
+//!    1), whose minima form the line L = {w : (o₂ + w)·ê = 0}, ê ∝ a₁ × a₂. So
+//!    det Df = det Dg(h)·det Dh, g is injective on each open side of L and h on each side of
+//!    its fold (sin of the elbow angle ≠ 0). On an aspect both signs are constant, so f is
+//!    injective there: **non-cuspidal** (at most one solution per aspect), on the full torus and
+//!    on any sub-domain (an aspect of a sub-domain lies in one aspect of the torus). h maps each
+//!    side of its fold onto the open annulus |l₂ − l₃| < |w| < l₂ + l₃, which L (at distance
+//!    d = |o₂·ê| from the centre) cuts in two iff d < l₂ + l₃: then **4 aspects** and, a point
+//!    of L inside the annulus having mirror images on both sides, **4 solutions** at most;
+//!    otherwise 2 and 2. Every comparison is made in interval arithmetic; one that is not
+//!    decided leaves the count `null`.
+//! 2. **A certified cusp** (a regular zero of the seed's system (2), unique in its box) makes
+//!    any 3R cuspidal: near a cusp value three solutions merge, two of them in one aspect.
+//!    With joint limits, only a cusp strictly inside them counts (the argument is local).
+//! 3. **No cusp**, the cusp search complete with nothing undecided on the full torus, and the
+//!    singular set det Df = 0 proven a smooth curve (∇det ≠ 0 wherever det may vanish, on a
+//!    bounded quadtree): by Salunkhe, Spartalis, Capco, Chablat, Wenger (2022), a generic 3R
+//!    is cuspidal iff it has a cusp, so **non-cuspidal**. We take a smooth singular set as the
+//!    genericity this needs; where smoothness is not proven (crossing branches, a box budget
+//!    spent) the verdict is `null`.
+//!
+//! Aspects and solution counts are only given under argument 1; elsewhere `null`.
+
+use super::chain::{cross, dot, sub, Pose, V3};
+use super::cusps::evaluate_without_tangency;
+use super::limits::JointLimits;
+use super::{Chain3R, Singularities};
+use crate::interval::point;
+use crate::model::{JointKind, Mechanism};
+use inari::Interval;
+use serde::Serialize;
+
+/// `"verdict"` in the JSON.
+#[derive(Clone, Debug, Serialize, PartialEq)]
+pub struct Verdict {
+    /// true, false, or null (undecided).
+    pub cuspidal: Option<bool>,
+    /// Number of aspects on the full torus, when proven.
+    pub aspects: Option<u32>,
+    /// Largest number of inverse-kinematics solutions (of joints 1–3) of one point, when proven.
+    pub max_ik_solutions: Option<u32>,
+    /// True when `cuspidal` rests on a proof.
+    pub certified: bool,
+    /// The argument used, or why there is none.
+    pub reason: String,
+}
+
+impl Verdict {
+    /// One line for the CLI.
+    pub fn line(&self) -> String {
+        let c = match self.cuspidal {
+            Some(true) => "CUSPIDAL",
+            Some(false) => "NON-CUSPIDAL",
+            None => "cuspidality UNDECIDED",
+        };
+        let n = |x: Option<u32>| x.map_or("?".into(), |v| v.to_string());
+        format!("verdict: {c} ({}), aspects {}, at most {} IK solutions: {}", if self.certified { "certified" } else { "not certified" }, n(self.aspects), n(self.max_ik_solutions), self.reason)
+    }
+}
+
+/// Argument 1 on the reduced mechanism (`select::positioning`'s), or `None` when axes 2 and 3
+/// are not proven parallel (or a₁ not proven apart from a₂, or a length not proven positive).
+pub fn parallel_structure(m: &Mechanism) -> Option<Verdict> {
+    let tip = (0..m.links.len()).find(|&l| m.joints.iter().all(|j| j.parent != l))?;
+    let path = m.path_to(tip);
+    let rev: Vec<usize> = path.iter().copied().filter(|&j| matches!(m.joints[j].kind, JointKind::Revolute { .. })).collect();
+    if rev.len() != 3 {
+        return None;
+    }
+    let axis = |j: usize| -> V3 { let a = m.joints[j].axis; [point(a[0]), point(a[1]), point(a[2])] };
+    let a1 = axis(rev[0]);
+    let start = path.iter().position(|&j| j == rev[0])? + 1;
+    let mut acc = Pose::identity();
+    let (mut o2, mut d2, mut o3, mut d3) = ([point(0.0); 3], [point(0.0); 3], [point(0.0); 3], [point(0.0); 3]);
+    for &j in &path[start..] {
+        acc = acc.then(&Pose::from_origin(&m.joints[j], 0.0));
+        if j == rev[1] {
+            (o2, d2) = (acc.t, super::chain::apply(&acc.r, &axis(j)));
+        }
+        if j == rev[2] {
+            (o3, d3) = (acc.t, super::chain::apply(&acc.r, &axis(j)));
+        }
+    }
+    let p = acc.t;
+    let zero = |v: &V3| v.iter().all(|x| x.inf() == 0.0 && x.sup() == 0.0);
+    let nonzero = |v: &V3| v.iter().any(|x| x.inf() > 0.0 || x.sup() < 0.0);
+    if !zero(&cross(&d2, &d3)) {
+        return None;
+    }
+    let n12 = cross(&a1, &d2);
+    if !nonzero(&n12) {
+        return None;
+    }
+    // Distance of q from the line through o along d: |(q − o) × d| / |d|.
+    let dist = |q: &V3, o: &V3, d: &V3| {
+        let c = cross(&sub(q, o), d);
+        (dot(&c, &c) / dot(d, d)).sqrt()
+    };
+    let (l2, l3) = (dist(&o3, &o2, &d2), dist(&p, &o3, &d3));
+    if !(l2.inf() > 0.0 && l3.inf() > 0.0) {
+        return None;
+    }
+    let d: Interval = (dot(&o2, &n12) / dot(&n12, &n12).sqrt()).abs();
+    let reach = l2 + l3;
+    let (aspects, k) = if d.sup() < reach.inf() {
+        (Some(4), Some(4))
+    } else if d.inf() > reach.sup() {
+        (Some(2), Some(2))
+    } else {
+        (None, None)
+    };
+    Some(Verdict {
+        cuspidal: Some(false),
+        aspects,
+        max_ik_solutions: k,
+        certified: true,
+        reason: format!(
+            "axes 2 and 3 are exactly parallel and axis 1 is not: f factors through the planar 2R map of joints 2-3 (l2 = {:.6}, l3 = {:.6}), injective on each aspect (see manip3r::verdict); the fold line of (rho, z) lies {:.6} from axis 2 against a reach of {:.6}",
+            l2.mid(), l3.mid(), d.mid(), reach.mid()
+        ),
+    })
+}
+
+/// Outcome of the smoothness proof of det Df = 0.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Smooth {
+    /// ∇det ≠ 0 wherever det may vanish.
+    Proven,
+    /// Boxes left where det and ∇det may both vanish.
+    Undecided(u64),
+}
+
+/// Proves det Df = 0 a smooth curve over the torus: every box has det ≠ 0 or a component of
+/// ∇det ≠ 0, or is bisected, down to `min_width`, with at most `max_boxes` boxes processed.
+/// A plain stack: a few thousand boxes on the robots seen, and the budget bounds it.
+pub fn smooth_singular_set(chain: &Chain3R, min_width: f64, max_boxes: u64) -> Smooth {
+    let full = super::motion::full_range();
+    let mut stack = vec![[full, full]];
+    let (mut processed, mut undecided) = (0u64, 0u64);
+    while let Some(b) = stack.pop() {
+        processed += 1;
+        if processed > max_boxes {
+            return Smooth::Undecided(undecided + 1 + stack.len() as u64);
+        }
+        let e = evaluate_without_tangency(chain, b);
+        let excludes = |x: Interval| x.inf() > 0.0 || x.sup() < 0.0;
+        if excludes(e.det) || excludes(e.grad_det[0]) || excludes(e.grad_det[1]) {
+            continue;
+        }
+        if b[0].wid().max(b[1].wid()) < min_width {
+            undecided += 1;
+            continue;
+        }
+        let (lo, hi) = super::cusps::bisect(b, false);
+        stack.push(lo);
+        stack.push(hi);
+    }
+    if undecided == 0 {
+        Smooth::Proven
+    } else {
+        Smooth::Undecided(undecided)
+    }
+}
+
+/// The verdict for a prepared arm from its (unfiltered, full-torus) singularity run.
+pub fn decide(mechanism: &Mechanism, chain: &Chain3R, run: &Singularities, limits: &JointLimits) -> Verdict {
+    if let Some(v) = parallel_structure(mechanism) {
+        return v;
+    }
+    if chain.uncertainty > 0.0 {
+        return Verdict { cuspidal: None, aspects: None, max_ik_solutions: None, certified: false, reason: "uncertain lengths: the arguments used here speak of one geometry".into() };
+    }
+    let certified: Vec<_> = run.cusps.cusps.iter().filter(|c| c.unique).collect();
+    if let Some(c) = certified.iter().find(|c| limits.holds(&c.theta)) {
+        return Verdict {
+            cuspidal: Some(true),
+            aspects: None,
+            max_ik_solutions: None,
+            certified: true,
+            reason: format!(
+                "{} certified cusps; one at ({}, {}) = ({:.6}, {:.6}){}: three solutions merge there, two in one aspect",
+                certified.len(),
+                chain.joints[1],
+                chain.joints[2],
+                c.theta[0].mid(),
+                c.theta[1].mid(),
+                if limits.restrict() { ", strictly inside the joint limits" } else { "" }
+            ),
+        };
+    }
+    if !certified.is_empty() {
+        return Verdict { cuspidal: None, aspects: None, max_ik_solutions: None, certified: false, reason: format!("{} certified cusps, none strictly inside the joint limits (the full torus is cuspidal; --ignore-limits)", certified.len()) };
+    }
+    let undecided = run.cusps.undecided.len();
+    if !run.cusps.status.is_complete() || undecided > 0 || run.cusps.cusps.iter().any(|c| !c.unique) {
+        return Verdict {
+            cuspidal: None,
+            aspects: None,
+            max_ik_solutions: None,
+            certified: false,
+            reason: format!("no certified cusp, but the cusp search left {undecided} boxes undecided (status {})", if run.cusps.status.is_complete() { "complete" } else { "incomplete" }),
+        };
+    }
+    match smooth_singular_set(chain, 1e-6, 2_000_000) {
+        Smooth::Proven => Verdict {
+            cuspidal: Some(false),
+            aspects: None,
+            max_ik_solutions: None,
+            certified: true,
+            reason: format!(
+                "no cusp on the whole torus (search complete) and det Df = 0 proven a smooth curve: a generic 3R without cusp is non-cuspidal (Salunkhe, Spartalis, Capco, Chablat, Wenger 2022){}",
+                if run.cusps.bands.is_empty() { String::new() } else { format!("; {} internal-motion lines (each mapped to one point) were set aside by the cusp search and are not cusps", run.cusps.bands.len()) }
+            ),
+        },
+        Smooth::Undecided(n) => Verdict {
+            cuspidal: None,
+            aspects: None,
+            max_ik_solutions: None,
+            certified: false,
+            reason: format!("no cusp on the whole torus, but the singular set is not proven smooth ({n} boxes where det and its gradient may both vanish: crossing branches?), so the generic theorem does not apply"),
+        },
+    }
+}

@@ -1,0 +1,163 @@
+//! The one rounding policy: orientations written with a truncated π/2 are snapped to exact.
+//!
+//! Vendor URDFs write quarter turns as `1.5707963267948966`, `1.570796`, `1.5708` or
+//! `3.14159`. Taken literally these are tiny twists (up to 3.7e-6 rad) that turn a robot with
+//! parallel or orthogonal axes into a near-degenerate one: internal-motion lines become thin
+//! tubes no finite search can decide, and real nodes split. The designer meant the quarter turn.
+//!
+//! Policy (applied once to a `Mechanism`, before any analysis):
+//! - every roll, pitch or yaw within [`ANGLE_TOLERANCE`] of a multiple of π/2 becomes that
+//!   multiple; when all three of a joint's angles are quarter turns, the joint gets its exact
+//!   rotation matrix (entries −1, 0, 1; `Joint::exact_rotation`), since the quaternion of a
+//!   quarter turn cannot be stored exactly;
+//! - every revolute or prismatic axis within [`ANGLE_TOLERANCE`] (as an angle) of a coordinate
+//!   axis of its joint frame becomes that coordinate axis. With exact quarter-turn frames this
+//!   makes axes that were within the tolerance of parallel or orthogonal exactly so.
+//!
+//! Every change is listed as a [`Snap`] (joint, what, original, snapped); a value that is
+//! already exact is not listed. Loop closures (`<loop>`) are left as written: the planar
+//! builders enclose the stated decimals themselves. `--exact-geometry` skips this module.
+
+use super::{JointKind, Mechanism};
+use nalgebra::{UnitQuaternion, Vector3};
+use serde::Serialize;
+use std::f64::consts::FRAC_PI_2;
+
+/// Angles (radians) within this of a quarter-turn multiple are snapped. 1e-5 covers every
+/// common truncation (`1.5708` is 3.7e-6 off, `3.14159` 2.7e-6) and is far below any twist a
+/// designer means (the smallest machined offsets are degrees).
+pub const ANGLE_TOLERANCE: f64 = 1e-5;
+
+/// One value the policy changed.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Snap {
+    /// The joint's name.
+    pub joint: String,
+    /// `"rpy"` or `"axis"`.
+    pub what: String,
+    /// As written in the file.
+    pub original: [f64; 3],
+    /// As analysed.
+    pub snapped: [f64; 3],
+}
+
+/// The nearest multiple of π/2 when within the tolerance: `(k mod 4, k·π/2)`.
+fn quarter(x: f64) -> Option<(i64, f64)> {
+    let k = (x / FRAC_PI_2).round();
+    // k·FRAC_PI_2 is the f64 nearest to k·π/2 for |k| ≤ 4 (checked in a test), and the
+    // matrix built from k mod 4 is exact whatever the f64 says.
+    ((x - k * FRAC_PI_2).abs() <= ANGLE_TOLERANCE).then(|| ((k as i64).rem_euclid(4), k * FRAC_PI_2))
+}
+
+/// cos and sin of k quarter turns, exactly.
+fn cs(k: i64) -> (f64, f64) {
+    match k {
+        0 => (1.0, 0.0),
+        1 => (0.0, 1.0),
+        2 => (-1.0, 0.0),
+        _ => (0.0, -1.0),
+    }
+}
+
+fn mul(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    // Entries are −1, 0, 1 with one non-zero per row: every sum is exact.
+    [0, 1, 2].map(|i| [0, 1, 2].map(|j| a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j]))
+}
+
+/// URDF's fixed-axis roll–pitch–yaw, `Rz(yaw)·Ry(pitch)·Rx(roll)`, for quarter turns.
+fn exact_rpy(k: [i64; 3]) -> [[f64; 3]; 3] {
+    let (cr, sr) = cs(k[0]);
+    let (cp, sp) = cs(k[1]);
+    let (cy, sy) = cs(k[2]);
+    let rx = [[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]];
+    let ry = [[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]];
+    let rz = [[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]];
+    mul(&rz, &mul(&ry, &rx))
+}
+
+/// The mechanism with the policy applied, and the list of what changed.
+pub fn snap(m: &Mechanism) -> (Mechanism, Vec<Snap>) {
+    let mut out = m.clone();
+    let mut snaps = Vec::new();
+    for j in &mut out.joints {
+        let q = j.rpy.map(quarter);
+        let snapped = [0, 1, 2].map(|i| q[i].map_or(j.rpy[i], |(_, v)| v));
+        if snapped != j.rpy {
+            snaps.push(Snap { joint: j.name.clone(), what: "rpy".into(), original: j.rpy, snapped });
+            j.rpy = snapped;
+            j.origin.rotation = UnitQuaternion::from_euler_angles(snapped[0], snapped[1], snapped[2]);
+        }
+        if let [Some((a, _)), Some((b, _)), Some((c, _))] = q {
+            j.exact_rotation = Some(exact_rpy([a, b, c]));
+        }
+        if matches!(j.kind, JointKind::Revolute { .. } | JointKind::Prismatic { .. }) {
+            let a = j.axis;
+            // The coordinate axis nearest in angle; sin of the angle = |component across it|.
+            let i = (0..3).max_by(|&x, &y| a[x].abs().total_cmp(&a[y].abs())).expect("three components");
+            let across = (a.norm_squared() - a[i] * a[i]).max(0.0).sqrt();
+            if across <= ANGLE_TOLERANCE && across > 0.0 {
+                let mut e = Vector3::zeros();
+                e[i] = a[i].signum();
+                snaps.push(Snap { joint: j.name.clone(), what: "axis".into(), original: [a[0], a[1], a[2]], snapped: [e[0], e[1], e[2]] });
+                j.axis = e;
+            }
+        }
+    }
+    (out, snaps)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quarter_turn_multiples_are_the_nearest_f64() {
+        // The f64 stored for k·π/2 is what `1.5707963267948966` etc. parse to.
+        for k in -4..=4 {
+            let v = k as f64 * FRAC_PI_2;
+            assert_eq!(quarter(v).map(|x| x.1), Some(v));
+        }
+        assert_eq!("1.5707963267948966".parse::<f64>().ok(), Some(FRAC_PI_2));
+    }
+
+    #[test]
+    fn truncated_quarter_turns_snap_and_others_do_not() {
+        for text in ["1.5708", "1.570796", "1.5707963267948966", "3.14159", "-1.5708", "0"] {
+            assert!(quarter(text.parse().expect("number")).is_some(), "{text}");
+        }
+        for text in ["1.57", "0.001", "1.5709", "3.1415"] {
+            assert!(quarter(text.parse().expect("number")).is_none(), "{text}");
+        }
+    }
+
+    #[test]
+    fn exact_rotation_matches_nalgebra_to_rounding() {
+        for a in 0..4 {
+            for b in 0..4 {
+                for c in 0..4 {
+                    let e = exact_rpy([a, b, c]);
+                    let m = UnitQuaternion::from_euler_angles(a as f64 * FRAC_PI_2, b as f64 * FRAC_PI_2, c as f64 * FRAC_PI_2).to_rotation_matrix();
+                    for i in 0..3 {
+                        for j in 0..3 {
+                            assert!((e[i][j] - m[(i, j)]).abs() < 1e-12, "{a} {b} {c}: {e:?} vs {m}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn snaps_are_listed_with_original_and_snapped_values() {
+        let xml = "<robot name='r'><link name='a'/><link name='b'/>\
+            <joint name='j' type='revolute'><parent link='a'/><child link='b'/><origin rpy='1.5708 0 0'/><axis xyz='0 0.000001 1'/>\
+            <limit lower='-1' upper='1' effort='1' velocity='1'/></joint></robot>";
+        let m = super::super::urdf::parse(xml).expect("parses");
+        let (s, snaps) = snap(&m);
+        assert_eq!(snaps.len(), 2, "{snaps:?}");
+        assert_eq!(snaps[0].original[0], 1.5708);
+        assert_eq!(snaps[0].snapped[0], FRAC_PI_2);
+        assert_eq!(s.joints[0].axis, Vector3::z());
+        assert_eq!(s.joints[0].exact_rotation, Some([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]]));
+    }
+}
