@@ -63,6 +63,10 @@ pub struct MotionRecord {
     pub joints: Joints,
     /// The strip of the third joint set aside by the searches (the lines plus one cell a side).
     pub strip: Bounds,
+    /// Present for a near-degenerate strip (not an internal motion, undecided): the end point
+    /// may come within this many metres of axis 2 there, but is nowhere proven on it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub near_degenerate: Option<f64>,
 }
 
 /// An undecided box of the cusp search.
@@ -283,7 +287,7 @@ impl SingularityReport {
             .iter()
             .map(|b: &Band| {
                 let full = super::motion::full_range();
-                MotionRecord { joints: joints(chain, &[full, crate::interval::interval(b.theta3[0], b.theta3[1])]), strip: b.strip }
+                MotionRecord { joints: joints(chain, &[full, crate::interval::interval(b.theta3[0], b.theta3[1])]), strip: b.strip, near_degenerate: b.near }
             })
             .collect();
         SingularityReport {
@@ -291,8 +295,9 @@ impl SingularityReport {
             joints: chain.joints.clone(),
             tip_link: chain.tip_link.clone(),
             settings: Settings { precision, nodes: nodes.is_some(), uncertainty: chain.uncertainty },
-            status: if status.is_complete() { "complete" } else { "incomplete" },
-            limit: limit_of(status),
+            // Near-degenerate strips were set aside undecided: never complete with them.
+            status: if status.is_complete() && cusps.bands.iter().all(|b| b.near.is_none()) { "complete" } else { "incomplete" },
+            limit: limit_of(status).or(cusps.bands.iter().any(|b| b.near.is_some()).then_some("near_degenerate")),
             cusps: cusps.cusps.iter().map(|c| CuspRecord { joints: joints(chain, &c.theta), workspace: workspace(c.rho, c.z), unique: c.unique }).collect(),
             nodes: nodes.map(|n| {
                 n.nodes
