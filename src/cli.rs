@@ -558,11 +558,16 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     let undecided = report.undecided_total[0] + report.undecided_total[1];
     writeln!(
         out,
-        "{}: {} cusps, {node_text}, {} internal-motion lines, {undecided} undecided, status {}, {:.3} s",
+        "{}: {} cusps, {node_text}, {} internal-motion lines, {}{undecided} undecided, status {}{}, {:.3} s",
         report.robot,
         report.cusps.len(),
-        report.internal_motions.len(),
+        report.internal_motions.iter().filter(|m| m.near_degenerate.is_none()).count(),
+        match report.internal_motions.iter().filter(|m| m.near_degenerate.is_some()).count() {
+            0 => String::new(),
+            n => format!("{n} near-degenerate strips (undecided), "),
+        },
         report.status,
+        report.limit.map_or(String::new(), |l| format!(" ({l})")),
         report.stats.seconds
     )
     .ok();
@@ -589,7 +594,8 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
         writeln!(out, "  node {} & {} -> radius {:.6} z {:.6}", fmt(&n.points[0]), fmt(&n.points[1]), mid(&n.workspace.radius), mid(&n.workspace.z)).ok();
     }
     for m in &report.internal_motions {
-        writeln!(out, "  internal motion {}", m.joints.iter().map(|(n, b)| format!("{n} in [{:.6}, {:.6}]", b[0], b[1])).collect::<Vec<_>>().join(", ")).ok();
+        let kind = if m.near_degenerate.is_some() { "near-degenerate strip (undecided)" } else { "internal motion" };
+        writeln!(out, "  {kind} {}", m.joints.iter().map(|(n, b)| format!("{n} in [{:.6}, {:.6}]", b[0], b[1])).collect::<Vec<_>>().join(", ")).ok();
     }
     if let Some(path) = args.json {
         std::fs::write(&path, serde_json::to_string_pretty(&report)?).with_context(|| format!("writing {}", path.display()))?;

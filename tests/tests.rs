@@ -16,6 +16,8 @@ mod random_linkages;
 mod stability;
 /// 3R manipulators from URDF: the seed-003 map, Table 1 counts, dense-sampling references.
 mod manip3r;
+/// Real arms' URDFs (issue 11): chain choice, rounding, limits, the verdict, three conventions.
+mod real_arms;
 /// Distance problems through Cayley–Menger determinants: octahedral platform, four spheres.
 mod cayley_menger;
 /// Issue 15: distance answers certified (Krawczyk in coordinates) or labelled undecided.

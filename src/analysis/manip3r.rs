@@ -341,7 +341,9 @@ fn internal_motions(chain: &Chain3R, bands: &[motion::Band], joints: &[String], 
         .enumerate()
         .map(|(k, b)| {
             let bx = vec![bounds(full), b.theta3];
-            ResultBox { status: BoxStatus::Solution, bounds: bx.clone(), joints: bx, level: 0, cluster: Some(k), traces: vec![] }
+            // A near-degenerate strip (`Band::near`) is not an internal motion: undecided.
+            let status = if b.near.is_some() { BoxStatus::Undecided } else { BoxStatus::Solution };
+            ResultBox { status, bounds: bx.clone(), joints: bx, level: 0, cluster: Some(k), traces: vec![] }
         })
         .collect();
     BoxSetResult {

@@ -440,6 +440,24 @@ impl Chain3R {
         [0, 1, 2].map(|i| natural[i].intersection(at_mid[i] + slope[i] * (t3 - m)))
     }
 
+    /// A length scale of the arm: the largest |coefficient| of the end point (metres).
+    pub fn length_scale(&self) -> f64 {
+        let mut m: f64 = 0.0;
+        for row in &self.coef.perp {
+            for v in row {
+                for c in v {
+                    m = m.max(c.mag());
+                }
+            }
+        }
+        for row in &self.coef.along {
+            for c in row {
+                m = m.max(c.mag());
+            }
+        }
+        m.max(f64::MIN_POSITIVE)
+    }
+
     fn check_not_degenerate(&self) -> Result<(), Manip3rError> {
         // Sample a coarse grid in floating point: a map whose Jacobian determinant is zero at
         // every sample (to relative 1e-9) is degenerate; one that never moves is reported as such.

@@ -31,6 +31,13 @@ pub struct Band {
     pub theta3: [f64; 2],
     /// The strip set aside: `theta3` plus one cell on each side (radians).
     pub strip: [f64; 2],
+    /// `Some(d)` for a near-degenerate strip: the end point may come within `d` metres of the
+    /// second axis there but is nowhere proven on it (a tiny twist, e.g. an angle written
+    /// 1.5707963267948966 and taken as written), so along θ₂ the map may vary by as little as
+    /// 2π·d, under what a search box of the precision resolves. Such a strip is set aside
+    /// *undecided*: no internal motion is claimed, and reports are incomplete. `None`: a true
+    /// band (the point may lie on the axis).
+    pub near: Option<f64>,
 }
 
 impl Band {
@@ -58,16 +65,22 @@ pub fn straddles(bands: &[Band], t3: Interval) -> bool {
 
 /// The internal-motion strips of `chain`, from dyadic cells no wider than `precision`.
 pub fn bands(chain: &Chain3R, precision: f64) -> Vec<Band> {
-    // Cells in order of θ₃, each marked when the end point may lie on axis 2 there.
-    let mut cells: Vec<(Interval, bool)> = Vec::new();
+    // Near-degenerate: the point within `near` of axis 2, where one turn of θ₂ moves the image
+    // by less than a search box of this precision does (about precision × the arm's length).
+    let near = precision * chain.length_scale() / (2.0 * std::f64::consts::PI);
+    // Cells in order of θ₃, each marked when the end point may lie on axis 2 there, or
+    // (second flag) is proven within `near` of it without being proven on it.
+    let mut cells: Vec<(Interval, bool, Option<f64>)> = Vec::new();
     let mut stack = vec![full_range()];
     while let Some(t) = stack.pop() {
         let off = chain.off_axis2(t);
         let possible = off.iter().all(|c| c.contains(0.0));
+        // May the point come within `near` of the axis (each component's smallest magnitude)?
+        let close = off.iter().all(|c| c.mig() <= near);
         if t.wid() <= precision {
-            cells.push((t, possible));
-        } else if !possible {
-            cells.push((t, false));
+            cells.push((t, possible || close, (close && !possible).then_some(near)));
+        } else if !close {
+            cells.push((t, false, None));
         } else {
             let m = t.mid();
             // Upper half first on the stack so the lower one is popped first: cells stay ordered.
@@ -83,16 +96,33 @@ pub fn bands(chain: &Chain3R, precision: f64) -> Vec<Band> {
             i += 1;
             continue;
         }
-        let start = i;
+        let mut start = i;
+        let mut near_bound: Option<f64> = None;
         while i < n && cells[i].1 {
+            if let Some(d) = cells[i].2 {
+                near_bound = Some(near_bound.map_or(d, |b: f64| b.max(d)));
+            }
             i += 1;
+        }
+        // A run holding a cell where the point may lie on the axis is a true band: trimmed to
+        // those cells (close-only cells beside it are within the strip's margin anyway).
+        if let (Some(first), Some(last)) = ((start..i).find(|&k| cells[k].2.is_none()), (start..i).rev().find(|&k| cells[k].2.is_none())) {
+            let end = i;
+            start = first;
+            i = last + 1;
+            let (lo, hi) = (cells[start].0.inf(), cells[i - 1].0.sup());
+            let below = if start > 0 { fine_end(cells[start - 1].0, precision, true).inf() } else { lo };
+            let above = if i < n { fine_end(cells[i].0, precision, false).sup() } else { hi };
+            out.push(Band { theta3: [lo, hi], strip: [below, above], near: None });
+            i = end;
+            continue;
         }
         let (lo, hi) = (cells[start].0.inf(), cells[i - 1].0.sup());
         // One fine cell on each side as margin, cut out of the neighbour by the same midpoint
         // bisections a search makes, so its outer end is a point every search cuts at too.
         let below = if start > 0 { fine_end(cells[start - 1].0, precision, true).inf() } else { lo };
         let above = if i < n { fine_end(cells[i].0, precision, false).sup() } else { hi };
-        out.push(Band { theta3: [lo, hi], strip: [below, above] });
+        out.push(Band { theta3: [lo, hi], strip: [below, above], near: near_bound });
     }
     out
 }

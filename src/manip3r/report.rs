@@ -63,6 +63,10 @@ pub struct MotionRecord {
     pub joints: Joints,
     /// The strip of the third joint set aside by the searches (the lines plus one cell a side).
     pub strip: Bounds,
+    /// Present for a near-degenerate strip (not an internal motion, undecided): the end point
+    /// may come within this many metres of axis 2 there, but is nowhere proven on it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub near_degenerate: Option<f64>,
 }
 
 /// An undecided box of the cusp search.
@@ -280,12 +284,13 @@ impl SingularityReport {
     pub fn new(chain: &Chain3R, precision: f64, cusps: &CuspSearch, nodes: Option<&NodeSearch>, seconds: f64) -> Self {
         let status = nodes.map_or(cusps.status, |n| cusps.status.and(n.status));
         let undecided = cusps.undecided.len() + nodes.map_or(0, |n| n.undecided.len());
+        let near_degenerate = cusps.bands.iter().any(|b| b.near.is_some());
         let internal_motions = cusps
             .bands
             .iter()
             .map(|b: &Band| {
                 let full = super::motion::full_range();
-                MotionRecord { joints: joints(chain, &[full, crate::interval::interval(b.theta3[0], b.theta3[1])]), strip: b.strip }
+                MotionRecord { joints: joints(chain, &[full, crate::interval::interval(b.theta3[0], b.theta3[1])]), strip: b.strip, near_degenerate: b.near }
             })
             .collect();
         SingularityReport {
@@ -293,10 +298,10 @@ impl SingularityReport {
             joints: chain.joints.clone(),
             tip_link: chain.tip_link.clone(),
             settings: Settings { precision, nodes: nodes.is_some(), uncertainty: chain.uncertainty },
-            status: if status.is_complete() && undecided == 0 { "complete" } else { "incomplete" },
             // "Complete" means nothing is left undecided: a search that ran to its end but left
-            // boxes undecided at the precision says so.
-            limit: limit_of(status).or((undecided > 0).then_some("precision")),
+            // boxes undecided at the precision, or set near-degenerate strips aside, says so.
+            status: if status.is_complete() && undecided == 0 && !near_degenerate { "complete" } else { "incomplete" },
+            limit: limit_of(status).or(near_degenerate.then_some("near_degenerate")).or((undecided > 0).then_some("precision")),
             cusps: cusps.cusps.iter().map(|c| CuspRecord { joints: joints(chain, &c.theta), workspace: workspace(c.rho, c.z), unique: c.unique }).collect(),
             nodes: nodes.map(|n| {
                 n.nodes

@@ -200,6 +200,16 @@ pub fn decide(mechanism: &Mechanism, chain: &Chain3R, run: &Singularities, limit
     if !certified.is_empty() {
         return Verdict { cuspidal: None, aspects: None, max_ik_solutions: None, certified: false, reason: format!("{} certified cusps, none strictly inside the joint limits (the full torus is cuspidal; --ignore-limits)", certified.len()) };
     }
+    let near = run.cusps.bands.iter().filter(|b| b.near.is_some()).count();
+    if near > 0 {
+        return Verdict {
+            cuspidal: None,
+            aspects: None,
+            max_ik_solutions: None,
+            certified: false,
+            reason: format!("{near} near-degenerate strips (the point may pass within {:.1e} m of axis 2 but is nowhere proven on it) were set aside undecided: the geometry as written is a tiny perturbation the searches cannot resolve (drop --exact-geometry to snap it)", run.cusps.bands.iter().filter_map(|b| b.near).fold(0.0, f64::max)),
+        };
+    }
     let undecided = run.cusps.undecided.len();
     if !run.cusps.status.is_complete() || undecided > 0 || run.cusps.cusps.iter().any(|c| !c.unique) {
         return Verdict {
@@ -207,7 +217,7 @@ pub fn decide(mechanism: &Mechanism, chain: &Chain3R, run: &Singularities, limit
             aspects: None,
             max_ik_solutions: None,
             certified: false,
-            reason: format!("no certified cusp, but the cusp search left {undecided} boxes undecided (status {})", if run.cusps.status.is_complete() { "complete" } else { "incomplete" }),
+            reason: format!("no certified cusp, but the cusp search left {undecided} boxes undecided on the full torus (status {})", if run.cusps.status.is_complete() { "complete" } else { "incomplete" }),
         };
     }
     match smooth_singular_set(chain, 1e-6, 2_000_000) {
