@@ -60,7 +60,7 @@ fn hull(values: &[f64], hits_max: bool, hits_min: bool) -> Interval {
 ///
 /// # Examples
 /// ```
-/// use linkspace::manip3r::trig::sin;
+/// use linkspace::interval::trig::sin;
 /// use linkspace::interval::interval;
 /// let s = sin(interval(1.0, 2.0));
 /// assert!(s.contains(1.0) && s.contains(1f64.sin()) && s.inf() <= 2f64.sin().min(1f64.sin()));
@@ -82,7 +82,7 @@ pub fn sin(x: Interval) -> Interval {
 ///
 /// # Examples
 /// ```
-/// use linkspace::manip3r::trig::cos;
+/// use linkspace::interval::trig::cos;
 /// use linkspace::interval::interval;
 /// assert_eq!(cos(interval(-0.1, 0.1)).sup(), 1.0);
 /// ```
