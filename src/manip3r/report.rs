@@ -211,7 +211,9 @@ pub struct SingularityReport {
     pub settings: Settings,
     /// `complete` or `incomplete`.
     pub status: &'static str,
-    /// The limit that stopped an incomplete run: `boxes`, `time`, `memory` or `cancelled`.
+    /// Why the run is incomplete: the limit that stopped it (`boxes`, `time`, `memory`,
+    /// `cancelled`), else `near_degenerate` (strips set aside) or `undecided` (boxes or pairs
+    /// left at the precision).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub limit: Option<&'static str>,
     /// Certified cusps.
@@ -282,6 +284,8 @@ impl SingularityReport {
     /// Builds the report from a cusp search and an optional node search.
     pub fn new(chain: &Chain3R, precision: f64, cusps: &CuspSearch, nodes: Option<&NodeSearch>, seconds: f64) -> Self {
         let status = nodes.map_or(cusps.status, |n| cusps.status.and(n.status));
+        let left_over = !cusps.undecided.is_empty() || nodes.is_some_and(|n| !n.undecided.is_empty());
+        let near = cusps.bands.iter().any(|b| b.near.is_some());
         let internal_motions = cusps
             .bands
             .iter()
@@ -295,9 +299,11 @@ impl SingularityReport {
             joints: chain.joints.clone(),
             tip_link: chain.tip_link.clone(),
             settings: Settings { precision, nodes: nodes.is_some(), uncertainty: chain.uncertainty },
-            // Near-degenerate strips were set aside undecided: never complete with them.
-            status: if status.is_complete() && cusps.bands.iter().all(|b| b.near.is_none()) { "complete" } else { "incomplete" },
-            limit: limit_of(status).or(cusps.bands.iter().any(|b| b.near.is_some()).then_some("near_degenerate")),
+            // Complete only when nothing is left undecided: no pending cell, no box or pair left
+            // at the precision, no near-degenerate strip set aside. The kernel's `Complete` says
+            // only that no limit stopped it.
+            status: if status.is_complete() && !left_over && !near { "complete" } else { "incomplete" },
+            limit: limit_of(status).or(near.then_some("near_degenerate")).or(left_over.then_some("undecided")),
             cusps: cusps.cusps.iter().map(|c| CuspRecord { joints: joints(chain, &c.theta), workspace: workspace(c.rho, c.z), unique: c.unique }).collect(),
             nodes: nodes.map(|n| {
                 n.nodes
