@@ -40,7 +40,7 @@ struct Cli {
 pub(crate) struct LimitArgs {
     /// Stop after processing this many boxes (box pairs for nodes); the run is then reported
     /// incomplete. Default: the command's (solve, distances, serve 1,000,000; ik 200,000;
-    /// collisions 5,000,000; singularities 20,000,000 per search).
+    /// collisions 5,000,000; singularities 5,000,000 per search).
     #[arg(long, value_name = "N")]
     max_boxes: Option<u64>,
     /// Stop after this many seconds; the run is then reported incomplete.
@@ -509,6 +509,12 @@ fn load_chain(path: &std::path::Path, uncertainty: f64, args: &ChainArgs) -> Res
     Ok((chain, prepared))
 }
 
+/// Default `--max-boxes` of `singularities`, per search. The node search's box tree is kept
+/// whole until the run ends and is not counted by `--max-memory` (which bounds pending cells),
+/// so this is what bounds its memory: about 50 bytes a pair, ~0.25 GB at this default on
+/// the flooding arms measured (README).
+const SINGULARITIES_MAX_BOXES: u64 = 5_000_000;
+
 /// Default `--max-memory` of `singularities` (bytes of pending cells): 256 MiB.
 const SINGULARITIES_MAX_MEMORY: usize = 256 << 20;
 
@@ -523,7 +529,7 @@ pub(crate) fn seconds_arg(t: Option<f64>) -> Result<Option<Duration>> {
 
 fn singularities(args: SingularitiesArgs) -> Result<()> {
     manip3r::check_precision(args.precision)?;
-    let mut limits = args.limits.limits(20_000_000)?;
+    let mut limits = args.limits.limits(SINGULARITIES_MAX_BOXES)?;
     if args.limits.max_memory.is_none() {
         // Pending cells of a flooding search (near-degenerate geometry) are bounded well below
         // the kernel's general default: the run stops on `memory` with its cells listed.

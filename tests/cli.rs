@@ -133,8 +133,7 @@ fn singularities_bad_input_gives_one_clear_line() {
     let two = robot_variant("e", "<joint name=\"joint3\" type=\"continuous\">", "<joint name=\"joint3\" type=\"fixed\">");
     assert_clear_error(&["singularities", two.as_str()], "not a 3R chain: the chain from 'base' to 'tool' has 2 revolute joints");
     let prismatic = robot_variant("e", "<joint name=\"joint3\" type=\"continuous\">", "<joint name=\"joint3\" type=\"prismatic\"><limit lower=\"0\" upper=\"1\" effort=\"1\" velocity=\"1\"/>");
-    // The longest revolute path now ends before the prismatic joint, and is too short.
-    assert_clear_error(&["singularities", prismatic.as_str()], "not a 3R chain: the chain from 'base' to 'link2' has 2 revolute joints");
+    assert_clear_error(&["singularities", prismatic.as_str()], "joint 'joint3' is prismatic");
     // All lengths zero: the tip sits on every axis and never moves.
     let still = variant_all("orthogonal_3r_e.urdf", &[("xyz=\"1 0 0\"", "xyz=\"0 0 0\""), ("xyz=\"1.5 0.5 0\"", "xyz=\"0 0 0\""), ("xyz=\"0.7 0 0\"", "xyz=\"0 0 0\"")]);
     assert_clear_error(&["singularities", still.as_str()], "does not move");
@@ -161,13 +160,19 @@ fn singularities_json_follows_the_documented_schema() {
     let path = std::env::temp_dir().join(format!("linkspace-3r-{}.json", std::process::id()));
     let (ok, out, err) = run(&["singularities", &fixture("orthogonal_3r_f.urdf"), "--nodes", "--json", path.to_str().expect("utf-8")]);
     assert!(ok, "{err}");
-    // The verdict a designer asks for first, then the summary.
+    // The verdict comes first (issue 11), then the counts.
     assert!(out.starts_with("verdict: NON-CUSPIDAL (certified)"), "{out}");
     assert!(out.lines().nth(1).is_some_and(|l| l.starts_with("orthogonal_3r_f: 0 cusps, 2 nodes, 2 internal-motion lines, 0 undecided, status complete")), "{out}");
     let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).expect("json")).expect("valid json");
     let _ = std::fs::remove_file(&path);
     assert_eq!(r["robot"], "orthogonal_3r_f");
     assert_eq!(r["status"], "complete");
+    assert_eq!(r["verdict"]["cuspidal"], false);
+    assert_eq!(r["verdict"]["certified"], true);
+    assert!(r["verdict"]["reason"].is_string() && r["verdict"]["aspects"].is_null());
+    assert_eq!(r["chain"]["joints"][2], "joint3");
+    assert_eq!(r["rounding"]["snapping"], true);
+    assert_eq!(r["undecided_total"][0], 0);
     assert_eq!(r["joints"][1], "joint2");
     assert_eq!(r["settings"]["precision"], 1e-4);
     assert_eq!(r["cusps"].as_array().expect("array").len(), 0);
@@ -190,6 +195,7 @@ fn singularities_json_follows_the_documented_schema() {
     let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).expect("json")).expect("valid json");
     let _ = std::fs::remove_file(&path);
     assert_eq!(r["cusps"].as_array().expect("array").len(), 4);
+    assert_eq!(r["verdict"]["cuspidal"], true);
     assert_eq!(r["cusps"][0]["unique"], true);
     assert!(r["cusps"][0]["joints"]["joint3"].is_array() && r["cusps"][0]["workspace"]["radius"].is_array());
     assert!(r["nodes"].is_null());

@@ -248,3 +248,18 @@ fn cli_first_line_is_the_verdict_and_bad_flags_are_one_line() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && stderr.trim().lines().count() == 1 && stderr.contains("--tip-point"), "{stderr}");
 }
+
+/// The complaint: "0 nodes, status complete" beside undecided boxes. A report is
+/// complete only when nothing is left undecided; the kernel's `Complete` only says no limit
+/// stopped it.
+#[test]
+fn a_report_with_undecided_boxes_is_never_complete() {
+    let p = prepare(&text("kuka_kr16.urdf"), &LoadOptions { ignore_limits: true, ..Default::default() }).expect("kuka");
+    let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
+    let run = manip3r::singularities(&chain, 1e-4, false, &bounded(2_000_000), &mut |_| {}).expect("runs");
+    assert!(run.status.is_complete(), "no limit stops the cusp search on this arm");
+    assert!(!run.cusps.undecided.is_empty(), "the crossing branches leave boxes the seed's system cannot decide");
+    let report = manip3r::report::SingularityReport::new(&chain, 1e-4, &run.cusps, None, run.seconds);
+    assert_eq!((report.status, report.limit), ("incomplete", Some("undecided")));
+    assert_eq!(report.undecided_total[0], run.cusps.undecided.len());
+}

@@ -60,6 +60,10 @@ impl Manip3rAnalysis {
     /// Reads the chain (nominal geometry); errors when the mechanism is not a 3R chain or its
     /// map is degenerate.
     pub fn new(mechanism: &Mechanism) -> Result<Self, Manip3rError> {
+        // As the CLI reads files: rounding policy, then the positioning structure of a real arm
+        // (root to wrist centre or tip), so the node takes vendor URDFs too.
+        let prepared = manip3r::prepare(mechanism, &manip3r::LoadOptions::default())?;
+        let mechanism = &prepared.mechanism;
         let chain = Chain3R::from_mechanism(mechanism, 0.0)?;
         let first = mechanism.joint(&chain.joints[0]).expect("invariant: the chain names its joints");
         // Compose the joint origins from the root down to the first revolute joint, in interval

@@ -211,8 +211,9 @@ pub struct SingularityReport {
     pub settings: Settings,
     /// `complete` or `incomplete`.
     pub status: &'static str,
-    /// Why the run is incomplete: the limit that stopped it (`boxes`, `time`, `memory` or
-    /// `cancelled`), or `precision` when it ran to its end with boxes left undecided.
+    /// Why the run is incomplete: the limit that stopped it (`boxes`, `time`, `memory`,
+    /// `cancelled`), else `near_degenerate` (strips set aside) or `undecided` (boxes or pairs
+    /// left at the precision).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub limit: Option<&'static str>,
     /// Certified cusps.
@@ -283,8 +284,8 @@ impl SingularityReport {
     /// Builds the report from a cusp search and an optional node search.
     pub fn new(chain: &Chain3R, precision: f64, cusps: &CuspSearch, nodes: Option<&NodeSearch>, seconds: f64) -> Self {
         let status = nodes.map_or(cusps.status, |n| cusps.status.and(n.status));
-        let undecided = cusps.undecided.len() + nodes.map_or(0, |n| n.undecided.len());
-        let near_degenerate = cusps.bands.iter().any(|b| b.near.is_some());
+        let left_over = !cusps.undecided.is_empty() || nodes.is_some_and(|n| !n.undecided.is_empty());
+        let near = cusps.bands.iter().any(|b| b.near.is_some());
         let internal_motions = cusps
             .bands
             .iter()
@@ -298,10 +299,11 @@ impl SingularityReport {
             joints: chain.joints.clone(),
             tip_link: chain.tip_link.clone(),
             settings: Settings { precision, nodes: nodes.is_some(), uncertainty: chain.uncertainty },
-            // "Complete" means nothing is left undecided: a search that ran to its end but left
-            // boxes undecided at the precision, or set near-degenerate strips aside, says so.
-            status: if status.is_complete() && undecided == 0 && !near_degenerate { "complete" } else { "incomplete" },
-            limit: limit_of(status).or(near_degenerate.then_some("near_degenerate")).or((undecided > 0).then_some("precision")),
+            // Complete only when nothing is left undecided: no pending cell, no box or pair left
+            // at the precision, no near-degenerate strip set aside. The kernel's `Complete` says
+            // only that no limit stopped it.
+            status: if status.is_complete() && !left_over && !near { "complete" } else { "incomplete" },
+            limit: limit_of(status).or(near.then_some("near_degenerate")).or(left_over.then_some("undecided")),
             cusps: cusps.cusps.iter().map(|c| CuspRecord { joints: joints(chain, &c.theta), workspace: workspace(c.rho, c.z), unique: c.unique }).collect(),
             nodes: nodes.map(|n| {
                 n.nodes

@@ -116,10 +116,13 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
         (None, None) => {
             // The end link of the longest revolute path: the child of a moving revolute joint
             // with the most moving revolute joints above it (side links on fixed joints lose).
-            let count = |l: usize| below(l).map(|p| p.iter().filter(|&&j| moving(j)).count());
+            // Prismatic joints count as moving here, so that a chain with one is refused by
+            // name below rather than cut short before it.
+            let movable = |j: usize| moving(j) || matches!(m.joints[j].kind, JointKind::Prismatic { .. });
+            let count = |l: usize| below(l).map(|p| p.iter().filter(|&&j| movable(j)).count());
             let best = (0..m.links.len()).filter_map(count).max().unwrap_or(0);
             let ends: Vec<usize> = (0..m.links.len())
-                .filter(|&l| m.links[l].parent_joint.is_some_and(|j| moving(j)) && count(l) == Some(best))
+                .filter(|&l| m.links[l].parent_joint.is_some_and(|j| movable(j)) && count(l) == Some(best))
                 .collect();
             match ends.as_slice() {
                 // Down a single line of fixed joints to its end link (a 3R file's `tool`);

@@ -200,7 +200,7 @@ pub fn singularity_report(r: &SingularityResult, run_id: u64) -> SingularityRepo
         complete: r.status == Status::Complete && r.undecided() == 0,
         precision: r.query.precision,
         limit: match r.status {
-            Status::Complete if r.undecided() > 0 => "precision".to_string(),
+            Status::Complete if r.undecided() > 0 => "undecided".to_string(),
             Status::Complete => String::new(),
             Status::Incomplete(l) => l.name().to_string(),
         },
