@@ -107,17 +107,7 @@ impl JointLimits {
     /// Drops what lies outside the limits from a singularity run; counts what is on a limit.
     pub fn apply(&self, run: &mut Singularities) -> LimitEffect {
         let (mut dropped, mut on_limit) = (0u64, 0u64);
-        let mut keep = |p: Place| match p {
-            Place::Outside => {
-                dropped += 1;
-                false
-            }
-            Place::OnLimit => {
-                on_limit += 1;
-                true
-            }
-            Place::Inside => true,
-        };
+        let mut keep = |p: Place| tally(p, &mut dropped, &mut on_limit);
         run.cusps.cusps.retain(|c| keep(self.of_box(&c.theta)));
         run.cusps.undecided.retain(|u| keep(self.of_box(&u.theta)));
         // An internal-motion line is the whole θ₂ circle at θ₃ in the band.
@@ -140,21 +130,27 @@ impl JointLimits {
     /// Drops inverse-kinematics solutions outside the limits.
     pub fn apply_ik(&self, s: &mut IkSolutions) -> LimitEffect {
         let (mut dropped, mut on_limit) = (0u64, 0u64);
-        let mut keep = |p: Place| match p {
-            Place::Outside => {
-                dropped += 1;
-                false
-            }
-            Place::OnLimit => {
-                on_limit += 1;
-                true
-            }
-            Place::Inside => true,
-        };
+        let mut keep = |p: Place| tally(p, &mut dropped, &mut on_limit);
         s.unique.retain(|b| keep(self.of_box(b)));
         s.clusters.retain(|c| keep(self.of_box(&c.hull)));
         let text = format!("{}; {dropped} solutions outside dropped, {on_limit} on a limit kept", self.describe());
         LimitEffect { limits: self.clone(), dropped, on_limit, text }
+    }
+}
+
+/// Whether a result in place `p` is kept (inside, or on a limit: it may hold admissible points),
+/// counting what is dropped and what sits on a limit.
+fn tally(p: Place, dropped: &mut u64, on_limit: &mut u64) -> bool {
+    match p {
+        Place::Outside => {
+            *dropped += 1;
+            false
+        }
+        Place::OnLimit => {
+            *on_limit += 1;
+            true
+        }
+        Place::Inside => true,
     }
 }
 
@@ -175,3 +171,4 @@ mod tests {
         assert_eq!(place(None, interval(3.0, 3.1)), Place::Inside);
     }
 }
+
