@@ -137,7 +137,7 @@ class System:
         return F, J, Fs
 
 
-def track(system, X0, Pa, Pb, tol=1e-9, h0=0.02, hmin=1e-12, max_steps=20000, hmax=0.1):
+def track(system, X0, Pa, Pb, tol=1e-9, h0=0.02, hmin=1e-12, max_steps=20000, hmax=0.05):
     """Track solutions X0 (n,8) of F(.;Pa)=0 along the segment Pa->Pb (parameter vectors).
     Returns (X (n,8), ok (n,) bool)."""
     n = X0.shape[0]
@@ -183,7 +183,7 @@ def track(system, X0, Pa, Pb, tol=1e-9, h0=0.02, hmin=1e-12, max_steps=20000, hm
             good &= np.isfinite(nrm)
         # accept: predictor close (no path jumping), corrector converged (last update at the
         # rounding floor or quadratically smaller than the previous one)
-        conv = good & (norms[0] < 1e-4) & (norms[1] < 1e-6) & (norms[2] < np.maximum(tol, 1e-1 * norms[1]))
+        conv = good & (norms[0] < 1e-6) & (norms[1] < 1e-6) & (norms[2] < np.maximum(tol, 1e-1 * norms[1]))
         conv &= np.isfinite(Y).all(1)
         acc = idx[conv]
         rej = idx[~conv]
@@ -464,7 +464,7 @@ def main():
 
     # two independent runs (seeds): monodromy start systems
     runs = []
-    for seed in (20240512, 777013):
+    for seed in (20240512, 31337):
         rng = np.random.default_rng(seed)
         system, P0, x0 = start_system(rng)
         log(f"seed {seed}: monodromy")
@@ -503,7 +503,7 @@ def main():
     rng = np.random.default_rng(4242)
     best = None
     tried = 0
-    while tried < 80:
+    while tried < int(os.environ.get("STEWART_POSES", "80")):
         tried += 1
         xyz = [rng.uniform(-0.12, 0.12), rng.uniform(-0.12, 0.12), rng.uniform(0.45, 0.8)]
         rpy = [rng.uniform(-0.45, 0.45), rng.uniform(-0.45, 0.45), rng.uniform(-0.7, 0.7)]
