@@ -4,6 +4,7 @@
 use super::{parse_fix, LimitArgs};
 use anyhow::{bail, Context, Result};
 use linkspace::model::urdf;
+use linkspace::problems::singular::image::{self, CuspProblem, ImageReport, NodeProblem};
 use linkspace::problems::singular::{transmission_joints, Output, SingularKind, SingularProblem};
 use linkspace::report::singular::SingularReport;
 use linkspace::search::SolverSettings;
@@ -21,6 +22,9 @@ pub(crate) enum Kind {
     Output,
     /// All three.
     All,
+    /// 2-dof mechanisms: cusps and nodes of the type-II image in actuator space, the regions it
+    /// cuts with their assembly modes, and the verdict on non-singular assembly-mode change.
+    Image,
 }
 
 #[derive(clap::Args)]
@@ -44,9 +48,12 @@ pub(crate) struct LoopSingularitiesArgs {
     sigma: f64,
     #[command(flatten)]
     limits: LimitArgs,
-    /// Write the reports (one per set, as a JSON array) here.
+    /// Write the reports (one per set, as a JSON array; `--kind image`: one image report) here.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
+    /// `--kind image`: cells per actuator axis of the raster that finds the regions.
+    #[arg(long, default_value_t = 128)]
+    grid: usize,
 }
 
 /// `LINK@X,Y` or `J1,J2`.
@@ -83,6 +90,9 @@ pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
         Some(a) => names(a, "--actuated")?,
         None => transmission_joints(&xml),
     };
+    if matches!(args.kind, Kind::Image) {
+        return run_image(&args, &mechanism, &fixed, &actuated, &settings);
+    }
     let kinds: Vec<SingularKind> = match args.kind {
         Kind::Cspace => vec![SingularKind::Cspace],
         Kind::Input => vec![SingularKind::Input],
@@ -90,6 +100,7 @@ pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
         // Input singularities need actuators: without any, `all` runs the other two.
         Kind::All if actuated.is_empty() => vec![SingularKind::Cspace, SingularKind::Output],
         Kind::All => vec![SingularKind::Cspace, SingularKind::Input, SingularKind::Output],
+        Kind::Image => unreachable!("handled above"),
     };
     let mut reports = Vec::new();
     let mut out = std::io::stdout().lock();
@@ -136,6 +147,60 @@ pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
         std::fs::write(&path, serde_json::to_string_pretty(&reports)?).with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
+}
+
+/// The type-II cover, then cusps, nodes, regions and the verdict; one summary and one JSON report.
+fn run_image(args: &LoopSingularitiesArgs, mechanism: &linkspace::model::Mechanism, fixed: &[(String, f64)], actuated: &[String], settings: &SolverSettings) -> Result<()> {
+    if args.grid < 2 {
+        bail!("--grid must be at least 2");
+    }
+    let r = image(mechanism, fixed, actuated, settings, args.grid).with_context(|| format!("analysing {}", args.urdf.display()))?;
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "{} type-II image: cusps {} proven, {} undecided; nodes {} proven, {} undecided ({} diagonal boxes injective); {} regions; status {}; {:.3} s (cover {:.3}, cusps {:.3}, nodes {:.3}, regions {:.3})",
+        r.mechanism,
+        r.cusp_counts.proven,
+        r.cusp_counts.undecided,
+        r.node_counts.proven,
+        r.node_counts.undecided,
+        r.injective,
+        r.regions.regions.len(),
+        r.status,
+        r.seconds.iter().sum::<f64>(),
+        r.seconds[0],
+        r.seconds[1],
+        r.seconds[2],
+        r.seconds[3]
+    )
+    .ok();
+    for (i, g) in r.regions.regions.iter().enumerate() {
+        let count = g.configurations.map_or("undecided".to_string(), |c| c.to_string());
+        let signs = g.signs.map_or(String::new(), |[p, n]| format!(" ({p} with det F_p > 0, {n} < 0)"));
+        writeln!(out, "  region {i}: {} cells, sample {:?}: {count} assembly modes{signs}", g.cells, g.sample).ok();
+    }
+    for c in r.cusps.iter().take(20) {
+        writeln!(out, "  cusp{}{}: {:?}", if c.unique { " (certified)" } else { " (undecided)" }, if c.degenerate { " degenerate" } else { "" }, c.workspace).ok();
+    }
+    for n in r.nodes.iter().take(20) {
+        writeln!(out, "  node{}: {:?}", if n.unique { " (certified)" } else { " (undecided)" }, n.workspace).ok();
+    }
+    writeln!(out, "  can change assembly mode without crossing a type-II singularity: {} ({})", r.verdict.answer, r.verdict.reason).ok();
+    if let Some(path) = &args.json {
+        std::fs::write(path, serde_json::to_string_pretty(&r)?).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// Cover, cusps, nodes and regions of `mechanism`'s type-II image (one timeout for each search).
+pub(crate) fn image(mechanism: &linkspace::model::Mechanism, fixed: &[(String, f64)], actuated: &[String], settings: &SolverSettings, grid: usize) -> Result<ImageReport> {
+    let cancel = AtomicBool::new(false);
+    let p = SingularProblem::new(mechanism, fixed, SingularKind::Input, actuated, None)?;
+    let cover = p.solve(settings, &cancel)?;
+    let cusps = CuspProblem::new(&p)?.solve(&p, settings, &cancel)?;
+    let nodes = NodeProblem::new(&p)?.solve(&p, settings, &cancel)?;
+    let regions = image::regions(mechanism, &p, &cover, grid, settings, &cancel)?;
+    Ok(ImageReport::new(&p, &cover, &cusps, &nodes, regions))
 }
 
 #[derive(clap::Args)]
