@@ -5,7 +5,7 @@
 
 use super::util::urdf_text;
 use linkspace::model::urdf;
-use linkspace::problems::singular::{BoxKind, Output, SingularKind, SingularProblem, SingularSet};
+use linkspace::problems::singular::{image, BoxKind, Output, SingularKind, SingularProblem, SingularSet};
 use linkspace::search::{SolverSettings, Status};
 use std::f64::consts::PI;
 use std::process::Command;
@@ -658,4 +658,217 @@ fn five_bar_type_two_curves_match_a_dense_grid() {
     // Three clusters in configuration space: the stretched-rods curve and, over each point
     // where the tips meet, the circle of overlapping rods.
     assert_eq!(set.clusters.len(), 3);
+}
+
+/// Five-bars with A1 = (0, 0), A2 = (1.5, 0), cranks 2, rods `r1`, `r2`: the references of the
+/// type-II image below never call the solver.
+mod five_bar_ref {
+    use std::f64::consts::PI;
+
+    /// Crank tips B1, B2.
+    pub fn tips(t1: f64, t2: f64) -> ([f64; 2], [f64; 2]) {
+        ([2.0 * t1.cos(), 2.0 * t1.sin()], [1.5 + 2.0 * t2.cos(), 2.0 * t2.sin()])
+    }
+
+    /// |B1 − B2|: the mechanism assembles when it lies in [|r1 − r2|, r1 + r2], and the rods are
+    /// in line (type II) at either end; the image of the type-II set is a union of level sets.
+    pub fn gap(t1: f64, t2: f64) -> f64 {
+        let (b1, b2) = tips(t1, t2);
+        (b1[0] - b2[0]).hypot(b1[1] - b2[1])
+    }
+
+    /// Assembly modes by circle intersection.
+    pub fn modes(t1: f64, t2: f64, r1: f64, r2: f64) -> usize {
+        let d = gap(t1, t2);
+        if d > r1 + r2 || d < (r1 - r2).abs() {
+            0
+        } else if d == r1 + r2 || d == (r1 - r2).abs() {
+            1
+        } else {
+            2
+        }
+    }
+
+    /// Critical points of f = |B1 − B2|² on the torus: Newton on ∇f from a grid, deduplicated.
+    /// A singular point of a level set of f is one of them (the cusps and nodes of the image).
+    pub fn critical_points() -> Vec<(f64, f64)> {
+        let grad = |t1: f64, t2: f64| {
+            let (b1, b2) = tips(t1, t2);
+            let d = [b1[0] - b2[0], b1[1] - b2[1]];
+            [2.0 * (d[0] * -2.0 * t1.sin() + d[1] * 2.0 * t1.cos()), -2.0 * (d[0] * -2.0 * t2.sin() + d[1] * 2.0 * t2.cos())]
+        };
+        let mut out: Vec<(f64, f64)> = Vec::new();
+        let n = 40;
+        for i in 0..n {
+            for j in 0..n {
+                let (mut x, mut y) = (-PI + 2.0 * PI * i as f64 / n as f64, -PI + 2.0 * PI * j as f64 / n as f64);
+                for _ in 0..60 {
+                    let g = grad(x, y);
+                    let h = 1e-6;
+                    let (gx, gy) = (grad(x + h, y), grad(x, y + h));
+                    let m = [[(gx[0] - g[0]) / h, (gy[0] - g[0]) / h], [(gx[1] - g[1]) / h, (gy[1] - g[1]) / h]];
+                    let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+                    if det.abs() < 1e-12 {
+                        break;
+                    }
+                    x -= (g[0] * m[1][1] - g[1] * m[0][1]) / det;
+                    y -= (m[0][0] * g[1] - m[1][0] * g[0]) / det;
+                }
+                let g = grad(x, y);
+                let (x, y) = ((x + PI).rem_euclid(2.0 * PI) - PI, (y + PI).rem_euclid(2.0 * PI) - PI);
+                if g[0].hypot(g[1]) < 1e-10 && !out.iter().any(|&(a, b)| super::angle_gap(a, x) < 1e-6 && super::angle_gap(b, y) < 1e-6) {
+                    out.push((x, y));
+                }
+            }
+        }
+        out
+    }
+
+    /// Points of the type-II image: grid edges where the number of modes changes, bisected.
+    pub fn curve_points(n: usize, r1: f64, r2: f64) -> Vec<(f64, f64)> {
+        let step = 2.0 * PI / n as f64;
+        let at = |k: usize| -PI + step * k as f64;
+        let mut out = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                let a = (at(i), at(j));
+                let here = modes(a.0, a.1, r1, r2);
+                for (di, dj) in [(1.0, 0.0), (0.0, 1.0)] {
+                    let b = (a.0 + di * step, a.1 + dj * step);
+                    if modes(b.0, b.1, r1, r2) == here {
+                        continue;
+                    }
+                    let (mut lo, mut hi) = (0.0, 1.0);
+                    for _ in 0..50 {
+                        let m = 0.5 * (lo + hi);
+                        if modes(a.0 + m * (b.0 - a.0), a.1 + m * (b.1 - a.1), r1, r2) == here {
+                            lo = m;
+                        } else {
+                            hi = m;
+                        }
+                    }
+                    let m = 0.5 * (lo + hi);
+                    out.push((a.0 + m * (b.0 - a.0), a.1 + m * (b.1 - a.1)));
+                }
+            }
+        }
+        out
+    }
+
+    /// Regions of the torus cut by the levels |r1 ± r2| of the gap: connected components of a
+    /// grid's cells by band (below, between, above), with the modes of each (4-neighbours, wrapping).
+    pub fn regions(n: usize, r1: f64, r2: f64) -> Vec<usize> {
+        let step = 2.0 * PI / n as f64;
+        let band = |i: usize, j: usize| {
+            let d = gap(-PI + step * (i as f64 + 0.5), -PI + step * (j as f64 + 0.5));
+            (d > (r1 - r2).abs()) as u8 + (d > r1 + r2) as u8
+        };
+        let mut label = vec![usize::MAX; n * n];
+        let mut modes_of = Vec::new();
+        for s in 0..n * n {
+            if label[s] != usize::MAX {
+                continue;
+            }
+            let id = modes_of.len();
+            let b = band(s / n, s % n);
+            modes_of.push(if b == 1 { 2 } else { 0 });
+            label[s] = id;
+            let mut stack = vec![s];
+            while let Some(c) = stack.pop() {
+                let (i, j) = (c / n, c % n);
+                for (a, b2) in [((i + 1) % n, j), ((i + n - 1) % n, j), (i, (j + 1) % n), (i, (j + n - 1) % n)] {
+                    let k = a * n + b2;
+                    if label[k] == usize::MAX && band(a, b2) == b {
+                        label[k] = id;
+                        stack.push(k);
+                    }
+                }
+            }
+        }
+        modes_of
+    }
+}
+
+const FIVE_BAR_ACTUATORS: [&str; 2] = ["crank1_joint", "crank2_joint"];
+
+/// The generic five-bar (rods 2.5 and 2): its type-II image is the two regular level sets
+/// |B1 − B2| = 4.5 and 0.5, so no cusp and no node (the critical values of the gap are 0, 1.5,
+/// 2.5, 5.5, found by Newton on its gradient); four regions (between the levels, 2 modes; above
+/// 4.5 and the two discs below 0.5, none), counted on a grid of our own; and no assembly-mode
+/// change without crossing: the verdict is "no".
+#[test]
+fn five_bar_image_has_no_cusp_no_node_and_four_regions_as_the_references() {
+    use five_bar_ref::*;
+    let (r1, r2) = (2.5, 2.0);
+    let critical = critical_points();
+    assert_eq!(critical.len(), 6, "critical points of the gap: {critical:?}");
+    for &(a, b) in &critical {
+        let d = gap(a, b);
+        assert!((d - (r1 + r2)).abs() > 0.1 && (d - (r1 - r2)).abs() > 0.1, "critical point ({a}, {b}) at gap {d} lies on a type-II level");
+    }
+    let reference_regions = regions(256, r1, r2);
+    assert_eq!(reference_regions.len(), 4);
+
+    let m = urdf::parse(&urdf_text("five_bar_unequal.urdf")).expect("parses");
+    let actuated: Vec<String> = FIVE_BAR_ACTUATORS.iter().map(|s| s.to_string()).collect();
+    let settings = SolverSettings { sigma: 1e-2, ..Default::default() };
+    let r = image::analyse(&m, &[], &actuated, &settings, 64, &AtomicBool::new(false)).expect("analyses");
+    assert_eq!(r.status, "complete");
+    assert_eq!((r.cusp_counts.proven, r.cusp_counts.undecided), (0, 0), "cusps {:?}", r.cusps);
+    assert_eq!((r.node_counts.proven, r.node_counts.undecided), (0, 0), "nodes {:?}", r.nodes);
+    assert!(r.injective > 0);
+    assert_eq!(r.regions.regions.len(), reference_regions.len());
+    let mut got: Vec<usize> = Vec::new();
+    for g in &r.regions.regions {
+        let expected = modes(g.sample[0], g.sample[1], r1, r2);
+        assert_eq!(g.configurations, Some(expected), "region at {:?}", g.sample);
+        if expected == 2 {
+            assert_eq!(g.signs, Some([1, 1]), "the two modes have opposite det F_p");
+        }
+        got.push(expected);
+    }
+    let mut want = reference_regions.clone();
+    got.sort();
+    want.sort();
+    assert_eq!(got, want);
+    assert_eq!(r.verdict.answer, "no", "{}", r.verdict.reason);
+
+    // The cover the regions were cut by holds every reference point of both curves.
+    let (p, set) = run(&urdf_text("five_bar_unequal.urdf"), SingularKind::Input, &FIVE_BAR_ACTUATORS, None, 1e-2);
+    let images: Vec<Vec<(f64, f64)>> = set.boxes.iter().map(|b| p.actuator_values(&b.b)).collect();
+    let points = curve_points(200, r1, r2);
+    assert!(points.len() > 200);
+    for &(a, b) in &points {
+        assert!(images.iter().any(|im| holds_angle(im[0], a, 1e-6) && holds_angle(im[1], b, 1e-6)), "reference point ({a}, {b}) not covered");
+    }
+}
+
+/// The bundled five-bar's equal rods fold onto each other over a whole circle of configurations
+/// where the crank tips meet (two actuator points, the minima of the gap): along that circle
+/// the kernel of the actuator map is the circle's tangent, so the cusp system has a curve of
+/// roots there. The search reports exactly those (never proven, never elsewhere), against the
+/// two points found by Newton on B1 = B2.
+#[test]
+fn five_bar_equal_rods_cusp_roots_are_the_folded_circles() {
+    use five_bar_ref::*;
+    let critical = critical_points();
+    let meets: Vec<(f64, f64)> = critical.iter().copied().filter(|&(a, b)| gap(a, b) < 1e-9).collect();
+    assert_eq!(meets.len(), 2, "{critical:?}");
+    let m = urdf::parse(&urdf_text("five_bar.urdf")).expect("parses");
+    let actuated: Vec<String> = FIVE_BAR_ACTUATORS.iter().map(|s| s.to_string()).collect();
+    let p = SingularProblem::new(&m, &[], SingularKind::Input, &actuated, None).expect("builds");
+    let cusps = image::CuspProblem::new(&p).expect("2 dof").solve(&p, &SolverSettings { sigma: 5e-2, ..Default::default() }, &AtomicBool::new(false)).expect("runs");
+    assert_eq!(cusps.status, Status::Complete);
+    assert_eq!(cusps.proven(), 0);
+    assert!(!cusps.points.is_empty());
+    let mut hit = [false; 2];
+    for pt in &cusps.points {
+        for b in &pt.boxes {
+            let v = p.actuator_values(b);
+            let near: Vec<usize> = (0..2).filter(|&i| holds_angle(v[0], meets[i].0, 1e-6) && holds_angle(v[1], meets[i].1, 1e-6)).collect();
+            assert_eq!(near.len(), 1, "cusp-system box at {v:?} is not over a point where the tips meet");
+            hit[near[0]] = true;
+        }
+    }
+    assert_eq!(hit, [true, true]);
 }

@@ -4,7 +4,7 @@
 use super::{parse_fix, LimitArgs};
 use anyhow::{bail, Context, Result};
 use linkspace::model::urdf;
-use linkspace::problems::singular::image::{self, CuspProblem, ImageReport, NodeProblem};
+use linkspace::problems::singular::image;
 use linkspace::problems::singular::{transmission_joints, Output, SingularKind, SingularProblem};
 use linkspace::report::singular::SingularReport;
 use linkspace::search::SolverSettings;
@@ -154,7 +154,7 @@ fn run_image(args: &LoopSingularitiesArgs, mechanism: &linkspace::model::Mechani
     if args.grid < 2 {
         bail!("--grid must be at least 2");
     }
-    let r = image(mechanism, fixed, actuated, settings, args.grid).with_context(|| format!("analysing {}", args.urdf.display()))?;
+    let r = image::analyse(mechanism, fixed, actuated, settings, args.grid, &AtomicBool::new(false)).with_context(|| format!("analysing {}", args.urdf.display()))?;
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
@@ -190,17 +190,6 @@ fn run_image(args: &LoopSingularitiesArgs, mechanism: &linkspace::model::Mechani
         std::fs::write(path, serde_json::to_string_pretty(&r)?).with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
-}
-
-/// Cover, cusps, nodes and regions of `mechanism`'s type-II image (one timeout for each search).
-pub(crate) fn image(mechanism: &linkspace::model::Mechanism, fixed: &[(String, f64)], actuated: &[String], settings: &SolverSettings, grid: usize) -> Result<ImageReport> {
-    let cancel = AtomicBool::new(false);
-    let p = SingularProblem::new(mechanism, fixed, SingularKind::Input, actuated, None)?;
-    let cover = p.solve(settings, &cancel)?;
-    let cusps = CuspProblem::new(&p)?.solve(&p, settings, &cancel)?;
-    let nodes = NodeProblem::new(&p)?.solve(&p, settings, &cancel)?;
-    let regions = image::regions(mechanism, &p, &cover, grid, settings, &cancel)?;
-    Ok(ImageReport::new(&p, &cover, &cusps, &nodes, regions))
 }
 
 #[derive(clap::Args)]

@@ -886,3 +886,30 @@ impl ImageReport {
         }
     }
 }
+
+/// What `analyse` can fail on.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum AnalyseError {
+    /// The set does not build.
+    #[error(transparent)]
+    Singular(#[from] SingularError),
+    /// Not a 2-dof mechanism with coordinate actuators.
+    #[error(transparent)]
+    Image(#[from] ImageError),
+    /// Bad settings.
+    #[error(transparent)]
+    Solve(#[from] SolveError),
+}
+
+/// The whole analysis of `m`'s type-II image: the cover of `S` (the input set at `settings`),
+/// cusps, nodes, regions on a `grid × grid` raster and the verdict. `settings.timeout` applies
+/// to each search.
+pub fn analyse(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String], settings: &SolverSettings, grid: usize, cancel: &AtomicBool) -> Result<ImageReport, AnalyseError> {
+    let p = SingularProblem::new(m, fixed, SingularKind::Input, actuated, None)?;
+    let cover = p.solve(settings, cancel)?;
+    let cusps = CuspProblem::new(&p)?.solve(&p, settings, cancel)?;
+    let nodes = NodeProblem::new(&p)?.solve(&p, settings, cancel)?;
+    let regions = regions(m, &p, &cover, grid, settings, cancel)?;
+    Ok(ImageReport::new(&p, &cover, &cusps, &nodes, regions))
+}
