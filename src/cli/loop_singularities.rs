@@ -200,11 +200,16 @@ pub(crate) struct BenchArgs {
     /// Also time the double butterfly's turning points of θ6 (about half a minute a run).
     #[arg(long)]
     butterfly: bool,
+    /// Also time the type-II image of the five-bar with unequal rods (cusps, nodes, regions;
+    /// about a minute a run), each search against the cover of the type-II set in the same run.
+    #[arg(long)]
+    image: bool,
 }
 
 const FOUR_BAR: &str = include_str!("../../urdf/four_bar.urdf");
 const FIVE_BAR: &str = include_str!("../../urdf/five_bar.urdf");
 const BUTTERFLY: &str = include_str!("../../urdf/double_butterfly.urdf");
+const FIVE_BAR_UNEQUAL: &str = include_str!("../../urdf/five_bar_unequal.urdf");
 
 /// Singular-set searches against a baseline in the same run: the same search with propagation
 /// only (no LP shrink), which shows what the LP relaxation of the bilinear null-vector rows buys.
@@ -246,5 +251,57 @@ pub(crate) fn bench(args: BenchArgs) -> Result<()> {
             medians.push(median);
         }
     }
+    if args.image {
+        bench_image(&mut out, args.repeat)?;
+    }
+    Ok(())
+}
+
+/// The type-II image searches of the five-bar with unequal rods, each against the cover of the
+/// type-II set (the baseline) in the same run; CPU seconds, medians of `repeat` runs.
+fn bench_image(out: &mut impl Write, repeat: usize) -> Result<()> {
+    let m = urdf::parse(FIVE_BAR_UNEQUAL)?;
+    let actuated: Vec<String> = vec!["crank1_joint".into(), "crank2_joint".into()];
+    let p = SingularProblem::new(&m, &[], SingularKind::Input, &actuated, None)?;
+    let settings = SolverSettings { sigma: 1e-2, max_boxes: 2_000_000, ..SolverSettings::default() };
+    let cancel = AtomicBool::new(false);
+    let cusp_problem = image::CuspProblem::new(&p)?;
+    let node_problem = image::NodeProblem::new(&p)?;
+    let median = |f: &mut dyn FnMut() -> Result<String>| -> Result<(f64, String)> {
+        let mut times = Vec::new();
+        let mut what = String::new();
+        for _ in 0..repeat {
+            let c0 = linkspace::search::process_cpu_seconds();
+            what = f()?;
+            times.push(linkspace::search::process_cpu_seconds() - c0);
+        }
+        times.sort_by(|a, b| a.total_cmp(b));
+        Ok((times[times.len() / 2], what))
+    };
+    writeln!(out, "five-bar (rods 2.5, 2) type-II image | median CPU s | result | vs the type-II cover (same run)").ok();
+    let mut cover = None;
+    let (base, what) = median(&mut || {
+        let set = p.solve(&settings, &cancel)?;
+        let w = format!("{} boxes, {} clusters", set.boxes.len(), set.clusters.len());
+        cover = Some(set);
+        Ok(w)
+    })?;
+    writeln!(out, "cover of S (baseline) | {base:.3} | {what} | 1.00x").ok();
+    let cover = cover.expect("repeat >= 1");
+    let (t, what) = median(&mut || {
+        let c = cusp_problem.solve(&p, &settings, &cancel)?;
+        Ok(format!("{} proven, {} undecided, {} chart pairs", c.proven(), c.points.len() - c.proven(), cusp_problem.charts.len()))
+    })?;
+    writeln!(out, "cusps | {t:.3} | {what} | {:.2}x the cover", t / base).ok();
+    let (t, what) = median(&mut || {
+        let n = node_problem.solve(&p, &settings, &cancel)?;
+        Ok(format!("{} proven, {} undecided, {} diagonal boxes injective", n.proven(), n.undecided(), n.injective))
+    })?;
+    writeln!(out, "nodes | {t:.3} | {what} | {:.2}x the cover", t / base).ok();
+    let (t, what) = median(&mut || {
+        let r = image::regions(&m, &p, &cover, 64, &settings, &cancel)?;
+        Ok(format!("{} regions on a 64 x 64 raster", r.regions.len()))
+    })?;
+    writeln!(out, "regions | {t:.3} | {what} | {:.2}x the cover", t / base).ok();
     Ok(())
 }
