@@ -222,7 +222,7 @@ mod butterfly {
         let p = [L7 * u7[0] - B6 * u6[0] + base[0], L7 * u7[1] - B6 * u6[1] + base[1]];
         let np = p[0].hypot(p[1]);
         let r = (L4 * L4 - np * np - B2 * B2) / (2.0 * B2 * np);
-        if !(r.abs() <= 1.0) {
+        if r.is_nan() || r.abs() > 1.0 {
             return None;
         }
         let t2 = p[1].atan2(p[0]) + s1 * r.acos() - g2;
@@ -230,7 +230,7 @@ mod butterfly {
         let q = [L7 * u7[0] + A2 * u2[0] + B0, L7 * u7[1] + A2 * u2[1]];
         let nq = q[0].hypot(q[1]);
         let r2 = (L5 * L5 - nq * nq - A1 * A1) / (2.0 * A1 * nq);
-        if !(r2.abs() <= 1.0) {
+        if r2.is_nan() || r2.abs() > 1.0 {
             return None;
         }
         let t1 = q[1].atan2(q[0]) + s2 * r2.acos();
@@ -328,8 +328,11 @@ mod trace {
     use nalgebra::{DMatrix, DVector};
     use std::f64::consts::PI;
 
+    /// One loop: its terms and its constant.
+    type Loop = (Vec<(f64, usize, f64)>, [f64; 2]);
+
     /// (coefficient, angle index 0..7 for θ1..θ7, offset): the terms of loops A, B, C.
-    fn loops() -> [(Vec<(f64, usize, f64)>, [f64; 2]); 3] {
+    fn loops() -> [Loop; 3] {
         let (g0, g1, g2) = (3f64.atan2(4.0), 5f64.atan2(12.0), 4f64.atan2(3.0));
         let base = [7.0 * g0.cos(), -7.0 * g0.sin()];
         [
@@ -529,7 +532,8 @@ fn double_butterfly_turning_points_of_theta6_match_an_independent_grid_and_newto
     }
     let (p, set) = run(&urdf_text("double_butterfly.urdf"), SingularKind::Input, &["joint6"], None, 1e-4);
     assert_eq!(set.status, Status::Complete);
-    let got: Vec<((f64, f64), (f64, f64), bool)> = cluster_values(&p, &set, "joint7")
+    type Turning = ((f64, f64), (f64, f64), bool);
+    let got: Vec<Turning> = cluster_values(&p, &set, "joint7")
         .into_iter()
         .zip(cluster_values(&p, &set, "joint6"))
         .map(|((t7, c), (t6, _))| (t7, t6, c))

@@ -211,13 +211,16 @@ const FIVE_BAR: &str = include_str!("../../urdf/five_bar.urdf");
 const BUTTERFLY: &str = include_str!("../../urdf/double_butterfly.urdf");
 const FIVE_BAR_UNEQUAL: &str = include_str!("../../urdf/five_bar_unequal.urdf");
 
+/// A bench case: name, URDF text, set, actuated joints, output, sigma.
+type Case = (&'static str, &'static str, SingularKind, Vec<String>, Option<Output>, f64);
+
 /// Singular-set searches against a baseline in the same run: the same search with propagation
 /// only (no LP shrink), which shows what the LP relaxation of the bilinear null-vector rows buys.
 pub(crate) fn bench(args: BenchArgs) -> Result<()> {
     if args.repeat == 0 {
         bail!("--repeat must be at least 1");
     }
-    let mut cases: Vec<(&str, &str, SingularKind, Vec<String>, Option<Output>, f64)> = vec![
+    let mut cases: Vec<Case> = vec![
         ("four-bar dead centres (output rocker_joint)", FOUR_BAR, SingularKind::Output, vec!["crank_joint".into()], Some(Output::Joints(vec!["rocker_joint".into()])), 1e-6),
         ("five-bar type-II curves", FIVE_BAR, SingularKind::Input, vec!["crank1_joint".into(), "crank2_joint".into()], None, 2e-2),
     ];

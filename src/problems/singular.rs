@@ -565,7 +565,7 @@ impl Parts {
             .map(|rates| {
                 let mut row = vec![point(0.0); self.coords.len()];
                 for r in rates {
-                    row[r.coord] = row[r.coord] + r.factor.map_or(r.coef, |f| r.coef * self.eval_var(b, f));
+                    row[r.coord] += r.factor.map_or(r.coef, |f| r.coef * self.eval_var(b, f));
                 }
                 row
             })
@@ -588,7 +588,7 @@ fn merge(terms: Vec<Term>) -> Vec<Term> {
     let mut out: Vec<Term> = Vec::new();
     for t in terms {
         match out.iter_mut().find(|o| o.mono == t.mono) {
-            Some(o) => o.coef = o.coef + t.coef,
+            Some(o) => o.coef += t.coef,
             None => out.push(t),
         }
     }

@@ -216,14 +216,14 @@ impl CuspProblem {
         tangent.extend(&w);
         let mut charts = Vec::new();
         for k in 0..n {
-            for tau in 0..=n {
+            for (tau, &pinned) in tangent.iter().enumerate() {
                 if tau == k + 1 {
                     continue;
                 }
                 let mut s = b.aug.clone();
                 pin(&mut s, v[k], 1.0);
                 pin(&mut s, w[k], 0.0);
-                pin(&mut s, tangent[tau], 1.0);
+                pin(&mut s, pinned, 1.0);
                 charts.push(((k, tau), s));
             }
         }
@@ -485,7 +485,7 @@ fn injective(sys: &EquationSystem, shared: &[VarId], bx: &IntervalBox, map: &[Va
         let mut row = vec![point(0.0); cols.len()];
         let mut add = |v: VarId, x: Interval| {
             if let Some(&j) = col_of.get(&v) {
-                row[j] = row[j] + x;
+                row[j] += x;
             }
         };
         for t in &e.terms {
@@ -527,13 +527,12 @@ pub fn full_column_rank(m: &[Vec<Interval>]) -> bool {
         for x in a[col].iter_mut() {
             *x /= piv;
         }
-        for i in 0..c {
-            if i != col {
-                let f = a[i][col];
-                if f != 0.0 {
-                    for j in 0..2 * c {
-                        a[i][j] -= f * a[col][j];
-                    }
+        let pivot_row = a[col].clone();
+        for (i, row) in a.iter_mut().enumerate() {
+            let f = row[col];
+            if i != col && f != 0.0 {
+                for (x, y) in row.iter_mut().zip(&pivot_row) {
+                    *x -= f * y;
                 }
             }
         }
@@ -541,14 +540,14 @@ pub fn full_column_rank(m: &[Vec<Interval>]) -> bool {
     // P = N⁻¹ M_cᵀ.
     let p: Vec<Vec<f64>> = (0..c).map(|i| (0..r).map(|k| (0..c).map(|j| a[i][c + j] * mc[k][j]).sum()).collect()).collect();
     let mut norm = 0.0f64;
-    for i in 0..c {
+    for (i, p_row) in p.iter().enumerate() {
         let mut row_sum = point(0.0);
         for j in 0..c {
             let mut x = point(if i == j { 1.0 } else { 0.0 });
-            for k in 0..r {
-                x = x - point(p[i][k]) * m[k][j];
+            for (pk, m_row) in p_row.iter().zip(m) {
+                x -= point(*pk) * m_row[j];
             }
-            row_sum = row_sum + x.abs();
+            row_sum += x.abs();
         }
         norm = norm.max(row_sum.sup());
     }
