@@ -958,8 +958,11 @@ mod three_rpr_ref {
 }
 
 /// The 3-RPR with ρ3 = 17: every cusp of its type-II image in (ρ1, ρ2) certified, against the
-/// independent Newton of `three_rpr_ref` (none missed, none extra); the verdict is "yes".
+/// independent Newton of `three_rpr_ref` (none missed, none extra).
+/// Ignored: on two shared cores the 30 chart pairs of the cusp search ran over ten minutes
+/// without finishing; run it with `--ignored`.
 #[test]
+#[ignore = "slow: the 3-RPR cusp search has 30 chart pairs (minutes); run with --ignored"]
 fn three_rpr_cusps_match_an_independent_newton() {
     let reference = three_rpr_ref::cusps(17.0);
     assert_eq!(reference.len(), 6, "{reference:?}");
