@@ -30,6 +30,8 @@ pub enum Choice {
     Auto,
     /// Coordinates of the free points (`Placed`).
     Points,
+    /// A point and a direction of the line through the two free points (`Placed::build_line`).
+    Line,
     /// Determinants, one variable per distance.
     Shared,
     /// Determinants, the seed's split variables.
@@ -143,30 +145,44 @@ fn solve_inner(problem: &DistanceProblem, choice: Choice, redundant: bool, faces
     let choice = if choice == Choice::Auto { choose(problem) } else { choice };
     let formulation = if choice == Choice::Split { Formulation::Split } else { Formulation::Shared };
     let cm = CayleyMenger::build(problem, BuildOptions { formulation, redundant })?;
-    let placed = match Placed::build(problem) {
-        Ok(p) => Some(p),
-        Err(e) if choice == Choice::Points => return Err(e.into()),
-        Err(_) => None,
+    let placed = match choice {
+        Choice::Line => Some(Placed::build_line(problem)?),
+        _ => match Placed::build(problem) {
+            Ok(p) => Some(p),
+            Err(e) if choice == Choice::Points => return Err(e.into()),
+            Err(_) => None,
+        },
     };
-    if choice == Choice::Points {
+    if matches!(choice, Choice::Points | Choice::Line) {
         let placed = placed.expect("built above");
+        let mut settings = settings.clone();
+        if let Ok(v) = std::env::var("LS_EXP_NOLP") { settings.use_lp = v != "1"; }
+        if let Ok(v) = std::env::var("LS_EXP_NW") { settings.newton_width = v.parse().unwrap(); }
+        if let Ok(v) = std::env::var("LS_EXP_RHO") { settings.rho = v.parse().unwrap(); }
+        let tt = std::time::Instant::now();
         let mut out = {
             let solver = Solver::new(&placed.system, settings.clone()).map_err(DistanceSolverError::from)?;
             let e = solver.enclose(cancel, &mut |_| {});
             let solver = Solver::new(&placed.system, deeper_settings(&settings)).map_err(DistanceSolverError::from)?;
             let mut out = Certified { formulation: choice, cm, placed: None, status: e.status, stats: e.stats, solutions: e.solutions, unique: e.unique, cluster: Vec::new(), clusters: Vec::new(), roots: Vec::new(), undecided: e.undecided };
+            eprintln!("PROF line search {:?} boxes {}", tt.elapsed(), out.stats.processed);
             settle_points(&placed, &solver, &mut out, cancel);
+            eprintln!("PROF line total {:?} boxes {}", tt.elapsed(), out.stats.processed);
             out
         };
         out.placed = Some(placed);
         Ok(out)
     } else {
         let solver = cm.solver(faces, settings.clone())?;
+        let tt = std::time::Instant::now();
         let e = solver.enclose(cancel, &mut |_| {});
+        eprintln!("PROF enclose {:?} processed {} sols {} dropped {}", tt.elapsed(), e.stats.processed, e.solutions.len(), e.stats.spurious_dropped);
+        let tt = std::time::Instant::now();
         let solver = cm.solver(faces, deeper_settings(&settings))?;
         let unique = vec![false; e.solutions.len()];
         let mut out = Certified { formulation: choice, cm: cm.clone(), placed: None, status: e.status, stats: e.stats, solutions: e.solutions, unique, cluster: Vec::new(), clusters: Vec::new(), roots: Vec::new(), undecided: e.undecided };
         settle_determinants(&cm, placed.as_ref(), &solver, &mut out, cancel);
+        eprintln!("PROF settle {:?}", tt.elapsed());
         out.placed = placed;
         Ok(out)
     }
@@ -290,6 +306,7 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
     // distances as bounds (square, so Krawczyk certifies what it finds); a box is removed when
     // that search proves it empty, gains the placements it certifies, or stays undecided. The
     // determinants themselves cannot do this near a tangency (singular) or when not square.
+    eprintln!("PROF roots {} ", roots.len());
     let covered: Vec<bool> = (0..out.solutions.len()).map(|i| meets.iter().any(|m| m.contains(&i))).collect();
     let pairs: Vec<(usize, usize)> = cm.unknowns.iter().map(|u| (u.a, u.b)).collect();
     let with_r = placed.filter(|p| p.is_square()).and_then(|_| Placed::build_with(&cm.problem, &pairs).ok());
@@ -302,6 +319,7 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
             continue;
         }
         let b = out.solutions[i].clone();
+        let tt = std::time::Instant::now(); let p0 = out.stats.processed;
         let verdict = match &with_r {
             Some(pr) => {
                 let bounds: Vec<_> = cm.unknown_intervals(&b).into_iter().map(|(_, d)| d).collect();
@@ -319,6 +337,7 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
             }
             None => deeper(solver, &b, cancel, &mut out.stats).and_then(|f| if f.is_empty() { Ok(Vec::new()) } else { Err("no frame to certify placements in (fewer than three fixed points)") }),
         };
+        eprintln!("PROF deeper box {i} {:?} processed {} -> {:?}", tt.elapsed(), out.stats.processed - p0, verdict.as_ref().map(|f| f.len()));
         match verdict {
             Ok(found) if found.is_empty() => {}
             Ok(found) => {

@@ -24,6 +24,9 @@ pub enum Form {
     Auto,
     /// Coordinates of the free points (degree two; interval Newton certifies).
     Points,
+    /// A point and a direction of the line through the two free points (lines tangent to
+    /// spheres; degree two; interval Newton certifies).
+    Line,
     /// One variable per distance (degree two; Bernstein control points).
     Shared,
     /// The seed's: r_ij and r_ji separate, multilinear (corner values).
@@ -93,6 +96,7 @@ pub fn choice(form: Form) -> Choice {
     match form {
         Form::Auto => Choice::Auto,
         Form::Points => Choice::Points,
+        Form::Line => Choice::Line,
         Form::Shared => Choice::Shared,
         Form::Split => Choice::Split,
     }
