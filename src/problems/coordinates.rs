@@ -23,7 +23,8 @@
 //! Builds only; solving is the kernel's job.
 
 use super::cayley_menger::{bound_smoothing, DistanceError, DistanceProblem};
-use crate::contract::{Contractor, Newton};
+use crate::contract::{Contractor, LpShrink, Newton, Propagation, Sequence};
+use crate::search::{SolveError, Solver, SolverSettings};
 use crate::interval::{interval, point, Interval, IntervalBox};
 use crate::system::multilinear::Poly;
 use crate::system::{Equation, EquationSystem, Monomial, Term, VarId, VarRole};
@@ -43,6 +44,8 @@ pub struct Placed {
     coord_polys: Vec<[Poly; 3]>,
     /// The line formulation's frame, when built by `build_line`.
     line: Option<LineFrame>,
+    /// `system` plus redundant equations for propagation only (`solver`), when there are any.
+    pub pruning: Option<EquationSystem>,
     /// One label per equation.
     pub labels: Vec<String>,
     /// Derived variables and what they stand for, in order of definition.
@@ -132,7 +135,7 @@ impl Placed {
             coords[q] = Some(ids);
         }
         let coord_polys = (0..n).map(|i| coordinate_polys(p, i, coords[i])).collect();
-        let mut placed = Self { problem: p.clone(), system, coords, coord_polys, line: None, labels: Vec::new(), derived: Vec::new(), distance_vars: Vec::new() };
+        let mut placed = Self { problem: p.clone(), system, coords, coord_polys, line: None, pruning: None, labels: Vec::new(), derived: Vec::new(), distance_vars: Vec::new() };
         let start = placed.system.initial_box();
         let mut equations: Vec<(Poly, String)> = Vec::new();
         // Known distances with a free end.
@@ -267,7 +270,7 @@ impl Placed {
         coord_polys[t] = [0, 1, 2].map(|k| vx(k).add(&Poly::constant(point(c[k]))));
         coord_polys[u] = [0, 1, 2].map(|k| vx(k).add(&vd(k).scale(len)).add(&Poly::constant(point(c[k]))));
         let frame = LineFrame { t, u, anchor, length: len, x: xs, d: ds };
-        let mut placed = Self { problem: p.clone(), system, coords: vec![None; n], coord_polys, line: Some(frame), labels: Vec::new(), derived: Vec::new(), distance_vars: Vec::new() };
+        let mut placed = Self { problem: p.clone(), system, coords: vec![None; n], coord_polys, line: Some(frame), pruning: None, labels: Vec::new(), derived: Vec::new(), distance_vars: Vec::new() };
         let start = placed.system.initial_box();
         let nm = |i: usize| p.points[i].name.clone();
         let dot = |a: &dyn Fn(usize) -> Poly, v: [Interval; 3]| (0..3).fold(Poly::zero(), |acc, k| acc.add(&a(k).scale(v[k])));
@@ -312,22 +315,54 @@ impl Placed {
             Ok(Poly::var(v))
         };
         let everything = interval(f64::NEG_INFINITY, f64::INFINITY);
+        // Equations linear in x (all but the first three so far), and the definitions of the
+        // derived `d·(t − p)`, linear in d: preconditioned below.
+        let first_extra = if b2.is_some() { 3 } else { 2 };
+        let mut in_x: Vec<Poly> = equations[first_extra..].iter().map(|(e, _)| e.clone()).collect();
+        let mut in_d: Vec<Poly> = Vec::new();
+        // An orientation toward p bounds d·(t − p): the derived y(p) of a point–line distance
+        // when there is one, its own derived variable otherwise.
+        let side = |o: &super::cayley_menger::Orientation| if o.a == t { interval(f64::NEG_INFINITY, 0.0) } else { interval(-len.sup(), f64::INFINITY) };
         for pl in &p.point_lines {
             let q = pl.point;
             let (e, e2) = e_of(q);
-            let y = derived(&mut placed, &mut equations, format!("y({})", nm(q)), along.add(&dot(&vd, e)), everything)?;
+            let bound = p.orientations.iter().filter(|o| o.toward == q).fold(everything, |b, o| b.intersection(side(o)));
+            let y = derived(&mut placed, &mut equations, format!("y({})", nm(q)), along.add(&dot(&vd, e)), bound)?;
+            in_d.push(equations.last().expect("just pushed").0.clone());
             let poly = dot(&vx, e).scale(point(2.0)).add(&y.mul(&y).scale(point(-1.0))).add(&Poly::constant(a2 + e2 - pl.squared));
+            in_x.push(poly.clone());
             equations.push((poly, format!("dist({}, line {} {})² = {}", nm(q), nm(pl.line.0), nm(pl.line.1), pl.squared.mid())));
         }
-        for o in &p.orientations {
+        for o in p.orientations.iter().filter(|o| !p.point_lines.iter().any(|pl| pl.point == o.toward)) {
             let (e, _) = e_of(o.toward);
-            let bound = if o.a == t { interval(f64::NEG_INFINITY, 0.0) } else { interval(-len.sup(), f64::INFINITY) };
-            derived(&mut placed, &mut equations, format!("orient({} {} toward {})", nm(o.a), nm(o.b), nm(o.toward)), along.add(&dot(&vd, e)), bound)?;
+            derived(&mut placed, &mut equations, format!("orient({} {} toward {})", nm(o.a), nm(o.b), nm(o.toward)), along.add(&dot(&vd, e)), side(o))?;
+            in_d.push(equations.last().expect("just pushed").0.clone());
         }
         for (poly, label) in equations {
             placed.system.add(to_equation(&poly)?);
             placed.labels.push(label);
         }
+        // Redundant equations for propagation: each equation group solved for its variables
+        // (x from the distances, d from the derived dot products) by a floating-point
+        // pseudo-inverse. Any real combination of equations that vanish vanishes, so these
+        // hold wherever the system does; they only let propagation see x and d one at a time.
+        let mut pruning = placed.system.clone();
+        for (group, vars) in [(&in_x, xs), (&in_d, ds)] {
+            let solved = precondition(group, &vars);
+            if vars == xs && !solved.is_empty() {
+                // x is then a function of d (through the y² terms): the search branches on d
+                // alone, a two-dimensional sphere instead of six dimensions (measured: half the
+                // boxes on the four spheres).
+                for &v in &xs {
+                    placed.system.vars[v].role = VarRole::Derived;
+                    pruning.vars[v].role = VarRole::Derived;
+                }
+            }
+            for poly in solved {
+                pruning.add(to_equation(&poly)?);
+            }
+        }
+        placed.pruning = Some(pruning);
         Ok(placed)
     }
 
@@ -362,6 +397,32 @@ impl Placed {
             b.dims[v] = cut;
         }
         Some(b)
+    }
+
+    /// The kernel's solver for `system`: propagation over `pruning` (when there is one), then
+    /// interval Newton and the LP shrink on `system`, as `search::default_contractor`.
+    pub fn solver(&self, settings: SolverSettings) -> Result<Solver<'_>, SolveError> {
+        let solver = Solver::new(&self.system, settings)?;
+        let Some(pruning) = &self.pruning else { return Ok(solver) };
+        let line = self.line.is_some();
+        Ok(solver.with_contractor(Box::new(move |system, s| {
+            // Another sweep only when the last one narrowed some component by a fifth: the
+            // bisection is cheaper than slow fixpoints (measured on the four spheres).
+            let mut prop = Propagation::new(pruning);
+            prop.min_gain = 0.2;
+            let mut steps: Vec<Box<dyn Contractor + Send + '_>> = vec![Box::new(prop)];
+            if let Some(newton) = Newton::new(system, s.newton_width) {
+                steps.push(Box::new(newton));
+            }
+            // The LP shrink cuts nothing measurable here (the same boxes with and without it),
+            // so the line formulation goes without.
+            if s.use_lp && !line {
+                let mut lp = LpShrink::new(system);
+                lp.backend = s.lp_backend;
+                steps.push(Box::new(lp));
+            }
+            Box::new(Sequence(steps))
+        })))
     }
 
     /// True when the system is square: Krawczyk applies, and certifies regular roots.
@@ -453,6 +514,26 @@ impl Placed {
         let b = IntervalBox::new(x.iter().map(|&v| interval(v - r(v), v + r(v))).collect());
         newton.certify(&b)
     }
+}
+
+/// Combinations `Σ_i M_ji p_i` of `polys`, one per variable of `vars`, with `M` a floating-point
+/// pseudo-inverse of the matrix of their coefficients in `vars` (midpoints of the linear terms):
+/// each combination has coefficient about 1 on its variable and about 0 on the others. Empty when
+/// that matrix has not full column rank. Sound for any `M`: a real combination of vanishing
+/// polynomials vanishes (coefficients are combined in interval arithmetic).
+fn precondition(polys: &[Poly], vars: &[VarId]) -> Vec<Poly> {
+    let (rows, cols) = (polys.len(), vars.len());
+    if rows < cols {
+        return Vec::new();
+    }
+    let a = nalgebra::DMatrix::from_fn(rows, cols, |r, c| polys[r].terms().find(|(m, _)| m.as_slice() == [(vars[c], 1)]).map_or(0.0, |(_, k)| k.mid()));
+    let ata = a.transpose() * &a;
+    let Some(inv) = ata.try_inverse() else { return Vec::new() };
+    let m = inv * a.transpose();
+    if !m.iter().all(|v| v.is_finite()) || m.amax() > 1e8 {
+        return Vec::new();
+    }
+    (0..cols).map(|j| (0..rows).fold(Poly::zero(), |acc, i| acc.add(&polys[i].scale(point(m[(j, i)]))))).collect()
 }
 
 /// A `Poly` of degree at most two as an `Equation` (`poly = 0`).
