@@ -278,7 +278,17 @@ fn settle_points(placed: &Placed, solvers: &[Solver<'_>], out: &mut Certified, c
                 clusters[c].undecided.get_or_insert("overlapping certified boxes: one solution or two");
             }
             clusters[c].proven += 1;
-            out.roots.push(Root { cluster: c, certified: certified[k].clone(), points: placed.points(&certified[k].midpoint()) });
+            // The certified box may be up to sigma wide: its placement is polished and proven
+            // again in a tiny box (kept when that fails: the wide box is still a proof).
+            let rough = placed.points(&certified[k].midpoint());
+            let (certified, points) = match placed.certify_near(&rough).filter(|x| x.intersects(certified[k])) {
+                Some(x) => {
+                    let points = placed.points(&x.midpoint());
+                    (x, points)
+                }
+                None => (certified[k].clone(), rough),
+            };
+            out.roots.push(Root { cluster: c, certified, points });
         }
     }
     out.solutions = boxes;
