@@ -483,9 +483,15 @@ fn randomized_sphere_sets_against_the_resultant() {
         (s >> 11) as f64 / (1u64 << 53) as f64
     };
     let mut counts = Vec::new();
-    for seed in 0..6 {
-        let c: [[f64; 3]; 4] = [0; 4].map(|_| [0; 3].map(|_| 3.0 * (next() - 0.5)));
-        let r = [0; 4].map(|_| 0.8 + 0.8 * next());
+    for seed in 0..10 {
+        // Half the sets anywhere in a cube, half a perturbed regular tetrahedron with radii
+        // around the value that gives 12 lines (so that counts from 0 to 12 come up).
+        let c: [[f64; 3]; 4] = if seed % 2 == 0 {
+            [0; 4].map(|_| [0; 3].map(|_| 3.0 * (next() - 0.5)))
+        } else {
+            [[1.0, 1.0, 1.0], [1.0, -1.0, -1.0], [-1.0, 1.0, -1.0], [-1.0, -1.0, 1.0]].map(|x| x.map(|v| v + 0.6 * (next() - 0.5)))
+        };
+        let r = if seed % 2 == 0 { [0; 4].map(|_| 0.8 + 0.8 * next()) } else { [0; 4].map(|_| 1.3 + 0.3 * next()) };
         let refs = resultant_lines(c, r);
         let out = run(&spheres(c, r), Choice::Auto, false, 0.01);
         let lines = proven_lines(&out);
