@@ -294,9 +294,15 @@ pub fn bench(args: BenchArgs) -> Result<()> {
             ("split, corners, C1-C4 (the seed's; baseline)", Form::Split, Some(args.split_timeout)),
             ("shared, Bernstein corners, C1-C4", Form::Shared, None),
             ("points (coordinates, Krawczyk)", Form::Points, None),
+            ("line (point and direction, Krawczyk; issue 15)", Form::Line, None),
             ("auto (the CLI's default)", Form::Auto, None),
         ] {
-            let settings = SolverSettings { sigma, rho: 0.99, timeout: timeout.map(Duration::from_secs_f64), ..Default::default() };
+            // rho as the CLI's default for the formulation (0.99 for the determinants).
+            let rho = default_rho(match choice(form) {
+                Choice::Auto => linkspace::distances::choose(&d),
+                c => c,
+            });
+            let settings = SolverSettings { sigma, rho, timeout: timeout.map(Duration::from_secs_f64), ..Default::default() };
             // The slow baseline runs once.
             let repeat = if form == Form::Split { 1 } else { args.repeat };
             let (t, c) = run(&d, form, matches!(form, Form::Split | Form::Shared), FaceBounds::Corners, &settings, repeat)?;
