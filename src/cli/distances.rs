@@ -126,6 +126,8 @@ fn face_bounds(f: Faces) -> FaceBounds {
 }
 
 pub fn run(args: DistancesArgs) -> Result<()> {
+    // Settings are checked before the file is read (rho's default depends on the formulation).
+    args.limits.solver_settings(SolverSettings::default().max_boxes, SolverSettings { sigma: args.sigma, rho: args.rho.unwrap_or(0.99), ..Default::default() })?.validate()?;
     let fixed = args.fix.iter().map(|s| parse_fix(s)).collect::<Result<Vec<_>>>()?;
     let text = std::fs::read_to_string(&args.file).with_context(|| format!("reading {}", args.file.display()))?;
     let loaded = load(&args.file, &text, &fixed)?;
