@@ -44,7 +44,10 @@ pub fn box_set(r: &BoxSetResult, run_id: u64) -> BoxSet {
         joint_lower.extend(b.joints.iter().map(|x| x[0]));
         joint_upper.extend(b.joints.iter().map(|x| x[1]));
     }
+    // Complete means nothing undecided, as in the CLI's reports: a finished run that left
+    // undecided boxes (a platform's cluster without a proof) is incomplete, limit "undecided".
     let (status, limit) = match r.status {
+        Status::Complete if r.boxes.iter().any(|b| b.status == BoxStatus::Undecided) => (msgs::SET_INCOMPLETE, "undecided"),
         Status::Complete => (msgs::SET_COMPLETE, ""),
         Status::Incomplete(l) => (msgs::SET_INCOMPLETE, limit_name(l)),
     };
