@@ -47,10 +47,22 @@ impl<'a> Newton<'a> {
 
     /// The shared Krawczyk step on `x`.
     fn step(&self, x: &[Interval]) -> Step<Vec<Interval>> {
+        let (b, c, fc, j) = self.linearise(x);
+        krawczyk::step(&b, &c, &fc, &j).map(|k| k.data.into())
+    }
+
+    /// Krawczyk's image of `x` (for ε-inflation).
+    fn image(&self, x: &[Interval]) -> Option<Vec<Interval>> {
+        let (b, c, fc, j) = self.linearise(x);
+        krawczyk::image(&b, &c, &fc, &j).map(|k| k.data.into())
+    }
+
+    /// The box, its midpoint `c`, `f(c)` and `J(x)`, as the Krawczyk step takes them.
+    fn linearise(&self, x: &[Interval]) -> (DVector<Interval>, DVector<f64>, DVector<Interval>, DMatrix<Interval>) {
         let c: Vec<f64> = x.iter().map(|d| d.mid()).collect();
         let cpoint: Vec<Interval> = c.iter().map(|&v| point(v)).collect();
         let fc = DVector::from_iterator(x.len(), self.system.equations.iter().map(|e| e.eval(&cpoint)));
-        krawczyk::step(&DVector::from_column_slice(x), &DVector::from_vec(c), &fc, &self.jacobian(x)).map(|k| k.data.into())
+        (DVector::from_column_slice(x), DVector::from_vec(c), fc, self.jacobian(x))
     }
 }
 
@@ -83,7 +95,7 @@ impl Contractor for Newton<'_> {
     /// does not depend on where a link's rest pose is (see `inflate` on the widest term).
     fn certify(&mut self, b: &IntervalBox) -> Option<IntervalBox> {
         let policy = Inflation { rounds: 4, own: 0.05, widest: 0.005, widest_of: &self.primaries, absolute: 0.0, ulps: 4.0 };
-        let dims = krawczyk::inflate(&b.dims, &policy, |x| self.step(x))?;
+        let dims = krawczyk::inflate(&b.dims, &policy, |x| self.image(x))?;
         Some(IntervalBox { dims, level: b.level })
     }
 }

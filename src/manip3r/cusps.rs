@@ -215,9 +215,10 @@ fn inflate(chain: &Chain3R, x: [Interval; 2], k: usize) -> Option<[Interval; 2]>
     krawczyk::inflate(&x, &policy, |grown| {
         let e = evaluate(chain, *grown);
         if !excludes_zero(&e.grad_det) || !excludes_zero(&e.df[k]) {
-            return K::Failed;
+            return None;
         }
-        krawczyk_cusp(grown, &e, k)
+        let m = [grown[0].mid(), grown[1].mid()];
+        krawczyk::image_array(grown, &m, &[e.det_mid, e.g_mid[k]], &[e.grad_det, e.grad_g[k]])
     })
 }
 
