@@ -338,7 +338,7 @@ mod tests {
     }
 
     /// Krawczyk's image for `poly3`.
-    fn image3(p: [f64; 4], x: &Vec<Interval>) -> Option<Vec<Interval>> {
+    fn image3(p: [f64; 4], x: &[Interval]) -> Option<Vec<Interval>> {
         let m: Vec<f64> = x.iter().map(|d| d.mid()).collect();
         let (fm, jac) = poly3(p, x, &m);
         image(&DVector::from_column_slice(x), &DVector::from_vec(m), &DVector::from_vec(fm), &DMatrix::from_fn(3, 3, |i, j| jac[i][j])).map(|k| k.data.into())

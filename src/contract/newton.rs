@@ -11,6 +11,7 @@ use super::{Contraction, Contractor};
 use crate::interval::{point, Interval, IntervalBox};
 use crate::system::{EquationSystem, Monomial, VarId};
 use nalgebra::{DMatrix, DVector};
+use std::cmp::Ordering;
 
 /// Krawczyk contraction, run only on boxes no wider than `max_width` in the primaries.
 pub struct Newton<'a> {
@@ -33,11 +34,11 @@ impl<'a> Newton<'a> {
         for (k, e) in self.system.equations.iter().enumerate() {
             for t in &e.terms {
                 match t.mono {
-                    Monomial::Linear(v) => j[(k, v)] = j[(k, v)] + t.coef,
-                    Monomial::Square(v) => j[(k, v)] = j[(k, v)] + t.coef * point(2.0) * x[v],
+                    Monomial::Linear(v) => j[(k, v)] += t.coef,
+                    Monomial::Square(v) => j[(k, v)] += t.coef * point(2.0) * x[v],
                     Monomial::Product(a, b) => {
-                        j[(k, a)] = j[(k, a)] + t.coef * x[b];
-                        j[(k, b)] = j[(k, b)] + t.coef * x[a];
+                        j[(k, a)] += t.coef * x[b];
+                        j[(k, b)] += t.coef * x[a];
                     }
                 }
             }
@@ -68,7 +69,9 @@ impl<'a> Newton<'a> {
 
 impl Contractor for Newton<'_> {
     fn contract(&mut self, b: &mut IntervalBox) -> Contraction {
-        if self.primaries.iter().any(|&i| !(b.dims[i].wid() <= self.max_width)) {
+        // A NaN width (never in a valid box) counts as too wide.
+        let narrow = |i: &VarId| matches!(b.dims[*i].wid().partial_cmp(&self.max_width), Some(Ordering::Less | Ordering::Equal));
+        if !self.primaries.iter().all(narrow) {
             return Contraction::Unchanged;
         }
         match self.step(&b.dims) {

@@ -194,10 +194,16 @@ pub fn bisect(b: [Interval; 2], cut_theta3: bool) -> ([Interval; 2], [Interval; 
     (lo, hi)
 }
 
+/// The square system (det, gₖ) linearised over `b` with `e` its evaluation: midpoint, values
+/// there and Jacobian over `b`, as `krawczyk::step_array` takes them.
+fn cusp_system(b: &[Interval; 2], e: &BoxEval, k: usize) -> ([f64; 2], [Interval; 2], [[Interval; 2]; 2]) {
+    ([b[0].mid(), b[1].mid()], [e.det_mid, e.g_mid[k]], [e.grad_det, e.grad_g[k]])
+}
+
 /// Krawczyk on (det, gₖ) over `b` with `e` its evaluation.
 fn krawczyk_cusp(b: &[Interval; 2], e: &BoxEval, k: usize) -> K<[Interval; 2]> {
-    let m = [b[0].mid(), b[1].mid()];
-    krawczyk::step_array(b, &m, &[e.det_mid, e.g_mid[k]], &[e.grad_det, e.grad_g[k]])
+    let (m, fm, jac) = cusp_system(b, e, k);
+    krawczyk::step_array(b, &m, &fm, &jac)
 }
 
 /// Shrinks a proven cusp box by repeated Krawczyk steps until it is no wider than `precision`.
@@ -217,8 +223,8 @@ fn inflate(chain: &Chain3R, x: [Interval; 2], k: usize) -> Option<[Interval; 2]>
         if !excludes_zero(&e.grad_det) || !excludes_zero(&e.df[k]) {
             return None;
         }
-        let m = [grown[0].mid(), grown[1].mid()];
-        krawczyk::image_array(grown, &m, &[e.det_mid, e.g_mid[k]], &[e.grad_det, e.grad_g[k]])
+        let (m, fm, jac) = cusp_system(grown, &e, k);
+        krawczyk::image_array(grown, &m, &fm, &jac)
     })
 }
 

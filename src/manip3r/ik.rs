@@ -168,7 +168,10 @@ fn cluster(boxes: &[[Interval; 2]]) -> Vec<IkCluster> {
             }
         }
     }
-    let edge: Vec<usize> = (0..n).filter(|&i| boxes[i].iter().any(|d| d.inf() <= -3.14159 || d.sup() >= 3.14159)).collect();
+    // Deliberately a little below π: boxes this close to the seam may meet copies across it.
+    #[allow(clippy::approx_constant)]
+    const NEAR_SEAM: f64 = 3.14159;
+    let edge: Vec<usize> = (0..n).filter(|&i| boxes[i].iter().any(|d| d.inf() <= -NEAR_SEAM || d.sup() >= NEAR_SEAM)).collect();
     for (x, &i) in edge.iter().enumerate() {
         for &j in &edge[x + 1..] {
             if meet_on_torus(&boxes[i], &boxes[j]) {
