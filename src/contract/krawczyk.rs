@@ -101,11 +101,7 @@ where
 /// nalgebra's stack storage.
 #[inline]
 pub fn step_array<const N: usize>(b: &[Interval; N], m: &[f64; N], fm: &[Interval; N], jac: &[[Interval; N]; N]) -> Step<[Interval; N]> {
-    let b = SVector::from(*b);
-    match image(&b, &SVector::from(*m), &SVector::from(*fm), &SMatrix::from_fn(|i, j| jac[i][j])) {
-        None => Step::Failed,
-        Some(k) => classify(&b, k).map(Into::into),
-    }
+    step(&SVector::from(*b), &SVector::from(*m), &SVector::from(*fm), &SMatrix::from_fn(|i, j| jac[i][j])).map(Into::into)
 }
 
 /// `image` on arrays, as `step_array`.
