@@ -55,6 +55,7 @@ class SolveStats_(IdlStruct, typename="linkspace_msgs::msg::dds_::SolveStats_"):
     max_level: uint32
     seconds: float64
     certified: uint64
+    post_processing_cut_short: bool
 
 
 @dataclass

@@ -216,6 +216,7 @@ fn assert_same_boxes(set: &Value, report: &Value) {
     assert_eq!(statuses.iter().filter(|s| **s == json!(2)).count(), unique, "certified boxes travel as Box.UNIQUE");
     assert_eq!(statuses.iter().filter(|s| **s == json!(0)).count(), solutions.len() - unique);
     assert_eq!(set["stats"]["certified"], report["stats"]["certified"]);
+    assert_eq!(set["stats"]["post_processing_cut_short"], report["stats"]["post_processing_cut_short"]);
     assert_eq!(set["clusters"], report["clusters"]);
     let complete = report["status"] == "complete";
     assert_eq!(set["status"], json!(if complete { 0 } else { 1 }));

@@ -81,6 +81,7 @@ pub fn box_set(r: &BoxSetResult, run_id: u64) -> BoxSet {
             max_level: r.stats.max_level,
             seconds: r.stats.seconds,
             certified: r.stats.certified,
+            post_processing_cut_short: r.stats.post_processing_cut_short,
         },
     }
 }

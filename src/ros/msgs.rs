@@ -149,7 +149,7 @@ mirror! {
 }
 mirror! {
     /// linkspace_msgs/SolveStats
-    SolveStats { processed: u64, empty: u64, bisected: u64, solutions: u64, spurious_dropped: u64, max_level: u32, seconds: f64, certified: u64 }
+    SolveStats { processed: u64, empty: u64, bisected: u64, solutions: u64, spurious_dropped: u64, max_level: u32, seconds: f64, certified: u64, post_processing_cut_short: bool }
 }
 mirror! {
     /// linkspace_msgs/BoxSet
