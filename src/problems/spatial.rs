@@ -707,6 +707,7 @@ impl SpatialProblem {
         let mut leg_travel: BTreeMap<usize, Travel> = BTreeMap::new();
         let travel_domain = |(lo, hi): (f64, f64)| interval(stated(lo).inf(), stated(hi).sup());
         let mut reductions = Vec::new();
+        let mut floating: Vec<(usize, [VarId; 3])> = Vec::new();
 
         for &l in &order {
             let Some(j) = m.links[l].parent_joint else { continue };
@@ -796,12 +797,15 @@ impl SpatialProblem {
                         // The pose is free: position and rotation in the root frame.
                         gr = const_rot(&st::identity());
                         at = Pos::origin();
+                        let mut vars = [0; 3];
                         for (i, axis) in ["x", "y", "z"].iter().enumerate() {
                             let v = b.system.add_var(format!("{name}.{axis}"), VarRole::Primary, interval(-reach, reach));
                             at.rest[i] = Form::var(v);
                             readings.push((format!("{name}.{axis}"), Reading::Var(v)));
                             free_joints.push(format!("{name}.{axis}"));
+                            vars[i] = v;
                         }
+                        floating.push((l, vars));
                     }
                     let z = point(0.0);
                     let o1 = point(1.0);
@@ -817,6 +821,38 @@ impl SpatialProblem {
                     places[l].rotation = Some((ng, st::identity()));
                     places[l].position = Some(at);
                 }
+            }
+        }
+
+        // A floating link closed by a leg lies within the leg's reach of the leg's first ball:
+        // |p| ≤ |A| + max |u + d·w| + |t| (t: the ball on the floating link), a far tighter box
+        // than the sum of every offset in the file.
+        for &(f, vars) in &floating {
+            let start = b.system.initial_box();
+            let mut r = reach;
+            for leg in &legs {
+                let lp = &m.loops[leg.closure];
+                let last = *leg.links.last().expect("a leg has links");
+                let other = if lp.predecessor == last { lp.successor } else { lp.predecessor };
+                if other != f {
+                    continue;
+                }
+                let t = if lp.predecessor == f { lp.predecessor_origin.translation.vector } else { lp.successor_origin.translation.vector };
+                let Some(apos) = places[m.joints[leg.joint].child].position.clone() else { continue };
+                let a = b.forms(&apos).map(|x| x.eval(&start.dims));
+                let na = (a[0].sqr() + a[1].sqr() + a[2].sqr()).sqrt().sup();
+                let nu = (leg.u[0].sqr() + leg.u[1].sqr() + leg.u[2].sqr()).sqrt().sup();
+                let travel = leg.travel.or_else(|| leg.links.get(1).and_then(|&rod| m.links[rod].parent_joint).and_then(|pj| leg_travel.get(&pj).copied()));
+                let nd = match travel {
+                    Some(Travel::Known(v)) => v.mag(),
+                    Some(Travel::Var(v)) => b.system.vars[v].domain.mag(),
+                    None => 0.0,
+                };
+                // w is a unit vector: |u + d·w| ≤ |u| + |d|; sums rounded up by a relative margin.
+                r = r.min((na + nu + nd + t.norm()) * (1.0 + 1e-12) + 1e-12);
+            }
+            for v in vars {
+                b.system.vars[v].domain = interval(-r, r);
             }
         }
 
