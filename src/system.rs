@@ -211,9 +211,6 @@ pub enum SystemError {
         /// the variable
         name: String,
     },
-    /// There is nothing to branch on.
-    #[error("the system has no primary variable")]
-    NoPrimary,
 }
 
 /// Variables with domains, and the equations over them.
@@ -268,9 +265,6 @@ impl EquationSystem {
             if !finite(e.constant) || !e.terms.iter().all(|t| finite(t.coef)) {
                 return Err(SystemError::BadCoefficient { equation: k });
             }
-        }
-        if self.primaries().is_empty() {
-            return Err(SystemError::NoPrimary);
         }
         Ok(())
     }

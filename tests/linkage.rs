@@ -436,3 +436,19 @@ fn limits_on_a_joint_away_from_the_ground_bound_the_search() {
         }
     }
 }
+
+/// Fixing every joint asks whether one stated configuration closes: a complete run with no box
+/// when it provably does not, one box (a point, never "unique": nothing is left to certify)
+/// when rounding cannot refute it. Neither is bad input.
+#[test]
+fn fixing_every_joint_answers_with_one_box_or_none() {
+    // Crank 0, coupler π/3: the coupler tip (3.5, 2√3) is 3.5 from O4 = (4, 0) exactly, at the
+    // rocker angle atan2(2√3, −0.5).
+    let (coupler, rocker) = (PI / 3.0, (2.0 * 3f64.sqrt()).atan2(-0.5));
+    let closes = problem("four_bar.urdf", &[("crank_joint", 0.0), ("coupler_joint", coupler), ("rocker_joint", rocker)], &[]);
+    let run = solve(&closes, 1e-6);
+    assert_eq!((run.status, run.solutions.len(), run.unique.iter().filter(|&&u| u).count()), (Status::Complete, 1, 0));
+    let off = problem("four_bar.urdf", &[("crank_joint", 0.0), ("coupler_joint", coupler), ("rocker_joint", rocker + 1e-9)], &[]);
+    let run = solve(&off, 1e-6);
+    assert_eq!((run.status, run.solutions.len()), (Status::Complete, 0));
+}

@@ -79,9 +79,6 @@ pub enum LinkageError {
     /// A traced point names an unknown link.
     #[error("--trace: no link named '{0}'")]
     UnknownTraceLink(String),
-    /// Nothing moves.
-    #[error("the mechanism has no unknown: every joint is fixed")]
-    NothingToSolve,
     /// A spatial description leaves some motion free that no loop constrains (a link spinning
     /// between two ball joints outside the recognised patterns, a ball or floating joint on no
     /// loop).
@@ -642,8 +639,15 @@ impl LinkageProblem {
                         rows.push(b.system.equations.len());
                         b.system.add(e);
                     }
-                    None if !constant.contains(0.0) => return Err(LinkageError::CannotClose(l.name.clone())),
-                    None => {}
+                    None if check_closure && !constant.contains(0.0) => return Err(LinkageError::CannotClose(l.name.clone())),
+                    // A row that `--fix` values (or shared links) made constant stays an
+                    // equation: the solver then refutes it (no configuration: a complete run with
+                    // no box) or keeps it, and it keeps Newton from certifying a closure that
+                    // rounding cannot confirm.
+                    None => {
+                        rows.push(b.system.equations.len());
+                        b.system.add(Equation::new(Vec::new(), constant));
+                    }
                 }
             }
             loop_equations.push((l.name.clone(), rows));
@@ -670,10 +674,6 @@ impl LinkageProblem {
                 }
             }
             trace_out.push(Trace { name, x: tx, y: ty });
-        }
-
-        if b.system.primaries().is_empty() {
-            return Err(LinkageError::NothingToSolve);
         }
 
         // A loop that cannot close on its own is bad input, not an empty answer.

@@ -308,6 +308,9 @@ enum Travel {
 }
 
 struct Builder {
+    /// Building to judge whether loops can close at all (then a constant row that cannot hold
+    /// is bad input, not an answer).
+    check_closure: bool,
     system: EquationSystem,
     groups: Vec<RotF>,
     products: BTreeMap<(VarId, VarId), VarId>,
@@ -455,7 +458,7 @@ impl Builder {
     fn zero(&mut self, f: &Form, rows: &mut Vec<usize>) -> Result<(), ()> {
         let f = f.merged();
         if f.terms.is_empty() {
-            return if f.constant.contains(0.0) { Ok(()) } else { Err(()) };
+            return self.constant_row(f.constant, rows);
         }
         let terms = f.terms.iter().map(|&(v, c)| Term { coef: c, mono: Monomial::Linear(v) }).collect();
         rows.push(self.system.equations.len());
@@ -512,10 +515,27 @@ impl Builder {
         let mut terms: Vec<Term> = lin.terms.iter().map(|&(v, c)| Term { coef: c, mono: Monomial::Linear(v) }).collect();
         terms.extend(squares);
         if terms.is_empty() {
-            return if lin.constant.contains(0.0) { Ok(()) } else { Err(()) };
+            return self.constant_row(lin.constant, rows);
         }
         rows.push(self.system.equations.len());
         self.system.add(Equation::new(terms, lin.constant));
+        Ok(())
+    }
+
+    /// A row with no unknown left (`--fix` values, or geometry such as the z rows of a planar
+    /// mechanism). Exactly zero: an identity, dropped. Otherwise it stays an equation, so the
+    /// solver refutes it (no configuration) or keeps it, and Newton cannot certify a closure
+    /// that rounding cannot confirm (as the planar builder does); when judging closure alone,
+    /// one that cannot hold is bad input.
+    fn constant_row(&mut self, k: Interval, rows: &mut Vec<usize>) -> Result<(), ()> {
+        if is_zero(k) {
+            return Ok(());
+        }
+        if self.check_closure && !k.contains(0.0) {
+            return Err(());
+        }
+        rows.push(self.system.equations.len());
+        self.system.add(Equation::new(Vec::new(), k));
         Ok(())
     }
 }
@@ -677,7 +697,7 @@ impl SpatialProblem {
             }
         }
 
-        let mut b = Builder { system: EquationSystem::default(), groups: vec![const_rot(&st::identity())], products: BTreeMap::new(), definitions: Vec::new() };
+        let mut b = Builder { check_closure, system: EquationSystem::default(), groups: vec![const_rot(&st::identity())], products: BTreeMap::new(), definitions: Vec::new() };
         let mut order: Vec<usize> = (0..n_links).collect();
         order.sort_by_key(|&l| m.path_to(l).len());
 
@@ -1012,10 +1032,6 @@ impl SpatialProblem {
                 vars[i] = v;
             }
             trace_out.push(Trace3 { name: label.clone(), xyz: vars });
-        }
-
-        if b.system.primaries().is_empty() {
-            return Err(LinkageError::NothingToSolve);
         }
 
         if check_closure {

@@ -418,7 +418,7 @@ impl Prune for SystemPrune<'_, '_> {
             Shrunk::Solution => Step::Found((BoxStatus::Solution, b)),
             Shrunk::Unique => Step::Found((BoxStatus::Unique, b)),
             Shrunk::Stalled => {
-                let (i, _) = b.widest(&self.solver.primaries).expect("invariant: validated system has primaries");
+                let (i, _) = b.widest(&self.solver.primaries).expect("invariant: a box wider than sigma has a primary");
                 let (lower, upper) = b.bisect(i);
                 Step::Split(smallvec![lower, upper])
             }
