@@ -24,6 +24,7 @@ use std::time::Duration;
 
 pub(crate) mod distances;
 mod loop_singularities;
+mod bench_spatial;
 mod figures;
 mod plot;
 mod study;
@@ -136,7 +137,7 @@ impl ChainArgs {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Enclose every configuration of a planar closed-loop linkage described in URDF.
+    /// Enclose every configuration of a closed-loop linkage described in URDF (planar or spatial).
     Solve(SolveArgs),
     /// Draw SVG charts from fresh runs of the bundled problems into a folder.
     Chart(ChartArgs),
@@ -161,6 +162,9 @@ enum Command {
     LoopSingularities(loop_singularities::LoopSingularitiesArgs),
     /// Time singular-set searches of closed-loop linkages against baselines in the same run.
     BenchLoopSingularities(loop_singularities::BenchArgs),
+    /// Time the spatial builder: planar fixtures against the planar model, spatial ones with
+    /// and without the LP shrink, each in the same run.
+    BenchSpatial(bench_spatial::BenchArgs),
 }
 
 #[derive(clap::Args)]
@@ -333,6 +337,7 @@ pub fn run() -> Result<()> {
         Command::Collisions(args) => collisions(args),
         Command::LoopSingularities(args) => loop_singularities::run(args),
         Command::BenchLoopSingularities(args) => loop_singularities::bench(args),
+        Command::BenchSpatial(args) => bench_spatial::bench(args),
     }
 }
 
