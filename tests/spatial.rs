@@ -186,8 +186,10 @@ fn spherical_closed_form(t: f64) -> Vec<f64> {
 fn spherical_four_bar_modes_and_curve_match_the_closed_form() {
     for t in [0.4, 2.0, -2.5] {
         let p = spatial("spherical_four_bar.urdf", &[("crank_joint", t)]);
+        assert!(p.is_square(), "crank {t}: the closing axes give two rows, the system is square");
         let e = solve(&p, 1e-6);
         assert_eq!(components(&e.solutions).1, 2, "crank {t}: two assembly modes");
+        assert_eq!(e.unique.iter().filter(|&&u| u).count(), 2, "crank {t}: both modes certified");
         for phi in spherical_closed_form(t) {
             assert!(covered(&p, &e.solutions, &[("rocker_joint", phi)], 1e-12), "crank {t}: rocker {phi} in no box");
         }

@@ -284,6 +284,9 @@ pub struct SpatialProblem {
     loops: Vec<Option<LoopFrames>>,
     readings: Vec<(String, Reading)>,
     limits: Vec<(usize, Interval, Interval)>,
+    /// Axis closures written with two of their three rows: the third component of both axes,
+    /// which must agree in sign (see `axes_agree`).
+    signs: Vec<(Form, Form)>,
 }
 
 /// A leg between two ball joints, reduced to a distance.
@@ -538,6 +541,31 @@ impl Builder {
         self.system.add(Equation::new(Vec::new(), k));
         Ok(())
     }
+}
+
+/// Two unit axes `u` (predecessor) and `v` (successor) coincide: two constraints, written as
+/// two rows so that a closure adds as many equations as it removes freedoms (and Krawczyk can
+/// certify isolated assemblies). The row left out is the component `i` largest at rest (`w`);
+/// with `|u| = |v| = 1` the two rows give `u_i = ±v_i`, and the mirror `u_i = −v_i ≠ 0` is
+/// removed by the sign filter (`SignFilter`): a box where they have opposite signs holds no
+/// closure; a box is certified only where they provably share one. When the three rows are
+/// identities or constants (planar axes), they are written as they are.
+fn axes_agree(b: &mut Builder, u: &Vec3F, v: &Vec3F, w: Vector3<f64>, rows: &mut Vec<usize>, signs: &mut Vec<(Form, Form)>) -> Result<(), ()> {
+    let diff = sub3(u, v);
+    if diff.iter().all(|f| f.terms.is_empty()) {
+        for f in &diff {
+            b.zero(f, rows)?;
+        }
+        return Ok(());
+    }
+    let i = (0..3).max_by(|&a, &c| w[a].abs().total_cmp(&w[c].abs())).expect("three components");
+    for (k, f) in diff.iter().enumerate() {
+        if k != i {
+            b.zero(f, rows)?;
+        }
+    }
+    signs.push((u[i].clone(), v[i].clone()));
+    Ok(())
 }
 
 fn is_zero(x: Interval) -> bool {
@@ -877,6 +905,15 @@ impl SpatialProblem {
         }
 
         // Closures.
+        // Rest orientation of every link (all joint values zero), to pick which axis row a
+        // revolute closure can do without.
+        let mut rest = vec![UnitQuaternion::identity(); n_links];
+        for &l in &order {
+            if let Some(j) = m.links[l].parent_joint {
+                rest[l] = rest[m.joints[j].parent] * m.joints[j].origin.rotation;
+            }
+        }
+        let mut signs: Vec<(Form, Form)> = Vec::new();
         let mut loop_rows: Vec<(String, Vec<usize>)> = Vec::new();
         let mut frames: Vec<Option<LoopFrames>> = vec![None; m.loops.len()];
         let leg_of: BTreeMap<usize, &Leg> = legs.iter().map(|leg| (leg.closure, leg)).collect();
@@ -958,7 +995,8 @@ impl SpatialProblem {
                             }
                         }
                         None => {
-                            b.equal(&axis_p, &axis_s, &mut rows).map_err(|_| cannot())?;
+                            let w = rest[lp.predecessor] * (lp.predecessor_origin.rotation * lp.axis);
+                            axes_agree(&mut b, &axis_p, &axis_s, w, &mut rows, &mut signs).map_err(|_| cannot())?;
                             if let (Some((lo, hi)), true) = (limits, respect_limits) {
                                 limit_list.push((readings.len(), stated(lo), stated(hi)));
                             }
@@ -970,7 +1008,8 @@ impl SpatialProblem {
                 (JointKind::Prismatic { limits }, compound) => {
                     let cylindrical = compound == Some(Compound::Cylindrical);
                     if cylindrical {
-                        b.equal(&axis_p, &axis_s, &mut rows).map_err(|_| cannot())?;
+                        let w = rest[lp.predecessor] * (lp.predecessor_origin.rotation * lp.axis);
+                        axes_agree(&mut b, &axis_p, &axis_s, w, &mut rows, &mut signs).map_err(|_| cannot())?;
                     } else {
                         for j in 0..2 {
                             b.equal(&col(&rp, j), &col(&rs, j), &mut rows).map_err(|_| cannot())?;
@@ -1058,6 +1097,7 @@ impl SpatialProblem {
             loops: frames,
             readings,
             limits: limit_list,
+            signs,
         })
     }
 
@@ -1141,9 +1181,19 @@ impl SpatialProblem {
             .collect()
     }
 
-    /// Where the box lies against the limits of the limited revolute joints and loops.
+    /// Where the box lies against the limits of the limited revolute joints and loops, and
+    /// against the sign agreement of the axis closures written with two rows.
     pub fn limit_verdict(&self, b: &IntervalBox) -> Verdict {
         let mut verdict = Verdict::Inside;
+        for (u, v) in &self.signs {
+            let (u, v) = (u.eval(&b.dims), v.eval(&b.dims));
+            if (u.sup() < 0.0 && v.inf() > 0.0) || (u.inf() > 0.0 && v.sup() < 0.0) {
+                return Verdict::Outside;
+            }
+            if !((u.inf() > 0.0 && v.inf() > 0.0) || (u.sup() < 0.0 && v.sup() < 0.0)) {
+                verdict = Verdict::Straddles;
+            }
+        }
         for &(k, lower, upper) in &self.limits {
             match against_limits(self.reading(&self.readings[k].1, b), lower, upper) {
                 Verdict::Outside => return Verdict::Outside,
@@ -1158,7 +1208,7 @@ impl SpatialProblem {
     /// carry limits (it sees every box, certified ones included).
     pub fn solver(&self, settings: SolverSettings) -> Result<Solver<'_>, SolveError> {
         let solver = Solver::new(&self.system, settings)?;
-        if self.limits.is_empty() {
+        if self.limits.is_empty() && self.signs.is_empty() {
             return Ok(solver);
         }
         Ok(solver.with_contractor(Box::new(move |system, settings| {
