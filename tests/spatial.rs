@@ -369,3 +369,77 @@ fn weld_and_universal_closures_hold_their_constraints() {
         assert!(near, "universal-closure box at rocker {phi:?} is no RSSR configuration");
     }
 }
+
+// ---------- delta robot and 6-6 Stewart platform: references from scripts/dev (refs12),
+// computed without linkspace: closed-form three-sphere intersection, and monodromy + homotopy
+// continuation refined in mpmath ----------
+
+fn reference(name: &str) -> serde_json::Value {
+    let path = format!("{}/tests/data/{name}", env!("CARGO_MANIFEST_DIR"));
+    serde_json::from_str(&std::fs::read_to_string(path).expect("reference file")).expect("valid json")
+}
+
+/// `--fix` values as the references state them (decimal strings, passed as written).
+fn fixed_from(case: &serde_json::Value, key: &str) -> Vec<(String, f64)> {
+    case[key].as_object().expect("object").iter().map(|(k, v)| (k.clone(), v.as_str().expect("decimal string").parse().expect("number"))).collect()
+}
+
+#[test]
+fn delta_forward_kinematics_has_both_assemblies_certified() {
+    let refs = reference("delta_fk.json");
+    let m = urdf::parse(&urdf_text("delta.urdf")).expect("parses");
+    for case in refs["cases"].as_array().expect("cases") {
+        let name = case["name"].as_str().expect("name");
+        let fixed = fixed_from(case, "actuators");
+        let p = SpatialProblem::new(&m, &fixed, &[]).expect("builds");
+        assert_eq!(p.reductions.len(), 3, "{name}: three forearms become distances");
+        assert!(p.is_square(), "{name}: forward kinematics is square");
+        let e = solve(&p, 1e-7);
+        let count = case["real_solutions"].as_u64().expect("count") as usize;
+        assert_eq!(components(&e.solutions).1, count, "{name}: assemblies");
+        assert!(e.unique.iter().all(|&u| u), "{name}: every box certified");
+        for s in case["solutions"].as_array().expect("solutions") {
+            let want: Vec<(&str, f64)> = ["platform_x", "platform_y", "platform_z"].iter().map(|&k| (k, s["joints"][k].as_f64().expect("number"))).collect();
+            let found = e.solutions.iter().any(|b| {
+                let j = p.joint_values(b);
+                want.iter().all(|(k, v)| holds(j[*k], *v, false, 1e-12))
+            });
+            assert!(found, "{name}: assembly {want:?} in no box");
+        }
+    }
+}
+
+#[test]
+fn stewart_platform_search_never_drops_a_reference_assembly() {
+    // The six-dimensional search does not finish in a test's time (README): a bounded run, in
+    // which solution and undecided boxes together must still hold every real assembly.
+    let refs = reference("stewart_6_6_fk.json");
+    let m = urdf::parse(&urdf_text("stewart_6_6.urdf")).expect("parses");
+    let case = &refs["cases"][0];
+    let fixed = fixed_from(case, "leg_lengths");
+    let p = SpatialProblem::new(&m, &fixed, &[]).expect("builds");
+    assert_eq!(p.reductions.len(), 6, "six legs become distances");
+    assert!(p.is_square(), "forward kinematics is square");
+    let settings = SolverSettings { sigma: 1e-4, max_boxes: 3_000, ..Default::default() };
+    let e = p.solver(settings).expect("settings").enclose(&AtomicBool::new(false), &mut |_| {});
+    let mut all = e.solutions.clone();
+    all.extend(e.undecided.iter().cloned());
+    for s in case["solutions"].as_array().expect("solutions") {
+        let pos = s["platform_position"].as_array().expect("xyz");
+        let rpy = s["platform_rpy"].as_array().expect("rpy");
+        let f = |v: &serde_json::Value| v.as_f64().expect("number");
+        let want = [
+            ("platform_pose.x", f(&pos[0]), false),
+            ("platform_pose.y", f(&pos[1]), false),
+            ("platform_pose.z", f(&pos[2]), false),
+            ("platform_pose.yaw", f(&rpy[2]), true),
+            ("platform_pose.pitch", f(&rpy[1]), true),
+            ("platform_pose.roll", f(&rpy[0]), true),
+        ];
+        let found = all.iter().any(|b| {
+            let j = p.joint_values(b);
+            want.iter().all(|(k, v, angle)| holds(j[*k], *v, *angle, 1e-9))
+        });
+        assert!(found, "assembly at {pos:?}, rpy {rpy:?} in no box");
+    }
+}
