@@ -69,7 +69,7 @@ impl Form {
 
     fn add(&mut self, o: &Form) {
         self.terms.extend_from_slice(&o.terms);
-        self.constant = self.constant + o.constant;
+        self.constant += o.constant;
     }
 
     fn add_scaled(&mut self, o: &Form, k: Interval) {
@@ -85,7 +85,7 @@ impl Form {
         let mut m: BTreeMap<VarId, Interval> = BTreeMap::new();
         for &(v, c) in &self.terms {
             let e = m.entry(v).or_insert(point(0.0));
-            *e = *e + c;
+            *e += c;
         }
         Form { terms: m.into_iter().filter(|&(_, c)| !(c.inf() == 0.0 && c.sup() == 0.0)).collect(), constant: self.constant }
     }
@@ -175,7 +175,7 @@ impl Pos {
     fn add_rotated(&mut self, g: usize, v: IVec3) {
         if g == 0 {
             for (r, x) in self.rest.iter_mut().zip(v) {
-                r.constant = r.constant + x;
+                r.constant += x;
             }
         } else {
             self.rotated.push((g, v));
@@ -196,8 +196,8 @@ impl Pos {
         let mut m: BTreeMap<usize, IVec3> = BTreeMap::new();
         for &(g, v) in &self.rotated {
             let e = m.entry(g).or_insert([point(0.0); 3]);
-            for i in 0..3 {
-                e[i] = e[i] + v[i];
+            for (x, y) in e.iter_mut().zip(v) {
+                *x += y;
             }
         }
         m
@@ -493,19 +493,19 @@ impl Builder {
             }
         }
         for (k, (_, r)) in rotated.iter().enumerate() {
-            for i in 0..3 {
-                let p = self.times_form(&r[i].clone(), &d.rest[i].clone(), (&format!("u{i}_{tag}_{k}"), &format!("w{i}_{tag}")));
+            for (i, (ri, wi)) in r.iter().zip(&d.rest).enumerate() {
+                let p = self.times_form(ri, wi, (&format!("u{i}_{tag}_{k}"), &format!("w{i}_{tag}")));
                 lin.add_scaled(&p, two);
             }
         }
         for i in 0..3 {
             let w = d.rest[i].merged();
             match w.terms.as_slice() {
-                [] => lin.constant = lin.constant + w.constant.sqr(),
+                [] => lin.constant += w.constant.sqr(),
                 [(x, a)] => {
                     squares.push(Term { coef: a.sqr(), mono: Monomial::Square(*x) });
                     lin.terms.push((*x, two * *a * w.constant));
-                    lin.constant = lin.constant + w.constant.sqr();
+                    lin.constant += w.constant.sqr();
                 }
                 _ => {
                     let n = self.name_form(&w, &format!("w{i}_{tag}"), None);
@@ -819,14 +819,14 @@ impl SpatialProblem {
                         None => {
                             let d = b.system.add_var(format!("d_{name}"), VarRole::Primary, travel_domain(limits));
                             if g == 0 {
-                                for i in 0..3 {
-                                    at.rest[i].add(&Form { terms: vec![(d, w[i])], constant: point(0.0) });
+                                for (r, wi) in at.rest.iter_mut().zip(w) {
+                                    r.add(&Form { terms: vec![(d, wi)], constant: point(0.0) });
                                 }
                             } else {
                                 let dir = rot_apply(&b.groups[g], &w);
-                                for i in 0..3 {
-                                    let f = b.times_var(&dir[i], d);
-                                    at.rest[i].add(&f);
+                                for (r, di) in at.rest.iter_mut().zip(&dir) {
+                                    let f = b.times_var(di, d);
+                                    r.add(&f);
                                 }
                             }
                             readings.push((name.clone(), Reading::Var(d)));
@@ -1110,9 +1110,8 @@ impl SpatialProblem {
         let mut out = [0, 1, 2].map(|i| p.rest[i].eval(b));
         for (&g, v) in &p.by_group() {
             let r = [0, 1, 2].map(|i| [0, 1, 2].map(|j| self.groups[g][i][j].eval(b)));
-            let x = st::apply(&r, v);
-            for i in 0..3 {
-                out[i] = out[i] + x[i];
+            for (o, x) in out.iter_mut().zip(st::apply(&r, v)) {
+                *o += x;
             }
         }
         out
