@@ -317,6 +317,8 @@ struct Builder {
     system: EquationSystem,
     groups: Vec<RotF>,
     products: BTreeMap<(VarId, VarId), VarId>,
+    /// Shared `n = Σ x²` variables, by their sorted variables.
+    norms: BTreeMap<Vec<VarId>, VarId>,
     /// Equations that are not closures (definitions), by index.
     definitions: Vec<usize>,
 }
@@ -498,21 +500,46 @@ impl Builder {
                 lin.add_scaled(&p, two);
             }
         }
+        // Squares of the linear part: one per coordinate that holds unknowns.
+        let mut wsq: Vec<(VarId, Interval)> = Vec::new();
         for i in 0..3 {
             let w = d.rest[i].merged();
             match w.terms.as_slice() {
                 [] => lin.constant += w.constant.sqr(),
                 [(x, a)] => {
-                    squares.push(Term { coef: a.sqr(), mono: Monomial::Square(*x) });
+                    wsq.push((*x, a.sqr()));
                     lin.terms.push((*x, two * *a * w.constant));
                     lin.constant += w.constant.sqr();
                 }
                 _ => {
                     let n = self.name_form(&w, &format!("w{i}_{tag}"), None);
-                    let (x, _) = n.terms[0];
-                    squares.push(Term { coef: point(1.0), mono: Monomial::Square(x) });
+                    wsq.push((n.terms[0].0, point(1.0)));
                 }
             }
+        }
+        // Several legs ending on one translating body share the same |x|² (a platform's
+        // position, a guide's travels): one derived variable `n = Σ x²` (the only row the LP
+        // cannot use), so that every leg row is linear.
+        let unit = |c: Interval| c.inf() == 1.0 && c.sup() == 1.0;
+        if wsq.len() >= 2 && wsq.iter().all(|&(_, c)| unit(c)) {
+            let mut key: Vec<VarId> = wsq.iter().map(|&(x, _)| x).collect();
+            key.sort_unstable();
+            let n = match self.norms.get(&key) {
+                Some(&n) => n,
+                None => {
+                    let dom = key.iter().fold(point(0.0), |acc, &x| acc + self.system.vars[x].domain.sqr());
+                    let names: Vec<&str> = key.iter().map(|&x| self.system.vars[x].name.as_str()).collect();
+                    let n = self.system.add_var(format!("|{}|^2", names.join(",")), VarRole::Derived, dom);
+                    let mut terms: Vec<Term> = key.iter().map(|&x| Term { coef: point(1.0), mono: Monomial::Square(x) }).collect();
+                    terms.push(Term { coef: point(-1.0), mono: Monomial::Linear(n) });
+                    self.define(Equation::new(terms, point(0.0)));
+                    self.norms.insert(key, n);
+                    n
+                }
+            };
+            lin.terms.push((n, point(1.0)));
+        } else {
+            squares.extend(wsq.iter().map(|&(x, c)| Term { coef: c, mono: Monomial::Square(x) }));
         }
         let lin = lin.merged();
         let mut terms: Vec<Term> = lin.terms.iter().map(|&(v, c)| Term { coef: c, mono: Monomial::Linear(v) }).collect();
@@ -725,7 +752,7 @@ impl SpatialProblem {
             }
         }
 
-        let mut b = Builder { check_closure, system: EquationSystem::default(), groups: vec![const_rot(&st::identity())], products: BTreeMap::new(), definitions: Vec::new() };
+        let mut b = Builder { check_closure, system: EquationSystem::default(), groups: vec![const_rot(&st::identity())], products: BTreeMap::new(), norms: BTreeMap::new(), definitions: Vec::new() };
         let mut order: Vec<usize> = (0..n_links).collect();
         order.sort_by_key(|&l| m.path_to(l).len());
 
