@@ -16,6 +16,10 @@ pub(crate) struct BenchArgs {
     /// Runs per case; the median is reported.
     #[arg(long, default_value_t = 3)]
     repeat: usize,
+    /// Also the 6-6 Stewart platform's forward kinematics (minutes; run once, whatever
+    /// --repeat says), against propagation only given twice the LP run's time.
+    #[arg(long)]
+    stewart: bool,
 }
 
 const FOUR_BAR: &str = include_str!("../../urdf/four_bar.urdf");
@@ -25,6 +29,8 @@ const BUTTERFLY: &str = include_str!("../../urdf/double_butterfly.urdf");
 const RSSR: &str = include_str!("../../urdf/rssr.urdf");
 const SPHERICAL: &str = include_str!("../../urdf/spherical_four_bar.urdf");
 const BENNETT: &str = include_str!("../../urdf/bennett.urdf");
+const DELTA: &str = include_str!("../../urdf/delta.urdf");
+const STEWART: &str = include_str!("../../urdf/stewart_6_6.urdf");
 
 /// Median CPU seconds over `repeat` runs, and the last run.
 fn timed(solver: &Solver<'_>, repeat: usize) -> (f64, Enclosure) {
@@ -68,7 +74,8 @@ pub(crate) fn bench(args: BenchArgs) -> Result<()> {
         line(&mut out, name, "planar model (baseline)", tp, &ep, "1.00x");
         line(&mut out, name, "--model spatial", ts, &es, &format!("{:.2}x the time", ts / tp.max(1e-9)));
     }
-    let spatial_cases: [(&str, &str, Vec<(String, f64)>, f64); 6] = [
+    let spatial_cases: [(&str, &str, Vec<(String, f64)>, f64); 7] = [
+        ("delta, actuators 0.2, 0.75, -0.1", DELTA, fix(&[("actuator1", 0.2), ("actuator2", 0.75), ("actuator3", -0.1)]), 1e-7),
         ("RSSR, crank 0.6", RSSR, fix(&[("crank_joint", 0.6)]), 1e-6),
         ("RSSR, mobile", RSSR, fix(&[]), 0.02),
         ("spherical four-bar, crank 0.4", SPHERICAL, fix(&[("crank_joint", 0.4)]), 1e-6),
@@ -87,6 +94,20 @@ pub(crate) fn bench(args: BenchArgs) -> Result<()> {
         let speed = tb / tl.max(1e-9);
         let speed = if speed >= 1.0 { format!("{speed:.2}x faster") } else { format!("{:.2}x slower", 1.0 / speed) };
         line(&mut out, name, "LP shrink", tl, &el, &format!("{speed}, {:.2}x fewer boxes", eb.stats.processed as f64 / el.stats.processed.max(1) as f64));
+    }
+    if args.stewart {
+        // tests/data/stewart_6_6_fk.json, case from_pose: 8 real assemblies of 40.
+        let legs = [0.7345220735, 0.7652225701, 0.7353460099, 0.7030942876, 0.7062382101, 0.7364750265];
+        let fixed: Vec<(String, f64)> = legs.iter().enumerate().map(|(k, &v)| (format!("leg{}", k + 1), v)).collect();
+        let p = SpatialProblem::new(&urdf::parse(STEWART)?, &fixed, &[])?;
+        let name = "6-6 Stewart platform, from_pose legs";
+        let lp = SolverSettings { sigma: 1e-4, ..SolverSettings::default() };
+        let (tl, el) = timed(&p.solver(lp.clone())?, 1);
+        let base = SolverSettings { use_lp: false, timeout: Some(std::time::Duration::from_secs_f64(2.0 * tl.max(1.0))), ..lp };
+        let (tb, eb) = timed(&p.solver(base)?, 1);
+        let done = |e: &Enclosure| if e.status == linkspace::Status::Complete { "" } else { ", incomplete" };
+        line(&mut out, name, &format!("propagation only (baseline){}", done(&eb)), tb, &eb, "1.00x");
+        line(&mut out, name, &format!("LP shrink{}", done(&el)), tl, &el, &format!("{:.2}x the baseline's time", tl / tb.max(1e-9)));
     }
     Ok(())
 }
