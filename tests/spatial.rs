@@ -491,3 +491,110 @@ fn stewart_platform_assemblies_are_all_certified() {
         assert!(found, "assembly at {pos}, rpy {rpy} in no box");
     }
 }
+
+// ---------- soundness of every contractor on the spatial systems ----------
+
+/// A true configuration of each fixture as a point in its system's variables: primaries from
+/// the closed forms (or the Stewart reference), derived variables from their definitions.
+fn true_point(which: usize, at: f64) -> (SpatialProblem, Vec<f64>, String) {
+    let set = |p: &SpatialProblem, x: &mut Vec<f64>, name: &str, v: f64| {
+        let i = p.system.var(name).unwrap_or_else(|| panic!("variable {name}"));
+        x[i] = v;
+    };
+    let angle = |p: &SpatialProblem, x: &mut Vec<f64>, joint: &str, t: f64| {
+        set(p, x, &format!("cos_{joint}"), t.cos());
+        set(p, x, &format!("sin_{joint}"), t.sin());
+    };
+    let t = -PI + TAU * at;
+    let (p, mut x, what) = match which {
+        0 => {
+            let p = spatial("bennett.urdf", &[]);
+            let mut x = vec![f64::NAN; p.system.vars.len()];
+            let r = bennett_closed_form(t);
+            for (k, j) in ["joint1", "joint2", "joint3"].iter().enumerate() {
+                angle(&p, &mut x, j, r[k]);
+            }
+            (p, x, format!("Bennett at joint1 = {t}"))
+        }
+        1 => {
+            let p = spatial("rssr.urdf", &[]);
+            let mut x = vec![f64::NAN; p.system.vars.len()];
+            // A crank angle where the RSSR assembles, on one of its two modes.
+            let t = 0.6 + 0.5 * (at - 0.5);
+            let phi = rssr_closed_form(t)[usize::from(at > 0.5)];
+            angle(&p, &mut x, "crank_joint", t);
+            angle(&p, &mut x, "rocker_joint", phi);
+            (p, x, format!("RSSR at crank {t}, rocker {phi}"))
+        }
+        2 => {
+            let p = spatial("spherical_four_bar.urdf", &[]);
+            let mut x = vec![f64::NAN; p.system.vars.len()];
+            let phi = spherical_closed_form(t)[0];
+            // The coupler's own angle: the turn about u2 that brings Ry(1.4) z onto u3.
+            let u2 = rotate([0.0, 0.0, 1.0], t, ry(0.5));
+            let u3 = rotate(ry(1.0), phi, ry(1.8));
+            let w = rotate([0.0, 0.0, 1.0], t, ry(1.4));
+            let along = |v: [f64; 3]| { let d = v[0] * u2[0] + v[1] * u2[1] + v[2] * u2[2]; [v[0] - d * u2[0], v[1] - d * u2[1], v[2] - d * u2[2]] };
+            let (a, b) = (along(w), along(u3));
+            let cross = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+            let psi = (cross[0] * u2[0] + cross[1] * u2[1] + cross[2] * u2[2]).atan2(a[0] * b[0] + a[1] * b[1] + a[2] * b[2]);
+            angle(&p, &mut x, "crank_joint", t);
+            angle(&p, &mut x, "coupler_joint", psi);
+            angle(&p, &mut x, "rocker_joint", phi);
+            (p, x, format!("spherical four-bar at crank {t}"))
+        }
+        _ => {
+            let refs = reference("stewart_6_6_fk.json");
+            let case = &refs["cases"][0];
+            let m = urdf::parse(&urdf_text("stewart_6_6.urdf")).expect("parses");
+            let p = SpatialProblem::new(&m, &fixed_from(case, "leg_lengths"), &[]).expect("builds");
+            let sols = case["solutions"].as_array().expect("solutions");
+            let s = &sols[((at * sols.len() as f64) as usize).min(sols.len() - 1)];
+            let f = |v: &serde_json::Value| v.as_f64().expect("number");
+            let mut x = vec![f64::NAN; p.system.vars.len()];
+            for (k, axis) in ["x", "y", "z"].iter().enumerate() {
+                set(&p, &mut x, &format!("platform_pose.{axis}"), f(&s["platform_position"][k]));
+            }
+            for (k, part) in ["roll", "pitch", "yaw"].iter().enumerate() {
+                angle(&p, &mut x, &format!("platform_pose.{part}"), f(&s["platform_rpy"][k]));
+            }
+            (p, x, format!("Stewart assembly at {}", s["platform_position"]))
+        }
+    };
+    assert!(p.complete_point(&mut x), "{what}: every derived variable follows");
+    for e in &p.system.equations {
+        assert!(e.residual(&x).abs() < 1e-9, "{what}: the point solves the system (residual {})", e.residual(&x));
+    }
+    (p, x, what)
+}
+
+// A box around a true configuration never loses it, whatever the box, under every contractor.
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+    #[test]
+    fn no_contractor_removes_a_true_spatial_configuration(which in 0usize..4, at in 0.01f64..0.99, widths in proptest::collection::vec(1e-6f64..0.6, 16), offsets in proptest::collection::vec(0.0f64..1.0, 16)) {
+        use linkspace::contract::{Contraction, Contractor, LpShrink, Newton, Propagation};
+        let (p, x, what) = true_point(which, at);
+        let mut b = p.system.initial_box();
+        for (i, d) in b.dims.iter_mut().enumerate() {
+            let (w, f) = (widths[i % 16], offsets[i % 16]);
+            let lo = (x[i] - w * f - 1e-9).max(d.inf());
+            let hi = (x[i] + w * (1.0 - f) + 1e-9).min(d.sup());
+            *d = linkspace::interval::interval(lo, hi);
+        }
+        let inside = |b: &IntervalBox| b.dims.iter().zip(&x).all(|(d, &v)| d.inf() - 1e-9 <= v && v <= d.sup() + 1e-9);
+        proptest::prop_assert!(inside(&b), "{}: the start box holds the point (domains enclose it)", what);
+        let mut steps: Vec<Box<dyn Contractor>> = vec![Box::new(Propagation::new(&p.system)), Box::new(LpShrink::new(&p.system))];
+        if let Some(n) = Newton::new(&p.system, 1.0) {
+            steps.push(Box::new(n));
+        }
+        for step in &mut steps {
+            let mut c = b.clone();
+            for _ in 0..3 {
+                proptest::prop_assert_ne!(step.contract(&mut c), Contraction::Empty, "{} emptied a box holding {}", step.name(), what);
+            }
+            proptest::prop_assert!(inside(&c), "{} cut the true configuration {}", step.name(), what);
+        }
+        proptest::prop_assert!(p.limit_verdict(&b) != linkspace::contract::Verdict::Outside, "the filters drop {}", what);
+    }
+}

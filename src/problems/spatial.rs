@@ -595,6 +595,13 @@ fn axes_agree(b: &mut Builder, u: &Vec3F, v: &Vec3F, w: Vector3<f64>, rows: &mut
     Ok(())
 }
 
+fn e_mentions(m: Monomial, v: VarId) -> bool {
+    match m {
+        Monomial::Linear(x) | Monomial::Square(x) => x == v,
+        Monomial::Product(x, y) => x == v || y == v,
+    }
+}
+
 fn is_zero(x: Interval) -> bool {
     x.inf() == 0.0 && x.sup() == 0.0
 }
@@ -1240,6 +1247,33 @@ impl SpatialProblem {
         Ok(solver.with_contractor(Box::new(move |system, settings| {
             Box::new(Filtered { inner: default_contractor(system, settings), filters: vec![Box::new(LimitFilter { problem: self })] })
         })))
+    }
+
+    /// Fills the derived variables of a point whose primaries are set (the others NaN), from
+    /// their defining equations (each derived variable appears linearly in one, after the
+    /// variables it depends on): for tests and references. `false` when some stay unknown.
+    pub fn complete_point(&self, x: &mut [f64]) -> bool {
+        loop {
+            let mut progress = false;
+            for e in &self.system.equations {
+                let unknown: Vec<VarId> = {
+                    let mut v: Vec<VarId> = e.vars().filter(|&v| x[v].is_nan()).collect();
+                    v.dedup();
+                    v
+                };
+                let [v] = unknown.as_slice() else { continue };
+                let Some(coef) = e.terms.iter().find(|t| t.mono == Monomial::Linear(*v)).map(|t| t.coef.mid()) else { continue };
+                if e.terms.iter().any(|t| t.mono != Monomial::Linear(*v) && e_mentions(t.mono, *v)) {
+                    continue;
+                }
+                x[*v] = 0.0;
+                x[*v] = -e.residual(x) / coef;
+                progress = true;
+            }
+            if !progress {
+                return x.iter().all(|v| !v.is_nan());
+            }
+        }
     }
 
     /// True when the system has as many equations as unknowns, so that interval Newton can
