@@ -598,3 +598,25 @@ proptest::proptest! {
         proptest::prop_assert!(p.limit_verdict(&b) != linkspace::contract::Verdict::Outside, "the filters drop {}", what);
     }
 }
+
+#[test]
+fn a_rod_with_welded_frames_is_still_a_distance() {
+    // A marker frame welded to the RSSR's coupler, with the ball closure moved onto it: the
+    // same mechanism, so the same two certified modes.
+    let text = urdf_text("rssr.urdf")
+        .replace(
+            "<loop name=\"rocker_ball\"",
+            "<link name=\"marker\"/><joint name=\"marker_weld\" type=\"fixed\"><parent link=\"coupler\"/><child link=\"marker\"/><origin xyz=\"1 0 0\" rpy=\"0 0 1.5707963267948966\"/></joint>\n  <loop name=\"rocker_ball\"",
+        )
+        .replace("<predecessor link=\"coupler\"><origin xyz=\"3.2 0 0\"", "<predecessor link=\"marker\"><origin xyz=\"0 -2.2 0\"");
+    let m = urdf::parse(&text).expect("parses");
+    let p = SpatialProblem::new(&m, &[("crank_joint".into(), 0.6)], &[]).expect("builds");
+    assert_eq!(p.reductions.len(), 1, "{:?}", p.reductions);
+    assert!(p.is_square());
+    let e = solve(&p, 1e-6);
+    assert_eq!(e.solutions.len(), 2);
+    assert!(e.unique.iter().all(|&u| u));
+    for phi in rssr_closed_form(0.6) {
+        assert!(covered(&p, &e.solutions, &[("rocker_joint", phi)], 1e-9), "rocker {phi} in no box");
+    }
+}

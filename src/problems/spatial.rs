@@ -702,10 +702,36 @@ impl SpatialProblem {
             let ball = |k: usize| m.loops[k].kind == JointKind::Spherical && m.loops[k].compound.is_none();
             let free_of_traces = |x: usize| !traced.contains(&x);
             let (tl, kids) = (touching(l), &children[l]);
-            if kids.is_empty() && tl.len() == 1 && ball(tl[0]) && free_of_traces(l) {
-                let (t, _) = side(tl[0], l);
-                legs.push(Leg { closure: tl[0], joint: j, u: st::translation(&t), w: [point(0.0); 3], travel: Some(Travel::Known(point(0.0))), links: vec![l] });
-                in_leg[l] = true;
+            // A rod with whatever is welded to it (frames such as a tool or marker link on
+            // fixed joints): every descendant welded, one ball closure on any of them.
+            let mut welded = vec![(l, st::identity(), [point(0.0); 3])];
+            let mut all_fixed = true;
+            let mut at = 0;
+            while at < welded.len() {
+                let (x, rot, pos) = welded[at];
+                for &cj in &children[x] {
+                    let c = &m.joints[cj];
+                    if c.kind != JointKind::Fixed {
+                        all_fixed = false;
+                        continue;
+                    }
+                    let t = st::apply(&rot, &st::translation(&c.origin.translation.vector));
+                    welded.push((c.child, imat_mul(&rot, &st::rpy(c.rpy)), [0, 1, 2].map(|i| pos[i] + t[i])));
+                }
+                at += 1;
+            }
+            let closures: Vec<usize> = welded.iter().flat_map(|&(x, _, _)| touching(x)).collect();
+            if all_fixed && closures.len() == 1 && ball(closures[0]) && welded.iter().all(|&(x, _, _)| free_of_traces(x)) {
+                let k = closures[0];
+                let lp = &m.loops[k];
+                let &(x, rot, pos) = welded.iter().find(|&&(x, _, _)| lp.predecessor == x || lp.successor == x).expect("the closure touches a welded link");
+                let (t, _) = side(k, x);
+                let tt = st::apply(&rot, &st::translation(&t));
+                let u = [0, 1, 2].map(|i| pos[i] + tt[i]);
+                legs.push(Leg { closure: k, joint: j, u, w: [point(0.0); 3], travel: Some(Travel::Known(point(0.0))), links: welded.iter().map(|&(x, _, _)| x).collect() });
+                for &(x, _, _) in &welded {
+                    in_leg[x] = true;
+                }
                 continue;
             }
             if let ([pj], true) = (kids.as_slice(), tl.is_empty()) {
@@ -799,6 +825,10 @@ impl SpatialProblem {
             let t = st::translation(&joint.origin.translation.vector);
             let a = st::axis(&joint.axis);
             // A leg's rod: its travel is the leg's, and it has no place of its own.
+            // A link welded to a rod between two balls: its pose is as undetermined as the rod's.
+            if in_leg[l] && joint.kind == JointKind::Fixed {
+                continue;
+            }
             if let (true, JointKind::Prismatic { limits }) = (in_leg[l], joint.kind) {
                 let tv = match fixed_tree.get(&j) {
                     Some(&v) => Travel::Known(stated(v)),
@@ -914,8 +944,7 @@ impl SpatialProblem {
             let mut r = reach;
             for leg in &legs {
                 let lp = &m.loops[leg.closure];
-                let last = *leg.links.last().expect("a leg has links");
-                let other = if lp.predecessor == last { lp.successor } else { lp.predecessor };
+                let other = if leg.links.contains(&lp.predecessor) { lp.successor } else { lp.predecessor };
                 if other != f {
                     continue;
                 }
@@ -957,8 +986,7 @@ impl SpatialProblem {
             if let Some(leg) = leg_of.get(&k) {
                 // |B − A|² = |u + d·w|² = |u|² + 2(u·w)d + d²
                 let joint = &m.joints[leg.joint];
-                let last = *leg.links.last().expect("a leg has links");
-                let other = if lp.predecessor == last { lp.successor } else { lp.predecessor };
+                let other = if leg.links.contains(&lp.predecessor) { lp.successor } else { lp.predecessor };
                 let (Some((go, ko)), Some(po)) = (places[other].rotation, places[other].position.clone()) else {
                     return Err(LinkageError::UnderConstrained(format!("loop '{}' joins two legs that spin between ball joints", lp.name)));
                 };
