@@ -30,6 +30,8 @@ pub enum Choice {
     Auto,
     /// Coordinates of the free points (`Placed`).
     Points,
+    /// A point and a direction of the line through the two free points (`Placed::build_line`).
+    Line,
     /// Determinants, one variable per distance.
     Shared,
     /// Determinants, the seed's split variables.
@@ -116,17 +118,22 @@ impl Certified {
     }
 }
 
-/// The formulation `Auto` picks: the shared determinants, certified in coordinates.
+/// The formulation `Auto` picks: the line formulation when the problem is a line to place
+/// (`Placed::build_line`: lines tangent to spheres), else the shared determinants, certified in
+/// coordinates.
 ///
-/// Measured (`bench-distances`, issue 15): the determinants prune far better than the points
-/// formulation as the kernel propagates it today (four spheres at sigma 0.01: about 900 boxes
-/// against over a million; octahedral b: 20 to 100 boxes against 130 000), because expanding
-/// `‖p_a − p_b‖²` into monomials loses the dependency between the squares and the products
-/// that interval propagation needs. So points are used to certify and to search the clusters
-/// the determinants leave, not to search the whole space; `--formulation points` keeps them
-/// available.
-pub fn choose(_problem: &DistanceProblem) -> Choice {
-    Choice::Shared
+/// Measured (`bench-distances`, issue 15): on the four spheres at sigma 0.01 the line
+/// formulation takes about 800 boxes and 0.06 s CPU with every solution box proven, against
+/// about 900 boxes plus a settling in coordinates of 2.8 s for the determinants, and over a
+/// million boxes for the points formulation (expanding `‖p_a − p_b‖²` into monomials loses the
+/// dependency between the squares and the products that interval propagation needs). On the
+/// platforms the determinants prune far better than the points (octahedral b: 20 to 100 boxes
+/// against 130 000). `--formulation` keeps every one available.
+pub fn choose(problem: &DistanceProblem) -> Choice {
+    match Placed::build_line(problem) {
+        Ok(line) if line.is_square() => Choice::Line,
+        _ => Choice::Shared,
+    }
 }
 
 /// `stats.seconds` and `stats.cpu_seconds` cover the whole call: build, search and settling.
@@ -143,19 +150,22 @@ fn solve_inner(problem: &DistanceProblem, choice: Choice, redundant: bool, faces
     let choice = if choice == Choice::Auto { choose(problem) } else { choice };
     let formulation = if choice == Choice::Split { Formulation::Split } else { Formulation::Shared };
     let cm = CayleyMenger::build(problem, BuildOptions { formulation, redundant })?;
-    let placed = match Placed::build(problem) {
-        Ok(p) => Some(p),
-        Err(e) if choice == Choice::Points => return Err(e.into()),
-        Err(_) => None,
+    let placed = match choice {
+        Choice::Line => Some(Placed::build_line(problem)?),
+        _ => match Placed::build(problem) {
+            Ok(p) => Some(p),
+            Err(e) if choice == Choice::Points => return Err(e.into()),
+            Err(_) => None,
+        },
     };
-    if choice == Choice::Points {
+    if matches!(choice, Choice::Points | Choice::Line) {
         let placed = placed.expect("built above");
         let mut out = {
-            let solver = Solver::new(&placed.system, settings.clone()).map_err(DistanceSolverError::from)?;
+            let solver = placed.solver(settings.clone()).map_err(DistanceSolverError::from)?;
             let e = solver.enclose(cancel, &mut |_| {});
-            let solver = Solver::new(&placed.system, deeper_settings(&settings)).map_err(DistanceSolverError::from)?;
+            let solvers = DEEPER.iter().map(|&f| placed.solver(deeper_settings(&settings, f))).collect::<Result<Vec<_>, _>>().map_err(DistanceSolverError::from)?;
             let mut out = Certified { formulation: choice, cm, placed: None, status: e.status, stats: e.stats, solutions: e.solutions, unique: e.unique, cluster: Vec::new(), clusters: Vec::new(), roots: Vec::new(), undecided: e.undecided };
-            settle_points(&placed, &solver, &mut out, cancel);
+            settle_points(&placed, &solvers, &mut out, cancel);
             out
         };
         out.placed = Some(placed);
@@ -163,7 +173,7 @@ fn solve_inner(problem: &DistanceProblem, choice: Choice, redundant: bool, faces
     } else {
         let solver = cm.solver(faces, settings.clone())?;
         let e = solver.enclose(cancel, &mut |_| {});
-        let solver = cm.solver(faces, deeper_settings(&settings))?;
+        let solver = cm.solver(faces, deeper_settings(&settings, DEEPER[0]))?;
         let unique = vec![false; e.solutions.len()];
         let mut out = Certified { formulation: choice, cm: cm.clone(), placed: None, status: e.status, stats: e.stats, solutions: e.solutions, unique, cluster: Vec::new(), clusters: Vec::new(), roots: Vec::new(), undecided: e.undecided };
         settle_determinants(&cm, placed.as_ref(), &solver, &mut out, cancel);
@@ -172,30 +182,50 @@ fn solve_inner(problem: &DistanceProblem, choice: Choice, redundant: bool, faces
     }
 }
 
-/// The deeper search's settings: sigma / 16, at most 4000 boxes per box, one thread (the
-/// searches are small), and the run's time limit.
-fn deeper_settings(s: &SolverSettings) -> SolverSettings {
-    SolverSettings { sigma: s.sigma / 16.0, max_boxes: 4_000, threads: 1, ..s.clone() }
+/// The deeper searches' sigmas, as fractions of the run's: each unproven box of one is searched
+/// again by the next (a box that shrinks to the finer sigma in one round is accepted there
+/// unproven, and is usually proven empty or unique one step further).
+const DEEPER: [f64; 3] = [1.0 / 16.0, 1.0 / 256.0, 1.0 / 4096.0];
+
+/// A deeper search's settings: sigma times `fraction`, at most 4000 boxes per search, one thread
+/// (the searches are small), and the run's time limit.
+fn deeper_settings(s: &SolverSettings, fraction: f64) -> SolverSettings {
+    SolverSettings { sigma: s.sigma * fraction, max_boxes: 4_000, threads: 1, ..s.clone() }
 }
 
-/// Bounded deeper search of one box: `Some(certified boxes)` when it finishes with every box it
-/// finds proven unique (none: the box held no solution), `None` otherwise.
-fn deeper(solver: &Solver<'_>, b: &IntervalBox, cancel: &AtomicBool, stats: &mut SolveStats) -> Result<Vec<IntervalBox>, &'static str> {
-    let mut found = Collect::default();
-    let (status, st) = solver.run_from(b.clone(), cancel, &mut found);
-    stats.processed += st.processed;
-    stats.certified += st.certified;
-    if status != Status::Complete {
-        return Err("the deeper search (sigma / 16) hit its box limit");
+/// Bounded deeper searches of one box, by `solvers` in turn on what the previous one left
+/// unproven: `Ok(certified boxes)` when every box found is proven unique (none: the box held no
+/// solution), `Err(reason)` otherwise.
+fn deeper(solvers: &[Solver<'_>], b: &IntervalBox, cancel: &AtomicBool, stats: &mut SolveStats) -> Result<Vec<IntervalBox>, &'static str> {
+    let mut pending = vec![b.clone()];
+    let mut proven = Vec::new();
+    for solver in solvers {
+        let mut next = Vec::new();
+        for p in pending {
+            let mut found = Collect::default();
+            let (status, st) = solver.run_from(p, cancel, &mut found);
+            stats.processed += st.processed;
+            stats.certified += st.certified;
+            if status != Status::Complete {
+                return Err("a deeper search hit its box limit");
+            }
+            for (f, u) in found.solutions.into_iter().zip(found.unique) {
+                if u {
+                    proven.push(f);
+                } else {
+                    next.push(f);
+                }
+            }
+        }
+        if next.is_empty() {
+            return Ok(proven);
+        }
+        pending = next;
     }
-    if found.unique.iter().all(|&u| u) {
-        Ok(found.solutions)
-    } else {
-        Err("no proof of a single solution, nor of none, after a deeper search (sigma / 16)")
-    }
+    Err("no proof of a single solution, nor of none, after deeper searches")
 }
 
-fn settle_points(placed: &Placed, solver: &Solver<'_>, out: &mut Certified, cancel: &AtomicBool) {
+fn settle_points(placed: &Placed, solvers: &[Solver<'_>], out: &mut Certified, cancel: &AtomicBool) {
     // Unproven boxes: replace each by what a deeper search certifies in it, or keep it with why.
     let mut boxes = Vec::new();
     let mut unique = Vec::new();
@@ -207,7 +237,7 @@ fn settle_points(placed: &Placed, solver: &Solver<'_>, out: &mut Certified, canc
             why.push(None);
             continue;
         }
-        match deeper(solver, &b, cancel, &mut out.stats) {
+        match deeper(solvers, &b, cancel, &mut out.stats) {
             Ok(found) => {
                 for f in found {
                     boxes.push(f);
@@ -248,7 +278,17 @@ fn settle_points(placed: &Placed, solver: &Solver<'_>, out: &mut Certified, canc
                 clusters[c].undecided.get_or_insert("overlapping certified boxes: one solution or two");
             }
             clusters[c].proven += 1;
-            out.roots.push(Root { cluster: c, certified: certified[k].clone(), points: placed.points(&certified[k].midpoint()) });
+            // The certified box may be up to sigma wide: its placement is polished and proven
+            // again in a tiny box (kept when that fails: the wide box is still a proof).
+            let rough = placed.points(&certified[k].midpoint());
+            let (certified, points) = match placed.certify_near(&rough).filter(|x| x.intersects(certified[k])) {
+                Some(x) => {
+                    let points = placed.points(&x.midpoint());
+                    (x, points)
+                }
+                None => (certified[k].clone(), rough),
+            };
+            out.roots.push(Root { cluster: c, certified, points });
         }
     }
     out.solutions = boxes;
@@ -293,6 +333,11 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
     let covered: Vec<bool> = (0..out.solutions.len()).map(|i| meets.iter().any(|m| m.contains(&i))).collect();
     let pairs: Vec<(usize, usize)> = cm.unknowns.iter().map(|u| (u.a, u.b)).collect();
     let with_r = placed.filter(|p| p.is_square()).and_then(|_| Placed::build_with(&cm.problem, &pairs).ok());
+    let s = solver.settings();
+    let coordinate_solvers: Vec<Solver<'_>> = match &with_r {
+        Some(pr) => [1.0, 1.0 / 16.0].iter().filter_map(|&f| Solver::new(&pr.system, SolverSettings { sigma: s.sigma.min(1e-3) * f, ..s.clone() }).ok()).collect(),
+        None => Vec::new(),
+    };
     let mut keep = Vec::new();
     let mut why: Vec<Option<&'static str>> = Vec::new();
     for i in 0..out.solutions.len() {
@@ -307,17 +352,11 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
                 let bounds: Vec<_> = cm.unknown_intervals(&b).into_iter().map(|(_, d)| d).collect();
                 match pr.start_from(&bounds) {
                     None => Ok(Vec::new()),
-                    Some(start) => {
-                        let s = solver.settings();
-                        let settings = SolverSettings { sigma: s.sigma.min(1e-3), ..s.clone() };
-                        match Solver::new(&pr.system, settings) {
-                            Ok(ps) => deeper(&ps, &start, cancel, &mut out.stats).map(|found| found.into_iter().map(|f| (f.clone(), pr.points(&f.midpoint()))).collect()),
-                            Err(_) => Err("the coordinate search could not be set up"),
-                        }
-                    }
+                    Some(_) if coordinate_solvers.is_empty() => Err("the coordinate search could not be set up"),
+                    Some(start) => deeper(&coordinate_solvers, &start, cancel, &mut out.stats).map(|found| found.into_iter().map(|f| (f.clone(), pr.points(&f.midpoint()))).collect()),
                 }
             }
-            None => deeper(solver, &b, cancel, &mut out.stats).and_then(|f| if f.is_empty() { Ok(Vec::new()) } else { Err("no frame to certify placements in (fewer than three fixed points)") }),
+            None => deeper(std::slice::from_ref(solver), &b, cancel, &mut out.stats).and_then(|f| if f.is_empty() { Ok(Vec::new()) } else { Err("no frame to certify placements in (fewer than three fixed points)") }),
         };
         match verdict {
             Ok(found) if found.is_empty() => {}

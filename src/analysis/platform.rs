@@ -3,13 +3,20 @@
 //! `CayleyMenger`, shared variables with the redundant determinants, clipped by
 //! `TrapezoidClip`). The boxes are those of `linkspace distances --redundant --json` for the same
 //! input; the "joints" of a box are those unknown squared distances.
+//!
+//! Runs are certified as the CLI's (`distances::solve`): each certified placement (Krawczyk in
+//! coordinates; a placement and its mirror image share their distances) is published as a
+//! `Unique` box over the distances (the enclosure of its distances over the certified box), in
+//! the cluster it was attributed to; the solution boxes of a cluster left undecided are
+//! published `Undecided`, those of settled clusters `Solution`.
 
 use super::{Analysis, AnalysisError, BoxSetResult, PreparedRun, ResultBox, Service};
 use crate::contract::FaceBounds;
 use crate::model::Mechanism;
 use crate::problems::cayley_menger::{BuildOptions, CayleyMenger, DistanceSolverError, Formulation};
 use crate::problems::{PlatformError, PlatformProblem};
-use crate::report::distances::report;
+use crate::distances::{solve as certified_solve, Choice};
+use crate::report::distances::report_certified;
 use crate::search::{BoxStatus, Progress, SolverSettings};
 use crate::system::VarRole;
 use std::sync::atomic::AtomicBool;
@@ -99,11 +106,11 @@ impl Analysis for PlatformAnalysis {
 
 impl PreparedRun for PlatformRun {
     fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> BoxSetResult {
-        let solver = self.cm.solver(FACES, self.settings.clone()).expect("invariant: validated when prepared");
-        let e = solver.enclose(cancel, progress);
+        let _ = progress;
+        let c = certified_solve(&self.platform.distances, Choice::Shared, BUILD.redundant, FACES, self.settings.clone(), cancel).expect("invariant: validated when prepared");
         // The CLI's report, so the published boxes are exactly those of `distances --json`.
         let fixed_map = self.fixed.iter().cloned().collect();
-        let rep = report(&self.cm, Some(&self.platform), fixed_map, FACES, &self.settings, e.status, e.stats.clone(), &e.solutions, &e.undecided);
+        let rep = report_certified(&c, Some(&self.platform), fixed_map, FACES, &self.settings);
         let joint_names: Vec<String> = self.cm.unknowns.iter().map(|u| u.name.clone()).collect();
         let convert = |r: &crate::report::distances::DistanceRecord, status: BoxStatus, cluster: Option<usize>| ResultBox {
             status,
@@ -113,7 +120,29 @@ impl PreparedRun for PlatformRun {
             cluster,
             traces: Vec::new(),
         };
-        let mut boxes: Vec<ResultBox> = rep.solutions.iter().map(|r| convert(r, BoxStatus::Solution, Some(r.cluster))).collect();
+        let settled = |k: usize| c.clusters.get(k).is_some_and(|v| v.undecided.is_none());
+        let mut boxes: Vec<ResultBox> = rep.solutions.iter().map(|r| convert(r, if settled(r.cluster) { BoxStatus::Solution } else { BoxStatus::Undecided }, Some(r.cluster))).collect();
+        // Certified placements: the distances of a placement and of its mirror image are one
+        // box (the mirror image is the same solution of the distance system).
+        if let Some(pl) = &c.placed {
+            let mut seen: Vec<Vec<[f64; 2]>> = Vec::new();
+            for root in &c.roots {
+                let d: Vec<[f64; 2]> = c.cm.unknowns.iter().map(|u| {
+                    let i = pl.distance_over(u.a, u.b, &root.certified);
+                    [i.inf(), i.sup()]
+                }).collect();
+                let overlaps = |e: &Vec<[f64; 2]>| e.iter().zip(&d).all(|(a, b)| a[0] <= b[1] && b[0] <= a[1]);
+                if seen.iter().any(overlaps) {
+                    continue;
+                }
+                seen.push(d.clone());
+                let mut bounds = vec![[f64::NAN, f64::NAN]; self.cm.system.vars.len()];
+                for (u, x) in c.cm.unknowns.iter().zip(&d) {
+                    bounds[u.var] = *x;
+                }
+                boxes.push(ResultBox { status: BoxStatus::Unique, bounds, joints: d, level: 0, cluster: Some(root.cluster), traces: Vec::new() });
+            }
+        }
         boxes.extend(rep.undecided.iter().map(|r| convert(r, BoxStatus::Undecided, None)));
         BoxSetResult {
             mechanism: rep.problem,
@@ -157,15 +186,24 @@ mod tests {
         let r = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
         assert_eq!(r.status, Status::Complete);
         assert_eq!(r.clusters, 2);
-        // The CLI path (`cli::distances::solve`), built independently here.
+        // The CLI path (`linkspace distances --redundant`), built independently here.
         let p = PlatformProblem::new(&m, &fixed).expect("platform");
-        let cm = CayleyMenger::build(&p.distances, BUILD).expect("builds");
-        let e = cm.solver(FACES, settings.clone()).expect("valid").enclose(&AtomicBool::new(false), &mut |_| {});
-        let rep = report(&cm, Some(&p), fixed.iter().cloned().collect(), FACES, &settings, e.status, e.stats, &e.solutions, &e.undecided);
+        let c = certified_solve(&p.distances, Choice::Shared, true, FACES, settings.clone(), &AtomicBool::new(false)).expect("solves");
+        let rep = report_certified(&c, Some(&p), fixed.iter().cloned().collect(), FACES, &settings);
         assert_eq!(rep.clusters, 2);
-        let published: Vec<&Vec<[f64; 2]>> = r.boxes.iter().filter(|b| b.status.is_solution()).map(|b| &b.bounds).collect();
+        assert!(rep.complete);
+        let published: Vec<&Vec<[f64; 2]>> = r.boxes.iter().filter(|b| b.status == BoxStatus::Solution).map(|b| &b.bounds).collect();
         let cli: Vec<&Vec<[f64; 2]>> = rep.solutions.iter().map(|s| &s.box_).collect();
         assert_eq!(published, cli);
+        // Two assembly modes, each proven (with its mirror image: one distance solution), each
+        // inside its cluster's boxes.
+        let unique: Vec<_> = r.boxes.iter().filter(|b| b.status == BoxStatus::Unique).collect();
+        assert_eq!(unique.len(), 2);
+        for u in &unique {
+            let k = u.cluster.expect("attributed");
+            assert!(r.boxes.iter().filter(|b| b.status == BoxStatus::Solution && b.cluster == Some(k)).any(|b| b.joints.iter().zip(&u.joints).all(|(a, x)| a[0] <= x[1] && x[0] <= a[1])));
+        }
+        assert!(!r.boxes.iter().any(|b| b.status == BoxStatus::Undecided));
         assert_eq!(r.joint_names.len(), r.boxes[0].joints.len());
         assert!(r.boxes.iter().all(|b| b.joints.iter().all(|j| j[0] <= j[1])));
         // Re-solving with other legs: configuration b.
@@ -174,6 +212,7 @@ mod tests {
         assert_eq!(rb.analysis, "solve");
         assert_eq!(rb.fixed_joints, b);
         assert!(rb.clusters > 0);
+        assert_eq!(rb.boxes.iter().filter(|b| b.status == BoxStatus::Unique).count(), 8, "configuration b: 8 assembly modes");
     }
 
     #[test]

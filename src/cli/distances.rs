@@ -24,6 +24,9 @@ pub enum Form {
     Auto,
     /// Coordinates of the free points (degree two; interval Newton certifies).
     Points,
+    /// A point and a direction of the line through the two free points (lines tangent to
+    /// spheres; degree two; interval Newton certifies).
+    Line,
     /// One variable per distance (degree two; Bernstein control points).
     Shared,
     /// The seed's: r_ij and r_ji separate, multilinear (corner values).
@@ -48,9 +51,11 @@ pub struct DistancesArgs {
     /// Solution boxes are at most this wide in every unknown squared distance.
     #[arg(long, default_value_t = 0.01)]
     sigma: f64,
-    /// Keep clipping a box while a round leaves less than this share of its volume.
-    #[arg(long, default_value_t = 0.99)]
-    rho: f64,
+    /// Keep clipping a box while a round leaves less than this share of its volume. Default
+    /// 0.99 (the seed's) for the determinants, 0.9 for the coordinate formulations (points,
+    /// line), where bisecting is cheaper than slow propagation fixpoints.
+    #[arg(long)]
+    rho: Option<f64>,
     /// Add the redundant determinants (platform: the seed's Eq. 7; JSON: six-point ones).
     #[arg(long)]
     redundant: bool,
@@ -89,10 +94,20 @@ pub fn solve(cm: &CayleyMenger, faces: FaceBounds, settings: SolverSettings) -> 
     Ok(cm.solver(faces, settings)?.enclose(&AtomicBool::new(false), &mut |_| {}))
 }
 
+/// The default rho of a formulation: the seed's 0.99 for the determinants, 0.9 in coordinates.
+pub fn default_rho(c: Choice) -> f64 {
+    if matches!(c, Choice::Points | Choice::Line) {
+        0.9
+    } else {
+        0.99
+    }
+}
+
 pub fn choice(form: Form) -> Choice {
     match form {
         Form::Auto => Choice::Auto,
         Form::Points => Choice::Points,
+        Form::Line => Choice::Line,
         Form::Shared => Choice::Shared,
         Form::Split => Choice::Split,
     }
@@ -111,13 +126,20 @@ fn face_bounds(f: Faces) -> FaceBounds {
 }
 
 pub fn run(args: DistancesArgs) -> Result<()> {
-    let settings = args.limits.solver_settings(SolverSettings::default().max_boxes, SolverSettings { sigma: args.sigma, rho: args.rho, ..Default::default() })?;
-    settings.validate()?;
+    // Settings are checked before the file is read (rho's default depends on the formulation).
+    args.limits.solver_settings(SolverSettings::default().max_boxes, SolverSettings { sigma: args.sigma, rho: args.rho.unwrap_or(0.99), ..Default::default() })?.validate()?;
     let fixed = args.fix.iter().map(|s| parse_fix(s)).collect::<Result<Vec<_>>>()?;
     let text = std::fs::read_to_string(&args.file).with_context(|| format!("reading {}", args.file.display()))?;
     let loaded = load(&args.file, &text, &fixed)?;
+    let chosen = match choice(args.formulation) {
+        Choice::Auto => linkspace::distances::choose(&loaded.distances),
+        c => c,
+    };
+    let rho = args.rho.unwrap_or(default_rho(chosen));
+    let settings = args.limits.solver_settings(SolverSettings::default().max_boxes, SolverSettings { sigma: args.sigma, rho, ..Default::default() })?;
+    settings.validate()?;
     let faces = face_bounds(args.faces);
-    let c = certified_solve(&loaded.distances, choice(args.formulation), args.redundant, faces, settings.clone(), &AtomicBool::new(false)).with_context(|| format!("solving {}", args.file.display()))?;
+    let c = certified_solve(&loaded.distances, chosen, args.redundant, faces, settings.clone(), &AtomicBool::new(false)).with_context(|| format!("solving {}", args.file.display()))?;
     let fixed_map: BTreeMap<String, f64> = fixed.into_iter().collect();
     let rep = report_certified(&c, loaded.platform.as_ref(), fixed_map, faces, &settings);
     summarize(&rep)?;
@@ -274,9 +296,15 @@ pub fn bench(args: BenchArgs) -> Result<()> {
             ("split, corners, C1-C4 (the seed's; baseline)", Form::Split, Some(args.split_timeout)),
             ("shared, Bernstein corners, C1-C4", Form::Shared, None),
             ("points (coordinates, Krawczyk)", Form::Points, None),
+            ("line (point and direction, Krawczyk; issue 15)", Form::Line, None),
             ("auto (the CLI's default)", Form::Auto, None),
         ] {
-            let settings = SolverSettings { sigma, rho: 0.99, timeout: timeout.map(Duration::from_secs_f64), ..Default::default() };
+            // rho as the CLI's default for the formulation (0.99 for the determinants).
+            let rho = default_rho(match choice(form) {
+                Choice::Auto => linkspace::distances::choose(&d),
+                c => c,
+            });
+            let settings = SolverSettings { sigma, rho, timeout: timeout.map(Duration::from_secs_f64), ..Default::default() };
             // The slow baseline runs once.
             let repeat = if form == Form::Split { 1 } else { args.repeat };
             let (t, c) = run(&d, form, matches!(form, Form::Split | Form::Shared), FaceBounds::Corners, &settings, repeat)?;

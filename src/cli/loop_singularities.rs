@@ -4,6 +4,7 @@
 use super::{parse_fix, LimitArgs};
 use anyhow::{bail, Context, Result};
 use linkspace::model::urdf;
+use linkspace::problems::singular::image;
 use linkspace::problems::singular::{transmission_joints, Output, SingularKind, SingularProblem};
 use linkspace::report::singular::SingularReport;
 use linkspace::search::SolverSettings;
@@ -21,6 +22,9 @@ pub(crate) enum Kind {
     Output,
     /// All three.
     All,
+    /// 2-dof mechanisms: cusps and nodes of the type-II image in actuator space, the regions it
+    /// cuts with their assembly modes, and the verdict on non-singular assembly-mode change.
+    Image,
 }
 
 #[derive(clap::Args)]
@@ -44,9 +48,12 @@ pub(crate) struct LoopSingularitiesArgs {
     sigma: f64,
     #[command(flatten)]
     limits: LimitArgs,
-    /// Write the reports (one per set, as a JSON array) here.
+    /// Write the reports (one per set, as a JSON array; `--kind image`: one image report) here.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
+    /// `--kind image`: cells per actuator axis of the raster that finds the regions.
+    #[arg(long, default_value_t = 128)]
+    grid: usize,
 }
 
 /// `LINK@X,Y` or `J1,J2`.
@@ -83,6 +90,9 @@ pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
         Some(a) => names(a, "--actuated")?,
         None => transmission_joints(&xml),
     };
+    if matches!(args.kind, Kind::Image) {
+        return run_image(&args, &mechanism, &fixed, &actuated, &settings);
+    }
     let kinds: Vec<SingularKind> = match args.kind {
         Kind::Cspace => vec![SingularKind::Cspace],
         Kind::Input => vec![SingularKind::Input],
@@ -90,6 +100,7 @@ pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
         // Input singularities need actuators: without any, `all` runs the other two.
         Kind::All if actuated.is_empty() => vec![SingularKind::Cspace, SingularKind::Output],
         Kind::All => vec![SingularKind::Cspace, SingularKind::Input, SingularKind::Output],
+        Kind::Image => unreachable!("handled above"),
     };
     let mut reports = Vec::new();
     let mut out = std::io::stdout().lock();
@@ -138,6 +149,49 @@ pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
     Ok(())
 }
 
+/// The type-II cover, then cusps, nodes, regions and the verdict; one summary and one JSON report.
+fn run_image(args: &LoopSingularitiesArgs, mechanism: &linkspace::model::Mechanism, fixed: &[(String, f64)], actuated: &[String], settings: &SolverSettings) -> Result<()> {
+    if args.grid < 2 {
+        bail!("--grid must be at least 2");
+    }
+    let r = image::analyse(mechanism, fixed, actuated, settings, args.grid, &AtomicBool::new(false)).with_context(|| format!("analysing {}", args.urdf.display()))?;
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "{} type-II image: cusps {} proven, {} undecided; nodes {} proven, {} undecided ({} diagonal boxes injective); {} regions; status {}; {:.3} s (cover {:.3}, cusps {:.3}, nodes {:.3}, regions {:.3})",
+        r.mechanism,
+        r.cusp_counts.proven,
+        r.cusp_counts.undecided,
+        r.node_counts.proven,
+        r.node_counts.undecided,
+        r.injective,
+        r.regions.regions.len(),
+        r.status,
+        r.seconds.iter().sum::<f64>(),
+        r.seconds[0],
+        r.seconds[1],
+        r.seconds[2],
+        r.seconds[3]
+    )
+    .ok();
+    for (i, g) in r.regions.regions.iter().enumerate() {
+        let count = g.configurations.map_or("undecided".to_string(), |c| c.to_string());
+        let signs = g.signs.map_or(String::new(), |[p, n]| format!(" ({p} with det F_p > 0, {n} < 0)"));
+        writeln!(out, "  region {i}: {} cells, sample {:?}: {count} assembly modes{signs}", g.cells, g.sample).ok();
+    }
+    for c in r.cusps.iter().take(20) {
+        writeln!(out, "  cusp{}{}: {:?}", if c.unique { " (certified)" } else { " (undecided)" }, if c.degenerate { " degenerate" } else { "" }, c.workspace).ok();
+    }
+    for n in r.nodes.iter().take(20) {
+        writeln!(out, "  node{}: {:?}", if n.unique { " (certified)" } else { " (undecided)" }, n.workspace).ok();
+    }
+    writeln!(out, "  can change assembly mode without crossing a type-II singularity: {} ({})", r.verdict.answer, r.verdict.reason).ok();
+    if let Some(path) = &args.json {
+        std::fs::write(path, serde_json::to_string_pretty(&r)?).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
 #[derive(clap::Args)]
 pub(crate) struct BenchArgs {
     /// Runs per case; the median is reported.
@@ -146,11 +200,19 @@ pub(crate) struct BenchArgs {
     /// Also time the double butterfly's turning points of θ6 (about half a minute a run).
     #[arg(long)]
     butterfly: bool,
+    /// Also time the type-II image of the five-bar with unequal rods (cusps, nodes, regions;
+    /// about a minute a run), each search against the cover of the type-II set in the same run.
+    #[arg(long)]
+    image: bool,
 }
 
 const FOUR_BAR: &str = include_str!("../../urdf/four_bar.urdf");
 const FIVE_BAR: &str = include_str!("../../urdf/five_bar.urdf");
 const BUTTERFLY: &str = include_str!("../../urdf/double_butterfly.urdf");
+const FIVE_BAR_UNEQUAL: &str = include_str!("../../urdf/five_bar_unequal.urdf");
+
+/// A bench case: name, URDF text, set, actuated joints, output, sigma.
+type Case = (&'static str, &'static str, SingularKind, Vec<String>, Option<Output>, f64);
 
 /// Singular-set searches against a baseline in the same run: the same search with propagation
 /// only (no LP shrink), which shows what the LP relaxation of the bilinear null-vector rows buys.
@@ -158,7 +220,7 @@ pub(crate) fn bench(args: BenchArgs) -> Result<()> {
     if args.repeat == 0 {
         bail!("--repeat must be at least 1");
     }
-    let mut cases: Vec<(&str, &str, SingularKind, Vec<String>, Option<Output>, f64)> = vec![
+    let mut cases: Vec<Case> = vec![
         ("four-bar dead centres (output rocker_joint)", FOUR_BAR, SingularKind::Output, vec!["crank_joint".into()], Some(Output::Joints(vec!["rocker_joint".into()])), 1e-6),
         ("five-bar type-II curves", FIVE_BAR, SingularKind::Input, vec!["crank1_joint".into(), "crank2_joint".into()], None, 2e-2),
     ];
@@ -192,5 +254,57 @@ pub(crate) fn bench(args: BenchArgs) -> Result<()> {
             medians.push(median);
         }
     }
+    if args.image {
+        bench_image(&mut out, args.repeat)?;
+    }
+    Ok(())
+}
+
+/// The type-II image searches of the five-bar with unequal rods, each against the cover of the
+/// type-II set (the baseline) in the same run; CPU seconds, medians of `repeat` runs.
+fn bench_image(out: &mut impl Write, repeat: usize) -> Result<()> {
+    let m = urdf::parse(FIVE_BAR_UNEQUAL)?;
+    let actuated: Vec<String> = vec!["crank1_joint".into(), "crank2_joint".into()];
+    let p = SingularProblem::new(&m, &[], SingularKind::Input, &actuated, None)?;
+    let settings = SolverSettings { sigma: 1e-2, max_boxes: 2_000_000, ..SolverSettings::default() };
+    let cancel = AtomicBool::new(false);
+    let cusp_problem = image::CuspProblem::new(&p)?;
+    let node_problem = image::NodeProblem::new(&p)?;
+    let median = |f: &mut dyn FnMut() -> Result<String>| -> Result<(f64, String)> {
+        let mut times = Vec::new();
+        let mut what = String::new();
+        for _ in 0..repeat {
+            let c0 = linkspace::search::process_cpu_seconds();
+            what = f()?;
+            times.push(linkspace::search::process_cpu_seconds() - c0);
+        }
+        times.sort_by(|a, b| a.total_cmp(b));
+        Ok((times[times.len() / 2], what))
+    };
+    writeln!(out, "five-bar (rods 2.5, 2) type-II image | median CPU s | result | vs the type-II cover (same run)").ok();
+    let mut cover = None;
+    let (base, what) = median(&mut || {
+        let set = p.solve(&settings, &cancel)?;
+        let w = format!("{} boxes, {} clusters", set.boxes.len(), set.clusters.len());
+        cover = Some(set);
+        Ok(w)
+    })?;
+    writeln!(out, "cover of S (baseline) | {base:.3} | {what} | 1.00x").ok();
+    let cover = cover.expect("repeat >= 1");
+    let (t, what) = median(&mut || {
+        let c = cusp_problem.solve(&p, &settings, &cancel)?;
+        Ok(format!("{} proven, {} undecided, {} chart pairs", c.proven(), c.points.len() - c.proven(), cusp_problem.charts.len()))
+    })?;
+    writeln!(out, "cusps | {t:.3} | {what} | {:.2}x the cover", t / base).ok();
+    let (t, what) = median(&mut || {
+        let n = node_problem.solve(&p, &settings, &cancel)?;
+        Ok(format!("{} proven, {} undecided, {} diagonal boxes injective", n.proven(), n.undecided(), n.injective))
+    })?;
+    writeln!(out, "nodes | {t:.3} | {what} | {:.2}x the cover", t / base).ok();
+    let (t, what) = median(&mut || {
+        let r = image::regions(&m, &p, &cover, 64, &settings, &cancel)?;
+        Ok(format!("{} regions on a 64 x 64 raster", r.regions.len()))
+    })?;
+    writeln!(out, "regions | {t:.3} | {what} | {:.2}x the cover", t / base).ok();
     Ok(())
 }

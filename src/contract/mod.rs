@@ -2,12 +2,14 @@
 //!
 //! Owns the `Contractor` trait, its outcome `Contraction`, the combinator `Sequence`, and the
 //! implementations: equation-wise interval propagation (`propagate`), the seed's LP shrink
-//! (`lp_shrink`), interval Newton for square systems (`newton`), and trapezoid clipping of
+//! (`lp_shrink`), the one Krawczyk operator with ε-inflation (`krawczyk`, used by every search)
+//! and its adapter for square systems (`newton`), and trapezoid clipping of
 //! polynomial equations (`trapezoid`, seed 004); `filter` applies non-equation conditions
 //! (joint limits) to every box, certified or not.
 //! A contractor does no IO; numerical trouble gives `Unchanged`, never `Empty`.
 
 mod filter;
+pub mod krawczyk;
 mod lp_shrink;
 mod newton;
 mod propagate;

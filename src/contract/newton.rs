@@ -1,17 +1,17 @@
-//! Interval Newton (Krawczyk's operator) for square systems: quadratic convergence near regular
-//! roots, and a certificate that a box holds exactly one solution.
+//! Interval Newton for square `EquationSystem`s: quadratic convergence near regular roots, and a
+//! certificate that a box holds exactly one solution.
 //!
-//! `K(X) = c − Y·f(c) + (I − Y·J(X))·(X − c)`, with `c` the midpoint, `J(X)` an interval
-//! enclosure of the Jacobian over `X` and `Y` any real matrix (the inverse of `mid J`).
-//! Every root in `X` lies in `K(X)`, so `X ∩ K(X)` loses none; `K(X) ⊂ int X` proves a unique
-//! root in `X` (Krawczyk 1969; Moore 1977; Neumaier, *Interval Methods for Systems of
-//! Equations*, 1990, §5.2). `Y` is computed in floating point: it needs no accuracy, only the
-//! interval products that use it are rounded outward.
+//! A thin adapter: it evaluates `f(c)` at the midpoint `c` and an enclosure `J(X)` of the
+//! Jacobian over `X` (inari, outward rounded), and hands them to the crate's one Krawczyk
+//! operator (`contract::krawczyk::step`, which owns the operator, its rounding and its
+//! references) and to its ε-inflation (`krawczyk::inflate`).
 
+use super::krawczyk::{self, Inflation, Step};
 use super::{Contraction, Contractor};
-use crate::interval::{interval, point, Interval, IntervalBox};
+use crate::interval::{point, Interval, IntervalBox};
 use crate::system::{EquationSystem, Monomial, VarId};
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
+use std::cmp::Ordering;
 
 /// Krawczyk contraction, run only on boxes no wider than `max_width` in the primaries.
 pub struct Newton<'a> {
@@ -28,88 +28,64 @@ impl<'a> Newton<'a> {
         (system.equations.len() == system.vars.len()).then(|| Self { system, primaries: system.primaries(), max_width })
     }
 
-    fn jacobian(&self, x: &[Interval]) -> Vec<Vec<Interval>> {
+    fn jacobian(&self, x: &[Interval]) -> DMatrix<Interval> {
         let n = x.len();
-        let mut j = vec![vec![point(0.0); n]; n];
+        let mut j = DMatrix::from_element(n, n, point(0.0));
         for (k, e) in self.system.equations.iter().enumerate() {
             for t in &e.terms {
                 match t.mono {
-                    Monomial::Linear(v) => j[k][v] = j[k][v] + t.coef,
-                    Monomial::Square(v) => j[k][v] = j[k][v] + t.coef * point(2.0) * x[v],
+                    Monomial::Linear(v) => j[(k, v)] += t.coef,
+                    Monomial::Square(v) => j[(k, v)] += t.coef * point(2.0) * x[v],
                     Monomial::Product(a, b) => {
-                        j[k][a] = j[k][a] + t.coef * x[b];
-                        j[k][b] = j[k][b] + t.coef * x[a];
+                        j[(k, a)] += t.coef * x[b];
+                        j[(k, b)] += t.coef * x[a];
                     }
                 }
             }
         }
         j
     }
-}
 
-impl Newton<'_> {
-    /// Krawczyk's image `K(X)`, not yet intersected with `X`; `None` when `mid J(X)` cannot be
-    /// inverted or the image is not finite.
+    /// The shared Krawczyk step on `x`.
+    fn step(&self, x: &[Interval]) -> Step<Vec<Interval>> {
+        let (b, c, fc, j) = self.linearise(x);
+        krawczyk::step(&b, &c, &fc, &j).map(|k| k.data.into())
+    }
+
+    /// Krawczyk's image of `x` (for ε-inflation).
     fn image(&self, x: &[Interval]) -> Option<Vec<Interval>> {
-        let n = x.len();
+        let (b, c, fc, j) = self.linearise(x);
+        krawczyk::image(&b, &c, &fc, &j).map(|k| k.data.into())
+    }
+
+    /// The box, its midpoint `c`, `f(c)` and `J(x)`, as the Krawczyk step takes them.
+    fn linearise(&self, x: &[Interval]) -> (DVector<Interval>, DVector<f64>, DVector<Interval>, DMatrix<Interval>) {
         let c: Vec<f64> = x.iter().map(|d| d.mid()).collect();
         let cpoint: Vec<Interval> = c.iter().map(|&v| point(v)).collect();
-        let fc: Vec<Interval> = self.system.equations.iter().map(|e| e.eval(&cpoint)).collect();
-        let j = self.jacobian(x);
-        let jm = DMatrix::from_fn(n, n, |r, s| j[r][s].mid());
-        let y = jm.try_inverse()?;
-        if !y.iter().all(|v| v.is_finite()) {
-            return None;
-        }
-        let mut out = Vec::with_capacity(n);
-        for r in 0..n {
-            // K_r = c_r − Σ_s Y_rs f_s(c) + Σ_s (δ_rs − Σ_t Y_rt J_ts)(X_s − c_s)
-            let mut k = point(c[r]);
-            for s in 0..n {
-                k = k - point(y[(r, s)]) * fc[s];
-            }
-            for s in 0..n {
-                let mut m = if r == s { point(1.0) } else { point(0.0) };
-                for t in 0..n {
-                    m = m - point(y[(r, t)]) * j[t][s];
-                }
-                k = k + m * (x[s] - point(c[s]));
-            }
-            if k.is_empty() {
-                return None;
-            }
-            out.push(k);
-        }
-        Some(out)
+        let fc = DVector::from_iterator(x.len(), self.system.equations.iter().map(|e| e.eval(&cpoint)));
+        (DVector::from_column_slice(x), DVector::from_vec(c), fc, self.jacobian(x))
     }
 }
 
 impl Contractor for Newton<'_> {
     fn contract(&mut self, b: &mut IntervalBox) -> Contraction {
-        let x = &b.dims;
-        if self.primaries.iter().any(|&i| !(x[i].wid() <= self.max_width)) {
+        // A NaN width (never in a valid box) counts as too wide.
+        let narrow = |i: &VarId| matches!(b.dims[*i].wid().partial_cmp(&self.max_width), Some(Ordering::Less | Ordering::Equal));
+        if !self.primaries.iter().all(narrow) {
             return Contraction::Unchanged;
         }
-        let Some(k) = self.image(x) else { return Contraction::Unchanged };
-        let mut outcome = Contraction::Unchanged;
-        let mut unique = true;
-        let mut next = x.clone();
-        for (r, k) in k.into_iter().enumerate() {
-            unique &= k.inf() > x[r].inf() && k.sup() < x[r].sup();
-            let narrowed = x[r].intersection(k);
-            if narrowed.is_empty() {
-                return Contraction::Empty;
+        match self.step(&b.dims) {
+            Step::Failed => Contraction::Unchanged,
+            Step::Empty => Contraction::Empty,
+            Step::Unique(k) => {
+                b.dims = k;
+                Contraction::Proven
             }
-            if narrowed != x[r] {
-                outcome = Contraction::Reduced;
+            Step::Contracted(k) if k == b.dims => Contraction::Unchanged,
+            Step::Contracted(k) => {
+                b.dims = k;
+                Contraction::Reduced
             }
-            next[r] = narrowed;
-        }
-        b.dims = next;
-        if unique {
-            Contraction::Proven
-        } else {
-            outcome
         }
     }
 
@@ -117,43 +93,20 @@ impl Contractor for Newton<'_> {
         "krawczyk"
     }
 
-    /// Epsilon-inflation (Rump 1983): a box that is already tight around a root rarely shows
-    /// `K(X) ⊂ int X`, so try on `X` widened, then on the widened hull of `X` and `K(X)`, a few
-    /// times. Every root of `b` stays in every trial box (each holds `b`, and `K` keeps the roots
-    /// of its argument), so when `K(X') ⊂ int X'` the returned `K(X')` holds the one root of
-    /// `X'` and every root of `b`.
-    ///
-    /// Inflating by a component's own radius is not enough: a component can be far narrower
-    /// than the box (`c = cos φ` near φ = 0 is `w²/2` wide when `s` is `w` wide, and a box
-    /// Newton has shrunk to a few ulps is narrower than its coefficients' uncertainty), while
-    /// `K` of that component is as wide as the box's curvature or coefficients make it. So each
-    /// component also gets 1% of the widest primary radius, and later rounds inflate `K`'s own
-    /// hull: certification no longer depends on where a link's rest pose is.
+    /// The shared ε-inflation (`krawczyk::inflate`) from `b`: four rounds, each component grown by
+    /// 5% of its width, 0.5% of the widest primary's width and a few ulps, so certification
+    /// does not depend on where a link's rest pose is (see `inflate` on the widest term).
     fn certify(&mut self, b: &IntervalBox) -> Option<IntervalBox> {
-        let inflate = |dims: &mut Vec<Interval>, primaries: &[VarId]| {
-            let widest = primaries.iter().map(|&i| dims[i].rad()).fold(0.0, f64::max);
-            for d in dims.iter_mut() {
-                let pad = 0.1 * d.rad() + 0.01 * widest + 4.0 * f64::EPSILON * d.mag().max(1.0);
-                *d = interval(d.inf() - pad, d.sup() + pad);
-            }
-        };
-        let mut x = b.dims.clone();
-        inflate(&mut x, &self.primaries);
-        for _ in 0..4 {
-            let k = self.image(&x)?;
-            if k.iter().zip(&x).all(|(k, x)| k.inf() > x.inf() && k.sup() < x.sup()) {
-                return Some(IntervalBox { dims: k, level: b.level });
-            }
-            x = k.iter().zip(&b.dims).map(|(k, b)| k.convex_hull(*b)).collect();
-            inflate(&mut x, &self.primaries);
-        }
-        None
+        let policy = Inflation { rounds: 4, own: 0.05, widest: 0.005, widest_of: &self.primaries, absolute: 0.0, ulps: 4.0 };
+        let dims = krawczyk::inflate(&b.dims, &policy, |x| self.image(x))?;
+        Some(IntervalBox { dims, level: b.level })
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::interval::interval;
     use crate::system::{Equation, Term, VarRole};
 
     #[test]

@@ -23,7 +23,7 @@
 
 use super::chain::Chain3R;
 use super::drive::{drive, no_progress, Control, Order, Outcome};
-use super::krawczyk::{self, Step as K};
+use crate::contract::krawczyk::{self, Inflation, Step as K};
 use super::motion::{self, Band};
 use crate::interval::{interval, point};
 use crate::search::{self, Limits, Progress, Prune, Stats, Status, Step};
@@ -194,48 +194,38 @@ pub fn bisect(b: [Interval; 2], cut_theta3: bool) -> ([Interval; 2], [Interval; 
     (lo, hi)
 }
 
+/// The square system (det, gₖ) linearised over `b` with `e` its evaluation: midpoint, values
+/// there and Jacobian over `b`, as `krawczyk::step_array` takes them.
+fn cusp_system(b: &[Interval; 2], e: &BoxEval, k: usize) -> ([f64; 2], [Interval; 2], [[Interval; 2]; 2]) {
+    ([b[0].mid(), b[1].mid()], [e.det_mid, e.g_mid[k]], [e.grad_det, e.grad_g[k]])
+}
+
 /// Krawczyk on (det, gₖ) over `b` with `e` its evaluation.
-fn krawczyk_cusp(b: &[Interval; 2], e: &BoxEval, k: usize) -> K<2> {
-    let m = [b[0].mid(), b[1].mid()];
-    krawczyk::step(b, &m, &[e.det_mid, e.g_mid[k]], &[e.grad_det, e.grad_g[k]])
+fn krawczyk_cusp(b: &[Interval; 2], e: &BoxEval, k: usize) -> K<[Interval; 2]> {
+    let (m, fm, jac) = cusp_system(b, e, k);
+    krawczyk::step_array(b, &m, &fm, &jac)
 }
 
 /// Shrinks a proven cusp box by repeated Krawczyk steps until it is no wider than `precision`.
-fn refine(chain: &Chain3R, mut b: [Interval; 2], k: usize, precision: f64) -> [Interval; 2] {
-    for _ in 0..30 {
-        if width(&b) <= precision {
-            break;
-        }
-        let e = evaluate(chain, b);
-        match krawczyk_cusp(&b, &e, k) {
-            K::Unique(next) | K::Contracted(next) if width(&next) < 0.9 * width(&b) => b = next,
-            _ => break,
-        }
-    }
-    b
+fn refine(chain: &Chain3R, b: [Interval; 2], k: usize, precision: f64) -> [Interval; 2] {
+    krawczyk::tighten(b, precision, |b| krawczyk_cusp(b, &evaluate(chain, *b), k))
 }
 
-/// Epsilon-inflation (Rump): from a box `x` that Krawczyk contracted but could not prove, try
-/// slightly larger boxes around it. With uncertain lengths the cusp moves with the geometry,
-/// so only a box wider than that motion can hold "one cusp for every geometry"; bisection alone
-/// would never produce one. Returns the proven box and its row.
-fn inflate(chain: &Chain3R, mut x: [Interval; 2], k: usize) -> Option<[Interval; 2]> {
-    for _ in 0..8 {
-        let grown = x.map(|d| {
-            let r = 0.1 * d.wid() + 1e-12;
-            interval(d.inf() - r, d.sup() + r)
-        });
-        let e = evaluate(chain, grown);
+/// Epsilon-inflation (Rump, the shared `krawczyk::inflate`): from a box `x` that Krawczyk
+/// contracted but could not prove, try slightly larger boxes around it. With uncertain lengths
+/// the cusp moves with the geometry, so only a box wider than that motion can hold "one cusp
+/// for every geometry"; bisection alone would never produce one. A trial box where `∇det` or
+/// row `k` of Df may vanish ends the search. Returns the proven box.
+fn inflate(chain: &Chain3R, x: [Interval; 2], k: usize) -> Option<[Interval; 2]> {
+    let policy = Inflation { rounds: 8, own: 0.1, widest: 0.0, widest_of: &[], absolute: 1e-12, ulps: 0.0 };
+    krawczyk::inflate(&x, &policy, |grown| {
+        let e = evaluate(chain, *grown);
         if !excludes_zero(&e.grad_det) || !excludes_zero(&e.df[k]) {
             return None;
         }
-        match krawczyk_cusp(&grown, &e, k) {
-            K::Unique(inner) => return Some(inner),
-            K::Contracted(next) => x = next,
-            K::Empty | K::Failed => return None,
-        }
-    }
-    None
+        let (m, fm, jac) = cusp_system(grown, &e, k);
+        krawczyk::image_array(grown, &m, &fm, &jac)
+    })
 }
 
 /// True when the two boxes share a point of the torus (angles modulo 2π).

@@ -10,7 +10,7 @@
 use super::chain::Chain3R;
 use super::cusps::{bisect, meet_on_torus};
 use super::drive::{drive, no_progress, Control, Order};
-use super::krawczyk::{self, Step as K};
+use crate::contract::krawczyk::{self, Step as K};
 use super::motion;
 use super::Manip3rError;
 use crate::interval::point;
@@ -97,22 +97,16 @@ impl Prune for IkPrune<'_> {
         if empty {
             return Step::Discard("no_solution");
         }
-        match krawczyk::step(&b, &m, &fm, &jac) {
+        match krawczyk::step_array(&b, &m, &fm, &jac) {
             K::Empty => return Step::Discard("krawczyk_empty"),
-            K::Unique(mut k) => {
-                for _ in 0..30 {
-                    if k[0].wid().max(k[1].wid()) <= precision {
-                        break;
-                    }
+            K::Unique(k) => {
+                let k = krawczyk::tighten(k, precision, |k| {
                     let mk = [k[0].mid(), k[1].mid()];
-                    let o = chain.derived(k, 1);
+                    let o = chain.derived(*k, 1);
                     let a = chain.derived([point(mk[0]), point(mk[1])], 1);
                     let fmk = [a.f[0].value() - target[0], a.f[1].value() - target[1]];
-                    match krawczyk::step(&k, &mk, &fmk, &[o.f[0].grad(), o.f[1].grad()]) {
-                        K::Unique(n) | K::Contracted(n) if n[0].wid().max(n[1].wid()) < 0.9 * k[0].wid().max(k[1].wid()) => k = n,
-                        _ => break,
-                    }
-                }
+                    krawczyk::step_array(k, &mk, &fmk, &[o.f[0].grad(), o.f[1].grad()])
+                });
                 return Step::Found((cell.order, k));
             }
             _ => {}
@@ -174,7 +168,10 @@ fn cluster(boxes: &[[Interval; 2]]) -> Vec<IkCluster> {
             }
         }
     }
-    let edge: Vec<usize> = (0..n).filter(|&i| boxes[i].iter().any(|d| d.inf() <= -3.14159 || d.sup() >= 3.14159)).collect();
+    // Deliberately a little below π: boxes this close to the seam may meet copies across it.
+    #[allow(clippy::approx_constant)]
+    const NEAR_SEAM: f64 = 3.14159;
+    let edge: Vec<usize> = (0..n).filter(|&i| boxes[i].iter().any(|d| d.inf() <= -NEAR_SEAM || d.sup() >= NEAR_SEAM)).collect();
     for (x, &i) in edge.iter().enumerate() {
         for &j in &edge[x + 1..] {
             if meet_on_torus(&boxes[i], &boxes[j]) {

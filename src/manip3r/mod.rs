@@ -21,7 +21,6 @@ pub mod curves;
 pub mod cusps;
 pub mod drive;
 pub mod ik;
-pub(crate) mod krawczyk;
 pub mod limits;
 pub mod motion;
 pub mod nodes;

@@ -30,7 +30,7 @@
 use super::chain::Chain3R;
 use super::cusps::{self, evaluate_without_tangency as evaluate, meet_on_torus, BoxEval, Cusp};
 use super::drive::{drive, no_progress, Control, Order};
-use super::krawczyk::{self, Step as K};
+use crate::contract::krawczyk::{self, Step as K};
 use super::motion::{self, Band};
 use crate::interval::{interval, point};
 use crate::search::{Limits, Progress, Prune, Stats, Status, Step};
@@ -281,7 +281,7 @@ fn contains(outer: &[Interval; 2], inner: &[Interval; 2]) -> bool {
 }
 
 /// Krawczyk on system (3) over `p × q`.
-fn krawczyk_node(p: &[Interval; 2], ep: &BoxEval, q: &[Interval; 2], eq: &BoxEval) -> K<4> {
+fn krawczyk_node(p: &[Interval; 2], ep: &BoxEval, q: &[Interval; 2], eq: &BoxEval) -> K<[Interval; 4]> {
     let b = [p[0], p[1], q[0], q[1]];
     let m = b.map(|x| x.mid());
     let fm = [ep.f_mid[0] - eq.f_mid[0], ep.f_mid[1] - eq.f_mid[1], ep.det_mid, eq.det_mid];
@@ -292,25 +292,16 @@ fn krawczyk_node(p: &[Interval; 2], ep: &BoxEval, q: &[Interval; 2], eq: &BoxEva
         [ep.grad_det[0], ep.grad_det[1], z, z],
         [z, z, eq.grad_det[0], eq.grad_det[1]],
     ];
-    krawczyk::step(&b, &m, &fm, &jac)
+    krawczyk::step_array(&b, &m, &fm, &jac)
 }
 
 /// Shrinks a proven node to the precision.
-fn refine(chain: &Chain3R, mut p: [Interval; 2], mut q: [Interval; 2], precision: f64) -> ([Interval; 2], [Interval; 2]) {
-    for _ in 0..30 {
-        if width(&p).max(width(&q)) <= precision {
-            break;
-        }
-        let (ep, eq) = (evaluate(chain, p), evaluate(chain, q));
-        match krawczyk_node(&p, &ep, &q, &eq) {
-            K::Unique(k) | K::Contracted(k) if width(&[k[0], k[1]]).max(width(&[k[2], k[3]])) < 0.9 * width(&p).max(width(&q)) => {
-                p = [k[0], k[1]];
-                q = [k[2], k[3]];
-            }
-            _ => break,
-        }
-    }
-    (p, q)
+fn refine(chain: &Chain3R, p: [Interval; 2], q: [Interval; 2], precision: f64) -> ([Interval; 2], [Interval; 2]) {
+    let k = krawczyk::tighten([p[0], p[1], q[0], q[1]], precision, |k| {
+        let (p, q) = ([k[0], k[1]], [k[2], k[3]]);
+        krawczyk_node(&p, &evaluate(chain, p), &q, &evaluate(chain, q))
+    });
+    ([k[0], k[1]], [k[2], k[3]])
 }
 
 /// The node test of the module doc, one pair at a time.

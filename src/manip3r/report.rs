@@ -124,18 +124,19 @@ pub struct CuspStats {
     pub seconds: f64,
 }
 
+/// A report's counters from a search: the fields listed as discard reasons are read from the
+/// kernel's per-reason counts under their own names (a field is named after its reason, so
+/// the two cannot drift apart), the others are given.
+macro_rules! counters {
+    ($ty:ident { $($field:ident: $value:expr),* $(,)? }, $stats:expr, discards: [$($reason:ident),* $(,)?]) => {
+        $ty { $($field: $value,)* $($reason: $stats.discarded(stringify!($reason)),)* }
+    };
+}
+
 impl From<&CuspSearch> for CuspStats {
     fn from(c: &CuspSearch) -> Self {
         let s = &c.stats;
-        CuspStats {
-            processed: s.processed,
-            regular: s.discarded("regular"),
-            not_tangent: s.discarded("not_tangent"),
-            krawczyk_empty: s.discarded("krawczyk_empty"),
-            bisected: s.split - c.contracted,
-            in_strips: s.discarded("in_strips"),
-            seconds: c.seconds,
-        }
+        counters!(CuspStats { processed: s.processed, bisected: s.split - c.contracted, seconds: c.seconds }, s, discards: [regular, not_tangent, krawczyk_empty, in_strips])
     }
 }
 
@@ -165,18 +166,30 @@ pub struct NodeStats {
 impl From<&NodeSearch> for NodeStats {
     fn from(n: &NodeSearch) -> Self {
         let s = &n.stats;
-        NodeStats {
-            pairs: s.processed,
-            apart: s.discarded("apart"),
-            injective: s.discarded("injective"),
-            near_cusp: s.discarded("near_cusp"),
-            krawczyk_empty: s.discarded("krawczyk_empty"),
-            in_strips: s.discarded("in_strips"),
-            cells: n.cells,
-            cusp_regions: n.cusp_regions,
-            seconds: n.seconds,
-        }
+        counters!(NodeStats { pairs: s.processed, cells: n.cells, cusp_regions: n.cusp_regions, seconds: n.seconds }, s, discards: [apart, injective, near_cusp, krawczyk_empty, in_strips])
     }
+}
+
+/// The one rule for "complete" of a singularity run, used by this report and by the ROS
+/// `SingularityReport` (`ros::convert`): complete means no limit stopped a search *and*
+/// nothing is undecided, i.e. no box or pair left at the precision, no cusp left without a
+/// uniqueness proof (`undecided` counts these) and no near-degenerate strip set aside
+/// (`near_degenerate`). The kernel's `Complete` says only that no limit stopped it.
+///
+/// Returns `None` when complete, else the word for the `limit` fields: the kernel's limit
+/// (`boxes`, `time`, `memory`, `cancelled`), else `near_degenerate`, else `undecided`.
+///
+/// # Examples
+///
+/// ```
+/// use linkspace::manip3r::report::incompleteness;
+/// use linkspace::search::{Limit, Status};
+/// assert_eq!(incompleteness(Status::Complete, 0, false), None);
+/// assert_eq!(incompleteness(Status::Complete, 3, false), Some("undecided"));
+/// assert_eq!(incompleteness(Status::Incomplete(Limit::Boxes), 3, true), Some("boxes"));
+/// ```
+pub fn incompleteness(status: Status, undecided: usize, near_degenerate: bool) -> Option<&'static str> {
+    limit_of(status).or(near_degenerate.then_some("near_degenerate")).or((undecided > 0).then_some("undecided"))
 }
 
 /// The name of the limit that stopped a run, for `limit` fields.
@@ -284,8 +297,10 @@ impl SingularityReport {
     /// Builds the report from a cusp search and an optional node search.
     pub fn new(chain: &Chain3R, precision: f64, cusps: &CuspSearch, nodes: Option<&NodeSearch>, seconds: f64) -> Self {
         let status = nodes.map_or(cusps.status, |n| cusps.status.and(n.status));
-        let left_over = !cusps.undecided.is_empty() || nodes.is_some_and(|n| !n.undecided.is_empty());
+        // Counted as `analysis` counts its uncertified records, for the one rule of `incompleteness`.
+        let undecided = cusps.undecided.len() + cusps.cusps.iter().filter(|c| !c.unique).count() + nodes.map_or(0, |n| n.undecided.len());
         let near = cusps.bands.iter().any(|b| b.near.is_some());
+        let limit = incompleteness(status, undecided, near);
         let internal_motions = cusps
             .bands
             .iter()
@@ -299,11 +314,8 @@ impl SingularityReport {
             joints: chain.joints.clone(),
             tip_link: chain.tip_link.clone(),
             settings: Settings { precision, nodes: nodes.is_some(), uncertainty: chain.uncertainty },
-            // Complete only when nothing is left undecided: no pending cell, no box or pair left
-            // at the precision, no near-degenerate strip set aside. The kernel's `Complete` says
-            // only that no limit stopped it.
-            status: if status.is_complete() && !left_over && !near { "complete" } else { "incomplete" },
-            limit: limit_of(status).or(near.then_some("near_degenerate")).or(left_over.then_some("undecided")),
+            status: if limit.is_none() { "complete" } else { "incomplete" },
+            limit,
             cusps: cusps.cusps.iter().map(|c| CuspRecord { joints: joints(chain, &c.theta), workspace: workspace(c.rho, c.z), unique: c.unique }).collect(),
             nodes: nodes.map(|n| {
                 n.nodes

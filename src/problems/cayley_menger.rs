@@ -238,6 +238,11 @@ impl DistanceProblem {
     }
 
     /// Number of point pairs whose distance is known.
+    /// The range given for the squared distance between `a` and `b`, if any.
+    pub fn range(&self, a: usize, b: usize) -> Option<Interval> {
+        self.ranges.get(&key(a, b)).copied()
+    }
+
     fn known_count(&self) -> usize {
         let n = self.points.len();
         (0..n).flat_map(|a| (a + 1..n).map(move |b| (a, b))).filter(|&(a, b)| self.known(a, b).is_some()).count()

@@ -23,7 +23,8 @@
 //! Builds only; solving is the kernel's job.
 
 use super::cayley_menger::{bound_smoothing, DistanceError, DistanceProblem};
-use crate::contract::{Contractor, Newton};
+use crate::contract::{Contractor, LpShrink, Newton, Propagation, Sequence};
+use crate::search::{SolveError, Solver, SolverSettings};
 use crate::interval::{interval, point, Interval, IntervalBox};
 use crate::system::multilinear::Poly;
 use crate::system::{Equation, EquationSystem, Monomial, Term, VarId, VarRole};
@@ -35,8 +36,16 @@ pub struct Placed {
     pub problem: DistanceProblem,
     /// Coordinates (primary) and the derived variables, with their equations.
     pub system: EquationSystem,
-    /// Per point: its three coordinate variables, or `None` for a fixed point.
+    /// Per point: its three coordinate variables, or `None` for a fixed point or a point of the
+    /// line formulation (whose coordinates are `coord_polys`).
     pub coords: Vec<Option<[VarId; 3]>>,
+    /// Per point: its coordinates as polynomials in the variables (a constant for a fixed point,
+    /// a variable for a free one, `c + x` and `c + x + L·d` in the line formulation).
+    coord_polys: Vec<[Poly; 3]>,
+    /// The line formulation's frame, when built by `build_line`.
+    line: Option<LineFrame>,
+    /// `system` plus redundant equations for propagation only (`solver`), when there are any.
+    pub pruning: Option<EquationSystem>,
     /// One label per equation.
     pub labels: Vec<String>,
     /// Derived variables and what they stand for, in order of definition.
@@ -58,6 +67,29 @@ pub enum PlacedError {
     /// An equation of degree above two (cannot happen for the constraints above).
     #[error("internal: an equation of degree {0} in coordinates")]
     Degree(usize),
+    /// The problem is not a line to place (`Placed::build_line`).
+    #[error("the line formulation does not apply: {0}")]
+    NotALine(String),
+}
+
+/// The line formulation's frame: `t = c + x`, `u = t + L·d` with `|d| = 1`.
+#[derive(Clone, Debug)]
+struct LineFrame {
+    t: usize,
+    u: usize,
+    anchor: usize,
+    length: Interval,
+    x: [VarId; 3],
+    d: [VarId; 3],
+}
+
+/// Coordinates of point `i` as polynomials: its constants when fixed, its variables when free.
+fn coordinate_polys(p: &DistanceProblem, i: usize, ids: Option<[VarId; 3]>) -> [Poly; 3] {
+    [0, 1, 2].map(|k| match (ids, p.points[i].xyz) {
+        (Some(ids), _) => Poly::var(ids[k]),
+        (None, Some(xyz)) => Poly::constant(point(xyz[k])),
+        (None, None) => Poly::zero(),
+    })
 }
 
 impl Placed {
@@ -102,7 +134,8 @@ impl Placed {
             let ids = [0, 1, 2].map(|k| system.add_var(format!("{name}.{}", ["x", "y", "z"][k]), VarRole::Primary, dom[k]));
             coords[q] = Some(ids);
         }
-        let mut placed = Self { problem: p.clone(), system, coords, labels: Vec::new(), derived: Vec::new(), distance_vars: Vec::new() };
+        let coord_polys = (0..n).map(|i| coordinate_polys(p, i, coords[i])).collect();
+        let mut placed = Self { problem: p.clone(), system, coords, coord_polys, line: None, pruning: None, labels: Vec::new(), derived: Vec::new(), distance_vars: Vec::new() };
         let start = placed.system.initial_box();
         let mut equations: Vec<(Poly, String)> = Vec::new();
         // Known distances with a free end.
@@ -164,12 +197,178 @@ impl Placed {
         Ok(placed)
     }
 
-    /// Coordinate `k` of point `i`: a constant or a variable.
-    fn coord(&self, i: usize, k: usize) -> Poly {
-        match self.coords[i] {
-            Some(ids) => Poly::var(ids[k]),
-            None => Poly::constant(point(self.problem.points[i].xyz.expect("fixed")[k])),
+    /// The line formulation (issue 15, item 2): for a problem whose free points are two points
+    /// `t`, `u` of one line, every constraint a distance from a fixed point to `t`, to `u`, or to
+    /// the line `t u` (lines tangent to spheres), the line is placed by a point and a direction,
+    /// as in ibexsolve's formulation: `t = c + x` for a fixed anchor `c` with `|c t|²` known,
+    /// `u = t + L·d` with `L = |t u|`, and
+    /// - `|x|² = |c t|²`, `|d|² = 1`, and `x·d = κ = (|c u|² − |c t|² − L²) / 2L` when `|c u|²` is
+    ///   known (the right angle at a tangent point makes `κ = 0`);
+    /// - the distance `D` of a fixed point `p` from the line: with `e = c − p` and the derived
+    ///   `y = d·(t − p) = κ + d·e` (linear), `|t − p|² − y² = D` reads
+    ///   `|c t|² + 2 x·e + |e|² − y² − D = 0`: linear in `x`, one square;
+    /// - another known `|p t|²` is linear in `x`: `2 x·e + |c t|² + |e|² − |p t|² = 0`, and `|p u|²`
+    ///   linear in `x` and `d` (with `x·d` kept as a product when `|c u|²` is unknown);
+    /// - an orientation `(p − t)·(u − t) ≥ 0` is the derived `d·(t − p) ≤ 0` (with `t`, `u`
+    ///   swapped: `d·(t − p) ≥ −L`).
+    ///
+    /// So every equation is of degree two with few terms, the primaries are the six numbers of
+    /// `x` and `d`, and the system is square exactly when the line is rigid (four constraints
+    /// besides `|c t|²` and `L`). All constants are intervals enclosing the exact values.
+    pub fn build_line(problem: &DistanceProblem) -> Result<Self, PlacedError> {
+        let p = problem;
+        let n = p.points.len();
+        let not = |why: &str| PlacedError::NotALine(why.to_string());
+        let free: Vec<usize> = (0..n).filter(|&i| p.points[i].xyz.is_none()).collect();
+        if free.len() != 2 {
+            return Err(not("it needs exactly two points without coordinates"));
         }
+        let fixed: Vec<usize> = (0..n).filter(|&i| p.points[i].xyz.is_some()).collect();
+        for &a in &free {
+            for b in 0..n {
+                if b != a && p.range(a, b).is_some() {
+                    return Err(not("a range is given for a distance to a point of the line"));
+                }
+            }
+        }
+        let l2 = p.known(free[0], free[1]).ok_or_else(|| not("the distance between the line's two points is not known"))?;
+        // The anchor: a fixed point at a known distance from t, preferably from u too.
+        let pick = |t: usize, u: usize, both: bool| fixed.iter().copied().find(|&c| p.known(c, t).is_some() && (!both || p.known(c, u).is_some())).map(|c| (t, u, c));
+        let (t, u, anchor) = pick(free[0], free[1], true)
+            .or_else(|| pick(free[1], free[0], true))
+            .or_else(|| pick(free[0], free[1], false))
+            .or_else(|| pick(free[1], free[0], false))
+            .ok_or_else(|| not("no fixed point is at a known distance from a point of the line"))?;
+        for pl in &p.point_lines {
+            let on_line = (pl.line == (t, u) || pl.line == (u, t)) && p.points[pl.point].xyz.is_some();
+            if !on_line {
+                return Err(not("a point–line constraint is not about a fixed point and the line"));
+            }
+        }
+        for o in &p.orientations {
+            let on_line = ((o.a, o.b) == (t, u) || (o.a, o.b) == (u, t)) && p.points[o.toward].xyz.is_some();
+            if !on_line {
+                return Err(not("an orientation is not about the line and a fixed point"));
+            }
+        }
+        let a2 = p.known(anchor, t).expect("picked");
+        let b2 = p.known(anchor, u);
+        let extra: Vec<(usize, usize, Interval)> = fixed.iter().filter(|&&c| c != anchor).flat_map(|&c| [(c, t), (c, u)]).filter_map(|(c, f)| p.known(c, f).map(|r| (c, f, r))).collect();
+        let constraints = usize::from(b2.is_some()) + extra.len() + p.point_lines.len();
+        if constraints != 4 {
+            return Err(not(&format!("{constraints} constraints on the line besides the anchor, not the 4 that make it rigid")));
+        }
+        let len = l2.sqrt();
+        let c = p.points[anchor].xyz.expect("fixed");
+        let reach = a2.sqrt().sup();
+        let mut system = EquationSystem::default();
+        let xs = [0, 1, 2].map(|k| system.add_var(format!("x{}", ["x", "y", "z"][k]), VarRole::Primary, interval(-reach, reach)));
+        let ds = [0, 1, 2].map(|k| system.add_var(format!("d{}", ["x", "y", "z"][k]), VarRole::Primary, interval(-1.0, 1.0)));
+        let vx = |k: usize| Poly::var(xs[k]);
+        let vd = |k: usize| Poly::var(ds[k]);
+        let mut coord_polys: Vec<[Poly; 3]> = (0..n).map(|i| coordinate_polys(p, i, None)).collect();
+        coord_polys[t] = [0, 1, 2].map(|k| vx(k).add(&Poly::constant(point(c[k]))));
+        coord_polys[u] = [0, 1, 2].map(|k| vx(k).add(&vd(k).scale(len)).add(&Poly::constant(point(c[k]))));
+        let frame = LineFrame { t, u, anchor, length: len, x: xs, d: ds };
+        let mut placed = Self { problem: p.clone(), system, coords: vec![None; n], coord_polys, line: Some(frame), pruning: None, labels: Vec::new(), derived: Vec::new(), distance_vars: Vec::new() };
+        let start = placed.system.initial_box();
+        let nm = |i: usize| p.points[i].name.clone();
+        let dot = |a: &dyn Fn(usize) -> Poly, v: [Interval; 3]| (0..3).fold(Poly::zero(), |acc, k| acc.add(&a(k).scale(v[k])));
+        let sq = |a: &dyn Fn(usize) -> Poly| (0..3).fold(Poly::zero(), |acc, k| acc.add(&a(k).mul(&a(k))));
+        let xd = (0..3).fold(Poly::zero(), |acc, k| acc.add(&vx(k).mul(&vd(k))));
+        // e = c − q for a fixed point q, and |e|².
+        let e_of = |q: usize| {
+            let xyz = p.points[q].xyz.expect("fixed");
+            let e = [0, 1, 2].map(|k| point(c[k]) - point(xyz[k]));
+            let e2 = e.iter().fold(point(0.0), |acc, v| acc + v.sqr());
+            (e, e2)
+        };
+        let mut equations: Vec<(Poly, String)> = Vec::new();
+        equations.push((sq(&vx).add(&Poly::constant(-a2)), format!("|{} {}|² = {}", nm(anchor), nm(t), a2.mid())));
+        equations.push((sq(&vd).add(&Poly::constant(point(-1.0))), "|d|² = 1".to_string()));
+        // x·d as a constant κ when |c u|² is known (its own equation), else the product.
+        let along = match b2 {
+            Some(b2) => {
+                let kappa = (b2 - a2 - l2) / (point(2.0) * len);
+                equations.push((xd.add(&Poly::constant(-kappa)), format!("|{} {}|² = {}", nm(anchor), nm(u), b2.mid())));
+                Poly::constant(kappa)
+            }
+            None => xd.clone(),
+        };
+        for &(q, f, r) in &extra {
+            let (e, e2) = e_of(q);
+            let mut poly = dot(&vx, e).scale(point(2.0)).add(&Poly::constant(a2 + e2 - r));
+            if f == u {
+                // |x + e + L d|² = |x + e|² + 2L d·(x + e) + L².
+                poly = poly.add(&along.add(&dot(&vd, e)).scale(point(2.0) * len)).add(&Poly::constant(l2));
+            }
+            equations.push((poly, format!("|{} {}|² = {}", nm(q), nm(f), r.mid())));
+        }
+        let derived = |placed: &mut Placed, equations: &mut Vec<(Poly, String)>, name: String, poly: Poly, bound: Interval| -> Result<Poly, PlacedError> {
+            let dom = poly.eval(&start.dims).intersection(bound);
+            if dom.is_empty() {
+                return Err(PlacedError::NotALine(format!("{name} has no room")));
+            }
+            let v = placed.system.add_var(name.clone(), VarRole::Derived, dom);
+            equations.push((Poly::var(v).add(&poly.scale(point(-1.0))), format!("{name} defined")));
+            placed.derived.push((v, poly));
+            Ok(Poly::var(v))
+        };
+        let everything = interval(f64::NEG_INFINITY, f64::INFINITY);
+        // Equations linear in x (all but the first three so far), and the definitions of the
+        // derived `d·(t − p)`, linear in d: preconditioned below.
+        let first_extra = if b2.is_some() { 3 } else { 2 };
+        let mut in_x: Vec<Poly> = equations[first_extra..].iter().map(|(e, _)| e.clone()).collect();
+        let mut in_d: Vec<Poly> = Vec::new();
+        // An orientation toward p bounds d·(t − p): the derived y(p) of a point–line distance
+        // when there is one, its own derived variable otherwise.
+        let side = |o: &super::cayley_menger::Orientation| if o.a == t { interval(f64::NEG_INFINITY, 0.0) } else { interval(-len.sup(), f64::INFINITY) };
+        for pl in &p.point_lines {
+            let q = pl.point;
+            let (e, e2) = e_of(q);
+            let bound = p.orientations.iter().filter(|o| o.toward == q).fold(everything, |b, o| b.intersection(side(o)));
+            let y = derived(&mut placed, &mut equations, format!("y({})", nm(q)), along.add(&dot(&vd, e)), bound)?;
+            in_d.push(equations.last().expect("just pushed").0.clone());
+            let poly = dot(&vx, e).scale(point(2.0)).add(&y.mul(&y).scale(point(-1.0))).add(&Poly::constant(a2 + e2 - pl.squared));
+            in_x.push(poly.clone());
+            equations.push((poly, format!("dist({}, line {} {})² = {}", nm(q), nm(pl.line.0), nm(pl.line.1), pl.squared.mid())));
+        }
+        for o in p.orientations.iter().filter(|o| !p.point_lines.iter().any(|pl| pl.point == o.toward)) {
+            let (e, _) = e_of(o.toward);
+            derived(&mut placed, &mut equations, format!("orient({} {} toward {})", nm(o.a), nm(o.b), nm(o.toward)), along.add(&dot(&vd, e)), side(o))?;
+            in_d.push(equations.last().expect("just pushed").0.clone());
+        }
+        for (poly, label) in equations {
+            placed.system.add(to_equation(&poly)?);
+            placed.labels.push(label);
+        }
+        // Redundant equations for propagation: each equation group solved for its variables
+        // (x from the distances, d from the derived dot products) by a floating-point
+        // pseudo-inverse. Any real combination of equations that vanish vanishes, so these
+        // hold wherever the system does; they only let propagation see x and d one at a time.
+        let mut pruning = placed.system.clone();
+        for (group, vars) in [(&in_x, xs), (&in_d, ds)] {
+            let solved = precondition(group, &vars);
+            if vars == xs && !solved.is_empty() {
+                // x is then a function of d (through the y² terms): the search branches on d
+                // alone, a two-dimensional sphere instead of six dimensions (measured: half the
+                // boxes on the four spheres).
+                for &v in &xs {
+                    placed.system.vars[v].role = VarRole::Derived;
+                    pruning.vars[v].role = VarRole::Derived;
+                }
+            }
+            for poly in solved {
+                pruning.add(to_equation(&poly)?);
+            }
+        }
+        placed.pruning = Some(pruning);
+        Ok(placed)
+    }
+
+    /// Coordinate `k` of point `i`: a polynomial in the variables.
+    fn coord(&self, i: usize, k: usize) -> Poly {
+        self.coord_polys[i][k].clone()
     }
 
     fn diff(&self, a: usize, b: usize, k: usize) -> Poly {
@@ -200,6 +399,32 @@ impl Placed {
         Some(b)
     }
 
+    /// The kernel's solver for `system`: propagation over `pruning` (when there is one), then
+    /// interval Newton and the LP shrink on `system`, as `search::default_contractor`.
+    pub fn solver(&self, settings: SolverSettings) -> Result<Solver<'_>, SolveError> {
+        let solver = Solver::new(&self.system, settings)?;
+        let Some(pruning) = &self.pruning else { return Ok(solver) };
+        let line = self.line.is_some();
+        Ok(solver.with_contractor(Box::new(move |system, s| {
+            // Another sweep only when the last one narrowed some component by a fifth: the
+            // bisection is cheaper than slow fixpoints (measured on the four spheres).
+            let mut prop = Propagation::new(pruning);
+            prop.min_gain = 0.2;
+            let mut steps: Vec<Box<dyn Contractor + Send + '_>> = vec![Box::new(prop)];
+            if let Some(newton) = Newton::new(system, s.newton_width) {
+                steps.push(Box::new(newton));
+            }
+            // The LP shrink cuts nothing measurable here (the same boxes with and without it),
+            // so the line formulation goes without.
+            if s.use_lp && !line {
+                let mut lp = LpShrink::new(system);
+                lp.backend = s.lp_backend;
+                steps.push(Box::new(lp));
+            }
+            Box::new(Sequence(steps))
+        })))
+    }
+
     /// True when the system is square: Krawczyk applies, and certifies regular roots.
     pub fn is_square(&self) -> bool {
         self.system.equations.len() == self.system.vars.len()
@@ -208,9 +433,10 @@ impl Placed {
     /// Every point's coordinates at `x` (a point of the variable space).
     pub fn points(&self, x: &[f64]) -> Vec<[f64; 3]> {
         (0..self.problem.points.len())
-            .map(|i| match self.coords[i] {
-                Some(ids) => ids.map(|v| x[v]),
-                None => self.problem.points[i].xyz.expect("fixed"),
+            .map(|i| match (self.coords[i], self.problem.points[i].xyz) {
+                (Some(ids), _) => ids.map(|v| x[v]),
+                (None, Some(xyz)) => xyz,
+                (None, None) => [0, 1, 2].map(|k| self.coord_polys[i][k].eval_point(x)),
             })
             .collect()
     }
@@ -223,6 +449,15 @@ impl Placed {
     /// The variable-space point of a placement `pts` (derived variables evaluated there).
     pub fn state(&self, pts: &[[f64; 3]]) -> Vec<f64> {
         let mut x = vec![0.0; self.system.vars.len()];
+        if let Some(f) = &self.line {
+            // x = t − c, d = (u − t) / L.
+            let (t, u) = (pts[f.t], pts[f.u]);
+            let c = self.problem.points[f.anchor].xyz.expect("fixed");
+            for k in 0..3 {
+                x[f.x[k]] = t[k] - c[k];
+                x[f.d[k]] = (u[k] - t[k]) / f.length.mid();
+            }
+        }
         for (i, c) in self.coords.iter().enumerate() {
             if let Some(ids) = c {
                 for k in 0..3 {
@@ -279,6 +514,26 @@ impl Placed {
         let b = IntervalBox::new(x.iter().map(|&v| interval(v - r(v), v + r(v))).collect());
         newton.certify(&b)
     }
+}
+
+/// Combinations `Σ_i M_ji p_i` of `polys`, one per variable of `vars`, with `M` a floating-point
+/// pseudo-inverse of the matrix of their coefficients in `vars` (midpoints of the linear terms):
+/// each combination has coefficient about 1 on its variable and about 0 on the others. Empty when
+/// that matrix has not full column rank. Sound for any `M`: a real combination of vanishing
+/// polynomials vanishes (coefficients are combined in interval arithmetic).
+fn precondition(polys: &[Poly], vars: &[VarId]) -> Vec<Poly> {
+    let (rows, cols) = (polys.len(), vars.len());
+    if rows < cols {
+        return Vec::new();
+    }
+    let a = nalgebra::DMatrix::from_fn(rows, cols, |r, c| polys[r].terms().find(|(m, _)| m.as_slice() == [(vars[c], 1)]).map_or(0.0, |(_, k)| k.mid()));
+    let ata = a.transpose() * &a;
+    let Some(inv) = ata.try_inverse() else { return Vec::new() };
+    let m = inv * a.transpose();
+    if !m.iter().all(|v| v.is_finite()) || m.amax() > 1e8 {
+        return Vec::new();
+    }
+    (0..cols).map(|j| (0..rows).fold(Poly::zero(), |acc, i| acc.add(&polys[i].scale(point(m[(j, i)]))))).collect()
 }
 
 /// A `Poly` of degree at most two as an `Equation` (`poly = 0`).

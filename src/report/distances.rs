@@ -216,17 +216,20 @@ pub fn report(cm: &CayleyMenger, platform: Option<&PlatformProblem>, fixed: BTre
 /// The report of a certified run (`distances::solve`): boxes with their `unique` flags, clusters
 /// with their verdicts, and "N proven, M undecided".
 pub fn report_certified(c: &Certified, platform: Option<&PlatformProblem>, fixed: BTreeMap<String, f64>, faces: FaceBounds, settings: &SolverSettings) -> DistancesReport {
-    let tol = 10.0 * settings.sigma.max(1e-6);
+    // Placements are compared within ten times the widest box (sigma for the determinants'
+    // boxes; far less for the tiny certified boxes of the coordinate formulations).
+    let widest = c.solutions.iter().flat_map(|b| b.dims.iter().map(|d| d.wid())).fold(0.0, f64::max);
+    let tol = 10.0 * widest.min(settings.sigma).max(1e-6);
     let mut rep = report(&c.cm, platform, fixed, faces, settings, c.status, c.stats.clone(), &[], &[]);
     let records: Vec<DistanceRecord> = match (&c.placed, c.formulation) {
-        (Some(pl), Choice::Points) => c.solutions.iter().zip(&c.cluster).zip(&c.unique).map(|((b, &l), &u)| placed_record(c, pl, platform, b, l, u)).collect(),
+        (Some(pl), Choice::Points | Choice::Line) => c.solutions.iter().zip(&c.cluster).zip(&c.unique).map(|((b, &l), &u)| placed_record(c, pl, platform, b, l, u)).collect(),
         _ => c.solutions.iter().zip(&c.cluster).zip(&c.unique).map(|((b, &l), &u)| DistanceRecord { unique: u, ..record(&c.cm, platform, b, l) }).collect(),
     };
     rep.undecided = match (&c.placed, c.formulation) {
-        (Some(pl), Choice::Points) => c.undecided.iter().map(|b| placed_record(c, pl, platform, b, usize::MAX, false)).collect(),
+        (Some(pl), Choice::Points | Choice::Line) => c.undecided.iter().map(|b| placed_record(c, pl, platform, b, usize::MAX, false)).collect(),
         _ => c.undecided.iter().map(|b| record(&c.cm, platform, b, usize::MAX)).collect(),
     };
-    if c.formulation == Choice::Points {
+    if matches!(c.formulation, Choice::Points | Choice::Line) {
         if let Some(pl) = &c.placed {
             rep.equations = pl.labels.clone();
             rep.variables = pl.system.vars.iter().map(|v| v.name.clone()).collect();

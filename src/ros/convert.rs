@@ -44,7 +44,10 @@ pub fn box_set(r: &BoxSetResult, run_id: u64) -> BoxSet {
         joint_lower.extend(b.joints.iter().map(|x| x[0]));
         joint_upper.extend(b.joints.iter().map(|x| x[1]));
     }
+    // Complete means nothing undecided, as in the CLI's reports: a finished run that left
+    // undecided boxes (a platform's cluster without a proof) is incomplete, limit "undecided".
     let (status, limit) = match r.status {
+        Status::Complete if r.boxes.iter().any(|b| b.status == BoxStatus::Undecided) => (msgs::SET_INCOMPLETE, "undecided"),
         Status::Complete => (msgs::SET_COMPLETE, ""),
         Status::Incomplete(l) => (msgs::SET_INCOMPLETE, limit_name(l)),
     };
@@ -180,6 +183,9 @@ fn intervals(b: &[Bounds]) -> Vec<msgs::Interval> {
 
 /// A singularity result as a `linkspace_msgs/SingularityReport`, records in the result's order.
 pub fn singularity_report(r: &SingularityResult, run_id: u64) -> SingularityReport {
+    // Near-degenerate strips travel as undecided internal-motion boxes.
+    let near = r.internal_motions.boxes.iter().any(|b| b.status == BoxStatus::Undecided);
+    let limit = crate::manip3r::report::incompleteness(r.status, r.undecided(), near);
     SingularityReport {
         header: header(&joint_frame(&r.mechanism)),
         mechanism: r.mechanism.clone(),
@@ -196,14 +202,10 @@ pub fn singularity_report(r: &SingularityResult, run_id: u64) -> SingularityRepo
         internal_motions: box_set(&r.internal_motions, run_id),
         joint_names: r.joint_names.clone(),
         workspace_names: r.workspace_names.clone(),
-        // Complete means nothing undecided, as in the CLI's report.
-        complete: r.status == Status::Complete && r.undecided() == 0,
+        // Complete means nothing undecided: the CLI report's rule, one function.
+        complete: limit.is_none(),
         precision: r.query.precision,
-        limit: match r.status {
-            Status::Complete if r.undecided() > 0 => "undecided".to_string(),
-            Status::Complete => String::new(),
-            Status::Incomplete(l) => l.name().to_string(),
-        },
+        limit: limit.unwrap_or_default().to_string(),
     }
 }
 
