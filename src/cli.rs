@@ -6,7 +6,7 @@ mod serve;
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use linkspace::model::urdf;
-use linkspace::problems::LinkageProblem;
+use linkspace::problems::{LinkageError, LinkageProblem, SpatialProblem};
 use linkspace::LpBackend;
 use linkspace::manip3r::{
     self,
@@ -24,6 +24,7 @@ use std::time::Duration;
 
 pub(crate) mod distances;
 mod loop_singularities;
+mod bench_spatial;
 mod figures;
 mod plot;
 mod study;
@@ -136,7 +137,7 @@ impl ChainArgs {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Enclose every configuration of a planar closed-loop linkage described in URDF.
+    /// Enclose every configuration of a closed-loop linkage described in URDF (planar or spatial).
     Solve(SolveArgs),
     /// Draw SVG charts from fresh runs of the bundled problems into a folder.
     Chart(ChartArgs),
@@ -161,6 +162,9 @@ enum Command {
     LoopSingularities(loop_singularities::LoopSingularitiesArgs),
     /// Time singular-set searches of closed-loop linkages against baselines in the same run.
     BenchLoopSingularities(loop_singularities::BenchArgs),
+    /// Time the spatial builder: planar fixtures against the planar model, spatial ones with
+    /// and without the LP shrink, each in the same run.
+    BenchSpatial(bench_spatial::BenchArgs),
 }
 
 #[derive(clap::Args)]
@@ -271,6 +275,14 @@ struct BenchArgs {
     mobile_sigma: f64,
 }
 
+/// `solve --model`.
+#[derive(Clone, Copy, Debug, PartialEq, clap::ValueEnum)]
+enum ModelChoice {
+    Auto,
+    Planar,
+    Spatial,
+}
+
 #[derive(clap::Args)]
 struct SolveArgs {
     /// URDF file (loops closed with the <loop> extension, see README).
@@ -286,9 +298,14 @@ struct SolveArgs {
     rho: f64,
     #[command(flatten)]
     limits: LimitArgs,
-    /// Trace a point given in a link's frame: LINK@X,Y. Repeatable.
-    #[arg(long = "trace", value_name = "LINK@X,Y")]
+    /// Trace a point given in a link's frame: LINK@X,Y (planar) or LINK@X,Y,Z. Repeatable.
+    #[arg(long = "trace", value_name = "LINK@X,Y[,Z]")]
     trace: Vec<String>,
+    /// Which builder: planar (one angle per rigid group), spatial (any loop of revolute,
+    /// prismatic, spherical, universal, cylindrical and fixed joints), or auto: planar when the
+    /// mechanism is planar, spatial otherwise.
+    #[arg(long, value_enum, default_value_t = ModelChoice::Auto)]
+    model: ModelChoice,
     /// Shrink by interval propagation only (no LP): for comparisons.
     #[arg(long)]
     no_lp: bool,
@@ -320,6 +337,7 @@ pub fn run() -> Result<()> {
         Command::Collisions(args) => collisions(args),
         Command::LoopSingularities(args) => loop_singularities::run(args),
         Command::BenchLoopSingularities(args) => loop_singularities::bench(args),
+        Command::BenchSpatial(args) => bench_spatial::bench(args),
     }
 }
 
@@ -397,16 +415,71 @@ fn parse_trace(s: &str) -> Result<(String, f64, f64)> {
     Ok((link.to_string(), x, y))
 }
 
+/// `LINK@X,Y` or `LINK@X,Y,Z`: the link, the point (z = 0 when two numbers are given), and the
+/// name as written.
+fn parse_trace3(s: &str) -> Result<(String, [f64; 3])> {
+    let (link, xy) = s.split_once('@').with_context(|| format!("--trace '{s}': expected LINK@X,Y or LINK@X,Y,Z"))?;
+    let parts: Vec<&str> = xy.split(',').collect();
+    if !(parts.len() == 2 || parts.len() == 3) {
+        bail!("--trace '{s}': expected LINK@X,Y or LINK@X,Y,Z");
+    }
+    let mut p = [0.0; 3];
+    for (k, t) in parts.iter().enumerate() {
+        p[k] = t.trim().parse().with_context(|| format!("--trace '{s}': '{t}' is not a number"))?;
+    }
+    if !p.iter().all(|v: &f64| v.is_finite()) {
+        bail!("--trace '{s}': coordinates must be finite");
+    }
+    Ok((link.to_string(), p))
+}
+
+/// The system a `solve` runs on: the planar builder's or the spatial one's.
+enum Built {
+    Planar(LinkageProblem),
+    Spatial(SpatialProblem, String),
+}
+
+/// Picks the model (`--model`) and builds it. Auto takes the planar builder whenever it accepts
+/// the mechanism (and every traced point lies in the plane of its link frame), and says why.
+fn build_model(mechanism: &linkspace::model::Mechanism, choice: ModelChoice, fixed: &[(String, f64)], traces: &[(String, [f64; 3])], raw: &[String]) -> Result<Built> {
+    let named: Vec<(String, [f64; 3], String)> = traces.iter().zip(raw).map(|((l, p), r)| (l.clone(), *p, r.clone())).collect();
+    let flat: Vec<(String, f64, f64)> = traces.iter().map(|(l, p)| (l.clone(), p[0], p[1])).collect();
+    let off_plane = traces.iter().zip(raw).find(|((_, p), _)| p[2] != 0.0).map(|(_, r)| r.clone());
+    let spatial = |reason: String| -> Result<Built> { Ok(Built::Spatial(SpatialProblem::new(mechanism, fixed, &named)?, reason)) };
+    match choice {
+        ModelChoice::Spatial => spatial("forced by --model spatial".into()),
+        ModelChoice::Planar => {
+            if let Some(r) = off_plane {
+                bail!("--trace '{r}': the planar model traces points of the plane z = 0 of a link's frame");
+            }
+            Ok(Built::Planar(LinkageProblem::new(mechanism, fixed, &flat)?))
+        }
+        ModelChoice::Auto => {
+            if let Some(r) = off_plane {
+                return spatial(format!("--trace '{r}' leaves the plane of the link frame"));
+            }
+            match LinkageProblem::new(mechanism, fixed, &flat) {
+                Ok(p) => Ok(Built::Planar(p)),
+                Err(LinkageError::NonPlanar(why)) => spatial(format!("not planar: {why}")),
+                Err(e) => Err(e.into()),
+            }
+        }
+    }
+}
+
 fn solve(args: SolveArgs) -> Result<()> {
     let base = SolverSettings { sigma: args.sigma, rho: args.rho, use_lp: !args.no_lp, newton_width: args.newton_width, lp_backend: args.lp.into(), ..SolverSettings::default() };
     let settings = args.limits.solver_settings(SolverSettings::default().max_boxes, base)?;
     settings.validate()?;
     let fixed = args.fix.iter().map(|s| parse_fix(s)).collect::<Result<Vec<_>>>()?;
-    let traces = args.trace.iter().map(|s| parse_trace(s)).collect::<Result<Vec<_>>>()?;
+    let traces = args.trace.iter().map(|s| parse_trace3(s)).collect::<Result<Vec<_>>>()?;
     let xml = std::fs::read_to_string(&args.urdf).with_context(|| format!("reading {}", args.urdf.display()))?;
     let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", args.urdf.display()))?;
-    let problem = LinkageProblem::new(&mechanism, &fixed, &traces).with_context(|| format!("building {}", args.urdf.display()))?;
-    let solver = problem.solver(settings.clone())?;
+    let built = build_model(&mechanism, args.model, &fixed, &traces, &args.trace).with_context(|| format!("building {}", args.urdf.display()))?;
+    let solver = match &built {
+        Built::Planar(p) => p.solver(settings.clone())?,
+        Built::Spatial(p, _) => p.solver(settings.clone())?,
+    };
     let show = std::io::stderr().is_terminal();
     let mut progress = |p: &Progress| {
         if show {
@@ -419,7 +492,10 @@ fn solve(args: SolveArgs) -> Result<()> {
         eprintln!();
     }
     let status = result.status;
-    let report = problem.report(&settings, result.status, result.stats, &result.solutions, &result.unique, &result.undecided);
+    let report = match &built {
+        Built::Planar(p) => p.report(&settings, result.status, result.stats, &result.solutions, &result.unique, &result.undecided),
+        Built::Spatial(p, why) => p.report(why, &settings, result.status, result.stats, &result.solutions, &result.unique, &result.undecided),
+    };
     // Write through a handle: `println!` panics when the reader of a pipe has gone.
     let mut out = std::io::stdout().lock();
     writeln!(
@@ -439,6 +515,10 @@ fn solve(args: SolveArgs) -> Result<()> {
         report.stats.seconds
     )
     .ok();
+    writeln!(out, "  model: {} ({}); {} certified unique", report.model, report.model_reason, report.solutions.iter().filter(|s| s.unique).count()).ok();
+    for r in &report.reductions {
+        writeln!(out, "  reduced: {r}").ok();
+    }
     if report.stats.post_processing_cut_short {
         // Honest about what the limit cost: these boxes were reported without the deeper
         // search that drops near misses, so the count may include a few spurious ones.

@@ -3,7 +3,8 @@
 //! Pure data: no IO here; the CLI writes it, the ROS node will publish it.
 
 use crate::interval::{components, IntervalBox};
-use crate::problems::LinkageProblem;
+use crate::problems::spatial::LinkPose;
+use crate::problems::{LinkageProblem, SpatialProblem};
 use crate::search::{SolveStats as Stats, SolverSettings, Status};
 use crate::system::VarRole;
 use serde::Serialize;
@@ -22,8 +23,12 @@ pub struct BoxRecord {
     pub joints: BTreeMap<String, Bounds>,
     /// Every link's world-frame orientation in the plane (radians), keyed by link name.
     pub link_angles: BTreeMap<String, Bounds>,
-    /// Traced points' world coordinates, keyed by `LINK@X,Y`.
+    /// Traced points' world coordinates, keyed by `LINK@X,Y` (or `LINK@X,Y,Z`).
     pub traces: BTreeMap<String, TracedPoint>,
+    /// Spatial model only: every link's pose in the root frame (position intervals, quaternion
+    /// `[w, x, y, z]` at the box midpoint).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub link_poses: Option<BTreeMap<String, LinkPose>>,
     /// The raw box, one entry per system variable (see `variables`).
     #[serde(rename = "box")]
     pub box_: Vec<Bounds>,
@@ -40,6 +45,9 @@ pub struct TracedPoint {
     pub x: Bounds,
     /// y interval
     pub y: Bounds,
+    /// z interval (spatial model only)
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub z: Option<Bounds>,
 }
 
 /// A system variable as listed in the report.
@@ -56,6 +64,13 @@ pub struct VariableInfo {
 pub struct SolveReport {
     /// Robot name from the URDF.
     pub mechanism: String,
+    /// `planar` or `spatial`: the builder that made the system.
+    pub model: String,
+    /// Why that model: what made the mechanism planar or not, or that it was forced.
+    pub model_reason: String,
+    /// What the spatial builder simplified (legs between ball joints reduced to distances).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub reductions: Vec<String>,
     /// Joints whose values were solved for.
     pub free_joints: Vec<String>,
     /// Joints fixed with `--fix`.
@@ -89,9 +104,10 @@ impl LinkageProblem {
                 .iter()
                 .map(|t| {
                     let (x, y) = (b.dims[t.x], b.dims[t.y]);
-                    (t.name.clone(), TracedPoint { x: [x.inf(), x.sup()], y: [y.inf(), y.sup()] })
+                    (t.name.clone(), TracedPoint { x: [x.inf(), x.sup()], y: [y.inf(), y.sup()], z: None })
                 })
                 .collect(),
+            link_poses: None,
             box_: b.dims.iter().map(|d| [d.inf(), d.sup()]).collect(),
             level: b.level,
             unique: false,
@@ -102,6 +118,54 @@ impl LinkageProblem {
     pub fn report(&self, settings: &SolverSettings, status: Status, stats: Stats, solutions: &[IntervalBox], unique: &[bool], undecided: &[IntervalBox]) -> SolveReport {
         SolveReport {
             mechanism: self.name.clone(),
+            model: "planar".into(),
+            model_reason: PLANAR_REASON.into(),
+            reductions: Vec::new(),
+            free_joints: self.free_joints.clone(),
+            fixed_joints: self.fixed_joints.iter().cloned().collect(),
+            settings: settings.clone(),
+            status,
+            variables: self.system.vars.iter().map(|v| VariableInfo { name: v.name.clone(), role: v.role }).collect(),
+            solutions: solutions.iter().zip(unique).map(|(b, &u)| BoxRecord { unique: u, ..self.record(b) }).collect(),
+            clusters: components(solutions).1,
+            undecided: undecided.iter().map(|b| self.record(b)).collect(),
+            stats,
+        }
+    }
+}
+
+/// Why a mechanism the planar builder accepts is solved with it.
+pub const PLANAR_REASON: &str = "every revolute axis is parallel and every slider lies in the plane: one angle per rigid group";
+
+impl SpatialProblem {
+    /// One box in the user's terms.
+    pub fn record(&self, b: &IntervalBox) -> BoxRecord {
+        BoxRecord {
+            joints: self.joint_values(b).into_iter().map(|(k, (lo, hi))| (k, [lo, hi])).collect(),
+            link_angles: BTreeMap::new(),
+            traces: self
+                .traces
+                .iter()
+                .map(|t| {
+                    let [x, y, z] = t.xyz.map(|v| [b.dims[v].inf(), b.dims[v].sup()]);
+                    (t.name.clone(), TracedPoint { x, y, z: Some(z) })
+                })
+                .collect(),
+            link_poses: Some(self.link_poses(b)),
+            box_: b.dims.iter().map(|d| [d.inf(), d.sup()]).collect(),
+            level: b.level,
+            unique: false,
+        }
+    }
+
+    /// The report of a finished run; `reason` says why the spatial model was chosen.
+    #[allow(clippy::too_many_arguments)]
+    pub fn report(&self, reason: &str, settings: &SolverSettings, status: Status, stats: Stats, solutions: &[IntervalBox], unique: &[bool], undecided: &[IntervalBox]) -> SolveReport {
+        SolveReport {
+            mechanism: self.name.clone(),
+            model: "spatial".into(),
+            model_reason: reason.into(),
+            reductions: self.reductions.clone(),
             free_joints: self.free_joints.clone(),
             fixed_joints: self.fixed_joints.iter().cloned().collect(),
             settings: settings.clone(),

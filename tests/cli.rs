@@ -69,7 +69,7 @@ fn bad_input_gives_one_clear_line() {
     assert_clear_error(&["solve", long.as_str()], "loop 'loop_coupler_rocker' cannot close");
     // A joint turning about x makes the mechanism spatial.
     let tilted = variant("four_bar.urdf", "<axis xyz=\"0 0 1\"/>", "<axis xyz=\"1 0 0\"/>");
-    assert_clear_error(&["solve", tilted.as_str()], "not planar");
+    assert_clear_error(&["solve", tilted.as_str(), "--model", "planar"], "not planar");
     // A tree has nothing to close.
     let tree = tempfile_path::Path::write("<robot name='arm'><link name='a'/><link name='b'/><joint name='j' type='continuous'><parent link='a'/><child link='b'/><axis xyz='0 0 1'/></joint></robot>");
     assert_clear_error(&["solve", tree.as_str()], "no <loop> closure");
@@ -112,6 +112,31 @@ fn json_report_follows_the_documented_schema() {
     // Without a time limit the spurious-box check runs to its end, and the report says so.
     assert_eq!(r["stats"]["post_processing_cut_short"], false);
     assert_eq!(r["settings"]["sigma"], 1e-5);
+}
+
+#[test]
+fn solve_picks_the_model_and_reports_spatial_poses() {
+    let path = std::env::temp_dir().join(format!("linkspace-spatial-{}.json", std::process::id()));
+    let p = path.to_str().expect("utf-8");
+    let (ok, out, err) = run(&["solve", &fixture("four_bar.urdf"), "--fix", "crank_joint=0.5", "--json", p]);
+    assert!(ok, "{err}");
+    assert!(out.contains("model: planar"), "{out}");
+    let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).expect("json")).expect("valid json");
+    assert_eq!(r["model"], "planar");
+    let (ok, out, err) = run(&["solve", &fixture("rssr.urdf"), "--fix", "crank_joint=0.6", "--trace", "rocker@1.5,0,0", "--json", p]);
+    assert!(ok, "{err}");
+    assert!(out.contains("model: spatial (not planar") && out.contains("2 certified"), "{out}");
+    let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).expect("json")).expect("valid json");
+    let _ = std::fs::remove_file(&path);
+    assert_eq!(r["model"], "spatial");
+    assert!(r["model_reason"].as_str().expect("text").contains("coupler_ball"));
+    let s = &r["solutions"][0];
+    assert!(s["joints"]["rocker_joint"].is_array());
+    assert_eq!(s["link_poses"]["rocker"]["quaternion"].as_array().expect("w, x, y, z").len(), 4);
+    assert!(s["link_poses"]["rocker"]["position"].is_array());
+    assert!(s["traces"]["rocker@1.5,0,0"]["z"].is_array());
+    assert_clear_error(&["solve", &fixture("rssr.urdf"), "--model", "planar"], "not planar");
+    assert_clear_error(&["solve", &fixture("four_bar.urdf"), "--model", "planar", "--trace", "coupler@1,0,2"], "plane z = 0");
 }
 
 /// A temporary 3R URDF from a bundled orthogonal robot with one replacement.

@@ -22,6 +22,9 @@ mod real_arms;
 mod cayley_menger;
 /// Issue 15: distance answers certified (Krawczyk in coordinates) or labelled undecided.
 mod certified_distances;
+/// Issue 12: spatial linkages (Bennett, RSSR, spherical four-bar) against closed forms; the
+/// planar fixtures through the spatial builder.
+mod spatial;
 /// Issue 13: singular sets of planar closed-loop linkages against closed forms, grids and Newton.
 mod closed_loop_singularities;
 /// The ROS 2 node against real rclpy over DDS on loopback: topics, services, load.

@@ -86,7 +86,8 @@ pub struct Mimic {
 pub struct LoopClosure {
     /// Name of the `<loop>` element.
     pub name: String,
-    /// Motion the closure allows (revolute, prismatic or spherical; limits as for joints).
+    /// Motion the closure allows (revolute, prismatic, spherical or fixed; limits as for
+    /// joints; the first motion of a universal or cylindrical closure, see `compound`).
     pub kind: JointKind,
     /// Index of the predecessor link.
     pub predecessor: usize,
@@ -102,6 +103,39 @@ pub struct LoopClosure {
     pub successor_rpy: [f64; 3],
     /// Unit axis in the predecessor's closure frame.
     pub axis: Vector3<f64>,
+    /// A closure of two motions: `kind` holds the first (revolute about `axis` for a universal
+    /// joint, prismatic along `axis` for a cylindrical one), this the second. `None` for the
+    /// one-motion closures (revolute, prismatic, spherical, fixed).
+    pub compound: Option<Compound>,
+}
+
+/// The second motion of a two-motion loop closure (`<loop type="universal|cylindrical">`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Compound {
+    /// A universal (Hooke, cardan) joint: `axis` on the predecessor and `axis2` on the
+    /// successor stay perpendicular, and the closure points coincide.
+    Universal {
+        /// Unit axis in the successor's closure frame (`<axis2 xyz>`).
+        axis2: Vector3<f64>,
+    },
+    /// A cylindrical joint: the successor turns about `axis` as well as sliding along it.
+    Cylindrical,
+}
+
+impl LoopClosure {
+    /// The closure's type as written in the file (`revolute`, `prismatic`, `spherical`, `fixed`,
+    /// `universal`, `cylindrical`).
+    pub fn type_name(&self) -> &'static str {
+        match (self.compound, self.kind) {
+            (Some(Compound::Universal { .. }), _) => "universal",
+            (Some(Compound::Cylindrical), _) => "cylindrical",
+            (None, JointKind::Revolute { .. }) => "revolute",
+            (None, JointKind::Prismatic { .. }) => "prismatic",
+            (None, JointKind::Spherical) => "spherical",
+            (None, JointKind::Fixed) => "fixed",
+            (None, JointKind::Floating) => "floating",
+        }
+    }
 }
 
 /// A rigid body.

@@ -5,14 +5,15 @@
 //! `roxmltree`. The element follows URDF+ (Chignoli et al., 2024, arXiv:2411.19753):
 //!
 //! ```xml
-//! <loop name="loop15" type="revolute">   <!-- revolute | prismatic | spherical -->
+//! <loop name="loop15" type="revolute">   <!-- revolute | prismatic | spherical | fixed | universal | cylindrical -->
 //!   <predecessor link="link1"><origin xyz="7 0 0" rpy="0 0 0"/></predecessor>
 //!   <successor link="link5"><origin xyz="12 0 0" rpy="0 0 0"/></successor>
 //!   <axis xyz="0 0 1"/>
+//!   <!-- universal only: <axis2 xyz="1 0 0"/>, in the successor's closure frame -->
 //! </loop>
 //! ```
 
-use super::{Collision, Joint, JointKind, Link, LoopClosure, Mechanism, Mimic, ModelError, Shape};
+use super::{Collision, Compound, Joint, JointKind, Link, LoopClosure, Mechanism, Mimic, ModelError, Shape};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use std::collections::HashMap;
 
@@ -155,12 +156,27 @@ pub fn parse(xml: &str) -> Result<Mechanism, ModelError> {
                 _ => return Err(bad(&element, "a prismatic loop needs <limit lower < upper>")),
             },
             "spherical" => JointKind::Spherical,
+            "fixed" => JointKind::Fixed,
+            "universal" => JointKind::Revolute { limits: None },
+            "cylindrical" => match number("lower")?.zip(number("upper")?) {
+                Some((l, u)) if l < u => JointKind::Prismatic { limits: (l, u) },
+                _ => return Err(bad(&element, "a cylindrical loop needs <limit lower < upper> to bound its travel")),
+            },
             other => return Err(ModelError::UnsupportedJoint { joint: name, kind: other.into() }),
+        };
+        let compound = match el.attribute("type") {
+            Some("universal") => {
+                let a2 = el.children().find(|n| n.has_tag_name("axis2")).ok_or_else(|| bad(&element, "a universal loop needs <axis2 xyz=\"…\"/>, its second axis in the successor's closure frame"))?;
+                let axis2 = unit_axis(&element, triple(&element, a2.attribute("xyz"), [0.0; 3])?)?;
+                Some(Compound::Universal { axis2 })
+            }
+            Some("cylindrical") => Some(Compound::Cylindrical),
+            _ => None,
         };
         if predecessor == successor {
             return Err(bad(&element, "predecessor and successor are the same link"));
         }
-        loops.push(LoopClosure { name, kind, predecessor, predecessor_origin, predecessor_rpy, successor, successor_origin, successor_rpy, axis });
+        loops.push(LoopClosure { name, kind, predecessor, predecessor_origin, predecessor_rpy, successor, successor_origin, successor_rpy, axis, compound });
     }
 
     Ok(Mechanism { name: robot.name.clone(), links, joints, loops, root })

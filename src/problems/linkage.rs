@@ -31,7 +31,7 @@ pub enum LinkageError {
     #[error(transparent)]
     Model(#[from] ModelError),
     /// Joint axes are not all parallel (or a slider axis is not in the plane).
-    #[error("not planar: {0} (only planar linkages are supported so far)")]
+    #[error("not planar: {0} (the planar builder takes planar linkages only; `solve --model spatial` takes the rest)")]
     NonPlanar(String),
     /// `--fix` names no joint or loop.
     #[error("--fix: no joint or loop named '{0}'")]
@@ -79,6 +79,14 @@ pub enum LinkageError {
     /// A traced point names an unknown link.
     #[error("--trace: no link named '{0}'")]
     UnknownTraceLink(String),
+    /// A spatial description leaves some motion free that no loop constrains (a link spinning
+    /// between two ball joints outside the recognised patterns, a ball or floating joint on no
+    /// loop).
+    #[error("under-constrained: {0}")]
+    UnderConstrained(String),
+    /// A joint or closure the spatial builder does not model.
+    #[error("unsupported: {0}")]
+    Unsupported(String),
     /// A tree has no loop to close: every joint value is a configuration.
     #[error("the mechanism has no <loop> closure: every joint value is a configuration, there is nothing to enclose (serial chains: see `singularities`)")]
     NoLoops,
@@ -391,6 +399,10 @@ impl LinkageProblem {
         }
         for l in &m.loops {
             let w = rest[l.predecessor] * (l.predecessor_origin.rotation * l.axis);
+            // Welds and two-motion closures are the spatial builder's (`problems::spatial`).
+            if l.compound.is_some() || l.kind == JointKind::Fixed {
+                return Err(LinkageError::NonPlanar(format!("loop '{}' is {}", l.name, l.type_name())));
+            }
             match l.kind {
                 JointKind::Prismatic { .. } => slider_axes.push((l.name.clone(), w)),
                 JointKind::Spherical | JointKind::Floating => return Err(LinkageError::NonPlanar(format!("loop '{}' is spherical", l.name))),

@@ -8,8 +8,10 @@ pub mod distance_file;
 pub mod linkage;
 pub mod platform;
 pub mod singular;
+pub mod spatial;
 pub(crate) mod stated;
 
 pub use cayley_menger::{CayleyMenger, DistanceError, DistanceProblem};
 pub use linkage::{LinkageError, LinkageProblem};
 pub use platform::{PlatformError, PlatformProblem};
+pub use spatial::SpatialProblem;
