@@ -6,7 +6,8 @@ mod serve;
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use linkspace::model::urdf;
-use linkspace::problems::{LinkageError, LinkageProblem, SpatialProblem};
+use linkspace::problems::choice::TracedPoint;
+use linkspace::problems::{Linkage, LinkageProblem, ModelChoice};
 use linkspace::LpBackend;
 use linkspace::manip3r::{
     self,
@@ -277,10 +278,20 @@ struct BenchArgs {
 
 /// `solve --model`.
 #[derive(Clone, Copy, Debug, PartialEq, clap::ValueEnum)]
-enum ModelChoice {
+enum ModelArg {
     Auto,
     Planar,
     Spatial,
+}
+
+impl From<ModelArg> for ModelChoice {
+    fn from(m: ModelArg) -> Self {
+        match m {
+            ModelArg::Auto => ModelChoice::Auto,
+            ModelArg::Planar => ModelChoice::Planar,
+            ModelArg::Spatial => ModelChoice::Spatial,
+        }
+    }
 }
 
 #[derive(clap::Args)]
@@ -304,8 +315,8 @@ struct SolveArgs {
     /// Which builder: planar (one angle per rigid group), spatial (any loop of revolute,
     /// prismatic, spherical, universal, cylindrical and fixed joints), or auto: planar when the
     /// mechanism is planar, spatial otherwise.
-    #[arg(long, value_enum, default_value_t = ModelChoice::Auto)]
-    model: ModelChoice,
+    #[arg(long, value_enum, default_value_t = ModelArg::Auto)]
+    model: ModelArg,
     /// Shrink by interval propagation only (no LP): for comparisons.
     #[arg(long)]
     no_lp: bool,
@@ -433,40 +444,6 @@ fn parse_trace3(s: &str) -> Result<(String, [f64; 3])> {
     Ok((link.to_string(), p))
 }
 
-/// The system a `solve` runs on: the planar builder's or the spatial one's.
-enum Built {
-    Planar(LinkageProblem),
-    Spatial(SpatialProblem, String),
-}
-
-/// Picks the model (`--model`) and builds it. Auto takes the planar builder whenever it accepts
-/// the mechanism (and every traced point lies in the plane of its link frame), and says why.
-fn build_model(mechanism: &linkspace::model::Mechanism, choice: ModelChoice, fixed: &[(String, f64)], traces: &[(String, [f64; 3])], raw: &[String]) -> Result<Built> {
-    let named: Vec<(String, [f64; 3], String)> = traces.iter().zip(raw).map(|((l, p), r)| (l.clone(), *p, r.clone())).collect();
-    let flat: Vec<(String, f64, f64)> = traces.iter().map(|(l, p)| (l.clone(), p[0], p[1])).collect();
-    let off_plane = traces.iter().zip(raw).find(|((_, p), _)| p[2] != 0.0).map(|(_, r)| r.clone());
-    let spatial = |reason: String| -> Result<Built> { Ok(Built::Spatial(SpatialProblem::new(mechanism, fixed, &named)?, reason)) };
-    match choice {
-        ModelChoice::Spatial => spatial("forced by --model spatial".into()),
-        ModelChoice::Planar => {
-            if let Some(r) = off_plane {
-                bail!("--trace '{r}': the planar model traces points of the plane z = 0 of a link's frame");
-            }
-            Ok(Built::Planar(LinkageProblem::new(mechanism, fixed, &flat)?))
-        }
-        ModelChoice::Auto => {
-            if let Some(r) = off_plane {
-                return spatial(format!("--trace '{r}' leaves the plane of the link frame"));
-            }
-            match LinkageProblem::new(mechanism, fixed, &flat) {
-                Ok(p) => Ok(Built::Planar(p)),
-                Err(LinkageError::NonPlanar(why)) => spatial(format!("not planar: {why}")),
-                Err(e) => Err(e.into()),
-            }
-        }
-    }
-}
-
 fn solve(args: SolveArgs) -> Result<()> {
     let base = SolverSettings { sigma: args.sigma, rho: args.rho, use_lp: !args.no_lp, newton_width: args.newton_width, lp_backend: args.lp.into(), ..SolverSettings::default() };
     let settings = args.limits.solver_settings(SolverSettings::default().max_boxes, base)?;
@@ -475,11 +452,9 @@ fn solve(args: SolveArgs) -> Result<()> {
     let traces = args.trace.iter().map(|s| parse_trace3(s)).collect::<Result<Vec<_>>>()?;
     let xml = std::fs::read_to_string(&args.urdf).with_context(|| format!("reading {}", args.urdf.display()))?;
     let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", args.urdf.display()))?;
-    let built = build_model(&mechanism, args.model, &fixed, &traces, &args.trace).with_context(|| format!("building {}", args.urdf.display()))?;
-    let solver = match &built {
-        Built::Planar(p) => p.solver(settings.clone())?,
-        Built::Spatial(p, _) => p.solver(settings.clone())?,
-    };
+    let named: Vec<TracedPoint> = traces.iter().zip(&args.trace).map(|((l, p), r)| (l.clone(), *p, r.clone())).collect();
+    let built = Linkage::build(&mechanism, args.model.into(), &fixed, &named).with_context(|| format!("building {}", args.urdf.display()))?;
+    let solver = built.solver(settings.clone())?;
     let show = std::io::stderr().is_terminal();
     let mut progress = |p: &Progress| {
         if show {
@@ -492,10 +467,7 @@ fn solve(args: SolveArgs) -> Result<()> {
         eprintln!();
     }
     let status = result.status;
-    let report = match &built {
-        Built::Planar(p) => p.report(&settings, result.status, result.stats, &result.solutions, &result.unique, &result.undecided),
-        Built::Spatial(p, why) => p.report(why, &settings, result.status, result.stats, &result.solutions, &result.unique, &result.undecided),
-    };
+    let report = built.report(&settings, result.status, result.stats, &result.solutions, &result.unique, &result.undecided);
     // Write through a handle: `println!` panics when the reader of a pipe has gone.
     let mut out = std::io::stdout().lock();
     writeln!(

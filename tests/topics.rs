@@ -345,7 +345,9 @@ fn services_answer_good_requests_and_refuse_bad_ones_with_reasons() {
     let Some(python) = python() else { return };
     let domain = 42;
     let four_bar = format!("{ROOT}/urdf/four_bar.urdf");
-    // A spatial variant, given as a robot_description string: loaded, listed, and refused.
+    // A spatial variant, given as a robot_description string: loaded on the spatial builder (its
+    // crank turns about x, so the loop closes only with the crank at 0 or π), listed, and refused
+    // what linkages do not answer.
     let tilted = std::fs::read_to_string(&four_bar).expect("fixture").replacen("<robot name=\"four_bar\"", "<robot name=\"tilted\"", 1).replacen("<axis xyz=\"0 0 1\"/>", "<axis xyz=\"1 0 0\"/>", 1);
     assert!(tilted.contains("name=\"tilted\""));
     let mut node = Node::start(domain, &[&four_bar, "--robot-description", &tilted, "--fix", "four_bar:crank_joint=0.5", "--trace", "four_bar:coupler@2,1", "--sigma", "1e-5", "--max-request-boxes", "500000"]);
@@ -373,10 +375,10 @@ fn services_answer_good_requests_and_refuse_bad_ones_with_reasons() {
         call("solve", "Solve", json!({"mechanism": "four_bar", "fixed_joint_names": ["nope"], "fixed_joint_values": [1.0], "settings": fine})),
         call("solve", "Solve", json!({"mechanism": "four_bar", "settings": fine, "wait": 1e9})),
         call("solve", "Solve", json!({"mechanism": "four_bar", "settings": long, "wait": 0.0})),
-        call("cancel", "Cancel", json!({"run_id": 4})),
+        call("cancel", "Cancel", json!({"run_id": 5})),
         {"sleep": 2.0},
         {"subscribe": "/linkspace/four_bar/solve_result"},
-        call("cancel", "Cancel", json!({"run_id": 4})),
+        call("cancel", "Cancel", json!({"run_id": 5})),
         call("cancel", "Cancel", json!({"run_id": 999_999})),
         call("singularities", "Singularities", json!({"mechanism": "four_bar"})),
         call("singularities", "Singularities", json!({"mechanism": "tilted"})),
@@ -413,8 +415,9 @@ fn services_answer_good_requests_and_refuse_bad_ones_with_reasons() {
     assert_eq!((list[0]["name"].as_str(), list[0]["kind"].as_str(), list[0]["state"].as_str()), (Some("four_bar"), Some("planar_linkage"), Some("complete")));
     assert_eq!(list[0]["services"], json!(["solve", "classify"]));
     assert_eq!(list[0]["topic_prefix"], "/linkspace/four_bar");
-    assert_eq!((list[1]["name"].as_str(), list[1]["kind"].as_str()), (Some("tilted"), Some("unsupported")));
-    assert!(list[1]["message"].as_str().expect("message").contains("not a planar linkage"));
+    assert_eq!((list[1]["name"].as_str(), list[1]["kind"].as_str()), (Some("tilted"), Some("spatial_linkage")));
+    assert!(list[1]["message"].as_str().expect("message").contains("complete, 2 boxes in 2 clusters"), "the crank at 0 and at π: {}", list[1]);
+    assert_eq!(list[1]["services"], json!(["solve", "classify"]));
 
     // Solve again with another crank angle: the same boxes as the CLI.
     assert_eq!((r[1]["ok"].clone(), r[1]["done"].clone()), (json!(true), json!(true)), "{}", r[1]);
@@ -434,20 +437,21 @@ fn services_answer_good_requests_and_refuse_bad_ones_with_reasons() {
     refused(9, "no joint or loop named 'nope'");
     refused(10, "wait 1000000000 s is out of range");
 
-    // A long run, answered at once with its id, cancelled, and published incomplete.
-    assert_eq!((r[11]["ok"].clone(), r[11]["done"].clone(), r[11]["run_id"].clone()), (json!(true), json!(false), json!(4)), "{}", r[11]);
+    // A long run, answered at once with its id (runs 1 and 2 are the two configuration spaces),
+    // cancelled, and published incomplete.
+    assert_eq!((r[11]["ok"].clone(), r[11]["done"].clone(), r[11]["run_id"].clone()), (json!(true), json!(false), json!(5)), "{}", r[11]);
     assert!(r[11]["message"].as_str().expect("message").contains("/linkspace/four_bar/solve_result"));
     assert_eq!(r[12]["ok"], json!(true), "{}", r[12]);
     let cancelled = r[14]["received"].as_array().and_then(|v| v.last()).cloned().unwrap_or_default();
     assert!(cancelled.is_object(), "no result after the cancel: {}\nnode log:\n{}", r[14], node.log());
-    assert_eq!((cancelled["run_id"].clone(), cancelled["status"].clone(), cancelled["limit"].clone()), (json!(4), json!(1), json!("cancelled")));
+    assert_eq!((cancelled["run_id"].clone(), cancelled["status"].clone(), cancelled["limit"].clone()), (json!(5), json!(1), json!("cancelled")));
     assert!(cancelled["box_status"].as_array().expect("statuses").contains(&json!(1)), "a cancelled run reports its undecided boxes");
-    refused(15, "run 4 has already finished");
+    refused(15, "run 5 has already finished");
     refused(16, "no run 999999");
 
     // Singularities and inverse kinematics have no math for these mechanisms yet.
     refused(17, "singularities is not available for this mechanism ('four_bar', planar_linkage)");
-    refused(18, "singularities is not available for this mechanism ('tilted', unsupported): not a planar linkage");
+    refused(18, "singularities is not available for this mechanism ('tilted', spatial_linkage)");
     refused(19, "inverse_kinematics is not available for this mechanism ('four_bar'");
     refused(20, "is not finite");
 
@@ -460,11 +464,11 @@ fn services_answer_good_requests_and_refuse_bad_ones_with_reasons() {
     refused(23, "is not a finite number");
     refused(24, "no value for free joint");
     refused(25, "no mechanism named 'ghost'");
-    refused(26, "classify is not available for this mechanism ('tilted', unsupported)");
+    refused(26, "no value for free joint 'crank_joint'");
     assert_eq!(r[27]["mechanisms"].as_array().expect("mechanisms").len(), 2);
     // The last progress is the cancelled run's end: done, part of the volume decided.
     let progress = r[28]["received"].as_array().and_then(|v| v.last()).cloned().unwrap_or_default();
-    assert_eq!((progress["run_id"].clone(), progress["analysis"].clone(), progress["done"].clone()), (json!(4), json!("solve"), json!(true)), "{progress}");
+    assert_eq!((progress["run_id"].clone(), progress["analysis"].clone(), progress["done"].clone()), (json!(5), json!("solve"), json!(true)), "{progress}");
     let decided = progress["decided"].as_f64().expect("decided");
     assert!((0.0..1.0).contains(&decided) && progress["processed"].as_u64().expect("processed") > 0, "{progress}");
     assert!(node.alive(), "the node died:\n{}", node.log());

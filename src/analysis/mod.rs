@@ -2,7 +2,7 @@
 //! implementation per kind of mechanism, and the plain-data results they return.
 //!
 //! `load` picks the analysis that fits a `Mechanism`: `Manip3rAnalysis` (a serial chain of
-//! three revolute joints: singularities, inverse kinematics), `PlanarAnalysis` (planar
+//! three revolute joints: singularities, inverse kinematics), `LinkageAnalysis` (planar or spatial
 //! closed-loop linkages: the configuration space) or `Unsupported`, which answers every query
 //! with `AnalysisError::NotAvailable`. Another kind of mechanism slots in as a further
 //! `Analysis` implementation and one more arm in `load`.
@@ -11,11 +11,11 @@
 //! requests are answered at once), moves it to a thread of its own and converts the result.
 
 mod manip3r;
-mod planar;
+mod linkage;
 mod platform;
 
 pub use manip3r::Manip3rAnalysis;
-pub use planar::PlanarAnalysis;
+pub use linkage::LinkageAnalysis;
 pub use platform::PlatformAnalysis;
 
 use crate::model::Mechanism;
@@ -482,8 +482,8 @@ pub fn load(mechanism: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f
         }
         Err(e) => e,
     };
-    // A parallel platform: PlatformProblem reads it, or it closes spherical loops (then it is a
-    // platform the builder cannot take, and is explained rather than tried as planar).
+    // An octahedral platform: PlatformProblem reads it (the seed's distance formulation). Other
+    // mechanisms with spherical loops go to the linkage builders below.
     let spherical = mechanism.loops.iter().any(|l| l.kind == crate::model::JointKind::Spherical);
     let unsupported = |reason: String| -> Box<dyn Analysis> {
         Box::new(Unsupported {
@@ -503,21 +503,17 @@ pub fn load(mechanism: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f
         Err(AnalysisError::Platform(e @ PlatformError::NotFixed(_))) if fixed.is_empty() => {
             return Ok(unsupported(format!("a parallel platform whose legs are not fixed ({e}); serve it with --fix {}:LEG=SQUARED_LENGTH for each of its six legs", mechanism.name)));
         }
-        Err(AnalysisError::Platform(e @ (PlatformError::NotAPlatform(_) | PlatformError::Unsupported(_)))) if spherical => {
-            return Ok(unsupported(format!("spherical loops, but {e}; only octahedral platforms, planar linkages and 3R manipulators are analysed so far")));
-        }
         Err(AnalysisError::Platform(PlatformError::NotAPlatform(_) | PlatformError::Unsupported(_))) => {}
         // A platform with bad --fix values (unknown leg, out of limits, some legs missing).
         Err(e) if spherical => return Err(e),
         Err(_) => {}
     }
-    match PlanarAnalysis::new(mechanism, fixed, traces) {
+    // Any other platform (a 6-6 Stewart, a delta) is a spatial linkage.
+    match LinkageAnalysis::new(mechanism, fixed, traces) {
         Ok(a) => Ok(Box::new(a)),
-        Err(e @ (LinkageError::NonPlanar(_) | LinkageError::NoLoops | LinkageError::Mimic { .. })) => Ok(Box::new(Unsupported {
-            name: mechanism.name.clone(),
-            joints: mechanism.joints.iter().filter(|j| j.kind != crate::model::JointKind::Fixed).map(|j| j.name.clone()).collect(),
-            reason: format!("not a planar linkage ({e}), and {not_3r}; only planar linkages and 3R manipulators are analysed so far"),
-        })),
+        Err(e @ (LinkageError::NoLoops | LinkageError::Mimic { .. } | LinkageError::Unsupported(_) | LinkageError::UnderConstrained(_))) => Ok(unsupported(format!(
+            "not a linkage the builders take ({e}), and {not_3r}; closed-loop linkages, octahedral platforms and 3R manipulators are analysed so far"
+        ))),
         Err(e) => Err(e.into()),
     }
 }

@@ -87,6 +87,9 @@ pub enum LinkageError {
     /// A joint or closure the spatial builder does not model.
     #[error("unsupported: {0}")]
     Unsupported(String),
+    /// A traced point off the plane z = 0 of its link's frame, with the planar model forced.
+    #[error("--trace '{0}': the planar model traces points of the plane z = 0 of a link's frame")]
+    TraceOffPlane(String),
     /// A tree has no loop to close: every joint value is a configuration.
     #[error("the mechanism has no <loop> closure: every joint value is a configuration, there is nothing to enclose (serial chains: see `singularities`)")]
     NoLoops,

@@ -3,6 +3,7 @@
 
 pub(crate) mod angles;
 pub mod cayley_menger;
+pub mod choice;
 pub mod coordinates;
 pub mod distance_file;
 pub mod linkage;
@@ -12,6 +13,7 @@ pub mod spatial;
 pub(crate) mod stated;
 
 pub use cayley_menger::{CayleyMenger, DistanceError, DistanceProblem};
+pub use choice::{Linkage, ModelChoice};
 pub use linkage::{LinkageError, LinkageProblem};
 pub use platform::{PlatformError, PlatformProblem};
 pub use spatial::SpatialProblem;

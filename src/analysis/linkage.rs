@@ -1,46 +1,50 @@
-//! The planar-linkage analysis: the configuration space of a planar closed-loop mechanism
-//! (`LinkageProblem` solved by `Solver::enclose`), re-solved on request with other fixed joints
-//! or settings. The result is the same as `linkspace solve --json` for the same input.
+//! The linkage analysis: the configuration space of a closed-loop mechanism (`problems::Linkage`:
+//! the planar builder when it accepts the mechanism, the spatial one otherwise, chosen as
+//! `solve --model auto` does), re-solved on request with other fixed joints or settings. The
+//! result is the same as `linkspace solve --json` for the same input.
 
 use super::{Analysis, AnalysisError, BoxSetResult, PreparedRun, ResultBox, Service};
 use crate::interval::components;
 use crate::model::{JointKind, Mechanism};
-use crate::problems::{LinkageError, LinkageProblem};
+use crate::problems::choice::TracedPoint;
+use crate::problems::{Linkage, LinkageError, ModelChoice};
 use crate::search::{BoxStatus, Progress, SolverSettings};
 use crate::system::VarRole;
 use std::sync::atomic::AtomicBool;
 
-/// A planar linkage, as loaded.
+/// A closed-loop linkage, as loaded.
 #[derive(Clone, Debug)]
-pub struct PlanarAnalysis {
+pub struct LinkageAnalysis {
     mechanism: Mechanism,
     fixed: Vec<(String, f64)>,
-    traces: Vec<(String, f64, f64)>,
-    /// The problem with the load-time fixed joints: names the free joints.
-    problem: LinkageProblem,
+    traces: Vec<TracedPoint>,
+    /// The problem with the load-time fixed joints: names the free joints and the model.
+    problem: Linkage,
 }
 
-impl PlanarAnalysis {
-    /// Formulates `mechanism` with the load-time `fixed` joints and traced points.
+impl LinkageAnalysis {
+    /// Formulates `mechanism` with the load-time `fixed` joints and traced points
+    /// `(link, x, y)` in the plane of the link's frame.
     pub fn new(mechanism: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f64, f64)]) -> Result<Self, LinkageError> {
-        let problem = LinkageProblem::new(mechanism, fixed, traces)?;
-        Ok(Self { mechanism: mechanism.clone(), fixed: fixed.to_vec(), traces: traces.to_vec(), problem })
+        let traces: Vec<TracedPoint> = traces.iter().map(|(l, x, y)| (l.clone(), [*x, *y, 0.0], format!("{l}@{x},{y}"))).collect();
+        let problem = Linkage::build(mechanism, ModelChoice::Auto, fixed, &traces)?;
+        Ok(Self { mechanism: mechanism.clone(), fixed: fixed.to_vec(), traces, problem })
     }
 
-    fn prepare(&self, problem: LinkageProblem, settings: &SolverSettings, analysis: &str) -> Result<Box<dyn PreparedRun>, AnalysisError> {
+    fn prepare(&self, problem: Linkage, settings: &SolverSettings, analysis: &str) -> Result<Box<dyn PreparedRun>, AnalysisError> {
         // Validate now, so that a bad request is answered before any thread starts.
         problem.solver(settings.clone())?;
-        Ok(Box::new(PlanarRun { problem, settings: settings.clone(), analysis: analysis.to_string() }))
+        Ok(Box::new(LinkageRun { problem, settings: settings.clone(), analysis: analysis.to_string() }))
     }
 }
 
-impl Analysis for PlanarAnalysis {
+impl Analysis for LinkageAnalysis {
     fn mechanism(&self) -> &str {
         &self.mechanism.name
     }
 
     fn kind(&self) -> &'static str {
-        "planar_linkage"
+        self.problem.kind()
     }
 
     fn services(&self) -> Vec<Service> {
@@ -48,11 +52,14 @@ impl Analysis for PlanarAnalysis {
     }
 
     fn limitation(&self) -> String {
-        "a planar linkage: only its configuration space is analysed so far (no singularity or inverse-kinematics analysis for planar linkages yet)".to_string()
+        match &self.problem {
+            Linkage::Planar(_) => "a planar linkage: only its configuration space is analysed so far (singular sets: `linkspace loop-singularities`)".to_string(),
+            Linkage::Spatial(_, why) => format!("a spatial linkage ({why}): only its configuration space is analysed so far"),
+        }
     }
 
     fn free_joints(&self) -> Vec<String> {
-        self.problem.free_joints.clone()
+        self.problem.free_joints().to_vec()
     }
 
     fn fixed_joints(&self) -> Vec<(String, f64)> {
@@ -68,7 +75,7 @@ impl Analysis for PlanarAnalysis {
                 .map(|j| j.kind)
                 .or_else(|| self.mechanism.loops.iter().find(|l| l.name == name).map(|l| l.kind))
         };
-        self.problem.free_joints.iter().map(|n| !matches!(kind(n), Some(JointKind::Prismatic { .. }))).collect()
+        self.problem.free_joints().iter().map(|n| !matches!(kind(n), Some(JointKind::Prismatic { .. }))).collect()
     }
 
     fn configuration_space(&self, settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, AnalysisError> {
@@ -76,27 +83,27 @@ impl Analysis for PlanarAnalysis {
     }
 
     fn solve(&self, fixed: &[(String, f64)], settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, AnalysisError> {
-        let problem = LinkageProblem::new(&self.mechanism, fixed, &self.traces)?;
+        let problem = Linkage::build(&self.mechanism, ModelChoice::Auto, fixed, &self.traces)?;
         self.prepare(problem, settings, "solve")
     }
 }
 
-/// A validated planar run.
-struct PlanarRun {
-    problem: LinkageProblem,
+/// A validated linkage run.
+struct LinkageRun {
+    problem: Linkage,
     settings: SolverSettings,
     analysis: String,
 }
 
-impl PreparedRun for PlanarRun {
+impl PreparedRun for LinkageRun {
     fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> BoxSetResult {
         let solver = self.problem.solver(self.settings.clone()).expect("invariant: validated when prepared");
         let e = solver.enclose(cancel, progress);
         // The CLI's report, so the published boxes are exactly those of `solve --json`.
         let report = self.problem.report(&self.settings, e.status, e.stats.clone(), &e.solutions, &e.unique, &e.undecided);
         let labels = components(&e.solutions).0;
-        let joint_names = self.problem.free_joints.clone();
-        let traces: Vec<String> = self.problem.traces.iter().map(|t| t.name.clone()).collect();
+        let joint_names = self.problem.free_joints().to_vec();
+        let traces = self.problem.trace_names();
         let convert = |record: &crate::report::BoxRecord, status: BoxStatus, cluster: Option<usize>| ResultBox {
             status,
             bounds: record.box_.clone(),
@@ -150,6 +157,21 @@ mod tests {
             assert_eq!(c.component, Some(m.cluster));
         }
         assert_eq!(r.traces, vec!["coupler@2,1".to_string()]);
+    }
+
+    #[test]
+    fn a_spatial_linkage_loads_on_the_spatial_builder_and_solves_again() {
+        let m = urdf::parse(include_str!("../../urdf/rssr.urdf")).expect("bundled");
+        let a = load(&m, &[("crank_joint".into(), 0.7)], &[]).expect("spatial");
+        assert_eq!(a.kind(), "spatial_linkage");
+        assert!(a.limitation().contains("not planar"), "{}", a.limitation());
+        let settings = SolverSettings { sigma: 1e-6, ..Default::default() };
+        let r = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        // The RSSR's two assembly modes, each proven.
+        assert_eq!((r.clusters, r.assembly_modes().len()), (2, 2));
+        assert!(r.boxes.iter().all(|b| b.status == BoxStatus::Unique), "{:?}", r.boxes.iter().map(|b| b.status).collect::<Vec<_>>());
+        let again = a.solve(&[("crank_joint".into(), 0.2)], &settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        assert_eq!((again.analysis.as_str(), again.clusters), ("solve", 2));
     }
 
     #[test]

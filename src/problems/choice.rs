@@ -1,0 +1,100 @@
+//! Which builder a closed-loop mechanism gets: the planar one (one angle per rigid group) when it
+//! accepts the mechanism, the spatial one otherwise (`--model auto`), or the one the user forces.
+//! One choice for the CLI's `solve` and the node's linkage analysis, so both say the same thing.
+
+use super::{LinkageError, LinkageProblem, SpatialProblem};
+use crate::interval::IntervalBox;
+use crate::report::SolveReport;
+use crate::search::{SolveError, SolveStats as Stats, Solver, SolverSettings, Status};
+
+/// `--model`: which builder.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ModelChoice {
+    /// Planar whenever the planar builder accepts the mechanism (and every traced point lies in
+    /// the plane of its link frame), spatial otherwise.
+    #[default]
+    Auto,
+    /// The planar builder, or its refusal.
+    Planar,
+    /// The spatial builder, even for a planar mechanism.
+    Spatial,
+}
+
+/// A traced point: link, coordinates in the link's frame, and its name as given (`LINK@X,Y[,Z]`).
+pub type TracedPoint = (String, [f64; 3], String);
+
+/// A closed-loop mechanism built by the chosen model.
+#[derive(Clone, Debug)]
+pub enum Linkage {
+    /// The planar builder's system.
+    Planar(LinkageProblem),
+    /// The spatial builder's system, and why it was chosen.
+    Spatial(SpatialProblem, String),
+}
+
+impl Linkage {
+    /// Picks the model and builds it, saying why in the spatial case.
+    pub fn build(mechanism: &crate::model::Mechanism, choice: ModelChoice, fixed: &[(String, f64)], traces: &[TracedPoint]) -> Result<Self, LinkageError> {
+        let flat: Vec<(String, f64, f64)> = traces.iter().map(|(l, p, _)| (l.clone(), p[0], p[1])).collect();
+        let off_plane = traces.iter().find(|(_, p, _)| p[2] != 0.0).map(|(_, _, r)| r.clone());
+        let spatial = |reason: String| -> Result<Self, LinkageError> { Ok(Self::Spatial(SpatialProblem::new(mechanism, fixed, traces)?, reason)) };
+        match choice {
+            ModelChoice::Spatial => spatial("forced by --model spatial".into()),
+            ModelChoice::Planar => match off_plane {
+                Some(r) => Err(LinkageError::TraceOffPlane(r)),
+                None => Ok(Self::Planar(LinkageProblem::new(mechanism, fixed, &flat)?)),
+            },
+            ModelChoice::Auto => {
+                if let Some(r) = off_plane {
+                    return spatial(format!("--trace '{r}' leaves the plane of the link frame"));
+                }
+                match LinkageProblem::new(mechanism, fixed, &flat) {
+                    Ok(p) => Ok(Self::Planar(p)),
+                    Err(LinkageError::NonPlanar(why)) => spatial(format!("not planar: {why}")),
+                    Err(e) => Err(e),
+                }
+            }
+        }
+    }
+
+    /// `planar_linkage` or `spatial_linkage`.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Self::Planar(_) => "planar_linkage",
+            Self::Spatial(..) => "spatial_linkage",
+        }
+    }
+
+    /// The solver for the built system (joint-limit filters included).
+    pub fn solver(&self, settings: SolverSettings) -> Result<Solver<'_>, SolveError> {
+        match self {
+            Self::Planar(p) => p.solver(settings),
+            Self::Spatial(p, _) => p.solver(settings),
+        }
+    }
+
+    /// Joints (tree and loop) solved for.
+    pub fn free_joints(&self) -> &[String] {
+        match self {
+            Self::Planar(p) => &p.free_joints,
+            Self::Spatial(p, _) => &p.free_joints,
+        }
+    }
+
+    /// Names of the traced points, as in the report.
+    pub fn trace_names(&self) -> Vec<String> {
+        match self {
+            Self::Planar(p) => p.traces.iter().map(|t| t.name.clone()).collect(),
+            Self::Spatial(p, _) => p.traces.iter().map(|t| t.name.clone()).collect(),
+        }
+    }
+
+    /// The report of a finished run (`solve --json`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn report(&self, settings: &SolverSettings, status: Status, stats: Stats, solutions: &[IntervalBox], unique: &[bool], undecided: &[IntervalBox]) -> SolveReport {
+        match self {
+            Self::Planar(p) => p.report(settings, status, stats, solutions, unique, undecided),
+            Self::Spatial(p, why) => p.report(why, settings, status, stats, solutions, unique, undecided),
+        }
+    }
+}
