@@ -959,10 +959,11 @@ mod three_rpr_ref {
 
 /// The 3-RPR with ρ3 = 17: every cusp of its type-II image in (ρ1, ρ2) certified, against the
 /// independent Newton of `three_rpr_ref` (none missed, none extra).
-/// Ignored: on two shared cores the 30 chart pairs of the cusp search ran over ten minutes
-/// without finishing; run it with `--ignored`.
+/// Ignored: on two shared cores the cusp search ran over ten minutes without finishing (16 of its
+/// 36 chart pairs stay open: the search must tile the whole curve S finely enough to refute the
+/// cusp condition; see `diag_three_rpr_cusp_charts` and the README); run it with `--ignored`.
 #[test]
-#[ignore = "slow: the 3-RPR cusp search has 30 chart pairs (minutes); run with --ignored"]
+#[ignore = "slow: the 3-RPR cusp search runs over ten minutes; run with --ignored"]
 fn three_rpr_cusps_match_an_independent_newton() {
     let reference = three_rpr_ref::cusps(17.0);
     assert_eq!(reference.len(), 6, "{reference:?}");
