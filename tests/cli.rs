@@ -125,7 +125,7 @@ fn solve_picks_the_model_and_reports_spatial_poses() {
     assert_eq!(r["model"], "planar");
     let (ok, out, err) = run(&["solve", &fixture("rssr.urdf"), "--fix", "crank_joint=0.6", "--trace", "rocker@1.5,0,0", "--json", p]);
     assert!(ok, "{err}");
-    assert!(out.contains("model: spatial (not planar") && out.contains("2 certified"), "{out}");
+    assert!(out.contains("model: spatial (not planar") && out.contains("rssr: 2 proven, 0 undecided (2 solution boxes in 2 clusters)"), "{out}");
     let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).expect("json")).expect("valid json");
     let _ = std::fs::remove_file(&path);
     assert_eq!(r["model"], "spatial");
