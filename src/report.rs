@@ -6,7 +6,7 @@ use crate::interval::{components, IntervalBox};
 use crate::problems::spatial::LinkPose;
 use crate::problems::{LinkageProblem, SpatialProblem};
 use crate::search::{SolveStats as Stats, SolverSettings, Status};
-use crate::system::VarRole;
+use crate::system::{EquationSystem, VarRole};
 use serde::Serialize;
 
 pub mod distances;
@@ -92,6 +92,36 @@ pub struct SolveReport {
     pub stats: Stats,
 }
 
+impl SolveReport {
+    /// A report of one model's run, without its variables and boxes yet (`add_run`).
+    #[allow(clippy::too_many_arguments)]
+    fn empty(mechanism: &str, model: &str, reason: &str, free_joints: &[String], fixed_joints: &[(String, f64)], settings: &SolverSettings, status: Status, stats: Stats) -> Self {
+        SolveReport {
+            mechanism: mechanism.into(),
+            model: model.into(),
+            model_reason: reason.into(),
+            reductions: Vec::new(),
+            free_joints: free_joints.to_vec(),
+            fixed_joints: fixed_joints.iter().cloned().collect(),
+            settings: settings.clone(),
+            status,
+            variables: Vec::new(),
+            solutions: Vec::new(),
+            clusters: 0,
+            undecided: Vec::new(),
+            stats,
+        }
+    }
+
+    /// The system's variables and the run's boxes, each read by the model's `record`.
+    fn add_run(&mut self, system: &EquationSystem, record: impl Fn(&IntervalBox) -> BoxRecord, solutions: &[IntervalBox], unique: &[bool], undecided: &[IntervalBox]) {
+        self.variables = system.vars.iter().map(|v| VariableInfo { name: v.name.clone(), role: v.role }).collect();
+        self.solutions = solutions.iter().zip(unique).map(|(b, &u)| BoxRecord { unique: u, ..record(b) }).collect();
+        self.clusters = components(solutions).1;
+        self.undecided = undecided.iter().map(record).collect();
+    }
+}
+
 impl LinkageProblem {
     /// One box in the user's terms.
     pub fn record(&self, b: &IntervalBox) -> BoxRecord {
@@ -116,21 +146,9 @@ impl LinkageProblem {
 
     /// The report of a finished run.
     pub fn report(&self, settings: &SolverSettings, status: Status, stats: Stats, solutions: &[IntervalBox], unique: &[bool], undecided: &[IntervalBox]) -> SolveReport {
-        SolveReport {
-            mechanism: self.name.clone(),
-            model: "planar".into(),
-            model_reason: PLANAR_REASON.into(),
-            reductions: Vec::new(),
-            free_joints: self.free_joints.clone(),
-            fixed_joints: self.fixed_joints.iter().cloned().collect(),
-            settings: settings.clone(),
-            status,
-            variables: self.system.vars.iter().map(|v| VariableInfo { name: v.name.clone(), role: v.role }).collect(),
-            solutions: solutions.iter().zip(unique).map(|(b, &u)| BoxRecord { unique: u, ..self.record(b) }).collect(),
-            clusters: components(solutions).1,
-            undecided: undecided.iter().map(|b| self.record(b)).collect(),
-            stats,
-        }
+        let mut report = SolveReport::empty(&self.name, "planar", PLANAR_REASON, &self.free_joints, &self.fixed_joints, settings, status, stats);
+        report.add_run(&self.system, |b| self.record(b), solutions, unique, undecided);
+        report
     }
 }
 
@@ -161,20 +179,9 @@ impl SpatialProblem {
     /// The report of a finished run; `reason` says why the spatial model was chosen.
     #[allow(clippy::too_many_arguments)]
     pub fn report(&self, reason: &str, settings: &SolverSettings, status: Status, stats: Stats, solutions: &[IntervalBox], unique: &[bool], undecided: &[IntervalBox]) -> SolveReport {
-        SolveReport {
-            mechanism: self.name.clone(),
-            model: "spatial".into(),
-            model_reason: reason.into(),
-            reductions: self.reductions.clone(),
-            free_joints: self.free_joints.clone(),
-            fixed_joints: self.fixed_joints.iter().cloned().collect(),
-            settings: settings.clone(),
-            status,
-            variables: self.system.vars.iter().map(|v| VariableInfo { name: v.name.clone(), role: v.role }).collect(),
-            solutions: solutions.iter().zip(unique).map(|(b, &u)| BoxRecord { unique: u, ..self.record(b) }).collect(),
-            clusters: components(solutions).1,
-            undecided: undecided.iter().map(|b| self.record(b)).collect(),
-            stats,
-        }
+        let mut report = SolveReport::empty(&self.name, "spatial", reason, &self.free_joints, &self.fixed_joints, settings, status, stats);
+        report.reductions = self.reductions.clone();
+        report.add_run(&self.system, |b| self.record(b), solutions, unique, undecided);
+        report
     }
 }

@@ -20,10 +20,29 @@ pub enum Verdict {
     Straddles,
 }
 
+impl Verdict {
+    /// The verdict on the intersection of two admissible sets: `Outside` when either is,
+    /// `Inside` only when both are.
+    pub fn and(self, other: Verdict) -> Verdict {
+        match (self, other) {
+            (Verdict::Outside, _) | (_, Verdict::Outside) => Verdict::Outside,
+            (Verdict::Inside, Verdict::Inside) => Verdict::Inside,
+            _ => Verdict::Straddles,
+        }
+    }
+}
+
 /// A sound test of a box against a condition that is not an equation.
 pub trait Filter {
     /// `Outside` only when no point of `b` is admissible; `Inside` only when every point is.
     fn judge(&self, b: &IntervalBox) -> Verdict;
+}
+
+/// A judging function is a filter (a problem's own limit test, borrowed).
+impl<F: Fn(&IntervalBox) -> Verdict> Filter for F {
+    fn judge(&self, b: &IntervalBox) -> Verdict {
+        self(b)
+    }
 }
 
 /// A contractor pipeline followed by filters that see every box it passes on.
@@ -36,19 +55,14 @@ pub struct Filtered<'a> {
 
 impl Filtered<'_> {
     fn verdict(&self, b: &IntervalBox) -> Verdict {
-        let mut all_inside = true;
+        let mut verdict = Verdict::Inside;
         for f in &self.filters {
-            match f.judge(b) {
-                Verdict::Outside => return Verdict::Outside,
-                Verdict::Straddles => all_inside = false,
-                Verdict::Inside => {}
+            verdict = verdict.and(f.judge(b));
+            if verdict == Verdict::Outside {
+                break;
             }
         }
-        if all_inside {
-            Verdict::Inside
-        } else {
-            Verdict::Straddles
-        }
+        verdict
     }
 }
 

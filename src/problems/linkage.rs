@@ -12,7 +12,7 @@
 
 use super::angles::{self, against_limits, cos_sin, reduce, stated, wrap};
 use super::stated::{self, IMat3, IVec3};
-use crate::contract::{Contraction, Contractor, Filter, Filtered, Propagation, Verdict};
+use crate::contract::{Contraction, Contractor, Filtered, Propagation, Verdict};
 use crate::search::{default_contractor, SolveError, Solver, SolverSettings};
 use crate::interval::{interval, point, Interval, IntervalBox};
 use crate::manip3r::trig;
@@ -733,14 +733,14 @@ impl LinkageProblem {
     }
 
     /// Where the box lies against the limits of the limited revolute joints (angles compared
-    /// modulo 2π, any number of turns).
+    /// modulo 2π, any number of turns). The joint intervals are outward-rounded enclosures
+    /// (`angles`), so `Outside` means no point of the box respects the limits.
     pub fn limit_verdict(&self, b: &IntervalBox) -> Verdict {
         let mut verdict = Verdict::Inside;
         for &(k, lower, upper) in &self.limits {
-            match against_limits(self.reading(&self.readings[k].1, b), lower, upper) {
-                Verdict::Outside => return Verdict::Outside,
-                Verdict::Straddles => verdict = Verdict::Straddles,
-                Verdict::Inside => {}
+            verdict = verdict.and(against_limits(self.reading(&self.readings[k].1, b), lower, upper));
+            if verdict == Verdict::Outside {
+                return verdict;
             }
         }
         verdict
@@ -760,7 +760,7 @@ impl LinkageProblem {
             return Ok(solver);
         }
         Ok(solver.with_contractor(Box::new(move |system, settings| {
-            Box::new(Filtered { inner: default_contractor(system, settings), filters: vec![Box::new(LimitFilter { problem: self })] })
+            Box::new(Filtered { inner: default_contractor(system, settings), filters: vec![Box::new(move |b: &IntervalBox| self.limit_verdict(b))] })
         })))
     }
 
@@ -841,28 +841,13 @@ impl LinkageProblem {
             return Ok(solver);
         }
         Ok(solver.with_contractor(Box::new(move |system, settings| {
-            Box::new(Filtered { inner: default_contractor(system, settings), filters: vec![Box::new(LimitFilter { problem: self })] })
+            Box::new(Filtered { inner: default_contractor(system, settings), filters: vec![Box::new(move |b: &IntervalBox| self.limit_verdict(b))] })
         })))
     }
 }
 
 fn bounds(x: Interval) -> (f64, f64) {
     (x.inf(), x.sup())
-}
-
-/// Drops boxes whose joint values lie wholly outside the joints' limits, and keeps the
-/// certificate only of boxes wholly inside them.
-///
-/// The joint intervals are outward-rounded enclosures (`angles`), so a box is dropped only when
-/// no point in it respects the limits.
-struct LimitFilter<'a> {
-    problem: &'a LinkageProblem,
-}
-
-impl Filter for LimitFilter<'_> {
-    fn judge(&self, b: &IntervalBox) -> Verdict {
-        self.problem.limit_verdict(b)
-    }
 }
 
 #[cfg(test)]

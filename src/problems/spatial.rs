@@ -34,7 +34,7 @@
 use super::angles::{self, against_limits, cos_sin, reduce, stated, wrap};
 use super::linkage::LinkageError;
 use super::stated::{self as st, IMat3, IVec3};
-use crate::contract::{Contraction, Contractor, Filter, Filtered, Propagation, Verdict};
+use crate::contract::{Contraction, Contractor, Filtered, Propagation, Verdict};
 use crate::interval::{interval, point, Interval, IntervalBox};
 use crate::manip3r::trig;
 use crate::model::{Compound, JointKind, Mechanism};
@@ -1256,10 +1256,9 @@ impl SpatialProblem {
             }
         }
         for &(k, lower, upper) in &self.limits {
-            match against_limits(self.reading(&self.readings[k].1, b), lower, upper) {
-                Verdict::Outside => return Verdict::Outside,
-                Verdict::Straddles => verdict = Verdict::Straddles,
-                Verdict::Inside => {}
+            verdict = verdict.and(against_limits(self.reading(&self.readings[k].1, b), lower, upper));
+            if verdict == Verdict::Outside {
+                return verdict;
             }
         }
         verdict
@@ -1273,7 +1272,7 @@ impl SpatialProblem {
             return Ok(solver);
         }
         Ok(solver.with_contractor(Box::new(move |system, settings| {
-            Box::new(Filtered { inner: default_contractor(system, settings), filters: vec![Box::new(LimitFilter { problem: self })] })
+            Box::new(Filtered { inner: default_contractor(system, settings), filters: vec![Box::new(move |b: &IntervalBox| self.limit_verdict(b))] })
         })))
     }
 
@@ -1313,16 +1312,6 @@ impl SpatialProblem {
     /// How many equations are quadratics the LP relaxation does not use (distance rows).
     pub fn quadratic_rows(&self) -> usize {
         self.system.equations.iter().filter(|e| e.kind == EquationKind::Quadratic).count()
-    }
-}
-
-struct LimitFilter<'a> {
-    problem: &'a SpatialProblem,
-}
-
-impl Filter for LimitFilter<'_> {
-    fn judge(&self, b: &IntervalBox) -> Verdict {
-        self.problem.limit_verdict(b)
     }
 }
 
