@@ -2,13 +2,25 @@
 //! the planar builder when it accepts the mechanism, the spatial one otherwise, chosen as
 //! `solve --model auto` does), re-solved on request with other fixed joints or settings. The
 //! result is the same as `linkspace solve --json` for the same input.
+//!
+//! Planar linkages also answer `singularities` with their singular sets (`problems::singular`:
+//! C-space, input and output, through `SingularSets`, the orchestration `linkspace
+//! loop-singularities` runs, so the boxes are those of its `--json`), and `classify` with a lower
+//! bound on the joint-space distance to the nearest singular configuration once those sets are
+//! complete.
 
-use super::{Analysis, AnalysisError, BoxSetResult, PreparedRun, ResultBox, Service};
+use super::{
+    classify, gap, Actuation, Analysis, AnalysisError, BoxSetResult, Classification, LoopSingularities, PreparedRun, ResultBox, Service, SingularSetResult, SingularityQuery,
+    SingularityResult,
+};
 use crate::interval::components;
 use crate::model::{JointKind, Mechanism};
 use crate::problems::choice::TracedPoint;
+use crate::problems::singular::sets::{all_kinds, SingularSets};
+use crate::problems::singular::{BoxKind, SingularProblem, SingularSet};
 use crate::problems::{Linkage, LinkageError, ModelChoice};
-use crate::search::{BoxStatus, Progress, SolverSettings};
+use crate::report::singular::SingularReport;
+use crate::search::{BoxStatus, Progress, SolveStats, SolverSettings, Status};
 use crate::system::VarRole;
 use std::sync::atomic::AtomicBool;
 
@@ -20,6 +32,8 @@ pub struct LinkageAnalysis {
     traces: Vec<TracedPoint>,
     /// The problem with the load-time fixed joints: names the free joints and the model.
     problem: Linkage,
+    /// Actuated joints of the input singular set.
+    actuation: Actuation,
 }
 
 impl LinkageAnalysis {
@@ -28,7 +42,12 @@ impl LinkageAnalysis {
     pub fn new(mechanism: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f64, f64)]) -> Result<Self, LinkageError> {
         let traces: Vec<TracedPoint> = traces.iter().map(|(l, x, y)| (l.clone(), [*x, *y, 0.0], format!("{l}@{x},{y}"))).collect();
         let problem = Linkage::build(mechanism, ModelChoice::Auto, fixed, &traces)?;
-        Ok(Self { mechanism: mechanism.clone(), fixed: fixed.to_vec(), traces, problem })
+        Ok(Self { mechanism: mechanism.clone(), fixed: fixed.to_vec(), traces, problem, actuation: Actuation { joints: Vec::new(), source: "none given".to_string() } })
+    }
+
+    /// The same analysis with these actuated joints (for the input singular set).
+    pub fn with_actuation(self, actuation: Actuation) -> Self {
+        Self { actuation, ..self }
     }
 
     fn prepare(&self, problem: Linkage, settings: &SolverSettings, analysis: &str) -> Result<Box<dyn PreparedRun>, AnalysisError> {
@@ -48,13 +67,16 @@ impl Analysis for LinkageAnalysis {
     }
 
     fn services(&self) -> Vec<Service> {
-        vec![Service::Solve, Service::Classify]
+        match &self.problem {
+            Linkage::Planar(_) => vec![Service::Solve, Service::Singularities, Service::Classify],
+            Linkage::Spatial(..) => vec![Service::Solve, Service::Classify],
+        }
     }
 
     fn limitation(&self) -> String {
         match &self.problem {
-            Linkage::Planar(_) => "a planar linkage: only its configuration space is analysed so far (singular sets: `linkspace loop-singularities`)".to_string(),
-            Linkage::Spatial(_, why) => format!("a spatial linkage ({why}): only its configuration space is analysed so far"),
+            Linkage::Planar(_) => "a planar linkage: its configuration space and singular sets (C-space, input, output) are analysed; cusps and nodes of the type-II image are not (`linkspace loop-singularities --kind image`), nor is inverse kinematics".to_string(),
+            Linkage::Spatial(_, why) => format!("a spatial linkage ({why}): only its configuration space is analysed so far (the singular-set builder is planar)"),
         }
     }
 
@@ -85,6 +107,233 @@ impl Analysis for LinkageAnalysis {
     fn solve(&self, fixed: &[(String, f64)], settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, AnalysisError> {
         let problem = Linkage::build(&self.mechanism, ModelChoice::Auto, fixed, &self.traces)?;
         self.prepare(problem, settings, "solve")
+    }
+
+    /// The singular sets with the load-time fixed joints: `precision` is the solver's sigma (the
+    /// largest width of a box in the configuration and null-vector variables), `max_boxes` the
+    /// limit per chart, `timeout` for all sets; `nodes` does not apply (no image is analysed).
+    fn singularities(&self, query: &SingularityQuery) -> Result<Box<dyn PreparedRun<SingularityResult>>, AnalysisError> {
+        if !matches!(self.problem, Linkage::Planar(_)) {
+            return Err(self.not_available(Service::Singularities));
+        }
+        if !(query.precision > 0.0 && query.precision < 1.0) {
+            return Err(AnalysisError::BadRequest(format!("precision must be a number in (0, 1), got {}", query.precision)));
+        }
+        if query.max_boxes == 0 {
+            return Err(AnalysisError::BadRequest("max_boxes must be at least 1".into()));
+        }
+        let settings = SolverSettings { sigma: query.precision, max_boxes: query.max_boxes, timeout: query.timeout, threads: query.threads.max(1), ..SolverSettings::default() };
+        settings.validate().map_err(crate::search::SolveError::from)?;
+        let actuated = &self.actuation.joints;
+        let sets = SingularSets::new(&self.mechanism, &self.fixed, &all_kinds(actuated), actuated, None)?;
+        Ok(Box::new(SingularSetsRun { sets, settings, query: query.clone(), actuation: self.actuation.clone(), mechanism: self.mechanism.name.clone() }))
+    }
+
+    /// The configuration-space classification, plus a lower bound on the distance to the nearest
+    /// singular configuration once every singular set is complete (else unknown, with why).
+    fn classify(&self, values: &[f64], configuration_space: Option<&BoxSetResult>, singularities: Option<&SingularityResult>) -> Result<Classification, AnalysisError> {
+        let cspace = configuration_space.ok_or(AnalysisError::NotReady { what: "configuration_space" })?;
+        let periodic = self.periodic();
+        let mut c = classify(cspace, values, &periodic, None);
+        let names = self.free_joints();
+        match (&self.problem, singularities.and_then(|s| s.loops.as_ref())) {
+            (Linkage::Spatial(..), _) => c.note = "the singular sets of spatial linkages are not built yet".to_string(),
+            (_, None) => c.note = "the singular sets are not known yet (still being computed, or their run failed: see list_mechanisms)".to_string(),
+            (_, Some(loops)) => match singular_distance(loops, &names, values, &periodic) {
+                Ok((d, note)) => {
+                    c.singular_distance = Some(d);
+                    c.note = note;
+                }
+                Err(why) => c.note = why,
+            },
+        }
+        Ok(c)
+    }
+}
+
+/// A lower bound on the joint-space distance from `values` (over `names`) to every box of every
+/// set, with which set holds the nearest box; an error (why) unless every set is complete.
+///
+/// Sound: a complete set holds every singular configuration of its kind in its solution boxes
+/// (certified or not), each box's joint values are outward enclosures, and the distance to a
+/// box is at most the distance to any point in it; the result is lowered by a relative and an
+/// absolute 1e-12 for the floating-point rounding of the distance itself.
+pub(crate) fn singular_distance(loops: &LoopSingularities, names: &[String], values: &[f64], periodic: &[bool]) -> Result<(f64, String), String> {
+    if !loops.complete() {
+        let open: Vec<String> = loops
+            .sets
+            .iter()
+            .filter(|s| !(s.boxes.status.is_complete() && s.undecided == 0))
+            .map(|s| match s.boxes.status {
+                Status::Incomplete(l) => format!("{} ({} limit, {} boxes undecided)", s.kind, l.name(), s.undecided),
+                Status::Complete => format!("{} ({} boxes undecided)", s.kind, s.undecided),
+            })
+            .collect();
+        return Err(format!("the singular search did not complete ({}), so no bound on the distance to singularities is claimed", open.join(", ")));
+    }
+    let mut best: Option<(f64, &'static str)> = None;
+    for set in &loops.sets {
+        // The set's joints by the analysis's names (the same free joints, looked up by name).
+        let index: Vec<usize> = names.iter().map(|n| set.boxes.joint_names.iter().position(|j| j == n)).collect::<Option<_>>().ok_or_else(|| format!("internal: the {} set is over other joints ({})", set.kind, set.boxes.joint_names.join(", ")))?;
+        for b in set.boxes.boxes.iter().filter(|b| b.status.is_solution()) {
+            let d = index.iter().zip(values).zip(periodic).map(|((&k, &x), &p)| gap(x, b.joints[k], p).powi(2)).sum::<f64>().sqrt();
+            if best.is_none_or(|(bd, _)| d < bd) {
+                best = Some((d, set.kind));
+            }
+        }
+    }
+    let searched: Vec<&str> = loops.sets.iter().map(|s| s.kind).collect();
+    Ok(match best {
+        None => (f64::INFINITY, format!("every singular set searched ({}) is empty, proven by complete searches: no singular configuration of those kinds", searched.join(", "))),
+        Some((d, kind)) => (
+            (d * (1.0 - 1e-12) - 1e-12).max(0.0),
+            format!("the singular distance is a lower bound on the joint-space distance to the nearest singular configuration, which is of the {kind} set ({}; sets searched: {})", kind_meaning(kind), searched.join(", ")),
+        ),
+    })
+}
+
+/// What a kind of singular set is, a few words.
+fn kind_meaning(kind: &str) -> &'static str {
+    match kind {
+        "cspace" => "a bifurcation: the loop constraints lose rank",
+        "input" => "type II: with the actuated joints locked the mechanism still moves",
+        _ => "type I: the output stands still while the mechanism moves",
+    }
+}
+
+/// A validated run of a linkage's singular sets.
+struct SingularSetsRun {
+    sets: SingularSets,
+    settings: SolverSettings,
+    query: SingularityQuery,
+    actuation: Actuation,
+    mechanism: String,
+}
+
+impl PreparedRun<SingularityResult> for SingularSetsRun {
+    fn run(self: Box<Self>, cancel: &AtomicBool, _progress: &mut dyn FnMut(&Progress)) -> SingularityResult {
+        let t0 = std::time::Instant::now();
+        let solved = self.sets.solve(&self.settings, cancel).expect("invariant: settings validated when prepared");
+        let sets: Vec<SingularSetResult> = self.sets.problems.iter().zip(&solved).map(|(p, set)| set_result(p, &self.settings, set)).collect();
+        // The run's status: the first limit any set met.
+        let status = solved.iter().map(|s| s.status).find(|s| !s.is_complete()).unwrap_or(Status::Complete);
+        let processed = solved.iter().flat_map(|s| &s.stats).map(|s| s.processed).sum();
+        let joint_names = self.sets.problems.first().map(|p| p.linkage.free_joints.clone()).unwrap_or_default();
+        let summary = format!(
+            "{}; actuated: {} ({})",
+            sets.iter().map(|s| format!("{}: {}", s.kind, s.verdict)).collect::<Vec<_>>().join("; "),
+            if self.actuation.joints.is_empty() { "none".to_string() } else { self.actuation.joints.join(", ") },
+            self.actuation.source
+        );
+        let empty = |analysis: &str| BoxSetResult {
+            mechanism: self.mechanism.clone(),
+            analysis: analysis.to_string(),
+            status: Status::Complete,
+            settings: self.settings.clone(),
+            variables: joint_names.clone(),
+            primaries: (0..joint_names.len()).collect(),
+            joint_names: joint_names.clone(),
+            fixed_joints: vec![],
+            traces: vec![],
+            boxes: vec![],
+            clusters: 0,
+            stats: SolveStats::default(),
+        };
+        SingularityResult {
+            mechanism: self.mechanism.clone(),
+            status,
+            query: self.query.clone(),
+            joint_names: joint_names.clone(),
+            workspace_names: vec![],
+            cusps: vec![],
+            nodes: vec![],
+            // The 3R records have no counterpart here: the sets are in `loops`.
+            singular_curves: empty("singular_curves"),
+            internal_motions: empty("internal_motions"),
+            processed,
+            seconds: t0.elapsed().as_secs_f64(),
+            summary,
+            loops: Some(LoopSingularities { actuated: self.actuation.joints.clone(), actuated_source: self.actuation.source.clone(), sets }),
+        }
+    }
+}
+
+/// One solved set as a box set, through the CLI's report (`SingularReport`), so its joint
+/// values are those of `loop-singularities --json` bit for bit.
+fn set_result(p: &SingularProblem, settings: &SolverSettings, set: &SingularSet) -> SingularSetResult {
+    let report = SingularReport::new(p, settings, set);
+    let names = p.linkage.free_joints.clone();
+    let chart = &p.charts[0];
+    let boxes: Vec<ResultBox> = set
+        .boxes
+        .iter()
+        .zip(&report.boxes)
+        .zip(&set.labels)
+        .map(|((sb, record), &label)| {
+            let status = match sb.status {
+                BoxKind::Certified => BoxStatus::Unique,
+                BoxKind::Solution => BoxStatus::Solution,
+                BoxKind::Undecided => BoxStatus::Undecided,
+            };
+            ResultBox {
+                status,
+                bounds: sb.b.dims.iter().map(|x| [x.inf(), x.sup()]).collect(),
+                joints: names.iter().map(|n| record.joints.get(n).copied().unwrap_or([f64::NAN, f64::NAN])).collect(),
+                level: sb.b.level,
+                cluster: (sb.status != BoxKind::Undecided).then_some(label),
+                traces: vec![],
+            }
+        })
+        .collect();
+    let undecided = report.summary.undecided_boxes;
+    let mut stats = SolveStats::default();
+    for s in &set.stats {
+        stats.processed += s.processed;
+        stats.empty += s.empty;
+        stats.bisected += s.bisected;
+        stats.solutions += s.solutions;
+        stats.certified += s.certified;
+        stats.max_level = stats.max_level.max(s.max_level);
+    }
+    stats.seconds = set.seconds;
+    let shape = match p.expected_dimension {
+        0 => "points",
+        1 => "curves",
+        d if d < 0 => "generically none",
+        _ => "surfaces",
+    };
+    let s = &report.summary;
+    let verdict = match set.status {
+        Status::Complete if s.boxes == 0 => format!("none (proven: a complete search left no box; expected {shape})"),
+        Status::Complete if undecided == 0 => format!("{} clusters ({} certified, {} unproven), {} boxes, complete (expected {shape})", s.clusters, s.certified_clusters, s.unproven_clusters, s.boxes),
+        Status::Complete => format!("{} clusters ({} certified), {} boxes, {undecided} undecided (expected {shape})", s.clusters, s.certified_clusters, s.boxes),
+        Status::Incomplete(l) => format!(
+            "incomplete ({} limit): {} clusters ({} certified), {} boxes, {undecided} undecided (expected {shape})",
+            l.name(),
+            s.clusters,
+            s.certified_clusters,
+            s.boxes
+        ),
+    };
+    SingularSetResult {
+        kind: p.kind.name(),
+        boxes: BoxSetResult {
+            mechanism: p.linkage.name.clone(),
+            analysis: format!("singular_set:{}", p.kind.name()),
+            status: set.status,
+            settings: settings.clone(),
+            variables: chart.vars.iter().map(|v| v.name.clone()).collect(),
+            primaries: chart.vars.iter().enumerate().filter(|(_, v)| v.role == VarRole::Primary).map(|(i, _)| i).collect(),
+            joint_names: names,
+            fixed_joints: p.linkage.fixed_joints.clone(),
+            traces: vec![],
+            boxes,
+            clusters: set.clusters.len(),
+            stats,
+        },
+        proven: s.certified_clusters,
+        undecided,
+        verdict,
     }
 }
 

@@ -332,6 +332,7 @@ impl PreparedRun<SingularityResult> for SingularityRun {
             processed,
             seconds: run.seconds + self.cover.seconds,
             summary,
+            loops: None,
         }
     }
 }

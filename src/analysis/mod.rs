@@ -16,6 +16,7 @@ mod platform;
 
 pub use manip3r::Manip3rAnalysis;
 pub use linkage::LinkageAnalysis;
+pub use crate::problems::singular::sets::Actuation;
 pub use platform::PlatformAnalysis;
 
 use crate::model::Mechanism;
@@ -79,6 +80,9 @@ pub enum AnalysisError {
     /// Settings out of range.
     #[error(transparent)]
     Solve(#[from] SolveError),
+    /// The singular sets of a linkage cannot be formulated (bad actuated joints...).
+    #[error(transparent)]
+    Singular(#[from] crate::problems::singular::SingularError),
     /// Anything else wrong with the request, named.
     #[error("{0}")]
     BadRequest(String),
@@ -315,12 +319,57 @@ pub struct SingularityResult {
     pub seconds: f64,
     /// One line: what was found.
     pub summary: String,
+    /// The singular sets of a closed-loop mechanism (`None` for 3R chains, whose records are
+    /// the cusps, nodes and curves above).
+    pub loops: Option<LoopSingularities>,
+}
+
+/// The singular sets of a closed-loop mechanism (`problems::singular`), as `linkspace
+/// loop-singularities --json` finds them for the same URDF, fixed joints and settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoopSingularities {
+    /// The actuated joints of the input set.
+    pub actuated: Vec<String>,
+    /// Where they come from, one line.
+    pub actuated_source: String,
+    /// One per set searched, in the order cspace, input, output.
+    pub sets: Vec<SingularSetResult>,
+}
+
+/// One singular set: boxes that together hold every singular configuration of its kind when
+/// `boxes.status` is complete and none is undecided.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SingularSetResult {
+    /// `cspace`, `input` or `output`.
+    pub kind: &'static str,
+    /// The boxes (analysis `singular_set:<kind>`): variables are the configuration then the null
+    /// vector, joints the free joints; certified boxes are `Unique`, clusters by configuration.
+    pub boxes: BoxSetResult,
+    /// Clusters holding a certified box (each holds at least one singular configuration).
+    pub proven: usize,
+    /// Boxes left undecided by a limit.
+    pub undecided: usize,
+    /// One line: what was found and what is proven.
+    pub verdict: String,
+}
+
+impl LoopSingularities {
+    /// Undecided boxes over every set.
+    pub fn undecided(&self) -> usize {
+        self.sets.iter().map(|s| s.undecided).sum()
+    }
+
+    /// True when every set ran to its end with nothing undecided: every singular configuration
+    /// is then in a solution box of some set.
+    pub fn complete(&self) -> bool {
+        self.sets.iter().all(|s| s.boxes.status.is_complete() && s.undecided == 0)
+    }
 }
 
 impl SingularityResult {
-    /// Undecided records (cusp boxes and node pairs).
+    /// Undecided records (cusp boxes and node pairs, boxes of a linkage's singular sets).
     pub fn undecided(&self) -> usize {
-        self.cusps.iter().filter(|c| !c.certified).count() + self.nodes.iter().filter(|n| !n.certified).count()
+        self.cusps.iter().filter(|c| !c.certified).count() + self.nodes.iter().filter(|n| !n.certified).count() + self.loops.as_ref().map_or(0, |l| l.undecided())
     }
 }
 
@@ -462,6 +511,13 @@ impl Analysis for Unsupported {
     }
 }
 
+/// `load` for a mechanism read from URDF text `xml`: a linkage's actuated joints come from its
+/// `<transmission>` elements (`Actuation::from_urdf`, the default of `linkspace
+/// loop-singularities` as well).
+pub fn load_urdf(mechanism: &Mechanism, xml: &str, fixed: &[(String, f64)], traces: &[(String, f64, f64)]) -> Result<Box<dyn Analysis>, AnalysisError> {
+    load_with(mechanism, fixed, traces, crate::problems::singular::sets::Actuation::from_urdf(xml, fixed))
+}
+
 /// Picks the analysis that fits `mechanism`. `fixed` and `traces` are as for
 /// `LinkageProblem::new`.
 ///
@@ -470,6 +526,10 @@ impl Analysis for Unsupported {
 /// mechanism outside every analysis loads as `Unsupported`, so the node can still list it and
 /// explain; bad fixed joints are an error.
 pub fn load(mechanism: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f64, f64)]) -> Result<Box<dyn Analysis>, AnalysisError> {
+    load_with(mechanism, fixed, traces, crate::problems::singular::sets::Actuation { joints: Vec::new(), source: "none given".to_string() })
+}
+
+fn load_with(mechanism: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f64, f64)], actuation: crate::problems::singular::sets::Actuation) -> Result<Box<dyn Analysis>, AnalysisError> {
     let not_3r = match Manip3rAnalysis::new(mechanism) {
         Ok(a) => {
             if let Some((joint, _)) = fixed.first() {
@@ -510,7 +570,7 @@ pub fn load(mechanism: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f
     }
     // Any other platform (a 6-6 Stewart, a delta) is a spatial linkage.
     match LinkageAnalysis::new(mechanism, fixed, traces) {
-        Ok(a) => Ok(Box::new(a)),
+        Ok(a) => Ok(Box::new(a.with_actuation(actuation))),
         Err(e @ (LinkageError::NoLoops | LinkageError::Mimic { .. } | LinkageError::Unsupported(_) | LinkageError::UnderConstrained(_))) => Ok(unsupported(format!(
             "not a linkage the builders take ({e}), and {not_3r}; closed-loop linkages, octahedral platforms and 3R manipulators are analysed so far"
         ))),

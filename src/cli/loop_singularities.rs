@@ -5,7 +5,8 @@ use super::{parse_fix, LimitArgs};
 use anyhow::{bail, Context, Result};
 use linkspace::model::urdf;
 use linkspace::problems::singular::image;
-use linkspace::problems::singular::{transmission_joints, Output, SingularKind, SingularProblem};
+use linkspace::problems::singular::sets::{all_kinds, Actuation, SingularSets};
+use linkspace::problems::singular::{Output, SingularKind, SingularProblem};
 use linkspace::report::singular::SingularReport;
 use linkspace::search::SolverSettings;
 use std::io::Write;
@@ -86,10 +87,12 @@ pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
     let output = args.output.as_deref().map(parse_output).transpose()?;
     let xml = std::fs::read_to_string(&args.urdf).with_context(|| format!("reading {}", args.urdf.display()))?;
     let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", args.urdf.display()))?;
+    // The node's default too (`LinkageAnalysis`): one function.
     let actuated = match &args.actuated {
-        Some(a) => names(a, "--actuated")?,
-        None => transmission_joints(&xml),
-    };
+        Some(a) => Actuation::given(names(a, "--actuated")?),
+        None => Actuation::from_urdf(&xml, &fixed),
+    }
+    .joints;
     if matches!(args.kind, Kind::Image) {
         return run_image(&args, &mechanism, &fixed, &actuated, &settings);
     }
@@ -97,17 +100,16 @@ pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
         Kind::Cspace => vec![SingularKind::Cspace],
         Kind::Input => vec![SingularKind::Input],
         Kind::Output => vec![SingularKind::Output],
-        // Input singularities need actuators: without any, `all` runs the other two.
-        Kind::All if actuated.is_empty() => vec![SingularKind::Cspace, SingularKind::Output],
-        Kind::All => vec![SingularKind::Cspace, SingularKind::Input, SingularKind::Output],
+        Kind::All => all_kinds(&actuated),
         Kind::Image => unreachable!("handled above"),
     };
+    // The orchestration the node runs as well: every problem built first, one timeout for all.
+    let sets = SingularSets::new(&mechanism, &fixed, &kinds, &actuated, output).with_context(|| format!("building {}", args.urdf.display()))?;
+    let solved = sets.solve(&settings, &AtomicBool::new(false))?;
     let mut reports = Vec::new();
     let mut out = std::io::stdout().lock();
-    for kind in kinds {
-        let p = SingularProblem::new(&mechanism, &fixed, kind, &actuated, output.clone()).with_context(|| format!("building {}", args.urdf.display()))?;
-        let set = p.solve(&settings, &AtomicBool::new(false))?;
-        let r = SingularReport::new(&p, &settings, &set);
+    for (p, set) in sets.problems.iter().zip(&solved) {
+        let r = SingularReport::new(p, &settings, set);
         let s = &r.summary;
         let shape = match r.expected_dimension {
             0 => "points",

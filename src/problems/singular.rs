@@ -38,6 +38,7 @@ use std::time::Instant;
 use thiserror::Error;
 
 pub mod image;
+pub mod sets;
 
 /// Half-width of a chart's free components: above 1, so a direction whose largest components
 /// tie (|m_j| = |m_k| = 1) lies inside both charts' domains, not on their boundary.

@@ -1,0 +1,126 @@
+//! The singular sets of one linkage in one call: which kinds, the default actuated joints, one
+//! deadline for all of them. `linkspace loop-singularities` and the node's `LinkageAnalysis`
+//! both run this, so a topic and a `--json` file of the same URDF and settings hold the same
+//! boxes.
+//!
+//! Building every set's problem comes first (`SingularSets::new`), so a bad request (unknown
+//! actuated joint, wrong actuator count) is answered before any search starts; `solve` then runs
+//! the sets in order under one timeout: what the first set leaves of it goes to the next.
+
+use super::{Output, SingularError, SingularKind, SingularProblem, SingularSet};
+use crate::model::Mechanism;
+use crate::search::{SolveError, SolverSettings};
+use std::sync::atomic::AtomicBool;
+use std::time::Instant;
+
+/// The actuated joints of a mechanism by default, and where they come from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Actuation {
+    /// Joint names, in file order.
+    pub joints: Vec<String>,
+    /// One line: where they come from (for reports and the node's topic).
+    pub source: String,
+}
+
+impl Actuation {
+    /// The default: the joints of the URDF's `<transmission>` elements (`transmission_joints`),
+    /// minus those `fixed` (a fixed joint is locked already, so it is no longer a free joint to
+    /// actuate); none when the URDF has no transmission.
+    pub fn from_urdf(xml: &str, fixed: &[(String, f64)]) -> Self {
+        let named = super::transmission_joints(xml);
+        if named.is_empty() {
+            return Actuation { joints: Vec::new(), source: "none (the URDF has no <transmission> element)".to_string() };
+        }
+        let (locked, joints): (Vec<String>, Vec<String>) = named.into_iter().partition(|j| fixed.iter().any(|(f, _)| f == j));
+        let mut source = "the URDF's <transmission> elements".to_string();
+        if !locked.is_empty() {
+            source.push_str(&format!(" (fixed, so left out: {})", locked.join(", ")));
+        }
+        Actuation { joints, source }
+    }
+
+    /// Joints given by name (`--actuated`).
+    pub fn given(joints: Vec<String>) -> Self {
+        Actuation { joints, source: "given".to_string() }
+    }
+}
+
+/// The sets that "all" means for `actuated`: C-space, input and output; input singularities
+/// need actuators, so without any "all" is C-space and output.
+pub fn all_kinds(actuated: &[String]) -> Vec<SingularKind> {
+    if actuated.is_empty() {
+        vec![SingularKind::Cspace, SingularKind::Output]
+    } else {
+        vec![SingularKind::Cspace, SingularKind::Input, SingularKind::Output]
+    }
+}
+
+/// The built problems of several singular sets of one linkage, in the order asked.
+#[derive(Clone, Debug)]
+pub struct SingularSets {
+    /// One per kind.
+    pub problems: Vec<SingularProblem>,
+}
+
+impl SingularSets {
+    /// Builds the problem of every kind of `kinds` for `m` with joints `fixed` (see
+    /// `SingularProblem::new`); the first that does not build is the error.
+    pub fn new(m: &Mechanism, fixed: &[(String, f64)], kinds: &[SingularKind], actuated: &[String], output: Option<Output>) -> Result<Self, SingularError> {
+        let problems = kinds.iter().map(|&k| SingularProblem::new(m, fixed, k, actuated, output.clone())).collect::<Result<_, _>>()?;
+        Ok(Self { problems })
+    }
+
+    /// Solves every set in order. `settings.max_boxes` applies per chart of each set;
+    /// `settings.timeout` to the whole call (a set that starts with no time left reports every
+    /// chart undecided, so nothing is dropped unsearched). Raising `cancel` ends every set.
+    pub fn solve(&self, settings: &SolverSettings, cancel: &AtomicBool) -> Result<Vec<SingularSet>, SolveError> {
+        let t0 = Instant::now();
+        self.problems
+            .iter()
+            .map(|p| {
+                let remaining = settings.timeout.map(|t| t.saturating_sub(t0.elapsed()));
+                p.solve(&SolverSettings { timeout: remaining, ..settings.clone() }, cancel)
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const FOUR_BAR: &str = include_str!("../../../urdf/four_bar.urdf");
+
+    fn with_transmission(joint: &str) -> String {
+        FOUR_BAR.replace("</robot>", &format!("<transmission name=\"t\"><type>transmission_interface/SimpleTransmission</type><joint name=\"{joint}\"/></transmission></robot>"))
+    }
+
+    #[test]
+    fn actuated_joints_default_to_transmissions_minus_fixed_ones() {
+        assert_eq!(Actuation::from_urdf(FOUR_BAR, &[]).joints, Vec::<String>::new());
+        let xml = with_transmission("rocker_joint");
+        assert_eq!(Actuation::from_urdf(&xml, &[]).joints, vec!["rocker_joint".to_string()]);
+        let fixed = Actuation::from_urdf(&xml, &[("rocker_joint".into(), 0.3)]);
+        assert_eq!(fixed.joints, Vec::<String>::new());
+        assert!(fixed.source.contains("left out: rocker_joint"), "{}", fixed.source);
+        assert_eq!(all_kinds(&[]), vec![SingularKind::Cspace, SingularKind::Output]);
+    }
+
+    #[test]
+    fn one_timeout_covers_every_set() {
+        let m = crate::model::urdf::parse(FOUR_BAR).expect("bundled");
+        let actuated = vec!["rocker_joint".to_string()];
+        let sets = SingularSets::new(&m, &[], &all_kinds(&actuated), &actuated, None).expect("builds");
+        assert_eq!(sets.problems.len(), 3);
+        // No time at all: every set reports its charts undecided, none is skipped.
+        let settings = SolverSettings { timeout: Some(std::time::Duration::ZERO), ..Default::default() };
+        let solved = sets.solve(&settings, &AtomicBool::new(false)).expect("valid");
+        for (p, s) in sets.problems.iter().zip(&solved) {
+            assert!(!s.status.is_complete(), "{:?}", p.kind);
+            assert_eq!(s.boxes.len(), p.charts.len());
+        }
+        // A bad actuator list fails before any search.
+        let err = SingularSets::new(&m, &[], &all_kinds(&["nope".to_string()]), &["nope".to_string()], None).err().expect("refused");
+        assert!(err.to_string().contains("'nope' is not a free joint"), "{err}");
+    }
+}
