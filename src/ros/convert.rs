@@ -207,6 +207,13 @@ pub fn singularity_report(r: &SingularityResult, run_id: u64) -> SingularityRepo
         complete: limit.is_none(),
         precision: r.query.precision,
         limit: limit.unwrap_or_default().to_string(),
+        set_kinds: r.loops.iter().flat_map(|l| &l.sets).map(|s| s.kind.to_string()).collect(),
+        sets: r.loops.iter().flat_map(|l| &l.sets).map(|s| box_set(&s.boxes, run_id)).collect(),
+        set_proven: r.loops.iter().flat_map(|l| &l.sets).map(|s| s.proven.min(u32::MAX as usize) as u32).collect(),
+        set_undecided: r.loops.iter().flat_map(|l| &l.sets).map(|s| s.undecided.min(u32::MAX as usize) as u32).collect(),
+        set_verdicts: r.loops.iter().flat_map(|l| &l.sets).map(|s| s.verdict.clone()).collect(),
+        actuated: r.loops.as_ref().map_or_else(Vec::new, |l| l.actuated.clone()),
+        actuated_source: r.loops.as_ref().map_or_else(String::new, |l| l.actuated_source.clone()),
     }
 }
 
@@ -218,7 +225,9 @@ fn sphere(frame: &str, ns: &str, id: i32, centre: [f64; 3], size: f64, color: Co
 /// record joints (x, y; radians as metres): a `DELETEALL`, then namespace `singular_curves`
 /// (one flat cube per cover box, coloured by piece), `internal_motions` (one flat cube per
 /// line), `cusps` (red spheres; grey when undecided) and `nodes` (blue spheres, one per point
-/// of each pair). At most `cap` markers per namespace.
+/// of each pair); for a linkage, `singular_set:<kind>` (one cube per box over its first three
+/// free joints, red for cspace, purple for input, brown for output; grey when undecided). At
+/// most `cap` markers per namespace.
 pub fn singularity_markers(r: &SingularityResult, cap: usize) -> MarkerArray {
     let frame = joint_frame(&r.mechanism);
     let mut markers = vec![Marker { header: header(&frame), action: msgs::marker::DELETEALL, ..Default::default() }];
@@ -238,6 +247,22 @@ pub fn singularity_markers(r: &SingularityResult, cap: usize) -> MarkerArray {
         let red = ColorRGBA { r: 0.9, g: 0.1, b: 0.1, a: 1.0 };
         markers.push(sphere(&frame, "cusps", id, centre(&c.joints), 0.08, if c.certified { red } else { grey.clone() }));
         id += 1;
+    }
+    // A linkage's singular sets: one cube per box over its first three free joints (as the
+    // configuration-space markers), namespace `singular_set:<kind>`, coloured by kind.
+    for (k, set) in r.loops.iter().flat_map(|l| &l.sets).enumerate() {
+        let ns = format!("singular_set:{}", set.kind);
+        let axes = set.boxes.joint_names.len().min(3);
+        for b in set.boxes.boxes.iter().take(cap) {
+            let (mut c, mut s) = ([0.0; 3], [0.0; 3]);
+            for i in 0..axes {
+                c[i] = 0.5 * (b.joints[i][0] + b.joints[i][1]);
+                s[i] = b.joints[i][1] - b.joints[i][0];
+            }
+            let color = if b.status == BoxStatus::Undecided { grey.clone() } else { colour(Some(3 + k)) };
+            markers.push(cube(&frame, &ns, id, c, s, color));
+            id += 1;
+        }
     }
     for n in r.nodes.iter().take(cap) {
         let blue = ColorRGBA { r: 0.1, g: 0.2, b: 0.9, a: 1.0 };

@@ -207,6 +207,13 @@ mirror! {
         complete: bool,
         precision: f64,
         limit: String,
+        set_kinds: Vec<String>,
+        sets: Vec<BoxSet>,
+        set_proven: Vec<u32>,
+        set_undecided: Vec<u32>,
+        set_verdicts: Vec<String>,
+        actuated: Vec<String>,
+        actuated_source: String,
     }
 }
 mirror! {

@@ -165,6 +165,26 @@ struct Mechanism {
     singularity_run: Option<u64>,
     state: String,
     message: String,
+    /// One line per load-time analysis (configuration space, singularities) as it ends, the
+    /// parts of `message` (a linkage has both).
+    cspace_note: String,
+    singular_note: String,
+}
+
+/// What `~/<robot>/markers` carries: the configuration-space markers, then the singularity
+/// markers after them (one `DELETEALL` first), so that a late subscriber of the latched topic
+/// gets both for a linkage that has both.
+fn combined_markers(m: &Mechanism) -> Option<MarkerArray> {
+    match (&m.published, &m.published_singularities) {
+        (None, None) => None,
+        (Some((_, a)), None) | (None, Some((_, a))) => Some(a.clone()),
+        (Some((_, a)), Some((_, b))) => {
+            let mut all = a.clone();
+            // Both start with their own DELETEALL; one is enough.
+            all.markers.extend(b.markers.iter().filter(|x| x.action != msgs::marker::DELETEALL).cloned());
+            Some(all)
+        }
+    }
 }
 
 struct State {
@@ -242,6 +262,8 @@ fn mechanism_entry(loaded: Loaded, prefix: String, topics: Topics, generation: u
         singularity_run: None,
         state: "running".into(),
         message: String::new(),
+        cspace_note: String::new(),
+        singular_note: String::new(),
     }
 }
 
@@ -580,12 +602,18 @@ impl State {
                 self.mechanisms[k].singularity_run = Some(run);
                 started = true;
             }
-            Err(e) => self.publish_no_singularities(k, e.to_string()),
+            Err(e) => {
+                // Said in list_mechanisms too, unless the kind has no singularity analysis at all.
+                if self.mechanisms[k].loaded.analysis.services().contains(&Service::Singularities) {
+                    self.mechanisms[k].singular_note = format!("no singularities: {}", convert::bounded(&e.to_string(), convert::ECHO_MESSAGE));
+                }
+                self.publish_no_singularities(k, e.to_string());
+            }
         }
         let m = &mut self.mechanisms[k];
         if started {
             m.state = "running".into();
-            m.message = String::new();
+            m.message = m.singular_note.clone();
         } else {
             m.state = "unavailable".into();
             m.message = m.loaded.analysis.limitation();
@@ -616,6 +644,30 @@ impl State {
         m.singularities = None;
         m.published_singularities = None;
         m.singularity_run = None;
+        m.cspace_note = String::new();
+        m.singular_note = String::new();
+    }
+
+    /// The state and message of mechanism `k` after a load-time run ended: `running` while
+    /// another load-time run of it goes; then complete when every load-time result is, else
+    /// incomplete. The message joins each analysis's line.
+    fn settle(&mut self, k: usize) {
+        let generation = self.mechanisms[k].generation;
+        let going = self.runs.values().any(|r| r.mechanism == k && r.generation == generation && matches!(r.kind, RunKind::ConfigurationSpace | RunKind::Singularities { load_time: true }));
+        let m = &mut self.mechanisms[k];
+        m.message = [&m.cspace_note, &m.singular_note].into_iter().filter(|n| !n.is_empty()).cloned().collect::<Vec<_>>().join("; ");
+        let complete = m.configuration_space.as_ref().is_none_or(|c| c.status == Status::Complete) && m.singularities.as_ref().is_none_or(|s| s.status == Status::Complete);
+        m.state = if going { "running" } else if complete { "complete" } else { "incomplete" }.into();
+    }
+
+    /// Publishes the latched markers of mechanism `k` (`combined_markers`).
+    async fn publish_markers(&self, k: usize) {
+        let m = &self.mechanisms[k];
+        if let Some(markers) = combined_markers(m) {
+            if let Err(e) = m.topics.markers.async_publish(markers).await {
+                eprintln!("linkspace: publishing {}/markers: {e:?}", m.prefix);
+            }
+        }
     }
 
     /// A new robot_description (parameter or topic): replaces the mechanism that came from
@@ -852,14 +904,10 @@ impl State {
         let summary = format!("{name}: run {run} ({:?}) {status}: {} boxes, {} clusters, {:.3} s", r.kind, result.boxes.len(), result.clusters, result.stats.seconds);
         match r.kind {
             RunKind::ConfigurationSpace => {
-                m.state = if result.status == Status::Complete { "complete".into() } else { "incomplete".into() };
-                m.message = format!("run {run}: {status}, {} boxes in {} clusters", result.boxes.len(), result.clusters);
+                m.cspace_note = format!("run {run}: {status}, {} boxes in {} clusters", result.boxes.len(), result.clusters);
                 let markers = convert::markers(&result, &m.loaded.root_link, self.limits.max_markers);
                 if let Err(e) = m.topics.configuration_space.async_publish(set.clone()).await {
                     eprintln!("linkspace: publishing {}/configuration_space: {e:?}", m.prefix);
-                }
-                if let Err(e) = m.topics.markers.async_publish(markers.clone()).await {
-                    eprintln!("linkspace: publishing {}/markers: {e:?}", m.prefix);
                 }
                 m.published = Some((set, markers));
                 let squared = m.loaded.analysis.kind() == "parallel_platform";
@@ -872,6 +920,8 @@ impl State {
                     }
                 }
                 m.configuration_space = Some(Arc::new(result));
+                self.publish_markers(r.mechanism).await;
+                self.settle(r.mechanism);
                 eprintln!("linkspace: {name}: published configuration_space");
             }
             RunKind::Solve => {
@@ -905,18 +955,16 @@ impl State {
         let name = m.loaded.analysis.mechanism().to_string();
         eprintln!("linkspace: {name}: run {run} (singularities, precision {}): {}, {:.3} s", result.query.precision, result.summary, result.seconds);
         if r.kind == (RunKind::Singularities { load_time: true }) {
-            m.state = if result.status == Status::Complete { "complete".into() } else { "incomplete".into() };
-            m.message = format!("run {run}: {}", result.summary);
+            m.singular_note = format!("run {run}: {}", result.summary);
             let markers = convert::singularity_markers(&result, self.limits.max_markers);
             if let Err(e) = m.topics.singularities.async_publish(report.clone()).await {
                 eprintln!("linkspace: publishing {}/singularities: {e:?}", m.prefix);
             }
-            if let Err(e) = m.topics.markers.async_publish(markers.clone()).await {
-                eprintln!("linkspace: publishing {}/markers: {e:?}", m.prefix);
-            }
             m.published_singularities = Some((report.clone(), markers));
             m.singularities = Some(Arc::new(result));
             m.singularity_run = None;
+            self.publish_markers(r.mechanism).await;
+            self.settle(r.mechanism);
             eprintln!("linkspace: {name}: published singularities");
         }
         let reply = singularity_reply(&report);
@@ -929,25 +977,21 @@ impl State {
     /// tools that subscribe with volatile durability (RViz's default), and for throughput
     /// measurements.
     async fn republish(&mut self) {
-        for m in &mut self.mechanisms {
-            if let Some((set, markers)) = &mut m.published {
+        for k in 0..self.mechanisms.len() {
+            let m = &mut self.mechanisms[k];
+            if let Some((set, _)) = &mut m.published {
                 set.header = convert::header(&set.header.frame_id);
                 if let Err(e) = m.topics.configuration_space.async_publish(set.clone()).await {
                     eprintln!("linkspace: publishing {}/configuration_space: {e:?}", m.prefix);
                 }
-                if let Err(e) = m.topics.markers.async_publish(markers.clone()).await {
-                    eprintln!("linkspace: publishing {}/markers: {e:?}", m.prefix);
-                }
             }
-            if let Some((report, markers)) = &mut m.published_singularities {
+            if let Some((report, _)) = &mut m.published_singularities {
                 report.header = convert::header(&report.header.frame_id);
                 if let Err(e) = m.topics.singularities.async_publish(report.clone()).await {
                     eprintln!("linkspace: publishing {}/singularities: {e:?}", m.prefix);
                 }
-                if let Err(e) = m.topics.markers.async_publish(markers.clone()).await {
-                    eprintln!("linkspace: publishing {}/markers: {e:?}", m.prefix);
-                }
             }
+            self.publish_markers(k).await;
         }
     }
 
@@ -1322,7 +1366,10 @@ impl State {
             None => "the configuration space is empty".to_string(),
         };
         match c.singular_distance {
+            // The note says why when the analysis has singularities but no bound yet.
+            None if a.services().contains(&Service::Singularities) => message.push_str("; distance to singularities unknown"),
             None => message.push_str(&format!("; distance to singularities unknown: {}", a.not_available(Service::Singularities))),
+            Some(d) if d.is_infinite() => message.push_str("; no singular configuration"),
             Some(d) => message.push_str(&format!("; at least {d:.6} from every singular configuration")),
         }
         if !c.note.is_empty() {
