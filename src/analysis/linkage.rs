@@ -385,6 +385,7 @@ mod tests {
     use super::*;
     use crate::analysis::{classify, load};
     use crate::model::urdf;
+    use std::f64::consts::{PI, TAU};
 
     const FOUR_BAR: &str = include_str!("../../urdf/four_bar.urdf");
 
@@ -423,6 +424,99 @@ mod tests {
         assert_eq!((again.analysis.as_str(), again.clusters), ("solve", 2));
     }
 
+    /// The bundled four-bar (d 4, crank a 1.5, coupler b 4, rocker c 3.5) with its rocker
+    /// actuated through a `<transmission>`.
+    fn four_bar_rocker_driven() -> String {
+        FOUR_BAR.replace("</robot>", "<transmission name=\"drive\"><type>transmission_interface/SimpleTransmission</type><joint name=\"rocker_joint\"/></transmission></robot>")
+    }
+
+    /// The four-bar's configuration at rocker angle `t4` on branch `sign` (free joints in the
+    /// analysis's order: crank, coupler, rocker, loop), by the law of cosines; `None` when the
+    /// loop does not close there.
+    fn four_bar_at(t4: f64, sign: f64) -> Option<Vec<f64>> {
+        let (d, a, b, c) = (4.0f64, 1.5f64, 4.0f64, 3.5f64);
+        let (bx, by) = (d + c * t4.cos(), c * t4.sin());
+        let r2 = bx * bx + by * by;
+        // |B − A| = b with A = a(cos θ2, sin θ2): cos(θ2 − φ) = (a² + r² − b²) / (2 a r).
+        let k = (a * a + r2 - b * b) / (2.0 * a * r2.sqrt());
+        if k.abs() > 1.0 {
+            return None;
+        }
+        let t2 = by.atan2(bx) + sign * k.acos();
+        let t3 = (by - a * t2.sin()).atan2(bx - a * t2.cos());
+        let wrap = |x: f64| (x + PI).rem_euclid(TAU) - PI;
+        Some(vec![wrap(t2), wrap(t3 - t2), wrap(t4), wrap(t4 - t3)])
+    }
+
+    /// Joint-space distance with angles compared modulo 2π.
+    fn angle_distance(p: &[f64], q: &[f64]) -> f64 {
+        p.iter().zip(q).map(|(x, y)| ((x - y).rem_euclid(TAU)).min(TAU - (x - y).rem_euclid(TAU)).powi(2)).sum::<f64>().sqrt()
+    }
+
+    #[test]
+    fn singular_sets_are_the_closed_form_dead_centres_and_classify_bounds_the_distance_to_them() {
+        let xml = four_bar_rocker_driven();
+        let m = urdf::parse(&xml).expect("bundled");
+        let a = crate::analysis::load_urdf(&m, &xml, &[], &[]).expect("planar");
+        assert_eq!(a.services(), vec![Service::Solve, Service::Singularities, Service::Classify]);
+        let query = SingularityQuery { precision: 1e-6, nodes: false, max_boxes: 1_000_000, timeout: None, threads: 1 };
+        let r = a.singularities(&query).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let loops = r.loops.as_ref().expect("a linkage's sets");
+        assert_eq!(loops.actuated, vec!["rocker_joint".to_string()]);
+        assert!(loops.actuated_source.contains("<transmission>"), "{}", loops.actuated_source);
+        let kinds: Vec<&str> = loops.sets.iter().map(|s| s.kind).collect();
+        assert_eq!(kinds, vec!["cspace", "input", "output"]);
+        assert!(loops.complete() && r.status == Status::Complete, "{}", r.summary);
+        // Rocker driving: type II where crank and coupler are in line, |B − O2| = a + b or
+        // b − a, B = (d, 0) + c(cos θ4, sin θ4): cos θ4 = (l² − d² − c²) / (2 d c).
+        let (d, a_, b, c) = (4.0f64, 1.5f64, 4.0f64, 3.5f64);
+        let mut dead: Vec<Vec<f64>> = Vec::new();
+        for l in [a_ + b, b - a_] {
+            let t4 = ((l * l - d * d - c * c) / (2.0 * d * c)).acos();
+            for t4 in [t4, -t4] {
+                // In line: both branches meet there; take the one that closes best.
+                let q = [1.0, -1.0].iter().filter_map(|&s| four_bar_at(t4, s)).next().expect("closes at a dead centre");
+                dead.push(q);
+            }
+        }
+        let input = &loops.sets[1];
+        assert_eq!((input.proven, input.boxes.clusters, input.undecided), (4, 4, 0), "{}", input.verdict);
+        for q in &dead {
+            let holds = input.boxes.boxes.iter().any(|bx| bx.joints[2][0] - 1e-9 <= q[2] && q[2] <= bx.joints[2][1] + 1e-9);
+            assert!(holds, "dead centre at rocker {} in no input box", q[2]);
+        }
+        // No bifurcation, no type-I singularity with every passive joint as output (proven empty).
+        assert_eq!((loops.sets[0].boxes.boxes.len(), loops.sets[2].boxes.boxes.len()), (0, 0), "{} / {}", loops.sets[0].verdict, loops.sets[2].verdict);
+
+        let settings = SolverSettings { sigma: 1e-2, ..Default::default() };
+        let cspace = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        // Configurations on the curve, near and far from the dead centres: the bound is never
+        // above the true distance (the set being exactly the four dead centres), and close to it.
+        let mut checked = 0;
+        for q0 in &dead {
+            // Past a dead centre the rocker cannot go (it is one of its extremes): one side closes.
+            for delta in [0.0, 1e-4, 1e-3, 1e-2, 0.1, 0.5, 1.5].into_iter().flat_map(|x: f64| [x, -x]) {
+                for sign in [1.0, -1.0] {
+                    let Some(q) = four_bar_at(q0[2] + delta, sign) else { continue };
+                    let cl = a.classify(&q, Some(&cspace), Some(&r)).expect("classifies");
+                    assert!(cl.inside, "{q:?} is on the curve (loop joint convention) but classified outside: {cl:?}");
+                    let bound = cl.singular_distance.expect("complete sets give a bound");
+                    let truth = dead.iter().map(|p| angle_distance(&q, p)).fold(f64::INFINITY, f64::min);
+                    assert!(bound <= truth, "{q:?}: bound {bound} above the true distance {truth}");
+                    assert!(bound >= truth - 1e-4, "{q:?}: bound {bound} far below the true distance {truth}");
+                    assert!(cl.note.contains("input set"), "{}", cl.note);
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked >= 40, "{checked} configurations checked");
+        // Without a complete singular search there is no bound, and the note says why.
+        let short = a.singularities(&SingularityQuery { max_boxes: 3, ..query }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let cl = a.classify(&dead[0], Some(&cspace), Some(&short)).expect("classifies");
+        assert_eq!(cl.singular_distance, None);
+        assert!(cl.note.contains("did not complete"), "{}", cl.note);
+    }
+
     #[test]
     fn bad_requests_fail_before_any_run() {
         let m = urdf::parse(FOUR_BAR).expect("bundled");
@@ -431,8 +525,14 @@ mod tests {
         assert!(err(a.solve(&[("nope".into(), 1.0)], &SolverSettings::default())).contains("no joint or loop named 'nope'"));
         assert!(err(a.solve(&[("crank_joint".into(), f64::NAN)], &SolverSettings::default())).contains("not a finite number"));
         assert!(err(a.solve(&[], &SolverSettings { sigma: f64::NAN, ..Default::default() })).contains("sigma"));
+        // A planar linkage answers singularities; bad queries are refused before a run.
         let query = crate::analysis::SingularityQuery { precision: 1e-4, nodes: true, max_boxes: 1000, timeout: None, threads: 1 };
-        assert!(a.singularities(&query).err().map(|e| e.to_string()).unwrap_or_default().contains("singularities is not available for this mechanism"));
+        assert!(a.singularities(&SingularityQuery { precision: 2.0, ..query.clone() }).err().map(|e| e.to_string()).unwrap_or_default().contains("precision must be a number in (0, 1)"));
+        assert!(a.singularities(&SingularityQuery { max_boxes: 0, ..query.clone() }).err().map(|e| e.to_string()).unwrap_or_default().contains("max_boxes must be at least 1"));
+        let bad = LinkageAnalysis::new(&m, &[], &[]).expect("planar").with_actuation(Actuation::given(vec!["nope".into()]));
+        assert!(bad.singularities(&query).err().map(|e| e.to_string()).unwrap_or_default().contains("'nope' is not a free joint"));
+        let spatial = load(&urdf::parse(include_str!("../../urdf/rssr.urdf")).expect("bundled"), &[("crank_joint".into(), 0.7)], &[]).expect("spatial");
+        assert!(spatial.singularities(&query).err().map(|e| e.to_string()).unwrap_or_default().contains("singularities is not available for this mechanism"));
         let query = crate::analysis::IkQuery { point: [1.0, 0.0, 0.0], precision: 1e-3, max_boxes: 1000, threads: 1 };
         assert!(a.inverse_kinematics(&query).err().map(|e| e.to_string()).unwrap_or_default().contains("inverse_kinematics is not available"));
     }
