@@ -295,7 +295,9 @@ fn topics_carry_the_solver_result_to_late_rclpy_subscribers() {
     }
     assert_eq!(got["progress"]["done"], json!(true));
     assert_eq!(got["progress"]["decided"], json!(1.0));
-    assert_eq!(got["singularities"]["ok"], json!(false));
+    // A planar linkage publishes its singular sets: with the crank fixed and no transmission,
+    // the C-space and output sets (no actuators, so no input set), both proven empty.
+    assert_eq!(got["singularities"]["ok"], json!(true), "{}", got["singularities"]);
 
     // The octahedral platform, legs fixed at serve time (configuration a): its two assembly
     // modes, as `linkspace distances --redundant` finds them.
@@ -351,7 +353,7 @@ fn services_answer_good_requests_and_refuse_bad_ones_with_reasons() {
     let tilted = std::fs::read_to_string(&four_bar).expect("fixture").replacen("<robot name=\"four_bar\"", "<robot name=\"tilted\"", 1).replacen("<axis xyz=\"0 0 1\"/>", "<axis xyz=\"1 0 0\"/>", 1);
     assert!(tilted.contains("name=\"tilted\""));
     let mut node = Node::start(domain, &[&four_bar, "--robot-description", &tilted, "--fix", "four_bar:crank_joint=0.5", "--trace", "four_bar:coupler@2,1", "--sigma", "1e-5", "--max-request-boxes", "500000"]);
-    node.wait_for(&["four_bar: published configuration_space"], Duration::from_secs(60));
+    node.wait_for(&["four_bar: published configuration_space", "four_bar: published singularities"], Duration::from_secs(60));
 
     let loaded = solve_json(&[&four_bar, "--fix", "crank_joint=0.5", "--trace", "coupler@2,1", "--sigma", "1e-5"]);
     let again = solve_json(&[&four_bar, "--fix", "crank_joint=1", "--trace", "coupler@2,1", "--sigma", "1e-5", "--max-boxes", "100000", "--timeout", "60"]);
@@ -375,10 +377,10 @@ fn services_answer_good_requests_and_refuse_bad_ones_with_reasons() {
         call("solve", "Solve", json!({"mechanism": "four_bar", "fixed_joint_names": ["nope"], "fixed_joint_values": [1.0], "settings": fine})),
         call("solve", "Solve", json!({"mechanism": "four_bar", "settings": fine, "wait": 1e9})),
         call("solve", "Solve", json!({"mechanism": "four_bar", "settings": long, "wait": 0.0})),
-        call("cancel", "Cancel", json!({"run_id": 5})),
+        call("cancel", "Cancel", json!({"run_id": 6})),
         {"sleep": 2.0},
         {"subscribe": "/linkspace/four_bar/solve_result"},
-        call("cancel", "Cancel", json!({"run_id": 5})),
+        call("cancel", "Cancel", json!({"run_id": 6})),
         call("cancel", "Cancel", json!({"run_id": 999_999})),
         call("singularities", "Singularities", json!({"mechanism": "four_bar"})),
         call("singularities", "Singularities", json!({"mechanism": "tilted"})),
@@ -413,7 +415,7 @@ fn services_answer_good_requests_and_refuse_bad_ones_with_reasons() {
     let list = r[0]["mechanisms"].as_array().expect("mechanisms");
     assert_eq!(list.len(), 2);
     assert_eq!((list[0]["name"].as_str(), list[0]["kind"].as_str(), list[0]["state"].as_str()), (Some("four_bar"), Some("planar_linkage"), Some("complete")));
-    assert_eq!(list[0]["services"], json!(["solve", "classify"]));
+    assert_eq!(list[0]["services"], json!(["solve", "singularities", "classify"]));
     assert_eq!(list[0]["topic_prefix"], "/linkspace/four_bar");
     assert_eq!((list[1]["name"].as_str(), list[1]["kind"].as_str()), (Some("tilted"), Some("spatial_linkage")));
     assert!(list[1]["message"].as_str().expect("message").contains("complete, 2 boxes in 2 clusters"), "the crank at 0 and at π: {}", list[1]);
@@ -437,28 +439,33 @@ fn services_answer_good_requests_and_refuse_bad_ones_with_reasons() {
     refused(9, "no joint or loop named 'nope'");
     refused(10, "wait 1000000000 s is out of range");
 
-    // A long run, answered at once with its id (runs 1 and 2 are the two configuration spaces),
+    // A long run, answered at once with its id (runs 1 to 3 are the load-time analyses: the
+    // four-bar's configuration space and singular sets, the tilted one's configuration space),
     // cancelled, and published incomplete.
-    assert_eq!((r[11]["ok"].clone(), r[11]["done"].clone(), r[11]["run_id"].clone()), (json!(true), json!(false), json!(5)), "{}", r[11]);
+    assert_eq!((r[11]["ok"].clone(), r[11]["done"].clone(), r[11]["run_id"].clone()), (json!(true), json!(false), json!(6)), "{}", r[11]);
     assert!(r[11]["message"].as_str().expect("message").contains("/linkspace/four_bar/solve_result"));
     assert_eq!(r[12]["ok"], json!(true), "{}", r[12]);
     let cancelled = r[14]["received"].as_array().and_then(|v| v.last()).cloned().unwrap_or_default();
     assert!(cancelled.is_object(), "no result after the cancel: {}\nnode log:\n{}", r[14], node.log());
-    assert_eq!((cancelled["run_id"].clone(), cancelled["status"].clone(), cancelled["limit"].clone()), (json!(5), json!(1), json!("cancelled")));
+    assert_eq!((cancelled["run_id"].clone(), cancelled["status"].clone(), cancelled["limit"].clone()), (json!(6), json!(1), json!("cancelled")));
     assert!(cancelled["box_status"].as_array().expect("statuses").contains(&json!(1)), "a cancelled run reports its undecided boxes");
-    refused(15, "run 5 has already finished");
+    refused(15, "run 6 has already finished");
     refused(16, "no run 999999");
 
-    // Singularities and inverse kinematics have no math for these mechanisms yet.
-    refused(17, "singularities is not available for this mechanism ('four_bar', planar_linkage)");
+    // The planar four-bar answers singularities with its load-time sets (crank fixed, no
+    // transmission: C-space and output, both proven empty); the spatial one and inverse
+    // kinematics have no math yet.
+    assert_eq!((r[17]["ok"].clone(), r[17]["report"]["set_kinds"].clone(), r[17]["report"]["complete"].clone()), (json!(true), json!(["cspace", "output"]), json!(true)), "{}", r[17]);
+    assert_eq!(r[17]["report"]["actuated"], json!([]));
     refused(18, "singularities is not available for this mechanism ('tilted', spatial_linkage)");
     refused(19, "inverse_kinematics is not available for this mechanism ('four_bar'");
     refused(20, "is not finite");
 
     // Classification: inside the first mode's component; outside, with the nearest component.
     assert_eq!((r[21]["ok"].clone(), r[21]["inside"].clone(), r[21]["component"].clone(), r[21]["components"].clone()), (json!(true), json!(true), json!(0), json!(2)), "{}", r[21]);
-    assert_eq!(r[21]["singular_distance_known"], json!(false));
-    assert!(r[21]["message"].as_str().expect("message").contains("distance to singularities unknown"));
+    // Complete, empty singular sets: no singular configuration of those kinds at any distance.
+    assert_eq!((r[21]["singular_distance_known"].clone(), r[21]["singular_distance"].clone()), (json!(true), json!("inf")), "{}", r[21]);
+    assert!(r[21]["message"].as_str().expect("message").contains("no singular configuration"), "{}", r[21]);
     assert_eq!((r[22]["ok"].clone(), r[22]["inside"].clone()), (json!(true), json!(false)), "{}", r[22]);
     assert!(r[22]["distance"].as_f64().expect("distance") > 0.1);
     refused(23, "is not a finite number");
@@ -468,7 +475,7 @@ fn services_answer_good_requests_and_refuse_bad_ones_with_reasons() {
     assert_eq!(r[27]["mechanisms"].as_array().expect("mechanisms").len(), 2);
     // The last progress is the cancelled run's end: done, part of the volume decided.
     let progress = r[28]["received"].as_array().and_then(|v| v.last()).cloned().unwrap_or_default();
-    assert_eq!((progress["run_id"].clone(), progress["analysis"].clone(), progress["done"].clone()), (json!(5), json!("solve"), json!(true)), "{progress}");
+    assert_eq!((progress["run_id"].clone(), progress["analysis"].clone(), progress["done"].clone()), (json!(6), json!("solve"), json!(true)), "{progress}");
     let decided = progress["decided"].as_f64().expect("decided");
     assert!((0.0..1.0).contains(&decided) && progress["processed"].as_u64().expect("processed") > 0, "{progress}");
     assert!(node.alive(), "the node died:\n{}", node.log());
@@ -1088,4 +1095,102 @@ fn the_regression_test_helper_passes_its_example_and_catches_a_perturbed_golden_
     let (ok, out, err) = pytest(Some(dir.to_str().expect("utf-8")));
     let _ = std::fs::remove_dir_all(&dir);
     assert!(!ok && out.contains("1 failed") && out.contains("lie in no box"), "the example should fail against the perturbed set:\n{out}\n{err}");
+}
+
+/// Test idea: a closed-loop mechanism's singular sets travel on `~/<robot>/singularities` as
+/// `linkspace loop-singularities --json` computes them for the same URDF and settings (same
+/// kinds, boxes bit for bit, same certificates and counts), with their markers; and `classify`
+/// answers a lower bound on the distance to them that the CLI's boxes confirm. The four-bar's
+/// rocker is actuated through a `<transmission>` (the default both front ends read), so the
+/// input set is its four dead centres.
+#[test]
+fn a_linkage_publishes_its_singular_sets_as_the_cli_finds_them() {
+    let Some(python) = python() else { return };
+    let domain = 53;
+    let xml = std::fs::read_to_string(format!("{ROOT}/urdf/four_bar.urdf")).expect("fixture").replace(
+        "</robot>",
+        "<transmission name=\"drive\"><type>transmission_interface/SimpleTransmission</type><joint name=\"rocker_joint\"/></transmission></robot>",
+    );
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("four_bar_rocker_driven-{}.urdf", std::process::id()));
+    std::fs::write(&path, &xml).expect("written");
+    let file = path.to_str().expect("utf-8");
+    let mut node = Node::start(domain, &[file, "--sigma", "1e-2", "--precision", "1e-6"]);
+    node.wait_for(&["four_bar: published singularities", "four_bar: published configuration_space"], Duration::from_secs(120));
+    let got = py(python, domain, "tests/ros_client.py", &["singular", "--prefix", "/linkspace/four_bar"], Duration::from_secs(90));
+    let cli = cli_json("loop-singularities", &[file, "--sigma", "1e-6"]);
+    let report = &got["/linkspace/four_bar"]["singularities"];
+    assert_eq!((report["ok"].clone(), report["complete"].clone()), (json!(true), json!(true)), "{}", report["message"]);
+    assert_eq!((report["actuated"].clone(), report["set_kinds"].clone()), (json!(["rocker_joint"]), json!(["cspace", "input", "output"])));
+    assert!(report["actuated_source"].as_str().expect("source").contains("<transmission>"), "{}", report["actuated_source"]);
+    let cli_sets = cli.as_array().expect("one report per set");
+    let sets = report["sets"].as_array().expect("sets");
+    assert_eq!(sets.len(), cli_sets.len());
+    let mut input_points = Vec::new();
+    for (k, (set, c)) in sets.iter().zip(cli_sets).enumerate() {
+        let kind = c["kind"].as_str().expect("kind");
+        assert_eq!(report["set_kinds"][k], json!(kind));
+        assert_eq!(set["analysis"], json!(format!("singular_set:{kind}")));
+        assert_eq!((set["status"].clone(), c["status"].clone()), (json!(0), json!("complete")), "{kind}");
+        assert_eq!(report["set_proven"][k], c["summary"]["certified_clusters"], "{kind}");
+        assert_eq!(report["set_undecided"][k], c["summary"]["undecided_boxes"], "{kind}");
+        assert_eq!(set["clusters"], c["summary"]["clusters"], "{kind}");
+        // The same boxes, in the same order, with the same joint enclosures and certificates.
+        let names: Vec<&str> = set["joint_names"].as_array().expect("names").iter().map(|v| v.as_str().expect("str")).collect();
+        let (lo, hi) = (floats(&set["joint_lower"]), floats(&set["joint_upper"]));
+        let boxes = c["boxes"].as_array().expect("boxes");
+        assert_eq!(lo.len(), names.len() * boxes.len(), "{kind}: box count");
+        for (i, b) in boxes.iter().enumerate() {
+            let want = by_name(&b["joints"], &names);
+            let have: Vec<[f64; 2]> = (0..names.len()).map(|j| [lo[i * names.len() + j], hi[i * names.len() + j]]).collect();
+            assert_eq!(have, want, "{kind} box {i}");
+            let status = match b["status"].as_str().expect("status") {
+                "certified" => 2,
+                "solution" => 0,
+                _ => 1,
+            };
+            assert_eq!(set["box_status"][i], json!(status), "{kind} box {i}");
+            if kind == "input" {
+                input_points.push(want);
+            }
+        }
+    }
+    // The rocker-driven four-bar: no bifurcation, four certified dead centres, no type-I set.
+    assert_eq!(report["set_proven"], json!([0, 4, 0]));
+    assert!(report["set_verdicts"][0].as_str().expect("verdict").starts_with("none (proven"), "{}", report["set_verdicts"]);
+    // One marker per box of the input set, after the configuration-space markers of the same
+    // latched array.
+    let markers = got["/linkspace/four_bar"]["markers"].as_array().expect("markers");
+    assert_eq!(markers.iter().filter(|m| m["ns"] == "singular_set:input").count(), input_points.len());
+    assert!(markers.iter().any(|m| m["ns"] == "configuration_space"), "the configuration-space markers stay");
+    assert_eq!(markers.iter().filter(|m| m["action"] == json!(3)).count(), 1, "one DELETEALL");
+
+    // Classify at a configuration near a dead centre and at the dead centre itself: the bound is
+    // at most the distance to the nearest CLI box's middle (a singular configuration lies there,
+    // within half a box width).
+    let names = ["crank_joint", "coupler_joint", "rocker_joint", "loop_coupler_rocker"];
+    let middle: Vec<f64> = input_points[0].iter().map(|b| 0.5 * (b[0] + b[1])).collect();
+    let near: Vec<f64> = middle.iter().enumerate().map(|(i, v)| if i == 0 { v + 0.05 } else { *v }).collect();
+    let script = json!([
+        call("classify", "Classify", json!({"mechanism": "four_bar", "joint_names": names, "joint_values": middle})),
+        call("classify", "Classify", json!({"mechanism": "four_bar", "joint_names": names, "joint_values": near})),
+        call("singularities", "Singularities", json!({"mechanism": "four_bar"})),
+    ]);
+    let spath = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("linkage-singular-{}.json", std::process::id()));
+    std::fs::write(&spath, serde_json::to_string(&script).expect("json")).expect("script written");
+    let r = py(python, domain, "tests/ros_client.py", &["services", "--script", spath.to_str().expect("utf-8")], Duration::from_secs(120));
+    let _ = std::fs::remove_file(&spath);
+    let r = r["results"].as_array().expect("results");
+    for (k, x) in r.iter().enumerate() {
+        assert!(x.get("error").is_none() && x["ok"] == json!(true), "step {k}: {x}\nnode log:\n{}", node.log());
+    }
+    assert_eq!(r[0]["singular_distance_known"], json!(true), "{}", r[0]);
+    assert!(r[0]["singular_distance"].as_f64().expect("distance") <= 1e-6, "{}", r[0]);
+    let bound = r[1]["singular_distance"].as_f64().expect("distance");
+    let to_middles = input_points.iter().map(|p| p.iter().zip(&near).map(|(b, x)| (0.5 * (b[0] + b[1]) - x).powi(2)).sum::<f64>().sqrt()).fold(f64::INFINITY, f64::min);
+    assert!(bound > 0.0 && bound <= to_middles + 1e-6, "bound {bound} against {to_middles}: {}", r[1]);
+    assert!(r[1]["message"].as_str().expect("message").contains("input set"), "{}", r[1]);
+    // The service answers with the load-time report.
+    assert_eq!(r[2]["report"]["set_proven"], json!([0, 4, 0]));
+    let _ = std::fs::remove_file(&path);
+    assert!(node.alive(), "the node died:\n{}", node.log());
 }

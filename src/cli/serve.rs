@@ -64,8 +64,9 @@ pub struct ServeArgs {
     /// Load-time analyses: bounds of each run.
     #[command(flatten)]
     limits: super::LimitArgs,
-    /// Load-time singularity analyses of 3R manipulators: largest width of the certified boxes
-    /// (radians), in (0, 1).
+    /// Load-time singularity analyses: largest width of the certified boxes of 3R manipulators
+    /// (radians), and the sigma of planar linkages' singular sets (their
+    /// `loop-singularities --sigma`), in (0, 1).
     #[arg(long, default_value_t = 1e-4, allow_hyphen_values = true)]
     precision: f64,
     /// Largest max_boxes a Solve request may ask for.
