@@ -23,7 +23,7 @@
 //! Builds only; solving is the kernel's job.
 
 use super::cayley_menger::{bound_smoothing, DistanceError, DistanceProblem};
-use crate::contract::{Contractor, FaceBounds, LpShrink, Newton, Propagation, Sequence, TrapezoidClip};
+use crate::contract::{Contractor, LpShrink, Newton, Propagation, Sequence};
 use crate::search::{SolveError, Solver, SolverSettings};
 use crate::interval::{interval, point, Interval, IntervalBox};
 use crate::system::multilinear::Poly;
@@ -425,31 +425,6 @@ impl Placed {
         })))
     }
 
-    /// Issue 15's candidate "LP shrink mixed with trapezoid clipping": `solver`'s pipeline with
-    /// the LP shrink always on (the line formulation's too) and then the seed's trapezoid
-    /// clipping (Bernstein control points) of every equation of `system` and `pruning`. Measured
-    /// by `bench-distances` against `solver`; not used by `distances::solve` (see README).
-    pub fn mixed_solver(&self, settings: SolverSettings) -> Result<Solver<'_>, SolveError> {
-        let polys: Vec<Poly> = self.system.equations.iter().chain(self.pruning.iter().flat_map(|p| p.equations.iter())).map(equation_poly).collect();
-        let clip = TrapezoidClip::new(&polys, FaceBounds::Corners).ok();
-        let pruning = self.pruning.as_ref();
-        Ok(Solver::new(&self.system, settings)?.with_contractor(Box::new(move |system, s| {
-            let mut prop = Propagation::new(pruning.unwrap_or(system));
-            prop.min_gain = if pruning.is_some() { 0.2 } else { prop.min_gain };
-            let mut steps: Vec<Box<dyn Contractor + Send + '_>> = vec![Box::new(prop)];
-            if let Some(newton) = Newton::new(system, s.newton_width) {
-                steps.push(Box::new(newton));
-            }
-            let mut lp = LpShrink::new(system);
-            lp.backend = s.lp_backend;
-            steps.push(Box::new(lp));
-            if let Some(clip) = &clip {
-                steps.push(Box::new(clip.clone()));
-            }
-            Box::new(Sequence(steps))
-        })))
-    }
-
     /// True when the system is square: Krawczyk applies, and certifies regular roots.
     pub fn is_square(&self) -> bool {
         self.system.equations.len() == self.system.vars.len()
@@ -581,14 +556,3 @@ fn to_equation(p: &Poly) -> Result<Equation, PlacedError> {
     Ok(Equation::new(terms, constant))
 }
 
-/// `constant + Σ coef·monomial` as a polynomial (for the trapezoid clipping).
-fn equation_poly(e: &Equation) -> Poly {
-    e.terms.iter().fold(Poly::constant(e.constant), |acc, t| {
-        let m = match t.mono {
-            Monomial::Linear(x) => Poly::var(x),
-            Monomial::Square(x) => Poly::var(x).mul(&Poly::var(x)),
-            Monomial::Product(x, y) => Poly::var(x).mul(&Poly::var(y)),
-        };
-        acc.add(&m.scale(t.coef))
-    })
-}
