@@ -11,7 +11,9 @@
 //!   Newton in coordinates and certified by Krawczyk on the points system; a certified placement
 //!   is attributed to the cluster whose boxes its distance enclosure meets (the root exists and
 //!   the solver never loses one, so its distances lie in some solution box). Boxes that meet no
-//!   certified placement get the deeper search: removed when proven empty, undecided otherwise.
+//!   certified placement are searched again with every determinant (the redundant ones settle
+//!   the singular tangent of octahedral b), then in coordinates: removed when proven empty,
+//!   undecided otherwise.
 //! A cluster then counts its proven solutions (distinct certified placements) and is undecided
 //! when some box of it is still unproven, with the reason. "Complete" means nothing undecided.
 
@@ -126,8 +128,8 @@ impl Certified {
 /// coordinates.
 ///
 /// Measured (`bench-distances`, issue 15): on the four spheres at sigma 0.01 the line
-/// formulation takes about 800 boxes and 0.06 s CPU with every solution box proven, against
-/// about 900 boxes plus a settling in coordinates of 2.8 s for the determinants, and over a
+/// formulation takes 843 boxes and 0.04 s CPU with every solution box proven, against 885
+/// boxes plus a settling of 0.6 s (1.6 s in all) for the shared determinants, and over a
 /// million boxes for the points formulation (expanding `‖p_a − p_b‖²` into monomials loses the
 /// dependency between the squares and the products that interval propagation needs). On the
 /// platforms the determinants prune far better than the points (octahedral b: 20 to 100 boxes
