@@ -196,7 +196,9 @@ pub struct LayeredPanel {
 pub fn layered_panels(out: &mut String, title: &str, panels: &[LayeredPanel], columns: usize) -> Result<(), ChartError> {
     let cols = columns.clamp(1, panels.len().max(1));
     let rows = panels.len().max(1).div_ceil(cols);
-    let root = SVGBackend::with_string(out, (560 * cols as u32, 40 + 540 * rows as u32)).into_drawing_area();
+    // One panel alone gets room for a long title.
+    let width = (560 * cols as u32).max(760);
+    let root = SVGBackend::with_string(out, (width, 40 + 540 * rows as u32)).into_drawing_area();
     root.fill(&WHITE).map_err(|e| fail(title, e))?;
     let root = root.titled(title, ("sans-serif", 20)).map_err(|e| fail(title, e))?;
     let areas = root.split_evenly((rows, cols));
@@ -218,10 +220,17 @@ pub fn layered_panels(out: &mut String, title: &str, panels: &[LayeredPanel], co
             match layer {
                 Layer::Boxes { label, rects, color } => {
                     let c = COLORS[color % COLORS.len()];
+                    // Boxes thinner than a pixel (a curve tangent to an axis) are widened to
+                    // one about their centre: plotters rounds to whole pixels and would drop them.
+                    let (px, py) = ((x1 - x0) / 400.0, (y1 - y0) / 400.0);
+                    let widen = |lo: f64, hi: f64, p: f64| if hi - lo < p { (0.5 * (lo + hi) - 0.5 * p, 0.5 * (lo + hi) + 0.5 * p) } else { (lo, hi) };
                     let clipped: Vec<[(f64, f64); 2]> = rects
                         .iter()
                         .filter(|r| r[1] >= x0 && r[0] <= x1 && r[3] >= y0 && r[2] <= y1)
-                        .map(|r| [(r[0].max(x0), r[2].max(y0)), (r[1].min(x1), r[3].min(y1))])
+                        .map(|r| {
+                            let ((a, b), (c, d)) = (widen(r[0], r[1], px), widen(r[2], r[3], py));
+                            [(a.max(x0), c.max(y0)), (b.min(x1), d.min(y1))]
+                        })
                         .collect();
                     chart.draw_series(clipped.iter().map(|&r| Rectangle::new(r, c.mix(0.35).filled()))).map_err(|e| fail(title, e))?;
                     let s = chart.draw_series(clipped.iter().map(|&r| Rectangle::new(r, c.stroke_width(1)))).map_err(|e| fail(title, e))?;

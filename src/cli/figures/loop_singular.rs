@@ -82,7 +82,7 @@ pub fn five_bar(dir: &Path, quick: bool) -> Result<()> {
         panels.push(panel);
     }
     let mut svg = String::new();
-    layered_panels(&mut svg, "Five-bar: type-II singular curves in actuator space, cusps, nodes, assembly modes per region", &panels, panels.len())?;
+    layered_panels(&mut svg, "Five-bar: type-II curves in actuator space, cusps, nodes, assembly modes per region", &panels, panels.len())?;
     write(dir, "five_bar_actuator_space.svg", &svg)?;
 
     // Workspace: the end point over the type-II set (rods in line) and the type-I set (the end
@@ -127,7 +127,7 @@ pub fn five_bar(dir: &Path, quick: bool) -> Result<()> {
         ],
     };
     let mut svg = String::new();
-    layered_panels(&mut svg, "Five-bar (rods 2.5, 2): workspace of the end point with its type-I and type-II curves", &[panel], 1)?;
+    layered_panels(&mut svg, "Five-bar (rods 2.5, 2): workspace of the end point, type-I and type-II curves", &[panel], 1)?;
     write(dir, "five_bar_workspace.svg", &svg)?;
     Ok(())
 }
