@@ -264,6 +264,10 @@ struct ChartArgs {
     /// Shorter sweeps (a minute instead of several).
     #[arg(long)]
     quick: bool,
+    /// Only these chart groups, comma separated: speed, cspace, convergence, stability,
+    /// singular3r, collisions, distances, cusps, loops (default: all).
+    #[arg(long, value_delimiter = ',', value_name = "GROUP,...")]
+    only: Vec<String>,
 }
 
 #[derive(clap::Args)]
@@ -337,7 +341,7 @@ pub fn run() -> Result<()> {
     match cli.command {
         Command::Solve(args) => solve(args),
         Command::Bench(args) => bench(args),
-        Command::Chart(args) => figures::run(&args.dir, args.quick),
+        Command::Chart(args) => figures::run(&args.dir, args.quick, &args.only),
         Command::Singularities(args) => singularities(args),
         Command::Ik(args) => ik(args),
         Command::Bench3r(args) => bench3r(args),

@@ -27,6 +27,9 @@ mod certified_distances;
 mod spatial;
 /// Issue 13: singular sets of planar closed-loop linkages against closed forms, grids and Newton.
 mod closed_loop_singularities;
+/// `linkspace chart`: the singular-set charts of closed loops (issue 13) and the 3R workspace
+/// regions (issue 11) show what the references of the other modules establish.
+mod charts;
 /// The ROS 2 node against real rclpy over DDS on loopback: topics, services, load.
 #[cfg(feature = "ros")]
 mod topics;

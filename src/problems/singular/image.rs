@@ -658,9 +658,9 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
         let id = out.regions.len();
         let mut stack = vec![start];
         label[start] = id;
-        let mut cells = 0;
+        let mut members = Vec::new();
         while let Some(c) = stack.pop() {
-            cells += 1;
+            members.push(c);
             let (i, j) = (c / grid, c % grid);
             let mut next = Vec::new();
             for (axis, di) in [(0usize, -1i64), (0, 1), (1, -1), (1, 1)] {
@@ -678,7 +678,15 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
                 }
             }
         }
-        let (i, j) = (start / grid, start % grid);
+        // The sample: the member cell nearest the members' mean (in grid indices), so a chart's
+        // label sits inside the region rather than at its first cell; any cell would do for the
+        // count, which is constant over the region.
+        let n = members.len() as f64;
+        let (mi, mj) = members.iter().fold((0.0, 0.0), |(a, b), &c| (a + (c / grid) as f64 / n, b + (c % grid) as f64 / n));
+        let far = |c: usize| ((c / grid) as f64 - mi).powi(2) + ((c % grid) as f64 - mj).powi(2);
+        let pick = members.iter().copied().min_by(|&x, &y| far(x).total_cmp(&far(y))).unwrap_or(start);
+        let cells = members.len();
+        let (i, j) = (pick / grid, pick % grid);
         let (a, b) = (axes[0].cell(i, grid), axes[1].cell(j, grid));
         let sample = vec![0.5 * (a.0 + a.1), 0.5 * (b.0 + b.1)];
         out.regions.push(sample_region(m, sp, &sample, cells, settings, cancel)?);
