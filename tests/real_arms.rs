@@ -263,3 +263,60 @@ fn a_report_with_undecided_boxes_is_never_complete() {
     assert_eq!((report.status, report.limit), ("incomplete", Some("undecided")));
     assert_eq!(report.undecided_total[0], run.cusps.undecided.len());
 }
+
+/// Must-show of issue 11: the orthogonal 3R near the cuspidal boundary (two cusps and a node
+/// within 3e-4 of each other for each sign of z) has all four cusps and both nodes certified
+/// at the default precision 1e-4, nothing undecided. The reference is independent of linkspace:
+/// `scripts/dev/orthogonal_3r_singular_points.py` traces det Df = 0 of the seed's closed form
+/// by marching squares, takes image reversals and chord crossings as starts and polishes them by
+/// Newton in mpmath at 50 digits (tests/data/orthogonal_3r_near_boundary_singular_points.json).
+/// Each reference point must lie in a certified box (the box is at most 1e-4 wide), and the
+/// counts must match.
+#[test]
+fn near_boundary_cusps_and_nodes_are_all_certified_at_1e_4() {
+    let bin = env!("CARGO_BIN_EXE_linkspace");
+    let dir = env!("CARGO_MANIFEST_DIR");
+    let json = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("near-boundary-{}.json", std::process::id()));
+    let out = std::process::Command::new(bin)
+        .args(["singularities", &format!("{dir}/urdf/orthogonal_3r_near_boundary.urdf"), "--nodes", "--precision", "1e-4", "--json", json.to_str().expect("utf-8")])
+        .output()
+        .expect("runs");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("4 cusps, 2 nodes, 0 internal-motion lines, 0 undecided, status complete"), "{stdout}");
+    let got: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("report written")).expect("json");
+    let _ = std::fs::remove_file(&json);
+    let reference: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(format!("{dir}/tests/data/orthogonal_3r_near_boundary_singular_points.json")).expect("reference")).expect("json");
+    let pair = |v: &serde_json::Value| [v[0].as_f64().expect("number"), v[1].as_f64().expect("number")];
+    let holds = |b: &serde_json::Value, p: [f64; 2]| {
+        ["joint2", "joint3"].iter().zip(p).all(|(j, x)| {
+            let [lo, hi] = pair(&b[*j]);
+            hi - lo <= 1e-4 && lo - 1e-12 <= x && x <= hi + 1e-12
+        })
+    };
+    let (cusps, nodes) = (got["cusps"].as_array().expect("cusps"), got["nodes"].as_array().expect("nodes"));
+    let (ref_cusps, ref_nodes) = (reference["cusps"].as_array().expect("cusps"), reference["nodes"].as_array().expect("nodes"));
+    assert_eq!((cusps.len(), nodes.len(), ref_cusps.len(), ref_nodes.len()), (4, 2, 4, 2));
+    assert_eq!((got["status"].as_str(), got["undecided_total"].clone()), (Some("complete"), serde_json::json!([0, 0])), "{}", got["undecided"]);
+    for c in ref_cusps {
+        let p = pair(&c["joints"]);
+        assert!(cusps.iter().any(|b| b["unique"] == true && holds(&b["joints"], p)), "reference cusp {p:?} in no certified box");
+    }
+    for n in ref_nodes {
+        let (a, b) = (pair(&n["points"][0]), pair(&n["points"][1]));
+        let found = nodes.iter().any(|m| {
+            let (x, y) = (&m["points"][0], &m["points"][1]);
+            m["unique"] == true && ((holds(x, a) && holds(y, b)) || (holds(x, b) && holds(y, a)))
+        });
+        assert!(found, "reference node {a:?} & {b:?} in no certified pair");
+    }
+    // What makes the robot hard: each node's image lies within 3e-4 of two cusps' images.
+    for n in ref_nodes {
+        let p = pair(&n["radius_z"]);
+        let close = ref_cusps.iter().filter(|c| {
+            let q = pair(&c["radius_z"]);
+            (p[0] - q[0]).abs().max((p[1] - q[1]).abs()) < 3e-4
+        });
+        assert_eq!(close.count(), 2, "{n}");
+    }
+}
