@@ -590,3 +590,13 @@ pub fn search_with(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &N
     Ok(NodeSearch { nodes, undecided, status: run.status, stats: run.stats, cells, cusp_regions: regions.len() as u64, settled, seconds: start.elapsed().as_secs_f64() })
 }
 
+
+#[cfg(test)]
+mod tests {
+    /// README's bound on the tree's memory (`--max-boxes` bounds it by about 800 bytes a pair)
+    /// rests on this size.
+    #[test]
+    fn a_tree_box_is_under_400_bytes() {
+        assert!(std::mem::size_of::<super::TreeBox>() < 400, "{}", std::mem::size_of::<super::TreeBox>());
+    }
+}
