@@ -159,6 +159,8 @@ pub struct NodeStats {
     pub cells: u64,
     /// Cusp neighbourhoods certified (of all cusps given).
     pub cusp_regions: u64,
+    /// Clusters of pairs left at the precision settled afterwards by ε-inflation.
+    pub settled: u64,
     /// Wall-clock seconds.
     pub seconds: f64,
 }
@@ -166,7 +168,7 @@ pub struct NodeStats {
 impl From<&NodeSearch> for NodeStats {
     fn from(n: &NodeSearch) -> Self {
         let s = &n.stats;
-        counters!(NodeStats { pairs: s.processed, cells: n.cells, cusp_regions: n.cusp_regions, seconds: n.seconds }, s, discards: [apart, injective, near_cusp, krawczyk_empty, in_strips])
+        counters!(NodeStats { pairs: s.processed, cells: n.cells, cusp_regions: n.cusp_regions, settled: n.settled, seconds: n.seconds }, s, discards: [apart, injective, near_cusp, krawczyk_empty, in_strips])
     }
 }
 
