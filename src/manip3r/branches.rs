@@ -441,6 +441,8 @@ pub fn of(m: &Mechanism, chain: &Chain3R) -> Option<SingularBranches> {
         let (ir, iz) = image(&p, (0..128).flat_map(|k| [seg(k, 1.0), seg(k, -1.0)]));
         let a1t = dot(&p.a1, &p.t);
         let vertical = a1t.abs().inf() == 1.0 && a1t.abs().sup() == 1.0;
+        // For a₁ ⟂ d₂ the radius on L is constant: its value at one point of L, tightly.
+        let ir = if vertical { super::report::radius(p.g([-e0, point(0.0)]).0) } else { ir };
         let description = if vertical {
             format!("axis 1 is perpendicular to axis 2, so the image is the vertical segment radius = {:.6} (the point's constant offset along axis 2 from axis 1) for z in [{:.6}, {:.6}], covered twice (the annulus meets L in two segments){}", ir.mid(), iz.inf(), iz.sup(), if ir.sup() < 1e-12 { ": axis 1 itself" } else { "" })
         } else {
