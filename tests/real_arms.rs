@@ -396,3 +396,140 @@ fn aspects_and_ik_counts_of_the_seed_robots_agree_with_sampling() {
         assert_eq!(best, max_ik.unwrap_or(4) as usize, "{name}: most real IK roots at a sampled point");
     }
 }
+
+/// det Df at (t2, t3) by central differences of the chain's own map in floating point:
+/// independent of `manip3r::branches`.
+fn det_fd(chain: &Chain3R, t2: f64, t3: f64) -> f64 {
+    let h = 1e-6;
+    let [r2p, z2p] = chain.eval_f64(t2 + h, t3);
+    let [r2m, z2m] = chain.eval_f64(t2 - h, t3);
+    let [r3p, z3p] = chain.eval_f64(t2, t3 + h);
+    let [r3m, z3m] = chain.eval_f64(t2, t3 - h);
+    ((r2p - r2m) * (z3p - z3m) - (r3p - r3m) * (z2p - z2m)) / (4.0 * h * h)
+}
+
+fn angle_gap(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(std::f64::consts::TAU);
+    d.min(std::f64::consts::TAU - d)
+}
+
+#[test]
+fn singular_branches_of_industrial_arms_match_an_independent_sampling() {
+    use linkspace::manip3r::branches;
+    // (file, crossings, theta3 lines are curves of nodes)
+    for (file, crossings, lines_of_nodes) in [("puma560.urdf", 4, true), ("kuka_kr16.urdf", 2, false), ("ur5.urdf", 4, true)] {
+        let p = prepare(&text(file), &LoadOptions::default()).expect(file);
+        let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
+        let b = branches::of(&p.mechanism, &chain).expect("parallel structure");
+        assert!(b.no_cusp_proven, "{file}");
+        assert_eq!(b.crossings, Some(crossings), "{file}");
+        let planar = branches::Planar::of(&p.mechanism).expect("planar");
+        let lines: Vec<f64> = b.branches.iter().filter_map(|x| x.theta3.map(|t| t.mid())).collect();
+        assert_eq!(lines.len(), 2, "{file}");
+        assert!((angle_gap(lines[0], lines[1]) - std::f64::consts::PI).abs() < 1e-12, "{file}: outstretched and folded are pi apart");
+        let scale = chain.length_scale().powi(4);
+        // Each theta3 line: det vanishes along it and changes sign across it.
+        for &t3 in &lines {
+            for k in 0..50 {
+                let t2 = -3.1 + 0.123 * k as f64;
+                assert!(det_fd(&chain, t2, t3).abs() < 1e-6 * scale, "{file}: det at ({t2}, {t3})");
+            }
+        }
+        // Fold of g: det vanishes at its sampled points, and its image is the reported one.
+        for k in 0..90 {
+            let t3 = -3.1 + 0.07 * k as f64;
+            for t2 in planar.fold_theta2_f64(t3) {
+                assert!(det_fd(&chain, t2, t3).abs() < 1e-6 * scale, "{file}: det on the fold at ({t2}, {t3})");
+                let [rho, z] = chain.eval_f64(t2, t3);
+                let img = &b.branches[2].image;
+                assert!(rho.sqrt() >= img.radius[0] - 1e-9 && rho.sqrt() <= img.radius[1] + 1e-9 && z >= img.z[0] - 1e-9 && z <= img.z[1] + 1e-9, "{file}: image of the fold");
+            }
+        }
+        // A fine grid: every sign change of det lies next to a reported branch.
+        let n = 400;
+        let step = std::f64::consts::TAU / n as f64;
+        let at = |i: usize| -std::f64::consts::PI + step * (i as f64 + 0.37);
+        let grid: Vec<Vec<f64>> = (0..n).map(|i| (0..n).map(|j| det_fd(&chain, at(i), at(j))).collect()).collect();
+        let near_branch = |t2: f64, t3: f64| {
+            lines.iter().any(|&l| angle_gap(t3, l) <= 1.5 * step)
+                || (-60..60).any(|k| {
+                    // The fold is continuous: between two samples s, s' of theta3 each of its
+                    // two theta2 values sweeps the short arc between its values at s and s',
+                    // and at a turning point (|m| = d, one sample without fold points) the two
+                    // values sweep the arc between them.
+                    let (s, s2) = (t3 + 0.05 * step * k as f64, t3 + 0.05 * step * (k + 1) as f64);
+                    let between = |a: f64, b: f64| angle_gap(t2, a) + angle_gap(t2, b) <= angle_gap(a, b) + 4.0 * step;
+                    match (planar.fold_theta2_f64(s).as_slice(), planar.fold_theta2_f64(s2).as_slice()) {
+                        ([a0, a1], [b0, b1]) => between(*a0, *b0) || between(*a1, *b1),
+                        ([a0, a1], []) | ([], [a0, a1]) => between(*a0, *a1),
+                        _ => false,
+                    }
+                })
+        };
+        let mut changes = 0;
+        for i in 0..n {
+            for j in 0..n {
+                for (i2, j2) in [((i + 1) % n, j), (i, (j + 1) % n)] {
+                    if grid[i][j] * grid[i2][j2] < 0.0 {
+                        changes += 1;
+                        assert!(near_branch(at(i), at(j)), "{file}: det changes sign at ({}, {}) away from every reported branch", at(i), at(j));
+                    }
+                }
+            }
+        }
+        assert!(changes > 4 * n, "{file}: the grid sees the branches ({changes})");
+        // Crossings: zeros of det and of its gradient, at the reported image.
+        let listed: Vec<_> = b.branches.iter().filter(|x| x.kind == "theta3_line").flat_map(|x| x.crossings.iter()).collect();
+        assert_eq!(listed.len(), crossings, "{file}");
+        for c in listed {
+            let mid = |x: [f64; 2]| 0.5 * (x[0] + x[1]);
+            let t = [mid(c.joints[&chain.joints[1]]), mid(c.joints[&chain.joints[2]])];
+            let h = 1e-5;
+            assert!(det_fd(&chain, t[0], t[1]).abs() < 1e-8 * scale, "{file}: {}", c.name);
+            let g2 = (det_fd(&chain, t[0] + h, t[1]) - det_fd(&chain, t[0] - h, t[1])) / (2.0 * h);
+            let g3 = (det_fd(&chain, t[0], t[1] + h) - det_fd(&chain, t[0], t[1] - h)) / (2.0 * h);
+            assert!(g2.abs() < 1e-4 * scale && g3.abs() < 1e-4 * scale, "{file}: grad det at {} = ({g2}, {g3})", c.name);
+            let [rho, z] = chain.eval_f64(t[0], t[1]);
+            assert!((rho.sqrt() - mid(c.workspace.radius)).abs() < 1e-7 && (z - mid(c.workspace.z)).abs() < 1e-9, "{file}: image of {}", c.name);
+        }
+        // Curves of nodes: mirrored points of a theta3 line share their image iff d = 0.
+        for br in b.branches.iter().filter(|x| x.kind == "theta3_line") {
+            assert_eq!(br.curve_of_nodes, Some(lines_of_nodes), "{file}: {}", br.name);
+        }
+        assert_eq!(b.branches[2].curve_of_nodes, Some(true));
+        // Independent check of the fold being a curve of nodes: two elbows, one image.
+        let t3 = 0.4;
+        let t2 = planar.fold_theta2_f64(t3)[0];
+        let w = planar.h_f64(t2, t3);
+        let f1 = chain.eval_f64(t2, t3);
+        let mut found = false;
+        for k in 0..20_000 {
+            let s3 = -std::f64::consts::PI + std::f64::consts::TAU * k as f64 / 20_000.0;
+            for s2 in planar.fold_theta2_f64(s3) {
+                let f2 = chain.eval_f64(s2, s3);
+                if angle_gap(s3, t3) > 0.1 && (f2[0] - f1[0]).abs() < 1e-3 && (f2[1] - f1[1]).abs() < 1e-3 {
+                    found = true;
+                }
+            }
+        }
+        assert!(found, "{file}: the other elbow of w = {w:?} on the fold maps to the same point");
+    }
+}
+
+#[test]
+fn undecided_cusp_boxes_of_industrial_arms_are_attributed_to_the_crossings() {
+    use linkspace::manip3r::branches;
+    for (file, crossings) in [("kuka_kr16.urdf", 2), ("ur5.urdf", 4)] {
+        let p = prepare(&text(file), &LoadOptions::default()).expect(file);
+        let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
+        let b = branches::of(&p.mechanism, &chain).expect("parallel structure");
+        let run = cusps::search_with(&chain, &cusps::CuspSettings { precision: 1e-4, method: cusps::Method::Krawczyk }, &bounded(2_000_000), &mut |_| {}).expect("runs");
+        assert!(run.cusps.iter().all(|c| !c.unique));
+        let boxes: Vec<_> = run.undecided.iter().map(|u| u.theta).chain(run.cusps.iter().map(|c| c.theta)).collect();
+        assert!(!boxes.is_empty(), "{file}: the search alone cannot decide the crossings");
+        let a = b.attribute(&p.mechanism, &boxes, 1e-2);
+        assert_eq!(a.near_crossings.len(), crossings, "{file}: {}", a.text);
+        assert_eq!((a.elsewhere, a.on_branch.len()), (0, 0), "{file}: {}", a.text);
+        assert!(a.explained && a.max_distance < 1e-2);
+    }
+}

@@ -16,6 +16,7 @@
 //! Nullstellen mit Fehlerschranken*, Computing 4 (1969).
 
 pub mod aspects;
+pub mod branches;
 pub mod chain;
 pub mod collision;
 pub mod curves;

@@ -33,7 +33,8 @@
 //! sample points against the bound 4, or the number of aspects for a non-cuspidal arm); each
 //! is `null` with its reason where that argument does not close.
 
-use super::chain::{cross, dot, sub, Pose, V3};
+use super::chain::{cross, dot, sub, Pose};
+pub use super::chain::V3;
 use super::cusps::evaluate_without_tangency;
 use super::limits::JointLimits;
 use super::{Chain3R, Singularities};
@@ -70,9 +71,27 @@ impl Verdict {
     }
 }
 
-/// Argument 1 on the reduced mechanism (`select::positioning`'s), or `None` when axes 2 and 3
-/// are not proven parallel (or a₁ not proven apart from a₂, or a length not proven positive).
-pub fn parallel_structure(m: &Mechanism) -> Option<Verdict> {
+/// The exact (rounded) geometry of the reduced chain at θ₂ = θ₃ = 0, in the first link's frame
+/// (axis 1 through its origin): axis 1's direction, axis 2 (point, direction), axis 3 (point,
+/// direction) and the analysed point. The same data `branches` builds the singular set from.
+#[derive(Clone, Copy, Debug)]
+pub struct Geometry {
+    /// Axis 1's direction (through the origin).
+    pub a1: V3,
+    /// A point of axis 2 and its direction.
+    pub o2: V3,
+    /// Axis 2's direction.
+    pub d2: V3,
+    /// A point of axis 3 (at θ₂ = 0).
+    pub o3: V3,
+    /// Axis 3's direction (at θ₂ = 0).
+    pub d3: V3,
+    /// The analysed point (at θ₂ = θ₃ = 0).
+    pub p: V3,
+}
+
+/// `Geometry` of a reduced mechanism with three revolute joints, `None` otherwise.
+pub fn geometry(m: &Mechanism) -> Option<Geometry> {
     let tip = (0..m.links.len()).find(|&l| m.joints.iter().all(|j| j.parent != l))?;
     let path = m.path_to(tip);
     let rev: Vec<usize> = path.iter().copied().filter(|&j| matches!(m.joints[j].kind, JointKind::Revolute { .. })).collect();
@@ -93,7 +112,13 @@ pub fn parallel_structure(m: &Mechanism) -> Option<Verdict> {
             (o3, d3) = (acc.t, super::chain::apply(&acc.r, &axis(j)));
         }
     }
-    let p = acc.t;
+    Some(Geometry { a1, o2, d2, o3, d3, p: acc.t })
+}
+
+/// Argument 1 on the reduced mechanism (`select::positioning`'s), or `None` when axes 2 and 3
+/// are not proven parallel (or a₁ not proven apart from a₂, or a length not proven positive).
+pub fn parallel_structure(m: &Mechanism) -> Option<Verdict> {
+    let Geometry { a1, o2, d2, o3, d3, p } = geometry(m)?;
     let zero = |v: &V3| v.iter().all(|x| x.inf() == 0.0 && x.sup() == 0.0);
     let nonzero = |v: &V3| v.iter().any(|x| x.inf() > 0.0 || x.sup() < 0.0);
     if !zero(&cross(&d2, &d3)) {
