@@ -1015,11 +1015,17 @@ fn diag_three_rpr_cusp_charts() {
     let sigma: f64 = env("DIAG_SIGMA", "1e-3").parse().unwrap();
     let derived = env("DIAG_DERIVED", "");
     let only = env("DIAG_CHARTS", "");
+    let scaled_widths = env("DIAG_SCALED", "0") == "1";
     if let Ok(cs) = std::env::var("DIAG_COVER") {
         let t = std::time::Instant::now();
-        let set = p.solve(&SolverSettings { sigma: cs.parse().unwrap(), use_lp, timeout: Some(std::time::Duration::from_secs(120)), ..Default::default() }, &AtomicBool::new(false)).unwrap();
+        let set = p.solve(&SolverSettings { sigma: cs.parse().unwrap(), use_lp, scaled_widths, timeout: Some(std::time::Duration::from_secs(120)), ..Default::default() }, &AtomicBool::new(false)).unwrap();
         let processed: u64 = set.stats.iter().map(|s| s.processed).sum();
         eprintln!("cover at {cs}: {:?} {} boxes, {} clusters, processed {processed}, {:.2}s", set.status, set.boxes.len(), set.clusters.len(), t.elapsed().as_secs_f64());
+    }
+    if env("DIAG_VARS", "0") == "1" {
+        let s = &cp.charts[0].1;
+        let names: Vec<String> = s.primaries().iter().map(|&i| format!("{} {:?}", s.vars[i].name, s.vars[i].domain)).collect();
+        eprintln!("{} vars, {} equations, {} primaries: {names:?}", s.vars.len(), s.equations.len(), names.len());
     }
     let t0 = std::time::Instant::now();
     for ((k, tau), chart) in &cp.charts {
@@ -1032,7 +1038,7 @@ fn diag_three_rpr_cusp_charts() {
                 v.role = VarRole::Derived;
             }
         }
-        let st = SolverSettings { sigma, use_lp, newton_width: nw, timeout: Some(std::time::Duration::from_secs(secs)), ..Default::default() };
+        let st = SolverSettings { sigma, use_lp, newton_width: nw, scaled_widths, timeout: Some(std::time::Duration::from_secs(secs)), ..Default::default() };
         let e = p.linkage.extended_solver(&chart, st).unwrap().enclose(&AtomicBool::new(false), &mut |_| {});
         if e.stats.processed > 1 {
             eprintln!("chart ({k},{tau}): {:?} processed {} sols {} uniq {} undecided {} maxlvl {} rounds {} lp {} {:.2}s", e.status, e.stats.processed, e.solutions.len(), e.unique.iter().filter(|u| **u).count(), e.undecided.len(), e.stats.max_level, e.stats.shrink_rounds, e.stats.lp.solved, e.stats.seconds);
