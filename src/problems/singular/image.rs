@@ -230,8 +230,8 @@ impl CuspProblem {
         Ok(Self { charts, v, tangent, base_vars: sp.base_vars })
     }
 
-    /// Runs the solver on every chart pair; boxes proven to be another chart's are dropped, the
-    /// rest clustered by configuration.
+    /// Runs the solver on every chart pair, in scaled widths (`scaled`); boxes proven to be
+    /// another chart's are dropped, the rest clustered by configuration.
     pub fn solve(&self, sp: &SingularProblem, settings: &SolverSettings, cancel: &AtomicBool) -> Result<PointSearch, SolveError> {
         let t0 = Instant::now();
         let mut found = Vec::new();
@@ -274,12 +274,23 @@ impl CuspProblem {
 }
 
 /// The settings for the rest of a run that started at `t0`; `None` when no time is left.
+/// Widths are scaled (`SolverSettings::scaled_widths`): see `scaled`.
 fn remaining(settings: &SolverSettings, t0: Instant) -> Option<SolverSettings> {
     let left = settings.timeout.map(|t| t.saturating_sub(t0.elapsed()));
     if left.is_some_and(|r| r.is_zero()) {
         return None;
     }
-    Some(SolverSettings { timeout: left, ..settings.clone() })
+    Some(SolverSettings { timeout: left, ..scaled(settings) })
+}
+
+/// `settings` with `scaled_widths` on, as the image searches (cover, cusps, nodes) run: their
+/// systems mix travels (a slider's range, [1, 40] on the 3-RPR), cosines and sines ([−1, 1])
+/// and chart directions ([−1.05, 1.05]); in absolute widths sigma and the bisection treat a
+/// travel as twenty times longer than an angle, so the searches tile `S` twenty times finer
+/// along the travels than across the angles (the 3-RPR cusp search: over ten minutes, against
+/// under a minute scaled). On mechanisms without sliders every unit is 1 or 1.05.
+pub fn scaled(settings: &SolverSettings) -> SolverSettings {
+    SolverSettings { scaled_widths: true, ..settings.clone() }
 }
 
 /// A cluster of boxes of a point search (cusps).
@@ -384,7 +395,7 @@ impl NodeProblem {
         Ok(Self { charts, shared })
     }
 
-    /// Runs the node search.
+    /// Runs the node search, in scaled widths (`scaled`).
     pub fn solve(&self, sp: &SingularProblem, settings: &SolverSettings, cancel: &AtomicBool) -> Result<NodeSearch, SolveError> {
         let t0 = Instant::now();
         let mut status = Status::Complete;
@@ -914,7 +925,7 @@ pub enum AnalyseError {
 /// to each search.
 pub fn analyse(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String], settings: &SolverSettings, grid: usize, cancel: &AtomicBool) -> Result<ImageReport, AnalyseError> {
     let p = SingularProblem::new(m, fixed, SingularKind::Input, actuated, None)?;
-    let cover = p.solve(settings, cancel)?;
+    let cover = p.solve(&scaled(settings), cancel)?;
     let cusps = CuspProblem::new(&p)?.solve(&p, settings, cancel)?;
     let nodes = NodeProblem::new(&p)?.solve(&p, settings, cancel)?;
     let regions = regions(m, &p, &cover, grid, settings, cancel)?;
