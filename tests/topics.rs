@@ -655,6 +655,61 @@ fn assert_same_singularities(report: &Value, cli: &Value) {
     }
 }
 
+/// The report's verdict and singular branches (appended fields) are the CLI report's
+/// `verdict` and `singular_branches`, field for field; no branches when the CLI has none.
+fn assert_same_verdict_and_branches(report: &Value, cli: &Value) {
+    let v = &cli["verdict"];
+    let tri = |x: &Value| json!(match x.as_bool() { Some(true) => 1, Some(false) => 0, None => -1 });
+    let count = |x: &Value| json!(x.as_i64().unwrap_or(-1));
+    assert_eq!(report["cuspidal"], tri(&v["cuspidal"]), "{v}");
+    assert_eq!((report["aspects"].clone(), report["max_ik_solutions"].clone()), (count(&v["aspects"]), count(&v["max_ik_solutions"])), "{v}");
+    assert_eq!((report["verdict_certified"].clone(), report["verdict_reason"].clone()), (v["certified"].clone(), v["reason"].clone()));
+    let names: Vec<&str> = report["joint_names"].as_array().expect("joint names").iter().map(|v| v.as_str().expect("str")).collect();
+    let crossings = &report["branch_crossings"];
+    assert_eq!((crossings["analysis"].as_str(), crossings["dim"].as_u64()), (Some("branch_crossings"), Some(4)));
+    let Some(b) = cli.get("singular_branches").filter(|b| !b.is_null()) else {
+        for k in ["branch_names", "branch_kinds", "crossing_names", "branch_images", "branch_isolated_nodes"] {
+            assert_eq!(report[k], json!([]), "{k}");
+        }
+        assert_eq!(crossings["lower"], json!([]));
+        return;
+    };
+    let branches = b["branches"].as_array().expect("branches");
+    let field = |k: &str| branches.iter().map(|x| x[k].clone()).collect::<Vec<Value>>();
+    assert_eq!(report["branch_names"], json!(field("name")));
+    assert_eq!(report["branch_kinds"], json!(field("kind")));
+    assert_eq!(report["branch_descriptions"], json!(field("description")));
+    assert_eq!(report["branch_proofs"], json!(field("proof")));
+    assert_eq!(report["branch_curve_of_nodes"], json!(branches.iter().map(|x| tri(&x["curve_of_nodes"])).collect::<Vec<_>>()));
+    assert_eq!(report["branch_image_descriptions"], json!(branches.iter().map(|x| x["image"]["description"].clone()).collect::<Vec<_>>()));
+    let images: Vec<[f64; 2]> = branches.iter().flat_map(|x| [bounds(&x["image"]["radius"]), bounds(&x["image"]["z"])]).collect();
+    assert_eq!(intervals(&report["branch_images"]), images);
+    // Each crossing once, in the order first met, on the branches listing it.
+    let mut cli_crossings: Vec<(Value, Vec<u32>)> = Vec::new();
+    for (i, x) in branches.iter().enumerate() {
+        for c in x["crossings"].as_array().expect("crossings") {
+            match cli_crossings.iter_mut().find(|(y, _)| y == c) {
+                Some((_, on)) => on.push(i as u32),
+                None => cli_crossings.push((c.clone(), vec![i as u32])),
+            }
+        }
+    }
+    assert_eq!(report["crossing_names"], json!(cli_crossings.iter().map(|(c, _)| c["name"].clone()).collect::<Vec<_>>()));
+    assert_eq!(report["crossing_branches"], json!(cli_crossings.iter().flat_map(|(_, on)| on.clone()).collect::<Vec<_>>()));
+    let (lower, upper) = (floats(&crossings["lower"]), floats(&crossings["upper"]));
+    assert_eq!(lower.len(), 4 * cli_crossings.len());
+    for (k, (c, _)) in cli_crossings.iter().enumerate() {
+        let mut want = by_name(&c["joints"], &names);
+        want.extend([bounds(&c["workspace"]["radius"]), bounds(&c["workspace"]["z"])]);
+        let got: Vec<[f64; 2]> = (0..4).map(|d| [lower[4 * k + d], upper[4 * k + d]]).collect();
+        assert_eq!(got, want, "crossing {k}");
+    }
+    assert_eq!(crossings["box_status"], json!(vec![2; cli_crossings.len()]));
+    assert_eq!(crossings["status"], json!(if b["crossings"].is_null() { 1 } else { 0 }));
+    assert_eq!(report["branch_isolated_nodes"].as_array().expect("nodes").len(), b["isolated_nodes"].as_array().expect("nodes").len());
+    assert_eq!((report["branches_no_cusp_proven"].clone(), report["branches_argument"].clone()), (b["no_cusp_proven"].clone(), b["argument"].clone()));
+}
+
 /// The tip of a 3R URDF at joint values `q` (floating point), by composing the URDF transforms.
 fn forward_kinematics(urdf_path: &str, q: &[f64]) -> [f64; 3] {
     use nalgebra::{Isometry3, Point3, Translation3, Unit, UnitQuaternion};
@@ -679,16 +734,35 @@ fn a_3r_manipulator_publishes_its_singularities_and_answers_inverse_kinematics()
     let Some(python) = python() else { return };
     let domain = 46;
     let (e, f) = (format!("{ROOT}/urdf/orthogonal_3r_e.urdf"), format!("{ROOT}/urdf/orthogonal_3r_f.urdf"));
-    let mut node = Node::start(domain, &[&e, &f, "--max-request-boxes", "300000"]);
-    node.wait_for(&["orthogonal_3r_e: published singularities", "orthogonal_3r_f: published singularities"], Duration::from_secs(120));
+    // A real 6R arm beside them (axes 2 and 3 parallel): its verdict and singular branches.
+    let puma = format!("{ROOT}/urdf/puma560.urdf");
+    let mut node = Node::start(domain, &[&e, &f, &puma, "--max-request-boxes", "300000"]);
+    node.wait_for(&["orthogonal_3r_e: published singularities", "orthogonal_3r_f: published singularities", "puma560: published singularities"], Duration::from_secs(120));
 
     // The latched topics, to a late subscriber: the same records as the CLI.
-    let got = py(python, domain, "tests/ros_client.py", &["singular", "--prefix", "/linkspace/orthogonal_3r_e", "--prefix", "/linkspace/orthogonal_3r_f"], Duration::from_secs(90));
+    let got = py(
+        python,
+        domain,
+        "tests/ros_client.py",
+        &["singular", "--prefix", "/linkspace/orthogonal_3r_e", "--prefix", "/linkspace/orthogonal_3r_f", "--prefix", "/linkspace/puma560"],
+        Duration::from_secs(90),
+    );
     assert_eq!(got["complete"], json!(true), "{got}");
-    let (ref_e, ref_f) = (cli_json("singularities", &[&e, "--nodes"]), cli_json("singularities", &[&f, "--nodes"]));
+    let (ref_e, ref_f, ref_puma) = (cli_json("singularities", &[&e, "--nodes"]), cli_json("singularities", &[&f, "--nodes"]), cli_json("singularities", &[&puma, "--nodes"]));
     let report_e = &got["/linkspace/orthogonal_3r_e"]["singularities"];
     assert_same_singularities(report_e, &ref_e);
     assert_same_singularities(&got["/linkspace/orthogonal_3r_f"]["singularities"], &ref_f);
+    // The verdict and singular branches, as the CLI's: e cuspidal with 2 aspects and 4
+    // solutions, f non-cuspidal, the PUMA non-cuspidal with 4 aspects, at most 4 solutions and
+    // three branches crossing in 4 points (no cusp search, no node search: the proof).
+    let report_puma = &got["/linkspace/puma560"]["singularities"];
+    for (report, cli) in [(report_e, &ref_e), (&got["/linkspace/orthogonal_3r_f"]["singularities"], &ref_f), (report_puma, &ref_puma)] {
+        assert_same_verdict_and_branches(report, cli);
+    }
+    assert_eq!((report_e["cuspidal"].clone(), report_e["aspects"].clone(), report_e["max_ik_solutions"].clone()), (json!(1), json!(2), json!(4)));
+    assert_eq!((report_puma["cuspidal"].clone(), report_puma["aspects"].clone(), report_puma["max_ik_solutions"].clone()), (json!(0), json!(4), json!(4)));
+    assert_eq!((report_puma["crossing_names"].as_array().map(Vec::len), report_puma["branch_names"].as_array().map(Vec::len)), (Some(4), Some(3)));
+    assert_eq!((report_puma["ok"].clone(), report_puma["complete"].clone(), report_puma["cusps"].clone(), report_puma["nodes"].clone()), (json!(true), json!(true), json!([]), json!([])));
     // Robot e: 4 cusps, 2 nodes; robot f: 2 nodes and its two internal-motion lines.
     let certified = |r: &Value, k: &str| r[k].as_array().expect("records").iter().filter(|c| c["certified"] == json!(true)).count();
     assert_eq!((certified(report_e, "cusps"), certified(report_e, "nodes")), (4, 2));

@@ -254,6 +254,8 @@ impl PreparedRun<SingularityResult> for SingularSetsRun {
             seconds: t0.elapsed().as_secs_f64(),
             summary,
             loops: Some(LoopSingularities { actuated: self.actuation.joints.clone(), actuated_source: self.actuation.source.clone(), sets }),
+            verdict: None,
+            branches: None,
         }
     }
 }

@@ -10,7 +10,7 @@
 //! solve; the default `configuration_space` and `solve` answer "not available".
 
 use super::{
-    gap, Analysis, AnalysisError, Bounds, BoxSetResult, Classification, IkQuery, IkResult, IkSolution, PreparedRun, ResultBox, Service, SingularPair, SingularPoint,
+    gap, Analysis, AnalysisError, Bounds, BoxSetResult, BranchRecord, BranchesResult, Classification, CrossingResult, IkQuery, IkResult, IkSolution, PreparedRun, ResultBox, Service, SingularPair, SingularPoint,
     SingularityQuery, SingularityResult,
 };
 use crate::interval::{interval, point};
@@ -54,6 +54,15 @@ pub struct Manip3rAnalysis {
     e2: V3,
     /// Cover of the singular curves, computed once (it does not depend on any request).
     cover: Arc<Cover>,
+    /// The reduced mechanism the chain was built from (rounded), for the verdict.
+    reduced: Arc<Mechanism>,
+    /// Limits of the three joints, as the CLI reads them (the verdict's cusp must lie inside).
+    limits: Arc<manip3r::limits::JointLimits>,
+    /// Axes 2 and 3 parallel (`verdict::parallel_structure`): the verdict is structural and
+    /// the interval searches are not run, as in `linkspace singularities`.
+    structural: bool,
+    /// The certified singular branches (parallel axes 2 and 3), computed once.
+    branches: Option<Arc<BranchesResult>>,
 }
 
 impl Manip3rAnalysis {
@@ -93,7 +102,22 @@ impl Manip3rAnalysis {
         e1 = e1.map(|x| x / n);
         let e2 = [a[1] * e1[2] - a[2] * e1[1], a[2] * e1[0] - a[0] * e1[2], a[0] * e1[1] - a[1] * e1[0]];
         let cover = Arc::new(Cover::new(&chain, CURVE_DEPTH, &manip3r::Control::with_limits(Limits::default())));
-        Ok(Self { chain: Arc::new(chain), base_rotation: r, base_translation: t, axis, e1: e1.map(point), e2: e2.map(point), cover })
+        let structural = manip3r::verdict::parallel_structure(mechanism).is_some();
+        let record_joints = [chain.joints[1].clone(), chain.joints[2].clone()];
+        let branches = manip3r::branches::of(mechanism, &chain).map(|b| Arc::new(branches_result(&b, &record_joints)));
+        Ok(Self {
+            chain: Arc::new(chain),
+            base_rotation: r,
+            base_translation: t,
+            axis,
+            e1: e1.map(point),
+            e2: e2.map(point),
+            cover,
+            reduced: Arc::new(prepared.mechanism.clone()),
+            limits: Arc::new(prepared.limits.clone()),
+            structural,
+            branches,
+        })
     }
 
     /// The chain's name tokens for records over (θ₂, θ₃).
@@ -195,7 +219,16 @@ impl Analysis for Manip3rAnalysis {
         if query.max_boxes == 0 {
             return Err(AnalysisError::BadRequest("max_boxes must be at least 1".into()));
         }
-        Ok(Box::new(SingularityRun { chain: self.chain.clone(), cover: self.cover.clone(), query: query.clone(), joints: self.record_joints() }))
+        Ok(Box::new(SingularityRun {
+            chain: self.chain.clone(),
+            cover: self.cover.clone(),
+            query: query.clone(),
+            joints: self.record_joints(),
+            reduced: self.reduced.clone(),
+            limits: self.limits.clone(),
+            structural: self.structural,
+            branches: self.branches.clone(),
+        }))
     }
 
     fn inverse_kinematics(&self, query: &IkQuery) -> Result<Box<dyn PreparedRun<IkResult>>, AnalysisError> {
@@ -266,12 +299,65 @@ fn box_set(cover: &Cover, mechanism: &str, joints: &[String]) -> BoxSetResult {
     }
 }
 
+/// The CLI's branches (`manip3r::branches`) as plain records over `joints` (θ₂, θ₃) and
+/// (radius, z); each crossing once, with the branches listing it by index.
+fn branches_result(b: &manip3r::branches::SingularBranches, joints: &[String; 2]) -> BranchesResult {
+    let over = |j: &manip3r::report::Joints| joints.iter().map(|n| j.get(n).copied().unwrap_or([f64::NEG_INFINITY, f64::INFINITY])).collect::<Vec<Bounds>>();
+    let mut crossings: Vec<CrossingResult> = Vec::new();
+    let branches = b
+        .branches
+        .iter()
+        .map(|br| {
+            let indices = br
+                .crossings
+                .iter()
+                .map(|c| {
+                    let record = CrossingResult { name: c.name.clone(), joints: over(&c.joints), workspace: vec![c.workspace.radius, c.workspace.z] };
+                    match crossings.iter().position(|x| *x == record) {
+                        Some(k) => k,
+                        None => {
+                            crossings.push(record);
+                            crossings.len() - 1
+                        }
+                    }
+                })
+                .collect();
+            BranchRecord {
+                name: br.name.clone(),
+                kind: br.kind.to_string(),
+                description: br.description.clone(),
+                image_description: br.image.description.clone(),
+                image: vec![br.image.radius, br.image.z],
+                curve_of_nodes: br.curve_of_nodes,
+                crossings: indices,
+                proof: br.proof.clone(),
+            }
+        })
+        .collect();
+    BranchesResult {
+        branches,
+        crossings,
+        crossings_complete: b.crossings.is_some(),
+        isolated_nodes: b
+            .isolated_nodes
+            .iter()
+            .map(|n| SingularPair { joints: [over(&n.points[0]), over(&n.points[1])], workspace: vec![n.workspace.radius, n.workspace.z], certified: true })
+            .collect(),
+        no_cusp_proven: b.no_cusp_proven,
+        argument: b.argument.clone(),
+    }
+}
+
 /// A validated singularity run.
 struct SingularityRun {
     chain: Arc<Chain3R>,
     cover: Arc<Cover>,
     query: SingularityQuery,
     joints: Vec<String>,
+    reduced: Arc<Mechanism>,
+    limits: Arc<manip3r::limits::JointLimits>,
+    structural: bool,
+    branches: Option<Arc<BranchesResult>>,
 }
 
 impl PreparedRun<SingularityResult> for SingularityRun {
@@ -279,7 +365,18 @@ impl PreparedRun<SingularityResult> for SingularityRun {
         let (chain, q) = (&*self.chain, &self.query);
         let limits = Limits { max_cells: q.max_boxes, timeout: q.timeout, ..Limits::default() };
         let control = manip3r::Control { limits, threads: q.threads.max(1), cancel };
-        let run = manip3r::singularities(chain, q.precision, q.nodes, &control, progress).expect("invariant: precision validated when prepared");
+        // As `linkspace singularities`: with axes 2 and 3 parallel the verdict's proof replaces
+        // the cusp search (which cannot complete there) and nodes are not searched; whenever
+        // the singular branches are known, whole branches are curves of nodes, which the
+        // isolated-node search does not model.
+        let with_nodes = q.nodes && self.branches.is_none();
+        let run = if self.structural {
+            manip3r::structural_singularities(chain, q.precision).expect("invariant: precision validated when prepared")
+        } else {
+            manip3r::singularities(chain, q.precision, with_nodes, &control, progress).expect("invariant: precision validated when prepared")
+        };
+        // The verdict reads the full-torus run (the CLI's, before its joint-limit filter).
+        let verdict = manip3r::verdict::decide(&self.reduced, chain, &run, &self.limits);
         let (found, node_search) = (&run.cusps, &run.nodes);
         let two = |t: &[Interval; 2]| vec![bounds(t[0]), bounds(t[1])];
         let image = |t: [Interval; 2]| {
@@ -307,7 +404,7 @@ impl PreparedRun<SingularityResult> for SingularityRun {
         let summary = format!(
             "{} cusps, {}, {} internal-motion lines, {} undecided, {} cover boxes in {} pieces, {}",
             found.cusps.len(),
-            if q.nodes { format!("{certified_nodes} nodes") } else { "nodes not searched".to_string() },
+            if with_nodes { format!("{certified_nodes} nodes") } else if q.nodes { "nodes not searched (the singular branches are curves of nodes)".to_string() } else { "nodes not searched".to_string() },
             found.bands.len(),
             found.undecided.len() + node_search.as_ref().map_or(0, |n| n.undecided.len()),
             self.cover.boxes.len(),
@@ -331,8 +428,10 @@ impl PreparedRun<SingularityResult> for SingularityRun {
             internal_motions: motions,
             processed,
             seconds: run.seconds + self.cover.seconds,
-            summary,
+            summary: format!("{}; {}", verdict.line(), summary),
             loops: None,
+            verdict: Some(verdict),
+            branches: self.branches.as_deref().cloned(),
         }
     }
 }

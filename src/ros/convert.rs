@@ -4,7 +4,7 @@ use super::msgs::{
     self, AssemblyMode, BoxSet, ColorRGBA, CuspRecord, Header, InverseKinematicsResponse, JointState, LsBox, Marker, MarkerArray, NodeRecord, Point, Pose, Quaternion, SingularityReport,
     SolveStats, TfMessage, Time, Transform, TransformStamped, Vector3,
 };
-use crate::analysis::{Bounds, BoxSetResult, IkResult, SingularityResult};
+use crate::analysis::{Bounds, BoxSetResult, BranchesResult, IkResult, ResultBox, SingularityResult};
 use crate::search::{BoxStatus, Limit, SolverSettings, Status};
 
 /// A header stamped now (wall clock) in `frame`.
@@ -214,7 +214,114 @@ pub fn singularity_report(r: &SingularityResult, run_id: u64) -> SingularityRepo
         set_verdicts: r.loops.iter().flat_map(|l| &l.sets).map(|s| s.verdict.clone()).collect(),
         actuated: r.loops.as_ref().map_or_else(Vec::new, |l| l.actuated.clone()),
         actuated_source: r.loops.as_ref().map_or_else(String::new, |l| l.actuated_source.clone()),
+        ..verdict_and_branches(r, run_id)
     }
+}
+
+/// An empty report (a refusal's, or a mechanism without the analysis) with the verdict
+/// fields at their unknown values (`cuspidal` UNKNOWN, counts -1), not the wire defaults.
+pub fn no_report() -> SingularityReport {
+    SingularityReport { cuspidal: msgs::UNKNOWN, aspects: -1, max_ik_solutions: -1, ..Default::default() }
+}
+
+/// `SingularityReport.YES`, `NO` or `UNKNOWN`.
+pub fn tri_state(x: Option<bool>) -> i8 {
+    match x {
+        Some(true) => msgs::YES,
+        Some(false) => msgs::NO,
+        None => msgs::UNKNOWN,
+    }
+}
+
+/// The appended verdict and branch fields of a singularity report (the rest default): the
+/// `verdict` and `singular_branches` of `linkspace singularities --json`. Without a verdict (a
+/// closed-loop mechanism) every field is unknown and the reason says why; without branches
+/// (axes 2 and 3 not parallel) they are empty.
+pub fn verdict_and_branches(r: &SingularityResult, run_id: u64) -> SingularityReport {
+    let count = |x: Option<u32>| x.map_or(-1, |v| v.min(i32::MAX as u32) as i32);
+    let mut m = match &r.verdict {
+        Some(v) => SingularityReport {
+            cuspidal: tri_state(v.cuspidal),
+            aspects: count(v.aspects),
+            max_ik_solutions: count(v.max_ik_solutions),
+            verdict_certified: v.certified,
+            verdict_reason: v.reason.clone(),
+            ..Default::default()
+        },
+        None => SingularityReport {
+            cuspidal: msgs::UNKNOWN,
+            aspects: -1,
+            max_ik_solutions: -1,
+            verdict_certified: false,
+            verdict_reason: "no verdict: cuspidality, aspects and IK counts are decided for 3R manipulators only".into(),
+            ..Default::default()
+        },
+    };
+    m.branch_crossings = crossing_set(r, r.branches.as_ref(), run_id);
+    let Some(b) = &r.branches else { return m };
+    m.branch_names = b.branches.iter().map(|x| x.name.clone()).collect();
+    m.branch_kinds = b.branches.iter().map(|x| x.kind.clone()).collect();
+    m.branch_descriptions = b.branches.iter().map(|x| x.description.clone()).collect();
+    m.branch_image_descriptions = b.branches.iter().map(|x| x.image_description.clone()).collect();
+    m.branch_curve_of_nodes = b.branches.iter().map(|x| tri_state(x.curve_of_nodes)).collect();
+    m.branch_proofs = b.branches.iter().map(|x| x.proof.clone()).collect();
+    m.branch_images = b.branches.iter().flat_map(|x| intervals(&x.image)).collect();
+    m.crossing_names = b.crossings.iter().map(|c| c.name.clone()).collect();
+    m.crossing_branches = (0..b.crossings.len())
+        .flat_map(|k| {
+            let on: Vec<u32> = b.branches.iter().enumerate().filter(|(_, x)| x.crossings.contains(&k)).map(|(i, _)| i as u32).collect();
+            // Two branches cross at each crossing; u32::MAX pads a side not listed.
+            [on.first().copied().unwrap_or(u32::MAX), on.get(1).copied().unwrap_or(u32::MAX)]
+        })
+        .collect();
+    m.branch_isolated_nodes = b
+        .isolated_nodes
+        .iter()
+        .map(|n| NodeRecord { joints_a: intervals(&n.joints[0]), joints_b: intervals(&n.joints[1]), workspace: intervals(&n.workspace), certified: n.certified })
+        .collect();
+    m.branches_no_cusp_proven = b.no_cusp_proven;
+    m.branches_argument = b.argument.clone();
+    m
+}
+
+/// The crossings as a box set (analysis `branch_crossings`): variables the record joints then
+/// the workspace coordinates, each box `Box.UNIQUE` (one crossing), cluster = its index.
+fn crossing_set(r: &SingularityResult, b: Option<&BranchesResult>, run_id: u64) -> BoxSet {
+    let crossings = b.map_or(&[][..], |b| &b.crossings[..]);
+    let boxes: Vec<ResultBox> = crossings
+        .iter()
+        .enumerate()
+        .map(|(k, c)| ResultBox {
+            status: BoxStatus::Unique,
+            bounds: c.joints.iter().chain(&c.workspace).copied().collect(),
+            joints: c.joints.clone(),
+            level: 0,
+            cluster: Some(k),
+            traces: vec![],
+        })
+        .collect();
+    let n = boxes.len();
+    let set = BoxSetResult {
+        mechanism: r.mechanism.clone(),
+        analysis: "branch_crossings".into(),
+        status: Status::Complete,
+        settings: SolverSettings { sigma: r.query.precision, ..Default::default() },
+        variables: r.joint_names.iter().chain(&r.workspace_names).cloned().collect(),
+        primaries: (0..r.joint_names.len()).collect(),
+        joint_names: r.joint_names.clone(),
+        fixed_joints: vec![],
+        traces: vec![],
+        boxes,
+        clusters: n,
+        stats: crate::search::SolveStats { solutions: n as u64, certified: n as u64, ..Default::default() },
+    };
+    let mut out = box_set(&set, run_id);
+    if b.is_some_and(|b| !b.crossings_complete) {
+        // Existence of crossings not decided everywhere: incomplete, as a run with boxes left
+        // undecided.
+        (out.status, out.limit) = (msgs::SET_INCOMPLETE, "undecided".into());
+    }
+    out
 }
 
 fn sphere(frame: &str, ns: &str, id: i32, centre: [f64; 3], size: f64, color: ColorRGBA) -> Marker {
@@ -340,6 +447,57 @@ pub fn static_transforms(frames: &[(String, String)]) -> TfMessage {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn report_of(xml: &str, nodes: bool) -> SingularityReport {
+        let m = crate::model::urdf::parse(xml).expect("parses");
+        let a = crate::analysis::load(&m, &[], &[]).expect("loads");
+        let q = crate::analysis::SingularityQuery { precision: 1e-4, nodes, max_boxes: 1_000_000, timeout: None, threads: 1 };
+        let r = a.singularities(&q).expect("valid").run(&std::sync::atomic::AtomicBool::new(false), &mut |_| {});
+        singularity_report(&r, 7)
+    }
+
+    #[test]
+    fn verdict_and_branches_reach_the_report() {
+        // PUMA 560 (axes 2 and 3 parallel): non-cuspidal, 4 aspects, at most 4 solutions, three
+        // branches crossing in 4 points, each crossing on a theta3 line and the fold of g.
+        let p = report_of(include_str!("../../urdf/puma560.urdf"), true);
+        assert_eq!((p.cuspidal, p.aspects, p.max_ik_solutions, p.verdict_certified), (msgs::NO, 4, 4, true), "{}", p.verdict_reason);
+        assert!(p.verdict_reason.contains("exactly parallel"));
+        assert_eq!(p.branch_names, ["outstretched", "folded", "fold_of_g"]);
+        assert_eq!(p.branch_kinds, ["theta3_line", "theta3_line", "curve"]);
+        assert_eq!(p.branch_curve_of_nodes, [msgs::YES; 3]);
+        assert_eq!((p.branch_descriptions.len(), p.branch_proofs.len(), p.branch_image_descriptions.len(), p.branch_images.len()), (3, 3, 3, 6));
+        let c = &p.branch_crossings;
+        assert_eq!((c.analysis.as_str(), c.dim, c.status, c.lower.len(), c.joint_lower.len()), ("branch_crossings", 4, msgs::SET_COMPLETE, 16, 8));
+        assert_eq!(c.variable_names, ["joint_2", "joint_3", "radius", "z"]);
+        assert_eq!(c.box_status, [msgs::BOX_UNIQUE; 4]);
+        assert_eq!(p.crossing_names.len(), 4);
+        assert_eq!(p.crossing_branches, [0, 2, 0, 2, 1, 2, 1, 2]);
+        // Box i's joint part is its first two variables; its image lies in the fold of g's.
+        for i in 0..4 {
+            assert_eq!(c.joint_lower[2 * i..2 * i + 2], c.lower[4 * i..4 * i + 2]);
+            let radius = &p.branch_images[2 * 2];
+            assert!(radius.lower <= c.lower[4 * i + 2] && c.upper[4 * i + 2] <= radius.upper);
+        }
+        // Nodes are not searched there (curves of nodes), cusps excluded by the proof.
+        assert!(p.complete && p.cusps.is_empty() && p.nodes.is_empty(), "{}", p.message);
+        assert!(p.branches_no_cusp_proven && !p.branches_argument.is_empty());
+
+        // Robot e: cuspidal, 2 aspects, 4 solutions; no branches.
+        let e = report_of(include_str!("../../urdf/orthogonal_3r_e.urdf"), false);
+        assert_eq!((e.cuspidal, e.aspects, e.max_ik_solutions, e.verdict_certified), (msgs::YES, 2, 4, true), "{}", e.verdict_reason);
+        assert!(e.branch_names.is_empty() && e.crossing_names.is_empty() && e.branch_crossings.lower.is_empty());
+        assert_eq!((e.branch_crossings.status, e.branch_crossings.dim), (msgs::SET_COMPLETE, 4));
+
+        // A linkage: unknown, with the reason; and a refusal's empty report likewise.
+        let four_bar = report_of(include_str!("../../urdf/four_bar.urdf"), false);
+        for r in [&four_bar, &no_report()] {
+            assert_eq!((r.cuspidal, r.aspects, r.max_ik_solutions, r.verdict_certified), (msgs::UNKNOWN, -1, -1, false));
+            assert!(r.branch_names.is_empty());
+        }
+        assert!(four_bar.verdict_reason.contains("3R manipulators only"));
+        assert_eq!((tri_state(Some(true)), tri_state(Some(false)), tri_state(None)), (1, 0, -1));
+    }
 
     #[test]
     fn echoed_strings_are_bounded() {

@@ -214,8 +214,32 @@ mirror! {
         set_verdicts: Vec<String>,
         actuated: Vec<String>,
         actuated_source: String,
+        cuspidal: i8,
+        aspects: i32,
+        max_ik_solutions: i32,
+        verdict_certified: bool,
+        verdict_reason: String,
+        branch_names: Vec<String>,
+        branch_kinds: Vec<String>,
+        branch_descriptions: Vec<String>,
+        branch_image_descriptions: Vec<String>,
+        branch_curve_of_nodes: Vec<i8>,
+        branch_proofs: Vec<String>,
+        branch_images: Vec<Interval>,
+        branch_crossings: BoxSet,
+        crossing_names: Vec<String>,
+        crossing_branches: Vec<u32>,
+        branch_isolated_nodes: Vec<NodeRecord>,
+        branches_no_cusp_proven: bool,
+        branches_argument: String,
     }
 }
+/// `SingularityReport.YES` (a tri-state field: cuspidal, branch_curve_of_nodes)
+pub const YES: i8 = 1;
+/// `SingularityReport.NO`
+pub const NO: i8 = 0;
+/// `SingularityReport.UNKNOWN`
+pub const UNKNOWN: i8 = -1;
 mirror! {
     /// linkspace_msgs/Progress
     Progress { header: Header, mechanism: String, analysis: String, run_id: u64, processed: u64, pending: u64, decided: f64, done: bool }
@@ -366,6 +390,7 @@ mod tests {
         match base {
             "bool" => "bool",
             "uint8" | "byte" => "u8",
+            "int8" => "i8",
             "int32" => "i32",
             "uint32" => "u32",
             "int64" => "i64",

@@ -756,7 +756,7 @@ impl State {
     /// so that a subscriber learns why instead of waiting.
     fn publish_no_singularities(&self, k: usize, reason: String) {
         let m = &self.mechanisms[k];
-        let report = SingularityReport { header: convert::header(&convert::joint_frame(m.loaded.analysis.mechanism())), mechanism: m.loaded.analysis.mechanism().to_string(), ok: false, message: reason, ..Default::default() };
+        let report = SingularityReport { header: convert::header(&convert::joint_frame(m.loaded.analysis.mechanism())), mechanism: m.loaded.analysis.mechanism().to_string(), ok: false, message: reason, ..convert::no_report() };
         if let Err(e) = m.topics.singularities.publish(report) {
             eprintln!("linkspace: publishing {}/singularities: {e:?}", m.prefix);
         }
@@ -1027,7 +1027,7 @@ impl State {
     fn reply_error(&self, kind: RunKind, id: RmwRequestId, message: String) {
         match kind {
             RunKind::Solve | RunKind::SolveAction | RunKind::ConfigurationSpace => self.reply_solve(id, solve_error(message)),
-            RunKind::Singularities { .. } => self.reply_singularities(id, SingularitiesResponse { ok: false, message, ..Default::default() }),
+            RunKind::Singularities { .. } => self.reply_singularities(id, SingularitiesResponse { ok: false, message, report: convert::no_report() }),
             RunKind::InverseKinematics => self.reply_ik(id, InverseKinematicsResponse { ok: false, message, ..Default::default() }),
         }
     }
@@ -1067,7 +1067,7 @@ impl State {
             Request::Singularities(id, q) => match catch_unwind(AssertUnwindSafe(|| self.singularities(id, q))) {
                 Ok(None) => Ok(()),
                 Ok(Some(a)) => servers.singularities.send_response(id, a),
-                Err(p) => servers.singularities.send_response(id, SingularitiesResponse { ok: false, message: internal(p), ..Default::default() }),
+                Err(p) => servers.singularities.send_response(id, SingularitiesResponse { ok: false, message: internal(p), report: convert::no_report() }),
             },
             Request::InverseKinematics(id, q) => match catch_unwind(AssertUnwindSafe(|| self.inverse_kinematics(id, q))) {
                 Ok(None) => Ok(()),
@@ -1243,7 +1243,7 @@ impl State {
     /// Answers with the load-time report, or starts a run with the request's settings; `None`
     /// when the reply waits for a run.
     fn singularities(&mut self, id: RmwRequestId, q: SingularitiesRequest) -> Option<SingularitiesResponse> {
-        let refuse = |message: String| Some(SingularitiesResponse { ok: false, message, ..Default::default() });
+        let refuse = |message: String| Some(SingularitiesResponse { ok: false, message, report: convert::no_report() });
         let k = match self.mechanism(&q.mechanism) {
             Ok(k) => k,
             Err(e) => return refuse(e),
