@@ -263,6 +263,17 @@ pub struct LinkPose {
     pub rotation_width: Option<f64>,
 }
 
+/// How a free joint of a spatial linkage moves in the system's unknowns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum JointMotion {
+    /// Its own angle, `c = cos θ`, `s = sin θ` (a revolute tree joint, one Euler angle).
+    Angle { c: VarId, s: VarId },
+    /// Its own variable (a travel, a floating joint's coordinate).
+    Var(VarId),
+    /// A loop joint: its value is read from the closure frames' relative pose.
+    Loop,
+}
+
 /// A spatial linkage as a polynomial system, with what is needed to read answers back.
 #[derive(Clone, Debug)]
 pub struct SpatialProblem {
@@ -1264,16 +1275,36 @@ impl SpatialProblem {
         verdict
     }
 
-    /// A solver for this problem: the default pipeline, plus a joint-limit filter when joints
-    /// carry limits (it sees every box, certified ones included).
-    pub fn solver(&self, settings: SolverSettings) -> Result<Solver<'_>, SolveError> {
-        let solver = Solver::new(&self.system, settings)?;
+    /// How a free joint moves in the system's unknowns: its own angle `(c, s)` or variable
+    /// (tree joints), or a loop joint whose value is read from its closure frames; `None` for a
+    /// name that is not a free joint. The singular-set builder takes the rates of the first two.
+    pub(crate) fn joint_motion(&self, name: &str) -> Option<JointMotion> {
+        let (_, r) = self.readings.iter().find(|(n, _)| n == name)?;
+        Some(match *r {
+            Reading::Angle { c, s } => JointMotion::Angle { c, s },
+            Reading::Var(v) => JointMotion::Var(v),
+            Reading::LoopAngle(_) | Reading::LoopTravel(_) => JointMotion::Loop,
+        })
+    }
+
+    /// A solver for `system`, which extends this problem's system (its first variables are
+    /// this problem's, as in the singular-set systems), with the joint-limit and sign filters
+    /// of `solver`.
+    pub fn extended_solver<'s>(&'s self, system: &'s EquationSystem, settings: SolverSettings) -> Result<Solver<'s>, SolveError> {
+        debug_assert!(system.vars.len() >= self.system.vars.len());
+        let solver = Solver::new(system, settings)?;
         if self.limits.is_empty() && self.signs.is_empty() {
             return Ok(solver);
         }
         Ok(solver.with_contractor(Box::new(move |system, settings| {
             Box::new(Filtered { inner: default_contractor(system, settings), filters: vec![Box::new(move |b: &IntervalBox| self.limit_verdict(b))] })
         })))
+    }
+
+    /// A solver for this problem: the default pipeline, plus a joint-limit filter when joints
+    /// carry limits (it sees every box, certified ones included).
+    pub fn solver(&self, settings: SolverSettings) -> Result<Solver<'_>, SolveError> {
+        self.extended_solver(&self.system, settings)
     }
 
     /// Fills the derived variables of a point whose primaries are set (the others NaN), from
