@@ -17,7 +17,7 @@ use crate::interval::components;
 use crate::model::{JointKind, Mechanism};
 use crate::problems::choice::TracedPoint;
 use crate::problems::singular::sets::{all_kinds, SingularSets};
-use crate::problems::singular::{BoxKind, SingularProblem, SingularSet};
+use crate::problems::singular::{BoxKind, Coordinates, SingularProblem, SingularSet};
 use crate::problems::{Linkage, LinkageError, ModelChoice};
 use crate::report::singular::SingularReport;
 use crate::search::{BoxStatus, Progress, SolveStats, SolverSettings, Status};
@@ -113,9 +113,6 @@ impl Analysis for LinkageAnalysis {
     /// largest width of a box in the configuration and null-vector variables), `max_boxes` the
     /// limit per chart, `timeout` for all sets; `nodes` does not apply (no image is analysed).
     fn singularities(&self, query: &SingularityQuery) -> Result<Box<dyn PreparedRun<SingularityResult>>, AnalysisError> {
-        if !matches!(self.problem, Linkage::Planar(_)) {
-            return Err(self.not_available(Service::Singularities));
-        }
         if !(query.precision > 0.0 && query.precision < 1.0) {
             return Err(AnalysisError::BadRequest(format!("precision must be a number in (0, 1), got {}", query.precision)));
         }
@@ -218,7 +215,7 @@ impl PreparedRun<SingularityResult> for SingularSetsRun {
         // The run's status: the first limit any set met.
         let status = solved.iter().map(|s| s.status).find(|s| !s.is_complete()).unwrap_or(Status::Complete);
         let processed = solved.iter().flat_map(|s| &s.stats).map(|s| s.processed).sum();
-        let joint_names = self.sets.problems.first().map(|p| p.linkage.free_joints.clone()).unwrap_or_default();
+        let joint_names = self.sets.problems.first().map(|p| p.linkage.free_joints().to_vec()).unwrap_or_default();
         let summary = format!(
             "{}; actuated: {} ({})",
             sets.iter().map(|s| format!("{}: {}", s.kind, s.verdict)).collect::<Vec<_>>().join("; "),
@@ -260,9 +257,9 @@ impl PreparedRun<SingularityResult> for SingularSetsRun {
 
 /// One solved set as a box set, through the CLI's report (`SingularReport`), so its joint
 /// values are those of `loop-singularities --json` bit for bit.
-fn set_result(p: &SingularProblem, settings: &SolverSettings, set: &SingularSet) -> SingularSetResult {
+fn set_result(p: &SingularProblem<Linkage>, settings: &SolverSettings, set: &SingularSet) -> SingularSetResult {
     let report = SingularReport::new(p, settings, set);
-    let names = p.linkage.free_joints.clone();
+    let names = p.linkage.free_joints().to_vec();
     let chart = &p.charts[0];
     let boxes: Vec<ResultBox> = set
         .boxes
@@ -318,14 +315,14 @@ fn set_result(p: &SingularProblem, settings: &SolverSettings, set: &SingularSet)
     SingularSetResult {
         kind: p.kind.name(),
         boxes: BoxSetResult {
-            mechanism: p.linkage.name.clone(),
+            mechanism: p.linkage.name().to_string(),
             analysis: format!("singular_set:{}", p.kind.name()),
             status: set.status,
             settings: settings.clone(),
             variables: chart.vars.iter().map(|v| v.name.clone()).collect(),
             primaries: chart.vars.iter().enumerate().filter(|(_, v)| v.role == VarRole::Primary).map(|(i, _)| i).collect(),
             joint_names: names,
-            fixed_joints: p.linkage.fixed_joints.clone(),
+            fixed_joints: p.linkage.fixed_joints().to_vec(),
             traces: vec![],
             boxes,
             clusters: set.clusters.len(),

@@ -39,6 +39,7 @@ use thiserror::Error;
 
 pub mod image;
 pub mod sets;
+pub mod velocity;
 
 /// Half-width of a chart's free components: above 1, so a direction whose largest components
 /// tie (|m_j| = |m_k| = 1) lies inside both charts' domains, not on their boundary.
@@ -109,6 +110,12 @@ pub enum SingularError {
     /// A joint named twice.
     #[error("joint '{0}' is named twice")]
     Repeated(String),
+    /// C-space singularities are built for planar linkages only.
+    #[error("C-space singularities (bifurcations) of spatial linkages are not built yet: ask for input or output singularities")]
+    SpatialCspace,
+    /// A spatial linkage's loop joint as an actuated or output joint.
+    #[error("'{0}' is a loop joint of a spatial linkage: its rate is read from the closure frames, not a coordinate; name tree joints")]
+    LoopJoint(String),
     /// The system has an equation shape the differentiation does not know.
     #[error("internal: loop row {0} mentions a variable that is neither an angle, a travel nor a product")]
     Unexpected(usize),
