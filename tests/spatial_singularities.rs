@@ -150,6 +150,12 @@ fn check(xml: &str, m: &Matrix3<f64>, counts: (usize, usize), what: &str) {
     same_points(&p, &set, &rocker_turns, &format!("{what}: output singularities, rocker angle"));
     let (p, set) = run(xml, SingularKind::Input, &["rocker_joint"], None);
     same_points(&p, &set, &rocker_turns, &format!("{what}: input singularities, rocker driving"));
+    // A bifurcation is where both partial derivatives of g vanish on the curve: a turning point
+    // of both angles at once. The closed form has none (the two lists share no point), and the
+    // C-space search proves there is none.
+    assert!(crank_turns.iter().all(|c| rocker_turns.iter().all(|r| (c.0 - r.0).abs() + (c.1 - r.1).abs() > 1e-3)), "{what}: the closed form itself");
+    let (_, set) = run(xml, SingularKind::Cspace, &[], None);
+    assert_eq!((set.status, set.boxes.len()), (Status::Complete, 0), "{what}: C-space singularities");
 }
 
 #[test]
@@ -191,6 +197,22 @@ fn planar_four_bar_through_the_spatial_model_has_the_planar_dead_centres() {
     let reference: Vec<(f64, f64)> = clusters(&planar, &a, ["crank_joint", "rocker_joint"]).iter().map(|(h, _)| (0.5 * (h[0].0 + h[0].1), 0.5 * (h[1].0 + h[1].1))).collect();
     assert_eq!(reference.len(), 4);
     same_points(&spatial, &b, &reference, "four-bar, spatial model");
+}
+
+#[test]
+fn a_folding_parallelogram_through_the_spatial_model_has_its_two_bifurcations() {
+    // d = b, a = c: the parallelogram and anti-parallelogram branches cross where all bars are
+    // in line (crank 0 and π). The spatial model's adjoint rows find them as the planar rows do:
+    // overdetermined there, so unproven clusters at those two places and nowhere else.
+    let m = urdf::parse(&super::closed_loop_singularities::four_bar(3.0, 1.0, 3.0, 1.0)).expect("parses");
+    let p = SingularProblem::with_linkage(SpatialProblem::new(&m, &[], &[]).expect("spatial"), SingularKind::Cspace, &[], None).expect("builds");
+    let set = p.solve(&SolverSettings { sigma: 1e-5, ..Default::default() }, &AtomicBool::new(false)).expect("valid");
+    assert_eq!(set.status, Status::Complete);
+    let got = clusters(&p, &set, ["crank_joint", "rocker_joint"]);
+    assert_eq!(got.len(), 2, "{got:?}");
+    for r in [0.0, PI] {
+        assert!(got.iter().any(|(h, _)| holds_angle(h[0], r, 1e-4) && holds_angle(h[1], r, 1e-4)), "bifurcation at crank {r} missing from {got:?}");
+    }
 }
 
 #[test]

@@ -110,9 +110,6 @@ pub enum SingularError {
     /// A joint named twice.
     #[error("joint '{0}' is named twice")]
     Repeated(String),
-    /// C-space singularities are built for planar linkages only.
-    #[error("C-space singularities (bifurcations) of spatial linkages are not built yet: ask for input or output singularities")]
-    SpatialCspace,
     /// A spatial linkage's loop joint as an actuated or output joint.
     #[error("'{0}' is a loop joint of a spatial linkage: its rate is read from the closure frames, not a coordinate; name tree joints")]
     LoopJoint(String),

@@ -36,9 +36,123 @@ enum Coordinate {
     Var(VarId),
 }
 
+/// How a system's equations split: coordinates, definitions of the derived variables (in the
+/// order they are defined), constraint rows.
+#[derive(Clone, Debug)]
+struct Structure {
+    coords: Vec<Coordinate>,
+    /// `(z, equation, a)`: the equation defines `z`, in which it appears once, as `a·z`.
+    definitions: Vec<(VarId, usize, Interval)>,
+    /// Equations with unknowns that define nothing (circles left out).
+    constraints: Vec<usize>,
+}
+
+impl Structure {
+    /// Each derived variable is defined by the first equation that mentions it, where it must
+    /// appear linearly with a coefficient that is not zero, after the variables it depends on;
+    /// anything else is an equation shape this construction does not know.
+    fn new(system: &EquationSystem) -> Result<Self, SingularError> {
+        let n = system.vars.len();
+        let mut coords: Vec<Coordinate> = Vec::new();
+        let mut in_circle = vec![false; n];
+        for (k, e) in system.equations.iter().enumerate() {
+            if let EquationKind::Circle { x, y } = e.kind {
+                if in_circle[x] || in_circle[y] {
+                    return Err(SingularError::Unexpected(k));
+                }
+                in_circle[x] = true;
+                in_circle[y] = true;
+                coords.push(Coordinate::Angle { c: x, s: y });
+            }
+        }
+        coords.extend(system.primaries().into_iter().filter(|&v| !in_circle[v]).map(Coordinate::Var));
+        let mut known: Vec<bool> = system.vars.iter().map(|v| v.role == VarRole::Primary).collect();
+        let mut definitions = Vec::new();
+        let mut constraints = Vec::new();
+        for (k, e) in system.equations.iter().enumerate() {
+            if matches!(e.kind, EquationKind::Circle { .. }) || e.terms.is_empty() {
+                continue;
+            }
+            let mut unknown: Vec<VarId> = e.vars().filter(|&v| !known[v]).collect();
+            unknown.sort_unstable();
+            unknown.dedup();
+            match unknown.as_slice() {
+                [] => constraints.push(k),
+                &[z] => {
+                    let linear: Vec<&Term> = e.terms.iter().filter(|t| t.mono == Monomial::Linear(z)).collect();
+                    let only_linear = e.terms.iter().all(|t| t.mono == Monomial::Linear(z) || !mentions(t.mono, z));
+                    let [t] = linear.as_slice() else { return Err(SingularError::Unexpected(k)) };
+                    if !only_linear || t.coef.contains(0.0) {
+                        return Err(SingularError::Unexpected(k));
+                    }
+                    definitions.push((z, k, t.coef));
+                    known[z] = true;
+                }
+                _ => return Err(SingularError::Unexpected(k)),
+            }
+        }
+        Ok(Self { coords, definitions, constraints })
+    }
+}
+
+/// `x·w` product variables with their bilinear definitions, added to an extended system on
+/// first use.
+#[derive(Clone, Debug, Default)]
+struct Products(BTreeMap<(VarId, VarId), VarId>);
+
+impl Products {
+    fn get(&mut self, aug: &mut EquationSystem, x: VarId, w: VarId) -> VarId {
+        *self.0.entry((x, w)).or_insert_with(|| {
+            let dom = aug.vars[x].domain * aug.vars[w].domain;
+            let p = aug.add_var(format!("{}*{}", aug.vars[x].name, aug.vars[w].name), VarRole::Derived, dom);
+            aug.add(Equation::bilinear(p, x, w));
+            p
+        })
+    }
+
+    /// `factor·Σ a·w` as terms (`factor` 1 when `None`).
+    fn times(&mut self, aug: &mut EquationSystem, factor: Option<VarId>, form: &[(VarId, Interval)], k: Interval, out: &mut Vec<Term>) {
+        for &(w, a) in form {
+            let mono = match factor {
+                None => Monomial::Linear(w),
+                Some(f) => Monomial::Linear(self.get(aug, f, w)),
+            };
+            out.push(Term { coef: k * a, mono });
+        }
+    }
+}
+
+/// `∂E/∂v` of one equation as `(factor, k)` pairs: `Σ k·factor`, factor a variable or 1.
+fn partial(e: &Equation, v: VarId) -> Vec<(Option<VarId>, Interval)> {
+    let mut out = Vec::new();
+    for t in &e.terms {
+        match t.mono {
+            Monomial::Linear(x) if x == v => out.push((None, t.coef)),
+            Monomial::Square(x) if x == v => out.push((Some(x), t.coef * point(2.0))),
+            Monomial::Product(x, y) if x == v && y == v => out.push((Some(x), t.coef * point(2.0))),
+            Monomial::Product(x, y) if x == v => out.push((Some(y), t.coef)),
+            Monomial::Product(x, y) if y == v => out.push((Some(x), t.coef)),
+            _ => {}
+        }
+    }
+    out
+}
+
+/// The enclosure of `Σ terms` over the variables' domains.
+fn enclosure(aug: &EquationSystem, terms: &[Term]) -> Interval {
+    terms.iter().fold(point(0.0), |acc, t| {
+        let m = match t.mono {
+            Monomial::Linear(v) => aug.vars[v].domain,
+            Monomial::Square(v) => aug.vars[v].domain.sqr(),
+            Monomial::Product(x, y) => aug.vars[x].domain * aug.vars[y].domain,
+        };
+        acc + t.coef * m
+    })
+}
+
 /// The velocity rows of a system, written into an extension of it.
 #[derive(Clone, Debug)]
-pub(crate) struct Velocities {
+struct Velocities {
     /// Per coordinate: the variable of its rate (a multiplier of the null vector) and what it
     /// moves.
     coords: Vec<(VarId, Coordinate)>,
@@ -47,112 +161,55 @@ pub(crate) struct Velocities {
     vel: Vec<Vec<(VarId, Interval)>>,
     /// The constraint rows' derivatives: the rows of `F_q v = 0`.
     rows: Vec<Vec<Term>>,
-    /// `x·w` products, keyed by (base variable, velocity-level variable).
-    products: BTreeMap<(VarId, VarId), VarId>,
 }
 
 impl Velocities {
-    /// Reads the coordinates and definitions of `system` and writes into `aug` (which extends
-    /// it) the rate variables, the velocities of the derived variables with their defining
-    /// rows, and the products they need; the constraint rows' derivatives are kept in `rows`,
-    /// for the caller to write with its own rows. `name` names a coordinate's rate.
-    fn new(system: &EquationSystem, aug: &mut EquationSystem, name: impl Fn(Coordinate) -> String) -> Result<Self, SingularError> {
-        let n = system.vars.len();
-        let mut coords: Vec<Coordinate> = Vec::new();
-        let mut in_circle = vec![false; n];
-        for e in &system.equations {
-            if let EquationKind::Circle { x, y } = e.kind {
-                if in_circle[x] || in_circle[y] {
-                    return Err(SingularError::Unexpected(0));
-                }
-                in_circle[x] = true;
-                in_circle[y] = true;
-                coords.push(Coordinate::Angle { c: x, s: y });
-            }
-        }
-        coords.extend(system.primaries().into_iter().filter(|&v| !in_circle[v]).map(Coordinate::Var));
-        let rates: Vec<(VarId, Coordinate)> = coords.iter().map(|&c| (aug.add_var(format!("v_{}", name(c)), VarRole::Primary, interval(-CHART_REACH, CHART_REACH)), c)).collect();
-        let mut me = Velocities { coords: rates.clone(), vel: vec![Vec::new(); n], rows: Vec::new(), products: BTreeMap::new() };
-        for &(w, c) in &rates {
+    /// Writes into `aug` (which extends `system`) the rate variables, the velocities of the
+    /// derived variables with their defining rows, and the products they need; the constraint
+    /// rows' derivatives are kept in `rows`, for the caller to write with its own rows. `name`
+    /// names a coordinate's rate.
+    fn new(system: &EquationSystem, st: &Structure, aug: &mut EquationSystem, name: impl Fn(Coordinate) -> String) -> Result<Self, SingularError> {
+        let mut products = Products::default();
+        let coords: Vec<(VarId, Coordinate)> = st.coords.iter().map(|&c| (aug.add_var(format!("v_{}", name(c)), VarRole::Primary, interval(-CHART_REACH, CHART_REACH)), c)).collect();
+        let mut vel = vec![Vec::new(); system.vars.len()];
+        for &(w, c) in &coords {
             match c {
                 Coordinate::Angle { c, s } => {
-                    let sw = me.product(aug, s, w);
-                    let cw = me.product(aug, c, w);
-                    me.vel[c] = vec![(sw, point(-1.0))];
-                    me.vel[s] = vec![(cw, point(1.0))];
+                    vel[c] = vec![(products.get(aug, s, w), point(-1.0))];
+                    vel[s] = vec![(products.get(aug, c, w), point(1.0))];
                 }
-                Coordinate::Var(v) => me.vel[v] = vec![(w, point(1.0))],
+                Coordinate::Var(v) => vel[v] = vec![(w, point(1.0))],
             }
         }
-        for (k, e) in system.equations.iter().enumerate() {
-            if matches!(e.kind, EquationKind::Circle { .. }) || e.terms.is_empty() {
-                continue;
-            }
-            let mut unknown: Vec<VarId> = e.vars().filter(|&v| me.vel[v].is_empty()).collect();
-            unknown.sort_unstable();
-            unknown.dedup();
-            match unknown.as_slice() {
-                [] => {
-                    let row = me.derivative(aug, &e.terms, k)?;
-                    me.rows.push(row);
-                }
-                &[z] => {
-                    // z's definition: `a·z + rest = 0`, so `ż = −(d rest/dt)/a`.
-                    let linear: Vec<&Term> = e.terms.iter().filter(|t| t.mono == Monomial::Linear(z)).collect();
-                    let only_linear = e.terms.iter().all(|t| t.mono == Monomial::Linear(z) || !mentions(t.mono, z));
-                    let [t] = linear.as_slice() else { return Err(SingularError::Unexpected(k)) };
-                    let a = t.coef;
-                    if system.vars[z].role != VarRole::Derived || !only_linear || a.contains(0.0) {
+        // d/dt Σ terms, the velocities of the variables known.
+        let derivative = |terms: &[&Term], vel: &[Vec<(VarId, Interval)>], products: &mut Products, aug: &mut EquationSystem, k: usize| -> Result<Vec<Term>, SingularError> {
+            let mut out = Vec::new();
+            for t in terms {
+                let parts: Vec<(Option<VarId>, VarId, Interval)> = match t.mono {
+                    Monomial::Linear(x) => vec![(None, x, point(1.0))],
+                    Monomial::Square(x) => vec![(Some(x), x, point(2.0))],
+                    Monomial::Product(x, y) => vec![(Some(y), x, point(1.0)), (Some(x), y, point(1.0))],
+                };
+                for (factor, x, m) in parts {
+                    if vel[x].is_empty() {
                         return Err(SingularError::Unexpected(k));
                     }
-                    let rest: Vec<Term> = e.terms.iter().filter(|t| t.mono != Monomial::Linear(z)).copied().collect();
-                    let mut row = me.derivative(aug, &rest, k)?;
-                    let sum = row.iter().fold(point(0.0), |acc, t| acc + t.coef * enclosure(aug, t.mono));
-                    let dz = aug.add_var(format!("d({})", system.vars[z].name), VarRole::Derived, -sum / a);
-                    row.push(Term { coef: a, mono: Monomial::Linear(dz) });
-                    aug.add(Equation::new(row, point(0.0)));
-                    me.vel[z] = vec![(dz, point(1.0))];
-                }
-                _ => return Err(SingularError::Unexpected(k)),
-            }
-        }
-        Ok(me)
-    }
-
-    /// The product variable `x·w`, added to `aug` on first use.
-    fn product(&mut self, aug: &mut EquationSystem, x: VarId, w: VarId) -> VarId {
-        *self.products.entry((x, w)).or_insert_with(|| {
-            let dom = aug.vars[x].domain * aug.vars[w].domain;
-            let p = aug.add_var(format!("{}*{}", aug.vars[x].name, aug.vars[w].name), VarRole::Derived, dom);
-            aug.add(Equation::bilinear(p, x, w));
-            p
-        })
-    }
-
-    /// `d/dt Σ terms` as linear terms in velocity-level variables (products added to `aug`).
-    fn derivative(&mut self, aug: &mut EquationSystem, terms: &[Term], row: usize) -> Result<Vec<Term>, SingularError> {
-        let mut out: Vec<Term> = Vec::new();
-        for t in terms {
-            // (factor, variable whose velocity, multiplier): d(mono) = Σ factor·vel(variable)·k.
-            let parts: Vec<(Option<VarId>, VarId, Interval)> = match t.mono {
-                Monomial::Linear(x) => vec![(None, x, point(1.0))],
-                Monomial::Square(x) => vec![(Some(x), x, point(2.0))],
-                Monomial::Product(x, y) => vec![(Some(y), x, point(1.0)), (Some(x), y, point(1.0))],
-            };
-            for (factor, x, k) in parts {
-                if self.vel[x].is_empty() {
-                    return Err(SingularError::Unexpected(row));
-                }
-                for (w, a) in self.vel[x].clone() {
-                    let mono = match factor {
-                        None => Monomial::Linear(w),
-                        Some(f) => Monomial::Linear(self.product(aug, f, w)),
-                    };
-                    out.push(Term { coef: t.coef * a * k, mono });
+                    products.times(aug, factor, &vel[x], t.coef * m, &mut out);
                 }
             }
+            Ok(merge(out))
+        };
+        for &(z, k, a) in &st.definitions {
+            // `a·z + rest = 0`, so `a·ż + d(rest)/dt = 0`.
+            let rest: Vec<&Term> = system.equations[k].terms.iter().filter(|t| t.mono != Monomial::Linear(z)).collect();
+            let mut row = derivative(&rest, &vel, &mut products, aug, k)?;
+            let dz = aug.add_var(format!("d({})", system.vars[z].name), VarRole::Derived, -enclosure(aug, &row) / a);
+            row.push(Term { coef: a, mono: Monomial::Linear(dz) });
+            aug.add(Equation::new(row, point(0.0)));
+            vel[z] = vec![(dz, point(1.0))];
         }
-        Ok(merge(out))
+        let rows = st.constraints.iter().map(|&k| derivative(&system.equations[k].terms.iter().collect::<Vec<_>>(), &vel, &mut products, aug, k)).collect::<Result<_, _>>()?;
+        Ok(Velocities { coords, vel, rows })
     }
 
     /// The rate of a joint that moves one coordinate or variable, as linear terms.
@@ -174,6 +231,75 @@ impl Velocities {
     }
 }
 
+/// The C-space rows `λᵀ dF/dq = 0` of a system, written into an extension of it: one
+/// multiplier `λ_r` per constraint row and, through the definitions, an adjoint `μ_z` per
+/// derived variable (`a·μ_z + Σ_e κ_e ∂E_e/∂z = 0` over the later equations `e` that mention `z`,
+/// `κ` being `λ` or `μ`; solved from the last definition back, so `μ` is a function of `λ` and
+/// vanishes with it); then one row per coordinate, `Σ_e κ_e ∂E_e/∂q = 0`, with `∂/∂φ =
+/// −s ∂/∂c + c ∂/∂s` for an angle. That is `λᵀ` times the total derivative of the constraint
+/// rows on the manifold of the definitions: the rows lose rank exactly where it has a root.
+/// Returns the multipliers and the rows.
+fn adjoint_rows(system: &EquationSystem, st: &Structure, aug: &mut EquationSystem) -> (Vec<VarId>, Vec<Vec<Term>>) {
+    let mut products = Products::default();
+    let lambdas: Vec<VarId> = (0..st.constraints.len()).map(|i| aug.add_var(format!("lambda_{i}"), VarRole::Primary, interval(-CHART_REACH, CHART_REACH))).collect();
+    // κ per equation: λ for constraint rows, μ for definitions (once made).
+    let mut kappa: Vec<Option<VarId>> = vec![None; system.equations.len()];
+    for (&k, &l) in st.constraints.iter().zip(&lambdas) {
+        kappa[k] = Some(l);
+    }
+    let mut mentions_of: Vec<Vec<usize>> = vec![Vec::new(); system.vars.len()];
+    for (k, e) in system.equations.iter().enumerate() {
+        if matches!(e.kind, EquationKind::Circle { .. }) || e.terms.is_empty() {
+            continue;
+        }
+        let mut vs: Vec<VarId> = e.vars().collect();
+        vs.sort_unstable();
+        vs.dedup();
+        for v in vs {
+            mentions_of[v].push(k);
+        }
+    }
+    // Σ_e κ_e ∂E_e/∂v as terms, over the equations with a κ, but `skip`.
+    let column = |v: VarId, skip: Option<usize>, kappa: &[Option<VarId>], products: &mut Products, aug: &mut EquationSystem| -> Vec<Term> {
+        let mut out = Vec::new();
+        for &k in &mentions_of[v] {
+            let Some(kv) = kappa[k].filter(|_| Some(k) != skip) else { continue };
+            for (factor, c) in partial(&system.equations[k], v) {
+                products.times(aug, factor, &[(kv, point(1.0))], c, &mut out);
+            }
+        }
+        merge(out)
+    };
+    for &(z, k, a) in st.definitions.iter().rev() {
+        let mut row = column(z, Some(k), &kappa, &mut products, aug);
+        let mu = aug.add_var(format!("mu({})", system.vars[z].name), VarRole::Derived, -enclosure(aug, &row) / a);
+        row.push(Term { coef: a, mono: Monomial::Linear(mu) });
+        aug.add(Equation::new(merge(row), point(0.0)));
+        kappa[k] = Some(mu);
+    }
+    let mut rows = Vec::new();
+    for &c in &st.coords {
+        match c {
+            Coordinate::Var(v) => rows.push(column(v, None, &kappa, &mut products, aug)),
+            Coordinate::Angle { c, s } => {
+                // −s·(λᵀ∂F/∂c) + c·(λᵀ∂F/∂s), each a form in κ-level variables times a variable.
+                let dc = column(c, None, &kappa, &mut products, aug);
+                let ds = column(s, None, &kappa, &mut products, aug);
+                let mut row = Vec::new();
+                for (factor, form, sign) in [(s, dc, -1.0), (c, ds, 1.0)] {
+                    let pairs: Vec<(VarId, Interval)> = form.iter().map(|t| match t.mono {
+                        Monomial::Linear(w) => (w, t.coef),
+                        _ => unreachable!("columns are linear"),
+                    }).collect();
+                    products.times(aug, Some(factor), &pairs, point(sign), &mut row);
+                }
+                rows.push(merge(row));
+            }
+        }
+    }
+    (lambdas, rows)
+}
+
 fn mentions(m: Monomial, v: VarId) -> bool {
     match m {
         Monomial::Linear(x) | Monomial::Square(x) => x == v,
@@ -181,14 +307,6 @@ fn mentions(m: Monomial, v: VarId) -> bool {
     }
 }
 
-/// The enclosure of a linear monomial over the variables' domains.
-fn enclosure(aug: &EquationSystem, m: Monomial) -> Interval {
-    match m {
-        Monomial::Linear(v) => aug.vars[v].domain,
-        Monomial::Square(v) => aug.vars[v].domain.sqr(),
-        Monomial::Product(x, y) => aug.vars[x].domain * aug.vars[y].domain,
-    }
-}
 
 impl Coordinates for SpatialProblem {
     fn system(&self) -> &EquationSystem {
@@ -216,9 +334,6 @@ impl Coordinates for SpatialProblem {
     }
 
     fn augment(&self, kind: SingularKind, actuated: &[String], output: Option<&Output>) -> Result<Augmented, SingularError> {
-        if kind == SingularKind::Cspace {
-            return Err(SingularError::SpatialCspace);
-        }
         let free = || self.free_joints.join(", ");
         let motion = |name: &str, unknown: fn(String, String) -> SingularError| -> Result<JointMotion, SingularError> {
             match self.joint_motion(name) {
@@ -247,9 +362,18 @@ impl Coordinates for SpatialProblem {
                 (None, Coordinate::Var(v)) => self.system.vars[v].name.clone(),
             }
         };
+        let st = Structure::new(&self.system)?;
+        let dof = st.coords.len() as isize - st.constraints.len() as isize;
         let mut aug = self.system.clone();
-        let vel = Velocities::new(&self.system, &mut aug, coordinate_name)?;
-        let dof = vel.coords.len() as isize - vel.rows.len() as isize;
+        if kind == SingularKind::Cspace {
+            let (multipliers, rows) = adjoint_rows(&self.system, &st, &mut aug);
+            let n_rows = rows.len() as isize;
+            for row in rows.into_iter().filter(|r| !r.is_empty()) {
+                aug.add(Equation::new(row, point(0.0)));
+            }
+            return Ok(Augmented { system: aug, multipliers, dof, rows: n_rows });
+        }
+        let vel = Velocities::new(&self.system, &st, &mut aug, coordinate_name)?;
         let mut rows = vel.rows.clone();
         match kind {
             SingularKind::Input => {
@@ -269,7 +393,7 @@ impl Coordinates for SpatialProblem {
                 }
                 _ => rows.extend(output_motions.iter().map(|&m| vel.rate(m).expect("checked: a tree joint's motion"))),
             },
-            SingularKind::Cspace => unreachable!("refused above"),
+            SingularKind::Cspace => unreachable!("handled above"),
         }
         let n_rows = rows.len() as isize;
         for row in rows {
