@@ -220,6 +220,12 @@ pub trait Coordinates {
     /// The multipliers and rows of `kind` (actuated joints checked here: which joints have a
     /// rate is the model's business).
     fn augment(&self, kind: SingularKind, actuated: &[String], output: Option<&Output>) -> Result<Augmented, SingularError>;
+    /// Whether a root of the augmented system in `b` (configuration variables first) is a
+    /// singular configuration of the mechanism, not an artefact of how its rows are written:
+    /// a Krawczyk certificate counts only where this holds.
+    fn rows_faithful(&self, _b: &IntervalBox) -> bool {
+        true
+    }
 }
 
 impl Coordinates for LinkageProblem {
@@ -405,7 +411,10 @@ impl<L: Coordinates> SingularProblem<L> {
                     dropped_other_chart += 1;
                     continue;
                 }
-                boxes.push(SingularBox { chart: k, b, status: if u { BoxKind::Certified } else { BoxKind::Solution } });
+                // A certificate of the augmented system is one of the mechanism only where its
+                // rows are faithful (see `Coordinates::rows_faithful`); elsewhere the box stays.
+                let certified = u && self.linkage.rows_faithful(&b);
+                boxes.push(SingularBox { chart: k, b, status: if certified { BoxKind::Certified } else { BoxKind::Solution } });
             }
             for b in e.undecided {
                 boxes.push(SingularBox { chart: k, b, status: BoxKind::Undecided });

@@ -1287,6 +1287,13 @@ impl SpatialProblem {
         })
     }
 
+    /// True when some axis closure written with two rows may have its left-out component at
+    /// zero in `b` (configuration variables first): there the two rows lose rank where the
+    /// three would not (the mirror branch the sign filter removes meets the true one).
+    pub(crate) fn axis_rows_may_degenerate(&self, b: &IntervalBox) -> bool {
+        self.signs.iter().any(|(u, v)| u.eval(&b.dims).contains(0.0) || v.eval(&b.dims).contains(0.0))
+    }
+
     /// A solver for `system`, which extends this problem's system (its first variables are
     /// this problem's, as in the singular-set systems), with the joint-limit and sign filters
     /// of `solver`.

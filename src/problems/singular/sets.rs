@@ -113,6 +113,13 @@ impl Coordinates for Linkage {
             Linkage::Spatial(p, _) => p.augment(kind, actuated, output),
         }
     }
+
+    fn rows_faithful(&self, b: &IntervalBox) -> bool {
+        match self {
+            Linkage::Planar(p) => p.rows_faithful(b),
+            Linkage::Spatial(p, _) => p.rows_faithful(b),
+        }
+    }
 }
 
 /// The built problems of several singular sets of one linkage, in the order asked.

@@ -333,6 +333,13 @@ impl Coordinates for SpatialProblem {
         SpatialProblem::extended_solver(self, system, settings)
     }
 
+    /// An axis closure is written with two of its three rows (`axes_agree` in `spatial`):
+    /// where the component left out vanishes, those rows lose rank on configurations where the
+    /// mechanism's do not, so a root there may be an artefact, never certified.
+    fn rows_faithful(&self, b: &IntervalBox) -> bool {
+        !self.axis_rows_may_degenerate(b)
+    }
+
     fn augment(&self, kind: SingularKind, actuated: &[String], output: Option<&Output>) -> Result<Augmented, SingularError> {
         let free = || self.free_joints.join(", ");
         let motion = |name: &str, unknown: fn(String, String) -> SingularError| -> Result<JointMotion, SingularError> {
