@@ -67,10 +67,7 @@ impl Analysis for LinkageAnalysis {
     }
 
     fn services(&self) -> Vec<Service> {
-        match &self.problem {
-            Linkage::Planar(_) => vec![Service::Solve, Service::Singularities, Service::Classify],
-            Linkage::Spatial(..) => vec![Service::Solve, Service::Classify],
-        }
+        vec![Service::Solve, Service::Singularities, Service::Classify]
     }
 
     fn limitation(&self) -> String {
