@@ -182,6 +182,37 @@ fn spherical_four_bar_singular_points_match_the_closed_form() {
 }
 
 #[test]
+fn an_axis_closure_through_its_left_out_component_adds_no_point() {
+    // The same spherical four-bar with the rocker arc 1.3 (closing axis Ry(2.3) z in the rocker
+    // frame): the closing axis sweeps a cone about u4 wide enough to cross the plane x = 0, and
+    // x is the component its two closure rows leave out (the largest at rest). There those two
+    // rows lose rank (the mirror branch meets the true one); the velocity rows use all three
+    // components with one more unknown (δ = ν·u), so no point appears there: exactly the closed
+    // form's, none extra.
+    let xml = urdf_text("spherical_four_bar.urdf").replace("<successor link=\"rocker\"><origin xyz=\"0 0 0\" rpy=\"0 1.8 0\"/>", "<successor link=\"rocker\"><origin xyz=\"0 0 0\" rpy=\"0 2.3 0\"/>");
+    assert!(xml.contains("rpy=\"0 2.3 0\""));
+    let u2 = Vector3::new(0.5f64.sin(), 0.0, 0.5f64.cos());
+    let u4 = Unit::new_normalize(Vector3::new(1.0f64.sin(), 0.0, 1.0f64.cos()));
+    let w = Vector3::new(2.3f64.sin(), 0.0, 2.3f64.cos());
+    let g = |t: f64, p: f64| (Rotation3::from_axis_angle(&Vector3::z_axis(), t) * u2).dot(&(Rotation3::from_axis_angle(&u4, p) * w)) - 0.9f64.cos();
+    // The closing axis's x component does vanish on the mechanism's curve.
+    let m = bilinear_form(g);
+    let mut signs = [false, false];
+    for i in 0..3600 {
+        let t = -PI + 2.0 * PI * i as f64 / 3600.0;
+        let k = m.transpose() * trig(t);
+        let r = (k[0] * k[0] + k[1] * k[1]).sqrt();
+        for branch in [-1.0, 1.0] {
+            let p = k[1].atan2(k[0]) + branch * (-k[2] / r).acos();
+            let x = (Rotation3::from_axis_angle(&u4, p) * w).x;
+            signs[usize::from(x > 0.0)] = true;
+        }
+    }
+    assert_eq!(signs, [true, true], "the closing axis's x component changes sign along the curve");
+    check(&xml, &m, (0, 4), "spherical four-bar, rocker arc 1.3");
+}
+
+#[test]
 fn planar_four_bar_through_the_spatial_model_has_the_planar_dead_centres() {
     // The generic velocity rows on the spatial builder's system against the planar builder's
     // own rows, on the bundled crank-rocker: the same four certified dead centres of the rocker.

@@ -298,6 +298,8 @@ pub struct SpatialProblem {
     /// Axis closures written with two of their three rows: the third component of both axes,
     /// which must agree in sign (see `axes_agree`).
     signs: Vec<(Form, Form)>,
+    /// The same closures, for their velocity rows (`axis_velocities`).
+    axis_pairs: Vec<AxisPair>,
 }
 
 /// A leg between two ball joints, reduced to a distance.
@@ -588,7 +590,7 @@ impl Builder {
 /// removed by the sign filter (`SignFilter`): a box where they have opposite signs holds no
 /// closure; a box is certified only where they provably share one. When the three rows are
 /// identities or constants (planar axes), they are written as they are.
-fn axes_agree(b: &mut Builder, u: &Vec3F, v: &Vec3F, w: Vector3<f64>, rows: &mut Vec<usize>, signs: &mut Vec<(Form, Form)>) -> Result<(), ()> {
+fn axes_agree(b: &mut Builder, u: &Vec3F, v: &Vec3F, w: Vector3<f64>, rows: &mut Vec<usize>, signs: &mut Vec<(Form, Form)>, pairs: &mut Vec<AxisPair>) -> Result<(), ()> {
     let diff = sub3(u, v);
     if diff.iter().all(|f| f.terms.is_empty()) {
         for f in &diff {
@@ -597,13 +599,41 @@ fn axes_agree(b: &mut Builder, u: &Vec3F, v: &Vec3F, w: Vector3<f64>, rows: &mut
         return Ok(());
     }
     let i = (0..3).max_by(|&a, &c| w[a].abs().total_cmp(&w[c].abs())).expect("three components");
+    let first = rows.len();
     for (k, f) in diff.iter().enumerate() {
         if k != i {
             b.zero(f, rows)?;
         }
     }
     signs.push((u[i].clone(), v[i].clone()));
+    pairs.push(AxisPair { u: u.clone().map(|f| f.merged()), diff: diff.clone(), rows: rows[first..].to_vec() });
     Ok(())
+}
+
+/// An axis closure written with two rows, kept for its velocities: the predecessor's axis `u`,
+/// `u − v` per component, and the equations written.
+#[derive(Clone, Debug)]
+struct AxisPair {
+    u: Vec3F,
+    diff: Vec3F,
+    rows: Vec<usize>,
+}
+
+/// A linear form `Σ a·x + constant` over the system's variables.
+pub(crate) type LinearForm = (Vec<(VarId, Interval)>, Interval);
+
+/// What the velocity rows of an axis closure written with two rows need: with `|u| = |v| = 1`
+/// and `u = v`, the derivative `δ = d/dt (u − v)` is orthogonal to `u`, so its three rows have
+/// rank two everywhere on the closure (the two rows written lose rank where the component left
+/// out vanishes); `δ = ν·u` with one more unknown `ν` is square and forces `ν = u·δ = 0`.
+#[derive(Clone, Debug)]
+pub(crate) struct AxisVelocity {
+    /// The predecessor's axis, per component.
+    pub u: [LinearForm; 3],
+    /// `u − v`, per component.
+    pub diff: [LinearForm; 3],
+    /// The equations (indices) written for this closure.
+    pub rows: Vec<usize>,
 }
 
 fn e_mentions(m: Monomial, v: VarId) -> bool {
@@ -988,6 +1018,7 @@ impl SpatialProblem {
             }
         }
         let mut signs: Vec<(Form, Form)> = Vec::new();
+        let mut axis_pairs: Vec<AxisPair> = Vec::new();
         let mut loop_rows: Vec<(String, Vec<usize>)> = Vec::new();
         let mut frames: Vec<Option<LoopFrames>> = vec![None; m.loops.len()];
         let leg_of: BTreeMap<usize, &Leg> = legs.iter().map(|leg| (leg.closure, leg)).collect();
@@ -1069,7 +1100,7 @@ impl SpatialProblem {
                         }
                         None => {
                             let w = rest[lp.predecessor] * (lp.predecessor_origin.rotation * lp.axis);
-                            axes_agree(&mut b, &axis_p, &axis_s, w, &mut rows, &mut signs).map_err(|_| cannot())?;
+                            axes_agree(&mut b, &axis_p, &axis_s, w, &mut rows, &mut signs, &mut axis_pairs).map_err(|_| cannot())?;
                             if let (Some((lo, hi)), true) = (limits, respect_limits) {
                                 limit_list.push((readings.len(), stated(lo), stated(hi)));
                             }
@@ -1082,7 +1113,7 @@ impl SpatialProblem {
                     let cylindrical = compound == Some(Compound::Cylindrical);
                     if cylindrical {
                         let w = rest[lp.predecessor] * (lp.predecessor_origin.rotation * lp.axis);
-                        axes_agree(&mut b, &axis_p, &axis_s, w, &mut rows, &mut signs).map_err(|_| cannot())?;
+                        axes_agree(&mut b, &axis_p, &axis_s, w, &mut rows, &mut signs, &mut axis_pairs).map_err(|_| cannot())?;
                     } else {
                         for j in 0..2 {
                             b.equal(&col(&rp, j), &col(&rs, j), &mut rows).map_err(|_| cannot())?;
@@ -1171,6 +1202,7 @@ impl SpatialProblem {
             readings,
             limits: limit_list,
             signs,
+            axis_pairs,
         })
     }
 
@@ -1285,6 +1317,13 @@ impl SpatialProblem {
             Reading::Var(v) => JointMotion::Var(v),
             Reading::LoopAngle(_) | Reading::LoopTravel(_) => JointMotion::Loop,
         })
+    }
+
+    /// The axis closures written with two rows, for faithful velocity rows (see
+    /// `AxisVelocity`).
+    pub(crate) fn axis_velocities(&self) -> Vec<AxisVelocity> {
+        let linear = |f: &Form| -> LinearForm { (f.merged().terms, f.constant) };
+        self.axis_pairs.iter().map(|p| AxisVelocity { u: [0, 1, 2].map(|i| linear(&p.u[i])), diff: [0, 1, 2].map(|i| linear(&p.diff[i])), rows: p.rows.clone() }).collect()
     }
 
     /// True when some axis closure written with two rows may have its left-out component at

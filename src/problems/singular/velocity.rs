@@ -22,7 +22,7 @@
 
 use super::{merge, Augmented, Coordinates, Output, SingularError, SingularKind, CHART_REACH};
 use crate::interval::{interval, point, Interval, IntervalBox};
-use crate::problems::spatial::{JointMotion, SpatialProblem};
+use crate::problems::spatial::{AxisVelocity, JointMotion, LinearForm, SpatialProblem};
 use crate::search::{SolveError, Solver, SolverSettings};
 use crate::system::{Equation, EquationKind, EquationSystem, Monomial, Term, VarId, VarRole};
 use std::collections::BTreeMap;
@@ -51,7 +51,7 @@ impl Structure {
     /// Each derived variable is defined by the first equation that mentions it, where it must
     /// appear linearly with a coefficient that is not zero, after the variables it depends on;
     /// anything else is an equation shape this construction does not know.
-    fn new(system: &EquationSystem) -> Result<Self, SingularError> {
+    fn new(system: &EquationSystem, skip: &[usize]) -> Result<Self, SingularError> {
         let n = system.vars.len();
         let mut coords: Vec<Coordinate> = Vec::new();
         let mut in_circle = vec![false; n];
@@ -70,7 +70,7 @@ impl Structure {
         let mut definitions = Vec::new();
         let mut constraints = Vec::new();
         for (k, e) in system.equations.iter().enumerate() {
-            if matches!(e.kind, EquationKind::Circle { .. }) || e.terms.is_empty() {
+            if matches!(e.kind, EquationKind::Circle { .. }) || e.terms.is_empty() || skip.contains(&k) {
                 continue;
             }
             let mut unknown: Vec<VarId> = e.vars().filter(|&v| !known[v]).collect();
@@ -92,6 +92,45 @@ impl Structure {
             }
         }
         Ok(Self { coords, definitions, constraints })
+    }
+}
+
+/// The equations as the first-order rows see them: each axis closure written with two rows
+/// (`spatial::AxisVelocity`) replaced by its three component rows, appended, whose rows get one
+/// more unknown `ν` times the axis (`δ = ν·u`), so that they keep the mechanism's rank where the
+/// component left out vanishes and the system stays square.
+#[derive(Clone, Debug)]
+struct Faithful {
+    system: EquationSystem,
+    /// Per axis closure: its three rows (indices into `system.equations`), the axis `u` per
+    /// component, and how many rows the configuration system has for it.
+    axes: Vec<([usize; 3], [LinearForm; 3], usize)>,
+}
+
+impl Faithful {
+    fn new(system: &EquationSystem, axes: &[AxisVelocity]) -> Self {
+        let written: Vec<usize> = axes.iter().flat_map(|a| a.rows.iter().copied()).collect();
+        let mut equations: Vec<Equation> = system.equations.iter().enumerate().filter(|(k, _)| !written.contains(k)).map(|(_, e)| e.clone()).collect();
+        let mut out = Vec::new();
+        for a in axes {
+            let rows = [0, 1, 2].map(|c| {
+                let (terms, constant) = &a.diff[c];
+                equations.push(Equation::new(terms.iter().map(|&(x, k)| Term { coef: k, mono: Monomial::Linear(x) }).collect(), *constant));
+                equations.len() - 1
+            });
+            out.push((rows, a.u.clone(), a.rows.len()));
+        }
+        Faithful { system: EquationSystem { vars: system.vars.clone(), equations }, axes: out }
+    }
+
+    /// The appended rows, which `Structure` leaves to the axis handling.
+    fn axis_rows(&self) -> Vec<usize> {
+        self.axes.iter().flat_map(|(r, _, _)| r.iter().copied()).collect()
+    }
+
+    /// Constraint rows of the configuration system: the structure's plus the axis rows written.
+    fn constraint_count(&self, st: &Structure) -> usize {
+        st.constraints.len() + self.axes.iter().map(|(_, _, w)| w).sum::<usize>()
     }
 }
 
@@ -168,7 +207,8 @@ impl Velocities {
     /// derived variables with their defining rows, and the products they need; the constraint
     /// rows' derivatives are kept in `rows`, for the caller to write with its own rows. `name`
     /// names a coordinate's rate.
-    fn new(system: &EquationSystem, st: &Structure, aug: &mut EquationSystem, name: impl Fn(Coordinate) -> String) -> Result<Self, SingularError> {
+    fn new(f: &Faithful, st: &Structure, aug: &mut EquationSystem, name: impl Fn(Coordinate) -> String) -> Result<Self, SingularError> {
+        let system = &f.system;
         let mut products = Products::default();
         let coords: Vec<(VarId, Coordinate)> = st.coords.iter().map(|&c| (aug.add_var(format!("v_{}", name(c)), VarRole::Primary, interval(-CHART_REACH, CHART_REACH)), c)).collect();
         let mut vel = vec![Vec::new(); system.vars.len()];
@@ -208,7 +248,19 @@ impl Velocities {
             aug.add(Equation::new(row, point(0.0)));
             vel[z] = vec![(dz, point(1.0))];
         }
-        let rows = st.constraints.iter().map(|&k| derivative(&system.equations[k].terms.iter().collect::<Vec<_>>(), &vel, &mut products, aug, k)).collect::<Result<_, _>>()?;
+        let mut rows: Vec<Vec<Term>> = st.constraints.iter().map(|&k| derivative(&system.equations[k].terms.iter().collect::<Vec<_>>(), &vel, &mut products, aug, k)).collect::<Result<_, _>>()?;
+        for (a, (three, u, _)) in f.axes.iter().enumerate() {
+            // δ_c − ν·u_c = 0 for the three components.
+            let nu = aug.add_var(format!("nu_{a}"), VarRole::Primary, interval(-CHART_REACH, CHART_REACH));
+            for (&k, (terms, constant)) in three.iter().zip(u) {
+                let mut row = derivative(&system.equations[k].terms.iter().collect::<Vec<_>>(), &vel, &mut products, aug, k)?;
+                for &(x, c) in terms {
+                    products.times(aug, Some(x), &[(nu, point(1.0))], -c, &mut row);
+                }
+                row.push(Term { coef: -*constant, mono: Monomial::Linear(nu) });
+                rows.push(merge(row));
+            }
+        }
         Ok(Velocities { coords, vel, rows })
     }
 
@@ -239,12 +291,14 @@ impl Velocities {
 /// −s ∂/∂c + c ∂/∂s` for an angle. That is `λᵀ` times the total derivative of the constraint
 /// rows on the manifold of the definitions: the rows lose rank exactly where it has a root.
 /// Returns the multipliers and the rows.
-fn adjoint_rows(system: &EquationSystem, st: &Structure, aug: &mut EquationSystem) -> (Vec<VarId>, Vec<Vec<Term>>) {
+fn adjoint_rows(f: &Faithful, st: &Structure, aug: &mut EquationSystem) -> (Vec<VarId>, Vec<Vec<Term>>) {
+    let system = &f.system;
     let mut products = Products::default();
-    let lambdas: Vec<VarId> = (0..st.constraints.len()).map(|i| aug.add_var(format!("lambda_{i}"), VarRole::Primary, interval(-CHART_REACH, CHART_REACH))).collect();
+    let rows_with_lambda: Vec<usize> = st.constraints.iter().copied().chain(f.axis_rows()).collect();
+    let lambdas: Vec<VarId> = (0..rows_with_lambda.len()).map(|i| aug.add_var(format!("lambda_{i}"), VarRole::Primary, interval(-CHART_REACH, CHART_REACH))).collect();
     // κ per equation: λ for constraint rows, μ for definitions (once made).
     let mut kappa: Vec<Option<VarId>> = vec![None; system.equations.len()];
-    for (&k, &l) in st.constraints.iter().zip(&lambdas) {
+    for (&k, &l) in rows_with_lambda.iter().zip(&lambdas) {
         kappa[k] = Some(l);
     }
     let mut mentions_of: Vec<Vec<usize>> = vec![Vec::new(); system.vars.len()];
@@ -297,6 +351,18 @@ fn adjoint_rows(system: &EquationSystem, st: &Structure, aug: &mut EquationSyste
             }
         }
     }
+    // ν's column: −Σ_c λ_c u_c = 0 (λ orthogonal to the axis).
+    for (three, u, _) in &f.axes {
+        let mut row = Vec::new();
+        for (&k, (terms, constant)) in three.iter().zip(u) {
+            let l = kappa[k].expect("axis rows carry a multiplier");
+            for &(x, c) in terms {
+                products.times(aug, Some(x), &[(l, point(1.0))], -c, &mut row);
+            }
+            row.push(Term { coef: -*constant, mono: Monomial::Linear(l) });
+        }
+        rows.push(merge(row));
+    }
     (lambdas, rows)
 }
 
@@ -333,9 +399,11 @@ impl Coordinates for SpatialProblem {
         SpatialProblem::extended_solver(self, system, settings)
     }
 
-    /// An axis closure is written with two of its three rows (`axes_agree` in `spatial`):
-    /// where the component left out vanishes, those rows lose rank on configurations where the
-    /// mechanism's do not, so a root there may be an artefact, never certified.
+    /// An axis closure is written with two of its three rows (`axes_agree` in `spatial`): the
+    /// mirror branch they also admit (the component left out of opposite signs) is removed by
+    /// the sign filter only where the signs are told apart, and it meets the true branch where
+    /// that component vanishes; a root in a box that straddles zero there may be the mirror's,
+    /// so it is never certified.
     fn rows_faithful(&self, b: &IntervalBox) -> bool {
         !self.axis_rows_may_degenerate(b)
     }
@@ -369,19 +437,22 @@ impl Coordinates for SpatialProblem {
                 (None, Coordinate::Var(v)) => self.system.vars[v].name.clone(),
             }
         };
-        let st = Structure::new(&self.system)?;
-        let dof = st.coords.len() as isize - st.constraints.len() as isize;
+        let faithful = Faithful::new(&self.system, &self.axis_velocities());
+        let st = Structure::new(&faithful.system, &faithful.axis_rows())?;
+        let dof = st.coords.len() as isize - faithful.constraint_count(&st) as isize;
         let mut aug = self.system.clone();
         if kind == SingularKind::Cspace {
-            let (multipliers, rows) = adjoint_rows(&self.system, &st, &mut aug);
+            let (multipliers, rows) = adjoint_rows(&faithful, &st, &mut aug);
             let n_rows = rows.len() as isize;
             for row in rows.into_iter().filter(|r| !r.is_empty()) {
                 aug.add(Equation::new(row, point(0.0)));
             }
             return Ok(Augmented { system: aug, multipliers, dof, rows: n_rows });
         }
-        let vel = Velocities::new(&self.system, &st, &mut aug, coordinate_name)?;
+        let vel = Velocities::new(&faithful, &st, &mut aug, coordinate_name)?;
         let mut rows = vel.rows.clone();
+        // Each ν is one more unknown beside its three rows.
+        let nus = faithful.axes.len() as isize;
         match kind {
             SingularKind::Input => {
                 if actuated.len() as isize != dof {
@@ -402,7 +473,7 @@ impl Coordinates for SpatialProblem {
             },
             SingularKind::Cspace => unreachable!("handled above"),
         }
-        let n_rows = rows.len() as isize;
+        let n_rows = rows.len() as isize - nus;
         for row in rows {
             if !row.is_empty() {
                 aug.add(Equation::new(merge(row), point(0.0)));
