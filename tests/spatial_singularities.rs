@@ -249,8 +249,8 @@ fn a_folding_parallelogram_through_the_spatial_model_has_its_two_bifurcations() 
 #[test]
 fn spatial_refusals_are_one_clear_line() {
     let m = urdf::parse(&urdf_text("spherical_four_bar.urdf")).expect("parses");
-    let err = SingularSets::new(&m, &[], &[SingularKind::Input], &["loop_coupler_rocker".to_string()], None).err().expect("refused");
+    let err = SingularSets::new(&m, &[], &[SingularKind::Input], &["loop_coupler_rocker".to_string()], None).expect_err("refused");
     assert!(err.to_string().contains("is a loop joint of a spatial linkage"), "{err}");
-    let err = SingularSets::new(&m, &[], &[SingularKind::Input], &["nope".to_string()], None).err().expect("refused");
+    let err = SingularSets::new(&m, &[], &[SingularKind::Input], &["nope".to_string()], None).expect_err("refused");
     assert!(err.to_string().contains("'nope' is not a free joint"), "{err}");
 }

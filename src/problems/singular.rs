@@ -114,7 +114,7 @@ pub enum SingularError {
     #[error("'{0}' is a loop joint of a spatial linkage: its rate is read from the closure frames, not a coordinate; name tree joints")]
     LoopJoint(String),
     /// The system has an equation shape the differentiation does not know.
-    #[error("internal: loop row {0} mentions a variable that is neither an angle, a travel nor a product")]
+    #[error("internal: equation {0} has a shape the differentiation does not know (a variable that is neither a coordinate nor defined by an earlier equation)")]
     Unexpected(usize),
 }
 

@@ -19,6 +19,11 @@
 //! the charts need only the coordinates' rates, as many as the planar builder's.
 //! Only the variables the equations touch get velocities; derivatives of circles are not
 //! written (the parametrisation satisfies them).
+//!
+//! C-space sets are the transposed construction (`adjoint_rows`): a multiplier per constraint
+//! row, an adjoint per derived variable solved back through the definitions, one row per
+//! coordinate. Axis closures written with two rows are widened to three at this level
+//! (`Faithful`), so neither construction inherits the two rows' rank loss.
 
 use super::{merge, Augmented, Coordinates, Output, SingularError, SingularKind, CHART_REACH};
 use crate::interval::{interval, point, Interval, IntervalBox};
@@ -463,7 +468,7 @@ impl Coordinates for SpatialProblem {
             SingularKind::Output => match output {
                 Some(Output::Point { link, x, y }) => {
                     let label = point_label(link, *x, *y);
-                    let t = self.traces.iter().find(|t| t.name == label).ok_or_else(|| SingularError::Unexpected(0))?;
+                    let t = self.traces.iter().find(|t| t.name == label).ok_or(SingularError::Unexpected(0))?;
                     for v in t.xyz {
                         // A coordinate that no equation touches has velocity zero.
                         rows.push(vel.var_rate(v).unwrap_or_default());
