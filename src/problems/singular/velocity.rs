@@ -107,35 +107,48 @@ impl Structure {
 #[derive(Clone, Debug)]
 struct Faithful {
     system: EquationSystem,
-    /// Per axis closure: its three rows (indices into `system.equations`), the axis `u` per
-    /// component, and how many rows the configuration system has for it.
-    axes: Vec<([usize; 3], [LinearForm; 3], usize)>,
+    /// Per axis closure: its component rows (indices into `system.equations`) with the axis
+    /// `u`'s component each, and how many rows the configuration system has for it.
+    axes: Vec<(Vec<(usize, LinearForm)>, usize)>,
 }
 
 impl Faithful {
+    /// A component whose `u − v` is identically zero (both axes confined to a plane) has no row
+    /// in either form and is left out: the closure then has one row written, and its two other
+    /// components become two rows with `ν`. A closure whose left-out component is identically
+    /// equal on both sides keeps its rows as written (no mirror branch to meet).
     fn new(system: &EquationSystem, axes: &[AxisVelocity]) -> Self {
-        let written: Vec<usize> = axes.iter().flat_map(|a| a.rows.iter().copied()).collect();
+        let identity = |(terms, constant): &LinearForm| terms.is_empty() && constant.inf() == 0.0 && constant.sup() == 0.0;
+        let widened: Vec<(&AxisVelocity, Vec<usize>)> = axes
+            .iter()
+            .map(|a| (a, (0..3).filter(|&c| !identity(&a.diff[c])).collect::<Vec<usize>>()))
+            .filter(|(a, comps)| comps.len() == a.rows.len() + 1)
+            .collect();
+        let written: Vec<usize> = widened.iter().flat_map(|(a, _)| a.rows.iter().copied()).collect();
         let mut equations: Vec<Equation> = system.equations.iter().enumerate().filter(|(k, _)| !written.contains(k)).map(|(_, e)| e.clone()).collect();
         let mut out = Vec::new();
-        for a in axes {
-            let rows = [0, 1, 2].map(|c| {
-                let (terms, constant) = &a.diff[c];
-                equations.push(Equation::new(terms.iter().map(|&(x, k)| Term { coef: k, mono: Monomial::Linear(x) }).collect(), *constant));
-                equations.len() - 1
-            });
-            out.push((rows, a.u.clone(), a.rows.len()));
+        for (a, comps) in widened {
+            let rows = comps
+                .iter()
+                .map(|&c| {
+                    let (terms, constant) = &a.diff[c];
+                    equations.push(Equation::new(terms.iter().map(|&(x, k)| Term { coef: k, mono: Monomial::Linear(x) }).collect(), *constant));
+                    (equations.len() - 1, a.u[c].clone())
+                })
+                .collect();
+            out.push((rows, a.rows.len()));
         }
         Faithful { system: EquationSystem { vars: system.vars.clone(), equations }, axes: out }
     }
 
     /// The appended rows, which `Structure` leaves to the axis handling.
     fn axis_rows(&self) -> Vec<usize> {
-        self.axes.iter().flat_map(|(r, _, _)| r.iter().copied()).collect()
+        self.axes.iter().flat_map(|(r, _)| r.iter().map(|&(k, _)| k)).collect()
     }
 
     /// Constraint rows of the configuration system: the structure's plus the axis rows written.
     fn constraint_count(&self, st: &Structure) -> usize {
-        st.constraints.len() + self.axes.iter().map(|(_, _, w)| w).sum::<usize>()
+        st.constraints.len() + self.axes.iter().map(|(_, w)| w).sum::<usize>()
     }
 }
 
@@ -254,10 +267,10 @@ impl Velocities {
             vel[z] = vec![(dz, point(1.0))];
         }
         let mut rows: Vec<Vec<Term>> = st.constraints.iter().map(|&k| derivative(&system.equations[k].terms.iter().collect::<Vec<_>>(), &vel, &mut products, aug, k)).collect::<Result<_, _>>()?;
-        for (a, (three, u, _)) in f.axes.iter().enumerate() {
-            // δ_c − ν·u_c = 0 for the three components.
+        for (a, (comps, _)) in f.axes.iter().enumerate() {
+            // δ_c − ν·u_c = 0 for the components.
             let nu = aug.add_var(format!("nu_{a}"), VarRole::Primary, interval(-CHART_REACH, CHART_REACH));
-            for (&k, (terms, constant)) in three.iter().zip(u) {
+            for (k, (terms, constant)) in comps.iter().map(|(k, u)| (*k, u)) {
                 let mut row = derivative(&system.equations[k].terms.iter().collect::<Vec<_>>(), &vel, &mut products, aug, k)?;
                 for &(x, c) in terms {
                     products.times(aug, Some(x), &[(nu, point(1.0))], -c, &mut row);
@@ -357,9 +370,9 @@ fn adjoint_rows(f: &Faithful, st: &Structure, aug: &mut EquationSystem) -> (Vec<
         }
     }
     // ν's column: −Σ_c λ_c u_c = 0 (λ orthogonal to the axis).
-    for (three, u, _) in &f.axes {
+    for (comps, _) in &f.axes {
         let mut row = Vec::new();
-        for (&k, (terms, constant)) in three.iter().zip(u) {
+        for (k, (terms, constant)) in comps.iter().map(|(k, u)| (*k, u)) {
             let l = kappa[k].expect("axis rows carry a multiplier");
             for &(x, c) in terms {
                 products.times(aug, Some(x), &[(l, point(1.0))], -c, &mut row);
