@@ -264,6 +264,10 @@ struct ChartArgs {
     /// Shorter sweeps (a minute instead of several).
     #[arg(long)]
     quick: bool,
+    /// Only these chart groups, comma separated: speed, cspace, convergence, stability,
+    /// singular3r, collisions, distances, cusps, loops (default: all).
+    #[arg(long, value_delimiter = ',', value_name = "GROUP,...")]
+    only: Vec<String>,
 }
 
 #[derive(clap::Args)]
@@ -337,7 +341,7 @@ pub fn run() -> Result<()> {
     match cli.command {
         Command::Solve(args) => solve(args),
         Command::Bench(args) => bench(args),
-        Command::Chart(args) => figures::run(&args.dir, args.quick),
+        Command::Chart(args) => figures::run(&args.dir, args.quick, &args.only),
         Command::Singularities(args) => singularities(args),
         Command::Ik(args) => ik(args),
         Command::Bench3r(args) => bench3r(args),
@@ -595,10 +599,14 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     let cancel = AtomicBool::new(false);
     let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };
     let structural = args.uncertainty == 0.0 && !args.search_anyway && manip3r::verdict::parallel_structure(&prepared.mechanism).is_some();
+    let branches = manip3r::branches::of(&prepared.mechanism, &chain);
+    // On these arms whole branches are curves of nodes: the isolated-node search floods, so it
+    // is not run even with --search-anyway.
+    let with_nodes = args.nodes && branches.is_none();
     let mut run = if structural {
         manip3r::structural_singularities(&chain, args.precision)?
     } else {
-        manip3r::singularities(&chain, args.precision, args.nodes, &control, &mut |_| {})?
+        manip3r::singularities(&chain, args.precision, with_nodes, &control, &mut |_| {})?
     };
     // The verdict reads the full-torus run; the limits then filter what is listed.
     let verdict = manip3r::verdict::decide(&prepared.mechanism, &chain, &run, &prepared.limits);
@@ -608,6 +616,18 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     report.chain = Some(prepared.choice.clone());
     report.rounding = Some(manip3r::report::Rounding::of(&prepared));
     report.joint_limits = Some(effect.clone());
+    if let Some(b) = &branches {
+        if !structural {
+            let boxes: Vec<_> = run.cusps.undecided.iter().map(|u| u.theta).chain(run.cusps.cusps.iter().filter(|c| !c.unique).map(|c| c.theta)).collect();
+            if !boxes.is_empty() {
+                report.explain(b.attribute(&prepared.mechanism, &boxes, 1e-2));
+            }
+            if args.nodes {
+                report.not_searched = Some("nodes not enumerated: the singular branches are curves of nodes (see the singular branches), which the isolated-node search does not model".into());
+            }
+        }
+        report.singular_branches = Some(b.clone());
+    }
     if structural {
         report.not_searched = Some(format!(
             "axes 2 and 3 are parallel: no cusp point, by the verdict's proof; {} (--search-anyway runs the interval searches, which cannot complete here)",
@@ -639,6 +659,12 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
         writeln!(out, "  not searched: {why}").ok();
     }
     writeln!(out, "  chain: {}", prepared.choice.reason).ok();
+    for line in report.singular_branches.iter().flat_map(|b| b.lines()) {
+        writeln!(out, "  {line}").ok();
+    }
+    if let Some(a) = &report.explained_undecided {
+        writeln!(out, "  undecided cusp boxes: {}", a.text).ok();
+    }
     let snaps = &prepared.snaps;
     if prepared.exact_geometry {
         writeln!(out, "  rounding: off (--exact-geometry): angles taken as written").ok();

@@ -11,12 +11,15 @@
 //!   Newton in coordinates and certified by Krawczyk on the points system; a certified placement
 //!   is attributed to the cluster whose boxes its distance enclosure meets (the root exists and
 //!   the solver never loses one, so its distances lie in some solution box). Boxes that meet no
-//!   certified placement get the deeper search: removed when proven empty, undecided otherwise.
+//!   certified placement are searched again with every determinant (the redundant ones settle
+//!   the singular tangent of octahedral b), then in coordinates: removed when proven empty,
+//!   undecided otherwise.
 //! A cluster then counts its proven solutions (distinct certified placements) and is undecided
 //! when some box of it is still unproven, with the reason. "Complete" means nothing undecided.
 
 use crate::contract::{Contractor, FaceBounds, Newton};
 use crate::interval::{components, IntervalBox};
+use inari::Interval;
 use crate::problems::cayley_menger::{BuildOptions, CayleyMenger, DistanceError, DistanceProblem, DistanceSolverError, Formulation};
 use crate::problems::coordinates::{Placed, PlacedError};
 use crate::search::{Collect, SolveStats, Solver, SolverSettings, Status};
@@ -99,6 +102,8 @@ pub struct Certified {
     pub roots: Vec<Root>,
     /// Boxes a limit left unprocessed.
     pub undecided: Vec<IntervalBox>,
+    /// CPU seconds per phase of the call (`search`, then the settling steps), where the time goes.
+    pub phases: Vec<(&'static str, f64)>,
 }
 
 impl Certified {
@@ -123,8 +128,8 @@ impl Certified {
 /// coordinates.
 ///
 /// Measured (`bench-distances`, issue 15): on the four spheres at sigma 0.01 the line
-/// formulation takes about 800 boxes and 0.06 s CPU with every solution box proven, against
-/// about 900 boxes plus a settling in coordinates of 2.8 s for the determinants, and over a
+/// formulation takes 843 boxes and 0.04 s CPU with every solution box proven, against 885
+/// boxes plus a settling of 0.6 s (1.6 s in all) for the shared determinants, and over a
 /// million boxes for the points formulation (expanding `‖p_a − p_b‖²` into monomials loses the
 /// dependency between the squares and the products that interval propagation needs). On the
 /// platforms the determinants prune far better than the points (octahedral b: 20 to 100 boxes
@@ -147,6 +152,7 @@ pub fn solve(problem: &DistanceProblem, choice: Choice, redundant: bool, faces: 
 }
 
 fn solve_inner(problem: &DistanceProblem, choice: Choice, redundant: bool, faces: FaceBounds, settings: SolverSettings, cancel: &AtomicBool) -> Result<Certified, DistancesError> {
+    let c0 = crate::search::process_cpu_seconds();
     let choice = if choice == Choice::Auto { choose(problem) } else { choice };
     let formulation = if choice == Choice::Split { Formulation::Split } else { Formulation::Shared };
     let cm = CayleyMenger::build(problem, BuildOptions { formulation, redundant })?;
@@ -164,8 +170,10 @@ fn solve_inner(problem: &DistanceProblem, choice: Choice, redundant: bool, faces
             let solver = placed.solver(settings.clone()).map_err(DistanceSolverError::from)?;
             let e = solver.enclose(cancel, &mut |_| {});
             let solvers = DEEPER.iter().map(|&f| placed.solver(deeper_settings(&settings, f))).collect::<Result<Vec<_>, _>>().map_err(DistanceSolverError::from)?;
-            let mut out = Certified { formulation: choice, cm, placed: None, status: e.status, stats: e.stats, solutions: e.solutions, unique: e.unique, cluster: Vec::new(), clusters: Vec::new(), roots: Vec::new(), undecided: e.undecided };
+            let mut out = Certified { formulation: choice, cm, placed: None, status: e.status, stats: e.stats, solutions: e.solutions, unique: e.unique, cluster: Vec::new(), clusters: Vec::new(), roots: Vec::new(), undecided: e.undecided, phases: vec![("search", crate::search::process_cpu_seconds() - c0)] };
+            let c1 = crate::search::process_cpu_seconds();
             settle_points(&placed, &solvers, &mut out, cancel);
+            out.phases.push(("deeper searches in coordinates", crate::search::process_cpu_seconds() - c1));
             out
         };
         out.placed = Some(placed);
@@ -174,9 +182,13 @@ fn solve_inner(problem: &DistanceProblem, choice: Choice, redundant: bool, faces
         let solver = cm.solver(faces, settings.clone())?;
         let e = solver.enclose(cancel, &mut |_| {});
         let solver = cm.solver(faces, deeper_settings(&settings, DEEPER[0]))?;
+        // Every determinant, shared variables and control points (whatever was solved): the
+        // settling's first test of a box no certified placement meets (see `settle_determinants`).
+        let all = CayleyMenger::build(problem, BuildOptions { formulation: Formulation::Shared, redundant: true })?;
+        let all_solver = all.solver(FaceBounds::Corners, deeper_settings(&settings, DEEPER[0]))?;
         let unique = vec![false; e.solutions.len()];
-        let mut out = Certified { formulation: choice, cm: cm.clone(), placed: None, status: e.status, stats: e.stats, solutions: e.solutions, unique, cluster: Vec::new(), clusters: Vec::new(), roots: Vec::new(), undecided: e.undecided };
-        settle_determinants(&cm, placed.as_ref(), &solver, &mut out, cancel);
+        let mut out = Certified { formulation: choice, cm: cm.clone(), placed: None, status: e.status, stats: e.stats, solutions: e.solutions, unique, cluster: Vec::new(), clusters: Vec::new(), roots: Vec::new(), undecided: e.undecided, phases: vec![("search", crate::search::process_cpu_seconds() - c0)] };
+        settle_determinants(&cm, placed.as_ref(), &solver, (&all, &all_solver), &mut out, cancel);
         out.placed = placed;
         Ok(out)
     }
@@ -297,39 +309,91 @@ fn settle_points(placed: &Placed, solvers: &[Solver<'_>], out: &mut Certified, c
     out.clusters = clusters;
 }
 
-fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solver<'_>, out: &mut Certified, cancel: &AtomicBool) {
-    let (labels, _) = components(&out.solutions);
+/// A certified placement found while settling the determinants: its certified box (in the
+/// variables of the coordinate system that proved it), its points, and the enclosure of every
+/// squared distance over that box (so boxes of any determinant system can be tested against it).
+struct Placement {
+    certified: IntervalBox,
+    points: Vec<[f64; 3]>,
+    distance: Vec<Vec<Interval>>,
+}
+
+impl Placement {
+    fn new(system: &Placed, certified: IntervalBox, points: Vec<[f64; 3]>) -> Self {
+        let n = points.len();
+        let distance = (0..n).map(|a| (0..n).map(|b| if a == b { crate::interval::point(0.0) } else { system.distance_over(a, b, &certified) }).collect()).collect();
+        Self { certified, points, distance }
+    }
+
+    /// True when the placement's distances meet box `b` of `cm` in every unknown (both copies
+    /// in the split formulation).
+    fn meets(&self, cm: &CayleyMenger, b: &IntervalBox) -> bool {
+        cm.unknowns.iter().all(|u| {
+            let d = self.distance[u.a][u.b];
+            !b.dims[u.var].intersection(d).is_empty() && u.twin.is_none_or(|t| !b.dims[t].intersection(d).is_empty())
+        })
+    }
+}
+
+/// Box `b` of `from` as a start box of `to` (every unknown both systems share cut to the box's
+/// interval; the others keep their domains): `None` when a cut is empty.
+fn restrict(from: &CayleyMenger, b: &IntervalBox, to: &CayleyMenger) -> Option<IntervalBox> {
+    let bounds = from.unknown_intervals(b);
+    let mut start = to.system.initial_box();
+    for u in &to.unknowns {
+        let Some(k) = from.unknowns.iter().position(|v| (v.a, v.b) == (u.a, u.b)) else { continue };
+        for var in std::iter::once(u.var).chain(u.twin) {
+            let cut = start.dims[var].intersection(bounds[k].1);
+            if cut.is_empty() {
+                return None;
+            }
+            start.dims[var] = cut;
+        }
+    }
+    Some(start)
+}
+
+/// Settles the boxes of a determinant search. `all` is the system of every determinant (the
+/// redundant ones too) in shared variables, with its solver at sigma / 16.
+fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solver<'_>, all: (&CayleyMenger, &Solver<'_>), out: &mut Certified, cancel: &AtomicBool) {
+    let clock = crate::search::process_cpu_seconds;
+    let t0 = clock();
     // Certified placements from every box midpoint, each once.
-    let mut roots: Vec<(IntervalBox, Vec<[f64; 3]>)> = Vec::new();
+    let mut roots: Vec<Placement> = Vec::new();
     let mut meets: Vec<Vec<usize>> = Vec::new();
     if let Some(pl) = placed.filter(|p| p.is_square()) {
         for b in &out.solutions {
             let width = cm.unknowns.iter().map(|u| b.width(u.var)).fold(0.0, f64::max);
             for pts in cm.embed(&b.midpoint(), 1e-7 + 10.0 * width) {
                 let Some(x) = pl.certify_near(&pts) else { continue };
-                if roots.iter().any(|(r, _)| r.intersects(&x)) {
+                if roots.iter().any(|r| r.certified.intersects(&x)) {
                     continue;
                 }
-                // The root's distances, enclosed over its certified box.
-                let d: Vec<_> = cm.unknowns.iter().map(|u| pl.distance_over(u.a, u.b, &x)).collect();
-                let hit: Vec<usize> = (0..out.solutions.len())
-                    .filter(|&i| cm.unknowns.iter().zip(&d).all(|(u, d)| out.solutions[i].dims[u.var].intersection(*d).is_empty() == false && u.twin.is_none_or(|t| !out.solutions[i].dims[t].intersection(*d).is_empty())))
-                    .collect();
+                let pts = pl.points(&x.midpoint());
+                let root = Placement::new(pl, x, pts);
+                let hit: Vec<usize> = (0..out.solutions.len()).filter(|&i| root.meets(cm, &out.solutions[i])).collect();
                 if hit.is_empty() {
                     // Not a solution of the determinant system as solved (an orientation
                     // choice excludes it): not counted.
                     continue;
                 }
-                let pts = pl.points(&x.midpoint());
-                roots.push((x, pts));
+                roots.push(root);
                 meets.push(hit);
             }
         }
     }
-    // Boxes that meet no certified placement: searched again in coordinates, with the box's
-    // distances as bounds (square, so Krawczyk certifies what it finds); a box is removed when
-    // that search proves it empty, gains the placements it certifies, or stays undecided. The
-    // determinants themselves cannot do this near a tangency (singular) or when not square.
+    let t1 = clock();
+    out.phases.push(("embedding and certifying placements", t1 - t0));
+    // Boxes that meet no certified placement are tested twice, cheapest first:
+    // 1. searched again with every determinant (`all`: the redundant ones prune where the
+    //    system solved is singular, e.g. along the common tangent of octahedral b's curves) from
+    //    the box's distances: removed when that search proves the box empty, covered when every
+    //    box it finds meets a certified placement (so do the boxes the main search keeps);
+    // 2. otherwise searched again in coordinates, with the box's distances as bounds (square,
+    //    so Krawczyk certifies what it finds): removed when proven empty, gains the placements
+    //    it certifies, or stays undecided. The determinants cannot certify near a tangency
+    //    (singular) or when not square.
+    let (all_cm, all_solver) = all;
     let covered: Vec<bool> = (0..out.solutions.len()).map(|i| meets.iter().any(|m| m.contains(&i))).collect();
     let pairs: Vec<(usize, usize)> = cm.unknowns.iter().map(|u| (u.a, u.b)).collect();
     let with_r = placed.filter(|p| p.is_square()).and_then(|_| Placed::build_with(&cm.problem, &pairs).ok());
@@ -340,6 +404,7 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
     };
     let mut keep = Vec::new();
     let mut why: Vec<Option<&'static str>> = Vec::new();
+    let (mut in_determinants, mut in_coordinates) = (0.0, 0.0);
     for i in 0..out.solutions.len() {
         if covered[i] {
             keep.push(i);
@@ -347,28 +412,56 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
             continue;
         }
         let b = out.solutions[i].clone();
+        let t = clock();
+        let first = match restrict(cm, &b, all_cm) {
+            None => Some(Vec::new()),
+            Some(start) => {
+                let mut found = Collect::default();
+                let (status, st) = all_solver.run_from(start, cancel, &mut found);
+                out.stats.processed += st.processed;
+                (status == Status::Complete).then_some(found.solutions)
+            }
+        };
+        in_determinants += clock() - t;
+        match first {
+            Some(found) if found.is_empty() => continue,
+            Some(found) => {
+                let hits: Vec<Vec<usize>> = found.iter().map(|f| (0..roots.len()).filter(|&r| roots[r].meets(all_cm, f)).collect()).collect();
+                if hits.iter().all(|h| !h.is_empty()) {
+                    keep.push(i);
+                    why.push(None);
+                    for r in hits.into_iter().flatten() {
+                        meets[r].push(i);
+                    }
+                    continue;
+                }
+            }
+            None => {}
+        }
+        let t = clock();
         let verdict = match &with_r {
             Some(pr) => {
                 let bounds: Vec<_> = cm.unknown_intervals(&b).into_iter().map(|(_, d)| d).collect();
                 match pr.start_from(&bounds) {
                     None => Ok(Vec::new()),
                     Some(_) if coordinate_solvers.is_empty() => Err("the coordinate search could not be set up"),
-                    Some(start) => deeper(&coordinate_solvers, &start, cancel, &mut out.stats).map(|found| found.into_iter().map(|f| (f.clone(), pr.points(&f.midpoint()))).collect()),
+                    Some(start) => deeper(&coordinate_solvers, &start, cancel, &mut out.stats).map(|found| found.into_iter().map(|f| Placement::new(pr, f.clone(), pr.points(&f.midpoint()))).collect()),
                 }
             }
             None => deeper(std::slice::from_ref(solver), &b, cancel, &mut out.stats).and_then(|f| if f.is_empty() { Ok(Vec::new()) } else { Err("no frame to certify placements in (fewer than three fixed points)") }),
         };
+        in_coordinates += clock() - t;
         match verdict {
             Ok(found) if found.is_empty() => {}
             Ok(found) => {
                 keep.push(i);
                 why.push(None);
-                for (x, pts) in found {
+                for root in found {
                     // Placements are compared by their points (the two systems' variables differ).
-                    match roots.iter().position(|(_, q)| q.iter().zip(&pts).all(|(a, b)| (0..3).all(|k| (a[k] - b[k]).abs() <= 1e-6))) {
+                    match roots.iter().position(|q| q.points.iter().zip(&root.points).all(|(a, b)| (0..3).all(|k| (a[k] - b[k]).abs() <= 1e-6))) {
                         Some(r) => meets[r].push(i),
                         None => {
-                            roots.push((x, pts));
+                            roots.push(root);
                             meets.push(vec![i]);
                         }
                     }
@@ -380,7 +473,8 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
             }
         }
     }
-    let _ = labels;
+    out.phases.push(("unmet boxes searched again with every determinant", in_determinants));
+    out.phases.push(("unmet boxes searched again in coordinates", in_coordinates));
     let old_index: Vec<usize> = keep.clone();
     out.solutions = keep.iter().map(|&i| out.solutions[i].clone()).collect();
     out.unique = vec![false; out.solutions.len()];
@@ -415,11 +509,11 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
             clusters[l].undecided.get_or_insert(r);
         }
     }
-    for ((x, pts), hit) in roots.into_iter().zip(meets) {
+    for (root, hit) in roots.into_iter().zip(meets) {
         let Some(k) = hit.iter().find_map(|&i| pos(i)) else { continue };
         let c = labels[k];
         clusters[c].proven += 1;
-        out.roots.push(Root { cluster: c, certified: x, points: pts });
+        out.roots.push(Root { cluster: c, certified: root.certified, points: root.points });
     }
     out.cluster = labels;
     out.clusters = clusters;

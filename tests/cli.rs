@@ -194,7 +194,9 @@ fn singularities_json_follows_the_documented_schema() {
     assert_eq!(r["status"], "complete");
     assert_eq!(r["verdict"]["cuspidal"], false);
     assert_eq!(r["verdict"]["certified"], true);
-    assert!(r["verdict"]["reason"].is_string() && r["verdict"]["aspects"].is_null());
+    // Robot f: 4 aspects proven by the cover; IK solutions unbounded (internal-motion lines).
+    assert!(r["verdict"]["reason"].is_string() && r["verdict"]["aspects"] == 4);
+    assert!(r["verdict"]["max_ik_solutions"].is_null(), "{}", r["verdict"]);
     assert_eq!(r["chain"]["joints"][2], "joint3");
     assert_eq!(r["rounding"]["snapping"], true);
     assert_eq!(r["undecided_total"][0], 0);

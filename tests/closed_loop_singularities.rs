@@ -959,11 +959,9 @@ mod three_rpr_ref {
 
 /// The 3-RPR with ρ3 = 17: every cusp of its type-II image in (ρ1, ρ2) certified, against the
 /// independent Newton of `three_rpr_ref` (none missed, none extra).
-/// Ignored: on two shared cores the cusp search ran over ten minutes without finishing (16 of its
-/// 36 chart pairs stay open: the search must tile the whole curve S finely enough to refute the
-/// cusp condition; see `diag_three_rpr_cusp_charts` and the README); run it with `--ignored`.
+/// The search runs in scaled widths (`CuspProblem::solve`): in absolute widths it ran over ten
+/// minutes without finishing (16 of its 36 chart pairs open; see `diag_three_rpr_cusp_charts`).
 #[test]
-#[ignore = "slow: the 3-RPR cusp search runs over ten minutes; run with --ignored"]
 fn three_rpr_cusps_match_an_independent_newton() {
     let reference = three_rpr_ref::cusps(17.0);
     assert_eq!(reference.len(), 6, "{reference:?}");
@@ -996,7 +994,8 @@ fn three_rpr_cusps_match_an_independent_newton() {
 
 /// Diagnostics, not a check: per cusp chart pair of the 3-RPR (rho3 = 17), the solver's counters
 /// within `DIAG_SECS` seconds a chart (default 10). Knobs: `DIAG_LP=0` (propagation only),
-/// `DIAG_NW` (newton_width), `DIAG_SIGMA`, `DIAG_DERIVED=v,w,mu` (those variables made derived:
+/// `DIAG_NW` (newton_width), `DIAG_RHO`, `DIAG_SCALED=1` (scaled widths), `DIAG_VARS=1` (print the
+/// primaries), `DIAG_SIGMA`, `DIAG_DERIVED=v,w,mu` (those variables made derived:
 /// not bisected, not LP targets), `DIAG_CHARTS="0,0;1,3"`, `DIAG_COVER=S` (also time the
 /// type-II cover at sigma S, 120 s at most). Run:
 /// `cargo test --release --test integration closed_loop_singularities::diag -- --ignored --nocapture`.
@@ -1015,11 +1014,17 @@ fn diag_three_rpr_cusp_charts() {
     let sigma: f64 = env("DIAG_SIGMA", "1e-3").parse().unwrap();
     let derived = env("DIAG_DERIVED", "");
     let only = env("DIAG_CHARTS", "");
+    let scaled_widths = env("DIAG_SCALED", "0") == "1";
     if let Ok(cs) = std::env::var("DIAG_COVER") {
         let t = std::time::Instant::now();
-        let set = p.solve(&SolverSettings { sigma: cs.parse().unwrap(), use_lp, timeout: Some(std::time::Duration::from_secs(120)), ..Default::default() }, &AtomicBool::new(false)).unwrap();
+        let set = p.solve(&SolverSettings { sigma: cs.parse().unwrap(), use_lp, scaled_widths, timeout: Some(std::time::Duration::from_secs(120)), ..Default::default() }, &AtomicBool::new(false)).unwrap();
         let processed: u64 = set.stats.iter().map(|s| s.processed).sum();
         eprintln!("cover at {cs}: {:?} {} boxes, {} clusters, processed {processed}, {:.2}s", set.status, set.boxes.len(), set.clusters.len(), t.elapsed().as_secs_f64());
+    }
+    if env("DIAG_VARS", "0") == "1" {
+        let s = &cp.charts[0].1;
+        let names: Vec<String> = s.primaries().iter().map(|&i| format!("{} {:?}", s.vars[i].name, s.vars[i].domain)).collect();
+        eprintln!("{} vars, {} equations, {} primaries: {names:?}", s.vars.len(), s.equations.len(), names.len());
     }
     let t0 = std::time::Instant::now();
     for ((k, tau), chart) in &cp.charts {
@@ -1032,7 +1037,8 @@ fn diag_three_rpr_cusp_charts() {
                 v.role = VarRole::Derived;
             }
         }
-        let st = SolverSettings { sigma, use_lp, newton_width: nw, timeout: Some(std::time::Duration::from_secs(secs)), ..Default::default() };
+        let rho: f64 = env("DIAG_RHO", "0.95").parse().unwrap();
+        let st = SolverSettings { sigma, rho, use_lp, newton_width: nw, scaled_widths, timeout: Some(std::time::Duration::from_secs(secs)), ..Default::default() };
         let e = p.linkage.extended_solver(&chart, st).unwrap().enclose(&AtomicBool::new(false), &mut |_| {});
         if e.stats.processed > 1 {
             eprintln!("chart ({k},{tau}): {:?} processed {} sols {} uniq {} undecided {} maxlvl {} rounds {} lp {} {:.2}s", e.status, e.stats.processed, e.solutions.len(), e.unique.iter().filter(|u| **u).count(), e.undecided.len(), e.stats.max_level, e.stats.shrink_rounds, e.stats.lp.solved, e.stats.seconds);

@@ -263,3 +263,273 @@ fn a_report_with_undecided_boxes_is_never_complete() {
     assert_eq!((report.status, report.limit), ("incomplete", Some("undecided")));
     assert_eq!(report.undecided_total[0], run.cusps.undecided.len());
 }
+
+/// Must-show of issue 11: the orthogonal 3R near the cuspidal boundary (two cusps and a node
+/// within 3e-4 of each other for each sign of z) has all four cusps and both nodes certified
+/// at the default precision 1e-4, nothing undecided. The reference is independent of linkspace:
+/// `scripts/dev/orthogonal_3r_singular_points.py` traces det Df = 0 of the seed's closed form
+/// by marching squares, takes image reversals and chord crossings as starts and polishes them by
+/// Newton in mpmath at 50 digits (tests/data/orthogonal_3r_near_boundary_singular_points.json).
+/// Each reference point must lie in a certified box (the box is at most 1e-4 wide), and the
+/// counts must match.
+#[test]
+fn near_boundary_cusps_and_nodes_are_all_certified_at_1e_4() {
+    let bin = env!("CARGO_BIN_EXE_linkspace");
+    let dir = env!("CARGO_MANIFEST_DIR");
+    let json = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("near-boundary-{}.json", std::process::id()));
+    let out = std::process::Command::new(bin)
+        .args(["singularities", &format!("{dir}/urdf/orthogonal_3r_near_boundary.urdf"), "--nodes", "--precision", "1e-4", "--json", json.to_str().expect("utf-8")])
+        .output()
+        .expect("runs");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("4 cusps, 2 nodes, 0 internal-motion lines, 0 undecided, status complete"), "{stdout}");
+    let got: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("report written")).expect("json");
+    let _ = std::fs::remove_file(&json);
+    let reference: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(format!("{dir}/tests/data/orthogonal_3r_near_boundary_singular_points.json")).expect("reference")).expect("json");
+    let pair = |v: &serde_json::Value| [v[0].as_f64().expect("number"), v[1].as_f64().expect("number")];
+    let holds = |b: &serde_json::Value, p: [f64; 2]| {
+        ["joint2", "joint3"].iter().zip(p).all(|(j, x)| {
+            let [lo, hi] = pair(&b[*j]);
+            hi - lo <= 1e-4 && lo - 1e-12 <= x && x <= hi + 1e-12
+        })
+    };
+    let (cusps, nodes) = (got["cusps"].as_array().expect("cusps"), got["nodes"].as_array().expect("nodes"));
+    let (ref_cusps, ref_nodes) = (reference["cusps"].as_array().expect("cusps"), reference["nodes"].as_array().expect("nodes"));
+    assert_eq!((cusps.len(), nodes.len(), ref_cusps.len(), ref_nodes.len()), (4, 2, 4, 2));
+    assert_eq!((got["status"].as_str(), got["undecided_total"].clone()), (Some("complete"), serde_json::json!([0, 0])), "{}", got["undecided"]);
+    for c in ref_cusps {
+        let p = pair(&c["joints"]);
+        assert!(cusps.iter().any(|b| b["unique"] == true && holds(&b["joints"], p)), "reference cusp {p:?} in no certified box");
+    }
+    for n in ref_nodes {
+        let (a, b) = (pair(&n["points"][0]), pair(&n["points"][1]));
+        let found = nodes.iter().any(|m| {
+            let (x, y) = (&m["points"][0], &m["points"][1]);
+            m["unique"] == true && ((holds(x, a) && holds(y, b)) || (holds(x, b) && holds(y, a)))
+        });
+        assert!(found, "reference node {a:?} & {b:?} in no certified pair");
+    }
+    // What makes the robot hard: each node's image lies within 3e-4 of two cusps' images.
+    for n in ref_nodes {
+        let p = pair(&n["radius_z"]);
+        let close = ref_cusps.iter().filter(|c| {
+            let q = pair(&c["radius_z"]);
+            (p[0] - q[0]).abs().max((p[1] - q[1]).abs()) < 3e-4
+        });
+        assert_eq!(close.count(), 2, "{n}");
+    }
+}
+
+/// Item 2 of the verdict outside the parallel-axes class: aspects and the largest number of IK
+/// solutions of the seed's robots, against plain floating-point computations on the seed's
+/// closed form that share nothing with the proof. Aspects: components of the sign of det Df on
+/// a 720 × 720 grid of the torus (4-neighbours, wrapping), det from the hand-written
+/// derivatives. IK: at each point of a 60 × 60 grid of joint configurations' images, the real
+/// roots in θ₃ of the IK equation 4d2²(ρ − y²) = (ρ − y² + d2² + z² − A² − r3²)² (y = d4 s3 + r2,
+/// A = d4 c3 + d3; each root gives one θ₂), counted as sign changes over 20,000 θ₃ samples.
+#[test]
+fn aspects_and_ik_counts_of_the_seed_robots_agree_with_sampling() {
+    // (robot, d2, d3, d4, r2, r3, aspects, max IK or None for the internal-motion robot)
+    let robots = [
+        ("a", [1.0, 2.0, 1.5, 1.0, 0.0], 2, Some(4)),
+        ("b", [1.0, 2.0, 1.5, 1.0, 0.5], 2, Some(4)),
+        ("d", [1.0, 0.7, 0.3, 0.2, 0.0], 2, Some(2)),
+        ("e", [1.0, 1.5, 0.7, 0.5, 0.0], 2, Some(4)),
+        ("f", [1.0, 0.5, 1.3, 0.2, 0.0], 4, None),
+    ];
+    for (name, [d2, d3, d4, r2, r3], aspects, max_ik) in robots {
+        let file = format!("orthogonal_3r_{name}.urdf");
+        let p = prepare(&text(&file), &LoadOptions::default()).expect(&file);
+        let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
+        let run = manip3r::singularities(&chain, 1e-4, false, &bounded(2_000_000), &mut |_| {}).expect("runs");
+        let v = verdict::decide(&p.mechanism, &chain, &run, &p.limits);
+        assert!(v.certified, "{name}: {v:?}");
+        assert_eq!((v.aspects, v.max_ik_solutions), (Some(aspects), max_ik), "{name}: {}", v.reason);
+        // Independent: sign components of det on a grid.
+        let map = |t2: f64, t3: f64| {
+            let (c2, s2, c3, s3) = (t2.cos(), t2.sin(), t3.cos(), t3.sin());
+            let a = d4 * c3 + d3;
+            let (x, y) = (c2 * a + d2 - r3 * s2, d4 * s3 + r2);
+            let (rho2, rho3) = (2.0 * x * (-s2 * a - r3 * c2), 2.0 * x * (-c2 * d4 * s3) + 2.0 * y * d4 * c3);
+            let (z2, z3) = (c2 * a - r3 * s2, -s2 * d4 * s3);
+            ([x * x + y * y, s2 * a + r3 * c2], rho2 * z3 - rho3 * z2)
+        };
+        let n = 720;
+        let t = |k: usize| -std::f64::consts::PI + (k as f64 + 0.5) * std::f64::consts::TAU / n as f64;
+        let positive: Vec<bool> = (0..n * n).map(|c| map(t(c / n), t(c % n)).1 > 0.0).collect();
+        let mut label = vec![usize::MAX; n * n];
+        let mut components = 0;
+        for s in 0..n * n {
+            if label[s] != usize::MAX {
+                continue;
+            }
+            label[s] = components;
+            let mut todo = vec![s];
+            while let Some(c) = todo.pop() {
+                let (i, j) = (c / n, c % n);
+                for m in [((i + 1) % n) * n + j, ((i + n - 1) % n) * n + j, i * n + (j + 1) % n, i * n + (j + n - 1) % n] {
+                    if label[m] == usize::MAX && positive[m] == positive[c] {
+                        label[m] = components;
+                        todo.push(m);
+                    }
+                }
+            }
+            components += 1;
+        }
+        assert_eq!(components, aspects as usize, "{name}: sign components of det on a {n} x {n} grid");
+        // Independent: real roots of the IK equation at sampled workspace points.
+        let roots = |rho: f64, z: f64| {
+            let m = 20_000;
+            let h = |t3: f64| {
+                let (y, a) = (d4 * t3.sin() + r2, d4 * t3.cos() + d3);
+                let w = rho - y * y;
+                4.0 * d2 * d2 * w - (w + d2 * d2 + z * z - a * a - r3 * r3).powi(2)
+            };
+            let vals: Vec<f64> = (0..m).map(|k| h(-std::f64::consts::PI + (k as f64 + 0.5) * std::f64::consts::TAU / m as f64)).collect();
+            (0..m).filter(|&k| (vals[k] > 0.0) != (vals[(k + 1) % m] > 0.0)).count()
+        };
+        let best = (0..60 * 60).map(|c| {
+            let [rho, z] = map(-3.1 + 0.103 * (c / 60) as f64, -3.1 + 0.103 * (c % 60) as f64).0;
+            roots(rho, z)
+        }).max().expect("samples");
+        assert_eq!(best, max_ik.unwrap_or(4) as usize, "{name}: most real IK roots at a sampled point");
+    }
+}
+
+/// det Df at (t2, t3) by central differences of the chain's own map in floating point:
+/// independent of `manip3r::branches`.
+fn det_fd(chain: &Chain3R, t2: f64, t3: f64) -> f64 {
+    let h = 1e-6;
+    let [r2p, z2p] = chain.eval_f64(t2 + h, t3);
+    let [r2m, z2m] = chain.eval_f64(t2 - h, t3);
+    let [r3p, z3p] = chain.eval_f64(t2, t3 + h);
+    let [r3m, z3m] = chain.eval_f64(t2, t3 - h);
+    ((r2p - r2m) * (z3p - z3m) - (r3p - r3m) * (z2p - z2m)) / (4.0 * h * h)
+}
+
+fn angle_gap(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(std::f64::consts::TAU);
+    d.min(std::f64::consts::TAU - d)
+}
+
+#[test]
+fn singular_branches_of_industrial_arms_match_an_independent_sampling() {
+    use linkspace::manip3r::branches;
+    // (file, crossings, theta3 lines are curves of nodes)
+    for (file, crossings, lines_of_nodes) in [("puma560.urdf", 4, true), ("kuka_kr16.urdf", 2, false), ("ur5.urdf", 4, true)] {
+        let p = prepare(&text(file), &LoadOptions::default()).expect(file);
+        let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
+        let b = branches::of(&p.mechanism, &chain).expect("parallel structure");
+        assert!(b.no_cusp_proven, "{file}");
+        assert_eq!(b.crossings, Some(crossings), "{file}");
+        let planar = branches::Planar::of(&p.mechanism).expect("planar");
+        let lines: Vec<f64> = b.branches.iter().filter_map(|x| x.theta3.map(|t| t.mid())).collect();
+        assert_eq!(lines.len(), 2, "{file}");
+        assert!((angle_gap(lines[0], lines[1]) - std::f64::consts::PI).abs() < 1e-12, "{file}: outstretched and folded are pi apart");
+        let scale = chain.length_scale().powi(4);
+        // Each theta3 line: det vanishes along it and changes sign across it.
+        for &t3 in &lines {
+            for k in 0..50 {
+                let t2 = -3.1 + 0.123 * k as f64;
+                assert!(det_fd(&chain, t2, t3).abs() < 1e-6 * scale, "{file}: det at ({t2}, {t3})");
+            }
+        }
+        // Fold of g: det vanishes at its sampled points, and its image is the reported one.
+        for k in 0..90 {
+            let t3 = -3.1 + 0.07 * k as f64;
+            for t2 in planar.fold_theta2_f64(t3) {
+                assert!(det_fd(&chain, t2, t3).abs() < 1e-6 * scale, "{file}: det on the fold at ({t2}, {t3})");
+                let [rho, z] = chain.eval_f64(t2, t3);
+                let img = &b.branches[2].image;
+                assert!(rho.sqrt() >= img.radius[0] - 1e-9 && rho.sqrt() <= img.radius[1] + 1e-9 && z >= img.z[0] - 1e-9 && z <= img.z[1] + 1e-9, "{file}: image of the fold");
+            }
+        }
+        // A fine grid: every sign change of det lies next to a reported branch.
+        let n = 400;
+        let step = std::f64::consts::TAU / n as f64;
+        let at = |i: usize| -std::f64::consts::PI + step * (i as f64 + 0.37);
+        let grid: Vec<Vec<f64>> = (0..n).map(|i| (0..n).map(|j| det_fd(&chain, at(i), at(j))).collect()).collect();
+        let near_branch = |t2: f64, t3: f64| {
+            lines.iter().any(|&l| angle_gap(t3, l) <= 1.5 * step)
+                || (-60..60).any(|k| {
+                    // The fold is continuous: between two samples s, s' of theta3 each of its
+                    // two theta2 values sweeps the short arc between its values at s and s',
+                    // and at a turning point (|m| = d, one sample without fold points) the two
+                    // values sweep the arc between them.
+                    let (s, s2) = (t3 + 0.05 * step * k as f64, t3 + 0.05 * step * (k + 1) as f64);
+                    let between = |a: f64, b: f64| angle_gap(t2, a) + angle_gap(t2, b) <= angle_gap(a, b) + 4.0 * step;
+                    match (planar.fold_theta2_f64(s).as_slice(), planar.fold_theta2_f64(s2).as_slice()) {
+                        ([a0, a1], [b0, b1]) => between(*a0, *b0) || between(*a1, *b1),
+                        ([a0, a1], []) | ([], [a0, a1]) => between(*a0, *a1),
+                        _ => false,
+                    }
+                })
+        };
+        let mut changes = 0;
+        for i in 0..n {
+            for j in 0..n {
+                for (i2, j2) in [((i + 1) % n, j), (i, (j + 1) % n)] {
+                    if grid[i][j] * grid[i2][j2] < 0.0 {
+                        changes += 1;
+                        assert!(near_branch(at(i), at(j)), "{file}: det changes sign at ({}, {}) away from every reported branch", at(i), at(j));
+                    }
+                }
+            }
+        }
+        assert!(changes > 4 * n, "{file}: the grid sees the branches ({changes})");
+        // Crossings: zeros of det and of its gradient, at the reported image.
+        let listed: Vec<_> = b.branches.iter().filter(|x| x.kind == "theta3_line").flat_map(|x| x.crossings.iter()).collect();
+        assert_eq!(listed.len(), crossings, "{file}");
+        for c in listed {
+            let mid = |x: [f64; 2]| 0.5 * (x[0] + x[1]);
+            let t = [mid(c.joints[&chain.joints[1]]), mid(c.joints[&chain.joints[2]])];
+            let h = 1e-5;
+            assert!(det_fd(&chain, t[0], t[1]).abs() < 1e-8 * scale, "{file}: {}", c.name);
+            let g2 = (det_fd(&chain, t[0] + h, t[1]) - det_fd(&chain, t[0] - h, t[1])) / (2.0 * h);
+            let g3 = (det_fd(&chain, t[0], t[1] + h) - det_fd(&chain, t[0], t[1] - h)) / (2.0 * h);
+            assert!(g2.abs() < 1e-4 * scale && g3.abs() < 1e-4 * scale, "{file}: grad det at {} = ({g2}, {g3})", c.name);
+            let [rho, z] = chain.eval_f64(t[0], t[1]);
+            assert!((rho.sqrt() - mid(c.workspace.radius)).abs() < 1e-7 && (z - mid(c.workspace.z)).abs() < 1e-9, "{file}: image of {}", c.name);
+        }
+        // Curves of nodes: mirrored points of a theta3 line share their image iff d = 0.
+        for br in b.branches.iter().filter(|x| x.kind == "theta3_line") {
+            assert_eq!(br.curve_of_nodes, Some(lines_of_nodes), "{file}: {}", br.name);
+        }
+        assert_eq!(b.branches[2].curve_of_nodes, Some(true));
+        // Independent check of the fold being a curve of nodes: two elbows, one image.
+        let t3 = 0.4;
+        let t2 = planar.fold_theta2_f64(t3)[0];
+        let w = planar.h_f64(t2, t3);
+        let f1 = chain.eval_f64(t2, t3);
+        let mut found = false;
+        for k in 0..20_000 {
+            let s3 = -std::f64::consts::PI + std::f64::consts::TAU * k as f64 / 20_000.0;
+            for s2 in planar.fold_theta2_f64(s3) {
+                let f2 = chain.eval_f64(s2, s3);
+                if angle_gap(s3, t3) > 0.1 && (f2[0] - f1[0]).abs() < 1e-3 && (f2[1] - f1[1]).abs() < 1e-3 {
+                    found = true;
+                }
+            }
+        }
+        assert!(found, "{file}: the other elbow of w = {w:?} on the fold maps to the same point");
+    }
+}
+
+#[test]
+fn undecided_cusp_boxes_of_industrial_arms_are_attributed_to_the_crossings() {
+    use linkspace::manip3r::branches;
+    for (file, crossings) in [("kuka_kr16.urdf", 2), ("ur5.urdf", 4)] {
+        let p = prepare(&text(file), &LoadOptions::default()).expect(file);
+        let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
+        let b = branches::of(&p.mechanism, &chain).expect("parallel structure");
+        let run = cusps::search_with(&chain, &cusps::CuspSettings { precision: 1e-4, method: cusps::Method::Krawczyk }, &bounded(2_000_000), &mut |_| {}).expect("runs");
+        assert!(run.cusps.iter().all(|c| !c.unique));
+        let boxes: Vec<_> = run.undecided.iter().map(|u| u.theta).chain(run.cusps.iter().map(|c| c.theta)).collect();
+        assert!(!boxes.is_empty(), "{file}: the search alone cannot decide the crossings");
+        let a = b.attribute(&p.mechanism, &boxes, 1e-2);
+        assert_eq!(a.near_crossings.len(), crossings, "{file}: {}", a.text);
+        assert_eq!((a.elsewhere, a.on_branch.len()), (0, 0), "{file}: {}", a.text);
+        assert!(a.explained && a.max_distance < 1e-2);
+    }
+}

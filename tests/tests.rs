@@ -30,6 +30,9 @@ mod closed_loop_singularities;
 /// Issue 13 on spatial linkages: RSSR and spherical four-bar singular points against their
 /// closed-form input–output relations.
 mod spatial_singularities;
+/// `linkspace chart`: the singular-set charts of closed loops (issue 13) and the 3R workspace
+/// regions (issue 11) show what the references of the other modules establish.
+mod charts;
 /// The ROS 2 node against real rclpy over DDS on loopback: topics, services, load.
 #[cfg(feature = "ros")]
 mod topics;

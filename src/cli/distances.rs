@@ -6,8 +6,9 @@ use anyhow::{bail, Context, Result};
 use linkspace::contract::FaceBounds;
 use linkspace::model::urdf;
 use linkspace::problems::cayley_menger::{BuildOptions, CayleyMenger, DistanceProblem, Formulation};
+use linkspace::problems::coordinates::Placed;
 use linkspace::problems::{distance_file, PlatformProblem};
-use linkspace::distances::{solve as certified_solve, Certified, Choice};
+use linkspace::distances::{solve as certified_solve, Choice};
 use linkspace::problems::cayley_menger::DistanceProblem as Problem;
 use linkspace::report::distances::{report_certified, DistancesReport};
 use linkspace::search::{Enclosure, SolverSettings};
@@ -219,38 +220,114 @@ fn summarize(rep: &DistancesReport) -> Result<()> {
 
 #[derive(clap::Args)]
 pub struct BenchArgs {
-    /// Runs per case; the median is reported.
+    /// Runs per case; the median CPU time is reported (the baselines run once).
     #[arg(long, default_value_t = 5)]
     repeat: usize,
-    /// Time limit per four-spheres run of the seed's split formulation (seconds).
-    #[arg(long, default_value_t = 60.0)]
-    split_timeout: f64,
+    /// Time limit per baseline run (seconds): octahedral, the seed's split formulation with
+    /// interval-arithmetic faces; four spheres, the seed's split formulation with corners.
+    #[arg(long, default_value_t = 30.0)]
+    baseline_timeout: f64,
 }
 
 const OCTAHEDRAL: &str = include_str!("../../urdf/octahedral.urdf");
 const FOUR_SPHERES: &str = include_str!("../../urdf/four_spheres.json");
 
-/// The seed's Tables I and II, each case against a baseline measured in the same run, with
-/// every answer settled (certified or labelled undecided; `distances::solve`).
+/// One way of running a case.
+#[derive(Clone, Copy)]
+enum Method {
+    /// The kernel on the determinants, no settling: boxes are neither certified nor labelled.
+    Search(Formulation, FaceBounds),
+    /// `distances::solve`: the search, then every cluster settled (certified or undecided).
+    Settled(Form),
+    /// The coordinate formulation's search alone (`Placed::solver`).
+    Coordinates(Form),
+}
+
+/// What one run measured.
+struct Measured {
+    cpu: f64,
+    complete: bool,
+    processed: u64,
+    solution_boxes: usize,
+    clusters: usize,
+    /// Proven and undecided; `None` when the run settles nothing.
+    verdict: Option<(usize, usize)>,
+    /// CPU seconds per phase (settled runs).
+    phases: Vec<(&'static str, f64)>,
+}
+
+fn measure(p: &Problem, method: Method, redundant: bool, settings: &SolverSettings) -> Result<Measured> {
+    let cancel = AtomicBool::new(false);
+    let c0 = linkspace::search::process_cpu_seconds();
+    let from_search = |e: Enclosure, cpu: f64| Measured {
+        cpu,
+        complete: e.status == linkspace::Status::Complete,
+        processed: e.stats.processed,
+        solution_boxes: e.solutions.len(),
+        clusters: linkspace::interval::components(&e.solutions).1,
+        verdict: None,
+        phases: Vec::new(),
+    };
+    Ok(match method {
+        Method::Search(formulation, faces) => {
+            let cm = CayleyMenger::build(p, BuildOptions { formulation, redundant })?;
+            let e = solve(&cm, faces, settings.clone())?;
+            from_search(e, linkspace::search::process_cpu_seconds() - c0)
+        }
+        Method::Coordinates(form) => {
+            let placed = if form == Form::Line { Placed::build_line(p)? } else { Placed::build(p)? };
+            let e = placed.solver(settings.clone())?.enclose(&cancel, &mut |_| {});
+            from_search(e, linkspace::search::process_cpu_seconds() - c0)
+        }
+        Method::Settled(form) => {
+            let c = certified_solve(p, choice(form), redundant, FaceBounds::Corners, settings.clone(), &cancel)?;
+            Measured {
+                cpu: c.stats.cpu_seconds,
+                complete: c.status == linkspace::Status::Complete,
+                processed: c.stats.processed,
+                solution_boxes: c.solutions.len(),
+                clusters: c.clusters.len(),
+                verdict: Some((c.proven(), c.undecided_regions())),
+                phases: c.phases,
+            }
+        }
+    })
+}
+
+/// The seed's Tables I and II in one run: the seed's determinants as plain searches (the
+/// previous configurations: split or shared variables, corner or interval-arithmetic faces)
+/// against the certified pipeline of issue 15 (`distances::solve`: the line formulation for the
+/// spheres, the settled shared determinants for the platforms), each row's CPU time against the
+/// case's baseline measured in the same run.
 pub fn bench(args: BenchArgs) -> Result<()> {
     if args.repeat == 0 {
         bail!("--repeat must be at least 1");
     }
+    if !(args.baseline_timeout > 0.0) {
+        bail!("--baseline-timeout must be positive");
+    }
     let mut out = std::io::stdout().lock();
-    writeln!(out, "case | method | median s (CPU) | boxes processed | solution boxes | clusters | proven | undecided | vs baseline (same run) | seed (Pentium IV 1.8 GHz)").ok();
-    // CPU seconds of the whole call (search and certification): what the peers' figures count.
-    let run = |p: &Problem, form: Form, redundant: bool, faces: FaceBounds, settings: &SolverSettings, repeat: usize| -> Result<(f64, Certified)> {
-        let mut times = Vec::new();
-        let mut last = None;
-        for _ in 0..repeat {
-            let c = certified_solve(p, choice(form), redundant, faces, settings.clone(), &AtomicBool::new(false))?;
-            times.push(c.stats.cpu_seconds);
-            last = Some(c);
-        }
-        times.sort_by(|a, b| a.total_cmp(b));
-        Ok((times[times.len() / 2], last.expect("repeat >= 1")))
+    writeln!(out, "case | method | CPU s (median) | boxes processed | solution boxes | clusters | proven | undecided | vs baseline (same run) | seed (Pentium IV 1.8 GHz) | where the time goes").ok();
+    // Runs `repeat` times (a baseline once, under its time limit) and keeps the median.
+    let run = |p: &Problem, method: Method, redundant: bool, settings: &SolverSettings, repeat: usize| -> Result<Measured> {
+        let mut all = (0..repeat).map(|_| measure(p, method, redundant, settings)).collect::<Result<Vec<_>>>()?;
+        all.sort_by(|a, b| a.cpu.total_cmp(&b.cpu));
+        Ok(all.swap_remove(all.len() / 2))
     };
-    let name = |c: &Certified| serde_json::to_value(c.formulation).ok().and_then(|v| v.as_str().map(str::to_string)).unwrap_or_default();
+    let limit = args.baseline_timeout;
+    let row = |out: &mut std::io::StdoutLock, case: &str, label: &str, m: &Measured, base: Option<(f64, bool)>, seed: &str| {
+        // The limit is wall-clock time (the kernel's); on a loaded machine the CPU time is less.
+        let t = if m.complete { format!("{:.4}", m.cpu) } else { format!("> {:.1} (stopped by the {limit} s wall-clock limit)", m.cpu) };
+        let ratio = match base {
+            None => "1.00x (baseline)".to_string(),
+            Some((b, true)) => format!("{:.1}x", b / m.cpu),
+            Some((b, false)) => format!("> {:.1}x", b / m.cpu),
+        };
+        let (proven, undecided) = m.verdict.map_or(("-".to_string(), "-".to_string()), |(p, u)| (p.to_string(), u.to_string()));
+        let phases: Vec<String> = m.phases.iter().filter(|(_, s)| *s >= 0.0005).map(|(n, s)| format!("{n} {s:.3}")).collect();
+        writeln!(out, "{case} | {label} | {t} | {} | {} | {} | {proven} | {undecided} | {ratio} | {seed} | {}", m.processed, m.solution_boxes, m.clusters, phases.join("; ")).ok();
+    };
+    let baseline_limit = Some(Duration::from_secs_f64(args.baseline_timeout));
     let legs = ["leg15", "leg16", "leg26", "leg24", "leg34", "leg35"];
     let configs = [("a", [4.25, 5.75, 4.25, 5.75, 4.25, 5.75]), ("b", [4.75; 6])];
     // Table I: t, b_p, n_s, for corners and (in parentheses) interval arithmetic.
@@ -261,59 +338,39 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         let p = PlatformProblem::new(&m, &fixed)?;
         for (ri, redundant) in [false, true].into_iter().enumerate() {
             let settings = SolverSettings { sigma: 0.1, rho: 0.9, ..Default::default() };
-            let case = format!("octahedral {cname}, {}, sigma 0.1", if redundant { "redundant" } else { "non-redundant" });
-            let methods = [
-                ("split, interval-arithmetic faces (baseline)", Form::Split, FaceBounds::IntervalArithmetic),
-                ("split, corners (the seed's)", Form::Split, FaceBounds::Corners),
-                ("shared, Bernstein corners", Form::Shared, FaceBounds::Corners),
-                ("points (coordinates, Krawczyk)", Form::Points, FaceBounds::Corners),
-                ("auto (the CLI's default)", Form::Auto, FaceBounds::Corners),
-            ];
-            let mut base = None;
-            for (label, form, faces) in methods {
-                // The interval-arithmetic baseline takes up to a minute: it runs once.
-                let repeat = if faces == FaceBounds::IntervalArithmetic { 1 } else { args.repeat };
-                let (t, c) = run(&p.distances, form, redundant, faces, &settings, repeat)?;
-                let ratio = base.map_or("1.00x (baseline)".to_string(), |b: f64| format!("{:.1}x faster", b / t));
-                base.get_or_insert(t);
-                let s = seed_table[ci][ri];
-                let seed = match (form, faces) {
-                    (Form::Split, FaceBounds::IntervalArithmetic) => format!("t {} s, b_p {}, n_s {}", s.3, s.4, s.5),
-                    (Form::Split, _) => format!("t {} s, b_p {}, n_s {}", s.0, s.1, s.2),
-                    _ => String::new(),
-                };
-                let label = if form == Form::Auto { format!("{label}: {}", name(&c)) } else { label.to_string() };
-                writeln!(out, "{case} | {label} | {t:.5} | {} | {} | {} | {} | {} | {ratio} | {seed}", c.stats.processed, c.solutions.len(), c.clusters.len(), c.proven(), c.undecided_regions()).ok();
+            let case = format!("octahedral {cname}{}, sigma 0.1", if redundant { ", redundant" } else { "" });
+            let s = seed_table[ci][ri];
+            let baseline = run(&p.distances, Method::Search(Formulation::Split, FaceBounds::IntervalArithmetic), redundant, &SolverSettings { timeout: baseline_limit, ..settings.clone() }, 1)?;
+            row(&mut out, &case, "split, interval faces, search only (baseline)", &baseline, None, &format!("t {} s, b_p {}, n_s {}", s.3, s.4, s.5));
+            let base = Some((baseline.cpu, baseline.complete));
+            for (label, method, seed) in [
+                ("split, corners, search only (the seed's)", Method::Search(Formulation::Split, FaceBounds::Corners), format!("t {} s, b_p {}, n_s {}", s.0, s.1, s.2)),
+                ("shared, Bernstein, search only (before issue 15)", Method::Search(Formulation::Shared, FaceBounds::Corners), String::new()),
+                ("shared, Bernstein, settled (certified; the default)", Method::Settled(Form::Auto), String::new()),
+            ] {
+                let m = run(&p.distances, method, redundant, &settings, args.repeat)?;
+                row(&mut out, &case, label, &m, base, &seed);
             }
         }
     }
-    // Table II: the four spheres, rho 0.99; the seed's C1-C4 (redundant) for the determinants.
+    // Table II: the four spheres, rho 0.99 for the determinants (the seed's C1-C4), the CLI's
+    // default rho for the line formulation.
     let d = distance_file::parse(FOUR_SPHERES, &[])?;
     for (sigma, seed) in [(0.1, "t 315 s, b_p 7875, n_s 870"), (0.01, "t 385 s, b_p 14579, n_s 813")] {
         let case = format!("four spheres, sigma {sigma}");
-        let mut base = None;
-        for (label, form, timeout) in [
-            ("split, corners, C1-C4 (the seed's; baseline)", Form::Split, Some(args.split_timeout)),
-            ("shared, Bernstein corners, C1-C4", Form::Shared, None),
-            ("points (coordinates, Krawczyk)", Form::Points, None),
-            ("line (point and direction, Krawczyk; issue 15)", Form::Line, None),
-            ("auto (the CLI's default)", Form::Auto, None),
+        let cm_settings = SolverSettings { sigma, rho: 0.99, ..Default::default() };
+        let line_settings = SolverSettings { sigma, rho: default_rho(Choice::Line), ..Default::default() };
+        let baseline = run(&d, Method::Search(Formulation::Split, FaceBounds::Corners), true, &SolverSettings { timeout: baseline_limit, ..cm_settings.clone() }, 1)?;
+        row(&mut out, &case, "split, corners, C1-C4, search only (the seed's; baseline)", &baseline, None, seed);
+        let base = Some((baseline.cpu, baseline.complete));
+        for (label, method, settings) in [
+            ("shared, Bernstein, C1-C4, search only (before issue 15)", Method::Search(Formulation::Shared, FaceBounds::Corners), &cm_settings),
+            ("shared, Bernstein, C1-C4, settled (certified)", Method::Settled(Form::Shared), &cm_settings),
+            ("line, search only", Method::Coordinates(Form::Line), &line_settings),
+            ("line, settled (certified; the default)", Method::Settled(Form::Auto), &line_settings),
         ] {
-            // rho as the CLI's default for the formulation (0.99 for the determinants).
-            let rho = default_rho(match choice(form) {
-                Choice::Auto => linkspace::distances::choose(&d),
-                c => c,
-            });
-            let settings = SolverSettings { sigma, rho, timeout: timeout.map(Duration::from_secs_f64), ..Default::default() };
-            // The slow baseline runs once.
-            let repeat = if form == Form::Split { 1 } else { args.repeat };
-            let (t, c) = run(&d, form, matches!(form, Form::Split | Form::Shared), FaceBounds::Corners, &settings, repeat)?;
-            let status = if c.status == linkspace::Status::Complete { String::new() } else { " (stopped by the time limit)".to_string() };
-            let ratio = base.map_or("1.00x (baseline)".to_string(), |b: f64| format!("at least {:.1}x faster", b / t));
-            base.get_or_insert(t);
-            let label = if form == Form::Auto { format!("{label}: {}", name(&c)) } else { label.to_string() };
-            let seed = if form == Form::Split { seed } else { "" };
-            writeln!(out, "{case} | {label}{status} | {t:.4} | {} | {} | {} | {} | {} | {ratio} | {seed}", c.stats.processed, c.solutions.len(), c.clusters.len(), c.proven(), c.undecided_regions()).ok();
+            let m = run(&d, method, true, settings, args.repeat)?;
+            row(&mut out, &case, label, &m, base, "");
         }
     }
     Ok(())

@@ -4,7 +4,7 @@
 //! box projections, traced coupler curves and the per-level convergence of the search tree.
 
 use anyhow::{Context, Result};
-use super::plot::{box_panels, lines, Panel, Scale, Series};
+use super::plot::{box_panels, layered_panels, lines, Layer, LayeredPanel, Marker, Panel, Scale, Series};
 use linkspace::interval::IntervalBox;
 use linkspace::LpBackend;
 use linkspace::model::urdf;
@@ -13,6 +13,12 @@ use linkspace::search::{Collect, Enclosure, SolverSettings, Status};
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
+
+mod loop_singular;
+mod workspace_regions;
+
+/// The chart groups `chart --only` selects, in the order `run` draws them.
+pub const GROUPS: [&str; 9] = ["speed", "cspace", "convergence", "stability", "singular3r", "collisions", "distances", "cusps", "loops"];
 
 const BUTTERFLY: &str = include_str!("../../urdf/double_butterfly.urdf");
 const FOUR_BAR: &str = include_str!("../../urdf/four_bar.urdf");
@@ -97,9 +103,45 @@ fn write(dir: &Path, name: &str, svg: &str) -> Result<()> {
     Ok(())
 }
 
-/// Draws every chart into `dir`; `quick` uses shorter sweeps.
-pub fn run(dir: &Path, quick: bool) -> Result<()> {
+/// Draws the charts of the groups in `only` (every group when empty; see `GROUPS`) into `dir`;
+/// `quick` uses shorter sweeps.
+pub fn run(dir: &Path, quick: bool, only: &[String]) -> Result<()> {
+    if let Some(bad) = only.iter().find(|g| !GROUPS.contains(&g.as_str())) {
+        anyhow::bail!("--only: unknown chart group '{bad}' (one of {})", GROUPS.join(", "));
+    }
+    let want = |g: &str| only.is_empty() || only.iter().any(|o| o == g);
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    if want("speed") || want("cspace") || want("convergence") || want("stability") {
+        butterfly_charts(dir, quick, &want)?;
+    }
+    // 5. 3R singular curves in joint space and workspace, with cusps and nodes, and the
+    // workspace regions with their number of IK solutions.
+    if want("singular3r") {
+        singular_curves(dir, if quick { 7 } else { 8 }, quick)?;
+    }
+    // 5b. Collision set of robot a beside a column (SIVIA on capsules).
+    if want("collisions") {
+        collision_chart(dir)?;
+    }
+    // 6. Speed against accuracy for the other problem families: distances and 3R cusps.
+    if want("distances") {
+        distance_sweeps(dir, quick)?;
+    }
+    if want("cusps") {
+        cusp_sweep(dir, quick)?;
+    }
+    // 7. Singular sets of closed loops: the five-bar's type-II image and workspace, the double
+    // butterfly's turning points.
+    if want("loops") {
+        loop_singular::five_bar(dir, quick)?;
+        loop_singular::butterfly_turning_points(dir, quick)?;
+    }
+    Ok(())
+}
+
+/// The charts of the double butterfly and the four-bar (speed, configuration space,
+/// convergence) and the stability study, as far as `want` asks.
+fn butterfly_charts(dir: &Path, quick: bool, want: &dyn Fn(&str) -> bool) -> Result<()> {
     let m = urdf::parse(BUTTERFLY).context("bundled double_butterfly.urdf")?;
     let rigid = LinkageProblem::new(&m, &[("joint6".into(), 12f64.atan2(5.0))], &[])?;
     let mobile = LinkageProblem::new(&m, &[], &[("link3".into(), 7.0, 0.0)])?;
@@ -109,6 +151,7 @@ pub fn run(dir: &Path, quick: bool) -> Result<()> {
     anyhow::ensure!(reference.status == Status::Complete && reference.unique.iter().all(|&u| u), "reference run did not certify every root");
 
     // 1. Speed against accuracy.
+    if want("speed") {
     let rigid_sigmas: &[f64] = if quick { &[1e-1, 1e-3, 1e-6] } else { &[3e-1, 1e-1, 1e-2, 1e-3, 1e-4, 1e-6, 1e-8] };
     let mobile_sigmas: &[f64] = if quick { &[0.5, 0.2] } else { &[0.5, 0.3, 0.2, 0.1, 0.05] };
     let repeat = if quick { 1 } else { 5 };
@@ -147,8 +190,10 @@ pub fn run(dir: &Path, quick: bool) -> Result<()> {
     let mut svg = String::new();
     lines(&mut svg, "Mobile double butterfly: CPU seconds (median) against worst box diagonal", "worst solution-box diagonal", "CPU seconds", &diag, Scale::Log, Scale::Log)?;
     write(dir, "speed_accuracy_mobile_diagonal.svg", &svg)?;
+    }
 
     // 2. Configuration-space projections like the seed's Fig. 3, and the traced coupler point.
+    if want("cspace") {
     let c2 = mobile.system.var("cos_link2").context("cos_link2")?;
     let c4 = mobile.system.var("cos_link4").context("cos_link4")?;
     let fig_sigmas: &[f64] = if quick { &[0.5, 0.2] } else { &[0.5, 0.2, 0.1, 0.05] };
@@ -181,8 +226,10 @@ pub fn run(dir: &Path, quick: bool) -> Result<()> {
     let mut svg = String::new();
     box_panels(&mut svg, "Four-bar: coupler curve of the point (2, 1) on the coupler, both assembly modes", "x", "y", &panels, xr, yr)?;
     write(dir, "four_bar_coupler.svg", &svg)?;
+    }
 
     // 3. Convergence: widest diagonal among the boxes of each tree level (breadth first).
+    if want("convergence") {
     let mut series = Vec::new();
     for (label, problem, sigma) in [("rigid butterfly (isolated roots)", &rigid, 1e-9), ("mobile butterfly (curve)", &mobile, if quick { 0.1 } else { 0.02 })] {
         let solver = problem.solver(SolverSettings { sigma, ..Default::default() })?;
@@ -191,7 +238,12 @@ pub fn run(dir: &Path, quick: bool) -> Result<()> {
         solver.run_parallel(1, &AtomicBool::new(false), &mut sink, Some(&mut levels));
         series.push(Series { label: label.into(), points: levels.iter().enumerate().map(|(k, &d)| (k as f64, d)).collect() });
     }
+    let mut svg = String::new();
+    lines(&mut svg, "Convergence: widest box diagonal after each tree level (seed 000, section V)", "tree level", "widest diagonal", &series, Scale::Linear, Scale::Log)?;
+    write(dir, "convergence.svg", &svg)?;
+    }
     // 4. Stability: two roots merging at the rocker limit of the four-bar.
+    if want("stability") {
     let deltas: Vec<f64> = (1..=14).map(|k| 10f64.powi(-k)).collect();
     let sweep = super::study::tangency_sweep(&deltas, 1e-6);
     let pick = |f: fn(&super::study::Finding) -> f64| sweep.iter().map(|(d, x)| (*d, f(x))).collect::<Vec<_>>();
@@ -212,20 +264,7 @@ pub fn run(dir: &Path, quick: bool) -> Result<()> {
     report += "\n## Rocker-limit sweep (sigma 1e-6)\n\n";
     report += &super::study::markdown(&sweep.iter().map(|(_, f)| f.clone()).collect::<Vec<_>>());
     write(dir, "stability.md", &report)?;
-
-    // 5. 3R singular curves in joint space and workspace, with cusps and nodes.
-    singular_curves(dir, if quick { 7 } else { 8 })?;
-
-    // 5b. Collision set of robot a beside a column (SIVIA on capsules).
-    collision_chart(dir)?;
-
-    // 6. Speed against accuracy for the other problem families: distances and 3R cusps.
-    distance_sweeps(dir, quick)?;
-    cusp_sweep(dir, quick)?;
-
-    let mut svg = String::new();
-    lines(&mut svg, "Convergence: widest box diagonal after each tree level (seed 000, section V)", "tree level", "widest diagonal", &series, Scale::Linear, Scale::Log)?;
-    write(dir, "convergence.svg", &svg)?;
+    }
     Ok(())
 }
 
@@ -251,12 +290,14 @@ const ROBOTS_3R: [(&str, &str); 3] = [
 ];
 
 /// The singular-curve cover (`manip3r::curves::Cover`, the one the ROS node publishes) on a
-/// `2^depth` grid, its images, and the certified cusps and nodes marked on both.
-fn singular_curves(dir: &Path, depth: u32) -> Result<()> {
+/// `2^depth` grid, its images, and the certified cusps and nodes marked on both; then the
+/// workspace regions between the images with their number of IK solutions (seed 003's style).
+fn singular_curves(dir: &Path, depth: u32, quick: bool) -> Result<()> {
     use linkspace::interval::interval;
     use linkspace::manip3r::{curves::Cover, cusps, nodes, report::radius, Chain3R, Control};
     let mut joint_panels = Vec::new();
     let mut work_panels = Vec::new();
+    let mut region_panels = Vec::new();
     for (name, text) in ROBOTS_3R {
         let chain = Chain3R::from_mechanism(&urdf::parse(text)?, 0.0)?;
         let found = cusps::search(&chain, &cusps::CuspSettings::default())?;
@@ -272,16 +313,44 @@ fn singular_curves(dir: &Path, depth: u32) -> Result<()> {
         }
         let mid = |i: linkspace::Interval| i.mid();
         let mut jmarks: Vec<(f64, f64)> = found.cusps.iter().map(|c| (mid(c.theta[0]), mid(c.theta[1]))).collect();
-        let mut wmarks: Vec<(f64, f64)> = found.cusps.iter().map(|c| (mid(radius(c.rho)), mid(c.z))).collect();
+        let cusp_marks: Vec<(f64, f64)> = found.cusps.iter().map(|c| (mid(radius(c.rho)), mid(c.z))).collect();
+        let mut node_marks = Vec::new();
         for n in &node_search.nodes {
             for t in &n.theta {
                 jmarks.push((mid(t[0]), mid(t[1])));
             }
-            wmarks.push((mid(radius(n.rho)), mid(n.z)));
+            node_marks.push((mid(radius(n.rho)), mid(n.z)));
         }
+        let wmarks = cusp_marks.iter().chain(&node_marks).copied().collect();
         let title = format!("robot {name}: {} cusps, {} nodes, {} motion lines", found.cusps.len(), node_search.nodes.len(), found.bands.len());
         joint_panels.push(Panel { title: title.clone(), rects: joint, marks: jmarks });
-        work_panels.push(Panel { title, rects: work, marks: wmarks });
+        work_panels.push(Panel { title: title.clone(), rects: work.clone(), marks: wmarks });
+
+        // Regions: a raster of the half-plane around the images, one IK run per region.
+        let ((_, x1), (z0, z1)) = bounds(std::slice::from_ref(&work_panels[work_panels.len() - 1]));
+        let (xr, zr) = ((0.0, x1), (z0, z1));
+        let grid = if quick { 96 } else { 192 };
+        let regions = workspace_regions::regions(&chain, &work, xr, zr, grid);
+        let mut counts = std::collections::BTreeMap::new();
+        for r in &regions {
+            *counts.entry(r.solutions.map_or("?".to_string(), |n| n.to_string())).or_insert(0usize) += 1;
+        }
+        println!("robot {name} workspace regions: {} on a {grid} x {grid} raster, regions per number of IK solutions {counts:?}", regions.len());
+        // Regions of a few cells are counted but not labelled: their labels would cover the curves.
+        let labels = regions.iter().filter(|r| r.cells * 2000 >= grid * grid).map(|r| (r.sample.0, r.sample.1, r.solutions.map_or("?".to_string(), |n| n.to_string()))).collect();
+        region_panels.push(LayeredPanel {
+            title: format!("robot {name}: {} regions ({} cusps, {} nodes)", regions.len(), found.cusps.len(), node_search.nodes.len()),
+            x_label: "ρ = √(x² + y²)".into(),
+            y_label: "z".into(),
+            x_range: xr,
+            y_range: zr,
+            layers: vec![
+                Layer::Boxes { label: "singular curves (images of the cover)".into(), rects: work, color: 0 },
+                Layer::Points { label: "cusp".into(), points: cusp_marks, marker: Marker::Triangle, color: 1 },
+                Layer::Points { label: "node".into(), points: node_marks, marker: Marker::Dot, color: 3 },
+                Layer::Text { items: labels },
+            ],
+        });
     }
     let pi = std::f64::consts::PI;
     let mut svg = String::new();
@@ -291,6 +360,9 @@ fn singular_curves(dir: &Path, depth: u32) -> Result<()> {
     let mut svg = String::new();
     box_panels(&mut svg, "3R singular curves in the workspace half-section, cusps and nodes in red", "radius", "z", &work_panels, (0.0, xr.1), yr)?;
     write(dir, "singular_3r_workspace.svg", &svg)?;
+    let mut svg = String::new();
+    layered_panels(&mut svg, "3R workspace half-section: regions between the singular curves and their number of IK solutions", &region_panels, region_panels.len())?;
+    write(dir, "workspace_regions_3r.svg", &svg)?;
     Ok(())
 }
 

@@ -20,12 +20,22 @@ pub struct Newton<'a> {
     /// Boxes wider than this (in any primary) are left alone: far from a root the
     /// linearisation is too loose to pay for itself.
     pub max_width: f64,
+    /// Per variable, the unit `max_width` is read in (empty: 1 for every variable).
+    units: Vec<f64>,
 }
 
 impl<'a> Newton<'a> {
     /// `None` unless the system is square (as many equations as variables).
     pub fn new(system: &'a EquationSystem, max_width: f64) -> Option<Self> {
-        (system.equations.len() == system.vars.len()).then(|| Self { system, primaries: system.primaries(), max_width })
+        (system.equations.len() == system.vars.len()).then(|| Self { system, primaries: system.primaries(), max_width, units: Vec::new() })
+    }
+
+    /// Reads `max_width` per variable in `units` (one per variable of the system; see
+    /// `search::width_units`): a primary is narrow enough when its width is at most
+    /// `max_width · units[i]`.
+    pub fn with_units(mut self, units: Vec<f64>) -> Self {
+        self.units = units;
+        self
     }
 
     fn jacobian(&self, x: &[Interval]) -> DMatrix<Interval> {
@@ -70,7 +80,7 @@ impl<'a> Newton<'a> {
 impl Contractor for Newton<'_> {
     fn contract(&mut self, b: &mut IntervalBox) -> Contraction {
         // A NaN width (never in a valid box) counts as too wide.
-        let narrow = |i: &VarId| matches!(b.dims[*i].wid().partial_cmp(&self.max_width), Some(Ordering::Less | Ordering::Equal));
+        let narrow = |i: &VarId| matches!(b.dims[*i].wid().partial_cmp(&(self.max_width * self.units.get(*i).copied().unwrap_or(1.0))), Some(Ordering::Less | Ordering::Equal));
         if !self.primaries.iter().all(narrow) {
             return Contraction::Unchanged;
         }

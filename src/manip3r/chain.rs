@@ -26,7 +26,8 @@ use crate::interval::{interval, point};
 use crate::model::{Joint, JointKind, Mechanism};
 use inari::Interval;
 
-pub(super) type V3 = [Interval; 3];
+/// An interval 3-vector.
+pub type V3 = [Interval; 3];
 pub(super) type M3 = [[Interval; 3]; 3];
 
 /// A 3R chain reduced to its kinematic map (see the module doc).

@@ -42,6 +42,9 @@ pub struct Cover {
     pub stats: Stats,
     /// Wall-clock seconds.
     pub seconds: f64,
+    /// The grid's shift along both axes (radians; 0 for `new`): its lines are those of the
+    /// unshifted grid plus `shift`.
+    pub shift: f64,
 }
 
 /// A quadtree cell: grid cell (i, j) and side s (cells).
@@ -85,15 +88,13 @@ impl Prune for CoverPrune<'_> {
 /// The grid lines of an `n` × `n` grid (see `Cover::line`).
 struct Lines {
     n: usize,
+    shift: f64,
 }
 
 impl Lines {
     fn line(&self, i: usize) -> f64 {
-        if i == self.n {
-            PI_UP
-        } else {
-            -PI_UP + (2.0 * PI_UP / self.n as f64) * i as f64
-        }
+        let base = if i == self.n { PI_UP } else { -PI_UP + (2.0 * PI_UP / self.n as f64) * i as f64 };
+        base + self.shift
     }
 
     fn span(&self, i: usize, s: usize) -> Bounds {
@@ -104,9 +105,17 @@ impl Lines {
 impl Cover {
     /// The cover of `chain` on a `2^depth` × `2^depth` grid, within `control`.
     pub fn new(chain: &Chain3R, depth: u32, control: &Control) -> Self {
+        Self::shifted(chain, depth, 0.0, control)
+    }
+
+    /// The cover on the grid shifted by `shift` along both axes (it still spans one period).
+    /// Why: robots symmetric in θ₂ (det Df even in it) have singular curves tangent to the grid
+    /// lines θ₂ = 0, ±π; a shift keeps such points off the lines, where `aspects` needs
+    /// det monotone along cell edges.
+    pub fn shifted(chain: &Chain3R, depth: u32, shift: f64, control: &Control) -> Self {
         let start = Instant::now();
         let n = 1usize << depth;
-        let lines = Lines { n };
+        let lines = Lines { n, shift };
         let root = QuadCell { i: 0, j: 0, s: n, level: 0 };
         let run = drive(|| CoverPrune { chain, lines: &lines }, root, control, &mut no_progress);
         let mut boxes = run.found;
@@ -117,7 +126,7 @@ impl Cover {
             }
         }
         boxes.sort_unstable();
-        let mut cover = Cover { n, boxes, cluster: Vec::new(), clusters: 0, region: vec![0; n * n], regions: 0, status: run.status, stats: run.stats, seconds: 0.0 };
+        let mut cover = Cover { n, shift, boxes, cluster: Vec::new(), clusters: 0, region: vec![0; n * n], regions: 0, status: run.status, stats: run.stats, seconds: 0.0 };
         for &(i, j) in &cover.boxes {
             cover.region[i * n + j] = -1;
         }
@@ -130,12 +139,12 @@ impl Cover {
     /// Grid line `i` of `n`: -π (rounded up) + i·(2π/n), the same float for every cell that
     /// shares it, with the last line exactly π (rounded up).
     pub fn line(&self, i: usize) -> f64 {
-        Lines { n: self.n }.line(i)
+        Lines { n: self.n, shift: self.shift }.line(i)
     }
 
     /// Bounds of grid column (or row) `i`.
     pub fn bounds(&self, i: usize) -> Bounds {
-        Lines { n: self.n }.span(i, 1)
+        Lines { n: self.n, shift: self.shift }.span(i, 1)
     }
 
     /// The cell holding (θ₂, θ₃), angles taken modulo 2π (rounding the reduction).
@@ -144,8 +153,10 @@ impl Cover {
             if !t.is_finite() {
                 return None;
             }
+            let t = t - self.shift;
             let t = if (-PI_UP..=PI_UP).contains(&t) { t } else { t - std::f64::consts::TAU * (t / std::f64::consts::TAU).round() };
-            let guess = (((t + PI_UP) / (2.0 * PI_UP) * self.n as f64).floor() as i64).clamp(0, self.n as i64 - 1) as usize;
+            let t = t + self.shift;
+            let guess = (((t - self.shift + PI_UP) / (2.0 * PI_UP) * self.n as f64).floor() as i64).clamp(0, self.n as i64 - 1) as usize;
             // The guess may be one off at a grid line; the lines themselves decide.
             (guess.saturating_sub(1)..=(guess + 1).min(self.n - 1)).find(|&k| self.line(k) <= t && t <= self.line(k + 1))
         };

@@ -15,6 +15,8 @@
 //! of 3R robotic manipulators* (seed 003). R. Krawczyk, *Newton-Algorithmen zur Bestimmung von
 //! Nullstellen mit Fehlerschranken*, Computing 4 (1969).
 
+pub mod aspects;
+pub mod branches;
 pub mod chain;
 pub mod collision;
 pub mod curves;

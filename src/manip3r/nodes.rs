@@ -84,6 +84,9 @@ pub struct NodeSearch {
     pub cells: u64,
     /// Cusp neighbourhoods certified (of all cusps given).
     pub cusp_regions: u64,
+    /// Clusters of pairs left at the precision that were settled afterwards (`settle`): a
+    /// node proven in a box holding the whole cluster.
+    pub settled: u64,
     /// Wall-clock seconds, the cusp neighbourhoods included.
     pub seconds: f64,
 }
@@ -295,6 +298,22 @@ fn krawczyk_node(p: &[Interval; 2], ep: &BoxEval, q: &[Interval; 2], eq: &BoxEva
     krawczyk::step_array(&b, &m, &fm, &jac)
 }
 
+/// Krawczyk's image of system (3) over `x = P × Q` (for `krawczyk::inflate`).
+fn node_image(chain: &Chain3R, x: &[Interval; 4]) -> Option<[Interval; 4]> {
+    let (p, q) = ([x[0], x[1]], [x[2], x[3]]);
+    let (ep, eq) = (evaluate(chain, p), evaluate(chain, q));
+    let m = x.map(|d| d.mid());
+    let fm = [ep.f_mid[0] - eq.f_mid[0], ep.f_mid[1] - eq.f_mid[1], ep.det_mid, eq.det_mid];
+    let z = point(0.0);
+    let jac = [
+        [ep.df[0][0], ep.df[0][1], -eq.df[0][0], -eq.df[0][1]],
+        [ep.df[1][0], ep.df[1][1], -eq.df[1][0], -eq.df[1][1]],
+        [ep.grad_det[0], ep.grad_det[1], z, z],
+        [z, z, eq.grad_det[0], eq.grad_det[1]],
+    ];
+    krawczyk::image_array(x, &m, &fm, &jac)
+}
+
 /// Shrinks a proven node to the precision.
 fn refine(chain: &Chain3R, p: [Interval; 2], q: [Interval; 2], precision: f64) -> ([Interval; 2], [Interval; 2]) {
     let k = krawczyk::tighten([p[0], p[1], q[0], q[1]], precision, |k| {
@@ -302,6 +321,122 @@ fn refine(chain: &Chain3R, p: [Interval; 2], q: [Interval; 2], precision: f64) -
         krawczyk_node(&p, &evaluate(chain, p), &q, &evaluate(chain, q))
     });
     ([k[0], k[1]], [k[2], k[3]])
+}
+
+/// Widest cluster (its hull, in multiples of the precision) that `settle` tries.
+const SETTLE_WIDTH: f64 = 64.0;
+
+/// Pairs at the precision beyond which `settle` is not tried: clustering is quadratic in them,
+/// and that many means a curve of candidates (a flood), not a few stuck nodes.
+const SETTLE_PAIRS: usize = 4096;
+
+/// True when `inner ⊂ outer` in one orientation of the pair or the other.
+fn pair_inside(outer: &[[Interval; 2]; 2], inner: &[[Interval; 2]; 2]) -> bool {
+    (contains(&outer[0], &inner[0]) && contains(&outer[1], &inner[1])) || (contains(&outer[0], &inner[1]) && contains(&outer[1], &inner[0]))
+}
+
+/// True when the pairs may share a point of the torus², in one orientation or the other.
+fn pairs_meet(a: &[[Interval; 2]; 2], b: &[[Interval; 2]; 2]) -> bool {
+    (meet_on_torus(&a[0], &b[0]) && meet_on_torus(&a[1], &b[1])) || (meet_on_torus(&a[0], &b[1]) && meet_on_torus(&a[1], &b[0]))
+}
+
+fn hull2(a: &[Interval; 2], b: &[Interval; 2]) -> [Interval; 2] {
+    [a[0].convex_hull(b[0]), a[1].convex_hull(b[1])]
+}
+
+/// Touching pairs, gathered into clusters: (hull, members). `b` joins a cluster when its two
+/// boxes touch the hull's two boxes in one orientation; it is stored in that orientation.
+fn clusters(pairs: &[[[Interval; 2]; 2]]) -> Vec<([[Interval; 2]; 2], Vec<usize>)> {
+    let touch = |h: &[[Interval; 2]; 2], b: &[[Interval; 2]; 2]| -> Option<[[Interval; 2]; 2]> {
+        let meet = |x: &[Interval; 2], y: &[Interval; 2]| (0..2).all(|i| !x[i].disjoint(y[i]));
+        if meet(&h[0], &b[0]) && meet(&h[1], &b[1]) {
+            Some(*b)
+        } else if meet(&h[0], &b[1]) && meet(&h[1], &b[0]) {
+            Some([b[1], b[0]])
+        } else {
+            None
+        }
+    };
+    let mut out: Vec<([[Interval; 2]; 2], Vec<usize>)> = Vec::new();
+    for (i, pair) in pairs.iter().enumerate() {
+        let mut hull = *pair;
+        let mut members = vec![i];
+        let mut k = 0;
+        while k < out.len() {
+            if let Some(h) = touch(&hull, &out[k].0) {
+                let (_, m) = out.remove(k);
+                hull = [hull2(&hull[0], &h[0]), hull2(&hull[1], &h[1])];
+                members.extend(m);
+                k = 0;
+            } else {
+                k += 1;
+            }
+        }
+        out.push((hull, members));
+    }
+    out.sort_by_key(|(_, m)| m.iter().copied().min());
+    out
+}
+
+/// Pairs left at the precision, settled by clusters after the search.
+///
+/// Why: Krawczyk proves a root only with `K(B) ⊂ int B`, so a node on (or very near) a
+/// bisection line of the tree is proven in no pair when the margin it needs exceeds its
+/// distance to the line. Near a cusp system (3) is ill-conditioned and that margin is large:
+/// the nodes of `orthogonal_3r_near_boundary.urdf` lie 1.4e-6 from a line of the 1e-4 grid and
+/// end in a ring of undecided pairs around it. So touching pairs are gathered, and Krawczyk
+/// with ε-inflation (`krawczyk::inflate`) runs on a box `X ⊇` the cluster whose two halves are
+/// disjoint on the torus. `K(X) ⊂ int X` proves exactly one zero `z` of system (3) in `X`, and
+/// `z` is a node (`x₁ ≠ x₂`); every zero in the cluster is `z`. Then the cluster goes:
+/// - an earlier node `N ⊂ X` is `z` (already reported);
+/// - no earlier node meets `K(X)`: `z` is new, reported with `K(X)` tightened to the precision;
+/// - otherwise (an earlier node meets `K(X)` without lying in `X`) it stays undecided.
+///
+/// Bounded: at most `SETTLE_PAIRS` pairs, clusters at most `SETTLE_WIDTH`·precision wide.
+/// Returns which of `pairs` stay undecided, and the clusters settled; only `eligible` pairs
+/// (those left at the precision) are tried.
+fn settle(chain: &Chain3R, eps: f64, nodes: &mut Vec<Node>, pairs: &[[[Interval; 2]; 2]], eligible: &[bool]) -> (Vec<bool>, u64) {
+    let mut keep = vec![true; pairs.len()];
+    let at: Vec<usize> = (0..pairs.len()).filter(|&i| eligible[i]).collect();
+    if at.len() > SETTLE_PAIRS {
+        return (keep, 0);
+    }
+    let at_precision: Vec<[[Interval; 2]; 2]> = at.iter().map(|&i| pairs[i]).collect();
+    let mut settled = 0;
+    for (hull, members) in clusters(&at_precision) {
+        if width(&hull[0]).max(width(&hull[1])) > SETTLE_WIDTH * eps || meet_on_torus(&hull[0], &hull[1]) {
+            continue;
+        }
+        let x = [hull[0][0], hull[0][1], hull[1][0], hull[1][1]];
+        let policy = krawczyk::Inflation { rounds: 8, own: 0.1, widest: 0.0, widest_of: &[], absolute: 1e-12, ulps: 0.0 };
+        // The last trial box is the `X` whose image proved the root.
+        let mut trial = x;
+        let Some(k) = krawczyk::inflate(&x, &policy, |grown| {
+            trial = *grown;
+            node_image(chain, grown)
+        }) else {
+            continue;
+        };
+        let big = [[trial[0], trial[1]], [trial[2], trial[3]]];
+        if meet_on_torus(&big[0], &big[1]) {
+            continue;
+        }
+        let small = [[k[0], k[1]], [k[2], k[3]]];
+        if nodes.iter().any(|n| pair_inside(&big, &n.theta)) {
+            // the same node, already reported
+        } else if nodes.iter().any(|n| pairs_meet(&n.theta, &small)) {
+            continue;
+        } else {
+            let (a, b) = refine(chain, small[0], small[1], eps);
+            let (ja, jb) = (chain.jets(a, 0), chain.jets(b, 0));
+            nodes.push(Node { theta: [a, b], rho: ja.rho.value().intersection(jb.rho.value()), z: ja.z.value().intersection(jb.z.value()) });
+        }
+        settled += 1;
+        for m in members {
+            keep[at[m]] = false;
+        }
+    }
+    (keep, settled)
 }
 
 /// The node test of the module doc, one pair at a time.
@@ -445,8 +580,23 @@ pub fn search_with(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &N
         }
     }
     run.undecided.sort_by_key(|(c, _)| c.order);
-    let undecided = run.undecided.iter().map(|(c, _)| c.boxes()).collect();
     let cells = tree.boxes.load(Ordering::Relaxed);
-    Ok(NodeSearch { nodes, undecided, status: run.status, stats: run.stats, cells, cusp_regions: regions.len() as u64, seconds: start.elapsed().as_secs_f64() })
+    // Pairs a limit left pending are not settled: they are not at the precision, and the
+    // limit's reason must stand.
+    let pairs: Vec<[[Interval; 2]; 2]> = run.undecided.iter().map(|(c, _)| c.boxes()).collect();
+    let eligible: Vec<bool> = run.undecided.iter().map(|(_, why)| matches!(why, crate::search::Undecided::Precision(_))).collect();
+    let (keep, settled) = settle(chain, settings.precision, &mut nodes, &pairs, &eligible);
+    let undecided = pairs.into_iter().zip(keep).filter_map(|(p, k)| k.then_some(p)).collect();
+    Ok(NodeSearch { nodes, undecided, status: run.status, stats: run.stats, cells, cusp_regions: regions.len() as u64, settled, seconds: start.elapsed().as_secs_f64() })
 }
 
+
+#[cfg(test)]
+mod tests {
+    /// README's bound on the tree's memory (`--max-boxes` bounds it by about 800 bytes a pair)
+    /// rests on this size.
+    #[test]
+    fn a_tree_box_is_under_400_bytes() {
+        assert!(std::mem::size_of::<super::TreeBox>() < 400, "{}", std::mem::size_of::<super::TreeBox>());
+    }
+}

@@ -17,7 +17,7 @@ use std::collections::BTreeMap;
 /// `[lower, upper]`
 pub type Bounds = [f64; 2];
 
-fn bounds(x: Interval) -> Bounds {
+pub(crate) fn bounds(x: Interval) -> Bounds {
     [x.inf(), x.sup()]
 }
 
@@ -159,6 +159,8 @@ pub struct NodeStats {
     pub cells: u64,
     /// Cusp neighbourhoods certified (of all cusps given).
     pub cusp_regions: u64,
+    /// Clusters of pairs left at the precision settled afterwards by ε-inflation.
+    pub settled: u64,
     /// Wall-clock seconds.
     pub seconds: f64,
 }
@@ -166,7 +168,7 @@ pub struct NodeStats {
 impl From<&NodeSearch> for NodeStats {
     fn from(n: &NodeSearch) -> Self {
         let s = &n.stats;
-        counters!(NodeStats { pairs: s.processed, cells: n.cells, cusp_regions: n.cusp_regions, seconds: n.seconds }, s, discards: [apart, injective, near_cusp, krawczyk_empty, in_strips])
+        counters!(NodeStats { pairs: s.processed, cells: n.cells, cusp_regions: n.cusp_regions, settled: n.settled, seconds: n.seconds }, s, discards: [apart, injective, near_cusp, krawczyk_empty, in_strips])
     }
 }
 
@@ -256,6 +258,14 @@ pub struct SingularityReport {
     /// Searches not run, and why (structural arms: the cusp answer comes from the proof).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub not_searched: Option<String>,
+    /// Arms with axes 2 and 3 exactly parallel: the singular set as certified branches
+    /// (`manip3r::branches`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub singular_branches: Option<super::branches::SingularBranches>,
+    /// `--search-anyway` on such an arm: where the cusp search's undecided boxes (and cusp
+    /// boxes without a uniqueness proof) lie, and whether the branches' argument explains them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub explained_undecided: Option<super::branches::Attribution>,
 }
 
 /// Undecided boxes listed in a report, at most, per search: the counts are always given, and
@@ -280,7 +290,7 @@ impl Rounding {
     }
 }
 
-fn joints(chain: &Chain3R, theta: &[Interval; 2]) -> Joints {
+pub(crate) fn joints(chain: &Chain3R, theta: &[Interval; 2]) -> Joints {
     BTreeMap::from([(chain.joints[1].clone(), bounds(theta[0])), (chain.joints[2].clone(), bounds(theta[1]))])
 }
 
@@ -289,7 +299,7 @@ pub fn radius(rho: Interval) -> Interval {
     rho.intersection(crate::interval::interval(0.0, f64::INFINITY)).sqrt()
 }
 
-fn workspace(rho: Interval, z: Interval) -> Workspace {
+pub(crate) fn workspace(rho: Interval, z: Interval) -> Workspace {
     Workspace { radius: bounds(radius(rho)), z: bounds(z) }
 }
 
@@ -335,7 +345,28 @@ impl SingularityReport {
             rounding: None,
             joint_limits: None,
             not_searched: None,
+            singular_branches: None,
+            explained_undecided: None,
         }
+    }
+}
+
+impl SingularityReport {
+    /// Records where the cusp search's undecided boxes lie (`attribution`). When the branches'
+    /// argument proves that none holds a cusp, no cusp was certified (a certified one would
+    /// contradict it: then nothing is moved), the node search left nothing undecided and the
+    /// only reason for `incomplete` was undecided boxes, they are moved out of `undecided`
+    /// (and cusp boxes without a uniqueness proof out of `cusps`) and the report is complete.
+    pub fn explain(&mut self, attribution: super::branches::Attribution) {
+        let moves = attribution.explained && self.limit == Some("undecided") && self.undecided_total[1] == 0 && self.cusps.iter().all(|c| !c.unique);
+        if moves {
+            self.undecided.cusps.clear();
+            self.undecided_total[0] = 0;
+            self.cusps.clear();
+            self.limit = None;
+            self.status = "complete";
+        }
+        self.explained_undecided = Some(attribution);
     }
 }
 

@@ -28,9 +28,13 @@
 //!    genericity this needs; where smoothness is not proven (crossing branches, a box budget
 //!    spent) the verdict is `null`.
 //!
-//! Aspects and solution counts are only given under argument 1; elsewhere `null`.
+//! Under arguments 2 and 3, aspects and the largest number of solutions come from
+//! `aspects` (the piece graph of the singular-curve cover, and certified inverse kinematics at
+//! sample points against the bound 4, or the number of aspects for a non-cuspidal arm); each
+//! is `null` with its reason where that argument does not close.
 
-use super::chain::{cross, dot, sub, Pose, V3};
+use super::chain::{cross, dot, sub, Pose};
+pub use super::chain::V3;
 use super::cusps::evaluate_without_tangency;
 use super::limits::JointLimits;
 use super::{Chain3R, Singularities};
@@ -67,9 +71,27 @@ impl Verdict {
     }
 }
 
-/// Argument 1 on the reduced mechanism (`select::positioning`'s), or `None` when axes 2 and 3
-/// are not proven parallel (or a₁ not proven apart from a₂, or a length not proven positive).
-pub fn parallel_structure(m: &Mechanism) -> Option<Verdict> {
+/// The exact (rounded) geometry of the reduced chain at θ₂ = θ₃ = 0, in the first link's frame
+/// (axis 1 through its origin): axis 1's direction, axis 2 (point, direction), axis 3 (point,
+/// direction) and the analysed point. The same data `branches` builds the singular set from.
+#[derive(Clone, Copy, Debug)]
+pub struct Geometry {
+    /// Axis 1's direction (through the origin).
+    pub a1: V3,
+    /// A point of axis 2 and its direction.
+    pub o2: V3,
+    /// Axis 2's direction.
+    pub d2: V3,
+    /// A point of axis 3 (at θ₂ = 0).
+    pub o3: V3,
+    /// Axis 3's direction (at θ₂ = 0).
+    pub d3: V3,
+    /// The analysed point (at θ₂ = θ₃ = 0).
+    pub p: V3,
+}
+
+/// `Geometry` of a reduced mechanism with three revolute joints, `None` otherwise.
+pub fn geometry(m: &Mechanism) -> Option<Geometry> {
     let tip = (0..m.links.len()).find(|&l| m.joints.iter().all(|j| j.parent != l))?;
     let path = m.path_to(tip);
     let rev: Vec<usize> = path.iter().copied().filter(|&j| matches!(m.joints[j].kind, JointKind::Revolute { .. })).collect();
@@ -90,7 +112,13 @@ pub fn parallel_structure(m: &Mechanism) -> Option<Verdict> {
             (o3, d3) = (acc.t, super::chain::apply(&acc.r, &axis(j)));
         }
     }
-    let p = acc.t;
+    Some(Geometry { a1, o2, d2, o3, d3, p: acc.t })
+}
+
+/// Argument 1 on the reduced mechanism (`select::positioning`'s), or `None` when axes 2 and 3
+/// are not proven parallel (or a₁ not proven apart from a₂, or a length not proven positive).
+pub fn parallel_structure(m: &Mechanism) -> Option<Verdict> {
+    let Geometry { a1, o2, d2, o3, d3, p } = geometry(m)?;
     let zero = |v: &V3| v.iter().all(|x| x.inf() == 0.0 && x.sup() == 0.0);
     let nonzero = |v: &V3| v.iter().any(|x| x.inf() > 0.0 || x.sup() < 0.0);
     if !zero(&cross(&d2, &d3)) {
@@ -171,6 +199,31 @@ pub fn smooth_singular_set(chain: &Chain3R, min_width: f64, max_boxes: u64) -> S
     }
 }
 
+/// Aspects and the largest number of IK solutions under arguments 2 and 3 (`aspects`), with
+/// what to add to the reason.
+fn counts(chain: &Chain3R, cusps: &[[f64; 2]], internal_motion: bool) -> (Option<u32>, Option<u32>, String) {
+    let control = super::Control::with_limits(crate::search::Limits { max_cells: 4_000_000, ..Default::default() });
+    let (aspects, mut why) = match super::aspects::count(chain, &control) {
+        Ok(n) => (Some(n), format!("; {n} aspects (components of det Df != 0, from the singular-curve cover: every cell regular or crossed by one arc)")),
+        Err(e) => (None, format!("; aspects not proven: {e}")),
+    };
+    if internal_motion {
+        why.push_str("; IK solutions unbounded: infinitely many at the image of each internal-motion line");
+        return (aspects, None, why);
+    }
+    // At most 4 (a quartic); a non-cuspidal arm has at most one per aspect.
+    let cuspidal = !cusps.is_empty();
+    let bound = if cuspidal { 4 } else { aspects.map_or(4, |a| a.min(4)) };
+    let (best, proven) = super::aspects::max_ik_solutions(chain, bound, cusps, 200_000);
+    if proven {
+        why.push_str(&format!("; at most {bound} IK solutions ({}), reached at a sample point with {best} certified solutions", if bound == 4 && (cuspidal || aspects.is_none_or(|a| a >= 4)) { "a 3R's bound" } else { "one per aspect" }));
+        (aspects, Some(best), why)
+    } else {
+        why.push_str(&format!("; IK solutions: {best} certified at best among the samples, against a bound of {bound}: the maximum is not proven"));
+        (aspects, None, why)
+    }
+}
+
 /// The verdict for a prepared arm from its (unfiltered, full-torus) singularity run.
 pub fn decide(mechanism: &Mechanism, chain: &Chain3R, run: &Singularities, limits: &JointLimits) -> Verdict {
     if let Some(v) = parallel_structure(mechanism) {
@@ -181,13 +234,15 @@ pub fn decide(mechanism: &Mechanism, chain: &Chain3R, run: &Singularities, limit
     }
     let certified: Vec<_> = run.cusps.cusps.iter().filter(|c| c.unique).collect();
     if let Some(c) = certified.iter().find(|c| limits.holds(&c.theta)) {
+        let centres: Vec<[f64; 2]> = certified.iter().map(|c| [c.theta[0].mid(), c.theta[1].mid()]).collect();
+        let (aspects, max_ik_solutions, more) = counts(chain, &centres, !run.cusps.bands.is_empty());
         return Verdict {
             cuspidal: Some(true),
-            aspects: None,
-            max_ik_solutions: None,
+            aspects,
+            max_ik_solutions,
             certified: true,
             reason: format!(
-                "{} certified cusps; one at ({}, {}) = ({:.6}, {:.6}){}: three solutions merge there, two in one aspect",
+                "{} certified cusps; one at ({}, {}) = ({:.6}, {:.6}){}: three solutions merge there, two in one aspect{more}",
                 certified.len(),
                 chain.joints[1],
                 chain.joints[2],
@@ -221,16 +276,19 @@ pub fn decide(mechanism: &Mechanism, chain: &Chain3R, run: &Singularities, limit
         };
     }
     match smooth_singular_set(chain, 1e-6, 2_000_000) {
-        Smooth::Proven => Verdict {
-            cuspidal: Some(false),
-            aspects: None,
-            max_ik_solutions: None,
-            certified: true,
-            reason: format!(
-                "no cusp on the whole torus (search complete) and det Df = 0 proven a smooth curve: a generic 3R without cusp is non-cuspidal (Salunkhe, Spartalis, Capco, Chablat, Wenger 2022){}",
-                if run.cusps.bands.is_empty() { String::new() } else { format!("; {} internal-motion lines (each mapped to one point) were set aside by the cusp search and are not cusps", run.cusps.bands.len()) }
-            ),
-        },
+        Smooth::Proven => {
+            let (aspects, max_ik_solutions, more) = counts(chain, &[], !run.cusps.bands.is_empty());
+            Verdict {
+                cuspidal: Some(false),
+                aspects,
+                max_ik_solutions,
+                certified: true,
+                reason: format!(
+                    "no cusp on the whole torus (search complete) and det Df = 0 proven a smooth curve: a generic 3R without cusp is non-cuspidal (Salunkhe, Spartalis, Capco, Chablat, Wenger 2022){}{more}",
+                    if run.cusps.bands.is_empty() { String::new() } else { format!("; {} internal-motion lines (each mapped to one point) were set aside by the cusp search and are not cusps", run.cusps.bands.len()) }
+                ),
+            }
+        }
         Smooth::Undecided(n) => Verdict {
             cuspidal: None,
             aspects: None,

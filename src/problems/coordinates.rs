@@ -555,3 +555,4 @@ fn to_equation(p: &Poly) -> Result<Equation, PlacedError> {
     }
     Ok(Equation::new(terms, constant))
 }
+

@@ -87,7 +87,8 @@ pub struct DistancesReport {
     pub cluster_verdicts: Vec<ClusterVerdict>,
     /// Connected components of the solution boxes.
     pub clusters: usize,
-    /// Distinct lines (or poses) placed from the first box of each cluster; see README.
+    /// Distinct lines (or poses): of the certified placements when there are any, else placed
+    /// from the first box of each cluster; see README.
     pub placements: usize,
     /// Boxes left undecided by a limit.
     pub undecided: Vec<DistanceRecord>,
@@ -235,7 +236,28 @@ pub fn report_certified(c: &Certified, platform: Option<&PlatformProblem>, fixed
             rep.variables = pl.system.vars.iter().map(|v| v.name.clone()).collect();
         }
     }
-    rep.placements = distinct_placements(&records, tol);
+    // Distinct placements: of the certified roots when there are any. Placed from box
+    // midpoints and compared within ten times the box width (the rule for uncertified reports),
+    // they undercounted at coarse sigma: at sigma 0.1 two poses of octahedral b less than a unit
+    // apart in position and quaternion merged (6 for 16). The roots are polished Newton points
+    // in tiny certified boxes, so they are compared within 1e-6.
+    rep.placements = if c.roots.is_empty() {
+        distinct_placements(&records, tol)
+    } else {
+        let at_roots: Vec<DistanceRecord> = c
+            .roots
+            .iter()
+            .enumerate()
+            .map(|(k, r)| {
+                let (poses, lines) = match platform {
+                    Some(p) => (p.pose_of(&r.points).into_iter().collect(), Vec::new()),
+                    None => (Vec::new(), c.cm.problem.lines.iter().map(|&(a, e)| line(&c.cm, &r.points, a, e)).collect()),
+                };
+                DistanceRecord { distances: BTreeMap::new(), cluster: k, poses, points: Vec::new(), lines, unique: true, box_: Vec::new(), level: 0 }
+            })
+            .collect();
+        distinct_placements(&at_roots, 1e-6)
+    };
     rep.solutions = records;
     rep.formulation = c.formulation;
     rep.proven = c.proven();

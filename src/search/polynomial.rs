@@ -2,7 +2,9 @@
 //!
 //! A cell is an `IntervalBox`. `SystemPrune` shrinks it until it is proven empty, is no wider
 //! than sigma, or one round no longer removes a significant share of its volume (rho), and
-//! bisects it in the last case (widest primary at its midpoint, lower half first).
+//! bisects it in the last case (widest primary at its midpoint, lower half first). Widths are
+//! absolute unless `SolverSettings::scaled_widths` gives each primary a unit of its own
+//! (`width_units`), read by sigma, Newton's threshold and the bisection alike.
 //! `Solver` is the preset that wires a system, its contractors and the settings to the kernel
 //! (as ibex's `DefaultSolver`): depth first on one thread, level by level on several, with the
 //! same set of boxes. Limits end a run `Incomplete`, and then every box still pending is
@@ -138,6 +140,8 @@ pub struct Solver<'a> {
     system: &'a EquationSystem,
     settings: SolverSettings,
     primaries: Vec<VarId>,
+    /// Per variable, the unit its width is measured in (`width_units`).
+    units: Vec<f64>,
     factory: Option<std::sync::Arc<ContractorFactory<'a>>>,
 }
 
@@ -146,7 +150,7 @@ pub struct Solver<'a> {
 pub fn default_contractor<'a>(system: &'a EquationSystem, settings: &SolverSettings) -> Box<dyn Contractor + Send + 'a> {
     let mut steps: Vec<Box<dyn Contractor + Send + 'a>> = vec![Box::new(Propagation::new(system))];
     if let Some(newton) = Newton::new(system, settings.newton_width) {
-        steps.push(Box::new(newton));
+        steps.push(Box::new(newton.with_units(width_units(system, settings))));
     }
     if settings.use_lp {
         let mut lp = LpShrink::new(system);
@@ -156,12 +160,37 @@ pub fn default_contractor<'a>(system: &'a EquationSystem, settings: &SolverSetti
     Box::new(Sequence(steps))
 }
 
+/// Per variable of `system`, the unit its width is measured in: 1 for every variable unless
+/// `settings.scaled_widths`; then, for a primary, its width in the initial box divided by the
+/// narrowest positive finite width among the primaries there (so the narrowest keep unit 1 and
+/// sigma keeps its meaning for them), and 1 for the rest (derived variables, fixed or unbounded
+/// primaries). A pure function of the system and the settings: every box of a run, and every
+/// re-examination of one, measures in the same units.
+pub fn width_units(system: &EquationSystem, settings: &SolverSettings) -> Vec<f64> {
+    let mut units = vec![1.0; system.vars.len()];
+    if !settings.scaled_widths {
+        return units;
+    }
+    let start = system.initial_box();
+    let width = |i: VarId| start.width(i);
+    let usable = |w: f64| w.is_finite() && w > 0.0;
+    let primaries = system.primaries();
+    let Some(narrowest) = primaries.iter().map(|&i| width(i)).filter(|&w| usable(w)).min_by(f64::total_cmp) else { return units };
+    for i in primaries {
+        if usable(width(i)) {
+            units[i] = width(i) / narrowest;
+        }
+    }
+    units
+}
+
 impl<'a> Solver<'a> {
     /// Validates both; after this, `run` cannot fail.
     pub fn new(system: &'a EquationSystem, settings: SolverSettings) -> Result<Self, SolveError> {
         settings.validate()?;
         system.validate()?;
-        Ok(Self { system, primaries: system.primaries(), settings, factory: None })
+        let units = width_units(system, &settings);
+        Ok(Self { system, primaries: system.primaries(), units, settings, factory: None })
     }
 
     /// Replaces the default shrink pipeline (`default_contractor`) with `factory`'s, e.g. to add
@@ -294,6 +323,7 @@ impl<'a> Solver<'a> {
         let deeper = Solver {
             system: self.system,
             primaries: self.primaries.clone(),
+            units: self.units.clone(),
             settings: SolverSettings { sigma: self.settings.sigma / 16.0, max_boxes: 4_000, ..self.settings.clone() },
             factory: self.factory.clone(),
         };
@@ -304,7 +334,7 @@ impl<'a> Solver<'a> {
             if cancel.load(Ordering::Relaxed) || remaining.is_some_and(|r| r.is_zero()) {
                 return Probe::NotRun;
             }
-            let timed = Solver { system: deeper.system, primaries: deeper.primaries.clone(), settings: SolverSettings { timeout: remaining.or(self.settings.timeout), ..deeper.settings.clone() }, factory: deeper.factory.clone() };
+            let timed = Solver { system: deeper.system, primaries: deeper.primaries.clone(), units: deeper.units.clone(), settings: SolverSettings { timeout: remaining.or(self.settings.timeout), ..deeper.settings.clone() }, factory: deeper.factory.clone() };
             let mut found = Collect::default();
             match timed.run_from(b.clone(), cancel, &mut found) {
                 (Status::Complete, _) if found.solutions.is_empty() => Probe::Empty,
@@ -333,8 +363,16 @@ impl<'a> Solver<'a> {
         (kept, kept_unique, dropped, cut_short)
     }
 
+    /// The widest primary of `b` in width units (`width_units`), with its scaled width.
+    fn widest(&self, b: &IntervalBox) -> Option<(VarId, f64)> {
+        self.primaries.iter().map(|&i| (i, b.width(i) / self.units[i])).fold(None, |best, (i, w)| match best {
+            Some((_, bw)) if bw >= w => best,
+            _ => Some((i, w)),
+        })
+    }
+
     fn size(&self, b: &IntervalBox) -> f64 {
-        b.widest(&self.primaries).map_or(0.0, |(_, w)| w)
+        self.widest(b).map_or(0.0, |(_, w)| w)
     }
 }
 
@@ -418,7 +456,7 @@ impl Prune for SystemPrune<'_, '_> {
             Shrunk::Solution => Step::Found((BoxStatus::Solution, b)),
             Shrunk::Unique => Step::Found((BoxStatus::Unique, b)),
             Shrunk::Stalled => {
-                let (i, _) = b.widest(&self.solver.primaries).expect("invariant: a box wider than sigma has a primary");
+                let (i, _) = self.solver.widest(&b).expect("invariant: a box wider than sigma has a primary");
                 let (lower, upper) = b.bisect(i);
                 Step::Split(smallvec![lower, upper])
             }

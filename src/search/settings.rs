@@ -30,6 +30,12 @@ pub struct SolverSettings {
     pub threads: usize,
     /// Which LP solver proposes the multipliers that the safe bound verifies. Default simplex.
     pub lp_backend: LpBackend,
+    /// Measure each primary's width in its own unit: its width in the system's initial box
+    /// divided by the narrowest such width (`width_units`). `sigma`, `newton_width` and the
+    /// choice of the component to bisect then read widths in these units, so a travel spanning
+    /// [1, 40] next to cosines spanning [−1, 1] is split as often, relative to its range, as
+    /// they are. Default false: widths are absolute (every primary in the same unit).
+    pub scaled_widths: bool,
 }
 
 fn seconds<S: serde::Serializer>(d: &Option<Duration>, s: S) -> Result<S::Ok, S::Error> {
@@ -41,7 +47,7 @@ fn seconds<S: serde::Serializer>(d: &Option<Duration>, s: S) -> Result<S::Ok, S:
 
 impl Default for SolverSettings {
     fn default() -> Self {
-        Self { sigma: 1e-3, rho: 0.95, max_boxes: 1_000_000, timeout: None, max_memory: super::limits::DEFAULT_MAX_MEMORY, use_lp: true, newton_width: 0.25, threads: 1, lp_backend: LpBackend::Simplex }
+        Self { sigma: 1e-3, rho: 0.95, max_boxes: 1_000_000, timeout: None, max_memory: super::limits::DEFAULT_MAX_MEMORY, use_lp: true, newton_width: 0.25, threads: 1, lp_backend: LpBackend::Simplex, scaled_widths: false }
     }
 }
 

@@ -230,8 +230,8 @@ impl CuspProblem {
         Ok(Self { charts, v, tangent, base_vars: sp.base_vars })
     }
 
-    /// Runs the solver on every chart pair; boxes proven to be another chart's are dropped, the
-    /// rest clustered by configuration.
+    /// Runs the solver on every chart pair, in scaled widths (`scaled`); boxes proven to be
+    /// another chart's are dropped, the rest clustered by configuration.
     pub fn solve(&self, sp: &SingularProblem, settings: &SolverSettings, cancel: &AtomicBool) -> Result<PointSearch, SolveError> {
         let t0 = Instant::now();
         let mut found = Vec::new();
@@ -274,12 +274,23 @@ impl CuspProblem {
 }
 
 /// The settings for the rest of a run that started at `t0`; `None` when no time is left.
+/// Widths are scaled (`SolverSettings::scaled_widths`): see `scaled`.
 fn remaining(settings: &SolverSettings, t0: Instant) -> Option<SolverSettings> {
     let left = settings.timeout.map(|t| t.saturating_sub(t0.elapsed()));
     if left.is_some_and(|r| r.is_zero()) {
         return None;
     }
-    Some(SolverSettings { timeout: left, ..settings.clone() })
+    Some(SolverSettings { timeout: left, ..scaled(settings) })
+}
+
+/// `settings` with `scaled_widths` on, as the image searches (cover, cusps, nodes) run: their
+/// systems mix travels (a slider's range, [1, 40] on the 3-RPR), cosines and sines ([−1, 1])
+/// and chart directions ([−1.05, 1.05]); in absolute widths sigma and the bisection treat a
+/// travel as twenty times longer than an angle, so the searches tile `S` twenty times finer
+/// along the travels than across the angles (the 3-RPR cusp search: over ten minutes, against
+/// under a minute scaled). On mechanisms without sliders every unit is 1 or 1.05.
+pub fn scaled(settings: &SolverSettings) -> SolverSettings {
+    SolverSettings { scaled_widths: true, ..settings.clone() }
 }
 
 /// A cluster of boxes of a point search (cusps).
@@ -384,7 +395,7 @@ impl NodeProblem {
         Ok(Self { charts, shared })
     }
 
-    /// Runs the node search.
+    /// Runs the node search, in scaled widths (`scaled`).
     pub fn solve(&self, sp: &SingularProblem, settings: &SolverSettings, cancel: &AtomicBool) -> Result<NodeSearch, SolveError> {
         let t0 = Instant::now();
         let mut status = Status::Complete;
@@ -658,9 +669,9 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
         let id = out.regions.len();
         let mut stack = vec![start];
         label[start] = id;
-        let mut cells = 0;
+        let mut members = Vec::new();
         while let Some(c) = stack.pop() {
-            cells += 1;
+            members.push(c);
             let (i, j) = (c / grid, c % grid);
             let mut next = Vec::new();
             for (axis, di) in [(0usize, -1i64), (0, 1), (1, -1), (1, 1)] {
@@ -678,7 +689,15 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
                 }
             }
         }
-        let (i, j) = (start / grid, start % grid);
+        // The sample: the member cell nearest the members' mean (in grid indices), so a chart's
+        // label sits inside the region rather than at its first cell; any cell would do for the
+        // count, which is constant over the region.
+        let n = members.len() as f64;
+        let (mi, mj) = members.iter().fold((0.0, 0.0), |(a, b), &c| (a + (c / grid) as f64 / n, b + (c % grid) as f64 / n));
+        let far = |c: usize| ((c / grid) as f64 - mi).powi(2) + ((c % grid) as f64 - mj).powi(2);
+        let pick = members.iter().copied().min_by(|&x, &y| far(x).total_cmp(&far(y))).unwrap_or(start);
+        let cells = members.len();
+        let (i, j) = (pick / grid, pick % grid);
         let (a, b) = (axes[0].cell(i, grid), axes[1].cell(j, grid));
         let sample = vec![0.5 * (a.0 + a.1), 0.5 * (b.0 + b.1)];
         out.regions.push(sample_region(m, sp, &sample, cells, settings, cancel)?);
@@ -902,13 +921,20 @@ pub enum AnalyseError {
 }
 
 /// The whole analysis of `m`'s type-II image: the cover of `S` (the input set at `settings`),
-/// cusps, nodes, regions on a `grid × grid` raster and the verdict. `settings.timeout` applies
-/// to each search.
+/// cusps, nodes, regions on a `grid × grid` raster and the verdict. `settings.timeout` bounds
+/// the whole analysis, as it bounds every set of `sets::SingularSets`: each search gets what the
+/// ones before it left (at least a millisecond, so a search that finds no time still reports its
+/// pending cells instead of being skipped silently).
 pub fn analyse(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String], settings: &SolverSettings, grid: usize, cancel: &AtomicBool) -> Result<ImageReport, AnalyseError> {
+    let t0 = Instant::now();
+    let left = || SolverSettings {
+        timeout: settings.timeout.map(|t| t.saturating_sub(t0.elapsed()).max(std::time::Duration::from_millis(1))),
+        ..settings.clone()
+    };
     let p = SingularProblem::new(m, fixed, SingularKind::Input, actuated, None)?;
-    let cover = p.solve(settings, cancel)?;
-    let cusps = CuspProblem::new(&p)?.solve(&p, settings, cancel)?;
-    let nodes = NodeProblem::new(&p)?.solve(&p, settings, cancel)?;
-    let regions = regions(m, &p, &cover, grid, settings, cancel)?;
+    let cover = p.solve(&scaled(&left()), cancel)?;
+    let cusps = CuspProblem::new(&p)?.solve(&p, &left(), cancel)?;
+    let nodes = NodeProblem::new(&p)?.solve(&p, &left(), cancel)?;
+    let regions = regions(m, &p, &cover, grid, &left(), cancel)?;
     Ok(ImageReport::new(&p, &cover, &cusps, &nodes, regions))
 }

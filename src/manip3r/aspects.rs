@@ -1,0 +1,212 @@
+//! Aspects (connected components of det Df ≠ 0 on the torus) and the largest number of
+//! inverse-kinematics solutions, for arms outside the parallel-axes class of `verdict`.
+//!
+//! **Aspects**, from the singular-curve cover (`curves::Cover`): every cell of the grid is
+//! regular (det Df ≠ 0 on the closed cell, one *piece* of one sign), or **monotone**: for some
+//! direction k, ∂det/∂θₖ has one strict sign on the closed cell, and on each of its two edges
+//! θₖ = const det has one sign or is strictly monotone along the edge. Along each segment in
+//! direction k det is then strictly monotone (say increasing), so {det < 0} in the cell is the
+//! union of the segments' lower parts, attached to the part of the lower edge where det < 0,
+//! which is one interval: one connected piece, or none; likewise {det > 0} with the upper edge.
+//! Pieces of one sign in two cells sharing an edge E belong to one aspect exactly when det has
+//! that sign somewhere on E, and the signs on E are known exactly: E lies on a regular cell (its
+//! sign), or det over E excludes zero, or det is strictly monotone along E (the signs of its
+//! two end points). A path within an aspect crosses from cell to cell through such edge points (at a
+//! vertex, through the edges next to it), so the components of the piece graph are exactly the
+//! aspects. A cell that is neither regular nor an arc cell, or an end point whose sign is not
+//! decided, stops the argument (then the grid is refined once, and after that the count is
+//! `None` with the reason).
+//!
+//! **Largest number of IK solutions.** A 3R has at most 4 solutions at a point not on the
+//! image of an internal-motion line (its inverse kinematics reduce to a quartic), and a
+//! non-cuspidal one at most one per aspect. A sample point whose inverse kinematics run ends
+//! complete with k solution boxes, each proven to hold exactly one, and nothing undecided, has
+//! exactly k; so when a sample reaches the upper bound, the maximum is proven.
+
+use super::curves::Cover;
+use super::cusps::evaluate_without_tangency as evaluate;
+use super::drive::Control;
+use super::ik;
+use super::Chain3R;
+use crate::interval::{interval, point};
+use crate::search::Limits;
+use inari::Interval;
+
+/// Cover depths and grid shifts tried, in order. The shifts keep the grid lines off θ = 0, ±π,
+/// where curves of arms symmetric in θ₂ are tangent to them (see `Cover::shifted`).
+const GRIDS: [(u32, f64); 3] = [(8, 0.0123456789), (9, 0.0071234567), (10, 0.0031234567)];
+
+/// The strict sign of `x`: `Some(true)` positive, `Some(false)` negative.
+fn sign(x: Interval) -> Option<bool> {
+    if x.inf() > 0.0 {
+        Some(true)
+    } else if x.sup() < 0.0 {
+        Some(false)
+    } else {
+        None
+    }
+}
+
+/// What is known of one grid cell.
+#[derive(Clone, Copy, Debug)]
+enum Cell {
+    /// det ≠ 0 on the closed cell, of this sign.
+    Regular(bool),
+    /// A monotone cell; which signs occur in it (each as one piece).
+    Arc { signs: [bool; 2] },
+}
+
+impl Cell {
+    fn has(&self, s: bool) -> bool {
+        match *self {
+            Cell::Regular(t) => t == s,
+            Cell::Arc { signs, .. } => signs[s as usize],
+        }
+    }
+}
+
+fn find(parent: &mut [usize], mut x: usize) -> usize {
+    while parent[x] != x {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
+    }
+    x
+}
+
+/// The number of aspects on the full torus, or why it is not proven.
+pub fn count(chain: &Chain3R, control: &Control) -> Result<u32, String> {
+    let mut why = String::new();
+    for (depth, shift) in GRIDS {
+        match count_at(chain, depth, shift, control) {
+            Ok(n) => return Ok(n),
+            Err(e) => why = e,
+        }
+    }
+    Err(why)
+}
+
+/// `count` on one grid.
+fn count_at(chain: &Chain3R, depth: u32, shift: f64, control: &Control) -> Result<u32, String> {
+    let cover = Cover::shifted(chain, depth, shift, control);
+    if !cover.status.is_complete() {
+        return Err(format!("the singular-curve cover ({0} x {0}) was stopped by a limit", cover.n));
+    }
+    let n = cover.n;
+    let side = |i: usize| {
+        let [a, b] = cover.bounds(i);
+        interval(a, b)
+    };
+    let at = |t2: f64, t3: f64| sign(evaluate(chain, [point(t2), point(t3)]).det);
+    // Regular regions' signs, from one cell of each.
+    let mut region_sign: Vec<Option<bool>> = vec![None; cover.regions];
+    for c in 0..n * n {
+        let r = cover.region[c];
+        if r >= 0 && region_sign[r as usize].is_none() {
+            let (i, j) = (c / n, c % n);
+            region_sign[r as usize] = Some(at(side(i).mid(), side(j).mid()).ok_or("a regular cell's sign is not decided")?);
+        }
+    }
+    // The signs det takes on an edge (`free` the coordinate along it), exactly: one sign over
+    // it, or strictly monotone along it (then the signs of its ends, each sign's set one
+    // interval of the edge).
+    let edge_signs = |e: [Interval; 2], free: usize| -> Option<[bool; 2]> {
+        let ev = evaluate(chain, e);
+        if let Some(s) = sign(ev.det) {
+            return Some([!s, s]);
+        }
+        sign(ev.grad_det[free])?;
+        let mut ends = [false; 2];
+        for t in [e[free].inf(), e[free].sup()] {
+            let mut p = [e[0].mid(), e[1].mid()];
+            p[free] = t;
+            ends[at(p[0], p[1])? as usize] = true;
+        }
+        Some(ends)
+    };
+    let mut cells: Vec<Cell> = (0..n * n).map(|c| Cell::Regular(region_sign.get(cover.region[c].max(0) as usize).copied().flatten().unwrap_or(false))).collect();
+    for &(i, j) in &cover.boxes {
+        let b = [side(i), side(j)];
+        let e = evaluate(chain, b);
+        // Monotone along k: each sign is one piece, attached to the part of the lower (negative)
+        // or upper (positive) k-edge where det has that sign (swapped when decreasing); that
+        // part is one interval of the edge.
+        let arc = (0..2).find_map(|k| {
+            let up = sign(e.grad_det[k])?;
+            let edge = |at: f64| {
+                let mut x = b;
+                x[k] = point(at);
+                edge_signs(x, 1 - k)
+            };
+            let (lo, hi) = (edge(b[k].inf())?, edge(b[k].sup())?);
+            let (neg_side, pos_side) = if up { (lo, hi) } else { (hi, lo) };
+            Some(Cell::Arc { signs: [neg_side[0], pos_side[1]] })
+        });
+        cells[i * n + j] = arc.ok_or_else(|| format!("a cell of the {n} x {n} cover around ({:.4}, {:.4}) is neither regular nor monotone in one direction with edges of known signs", b[0].mid(), b[1].mid()))?;
+    }
+    // Pieces: node 2c + s for cell c and sign s.
+    let mut parent: Vec<usize> = (0..2 * n * n).collect();
+    let id = |c: usize, s: bool| 2 * c + s as usize;
+    for i in 0..n {
+        for j in 0..n {
+            let x = i * n + j;
+            // The upper neighbour in θ₂ (edge θ₂ = line i + 1, spanning θ₃ over cell j), then in θ₃.
+            for dir in 0..2 {
+                let y = if dir == 0 { ((i + 1) % n) * n + j } else { i * n + (j + 1) % n };
+                let (cx, cy) = (cells[x], cells[y]);
+                // The shared edge, seen from x: θ_dir fixed at x's upper bound, the other free.
+                let mut edge = [side(i), side(j)];
+                edge[dir] = point(edge[dir].sup());
+                let signs: [bool; 2] = match (cx, cy) {
+                    (Cell::Regular(s), _) | (_, Cell::Regular(s)) => [!s, s],
+                    _ => edge_signs(edge, 1 - dir).ok_or_else(|| format!("the signs of det on a cell edge of the {n} x {n} cover are not decided"))?,
+                };
+                for s in [false, true] {
+                    if signs[s as usize] && cx.has(s) && cy.has(s) {
+                        let (a, b) = (find(&mut parent, id(x, s)), find(&mut parent, id(y, s)));
+                        parent[a] = b;
+                    }
+                }
+            }
+        }
+    }
+    let mut roots = std::collections::BTreeSet::new();
+    for c in 0..n * n {
+        for s in [false, true] {
+            if cells[c].has(s) {
+                roots.insert(find(&mut parent, id(c, s)));
+            }
+        }
+    }
+    Ok(roots.len() as u32)
+}
+
+/// The largest number of IK solutions of one point, proven when a sample reaches `bound`.
+/// Samples: configurations around each of `near` (certified cusps: regions with more
+/// solutions border their images, and may be small, as on the near-boundary robot), then the
+/// (θ₂, θ₃) grid points, coarse grids first; their images are the points solved. Each inverse
+/// kinematics run is bounded by `max_boxes`. Returns the best certified count seen and whether
+/// it reaches `bound`.
+pub fn max_ik_solutions(chain: &Chain3R, bound: u32, near: &[[f64; 2]], max_boxes: u64) -> (u32, bool) {
+    let control = Control::with_limits(Limits { max_cells: max_boxes, ..Limits::default() });
+    let mut best = 0u32;
+    let around = near.iter().flat_map(|c| {
+        [3e-2, 1e-2, 3e-3].into_iter().flat_map(move |r| (0..8).map(move |a| {
+            let phi = a as f64 * std::f64::consts::FRAC_PI_4 + 0.1;
+            [c[0] + r * phi.cos(), c[1] + r * phi.sin()]
+        }))
+    });
+    // Offsets keep the grid samples off the lines of earlier grids and off symmetric spots.
+    let t = |k: usize, n: usize| -std::f64::consts::PI + (k as f64 + 0.37) * std::f64::consts::TAU / n as f64;
+    let grid = [8usize, 16, 32].into_iter().flat_map(move |n| (0..n * n).map(move |k| [t(k / n, n), t(k % n, n)]));
+    for [t2, t3] in around.chain(grid) {
+        let [rho, z] = chain.eval_f64(t2, t3);
+        let Ok(s) = ik::solve_with(chain, rho.max(0.0).sqrt(), z, 1e-9, &control, &mut super::drive::no_progress) else { continue };
+        if s.status.is_complete() && s.clusters.is_empty() {
+            best = best.max(s.unique.len() as u32);
+            if best >= bound {
+                return (best, true);
+            }
+        }
+    }
+    (best, false)
+}
