@@ -13,7 +13,7 @@ use std::sync::atomic::AtomicBool;
 
 /// A four-bar in URDF: ground pivots (0, 0) and (d, 0), crank a, coupler b, rocker c, joints named
 /// as in the bundled `four_bar.urdf`.
-fn four_bar(d: f64, a: f64, b: f64, c: f64) -> String {
+pub(super) fn four_bar(d: f64, a: f64, b: f64, c: f64) -> String {
     format!(
         r#"<?xml version="1.0"?>
 <robot name="four_bar_{d}_{a}_{b}_{c}">

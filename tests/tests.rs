@@ -27,6 +27,9 @@ mod certified_distances;
 mod spatial;
 /// Issue 13: singular sets of planar closed-loop linkages against closed forms, grids and Newton.
 mod closed_loop_singularities;
+/// Issue 13 on spatial linkages: RSSR and spherical four-bar singular points against their
+/// closed-form input–output relations.
+mod spatial_singularities;
 /// `linkspace chart`: the singular-set charts of closed loops (issue 13) and the 3R workspace
 /// regions (issue 11) show what the references of the other modules establish.
 mod charts;

@@ -377,10 +377,10 @@ fn services_answer_good_requests_and_refuse_bad_ones_with_reasons() {
         call("solve", "Solve", json!({"mechanism": "four_bar", "fixed_joint_names": ["nope"], "fixed_joint_values": [1.0], "settings": fine})),
         call("solve", "Solve", json!({"mechanism": "four_bar", "settings": fine, "wait": 1e9})),
         call("solve", "Solve", json!({"mechanism": "four_bar", "settings": long, "wait": 0.0})),
-        call("cancel", "Cancel", json!({"run_id": 6})),
+        call("cancel", "Cancel", json!({"run_id": 7})),
         {"sleep": 2.0},
         {"subscribe": "/linkspace/four_bar/solve_result"},
-        call("cancel", "Cancel", json!({"run_id": 6})),
+        call("cancel", "Cancel", json!({"run_id": 7})),
         call("cancel", "Cancel", json!({"run_id": 999_999})),
         call("singularities", "Singularities", json!({"mechanism": "four_bar"})),
         call("singularities", "Singularities", json!({"mechanism": "tilted"})),
@@ -419,7 +419,7 @@ fn services_answer_good_requests_and_refuse_bad_ones_with_reasons() {
     assert_eq!(list[0]["topic_prefix"], "/linkspace/four_bar");
     assert_eq!((list[1]["name"].as_str(), list[1]["kind"].as_str()), (Some("tilted"), Some("spatial_linkage")));
     assert!(list[1]["message"].as_str().expect("message").contains("complete, 2 boxes in 2 clusters"), "the crank at 0 and at π: {}", list[1]);
-    assert_eq!(list[1]["services"], json!(["solve", "classify"]));
+    assert_eq!(list[1]["services"], json!(["solve", "singularities", "classify"]));
 
     // Solve again with another crank angle: the same boxes as the CLI.
     assert_eq!((r[1]["ok"].clone(), r[1]["done"].clone()), (json!(true), json!(true)), "{}", r[1]);
@@ -439,25 +439,25 @@ fn services_answer_good_requests_and_refuse_bad_ones_with_reasons() {
     refused(9, "no joint or loop named 'nope'");
     refused(10, "wait 1000000000 s is out of range");
 
-    // A long run, answered at once with its id (runs 1 to 3 are the load-time analyses: the
-    // four-bar's configuration space and singular sets, the tilted one's configuration space),
+    // A long run, answered at once with its id (runs 1 to 4 are the load-time analyses: the
+    // four-bar's configuration space and singular sets, the tilted one's),
     // cancelled, and published incomplete.
-    assert_eq!((r[11]["ok"].clone(), r[11]["done"].clone(), r[11]["run_id"].clone()), (json!(true), json!(false), json!(6)), "{}", r[11]);
+    assert_eq!((r[11]["ok"].clone(), r[11]["done"].clone(), r[11]["run_id"].clone()), (json!(true), json!(false), json!(7)), "{}", r[11]);
     assert!(r[11]["message"].as_str().expect("message").contains("/linkspace/four_bar/solve_result"));
     assert_eq!(r[12]["ok"], json!(true), "{}", r[12]);
     let cancelled = r[14]["received"].as_array().and_then(|v| v.last()).cloned().unwrap_or_default();
     assert!(cancelled.is_object(), "no result after the cancel: {}\nnode log:\n{}", r[14], node.log());
-    assert_eq!((cancelled["run_id"].clone(), cancelled["status"].clone(), cancelled["limit"].clone()), (json!(6), json!(1), json!("cancelled")));
+    assert_eq!((cancelled["run_id"].clone(), cancelled["status"].clone(), cancelled["limit"].clone()), (json!(7), json!(1), json!("cancelled")));
     assert!(cancelled["box_status"].as_array().expect("statuses").contains(&json!(1)), "a cancelled run reports its undecided boxes");
-    refused(15, "run 6 has already finished");
+    refused(15, "run 7 has already finished");
     refused(16, "no run 999999");
 
     // The planar four-bar answers singularities with its load-time sets (crank fixed, no
-    // transmission: C-space and output, both proven empty); the spatial one and inverse
-    // kinematics have no math yet.
+    // transmission: C-space and output, both proven empty); so does the spatial one (the
+    // spatial model's sets: C-space and output); inverse kinematics has no math yet.
     assert_eq!((r[17]["ok"].clone(), r[17]["report"]["set_kinds"].clone(), r[17]["report"]["complete"].clone()), (json!(true), json!(["cspace", "output"]), json!(true)), "{}", r[17]);
     assert_eq!(r[17]["report"]["actuated"], json!([]));
-    refused(18, "singularities is not available for this mechanism ('tilted', spatial_linkage)");
+    assert_eq!((r[18]["ok"].clone(), r[18]["report"]["set_kinds"].clone()), (json!(true), json!(["cspace", "output"])), "{}", r[18]);
     refused(19, "inverse_kinematics is not available for this mechanism ('four_bar'");
     refused(20, "is not finite");
 
@@ -475,7 +475,7 @@ fn services_answer_good_requests_and_refuse_bad_ones_with_reasons() {
     assert_eq!(r[27]["mechanisms"].as_array().expect("mechanisms").len(), 2);
     // The last progress is the cancelled run's end: done, part of the volume decided.
     let progress = r[28]["received"].as_array().and_then(|v| v.last()).cloned().unwrap_or_default();
-    assert_eq!((progress["run_id"].clone(), progress["analysis"].clone(), progress["done"].clone()), (json!(6), json!("solve"), json!(true)), "{progress}");
+    assert_eq!((progress["run_id"].clone(), progress["analysis"].clone(), progress["done"].clone()), (json!(7), json!("solve"), json!(true)), "{progress}");
     let decided = progress["decided"].as_f64().expect("decided");
     assert!((0.0..1.0).contains(&decided) && progress["processed"].as_u64().expect("processed") > 0, "{progress}");
     assert!(node.alive(), "the node died:\n{}", node.log());

@@ -3,11 +3,11 @@
 //! `solve --model auto` does), re-solved on request with other fixed joints or settings. The
 //! result is the same as `linkspace solve --json` for the same input.
 //!
-//! Planar linkages also answer `singularities` with their singular sets (`problems::singular`:
-//! C-space, input and output, through `SingularSets`, the orchestration `linkspace
-//! loop-singularities` runs, so the boxes are those of its `--json`), and `classify` with a lower
-//! bound on the joint-space distance to the nearest singular configuration once those sets are
-//! complete.
+//! Planar and spatial linkages also answer `singularities` with their singular sets
+//! (`problems::singular`: C-space, input and output, through `SingularSets`, the orchestration
+//! `linkspace loop-singularities` runs on the same model, so the boxes are those of its
+//! `--json`), and `classify` with a lower bound on the joint-space distance to the nearest
+//! singular configuration once those sets are complete.
 
 use super::{
     classify, gap, Actuation, Analysis, AnalysisError, BoxSetResult, Classification, LoopSingularities, PreparedRun, ResultBox, Service, SingularSetResult, SingularityQuery,
@@ -17,7 +17,7 @@ use crate::interval::components;
 use crate::model::{JointKind, Mechanism};
 use crate::problems::choice::TracedPoint;
 use crate::problems::singular::sets::{all_kinds, SingularSets};
-use crate::problems::singular::{BoxKind, SingularProblem, SingularSet};
+use crate::problems::singular::{BoxKind, Coordinates, SingularProblem, SingularSet};
 use crate::problems::{Linkage, LinkageError, ModelChoice};
 use crate::report::singular::SingularReport;
 use crate::search::{BoxStatus, Progress, SolveStats, SolverSettings, Status};
@@ -67,16 +67,13 @@ impl Analysis for LinkageAnalysis {
     }
 
     fn services(&self) -> Vec<Service> {
-        match &self.problem {
-            Linkage::Planar(_) => vec![Service::Solve, Service::Singularities, Service::Classify],
-            Linkage::Spatial(..) => vec![Service::Solve, Service::Classify],
-        }
+        vec![Service::Solve, Service::Singularities, Service::Classify]
     }
 
     fn limitation(&self) -> String {
         match &self.problem {
             Linkage::Planar(_) => "a planar linkage: its configuration space and singular sets (C-space, input, output) are analysed; cusps and nodes of the type-II image are not (`linkspace loop-singularities --kind image`), nor is inverse kinematics".to_string(),
-            Linkage::Spatial(_, why) => format!("a spatial linkage ({why}): only its configuration space is analysed so far (the singular-set builder is planar)"),
+            Linkage::Spatial(_, why) => format!("a spatial linkage ({why}): its configuration space and singular sets (C-space, input, output; actuated and output joints are tree joints) are analysed; inverse kinematics is not"),
         }
     }
 
@@ -113,9 +110,6 @@ impl Analysis for LinkageAnalysis {
     /// largest width of a box in the configuration and null-vector variables), `max_boxes` the
     /// limit per chart, `timeout` for all sets; `nodes` does not apply (no image is analysed).
     fn singularities(&self, query: &SingularityQuery) -> Result<Box<dyn PreparedRun<SingularityResult>>, AnalysisError> {
-        if !matches!(self.problem, Linkage::Planar(_)) {
-            return Err(self.not_available(Service::Singularities));
-        }
         if !(query.precision > 0.0 && query.precision < 1.0) {
             return Err(AnalysisError::BadRequest(format!("precision must be a number in (0, 1), got {}", query.precision)));
         }
@@ -137,7 +131,6 @@ impl Analysis for LinkageAnalysis {
         let mut c = classify(cspace, values, &periodic, None);
         let names = self.free_joints();
         match (&self.problem, singularities.and_then(|s| s.loops.as_ref())) {
-            (Linkage::Spatial(..), _) => c.note = "the singular sets of spatial linkages are not built yet".to_string(),
             (_, None) => c.note = "the singular sets are not known yet (still being computed, or their run failed: see list_mechanisms)".to_string(),
             (_, Some(loops)) => match singular_distance(loops, &names, values, &periodic) {
                 Ok((d, note)) => {
@@ -218,7 +211,7 @@ impl PreparedRun<SingularityResult> for SingularSetsRun {
         // The run's status: the first limit any set met.
         let status = solved.iter().map(|s| s.status).find(|s| !s.is_complete()).unwrap_or(Status::Complete);
         let processed = solved.iter().flat_map(|s| &s.stats).map(|s| s.processed).sum();
-        let joint_names = self.sets.problems.first().map(|p| p.linkage.free_joints.clone()).unwrap_or_default();
+        let joint_names = self.sets.problems.first().map(|p| p.linkage.free_joints().to_vec()).unwrap_or_default();
         let summary = format!(
             "{}; actuated: {} ({})",
             sets.iter().map(|s| format!("{}: {}", s.kind, s.verdict)).collect::<Vec<_>>().join("; "),
@@ -262,9 +255,9 @@ impl PreparedRun<SingularityResult> for SingularSetsRun {
 
 /// One solved set as a box set, through the CLI's report (`SingularReport`), so its joint
 /// values are those of `loop-singularities --json` bit for bit.
-fn set_result(p: &SingularProblem, settings: &SolverSettings, set: &SingularSet) -> SingularSetResult {
+fn set_result(p: &SingularProblem<Linkage>, settings: &SolverSettings, set: &SingularSet) -> SingularSetResult {
     let report = SingularReport::new(p, settings, set);
-    let names = p.linkage.free_joints.clone();
+    let names = p.linkage.free_joints().to_vec();
     let chart = &p.charts[0];
     let boxes: Vec<ResultBox> = set
         .boxes
@@ -320,14 +313,14 @@ fn set_result(p: &SingularProblem, settings: &SolverSettings, set: &SingularSet)
     SingularSetResult {
         kind: p.kind.name(),
         boxes: BoxSetResult {
-            mechanism: p.linkage.name.clone(),
+            mechanism: p.linkage.name().to_string(),
             analysis: format!("singular_set:{}", p.kind.name()),
             status: set.status,
             settings: settings.clone(),
             variables: chart.vars.iter().map(|v| v.name.clone()).collect(),
             primaries: chart.vars.iter().enumerate().filter(|(_, v)| v.role == VarRole::Primary).map(|(i, _)| i).collect(),
             joint_names: names,
-            fixed_joints: p.linkage.fixed_joints.clone(),
+            fixed_joints: p.linkage.fixed_joints().to_vec(),
             traces: vec![],
             boxes,
             clusters: set.clusters.len(),
@@ -520,6 +513,31 @@ mod tests {
     }
 
     #[test]
+    fn a_spatial_linkage_serves_its_singular_sets_and_a_bound_on_their_distance() {
+        // The RSSR driven by its crank (a transmission): the crank turns fully (no input
+        // singularity), no bifurcation, and the rocker (the passive tree joint, the default
+        // output) has 4 dead centres, the closed form of `tests/spatial_singularities.rs`.
+        let xml = include_str!("../../urdf/rssr.urdf").replace("</robot>", "<transmission name=\"drive\"><type>transmission_interface/SimpleTransmission</type><joint name=\"crank_joint\"/></transmission></robot>");
+        let m = urdf::parse(&xml).expect("bundled");
+        let a = crate::analysis::load_urdf(&m, &xml, &[], &[]).expect("spatial");
+        assert_eq!(a.kind(), "spatial_linkage");
+        let query = SingularityQuery { precision: 1e-6, nodes: false, max_boxes: 1_000_000, timeout: None, threads: 1 };
+        let r = a.singularities(&query).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let loops = r.loops.as_ref().expect("a linkage's sets");
+        assert_eq!(loops.actuated, vec!["crank_joint".to_string()]);
+        let got: Vec<(&str, usize, usize)> = loops.sets.iter().map(|s| (s.kind, s.boxes.clusters, s.proven)).collect();
+        assert_eq!(got, vec![("cspace", 0, 0), ("input", 0, 0), ("output", 4, 4)], "{}", r.summary);
+        assert!(loops.complete(), "{}", r.summary);
+        let cspace = a.configuration_space(&SolverSettings { sigma: 1e-3, ..Default::default() }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let names = a.free_joints();
+        let values: Vec<f64> = names.iter().map(|n| if n == "crank_joint" { 0.0 } else { 0.645167 }).collect();
+        let c = a.classify(&values, Some(&cspace), Some(&r)).expect("classifies");
+        // At a dead centre (to six digits): the bound is known, and small.
+        let d = c.singular_distance.expect("complete sets give a bound");
+        assert!(d < 1e-5, "{d}: {}", c.note);
+    }
+
+    #[test]
     fn bad_requests_fail_before_any_run() {
         let m = urdf::parse(FOUR_BAR).expect("bundled");
         let a = load(&m, &[], &[]).expect("planar");
@@ -533,8 +551,11 @@ mod tests {
         assert!(a.singularities(&SingularityQuery { max_boxes: 0, ..query.clone() }).err().map(|e| e.to_string()).unwrap_or_default().contains("max_boxes must be at least 1"));
         let bad = LinkageAnalysis::new(&m, &[], &[]).expect("planar").with_actuation(Actuation::given(vec!["nope".into()]));
         assert!(bad.singularities(&query).err().map(|e| e.to_string()).unwrap_or_default().contains("'nope' is not a free joint"));
-        let spatial = load(&urdf::parse(include_str!("../../urdf/rssr.urdf")).expect("bundled"), &[("crank_joint".into(), 0.7)], &[]).expect("spatial");
-        assert!(spatial.singularities(&query).err().map(|e| e.to_string()).unwrap_or_default().contains("singularities is not available for this mechanism"));
+        // A spatial linkage answers too, with the same checks before a run.
+        let spatial = load(&urdf::parse(include_str!("../../urdf/rssr.urdf")).expect("bundled"), &[], &[]).expect("spatial");
+        assert!(spatial.singularities(&query).is_ok());
+        let bad = LinkageAnalysis::new(&urdf::parse(include_str!("../../urdf/spherical_four_bar.urdf")).expect("bundled"), &[], &[]).expect("spatial").with_actuation(Actuation::given(vec!["loop_coupler_rocker".into()]));
+        assert!(bad.singularities(&query).err().map(|e| e.to_string()).unwrap_or_default().contains("is a loop joint of a spatial linkage"));
         let query = crate::analysis::IkQuery { point: [1.0, 0.0, 0.0], precision: 1e-3, max_boxes: 1000, threads: 1 };
         assert!(a.inverse_kinematics(&query).err().map(|e| e.to_string()).unwrap_or_default().contains("inverse_kinematics is not available"));
     }

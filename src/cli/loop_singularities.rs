@@ -1,5 +1,6 @@
-//! `linkspace loop-singularities`: certified singular sets of planar closed-loop linkages
-//! (issue 13), on the polynomial solver through `problems::singular`.
+//! `linkspace loop-singularities`: certified singular sets of closed-loop linkages (issue 13),
+//! planar or spatial (the model `solve --model auto` picks), on the polynomial solver through
+//! `problems::singular`.
 
 use super::{parse_fix, LimitArgs};
 use anyhow::{bail, Context, Result};
@@ -30,7 +31,7 @@ pub(crate) enum Kind {
 
 #[derive(clap::Args)]
 pub(crate) struct LoopSingularitiesArgs {
-    /// URDF file of a planar closed-loop linkage (loops closed with <loop>, see README).
+    /// URDF file of a closed-loop linkage, planar or spatial (loops closed with <loop>, see README).
     urdf: PathBuf,
     /// Which singular set(s).
     #[arg(long, value_enum, default_value_t = Kind::All)]
@@ -108,6 +109,9 @@ pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
     let solved = sets.solve(&settings, &AtomicBool::new(false))?;
     let mut reports = Vec::new();
     let mut out = std::io::stdout().lock();
+    if sets.model == "spatial" {
+        writeln!(out, "{}: spatial model ({})", mechanism.name, sets.model_reason).ok();
+    }
     for (p, set) in sets.problems.iter().zip(&solved) {
         let r = SingularReport::new(p, &settings, set);
         let s = &r.summary;
@@ -212,6 +216,8 @@ const FOUR_BAR: &str = include_str!("../../urdf/four_bar.urdf");
 const FIVE_BAR: &str = include_str!("../../urdf/five_bar.urdf");
 const BUTTERFLY: &str = include_str!("../../urdf/double_butterfly.urdf");
 const FIVE_BAR_UNEQUAL: &str = include_str!("../../urdf/five_bar_unequal.urdf");
+const RSSR: &str = include_str!("../../urdf/rssr.urdf");
+const SPHERICAL: &str = include_str!("../../urdf/spherical_four_bar.urdf");
 
 /// A bench case: name, URDF text, set, actuated joints, output, sigma.
 type Case = (&'static str, &'static str, SingularKind, Vec<String>, Option<Output>, f64);
@@ -226,6 +232,9 @@ pub(crate) fn bench(args: BenchArgs) -> Result<()> {
         ("four-bar dead centres (output rocker_joint)", FOUR_BAR, SingularKind::Output, vec!["crank_joint".into()], Some(Output::Joints(vec!["rocker_joint".into()])), 1e-6),
         ("five-bar type-II curves", FIVE_BAR, SingularKind::Input, vec!["crank1_joint".into(), "crank2_joint".into()], None, 2e-2),
     ];
+    // Spatial four-bars (the spatial model's velocity rows): the rocker's dead centres.
+    cases.push(("RSSR dead centres (output rocker_joint)", RSSR, SingularKind::Output, vec!["crank_joint".into()], Some(Output::Joints(vec!["rocker_joint".into()])), 1e-6));
+    cases.push(("spherical four-bar dead centres (output rocker_joint)", SPHERICAL, SingularKind::Output, vec!["crank_joint".into()], Some(Output::Joints(vec!["rocker_joint".into()])), 1e-6));
     if args.butterfly {
         cases.push(("double butterfly turning points of joint6", BUTTERFLY, SingularKind::Input, vec!["joint6".into()], None, 1e-4));
     }
@@ -233,7 +242,8 @@ pub(crate) fn bench(args: BenchArgs) -> Result<()> {
     writeln!(out, "case | shrink | median CPU s | boxes processed | boxes | clusters (certified) | vs propagation only (same run)").ok();
     for (name, xml, kind, actuated, output, sigma) in cases {
         let m = urdf::parse(xml)?;
-        let p = SingularProblem::new(&m, &[], kind, &actuated, output)?;
+        // The model `loop-singularities` picks (planar when the planar builder accepts it).
+        let p = SingularSets::new(&m, &[], &[kind], &actuated, output)?.problems.remove(0);
         let mut medians = Vec::new();
         for use_lp in [false, true] {
             // The baseline is bounded: without the LP the curves take many more boxes.

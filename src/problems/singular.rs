@@ -30,7 +30,7 @@
 use super::linkage::{JointCoordinate, LinkageError, LinkageProblem};
 use crate::interval::{components, interval, point, Interval, IntervalBox};
 use crate::model::Mechanism;
-use crate::search::{Limit, SolveError, SolveStats, SolverSettings, Status};
+use crate::search::{Limit, SolveError, SolveStats, Solver, SolverSettings, Status};
 use crate::system::{Equation, EquationKind, EquationSystem, Monomial, Term, VarId, VarRole};
 use std::collections::BTreeMap;
 use std::sync::atomic::AtomicBool;
@@ -39,6 +39,7 @@ use thiserror::Error;
 
 pub mod image;
 pub mod sets;
+pub mod velocity;
 
 /// Half-width of a chart's free components: above 1, so a direction whose largest components
 /// tie (|m_j| = |m_k| = 1) lies inside both charts' domains, not on their boundary.
@@ -109,8 +110,11 @@ pub enum SingularError {
     /// A joint named twice.
     #[error("joint '{0}' is named twice")]
     Repeated(String),
+    /// A spatial linkage's loop joint as an actuated or output joint.
+    #[error("'{0}' is a loop joint of a spatial linkage: its rate is read from the closure frames, not a coordinate; name tree joints")]
+    LoopJoint(String),
     /// The system has an equation shape the differentiation does not know.
-    #[error("internal: loop row {0} mentions a variable that is neither an angle, a travel nor a product")]
+    #[error("internal: equation {0} has a shape the differentiation does not know (a variable that is neither a coordinate nor defined by an earlier equation)")]
     Unexpected(usize),
 }
 
@@ -143,9 +147,9 @@ struct Rate {
 /// The augmented systems of one singular set: the linkage's system, the multiplier variables
 /// and their equations, one system per chart.
 #[derive(Clone, Debug)]
-pub struct SingularProblem {
+pub struct SingularProblem<L = LinkageProblem> {
     /// The linkage (with the output point traced, if any).
-    pub linkage: LinkageProblem,
+    pub linkage: L,
     /// Which set.
     pub kind: SingularKind,
     /// Actuated joints.
@@ -182,19 +186,75 @@ pub fn transmission_joints(xml: &str) -> Vec<String> {
     out
 }
 
-impl SingularProblem {
-    /// Builds the augmented systems of `kind` for `m` with joints `fixed`.
-    pub fn new(m: &Mechanism, fixed: &[(String, f64)], kind: SingularKind, actuated: &[String], output: Option<Output>) -> Result<Self, SingularError> {
-        let traces: Vec<(String, f64, f64)> = match (&output, kind) {
-            (Some(Output::Point { link, x, y }), SingularKind::Output) => vec![(link.clone(), *x, *y)],
-            _ => Vec::new(),
-        };
-        let linkage = LinkageProblem::new(m, fixed, &traces)?;
-        for (k, a) in actuated.iter().enumerate() {
-            if actuated[..k].contains(a) {
-                return Err(SingularError::Repeated(a.clone()));
-            }
-        }
+/// What a singular-set builder adds to a linkage's system: the multipliers (one chart each) and
+/// the rows that make them a null vector of the relevant Jacobian block.
+#[derive(Clone, Debug)]
+pub struct Augmented {
+    /// The linkage's system extended by the multipliers, the rows and their product variables.
+    pub system: EquationSystem,
+    /// The multipliers, chart `k` fixing `multipliers[k] = 1`.
+    pub multipliers: Vec<VarId>,
+    /// Degrees of freedom of the linkage (coordinates minus constraint rows).
+    pub dof: isize,
+    /// Rows added beyond the derived variables they define: the set's expected dimension is
+    /// `dof + (multipliers − 1) − rows`.
+    pub rows: isize,
+}
+
+/// A linkage's system seen through its coordinates: what the chart, search, cluster and report
+/// machinery of singular sets needs of a model, planar (`LinkageProblem`) or spatial
+/// (`SpatialProblem`, through `velocity`), so that machinery exists once.
+pub trait Coordinates {
+    /// The configuration system; its variables are the first of every chart's.
+    fn system(&self) -> &EquationSystem;
+    /// Robot name.
+    fn name(&self) -> &str;
+    /// `planar` or `spatial`.
+    fn model(&self) -> &'static str;
+    /// Joints fixed by the user, with their values.
+    fn fixed_joints(&self) -> &[(String, f64)];
+    /// Free joint values over a box of the configuration variables (radians or metres).
+    fn joint_values(&self, b: &IntervalBox) -> BTreeMap<String, (f64, f64)>;
+    /// A solver for `system`, an extension of `self.system()`, with the model's filters.
+    fn extended_solver<'s>(&'s self, system: &'s EquationSystem, settings: SolverSettings) -> Result<Solver<'s>, SolveError>;
+    /// The multipliers and rows of `kind` (actuated joints checked here: which joints have a
+    /// rate is the model's business).
+    fn augment(&self, kind: SingularKind, actuated: &[String], output: Option<&Output>) -> Result<Augmented, SingularError>;
+    /// Whether a root of the augmented system in `b` (configuration variables first) is a
+    /// singular configuration of the mechanism, not an artefact of how its rows are written:
+    /// a Krawczyk certificate counts only where this holds.
+    fn rows_faithful(&self, _b: &IntervalBox) -> bool {
+        true
+    }
+}
+
+impl Coordinates for LinkageProblem {
+    fn system(&self) -> &EquationSystem {
+        &self.system
+    }
+
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn model(&self) -> &'static str {
+        "planar"
+    }
+
+    fn fixed_joints(&self) -> &[(String, f64)] {
+        &self.fixed_joints
+    }
+
+    fn joint_values(&self, b: &IntervalBox) -> BTreeMap<String, (f64, f64)> {
+        LinkageProblem::joint_values(self, b)
+    }
+
+    fn extended_solver<'s>(&'s self, system: &'s EquationSystem, settings: SolverSettings) -> Result<Solver<'s>, SolveError> {
+        LinkageProblem::extended_solver(self, system, settings)
+    }
+
+    fn augment(&self, kind: SingularKind, actuated: &[String], output: Option<&Output>) -> Result<Augmented, SingularError> {
+        let linkage = self;
         let free = || linkage.free_joints.join(", ");
         let rate_of = |name: &str| linkage.joint_coordinate(name);
         for a in actuated {
@@ -202,7 +262,7 @@ impl SingularProblem {
                 return Err(SingularError::UnknownActuated(a.clone(), free()));
             }
         }
-        if let Some(Output::Joints(js)) = &output {
+        if let Some(Output::Joints(js)) = output {
             for j in js {
                 if rate_of(j).is_none() {
                     return Err(SingularError::UnknownOutput(j.clone(), free()));
@@ -210,14 +270,13 @@ impl SingularProblem {
             }
         }
         let system = &linkage.system;
-        let base_vars = system.vars.len();
         let mut aug = system.clone();
-        let parts = Parts::new(&linkage, &mut aug)?;
+        let parts = Parts::new(linkage, &mut aug)?;
         let Parts { coords, loop_rates, trace_rates, .. } = &parts;
         let loop_rows = &parts.loop_rows;
         let dof = parts.dof();
         let coord_name = |c: &Coord| parts.coord_name(system, c);
-        let joint_rates = |name: &str| parts.joint_rates(&linkage, name);
+        let joint_rates = |name: &str| parts.joint_rates(linkage, name);
 
         // Multipliers: velocities (input, output) or row multipliers (C-space).
         let n_mult = if kind == SingularKind::Cspace { loop_rows.len() } else { coords.len() };
@@ -261,7 +320,7 @@ impl SingularProblem {
                     }
                     velocity_rows.extend(actuated.iter().map(|a| joint_rates(a)));
                 } else {
-                    match &output {
+                    match output {
                         Some(Output::Point { .. }) => velocity_rows.extend(trace_rates.iter().cloned()),
                         Some(Output::Joints(js)) => velocity_rows.extend(js.iter().map(|j| joint_rates(j))),
                         // Default: every passive joint stands still (the Jacobian with respect
@@ -283,8 +342,36 @@ impl SingularProblem {
                 aug.add(Equation::new(merge(row), point(0.0)));
             }
         }
+        Ok(Augmented { system: aug, multipliers, dof, rows: n_rows })
+    }
+}
+
+impl SingularProblem {
+    /// Builds the augmented systems of `kind` for the planar linkage `m` with joints `fixed`
+    /// (`SingularSets` builds either model, as `solve --model auto` chooses).
+    pub fn new(m: &Mechanism, fixed: &[(String, f64)], kind: SingularKind, actuated: &[String], output: Option<Output>) -> Result<Self, SingularError> {
+        let traces: Vec<(String, f64, f64)> = match (&output, kind) {
+            (Some(Output::Point { link, x, y }), SingularKind::Output) => vec![(link.clone(), *x, *y)],
+            _ => Vec::new(),
+        };
+        Self::with_linkage(LinkageProblem::new(m, fixed, &traces)?, kind, actuated, output)
+    }
+}
+
+impl<L: Coordinates> SingularProblem<L> {
+    /// Builds the augmented systems of `kind` for a built linkage (with the output point traced
+    /// when `output` is a point).
+    pub fn with_linkage(linkage: L, kind: SingularKind, actuated: &[String], output: Option<Output>) -> Result<Self, SingularError> {
+        for (k, a) in actuated.iter().enumerate() {
+            if actuated[..k].contains(a) {
+                return Err(SingularError::Repeated(a.clone()));
+            }
+        }
+        let base_vars = linkage.system().vars.len();
+        let Augmented { system: aug, multipliers, dof, rows } = linkage.augment(kind, actuated, output.as_ref())?;
+        let n_mult = multipliers.len();
         // Unknowns added: the multipliers (one fixed by the chart); equations added: the rows.
-        let expected_dimension = dof + (n_mult as isize - 1) - n_rows;
+        let expected_dimension = dof + (n_mult as isize - 1) - rows;
         let charts = (0..n_mult)
             .map(|k| {
                 let mut s = aug.clone();
@@ -324,7 +411,10 @@ impl SingularProblem {
                     dropped_other_chart += 1;
                     continue;
                 }
-                boxes.push(SingularBox { chart: k, b, status: if u { BoxKind::Certified } else { BoxKind::Solution } });
+                // A certificate of the augmented system is one of the mechanism only where its
+                // rows are faithful (see `Coordinates::rows_faithful`); elsewhere the box stays.
+                let certified = u && self.linkage.rows_faithful(&b);
+                boxes.push(SingularBox { chart: k, b, status: if certified { BoxKind::Certified } else { BoxKind::Solution } });
             }
             for b in e.undecided {
                 boxes.push(SingularBox { chart: k, b, status: BoxKind::Undecided });
@@ -367,6 +457,11 @@ impl SingularProblem {
     /// Free joint values over a box.
     pub fn joint_values(&self, b: &IntervalBox) -> BTreeMap<String, (f64, f64)> {
         self.linkage.joint_values(&IntervalBox::new(b.dims[..self.base_vars].to_vec()))
+    }
+
+    /// `planar` or `spatial`: the model the linkage was built with.
+    pub fn model(&self) -> &'static str {
+        self.linkage.model()
     }
 }
 

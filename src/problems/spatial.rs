@@ -263,6 +263,17 @@ pub struct LinkPose {
     pub rotation_width: Option<f64>,
 }
 
+/// How a free joint of a spatial linkage moves in the system's unknowns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum JointMotion {
+    /// Its own angle, `c = cos θ`, `s = sin θ` (a revolute tree joint, one Euler angle).
+    Angle { c: VarId, s: VarId },
+    /// Its own variable (a travel, a floating joint's coordinate).
+    Var(VarId),
+    /// A loop joint: its value is read from the closure frames' relative pose.
+    Loop,
+}
+
 /// A spatial linkage as a polynomial system, with what is needed to read answers back.
 #[derive(Clone, Debug)]
 pub struct SpatialProblem {
@@ -287,6 +298,8 @@ pub struct SpatialProblem {
     /// Axis closures written with two of their three rows: the third component of both axes,
     /// which must agree in sign (see `axes_agree`).
     signs: Vec<(Form, Form)>,
+    /// The same closures, for their velocity rows (`axis_velocities`).
+    axis_pairs: Vec<AxisPair>,
 }
 
 /// A leg between two ball joints, reduced to a distance.
@@ -577,7 +590,7 @@ impl Builder {
 /// removed by the sign filter (`SignFilter`): a box where they have opposite signs holds no
 /// closure; a box is certified only where they provably share one. When the three rows are
 /// identities or constants (planar axes), they are written as they are.
-fn axes_agree(b: &mut Builder, u: &Vec3F, v: &Vec3F, w: Vector3<f64>, rows: &mut Vec<usize>, signs: &mut Vec<(Form, Form)>) -> Result<(), ()> {
+fn axes_agree(b: &mut Builder, u: &Vec3F, v: &Vec3F, w: Vector3<f64>, rows: &mut Vec<usize>, signs: &mut Vec<(Form, Form)>, pairs: &mut Vec<AxisPair>) -> Result<(), ()> {
     let diff = sub3(u, v);
     if diff.iter().all(|f| f.terms.is_empty()) {
         for f in &diff {
@@ -586,13 +599,41 @@ fn axes_agree(b: &mut Builder, u: &Vec3F, v: &Vec3F, w: Vector3<f64>, rows: &mut
         return Ok(());
     }
     let i = (0..3).max_by(|&a, &c| w[a].abs().total_cmp(&w[c].abs())).expect("three components");
+    let first = rows.len();
     for (k, f) in diff.iter().enumerate() {
         if k != i {
             b.zero(f, rows)?;
         }
     }
     signs.push((u[i].clone(), v[i].clone()));
+    pairs.push(AxisPair { u: u.clone().map(|f| f.merged()), diff: diff.clone(), rows: rows[first..].to_vec() });
     Ok(())
+}
+
+/// An axis closure written with two rows, kept for its velocities: the predecessor's axis `u`,
+/// `u − v` per component, and the equations written.
+#[derive(Clone, Debug)]
+struct AxisPair {
+    u: Vec3F,
+    diff: Vec3F,
+    rows: Vec<usize>,
+}
+
+/// A linear form `Σ a·x + constant` over the system's variables.
+pub(crate) type LinearForm = (Vec<(VarId, Interval)>, Interval);
+
+/// What the velocity rows of an axis closure written with two rows need: with `|u| = |v| = 1`
+/// and `u = v`, the derivative `δ = d/dt (u − v)` is orthogonal to `u`, so its three rows have
+/// rank two everywhere on the closure (the two rows written lose rank where the component left
+/// out vanishes); `δ = ν·u` with one more unknown `ν` is square and forces `ν = u·δ = 0`.
+#[derive(Clone, Debug)]
+pub(crate) struct AxisVelocity {
+    /// The predecessor's axis, per component.
+    pub u: [LinearForm; 3],
+    /// `u − v`, per component.
+    pub diff: [LinearForm; 3],
+    /// The equations (indices) written for this closure.
+    pub rows: Vec<usize>,
 }
 
 fn e_mentions(m: Monomial, v: VarId) -> bool {
@@ -977,6 +1018,7 @@ impl SpatialProblem {
             }
         }
         let mut signs: Vec<(Form, Form)> = Vec::new();
+        let mut axis_pairs: Vec<AxisPair> = Vec::new();
         let mut loop_rows: Vec<(String, Vec<usize>)> = Vec::new();
         let mut frames: Vec<Option<LoopFrames>> = vec![None; m.loops.len()];
         let leg_of: BTreeMap<usize, &Leg> = legs.iter().map(|leg| (leg.closure, leg)).collect();
@@ -1058,7 +1100,7 @@ impl SpatialProblem {
                         }
                         None => {
                             let w = rest[lp.predecessor] * (lp.predecessor_origin.rotation * lp.axis);
-                            axes_agree(&mut b, &axis_p, &axis_s, w, &mut rows, &mut signs).map_err(|_| cannot())?;
+                            axes_agree(&mut b, &axis_p, &axis_s, w, &mut rows, &mut signs, &mut axis_pairs).map_err(|_| cannot())?;
                             if let (Some((lo, hi)), true) = (limits, respect_limits) {
                                 limit_list.push((readings.len(), stated(lo), stated(hi)));
                             }
@@ -1071,7 +1113,7 @@ impl SpatialProblem {
                     let cylindrical = compound == Some(Compound::Cylindrical);
                     if cylindrical {
                         let w = rest[lp.predecessor] * (lp.predecessor_origin.rotation * lp.axis);
-                        axes_agree(&mut b, &axis_p, &axis_s, w, &mut rows, &mut signs).map_err(|_| cannot())?;
+                        axes_agree(&mut b, &axis_p, &axis_s, w, &mut rows, &mut signs, &mut axis_pairs).map_err(|_| cannot())?;
                     } else {
                         for j in 0..2 {
                             b.equal(&col(&rp, j), &col(&rs, j), &mut rows).map_err(|_| cannot())?;
@@ -1160,6 +1202,7 @@ impl SpatialProblem {
             readings,
             limits: limit_list,
             signs,
+            axis_pairs,
         })
     }
 
@@ -1264,16 +1307,50 @@ impl SpatialProblem {
         verdict
     }
 
-    /// A solver for this problem: the default pipeline, plus a joint-limit filter when joints
-    /// carry limits (it sees every box, certified ones included).
-    pub fn solver(&self, settings: SolverSettings) -> Result<Solver<'_>, SolveError> {
-        let solver = Solver::new(&self.system, settings)?;
+    /// How a free joint moves in the system's unknowns: its own angle `(c, s)` or variable
+    /// (tree joints), or a loop joint whose value is read from its closure frames; `None` for a
+    /// name that is not a free joint. The singular-set builder takes the rates of the first two.
+    pub(crate) fn joint_motion(&self, name: &str) -> Option<JointMotion> {
+        let (_, r) = self.readings.iter().find(|(n, _)| n == name)?;
+        Some(match *r {
+            Reading::Angle { c, s } => JointMotion::Angle { c, s },
+            Reading::Var(v) => JointMotion::Var(v),
+            Reading::LoopAngle(_) | Reading::LoopTravel(_) => JointMotion::Loop,
+        })
+    }
+
+    /// The axis closures written with two rows, for faithful velocity rows (see
+    /// `AxisVelocity`).
+    pub(crate) fn axis_velocities(&self) -> Vec<AxisVelocity> {
+        let linear = |f: &Form| -> LinearForm { (f.merged().terms, f.constant) };
+        self.axis_pairs.iter().map(|p| AxisVelocity { u: [0, 1, 2].map(|i| linear(&p.u[i])), diff: [0, 1, 2].map(|i| linear(&p.diff[i])), rows: p.rows.clone() }).collect()
+    }
+
+    /// True when some axis closure written with two rows may have its left-out component at
+    /// zero in `b` (configuration variables first): there the two rows lose rank where the
+    /// three would not (the mirror branch the sign filter removes meets the true one).
+    pub(crate) fn axis_rows_may_degenerate(&self, b: &IntervalBox) -> bool {
+        self.signs.iter().any(|(u, v)| u.eval(&b.dims).contains(0.0) || v.eval(&b.dims).contains(0.0))
+    }
+
+    /// A solver for `system`, which extends this problem's system (its first variables are
+    /// this problem's, as in the singular-set systems), with the joint-limit and sign filters
+    /// of `solver`.
+    pub fn extended_solver<'s>(&'s self, system: &'s EquationSystem, settings: SolverSettings) -> Result<Solver<'s>, SolveError> {
+        debug_assert!(system.vars.len() >= self.system.vars.len());
+        let solver = Solver::new(system, settings)?;
         if self.limits.is_empty() && self.signs.is_empty() {
             return Ok(solver);
         }
         Ok(solver.with_contractor(Box::new(move |system, settings| {
             Box::new(Filtered { inner: default_contractor(system, settings), filters: vec![Box::new(move |b: &IntervalBox| self.limit_verdict(b))] })
         })))
+    }
+
+    /// A solver for this problem: the default pipeline, plus a joint-limit filter when joints
+    /// carry limits (it sees every box, certified ones included).
+    pub fn solver(&self, settings: SolverSettings) -> Result<Solver<'_>, SolveError> {
+        self.extended_solver(&self.system, settings)
     }
 
     /// Fills the derived variables of a point whose primaries are set (the others NaN), from

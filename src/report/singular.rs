@@ -3,7 +3,7 @@
 
 use super::Bounds;
 use crate::interval::IntervalBox;
-use crate::problems::singular::{BoxKind, Output, SingularProblem, SingularSet};
+use crate::problems::singular::{BoxKind, Coordinates, Output, SingularProblem, SingularSet};
 use crate::search::{SolveStats, SolverSettings, Status};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -13,6 +13,9 @@ use std::collections::BTreeMap;
 pub struct SingularReport {
     /// Robot name.
     pub mechanism: String,
+    /// The model the linkage was built with, as `solve --model auto` chooses: `planar` or
+    /// `spatial`.
+    pub model: &'static str,
     /// `cspace`, `input` or `output`.
     pub kind: &'static str,
     /// Actuated joints, in the order of `actuators` below.
@@ -101,7 +104,7 @@ fn hull(a: Bounds, b: (f64, f64)) -> Bounds {
 
 impl SingularReport {
     /// The report of `set`, a run of `p` with `settings`.
-    pub fn new(p: &SingularProblem, settings: &SolverSettings, set: &SingularSet) -> Self {
+    pub fn new<L: Coordinates>(p: &SingularProblem<L>, settings: &SolverSettings, set: &SingularSet) -> Self {
         let record = |b: &IntervalBox| -> (BTreeMap<String, Bounds>, Vec<Bounds>) {
             let joints = p.joint_values(b).into_iter().map(|(k, (lo, hi))| (k, [lo, hi])).collect();
             let act = p.actuator_values(b).into_iter().map(|(lo, hi)| [lo, hi]).collect();
@@ -151,11 +154,12 @@ impl SingularReport {
             _ => None,
         };
         SingularReport {
-            mechanism: p.linkage.name.clone(),
+            mechanism: p.linkage.name().to_string(),
+            model: p.model(),
             kind: p.kind.name(),
             actuated: p.actuated.clone(),
             output,
-            fixed_joints: p.linkage.fixed_joints.iter().cloned().collect(),
+            fixed_joints: p.linkage.fixed_joints().iter().cloned().collect(),
             dof: p.dof,
             expected_dimension: p.expected_dimension,
             charts: p.charts.len(),

@@ -3,13 +3,21 @@
 //! both run this, so a topic and a `--json` file of the same URDF and settings hold the same
 //! boxes.
 //!
+//! The model is `problems::Linkage::build`'s, as `solve --model auto` chooses: planar when the
+//! planar builder accepts the mechanism, spatial otherwise (`velocity`), with the reason.
+//!
 //! Building every set's problem comes first (`SingularSets::new`), so a bad request (unknown
 //! actuated joint, wrong actuator count) is answered before any search starts; `solve` then runs
 //! the sets in order under one timeout: what the first set leaves of it goes to the next.
 
-use super::{Output, SingularError, SingularKind, SingularProblem, SingularSet};
+use super::velocity::point_label;
+use super::{Augmented, Coordinates, Output, SingularError, SingularKind, SingularProblem, SingularSet};
+use crate::interval::IntervalBox;
 use crate::model::Mechanism;
-use crate::search::{SolveError, SolverSettings};
+use crate::problems::{Linkage, ModelChoice};
+use crate::search::{SolveError, Solver, SolverSettings};
+use crate::system::EquationSystem;
+use std::collections::BTreeMap;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
@@ -55,19 +63,96 @@ pub fn all_kinds(actuated: &[String]) -> Vec<SingularKind> {
     }
 }
 
+/// The model-chosen linkage as a coordinate source: either builder's rows, one orchestration.
+impl Coordinates for Linkage {
+    fn system(&self) -> &EquationSystem {
+        match self {
+            Linkage::Planar(p) => Coordinates::system(p),
+            Linkage::Spatial(p, _) => Coordinates::system(p),
+        }
+    }
+
+    fn name(&self) -> &str {
+        match self {
+            Linkage::Planar(p) => Coordinates::name(p),
+            Linkage::Spatial(p, _) => Coordinates::name(p),
+        }
+    }
+
+    fn model(&self) -> &'static str {
+        match self {
+            Linkage::Planar(p) => p.model(),
+            Linkage::Spatial(p, _) => p.model(),
+        }
+    }
+
+    fn fixed_joints(&self) -> &[(String, f64)] {
+        match self {
+            Linkage::Planar(p) => Coordinates::fixed_joints(p),
+            Linkage::Spatial(p, _) => Coordinates::fixed_joints(p),
+        }
+    }
+
+    fn joint_values(&self, b: &IntervalBox) -> BTreeMap<String, (f64, f64)> {
+        match self {
+            Linkage::Planar(p) => p.joint_values(b),
+            Linkage::Spatial(p, _) => p.joint_values(b),
+        }
+    }
+
+    fn extended_solver<'s>(&'s self, system: &'s EquationSystem, settings: SolverSettings) -> Result<Solver<'s>, SolveError> {
+        match self {
+            Linkage::Planar(p) => p.extended_solver(system, settings),
+            Linkage::Spatial(p, _) => p.extended_solver(system, settings),
+        }
+    }
+
+    fn augment(&self, kind: SingularKind, actuated: &[String], output: Option<&Output>) -> Result<Augmented, SingularError> {
+        match self {
+            Linkage::Planar(p) => p.augment(kind, actuated, output),
+            Linkage::Spatial(p, _) => p.augment(kind, actuated, output),
+        }
+    }
+
+    fn rows_faithful(&self, b: &IntervalBox) -> bool {
+        match self {
+            Linkage::Planar(p) => p.rows_faithful(b),
+            Linkage::Spatial(p, _) => p.rows_faithful(b),
+        }
+    }
+}
+
 /// The built problems of several singular sets of one linkage, in the order asked.
 #[derive(Clone, Debug)]
 pub struct SingularSets {
     /// One per kind.
-    pub problems: Vec<SingularProblem>,
+    pub problems: Vec<SingularProblem<Linkage>>,
+    /// `planar` or `spatial`.
+    pub model: &'static str,
+    /// Why the spatial model was chosen; empty for planar linkages.
+    pub model_reason: String,
 }
 
 impl SingularSets {
-    /// Builds the problem of every kind of `kinds` for `m` with joints `fixed` (see
-    /// `SingularProblem::new`); the first that does not build is the error.
+    /// Builds the problem of every kind of `kinds` for `m` with joints `fixed`, on the model
+    /// `solve --model auto` picks (`Linkage::build`; see `SingularProblem::with_linkage`); the
+    /// first that does not build is the error. A point output is traced in the output set's
+    /// linkage only, as `SingularProblem::new` does.
     pub fn new(m: &Mechanism, fixed: &[(String, f64)], kinds: &[SingularKind], actuated: &[String], output: Option<Output>) -> Result<Self, SingularError> {
-        let problems = kinds.iter().map(|&k| SingularProblem::new(m, fixed, k, actuated, output.clone())).collect::<Result<_, _>>()?;
-        Ok(Self { problems })
+        let build = |kind: SingularKind| -> Result<SingularProblem<Linkage>, SingularError> {
+            let traces = match (&output, kind) {
+                (Some(Output::Point { link, x, y }), SingularKind::Output) => vec![(link.clone(), [*x, *y, 0.0], point_label(link, *x, *y))],
+                _ => Vec::new(),
+            };
+            let linkage = Linkage::build(m, ModelChoice::Auto, fixed, &traces)?;
+            SingularProblem::with_linkage(linkage, kind, actuated, output.clone())
+        };
+        let problems: Vec<SingularProblem<Linkage>> = kinds.iter().map(|&k| build(k)).collect::<Result<_, _>>()?;
+        let (model, model_reason) = match problems.first().map(|p| &p.linkage) {
+            Some(Linkage::Spatial(_, why)) => ("spatial", why.clone()),
+            _ => ("planar", String::new()),
+        };
+        Ok(Self { problems, model, model_reason })
     }
 
     /// Solves every set in order. `settings.max_boxes` applies per chart of each set;
