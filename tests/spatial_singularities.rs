@@ -254,3 +254,19 @@ fn spatial_refusals_are_one_clear_line() {
     let err = SingularSets::new(&m, &[], &[SingularKind::Input], &["nope".to_string()], None).expect_err("refused");
     assert!(err.to_string().contains("'nope' is not a free joint"), "{err}");
 }
+
+/// The delta (`urdf/delta.urdf`) driven by its three actuators, within the file's limits: no
+/// input (type II) singularity. Reference, not the solver: the two assemblies of the closed-form
+/// three-sphere intersection (`scripts/dev/delta_fk.py`) never merge inside the actuator limit box
+/// (half separation at least 0.66 m by a grid search, its note; 0.67–0.79 m at the four cases of
+/// `tests/data/delta_fk.json`), and a type-II point of the delta is exactly such a merge. So the
+/// input set must be proven empty: no cluster, no box, nothing undecided.
+#[test]
+fn the_delta_has_no_type_two_singularity_within_its_limits() {
+    let reference: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(format!("{}/tests/data/delta_fk.json", env!("CARGO_MANIFEST_DIR"))).expect("reference")).expect("json");
+    let separations: Vec<f64> = reference["cases"].as_array().expect("cases").iter().map(|c| c["half_separation"].as_f64().expect("number")).collect();
+    assert!(separations.len() == 4 && separations.iter().all(|h| *h > 0.6), "{separations:?}");
+    let (_, set) = run(&urdf_text("delta.urdf"), SingularKind::Input, &["actuator1", "actuator2", "actuator3"], None);
+    assert_eq!(set.status, Status::Complete);
+    assert!(set.boxes.is_empty() && set.clusters.is_empty(), "{} boxes in {} clusters", set.boxes.len(), set.clusters.len());
+}

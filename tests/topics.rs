@@ -1010,8 +1010,8 @@ fn large_replies_reach_rclpy_and_a_long_name_blocks_no_one() {
 /// box set of about 2 MB (the four-bar's free curve at sigma 1e-3, 14,336 boxes) every 50 ms with
 /// nobody subscribed; unpatched RustDDS kept every sample of such a TransientLocal writer and
 /// grew by tens of MB/s. The bound is the one the issue sets: resident memory (VmRSS from
-/// /proc) stays within 10% of its value after the first publications, sampled every second
-/// for 15 s (LINKSPACE_RSS_SECONDS=60 for the issue's full minute). No Python needed.
+/// /proc) stays within 10% of its peak over the first 5 s of publications, sampled every second
+/// for 15 s more (LINKSPACE_RSS_SECONDS=60 for the issue's full minute). No Python needed.
 #[test]
 fn memory_stays_flat_when_nobody_subscribes() {
     if std::env::var("LINKSPACE_SKIP_ROS").is_ok_and(|v| v == "1") {
@@ -1021,11 +1021,19 @@ fn memory_stays_flat_when_nobody_subscribes() {
     let domain = 49;
     let four_bar = format!("{ROOT}/urdf/four_bar.urdf");
     let mut node = Node::start(domain, &[&four_bar, "--republish", "0.05"]);
-    node.wait_for(&["four_bar: published configuration_space"], Duration::from_secs(120));
-    // A few republications first: the allocator's working set for one sample is in place.
-    std::thread::sleep(Duration::from_secs(2));
+    // Both load-time runs (configuration space and singular sets) finished: their one-time
+    // allocations are not growth.
+    node.wait_for(&["four_bar: published configuration_space", "four_bar: published singularities"], Duration::from_secs(120));
+    // Warm-up: the allocator's working set for the samples in flight settles within a few
+    // seconds (from one run to the next it starts anywhere between 60 and 85 MB); the baseline
+    // is its peak over 5 s, so a working set still filling up is not mistaken for growth, while
+    // the unbounded growth this test guards against (tens of MB/s) still fails by far.
+    let mut start = 0;
+    for _ in 0..5 {
+        std::thread::sleep(Duration::from_secs(1));
+        start = start.max(node.memory_kib("VmRSS"));
+    }
     let seconds: u64 = std::env::var("LINKSPACE_RSS_SECONDS").ok().and_then(|v| v.parse().ok()).unwrap_or(15);
-    let start = node.memory_kib("VmRSS");
     let mut peak = start;
     for _ in 0..seconds {
         std::thread::sleep(Duration::from_secs(1));
