@@ -26,6 +26,7 @@ use std::time::Duration;
 pub(crate) mod distances;
 mod loop_singularities;
 mod bench_spatial;
+mod bench_arms;
 mod figures;
 mod plot;
 mod study;
@@ -240,6 +241,24 @@ struct Bench3rArgs {
     /// Precision of every search.
     #[arg(long, default_value_t = 1e-4)]
     precision: f64,
+    /// Instead: per bundled real arm (PUMA 560, KR 16, UR5, iiwa 14 with joint_3 locked) and
+    /// seed robot, `singularities FILE` as it ships against the previous behaviour on the same
+    /// chain (interval cusp and node searches, full torus, bounded), each run as a child
+    /// process: wall time, peak RSS, status, undecided count, ratios.
+    #[arg(long)]
+    arms: bool,
+    /// With --arms: the baseline's time limit (seconds, per run).
+    #[arg(long, default_value_t = 20.0)]
+    timeout: f64,
+    /// With --arms: the baseline's box limit (boxes, box pairs for nodes; per search).
+    #[arg(long, default_value_t = 2_000_000)]
+    max_boxes: u64,
+    /// Internal: one baseline run of --arms on this file (one JSON line).
+    #[arg(long, hide = true, value_name = "URDF")]
+    baseline_child: Option<PathBuf>,
+    /// Internal, with --baseline-child: joints to lock.
+    #[arg(long, hide = true, value_name = "JOINT=VALUE", allow_hyphen_values = true)]
+    lock: Vec<String>,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -781,6 +800,12 @@ fn bench3r(args: Bench3rArgs) -> Result<()> {
         bail!("--repeat must be at least 1");
     }
     manip3r::check_precision(args.precision)?;
+    if let Some(file) = &args.baseline_child {
+        return bench_arms::baseline_child(&args, file);
+    }
+    if args.arms {
+        return bench_arms::run(&args);
+    }
     let mut out = std::io::stdout().lock();
     writeln!(out, "robot | cusps: Krawczyk s | found | undecided | bisection baseline s | clusters | speed-up | Ibex s | vs Ibex | nodes s | found | undecided | Ibex s (separated) | vs Ibex").ok();
     for (name, xml, ibex_cusps, ibex_nodes) in ROBOTS {

@@ -321,3 +321,23 @@ fn help_is_still_the_full_text() {
     let (ok, out, _) = run(&["--version"]);
     assert!(ok && out.starts_with("linkspace "), "{out}");
 }
+
+/// `bench3r --arms` (issue 11): one row per bundled real arm and seed robot, the shipped path
+/// complete with nothing undecided, the baseline reported with its status. Tiny baseline limits
+/// keep it to a few seconds; no timing is asserted.
+#[test]
+fn bench3r_arms_has_a_row_per_robot_and_the_new_path_completes() {
+    let (ok, out, err) = run(&["bench3r", "--arms", "--repeat", "1", "--timeout", "0.5", "--max-boxes", "20000"]);
+    assert!(ok, "{err}");
+    for robot in ["puma560", "kuka_kr16", "ur5", "iiwa14", "a", "b", "d", "e", "f"] {
+        let row = out.lines().find(|l| l.starts_with(&format!("{robot} | "))).unwrap_or_else(|| panic!("no row for {robot}:\n{out}"));
+        let cells: Vec<&str> = row.split(" | ").collect();
+        assert_eq!(cells.len(), 12, "{row}");
+        assert_eq!(cells[3], "complete", "{row}");
+        assert_eq!(cells[4], "0", "{row}");
+        assert!(cells[8].starts_with("complete") || cells[8].starts_with("incomplete ("), "{row}");
+        for i in [1, 2, 6, 7, 10, 11] {
+            assert!(cells[i].parse::<f64>().is_ok_and(|x| x >= 0.0), "{row}");
+        }
+    }
+}
