@@ -635,9 +635,12 @@ pub struct Regions {
 }
 
 /// The regions of actuator space for `sp`'s input set `set` (its cover), on a `grid × grid`
-/// raster, with a certified solve of `m` at one sample of each.
+/// raster, with a certified solve of `m` at one sample of each. `settings.timeout` bounds all
+/// the samples together (each gets what the ones before it left, at least a millisecond, so a
+/// sample that finds no time reports itself unproven instead of being skipped).
 pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usize, settings: &SolverSettings, cancel: &AtomicBool) -> Result<Regions, ImageError> {
     check(sp)?;
+    let t0 = Instant::now();
     let mut scratch = sp.linkage.system.clone();
     let parts = Parts::new(&sp.linkage, &mut scratch)?;
     let mut axes = Vec::new();
@@ -660,7 +663,6 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
         }
     }
     let mut label = vec![usize::MAX; grid * grid];
-    let t0 = Instant::now();
     let mut out = Regions { grid, blocked_cells: blocked.iter().filter(|b| **b).count(), regions: Vec::new(), seconds: 0.0 };
     for start in 0..grid * grid {
         if blocked[start] || label[start] != usize::MAX {
@@ -700,7 +702,8 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
         let (i, j) = (pick / grid, pick % grid);
         let (a, b) = (axes[0].cell(i, grid), axes[1].cell(j, grid));
         let sample = vec![0.5 * (a.0 + a.1), 0.5 * (b.0 + b.1)];
-        out.regions.push(sample_region(m, sp, &sample, cells, settings, cancel)?);
+        let left = SolverSettings { timeout: settings.timeout.map(|t| t.saturating_sub(t0.elapsed()).max(std::time::Duration::from_millis(1))), ..settings.clone() };
+        out.regions.push(sample_region(m, sp, &sample, cells, &left, cancel)?);
     }
     out.seconds = t0.elapsed().as_secs_f64();
     Ok(out)
@@ -888,7 +891,12 @@ impl ImageReport {
             .collect();
         let regions_seconds = regions.seconds;
         let verdict = verdict(cover, cusps, nodes, &regions);
-        let complete = [cover.status, cusps.status, nodes.status].iter().all(|s| *s == Status::Complete);
+        // "complete" is the crate's one rule: no limit met and nothing undecided (an unproven
+        // cusp or node, a near-diagonal box, a region whose assembly modes are not proven).
+        let complete = [cover.status, cusps.status, nodes.status].iter().all(|s| *s == Status::Complete)
+            && cusps.points.len() == cusps.proven()
+            && nodes.undecided() == 0
+            && regions.regions.iter().all(|r| r.configurations.is_some() && r.signs.is_some());
         Self {
             mechanism: sp.linkage.name.clone(),
             actuated: sp.actuated.clone(),
