@@ -26,6 +26,18 @@ pub fn point(x: f64) -> Interval {
     }
 }
 
+/// The strict sign of `x` when it excludes zero: `Some(true)` positive, `Some(false)` negative,
+/// `None` when `x` may vanish (or is empty).
+pub fn strict_sign(x: Interval) -> Option<bool> {
+    if x.inf() > 0.0 {
+        Some(true)
+    } else if x.sup() < 0.0 {
+        Some(false)
+    } else {
+        None
+    }
+}
+
 /// A Cartesian product of intervals, one per variable of a system.
 ///
 /// `level` is the depth in the branch-and-prune tree (0 for the initial box); it is kept for

@@ -28,24 +28,13 @@ use super::cusps::evaluate_without_tangency as evaluate;
 use super::drive::Control;
 use super::ik;
 use super::Chain3R;
-use crate::interval::{interval, point};
+use crate::interval::{interval, point, strict_sign};
 use crate::search::Limits;
 use inari::Interval;
 
 /// Cover depths and grid shifts tried, in order. The shifts keep the grid lines off θ = 0, ±π,
 /// where curves of arms symmetric in θ₂ are tangent to them (see `Cover::shifted`).
 const GRIDS: [(u32, f64); 3] = [(8, 0.0123456789), (9, 0.0071234567), (10, 0.0031234567)];
-
-/// The strict sign of `x`: `Some(true)` positive, `Some(false)` negative.
-fn sign(x: Interval) -> Option<bool> {
-    if x.inf() > 0.0 {
-        Some(true)
-    } else if x.sup() < 0.0 {
-        Some(false)
-    } else {
-        None
-    }
-}
 
 /// What is known of one grid cell.
 #[derive(Clone, Copy, Debug)]
@@ -96,7 +85,7 @@ fn count_at(chain: &Chain3R, depth: u32, shift: f64, control: &Control) -> Resul
         let [a, b] = cover.bounds(i);
         interval(a, b)
     };
-    let at = |t2: f64, t3: f64| sign(evaluate(chain, [point(t2), point(t3)]).det);
+    let at = |t2: f64, t3: f64| strict_sign(evaluate(chain, [point(t2), point(t3)]).det);
     // Regular regions' signs, from one cell of each.
     let mut region_sign: Vec<Option<bool>> = vec![None; cover.regions];
     for c in 0..n * n {
@@ -111,10 +100,10 @@ fn count_at(chain: &Chain3R, depth: u32, shift: f64, control: &Control) -> Resul
     // interval of the edge).
     let edge_signs = |e: [Interval; 2], free: usize| -> Option<[bool; 2]> {
         let ev = evaluate(chain, e);
-        if let Some(s) = sign(ev.det) {
+        if let Some(s) = strict_sign(ev.det) {
             return Some([!s, s]);
         }
-        sign(ev.grad_det[free])?;
+        strict_sign(ev.grad_det[free])?;
         let mut ends = [false; 2];
         for t in [e[free].inf(), e[free].sup()] {
             let mut p = [e[0].mid(), e[1].mid()];
@@ -131,7 +120,7 @@ fn count_at(chain: &Chain3R, depth: u32, shift: f64, control: &Control) -> Resul
         // or upper (positive) k-edge where det has that sign (swapped when decreasing); that
         // part is one interval of the edge.
         let arc = (0..2).find_map(|k| {
-            let up = sign(e.grad_det[k])?;
+            let up = strict_sign(e.grad_det[k])?;
             let edge = |at: f64| {
                 let mut x = b;
                 x[k] = point(at);

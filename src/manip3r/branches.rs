@@ -92,14 +92,9 @@ fn unit(v: &V3) -> V3 {
     [v[0] / n, v[1] / n, v[2] / n]
 }
 
+/// `interval::strict_sign` as a factor ±1.
 fn sign(x: Interval) -> Option<f64> {
-    if x.inf() > 0.0 {
-        Some(1.0)
-    } else if x.sup() < 0.0 {
-        Some(-1.0)
-    } else {
-        None
-    }
+    crate::interval::strict_sign(x).map(|positive| if positive { 1.0 } else { -1.0 })
 }
 
 /// The planar structure of the arm (module doc's notation).

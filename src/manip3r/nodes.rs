@@ -32,7 +32,7 @@ use super::cusps::{self, evaluate_without_tangency as evaluate, meet_on_torus, B
 use super::drive::{drive, no_progress, Control, Order};
 use crate::contract::krawczyk::{self, Step as K};
 use super::motion::{self, Band};
-use crate::interval::{interval, point};
+use crate::interval::{interval, point, strict_sign};
 use crate::search::{Limits, Progress, Prune, Stats, Status, Step};
 use inari::Interval;
 use smallvec::SmallVec;
@@ -223,17 +223,6 @@ fn flow_derivatives(chain: &Chain3R, b: [Interval; 2]) -> ([Interval; 2], [Inter
     ([f2[0].value(), f2[1].value()], [along(&f2[0]).value(), along(&f2[1]).value()])
 }
 
-/// The sign of an interval that excludes zero.
-fn sign(x: Interval) -> Option<bool> {
-    if x.inf() > 0.0 {
-        Some(true)
-    } else if x.sup() < 0.0 {
-        Some(false)
-    } else {
-        None
-    }
-}
-
 /// The cusp certificate on `u` around the certified cusp box `c` ⊂ `u` (see the module doc).
 /// Each condition is checked on adaptive sub-boxes (`everywhere`), with one strict sign over
 /// all of them, and F''(c) on the cusp box itself, which keeps the enclosures tight.
@@ -243,8 +232,8 @@ pub fn injective_near_cusp(chain: &Chain3R, u: [Interval; 2], c: [Interval; 2]) 
     // once; with det ≠ 0 on the two edges θₖ = const, the signs there are fixed, so S ∩ u is
     // empty or one arc across u.
     let arc = (0..2).any(|k| {
-        let Some(s) = sign(at_c.grad_det[k]) else { return false };
-        everywhere(u, DEPTH, &mut |b| sign(evaluate(chain, *b).grad_det[k]) == Some(s))
+        let Some(s) = strict_sign(at_c.grad_det[k]) else { return false };
+        everywhere(u, DEPTH, &mut |b| strict_sign(evaluate(chain, *b).grad_det[k]) == Some(s))
             && [u[k].inf(), u[k].sup()].into_iter().all(|at| {
                 let mut edge = u;
                 edge[k] = point(at);
@@ -256,13 +245,13 @@ pub fn injective_near_cusp(chain: &Chain3R, u: [Interval; 2], c: [Interval; 2]) 
     }
     // (c) F''(c) × F'''(τ) of one strict sign for τ on S ∩ u.
     let (f2c, f3c) = flow_derivatives(chain, c);
-    let Some(want) = sign(f2c[0] * f3c[1] - f2c[1] * f3c[0]) else { return false };
+    let Some(want) = strict_sign(f2c[0] * f3c[1] - f2c[1] * f3c[0]) else { return false };
     everywhere(u, DEPTH, &mut |b| {
         if !evaluate(chain, *b).det.contains(0.0) {
             return true;
         }
         let (_, f3) = flow_derivatives(chain, *b);
-        sign(f2c[0] * f3[1] - f2c[1] * f3[0]) == Some(want)
+        strict_sign(f2c[0] * f3[1] - f2c[1] * f3[0]) == Some(want)
     })
 }
 
@@ -287,6 +276,14 @@ fn contains(outer: &[Interval; 2], inner: &[Interval; 2]) -> bool {
 fn krawczyk_node(p: &[Interval; 2], ep: &BoxEval, q: &[Interval; 2], eq: &BoxEval) -> K<[Interval; 4]> {
     let b = [p[0], p[1], q[0], q[1]];
     let m = b.map(|x| x.mid());
+    let (fm, jac) = node_system(ep, eq);
+    krawczyk::step_array(&b, &m, &fm, &jac)
+}
+
+/// System (3) at the midpoints of `p × q` and its interval Jacobian over `p × q`, from the two
+/// boxes' evaluations: `f(p) − f(q) = 0`, `det(p) = 0`, `det(q) = 0`.
+#[inline]
+fn node_system(ep: &BoxEval, eq: &BoxEval) -> ([Interval; 4], [[Interval; 4]; 4]) {
     let fm = [ep.f_mid[0] - eq.f_mid[0], ep.f_mid[1] - eq.f_mid[1], ep.det_mid, eq.det_mid];
     let z = point(0.0);
     let jac = [
@@ -295,7 +292,7 @@ fn krawczyk_node(p: &[Interval; 2], ep: &BoxEval, q: &[Interval; 2], eq: &BoxEva
         [ep.grad_det[0], ep.grad_det[1], z, z],
         [z, z, eq.grad_det[0], eq.grad_det[1]],
     ];
-    krawczyk::step_array(&b, &m, &fm, &jac)
+    (fm, jac)
 }
 
 /// Krawczyk's image of system (3) over `x = P × Q` (for `krawczyk::inflate`).
@@ -303,14 +300,7 @@ fn node_image(chain: &Chain3R, x: &[Interval; 4]) -> Option<[Interval; 4]> {
     let (p, q) = ([x[0], x[1]], [x[2], x[3]]);
     let (ep, eq) = (evaluate(chain, p), evaluate(chain, q));
     let m = x.map(|d| d.mid());
-    let fm = [ep.f_mid[0] - eq.f_mid[0], ep.f_mid[1] - eq.f_mid[1], ep.det_mid, eq.det_mid];
-    let z = point(0.0);
-    let jac = [
-        [ep.df[0][0], ep.df[0][1], -eq.df[0][0], -eq.df[0][1]],
-        [ep.df[1][0], ep.df[1][1], -eq.df[1][0], -eq.df[1][1]],
-        [ep.grad_det[0], ep.grad_det[1], z, z],
-        [z, z, eq.grad_det[0], eq.grad_det[1]],
-    ];
+    let (fm, jac) = node_system(&ep, &eq);
     krawczyk::image_array(x, &m, &fm, &jac)
 }
 
