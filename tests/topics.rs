@@ -1009,9 +1009,12 @@ fn large_replies_reach_rclpy_and_a_long_name_blocks_no_one() {
 /// Test idea: memory stays bounded when a writer has no matched reader. The node republishes a
 /// box set of about 2 MB (the four-bar's free curve at sigma 1e-3, 14,336 boxes) every 50 ms with
 /// nobody subscribed; unpatched RustDDS kept every sample of such a TransientLocal writer and
-/// grew by tens of MB/s. The bound is the one the issue sets: resident memory (VmRSS from
-/// /proc) stays within 10% of its peak over the first 5 s of publications, sampled every second
-/// for 15 s more (LINKSPACE_RSS_SECONDS=60 for the issue's full minute). No Python needed.
+/// grew by tens of MB/s. Resident memory (VmRSS from /proc) is sampled every second: what is
+/// retained is the floor of a window (its minimum), and that must stay within 10% of the first
+/// window's floor (the bound the issue sets) over 15 s more (LINKSPACE_RSS_SECONDS=60 for the
+/// issue's full minute). Samples in flight are live memory too: on a loaded machine a few of
+/// them (2 MB each) overlap now and then, so the peak is bounded separately, at 1.5 times the
+/// first window's peak. Unbounded retention fails both by far. No Python needed.
 #[test]
 fn memory_stays_flat_when_nobody_subscribes() {
     if std::env::var("LINKSPACE_SKIP_ROS").is_ok_and(|v| v == "1") {
@@ -1024,25 +1027,25 @@ fn memory_stays_flat_when_nobody_subscribes() {
     // Both load-time runs (configuration space and singular sets) finished: their one-time
     // allocations are not growth.
     node.wait_for(&["four_bar: published configuration_space", "four_bar: published singularities"], Duration::from_secs(120));
-    // Warm-up: the allocator's working set for the samples in flight settles within a few
-    // seconds (from one run to the next it starts anywhere between 60 and 85 MB); the baseline
-    // is its peak over 5 s, so a working set still filling up is not mistaken for growth, while
-    // the unbounded growth this test guards against (tens of MB/s) still fails by far.
-    let mut start = 0;
-    for _ in 0..5 {
-        std::thread::sleep(Duration::from_secs(1));
-        start = start.max(node.memory_kib("VmRSS"));
-    }
+    let mut sample = |seconds: u64| -> Vec<u64> {
+        (0..seconds)
+            .map(|_| {
+                std::thread::sleep(Duration::from_secs(1));
+                assert!(node.alive(), "the node died:\n{}", node.log());
+                node.memory_kib("VmRSS")
+            })
+            .collect()
+    };
+    let first = sample(5);
     let seconds: u64 = std::env::var("LINKSPACE_RSS_SECONDS").ok().and_then(|v| v.parse().ok()).unwrap_or(15);
-    let mut peak = start;
-    for _ in 0..seconds {
-        std::thread::sleep(Duration::from_secs(1));
-        assert!(node.alive(), "the node died:\n{}", node.log());
-        peak = peak.max(node.memory_kib("VmRSS"));
-    }
-    let end = node.memory_kib("VmRSS");
-    eprintln!("--republish 0.05, no subscriber, {seconds} s: VmRSS start {start} KiB, peak {peak} KiB, end {end} KiB");
-    assert!(peak as f64 <= 1.10 * start as f64, "VmRSS grew from {start} KiB to {peak} KiB in {seconds} s");
+    let rest = sample(seconds);
+    let floor_peak = |w: &[u64]| (*w.iter().min().expect("samples"), *w.iter().max().expect("samples"));
+    let (start_floor, start_peak) = floor_peak(&first);
+    let (end_floor, _) = floor_peak(&rest[rest.len().saturating_sub(5)..]);
+    let (_, rest_peak) = floor_peak(&rest);
+    eprintln!("--republish 0.05, no subscriber, 5+{seconds} s: VmRSS floor {start_floor} -> {end_floor} KiB, peak {start_peak} -> {rest_peak} KiB ({first:?} {rest:?})");
+    assert!(end_floor as f64 <= 1.10 * start_floor as f64, "retained memory grew from {start_floor} KiB to {end_floor} KiB in {seconds} s: {first:?} {rest:?}");
+    assert!(rest_peak as f64 <= 1.5 * start_peak as f64, "peak memory grew from {start_peak} KiB to {rest_peak} KiB in {seconds} s: {first:?} {rest:?}");
 }
 
 /// Test idea: the node starts the way `ros2 run` and launch files start nodes, and takes its URDF
