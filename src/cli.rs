@@ -622,15 +622,17 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     // On these arms whole branches are curves of nodes: the isolated-node search floods, so it
     // is not run even with --search-anyway.
     let with_nodes = args.nodes && branches.is_none();
+    // One deadline for the run and the verdict's searches; the time reported covers both.
+    let start = std::time::Instant::now();
     let mut run = if structural {
         manip3r::structural_singularities(&chain, args.precision)?
     } else {
         manip3r::singularities(&chain, args.precision, with_nodes, &control, &mut |_| {})?
     };
     // The verdict reads the full-torus run; the limits then filter what is listed.
-    let verdict = manip3r::verdict::decide(&prepared.mechanism, &chain, &run, &prepared.limits);
+    let verdict = manip3r::verdict::decide(&prepared.mechanism, &chain, &run, &prepared.limits, &control.remaining_since(start));
     let effect = prepared.limits.apply(&mut run);
-    let mut report = SingularityReport::new(&chain, args.precision, &run.cusps, run.nodes.as_ref(), run.seconds);
+    let mut report = SingularityReport::new(&chain, args.precision, &run.cusps, run.nodes.as_ref(), start.elapsed().as_secs_f64());
     report.verdict = Some(verdict.clone());
     report.chain = Some(prepared.choice.clone());
     report.rounding = Some(manip3r::report::Rounding::of(&prepared));

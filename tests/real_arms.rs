@@ -184,7 +184,7 @@ fn seed_robots_in_three_conventions_agree_with_table_1() {
             assert!(run.status.is_complete(), "{case} {style}");
             assert_eq!((run.cusps.cusps.len(), nodes.nodes.len(), run.cusps.bands.len()), (n_cusps, n_nodes, n_lines), "{case} {style}");
             assert!(run.cusps.undecided.is_empty() && nodes.undecided.is_empty(), "{case} {style}");
-            let v = verdict::decide(&p.mechanism, &chain, &run, &p.limits);
+            let v = verdict::decide(&p.mechanism, &chain, &run, &p.limits, &Control::with_limits(Limits::default()));
             assert_eq!((v.cuspidal, v.certified), (Some(cuspidal), true), "{case} {style}: {v:?}");
             let mut img: Vec<[f64; 2]> = run.cusps.cusps.iter().map(|c| [c.rho.mid(), c.z.mid()]).chain(nodes.nodes.iter().map(|n| [n.rho.mid(), n.z.mid()])).collect();
             img.sort_by(|a, b| a.partial_cmp(b).expect("finite"));
@@ -219,7 +219,7 @@ fn exact_geometry_on_a_truncated_robot_reports_near_degenerate_strips() {
         let near: Vec<_> = run.cusps.bands.iter().filter(|b| b.near.is_some()).collect();
         assert_eq!((near.len(), run.cusps.bands.len()), (2, 2), "{:?}", run.cusps.bands);
         assert!(run.status.is_complete(), "outside the strips everything is decided");
-        let v = verdict::decide(&p.mechanism, &chain, &run, &p.limits);
+        let v = verdict::decide(&p.mechanism, &chain, &run, &p.limits, &Control::with_limits(Limits::default()));
         assert_eq!((v.cuspidal, v.certified), (None, false), "{v:?}");
         let report = manip3r::report::SingularityReport::new(&chain, 1e-4, &run.cusps, run.nodes.as_ref(), run.seconds);
         assert_eq!((report.status, report.limit), ("incomplete", Some("near_degenerate")));
@@ -343,7 +343,7 @@ fn aspects_and_ik_counts_of_the_seed_robots_agree_with_sampling() {
         let p = prepare(&text(&file), &LoadOptions::default()).expect(&file);
         let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
         let run = manip3r::singularities(&chain, 1e-4, false, &bounded(2_000_000), &mut |_| {}).expect("runs");
-        let v = verdict::decide(&p.mechanism, &chain, &run, &p.limits);
+        let v = verdict::decide(&p.mechanism, &chain, &run, &p.limits, &Control::with_limits(Limits::default()));
         assert!(v.certified, "{name}: {v:?}");
         assert_eq!((v.aspects, v.max_ik_solutions), (Some(aspects), max_ik), "{name}: {}", v.reason);
         // Independent: sign components of det on a grid.
@@ -531,5 +531,28 @@ fn undecided_cusp_boxes_of_industrial_arms_are_attributed_to_the_crossings() {
         assert_eq!(a.near_crossings.len(), crossings, "{file}: {}", a.text);
         assert_eq!((a.elsewhere, a.on_branch.len()), (0, 0), "{file}: {}", a.text);
         assert!(a.explained && a.max_distance < 1e-2);
+    }
+}
+
+/// Test idea: the verdict's own searches (smoothness of det Df = 0, the aspect cover, sample
+/// IK) obey the caller's control like the cusp and node searches: with the cancel flag raised,
+/// a non-cuspidal robot's verdict (which rests on the smoothness proof) is null with the limit
+/// named, and a cuspidal robot keeps its certified cusp argument but leaves the aspects and
+/// IK counts null, saying why. Before, they ran unbounded by --timeout and deaf to cancel.
+#[test]
+fn a_cancelled_verdict_names_its_limit_and_claims_nothing_more() {
+    let cancel = std::sync::atomic::AtomicBool::new(true);
+    let control = Control { limits: Limits::default(), threads: 1, cancel: &cancel };
+    for (name, cuspidal) in [("d", None), ("a", Some(true))] {
+        let file = format!("orthogonal_3r_{name}.urdf");
+        let p = prepare(&text(&file), &LoadOptions::default()).expect(&file);
+        let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
+        let run = manip3r::singularities(&chain, 1e-4, false, &bounded(2_000_000), &mut |_| {}).expect("runs");
+        let v = verdict::decide(&p.mechanism, &chain, &run, &p.limits, &control);
+        assert_eq!((v.cuspidal, v.aspects, v.max_ik_solutions), (cuspidal, None, None), "{name}: {v:?}");
+        assert!(v.reason.contains("cancelled") || v.reason.contains("stopped by a limit"), "{name}: {}", v.reason);
+        // The same run uncancelled decides everything: the null above is the limit's doing.
+        let full = verdict::decide(&p.mechanism, &chain, &run, &p.limits, &Control::with_limits(Limits::default()));
+        assert!(full.certified && full.aspects.is_some() && full.max_ik_solutions.is_some(), "{name}: {full:?}");
     }
 }

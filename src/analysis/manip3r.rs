@@ -365,6 +365,7 @@ impl PreparedRun<SingularityResult> for SingularityRun {
         let (chain, q) = (&*self.chain, &self.query);
         let limits = Limits { max_cells: q.max_boxes, timeout: q.timeout, ..Limits::default() };
         let control = manip3r::Control { limits, threads: q.threads.max(1), cancel };
+        let start = std::time::Instant::now();
         // As `linkspace singularities`: with axes 2 and 3 parallel the verdict's proof replaces
         // the cusp search (which cannot complete there) and nodes are not searched; whenever
         // the singular branches are known, whole branches are curves of nodes, which the
@@ -376,7 +377,7 @@ impl PreparedRun<SingularityResult> for SingularityRun {
             manip3r::singularities(chain, q.precision, with_nodes, &control, progress).expect("invariant: precision validated when prepared")
         };
         // The verdict reads the full-torus run (the CLI's, before its joint-limit filter).
-        let verdict = manip3r::verdict::decide(&self.reduced, chain, &run, &self.limits);
+        let verdict = manip3r::verdict::decide(&self.reduced, chain, &run, &self.limits, &control.remaining_since(start));
         let (found, node_search) = (&run.cusps, &run.nodes);
         let two = |t: &[Interval; 2]| vec![bounds(t[0]), bounds(t[1])];
         let image = |t: [Interval; 2]| {
@@ -427,7 +428,7 @@ impl PreparedRun<SingularityResult> for SingularityRun {
             singular_curves: box_set(&self.cover, &chain.name, &self.joints),
             internal_motions: motions,
             processed,
-            seconds: run.seconds + self.cover.seconds,
+            seconds: start.elapsed().as_secs_f64() + self.cover.seconds,
             summary: format!("{}; {}", verdict.line(), summary),
             loops: None,
             verdict: Some(verdict),

@@ -173,10 +173,12 @@ fn count_at(chain: &Chain3R, depth: u32, shift: f64, control: &Control) -> Resul
 /// Samples: configurations around each of `near` (certified cusps: regions with more
 /// solutions border their images, and may be small, as on the near-boundary robot), then the
 /// (θ₂, θ₃) grid points, coarse grids first; their images are the points solved. Each inverse
-/// kinematics run is bounded by `max_boxes`. Returns the best certified count seen and whether
-/// it reaches `bound`.
-pub fn max_ik_solutions(chain: &Chain3R, bound: u32, near: &[[f64; 2]], max_boxes: u64) -> (u32, bool) {
-    let control = Control::with_limits(Limits { max_cells: max_boxes, ..Limits::default() });
+/// kinematics run has `control`'s cell budget; its timeout and cancel flag bound them all.
+/// Returns the best certified count seen and whether it reaches `bound`.
+pub fn max_ik_solutions(chain: &Chain3R, bound: u32, near: &[[f64; 2]], control: &Control) -> (u32, bool) {
+    // Each sample's IK gets what the samples before it left of the timeout; the samples are
+    // tiny searches, so one thread each.
+    let start = std::time::Instant::now();
     let mut best = 0u32;
     let around = near.iter().flat_map(|c| {
         [3e-2, 1e-2, 3e-3].into_iter().flat_map(move |r| (0..8).map(move |a| {
@@ -188,8 +190,13 @@ pub fn max_ik_solutions(chain: &Chain3R, bound: u32, near: &[[f64; 2]], max_boxe
     let t = |k: usize, n: usize| -std::f64::consts::PI + (k as f64 + 0.37) * std::f64::consts::TAU / n as f64;
     let grid = [8usize, 16, 32].into_iter().flat_map(move |n| (0..n * n).map(move |k| [t(k / n, n), t(k % n, n)]));
     for [t2, t3] in around.chain(grid) {
+        let timeout = control.limits.timeout.map(|t| t.saturating_sub(start.elapsed()));
+        if timeout.is_some_and(|t| t.is_zero()) || control.cancel.load(std::sync::atomic::Ordering::Relaxed) {
+            break;
+        }
+        let sample = Control { limits: Limits { timeout, ..control.limits }, threads: 1, ..*control };
         let [rho, z] = chain.eval_f64(t2, t3);
-        let Ok(s) = ik::solve_with(chain, rho.max(0.0).sqrt(), z, 1e-9, &control, &mut super::drive::no_progress) else { continue };
+        let Ok(s) = ik::solve_with(chain, rho.max(0.0).sqrt(), z, 1e-9, &sample, &mut super::drive::no_progress) else { continue };
         if s.status.is_complete() && s.clusters.is_empty() {
             best = best.max(s.unique.len() as u32);
             if best >= bound {

@@ -36,6 +36,13 @@ impl Control<'static> {
 }
 
 impl<'a> Control<'a> {
+    /// The same control with what is left, at this moment, of its timeout by a run that
+    /// started at `start`: the steps of one answer share one deadline.
+    pub fn remaining_since(self, start: std::time::Instant) -> Self {
+        let timeout = self.limits.timeout.map(|t| t.saturating_sub(start.elapsed()));
+        Control { limits: Limits { timeout, ..self.limits }, ..self }
+    }
+
     /// The same control with another cell budget.
     pub fn max_cells(self, max_cells: u64) -> Self {
         Control { limits: Limits { max_cells, ..self.limits }, ..self }

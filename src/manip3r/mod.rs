@@ -38,7 +38,7 @@ pub use cusps::{Cusp, CuspSearch};
 pub use drive::{Control, Order};
 pub use nodes::{Node, NodeSearch};
 
-use crate::search::{Limits, Progress, Status};
+use crate::search::{Progress, Status};
 use std::time::Instant;
 use thiserror::Error;
 
@@ -127,8 +127,7 @@ pub fn singularities(chain: &Chain3R, precision: f64, with_nodes: bool, control:
         progress(&Progress { decided: p.decided * share, ..*p })
     })?;
     let node_search = if with_nodes {
-        let left = control.limits.timeout.map(|t| t.saturating_sub(start.elapsed()));
-        let control = Control { limits: Limits { timeout: left, ..control.limits }, ..*control };
+        let control = control.remaining_since(start);
         let settings = nodes::NodeSettings { precision };
         Some(nodes::search_with(chain, &found.cusps, &found.bands, &settings, &control, &mut |p| progress(&Progress { decided: 0.5 + 0.5 * p.decided, ..*p }))?)
     } else {

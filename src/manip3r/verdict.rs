@@ -36,12 +36,20 @@
 use super::chain::{cross, dot, sub, Pose};
 pub use super::chain::V3;
 use super::cusps::evaluate_without_tangency;
+use super::drive::{drive, no_progress, Control};
 use super::limits::JointLimits;
 use super::{Chain3R, Singularities};
+use crate::search::{Limit, Prune, Status, Step};
 use crate::interval::point;
 use crate::model::{JointKind, Mechanism};
 use inari::Interval;
 use serde::Serialize;
+
+/// Cell budgets of the verdict's searches: the smoothness quadtree (a few thousand boxes on
+/// the robots seen), the singular-curve cover behind the aspects, and one sample's IK.
+const SMOOTH_CELLS: u64 = 2_000_000;
+const COVER_CELLS: u64 = 4_000_000;
+const IK_CELLS: u64 = 200_000;
 
 /// `"verdict"` in the JSON.
 #[derive(Clone, Debug, Serialize, PartialEq)]
@@ -163,47 +171,57 @@ pub fn parallel_structure(m: &Mechanism) -> Option<Verdict> {
 pub enum Smooth {
     /// ∇det ≠ 0 wherever det may vanish.
     Proven,
-    /// Boxes left where det and ∇det may both vanish.
+    /// Boxes left at the width where det and ∇det may both vanish.
     Undecided(u64),
+    /// A limit stopped the proof, with this many boxes pending or left.
+    Stopped(Limit, u64),
 }
 
 /// Proves det Df = 0 a smooth curve over the torus: every box has det ≠ 0 or a component of
-/// ∇det ≠ 0, or is bisected, down to `min_width`, with at most `max_boxes` boxes processed.
-/// A plain stack: a few thousand boxes on the robots seen, and the budget bounds it.
-pub fn smooth_singular_set(chain: &Chain3R, min_width: f64, max_boxes: u64) -> Smooth {
+/// ∇det ≠ 0, or is bisected, down to `min_width`, within `control` (a few thousand boxes on
+/// the robots seen).
+pub fn smooth_singular_set(chain: &Chain3R, min_width: f64, control: &Control) -> Smooth {
     let full = super::motion::full_range();
-    let mut stack = vec![[full, full]];
-    let (mut processed, mut undecided) = (0u64, 0u64);
-    while let Some(b) = stack.pop() {
-        processed += 1;
-        if processed > max_boxes {
-            return Smooth::Undecided(undecided + 1 + stack.len() as u64);
-        }
-        let e = evaluate_without_tangency(chain, b);
+    let run = drive(|| SmoothPrune { chain, min_width }, [full, full], control, &mut no_progress);
+    let left = run.undecided.len() as u64;
+    match run.status {
+        Status::Incomplete(limit) => Smooth::Stopped(limit, left),
+        Status::Complete if left == 0 => Smooth::Proven,
+        Status::Complete => Smooth::Undecided(left),
+    }
+}
+
+/// The smoothness test of `smooth_singular_set`, one box at a time.
+struct SmoothPrune<'a> {
+    chain: &'a Chain3R,
+    min_width: f64,
+}
+
+impl Prune for SmoothPrune<'_> {
+    type Cell = [Interval; 2];
+    type Found = std::convert::Infallible;
+
+    fn process(&mut self, b: [Interval; 2]) -> Step<[Interval; 2], Self::Found> {
+        let e = evaluate_without_tangency(self.chain, b);
         let excludes = |x: Interval| x.inf() > 0.0 || x.sup() < 0.0;
-        if excludes(e.det) || excludes(e.grad_det[0]) || excludes(e.grad_det[1]) {
-            continue;
+        if excludes(e.det) {
+            return Step::Discard("regular");
         }
-        if b[0].wid().max(b[1].wid()) < min_width {
-            undecided += 1;
-            continue;
+        if excludes(e.grad_det[0]) || excludes(e.grad_det[1]) {
+            return Step::Discard("smooth");
+        }
+        if b[0].wid().max(b[1].wid()) < self.min_width {
+            return Step::Undecided(b, "gradient may vanish");
         }
         let (lo, hi) = super::cusps::bisect(b, false);
-        stack.push(lo);
-        stack.push(hi);
-    }
-    if undecided == 0 {
-        Smooth::Proven
-    } else {
-        Smooth::Undecided(undecided)
+        Step::Split([hi, lo].into_iter().collect())
     }
 }
 
 /// Aspects and the largest number of IK solutions under arguments 2 and 3 (`aspects`), with
 /// what to add to the reason.
-fn counts(chain: &Chain3R, cusps: &[[f64; 2]], internal_motion: bool) -> (Option<u32>, Option<u32>, String) {
-    let control = super::Control::with_limits(crate::search::Limits { max_cells: 4_000_000, ..Default::default() });
-    let (aspects, mut why) = match super::aspects::count(chain, &control) {
+fn counts(chain: &Chain3R, cusps: &[[f64; 2]], internal_motion: bool, control: &Control) -> (Option<u32>, Option<u32>, String) {
+    let (aspects, mut why) = match super::aspects::count(chain, &control.max_cells(COVER_CELLS)) {
         Ok(n) => (Some(n), format!("; {n} aspects (components of det Df != 0, from the singular-curve cover: every cell regular or crossed by one arc)")),
         Err(e) => (None, format!("; aspects not proven: {e}")),
     };
@@ -214,7 +232,7 @@ fn counts(chain: &Chain3R, cusps: &[[f64; 2]], internal_motion: bool) -> (Option
     // At most 4 (a quartic); a non-cuspidal arm has at most one per aspect.
     let cuspidal = !cusps.is_empty();
     let bound = if cuspidal { 4 } else { aspects.map_or(4, |a| a.min(4)) };
-    let (best, proven) = super::aspects::max_ik_solutions(chain, bound, cusps, 200_000);
+    let (best, proven) = super::aspects::max_ik_solutions(chain, bound, cusps, &control.max_cells(IK_CELLS));
     if proven {
         why.push_str(&format!("; at most {bound} IK solutions ({}), reached at a sample point with {best} certified solutions", if bound == 4 && (cuspidal || aspects.is_none_or(|a| a >= 4)) { "a 3R's bound" } else { "one per aspect" }));
         (aspects, Some(best), why)
@@ -224,8 +242,12 @@ fn counts(chain: &Chain3R, cusps: &[[f64; 2]], internal_motion: bool) -> (Option
     }
 }
 
-/// The verdict for a prepared arm from its (unfiltered, full-torus) singularity run.
-pub fn decide(mechanism: &Mechanism, chain: &Chain3R, run: &Singularities, limits: &JointLimits) -> Verdict {
+/// The verdict for a prepared arm from its (unfiltered, full-torus) singularity run. Its
+/// searches (smoothness, aspects, sample IK) run with `control`'s threads, cancel flag and
+/// timeout (the caller passes what its run left of it) and their own cell budgets
+/// (`SMOOTH_CELLS`, `COVER_CELLS`, `IK_CELLS` a sample); a limit that stops one leaves its
+/// count `null`, with the limit named.
+pub fn decide(mechanism: &Mechanism, chain: &Chain3R, run: &Singularities, limits: &JointLimits, control: &Control) -> Verdict {
     if let Some(v) = parallel_structure(mechanism) {
         return v;
     }
@@ -235,7 +257,7 @@ pub fn decide(mechanism: &Mechanism, chain: &Chain3R, run: &Singularities, limit
     let certified: Vec<_> = run.cusps.cusps.iter().filter(|c| c.unique).collect();
     if let Some(c) = certified.iter().find(|c| limits.holds(&c.theta)) {
         let centres: Vec<[f64; 2]> = certified.iter().map(|c| [c.theta[0].mid(), c.theta[1].mid()]).collect();
-        let (aspects, max_ik_solutions, more) = counts(chain, &centres, !run.cusps.bands.is_empty());
+        let (aspects, max_ik_solutions, more) = counts(chain, &centres, !run.cusps.bands.is_empty(), control);
         return Verdict {
             cuspidal: Some(true),
             aspects,
@@ -275,9 +297,9 @@ pub fn decide(mechanism: &Mechanism, chain: &Chain3R, run: &Singularities, limit
             reason: format!("no certified cusp, but the cusp search left {undecided} boxes undecided on the full torus (status {})", if run.cusps.status.is_complete() { "complete" } else { "incomplete" }),
         };
     }
-    match smooth_singular_set(chain, 1e-6, 2_000_000) {
+    match smooth_singular_set(chain, 1e-6, &control.max_cells(SMOOTH_CELLS)) {
         Smooth::Proven => {
-            let (aspects, max_ik_solutions, more) = counts(chain, &[], !run.cusps.bands.is_empty());
+            let (aspects, max_ik_solutions, more) = counts(chain, &[], !run.cusps.bands.is_empty(), control);
             Verdict {
                 cuspidal: Some(false),
                 aspects,
@@ -295,6 +317,13 @@ pub fn decide(mechanism: &Mechanism, chain: &Chain3R, run: &Singularities, limit
             max_ik_solutions: None,
             certified: false,
             reason: format!("no cusp on the whole torus, but the singular set is not proven smooth ({n} boxes where det and its gradient may both vanish: crossing branches?), so the generic theorem does not apply"),
+        },
+        Smooth::Stopped(limit, n) => Verdict {
+            cuspidal: None,
+            aspects: None,
+            max_ik_solutions: None,
+            certified: false,
+            reason: format!("no cusp on the whole torus, but the smoothness proof of the singular set was stopped by the {} limit ({n} boxes left), so the generic theorem does not apply", limit.name()),
         },
     }
 }
