@@ -11,7 +11,9 @@
 //! search box is either inside a strip or has no interior point in common with it.
 
 use super::chain::Chain3R;
+use super::drive::{drive, no_progress, Control, Order};
 use crate::interval::interval;
+use crate::search::{Limits, Prune, Step};
 use inari::Interval;
 use serde::Serialize;
 
@@ -63,31 +65,47 @@ pub fn straddles(bands: &[Band], t3: Interval) -> bool {
     bands.iter().any(|b| t3.inf() < b.strip[1] && b.strip[0] < t3.sup() && !b.holds(t3))
 }
 
+/// The θ₃ walk of `bands`: every leaf cell is reported (marked or not), with its place in the
+/// θ₃ order, since runs of marked cells need their neighbours.
+struct StripPrune<'a> {
+    chain: &'a Chain3R,
+    precision: f64,
+    near: f64,
+}
+
+impl Prune for StripPrune<'_> {
+    type Cell = (Interval, Order);
+    type Found = (Order, (Interval, bool, Option<f64>));
+
+    fn process(&mut self, (t, order): (Interval, Order)) -> Step<Self::Cell, Self::Found> {
+        let off = self.chain.off_axis2(t);
+        let possible = off.iter().all(|c| c.contains(0.0));
+        // May the point come within `near` of the axis (each component's smallest magnitude)?
+        let close = off.iter().all(|c| c.mig() <= self.near);
+        if t.wid() <= self.precision {
+            Step::Found((order, (t, possible || close, (close && !possible).then_some(self.near))))
+        } else if !close {
+            Step::Found((order, (t, false, None)))
+        } else {
+            let m = t.mid();
+            Step::Split([(interval(t.inf(), m), order.child(0, 2)), (interval(m, t.sup()), order.child(1, 2))].into_iter().collect())
+        }
+    }
+}
+
 /// The internal-motion strips of `chain`, from dyadic cells no wider than `precision`.
 pub fn bands(chain: &Chain3R, precision: f64) -> Vec<Band> {
     // Near-degenerate: the point within `near` of axis 2, where one turn of θ₂ moves the image
     // by less than a search box of this precision does (about precision × the arm's length).
     let near = precision * chain.length_scale() / (2.0 * std::f64::consts::PI);
     // Cells in order of θ₃, each marked when the end point may lie on axis 2 there, or
-    // (second flag) is proven within `near` of it without being proven on it.
-    let mut cells: Vec<(Interval, bool, Option<f64>)> = Vec::new();
-    let mut stack = vec![full_range()];
-    while let Some(t) = stack.pop() {
-        let off = chain.off_axis2(t);
-        let possible = off.iter().all(|c| c.contains(0.0));
-        // May the point come within `near` of the axis (each component's smallest magnitude)?
-        let close = off.iter().all(|c| c.mig() <= near);
-        if t.wid() <= precision {
-            cells.push((t, possible || close, (close && !possible).then_some(near)));
-        } else if !close {
-            cells.push((t, false, None));
-        } else {
-            let m = t.mid();
-            // Upper half first on the stack so the lower one is popped first: cells stay ordered.
-            stack.push(interval(m, t.sup()));
-            stack.push(interval(t.inf(), m));
-        }
-    }
+    // (second flag) is proven within `near` of it without being proven on it. The walk always
+    // ends (cells stop at the precision), so it runs without a limit: a partial list of cells
+    // would make strips unsound.
+    let control = Control::with_limits(Limits { max_cells: u64::MAX, timeout: None, max_memory: usize::MAX });
+    let mut run = drive(|| StripPrune { chain, precision, near }, (full_range(), Order::ROOT), &control, &mut no_progress);
+    run.found.sort_by_key(|(order, _)| *order);
+    let cells: Vec<(Interval, bool, Option<f64>)> = run.found.into_iter().map(|(_, cell)| cell).collect();
     let mut out = Vec::new();
     let n = cells.len();
     let mut i = 0;
