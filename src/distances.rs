@@ -188,7 +188,7 @@ fn solve_inner(problem: &DistanceProblem, choice: Choice, redundant: bool, faces
         let all_solver = all.solver(FaceBounds::Corners, deeper_settings(&settings, DEEPER[0]))?;
         let unique = vec![false; e.solutions.len()];
         let mut out = Certified { formulation: choice, cm: cm.clone(), placed: None, status: e.status, stats: e.stats, solutions: e.solutions, unique, cluster: Vec::new(), clusters: Vec::new(), roots: Vec::new(), undecided: e.undecided, phases: vec![("search", crate::search::process_cpu_seconds() - c0)] };
-        settle_determinants(&cm, placed.as_ref(), &solver, (&all, &all_solver), &mut out, cancel);
+        settle_determinants(&cm, placed.as_ref(), &solver, (&all, &all_solver), settings.threads, &mut out, cancel);
         out.placed = placed;
         Ok(out)
     }
@@ -354,8 +354,9 @@ fn restrict(from: &CayleyMenger, b: &IntervalBox, to: &CayleyMenger) -> Option<I
 }
 
 /// Settles the boxes of a determinant search. `all` is the system of every determinant (the
-/// redundant ones too) in shared variables, with its solver at sigma / 16.
-fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solver<'_>, all: (&CayleyMenger, &Solver<'_>), out: &mut Certified, cancel: &AtomicBool) {
+/// redundant ones too) in shared variables, with its solver at sigma / 16. The re-searches of
+/// unmet boxes run on `threads` threads.
+fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solver<'_>, all: (&CayleyMenger, &Solver<'_>), threads: usize, out: &mut Certified, cancel: &AtomicBool) {
     let clock = crate::search::process_cpu_seconds;
     let t0 = clock();
     // Certified placements from every box midpoint, each once.
@@ -402,27 +403,56 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
         Some(pr) => [1.0, 1.0 / 16.0].iter().filter_map(|&f| Solver::new(&pr.system, SolverSettings { sigma: s.sigma.min(1e-3) * f, ..s.clone() }).ok()).collect(),
         None => Vec::new(),
     };
+    // The searches of different boxes are independent, so they run on the run's threads, in
+    // two passes; the decisions are then taken in box order exactly as one thread would take
+    // them. Which boxes need the coordinate search depends on the placements earlier boxes
+    // add, and placements only accumulate: a box that is covered with the placements known
+    // before the passes is covered then too, so pass 2 searches every box that may need it (a
+    // few searches may go unused) and only the searches used are counted.
+    let threads = threads.max(1);
+    let covered_by = |found: &[IntervalBox], roots: &[Placement]| found.iter().all(|f| roots.iter().any(|r| r.meets(all_cm, f)));
+    let t = clock();
+    let unmet: Vec<usize> = (0..out.solutions.len()).filter(|&i| !covered[i]).collect();
+    let firsts: Vec<(Option<Vec<IntervalBox>>, u64)> = crate::search::map_parallel(&unmet, threads, |&i| match restrict(cm, &out.solutions[i], all_cm) {
+        None => (Some(Vec::new()), 0),
+        Some(start) => {
+            let mut found = Collect::default();
+            let (status, st) = all_solver.run_from(start, cancel, &mut found);
+            ((status == Status::Complete).then_some(found.solutions), st.processed)
+        }
+    });
+    let in_determinants = clock() - t;
+    let t = clock();
+    let may_need: Vec<usize> = unmet.iter().zip(&firsts).filter(|(_, (first, _))| first.as_ref().is_none_or(|f| !f.is_empty() && !covered_by(f, &roots))).map(|(&i, _)| i).collect();
+    let coordinates: Vec<(Result<Vec<Placement>, &'static str>, SolveStats)> = crate::search::map_parallel(&may_need, threads, |&i| {
+        let b = &out.solutions[i];
+        let mut stats = SolveStats::default();
+        let verdict = match &with_r {
+            Some(pr) => {
+                let bounds: Vec<_> = cm.unknown_intervals(b).into_iter().map(|(_, d)| d).collect();
+                match pr.start_from(&bounds) {
+                    None => Ok(Vec::new()),
+                    Some(_) if coordinate_solvers.is_empty() => Err("the coordinate search could not be set up"),
+                    Some(start) => deeper(&coordinate_solvers, &start, cancel, &mut stats).map(|found| found.into_iter().map(|f| Placement::new(pr, f.clone(), pr.points(&f.midpoint()))).collect()),
+                }
+            }
+            None => deeper(std::slice::from_ref(solver), b, cancel, &mut stats).and_then(|f| if f.is_empty() { Ok(Vec::new()) } else { Err("no frame to certify placements in (fewer than three fixed points)") }),
+        };
+        (verdict, stats)
+    });
+    let in_coordinates = clock() - t;
+    let mut firsts = unmet.iter().copied().zip(firsts);
+    let mut coordinates = may_need.iter().copied().zip(coordinates);
     let mut keep = Vec::new();
     let mut why: Vec<Option<&'static str>> = Vec::new();
-    let (mut in_determinants, mut in_coordinates) = (0.0, 0.0);
     for i in 0..out.solutions.len() {
         if covered[i] {
             keep.push(i);
             why.push(None);
             continue;
         }
-        let b = out.solutions[i].clone();
-        let t = clock();
-        let first = match restrict(cm, &b, all_cm) {
-            None => Some(Vec::new()),
-            Some(start) => {
-                let mut found = Collect::default();
-                let (status, st) = all_solver.run_from(start, cancel, &mut found);
-                out.stats.processed += st.processed;
-                (status == Status::Complete).then_some(found.solutions)
-            }
-        };
-        in_determinants += clock() - t;
+        let (_, (first, processed)) = firsts.next().expect("invariant: one first search per unmet box");
+        out.stats.processed += processed;
         match first {
             Some(found) if found.is_empty() => continue,
             Some(found) => {
@@ -438,19 +468,14 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
             }
             None => {}
         }
-        let t = clock();
-        let verdict = match &with_r {
-            Some(pr) => {
-                let bounds: Vec<_> = cm.unknown_intervals(&b).into_iter().map(|(_, d)| d).collect();
-                match pr.start_from(&bounds) {
-                    None => Ok(Vec::new()),
-                    Some(_) if coordinate_solvers.is_empty() => Err("the coordinate search could not be set up"),
-                    Some(start) => deeper(&coordinate_solvers, &start, cancel, &mut out.stats).map(|found| found.into_iter().map(|f| Placement::new(pr, f.clone(), pr.points(&f.midpoint()))).collect()),
-                }
+        let (verdict, stats) = loop {
+            let (j, searched) = coordinates.next().expect("invariant: pass 2 searched every box that may need it");
+            if j == i {
+                break searched;
             }
-            None => deeper(std::slice::from_ref(solver), &b, cancel, &mut out.stats).and_then(|f| if f.is_empty() { Ok(Vec::new()) } else { Err("no frame to certify placements in (fewer than three fixed points)") }),
         };
-        in_coordinates += clock() - t;
+        out.stats.processed += stats.processed;
+        out.stats.certified += stats.certified;
         match verdict {
             Ok(found) if found.is_empty() => {}
             Ok(found) => {
