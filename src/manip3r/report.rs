@@ -24,13 +24,26 @@ pub(crate) fn bounds(x: Interval) -> Bounds {
 /// Joint intervals keyed by joint name (the second and third joints).
 pub type Joints = BTreeMap<String, Bounds>;
 
+/// `joints` in the order of `names` (records keyed by name → the positional records of
+/// `analysis` and the ROS messages); a joint the record does not name is unbounded.
+pub fn joints_over(joints: &Joints, names: &[String]) -> Vec<Bounds> {
+    names.iter().map(|n| joints.get(n).copied().unwrap_or([f64::NEG_INFINITY, f64::INFINITY])).collect()
+}
+
 /// A workspace box.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Workspace {
     /// Distance from the first axis.
     pub radius: Bounds,
     /// Coordinate along the first axis.
     pub z: Bounds,
+}
+
+impl Workspace {
+    /// `[radius, z]`, the order of `analysis::SingularityResult::workspace_names`.
+    pub fn bounds(&self) -> [Bounds; 2] {
+        [self.radius, self.z]
+    }
 }
 
 /// One cusp.
