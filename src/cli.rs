@@ -634,9 +634,7 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     let effect = prepared.limits.apply(&mut run);
     let mut report = SingularityReport::new(&chain, args.precision, &run.cusps, run.nodes.as_ref(), start.elapsed().as_secs_f64());
     report.verdict = Some(verdict.clone());
-    report.chain = Some(prepared.choice.clone());
-    report.rounding = Some(manip3r::report::Rounding::of(&prepared));
-    report.joint_limits = Some(effect.clone());
+    report.reading = Some(manip3r::report::Reading::of(&prepared, effect.clone()));
     if let Some(b) = &branches {
         if !structural {
             let boxes: Vec<_> = run.cusps.undecided.iter().map(|u| u.theta).chain(run.cusps.cusps.iter().filter(|c| !c.unique).map(|c| c.theta)).collect();
@@ -764,9 +762,7 @@ fn ik(args: IkArgs) -> Result<()> {
     let mut s = manip3r::ik::solve_with(&chain, r, z, args.precision, &control, &mut |_| {})?;
     let effect = prepared.limits.apply_ik(&mut s);
     let mut report = IkReport::new(&chain, [r, z], &s);
-    report.chain = Some(prepared.choice.clone());
-    report.rounding = Some(manip3r::report::Rounding::of(&prepared));
-    report.joint_limits = Some(effect.clone());
+    report.reading = Some(manip3r::report::Reading::of(&prepared, effect.clone()));
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}: {} solutions proven unique, {} clusters undecided, status {}", report.robot, s.unique.len(), s.clusters.len(), report.status).ok();
     writeln!(out, "  chain: {}", prepared.choice.reason).ok();

@@ -10,12 +10,13 @@
 //! solve; the default `configuration_space` and `solve` answer "not available".
 
 use super::{
-    gap, Analysis, AnalysisError, Bounds, BoxSetResult, BranchRecord, BranchesResult, Classification, CrossingResult, IkQuery, IkResult, IkSolution, PreparedRun, ResultBox, Service, SingularPair, SingularPoint,
+    gap, Analysis, AnalysisError, Bounds, BoxSetResult, Classification, IkQuery, IkResult, IkSolution, PreparedRun, ResultBox, Service, SingularPair, SingularPoint,
     SingularityQuery, SingularityResult,
 };
 use crate::interval::{interval, point};
 use crate::manip3r::motion;
 use crate::manip3r::report::radius;
+use crate::manip3r::branches::SingularBranches;
 use crate::manip3r::curves::Cover;
 use crate::manip3r::{self, ik, Chain3R, Manip3rError};
 use crate::model::Mechanism;
@@ -62,7 +63,7 @@ pub struct Manip3rAnalysis {
     /// the interval searches are not run, as in `linkspace singularities`.
     structural: bool,
     /// The certified singular branches (parallel axes 2 and 3), computed once.
-    branches: Option<Arc<BranchesResult>>,
+    branches: Option<Arc<SingularBranches>>,
 }
 
 impl Manip3rAnalysis {
@@ -103,8 +104,7 @@ impl Manip3rAnalysis {
         let e2 = [a[1] * e1[2] - a[2] * e1[1], a[2] * e1[0] - a[0] * e1[2], a[0] * e1[1] - a[1] * e1[0]];
         let cover = Arc::new(Cover::new(&chain, CURVE_DEPTH, &manip3r::Control::with_limits(Limits::default())));
         let structural = manip3r::verdict::parallel_structure(mechanism).is_some();
-        let record_joints = [chain.joints[1].clone(), chain.joints[2].clone()];
-        let branches = manip3r::branches::of(mechanism, &chain).map(|b| Arc::new(branches_result(&b, &record_joints)));
+        let branches = manip3r::branches::of(mechanism, &chain).map(Arc::new);
         Ok(Self {
             chain: Arc::new(chain),
             base_rotation: r,
@@ -299,55 +299,6 @@ fn box_set(cover: &Cover, mechanism: &str, joints: &[String]) -> BoxSetResult {
     }
 }
 
-/// The CLI's branches (`manip3r::branches`) as plain records over `joints` (θ₂, θ₃) and
-/// (radius, z); each crossing once, with the branches listing it by index.
-fn branches_result(b: &manip3r::branches::SingularBranches, joints: &[String; 2]) -> BranchesResult {
-    let over = |j: &manip3r::report::Joints| joints.iter().map(|n| j.get(n).copied().unwrap_or([f64::NEG_INFINITY, f64::INFINITY])).collect::<Vec<Bounds>>();
-    let mut crossings: Vec<CrossingResult> = Vec::new();
-    let branches = b
-        .branches
-        .iter()
-        .map(|br| {
-            let indices = br
-                .crossings
-                .iter()
-                .map(|c| {
-                    let record = CrossingResult { name: c.name.clone(), joints: over(&c.joints), workspace: vec![c.workspace.radius, c.workspace.z] };
-                    match crossings.iter().position(|x| *x == record) {
-                        Some(k) => k,
-                        None => {
-                            crossings.push(record);
-                            crossings.len() - 1
-                        }
-                    }
-                })
-                .collect();
-            BranchRecord {
-                name: br.name.clone(),
-                kind: br.kind.to_string(),
-                description: br.description.clone(),
-                image_description: br.image.description.clone(),
-                image: vec![br.image.radius, br.image.z],
-                curve_of_nodes: br.curve_of_nodes,
-                crossings: indices,
-                proof: br.proof.clone(),
-            }
-        })
-        .collect();
-    BranchesResult {
-        branches,
-        crossings,
-        crossings_complete: b.crossings.is_some(),
-        isolated_nodes: b
-            .isolated_nodes
-            .iter()
-            .map(|n| SingularPair { joints: [over(&n.points[0]), over(&n.points[1])], workspace: vec![n.workspace.radius, n.workspace.z], certified: true })
-            .collect(),
-        no_cusp_proven: b.no_cusp_proven,
-        argument: b.argument.clone(),
-    }
-}
-
 /// A validated singularity run.
 struct SingularityRun {
     chain: Arc<Chain3R>,
@@ -357,7 +308,7 @@ struct SingularityRun {
     reduced: Arc<Mechanism>,
     limits: Arc<manip3r::limits::JointLimits>,
     structural: bool,
-    branches: Option<Arc<BranchesResult>>,
+    branches: Option<Arc<SingularBranches>>,
 }
 
 impl PreparedRun<SingularityResult> for SingularityRun {

@@ -325,61 +325,10 @@ pub struct SingularityResult {
     /// 3R chains: the verdict of `linkspace singularities --json` (`manip3r::verdict::decide` on
     /// the full-torus run); `None` for closed-loop mechanisms.
     pub verdict: Option<crate::manip3r::verdict::Verdict>,
-    /// 3R chains with parallel axes 2 and 3: the certified singular branches of `linkspace
-    /// singularities --json` (`manip3r::branches::of`); `None` otherwise.
-    pub branches: Option<BranchesResult>,
-}
-
-/// The certified singular branches of a 3R chain with parallel axes 2 and 3
-/// (`manip3r::branches::SingularBranches`, `"singular_branches"` in `linkspace singularities
-/// --json`), joints in the order of `SingularityResult::joint_names`, workspace in that of
-/// `workspace_names`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct BranchesResult {
-    /// The branches, in the JSON's order.
-    pub branches: Vec<BranchRecord>,
-    /// Every crossing of two branches once, in the order first met in the branches' lists.
-    pub crossings: Vec<CrossingResult>,
-    /// False when the crossings are not all decided (the JSON's `crossings` is null).
-    pub crossings_complete: bool,
-    /// Isolated nodes between the outstretched and folded lines (certified).
-    pub isolated_nodes: Vec<SingularPair>,
-    /// True when the no-cusp argument is made.
-    pub no_cusp_proven: bool,
-    /// The argument, in words.
-    pub argument: String,
-}
-
-/// One singular branch.
-#[derive(Clone, Debug, PartialEq)]
-pub struct BranchRecord {
-    /// `outstretched`, `folded` or `fold_of_g`.
-    pub name: String,
-    /// `theta3_line` or `curve`.
-    pub kind: String,
-    /// Joint-space description, in words.
-    pub description: String,
-    /// Its image, in words.
-    pub image_description: String,
-    /// Enclosure of its image, one interval per workspace coordinate.
-    pub image: Vec<Bounds>,
-    /// Some(true): a curve of nodes; Some(false): not; None: undecided.
-    pub curve_of_nodes: Option<bool>,
-    /// Indices into `BranchesResult::crossings` of its crossings, in the JSON's order.
-    pub crossings: Vec<usize>,
-    /// Why.
-    pub proof: String,
-}
-
-/// One crossing of two singular branches: exactly one singular configuration in the box.
-#[derive(Clone, Debug, PartialEq)]
-pub struct CrossingResult {
-    /// e.g. `outstretched x fold_of_g, w_t > 0`.
-    pub name: String,
-    /// One interval per record joint.
-    pub joints: Vec<Bounds>,
-    /// One interval per workspace coordinate.
-    pub workspace: Vec<Bounds>,
+    /// 3R chains with parallel axes 2 and 3: the certified singular branches, the very
+    /// `"singular_branches"` of `linkspace singularities --json` (`manip3r::branches::of`; joints
+    /// keyed by the names of `joint_names`, images in `workspace_names`); `None` otherwise.
+    pub branches: Option<crate::manip3r::branches::SingularBranches>,
 }
 
 /// The singular sets of a closed-loop mechanism (`problems::singular`), as `linkspace

@@ -203,7 +203,7 @@ impl Planar {
 }
 
 /// One crossing of two branches.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct CrossingRecord {
     /// e.g. `outstretched x fold, t > 0`.
     pub name: String,
@@ -217,7 +217,7 @@ pub struct CrossingRecord {
 }
 
 /// A point of a fold branch at a given θ₃.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct FoldSample {
     /// The third joint (exact).
     pub theta3: f64,
@@ -226,7 +226,7 @@ pub struct FoldSample {
 }
 
 /// The image of a branch.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ImageRecord {
     /// In words, with numbers.
     pub description: String,
@@ -237,7 +237,7 @@ pub struct ImageRecord {
 }
 
 /// One branch of the singular set.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SingularBranch {
     /// `outstretched`, `folded` or `fold_of_g`.
     pub name: String,
@@ -266,7 +266,7 @@ pub struct SingularBranch {
 }
 
 /// An isolated node between the two θ₃ lines (d > 0 only).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct IsolatedNode {
     /// Its two points (outstretched, folded).
     pub points: [Joints; 2],
@@ -275,7 +275,7 @@ pub struct IsolatedNode {
 }
 
 /// `"singular_branches"` in the JSON.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct SingularBranches {
     /// The branches.
     pub branches: Vec<SingularBranch>,
@@ -568,6 +568,23 @@ fn meets_mod_2pi(x: Interval, line: Interval) -> bool {
 }
 
 impl SingularBranches {
+    /// Every crossing once, in the order first met in the branches' lists, with the indices of
+    /// the branches listing it (ascending). Each crossing lies on two branches and both list it
+    /// (the JSON repeats it); the ROS message lists it once and points at the two branches.
+    pub fn distinct_crossings(&self) -> Vec<(&CrossingRecord, Vec<usize>)> {
+        let mut out: Vec<(&CrossingRecord, Vec<usize>)> = Vec::new();
+        for (i, b) in self.branches.iter().enumerate() {
+            for c in &b.crossings {
+                match out.iter_mut().find(|(x, _)| *x == c) {
+                    Some((_, on)) if on.last() != Some(&i) => on.push(i),
+                    Some(_) => {}
+                    None => out.push((c, vec![i])),
+                }
+            }
+        }
+        out
+    }
+
     /// Attributes boxes to the crossing they are within `radius` of, else to the branches
     /// they meet (interval tests), else to none.
     pub fn attribute(&self, m: &Mechanism, boxes: &[[Interval; 2]], radius: f64) -> Attribution {
@@ -655,5 +672,36 @@ impl SingularBranches {
             out.push(format!("isolated node between the outstretched and folded lines -> radius {:.6} z {:.6}", 0.5 * (n.workspace.radius[0] + n.workspace.radius[1]), 0.5 * (n.workspace.z[0] + n.workspace.z[1])));
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::manip3r::{prepare, LoadOptions};
+
+    /// The branches of a bundled arm (nominal lengths).
+    fn branches_of(xml: &str) -> SingularBranches {
+        let p = prepare(&crate::model::urdf::parse(xml).expect("parses"), &LoadOptions::default()).expect("a 3R arm");
+        let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
+        of(&p.mechanism, &chain).expect("axes 2 and 3 parallel")
+    }
+
+    #[test]
+    fn distinct_crossings_list_each_crossing_once_with_its_two_branches() {
+        // PUMA and UR5: the fold of g meets both theta3 lines; KUKA: only the outstretched one.
+        for (xml, lines) in [(include_str!("../../urdf/puma560.urdf"), &[0, 0, 1, 1][..]), (include_str!("../../urdf/ur5.urdf"), &[0, 0, 1, 1]), (include_str!("../../urdf/kuka_kr16.urdf"), &[0, 0])] {
+            let b = branches_of(xml);
+            let d = b.distinct_crossings();
+            assert_eq!(Some(d.len()), b.crossings);
+            for (k, (c, on)) in d.iter().enumerate() {
+                // A theta3 line and the fold of g (index 2), each listing the record.
+                assert_eq!(on[..], [lines[k], 2], "{}", c.name);
+                assert!(on.iter().all(|&i| b.branches[i].crossings.contains(c)), "{}", c.name);
+                assert!(d[..k].iter().all(|(x, _)| x != c), "{} listed twice", c.name);
+            }
+            // Every listed crossing is among them.
+            assert!(b.branches.iter().flat_map(|x| &x.crossings).all(|c| d.iter().any(|(x, _)| *x == c)));
+        }
     }
 }

@@ -24,13 +24,26 @@ pub(crate) fn bounds(x: Interval) -> Bounds {
 /// Joint intervals keyed by joint name (the second and third joints).
 pub type Joints = BTreeMap<String, Bounds>;
 
+/// `joints` in the order of `names` (records keyed by name → the positional records of
+/// `analysis` and the ROS messages); a joint the record does not name is unbounded.
+pub fn joints_over(joints: &Joints, names: &[String]) -> Vec<Bounds> {
+    names.iter().map(|n| joints.get(n).copied().unwrap_or([f64::NEG_INFINITY, f64::INFINITY])).collect()
+}
+
 /// A workspace box.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Workspace {
     /// Distance from the first axis.
     pub radius: Bounds,
     /// Coordinate along the first axis.
     pub z: Bounds,
+}
+
+impl Workspace {
+    /// `[radius, z]`, the order of `analysis::SingularityResult::workspace_names`.
+    pub fn bounds(&self) -> [Bounds; 2] {
+        [self.radius, self.z]
+    }
 }
 
 /// One cusp.
@@ -246,15 +259,10 @@ pub struct SingularityReport {
     /// The first answer: cuspidal or not, aspects, IK solutions, and the argument.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub verdict: Option<super::verdict::Verdict>,
-    /// Which chain and point of the file were analysed, and why.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub chain: Option<super::select::Choice>,
-    /// The rounding policy's changes.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub rounding: Option<Rounding>,
-    /// Joint limits and what they removed.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub joint_limits: Option<super::limits::LimitEffect>,
+    /// How the file was read (`chain`, `rounding`, `joint_limits` in the JSON); `None` for a
+    /// report built from searches alone.
+    #[serde(flatten)]
+    pub reading: Option<Reading>,
     /// Searches not run, and why (structural arms: the cusp answer comes from the proof).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub not_searched: Option<String>,
@@ -287,6 +295,26 @@ impl Rounding {
     /// From a prepared arm.
     pub fn of(p: &super::Prepared) -> Self {
         Rounding { snapping: !p.exact_geometry, tolerance: crate::model::rounding::ANGLE_TOLERANCE, snaps: p.snaps.clone() }
+    }
+}
+
+/// How a file was read for a 3R report: what `manip3r::prepare` chose and changed, and what the
+/// joint limits removed. Every 3R report of a file (`singularities`, `ik`) carries the same three
+/// fields; flattened, they keep their place and names in the report's JSON object.
+#[derive(Clone, Debug, Serialize)]
+pub struct Reading {
+    /// Which chain and point of the file were analysed, and why.
+    pub chain: super::select::Choice,
+    /// The rounding policy's changes.
+    pub rounding: Rounding,
+    /// Joint limits and what they removed.
+    pub joint_limits: super::limits::LimitEffect,
+}
+
+impl Reading {
+    /// From a prepared arm and what its limits did to the results.
+    pub fn of(p: &super::Prepared, joint_limits: super::limits::LimitEffect) -> Self {
+        Reading { chain: p.choice.clone(), rounding: Rounding::of(p), joint_limits }
     }
 }
 
@@ -341,9 +369,7 @@ impl SingularityReport {
             undecided_total: [cusps.undecided.len(), nodes.map_or(0, |n| n.undecided.len())],
             stats: Stats { cusps: CuspStats::from(cusps), nodes: nodes.map(NodeStats::from), seconds },
             verdict: None,
-            chain: None,
-            rounding: None,
-            joint_limits: None,
+            reading: None,
             not_searched: None,
             singular_branches: None,
             explained_undecided: None,
@@ -398,15 +424,10 @@ pub struct IkReport {
     pub solutions: Vec<IkRecord>,
     /// Boxes processed.
     pub processed: u64,
-    /// Which chain and point of the file were analysed, and why.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub chain: Option<super::select::Choice>,
-    /// The rounding policy's changes.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub rounding: Option<Rounding>,
-    /// Joint limits and what they removed.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub joint_limits: Option<super::limits::LimitEffect>,
+    /// How the file was read (`chain`, `rounding`, `joint_limits` in the JSON); `None` for a
+    /// report built from searches alone.
+    #[serde(flatten)]
+    pub reading: Option<Reading>,
 }
 
 impl IkReport {
@@ -414,7 +435,7 @@ impl IkReport {
     pub fn new(chain: &Chain3R, point: [f64; 2], s: &IkSolutions) -> Self {
         let mut solutions: Vec<IkRecord> = s.unique.iter().map(|b| IkRecord { joints: joints(chain, b), unique: true, boxes: 0 }).collect();
         solutions.extend(s.clusters.iter().map(|c| IkRecord { joints: joints(chain, &c.hull), unique: false, boxes: c.boxes }));
-        IkReport { robot: chain.name.clone(), point, status: if s.status.is_complete() { "complete" } else { "incomplete" }, limit: limit_of(s.status), solutions, processed: s.stats.processed, chain: None, rounding: None, joint_limits: None }
+        IkReport { robot: chain.name.clone(), point, status: if s.status.is_complete() { "complete" } else { "incomplete" }, limit: limit_of(s.status), solutions, processed: s.stats.processed, reading: None }
     }
 }
 
@@ -521,5 +542,34 @@ impl CollisionReport {
                 seconds: set.seconds,
             },
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::manip3r::{prepare, structural_singularities, LoadOptions};
+
+    /// The JSON keys of `report` at the top level, in the written order.
+    fn keys(report: &impl Serialize) -> Vec<String> {
+        let text = serde_json::to_string_pretty(report).expect("serialises");
+        text.lines().filter_map(|l| l.strip_prefix("  \"")).filter_map(|l| l.split_once('"')).map(|(k, _)| k.to_string()).collect()
+    }
+
+    #[test]
+    fn the_reading_keeps_its_place_in_the_json_and_is_absent_without_one() {
+        let p = prepare(&crate::model::urdf::parse(include_str!("../../urdf/puma560.urdf")).expect("parses"), &LoadOptions::default()).expect("3R");
+        let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
+        let run = structural_singularities(&chain, 1e-4).expect("precision");
+        let mut r = SingularityReport::new(&chain, 1e-4, &run.cusps, None, 0.0);
+        r.not_searched = Some("structural".into());
+        let bare = keys(&r);
+        assert!(!bare.iter().any(|k| ["chain", "rounding", "joint_limits"].contains(&k.as_str())), "{bare:?}");
+        r.reading = Some(Reading::of(&p, Default::default()));
+        // Where the three optional fields always were: after the counters (and the verdict),
+        // before `not_searched`.
+        let at = |k: &str| keys(&r).iter().position(|x| x == k).unwrap_or_else(|| panic!("{k} missing"));
+        assert_eq!([at("stats") + 1, at("chain") + 1, at("rounding") + 1, at("joint_limits") + 1], [at("chain"), at("rounding"), at("joint_limits"), at("not_searched")]);
+        assert_eq!(keys(&r).len(), bare.len() + 3);
     }
 }

@@ -4,7 +4,9 @@ use super::msgs::{
     self, AssemblyMode, BoxSet, ColorRGBA, CuspRecord, Header, InverseKinematicsResponse, JointState, LsBox, Marker, MarkerArray, NodeRecord, Point, Pose, Quaternion, SingularityReport,
     SolveStats, TfMessage, Time, Transform, TransformStamped, Vector3,
 };
-use crate::analysis::{Bounds, BoxSetResult, BranchesResult, IkResult, ResultBox, SingularityResult};
+use crate::analysis::{Bounds, BoxSetResult, IkResult, ResultBox, SingularityResult};
+use crate::manip3r::branches::SingularBranches;
+use crate::manip3r::report::joints_over;
 use crate::search::{BoxStatus, Limit, SolverSettings, Status};
 
 /// A header stamped now (wall clock) in `frame`.
@@ -260,24 +262,32 @@ pub fn verdict_and_branches(r: &SingularityResult, run_id: u64) -> SingularityRe
     m.branch_crossings = crossing_set(r, r.branches.as_ref(), run_id);
     let Some(b) = &r.branches else { return m };
     m.branch_names = b.branches.iter().map(|x| x.name.clone()).collect();
-    m.branch_kinds = b.branches.iter().map(|x| x.kind.clone()).collect();
+    m.branch_kinds = b.branches.iter().map(|x| x.kind.to_string()).collect();
     m.branch_descriptions = b.branches.iter().map(|x| x.description.clone()).collect();
-    m.branch_image_descriptions = b.branches.iter().map(|x| x.image_description.clone()).collect();
+    m.branch_image_descriptions = b.branches.iter().map(|x| x.image.description.clone()).collect();
     m.branch_curve_of_nodes = b.branches.iter().map(|x| tri_state(x.curve_of_nodes)).collect();
     m.branch_proofs = b.branches.iter().map(|x| x.proof.clone()).collect();
-    m.branch_images = b.branches.iter().flat_map(|x| intervals(&x.image)).collect();
-    m.crossing_names = b.crossings.iter().map(|c| c.name.clone()).collect();
-    m.crossing_branches = (0..b.crossings.len())
-        .flat_map(|k| {
-            let on: Vec<u32> = b.branches.iter().enumerate().filter(|(_, x)| x.crossings.contains(&k)).map(|(i, _)| i as u32).collect();
+    m.branch_images = b.branches.iter().flat_map(|x| intervals(&[x.image.radius, x.image.z])).collect();
+    let crossings = b.distinct_crossings();
+    m.crossing_names = crossings.iter().map(|(c, _)| c.name.clone()).collect();
+    m.crossing_branches = crossings
+        .iter()
+        .flat_map(|(_, on)| {
             // Two branches cross at each crossing; u32::MAX pads a side not listed.
-            [on.first().copied().unwrap_or(u32::MAX), on.get(1).copied().unwrap_or(u32::MAX)]
+            let side = |k: usize| on.get(k).map_or(u32::MAX, |&i| i as u32);
+            [side(0), side(1)]
         })
         .collect();
+    // Isolated nodes come with the closed form's proof: certified.
     m.branch_isolated_nodes = b
         .isolated_nodes
         .iter()
-        .map(|n| NodeRecord { joints_a: intervals(&n.joints[0]), joints_b: intervals(&n.joints[1]), workspace: intervals(&n.workspace), certified: n.certified })
+        .map(|n| NodeRecord {
+            joints_a: intervals(&joints_over(&n.points[0], &r.joint_names)),
+            joints_b: intervals(&joints_over(&n.points[1], &r.joint_names)),
+            workspace: intervals(&n.workspace.bounds()),
+            certified: true,
+        })
         .collect();
     m.branches_no_cusp_proven = b.no_cusp_proven;
     m.branches_argument = b.argument.clone();
@@ -286,18 +296,14 @@ pub fn verdict_and_branches(r: &SingularityResult, run_id: u64) -> SingularityRe
 
 /// The crossings as a box set (analysis `branch_crossings`): variables the record joints then
 /// the workspace coordinates, each box `Box.UNIQUE` (one crossing), cluster = its index.
-fn crossing_set(r: &SingularityResult, b: Option<&BranchesResult>, run_id: u64) -> BoxSet {
-    let crossings = b.map_or(&[][..], |b| &b.crossings[..]);
+fn crossing_set(r: &SingularityResult, b: Option<&SingularBranches>, run_id: u64) -> BoxSet {
+    let crossings = b.map_or_else(Vec::new, |b| b.distinct_crossings());
     let boxes: Vec<ResultBox> = crossings
         .iter()
         .enumerate()
-        .map(|(k, c)| ResultBox {
-            status: BoxStatus::Unique,
-            bounds: c.joints.iter().chain(&c.workspace).copied().collect(),
-            joints: c.joints.clone(),
-            level: 0,
-            cluster: Some(k),
-            traces: vec![],
+        .map(|(k, (c, _))| {
+            let joints = joints_over(&c.joints, &r.joint_names);
+            ResultBox { status: BoxStatus::Unique, bounds: joints.iter().chain(&c.workspace.bounds()).copied().collect(), joints, level: 0, cluster: Some(k), traces: vec![] }
         })
         .collect();
     let n = boxes.len();
@@ -316,7 +322,7 @@ fn crossing_set(r: &SingularityResult, b: Option<&BranchesResult>, run_id: u64) 
         stats: crate::search::SolveStats { solutions: n as u64, certified: n as u64, ..Default::default() },
     };
     let mut out = box_set(&set, run_id);
-    if b.is_some_and(|b| !b.crossings_complete) {
+    if b.is_some_and(|b| b.crossings.is_none()) {
         // Existence of crossings not decided everywhere: incomplete, as a run with boxes left
         // undecided.
         (out.status, out.limit) = (msgs::SET_INCOMPLETE, "undecided".into());
