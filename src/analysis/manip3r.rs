@@ -329,6 +329,9 @@ impl PreparedRun<SingularityResult> for SingularityRun {
         };
         // The verdict reads the full-torus run (the CLI's, before its joint-limit filter).
         let verdict = manip3r::verdict::decide(&self.reduced, chain, &run, &self.limits, &control.remaining_since(start));
+        // Then the file's joint limits filter what is published, as the CLI's do.
+        let mut run = run;
+        let effect = self.limits.restrict().then(|| self.limits.apply(&mut run));
         let (found, node_search) = (&run.cusps, &run.nodes);
         let two = |t: &[Interval; 2]| vec![bounds(t[0]), bounds(t[1])];
         let image = |t: [Interval; 2]| {
@@ -380,7 +383,10 @@ impl PreparedRun<SingularityResult> for SingularityRun {
             internal_motions: motions,
             processed,
             seconds: start.elapsed().as_secs_f64() + self.cover.seconds,
-            summary: format!("{}; {}", verdict.line(), summary),
+            summary: match &effect {
+                Some(e) => format!("{}; {}; {}", verdict.line(), summary, e.text),
+                None => format!("{}; {}", verdict.line(), summary),
+            },
             loops: None,
             verdict: Some(verdict),
             branches: self.branches.as_deref().cloned(),
@@ -435,7 +441,12 @@ impl PreparedRun<IkResult> for IkRun {
         let chain = &*a.chain;
         let limits = Limits { max_cells: self.query.max_boxes, ..Limits::default() };
         let control = manip3r::Control { limits, threads: self.query.threads.max(1), cancel };
-        let s = ik::solve_target(chain, self.target, self.query.precision, &control, progress).expect("invariant: validated when prepared");
+        let mut s = ik::solve_target(chain, self.target, self.query.precision, &control, progress).expect("invariant: validated when prepared");
+        // Solutions outside the file's joint limits are not solutions of the arm (`ik` drops
+        // them too); those on a limit are kept.
+        if a.limits.restrict() {
+            a.limits.apply_ik(&mut s);
+        }
         // θ₁ turns the end point's direction about a₁ onto the point's.
         let theta1 = |b: &[Interval; 2]| -> Bounds {
             match (self.target_direction, a.direction(&chain.perp(*b))) {
@@ -561,6 +572,41 @@ mod tests {
             assert!(c.inside && c.components >= 2);
         }
         assert!(!seen_regions.is_empty());
+    }
+
+    /// Test idea: the node honours the file's joint limits as `ik` and `singularities` do.
+    /// PUMA 560 limits joint 2 to [-3.927, 0.7854] and joint 3 to [-0.7854, 3.927]: on the
+    /// circle, θ₂ in (0.7854, 2.3562) and θ₃ in (-2.3562, -0.7854) are out of reach. The same
+    /// arm with continuous joints answers a superset; what the limited one leaves out is
+    /// exactly the solutions in those arcs (checked against the decimal limits, not the
+    /// library's filter), and some point must lose one.
+    #[test]
+    fn joint_limits_filter_what_the_node_answers() {
+        const PUMA: &str = include_str!("../../urdf/puma560.urdf");
+        let limited = load(&urdf::parse(PUMA).expect("bundled"), &[], &[]).expect("puma");
+        let free = load(&urdf::parse(&PUMA.replace("type=\"revolute\"", "type=\"continuous\"")).expect("continuous"), &[], &[]).expect("puma");
+        let tau = std::f64::consts::TAU;
+        let outside = |j: &[Bounds]| (j[1][0] > 0.7854 && j[1][1] < -3.927 + tau) || (j[2][0] > 3.927 - tau && j[2][1] < -0.7854);
+        let mut dropped = 0;
+        for point in [[0.5, 0.0, 0.3], [0.4, 0.2, 0.6], [0.3, -0.3, 0.9], [0.6, 0.1, 0.2], [0.2, 0.2, 0.2]] {
+            let q = IkQuery { point, precision: 1e-8, max_boxes: 200_000, threads: 1 };
+            let l = limited.inverse_kinematics(&q).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+            let f = free.inverse_kinematics(&q).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+            assert!(l.status.is_complete() && f.status.is_complete());
+            for s in &l.solutions {
+                assert!(f.solutions.iter().any(|t| t.joints == s.joints), "{point:?}: {s:?} is not a solution of the free arm");
+                assert!(!outside(&s.joints), "{point:?}: {s:?} is outside the limits");
+            }
+            for t in f.solutions.iter().filter(|t| !l.solutions.iter().any(|s| s.joints == t.joints)) {
+                assert!(outside(&t.joints), "{point:?}: {t:?} was dropped but lies within the limits");
+                dropped += 1;
+            }
+        }
+        assert!(dropped > 0, "no point lost a solution to the limits");
+        let r = limited.singularities(&SingularityQuery { nodes: false, ..query() }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        assert!(r.summary.contains("results outside dropped"), "{}", r.summary);
+        let r = free.singularities(&SingularityQuery { nodes: false, ..query() }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        assert!(!r.summary.contains("results outside dropped"), "{}", r.summary);
     }
 
     #[test]
