@@ -588,10 +588,8 @@ fn load_chain(path: &std::path::Path, uncertainty: f64, args: &ChainArgs) -> Res
     Ok((chain, prepared))
 }
 
-/// Default `--max-boxes` of `singularities`, per search. The node search's box tree is kept
-/// whole until the run ends and is not counted by `--max-memory` (which bounds pending cells),
-/// so this is what bounds its memory: about 50 bytes a pair, ~0.25 GB at this default on
-/// the flooding arms measured (README).
+/// Default `--max-boxes` of `singularities`, per search. `--max-memory` bounds the pending
+/// cells and, separately, the node search's box tree (kept whole until the run ends).
 const SINGULARITIES_MAX_BOXES: u64 = 5_000_000;
 
 /// Default `--max-memory` of `singularities` (bytes of pending cells): 256 MiB.

@@ -556,3 +556,26 @@ fn a_cancelled_verdict_names_its_limit_and_claims_nothing_more() {
         assert!(full.certified && full.aspects.is_some() && full.max_ik_solutions.is_some(), "{name}: {full:?}");
     }
 }
+
+/// Test idea: `--max-memory` bounds the node search's box tree (kept whole until the run ends),
+/// not only its pending pairs. Robot e's complete node search makes 2,951 tree boxes (of a few
+/// hundred bytes each); within 128 KiB the tree must stop growing well before that, the run
+/// end incomplete on `memory` with its undecided pairs so labelled, and the nodes it did
+/// certify still be true ones; with the default limit the same search is complete.
+#[test]
+fn the_node_tree_stays_within_the_memory_limit() {
+    let p = prepare(&text("orthogonal_3r_e.urdf"), &LoadOptions::default()).expect("e");
+    let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
+    let run = |max_memory: usize| manip3r::singularities(&chain, 1e-4, true, &Control::with_limits(Limits { max_cells: 5_000_000, timeout: None, max_memory }), &mut |_| {}).expect("runs");
+    let full = run(256 << 20);
+    let full_nodes = full.nodes.expect("asked");
+    assert!(full.status.is_complete() && full_nodes.nodes.len() == 2, "{:?}", full.status);
+    let small = run(128 << 10);
+    let nodes = small.nodes.expect("asked");
+    assert_eq!(nodes.status, Status::Incomplete(linkspace::search::Limit::Memory));
+    assert!(nodes.cells < full_nodes.cells / 2, "{} tree boxes within 128 KiB (complete run: {})", nodes.cells, full_nodes.cells);
+    assert!(!nodes.undecided.is_empty());
+    for n in &nodes.nodes {
+        assert!(full_nodes.nodes.iter().any(|m| m.theta == n.theta || m.theta == [n.theta[1], n.theta[0]]), "{n:?}");
+    }
+}

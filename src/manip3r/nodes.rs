@@ -33,7 +33,7 @@ use super::drive::{drive, no_progress, Control, Order};
 use crate::contract::krawczyk::{self, Step as K};
 use super::motion::{self, Band};
 use crate::interval::{interval, point, strict_sign};
-use crate::search::{Limits, Progress, Prune, Stats, Status, Step};
+use crate::search::{Limit, Limits, Progress, Prune, Stats, Status, Step};
 use inari::Interval;
 use smallvec::SmallVec;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -91,6 +91,9 @@ pub struct NodeSearch {
     pub seconds: f64,
 }
 
+/// Why a pair is left undecided when the box tree reached the memory limit.
+const TREE_FULL: &str = "memory";
+
 /// A box of the binary tree over [-π, π]², with its enclosures computed once: a box meets
 /// many others in pairs. The tree grows as the search asks for children (`children`); workers
 /// share it, and the children of a box are the same whoever makes them. Boxes are never freed
@@ -113,6 +116,9 @@ struct Tree<'a> {
     eps: f64,
     /// Boxes made so far.
     boxes: AtomicU64,
+    /// Boxes the tree may hold: the run's memory limit (`Limits::max_memory`) covers the tree,
+    /// which is kept whole until the run ends, as well as the pending pairs.
+    max_boxes: u64,
 }
 
 impl Tree<'_> {
@@ -506,6 +512,11 @@ impl<'r> Prune for NodePrune<'_, '_, 'r> {
         if wp.max(wq) <= eps {
             return Step::Undecided(cell, "precision");
         }
+        // A full tree splits no more: the pair stays undecided and the run is reported
+        // stopped by its memory limit.
+        if tree.boxes.load(Ordering::Relaxed) >= tree.max_boxes {
+            return Step::Undecided(cell, TREE_FULL);
+        }
         // Children in the order the depth-first walk explores them: the loop this replaces
         // pushed the pairs on a stack and took the last first.
         let (level, order) = (cell.level + 1, cell.order);
@@ -554,10 +565,14 @@ pub fn search_with(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &N
     let start = Instant::now();
     let unique: Vec<&Cusp> = cusps.iter().filter(|c| c.unique).collect();
     let regions: Vec<[Interval; 2]> = crate::search::map_parallel(&unique, control.threads, |c| cusp_region(chain, c)).into_iter().flatten().collect();
-    let tree = Tree { chain, bands, regions: &regions, eps: settings.precision, boxes: AtomicU64::new(0) };
+    let max_boxes = (control.limits.max_memory / std::mem::size_of::<TreeBox>()) as u64;
+    let tree = Tree { chain, bands, regions: &regions, eps: settings.precision, boxes: AtomicU64::new(0), max_boxes };
     let root = tree.make([motion::full_range(), motion::full_range()]);
     let start_cell = NodeCell { p: &root, q: &root, ancestor: &root, order: Order::ROOT, level: 0 };
     let mut run = drive(|| NodePrune { tree: &tree, _boxes: std::marker::PhantomData }, start_cell, control, progress);
+    if run.undecided.iter().any(|(_, why)| *why == crate::search::Undecided::Precision(TREE_FULL)) {
+        run.status = run.status.and(Status::Incomplete(Limit::Memory));
+    }
     // Only the ±π seam (where the range overlaps itself by an ulp) can repeat a node: the first
     // in depth-first order is kept.
     run.found.sort_by_key(|f| f.order);
@@ -574,7 +589,7 @@ pub fn search_with(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &N
     // Pairs a limit left pending are not settled: they are not at the precision, and the
     // limit's reason must stand.
     let pairs: Vec<[[Interval; 2]; 2]> = run.undecided.iter().map(|(c, _)| c.boxes()).collect();
-    let eligible: Vec<bool> = run.undecided.iter().map(|(_, why)| matches!(why, crate::search::Undecided::Precision(_))).collect();
+    let eligible: Vec<bool> = run.undecided.iter().map(|(_, why)| matches!(why, crate::search::Undecided::Precision(r) if *r != TREE_FULL)).collect();
     let (keep, settled) = settle(chain, settings.precision, &mut nodes, &pairs, &eligible);
     let undecided = pairs.into_iter().zip(keep).filter_map(|(p, k)| k.then_some(p)).collect();
     Ok(NodeSearch { nodes, undecided, status: run.status, stats: run.stats, cells, cusp_regions: regions.len() as u64, settled, seconds: start.elapsed().as_secs_f64() })
@@ -583,8 +598,8 @@ pub fn search_with(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &N
 
 #[cfg(test)]
 mod tests {
-    /// README's bound on the tree's memory (`--max-boxes` bounds it by about 800 bytes a pair)
-    /// rests on this size.
+    /// The tree's box count is capped by the memory limit over this size; README's figures for
+    /// flooding arms rest on it.
     #[test]
     fn a_tree_box_is_under_400_bytes() {
         assert!(std::mem::size_of::<super::TreeBox>() < 400, "{}", std::mem::size_of::<super::TreeBox>());
