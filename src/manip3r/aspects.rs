@@ -113,7 +113,9 @@ fn count_at(chain: &Chain3R, depth: u32, shift: f64, control: &Control) -> Resul
         Some(ends)
     };
     let mut cells: Vec<Cell> = (0..n * n).map(|c| Cell::Regular(region_sign.get(cover.region[c].max(0) as usize).copied().flatten().unwrap_or(false))).collect();
-    for &(i, j) in &cover.boxes {
+    // Each cover box's arc on its own (on the run's threads); the first failure in box order
+    // is the one reported, as a box-by-box walk would.
+    let arcs = crate::search::map_parallel(&cover.boxes, control.threads, |&(i, j)| {
         let b = [side(i), side(j)];
         let e = evaluate(chain, b);
         // Monotone along k: each sign is one piece, attached to the part of the lower (negative)
@@ -130,30 +132,40 @@ fn count_at(chain: &Chain3R, depth: u32, shift: f64, control: &Control) -> Resul
             let (neg_side, pos_side) = if up { (lo, hi) } else { (hi, lo) };
             Some(Cell::Arc { signs: [neg_side[0], pos_side[1]] })
         });
-        cells[i * n + j] = arc.ok_or_else(|| format!("a cell of the {n} x {n} cover around ({:.4}, {:.4}) is neither regular nor monotone in one direction with edges of known signs", b[0].mid(), b[1].mid()))?;
+        arc.ok_or_else(|| format!("a cell of the {n} x {n} cover around ({:.4}, {:.4}) is neither regular nor monotone in one direction with edges of known signs", b[0].mid(), b[1].mid()))
+    });
+    for (&(i, j), arc) in cover.boxes.iter().zip(arcs) {
+        cells[i * n + j] = arc?;
     }
+    // The signs of det on the edges between two arc cells (both sides crossed by the curve),
+    // on the run's threads; edges beside a regular cell take its sign.
+    let edge_of = |x: usize, dir: usize| {
+        let (i, j) = (x / n, x % n);
+        let mut edge = [side(i), side(j)];
+        edge[dir] = point(edge[dir].sup());
+        edge
+    };
+    let upper = |x: usize, dir: usize| if dir == 0 { ((x / n + 1) % n) * n + x % n } else { (x / n) * n + (x % n + 1) % n };
+    let between_arcs: Vec<(usize, usize)> = (0..n * n).flat_map(|x| (0..2).map(move |dir| (x, dir))).filter(|&(x, dir)| matches!((cells[x], cells[upper(x, dir)]), (Cell::Arc { .. }, Cell::Arc { .. }))).collect();
+    let arc_edge_signs: std::collections::HashMap<(usize, usize), Option<[bool; 2]>> =
+        between_arcs.iter().copied().zip(crate::search::map_parallel(&between_arcs, control.threads, |&(x, dir)| edge_signs(edge_of(x, dir), 1 - dir))).collect();
     // Pieces: node 2c + s for cell c and sign s.
     let mut parent: Vec<usize> = (0..2 * n * n).collect();
     let id = |c: usize, s: bool| 2 * c + s as usize;
-    for i in 0..n {
-        for j in 0..n {
-            let x = i * n + j;
-            // The upper neighbour in θ₂ (edge θ₂ = line i + 1, spanning θ₃ over cell j), then in θ₃.
-            for dir in 0..2 {
-                let y = if dir == 0 { ((i + 1) % n) * n + j } else { i * n + (j + 1) % n };
-                let (cx, cy) = (cells[x], cells[y]);
-                // The shared edge, seen from x: θ_dir fixed at x's upper bound, the other free.
-                let mut edge = [side(i), side(j)];
-                edge[dir] = point(edge[dir].sup());
-                let signs: [bool; 2] = match (cx, cy) {
-                    (Cell::Regular(s), _) | (_, Cell::Regular(s)) => [!s, s],
-                    _ => edge_signs(edge, 1 - dir).ok_or_else(|| format!("the signs of det on a cell edge of the {n} x {n} cover are not decided"))?,
-                };
-                for s in [false, true] {
-                    if signs[s as usize] && cx.has(s) && cy.has(s) {
-                        let (a, b) = (find(&mut parent, id(x, s)), find(&mut parent, id(y, s)));
-                        parent[a] = b;
-                    }
+    for x in 0..n * n {
+        // For cell x = i·n + j: the upper neighbour in θ₂ (edge θ₂ = line i + 1, spanning θ₃ over
+        // cell j), then in θ₃; the shared edge is seen from x: θ_dir fixed at x's upper bound.
+        for dir in 0..2 {
+            let y = upper(x, dir);
+            let (cx, cy) = (cells[x], cells[y]);
+            let signs: [bool; 2] = match (cx, cy) {
+                (Cell::Regular(s), _) | (_, Cell::Regular(s)) => [!s, s],
+                _ => arc_edge_signs[&(x, dir)].ok_or_else(|| format!("the signs of det on a cell edge of the {n} x {n} cover are not decided"))?,
+            };
+            for s in [false, true] {
+                if signs[s as usize] && cx.has(s) && cy.has(s) {
+                    let (a, b) = (find(&mut parent, id(x, s)), find(&mut parent, id(y, s)));
+                    parent[a] = b;
                 }
             }
         }
@@ -176,8 +188,10 @@ fn count_at(chain: &Chain3R, depth: u32, shift: f64, control: &Control) -> Resul
 /// kinematics run has `control`'s cell budget; its timeout and cancel flag bound them all.
 /// Returns the best certified count seen and whether it reaches `bound`.
 pub fn max_ik_solutions(chain: &Chain3R, bound: u32, near: &[[f64; 2]], control: &Control) -> (u32, bool) {
-    // Each sample's IK gets what the samples before it left of the timeout; the samples are
-    // tiny searches, so one thread each.
+    // Each sample's IK is a tiny search on one thread; the samples are taken a batch at a time,
+    // one per thread, with what the batches before left of the timeout. A batch that reaches
+    // the bound ends the walk: no sample can exceed it (the bound is a theorem's), so the
+    // answer is the one a sample-by-sample walk gives.
     let start = std::time::Instant::now();
     let mut best = 0u32;
     let around = near.iter().flat_map(|c| {
@@ -189,19 +203,22 @@ pub fn max_ik_solutions(chain: &Chain3R, bound: u32, near: &[[f64; 2]], control:
     // Offsets keep the grid samples off the lines of earlier grids and off symmetric spots.
     let t = |k: usize, n: usize| -std::f64::consts::PI + (k as f64 + 0.37) * std::f64::consts::TAU / n as f64;
     let grid = [8usize, 16, 32].into_iter().flat_map(move |n| (0..n * n).map(move |k| [t(k / n, n), t(k % n, n)]));
-    for [t2, t3] in around.chain(grid) {
+    let samples: Vec<[f64; 2]> = around.chain(grid).collect();
+    let threads = control.threads.max(1);
+    for batch in samples.chunks(threads) {
         let timeout = control.limits.timeout.map(|t| t.saturating_sub(start.elapsed()));
         if timeout.is_some_and(|t| t.is_zero()) || control.cancel.load(std::sync::atomic::Ordering::Relaxed) {
             break;
         }
         let sample = Control { limits: Limits { timeout, ..control.limits }, threads: 1, ..*control };
-        let [rho, z] = chain.eval_f64(t2, t3);
-        let Ok(s) = ik::solve_with(chain, rho.max(0.0).sqrt(), z, 1e-9, &sample, &mut super::drive::no_progress) else { continue };
-        if s.status.is_complete() && s.clusters.is_empty() {
-            best = best.max(s.unique.len() as u32);
-            if best >= bound {
-                return (best, true);
-            }
+        let counts = crate::search::map_parallel(batch, threads, |&[t2, t3]| {
+            let [rho, z] = chain.eval_f64(t2, t3);
+            let s = ik::solve_with(chain, rho.max(0.0).sqrt(), z, 1e-9, &sample, &mut super::drive::no_progress).ok()?;
+            (s.status.is_complete() && s.clusters.is_empty()).then_some(s.unique.len() as u32)
+        });
+        best = counts.into_iter().flatten().fold(best, u32::max);
+        if best >= bound {
+            return (best, true);
         }
     }
     (best, false)
