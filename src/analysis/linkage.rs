@@ -556,7 +556,7 @@ mod tests {
         assert!(spatial.singularities(&query).is_ok());
         let bad = LinkageAnalysis::new(&urdf::parse(include_str!("../../urdf/spherical_four_bar.urdf")).expect("bundled"), &[], &[]).expect("spatial").with_actuation(Actuation::given(vec!["loop_coupler_rocker".into()]));
         assert!(bad.singularities(&query).err().map(|e| e.to_string()).unwrap_or_default().contains("is a loop joint of a spatial linkage"));
-        let query = crate::analysis::IkQuery { point: [1.0, 0.0, 0.0], precision: 1e-3, max_boxes: 1000, threads: 1 };
+        let query = crate::analysis::IkQuery { point: [1.0, 0.0, 0.0], precision: 1e-3, max_boxes: 1000, timeout: None, threads: 1 };
         assert!(a.inverse_kinematics(&query).err().map(|e| e.to_string()).unwrap_or_default().contains("inverse_kinematics is not available"));
     }
 }

@@ -439,7 +439,7 @@ impl PreparedRun<IkResult> for IkRun {
         let start = Instant::now();
         let a = &self.analysis;
         let chain = &*a.chain;
-        let limits = Limits { max_cells: self.query.max_boxes, ..Limits::default() };
+        let limits = Limits { max_cells: self.query.max_boxes, timeout: self.query.timeout, ..Limits::default() };
         let control = manip3r::Control { limits, threads: self.query.threads.max(1), cancel };
         let mut s = ik::solve_target(chain, self.target, self.query.precision, &control, progress).expect("invariant: validated when prepared");
         // Solutions outside the file's joint limits are not solutions of the arm (`ik` drops
@@ -589,7 +589,7 @@ mod tests {
         let outside = |j: &[Bounds]| (j[1][0] > 0.7854 && j[1][1] < -3.927 + tau) || (j[2][0] > 3.927 - tau && j[2][1] < -0.7854);
         let mut dropped = 0;
         for point in [[0.5, 0.0, 0.3], [0.4, 0.2, 0.6], [0.3, -0.3, 0.9], [0.6, 0.1, 0.2], [0.2, 0.2, 0.2]] {
-            let q = IkQuery { point, precision: 1e-8, max_boxes: 200_000, threads: 1 };
+            let q = IkQuery { point, precision: 1e-8, max_boxes: 200_000, timeout: None, threads: 1 };
             let l = limited.inverse_kinematics(&q).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
             let f = free.inverse_kinematics(&q).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
             assert!(l.status.is_complete() && f.status.is_complete());
@@ -618,7 +618,7 @@ mod tests {
         let reference = ik::solve(&chain, r, z, 1e-8, 200_000).expect("valid");
         // The same (ρ, z) seen from a point turned by 0.7 rad about the first axis.
         let p = [r * 0.7f64.cos(), r * 0.7f64.sin(), z];
-        let got = a.inverse_kinematics(&IkQuery { point: p, precision: 1e-8, max_boxes: 200_000, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let got = a.inverse_kinematics(&IkQuery { point: p, precision: 1e-8, max_boxes: 200_000, timeout: None, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
         assert_eq!(got.joint_names, vec!["joint1", "joint2", "joint3"]);
         assert_eq!(got.solutions.iter().filter(|s| s.unique).count(), reference.unique.len());
         assert!(reference.unique.len() >= 2);
@@ -630,7 +630,7 @@ mod tests {
             assert!(s.joints[0][1] - s.joints[0][0] < 1e-6, "θ1 enclosed tightly: {:?}", s.joints[0]);
         }
         // On the point (r, 0, z) the boxes are the CLI's, bit for bit.
-        let got = a.inverse_kinematics(&IkQuery { point: [r, 0.0, z], precision: 1e-8, max_boxes: 200_000, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let got = a.inverse_kinematics(&IkQuery { point: [r, 0.0, z], precision: 1e-8, max_boxes: 200_000, timeout: None, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
         for (s, u) in got.solutions.iter().zip(&reference.unique) {
             assert_eq!(s.joints[1..], [bounds(u[0]), bounds(u[1])]);
         }
@@ -645,12 +645,15 @@ mod tests {
         assert!(r.nodes.is_empty());
         let err = |e: AnalysisError| e.to_string();
         assert!(err(a.singularities(&SingularityQuery { precision: 2.0, ..query() }).err().expect("refused")).contains("precision must be a number in (0, 1), got 2"));
-        let ik = |point: [f64; 3], precision: f64| a.inverse_kinematics(&IkQuery { point, precision, max_boxes: 1000, threads: 1 }).err().map(err).unwrap_or_default();
+        let ik = |point: [f64; 3], precision: f64| a.inverse_kinematics(&IkQuery { point, precision, max_boxes: 1000, timeout: None, threads: 1 }).err().map(err).unwrap_or_default();
         assert!(ik([f64::NAN, 0.0, 0.0], 1e-6).contains("is not finite"));
         assert!(ik([1.0, 0.0, 0.0], 0.0).contains("precision must be a number in (0, 1)"));
         // A tight box limit ends incomplete, with its pending boxes as clusters.
-        let short = a.inverse_kinematics(&IkQuery { point: [1.0, 0.0, 0.2], precision: 1e-9, max_boxes: 5, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let short = a.inverse_kinematics(&IkQuery { point: [1.0, 0.0, 0.2], precision: 1e-9, max_boxes: 5, timeout: None, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
         assert!(short.status == Status::Incomplete(Limit::Boxes) && short.solutions.iter().any(|s| !s.unique));
+        // A timeout stops it too (the node passes its --max-wait, past which no reply is sent).
+        let late = a.inverse_kinematics(&IkQuery { point: [1.0, 0.0, 0.2], precision: 1e-9, max_boxes: 1_000_000, timeout: Some(std::time::Duration::ZERO), threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        assert_eq!(late.status, Status::Incomplete(Limit::Time));
         // 3R chains take no fixed joints.
         assert!(load(&m, &[("joint2".into(), 0.1)], &[]).err().map(err).unwrap_or_default().contains("takes no fixed joints"));
     }

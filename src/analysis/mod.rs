@@ -389,6 +389,8 @@ pub struct IkQuery {
     pub precision: f64,
     /// Stop after this many boxes; the run is then incomplete.
     pub max_boxes: u64,
+    /// Stop after this long (wall clock); the run is then incomplete.
+    pub timeout: Option<std::time::Duration>,
     /// Worker threads (the results do not depend on them).
     pub threads: usize,
 }

@@ -1104,7 +1104,7 @@ impl State {
         let run = self.start(k, RunKind::Solve, job);
         if q.wait > 0.0 {
             let r = self.runs.get_mut(&run).expect("invariant: just started");
-            r.waiters.push((id, Instant::now() + Duration::from_secs_f64(q.wait)));
+            r.waiters.push((id, Instant::now() + seconds(q.wait)));
             None
         } else {
             Some(SolveResponse { ok: true, message: format!("run {run} started; its result will be published on {}/solve_result", self.mechanisms[k].prefix), run_id: run, done: false, ..Default::default() })
@@ -1140,7 +1140,7 @@ impl State {
         if let Some(busy) = self.busy() {
             return Err(busy);
         }
-        let settings = SolverSettings { sigma: s.sigma, rho: s.rho, max_boxes: s.max_boxes, timeout: Some(Duration::from_secs_f64(timeout)), ..self.settings.clone() };
+        let settings = SolverSettings { sigma: s.sigma, rho: s.rho, max_boxes: s.max_boxes, timeout: Some(seconds(timeout)), ..self.settings.clone() };
         let fixed: Vec<(String, f64)> = q.fixed_joint_names.iter().cloned().zip(q.fixed_joint_values.iter().copied()).collect();
         let prepared = match self.mechanisms[k].loaded.analysis.solve(&fixed, &settings) {
             Ok(p) => p,
@@ -1258,7 +1258,7 @@ impl State {
                 return Some(singularity_reply(report));
             }
             let Some(run) = m.singularity_run else { return refuse(format!("no singularity report for '{}': {}", q.mechanism, m.message)) };
-            let deadline = Instant::now() + Duration::from_secs_f64(self.limits.max_wait);
+            let deadline = Instant::now() + seconds(self.limits.max_wait);
             self.runs.get_mut(&run).expect("invariant: the load-time run is going").waiters.push((id, deadline));
             return None;
         }
@@ -1271,7 +1271,7 @@ impl State {
             return refuse(format!("timeout {} s is out of range: give 0 (the node's limit) to {longest} s (--max-request-timeout and --max-wait)", q.timeout));
         }
         let timeout = if q.timeout == 0.0 { longest } else { q.timeout };
-        let query = SingularityQuery { precision: q.precision, nodes: q.nodes, max_boxes, timeout: Some(Duration::from_secs_f64(timeout)), threads: self.settings.threads };
+        let query = SingularityQuery { precision: q.precision, nodes: q.nodes, max_boxes, timeout: Some(seconds(timeout)), threads: self.settings.threads };
         let prepared = match a.singularities(&query) {
             Ok(p) => p,
             Err(e) => return refuse(e.to_string()),
@@ -1281,7 +1281,7 @@ impl State {
         }
         let run = self.start(k, RunKind::Singularities { load_time: false }, Box::new(move |c, p| Outcome::Singularities(prepared.run(c, p))));
         // The searches stop at `timeout`; the margin covers building the report.
-        let deadline = Instant::now() + Duration::from_secs_f64(timeout + 10.0);
+        let deadline = Instant::now() + seconds(timeout + 10.0);
         self.runs.get_mut(&run).expect("invariant: just started").waiters.push((id, deadline));
         None
     }
@@ -1310,7 +1310,7 @@ impl State {
             Ok(n) => n,
             Err(e) => return refuse(e),
         };
-        let prepared = match self.mechanisms[k].loaded.analysis.inverse_kinematics(&IkQuery { point: p, precision: q.sigma, max_boxes, threads: self.settings.threads }) {
+        let prepared = match self.mechanisms[k].loaded.analysis.inverse_kinematics(&IkQuery { point: p, precision: q.sigma, max_boxes, timeout: Some(seconds(self.limits.max_wait)), threads: self.settings.threads }) {
             Ok(p) => p,
             Err(e) => return refuse(convert::bounded(&e.to_string(), convert::ECHO_MESSAGE)),
         };
@@ -1318,8 +1318,8 @@ impl State {
             return refuse(busy);
         }
         let run = self.start(k, RunKind::InverseKinematics, Box::new(move |c, p| Outcome::InverseKinematics(prepared.run(c, p))));
-        // Bounded by boxes, not time: the node's longest wait is the safety net.
-        let deadline = Instant::now() + Duration::from_secs_f64(self.limits.max_wait);
+        // Bounded by boxes and by the node's longest wait, after which its reply could not be sent.
+        let deadline = Instant::now() + seconds(self.limits.max_wait);
         self.runs.get_mut(&run).expect("invariant: just started").waiters.push((id, deadline));
         None
     }
@@ -1412,5 +1412,26 @@ impl State {
                 })
                 .collect(),
         }
+    }
+}
+
+/// A duration of `s` seconds for a deadline or a run's timeout: `Duration::from_secs_f64`
+/// panics above about 1.8e19 s, and a parameter such as `max_wait` may be set to any finite
+/// value (1e300 was accepted); past a year a deadline is as good as none.
+fn seconds(s: f64) -> Duration {
+    Duration::from_secs_f64(if s.is_nan() { 0.0 } else { s.clamp(0.0, 365.0 * 86_400.0) })
+}
+
+#[cfg(test)]
+mod tests {
+    /// Test idea: any finite limit a user may set (`--max-wait 1e300` was accepted) gives a
+    /// deadline instead of the panic of `Duration::from_secs_f64`.
+    #[test]
+    fn every_seconds_value_gives_a_duration() {
+        use super::seconds;
+        assert_eq!(seconds(2.5), std::time::Duration::from_millis(2500));
+        assert_eq!(seconds(1e300), std::time::Duration::from_secs(365 * 86_400));
+        assert_eq!(seconds(f64::NAN), std::time::Duration::ZERO);
+        assert_eq!(seconds(-1.0), std::time::Duration::ZERO);
     }
 }
