@@ -40,7 +40,7 @@ use super::drive::{drive, no_progress, Control};
 use super::limits::JointLimits;
 use super::{Chain3R, Singularities};
 use crate::search::{Limit, Prune, Status, Step};
-use crate::interval::point;
+use crate::interval::{point, strict_sign};
 use crate::model::{JointKind, Mechanism};
 use inari::Interval;
 use serde::Serialize;
@@ -128,7 +128,7 @@ pub fn geometry(m: &Mechanism) -> Option<Geometry> {
 pub fn parallel_structure(m: &Mechanism) -> Option<Verdict> {
     let Geometry { a1, o2, d2, o3, d3, p } = geometry(m)?;
     let zero = |v: &V3| v.iter().all(|x| x.inf() == 0.0 && x.sup() == 0.0);
-    let nonzero = |v: &V3| v.iter().any(|x| x.inf() > 0.0 || x.sup() < 0.0);
+    let nonzero = |v: &V3| v.iter().any(|x| strict_sign(*x).is_some());
     if !zero(&cross(&d2, &d3)) {
         return None;
     }
@@ -203,7 +203,7 @@ impl Prune for SmoothPrune<'_> {
 
     fn process(&mut self, b: [Interval; 2]) -> Step<[Interval; 2], Self::Found> {
         let e = evaluate_without_tangency(self.chain, b);
-        let excludes = |x: Interval| x.inf() > 0.0 || x.sup() < 0.0;
+        let excludes = |x: Interval| strict_sign(x).is_some();
         if excludes(e.det) {
             return Step::Discard("regular");
         }
