@@ -29,7 +29,6 @@ use super::drive::Control;
 use super::ik;
 use super::Chain3R;
 use crate::interval::{interval, point, strict_sign};
-use crate::search::Limits;
 use inari::Interval;
 
 /// Cover depths and grid shifts tried, in order. The shifts keep the grid lines off θ = 0, ±π,
@@ -206,11 +205,11 @@ pub fn max_ik_solutions(chain: &Chain3R, bound: u32, near: &[[f64; 2]], control:
     let samples: Vec<[f64; 2]> = around.chain(grid).collect();
     let threads = control.threads.max(1);
     for batch in samples.chunks(threads) {
-        let timeout = control.limits.timeout.map(|t| t.saturating_sub(start.elapsed()));
-        if timeout.is_some_and(|t| t.is_zero()) || control.cancel.load(std::sync::atomic::Ordering::Relaxed) {
+        let left = control.remaining_since(start);
+        if left.limits.timeout.is_some_and(|t| t.is_zero()) || control.cancel.load(std::sync::atomic::Ordering::Relaxed) {
             break;
         }
-        let sample = Control { limits: Limits { timeout, ..control.limits }, threads: 1, ..*control };
+        let sample = Control { threads: 1, ..left };
         let counts = crate::search::map_parallel(batch, threads, |&[t2, t3]| {
             let [rho, z] = chain.eval_f64(t2, t3);
             let s = ik::solve_with(chain, rho.max(0.0).sqrt(), z, 1e-9, &sample, &mut super::drive::no_progress).ok()?;
