@@ -374,12 +374,10 @@ fn the_bundled_file_is_the_seeds_four_spheres_and_c1_c2_alone_do_not_decide() {
 
 /// Without the orientation choice each line comes twice (u on either side of t): at least 24
 /// clusters (near a few solutions the clusters split at this sigma), and both orientations of
-/// every reference line lie in solution boxes. Long (about 10 s): LINKSPACE_LONG=1.
+/// every reference line lie in solution boxes.
 #[test]
+#[ignore = "long: about 10 s"]
 fn both_orientations_give_each_line_twice() {
-    if std::env::var("LINKSPACE_LONG").is_err() {
-        return;
-    }
     let p = four_spheres(false);
     let centres: Vec<Vector3<f64>> = p.points.iter().filter_map(|q| q.xyz).map(|c| Vector3::new(c[0], c[1], c[2])).collect();
     let cm = CayleyMenger::build(&p, shared(false)).unwrap();
@@ -459,7 +457,7 @@ fn distances_cli_reports_and_rejects_bad_input_in_one_line() {
     }
 }
 
-/// Issue 4: the parallel driver gives exactly the serial set of boxes on the distance problems.
+/// The parallel driver gives exactly the serial set of boxes on the distance problems.
 #[test]
 fn parallel_and_serial_drivers_agree_on_distance_problems() {
     let cases = [(octahedral(CONFIG_A), 1e-3, 0.9), (octahedral(CONFIG_B), 1e-3, 0.9), (four_spheres(true), 0.1, 0.99)];
