@@ -380,7 +380,7 @@ pub fn run() -> Result<()> {
 /// Values may be negative everywhere (`--sigma -1` means the same as `--sigma=-1`, and
 /// gets the same one-line complaint from the settings' own check). Every other error of clap's
 /// (unknown flag, missing value, unparsable number) is flattened to one line: its multi-line
-/// usage text buried the message (issue 9, item 8). `--help` and `--version` print as usual.
+/// usage text would bury the message. `--help` and `--version` print as usual.
 fn parse_args<I, T>(args: I) -> Cli
 where
     I: IntoIterator<Item = T>,

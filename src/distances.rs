@@ -1,4 +1,4 @@
-//! Solving distance problems with every answer certified or labelled (issue 15).
+//! Solving distance problems with every answer certified or labelled.
 //!
 //! `solve` picks a formulation (`Choice`), runs the kernel on it, then settles every cluster of
 //! solution boxes (connected component of touching boxes) as follows:
@@ -127,7 +127,7 @@ impl Certified {
 /// (`Placed::build_line`: lines tangent to spheres), else the shared determinants, certified in
 /// coordinates.
 ///
-/// Measured (`bench-distances`, issue 15): on the four spheres at sigma 0.01 the line
+/// Measured (`bench-distances`): on the four spheres at sigma 0.01 the line
 /// formulation takes 843 boxes and 0.04 s CPU with every solution box proven, against 885
 /// boxes plus a settling of 0.6 s (1.6 s in all) for the shared determinants, and over a
 /// million boxes for the points formulation (expanding `‖p_a − p_b‖²` into monomials loses the

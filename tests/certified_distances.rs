@@ -1,4 +1,4 @@
-//! Test idea (issue 15): every answer of a distance problem is certified or labelled. Proven
+//! Test idea: every answer of a distance problem is certified or labelled. Proven
 //! placements are checked against references computed without the solver: lines tangent to four
 //! spheres by floating-point Newton on the point-and-direction system from many seeded starts
 //! (a lower bound on the set of lines: every line found must be proven, none lost), and each
@@ -152,7 +152,7 @@ fn randomized_sphere_sets_every_line_proven() {
 
 #[test]
 fn octahedral_every_assembly_mode_proven() {
-    // Without the redundant determinants too (issue 15): the boxes along the common tangent of
+    // Without the redundant determinants too: the boxes along the common tangent of
     // configuration b's two curves, which no certified placement meets, are searched again with
     // every determinant and proven empty. At sigma 0.1 as well as 0.01.
     for sigma in [0.01, 0.1] {

@@ -249,7 +249,7 @@ fn cli_first_line_is_the_verdict_and_bad_flags_are_one_line() {
     assert!(!out.status.success() && stderr.trim().lines().count() == 1 && stderr.contains("--tip-point"), "{stderr}");
 }
 
-/// The issue's complaint: "0 nodes, status complete" beside undecided boxes. A report is
+/// No "0 nodes, status complete" beside undecided boxes: a report is
 /// complete only when nothing is left undecided; the kernel's `Complete` only says no limit
 /// stopped it.
 #[test]
@@ -264,7 +264,7 @@ fn a_report_with_undecided_boxes_is_never_complete() {
     assert_eq!(report.undecided_total[0], run.cusps.undecided.len());
 }
 
-/// Must-show of issue 11: the orthogonal 3R near the cuspidal boundary (two cusps and a node
+/// The orthogonal 3R near the cuspidal boundary (two cusps and a node
 /// within 3e-4 of each other for each sign of z) has all four cusps and both nodes certified
 /// at the default precision 1e-4, nothing undecided. The reference is independent of linkspace:
 /// `scripts/dev/orthogonal_3r_singular_points.py` traces det Df = 0 of the seed's closed form

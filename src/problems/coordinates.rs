@@ -1,4 +1,4 @@
-//! Distance problems in placed coordinates: the "points" formulation (issue 15).
+//! Distance problems in placed coordinates: the "points" formulation.
 //!
 //! The seed's determinants (`cayley_menger`) work on squared distances only; here every point
 //! without given coordinates gets three coordinate variables instead, in the frame the fixed
@@ -197,7 +197,7 @@ impl Placed {
         Ok(placed)
     }
 
-    /// The line formulation (issue 15, item 2): for a problem whose free points are two points
+    /// The line formulation: for a problem whose free points are two points
     /// `t`, `u` of one line, every constraint a distance from a fixed point to `t`, to `u`, or to
     /// the line `t u` (lines tangent to spheres), the line is placed by a point and a direction,
     /// as in ibexsolve's formulation: `t = c + x` for a fixed anchor `c` with `|c t|²` known,
