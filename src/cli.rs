@@ -438,6 +438,7 @@ fn parse_fix(s: &str) -> Result<(String, f64)> {
     Ok((name.trim().to_string(), v))
 }
 
+#[cfg(feature = "ros")]
 fn parse_trace(s: &str) -> Result<(String, f64, f64)> {
     let (link, xy) = s.split_once('@').with_context(|| format!("--trace '{s}': expected LINK@X,Y"))?;
     let (x, y) = xy.split_once(',').with_context(|| format!("--trace '{s}': expected LINK@X,Y"))?;
@@ -822,7 +823,7 @@ fn bench3r(args: Bench3rArgs) -> Result<()> {
         let mut node_times = Vec::new();
         let mut node_run = None;
         for _ in 0..args.repeat {
-            let r = nodes::search(&chain, &k.cusps, &k.bands, &NodeSettings { precision: args.precision, ..Default::default() })?;
+            let r = nodes::search(&chain, &k.cusps, &k.bands, &NodeSettings { precision: args.precision })?;
             node_times.push(r.seconds);
             node_run = Some(r);
         }

@@ -159,6 +159,7 @@ fn cm_value(cm: &CayleyMenger, e: usize, x: [f64; 2]) -> f64 {
 
 /// Newton's method on the two equations (6) in (r14, r36), with a central-difference Jacobian;
 /// returns the distance to `root` after `steps` steps.
+#[allow(clippy::needless_range_loop)] // a 2 × 2 Jacobian filled by (equation, variable)
 fn newton(cm: &CayleyMenger, start: [f64; 2], root: [f64; 2], steps: usize) -> f64 {
     let mut x = start;
     for _ in 0..steps {
@@ -328,7 +329,7 @@ fn the_twelve_lines_tangent_to_four_spheres() {
     assert_eq!(r.clusters, 12);
     assert_eq!(r.placements, 12);
     // Each reference line is found, and each cluster's line touches all four spheres.
-    let mut matched = vec![false; 12];
+    let mut matched = [false; 12];
     for c in 0..r.clusters {
         let line = &r.solutions.iter().find(|s| s.cluster == c).unwrap().lines[0];
         for (name, dist) in &line.distance_from {

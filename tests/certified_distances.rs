@@ -20,6 +20,7 @@ fn run(p: &DistanceProblem, choice: Choice, redundant: bool, sigma: f64) -> Cert
 }
 
 /// Lines tangent to spheres (centres `c`, radii `r`) from the problem's `t`, `u` (indices 4, 5).
+#[allow(clippy::needless_range_loop)] // point k pairs with radius r[k]
 fn spheres(c: [[f64; 3]; 4], r: [f64; 4]) -> DistanceProblem {
     let mut p = DistanceProblem::new("spheres");
     for (k, x) in c.into_iter().enumerate() {
@@ -360,6 +361,7 @@ fn roots(coef: &[R]) -> Vec<C> {
 }
 
 /// Determinant by Gaussian elimination with partial pivoting.
+#[allow(clippy::needless_range_loop)] // Gaussian elimination: indices read as the formula
 fn det(mut a: Vec<Vec<R>>) -> R {
     let n = a.len();
     let mut d = R::f(1.0);

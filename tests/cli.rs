@@ -181,6 +181,7 @@ fn variant_all(name: &str, edits: &[(&str, &str)]) -> tempfile_path::Path {
 }
 
 #[test]
+#[allow(clippy::approx_constant)] // a loose bound just inside −π, not π
 fn singularities_json_follows_the_documented_schema() {
     let path = std::env::temp_dir().join(format!("linkspace-3r-{}.json", std::process::id()));
     let (ok, out, err) = run(&["singularities", &fixture("orthogonal_3r_f.urdf"), "--nodes", "--json", path.to_str().expect("utf-8")]);

@@ -158,6 +158,7 @@ fn exact(k: i64) -> String {
     format!("{}", k as f64 * FRAC_PI_2)
 }
 
+#[allow(clippy::approx_constant)] // URDF angles truncated on purpose, not π and π/2
 fn truncated(k: i64) -> String {
     match k {
         0 => "0".into(),
@@ -168,6 +169,7 @@ fn truncated(k: i64) -> String {
 
 /// Table 1 and the verdicts, for each convention, with snapping on.
 #[test]
+#[allow(clippy::approx_constant)] // 1.5708 is the truncated file value
 fn seed_robots_in_three_conventions_agree_with_table_1() {
     // (case, cusps, nodes, internal-motion lines, cuspidal)
     let table = [("a", 4, 0, 0, true), ("b", 4, 0, 0, true), ("d", 0, 0, 0, false), ("e", 4, 2, 0, true), ("f", 0, 2, 2, false)];

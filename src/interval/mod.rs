@@ -200,10 +200,10 @@ pub fn components_counted(boxes: &[IntervalBox]) -> (Vec<usize>, usize, u64) {
     }
     let mut labels = vec![0; n];
     let mut ids = std::collections::HashMap::new();
-    for i in 0..n {
+    for (i, label) in labels.iter_mut().enumerate() {
         let r = uf.find(i);
         let next = ids.len();
-        labels[i] = *ids.entry(r).or_insert(next);
+        *label = *ids.entry(r).or_insert(next);
     }
     (labels, ids.len(), compared)
 }
@@ -250,10 +250,10 @@ pub fn components_all_pairs(boxes: &[IntervalBox]) -> (Vec<usize>, usize) {
     }
     let mut labels = vec![0; boxes.len()];
     let mut ids = std::collections::HashMap::new();
-    for i in 0..boxes.len() {
+    for (i, label) in labels.iter_mut().enumerate() {
         let r = uf.find(i);
         let next = ids.len();
-        labels[i] = *ids.entry(r).or_insert(next);
+        *label = *ids.entry(r).or_insert(next);
     }
     (labels, ids.len())
 }

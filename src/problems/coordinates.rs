@@ -9,6 +9,7 @@
 //!   `W = w·v` (and `Q = ‖v‖²` when `r_ab` is unknown) become derived variables with their own
 //!   degree-two equations, and the constraint reads `S·Q − W² − d²·Q = 0`;
 //! - an orientation `(toward − a)·(b − a) ≥ 0`: a derived variable with domain `[0, …]`.
+//!
 //! This is the point-and-direction formulation ibexsolve uses for lines tangent to spheres
 //! (here the line's points `t`, `u` of the problem file), written for any distance problem.
 //!
@@ -543,7 +544,7 @@ fn to_equation(p: &Poly) -> Result<Equation, PlacedError> {
     for (m, c) in p.terms() {
         let mono = match m.as_slice() {
             [] => {
-                constant = constant + c;
+                constant += c;
                 continue;
             }
             [(v, 1)] => Monomial::Linear(*v),
