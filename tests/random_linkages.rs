@@ -897,7 +897,7 @@ fn random_linkages_lose_nothing_and_unique_boxes_hold_one_assembly() {
 }
 
 #[test]
-#[ignore = "long: 2000 seeds, ten times the default sweep"]
+#[ignore = "long: 2000 seeds, about 20 s"]
 fn random_linkages_long_sweep() {
     sweep(0..2000);
 }
