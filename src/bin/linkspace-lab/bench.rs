@@ -24,7 +24,7 @@ pub struct BenchArgs {
 const BUTTERFLY: &str = include_str!("../../../urdf/double_butterfly.urdf");
 
 /// Where the peer figures come from, printed beside them.
-const CUIK_SOURCE: &str = "reference, not run here: CPU s on the same 2-vCPU machine kind, recorded by 2026-11-22 (README, \"Beside the peers\")";
+const CUIK_SOURCE: &str = "reference, not run here: CPU s on the same 2-vCPU machine kind, recorded by 2026-11-22; README, \"Beside the peers\"";
 
 pub fn run(args: BenchArgs) -> Result<()> {
     crate::check_repeat(args.repeat)?;
@@ -50,11 +50,11 @@ pub fn run(args: BenchArgs) -> Result<()> {
             let median = crate::median(times);
             let e = last.expect("repeat >= 1");
             let clusters = linkspace::interval::components(&e.solutions).1;
-            let ratio = baseline.map_or("1.00x (baseline)".to_string(), |base: f64| format!("{:.2}x faster", base / median));
+            let ratio = baseline.map_or("1.00x (baseline)".to_string(), |base: f64| crate::speed_against(base, median));
             writeln!(out, "{name} | {backend:?} | {median:.4} | {} | {} | {clusters} | {} | {ratio}", e.stats.processed, e.solutions.len(), e.stats.lp.solved).ok();
             baseline.get_or_insert(median);
         }
-        writeln!(out, "{name} | CuikSuite at sigma {cuik_sigma} ({CUIK_SOURCE}) | {cuik_s} | {cuik_boxes} | {cuik_sol} | | | -").ok();
+        writeln!(out, "{name} | CuikSuite, sigma {cuik_sigma:e} ({CUIK_SOURCE}) | {cuik_s} | {cuik_boxes} | {cuik_sol} | | | -").ok();
     }
     Ok(())
 }

@@ -4,7 +4,8 @@
 //! bounded by `--timeout` and `--max-boxes`), both measured in the same run. Every case runs as a
 //! child process, so its peak resident memory is the child's own (`wait4`'s `ru_maxrss`): the
 //! shipped path as the `linkspace` binary beside this one, the baseline as this executable's
-//! hidden `--baseline-child` mode. Wall time includes the process start of either binary.
+//! hidden `--baseline-child` mode. Wall time and peak memory include each binary's own start
+//! and footprint (the product also carries the ROS 2 node), a few milliseconds and megabytes.
 
 use crate::bench3r::{Bench3rArgs, ROBOTS};
 use crate::median;

@@ -70,7 +70,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
             let median = times[times.len() / 2];
             let set = last.expect("repeat >= 1");
             let processed: u64 = set.stats.iter().map(|s| s.processed).sum();
-            let ratio = medians.first().map_or("1.00x (baseline)".to_string(), |base: &f64| format!("{:.2}x faster", base / median));
+            let ratio = medians.first().map_or("1.00x (baseline)".to_string(), |base: &f64| crate::speed_against(*base, median));
             let status = if set.status == linkspace::Status::Complete { "" } else { " (incomplete)" };
             writeln!(out, "{name} | {} | {median:.4}{status} | {processed} | {} | {} ({}) | {ratio}", if use_lp { "propagation + LP" } else { "propagation" }, set.boxes.len(), set.clusters.len(), set.certified_clusters()).ok();
             medians.push(median);

@@ -80,6 +80,16 @@ fn check_repeat(repeat: usize) -> Result<()> {
     Ok(())
 }
 
+/// A time against a baseline measured in the same run: "2.10x faster" or "1.25x slower".
+fn speed_against(baseline: f64, time: f64) -> String {
+    let speed = baseline / time.max(1e-9);
+    if speed >= 1.0 {
+        format!("{speed:.2}x faster")
+    } else {
+        format!("{:.2}x slower", 1.0 / speed)
+    }
+}
+
 /// The median of `v` (the upper one for an even count); `v` is not empty.
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);

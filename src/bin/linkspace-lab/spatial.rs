@@ -89,8 +89,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         let (tb, eb) = timed(&p.solver(base.clone())?, args.repeat);
         let (tl, el) = timed(&p.solver(SolverSettings { use_lp: true, ..base })?, args.repeat);
         line(&mut out, name, &format!("propagation only (baseline){}", if eb.status == linkspace::Status::Complete { "" } else { ", incomplete" }), tb, &eb, "1.00x");
-        let speed = tb / tl.max(1e-9);
-        let speed = if speed >= 1.0 { format!("{speed:.2}x faster") } else { format!("{:.2}x slower", 1.0 / speed) };
+        let speed = crate::speed_against(tb, tl);
         line(&mut out, name, "LP shrink", tl, &el, &format!("{speed}, {:.2}x fewer boxes", eb.stats.processed as f64 / el.stats.processed.max(1) as f64));
     }
     if args.stewart {
