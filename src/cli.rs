@@ -7,12 +7,10 @@ use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use linkspace::model::urdf;
 use linkspace::problems::choice::TracedPoint;
-use linkspace::problems::{Linkage, LinkageProblem, ModelChoice};
+use linkspace::problems::{Linkage, ModelChoice};
 use linkspace::LpBackend;
 use linkspace::manip3r::{
     self,
-    cusps::{self, CuspSettings, Method},
-    nodes::{self, NodeSettings},
     collision::{self, CollisionSettings, Scene},
     report::{CollisionReport, IkReport, SingularityReport},
     Chain3R, Control,
@@ -25,11 +23,6 @@ use std::time::Duration;
 
 pub(crate) mod distances;
 mod loop_singularities;
-mod bench_spatial;
-mod bench_arms;
-mod figures;
-mod plot;
-mod study;
 
 #[derive(Parser)]
 #[command(name = "linkspace", version, about = "Every configuration a mechanism can take, with guarantees.")]
@@ -141,20 +134,12 @@ impl ChainArgs {
 enum Command {
     /// Enclose every configuration of a closed-loop linkage described in URDF (planar or spatial).
     Solve(SolveArgs),
-    /// Draw SVG charts from fresh runs of the bundled problems into a folder.
-    Chart(ChartArgs),
-    /// Time the bundled double butterfly, rigid and mobile, against a baseline in the same run.
-    Bench(BenchArgs),
     /// Certified cusps, nodes and internal motions of a 3R chain described in URDF.
     Singularities(SingularitiesArgs),
     /// Every joint solution (joint 2, joint 3) of a 3R chain for a workspace point (radius, z).
     Ik(IkArgs),
-    /// Time cusp and node searches on the bundled 3R robots against baselines in the same run.
-    Bench3r(Bench3rArgs),
     /// Solve a distance problem by Cayley–Menger determinants: a platform in URDF or a JSON file.
     Distances(distances::DistancesArgs),
-    /// Time the seed-004 cases (octahedral platform, four spheres) against baselines in the same run.
-    BenchDistances(distances::BenchArgs),
     /// Run the ROS 2 node: analyse each URDF, publish the results, serve queries (launch_notes.md).
     #[cfg(feature = "ros")]
     Serve(serve::ServeArgs),
@@ -162,11 +147,6 @@ enum Command {
     Collisions(CollisionsArgs),
     /// Certified singular sets (C-space, input/type II, output/type I) of a planar closed-loop linkage.
     LoopSingularities(loop_singularities::LoopSingularitiesArgs),
-    /// Time singular-set searches of closed-loop linkages against baselines in the same run.
-    BenchLoopSingularities(loop_singularities::BenchArgs),
-    /// Time the spatial builder: planar fixtures against the planar model, spatial ones with
-    /// and without the LP shrink, each in the same run.
-    BenchSpatial(bench_spatial::BenchArgs),
 }
 
 #[derive(clap::Args)]
@@ -233,34 +213,6 @@ struct IkArgs {
     json: Option<PathBuf>,
 }
 
-#[derive(clap::Args)]
-struct Bench3rArgs {
-    /// Runs per case; the median is reported.
-    #[arg(long, default_value_t = 5)]
-    repeat: usize,
-    /// Precision of every search.
-    #[arg(long, default_value_t = 1e-4)]
-    precision: f64,
-    /// Instead: per bundled real arm (PUMA 560, KR 16, UR5, iiwa 14 with joint_3 locked) and
-    /// seed robot, `singularities FILE` as it ships against the previous behaviour on the same
-    /// chain (interval cusp and node searches, full torus, bounded), each run as a child
-    /// process: wall time, peak RSS, status, undecided count, ratios.
-    #[arg(long)]
-    arms: bool,
-    /// With --arms: the baseline's time limit (seconds, per run).
-    #[arg(long, default_value_t = 20.0)]
-    timeout: f64,
-    /// With --arms: the baseline's box limit (boxes, box pairs for nodes; per search).
-    #[arg(long, default_value_t = 2_000_000)]
-    max_boxes: u64,
-    /// Internal: one baseline run of --arms on this file (one JSON line).
-    #[arg(long, hide = true, value_name = "URDF")]
-    baseline_child: Option<PathBuf>,
-    /// Internal, with --baseline-child: joints to lock.
-    #[arg(long, hide = true, value_name = "JOINT=VALUE", allow_hyphen_values = true)]
-    lock: Vec<String>,
-}
-
 #[derive(Clone, Copy, clap::ValueEnum)]
 enum Backend {
     Simplex,
@@ -274,29 +226,6 @@ impl From<Backend> for LpBackend {
             Backend::Clarabel => LpBackend::Clarabel,
         }
     }
-}
-
-#[derive(clap::Args)]
-struct ChartArgs {
-    /// Folder for the SVG files (created if missing).
-    dir: PathBuf,
-    /// Shorter sweeps (a minute instead of several).
-    #[arg(long)]
-    quick: bool,
-    /// Only these chart groups, comma separated: speed, cspace, convergence, stability,
-    /// singular3r, collisions, distances, cusps, loops (default: all).
-    #[arg(long, value_delimiter = ',', value_name = "GROUP,...")]
-    only: Vec<String>,
-}
-
-#[derive(clap::Args)]
-struct BenchArgs {
-    /// Runs per case; the median is reported.
-    #[arg(long, default_value_t = 5)]
-    repeat: usize,
-    /// Mobile-case sigma.
-    #[arg(long, default_value_t = 0.05)]
-    mobile_sigma: f64,
 }
 
 /// `solve --model`.
@@ -359,19 +288,13 @@ pub fn run() -> Result<()> {
     let cli = parse_args(std::env::args_os());
     match cli.command {
         Command::Solve(args) => solve(args),
-        Command::Bench(args) => bench(args),
-        Command::Chart(args) => figures::run(&args.dir, args.quick, &args.only),
         Command::Singularities(args) => singularities(args),
         Command::Ik(args) => ik(args),
-        Command::Bench3r(args) => bench3r(args),
         Command::Distances(args) => distances::run(args),
-        Command::BenchDistances(args) => distances::bench(args),
         #[cfg(feature = "ros")]
         Command::Serve(args) => serve::serve(args),
         Command::Collisions(args) => collisions(args),
         Command::LoopSingularities(args) => loop_singularities::run(args),
-        Command::BenchLoopSingularities(args) => loop_singularities::bench(args),
-        Command::BenchSpatial(args) => bench_spatial::bench(args),
     }
 }
 
@@ -533,44 +456,6 @@ fn solve(args: SolveArgs) -> Result<()> {
     if let Some(path) = args.json {
         let text = serde_json::to_string_pretty(&report)?;
         std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
-    }
-    Ok(())
-}
-
-/// The bundled butterfly, compiled in so `bench` runs from anywhere.
-const BUTTERFLY: &str = include_str!("../urdf/double_butterfly.urdf");
-
-fn bench(args: BenchArgs) -> Result<()> {
-    if args.repeat == 0 {
-        bail!("--repeat must be at least 1");
-    }
-    let mechanism = urdf::parse(BUTTERFLY).context("bundled double_butterfly.urdf")?;
-    let rigid = LinkageProblem::new(&mechanism, &[("joint6".to_string(), 12f64.atan2(5.0))], &[])?;
-    let mobile = LinkageProblem::new(&mechanism, &[], &[])?;
-    let cases = [("rigid, theta6 = atan2(12,5), sigma 1e-4", &rigid, 1e-4, 0.15, 15, 6), ("mobile", &mobile, args.mobile_sigma, 28.9, 2523, 1229)];
-    let mut out = std::io::stdout().lock();
-    writeln!(out, "case | LP backend | median CPU s | boxes processed | solution boxes | clusters | LPs | vs clarabel (same run)").ok();
-    for (name, problem, sigma, cuik_s, cuik_boxes, cuik_sol) in cases {
-        let mut medians = Vec::new();
-        for backend in [LpBackend::Clarabel, LpBackend::Simplex] {
-            let settings = SolverSettings { sigma, lp_backend: backend, ..Default::default() };
-            let solver = problem.solver(settings)?;
-            let mut times = Vec::new();
-            let mut last = None;
-            for _ in 0..args.repeat {
-                let e = solver.enclose(&AtomicBool::new(false), &mut |_| {});
-                times.push(e.stats.cpu_seconds);
-                last = Some(e);
-            }
-            times.sort_by(|a, b| a.total_cmp(b));
-            let median = times[times.len() / 2];
-            let e = last.expect("repeat >= 1");
-            let clusters = linkspace::interval::components(&e.solutions).1;
-            let ratio = medians.first().map_or("1.00x (baseline)".to_string(), |base: &f64| format!("{:.2}x faster", base / median));
-            writeln!(out, "{name} | {backend:?} | {median:.4} | {} | {} | {clusters} | {} | {ratio}", e.stats.processed, e.solutions.len(), e.stats.lp.solved).ok();
-            medians.push(median);
-        }
-        writeln!(out, "{name} | CuikSuite (published in research/double_butterfly.md, not run here) | {cuik_s} | {cuik_boxes} | {cuik_sol} | | | {:.1}x faster than CuikSuite", cuik_s / medians[1]).ok();
     }
     Ok(())
 }
@@ -774,74 +659,5 @@ fn ik(args: IkArgs) -> Result<()> {
     if let Some(path) = args.json {
         std::fs::write(&path, serde_json::to_string_pretty(&report)?).with_context(|| format!("writing {}", path.display()))?;
     }
-    Ok(())
-}
-
-/// The bundled 3R robots, compiled in so `bench3r` runs from anywhere, with the peers' CPU
-/// seconds from research/peers.md (Ibex, best formulation; nodes with a separation constraint).
-const ROBOTS: [(&str, &str, f64, f64); 5] = [
-    ("a", include_str!("../urdf/orthogonal_3r_a.urdf"), 0.034, 0.32),
-    ("b", include_str!("../urdf/orthogonal_3r_b.urdf"), 0.077, 0.54),
-    ("d", include_str!("../urdf/orthogonal_3r_d.urdf"), 0.019, 0.08),
-    ("e", include_str!("../urdf/orthogonal_3r_e.urdf"), 0.031, 0.44),
-    ("f", include_str!("../urdf/orthogonal_3r_f.urdf"), 59.0, 0.21),
-];
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    v[v.len() / 2]
-}
-
-fn bench3r(args: Bench3rArgs) -> Result<()> {
-    if args.repeat == 0 {
-        bail!("--repeat must be at least 1");
-    }
-    manip3r::check_precision(args.precision)?;
-    if let Some(file) = &args.baseline_child {
-        return bench_arms::baseline_child(&args, file);
-    }
-    if args.arms {
-        return bench_arms::run(&args);
-    }
-    let mut out = std::io::stdout().lock();
-    writeln!(out, "robot | cusps: Krawczyk s | found | undecided | bisection baseline s | clusters | speed-up | Ibex s | vs Ibex | nodes s | found | undecided | Ibex s (separated) | vs Ibex").ok();
-    for (name, xml, ibex_cusps, ibex_nodes) in ROBOTS {
-        let chain = Chain3R::from_mechanism(&urdf::parse(xml)?, 0.0)?;
-        let run = |method| {
-            let settings = CuspSettings { precision: args.precision, method };
-            let mut times = Vec::new();
-            let mut last = None;
-            for _ in 0..args.repeat {
-                let r = cusps::search(&chain, &settings).expect("validated precision");
-                times.push(r.seconds);
-                last = Some(r);
-            }
-            (median(times), last.expect("repeat >= 1"))
-        };
-        let (t_base, base) = run(Method::Bisection);
-        let (t_k, k) = run(Method::Krawczyk);
-        let mut node_times = Vec::new();
-        let mut node_run = None;
-        for _ in 0..args.repeat {
-            let r = nodes::search(&chain, &k.cusps, &k.bands, &NodeSettings { precision: args.precision })?;
-            node_times.push(r.seconds);
-            node_run = Some(r);
-        }
-        let (t_n, n) = (median(node_times), node_run.expect("repeat >= 1"));
-        writeln!(
-            out,
-            "{name} | {t_k:.4} | {} | {} | {t_base:.4} | {} | {:.1}x | {ibex_cusps} | {:.1}x | {t_n:.4} | {} | {} | {ibex_nodes} | {:.1}x",
-            k.cusps.len(),
-            k.undecided.len(),
-            base.cusps.len(),
-            t_base / t_k,
-            ibex_cusps / t_k,
-            n.nodes.len(),
-            n.undecided.len(),
-            ibex_nodes / t_n
-        )
-        .ok();
-    }
-    writeln!(out, "Ibex figures are CPU seconds from research/peers.md (not run here); case f's cusp figure is Ibex at 1e-4 ending with 186,320 undecided boxes.").ok();
     Ok(())
 }

@@ -1,5 +1,5 @@
-//! Test idea: `linkspace chart --quick --only loops,singular3r` draws the singular-set charts of
-//! closed loops and the 3R workspace regions from fresh runs. The runs' summary lines must show what the independent references of
+//! Test idea: `linkspace-lab chart --quick --only loops,singular3r` draws the singular-set charts
+//! of closed loops and the 3R workspace regions from fresh runs. The runs' summary lines must show what the independent references of
 //! the other modules establish (the double butterfly's 10 turning points of θ6 on its 4
 //! branches, by continuation in `closed_loop_singularities`; the unequal five-bar's empty cusp
 //! and node sets and its verdict), every turning point must land on a branch drawn beside it,
@@ -15,7 +15,7 @@ fn line<'a>(stdout: &'a str, prefix: &str) -> &'a str {
 #[test]
 fn loop_singularity_and_workspace_region_charts() {
     let dir = std::env::temp_dir().join(format!("linkspace-charts-{}", std::process::id()));
-    let out = Command::new(env!("CARGO_BIN_EXE_linkspace")).args(["chart", dir.to_str().expect("utf-8 temp dir"), "--quick", "--only", "loops,singular3r"]).output().expect("binary runs");
+    let out = Command::new(env!("CARGO_BIN_EXE_linkspace-lab")).args(["chart", dir.to_str().expect("utf-8 temp dir"), "--quick", "--only", "loops,singular3r"]).output().expect("binary runs");
     let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
     assert!(out.status.success(), "chart failed: {}\n{stdout}", String::from_utf8_lossy(&out.stderr));
 

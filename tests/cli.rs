@@ -3,8 +3,16 @@
 
 use std::process::Command;
 
+/// The product binary, and the lab binary of benches and charts.
+const LINKSPACE: &str = env!("CARGO_BIN_EXE_linkspace");
+const LAB: &str = env!("CARGO_BIN_EXE_linkspace-lab");
+
 fn run(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_linkspace")).args(args).output().expect("binary runs");
+    run_bin(LINKSPACE, args)
+}
+
+fn run_bin(bin: &str, args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(bin).args(args).output().expect("binary runs");
     (out.status.success(), String::from_utf8_lossy(&out.stdout).into_owned(), String::from_utf8_lossy(&out.stderr).into_owned())
 }
 
@@ -41,7 +49,11 @@ mod tempfile_path {
 }
 
 fn assert_clear_error(args: &[&str], needle: &str) {
-    let (ok, _, err) = run(args);
+    assert_clear_error_of(LINKSPACE, args, needle)
+}
+
+fn assert_clear_error_of(bin: &str, args: &[&str], needle: &str) {
+    let (ok, _, err) = run_bin(bin, args);
     assert!(!ok, "{args:?} should fail");
     assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
     let lines: Vec<&str> = err.lines().collect();
@@ -303,10 +315,13 @@ fn bad_input_gets_one_line_however_it_is_spelled() {
     assert_clear_error(&["collisions", &scene, "--timeout", "-3"], "--timeout must be a positive number of seconds");
     assert_clear_error(&["distances", &platform, "--sigma", "-1"], "sigma must be a positive");
     assert_clear_error(&["distances", &platform, "--timeout", "-1"], "--timeout must be a positive number of seconds");
-    assert_clear_error(&["bench", "--repeat", "-1"], "invalid value '-1' for '--repeat");
-    assert_clear_error(&["bench3r", "--repeat", "-2"], "invalid value '-2' for '--repeat");
-    assert_clear_error(&["bench-distances", "--repeat", "-1"], "invalid value '-1' for '--repeat");
-    assert_clear_error(&["chart"], "required arguments were not provided: <DIR>");
+    // The lab binary's benches and charts keep the same contract.
+    assert_clear_error_of(LAB, &["bench", "--repeat", "-1"], "invalid value '-1' for '--repeat");
+    assert_clear_error_of(LAB, &["bench3r", "--repeat", "-2"], "invalid value '-2' for '--repeat");
+    assert_clear_error_of(LAB, &["bench-distances", "--repeat", "-1"], "invalid value '-1' for '--repeat");
+    assert_clear_error_of(LAB, &["bench", "--repeat", "0"], "--repeat must be at least 1");
+    assert_clear_error_of(LAB, &["chart"], "required arguments were not provided: <DIR>");
+    assert_clear_error_of(LAB, &["chart", "/nonexistent", "--only", "nope"], "unknown chart group 'nope'");
     #[cfg(feature = "ros")]
     assert_clear_error(&["serve", &fb, "--sigma", "-1"], "sigma must be a positive");
 }
@@ -323,12 +338,25 @@ fn help_is_still_the_full_text() {
     assert!(ok && out.starts_with("linkspace "), "{out}");
 }
 
-/// `bench3r --arms`: one row per bundled real arm and seed robot, the shipped path
+/// The benches and charts live in `linkspace-lab`; the product lists none of them.
+#[test]
+fn the_product_lists_no_bench_or_chart() {
+    let (ok, out, err) = run(&["--help"]);
+    assert!(ok, "{err}");
+    for command in ["chart", "bench", "bench3r", "bench-distances", "bench-loop-singularities", "bench-spatial"] {
+        assert!(!out.lines().any(|l| l.trim_start().starts_with(&format!("{command} "))), "linkspace --help lists {command}:\n{out}");
+        assert_clear_error(&[command], &format!("unrecognized subcommand '{command}'"));
+        let (ok, out, err) = run_bin(LAB, &[command, "--help"]);
+        assert!(ok && out.contains("Usage:"), "linkspace-lab {command} --help: {err}");
+    }
+}
+
+/// `linkspace-lab bench3r --arms`: one row per bundled real arm and seed robot, the shipped path
 /// complete with nothing undecided, the baseline reported with its status. Tiny baseline limits
 /// keep it to a few seconds; no timing is asserted.
 #[test]
 fn bench3r_arms_has_a_row_per_robot_and_the_new_path_completes() {
-    let (ok, out, err) = run(&["bench3r", "--arms", "--repeat", "1", "--timeout", "0.5", "--max-boxes", "20000"]);
+    let (ok, out, err) = run_bin(LAB, &["bench3r", "--arms", "--repeat", "1", "--timeout", "0.5", "--max-boxes", "20000"]);
     assert!(ok, "{err}");
     for robot in ["puma560", "kuka_kr16", "ur5", "iiwa14", "a", "b", "d", "e", "f"] {
         let row = out.lines().find(|l| l.starts_with(&format!("{robot} | "))).unwrap_or_else(|| panic!("no row for {robot}:\n{out}"));

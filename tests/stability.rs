@@ -2,10 +2,10 @@
 //! near-root with no real root, many regular roots in many unknowns). Branch and prune must
 //! lose no reference root on any of them; the report says what plain Newton–Raphson misses.
 
-// The study is the binary's (it feeds `linkspace chart`), not the library's: included here as
+// The study is the lab binary's (it feeds `linkspace-lab chart`), not the library's: included here as
 // the same source file, so the test and the chart run one implementation.
 #[allow(dead_code)]
-#[path = "../src/cli/study.rs"]
+#[path = "../src/bin/linkspace-lab/study.rs"]
 mod study;
 
 use study::{markdown, planar_findings};

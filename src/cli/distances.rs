@@ -1,22 +1,19 @@
-//! `linkspace distances` and `linkspace bench-distances`: distance problems (seed 004) from a
-//! URDF platform or a JSON distance file.
+//! `linkspace distances`: distance problems (seed 004) from a URDF platform or a JSON distance
+//! file.
 
 use super::parse_fix;
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use linkspace::contract::FaceBounds;
 use linkspace::model::urdf;
-use linkspace::problems::cayley_menger::{BuildOptions, CayleyMenger, DistanceProblem, Formulation};
-use linkspace::problems::coordinates::Placed;
+use linkspace::problems::cayley_menger::DistanceProblem;
 use linkspace::problems::{distance_file, PlatformProblem};
 use linkspace::distances::{solve as certified_solve, Choice};
-use linkspace::problems::cayley_menger::DistanceProblem as Problem;
 use linkspace::report::distances::{report_certified, DistancesReport};
-use linkspace::search::{Enclosure, SolverSettings};
+use linkspace::search::SolverSettings;
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
-use std::time::Duration;
 
 #[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
 pub enum Form {
@@ -91,10 +88,6 @@ pub fn load(path: &Path, text: &str, fixed: &[(String, f64)]) -> Result<Loaded> 
     }
 }
 
-pub fn solve(cm: &CayleyMenger, faces: FaceBounds, settings: SolverSettings) -> Result<Enclosure> {
-    Ok(cm.solver(faces, settings)?.enclose(&AtomicBool::new(false), &mut |_| {}))
-}
-
 /// The default rho of a formulation: the seed's 0.99 for the determinants, 0.9 in coordinates.
 pub fn default_rho(c: Choice) -> f64 {
     if matches!(c, Choice::Points | Choice::Line) {
@@ -112,10 +105,6 @@ pub fn choice(form: Form) -> Choice {
         Form::Shared => Choice::Shared,
         Form::Split => Choice::Split,
     }
-}
-
-pub fn options(form: Form, redundant: bool) -> BuildOptions {
-    BuildOptions { formulation: if form == Form::Split { Formulation::Split } else { Formulation::Shared }, redundant }
 }
 
 fn face_bounds(f: Faces) -> FaceBounds {
@@ -213,164 +202,6 @@ fn summarize(rep: &DistancesReport) -> Result<()> {
                 l.through[0], l.through[1], l.point[0], l.point[1], l.point[2], l.direction[0], l.direction[1], l.direction[2], dist.join(", ")
             )
             .ok();
-        }
-    }
-    Ok(())
-}
-
-#[derive(clap::Args)]
-pub struct BenchArgs {
-    /// Runs per case; the median CPU time is reported (the baselines run once).
-    #[arg(long, default_value_t = 5)]
-    repeat: usize,
-    /// Time limit per baseline run (seconds): octahedral, the seed's split formulation with
-    /// interval-arithmetic faces; four spheres, the seed's split formulation with corners.
-    #[arg(long, default_value_t = 30.0)]
-    baseline_timeout: f64,
-}
-
-const OCTAHEDRAL: &str = include_str!("../../urdf/octahedral.urdf");
-const FOUR_SPHERES: &str = include_str!("../../urdf/four_spheres.json");
-
-/// One way of running a case.
-#[derive(Clone, Copy)]
-enum Method {
-    /// The kernel on the determinants, no settling: boxes are neither certified nor labelled.
-    Search(Formulation, FaceBounds),
-    /// `distances::solve`: the search, then every cluster settled (certified or undecided).
-    Settled(Form),
-    /// The coordinate formulation's search alone (`Placed::solver`).
-    Coordinates(Form),
-}
-
-/// What one run measured.
-struct Measured {
-    cpu: f64,
-    complete: bool,
-    processed: u64,
-    solution_boxes: usize,
-    clusters: usize,
-    /// Proven and undecided; `None` when the run settles nothing.
-    verdict: Option<(usize, usize)>,
-    /// CPU seconds per phase (settled runs).
-    phases: Vec<(&'static str, f64)>,
-}
-
-fn measure(p: &Problem, method: Method, redundant: bool, settings: &SolverSettings) -> Result<Measured> {
-    let cancel = AtomicBool::new(false);
-    let c0 = linkspace::search::process_cpu_seconds();
-    let from_search = |e: Enclosure, cpu: f64| Measured {
-        cpu,
-        complete: e.status == linkspace::Status::Complete,
-        processed: e.stats.processed,
-        solution_boxes: e.solutions.len(),
-        clusters: linkspace::interval::components(&e.solutions).1,
-        verdict: None,
-        phases: Vec::new(),
-    };
-    Ok(match method {
-        Method::Search(formulation, faces) => {
-            let cm = CayleyMenger::build(p, BuildOptions { formulation, redundant })?;
-            let e = solve(&cm, faces, settings.clone())?;
-            from_search(e, linkspace::search::process_cpu_seconds() - c0)
-        }
-        Method::Coordinates(form) => {
-            let placed = if form == Form::Line { Placed::build_line(p)? } else { Placed::build(p)? };
-            let e = placed.solver(settings.clone())?.enclose(&cancel, &mut |_| {});
-            from_search(e, linkspace::search::process_cpu_seconds() - c0)
-        }
-        Method::Settled(form) => {
-            let c = certified_solve(p, choice(form), redundant, FaceBounds::Corners, settings.clone(), &cancel)?;
-            Measured {
-                cpu: c.stats.cpu_seconds,
-                complete: c.status == linkspace::Status::Complete,
-                processed: c.stats.processed,
-                solution_boxes: c.solutions.len(),
-                clusters: c.clusters.len(),
-                verdict: Some((c.proven(), c.undecided_regions())),
-                phases: c.phases,
-            }
-        }
-    })
-}
-
-/// The seed's Tables I and II in one run: the seed's determinants as plain searches (the
-/// previous configurations: split or shared variables, corner or interval-arithmetic faces)
-/// against the certified pipeline (`distances::solve`: the line formulation for the
-/// spheres, the settled shared determinants for the platforms), each row's CPU time against the
-/// case's baseline measured in the same run.
-pub fn bench(args: BenchArgs) -> Result<()> {
-    if args.repeat == 0 {
-        bail!("--repeat must be at least 1");
-    }
-    if !(args.baseline_timeout > 0.0) {
-        bail!("--baseline-timeout must be positive");
-    }
-    let mut out = std::io::stdout().lock();
-    writeln!(out, "case | method | CPU s (median) | boxes processed | solution boxes | clusters | proven | undecided | vs baseline (same run) | seed (Pentium IV 1.8 GHz) | where the time goes").ok();
-    // Runs `repeat` times (a baseline once, under its time limit) and keeps the median.
-    let run = |p: &Problem, method: Method, redundant: bool, settings: &SolverSettings, repeat: usize| -> Result<Measured> {
-        let mut all = (0..repeat).map(|_| measure(p, method, redundant, settings)).collect::<Result<Vec<_>>>()?;
-        all.sort_by(|a, b| a.cpu.total_cmp(&b.cpu));
-        Ok(all.swap_remove(all.len() / 2))
-    };
-    let limit = args.baseline_timeout;
-    let row = |out: &mut std::io::StdoutLock, case: &str, label: &str, m: &Measured, base: Option<(f64, bool)>, seed: &str| {
-        // The limit is wall-clock time (the kernel's); on a loaded machine the CPU time is less.
-        let t = if m.complete { format!("{:.4}", m.cpu) } else { format!("> {:.1} (stopped by the {limit} s wall-clock limit)", m.cpu) };
-        let ratio = match base {
-            None => "1.00x (baseline)".to_string(),
-            Some((b, true)) => format!("{:.1}x", b / m.cpu),
-            Some((b, false)) => format!("> {:.1}x", b / m.cpu),
-        };
-        let (proven, undecided) = m.verdict.map_or(("-".to_string(), "-".to_string()), |(p, u)| (p.to_string(), u.to_string()));
-        let phases: Vec<String> = m.phases.iter().filter(|(_, s)| *s >= 0.0005).map(|(n, s)| format!("{n} {s:.3}")).collect();
-        writeln!(out, "{case} | {label} | {t} | {} | {} | {} | {proven} | {undecided} | {ratio} | {seed} | {}", m.processed, m.solution_boxes, m.clusters, phases.join("; ")).ok();
-    };
-    let baseline_limit = Some(Duration::from_secs_f64(args.baseline_timeout));
-    let legs = ["leg15", "leg16", "leg26", "leg24", "leg34", "leg35"];
-    let configs = [("a", [4.25, 5.75, 4.25, 5.75, 4.25, 5.75]), ("b", [4.75; 6])];
-    // Table I: t, b_p, n_s, for corners and (in parentheses) interval arithmetic.
-    let seed_table = [[("<0.01", 7, 2, "0.09", 851, 86), ("<0.01", 3, 2, "0.35", 1477, 67)], [("0.03", 65, 27, "0.28", 2173, 680), ("0.03", 39, 8, "2.15", 6841, 764)]];
-    for (ci, (cname, lengths)) in configs.iter().enumerate() {
-        let fixed: Vec<(String, f64)> = legs.iter().map(|l| l.to_string()).zip(lengths.iter().copied()).collect();
-        let m = urdf::parse(OCTAHEDRAL).context("bundled octahedral.urdf")?;
-        let p = PlatformProblem::new(&m, &fixed)?;
-        for (ri, redundant) in [false, true].into_iter().enumerate() {
-            let settings = SolverSettings { sigma: 0.1, rho: 0.9, ..Default::default() };
-            let case = format!("octahedral {cname}{}, sigma 0.1", if redundant { ", redundant" } else { "" });
-            let s = seed_table[ci][ri];
-            let baseline = run(&p.distances, Method::Search(Formulation::Split, FaceBounds::IntervalArithmetic), redundant, &SolverSettings { timeout: baseline_limit, ..settings.clone() }, 1)?;
-            row(&mut out, &case, "split, interval faces, search only (baseline)", &baseline, None, &format!("t {} s, b_p {}, n_s {}", s.3, s.4, s.5));
-            let base = Some((baseline.cpu, baseline.complete));
-            for (label, method, seed) in [
-                ("split, corners, search only (the seed's)", Method::Search(Formulation::Split, FaceBounds::Corners), format!("t {} s, b_p {}, n_s {}", s.0, s.1, s.2)),
-                ("shared, Bernstein, search only", Method::Search(Formulation::Shared, FaceBounds::Corners), String::new()),
-                ("shared, Bernstein, settled (certified; the default)", Method::Settled(Form::Auto), String::new()),
-            ] {
-                let m = run(&p.distances, method, redundant, &settings, args.repeat)?;
-                row(&mut out, &case, label, &m, base, &seed);
-            }
-        }
-    }
-    // Table II: the four spheres, rho 0.99 for the determinants (the seed's C1-C4), the CLI's
-    // default rho for the line formulation.
-    let d = distance_file::parse(FOUR_SPHERES, &[])?;
-    for (sigma, seed) in [(0.1, "t 315 s, b_p 7875, n_s 870"), (0.01, "t 385 s, b_p 14579, n_s 813")] {
-        let case = format!("four spheres, sigma {sigma}");
-        let cm_settings = SolverSettings { sigma, rho: 0.99, ..Default::default() };
-        let line_settings = SolverSettings { sigma, rho: default_rho(Choice::Line), ..Default::default() };
-        let baseline = run(&d, Method::Search(Formulation::Split, FaceBounds::Corners), true, &SolverSettings { timeout: baseline_limit, ..cm_settings.clone() }, 1)?;
-        row(&mut out, &case, "split, corners, C1-C4, search only (the seed's; baseline)", &baseline, None, seed);
-        let base = Some((baseline.cpu, baseline.complete));
-        for (label, method, settings) in [
-            ("shared, Bernstein, C1-C4, search only", Method::Search(Formulation::Shared, FaceBounds::Corners), &cm_settings),
-            ("shared, Bernstein, C1-C4, settled (certified)", Method::Settled(Form::Shared), &cm_settings),
-            ("line, search only", Method::Coordinates(Form::Line), &line_settings),
-            ("line, settled (certified; the default)", Method::Settled(Form::Auto), &line_settings),
-        ] {
-            let m = run(&d, method, true, settings, args.repeat)?;
-            row(&mut out, &case, label, &m, base, "");
         }
     }
     Ok(())

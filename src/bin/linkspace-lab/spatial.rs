@@ -1,8 +1,8 @@
-//! `linkspace bench-spatial`: the spatial builder timed against baselines measured in the same
+//! `linkspace-lab bench-spatial`: the spatial builder timed against baselines measured in the same
 //! run: on the planar fixtures, the spatial model against the planar one (what modelling more
 //! than the scene needs costs); on the spatial fixtures, the LP shrink against propagation only.
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use linkspace::interval::components;
 use linkspace::model::urdf;
 use linkspace::problems::{LinkageProblem, SpatialProblem};
@@ -12,7 +12,7 @@ use std::sync::atomic::AtomicBool;
 
 /// Runs per case; the median is reported.
 #[derive(clap::Args)]
-pub(crate) struct BenchArgs {
+pub struct BenchArgs {
     /// Runs per case; the median is reported.
     #[arg(long, default_value_t = 3)]
     repeat: usize,
@@ -22,15 +22,15 @@ pub(crate) struct BenchArgs {
     stewart: bool,
 }
 
-const FOUR_BAR: &str = include_str!("../../urdf/four_bar.urdf");
-const SLIDER_CRANK: &str = include_str!("../../urdf/slider_crank.urdf");
-const WATT: &str = include_str!("../../urdf/watt_six_bar.urdf");
-const BUTTERFLY: &str = include_str!("../../urdf/double_butterfly.urdf");
-const RSSR: &str = include_str!("../../urdf/rssr.urdf");
-const SPHERICAL: &str = include_str!("../../urdf/spherical_four_bar.urdf");
-const BENNETT: &str = include_str!("../../urdf/bennett.urdf");
-const DELTA: &str = include_str!("../../urdf/delta.urdf");
-const STEWART: &str = include_str!("../../urdf/stewart_6_6.urdf");
+const FOUR_BAR: &str = include_str!("../../../urdf/four_bar.urdf");
+const SLIDER_CRANK: &str = include_str!("../../../urdf/slider_crank.urdf");
+const WATT: &str = include_str!("../../../urdf/watt_six_bar.urdf");
+const BUTTERFLY: &str = include_str!("../../../urdf/double_butterfly.urdf");
+const RSSR: &str = include_str!("../../../urdf/rssr.urdf");
+const SPHERICAL: &str = include_str!("../../../urdf/spherical_four_bar.urdf");
+const BENNETT: &str = include_str!("../../../urdf/bennett.urdf");
+const DELTA: &str = include_str!("../../../urdf/delta.urdf");
+const STEWART: &str = include_str!("../../../urdf/stewart_6_6.urdf");
 
 /// Median CPU seconds over `repeat` runs, and the last run.
 fn timed(solver: &Solver<'_>, repeat: usize) -> (f64, Enclosure) {
@@ -50,10 +50,8 @@ fn line(out: &mut impl Write, case: &str, run: &str, t: f64, e: &Enclosure, rati
     writeln!(out, "{case} | {run} | {t:.4} | {} | {} | {} ({certified}) | {ratio}", e.stats.processed, e.solutions.len(), components(&e.solutions).1).ok();
 }
 
-pub(crate) fn bench(args: BenchArgs) -> Result<()> {
-    if args.repeat == 0 {
-        bail!("--repeat must be at least 1");
-    }
+pub fn bench(args: BenchArgs) -> Result<()> {
+    crate::check_repeat(args.repeat)?;
     let fix = |v: &[(&str, f64)]| v.iter().map(|(n, x)| (n.to_string(), *x)).collect::<Vec<_>>();
     let mut out = std::io::stdout().lock();
     writeln!(out, "case | run | median CPU s | boxes processed | solution boxes | clusters (certified) | vs baseline (same run)").ok();
@@ -92,8 +90,7 @@ pub(crate) fn bench(args: BenchArgs) -> Result<()> {
         let (tb, eb) = timed(&p.solver(base.clone())?, args.repeat);
         let (tl, el) = timed(&p.solver(SolverSettings { use_lp: true, ..base })?, args.repeat);
         line(&mut out, name, &format!("propagation only (baseline){}", if eb.status == linkspace::Status::Complete { "" } else { ", incomplete" }), tb, &eb, "1.00x");
-        let speed = tb / tl.max(1e-9);
-        let speed = if speed >= 1.0 { format!("{speed:.2}x faster") } else { format!("{:.2}x slower", 1.0 / speed) };
+        let speed = crate::speed_against(tb, tl);
         line(&mut out, name, "LP shrink", tl, &el, &format!("{speed}, {:.2}x fewer boxes", eb.stats.processed as f64 / el.stats.processed.max(1) as f64));
     }
     if args.stewart {

@@ -198,7 +198,7 @@ fn grid(dims: usize, count: usize) -> Vec<Vec<f64>> {
 }
 
 fn four_bar_instance(delta: f64, sigma: f64) -> Instance {
-    let m = urdf::parse(include_str!("../../urdf/four_bar.urdf")).expect("invariant: bundled four-bar parses");
+    let m = urdf::parse(include_str!("../../../urdf/four_bar.urdf")).expect("invariant: bundled four-bar parses");
     // The rocker reaches angles at and above the limit: δ > 0 is inside, δ < 0 beyond.
     let t4 = four_bar_tangent_rocker_angle() + delta;
     let problem = LinkageProblem::new(&m, &[("rocker_joint".into(), t4)], &[]).expect("invariant: bundled four-bar builds");
@@ -219,7 +219,7 @@ fn four_bar_instance(delta: f64, sigma: f64) -> Instance {
 }
 
 fn butterfly_instance() -> Instance {
-    let m = urdf::parse(include_str!("../../urdf/double_butterfly.urdf")).expect("invariant: bundled butterfly parses");
+    let m = urdf::parse(include_str!("../../../urdf/double_butterfly.urdf")).expect("invariant: bundled butterfly parses");
     let t6 = 12f64.atan2(5.0);
     let problem = LinkageProblem::new(&m, &[("joint6".into(), t6)], &[]).expect("invariant: bundled butterfly builds");
     let point = |t: &[f64]| {
@@ -393,8 +393,8 @@ fn study_ik(name: &str, difficulty: &str, chain: &Chain3R, target: [f64; 2], roo
 /// an internal motion.
 pub fn manip3r_findings() -> Vec<Finding> {
     let load = |text: &str| Chain3R::from_mechanism(&urdf::parse(text).expect("invariant: bundled robot parses"), 0.0).expect("invariant: bundled robot is 3R");
-    let a = load(include_str!("../../urdf/orthogonal_3r_a.urdf"));
-    let f = load(include_str!("../../urdf/orthogonal_3r_f.urdf"));
+    let a = load(include_str!("../../../urdf/orthogonal_3r_a.urdf"));
+    let f = load(include_str!("../../../urdf/orthogonal_3r_f.urdf"));
     let mut out = Vec::new();
     let regular = a.eval_f64(0.4, -1.2);
     out.push(study_ik("3R robot a, IK at a regular point", "isolated regular roots", &a, regular, brute_force_roots(&a, regular), None));

@@ -1,27 +1,34 @@
-//! `linkspace bench3r --arms`: per robot, the shipped `singularities` path (rounding, chain
-//! selection, structural or generic verdict, certified branches) against the previous
-//! behaviour on the same chain (the interval cusp and node searches on the full torus, bounded
-//! by `--timeout` and `--max-boxes`), both measured in the same run. Every case runs as a child
-//! process of this executable, so its peak resident memory is the child's own (`wait4`'s
-//! `ru_maxrss`); wall time includes the process start, the same for both paths.
+//! `linkspace-lab bench3r --arms`: per robot, the shipped `linkspace singularities` path
+//! (rounding, chain selection, structural or generic verdict, certified branches) against the
+//! previous behaviour on the same chain (the interval cusp and node searches on the full torus,
+//! bounded by `--timeout` and `--max-boxes`), both measured in the same run. Every case runs as a
+//! child process, so its peak resident memory is the child's own (`wait4`'s `ru_maxrss`): the
+//! shipped path as the `linkspace` binary beside this one, the baseline as this executable's
+//! hidden `--baseline-child` mode. Wall time and peak memory include each binary's own start
+//! and footprint (the product also carries the ROS 2 node), a few milliseconds and megabytes.
 
-use super::{load_chain, median, Bench3rArgs, ChainArgs, ROBOTS, SINGULARITIES_MAX_MEMORY};
+use crate::bench3r::{Bench3rArgs, ROBOTS};
+use crate::median;
 use anyhow::{bail, Context, Result};
-use linkspace::manip3r::{self, Control};
+use linkspace::manip3r::{self, select::ChainSpec, Chain3R, Control, LoadOptions};
+use linkspace::model::urdf;
 use linkspace::search::{Limits, Status};
 use std::io::{Read, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Stdio};
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 /// The bundled real arms, with the joint a 7R arm needs locked (README, "Real arms").
 const ARMS: [(&str, &str, &[&str]); 4] = [
-    ("puma560", include_str!("../../urdf/puma560.urdf"), &[]),
-    ("kuka_kr16", include_str!("../../urdf/kuka_kr16.urdf"), &[]),
-    ("ur5", include_str!("../../urdf/ur5.urdf"), &[]),
-    ("iiwa14", include_str!("../../urdf/iiwa14.urdf"), &["joint_3=0"]),
+    ("puma560", include_str!("../../../urdf/puma560.urdf"), &[]),
+    ("kuka_kr16", include_str!("../../../urdf/kuka_kr16.urdf"), &[]),
+    ("ur5", include_str!("../../../urdf/ur5.urdf"), &[]),
+    ("iiwa14", include_str!("../../../urdf/iiwa14.urdf"), &["joint_3=0"]),
 ];
+
+/// The baseline's bound on pending cells: `linkspace singularities`' default `--max-memory`.
+const BASELINE_MAX_MEMORY: usize = 256 << 20;
 
 /// One child run: wall seconds, peak RSS (bytes), stdout.
 struct Measured {
@@ -89,16 +96,21 @@ fn status_text(complete: bool, limit: Option<&str>) -> String {
 }
 
 /// `bench3r --arms`.
-pub(crate) fn run(args: &Bench3rArgs) -> Result<()> {
-    let exe = std::env::current_exe().context("locating this executable")?;
+pub fn run(args: &Bench3rArgs) -> Result<()> {
+    let lab = std::env::current_exe().context("locating this executable")?;
+    let shipped = lab.parent().context("locating this executable's folder")?.join(format!("linkspace{}", std::env::consts::EXE_SUFFIX));
+    if !shipped.is_file() {
+        bail!("bench3r --arms runs the product binary, not found at {} (build it: cargo build --release --bins)", shipped.display());
+    }
     let dir = std::env::temp_dir().join(format!("linkspace-bench-arms-{}", std::process::id()));
     std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-    let result = table(args, &exe, &dir);
+    let result = table(args, &shipped, &lab, &dir);
     std::fs::remove_dir_all(&dir).ok();
     result
 }
 
-fn table(args: &Bench3rArgs, exe: &Path, dir: &Path) -> Result<()> {
+/// The table: `shipped` runs the new path, `lab` (this executable) the baseline.
+fn table(args: &Bench3rArgs, shipped: &Path, lab: &Path, dir: &Path) -> Result<()> {
     let robots = ARMS.iter().map(|&(n, x, l)| (n, x, l)).chain(ROBOTS.iter().map(|&(n, x, _, _)| (n, x, &[][..])));
     let mut out = std::io::stdout().lock();
     let timeout = args.timeout;
@@ -130,7 +142,7 @@ fn table(args: &Bench3rArgs, exe: &Path, dir: &Path) -> Result<()> {
             let note = format!("{note}{}", if verdict["certified"].as_bool() == Some(true) { " (certified)" } else { "" });
             Ok(Outcome { status: status_text(complete, v["limit"].as_str()), undecided, note })
         };
-        let (t_new, m_new, new) = repeated(exe, &new_args, args.repeat, &read_new)?;
+        let (t_new, m_new, new) = repeated(shipped, &new_args, args.repeat, &read_new)?;
         let mut base_args = vec![
             "bench3r".to_string(),
             "--baseline-child".into(),
@@ -149,7 +161,7 @@ fn table(args: &Bench3rArgs, exe: &Path, dir: &Path) -> Result<()> {
             let (uc, un) = (v["undecided_cusp_boxes"].as_u64().unwrap_or(0), v["undecided_node_pairs"].as_u64().unwrap_or(0));
             Ok(Outcome { status: status_text(complete, v["limit"].as_str()), undecided: uc + un, note: format!("{uc} + {un}") })
         };
-        let (t_base, m_base, base) = repeated(exe, &base_args, args.repeat, &read_base)?;
+        let (t_base, m_base, base) = repeated(lab, &base_args, args.repeat, &read_base)?;
         let mb = |b: f64| b / (1024.0 * 1024.0);
         writeln!(
             out,
@@ -174,14 +186,28 @@ fn table(args: &Bench3rArgs, exe: &Path, dir: &Path) -> Result<()> {
 /// The hidden `bench3r --baseline-child FILE` mode: the previous behaviour on the chain the
 /// shipped path selects (same rounding and chain choice), the full torus, both interval
 /// searches run whatever the structure, nothing attributed afterwards. One JSON line.
-pub(crate) fn baseline_child(args: &Bench3rArgs, file: &Path) -> Result<()> {
+pub fn baseline_child(args: &Bench3rArgs, file: &Path) -> Result<()> {
     manip3r::check_precision(args.precision)?;
-    let chain_args = ChainArgs { base: None, tip: None, tip_point: None, lock: args.lock.clone(), exact_geometry: false, ignore_limits: true };
-    let (chain, _prepared) = load_chain(&PathBuf::from(file), 0.0, &chain_args)?;
+    let locks = args
+        .lock
+        .iter()
+        .map(|text| {
+            let (joint, value) = text.split_once('=').with_context(|| format!("--lock '{text}': expected JOINT=VALUE"))?;
+            let value: f64 = value.trim().parse().with_context(|| format!("--lock '{text}': '{value}' is not a number"))?;
+            Ok((joint.to_string(), value))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    // What `linkspace singularities FILE --lock ... --ignore-limits` reads: the same rounding
+    // and chain choice.
+    let options = LoadOptions { spec: ChainSpec { locks, length_tolerance: 0.0, ..Default::default() }, exact_geometry: false, ignore_limits: true };
+    let xml = std::fs::read_to_string(file).with_context(|| format!("reading {}", file.display()))?;
+    let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", file.display()))?;
+    let prepared = manip3r::prepare(&mechanism, &options).with_context(|| format!("loading {}", file.display()))?;
+    let chain = Chain3R::from_mechanism(&prepared.mechanism, 0.0).with_context(|| format!("loading {}", file.display()))?;
     if !(args.timeout.is_finite() && args.timeout > 0.0) {
         bail!("--timeout must be a positive number of seconds, got {}", args.timeout);
     }
-    let limits = Limits { max_cells: args.max_boxes, timeout: Some(Duration::from_secs_f64(args.timeout.min(1e9))), max_memory: SINGULARITIES_MAX_MEMORY };
+    let limits = Limits { max_cells: args.max_boxes, timeout: Some(Duration::from_secs_f64(args.timeout.min(1e9))), max_memory: BASELINE_MAX_MEMORY };
     let cancel = AtomicBool::new(false);
     let control = Control { limits, threads: 1, cancel: &cancel };
     let run = manip3r::singularities(&chain, args.precision, true, &control, &mut |_| {})?;

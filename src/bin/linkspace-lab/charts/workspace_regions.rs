@@ -1,5 +1,5 @@
 //! Workspace regions of a 3R arm in the half-section (ρ, z) with their number of inverse
-//! kinematic solutions (issue 11, item 4; seed 003's figures).
+//! kinematic solutions (seed 003's figures).
 //!
 //! The images of the singular-curve cover's boxes (`manip3r::curves::Cover`, enclosed by
 //! `cusps::evaluate`) are rasterised on a grid of the half-plane; a cell they miss holds no

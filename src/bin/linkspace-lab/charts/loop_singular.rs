@@ -1,4 +1,4 @@
-//! Charts of closed-loop singular sets (issue 13, item 5), from runs made here: the five-bar's
+//! Charts of closed-loop singular sets from runs made here: the five-bar's
 //! type-II image in actuator space (cover boxes, cusps, nodes, regions with their assembly
 //! modes), its workspace with the type-I and type-II curves, and the double butterfly's θ6
 //! along each branch of its configuration curve with the certified turning points.
@@ -7,7 +7,7 @@
 //! `problems::singular::image`); the summary lines printed here are what the tests read.
 
 use super::write;
-use crate::cli::plot::{layered_panels, Layer, LayeredPanel, Marker};
+use crate::plot::{layered_panels, Layer, LayeredPanel, Marker};
 use anyhow::{Context, Result};
 use linkspace::contract::{Contraction, Contractor, Propagation};
 use linkspace::interval::{components, IntervalBox};
@@ -21,9 +21,9 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
-const FIVE_BAR_UNEQUAL: &str = include_str!("../../../urdf/five_bar_unequal.urdf");
-const FIVE_BAR: &str = include_str!("../../../urdf/five_bar.urdf");
-const BUTTERFLY: &str = include_str!("../../../urdf/double_butterfly.urdf");
+const FIVE_BAR_UNEQUAL: &str = include_str!("../../../../urdf/five_bar_unequal.urdf");
+const FIVE_BAR: &str = include_str!("../../../../urdf/five_bar.urdf");
+const BUTTERFLY: &str = include_str!("../../../../urdf/double_butterfly.urdf");
 const CRANKS: [&str; 2] = ["crank1_joint", "crank2_joint"];
 /// The five-bar's end point: the tip of rod1 (where rod2's tip is pinned).
 const END_POINT: (&str, f64, f64) = ("rod1", 2.5, 0.0);
