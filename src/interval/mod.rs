@@ -4,6 +4,7 @@
 //! which it was made), bisection, and the few set operations the driver needs.
 //! It does no IO and knows nothing of equations.
 
+pub mod angle;
 pub(crate) mod fast;
 mod graph;
 pub mod trig;
