@@ -148,23 +148,47 @@ pub fn solve_target(chain: &Chain3R, target: [Interval; 2], precision: f64, cont
     Ok(IkSolutions { unique, clusters: cluster(&undecided), status: run.status, stats: run.stats })
 }
 
-/// Groups boxes that touch on the torus, in order of their first box.
+/// Groups boxes that touch on the torus.
 fn cluster(boxes: &[[Interval; 2]]) -> Vec<IkCluster> {
     let n = boxes.len();
-    // Boxes that share a point (a sweep), then an all-pairs pass over the few boxes on the ±π
-    // edges for contacts across the seam.
-    let all: Vec<usize> = (0..n).collect();
-    let (touching, _) = crate::interval::touching_pairs(&all, 2, |i, d| boxes[i][d]);
+    let mut uf = crate::interval::UnionFind::new(n);
+    // Sweep along θ₂ for ordinary contacts, then an all-pairs pass over the few boxes on the
+    // ±π edges for contacts across the seam.
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| boxes[a][0].inf().total_cmp(&boxes[b][0].inf()));
+    for x in 0..n {
+        let i = order[x];
+        for &j in &order[x + 1..] {
+            if boxes[j][0].inf() > boxes[i][0].sup() {
+                break;
+            }
+            if !boxes[i][1].disjoint(boxes[j][1]) {
+                let (a, b) = (uf.find(i), uf.find(j));
+                uf.link(a, b);
+            }
+        }
+    }
     // Deliberately a little below π: boxes this close to the seam may meet copies across it.
     #[allow(clippy::approx_constant)]
     const NEAR_SEAM: f64 = 3.14159;
     let edge: Vec<usize> = (0..n).filter(|&i| boxes[i].iter().any(|d| d.inf() <= -NEAR_SEAM || d.sup() >= NEAR_SEAM)).collect();
-    let across = edge.iter().enumerate().flat_map(|(x, &i)| edge[x + 1..].iter().filter(move |&&j| meet_on_torus(&boxes[i], &boxes[j])).map(move |&j| (i, j)));
-    crate::interval::components_of_edges(n, touching.into_iter().chain(across))
-        .into_iter()
-        .map(|members| IkCluster {
-            hull: members.iter().fold([Interval::EMPTY; 2], |h, &i| [h[0].convex_hull(boxes[i][0]), h[1].convex_hull(boxes[i][1])]),
-            boxes: members.len(),
-        })
-        .collect()
+    for (x, &i) in edge.iter().enumerate() {
+        for &j in &edge[x + 1..] {
+            if meet_on_torus(&boxes[i], &boxes[j]) {
+                let (a, b) = (uf.find(i), uf.find(j));
+                uf.link(a, b);
+            }
+        }
+    }
+    let mut out: std::collections::BTreeMap<usize, IkCluster> = std::collections::BTreeMap::new();
+    for (i, b) in boxes.iter().enumerate() {
+        let r = uf.find(i);
+        out.entry(r)
+            .and_modify(|c| {
+                c.hull = [c.hull[0].convex_hull(b[0]), c.hull[1].convex_hull(b[1])];
+                c.boxes += 1;
+            })
+            .or_insert(IkCluster { hull: *b, boxes: 1 });
+    }
+    out.into_values().collect()
 }
