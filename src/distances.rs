@@ -507,27 +507,15 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
     // Clusters: touching boxes, and boxes that hold the same certified placement (a root on the
     // boundary of two clusters' boxes is one solution, counted once).
     let (touch, n0) = components(&out.solutions);
-    let mut uf = crate::interval::UnionFind::new(n0);
     let pos = |i: usize| old_index.iter().position(|&j| j == i);
-    for hit in &meets {
+    let same_placement = meets.iter().flat_map(|hit| {
         let ks: Vec<usize> = hit.iter().filter_map(|&i| pos(i)).collect();
-        for w in ks.windows(2) {
-            let (a, b) = (uf.find(touch[w[0]]), uf.find(touch[w[1]]));
-            uf.link(a, b);
-        }
-    }
-    let mut renumber: Vec<Option<usize>> = vec![None; n0];
-    let mut n = 0;
-    let labels: Vec<usize> = touch
-        .iter()
-        .map(|&t| {
-            let r = uf.find(t);
-            *renumber[r].get_or_insert_with(|| {
-                n += 1;
-                n - 1
-            })
-        })
-        .collect();
+        ks.windows(2).map(|w| (touch[w[0]], touch[w[1]])).collect::<Vec<_>>()
+    });
+    // Touch components are numbered by first box, so numbering their unions by smallest
+    // member numbers the clusters by first box too.
+    let (merged, n) = crate::interval::labels(n0, &crate::interval::components_of_edges(n0, same_placement));
+    let labels: Vec<usize> = touch.iter().map(|&t| merged[t]).collect();
     let mut clusters = vec![ClusterVerdict { proven: 0, undecided: None, boxes: 0 }; n];
     for (k, &l) in labels.iter().enumerate() {
         clusters[l].boxes += 1;

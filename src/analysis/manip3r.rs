@@ -144,9 +144,9 @@ impl Manip3rAnalysis {
 /// the origin or spans half a turn or more.
 ///
 /// The candidate comes from `f64::atan2` at the corners; it is then proven: every vector of the
-/// box lies left of direction α (`cos α·y − sin α·x ≥ 0`) and right of direction β, evaluated
-/// with the sound interval sine and cosine, and β − α < π, so every angle lies in [α, β]
-/// (modulo 2π). A failed proof widens the candidate, then gives up.
+/// box lies strictly left of direction α and right of direction β
+/// (`interval::angle::strictly_between`), so every angle lies in [α, β] (modulo 2π). A failed
+/// proof widens the candidate, then gives up.
 fn direction(x: Interval, y: Interval) -> Option<Interval> {
     if x.contains(0.0) && y.contains(0.0) {
         return None;
@@ -164,25 +164,11 @@ fn direction(x: Interval, y: Interval) -> Option<Interval> {
         if beta - alpha >= 3.0 {
             return None;
         }
-        let side = |angle: f64| {
-            let a = point(angle);
-            manip3r::trig::cos(a) * y - manip3r::trig::sin(a) * x
-        };
-        if side(alpha).inf() >= 0.0 && side(beta).sup() <= 0.0 {
+        if crate::interval::angle::strictly_between(x, y, alpha, beta) {
             return Some(interval(alpha, beta));
         }
     }
     None
-}
-
-/// Shifts an angle interval by a whole number of turns so that its middle lies in [-π, π].
-fn principal(a: Interval) -> Interval {
-    let k = (a.mid() / std::f64::consts::TAU).round();
-    if k == 0.0 {
-        a
-    } else {
-        a - point(k) * Interval::TAU
-    }
 }
 
 impl Analysis for Manip3rAnalysis {
@@ -450,7 +436,7 @@ impl PreparedRun<IkResult> for IkRun {
         // θ₁ turns the end point's direction about a₁ onto the point's.
         let theta1 = |b: &[Interval; 2]| -> Bounds {
             match (self.target_direction, a.direction(&chain.perp(*b))) {
-                (Some(t), Some(u)) => bounds(principal(t - u)),
+                (Some(t), Some(u)) => bounds(crate::interval::angle::wrap(t - u)),
                 _ => bounds(motion::full_range()),
             }
         };

@@ -4,8 +4,12 @@
 //! which it was made), bisection, and the few set operations the driver needs.
 //! It does no IO and knows nothing of equations.
 
+pub mod angle;
 pub(crate) mod fast;
+mod graph;
 pub mod trig;
+
+pub use graph::{components_by, components_of_edges, flood_fill, labels, touching_pairs};
 
 pub use inari::Interval;
 
@@ -126,13 +130,8 @@ impl IntervalBox {
 /// Labels each box with its connected component (boxes sharing a point are connected);
 /// returns the labels and the number of components, numbered in order of first appearance.
 ///
-/// Sort and sweep, so that reporting a run of a million boxes stays cheap (an
-/// all-pairs comparison takes minutes on a run stopped by its `--timeout`). The boxes
-/// are swept along the one coordinate on which the fewest pairs overlap (counted exactly in
-/// O(n log n) per coordinate): only pairs that overlap there are compared in full, and every
-/// pair that shares a point overlaps on every coordinate, so the components are exactly the
-/// all-pairs ones. Along a curve of boxes a coordinate overlaps O(n) pairs, so the whole is
-/// O(n log n) in practice.
+/// Sort and sweep (`touching_pairs`), so that reporting a run of a million boxes stays cheap (an
+/// all-pairs comparison takes minutes on a run stopped by its `--timeout`).
 pub fn components(boxes: &[IntervalBox]) -> (Vec<usize>, usize) {
     let (labels, n, _) = components_counted(boxes);
     (labels, n)
@@ -141,74 +140,17 @@ pub fn components(boxes: &[IntervalBox]) -> (Vec<usize>, usize) {
 /// `components`, also returning how many box pairs were compared in full (the sweep's work):
 /// for tests that check the cost without timing it.
 pub fn components_counted(boxes: &[IntervalBox]) -> (Vec<usize>, usize, u64) {
-    let n = boxes.len();
-    let mut uf = UnionFind::new(n);
-    let mut compared = 0u64;
-    // A void box shares no point with anything: it is its own component.
-    let live: Vec<usize> = (0..n).filter(|&i| !boxes[i].is_void()).collect();
-    let dims = live.first().map_or(0, |&i| boxes[i].len());
-    if dims == 0 {
-        // Boxes over no variable are all the one point of a zero-dimensional space.
-        for w in live.windows(2) {
-            let (a, b) = (uf.find(w[0]), uf.find(w[1]));
-            if a != b {
-                uf.link(a, b);
-            }
-        }
-    } else if live.len() > 1 {
-        let by_inf = |d: usize| {
-            let mut order = live.clone();
-            order.sort_by(|&a, &b| boxes[a].dims[d].inf().total_cmp(&boxes[b].dims[d].inf()));
-            order
-        };
-        // Pairs overlapping on coordinate d: for each box in order of lower bound, the later
-        // boxes whose lower bound is at most its upper bound (closed intervals touch).
-        let overlapping = |order: &[usize], d: usize| -> u128 {
-            let infs: Vec<f64> = order.iter().map(|&i| boxes[i].dims[d].inf()).collect();
-            order
-                .iter()
-                .enumerate()
-                .map(|(k, &i)| {
-                    let sup = boxes[i].dims[d].sup();
-                    (infs.partition_point(|&x| x <= sup) - (k + 1)) as u128
-                })
-                .sum()
-        };
-        let (d, order) = (0..dims)
-            .map(|d| {
-                let order = by_inf(d);
-                (overlapping(&order, d), d, order)
-            })
-            .min_by_key(|(pairs, d, _)| (*pairs, *d))
-            .map(|(_, d, order)| (d, order))
-            .expect("invariant: dims > 0");
-        for (k, &i) in order.iter().enumerate() {
-            let sup = boxes[i].dims[d].sup();
-            for &j in &order[k + 1..] {
-                if boxes[j].dims[d].inf() > sup {
-                    break;
-                }
-                compared += 1;
-                if boxes[i].intersects(&boxes[j]) {
-                    let (a, b) = (uf.find(i), uf.find(j));
-                    if a != b {
-                        uf.link(a, b);
-                    }
-                }
-            }
-        }
-    }
-    let mut labels = vec![0; n];
-    let mut ids = std::collections::HashMap::new();
-    for (i, label) in labels.iter_mut().enumerate() {
-        let r = uf.find(i);
-        let next = ids.len();
-        *label = *ids.entry(r).or_insert(next);
-    }
-    (labels, ids.len(), compared)
+    graph::box_components(boxes)
 }
 
-/// Disjoint sets over `0..n` (union–find with path halving), for grouping boxes.
+/// The all-pairs definition of `components`, O(n²): the reference the tests hold the sweep to.
+#[doc(hidden)]
+pub fn components_all_pairs(boxes: &[IntervalBox]) -> (Vec<usize>, usize) {
+    components_by(boxes.len(), |i, j| boxes[i].intersects(&boxes[j]))
+}
+
+/// Disjoint sets over `0..n` (union–find with path halving). Only the IK clusters use it: their
+/// order is the order of the representatives, which the reports keep.
 pub(crate) struct UnionFind {
     parent: Vec<usize>,
 }
@@ -232,30 +174,6 @@ impl UnionFind {
     pub(crate) fn link(&mut self, a: usize, b: usize) {
         self.parent[a] = b;
     }
-}
-
-/// The all-pairs definition of `components`, O(n²): the reference the tests hold the sweep to.
-#[doc(hidden)]
-pub fn components_all_pairs(boxes: &[IntervalBox]) -> (Vec<usize>, usize) {
-    let mut uf = UnionFind::new(boxes.len());
-    for i in 0..boxes.len() {
-        for j in (i + 1)..boxes.len() {
-            if boxes[i].intersects(&boxes[j]) {
-                let (a, b) = (uf.find(i), uf.find(j));
-                if a != b {
-                    uf.link(a, b);
-                }
-            }
-        }
-    }
-    let mut labels = vec![0; boxes.len()];
-    let mut ids = std::collections::HashMap::new();
-    for (i, label) in labels.iter_mut().enumerate() {
-        let r = uf.find(i);
-        let next = ids.len();
-        *label = *ids.entry(r).or_insert(next);
-    }
-    (labels, ids.len())
 }
 
 #[cfg(test)]

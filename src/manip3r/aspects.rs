@@ -53,14 +53,6 @@ impl Cell {
     }
 }
 
-fn find(parent: &mut [usize], mut x: usize) -> usize {
-    while parent[x] != x {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    x
-}
-
 /// The number of aspects on the full torus, or why it is not proven.
 pub fn count(chain: &Chain3R, control: &Control) -> Result<u32, String> {
     let mut why = String::new();
@@ -149,8 +141,8 @@ fn count_at(chain: &Chain3R, depth: u32, shift: f64, control: &Control) -> Resul
     let arc_edge_signs: std::collections::HashMap<(usize, usize), Option<[bool; 2]>> =
         between_arcs.iter().copied().zip(crate::search::map_parallel(&between_arcs, control.threads, |&(x, dir)| edge_signs(edge_of(x, dir), 1 - dir))).collect();
     // Pieces: node 2c + s for cell c and sign s.
-    let mut parent: Vec<usize> = (0..2 * n * n).collect();
     let id = |c: usize, s: bool| 2 * c + s as usize;
+    let mut joined = Vec::new();
     for x in 0..n * n {
         // For cell x = i·n + j: the upper neighbour in θ₂ (edge θ₂ = line i + 1, spanning θ₃ over
         // cell j), then in θ₃; the shared edge is seen from x: θ_dir fixed at x's upper bound.
@@ -163,21 +155,14 @@ fn count_at(chain: &Chain3R, depth: u32, shift: f64, control: &Control) -> Resul
             };
             for s in [false, true] {
                 if signs[s as usize] && cx.has(s) && cy.has(s) {
-                    let (a, b) = (find(&mut parent, id(x, s)), find(&mut parent, id(y, s)));
-                    parent[a] = b;
+                    joined.push((id(x, s), id(y, s)));
                 }
             }
         }
     }
-    let mut roots = std::collections::BTreeSet::new();
-    for (c, cell) in cells.iter().enumerate() {
-        for s in [false, true] {
-            if cell.has(s) {
-                roots.insert(find(&mut parent, id(c, s)));
-            }
-        }
-    }
-    Ok(roots.len() as u32)
+    // A piece that does not exist is joined to nothing: its own group, not counted.
+    let pieces = crate::interval::components_of_edges(2 * n * n, joined);
+    Ok(pieces.iter().filter(|g| cells[g[0] / 2].has(g[0] % 2 == 1)).count() as u32)
 }
 
 /// The largest number of IK solutions of one point, proven when a sample reaches `bound`.

@@ -58,34 +58,7 @@ use crate::model::Mechanism;
 use inari::Interval;
 use serde::Serialize;
 
-/// A sound enclosure of arg(x, y), within (−π, π] up to the enclosure's width, or `None`
-/// when (x, y) may be 0 or the guess cannot be proven.
-pub fn arg(x: Interval, y: Interval) -> Option<Interval> {
-    let phi = y.mid().atan2(x.mid());
-    let mut eps = 1e-15f64;
-    while eps < 1e-2 {
-        let (lo, hi) = (phi - eps, phi + eps);
-        // The direction is strictly counter-clockwise from lo and clockwise from hi; with
-        // hi − lo < π this puts its angle in (lo, hi) modulo 2π.
-        let left = cos(point(lo)) * y - sin(point(lo)) * x;
-        let right = cos(point(hi)) * y - sin(point(hi)) * x;
-        if left.inf() > 0.0 && right.sup() < 0.0 {
-            return Some(interval(lo, hi));
-        }
-        eps *= 10.0;
-    }
-    None
-}
-
-/// `x` shifted by a multiple of 2π so that its midpoint lies in [−π, π].
-pub fn wrap(x: Interval) -> Interval {
-    let k = (x.mid() / std::f64::consts::TAU).round();
-    if k == 0.0 {
-        x
-    } else {
-        x - point(k) * Interval::TAU
-    }
-}
+pub use crate::interval::angle::{arg, wrap};
 
 fn unit(v: &V3) -> V3 {
     let n = dot(v, v).sqrt();

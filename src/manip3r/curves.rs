@@ -163,63 +163,43 @@ impl Cover {
         Some((index(t2)?, index(t3)?))
     }
 
+    /// Clusters: cover boxes touching (8-neighbours across the ±π seams), numbered by first box.
     fn label_clusters(&mut self) {
         let n = self.n;
         let mut at = vec![usize::MAX; n * n];
         for (k, &(i, j)) in self.boxes.iter().enumerate() {
             at[i * n + j] = k;
         }
-        self.cluster = vec![usize::MAX; self.boxes.len()];
-        for start in 0..self.boxes.len() {
-            if self.cluster[start] != usize::MAX {
-                continue;
-            }
-            let label = self.clusters;
-            self.clusters += 1;
-            self.cluster[start] = label;
-            let mut todo = vec![start];
-            while let Some(k) = todo.pop() {
-                let (i, j) = self.boxes[k];
-                for di in [n - 1, 0, 1] {
-                    for dj in [n - 1, 0, 1] {
-                        let m = at[((i + di) % n) * n + (j + dj) % n];
-                        if m != usize::MAX && self.cluster[m] == usize::MAX {
-                            self.cluster[m] = label;
-                            todo.push(m);
-                        }
+        let boxes = &self.boxes;
+        let groups = crate::interval::flood_fill(boxes.len(), |_| true, |k, out| {
+            let (i, j) = boxes[k];
+            for di in [n - 1, 0, 1] {
+                for dj in [n - 1, 0, 1] {
+                    let m = at[((i + di) % n) * n + (j + dj) % n];
+                    if m != usize::MAX {
+                        out.push(m);
                     }
                 }
             }
-        }
+        });
+        (self.cluster, self.clusters) = crate::interval::labels(boxes.len(), &groups);
     }
 
+    /// Regions: regular cells (region 0 until now) joined by 4-neighbours across the ±π seams,
+    /// numbered by first cell; cover cells keep -1.
     fn label_regions(&mut self) {
         let n = self.n;
-        // 0 marks a regular cell not yet labelled; labels are stored as region + 1 meanwhile.
-        let mut next = 0;
-        for start in 0..n * n {
-            if self.region[start] != 0 {
-                continue;
-            }
-            next += 1;
-            self.region[start] = next;
-            let mut todo = vec![start];
-            while let Some(c) = todo.pop() {
-                let (i, j) = (c / n, c % n);
-                for (a, b) in [((i + 1) % n, j), ((i + n - 1) % n, j), (i, (j + 1) % n), (i, (j + n - 1) % n)] {
-                    if self.region[a * n + b] == 0 {
-                        self.region[a * n + b] = next;
-                        todo.push(a * n + b);
-                    }
-                }
+        let region = &self.region;
+        let groups = crate::interval::flood_fill(n * n, |c| region[c] == 0, |c, out| {
+            let (i, j) = (c / n, c % n);
+            out.extend([((i + 1) % n, j), ((i + n - 1) % n, j), (i, (j + 1) % n), (i, (j + n - 1) % n)].map(|(a, b)| a * n + b));
+        });
+        for (k, g) in groups.iter().enumerate() {
+            for &c in g {
+                self.region[c] = k as i32;
             }
         }
-        for r in self.region.iter_mut() {
-            if *r > 0 {
-                *r -= 1;
-            }
-        }
-        self.regions = next as usize;
+        self.regions = groups.len();
     }
 }
 

@@ -49,22 +49,8 @@ pub fn stated(x: f64) -> Interval {
     if x == 0.0 {
         point(0.0)
     } else {
-        interval(next_down(x), next_up(x))
+        interval(x.next_down(), x.next_up())
     }
-}
-
-/// The next `f64` below `x` (finite `x`).
-pub fn next_down(x: f64) -> f64 {
-    -next_up(-x)
-}
-
-/// The next `f64` above `x` (finite `x`).
-pub fn next_up(x: f64) -> f64 {
-    if x == 0.0 {
-        return f64::from_bits(1);
-    }
-    let bits = x.to_bits();
-    f64::from_bits(if x > 0.0 { bits + 1 } else { bits - 1 })
 }
 
 /// `(cos x, sin x)` enclosed; exact at the point 0, so axis-aligned models keep point coefficients.

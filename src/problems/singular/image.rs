@@ -662,35 +662,20 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
             blocked[i * grid + j] = images.iter().any(|im| axes[0].meets(ci, im[0]) && axes[1].meets(cj, im[1]));
         }
     }
-    let mut label = vec![usize::MAX; grid * grid];
     let mut out = Regions { grid, blocked_cells: blocked.iter().filter(|b| **b).count(), regions: Vec::new(), seconds: 0.0 };
-    for start in 0..grid * grid {
-        if blocked[start] || label[start] != usize::MAX {
-            continue;
-        }
-        let id = out.regions.len();
-        let mut stack = vec![start];
-        label[start] = id;
-        let mut members = Vec::new();
-        while let Some(c) = stack.pop() {
-            members.push(c);
-            let (i, j) = (c / grid, c % grid);
-            let mut next = Vec::new();
-            for (axis, di) in [(0usize, -1i64), (0, 1), (1, -1), (1, 1)] {
-                let (mut a, mut b) = (i as i64, j as i64);
-                if axis == 0 { a += di } else { b += di }
-                let wrap = |x: i64, ax: &Axis| if (0..grid as i64).contains(&x) { Some(x as usize) } else if ax.periodic { Some(x.rem_euclid(grid as i64) as usize) } else { None };
-                if let (Some(a), Some(b)) = (wrap(a, &axes[0]), wrap(b, &axes[1])) {
-                    next.push(a * grid + b);
-                }
-            }
-            for nb in next {
-                if !blocked[nb] && label[nb] == usize::MAX {
-                    label[nb] = id;
-                    stack.push(nb);
-                }
+    let wrap = |x: i64, ax: &Axis| if (0..grid as i64).contains(&x) { Some(x as usize) } else if ax.periodic { Some(x.rem_euclid(grid as i64) as usize) } else { None };
+    let free_regions = crate::interval::flood_fill(grid * grid, |c| !blocked[c], |c, next| {
+        let (i, j) = (c / grid, c % grid);
+        for (axis, di) in [(0usize, -1i64), (0, 1), (1, -1), (1, 1)] {
+            let (mut a, mut b) = (i as i64, j as i64);
+            if axis == 0 { a += di } else { b += di }
+            if let (Some(a), Some(b)) = (wrap(a, &axes[0]), wrap(b, &axes[1])) {
+                next.push(a * grid + b);
             }
         }
+    });
+    for members in free_regions {
+        let start = members[0];
         // The sample: the member cell nearest the members' mean (in grid indices), so a chart's
         // label sits inside the region rather than at its first cell; any cell would do for the
         // count, which is constant over the region.

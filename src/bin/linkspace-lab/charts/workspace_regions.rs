@@ -53,39 +53,23 @@ pub fn regions(chain: &Chain3R, blocked: &[[f64; 4]], x: (f64, f64), z: (f64, f6
             }
         }
     }
-    let mut label = vec![usize::MAX; grid * grid];
     let mut out = Vec::new();
-    for start in 0..grid * grid {
-        if !free[start] || label[start] != usize::MAX {
-            continue;
+    let free_regions = linkspace::interval::flood_fill(grid * grid, |c| free[c], |c, next| {
+        let (i, j) = (c / grid, c % grid);
+        if i > 0 {
+            next.push(c - grid);
         }
-        let id = out.len();
-        let mut stack = vec![start];
-        let mut members = Vec::new();
-        label[start] = id;
-        while let Some(c) = stack.pop() {
-            members.push(c);
-            let (i, j) = (c / grid, c % grid);
-            let mut next = Vec::with_capacity(4);
-            if i > 0 {
-                next.push(c - grid);
-            }
-            if i + 1 < grid {
-                next.push(c + grid);
-            }
-            if j > 0 {
-                next.push(c - 1);
-            }
-            if j + 1 < grid {
-                next.push(c + 1);
-            }
-            for n in next {
-                if free[n] && label[n] == usize::MAX {
-                    label[n] = id;
-                    stack.push(n);
-                }
-            }
+        if i + 1 < grid {
+            next.push(c + grid);
         }
+        if j > 0 {
+            next.push(c - 1);
+        }
+        if j + 1 < grid {
+            next.push(c + 1);
+        }
+    });
+    for members in free_regions {
         let centre = |c: usize| (x.0 + wx * ((c / grid) as f64 + 0.5), z.0 + wz * ((c % grid) as f64 + 0.5));
         let n = members.len() as f64;
         let (mx, mz) = members.iter().map(|&c| centre(c)).fold((0.0, 0.0), |(a, b), (p, q)| (a + p / n, b + q / n));
