@@ -5,7 +5,7 @@
 //! process of this executable, so its peak resident memory is the child's own (`wait4`'s
 //! `ru_maxrss`); wall time includes the process start, the same for both paths.
 
-use super::{load_chain, median, Bench3rArgs, ChainArgs, ROBOTS, SINGULARITIES_MAX_MEMORY};
+use super::{load_arm, median, Bench3rArgs, ChainArgs, ROBOTS, SINGULARITIES_MAX_MEMORY};
 use anyhow::{bail, Context, Result};
 use linkspace::manip3r::{self, Control};
 use linkspace::search::{Limits, Status};
@@ -177,7 +177,7 @@ fn table(args: &Bench3rArgs, exe: &Path, dir: &Path) -> Result<()> {
 pub(crate) fn baseline_child(args: &Bench3rArgs, file: &Path) -> Result<()> {
     manip3r::check_precision(args.precision)?;
     let chain_args = ChainArgs { base: None, tip: None, tip_point: None, lock: args.lock.clone(), exact_geometry: false, ignore_limits: true };
-    let (chain, _prepared) = load_chain(&PathBuf::from(file), 0.0, &chain_args)?;
+    let chain = load_arm(&PathBuf::from(file), 0.0, &chain_args)?.chain;
     if !(args.timeout.is_finite() && args.timeout > 0.0) {
         bail!("--timeout must be a positive number of seconds, got {}", args.timeout);
     }

@@ -4,7 +4,7 @@ use super::msgs::{
     self, AssemblyMode, BoxSet, ColorRGBA, CuspRecord, Header, InverseKinematicsResponse, JointState, LsBox, Marker, MarkerArray, NodeRecord, Point, Pose, Quaternion, SingularityReport,
     SolveStats, TfMessage, Time, Transform, TransformStamped, Vector3,
 };
-use crate::analysis::{Bounds, BoxSetResult, IkResult, ResultBox, SingularityResult};
+use crate::app::{Bounds, BoxSetResult, IkResult, ResultBox, SingularityResult};
 use crate::manip3r::branches::SingularBranches;
 use crate::manip3r::report::joints_over;
 use crate::search::{BoxStatus, Limit, SolverSettings, Status};
@@ -456,8 +456,8 @@ mod tests {
 
     fn report_of(xml: &str, nodes: bool) -> SingularityReport {
         let m = crate::model::urdf::parse(xml).expect("parses");
-        let a = crate::analysis::load(&m, &[], &[]).expect("loads");
-        let q = crate::analysis::SingularityQuery { precision: 1e-4, nodes, max_boxes: 1_000_000, timeout: None, threads: 1 };
+        let a = crate::app::load(&m, &[], &[]).expect("loads");
+        let q = crate::app::SingularityQuery { precision: 1e-4, nodes, max_boxes: 1_000_000, timeout: None, threads: 1 };
         let r = a.singularities(&q).expect("valid").run(&std::sync::atomic::AtomicBool::new(false), &mut |_| {});
         singularity_report(&r, 7)
     }

@@ -13,7 +13,7 @@
 use super::convert;
 use super::msgs::{self, *};
 use super::{Limits, Loaded, Mapping, Network, ServeConfig, Source};
-use crate::analysis::{AnalysisError, BoxSetResult, IkQuery, IkResult, Service, SingularityQuery, SingularityResult};
+use crate::app::{AnalysisError, BoxSetResult, IkQuery, IkResult, Service, SingularityQuery, SingularityResult};
 use crate::search::{SolverSettings, Status};
 use anyhow::{Context as _, Result};
 use futures::StreamExt;

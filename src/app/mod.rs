@@ -10,12 +10,12 @@
 //! No IO and no async here: a front end prepares a run (all validation happens then, so bad
 //! requests are answered at once), moves it to a thread of its own and converts the result.
 
-mod manip3r;
-mod linkage;
+pub mod arm;
+pub mod linkage;
 mod platform;
 
-pub use manip3r::Manip3rAnalysis;
-pub use linkage::LinkageAnalysis;
+pub use arm::{Arm, Manip3rAnalysis};
+pub use linkage::{LinkageAnalysis, SolveJob};
 pub use crate::problems::singular::sets::Actuation;
 pub use platform::PlatformAnalysis;
 

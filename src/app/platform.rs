@@ -164,7 +164,7 @@ impl PreparedRun for PlatformRun {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analysis::load;
+    use crate::app::load;
     use crate::model::urdf;
     use crate::search::Status;
 
@@ -227,7 +227,7 @@ mod tests {
         assert!(load(&m, &partial, &[]).err().map(|e| e.to_string()).unwrap_or_default().contains("leg 'leg35' has no --fix value"));
         assert!(load(&m, &[("nope".into(), 1.0)], &[]).err().map(|e| e.to_string()).unwrap_or_default().contains("no leg"));
         let a = load(&m, &config_a(), &[]).expect("platform");
-        let query = crate::analysis::SingularityQuery { precision: 1e-4, nodes: false, max_boxes: 10, timeout: None, threads: 1 };
+        let query = crate::app::SingularityQuery { precision: 1e-4, nodes: false, max_boxes: 10, timeout: None, threads: 1 };
         assert!(a.singularities(&query).err().map(|e| e.to_string()).unwrap_or_default().contains("not available"));
         assert!(a.solve(&config_a(), &SolverSettings { sigma: -1.0, ..Default::default() }).err().map(|e| e.to_string()).unwrap_or_default().contains("sigma"));
     }
