@@ -22,12 +22,13 @@ run solve_rssr solve urdf/rssr.urdf --sigma 1e-3
 run solve_bennett solve urdf/bennett.urdf --sigma 1e-2
 for r in a b d e f; do run sing_$r singularities urdf/orthogonal_3r_$r.urdf --nodes; done
 for r in puma560 kuka_kr16 ur5; do run sing_$r singularities urdf/$r.urdf; done
-run sing_iiwa singularities urdf/iiwa14.urdf --lock joint_a3=0.5 --ignore-limits
+run sing_iiwa singularities urdf/iiwa14.urdf --lock joint_3=0.5 --ignore-limits
 run ik_e ik urdf/orthogonal_3r_e.urdf --point 2,1
 run ik_a ik urdf/orthogonal_3r_a.urdf --point 3,1
 run ik_puma ik urdf/puma560.urdf --point 0.5,0.3
-run coll_puma collisions urdf/puma560.urdf
-run dist_oct distances urdf/octahedral.urdf
+run coll_column collisions urdf/orthogonal_3r_a_column.urdf
+run dist_oct distances urdf/octahedral.urdf --fix leg15=4.25 --fix leg16=5.75 --fix leg26=4.25 --fix leg24=5.75 --fix leg34=4.25 --fix leg35=5.75
 run dist_spheres distances urdf/four_spheres.json
 run loops_five_bar loop-singularities urdf/five_bar.urdf
 run loops_four_bar loop-singularities urdf/four_bar.urdf
+run ik_e_xyz ik urdf/orthogonal_3r_e.urdf --point 1.5,0.5,1
