@@ -23,7 +23,7 @@ use inari::Interval;
 use std::time::Instant;
 
 use super::{
-    gap, Analysis, AnalysisError, Bounds, BoxSetResult, Classification, IkQuery, IkResult, IkSolution, PreparedRun, ResultBox, Service, SingularPair, SingularPoint,
+    gap, Analysis, AnalysisError, MechanismKind, Bounds, BoxSetResult, Classification, IkQuery, IkResult, IkSolution, PreparedRun, ResultBox, Service, SingularPair, SingularPoint,
     SingularityQuery, SingularityResult,
 };
 use crate::manip3r::{curves::Cover, motion, report::radius};
@@ -289,8 +289,8 @@ impl Analysis for Manip3rAnalysis {
         &self.arm.chain.name
     }
 
-    fn kind(&self) -> &'static str {
-        "manipulator_3r"
+    fn kind(&self) -> MechanismKind {
+        MechanismKind::Manipulator3R
     }
 
     fn services(&self) -> Vec<Service> {
@@ -573,7 +573,7 @@ mod tests {
     fn robot_e_has_the_table_counts_and_a_sound_curve_cover() {
         let m = urdf::parse(E).expect("bundled");
         let a = load(&m, &[], &[]).expect("3R");
-        assert_eq!(a.kind(), "manipulator_3r");
+        assert_eq!(a.kind(), MechanismKind::Manipulator3R);
         let r = a.singularities(&query()).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
         assert_eq!(r.status, Status::Complete);
         assert_eq!((r.cusps.iter().filter(|c| c.certified).count(), r.nodes.iter().filter(|n| n.certified).count(), r.undecided()), (4, 2, 0));

@@ -10,7 +10,7 @@
 //! singular configuration once those sets are complete.
 
 use super::{
-    classify, gap, Actuation, Analysis, AnalysisError, BoxSetResult, Classification, LoopSingularities, PreparedRun, ResultBox, Service, SingularSetResult, SingularityQuery,
+    classify, gap, Actuation, Analysis, MechanismKind, AnalysisError, BoxSetResult, Classification, LoopSingularities, PreparedRun, ResultBox, Service, SingularSetResult, SingularityQuery,
     SingularityResult,
 };
 use crate::interval::components;
@@ -61,8 +61,11 @@ impl Analysis for LinkageAnalysis {
         &self.mechanism.name
     }
 
-    fn kind(&self) -> &'static str {
-        self.problem.kind()
+    fn kind(&self) -> MechanismKind {
+        match self.problem {
+            Linkage::Planar(_) => MechanismKind::PlanarLinkage,
+            Linkage::Spatial(..) => MechanismKind::SpatialLinkage,
+        }
     }
 
     fn services(&self) -> Vec<Service> {
@@ -433,7 +436,7 @@ mod tests {
     fn four_bar_with_a_fixed_crank_has_two_assembly_modes() {
         let m = urdf::parse(FOUR_BAR).expect("bundled");
         let a = load(&m, &[("crank_joint".into(), 0.5)], &[("coupler".into(), 2.0, 1.0)]).expect("planar");
-        assert_eq!(a.kind(), "planar_linkage");
+        assert_eq!(a.kind(), MechanismKind::PlanarLinkage);
         let settings = SolverSettings { sigma: 1e-5, ..Default::default() };
         let r = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
         assert_eq!(r.clusters, 2);
@@ -453,7 +456,7 @@ mod tests {
     fn a_spatial_linkage_loads_on_the_spatial_builder_and_solves_again() {
         let m = urdf::parse(include_str!("../../urdf/rssr.urdf")).expect("bundled");
         let a = load(&m, &[("crank_joint".into(), 0.7)], &[]).expect("spatial");
-        assert_eq!(a.kind(), "spatial_linkage");
+        assert_eq!(a.kind(), MechanismKind::SpatialLinkage);
         assert!(a.limitation().contains("not planar"), "{}", a.limitation());
         let settings = SolverSettings { sigma: 1e-6, ..Default::default() };
         let r = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
@@ -565,7 +568,7 @@ mod tests {
         let xml = include_str!("../../urdf/rssr.urdf").replace("</robot>", "<transmission name=\"drive\"><type>transmission_interface/SimpleTransmission</type><joint name=\"crank_joint\"/></transmission></robot>");
         let m = urdf::parse(&xml).expect("bundled");
         let a = crate::app::load_urdf(&m, &xml, &[], &[]).expect("spatial");
-        assert_eq!(a.kind(), "spatial_linkage");
+        assert_eq!(a.kind(), MechanismKind::SpatialLinkage);
         let query = SingularityQuery { precision: 1e-6, nodes: false, max_boxes: 1_000_000, timeout: None, threads: 1 };
         let r = a.singularities(&query).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
         let loops = r.loops.as_ref().expect("a linkage's sets");

@@ -7,7 +7,7 @@ use super::msgs::{
 use crate::app::{Bounds, BoxSetResult, IkResult, ResultBox, SingularityResult};
 use crate::manip3r::branches::SingularBranches;
 use crate::manip3r::report::joints_over;
-use crate::search::{BoxStatus, Limit, SolverSettings, Status};
+use crate::search::{BoxStatus, SolverSettings, Status};
 
 /// A header stamped now (wall clock) in `frame`.
 pub fn header(frame: &str) -> Header {
@@ -18,11 +18,6 @@ pub fn header(frame: &str) -> Header {
 /// The wire form of the settings (`timeout` 0 for none).
 pub fn settings(s: &SolverSettings) -> msgs::Settings {
     msgs::Settings { sigma: s.sigma, rho: s.rho, max_boxes: s.max_boxes, timeout: s.timeout.map_or(0.0, |t| t.as_secs_f64()) }
-}
-
-/// The name of a limit, as in the JSON report.
-pub fn limit_name(l: Limit) -> &'static str {
-    l.name()
 }
 
 /// The wire value of a box's status (`Box.SOLUTION`, `Box.UNIQUE`, `Box.UNDECIDED`).
@@ -51,7 +46,7 @@ pub fn box_set(r: &BoxSetResult, run_id: u64) -> BoxSet {
     let (status, limit) = match r.status {
         Status::Complete if r.boxes.iter().any(|b| b.status == BoxStatus::Undecided) => (msgs::SET_INCOMPLETE, "undecided"),
         Status::Complete => (msgs::SET_COMPLETE, ""),
-        Status::Incomplete(l) => (msgs::SET_INCOMPLETE, limit_name(l)),
+        Status::Incomplete(l) => (msgs::SET_INCOMPLETE, l.name()),
     };
     BoxSet {
         header: header(&joint_frame(&r.mechanism)),
