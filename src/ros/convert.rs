@@ -7,7 +7,7 @@ use super::msgs::{
 use crate::app::{Bounds, BoxSetResult, IkResult, ResultBox, SingularityResult};
 use crate::manip3r::branches::SingularBranches;
 use crate::manip3r::report::joints_over;
-use crate::search::{BoxStatus, SolverSettings, Status};
+use crate::search::{BoxStatus, Incompleteness, SolverSettings, Status};
 
 /// A header stamped now (wall clock) in `frame`.
 pub fn header(frame: &str) -> Header {
@@ -44,7 +44,7 @@ pub fn box_set(r: &BoxSetResult, run_id: u64) -> BoxSet {
     // Complete means nothing undecided, as in the CLI's reports: a finished run that left
     // undecided boxes (a platform's cluster without a proof) is incomplete, limit "undecided".
     let (status, limit) = match r.status {
-        Status::Complete if r.boxes.iter().any(|b| b.status == BoxStatus::Undecided) => (msgs::SET_INCOMPLETE, "undecided"),
+        Status::Complete if r.boxes.iter().any(|b| b.status == BoxStatus::Undecided) => (msgs::SET_INCOMPLETE, Incompleteness::Undecided.name()),
         Status::Complete => (msgs::SET_COMPLETE, ""),
         Status::Incomplete(l) => (msgs::SET_INCOMPLETE, l.name()),
     };
