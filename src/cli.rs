@@ -384,7 +384,7 @@ pub fn run() -> Result<()> {
 /// Values may be negative everywhere (`--sigma -1` means the same as `--sigma=-1`, and
 /// gets the same one-line complaint from the settings' own check). Every other error of clap's
 /// (unknown flag, missing value, unparsable number) is flattened to one line: its multi-line
-/// usage text buried the message (issue 9, item 8). `--help` and `--version` print as usual.
+/// usage text would bury the message. `--help` and `--version` print as usual.
 fn parse_args<I, T>(args: I) -> Cli
 where
     I: IntoIterator<Item = T>,
@@ -442,6 +442,7 @@ fn parse_fix(s: &str) -> Result<(String, f64)> {
     Ok((name.trim().to_string(), v))
 }
 
+#[cfg(feature = "ros")]
 fn parse_trace(s: &str) -> Result<(String, f64, f64)> {
     let (link, xy) = s.split_once('@').with_context(|| format!("--trace '{s}': expected LINK@X,Y"))?;
     let (x, y) = xy.split_once(',').with_context(|| format!("--trace '{s}': expected LINK@X,Y"))?;
@@ -800,7 +801,7 @@ fn bench3r(args: Bench3rArgs) -> Result<()> {
         let mut node_times = Vec::new();
         let mut node_run = None;
         for _ in 0..args.repeat {
-            let r = nodes::search(&chain, &k.cusps, &k.bands, &NodeSettings { precision: args.precision, ..Default::default() })?;
+            let r = nodes::search(&chain, &k.cusps, &k.bands, &NodeSettings { precision: args.precision })?;
             node_times.push(r.seconds);
             node_run = Some(r);
         }

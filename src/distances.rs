@@ -1,4 +1,4 @@
-//! Solving distance problems with every answer certified or labelled (issue 15).
+//! Solving distance problems with every answer certified or labelled.
 //!
 //! `solve` picks a formulation (`Choice`), runs the kernel on it, then settles every cluster of
 //! solution boxes (connected component of touching boxes) as follows:
@@ -14,6 +14,7 @@
 //!   certified placement are searched again with every determinant (the redundant ones settle
 //!   the singular tangent of octahedral b), then in coordinates: removed when proven empty,
 //!   undecided otherwise.
+//!
 //! A cluster then counts its proven solutions (distinct certified placements) and is undecided
 //! when some box of it is still unproven, with the reason. "Complete" means nothing undecided.
 
@@ -127,7 +128,7 @@ impl Certified {
 /// (`Placed::build_line`: lines tangent to spheres), else the shared determinants, certified in
 /// coordinates.
 ///
-/// Measured (`bench-distances`, issue 15): on the four spheres at sigma 0.01 the line
+/// Measured (`bench-distances`): on the four spheres at sigma 0.01 the line
 /// formulation takes 843 boxes and 0.04 s CPU with every solution box proven, against 885
 /// boxes plus a settling of 0.6 s (1.6 s in all) for the shared determinants, and over a
 /// million boxes for the points formulation (expanding `‖p_a − p_b‖²` into monomials loses the
@@ -267,11 +268,11 @@ fn settle_points(placed: &Placed, solvers: &[Solver<'_>], out: &mut Certified, c
     let (labels, n) = components(&boxes);
     let mut newton = Newton::new(&placed.system, f64::INFINITY);
     let mut clusters = vec![ClusterVerdict { proven: 0, undecided: None, boxes: 0 }; n];
-    for c in 0..n {
+    for (c, cluster) in clusters.iter_mut().enumerate() {
         let members: Vec<usize> = (0..boxes.len()).filter(|&i| labels[i] == c).collect();
-        clusters[c].boxes = members.len();
+        cluster.boxes = members.len();
         if let Some(r) = members.iter().find_map(|&i| why[i]) {
-            clusters[c].undecided = Some(r);
+            cluster.undecided = Some(r);
         }
         // Certified boxes that overlap may hold the same placement: one root when Krawczyk
         // certifies their hull, otherwise the cluster is left undecided about the count.
@@ -287,9 +288,9 @@ fn settle_points(placed: &Placed, solvers: &[Solver<'_>], out: &mut Certified, c
             let hull = group.iter().skip(1).fold(group[0].clone(), |h, b| IntervalBox { dims: h.dims.iter().zip(&b.dims).map(|(x, y)| x.convex_hull(*y)).collect(), level: h.level });
             let single = group.len() == 1 || newton.as_mut().and_then(|nw| nw.certify(&hull)).is_some();
             if !single {
-                clusters[c].undecided.get_or_insert("overlapping certified boxes: one solution or two");
+                cluster.undecided.get_or_insert("overlapping certified boxes: one solution or two");
             }
-            clusters[c].proven += 1;
+            cluster.proven += 1;
             // The certified box may be up to sigma wide: its placement is polished and proven
             // again in a tiny box (kept when that fails: the wide box is still a proof).
             let rough = placed.points(&certified[k].midpoint());
@@ -445,8 +446,8 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
     let mut coordinates = may_need.iter().copied().zip(coordinates);
     let mut keep = Vec::new();
     let mut why: Vec<Option<&'static str>> = Vec::new();
-    for i in 0..out.solutions.len() {
-        if covered[i] {
+    for (i, &is_covered) in covered.iter().enumerate() {
+        if is_covered {
             keep.push(i);
             why.push(None);
             continue;

@@ -1,4 +1,4 @@
-//! Test idea (issue 15): every answer of a distance problem is certified or labelled. Proven
+//! Test idea: every answer of a distance problem is certified or labelled. Proven
 //! placements are checked against references computed without the solver: lines tangent to four
 //! spheres by floating-point Newton on the point-and-direction system from many seeded starts
 //! (a lower bound on the set of lines: every line found must be proven, none lost), and each
@@ -20,6 +20,7 @@ fn run(p: &DistanceProblem, choice: Choice, redundant: bool, sigma: f64) -> Cert
 }
 
 /// Lines tangent to spheres (centres `c`, radii `r`) from the problem's `t`, `u` (indices 4, 5).
+#[allow(clippy::needless_range_loop)] // point k pairs with radius r[k]
 fn spheres(c: [[f64; 3]; 4], r: [f64; 4]) -> DistanceProblem {
     let mut p = DistanceProblem::new("spheres");
     for (k, x) in c.into_iter().enumerate() {
@@ -152,7 +153,7 @@ fn randomized_sphere_sets_every_line_proven() {
 
 #[test]
 fn octahedral_every_assembly_mode_proven() {
-    // Without the redundant determinants too (issue 15): the boxes along the common tangent of
+    // Without the redundant determinants too: the boxes along the common tangent of
     // configuration b's two curves, which no certified placement meets, are searched again with
     // every determinant and proven empty. At sigma 0.1 as well as 0.01.
     for sigma in [0.01, 0.1] {
@@ -360,6 +361,7 @@ fn roots(coef: &[R]) -> Vec<C> {
 }
 
 /// Determinant by Gaussian elimination with partial pivoting.
+#[allow(clippy::needless_range_loop)] // Gaussian elimination: indices read as the formula
 fn det(mut a: Vec<Vec<R>>) -> R {
     let n = a.len();
     let mut d = R::f(1.0);

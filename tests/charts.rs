@@ -1,5 +1,5 @@
-//! Test idea: `linkspace chart --quick --only loops,singular3r` draws the issue-13 and issue-11
-//! charts from fresh runs. The runs' summary lines must show what the independent references of
+//! Test idea: `linkspace chart --quick --only loops,singular3r` draws the singular-set charts of
+//! closed loops and the 3R workspace regions from fresh runs. The runs' summary lines must show what the independent references of
 //! the other modules establish (the double butterfly's 10 turning points of θ6 on its 4
 //! branches, by continuation in `closed_loop_singularities`; the unequal five-bar's empty cusp
 //! and node sets and its verdict), every turning point must land on a branch drawn beside it,

@@ -181,11 +181,12 @@ fn variant_all(name: &str, edits: &[(&str, &str)]) -> tempfile_path::Path {
 }
 
 #[test]
+#[allow(clippy::approx_constant)] // a loose bound just inside −π, not π
 fn singularities_json_follows_the_documented_schema() {
     let path = std::env::temp_dir().join(format!("linkspace-3r-{}.json", std::process::id()));
     let (ok, out, err) = run(&["singularities", &fixture("orthogonal_3r_f.urdf"), "--nodes", "--json", path.to_str().expect("utf-8")]);
     assert!(ok, "{err}");
-    // The verdict comes first (issue 11), then the counts.
+    // The verdict comes first, then the counts.
     assert!(out.starts_with("verdict: NON-CUSPIDAL (certified)"), "{out}");
     assert!(out.lines().nth(1).is_some_and(|l| l.starts_with("orthogonal_3r_f: 0 cusps, 2 nodes, 2 internal-motion lines, 0 undecided, status complete")), "{out}");
     let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).expect("json")).expect("valid json");
@@ -303,9 +304,9 @@ fn collisions_bad_input_and_json_schema() {
     }
 }
 
-/// Issue 9, item 8: a negative number after a flag used to be taken for a flag of its own, and
-/// clap answered with several lines of usage; `--sigma=-1` got the one-line error. Every
-/// spelling of bad input now gets one line, for every subcommand.
+/// A negative number after a flag is a value, not a flag of its own, and bad input gets one
+/// line, not clap's several lines of usage: every spelling (`--sigma -1` as `--sigma=-1`), for
+/// every subcommand.
 #[test]
 fn bad_input_gets_one_line_however_it_is_spelled() {
     let fb = fixture("four_bar.urdf");
@@ -359,7 +360,7 @@ fn help_is_still_the_full_text() {
     assert!(ok && out.starts_with("linkspace "), "{out}");
 }
 
-/// `bench3r --arms` (issue 11): one row per bundled real arm and seed robot, the shipped path
+/// `bench3r --arms`: one row per bundled real arm and seed robot, the shipped path
 /// complete with nothing undecided, the baseline reported with its status. Tiny baseline limits
 /// keep it to a few seconds; no timing is asserted.
 #[test]

@@ -1,4 +1,4 @@
-//! Issue 13: singular sets of planar closed-loop linkages (`problems::singular`) against
+//! Singular sets of planar closed-loop linkages (`problems::singular`) against
 //! references of our own that never call the solver: closed forms for four-bars, a sheet-wise
 //! grid plus Newton for the double butterfly's turning points of θ6, a dense actuator grid for
 //! the five-bar's type-II curves.

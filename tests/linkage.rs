@@ -10,7 +10,7 @@ use nalgebra::{DMatrix, DVector};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 
-// ---------- the double butterfly, written out by hand from research/double_butterfly.md ----------
+// ---------- the double butterfly, written out by hand from the seed's three loop equations ----------
 
 fn g0() -> f64 {
     3f64.atan2(4.0)
@@ -335,7 +335,7 @@ fn mobile_branches() -> &'static Vec<Vec<Vec<f64>>> {
     })
 }
 
-/// Issue 4: the parallel driver gives exactly the serial set of boxes, on every bundled problem.
+/// The parallel driver gives exactly the serial set of boxes, on every bundled problem.
 #[test]
 fn parallel_and_serial_drivers_give_identical_box_sets() {
     use linkspace::search::SolverSettings;

@@ -31,6 +31,7 @@ fn seed_map(p: (f64, f64, f64, f64, f64), t2: f64, t3: f64) -> [f64; 2] {
 }
 
 #[test]
+#[allow(clippy::approx_constant)] // a sample grid from −3.14, not π
 fn loaded_map_equals_the_seed_formulas() {
     for (case, d2, d3, d4, r2, r3) in CASES {
         let c = chain(case);
@@ -130,7 +131,8 @@ fn sample(p: (f64, f64, f64, f64, f64), n: usize) -> Sampled {
         }
     }
     // Nodes: crossings of image segments whose joint points are at least 5h apart.
-    let segs: Vec<([f64; 2], [f64; 2], [f64; 2], [f64; 2])> = segments
+    type Segment = ([f64; 2], [f64; 2], [f64; 2], [f64; 2]);
+    let segs: Vec<Segment> = segments
         .iter()
         .filter_map(|&(a, b)| {
             let (pa, pb) = (point_on(a)?, point_on(b)?);
@@ -312,7 +314,7 @@ fn inverse_kinematics_recovers_sampled_configurations() {
         }
         // Away from singularities the number of solutions is even (2 or 4) for these robots.
         if s.clusters.is_empty() {
-            assert!(s.unique.len() % 2 == 0 && !s.unique.is_empty(), "{} solutions", s.unique.len());
+            assert!(s.unique.len().is_multiple_of(2) && !s.unique.is_empty(), "{} solutions", s.unique.len());
         }
     }
 }
@@ -413,7 +415,7 @@ fn collision_boxes_agree_with_sampling() {
             }
         }
     }
-    let set = classify(&scene, &CollisionSettings { precision: 0.02, ..Default::default() }).expect("valid settings");
+    let set = classify(&scene, &CollisionSettings { precision: 0.02 }).expect("valid settings");
     assert!(set.status.is_complete());
     let collides = |t2: f64, t3: f64| -> [bool; 2] {
         let s = column_scene(t2, t3);

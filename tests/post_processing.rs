@@ -1,5 +1,5 @@
 //! Test idea: what runs after branch and prune (the spurious-box check, clustering, the report)
-//! keeps the run's limits (issue 9, item 6). No clock is read here: the properties are that a
+//! keeps the run's limits. No clock is read here: the properties are that a
 //! deadline already passed does no work and says so, and that nothing is dropped unexamined.
 
 use crate::util::problem;

@@ -158,6 +158,7 @@ fn exact(k: i64) -> String {
     format!("{}", k as f64 * FRAC_PI_2)
 }
 
+#[allow(clippy::approx_constant)] // URDF angles truncated on purpose, not π and π/2
 fn truncated(k: i64) -> String {
     match k {
         0 => "0".into(),
@@ -168,6 +169,7 @@ fn truncated(k: i64) -> String {
 
 /// Table 1 and the verdicts, for each convention, with snapping on.
 #[test]
+#[allow(clippy::approx_constant)] // 1.5708 is the truncated file value
 fn seed_robots_in_three_conventions_agree_with_table_1() {
     // (case, cusps, nodes, internal-motion lines, cuspidal)
     let table = [("a", 4, 0, 0, true), ("b", 4, 0, 0, true), ("d", 0, 0, 0, false), ("e", 4, 2, 0, true), ("f", 0, 2, 2, false)];
@@ -249,7 +251,7 @@ fn cli_first_line_is_the_verdict_and_bad_flags_are_one_line() {
     assert!(!out.status.success() && stderr.trim().lines().count() == 1 && stderr.contains("--tip-point"), "{stderr}");
 }
 
-/// The issue's complaint: "0 nodes, status complete" beside undecided boxes. A report is
+/// No "0 nodes, status complete" beside undecided boxes: a report is
 /// complete only when nothing is left undecided; the kernel's `Complete` only says no limit
 /// stopped it.
 #[test]
@@ -264,7 +266,7 @@ fn a_report_with_undecided_boxes_is_never_complete() {
     assert_eq!(report.undecided_total[0], run.cusps.undecided.len());
 }
 
-/// Must-show of issue 11: the orthogonal 3R near the cuspidal boundary (two cusps and a node
+/// The orthogonal 3R near the cuspidal boundary (two cusps and a node
 /// within 3e-4 of each other for each sign of z) has all four cusps and both nodes certified
 /// at the default precision 1e-4, nothing undecided. The reference is independent of linkspace:
 /// `scripts/dev/orthogonal_3r_singular_points.py` traces det Df = 0 of the seed's closed form

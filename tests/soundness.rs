@@ -1,4 +1,4 @@
-//! Test idea: each break of issue 9 as a mechanism whose answer is known in closed form (circle
+//! Test idea: each way of losing or misreporting a configuration as a mechanism whose answer is known in closed form (circle
 //! intersections, computed here or with mpmath at 300 bits where noted), solved through the
 //! library; the boxes must enclose every configuration of the stated mechanism and keep every
 //! filter and certificate honest.
@@ -80,8 +80,8 @@ fn joint(p: &LinkageProblem, b: &IntervalBox, name: &str) -> (f64, f64) {
     p.joint_values(b)[name]
 }
 
-/// Issue 9 item 1: limits six turns away, [1 + 6π, 2 + 6π], keep the configuration whose rocker
-/// angle 1.5145 ≡ 20.364 lies inside them (the filter only tried offsets of −2..=2 turns).
+/// Limits six turns away, [1 + 6π, 2 + 6π], keep the configuration whose rocker
+/// angle 1.5145 ≡ 20.364 lies inside them (a filter trying only offsets of −2..=2 turns loses it).
 #[test]
 fn limits_several_turns_away_keep_their_configurations() {
     let six_pi = 3.0 * TAU;
@@ -98,7 +98,7 @@ fn limits_several_turns_away_keep_their_configurations() {
     }
 }
 
-/// Issue 9 item 2: with `<limit lower="0" upper="1"/>` on the loop, a root that Krawczyk
+/// With `<limit lower="0" upper="1"/>` on the loop, a root that Krawczyk
 /// certifies outside the limit must not be reported, and the one inside still is.
 #[test]
 fn certified_roots_still_meet_the_loop_limits() {
@@ -117,7 +117,7 @@ fn certified_roots_still_meet_the_loop_limits() {
     assert!(r.unique.iter().any(|&u| u), "the root inside the limit is still certified");
 }
 
-/// Issue 9 item 3: a coupler of 1e-12 beside a crank of 1000 is a term, not noise. The stated
+/// A coupler of 1e-12 beside a crank of 1000 is a term, not noise. The stated
 /// mechanism (O4 at 3000, rocker 2000 − 5e-13) puts the coupler at cos φ = (D² + b² − c²)/(2Db)
 /// = 0.5 + 1.9e-16 (D = 2000, b = 1e-12: exact decimal arithmetic by hand), so φ = ±60°.
 #[test]
@@ -131,7 +131,7 @@ fn tiny_terms_are_bounded_not_dropped() {
     }
 }
 
-/// Issue 9 item 3: the same four-bar scaled by 1e±200 has the same joint values.
+/// The same four-bar scaled by 1e±200 has the same joint values.
 #[test]
 fn scaled_mechanisms_give_the_same_answers() {
     let reference = assemblies(1.5, 4.0, 3.5, 4.0, 0.5);
@@ -150,7 +150,7 @@ fn scaled_mechanisms_give_the_same_answers() {
     }
 }
 
-/// Issue 9 item 4: coefficients from `--fix crank_joint=0.305` enclose 1.5·cos 0.305 − 4 and
+/// Coefficients from `--fix crank_joint=0.305` enclose 1.5·cos 0.305 − 4 and
 /// 1.5·sin 0.305 exactly (brackets: the f64 neighbours of the 300-bit mpmath values), where the
 /// old builder stored the nearest f64 as if exact.
 #[test]
@@ -164,7 +164,7 @@ fn coefficients_enclose_their_exact_values() {
     }
 }
 
-/// Issue 9 item 5: read-outs at `--fix crank_joint=1e8` are outward rounded around the true
+/// Read-outs at `--fix crank_joint=1e8` are outward rounded around the true
 /// values (1e8 ≡ 1.94269513450401446 mod 2π, mpmath at 300 bits); 1e16 is refused in one line.
 #[test]
 fn large_fixed_values_read_out_soundly_or_are_refused() {
@@ -184,7 +184,7 @@ fn large_fixed_values_read_out_soundly_or_are_refused() {
     }
 }
 
-/// Issue 9 item 7: a parallelogram four-bar (crank 1, coupler 2, rocker 1, O4 at 2) with the
+/// A parallelogram four-bar (crank 1, coupler 2, rocker 1, O4 at 2) with the
 /// crank at 0.5 has its coupler exactly at its rest orientation in one assembly; both roots are
 /// regular and must be certified.
 #[test]

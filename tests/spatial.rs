@@ -464,9 +464,9 @@ fn stewart_platform_search_never_drops_a_reference_assembly() {
 }
 
 /// The full forward kinematics of the 6-6 platform: every real assembly of the reference, each
-/// in a certified box, and no other. Minutes on two shared cores: run with `--ignored`.
+/// in a certified box, and no other.
 #[test]
-#[ignore]
+#[ignore = "long: about 2.5 minutes on two shared cores"]
 fn stewart_platform_assemblies_are_all_certified() {
     let refs = reference("stewart_6_6_fk.json");
     let m = urdf::parse(&urdf_text("stewart_6_6.urdf")).expect("parses");

@@ -1,4 +1,4 @@
-//! Issue 13 on spatial linkages: the input (type II) and output (type I) singular sets of 1-dof
+//! Singular sets of spatial linkages: the input (type II) and output (type I) singular sets of 1-dof
 //! spatial four-bars, built on the spatial model (`problems::singular::velocity`), against their
 //! closed-form input–output relations, which never call the solver.
 //!

@@ -6,7 +6,7 @@ mod architecture;
 mod util;
 /// Planar linkages from URDF against closed forms and independently traced curves.
 mod linkage;
-/// Issue 9: every configuration of the stated mechanism, with limits, tiny and rounded coefficients.
+/// Every configuration of the stated mechanism, with limits, tiny and rounded coefficients.
 mod soundness;
 /// The command line: bad input gives one clear line and a non-zero exit.
 mod cli;
@@ -18,22 +18,22 @@ mod random_linkages;
 mod stability;
 /// 3R manipulators from URDF: the seed-003 map, Table 1 counts, dense-sampling references.
 mod manip3r;
-/// Real arms' URDFs (issue 11): chain choice, rounding, limits, the verdict, three conventions.
+/// Real arms' URDFs: chain choice, rounding, limits, the verdict, three conventions.
 mod real_arms;
 /// Distance problems through Cayley–Menger determinants: octahedral platform, four spheres.
 mod cayley_menger;
-/// Issue 15: distance answers certified (Krawczyk in coordinates) or labelled undecided.
+/// Distance answers certified (Krawczyk in coordinates) or labelled undecided.
 mod certified_distances;
-/// Issue 12: spatial linkages (Bennett, RSSR, spherical four-bar) against closed forms; the
+/// Spatial linkages (Bennett, RSSR, spherical four-bar) against closed forms; the
 /// planar fixtures through the spatial builder.
 mod spatial;
-/// Issue 13: singular sets of planar closed-loop linkages against closed forms, grids and Newton.
+/// Singular sets of planar closed-loop linkages against closed forms, grids and Newton.
 mod closed_loop_singularities;
-/// Issue 13 on spatial linkages: RSSR and spherical four-bar singular points against their
+/// Singular sets of spatial linkages: RSSR and spherical four-bar singular points against their
 /// closed-form input–output relations.
 mod spatial_singularities;
-/// `linkspace chart`: the singular-set charts of closed loops (issue 13) and the 3R workspace
-/// regions (issue 11) show what the references of the other modules establish.
+/// `linkspace chart`: the singular-set charts of closed loops and the 3R workspace
+/// regions show what the references of the other modules establish.
 mod charts;
 /// The ROS 2 node against real rclpy over DDS on loopback: topics, services, load.
 #[cfg(feature = "ros")]

@@ -933,7 +933,7 @@ fn a_singularity_run_shows_progress_and_is_cancelled_from_rclpy() {
 /// the CLI's result. Before the RustDDS patch (vendor/README.md) every fragmented reply was
 /// dropped by Fast DDS and stalled the service for every client. A request whose mechanism
 /// name has 65,300 characters gets a short error, and a second rclpy process calling the same
-/// service at the same time is answered throughout. The minor refusals of issue 14 ride along:
+/// service at the same time is answered throughout. Smaller refusals ride along:
 /// a joint fixed twice, an IK point at 1e300, and `timeout 0` meaning the node's limit.
 #[test]
 fn large_replies_reach_rclpy_and_a_long_name_blocks_no_one() {
@@ -1011,8 +1011,8 @@ fn large_replies_reach_rclpy_and_a_long_name_blocks_no_one() {
 /// nobody subscribed; unpatched RustDDS kept every sample of such a TransientLocal writer and
 /// grew by tens of MB/s. Resident memory (VmRSS from /proc) is sampled every second: what is
 /// retained is the floor of a window (its minimum), and that must stay within 10% of the first
-/// window's floor (the bound the issue sets) over 15 s more (LINKSPACE_RSS_SECONDS=60 for the
-/// issue's full minute). Samples in flight are live memory too: on a loaded machine a few of
+/// window's floor over 15 s more (LINKSPACE_RSS_SECONDS=60 for a full
+/// minute). Samples in flight are live memory too: on a loaded machine a few of
 /// them (2 MB each) overlap now and then, so the peak is bounded separately, at 1.5 times the
 /// first window's peak. Unbounded retention fails both by far. No Python needed.
 #[test]

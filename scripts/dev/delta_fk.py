@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Reference forward kinematics of urdf/delta.urdf (issue 12), in closed form with mpmath.
+"""Reference forward kinematics of urdf/delta.urdf, in closed form with mpmath.
 
 With the three actuators fixed, each forearm rod (ball to ball) keeps its wrist ball centre on a
 sphere about its elbow ball centre; the platform only translates (virtual guide platform_x/y/z),

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Reference forward kinematics of urdf/stewart_6_6.urdf (issue 12): EVERY assembly, by homotopy.
+"""Reference forward kinematics of urdf/stewart_6_6.urdf: EVERY assembly, by homotopy.
 
 No interval solver and no linkspace code. Geometry is read from the URDF (scripts/dev/urdf_mp.py).
 

@@ -344,7 +344,7 @@ impl Analysis for Manip3rAnalysis {
                 c.regions,
                 c.boxes.len()
             ),
-            None => format!("an open 3R chain: every configuration is reachable. This one lies in a box of the singular-curve cover (det Df may vanish there), so it belongs to no proven region (component -1); the singular distance is 0"),
+            None => "an open 3R chain: every configuration is reachable. This one lies in a box of the singular-curve cover (det Df may vanish there), so it belongs to no proven region (component -1); the singular distance is 0".to_string(),
         };
         Ok(Classification {
             inside: true,
@@ -570,6 +570,7 @@ mod tests {
     }
 
     #[test]
+    #[allow(clippy::approx_constant)] // a sample grid over [-3.14, 3.14], not π
     fn robot_e_has_the_table_counts_and_a_sound_curve_cover() {
         let m = urdf::parse(E).expect("bundled");
         let a = load(&m, &[], &[]).expect("3R");
@@ -601,6 +602,7 @@ mod tests {
     }
 
     #[test]
+    #[allow(clippy::approx_constant)] // a sample grid over [-3.14, 3.14], not π
     fn classification_gives_a_sound_lower_bound_on_the_singular_distance() {
         let m = urdf::parse(E).expect("bundled");
         let a = load(&m, &[], &[]).expect("3R");
@@ -646,6 +648,7 @@ mod tests {
     /// exactly the solutions in those arcs (checked against the decimal limits, not the
     /// library's filter), and some point must lose one.
     #[test]
+    #[allow(clippy::approx_constant)] // the decimal limits of puma560.urdf, not π/4
     fn joint_limits_filter_what_the_node_answers() {
         const PUMA: &str = include_str!("../../urdf/puma560.urdf");
         let limited = load(&urdf::parse(PUMA).expect("bundled"), &[], &[]).expect("puma");

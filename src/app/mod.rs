@@ -271,7 +271,7 @@ pub fn classify(result: &BoxSetResult, values: &[f64], periodic: &[bool], singul
         component,
         components: result.clusters,
         distance,
-        singular_distance: singular.and_then(|s| nearest(s)).map(|(d, _)| d),
+        singular_distance: singular.and_then(nearest).map(|(d, _)| d),
         note: String::new(),
     }
 }

@@ -57,7 +57,8 @@ pub(crate) fn bench(args: BenchArgs) -> Result<()> {
     let fix = |v: &[(&str, f64)]| v.iter().map(|(n, x)| (n.to_string(), *x)).collect::<Vec<_>>();
     let mut out = std::io::stdout().lock();
     writeln!(out, "case | run | median CPU s | boxes processed | solution boxes | clusters (certified) | vs baseline (same run)").ok();
-    let planar_cases: [(&str, &str, Vec<(String, f64)>, f64); 5] = [
+    type Case = (&'static str, &'static str, Vec<(String, f64)>, f64);
+    let planar_cases: [Case; 5] = [
         ("four-bar, crank 0.5", FOUR_BAR, fix(&[("crank_joint", 0.5)]), 1e-6),
         ("four-bar, mobile", FOUR_BAR, fix(&[]), 0.05),
         ("slider-crank, crank 1", SLIDER_CRANK, fix(&[("crank_joint", 1.0)]), 1e-6),
@@ -74,7 +75,7 @@ pub(crate) fn bench(args: BenchArgs) -> Result<()> {
         line(&mut out, name, "planar model (baseline)", tp, &ep, "1.00x");
         line(&mut out, name, "--model spatial", ts, &es, &format!("{:.2}x the time", ts / tp.max(1e-9)));
     }
-    let spatial_cases: [(&str, &str, Vec<(String, f64)>, f64); 7] = [
+    let spatial_cases: [Case; 7] = [
         ("delta, actuators 0.2, 0.75, -0.1", DELTA, fix(&[("actuator1", 0.2), ("actuator2", 0.75), ("actuator3", -0.1)]), 1e-7),
         ("RSSR, crank 0.6", RSSR, fix(&[("crank_joint", 0.6)]), 1e-6),
         ("RSSR, mobile", RSSR, fix(&[]), 0.02),

@@ -296,7 +296,7 @@ fn measure(p: &Problem, method: Method, redundant: bool, settings: &SolverSettin
 
 /// The seed's Tables I and II in one run: the seed's determinants as plain searches (the
 /// previous configurations: split or shared variables, corner or interval-arithmetic faces)
-/// against the certified pipeline of issue 15 (`distances::solve`: the line formulation for the
+/// against the certified pipeline (`distances::solve`: the line formulation for the
 /// spheres, the settled shared determinants for the platforms), each row's CPU time against the
 /// case's baseline measured in the same run.
 pub fn bench(args: BenchArgs) -> Result<()> {
@@ -345,7 +345,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
             let base = Some((baseline.cpu, baseline.complete));
             for (label, method, seed) in [
                 ("split, corners, search only (the seed's)", Method::Search(Formulation::Split, FaceBounds::Corners), format!("t {} s, b_p {}, n_s {}", s.0, s.1, s.2)),
-                ("shared, Bernstein, search only (before issue 15)", Method::Search(Formulation::Shared, FaceBounds::Corners), String::new()),
+                ("shared, Bernstein, search only", Method::Search(Formulation::Shared, FaceBounds::Corners), String::new()),
                 ("shared, Bernstein, settled (certified; the default)", Method::Settled(Form::Auto), String::new()),
             ] {
                 let m = run(&p.distances, method, redundant, &settings, args.repeat)?;
@@ -364,7 +364,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         row(&mut out, &case, "split, corners, C1-C4, search only (the seed's; baseline)", &baseline, None, seed);
         let base = Some((baseline.cpu, baseline.complete));
         for (label, method, settings) in [
-            ("shared, Bernstein, C1-C4, search only (before issue 15)", Method::Search(Formulation::Shared, FaceBounds::Corners), &cm_settings),
+            ("shared, Bernstein, C1-C4, search only", Method::Search(Formulation::Shared, FaceBounds::Corners), &cm_settings),
             ("shared, Bernstein, C1-C4, settled (certified)", Method::Settled(Form::Shared), &cm_settings),
             ("line, search only", Method::Coordinates(Form::Line), &line_settings),
             ("line, settled (certified; the default)", Method::Settled(Form::Auto), &line_settings),

@@ -458,7 +458,7 @@ fn cusp_sweep(dir: &Path, quick: bool) -> Result<()> {
 fn collision_chart(dir: &Path) -> Result<()> {
     use linkspace::manip3r::collision::{classify, CollisionSettings, Scene};
     let scene = Scene::from_mechanism(&urdf::parse(include_str!("../../urdf/orthogonal_3r_a_column.urdf"))?)?;
-    let set = classify(&scene, &CollisionSettings { precision: 1e-2, ..Default::default() })?;
+    let set = classify(&scene, &CollisionSettings { precision: 1e-2 })?;
     let rect = |t: &[linkspace::Interval; 2]| [t[0].inf(), t[0].sup(), t[1].inf(), t[1].sup()];
     let pct = |a: f64| 100.0 * a / (4.0 * std::f64::consts::PI * std::f64::consts::PI);
     let panels = [

@@ -1,4 +1,4 @@
-//! `linkspace loop-singularities`: certified singular sets of closed-loop linkages (issue 13),
+//! `linkspace loop-singularities`: certified singular sets of closed-loop linkages,
 //! planar or spatial (the model `solve --model auto` picks), on the polynomial solver through
 //! `problems::singular`.
 

@@ -164,7 +164,7 @@ pub fn serve(mut args: ServeArgs) -> Result<()> {
     }
 
     let republish = match args.republish {
-        t if t == 0.0 => None,
+        0.0 => None,
         t if t.is_finite() && t >= 0.001 => Some(Duration::from_secs_f64(t)),
         t => bail!("--republish must be 0 (off) or at least 0.001 seconds, got {t}"),
     };

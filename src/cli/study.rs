@@ -244,7 +244,7 @@ fn butterfly_instance() -> Instance {
 
 /// Runs every planar instance of the study.
 pub fn planar_findings() -> Vec<Finding> {
-    let mut instances = vec![butterfly_instance(), four_bar_instance(0.0, 1e-6), four_bar_instance(1e-8, 1e-6), four_bar_instance(1e-8, 1e-3), four_bar_instance(1e-4, 1e-6), four_bar_instance(-1e-8, 1e-6)];
+    let mut instances = [butterfly_instance(), four_bar_instance(0.0, 1e-6), four_bar_instance(1e-8, 1e-6), four_bar_instance(1e-8, 1e-3), four_bar_instance(1e-4, 1e-6), four_bar_instance(-1e-8, 1e-6)];
     instances.iter_mut().map(|i| study(i)).collect()
 }
 

@@ -84,7 +84,7 @@ pub fn project(e: &Equation, b: &mut [Interval], partial: &mut Vec<Interval>) ->
                 return false;
             }
         }
-        prefix = prefix + t.coef * t.mono.eval(b);
+        prefix += t.coef * t.mono.eval(b);
     }
     true
 }

@@ -102,7 +102,7 @@ impl Compiled {
         let mut terms = Vec::with_capacity(p.len());
         for (m, c) in p.terms() {
             let at: usize = m.iter().map(|&(v, e)| strides[local(v)] * e as usize).sum();
-            power[at] = power[at] + c;
+            power[at] += c;
             terms.push((m.iter().map(|&(v, e)| (local(v), e)).collect(), c));
         }
         Ok(Self { vars, degrees, strides, power, terms })
@@ -404,7 +404,7 @@ mod tests {
         let start = IntervalBox::new(vec![interval(-1.0, 1.0), interval(0.0, 2.0), interval(0.5, 1.5)]);
         let mut corners = start.clone();
         let mut ia = start.clone();
-        TrapezoidClip::new(&[p.clone()], FaceBounds::Corners).unwrap().contract(&mut corners);
+        TrapezoidClip::new(std::slice::from_ref(&p), FaceBounds::Corners).unwrap().contract(&mut corners);
         TrapezoidClip::new(&[p], FaceBounds::IntervalArithmetic).unwrap().contract(&mut ia);
         for (c, i) in corners.dims.iter().zip(&ia.dims) {
             assert!(c.wid() <= i.wid() + 1e-12);

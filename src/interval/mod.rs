@@ -126,8 +126,8 @@ impl IntervalBox {
 /// Labels each box with its connected component (boxes sharing a point are connected);
 /// returns the labels and the number of components, numbered in order of first appearance.
 ///
-/// Sort and sweep, so that reporting a run of a million boxes stays cheap (issue 9, item 6:
-/// the all-pairs version took minutes after a `--timeout` had already expired). The boxes
+/// Sort and sweep, so that reporting a run of a million boxes stays cheap (an
+/// all-pairs comparison takes minutes on a run stopped by its `--timeout`). The boxes
 /// are swept along the one coordinate on which the fewest pairs overlap (counted exactly in
 /// O(n log n) per coordinate): only pairs that overlap there are compared in full, and every
 /// pair that shares a point overlaps on every coordinate, so the components are exactly the
@@ -200,10 +200,10 @@ pub fn components_counted(boxes: &[IntervalBox]) -> (Vec<usize>, usize, u64) {
     }
     let mut labels = vec![0; n];
     let mut ids = std::collections::HashMap::new();
-    for i in 0..n {
+    for (i, label) in labels.iter_mut().enumerate() {
         let r = uf.find(i);
         let next = ids.len();
-        labels[i] = *ids.entry(r).or_insert(next);
+        *label = *ids.entry(r).or_insert(next);
     }
     (labels, ids.len(), compared)
 }
@@ -250,10 +250,10 @@ pub fn components_all_pairs(boxes: &[IntervalBox]) -> (Vec<usize>, usize) {
     }
     let mut labels = vec![0; boxes.len()];
     let mut ids = std::collections::HashMap::new();
-    for i in 0..boxes.len() {
+    for (i, label) in labels.iter_mut().enumerate() {
         let r = uf.find(i);
         let next = ids.len();
-        labels[i] = *ids.entry(r).or_insert(next);
+        *label = *ids.entry(r).or_insert(next);
     }
     (labels, ids.len())
 }

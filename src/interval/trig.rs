@@ -15,6 +15,12 @@
 
 use inari::Interval;
 
+/// From this width on, sin and cos give [-1, 1] without looking further. Just under 2π, so that
+/// an interval of a full turn whose width rounded down is still caught; any threshold is sound,
+/// since [-1, 1] encloses every value.
+#[allow(clippy::approx_constant)] // a threshold below 2π, not an approximation of it
+const NEARLY_A_TURN: f64 = 6.28;
+
 /// Widening of an end-point value: far above the libm error, far below any width we use.
 fn widen(v: f64) -> (f64, f64) {
     let e = v.abs() * f64::powi(2.0, -48) + f64::MIN_POSITIVE;
@@ -70,7 +76,7 @@ pub fn sin(x: Interval) -> Interval {
         return Interval::EMPTY;
     }
     let (lo, hi) = (x.inf(), x.sup());
-    if !(lo.is_finite() && hi.is_finite()) || hi - lo >= 6.28 {
+    if !(lo.is_finite() && hi.is_finite()) || hi - lo >= NEARLY_A_TURN {
         return crate::interval::interval(-1.0, 1.0);
     }
     // sin has a maximum at π/2 + 2kπ and a minimum at π/2 + (2k+1)π.
@@ -91,7 +97,7 @@ pub fn cos(x: Interval) -> Interval {
         return Interval::EMPTY;
     }
     let (lo, hi) = (x.inf(), x.sup());
-    if !(lo.is_finite() && hi.is_finite()) || hi - lo >= 6.28 {
+    if !(lo.is_finite() && hi.is_finite()) || hi - lo >= NEARLY_A_TURN {
         return crate::interval::interval(-1.0, 1.0);
     }
     // cos has a maximum at 2kπ and a minimum at (2k+1)π.

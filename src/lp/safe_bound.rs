@@ -13,7 +13,7 @@ use crate::interval::{point, Interval};
 fn enclosure(rel: &Relaxation, b: &[Interval], q: &[(usize, f64)], mu: &[f64]) -> Interval {
     let mut residual: Vec<Interval> = vec![point(0.0); rel.n];
     for &(j, v) in q {
-        residual[j] = residual[j] + point(v);
+        residual[j] += point(v);
     }
     let mut total = point(0.0);
     for (row, &m) in rel.rows.iter().zip(mu) {
@@ -21,9 +21,9 @@ fn enclosure(rel: &Relaxation, b: &[Interval], q: &[(usize, f64)], mu: &[f64]) -
             continue;
         }
         let m = point(m);
-        total = total + m * row.bounds;
+        total += m * row.bounds;
         for &(j, a) in &row.coefs {
-            residual[j] = residual[j] - m * point(a);
+            residual[j] -= m * point(a);
         }
     }
     residual.iter().zip(b).fold(total, |acc, (r, x)| acc + *r * *x)

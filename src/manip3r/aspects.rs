@@ -170,9 +170,9 @@ fn count_at(chain: &Chain3R, depth: u32, shift: f64, control: &Control) -> Resul
         }
     }
     let mut roots = std::collections::BTreeSet::new();
-    for c in 0..n * n {
+    for (c, cell) in cells.iter().enumerate() {
         for s in [false, true] {
-            if cells[c].has(s) {
+            if cell.has(s) {
                 roots.insert(find(&mut parent, id(c, s)));
             }
         }

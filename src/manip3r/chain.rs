@@ -194,6 +194,7 @@ impl Pose {
     }
 
     /// `self ∘ other`: first `other`, then `self`.
+    #[allow(clippy::needless_range_loop)] // 3 × 3 matrix product: indices read as the formula
     pub(super) fn then(&self, other: &Pose) -> Pose {
         let mut r = [[ZERO; 3]; 3];
         for i in 0..3 {
@@ -345,6 +346,7 @@ impl Chain3R {
     /// the terms of ρ, z and their derivatives (the dependency problem of the natural form),
     /// and the width due to the lengths is their true effect plus O(h·(h + |θ box|)).
     /// The derivatives are exact forward-mode ones: the end point is linear in the lengths.
+    #[allow(clippy::needless_range_loop)] // 2 × 2 Jacobian entries: indices read as the formula
     pub fn derived(&self, theta: [Interval; 2], order: usize) -> Derived {
         let trig = trig_jets(theta, order);
         let (p, z) = self.coef.point(&trig);
@@ -389,6 +391,7 @@ impl Chain3R {
     /// The end point's part perpendicular to the first axis, `p − (a₁·p) a₁`, over the box
     /// `theta` = (θ₂, θ₃), in the first link's frame (so in the first joint's frame at θ₁ = 0):
     /// its direction about a₁ gives θ₁ in inverse kinematics. Natural interval evaluation.
+    #[allow(clippy::needless_range_loop)] // tensor coefficients c[a][b] paired with e2[a], e3[b]
     pub fn perp(&self, theta: [Interval; 2]) -> [Interval; 3] {
         let e2 = [super::trig::cos(theta[0]), super::trig::sin(theta[0]), point(1.0)];
         let e3 = [super::trig::cos(theta[1]), super::trig::sin(theta[1]), point(1.0)];
@@ -403,6 +406,7 @@ impl Chain3R {
 
     /// f at a point, in plain floating point (midpoints of the coefficients): for sampling and
     /// tests only, never for decisions.
+    #[allow(clippy::needless_range_loop)] // tensor coefficients c[a][b] paired with e2[a], e3[b]
     pub fn eval_f64(&self, t2: f64, t3: f64) -> [f64; 2] {
         let e2 = [t2.cos(), t2.sin(), 1.0];
         let e3 = [t3.cos(), t3.sin(), 1.0];

@@ -79,7 +79,7 @@ impl Placed {
         for (a, ca) in self.c.iter().enumerate() {
             let h = [0, 1, 2].map(|i| ca[0][i] * e3[0] + ca[1][i] * e3[1] + ca[2][i]);
             for i in 0..3 {
-                p[i] = p[i] + e2[a] * h[i];
+                p[i] += e2[a] * h[i];
             }
         }
         p
@@ -87,6 +87,7 @@ impl Placed {
 
     /// The point at (θ₂, θ₃) in floating point (midpoints of the coefficients): for choosing
     /// test directions only, never for decisions.
+    #[allow(clippy::needless_range_loop)] // tensor coefficients c[a][b] paired with e2[a], e3[b]
     fn at(&self, e2: &[f64; 3], e3: &[f64; 3]) -> [f64; 3] {
         let mut p = [0.0; 3];
         for a in 0..3 {

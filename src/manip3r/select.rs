@@ -122,7 +122,7 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
             let count = |l: usize| below(l).map(|p| p.iter().filter(|&&j| movable(j)).count());
             let best = (0..m.links.len()).filter_map(count).max().unwrap_or(0);
             let ends: Vec<usize> = (0..m.links.len())
-                .filter(|&l| m.links[l].parent_joint.is_some_and(|j| movable(j)) && count(l) == Some(best))
+                .filter(|&l| m.links[l].parent_joint.is_some_and(&movable) && count(l) == Some(best))
                 .collect();
             match ends.as_slice() {
                 // Down a single line of fixed joints to its end link (a 3R file's `tool`);

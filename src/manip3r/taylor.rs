@@ -171,6 +171,7 @@ impl std::ops::Add for Taylor {
 
 impl std::ops::Sub for Taylor {
     type Output = Taylor;
+    #[allow(clippy::suspicious_arithmetic_impl)] // the `+` computes an index, not the difference
     fn sub(self, o: Taylor) -> Taylor {
         let order = self.order.min(o.order);
         let mut out = Taylor::zero(order);

@@ -148,6 +148,7 @@ mod tests {
     }
 
     #[test]
+    #[allow(clippy::approx_constant)] // 1.5708 is the file's rounded value that gets snapped
     fn snaps_are_listed_with_original_and_snapped_values() {
         let xml = "<robot name='r'><link name='a'/><link name='b'/>\
             <joint name='j' type='revolute'><parent link='a'/><child link='b'/><origin rpy='1.5708 0 0'/><axis xyz='0 0.000001 1'/>\

@@ -554,6 +554,7 @@ impl CayleyMenger {
     /// The squared distance of every pair at a point `x` of the variable space (box midpoint,
     /// say): known ones at their midpoints, unknown ones from `x` (the mean of the two copies in
     /// the split formulation), `None` for pairs the equations did not involve.
+    #[allow(clippy::needless_range_loop)] // a symmetric matrix filled by (row, column)
     pub fn distances(&self, x: &[f64]) -> Vec<Vec<Option<f64>>> {
         let n = self.problem.points.len();
         let mut r = vec![vec![None; n]; n];

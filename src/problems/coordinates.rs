@@ -1,4 +1,4 @@
-//! Distance problems in placed coordinates: the "points" formulation (issue 15).
+//! Distance problems in placed coordinates: the "points" formulation.
 //!
 //! The seed's determinants (`cayley_menger`) work on squared distances only; here every point
 //! without given coordinates gets three coordinate variables instead, in the frame the fixed
@@ -9,6 +9,7 @@
 //!   `W = w·v` (and `Q = ‖v‖²` when `r_ab` is unknown) become derived variables with their own
 //!   degree-two equations, and the constraint reads `S·Q − W² − d²·Q = 0`;
 //! - an orientation `(toward − a)·(b − a) ≥ 0`: a derived variable with domain `[0, …]`.
+//!
 //! This is the point-and-direction formulation ibexsolve uses for lines tangent to spheres
 //! (here the line's points `t`, `u` of the problem file), written for any distance problem.
 //!
@@ -197,7 +198,7 @@ impl Placed {
         Ok(placed)
     }
 
-    /// The line formulation (issue 15, item 2): for a problem whose free points are two points
+    /// The line formulation: for a problem whose free points are two points
     /// `t`, `u` of one line, every constraint a distance from a fixed point to `t`, to `u`, or to
     /// the line `t u` (lines tangent to spheres), the line is placed by a point and a direction,
     /// as in ibexsolve's formulation: `t = c + x` for a fixed anchor `c` with `|c t|²` known,
@@ -543,7 +544,7 @@ fn to_equation(p: &Poly) -> Result<Equation, PlacedError> {
     for (m, c) in p.terms() {
         let mono = match m.as_slice() {
             [] => {
-                constant = constant + c;
+                constant += c;
                 continue;
             }
             [(v, 1)] => Monomial::Linear(*v),

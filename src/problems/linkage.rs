@@ -250,8 +250,8 @@ impl Builder<'_> {
         let v = off.rotate(v).map(|x| x * scale);
         match self.angles[g] {
             Angle::Ground => {
-                f.constant[0] = f.constant[0] + v[0];
-                f.constant[1] = f.constant[1] + v[1];
+                f.constant[0] += v[0];
+                f.constant[1] += v[1];
             }
             Angle::Free { c, s } => {
                 f.x.push((c, v[0]));
@@ -325,7 +325,7 @@ fn equation_from(terms: &[(VarId, Interval)], constant: Interval) -> Option<Equa
     let mut merged: BTreeMap<VarId, Interval> = BTreeMap::new();
     for &(v, c) in terms {
         let e = merged.entry(v).or_insert(point(0.0));
-        *e = *e + c;
+        *e += c;
     }
     let terms: Vec<Term> = merged
         .into_iter()

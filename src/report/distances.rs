@@ -169,9 +169,7 @@ pub fn distinct_placements(records: &[DistanceRecord], tol: f64) -> usize {
         for k in keys {
             let Some(&first) = k.first() else {
                 // A key of no coordinate matches every other such key.
-                if !seen.contains_key(&(i64::MIN, 0)) {
-                    seen.insert((i64::MIN, 0), k);
-                }
+                seen.entry((i64::MIN, 0)).or_insert(k);
                 continue;
             };
             let near = |s: &Vec<f64>| s.iter().zip(&k).all(|(a, b)| (a - b).abs() <= tol);

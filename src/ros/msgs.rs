@@ -447,7 +447,8 @@ mod tests {
             ("MechanismInfo", mirrored::<MechanismInfo>()),
             ("AssemblyMode", mirrored::<AssemblyMode>()),
         ];
-        let srvs: Vec<(&str, Vec<(String, String)>, Vec<(String, String)>)> = vec![
+        type Fields = Vec<(String, String)>;
+        let srvs: Vec<(&str, Fields, Fields)> = vec![
             ("Solve", mirrored::<SolveRequest>(), mirrored::<SolveResponse>()),
             ("Cancel", mirrored::<CancelRequest>(), mirrored::<CancelResponse>()),
             ("Singularities", mirrored::<SingularitiesRequest>(), mirrored::<SingularitiesResponse>()),
@@ -458,7 +459,7 @@ mod tests {
         for (name, mirror) in &msgs {
             assert_eq!(&fields(&read(&format!("msg/{name}.msg"))), mirror, "msg/{name}.msg");
         }
-        let actions: Vec<(&str, [Vec<(String, String)>; 3])> = vec![("Solve", [mirrored::<SolveGoal>(), mirrored::<SolveActionResult>(), mirrored::<SolveFeedback>()])];
+        let actions: Vec<(&str, [Fields; 3])> = vec![("Solve", [mirrored::<SolveGoal>(), mirrored::<SolveActionResult>(), mirrored::<SolveFeedback>()])];
         for (name, parts) in &actions {
             let text = read(&format!("action/{name}.action"));
             let got: Vec<&str> = text.split("\n---").collect();

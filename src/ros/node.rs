@@ -32,6 +32,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// Everything that makes the loop do something.
+#[allow(clippy::large_enum_variant)] // one event at a time through a channel: not worth a Box
 enum Event {
     Request(Request),
     Progress { run: u64, progress: crate::search::Progress },
@@ -54,6 +55,7 @@ enum Event {
 type SolveAction = AsyncActionServer<SolveGoal, SolveActionResult, SolveFeedback>;
 
 /// What a run returns.
+#[allow(clippy::large_enum_variant)] // one per run, moved once: not worth a Box
 enum Outcome {
     BoxSet(BoxSetResult),
     Singularities(SingularityResult),
@@ -717,7 +719,7 @@ impl State {
         let (mut fixes, mut traces) = (vec![false; self.config.fixed.len()], vec![false; self.config.traces.len()]);
         let loaded = match super::load_one(&source, &self.config, &mut fixes, &mut traces) {
             Ok(l) => l,
-            Err(e) => return self.log(LogLevel::Error, format!("{}", convert::bounded(&format!("{e:#}"), convert::ECHO_MESSAGE))),
+            Err(e) => return self.log(LogLevel::Error, convert::bounded(&format!("{e:#}"), convert::ECHO_MESSAGE).to_string()),
         };
         let slot = self.mechanisms.iter().position(|m| m.loaded.description);
         let name = loaded.analysis.mechanism().to_string();

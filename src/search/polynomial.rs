@@ -292,7 +292,7 @@ impl<'a> Solver<'a> {
         } else {
             self.run(cancel, &mut sink)
         };
-        // The time limit covers the whole call, post-processing included (issue 9, item 6).
+        // The time limit covers the whole call, post-processing included.
         let deadline = self.settings.timeout.map(|t| t0 + t);
         let (solutions, unique, dropped, cut_short) = self.drop_spurious(std::mem::take(&mut sink.collect.solutions), std::mem::take(&mut sink.collect.unique), 2, cancel, deadline);
         stats.spurious_dropped = dropped;

@@ -206,7 +206,8 @@ pub fn butterfly_turning_points(dir: &Path, quick: bool) -> Result<()> {
         curves[l].push(rect(joint(&v, "joint2"), joint(&v, "joint6")));
     }
     // Each turning point on the branch whose boxes its configuration box meets.
-    let mut turns: Vec<(Vec<(f64, f64)>, Vec<(f64, f64)>)> = vec![(Vec::new(), Vec::new()); branches];
+    type Points = Vec<(f64, f64)>;
+    let mut turns: Vec<(Points, Points)> = vec![(Vec::new(), Vec::new()); branches];
     let mut unplaced = 0;
     for c in &set.clusters {
         let first = &set.boxes[c.boxes[0]].b;

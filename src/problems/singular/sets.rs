@@ -205,7 +205,7 @@ mod tests {
             assert_eq!(s.boxes.len(), p.charts.len());
         }
         // A bad actuator list fails before any search.
-        let err = SingularSets::new(&m, &[], &all_kinds(&["nope".to_string()]), &["nope".to_string()], None).err().expect("refused");
+        let err = SingularSets::new(&m, &[], &all_kinds(&["nope".to_string()]), &["nope".to_string()], None).expect_err("refused");
         assert!(err.to_string().contains("'nope' is not a free joint"), "{err}");
     }
 }
