@@ -7,14 +7,15 @@ use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use linkspace::model::urdf;
 use linkspace::problems::choice::TracedPoint;
-use linkspace::problems::{Linkage, ModelChoice};
+use linkspace::problems::ModelChoice;
 use linkspace::LpBackend;
+use linkspace::app::{self, arm::IkPoint, Arm};
 use linkspace::manip3r::{
     self,
-    collision::{self, CollisionSettings, Scene},
-    report::{CollisionReport, IkReport, SingularityReport},
-    Chain3R, Control,
+    collision,
+    report::CollisionReport,
 };
+use linkspace::search::Control;
 use linkspace::search::{Limits, Progress, SolverSettings};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
@@ -136,7 +137,7 @@ enum Command {
     Solve(SolveArgs),
     /// Certified cusps, nodes and internal motions of a 3R chain described in URDF.
     Singularities(SingularitiesArgs),
-    /// Every joint solution (joint 2, joint 3) of a 3R chain for a workspace point (radius, z).
+    /// Every joint solution of an arm's 3R positioning structure for a point (X,Y,Z or R,Z).
     Ik(IkArgs),
     /// Solve a distance problem by Cayley–Menger determinants: a platform in URDF or a JSON file.
     Distances(distances::DistancesArgs),
@@ -197,8 +198,10 @@ struct IkArgs {
     urdf: PathBuf,
     #[command(flatten)]
     chain: ChainArgs,
-    /// Workspace point: distance from the first axis, then height along it.
-    #[arg(long, value_name = "R,Z", allow_hyphen_values = true)]
+    /// The point to reach: X,Y,Z in the frame of the root link (every joint is solved for), or
+    /// R,Z: distance from the first axis and height along it, in the first joint's frame (the
+    /// first joint is then free; joints 2 and 3 are solved for).
+    #[arg(long, value_name = "X,Y,Z|R,Z", allow_hyphen_values = true)]
     point: String,
     /// Largest width (radians) of reported boxes, in (0, 1).
     #[arg(long, default_value_t = 1e-6, allow_hyphen_values = true)]
@@ -400,8 +403,7 @@ fn solve(args: SolveArgs) -> Result<()> {
     let xml = std::fs::read_to_string(&args.urdf).with_context(|| format!("reading {}", args.urdf.display()))?;
     let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", args.urdf.display()))?;
     let named: Vec<TracedPoint> = traces.iter().zip(&args.trace).map(|((l, p), r)| (l.clone(), *p, r.clone())).collect();
-    let built = Linkage::build(&mechanism, args.model.into(), &fixed, &named).with_context(|| format!("building {}", args.urdf.display()))?;
-    let solver = built.solver(settings.clone())?;
+    let job = app::SolveJob::build(&mechanism, args.model.into(), &fixed, &named, settings).with_context(|| format!("building {}", args.urdf.display()))?;
     let show = std::io::stderr().is_terminal();
     let mut progress = |p: &Progress| {
         if show {
@@ -409,12 +411,11 @@ fn solve(args: SolveArgs) -> Result<()> {
             let _ = std::io::stderr().flush();
         }
     };
-    let result = solver.enclose(&AtomicBool::new(false), &mut progress);
+    let report = job.run(&AtomicBool::new(false), &mut progress).report;
     if show {
         eprintln!();
     }
-    let status = result.status;
-    let report = built.report(&settings, result.status, result.stats, &result.solutions, &result.unique, &result.undecided);
+    let status = report.status;
     // Write through a handle: `println!` panics when the reader of a pipe has gone.
     let mut out = std::io::stdout().lock();
     writeln!(
@@ -460,18 +461,17 @@ fn solve(args: SolveArgs) -> Result<()> {
     Ok(())
 }
 
-/// Reads a file as every 3R command does: rounding policy, chain choice, limits.
-fn load_prepared(path: &std::path::Path, args: &ChainArgs) -> Result<manip3r::Prepared> {
-    let options = args.options()?;
+/// Reads a file's robot description.
+fn load_mechanism(path: &std::path::Path) -> Result<linkspace::Mechanism> {
     let xml = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", path.display()))?;
-    manip3r::prepare(&mechanism, &options).with_context(|| format!("loading {}", path.display()))
+    urdf::parse(&xml).with_context(|| format!("loading {}", path.display()))
 }
 
-fn load_chain(path: &std::path::Path, uncertainty: f64, args: &ChainArgs) -> Result<(Chain3R, manip3r::Prepared)> {
-    let prepared = load_prepared(path, args)?;
-    let chain = Chain3R::from_mechanism(&prepared.mechanism, uncertainty).with_context(|| format!("loading {}", path.display()))?;
-    Ok((chain, prepared))
+/// Reads a file as every 3R command does: rounding policy, chain choice, limits.
+fn load_arm(path: &std::path::Path, uncertainty: f64, args: &ChainArgs) -> Result<Arm> {
+    let options = args.options()?;
+    let mechanism = load_mechanism(path)?;
+    Arm::load(&mechanism, &options, uncertainty).with_context(|| format!("loading {}", path.display()))
 }
 
 /// Default `--max-boxes` of `singularities`, per search. `--max-memory` bounds the pending
@@ -498,45 +498,13 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
         // the kernel's general default: the run stops on `memory` with its cells listed.
         limits.max_memory = SINGULARITIES_MAX_MEMORY;
     }
-    let (chain, prepared) = load_chain(&args.urdf, args.uncertainty, &args.chain)?;
+    let arm = load_arm(&args.urdf, args.uncertainty, &args.chain)?;
     let cancel = AtomicBool::new(false);
     let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };
-    let structural = args.uncertainty == 0.0 && !args.search_anyway && manip3r::verdict::parallel_structure(&prepared.mechanism).is_some();
-    let branches = manip3r::branches::of(&prepared.mechanism, &chain);
-    // On these arms whole branches are curves of nodes: the isolated-node search floods, so it
-    // is not run even with --search-anyway.
-    let with_nodes = args.nodes && branches.is_none();
-    // One deadline for the run and the verdict's searches; the time reported covers both.
-    let start = std::time::Instant::now();
-    let mut run = if structural {
-        manip3r::structural_singularities(&chain, args.precision)?
-    } else {
-        manip3r::singularities(&chain, args.precision, with_nodes, &control, &mut |_| {})?
-    };
-    // The verdict reads the full-torus run; the limits then filter what is listed.
-    let verdict = manip3r::verdict::decide(&prepared.mechanism, &chain, &run, &prepared.limits, &control.remaining_since(start));
-    let effect = prepared.limits.apply(&mut run);
-    let mut report = SingularityReport::new(&chain, args.precision, &run.cusps, run.nodes.as_ref(), start.elapsed().as_secs_f64());
-    report.verdict = Some(verdict.clone());
-    report.reading = Some(manip3r::report::Reading::of(&prepared, effect.clone()));
-    if let Some(b) = &branches {
-        if !structural {
-            let boxes: Vec<_> = run.cusps.undecided.iter().map(|u| u.theta).chain(run.cusps.cusps.iter().filter(|c| !c.unique).map(|c| c.theta)).collect();
-            if !boxes.is_empty() {
-                report.explain(b.attribute(&prepared.mechanism, &boxes, 1e-2));
-            }
-            if args.nodes {
-                report.not_searched = Some("nodes not enumerated: the singular branches are curves of nodes (see the singular branches), which the isolated-node search does not model".into());
-            }
-        }
-        report.singular_branches = Some(b.clone());
-    }
-    if structural {
-        report.not_searched = Some(format!(
-            "axes 2 and 3 are parallel: no cusp point, by the verdict's proof; {} (--search-anyway runs the interval searches, which cannot complete here)",
-            if args.nodes { "nodes not enumerated: the singular branches cross and map onto shared curves (curves of nodes), which the isolated-node search does not model" } else { "nodes not asked" }
-        ));
-    }
+    let request = app::arm::SingularitiesRequest { precision: args.precision, nodes: args.nodes, search_anyway: args.search_anyway };
+    let found = app::arm::singularities(&arm, &request, &control, &mut |_| {})?;
+    let report = found.report(&arm);
+    let (prepared, verdict, effect) = (&arm.prepared, &found.verdict, &found.limit_effect);
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}", verdict.line()).ok();
     let node_text = report.nodes.as_ref().map_or("nodes not searched".to_string(), |n| format!("{} nodes", n.len()));
@@ -597,15 +565,14 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
 fn collisions(args: CollisionsArgs) -> Result<()> {
     manip3r::check_precision(args.precision)?;
     let limits = args.limits.limits(collision::DEFAULT_MAX_BOXES)?;
-    let xml = std::fs::read_to_string(&args.urdf).with_context(|| format!("reading {}", args.urdf.display()))?;
-    let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", args.urdf.display()))?;
-    let prepared = manip3r::prepare(&mechanism, &args.chain.options()?).with_context(|| format!("loading {}", args.urdf.display()))?;
-    let scene = Scene::from_mechanism(&prepared.mechanism).with_context(|| format!("loading {}", args.urdf.display()))?;
+    let options = args.chain.options()?;
+    let mechanism = load_mechanism(&args.urdf)?;
     let cancel = AtomicBool::new(false);
     let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };
-    eprintln!("chain: {}", prepared.choice.reason);
-    let set = collision::classify_with(&scene, &CollisionSettings { precision: args.precision }, &control, &mut |_| {})?;
-    let report = CollisionReport::new(&scene, args.precision, &set);
+    let found = app::arm::collisions(&mechanism, &options, args.precision, &control, &mut |_| {}).with_context(|| format!("loading {}", args.urdf.display()))?;
+    eprintln!("chain: {}", found.prepared.choice.reason);
+    let (scene, set) = (&found.scene, &found.set);
+    let report = CollisionReport::new(scene, args.precision, set);
     let s = &report.stats;
     let total = s.colliding_area + s.free_area + s.undecided_area;
     let pct = |a: f64| 100.0 * a / total;
@@ -636,21 +603,18 @@ fn collisions(args: CollisionsArgs) -> Result<()> {
 }
 
 fn ik(args: IkArgs) -> Result<()> {
-    let (r, z) = args.point.split_once(',').with_context(|| format!("--point '{}': expected R,Z", args.point))?;
-    let r: f64 = r.trim().parse().with_context(|| format!("--point '{}': '{r}' is not a number", args.point))?;
-    let z: f64 = z.trim().parse().with_context(|| format!("--point '{}': '{z}' is not a number", args.point))?;
+    let point = parse_ik_point(&args.point)?;
     manip3r::check_precision(args.precision)?;
-    let (chain, prepared) = load_chain(&args.urdf, args.uncertainty, &args.chain)?;
+    let arm = load_arm(&args.urdf, args.uncertainty, &args.chain)?;
     let cancel = AtomicBool::new(false);
     let control = Control { limits: args.limits.limits(200_000)?, threads: args.limits.threads(), cancel: &cancel };
-    let mut s = manip3r::ik::solve_with(&chain, r, z, args.precision, &control, &mut |_| {})?;
-    let effect = prepared.limits.apply_ik(&mut s);
-    let mut report = IkReport::new(&chain, [r, z], &s);
-    report.reading = Some(manip3r::report::Reading::of(&prepared, effect.clone()));
+    let found = app::arm::inverse_kinematics(&arm, point, args.precision, &control, &mut |_| {})?;
+    let report = found.report(&arm);
+    let s = &found.solutions;
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}: {} solutions proven unique, {} clusters undecided, status {}", report.robot, s.unique.len(), s.clusters.len(), report.status).ok();
-    writeln!(out, "  chain: {}", prepared.choice.reason).ok();
-    writeln!(out, "  {}", effect.text).ok();
+    writeln!(out, "  chain: {}", arm.prepared.choice.reason).ok();
+    writeln!(out, "  {}", found.limit_effect.text).ok();
     for sol in &report.solutions {
         let text: Vec<String> = sol.joints.iter().map(|(n, b)| format!("{n} in [{:.9}, {:.9}]", b[0], b[1])).collect();
         let tag = if sol.unique { "unique".to_string() } else { format!("cluster of {} boxes (one or more solutions)", sol.boxes) };
@@ -660,4 +624,17 @@ fn ik(args: IkArgs) -> Result<()> {
         std::fs::write(&path, serde_json::to_string_pretty(&report)?).with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
+}
+
+/// `--point`: `X,Y,Z` in the root frame, or `R,Z` in the first joint's frame.
+fn parse_ik_point(text: &str) -> Result<IkPoint> {
+    let values: Vec<f64> = text
+        .split(',')
+        .map(|t| t.trim().parse::<f64>().map_err(|_| anyhow::anyhow!("--point '{text}': '{}' is not a number", t.trim())))
+        .collect::<Result<_>>()?;
+    match values.as_slice() {
+        [x, y, z] => Ok(IkPoint::Root([*x, *y, *z])),
+        [radius, z] => Ok(IkPoint::HalfSection { radius: *radius, z: *z }),
+        _ => bail!("--point '{text}': expected X,Y,Z (root frame) or R,Z (distance from the first axis, height along it)"),
+    }
 }

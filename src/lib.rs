@@ -25,7 +25,7 @@
 
 #![warn(missing_docs)]
 
-pub mod analysis;
+pub mod app;
 pub mod contract;
 pub mod distances;
 pub mod interval;
@@ -39,7 +39,7 @@ pub mod report;
 pub mod search;
 pub mod system;
 
-pub use analysis::{load, Analysis, AnalysisError};
+pub use app::{load, Analysis, AnalysisError};
 pub use interval::{Interval, IntervalBox};
 pub use lp::{LpBackend, LpCounters};
 pub use model::{Mechanism, ModelError};

@@ -177,7 +177,7 @@ fn singularities_bad_input_gives_one_clear_line() {
     // Tip on the third axis: it moves with joint 2 only, det Df = 0 everywhere.
     let on_axis3 = robot_variant("e", "<origin xyz=\"0.7 0 0\" rpy=\"0 0 0\"/>", "<origin xyz=\"0 0 0.3\" rpy=\"0 0 0\"/>");
     assert_clear_error(&["singularities", on_axis3.as_str()], "degenerate");
-    assert_clear_error(&["ik", &e, "--point", "1.2"], "expected R,Z");
+    assert_clear_error(&["ik", &e, "--point", "1.2"], "expected X,Y,Z (root frame) or R,Z");
     assert_clear_error(&["ik", &e, "--point", "-1,0"], "radius must be >= 0");
     assert_clear_error(&["ik", &e, "--point", "x,0"], "'x' is not a number");
 }
@@ -246,6 +246,43 @@ fn ik_reports_every_solution() {
     let (ok, out, err) = run(&["ik", &fixture("orthogonal_3r_e.urdf"), "--point", "1.3,0.2"]);
     assert!(ok, "{err}");
     assert!(out.starts_with("orthogonal_3r_e: 2 solutions proven unique, 0 clusters undecided, status complete"), "{out}");
+}
+
+/// Test idea: `ik` takes a point of the root frame as the node does; on the point (r, 0, z) of
+/// robot e (first axis along z through the origin) joints 2 and 3 are those of the half-section
+/// query (r, z), and joint 1 is enclosed; turning the point by φ about the first axis turns
+/// joint 1 by φ and leaves joints 2 and 3.
+#[test]
+fn ik_takes_a_point_of_the_root_frame() {
+    let e = fixture("orthogonal_3r_e.urdf");
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let query = |point: &str, name: &str| -> serde_json::Value {
+        let path = dir.join(format!("ik-{name}-{}.json", std::process::id()));
+        let (ok, _, err) = run(&["ik", &e, "--point", point, "--precision", "1e-8", "--json", path.to_str().expect("utf-8")]);
+        assert!(ok, "{err}");
+        let v = serde_json::from_str(&std::fs::read_to_string(&path).expect("report")).expect("json");
+        let _ = std::fs::remove_file(&path);
+        v
+    };
+    let (r, z, phi) = (1.9f64, 0.4f64, 0.7f64);
+    let half = query(&format!("{r},{z}"), "half");
+    let root = query(&format!("{r},0,{z}"), "root");
+    let turned = query(&format!("{},{},{z}", r * phi.cos(), r * phi.sin()), "turned");
+    let solutions = |v: &serde_json::Value| v["solutions"].as_array().expect("solutions").clone();
+    let (h, a, t) = (solutions(&half), solutions(&root), solutions(&turned));
+    assert!(h.len() >= 2 && h.iter().all(|s| s["unique"] == true), "{half}");
+    assert_eq!((a.len(), t.len()), (h.len(), h.len()));
+    let mid = |s: &serde_json::Value, j: &str| 0.5 * (s["joints"][j][0].as_f64().expect("lo") + s["joints"][j][1].as_f64().expect("hi"));
+    for ((hs, rs), ts) in h.iter().zip(&a).zip(&t) {
+        assert!(hs["joints"].get("joint1").is_none(), "joint 1 is free for a half-section point");
+        assert_eq!((&rs["joints"]["joint2"], &rs["joints"]["joint3"]), (&hs["joints"]["joint2"], &hs["joints"]["joint3"]));
+        let width = rs["joints"]["joint1"][1].as_f64().expect("hi") - rs["joints"]["joint1"][0].as_f64().expect("lo");
+        assert!((0.0..1e-6).contains(&width), "joint 1 enclosed: {rs}");
+        let turn = mid(ts, "joint1") - mid(rs, "joint1");
+        assert!((turn - phi).abs() < 1e-6, "joint 1 turns with the point: {turn}");
+        assert!((mid(ts, "joint2") - mid(hs, "joint2")).abs() < 1e-6 && (mid(ts, "joint3") - mid(hs, "joint3")).abs() < 1e-6);
+    }
+    assert_eq!(root["point"], serde_json::json!([r, 0.0, z]));
 }
 
 #[test]

@@ -502,7 +502,8 @@ fn bits(boxes: impl IntoIterator<Item = [linkspace::Interval; 2]>) -> Vec<[u64; 
 /// f internal-motion strips and nodes).
 #[test]
 fn two_threads_give_the_results_of_one() {
-    use linkspace::manip3r::{singularities, Control};
+    use linkspace::manip3r::singularities;
+    use linkspace::search::Control;
     use linkspace::search::{Limits, Status};
     use std::sync::atomic::AtomicBool;
     for case in ["e", "f"] {
@@ -527,7 +528,8 @@ fn two_threads_give_the_results_of_one() {
 /// silently dropped.
 #[test]
 fn a_cancelled_singularity_run_says_so_and_keeps_its_undecided_cells() {
-    use linkspace::manip3r::{cusps::Reason, singularities, Control};
+    use linkspace::manip3r::{cusps::Reason, singularities};
+    use linkspace::search::Control;
     use linkspace::search::{Limit, Limits, Status};
     use std::sync::atomic::{AtomicBool, Ordering};
     let c = chain("e");

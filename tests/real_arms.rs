@@ -5,7 +5,8 @@
 //! solutions where the verdict says at most four); the seed's robots written in three
 //! conventions against each other and against Table 1.
 
-use linkspace::manip3r::{self, cusps, ik, select::ChainSpec, verdict, Chain3R, Control, LoadOptions};
+use linkspace::manip3r::{self, cusps, ik, select::ChainSpec, verdict, Chain3R, LoadOptions};
+use linkspace::search::Control;
 use linkspace::model::{urdf, JointKind, Mechanism};
 use linkspace::search::{Limits, Status};
 use nalgebra::{Matrix3, Rotation3, Vector3};

@@ -1,5 +1,7 @@
 //! Integration tests, one binary (ripgrep style). Each module says what belongs in it.
 
+/// The invariants of ARCHITECTURE.md read off the source: layers, no cycle, adapters.
+mod architecture;
 /// Shared helpers: running the library on bundled URDFs, independent references.
 mod util;
 /// Planar linkages from URDF against closed forms and independently traced curves.

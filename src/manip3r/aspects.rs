@@ -25,7 +25,7 @@
 
 use super::curves::Cover;
 use super::cusps::evaluate_without_tangency as evaluate;
-use super::drive::Control;
+use crate::search::Control;
 use super::ik;
 use super::Chain3R;
 use crate::interval::{interval, point, strict_sign};

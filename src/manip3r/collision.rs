@@ -43,7 +43,8 @@
 
 use super::chain::{self, Pose, V3, ZERO};
 use super::cusps::bisect;
-use super::drive::{drive, no_progress, Control, Order};
+use super::drive::{drive, no_progress, Order};
+use crate::search::Control;
 use super::{motion, trig, Chain3R, Manip3rError};
 use crate::interval::point;
 use crate::model::{JointKind, Mechanism, Shape};

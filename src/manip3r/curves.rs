@@ -2,7 +2,8 @@
 //! vanish, found by a quadtree on the kernel, and the regions between them. The ROS node's
 //! `singular_curves` and `classify`, and the README's charts, all draw this one cover.
 
-use super::drive::{drive, no_progress, Control};
+use super::drive::{drive, no_progress};
+use crate::search::Control;
 use super::motion::PI_UP;
 use super::Chain3R;
 use crate::interval::{interval, point};

@@ -22,7 +22,8 @@
 //! Boxes inside an internal-motion strip are set aside (see `motion`).
 
 use super::chain::Chain3R;
-use super::drive::{drive, no_progress, Control, Order, Outcome};
+use super::drive::{drive, no_progress, Order, Outcome};
+use crate::search::Control;
 use crate::contract::krawczyk::{self, Inflation, Step as K};
 use super::motion::{self, Band};
 use crate::interval::{interval, point};

@@ -1,6 +1,5 @@
-//! How the 3R searches run on the kernel (`crate::search`): one `Control` (limits, threads,
-//! cancel flag) for every search, the serial or the level-by-level driver picked by the
-//! thread count, and the depth-first `Order` that puts the results of either driver in the
+//! How the 3R searches run on the kernel (`crate::search`) within the caller's
+//! `search::Control`: the serial or the level-by-level driver picked by the thread count, and the depth-first `Order` that puts the results of either driver in the
 //! same order.
 //!
 //! Why an order: a few decisions of the 3R searches look at results found before (the ±π
@@ -10,44 +9,9 @@
 //! of the depth-first walk: the order of the hand-written loops that came before, whatever
 //! driver or thread count ran the search.
 
-use crate::search::{self, Limits, Progress, Prune, Sink, Stats, Status, Store, Undecided};
+use crate::search::Control;
+use crate::search::{self, Progress, Prune, Sink, Stats, Status, Store, Undecided};
 use std::ops::ControlFlow;
-use std::sync::atomic::AtomicBool;
-
-/// How a search runs: its bounds, worker threads and cancel flag.
-#[derive(Clone, Copy, Debug)]
-pub struct Control<'a> {
-    /// Cells, time and memory.
-    pub limits: Limits,
-    /// 1: depth first on the calling thread; more: breadth first, level by level, on that many
-    /// threads. The results are the same (for a run no limit stopped).
-    pub threads: usize,
-    /// Raised by the caller to stop the run (`Incomplete(Cancelled)`).
-    pub cancel: &'a AtomicBool,
-}
-
-static NEVER: AtomicBool = AtomicBool::new(false);
-
-impl Control<'static> {
-    /// One thread, never cancelled.
-    pub fn with_limits(limits: Limits) -> Self {
-        Control { limits, threads: 1, cancel: &NEVER }
-    }
-}
-
-impl<'a> Control<'a> {
-    /// The same control with what is left, at this moment, of its timeout by a run that
-    /// started at `start`: the steps of one answer share one deadline.
-    pub fn remaining_since(self, start: std::time::Instant) -> Self {
-        let timeout = self.limits.timeout.map(|t| t.saturating_sub(start.elapsed()));
-        Control { limits: Limits { timeout, ..self.limits }, ..self }
-    }
-
-    /// The same control with another cell budget.
-    pub fn max_cells(self, max_cells: u64) -> Self {
-        Control { limits: Limits { max_cells, ..self.limits }, ..self }
-    }
-}
 
 /// A cell's place in the depth-first walk of the search tree: the cell owns the slice
 /// `[at, at + span)` of `u128`, its children cut it into equal parts in the order they are

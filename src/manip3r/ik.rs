@@ -9,7 +9,8 @@
 
 use super::chain::Chain3R;
 use super::cusps::{bisect, meet_on_torus};
-use super::drive::{drive, no_progress, Control, Order};
+use super::drive::{drive, no_progress, Order};
+use crate::search::Control;
 use crate::contract::krawczyk::{self, Step as K};
 use super::motion;
 use super::Manip3rError;

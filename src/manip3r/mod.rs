@@ -22,6 +22,7 @@ pub mod collision;
 pub mod curves;
 pub mod cusps;
 pub mod drive;
+pub mod frame;
 pub mod ik;
 pub mod limits;
 pub mod motion;
@@ -35,10 +36,10 @@ pub(crate) use crate::interval::trig;
 
 pub use chain::{Chain3R, Jets};
 pub use cusps::{Cusp, CuspSearch};
-pub use drive::{Control, Order};
+pub use drive::Order;
 pub use nodes::{Node, NodeSearch};
 
-use crate::search::{Progress, Status};
+use crate::search::{Control, Progress, Status};
 use std::time::Instant;
 use thiserror::Error;
 
@@ -70,6 +71,9 @@ pub enum Manip3rError {
     /// A workspace point for inverse kinematics is not finite or has a negative radius.
     #[error("workspace point ({0}, {1}) is not valid: radius must be >= 0 and both finite")]
     BadPoint(f64, f64),
+    /// A point of the root frame for inverse kinematics is not finite.
+    #[error("point ({}, {}, {}) is not finite", .0[0], .0[1], .0[2])]
+    BadTarget([f64; 3]),
     /// Nothing to check for collisions.
     #[error("no collision geometry: {0}")]
     NoCollisionGeometry(String),

@@ -11,7 +11,8 @@
 //! search box is either inside a strip or has no interior point in common with it.
 
 use super::chain::Chain3R;
-use super::drive::{drive, no_progress, Control, Order};
+use super::drive::{drive, no_progress, Order};
+use crate::search::Control;
 use crate::interval::interval;
 use crate::search::{Limits, Prune, Step};
 use inari::Interval;

@@ -29,7 +29,8 @@
 
 use super::chain::Chain3R;
 use super::cusps::{self, evaluate_without_tangency as evaluate, meet_on_torus, BoxEval, Cusp};
-use super::drive::{drive, no_progress, Control, Order};
+use super::drive::{drive, no_progress, Order};
+use crate::search::Control;
 use crate::contract::krawczyk::{self, Step as K};
 use super::motion::{self, Band};
 use crate::interval::{interval, point, strict_sign};

@@ -40,7 +40,7 @@ pub struct Workspace {
 }
 
 impl Workspace {
-    /// `[radius, z]`, the order of `analysis::SingularityResult::workspace_names`.
+    /// `[radius, z]`, the order of `app::SingularityResult::workspace_names`.
     pub fn bounds(&self) -> [Bounds; 2] {
         [self.radius, self.z]
     }
@@ -413,8 +413,8 @@ pub struct IkRecord {
 pub struct IkReport {
     /// Robot name.
     pub robot: String,
-    /// The query (radius, z).
-    pub point: [f64; 2],
+    /// The query: (radius, z) in the first joint's frame, or (x, y, z) in the root frame.
+    pub point: Vec<f64>,
     /// `complete` or `incomplete`.
     pub status: &'static str,
     /// The limit that stopped an incomplete run: `boxes`, `time`, `memory` or `cancelled`.
@@ -431,10 +431,19 @@ pub struct IkReport {
 }
 
 impl IkReport {
-    /// Builds the report of a query.
-    pub fn new(chain: &Chain3R, point: [f64; 2], s: &IkSolutions) -> Self {
-        let mut solutions: Vec<IkRecord> = s.unique.iter().map(|b| IkRecord { joints: joints(chain, b), unique: true, boxes: 0 }).collect();
-        solutions.extend(s.clusters.iter().map(|c| IkRecord { joints: joints(chain, &c.hull), unique: false, boxes: c.boxes }));
+    /// Builds the report of a query; `theta1` encloses the first joint's angle of a solution
+    /// box over (θ₂, θ₃) when the point fixes it (`None`: the first joint is free and not
+    /// listed).
+    pub fn new(chain: &Chain3R, point: Vec<f64>, s: &IkSolutions, theta1: impl Fn(&[Interval; 2]) -> Option<Interval>) -> Self {
+        let record = |b: &[Interval; 2]| {
+            let mut j = joints(chain, b);
+            if let Some(t) = theta1(b) {
+                j.insert(chain.joints[0].clone(), bounds(t));
+            }
+            j
+        };
+        let mut solutions: Vec<IkRecord> = s.unique.iter().map(|b| IkRecord { joints: record(b), unique: true, boxes: 0 }).collect();
+        solutions.extend(s.clusters.iter().map(|c| IkRecord { joints: record(&c.hull), unique: false, boxes: c.boxes }));
         IkReport { robot: chain.name.clone(), point, status: if s.status.is_complete() { "complete" } else { "incomplete" }, limit: limit_of(s.status), solutions, processed: s.stats.processed, reading: None }
     }
 }

@@ -36,7 +36,8 @@
 use super::chain::{cross, dot, sub, Pose};
 pub use super::chain::V3;
 use super::cusps::evaluate_without_tangency;
-use super::drive::{drive, no_progress, Control};
+use super::drive::{drive, no_progress};
+use crate::search::Control;
 use super::limits::JointLimits;
 use super::{Chain3R, Singularities};
 use crate::search::{Limit, Prune, Status, Step};

@@ -4,10 +4,10 @@ use super::msgs::{
     self, AssemblyMode, BoxSet, ColorRGBA, CuspRecord, Header, InverseKinematicsResponse, JointState, LsBox, Marker, MarkerArray, NodeRecord, Point, Pose, Quaternion, SingularityReport,
     SolveStats, TfMessage, Time, Transform, TransformStamped, Vector3,
 };
-use crate::analysis::{Bounds, BoxSetResult, IkResult, ResultBox, SingularityResult};
+use crate::app::{Bounds, BoxSetResult, IkResult, ResultBox, SingularityResult};
 use crate::manip3r::branches::SingularBranches;
 use crate::manip3r::report::joints_over;
-use crate::search::{BoxStatus, Limit, SolverSettings, Status};
+use crate::search::{BoxStatus, Incompleteness, SolverSettings, Status};
 
 /// A header stamped now (wall clock) in `frame`.
 pub fn header(frame: &str) -> Header {
@@ -18,11 +18,6 @@ pub fn header(frame: &str) -> Header {
 /// The wire form of the settings (`timeout` 0 for none).
 pub fn settings(s: &SolverSettings) -> msgs::Settings {
     msgs::Settings { sigma: s.sigma, rho: s.rho, max_boxes: s.max_boxes, timeout: s.timeout.map_or(0.0, |t| t.as_secs_f64()) }
-}
-
-/// The name of a limit, as in the JSON report.
-pub fn limit_name(l: Limit) -> &'static str {
-    l.name()
 }
 
 /// The wire value of a box's status (`Box.SOLUTION`, `Box.UNIQUE`, `Box.UNDECIDED`).
@@ -49,9 +44,9 @@ pub fn box_set(r: &BoxSetResult, run_id: u64) -> BoxSet {
     // Complete means nothing undecided, as in the CLI's reports: a finished run that left
     // undecided boxes (a platform's cluster without a proof) is incomplete, limit "undecided".
     let (status, limit) = match r.status {
-        Status::Complete if r.boxes.iter().any(|b| b.status == BoxStatus::Undecided) => (msgs::SET_INCOMPLETE, "undecided"),
+        Status::Complete if r.boxes.iter().any(|b| b.status == BoxStatus::Undecided) => (msgs::SET_INCOMPLETE, Incompleteness::Undecided.name()),
         Status::Complete => (msgs::SET_COMPLETE, ""),
-        Status::Incomplete(l) => (msgs::SET_INCOMPLETE, limit_name(l)),
+        Status::Incomplete(l) => (msgs::SET_INCOMPLETE, l.name()),
     };
     BoxSet {
         header: header(&joint_frame(&r.mechanism)),
@@ -456,8 +451,8 @@ mod tests {
 
     fn report_of(xml: &str, nodes: bool) -> SingularityReport {
         let m = crate::model::urdf::parse(xml).expect("parses");
-        let a = crate::analysis::load(&m, &[], &[]).expect("loads");
-        let q = crate::analysis::SingularityQuery { precision: 1e-4, nodes, max_boxes: 1_000_000, timeout: None, threads: 1 };
+        let a = crate::app::load(&m, &[], &[]).expect("loads");
+        let q = crate::app::SingularityQuery { precision: 1e-4, nodes, max_boxes: 1_000_000, timeout: None, threads: 1 };
         let r = a.singularities(&q).expect("valid").run(&std::sync::atomic::AtomicBool::new(false), &mut |_| {});
         singularity_report(&r, 7)
     }

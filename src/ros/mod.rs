@@ -2,7 +2,7 @@
 //! async.
 //!
 //! `serve` loads every mechanism first (bad input fails before any DDS traffic), then joins
-//! the DDS domain and runs the event loop of `node`. The analyses themselves (`crate::analysis`)
+//! the DDS domain and runs the event loop of `node`. The analyses themselves (`crate::app`)
 //! run on threads of their own and know nothing of ROS.
 //!
 //! Files: `msgs` mirrors `msgs/` (the wire types), `convert` turns results into messages,
@@ -14,7 +14,7 @@ mod node;
 
 pub use convert::bounded;
 
-use crate::analysis::{self, Analysis};
+use crate::app::{self, Analysis};
 use crate::model::urdf;
 use crate::search::SolverSettings;
 use anyhow::{bail, Context as _, Result};
@@ -157,7 +157,7 @@ pub(crate) fn load_one(s: &Source, config: &ServeConfig, used_fixes: &mut [bool]
             traces.push((link.clone(), *x, *y));
         }
     }
-    let analysis = analysis::load_urdf(&m, &s.xml, &fixed, &traces).with_context(|| format!("loading {}", s.label))?;
+    let analysis = app::load_urdf(&m, &s.xml, &fixed, &traces).with_context(|| format!("loading {}", s.label))?;
     Ok(Loaded { analysis, root_link: m.links[m.root].name.clone(), token: name_token(&m.name), description: s.description })
 }
 

@@ -13,8 +13,8 @@
 use super::convert;
 use super::msgs::{self, *};
 use super::{Limits, Loaded, Mapping, Network, ServeConfig, Source};
-use crate::analysis::{AnalysisError, BoxSetResult, IkQuery, IkResult, Service, SingularityQuery, SingularityResult};
-use crate::search::{SolverSettings, Status};
+use crate::app::{AnalysisError, BoxSetResult, MechanismKind, IkQuery, IkResult, Service, SingularityQuery, SingularityResult};
+use crate::search::{Limit, SolverSettings, Status};
 use anyhow::{Context as _, Result};
 use futures::StreamExt;
 use ros2_client::dds::rustdds::DomainParticipantBuilder;
@@ -165,12 +165,39 @@ struct Mechanism {
     singularities: Option<Arc<SingularityResult>>,
     published_singularities: Option<(SingularityReport, MarkerArray)>,
     singularity_run: Option<u64>,
-    state: String,
+    state: RunState,
     message: String,
     /// One line per load-time analysis (configuration space, singularities) as it ends, the
     /// parts of `message` (a linkage has both).
     cspace_note: String,
     singular_note: String,
+}
+
+/// Where a mechanism's load-time analyses stand (`list_mechanisms`' `state`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum RunState {
+    /// A load-time run goes.
+    Running,
+    /// Every load-time result is complete.
+    Complete,
+    /// A load-time result stopped on a limit.
+    Incomplete,
+    /// A load-time run failed (internal error).
+    Failed,
+    /// The kind has no load-time analysis.
+    Unavailable,
+}
+
+impl RunState {
+    fn name(self) -> &'static str {
+        match self {
+            RunState::Running => "running",
+            RunState::Complete => "complete",
+            RunState::Incomplete => "incomplete",
+            RunState::Failed => "failed",
+            RunState::Unavailable => "unavailable",
+        }
+    }
 }
 
 /// What `~/<robot>/markers` carries: the configuration-space markers, then the singularity
@@ -262,7 +289,7 @@ fn mechanism_entry(loaded: Loaded, prefix: String, topics: Topics, generation: u
         singularities: None,
         published_singularities: None,
         singularity_run: None,
-        state: "running".into(),
+        state: RunState::Running,
         message: String::new(),
         cspace_note: String::new(),
         singular_note: String::new(),
@@ -614,10 +641,10 @@ impl State {
         }
         let m = &mut self.mechanisms[k];
         if started {
-            m.state = "running".into();
+            m.state = RunState::Running;
             m.message = m.singular_note.clone();
         } else {
-            m.state = "unavailable".into();
+            m.state = RunState::Unavailable;
             m.message = m.loaded.analysis.limitation();
         }
     }
@@ -659,7 +686,13 @@ impl State {
         let m = &mut self.mechanisms[k];
         m.message = [&m.cspace_note, &m.singular_note].into_iter().filter(|n| !n.is_empty()).cloned().collect::<Vec<_>>().join("; ");
         let complete = m.configuration_space.as_ref().is_none_or(|c| c.status == Status::Complete) && m.singularities.as_ref().is_none_or(|s| s.status == Status::Complete);
-        m.state = if going { "running" } else if complete { "complete" } else { "incomplete" }.into();
+        m.state = if going {
+            RunState::Running
+        } else if complete {
+            RunState::Complete
+        } else {
+            RunState::Incomplete
+        };
     }
 
     /// Publishes the latched markers of mechanism `k` (`combined_markers`).
@@ -867,7 +900,7 @@ impl State {
                 eprintln!("linkspace: {message}");
                 let m = &mut self.mechanisms[r.mechanism];
                 if matches!(r.kind, RunKind::ConfigurationSpace | RunKind::Singularities { load_time: true }) {
-                    m.state = "failed".into();
+                    m.state = RunState::Failed;
                     m.message = message.clone();
                 }
                 if r.kind == (RunKind::Singularities { load_time: true }) {
@@ -901,7 +934,7 @@ impl State {
         let set = convert::box_set(&result, run);
         let status = match result.status {
             Status::Complete => "complete".to_string(),
-            Status::Incomplete(l) => format!("incomplete ({} limit)", convert::limit_name(l)),
+            Status::Incomplete(l) => format!("incomplete ({} limit)", l.name()),
         };
         let summary = format!("{name}: run {run} ({:?}) {status}: {} boxes, {} clusters, {:.3} s", r.kind, result.boxes.len(), result.clusters, result.stats.seconds);
         match r.kind {
@@ -912,7 +945,7 @@ impl State {
                     eprintln!("linkspace: publishing {}/configuration_space: {e:?}", m.prefix);
                 }
                 m.published = Some((set, markers));
-                let squared = m.loaded.analysis.kind() == "parallel_platform";
+                let squared = m.loaded.analysis.kind() == MechanismKind::ParallelPlatform;
                 for (js, mode) in convert::assembly_modes(&result, run, &m.loaded.root_link, squared) {
                     if let Err(e) = m.topics.assembly_modes.async_publish(js).await {
                         eprintln!("linkspace: publishing {}/assembly_modes: {e:?}", m.prefix);
@@ -940,7 +973,7 @@ impl State {
                 if let Err(e) = m.topics.solve_result.async_publish(set.clone()).await {
                     eprintln!("linkspace: publishing {}/solve_result: {e:?}", m.prefix);
                 }
-                let cancelled = matches!(result.status, Status::Incomplete(l) if convert::limit_name(l) == "cancelled");
+                let cancelled = result.status == Status::Incomplete(Limit::Cancelled);
                 if let Some(h) = r.goal {
                     let end = if cancelled { GoalEndStatus::Canceled } else { GoalEndStatus::Succeeded };
                     self.goal_result(h, end, SolveActionResult { ok: true, message: format!("run {run}: {status}"), run_id: run, result: set });
@@ -1357,7 +1390,7 @@ impl State {
         let c = match a.classify(&values, m.configuration_space.as_deref(), m.singularities.as_deref()) {
             Ok(c) => c,
             Err(AnalysisError::NotReady { what }) => {
-                return refuse(format!("the {} of '{}' is not known yet ({}); retry when {}/{what} is published", what.replace('_', " "), q.mechanism, m.state, m.prefix));
+                return refuse(format!("the {} of '{}' is not known yet ({}); retry when {}/{what} is published", what.replace('_', " "), q.mechanism, m.state.name(), m.prefix));
             }
             Err(e) => return refuse(e.to_string()),
         };
@@ -1402,12 +1435,12 @@ impl State {
                     let fixed = a.fixed_joints();
                     MechanismInfo {
                         name: a.mechanism().to_string(),
-                        kind: a.kind().to_string(),
+                        kind: a.kind().name().to_string(),
                         services: a.services().iter().map(|s| s.name().to_string()).collect(),
                         free_joints: a.free_joints(),
                         fixed_joint_names: fixed.iter().map(|(n, _)| n.clone()).collect(),
                         fixed_joint_values: fixed.iter().map(|(_, v)| *v).collect(),
-                        state: m.state.clone(),
+                        state: m.state.name().to_string(),
                         message: if m.message.is_empty() && a.services().is_empty() { a.limitation() } else { m.message.clone() },
                         topic_prefix: m.prefix.clone(),
                     }

@@ -78,6 +78,50 @@ impl Status {
     }
 }
 
+/// Why a result is incomplete: a limit stopped its run, or the run ended with something it could
+/// not decide. "Complete" means none of these: every cell decided, nothing left open.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Incompleteness {
+    /// A limit stopped the run.
+    Limit(Limit),
+    /// Strips were set aside as near-degenerate (undecided as a whole).
+    NearDegenerate,
+    /// Cells were left undecided at the precision.
+    Undecided,
+}
+
+impl Incompleteness {
+    /// The one rule: the limit that stopped the run, else near-degenerate strips, else undecided
+    /// cells; `None` for a complete result.
+    ///
+    /// # Examples
+    ///
+    /// ```
+    /// use linkspace::search::{Incompleteness, Limit, Status};
+    /// assert_eq!(Incompleteness::of(Status::Complete, 0, false), None);
+    /// assert_eq!(Incompleteness::of(Status::Complete, 3, false), Some(Incompleteness::Undecided));
+    /// assert_eq!(Incompleteness::of(Status::Incomplete(Limit::Boxes), 3, true), Some(Incompleteness::Limit(Limit::Boxes)));
+    /// ```
+    pub fn of(status: Status, undecided: usize, near_degenerate: bool) -> Option<Self> {
+        match status {
+            Status::Incomplete(l) => Some(Incompleteness::Limit(l)),
+            Status::Complete if near_degenerate => Some(Incompleteness::NearDegenerate),
+            Status::Complete if undecided > 0 => Some(Incompleteness::Undecided),
+            Status::Complete => None,
+        }
+    }
+
+    /// The name used in reports and messages (a limit's own name, `near_degenerate`,
+    /// `undecided`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Incompleteness::Limit(l) => l.name(),
+            Incompleteness::NearDegenerate => "near_degenerate",
+            Incompleteness::Undecided => "undecided",
+        }
+    }
+}
+
 /// A snapshot of a run's progress.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Progress {

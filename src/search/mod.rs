@@ -18,14 +18,16 @@
 //!
 //! Does no IO and knows nothing of mechanisms, URDF or ROS.
 
+mod control;
 mod driver;
 mod limits;
 mod polynomial;
 mod settings;
 mod store;
 
+pub use control::Control;
 pub use driver::{run, run_by_level};
-pub use limits::{process_cpu_seconds, Limit, Limits, Progress, Status};
+pub use limits::{process_cpu_seconds, Incompleteness, Limit, Limits, Progress, Status};
 pub use polynomial::{default_contractor, width_units, BoxSink, BoxStatus, Collect, ContractorFactory, Enclosure, SolveError, SolveStats, Solver};
 pub use settings::{SettingsError, SolverSettings};
 pub use store::Store;

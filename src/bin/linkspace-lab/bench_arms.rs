@@ -10,7 +10,8 @@
 use crate::bench3r::{Bench3rArgs, ROBOTS};
 use crate::median;
 use anyhow::{bail, Context, Result};
-use linkspace::manip3r::{self, select::ChainSpec, Chain3R, Control, LoadOptions};
+use linkspace::manip3r::{self, select::ChainSpec, LoadOptions};
+use linkspace::search::Control;
 use linkspace::model::urdf;
 use linkspace::search::{Limits, Status};
 use std::io::{Read, Write};
@@ -202,8 +203,7 @@ pub fn baseline_child(args: &Bench3rArgs, file: &Path) -> Result<()> {
     let options = LoadOptions { spec: ChainSpec { locks, length_tolerance: 0.0, ..Default::default() }, exact_geometry: false, ignore_limits: true };
     let xml = std::fs::read_to_string(file).with_context(|| format!("reading {}", file.display()))?;
     let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", file.display()))?;
-    let prepared = manip3r::prepare(&mechanism, &options).with_context(|| format!("loading {}", file.display()))?;
-    let chain = Chain3R::from_mechanism(&prepared.mechanism, 0.0).with_context(|| format!("loading {}", file.display()))?;
+    let chain = linkspace::app::Arm::load(&mechanism, &options, 0.0).with_context(|| format!("loading {}", file.display()))?.chain;
     if !(args.timeout.is_finite() && args.timeout > 0.0) {
         bail!("--timeout must be a positive number of seconds, got {}", args.timeout);
     }

@@ -294,7 +294,8 @@ const ROBOTS_3R: [(&str, &str); 3] = [
 /// workspace regions between the images with their number of IK solutions (seed 003's style).
 fn singular_curves(dir: &Path, depth: u32, quick: bool) -> Result<()> {
     use linkspace::interval::interval;
-    use linkspace::manip3r::{curves::Cover, cusps, nodes, report::radius, Chain3R, Control};
+    use linkspace::manip3r::{curves::Cover, cusps, nodes, report::radius, Chain3R};
+    use linkspace::search::Control;
     let mut joint_panels = Vec::new();
     let mut work_panels = Vec::new();
     let mut region_panels = Vec::new();
@@ -428,7 +429,8 @@ fn distance_sweeps(dir: &Path, quick: bool) -> Result<()> {
 
 /// 3R cusps: CPU seconds against the widest cusp box, Krawczyk against bisection alone.
 fn cusp_sweep(dir: &Path, quick: bool) -> Result<()> {
-    use linkspace::manip3r::{cusps, Chain3R, Control};
+    use linkspace::manip3r::{cusps, Chain3R};
+    use linkspace::search::Control;
     let precisions: &[f64] = if quick { &[1e-2, 1e-4] } else { &[1e-2, 1e-3, 1e-4, 1e-6, 1e-8] };
     let mut series = Vec::new();
     for (name, text) in ROBOTS_3R.iter().take(2) {

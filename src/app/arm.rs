@@ -1,183 +1,296 @@
-//! The 3R-manipulator analysis: certified cusps, nodes and internal motions (`crate::manip3r`),
-//! a cover of the singular curves, inverse kinematics of a point, and where a configuration
-//! lies relative to the singular set.
+//! Serial arms: the 3R positioning structure of a robot description, and the jobs run on it
+//! (singularities with the cuspidality verdict, inverse kinematics, collision sets).
 //!
-//! Cusps, nodes, internal motions and inverse-kinematics boxes are those of `linkspace
-//! singularities --json` and `linkspace ik --json` for the same URDF and settings (same
-//! searches, same order). The curve cover and the classification are built here.
-//!
-//! An open 3R chain reaches every joint configuration, so there is no configuration space to
-//! solve; the default `configuration_space` and `solve` answer "not available".
+//! An `Arm` is read once (`manip3r::prepare`: rounding policy, chain and point, joint limits);
+//! each job takes it with the front end's `Control` and returns what happened as values. The
+//! CLI prints and writes the JSON reports (`manip3r::report`) from these results; the ROS node
+//! converts the same results into its messages.
+
+use crate::manip3r::{
+    self,
+    branches::{Attribution, SingularBranches},
+    collision::{self, CollisionSet, CollisionSettings, Scene},
+    frame::{BaseFrame, Target},
+    ik::IkSolutions,
+    limits::LimitEffect,
+    report::{IkReport, Reading, SingularityReport},
+    verdict::{self, Verdict},
+    Chain3R, LoadOptions, Manip3rError, Prepared, Singularities,
+};
+use crate::model::Mechanism;
+use crate::search::{Control, Progress};
+use inari::Interval;
+use std::time::Instant;
 
 use super::{
-    gap, Analysis, AnalysisError, Bounds, BoxSetResult, Classification, IkQuery, IkResult, IkSolution, PreparedRun, ResultBox, Service, SingularPair, SingularPoint,
+    gap, Analysis, AnalysisError, MechanismKind, Bounds, BoxSetResult, Classification, IkQuery, IkResult, IkSolution, PreparedRun, ResultBox, Service, SingularPair, SingularPoint,
     SingularityQuery, SingularityResult,
 };
-use crate::interval::{interval, point};
-use crate::manip3r::motion;
-use crate::manip3r::report::radius;
-use crate::manip3r::branches::SingularBranches;
-use crate::manip3r::curves::Cover;
-use crate::manip3r::{self, ik, Chain3R, Manip3rError};
-use crate::model::Mechanism;
-use crate::search::{BoxStatus, Limit, Limits, Progress, SolveStats as Stats, SolverSettings, Status};
-use inari::Interval;
+use crate::manip3r::{curves::Cover, motion, report::radius};
+use crate::search::{BoxStatus, Limit, Limits, SolveStats as Stats, SolverSettings, Status};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
-use std::time::Instant;
+
+/// A serial arm as the 3R analyses read it.
+#[derive(Clone, Debug)]
+pub struct Arm {
+    /// The reduced serial mechanism, what was chosen and changed, and the joint limits.
+    pub prepared: Prepared,
+    /// The half-section map of the positioning structure.
+    pub chain: Chain3R,
+    /// Where the chain sits in the robot's root frame.
+    pub frame: BaseFrame,
+    /// The certified singular branches of an arm whose axes 2 and 3 are parallel.
+    pub branches: Option<SingularBranches>,
+}
+
+impl Arm {
+    /// Reads the arm of `mechanism` as `options` say, every length widened by `uncertainty`
+    /// metres (0 for the nominal geometry).
+    pub fn load(mechanism: &Mechanism, options: &LoadOptions, uncertainty: f64) -> Result<Self, Manip3rError> {
+        let prepared = manip3r::prepare(mechanism, options)?;
+        let chain = Chain3R::from_mechanism(&prepared.mechanism, uncertainty)?;
+        let frame = BaseFrame::of(&prepared.mechanism, &chain);
+        let branches = manip3r::branches::of(&prepared.mechanism, &chain);
+        Ok(Self { prepared, chain, frame, branches })
+    }
+
+    /// How the file was read, with what the joint limits removed from a result.
+    pub fn reading(&self, effect: LimitEffect) -> Reading {
+        Reading::of(&self.prepared, effect)
+    }
+}
+
+/// What a singularity run is asked for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SingularitiesRequest {
+    /// Largest width (radians) of reported and undecided boxes, in (0, 1).
+    pub precision: f64,
+    /// Also search nodes (pairs of singular points with one image).
+    pub nodes: bool,
+    /// Run the interval searches even where the verdict is structural (axes 2 and 3 parallel),
+    /// where they cannot complete.
+    pub search_anyway: bool,
+}
+
+/// Cusps, nodes, internal motions and the verdict of one arm.
+#[derive(Clone, Debug)]
+pub struct ArmSingularities {
+    /// What was asked.
+    pub request: SingularitiesRequest,
+    /// The searches' results inside the joint limits (the verdict reads the full torus).
+    pub run: Singularities,
+    /// The first answer: cuspidal or not, with its argument.
+    pub verdict: Verdict,
+    /// What the joint limits removed.
+    pub limit_effect: LimitEffect,
+    /// Axes 2 and 3 parallel, nominal geometry, searches not forced: the cusp answer comes from
+    /// the verdict's proof and the interval searches were not run.
+    pub structural: bool,
+    /// Whether the node search ran (it is not run where the singular branches are curves of
+    /// nodes).
+    pub nodes_searched: bool,
+    /// Where the cusp search's undecided boxes lie relative to the singular branches.
+    pub explained: Option<Attribution>,
+    /// Searches not run, and why.
+    pub not_searched: Option<String>,
+    /// Wall-clock seconds of the searches and the verdict.
+    pub seconds: f64,
+}
+
+/// Cusps, then nodes, then the verdict, within one `control` (one deadline for all).
+pub fn singularities(arm: &Arm, request: &SingularitiesRequest, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<ArmSingularities, Manip3rError> {
+    manip3r::check_precision(request.precision)?;
+    let (chain, mechanism) = (&arm.chain, &arm.prepared.mechanism);
+    let structural = chain.uncertainty == 0.0 && !request.search_anyway && verdict::parallel_structure(mechanism).is_some();
+    // On arms with known singular branches whole branches are curves of nodes: the isolated-node
+    // search floods, so it is not run even when the searches are forced.
+    let nodes_searched = request.nodes && arm.branches.is_none();
+    let start = Instant::now();
+    let mut run = if structural {
+        manip3r::structural_singularities(chain, request.precision)?
+    } else {
+        manip3r::singularities(chain, request.precision, nodes_searched, control, progress)?
+    };
+    // The verdict reads the full-torus run; the limits then filter what is listed.
+    let verdict = verdict::decide(mechanism, chain, &run, &arm.prepared.limits, &control.remaining_since(start));
+    let limit_effect = arm.prepared.limits.apply(&mut run);
+    let mut explained = None;
+    let mut not_searched = None;
+    if let Some(b) = &arm.branches {
+        if !structural {
+            let boxes: Vec<[Interval; 2]> = run.cusps.undecided.iter().map(|u| u.theta).chain(run.cusps.cusps.iter().filter(|c| !c.unique).map(|c| c.theta)).collect();
+            if !boxes.is_empty() {
+                explained = Some(b.attribute(mechanism, &boxes, 1e-2));
+            }
+            if request.nodes {
+                not_searched = Some("nodes not enumerated: the singular branches are curves of nodes (see the singular branches), which the isolated-node search does not model".to_string());
+            }
+        }
+    }
+    if structural {
+        not_searched = Some(format!(
+            "axes 2 and 3 are parallel: no cusp point, by the verdict's proof; {} (--search-anyway runs the interval searches, which cannot complete here)",
+            if request.nodes { "nodes not enumerated: the singular branches cross and map onto shared curves (curves of nodes), which the isolated-node search does not model" } else { "nodes not asked" }
+        ));
+    }
+    Ok(ArmSingularities { request: *request, run, verdict, limit_effect, structural, nodes_searched, explained, not_searched, seconds: start.elapsed().as_secs_f64() })
+}
+
+impl ArmSingularities {
+    /// What `linkspace singularities --json` writes.
+    pub fn report(&self, arm: &Arm) -> SingularityReport {
+        let mut report = SingularityReport::new(&arm.chain, self.request.precision, &self.run.cusps, self.run.nodes.as_ref(), self.seconds);
+        report.verdict = Some(self.verdict.clone());
+        report.reading = Some(arm.reading(self.limit_effect.clone()));
+        if let Some(a) = &self.explained {
+            report.explain(a.clone());
+        }
+        report.not_searched = self.not_searched.clone();
+        report.singular_branches = arm.branches.clone();
+        report
+    }
+}
+
+/// A point asked of inverse kinematics.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum IkPoint {
+    /// A point of the robot's root frame (metres): every joint of the chain is solved for.
+    Root([f64; 3]),
+    /// Half-section coordinates in the first joint's frame: distance from the first axis and
+    /// height along it (metres). The first joint is free (any angle turns the point about the
+    /// axis), so only joints 2 and 3 are solved for.
+    HalfSection {
+        /// Distance from the first axis.
+        radius: f64,
+        /// Height along the first axis.
+        z: f64,
+    },
+}
+
+/// Every solution of one inverse-kinematics query.
+#[derive(Clone, Debug)]
+pub struct ArmIk {
+    /// The point asked.
+    pub point: IkPoint,
+    /// The point as the search took it (`None` for a half-section point, taken exactly).
+    pub target: Option<Target>,
+    /// Solutions over (θ₂, θ₃) inside the joint limits: unique boxes, then clusters.
+    pub solutions: IkSolutions,
+    /// What the joint limits removed.
+    pub limit_effect: LimitEffect,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+/// Every joint solution of `arm` reaching `point`, within `control`.
+pub fn inverse_kinematics(arm: &Arm, point: IkPoint, precision: f64, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<ArmIk, Manip3rError> {
+    let start = Instant::now();
+    let (mut solutions, target) = match point {
+        IkPoint::HalfSection { radius, z } => (manip3r::ik::solve_with(&arm.chain, radius, z, precision, control, progress)?, None),
+        IkPoint::Root(p) => {
+            if p.iter().any(|v| !v.is_finite()) {
+                return Err(Manip3rError::BadTarget(p));
+            }
+            let target = arm.frame.target(p);
+            (manip3r::ik::solve_target(&arm.chain, target.half_section, precision, control, progress)?, Some(target))
+        }
+    };
+    // Solutions outside the file's joint limits are not solutions of the arm; those on a limit
+    // are kept.
+    let limit_effect = arm.prepared.limits.apply_ik(&mut solutions);
+    Ok(ArmIk { point, target, solutions, limit_effect, seconds: start.elapsed().as_secs_f64() })
+}
+
+impl ArmIk {
+    /// The first joint's angle for a solution box over (θ₂, θ₃): `None` for a half-section
+    /// point (θ₁ is free), the whole turn where the point or the end point may lie on the
+    /// first axis.
+    pub fn theta1(&self, arm: &Arm, b: &[Interval; 2]) -> Option<Interval> {
+        self.target.map(|t| arm.frame.theta1(&arm.chain, &t, b))
+    }
+
+    /// What `linkspace ik --json` writes.
+    pub fn report(&self, arm: &Arm) -> IkReport {
+        let point = match self.point {
+            IkPoint::Root(p) => p.to_vec(),
+            IkPoint::HalfSection { radius, z } => vec![radius, z],
+        };
+        let mut report = IkReport::new(&arm.chain, point, &self.solutions, |b| self.theta1(arm, b));
+        report.reading = Some(arm.reading(self.limit_effect.clone()));
+        report
+    }
+}
+
+/// Where the collision capsules of an arm meet, over (θ₂, θ₃).
+#[derive(Clone, Debug)]
+pub struct ArmCollisions {
+    /// The reduced arm, as read.
+    pub prepared: Prepared,
+    /// Its capsules and the pairs checked.
+    pub scene: Scene,
+    /// Colliding, free and undecided boxes.
+    pub set: CollisionSet,
+}
+
+/// The collision set of the arm of `mechanism` (read as `options` say), within `control`.
+///
+/// Takes the mechanism rather than an `Arm`: collisions need the capsules of the chosen chain,
+/// not its half-section map, which may be degenerate where collisions are still well defined.
+pub fn collisions(mechanism: &Mechanism, options: &LoadOptions, precision: f64, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<ArmCollisions, Manip3rError> {
+    manip3r::check_precision(precision)?;
+    let prepared = manip3r::prepare(mechanism, options)?;
+    let scene = Scene::from_mechanism(&prepared.mechanism)?;
+    let set = collision::classify_with(&scene, &CollisionSettings { precision }, control, progress)?;
+    Ok(ArmCollisions { prepared, scene, set })
+}
+
+// The ROS node's analysis of an arm: the jobs above, plus a cover of the singular curves and
+// the classification of configurations against it.
 
 /// Bisections per axis of the singular-curve cover: 256 × 256 cells of about 0.025 rad, the
 /// grid of the README's charts. Fine enough to show the curves and to separate the regions
 /// between them, coarse enough for a message of a few thousand boxes.
 pub const CURVE_DEPTH: u32 = 8;
 
-type V3 = [Interval; 3];
-
-fn dot(a: &V3, b: &V3) -> Interval {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
 fn bounds(x: Interval) -> Bounds {
     [x.inf(), x.sup()]
 }
 
-/// A serial chain of three revolute joints, as loaded.
+/// A serial arm as the node loads it: its 3R positioning structure, read as `linkspace
+/// singularities` reads a file with no options.
+///
+/// An open chain reaches every joint configuration, so there is no configuration space to
+/// solve; the default `configuration_space` and `solve` answer "not available".
 #[derive(Clone, Debug)]
 pub struct Manip3rAnalysis {
-    chain: Arc<Chain3R>,
-    /// The first joint's frame in the root link's: rotation (rows) and translation.
-    base_rotation: [V3; 3],
-    base_translation: V3,
-    /// The first axis in the first joint's frame, and two unit vectors completing a
-    /// right-handed basis (`e1 × e2 = axis`).
-    axis: V3,
-    e1: V3,
-    e2: V3,
+    arm: Arc<Arm>,
     /// Cover of the singular curves, computed once (it does not depend on any request).
     cover: Arc<Cover>,
-    /// The reduced mechanism the chain was built from (rounded), for the verdict.
-    reduced: Arc<Mechanism>,
-    /// Limits of the three joints, as the CLI reads them (the verdict's cusp must lie inside).
-    limits: Arc<manip3r::limits::JointLimits>,
-    /// Axes 2 and 3 parallel (`verdict::parallel_structure`): the verdict is structural and
-    /// the interval searches are not run, as in `linkspace singularities`.
-    structural: bool,
-    /// The certified singular branches (parallel axes 2 and 3), computed once.
-    branches: Option<Arc<SingularBranches>>,
 }
 
 impl Manip3rAnalysis {
-    /// Reads the chain (nominal geometry); errors when the mechanism is not a 3R chain or its
-    /// map is degenerate.
+    /// Reads the arm (nominal geometry); errors when the mechanism holds no 3R positioning
+    /// structure or its map is degenerate.
     pub fn new(mechanism: &Mechanism) -> Result<Self, Manip3rError> {
-        // As the CLI reads files: rounding policy, then the positioning structure of a real arm
-        // (root to wrist centre or tip), so the node takes vendor URDFs too.
-        let prepared = manip3r::prepare(mechanism, &manip3r::LoadOptions::default())?;
-        let mechanism = &prepared.mechanism;
-        let chain = Chain3R::from_mechanism(mechanism, 0.0)?;
-        let first = mechanism.joint(&chain.joints[0]).expect("invariant: the chain names its joints");
-        // Compose the joint origins from the root down to the first revolute joint, in interval
-        // arithmetic (as `Chain3R` does for the rest of the chain).
-        let mut r: [V3; 3] = [[point(1.0), point(0.0), point(0.0)], [point(0.0), point(1.0), point(0.0)], [point(0.0), point(0.0), point(1.0)]];
-        let mut t: V3 = [point(0.0); 3];
-        for j in mechanism.path_to(mechanism.joints[first].child) {
-            let iso = &mechanism.joints[j].origin;
-            let m = mechanism.joints[j].rotation_matrix();
-            let o: [V3; 3] = [0, 1, 2].map(|i| [0, 1, 2].map(|k| point(m[i][k])));
-            let v = iso.translation.vector;
-            let ov: V3 = [point(v[0]), point(v[1]), point(v[2])];
-            // (r, t) ∘ (o, ov) = (r·o, r·ov + t)
-            let rows = r;
-            r = [0, 1, 2].map(|i| [0, 1, 2].map(|k| rows[i][0] * o[0][k] + rows[i][1] * o[1][k] + rows[i][2] * o[2][k]));
-            t = [0, 1, 2].map(|i| dot(&rows[i], &ov) + t[i]);
-        }
-        let a = mechanism.joints[first].axis;
-        let axis = [point(a[0]), point(a[1]), point(a[2])];
-        // e1: the unit vector of the coordinate axis least aligned with a₁, made perpendicular.
-        let k = (0..3).min_by(|&i, &j| a[i].abs().total_cmp(&a[j].abs())).expect("three axes");
-        let mut u = [0.0; 3];
-        u[k] = 1.0;
-        let d = a[k];
-        let mut e1 = [u[0] - d * a[0], u[1] - d * a[1], u[2] - d * a[2]];
-        let n = (e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]).sqrt();
-        e1 = e1.map(|x| x / n);
-        let e2 = [a[1] * e1[2] - a[2] * e1[1], a[2] * e1[0] - a[0] * e1[2], a[0] * e1[1] - a[1] * e1[0]];
-        let cover = Arc::new(Cover::new(&chain, CURVE_DEPTH, &manip3r::Control::with_limits(Limits::default())));
-        let structural = manip3r::verdict::parallel_structure(mechanism).is_some();
-        let branches = manip3r::branches::of(mechanism, &chain).map(Arc::new);
-        Ok(Self {
-            chain: Arc::new(chain),
-            base_rotation: r,
-            base_translation: t,
-            axis,
-            e1: e1.map(point),
-            e2: e2.map(point),
-            cover,
-            reduced: Arc::new(prepared.mechanism.clone()),
-            limits: Arc::new(prepared.limits.clone()),
-            structural,
-            branches,
-        })
+        let arm = Arm::load(mechanism, &LoadOptions::default(), 0.0)?;
+        let cover = Arc::new(Cover::new(&arm.chain, CURVE_DEPTH, &Control::with_limits(Limits::default())));
+        Ok(Self { arm: Arc::new(arm), cover })
     }
 
     /// The chain's name tokens for records over (θ₂, θ₃).
     fn record_joints(&self) -> Vec<String> {
-        vec![self.chain.joints[1].clone(), self.chain.joints[2].clone()]
+        vec![self.arm.chain.joints[1].clone(), self.arm.chain.joints[2].clone()]
     }
-
-    /// The point `p` (root frame) in the first joint's frame: `Rᵀ(p − t)`, the rotation taken
-    /// as exact (as every URDF rotation is in this crate).
-    fn to_first_joint(&self, p: [f64; 3]) -> V3 {
-        let d: V3 = [0, 1, 2].map(|i| point(p[i]) - self.base_translation[i]);
-        let r = &self.base_rotation;
-        [0, 1, 2].map(|k| r[0][k] * d[0] + r[1][k] * d[1] + r[2][k] * d[2])
-    }
-
-    /// Direction about the first axis of a vector perpendicular to it (radians), or `None` when
-    /// it may vanish.
-    fn direction(&self, v: &V3) -> Option<Interval> {
-        direction(dot(v, &self.e1), dot(v, &self.e2))
-    }
-}
-
-/// An enclosure of the angle of every vector (x, y) of the box, or `None` when the box may hold
-/// the origin or spans half a turn or more.
-///
-/// The candidate comes from `f64::atan2` at the corners; it is then proven: every vector of the
-/// box lies strictly left of direction α and right of direction β
-/// (`interval::angle::strictly_between`), so every angle lies in [α, β] (modulo 2π). A failed
-/// proof widens the candidate, then gives up.
-fn direction(x: Interval, y: Interval) -> Option<Interval> {
-    if x.contains(0.0) && y.contains(0.0) {
-        return None;
-    }
-    let centre = y.mid().atan2(x.mid());
-    let wrap = |a: f64| {
-        let tau = std::f64::consts::TAU;
-        a - tau * (a / tau).round()
-    };
-    let rel: Vec<f64> = [(x.inf(), y.inf()), (x.inf(), y.sup()), (x.sup(), y.inf()), (x.sup(), y.sup())].iter().map(|&(a, b)| wrap(b.atan2(a) - centre)).collect();
-    let lo = centre + rel.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = centre + rel.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    for margin in [1e-12, 1e-9, 1e-6] {
-        let (alpha, beta) = (lo - margin, hi + margin);
-        if beta - alpha >= 3.0 {
-            return None;
-        }
-        if crate::interval::angle::strictly_between(x, y, alpha, beta) {
-            return Some(interval(alpha, beta));
-        }
-    }
-    None
 }
 
 impl Analysis for Manip3rAnalysis {
     fn mechanism(&self) -> &str {
-        &self.chain.name
+        &self.arm.chain.name
     }
 
-    fn kind(&self) -> &'static str {
-        "manipulator_3r"
+    fn kind(&self) -> MechanismKind {
+        MechanismKind::Manipulator3R
     }
 
     fn services(&self) -> Vec<Service> {
@@ -189,7 +302,7 @@ impl Analysis for Manip3rAnalysis {
     }
 
     fn free_joints(&self) -> Vec<String> {
-        self.chain.joints.to_vec()
+        self.arm.chain.joints.to_vec()
     }
 
     fn fixed_joints(&self) -> Vec<(String, f64)> {
@@ -205,16 +318,7 @@ impl Analysis for Manip3rAnalysis {
         if query.max_boxes == 0 {
             return Err(AnalysisError::BadRequest("max_boxes must be at least 1".into()));
         }
-        Ok(Box::new(SingularityRun {
-            chain: self.chain.clone(),
-            cover: self.cover.clone(),
-            query: query.clone(),
-            joints: self.record_joints(),
-            reduced: self.reduced.clone(),
-            limits: self.limits.clone(),
-            structural: self.structural,
-            branches: self.branches.clone(),
-        }))
+        Ok(Box::new(SingularityRun { arm: self.arm.clone(), cover: self.cover.clone(), query: query.clone(), joints: self.record_joints() }))
     }
 
     fn inverse_kinematics(&self, query: &IkQuery) -> Result<Box<dyn PreparedRun<IkResult>>, AnalysisError> {
@@ -226,11 +330,7 @@ impl Analysis for Manip3rAnalysis {
         if query.max_boxes == 0 {
             return Err(AnalysisError::BadRequest("max_boxes must be at least 1".into()));
         }
-        let local = self.to_first_joint(p);
-        let z = dot(&local, &self.axis);
-        let perp: V3 = [0, 1, 2].map(|i| local[i] - z * self.axis[i]);
-        let rho = dot(&perp, &perp).intersection(interval(0.0, f64::INFINITY));
-        Ok(Box::new(IkRun { analysis: self.clone(), query: query.clone(), target: [rho, z], target_direction: self.direction(&perp) }))
+        Ok(Box::new(IkRun { arm: self.arm.clone(), query: query.clone() }))
     }
 
     fn classify(&self, values: &[f64], _cspace: Option<&BoxSetResult>, _singular: Option<&SingularityResult>) -> Result<Classification, AnalysisError> {
@@ -287,46 +387,29 @@ fn box_set(cover: &Cover, mechanism: &str, joints: &[String]) -> BoxSetResult {
 
 /// A validated singularity run.
 struct SingularityRun {
-    chain: Arc<Chain3R>,
+    arm: Arc<Arm>,
     cover: Arc<Cover>,
     query: SingularityQuery,
     joints: Vec<String>,
-    reduced: Arc<Mechanism>,
-    limits: Arc<manip3r::limits::JointLimits>,
-    structural: bool,
-    branches: Option<Arc<SingularBranches>>,
 }
 
 impl PreparedRun<SingularityResult> for SingularityRun {
     fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> SingularityResult {
-        let (chain, q) = (&*self.chain, &self.query);
+        let (arm, q) = (&*self.arm, &self.query);
+        let chain = &arm.chain;
         let limits = Limits { max_cells: q.max_boxes, timeout: q.timeout, ..Limits::default() };
-        let control = manip3r::Control { limits, threads: q.threads.max(1), cancel };
-        let start = std::time::Instant::now();
-        // As `linkspace singularities`: with axes 2 and 3 parallel the verdict's proof replaces
-        // the cusp search (which cannot complete there) and nodes are not searched; whenever
-        // the singular branches are known, whole branches are curves of nodes, which the
-        // isolated-node search does not model.
-        let with_nodes = q.nodes && self.branches.is_none();
-        let run = if self.structural {
-            manip3r::structural_singularities(chain, q.precision).expect("invariant: precision validated when prepared")
-        } else {
-            manip3r::singularities(chain, q.precision, with_nodes, &control, progress).expect("invariant: precision validated when prepared")
-        };
-        // The verdict reads the full-torus run (the CLI's, before its joint-limit filter).
-        let verdict = manip3r::verdict::decide(&self.reduced, chain, &run, &self.limits, &control.remaining_since(start));
-        // Then the file's joint limits filter what is published, as the CLI's do.
-        let mut run = run;
-        let effect = self.limits.restrict().then(|| self.limits.apply(&mut run));
-        let (found, node_search) = (&run.cusps, &run.nodes);
+        let control = Control { limits, threads: q.threads.max(1), cancel };
+        let request = SingularitiesRequest { precision: q.precision, nodes: q.nodes, search_anyway: false };
+        let found = singularities(arm, &request, &control, progress).expect("invariant: precision validated when prepared");
+        let (cusps, node_search) = (&found.run.cusps, &found.run.nodes);
         let two = |t: &[Interval; 2]| vec![bounds(t[0]), bounds(t[1])];
         let image = |t: [Interval; 2]| {
             let j = chain.jets(t, 0);
             [j.rho.value(), j.z.value()]
         };
         let workspace = |rho: Interval, z: Interval| vec![bounds(radius(rho)), bounds(z)];
-        let mut cusp_records: Vec<SingularPoint> = found.cusps.iter().map(|c| SingularPoint { joints: two(&c.theta), workspace: workspace(c.rho, c.z), certified: c.unique }).collect();
-        cusp_records.extend(found.undecided.iter().map(|u| {
+        let mut cusp_records: Vec<SingularPoint> = cusps.cusps.iter().map(|c| SingularPoint { joints: two(&c.theta), workspace: workspace(c.rho, c.z), certified: c.unique }).collect();
+        cusp_records.extend(cusps.undecided.iter().map(|u| {
             let [rho, z] = image(u.theta);
             SingularPoint { joints: two(&u.theta), workspace: workspace(rho, z), certified: false }
         }));
@@ -338,16 +421,22 @@ impl PreparedRun<SingularityResult> for SingularityRun {
                 SingularPair { joints: [two(&p[0]), two(&p[1])], workspace: workspace(a[0].convex_hull(b[0]), a[1].convex_hull(b[1])), certified: false }
             }));
         }
-        let status = run.status;
-        let motions = internal_motions(chain, &found.bands, &self.joints, q.precision);
-        let processed = found.stats.processed + node_search.as_ref().map_or(0, |n| n.stats.processed);
+        let status = found.run.status;
+        let motions = internal_motions(chain, &cusps.bands, &self.joints, q.precision);
+        let processed = cusps.stats.processed + node_search.as_ref().map_or(0, |n| n.stats.processed);
         let certified_nodes = node_search.as_ref().map_or(0, |n| n.nodes.len());
         let summary = format!(
             "{} cusps, {}, {} internal-motion lines, {} undecided, {} cover boxes in {} pieces, {}",
-            found.cusps.len(),
-            if with_nodes { format!("{certified_nodes} nodes") } else if q.nodes { "nodes not searched (the singular branches are curves of nodes)".to_string() } else { "nodes not searched".to_string() },
-            found.bands.len(),
-            found.undecided.len() + node_search.as_ref().map_or(0, |n| n.undecided.len()),
+            cusps.cusps.len(),
+            if found.nodes_searched {
+                format!("{certified_nodes} nodes")
+            } else if q.nodes {
+                "nodes not searched (the singular branches are curves of nodes)".to_string()
+            } else {
+                "nodes not searched".to_string()
+            },
+            cusps.bands.len(),
+            cusps.undecided.len() + node_search.as_ref().map_or(0, |n| n.undecided.len()),
             self.cover.boxes.len(),
             self.cover.clusters,
             match status {
@@ -357,6 +446,12 @@ impl PreparedRun<SingularityResult> for SingularityRun {
                 Status::Incomplete(limit) => format!("incomplete ({} limit)", limit.name()),
             }
         );
+        // The joint limits' effect is named only when the file has limits.
+        let summary = if arm.prepared.limits.restrict() {
+            format!("{}; {}; {}", found.verdict.line(), summary, found.limit_effect.text)
+        } else {
+            format!("{}; {}", found.verdict.line(), summary)
+        };
         SingularityResult {
             mechanism: chain.name.clone(),
             status,
@@ -368,14 +463,11 @@ impl PreparedRun<SingularityResult> for SingularityRun {
             singular_curves: box_set(&self.cover, &chain.name, &self.joints),
             internal_motions: motions,
             processed,
-            seconds: start.elapsed().as_secs_f64() + self.cover.seconds,
-            summary: match &effect {
-                Some(e) => format!("{}; {}; {}", verdict.line(), summary, e.text),
-                None => format!("{}; {}", verdict.line(), summary),
-            },
+            seconds: found.seconds + self.cover.seconds,
+            summary,
             loops: None,
-            verdict: Some(verdict),
-            branches: self.branches.as_deref().cloned(),
+            verdict: Some(found.verdict),
+            branches: arm.branches.clone(),
         }
     }
 }
@@ -412,46 +504,31 @@ fn internal_motions(chain: &Chain3R, bands: &[motion::Band], joints: &[String], 
 
 /// A validated inverse-kinematics run.
 struct IkRun {
-    analysis: Manip3rAnalysis,
+    arm: Arc<Arm>,
     query: IkQuery,
-    /// (ρ, z) of the point in the first joint's frame.
-    target: [Interval; 2],
-    /// Direction of the point about the first axis (`None` on the axis: θ₁ is free).
-    target_direction: Option<Interval>,
 }
 
 impl PreparedRun<IkResult> for IkRun {
     fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> IkResult {
-        let start = Instant::now();
-        let a = &self.analysis;
-        let chain = &*a.chain;
+        let arm = &*self.arm;
+        let chain = &arm.chain;
         let limits = Limits { max_cells: self.query.max_boxes, timeout: self.query.timeout, ..Limits::default() };
-        let control = manip3r::Control { limits, threads: self.query.threads.max(1), cancel };
-        let mut s = ik::solve_target(chain, self.target, self.query.precision, &control, progress).expect("invariant: validated when prepared");
-        // Solutions outside the file's joint limits are not solutions of the arm (`ik` drops
-        // them too); those on a limit are kept.
-        if a.limits.restrict() {
-            a.limits.apply_ik(&mut s);
-        }
-        // θ₁ turns the end point's direction about a₁ onto the point's.
-        let theta1 = |b: &[Interval; 2]| -> Bounds {
-            match (self.target_direction, a.direction(&chain.perp(*b))) {
-                (Some(t), Some(u)) => bounds(crate::interval::angle::wrap(t - u)),
-                _ => bounds(motion::full_range()),
-            }
-        };
-        let three = |b: &[Interval; 2]| vec![theta1(b), bounds(b[0]), bounds(b[1])];
+        let control = Control { limits, threads: self.query.threads.max(1), cancel };
+        let found = inverse_kinematics(arm, IkPoint::Root(self.query.point), self.query.precision, &control, progress).expect("invariant: validated when prepared");
+        let target = found.target.expect("invariant: a root-frame point has a target");
+        let three = |b: &[Interval; 2]| vec![bounds(found.theta1(arm, b).expect("invariant: a root-frame point fixes θ₁")), bounds(b[0]), bounds(b[1])];
+        let s = &found.solutions;
         let mut solutions: Vec<IkSolution> = s.unique.iter().map(|b| IkSolution { joints: three(b), unique: true, boxes: 0 }).collect();
         solutions.extend(s.clusters.iter().map(|c| IkSolution { joints: three(&c.hull), unique: false, boxes: c.boxes }));
         IkResult {
             mechanism: chain.name.clone(),
             joint_names: chain.joints.to_vec(),
             point_names: vec!["radius".into(), "z".into()],
-            point_values: vec![bounds(radius(self.target[0])), bounds(self.target[1])],
+            point_values: vec![bounds(radius(target.half_section[0])), bounds(target.half_section[1])],
             solutions,
             status: s.status,
             processed: s.stats.processed,
-            seconds: start.elapsed().as_secs_f64(),
+            seconds: found.seconds,
         }
     }
 }
@@ -459,7 +536,9 @@ impl PreparedRun<IkResult> for IkRun {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analysis::load;
+    use crate::interval::point;
+    use crate::manip3r::ik;
+    use crate::app::load;
     use crate::model::{urdf, JointKind};
     use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};
 
@@ -495,7 +574,7 @@ mod tests {
     fn robot_e_has_the_table_counts_and_a_sound_curve_cover() {
         let m = urdf::parse(E).expect("bundled");
         let a = load(&m, &[], &[]).expect("3R");
-        assert_eq!(a.kind(), "manipulator_3r");
+        assert_eq!(a.kind(), MechanismKind::Manipulator3R);
         let r = a.singularities(&query()).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
         assert_eq!(r.status, Status::Complete);
         assert_eq!((r.cusps.iter().filter(|c| c.certified).count(), r.nodes.iter().filter(|n| n.certified).count(), r.undecided()), (4, 2, 0));
@@ -645,18 +724,5 @@ mod tests {
         assert_eq!(late.status, Status::Incomplete(Limit::Time));
         // 3R chains take no fixed joints.
         assert!(load(&m, &[("joint2".into(), 0.1)], &[]).err().map(err).unwrap_or_default().contains("takes no fixed joints"));
-    }
-
-    #[test]
-    #[allow(clippy::approx_constant)] // sample angles over [-3.14, 3.14], not π
-    fn directions_are_enclosed() {
-        for k in 0..64 {
-            let angle = -3.14 + 6.28 * k as f64 / 63.0;
-            let (x, y) = (2.0 * angle.cos(), 2.0 * angle.sin());
-            let d = direction(interval(x - 1e-3, x + 1e-3), interval(y - 1e-3, y + 1e-3)).expect("away from 0");
-            let shifted = [0.0, std::f64::consts::TAU, -std::f64::consts::TAU].iter().any(|s| d.contains(angle + s));
-            assert!(shifted && d.wid() < 2e-3, "{angle}: {d:?}");
-        }
-        assert!(direction(interval(-1.0, 1.0), interval(-1.0, 1.0)).is_none());
     }
 }

@@ -10,12 +10,12 @@
 //! No IO and no async here: a front end prepares a run (all validation happens then, so bad
 //! requests are answered at once), moves it to a thread of its own and converts the result.
 
-mod manip3r;
-mod linkage;
+pub mod arm;
+pub mod linkage;
 mod platform;
 
-pub use manip3r::Manip3rAnalysis;
-pub use linkage::LinkageAnalysis;
+pub use arm::{Arm, Manip3rAnalysis};
+pub use linkage::{LinkageAnalysis, SolveJob};
 pub use crate::problems::singular::sets::Actuation;
 pub use platform::PlatformAnalysis;
 
@@ -28,6 +28,34 @@ use thiserror::Error;
 
 /// `[lower, upper]`
 pub type Bounds = [f64; 2];
+
+/// What kind of mechanism an analysis answers for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MechanismKind {
+    /// A serial arm, analysed through its 3R positioning structure.
+    Manipulator3R,
+    /// A closed-loop linkage on the planar builder.
+    PlanarLinkage,
+    /// A closed-loop linkage on the spatial builder.
+    SpatialLinkage,
+    /// An octahedral platform on the Cayley–Menger formulation.
+    ParallelPlatform,
+    /// Outside every analysis (loaded and listed, with why).
+    Unsupported,
+}
+
+impl MechanismKind {
+    /// The name used in messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            MechanismKind::Manipulator3R => "manipulator_3r",
+            MechanismKind::PlanarLinkage => "planar_linkage",
+            MechanismKind::SpatialLinkage => "spatial_linkage",
+            MechanismKind::ParallelPlatform => "parallel_platform",
+            MechanismKind::Unsupported => "unsupported",
+        }
+    }
+}
 
 /// The queries a mechanism can be asked; `Analysis::services` lists those it answers with
 /// real results.
@@ -436,8 +464,8 @@ pub struct IkResult {
 pub trait Analysis: Send + Sync {
     /// Robot name.
     fn mechanism(&self) -> &str;
-    /// Kind of mechanism, e.g. `planar_linkage`.
-    fn kind(&self) -> &'static str;
+    /// Kind of mechanism.
+    fn kind(&self) -> MechanismKind;
     /// The queries answered with real results.
     fn services(&self) -> Vec<Service>;
     /// Why the other queries are not available (shown in their error replies).
@@ -484,7 +512,7 @@ pub trait Analysis: Send + Sync {
 
     /// The `NotAvailable` error for `service`.
     fn not_available(&self, service: Service) -> AnalysisError {
-        AnalysisError::NotAvailable { service: service.name(), mechanism: self.mechanism().to_string(), kind: self.kind(), reason: self.limitation() }
+        AnalysisError::NotAvailable { service: service.name(), mechanism: self.mechanism().to_string(), kind: self.kind().name(), reason: self.limitation() }
     }
 }
 
@@ -500,8 +528,8 @@ impl Analysis for Unsupported {
     fn mechanism(&self) -> &str {
         &self.name
     }
-    fn kind(&self) -> &'static str {
-        "unsupported"
+    fn kind(&self) -> MechanismKind {
+        MechanismKind::Unsupported
     }
     fn services(&self) -> Vec<Service> {
         Vec::new()

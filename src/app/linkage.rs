@@ -10,7 +10,7 @@
 //! singular configuration once those sets are complete.
 
 use super::{
-    classify, gap, Actuation, Analysis, AnalysisError, BoxSetResult, Classification, LoopSingularities, PreparedRun, ResultBox, Service, SingularSetResult, SingularityQuery,
+    classify, gap, Actuation, Analysis, MechanismKind, AnalysisError, BoxSetResult, Classification, LoopSingularities, PreparedRun, ResultBox, Service, SingularSetResult, SingularityQuery,
     SingularityResult,
 };
 use crate::interval::components;
@@ -20,6 +20,7 @@ use crate::problems::singular::sets::{all_kinds, SingularSets};
 use crate::problems::singular::{BoxKind, Coordinates, SingularProblem, SingularSet};
 use crate::problems::{Linkage, LinkageError, ModelChoice};
 use crate::report::singular::SingularReport;
+use crate::report::SolveReport;
 use crate::search::{BoxStatus, Progress, SolveStats, SolverSettings, Status};
 use crate::system::VarRole;
 use std::sync::atomic::AtomicBool;
@@ -51,9 +52,7 @@ impl LinkageAnalysis {
     }
 
     fn prepare(&self, problem: Linkage, settings: &SolverSettings, analysis: &str) -> Result<Box<dyn PreparedRun>, AnalysisError> {
-        // Validate now, so that a bad request is answered before any thread starts.
-        problem.solver(settings.clone())?;
-        Ok(Box::new(LinkageRun { problem, settings: settings.clone(), analysis: analysis.to_string() }))
+        Ok(Box::new(LinkageRun { job: SolveJob::new(problem, settings.clone())?, analysis: analysis.to_string() }))
     }
 }
 
@@ -62,8 +61,11 @@ impl Analysis for LinkageAnalysis {
         &self.mechanism.name
     }
 
-    fn kind(&self) -> &'static str {
-        self.problem.kind()
+    fn kind(&self) -> MechanismKind {
+        match self.problem {
+            Linkage::Planar(_) => MechanismKind::PlanarLinkage,
+            Linkage::Spatial(..) => MechanismKind::SpatialLinkage,
+        }
     }
 
     fn services(&self) -> Vec<Service> {
@@ -332,22 +334,68 @@ fn set_result(p: &SingularProblem<Linkage>, settings: &SolverSettings, set: &Sin
     }
 }
 
-/// A validated linkage run.
-struct LinkageRun {
+/// A configuration-space run of a closed-loop linkage, built and validated: `linkspace solve`
+/// and the node's `configuration_space` and `solve` all run one.
+#[derive(Clone, Debug)]
+pub struct SolveJob {
     problem: Linkage,
     settings: SolverSettings,
+}
+
+impl SolveJob {
+    /// Validates `settings` for `problem`, so that a bad request is answered before any run.
+    pub fn new(problem: Linkage, settings: SolverSettings) -> Result<Self, crate::search::SolveError> {
+        problem.solver(settings.clone())?;
+        Ok(Self { problem, settings })
+    }
+
+    /// Builds `mechanism` with `model` (planar, spatial, or auto: planar when the planar builder
+    /// takes it), the `fixed` joint values and the `traces` to follow, and validates `settings`.
+    pub fn build(mechanism: &Mechanism, model: ModelChoice, fixed: &[(String, f64)], traces: &[TracedPoint], settings: SolverSettings) -> Result<Self, AnalysisError> {
+        let problem = Linkage::build(mechanism, model, fixed, traces)?;
+        Ok(Self::new(problem, settings)?)
+    }
+
+    /// The built problem.
+    pub fn problem(&self) -> &Linkage {
+        &self.problem
+    }
+
+    /// The settings it runs with.
+    pub fn settings(&self) -> &SolverSettings {
+        &self.settings
+    }
+
+    /// Encloses every configuration, within the settings' limits or until `cancel` is raised.
+    pub fn run(&self, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> SolveRun {
+        let solver = self.problem.solver(self.settings.clone()).expect("invariant: validated when built");
+        let e = solver.enclose(cancel, progress);
+        let report = self.problem.report(&self.settings, e.status, e.stats.clone(), &e.solutions, &e.unique, &e.undecided);
+        SolveRun { report, solutions: e.solutions }
+    }
+}
+
+/// The outcome of a `SolveJob`.
+#[derive(Clone, Debug)]
+pub struct SolveRun {
+    /// Every box with its joint values and traces (what `solve --json` writes).
+    pub report: SolveReport,
+    /// The solution boxes in the system's variables, in the report's order.
+    pub solutions: Vec<crate::interval::IntervalBox>,
+}
+
+/// A validated linkage run.
+struct LinkageRun {
+    job: SolveJob,
     analysis: String,
 }
 
 impl PreparedRun for LinkageRun {
     fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> BoxSetResult {
-        let solver = self.problem.solver(self.settings.clone()).expect("invariant: validated when prepared");
-        let e = solver.enclose(cancel, progress);
-        // The CLI's report, so the published boxes are exactly those of `solve --json`.
-        let report = self.problem.report(&self.settings, e.status, e.stats.clone(), &e.solutions, &e.unique, &e.undecided);
-        let labels = components(&e.solutions).0;
-        let joint_names = self.problem.free_joints().to_vec();
-        let traces = self.problem.trace_names();
+        let SolveRun { report, solutions } = self.job.run(cancel, progress);
+        let labels = components(&solutions).0;
+        let joint_names = self.job.problem.free_joints().to_vec();
+        let traces = self.job.problem.trace_names();
         let convert = |record: &crate::report::BoxRecord, status: BoxStatus, cluster: Option<usize>| ResultBox {
             status,
             bounds: record.box_.clone(),
@@ -378,7 +426,7 @@ impl PreparedRun for LinkageRun {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analysis::{classify, load};
+    use crate::app::{classify, load};
     use crate::model::urdf;
     use std::f64::consts::{PI, TAU};
 
@@ -388,7 +436,7 @@ mod tests {
     fn four_bar_with_a_fixed_crank_has_two_assembly_modes() {
         let m = urdf::parse(FOUR_BAR).expect("bundled");
         let a = load(&m, &[("crank_joint".into(), 0.5)], &[("coupler".into(), 2.0, 1.0)]).expect("planar");
-        assert_eq!(a.kind(), "planar_linkage");
+        assert_eq!(a.kind(), MechanismKind::PlanarLinkage);
         let settings = SolverSettings { sigma: 1e-5, ..Default::default() };
         let r = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
         assert_eq!(r.clusters, 2);
@@ -408,7 +456,7 @@ mod tests {
     fn a_spatial_linkage_loads_on_the_spatial_builder_and_solves_again() {
         let m = urdf::parse(include_str!("../../urdf/rssr.urdf")).expect("bundled");
         let a = load(&m, &[("crank_joint".into(), 0.7)], &[]).expect("spatial");
-        assert_eq!(a.kind(), "spatial_linkage");
+        assert_eq!(a.kind(), MechanismKind::SpatialLinkage);
         assert!(a.limitation().contains("not planar"), "{}", a.limitation());
         let settings = SolverSettings { sigma: 1e-6, ..Default::default() };
         let r = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
@@ -452,7 +500,7 @@ mod tests {
     fn singular_sets_are_the_closed_form_dead_centres_and_classify_bounds_the_distance_to_them() {
         let xml = four_bar_rocker_driven();
         let m = urdf::parse(&xml).expect("bundled");
-        let a = crate::analysis::load_urdf(&m, &xml, &[], &[]).expect("planar");
+        let a = crate::app::load_urdf(&m, &xml, &[], &[]).expect("planar");
         assert_eq!(a.services(), vec![Service::Solve, Service::Singularities, Service::Classify]);
         let query = SingularityQuery { precision: 1e-6, nodes: false, max_boxes: 1_000_000, timeout: None, threads: 1 };
         let r = a.singularities(&query).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
@@ -519,8 +567,8 @@ mod tests {
         // output) has 4 dead centres, the closed form of `tests/spatial_singularities.rs`.
         let xml = include_str!("../../urdf/rssr.urdf").replace("</robot>", "<transmission name=\"drive\"><type>transmission_interface/SimpleTransmission</type><joint name=\"crank_joint\"/></transmission></robot>");
         let m = urdf::parse(&xml).expect("bundled");
-        let a = crate::analysis::load_urdf(&m, &xml, &[], &[]).expect("spatial");
-        assert_eq!(a.kind(), "spatial_linkage");
+        let a = crate::app::load_urdf(&m, &xml, &[], &[]).expect("spatial");
+        assert_eq!(a.kind(), MechanismKind::SpatialLinkage);
         let query = SingularityQuery { precision: 1e-6, nodes: false, max_boxes: 1_000_000, timeout: None, threads: 1 };
         let r = a.singularities(&query).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
         let loops = r.loops.as_ref().expect("a linkage's sets");
@@ -546,7 +594,7 @@ mod tests {
         assert!(err(a.solve(&[("crank_joint".into(), f64::NAN)], &SolverSettings::default())).contains("not a finite number"));
         assert!(err(a.solve(&[], &SolverSettings { sigma: f64::NAN, ..Default::default() })).contains("sigma"));
         // A planar linkage answers singularities; bad queries are refused before a run.
-        let query = crate::analysis::SingularityQuery { precision: 1e-4, nodes: true, max_boxes: 1000, timeout: None, threads: 1 };
+        let query = crate::app::SingularityQuery { precision: 1e-4, nodes: true, max_boxes: 1000, timeout: None, threads: 1 };
         assert!(a.singularities(&SingularityQuery { precision: 2.0, ..query.clone() }).err().map(|e| e.to_string()).unwrap_or_default().contains("precision must be a number in (0, 1)"));
         assert!(a.singularities(&SingularityQuery { max_boxes: 0, ..query.clone() }).err().map(|e| e.to_string()).unwrap_or_default().contains("max_boxes must be at least 1"));
         let bad = LinkageAnalysis::new(&m, &[], &[]).expect("planar").with_actuation(Actuation::given(vec!["nope".into()]));
@@ -556,7 +604,7 @@ mod tests {
         assert!(spatial.singularities(&query).is_ok());
         let bad = LinkageAnalysis::new(&urdf::parse(include_str!("../../urdf/spherical_four_bar.urdf")).expect("bundled"), &[], &[]).expect("spatial").with_actuation(Actuation::given(vec!["loop_coupler_rocker".into()]));
         assert!(bad.singularities(&query).err().map(|e| e.to_string()).unwrap_or_default().contains("is a loop joint of a spatial linkage"));
-        let query = crate::analysis::IkQuery { point: [1.0, 0.0, 0.0], precision: 1e-3, max_boxes: 1000, timeout: None, threads: 1 };
+        let query = crate::app::IkQuery { point: [1.0, 0.0, 0.0], precision: 1e-3, max_boxes: 1000, timeout: None, threads: 1 };
         assert!(a.inverse_kinematics(&query).err().map(|e| e.to_string()).unwrap_or_default().contains("inverse_kinematics is not available"));
     }
 }

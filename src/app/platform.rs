@@ -10,7 +10,7 @@
 //! the cluster it was attributed to; the solution boxes of a cluster left undecided are
 //! published `Undecided`, those of settled clusters `Solution`.
 
-use super::{Analysis, AnalysisError, BoxSetResult, PreparedRun, ResultBox, Service};
+use super::{MechanismKind, Analysis, AnalysisError, BoxSetResult, PreparedRun, ResultBox, Service};
 use crate::contract::FaceBounds;
 use crate::model::Mechanism;
 use crate::problems::cayley_menger::{BuildOptions, CayleyMenger, DistanceSolverError, Formulation};
@@ -70,8 +70,8 @@ impl Analysis for PlatformAnalysis {
         &self.mechanism.name
     }
 
-    fn kind(&self) -> &'static str {
-        "parallel_platform"
+    fn kind(&self) -> MechanismKind {
+        MechanismKind::ParallelPlatform
     }
 
     fn services(&self) -> Vec<Service> {
@@ -164,7 +164,7 @@ impl PreparedRun for PlatformRun {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::analysis::load;
+    use crate::app::load;
     use crate::model::urdf;
     use crate::search::Status;
 
@@ -180,7 +180,7 @@ mod tests {
         let m = urdf::parse(OCTAHEDRAL).expect("bundled");
         let fixed = config_a();
         let a = load(&m, &fixed, &[]).expect("platform");
-        assert_eq!(a.kind(), "parallel_platform");
+        assert_eq!(a.kind(), MechanismKind::ParallelPlatform);
         // The CLI's defaults (`linkspace distances --redundant`).
         let settings = SolverSettings { sigma: 0.01, rho: 0.99, ..Default::default() };
         let r = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
@@ -219,7 +219,7 @@ mod tests {
     fn octahedral_without_legs_is_unsupported_and_bad_legs_fail() {
         let m = urdf::parse(OCTAHEDRAL).expect("bundled");
         let a = load(&m, &[], &[]).expect("listed");
-        assert_eq!(a.kind(), "unsupported");
+        assert_eq!(a.kind(), MechanismKind::Unsupported);
         let err = a.configuration_space(&SolverSettings::default()).err().map(|e| e.to_string()).unwrap_or_default();
         assert!(err.contains("legs are not fixed") && err.contains("--fix"), "{err}");
         let mut partial = config_a();
@@ -227,7 +227,7 @@ mod tests {
         assert!(load(&m, &partial, &[]).err().map(|e| e.to_string()).unwrap_or_default().contains("leg 'leg35' has no --fix value"));
         assert!(load(&m, &[("nope".into(), 1.0)], &[]).err().map(|e| e.to_string()).unwrap_or_default().contains("no leg"));
         let a = load(&m, &config_a(), &[]).expect("platform");
-        let query = crate::analysis::SingularityQuery { precision: 1e-4, nodes: false, max_boxes: 10, timeout: None, threads: 1 };
+        let query = crate::app::SingularityQuery { precision: 1e-4, nodes: false, max_boxes: 10, timeout: None, threads: 1 };
         assert!(a.singularities(&query).err().map(|e| e.to_string()).unwrap_or_default().contains("not available"));
         assert!(a.solve(&config_a(), &SolverSettings { sigma: -1.0, ..Default::default() }).err().map(|e| e.to_string()).unwrap_or_default().contains("sigma"));
     }
