@@ -166,7 +166,7 @@ fn direction(x: Interval, y: Interval) -> Option<Interval> {
         }
         let side = |angle: f64| {
             let a = point(angle);
-            manip3r::trig::cos(a) * y - manip3r::trig::sin(a) * x
+            crate::interval::trig::cos(a) * y - crate::interval::trig::sin(a) * x
         };
         if side(alpha).inf() >= 0.0 && side(beta).sup() <= 0.0 {
             return Some(interval(alpha, beta));

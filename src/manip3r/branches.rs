@@ -51,7 +51,7 @@
 
 use super::chain::{add, cross, dot, scale, sub, Chain3R, V3};
 use super::report::{bounds, joints, workspace, Bounds, Joints, Workspace};
-use super::trig::{cos, sin};
+use crate::interval::trig::{cos, sin};
 use super::verdict::Geometry;
 use crate::interval::{interval, point};
 use crate::model::Mechanism;
