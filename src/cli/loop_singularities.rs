@@ -1,13 +1,14 @@
 //! `linkspace loop-singularities`: certified singular sets of closed-loop linkages (issue 13),
 //! planar or spatial (the model `solve --model auto` picks), on the polynomial solver through
-//! `problems::singular`.
+//! `singular` (the searches on the systems of `problems::singular`).
 
 use super::{parse_fix, LimitArgs};
 use anyhow::{bail, Context, Result};
 use linkspace::model::urdf;
-use linkspace::problems::singular::image;
-use linkspace::problems::singular::sets::{all_kinds, Actuation, SingularSets};
+use linkspace::problems::singular::image::{CuspProblem, NodeProblem};
 use linkspace::problems::singular::{Output, SingularKind, SingularProblem};
+use linkspace::singular::image;
+use linkspace::singular::sets::{all_kinds, Actuation, SingularSets};
 use linkspace::report::singular::SingularReport;
 use linkspace::search::SolverSettings;
 use std::io::Write;
@@ -91,7 +92,7 @@ pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
     // The node's default too (`LinkageAnalysis`): one function.
     let actuated = match &args.actuated {
         Some(a) => Actuation::given(names(a, "--actuated")?),
-        None => Actuation::from_urdf(&xml, &fixed),
+        None => Actuation::from_transmissions(&mechanism, &fixed),
     }
     .joints;
     if matches!(args.kind, Kind::Image) {
@@ -280,8 +281,8 @@ fn bench_image(out: &mut impl Write, repeat: usize) -> Result<()> {
     let p = SingularProblem::new(&m, &[], SingularKind::Input, &actuated, None)?;
     let settings = SolverSettings { sigma: 1e-2, max_boxes: 2_000_000, ..SolverSettings::default() };
     let cancel = AtomicBool::new(false);
-    let cusp_problem = image::CuspProblem::new(&p)?;
-    let node_problem = image::NodeProblem::new(&p)?;
+    let cusp_problem = CuspProblem::new(&p)?;
+    let node_problem = NodeProblem::new(&p)?;
     let median = |f: &mut dyn FnMut() -> Result<String>| -> Result<(f64, String)> {
         let mut times = Vec::new();
         let mut what = String::new();
