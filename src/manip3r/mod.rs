@@ -26,6 +26,7 @@ pub mod ik;
 pub mod limits;
 pub mod motion;
 pub mod nodes;
+mod records;
 pub mod report;
 pub mod select;
 pub(crate) mod taylor;
