@@ -17,6 +17,10 @@
 //!
 //! A cluster then counts its proven solutions (distinct certified placements) and is undecided
 //! when some box of it is still unproven, with the reason. "Complete" means nothing undecided.
+//!
+//! `file` reads the JSON format of distance problems into a `DistanceProblem`.
+
+pub mod file;
 
 use crate::contract::{Contractor, FaceBounds, Newton};
 use crate::interval::{components, IntervalBox};

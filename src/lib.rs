@@ -37,6 +37,7 @@ pub mod ros;
 pub mod problems;
 pub mod report;
 pub mod search;
+pub mod singular;
 pub mod system;
 
 pub use app::{load, Analysis, AnalysisError};

@@ -4,7 +4,7 @@
 
 use crate::interval::{components, IntervalBox};
 use crate::problems::spatial::LinkPose;
-use crate::problems::{LinkageProblem, SpatialProblem};
+use crate::problems::{Linkage, LinkageProblem, SpatialProblem};
 use crate::search::{SolveStats as Stats, SolverSettings, Status};
 use crate::system::{EquationSystem, VarRole};
 use serde::Serialize;
@@ -13,8 +13,7 @@ pub mod distances;
 pub mod singular;
 use std::collections::BTreeMap;
 
-/// `[lower, upper]`
-pub type Bounds = [f64; 2];
+pub use crate::interval::Bounds;
 
 /// One reported box, in the user's terms.
 #[derive(Clone, Debug, Serialize)]
@@ -183,5 +182,16 @@ impl SpatialProblem {
         report.reductions = self.reductions.clone();
         report.add_run(&self.system, |b| self.record(b), solutions, unique, undecided);
         report
+    }
+}
+
+impl Linkage {
+    /// The report of a finished run (`solve --json`).
+    #[allow(clippy::too_many_arguments)]
+    pub fn report(&self, settings: &SolverSettings, status: Status, stats: Stats, solutions: &[IntervalBox], unique: &[bool], undecided: &[IntervalBox]) -> SolveReport {
+        match self {
+            Self::Planar(p) => p.report(settings, status, stats, solutions, unique, undecided),
+            Self::Spatial(p, why) => p.report(why, settings, status, stats, solutions, unique, undecided),
+        }
     }
 }

@@ -5,7 +5,9 @@
 
 use super::util::urdf_text;
 use linkspace::model::urdf;
-use linkspace::problems::singular::{image, BoxKind, Output, SingularKind, SingularProblem, SingularSet};
+use linkspace::problems::singular::image::CuspProblem;
+use linkspace::problems::singular::{Output, SingularKind, SingularProblem};
+use linkspace::singular::{image, BoxKind, SingularSet};
 use linkspace::search::{SolverSettings, Status};
 use std::f64::consts::PI;
 use std::process::Command;
@@ -861,7 +863,7 @@ fn five_bar_equal_rods_cusp_roots_are_the_folded_circles() {
     let m = urdf::parse(&urdf_text("five_bar.urdf")).expect("parses");
     let actuated: Vec<String> = FIVE_BAR_ACTUATORS.iter().map(|s| s.to_string()).collect();
     let p = SingularProblem::new(&m, &[], SingularKind::Input, &actuated, None).expect("builds");
-    let cusps = image::CuspProblem::new(&p).expect("2 dof").solve(&p, &SolverSettings { sigma: 5e-2, ..Default::default() }, &AtomicBool::new(false)).expect("runs");
+    let cusps = CuspProblem::new(&p).expect("2 dof").solve(&p, &SolverSettings { sigma: 5e-2, ..Default::default() }, &AtomicBool::new(false)).expect("runs");
     assert_eq!(cusps.status, Status::Complete);
     assert_eq!(cusps.proven(), 0);
     assert!(!cusps.points.is_empty());
@@ -968,7 +970,7 @@ fn three_rpr_cusps_match_an_independent_newton() {
     let m = urdf::parse(&urdf_text("three_rpr.urdf")).expect("parses");
     let actuated = vec!["rho1".to_string(), "rho2".to_string()];
     let p = SingularProblem::new(&m, &[("rho3".to_string(), 17.0)], SingularKind::Input, &actuated, None).expect("builds");
-    let cusps = image::CuspProblem::new(&p).expect("2 dof").solve(&p, &SolverSettings { sigma: 1e-3, ..Default::default() }, &AtomicBool::new(false)).expect("runs");
+    let cusps = CuspProblem::new(&p).expect("2 dof").solve(&p, &SolverSettings { sigma: 1e-3, ..Default::default() }, &AtomicBool::new(false)).expect("runs");
     assert_eq!(cusps.status, Status::Complete);
     let images: Vec<(Vec<(f64, f64)>, bool)> = cusps
         .points
@@ -1007,7 +1009,7 @@ fn diag_three_rpr_cusp_charts() {
     let m = urdf::parse(&urdf_text("three_rpr.urdf")).expect("parses");
     let actuated = vec!["rho1".to_string(), "rho2".to_string()];
     let p = SingularProblem::new(&m, &[("rho3".to_string(), 17.0)], SingularKind::Input, &actuated, None).expect("builds");
-    let cp = image::CuspProblem::new(&p).expect("2 dof");
+    let cp = CuspProblem::new(&p).expect("2 dof");
     let secs: u64 = env("DIAG_SECS", "10").parse().unwrap();
     let use_lp = env("DIAG_LP", "1") == "1";
     let nw: f64 = env("DIAG_NW", "0.25").parse().unwrap();

@@ -17,8 +17,9 @@
 
 use super::util::urdf_text;
 use linkspace::model::urdf;
-use linkspace::problems::singular::sets::SingularSets;
-use linkspace::problems::singular::{Coordinates, Output, SingularKind, SingularProblem, SingularSet};
+use linkspace::problems::singular::{Coordinates, Output, SingularKind, SingularProblem};
+use linkspace::singular::sets::SingularSets;
+use linkspace::singular::SingularSet;
 use linkspace::problems::{Linkage, LinkageProblem, SpatialProblem};
 use linkspace::search::{SolverSettings, Status};
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};

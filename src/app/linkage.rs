@@ -16,8 +16,9 @@ use super::{
 use crate::interval::components;
 use crate::model::{JointKind, Mechanism};
 use crate::problems::choice::TracedPoint;
-use crate::problems::singular::sets::{all_kinds, SingularSets};
-use crate::problems::singular::{BoxKind, Coordinates, SingularProblem, SingularSet};
+use crate::problems::singular::{Coordinates, SingularProblem};
+use crate::singular::sets::{all_kinds, SingularSets};
+use crate::singular::{BoxKind, SingularSet};
 use crate::problems::{Linkage, LinkageError, ModelChoice};
 use crate::report::singular::SingularReport;
 use crate::report::SolveReport;
@@ -500,7 +501,7 @@ mod tests {
     fn singular_sets_are_the_closed_form_dead_centres_and_classify_bounds_the_distance_to_them() {
         let xml = four_bar_rocker_driven();
         let m = urdf::parse(&xml).expect("bundled");
-        let a = crate::app::load_urdf(&m, &xml, &[], &[]).expect("planar");
+        let a = crate::app::load_urdf(&m, &[], &[]).expect("planar");
         assert_eq!(a.services(), vec![Service::Solve, Service::Singularities, Service::Classify]);
         let query = SingularityQuery { precision: 1e-6, nodes: false, max_boxes: 1_000_000, timeout: None, threads: 1 };
         let r = a.singularities(&query).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
@@ -567,7 +568,7 @@ mod tests {
         // output) has 4 dead centres, the closed form of `tests/spatial_singularities.rs`.
         let xml = include_str!("../../urdf/rssr.urdf").replace("</robot>", "<transmission name=\"drive\"><type>transmission_interface/SimpleTransmission</type><joint name=\"crank_joint\"/></transmission></robot>");
         let m = urdf::parse(&xml).expect("bundled");
-        let a = crate::app::load_urdf(&m, &xml, &[], &[]).expect("spatial");
+        let a = crate::app::load_urdf(&m, &[], &[]).expect("spatial");
         assert_eq!(a.kind(), MechanismKind::SpatialLinkage);
         let query = SingularityQuery { precision: 1e-6, nodes: false, max_boxes: 1_000_000, timeout: None, threads: 1 };
         let r = a.singularities(&query).expect("valid").run(&AtomicBool::new(false), &mut |_| {});

@@ -16,7 +16,7 @@ mod platform;
 
 pub use arm::{Arm, Manip3rAnalysis};
 pub use linkage::{LinkageAnalysis, SolveJob};
-pub use crate::problems::singular::sets::Actuation;
+pub use crate::singular::sets::Actuation;
 pub use platform::PlatformAnalysis;
 
 use crate::model::Mechanism;
@@ -548,11 +548,11 @@ impl Analysis for Unsupported {
     }
 }
 
-/// `load` for a mechanism read from URDF text `xml`: a linkage's actuated joints come from its
-/// `<transmission>` elements (`Actuation::from_urdf`, the default of `linkspace
+/// `load` for a mechanism read from URDF: a linkage's actuated joints come from its
+/// `<transmission>` elements (`Actuation::from_transmissions`, the default of `linkspace
 /// loop-singularities` as well).
-pub fn load_urdf(mechanism: &Mechanism, xml: &str, fixed: &[(String, f64)], traces: &[(String, f64, f64)]) -> Result<Box<dyn Analysis>, AnalysisError> {
-    load_with(mechanism, fixed, traces, crate::problems::singular::sets::Actuation::from_urdf(xml, fixed))
+pub fn load_urdf(mechanism: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f64, f64)]) -> Result<Box<dyn Analysis>, AnalysisError> {
+    load_with(mechanism, fixed, traces, Actuation::from_transmissions(mechanism, fixed))
 }
 
 /// Picks the analysis that fits `mechanism`. `fixed` and `traces` are as for
@@ -563,10 +563,10 @@ pub fn load_urdf(mechanism: &Mechanism, xml: &str, fixed: &[(String, f64)], trac
 /// mechanism outside every analysis loads as `Unsupported`, so the node can still list it and
 /// explain; bad fixed joints are an error.
 pub fn load(mechanism: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f64, f64)]) -> Result<Box<dyn Analysis>, AnalysisError> {
-    load_with(mechanism, fixed, traces, crate::problems::singular::sets::Actuation { joints: Vec::new(), source: "none given".to_string() })
+    load_with(mechanism, fixed, traces, Actuation { joints: Vec::new(), source: "none given".to_string() })
 }
 
-fn load_with(mechanism: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f64, f64)], actuation: crate::problems::singular::sets::Actuation) -> Result<Box<dyn Analysis>, AnalysisError> {
+fn load_with(mechanism: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f64, f64)], actuation: Actuation) -> Result<Box<dyn Analysis>, AnalysisError> {
     let not_3r = match Manip3rAnalysis::new(mechanism) {
         Ok(a) => {
             if let Some((joint, _)) = fixed.first() {

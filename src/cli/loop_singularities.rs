@@ -1,13 +1,13 @@
 //! `linkspace loop-singularities`: certified singular sets of closed-loop linkages,
 //! planar or spatial (the model `solve --model auto` picks), on the polynomial solver through
-//! `problems::singular`.
+//! `singular` (the searches on the systems of `problems::singular`).
 
 use super::{parse_fix, LimitArgs};
 use anyhow::{bail, Context, Result};
 use linkspace::model::urdf;
-use linkspace::problems::singular::image;
-use linkspace::problems::singular::sets::{all_kinds, Actuation, SingularSets};
 use linkspace::problems::singular::{Output, SingularKind};
+use linkspace::singular::image;
+use linkspace::singular::sets::{all_kinds, Actuation, SingularSets};
 use linkspace::report::singular::SingularReport;
 use linkspace::search::SolverSettings;
 use std::io::Write;
@@ -91,7 +91,7 @@ pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
     // The node's default too (`LinkageAnalysis`): one function.
     let actuated = match &args.actuated {
         Some(a) => Actuation::given(names(a, "--actuated")?),
-        None => Actuation::from_urdf(&xml, &fixed),
+        None => Actuation::from_transmissions(&mechanism, &fixed),
     }
     .joints;
     if matches!(args.kind, Kind::Image) {

@@ -13,6 +13,9 @@ pub use graph::{components_by, components_of_edges, flood_fill, labels, touching
 
 pub use inari::Interval;
 
+/// `[lower, upper]`: an interval as the JSON reports write it.
+pub type Bounds = [f64; 2];
+
 /// The interval `[lo, hi]`, or `Interval::EMPTY` when `lo > hi` or either bound is NaN.
 ///
 /// Bounds are taken as they are: callers that computed them in floating point must round

@@ -50,8 +50,8 @@
 //! line is an internal motion and the argument is not made).
 
 use super::chain::{add, cross, dot, scale, sub, Chain3R, V3};
-use super::report::{bounds, joints, workspace, Bounds, Joints, Workspace};
-use super::trig::{cos, sin};
+use super::records::{bounds, joints, radius, workspace, Bounds, Joints, Workspace};
+use crate::interval::trig::{cos, sin};
 use super::verdict::Geometry;
 use crate::interval::{interval, point};
 use crate::model::Mechanism;
@@ -274,7 +274,7 @@ fn image(p: &Planar, pieces: impl Iterator<Item = [Interval; 2]>) -> (Interval, 
     let mut z = Interval::EMPTY;
     for w in pieces {
         let (rho, zz) = p.g(w);
-        r = r.convex_hull(super::report::radius(rho));
+        r = r.convex_hull(radius(rho));
         z = z.convex_hull(zz);
     }
     (r, z)
@@ -410,7 +410,7 @@ pub fn of(m: &Mechanism, chain: &Chain3R) -> Option<SingularBranches> {
         let a1t = dot(&p.a1, &p.t);
         let vertical = a1t.abs().inf() == 1.0 && a1t.abs().sup() == 1.0;
         // For a₁ ⟂ d₂ the radius on L is constant: its value at one point of L, tightly.
-        let ir = if vertical { super::report::radius(p.g([-e0, point(0.0)]).0) } else { ir };
+        let ir = if vertical { radius(p.g([-e0, point(0.0)]).0) } else { ir };
         let description = if vertical {
             format!("axis 1 is perpendicular to axis 2, so the image is the vertical segment radius = {:.6} (the point's constant offset along axis 2 from axis 1) for z in [{:.6}, {:.6}], covered twice (the annulus meets L in two segments){}", ir.mid(), iz.inf(), iz.sup(), if ir.sup() < 1e-12 { ": axis 1 itself" } else { "" })
         } else {

@@ -393,8 +393,8 @@ impl Chain3R {
     /// its direction about a₁ gives θ₁ in inverse kinematics. Natural interval evaluation.
     #[allow(clippy::needless_range_loop)] // tensor coefficients c[a][b] paired with e2[a], e3[b]
     pub fn perp(&self, theta: [Interval; 2]) -> [Interval; 3] {
-        let e2 = [super::trig::cos(theta[0]), super::trig::sin(theta[0]), point(1.0)];
-        let e3 = [super::trig::cos(theta[1]), super::trig::sin(theta[1]), point(1.0)];
+        let e2 = [crate::interval::trig::cos(theta[0]), crate::interval::trig::sin(theta[0]), point(1.0)];
+        let e3 = [crate::interval::trig::cos(theta[1]), crate::interval::trig::sin(theta[1]), point(1.0)];
         let mut p = [ZERO; 3];
         for a in 0..3 {
             for b in 0..3 {
@@ -430,7 +430,7 @@ impl Chain3R {
     pub fn off_axis2(&self, t3: Interval) -> [Interval; 3] {
         let m = point(t3.mid());
         let eval = |t: Interval, deriv: bool| -> [Interval; 3] {
-            let (s, c) = (super::trig::sin(t), super::trig::cos(t));
+            let (s, c) = (crate::interval::trig::sin(t), crate::interval::trig::cos(t));
             // q = q0 cos + q1 sin + q2; q' = −q0 sin + q1 cos.
             let v: V3 = if deriv {
                 add(&scale(&self.coef.q[0], -s), &scale(&self.coef.q[1], c))

@@ -44,8 +44,9 @@
 use super::chain::{self, Pose, V3, ZERO};
 use super::cusps::bisect;
 use super::drive::{drive, no_progress, Order};
+use super::{motion, Chain3R, Manip3rError};
+use crate::interval::trig;
 use crate::search::Control;
-use super::{motion, trig, Chain3R, Manip3rError};
 use crate::interval::point;
 use crate::model::{JointKind, Mechanism, Shape};
 use crate::search::{Limits, Progress, Prune, Stats, Status, Step};

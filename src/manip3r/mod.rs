@@ -1,7 +1,7 @@
 //! Guaranteed cusps, nodes and internal motions of 3R manipulators, from URDF (seed 003).
 //!
 //! Owns the kinematic map of a serial chain of three revolute joints (`Chain3R`), its sound
-//! evaluation with derivatives over boxes (`taylor`, `trig`), and the searches built on it:
+//! evaluation with derivatives over boxes (`taylor`, over `interval::trig`), and the searches built on it:
 //! internal-motion lines (`motion`), cusps (`cusps`), nodes (`nodes`), inverse kinematics
 //! (`ik`), collision sets (`collision`) and the report types (`report`).
 //! Every search is branch and prune over (θ₂, θ₃) with interval Newton (Krawczyk) proofs; a box
@@ -27,12 +27,11 @@ pub mod ik;
 pub mod limits;
 pub mod motion;
 pub mod nodes;
+mod records;
 pub mod report;
 pub mod select;
 pub(crate) mod taylor;
 pub mod verdict;
-/// Sound interval sine and cosine, now `crate::interval::trig` (the path kept for callers).
-pub(crate) use crate::interval::trig;
 
 pub use chain::{Chain3R, Jets};
 pub use cusps::{Cusp, CuspSearch};

@@ -11,40 +11,10 @@ use super::motion::Band;
 use super::nodes::NodeSearch;
 use inari::Interval;
 use crate::search::Status;
+pub(crate) use super::records::{bounds, joints, workspace};
+pub use super::records::{joints_over, radius, Bounds, Joints, Workspace};
 use serde::Serialize;
 use std::collections::BTreeMap;
-
-/// `[lower, upper]`
-pub type Bounds = [f64; 2];
-
-pub(crate) fn bounds(x: Interval) -> Bounds {
-    [x.inf(), x.sup()]
-}
-
-/// Joint intervals keyed by joint name (the second and third joints).
-pub type Joints = BTreeMap<String, Bounds>;
-
-/// `joints` in the order of `names` (records keyed by name → the positional records of
-/// `analysis` and the ROS messages); a joint the record does not name is unbounded.
-pub fn joints_over(joints: &Joints, names: &[String]) -> Vec<Bounds> {
-    names.iter().map(|n| joints.get(n).copied().unwrap_or([f64::NEG_INFINITY, f64::INFINITY])).collect()
-}
-
-/// A workspace box.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Workspace {
-    /// Distance from the first axis.
-    pub radius: Bounds,
-    /// Coordinate along the first axis.
-    pub z: Bounds,
-}
-
-impl Workspace {
-    /// `[radius, z]`, the order of `app::SingularityResult::workspace_names`.
-    pub fn bounds(&self) -> [Bounds; 2] {
-        [self.radius, self.z]
-    }
-}
 
 /// One cusp.
 #[derive(Clone, Debug, Serialize)]
@@ -316,19 +286,6 @@ impl Reading {
     pub fn of(p: &super::Prepared, joint_limits: super::limits::LimitEffect) -> Self {
         Reading { chain: p.choice.clone(), rounding: Rounding::of(p), joint_limits }
     }
-}
-
-pub(crate) fn joints(chain: &Chain3R, theta: &[Interval; 2]) -> Joints {
-    BTreeMap::from([(chain.joints[1].clone(), bounds(theta[0])), (chain.joints[2].clone(), bounds(theta[1]))])
-}
-
-/// The radius √ρ over `rho` (ρ ≥ 0 always holds).
-pub fn radius(rho: Interval) -> Interval {
-    rho.intersection(crate::interval::interval(0.0, f64::INFINITY)).sqrt()
-}
-
-pub(crate) fn workspace(rho: Interval, z: Interval) -> Workspace {
-    Workspace { radius: bounds(radius(rho)), z: bounds(z) }
 }
 
 impl SingularityReport {

@@ -319,7 +319,7 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
         });
         links.push(Link { name, parent_joint: Some(joints_out.len() - 1), collisions: Vec::new() });
     }
-    Ok((Mechanism { name: m.name.clone(), links, joints: joints_out, loops: Vec::new(), root: 0 }, choice))
+    Ok((Mechanism { name: m.name.clone(), links, joints: joints_out, loops: Vec::new(), root: 0, transmission_joints: Vec::new() }, choice))
 }
 
 /// The rotation of a locked joint about its axis by `v`, as a pose.

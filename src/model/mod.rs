@@ -208,6 +208,9 @@ pub struct Mechanism {
     pub loops: Vec<LoopClosure>,
     /// Index of the ground link.
     pub root: usize,
+    /// Joints named in the file's `<transmission>` elements, in file order, each once: the
+    /// actuated joints by default.
+    pub transmission_joints: Vec<String>,
 }
 
 /// What is wrong with a mechanism description. Messages name the element at fault.

@@ -179,7 +179,17 @@ pub fn parse(xml: &str) -> Result<Mechanism, ModelError> {
         loops.push(LoopClosure { name, kind, predecessor, predecessor_origin, predecessor_rpy, successor, successor_origin, successor_rpy, axis, compound });
     }
 
-    Ok(Mechanism { name: robot.name.clone(), links, joints, loops, root })
+    let mut transmission_joints: Vec<String> = Vec::new();
+    for t in robot_el.children().filter(|n| n.has_tag_name("transmission")) {
+        for j in t.children().filter(|n| n.has_tag_name("joint")) {
+            if let Some(name) = j.attribute("name") {
+                if !transmission_joints.iter().any(|n| n == name) {
+                    transmission_joints.push(name.to_string());
+                }
+            }
+        }
+    }
+    Ok(Mechanism { name: robot.name.clone(), links, joints, loops, root, transmission_joints })
 }
 
 /// A `<collision>` element, with its sizes checked.

@@ -9,7 +9,7 @@
 
 use crate::contract::Verdict;
 use crate::interval::{interval, point, Interval};
-use crate::manip3r::trig;
+use crate::interval::trig;
 
 /// Largest `|value|` (radians) that `reduce` accepts: 2²⁶ turns, where `k·TAU_A` stops being exact.
 pub const MAX_REDUCIBLE: f64 = 4.0e8;

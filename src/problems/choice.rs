@@ -3,9 +3,7 @@
 //! One choice for the CLI's `solve` and the node's linkage analysis, so both say the same thing.
 
 use super::{LinkageError, LinkageProblem, SpatialProblem};
-use crate::interval::IntervalBox;
-use crate::report::SolveReport;
-use crate::search::{SolveError, SolveStats as Stats, Solver, SolverSettings, Status};
+use crate::search::{SolveError, Solver, SolverSettings};
 
 /// `--model`: which builder.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -86,15 +84,6 @@ impl Linkage {
         match self {
             Self::Planar(p) => p.traces.iter().map(|t| t.name.clone()).collect(),
             Self::Spatial(p, _) => p.traces.iter().map(|t| t.name.clone()).collect(),
-        }
-    }
-
-    /// The report of a finished run (`solve --json`).
-    #[allow(clippy::too_many_arguments)]
-    pub fn report(&self, settings: &SolverSettings, status: Status, stats: Stats, solutions: &[IntervalBox], unique: &[bool], undecided: &[IntervalBox]) -> SolveReport {
-        match self {
-            Self::Planar(p) => p.report(settings, status, stats, solutions, unique, undecided),
-            Self::Spatial(p, why) => p.report(why, settings, status, stats, solutions, unique, undecided),
         }
     }
 }

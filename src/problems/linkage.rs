@@ -15,7 +15,7 @@ use super::stated::{self, IMat3, IVec3};
 use crate::contract::{Contraction, Contractor, Filtered, Propagation, Verdict};
 use crate::search::{default_contractor, SolveError, Solver, SolverSettings};
 use crate::interval::{interval, point, Interval, IntervalBox};
-use crate::manip3r::trig;
+use crate::interval::trig;
 use crate::model::{JointKind, Mechanism, ModelError};
 use crate::system::{Equation, EquationSystem, Monomial, Term, VarId, VarRole};
 use nalgebra::{Rotation3, UnitQuaternion, Vector3};

@@ -5,7 +5,6 @@ pub(crate) mod angles;
 pub mod cayley_menger;
 pub mod choice;
 pub mod coordinates;
-pub mod distance_file;
 pub mod linkage;
 pub mod platform;
 pub mod singular;

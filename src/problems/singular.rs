@@ -25,20 +25,19 @@
 //! `k`'s domain; a box of chart `k` proven to hold only directions owned by another chart (the
 //! first index of largest |m|) is dropped, because that chart finds them; the rest are merged
 //! by their configuration parts.
-//! Builds only; `SingularProblem::solve` runs the kernel's `Solver` on each chart.
+//! Builds only; `SingularProblem::solve` (in `crate::singular`) runs the kernel's `Solver` on
+//! each chart.
 
 use super::linkage::{JointCoordinate, LinkageError, LinkageProblem};
-use crate::interval::{components, interval, point, Interval, IntervalBox};
+use super::Linkage;
+use crate::interval::{interval, point, Interval, IntervalBox};
 use crate::model::Mechanism;
-use crate::search::{Limit, SolveError, SolveStats, Solver, SolverSettings, Status};
+use crate::search::{SolveError, Solver, SolverSettings};
 use crate::system::{Equation, EquationKind, EquationSystem, Monomial, Term, VarId, VarRole};
 use std::collections::BTreeMap;
-use std::sync::atomic::AtomicBool;
-use std::time::Instant;
 use thiserror::Error;
 
 pub mod image;
-pub mod sets;
 pub mod velocity;
 
 /// Half-width of a chart's free components: above 1, so a direction whose largest components
@@ -167,23 +166,6 @@ pub struct SingularProblem<L = LinkageProblem> {
     pub multipliers: Vec<VarId>,
     /// Number of the linkage's variables (the configuration part of every box).
     pub base_vars: usize,
-}
-
-/// Joints named in a URDF's `<transmission>` elements (`<joint name="..."/>` children), in file
-/// order: the default actuated joints. Malformed XML gives none (the model loader reports it).
-pub fn transmission_joints(xml: &str) -> Vec<String> {
-    let Ok(doc) = roxmltree::Document::parse(xml) else { return Vec::new() };
-    let mut out: Vec<String> = Vec::new();
-    for t in doc.root_element().children().filter(|n| n.has_tag_name("transmission")) {
-        for j in t.children().filter(|n| n.has_tag_name("joint")) {
-            if let Some(name) = j.attribute("name") {
-                if !out.iter().any(|n| n == name) {
-                    out.push(name.to_string());
-                }
-            }
-        }
-    }
-    out
 }
 
 /// What a singular-set builder adds to a linkage's system: the multipliers (one chart each) and
@@ -346,6 +328,65 @@ impl Coordinates for LinkageProblem {
     }
 }
 
+/// The model-chosen linkage as a coordinate source: either builder's rows, one orchestration.
+impl Coordinates for Linkage {
+    fn system(&self) -> &EquationSystem {
+        match self {
+            Linkage::Planar(p) => Coordinates::system(p),
+            Linkage::Spatial(p, _) => Coordinates::system(p),
+        }
+    }
+
+    fn name(&self) -> &str {
+        match self {
+            Linkage::Planar(p) => Coordinates::name(p),
+            Linkage::Spatial(p, _) => Coordinates::name(p),
+        }
+    }
+
+    fn model(&self) -> &'static str {
+        match self {
+            Linkage::Planar(p) => p.model(),
+            Linkage::Spatial(p, _) => p.model(),
+        }
+    }
+
+    fn fixed_joints(&self) -> &[(String, f64)] {
+        match self {
+            Linkage::Planar(p) => Coordinates::fixed_joints(p),
+            Linkage::Spatial(p, _) => Coordinates::fixed_joints(p),
+        }
+    }
+
+    fn joint_values(&self, b: &IntervalBox) -> BTreeMap<String, (f64, f64)> {
+        match self {
+            Linkage::Planar(p) => p.joint_values(b),
+            Linkage::Spatial(p, _) => p.joint_values(b),
+        }
+    }
+
+    fn extended_solver<'s>(&'s self, system: &'s EquationSystem, settings: SolverSettings) -> Result<Solver<'s>, SolveError> {
+        match self {
+            Linkage::Planar(p) => p.extended_solver(system, settings),
+            Linkage::Spatial(p, _) => p.extended_solver(system, settings),
+        }
+    }
+
+    fn augment(&self, kind: SingularKind, actuated: &[String], output: Option<&Output>) -> Result<Augmented, SingularError> {
+        match self {
+            Linkage::Planar(p) => p.augment(kind, actuated, output),
+            Linkage::Spatial(p, _) => p.augment(kind, actuated, output),
+        }
+    }
+
+    fn rows_faithful(&self, b: &IntervalBox) -> bool {
+        match self {
+            Linkage::Planar(p) => p.rows_faithful(b),
+            Linkage::Spatial(p, _) => p.rows_faithful(b),
+        }
+    }
+}
+
 impl SingularProblem {
     /// Builds the augmented systems of `kind` for the planar linkage `m` with joints `fixed`
     /// (`SingularSets` builds either model, as `solve --model auto` chooses).
@@ -384,69 +425,6 @@ impl<L: Coordinates> SingularProblem<L> {
         Ok(Self { linkage, kind, actuated: actuated.to_vec(), output, dof, expected_dimension, charts, multipliers, base_vars })
     }
 
-    /// Runs the solver on every chart and merges the results. `settings.max_boxes` applies per
-    /// chart; `settings.timeout` to the whole call.
-    pub fn solve(&self, settings: &SolverSettings, cancel: &AtomicBool) -> Result<SingularSet, SolveError> {
-        let t0 = Instant::now();
-        let mut boxes = Vec::new();
-        let mut status = Status::Complete;
-        let mut stats = Vec::new();
-        let mut dropped_other_chart = 0u64;
-        for (k, chart) in self.charts.iter().enumerate() {
-            let remaining = settings.timeout.map(|t| t.saturating_sub(t0.elapsed()));
-            if remaining.is_some_and(|r| r.is_zero()) {
-                // No time left: the whole chart is undecided.
-                status = Status::Incomplete(Limit::Time);
-                boxes.push(SingularBox { chart: k, b: chart.initial_box(), status: BoxKind::Undecided });
-                continue;
-            }
-            let s = SolverSettings { timeout: remaining, ..settings.clone() };
-            let solver = self.linkage.extended_solver(chart, s)?;
-            let e = solver.enclose(cancel, &mut |_| {});
-            if e.status != Status::Complete {
-                status = e.status;
-            }
-            for (b, u) in e.solutions.into_iter().zip(e.unique) {
-                if self.owned_elsewhere(k, &b) {
-                    dropped_other_chart += 1;
-                    continue;
-                }
-                // A certificate of the augmented system is one of the mechanism only where its
-                // rows are faithful (see `Coordinates::rows_faithful`); elsewhere the box stays.
-                let certified = u && self.linkage.rows_faithful(&b);
-                boxes.push(SingularBox { chart: k, b, status: if certified { BoxKind::Certified } else { BoxKind::Solution } });
-            }
-            for b in e.undecided {
-                boxes.push(SingularBox { chart: k, b, status: BoxKind::Undecided });
-            }
-            stats.push(e.stats);
-        }
-        // Clusters by configuration part: the same configuration found in two charts (or a
-        // curve crossing from one chart to the next) is one cluster.
-        let projected: Vec<IntervalBox> = boxes.iter().map(|x| IntervalBox::new(x.b.dims[..self.base_vars].to_vec())).collect();
-        let (labels, n) = components(&projected);
-        let mut clusters = vec![Cluster::default(); n];
-        for (i, &l) in labels.iter().enumerate() {
-            clusters[l].boxes.push(i);
-            match boxes[i].status {
-                BoxKind::Certified => clusters[l].certified = true,
-                BoxKind::Undecided => clusters[l].undecided = true,
-                BoxKind::Solution => {}
-            }
-        }
-        Ok(SingularSet { status, boxes, labels, clusters, stats, dropped_other_chart, seconds: t0.elapsed().as_secs_f64() })
-    }
-
-    /// True when every direction in `b` (chart `k`, `m_k = 1`) is owned by another chart: some
-    /// earlier component has |m_j| ≥ 1 or some later one |m_j| > 1, so the largest |m| is first
-    /// reached elsewhere, inside that chart's domain, and that chart reports it.
-    fn owned_elsewhere(&self, k: usize, b: &IntervalBox) -> bool {
-        self.multipliers.iter().enumerate().any(|(j, &m)| {
-            let mig = b.dims[m].mig();
-            (j < k && mig >= 1.0) || (j > k && mig > 1.0)
-        })
-    }
-
     /// Values of the actuated joints over a box (radians or metres), outward rounded.
     pub fn actuator_values(&self, b: &IntervalBox) -> Vec<(f64, f64)> {
         let base = IntervalBox::new(b.dims[..self.base_vars].to_vec());
@@ -483,7 +461,7 @@ pub(crate) struct Parts {
 impl Parts {
     /// Reads the coordinates of `linkage`'s system and differentiates its rows; product
     /// partners the derivatives need are added to `aug` (which extends the linkage's system).
-    fn new(linkage: &LinkageProblem, aug: &mut EquationSystem) -> Result<Self, SingularError> {
+    pub(crate) fn new(linkage: &LinkageProblem, aug: &mut EquationSystem) -> Result<Self, SingularError> {
         let system = &linkage.system;
         let base_vars = system.vars.len();
         let mut coords: Vec<Coord> = Vec::new();
@@ -636,7 +614,7 @@ impl Parts {
 
     /// The variables of a joint that is a coordinate of its own (a revolute joint to the
     /// ground: its cosine and sine; a slider: its travel), else `None`.
-    fn own_coordinate(&self, linkage: &LinkageProblem, name: &str) -> Option<(usize, Vec<VarId>)> {
+    pub(crate) fn own_coordinate(&self, linkage: &LinkageProblem, name: &str) -> Option<(usize, Vec<VarId>)> {
         match linkage.joint_coordinate(name)? {
             JointCoordinate::Travel(v) => Some((self.coord_of(v)?, vec![v])),
             JointCoordinate::Angles { plus: Some((c, s)), minus: None } | JointCoordinate::Angles { plus: None, minus: Some((c, s)) } => Some((self.coord_of(c)?, vec![c, s])),
@@ -655,7 +633,7 @@ impl Parts {
 
     /// The loop rows' Jacobian `F_q` over a box of the linkage's variables (rows: loop rows,
     /// columns: coordinates), outward rounded.
-    fn jacobian(&self, b: &[Interval]) -> Vec<Vec<Interval>> {
+    pub(crate) fn jacobian(&self, b: &[Interval]) -> Vec<Vec<Interval>> {
         self.loop_rates
             .iter()
             .map(|rates| {
@@ -689,65 +667,4 @@ fn merge(terms: Vec<Term>) -> Vec<Term> {
         }
     }
     out
-}
-
-/// What a reported box is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum BoxKind {
-    /// Certified (Krawczyk) to hold exactly one solution of its chart's system.
-    Certified,
-    /// At sigma, not proven empty, no proof of a solution.
-    Solution,
-    /// Left by a limit.
-    Undecided,
-}
-
-/// One box of a singular set, in its chart's variables.
-#[derive(Clone, Debug)]
-pub struct SingularBox {
-    /// The chart (index of the multiplier fixed to 1).
-    pub chart: usize,
-    /// The box.
-    pub b: IntervalBox,
-    /// Its status.
-    pub status: BoxKind,
-}
-
-/// Boxes whose configuration parts touch.
-#[derive(Clone, Debug, Default)]
-pub struct Cluster {
-    /// Indices into `SingularSet::boxes`.
-    pub boxes: Vec<usize>,
-    /// Holds a certified box: at least one singular configuration is proven inside.
-    pub certified: bool,
-    /// Holds an undecided box.
-    pub undecided: bool,
-}
-
-/// Every singular configuration lies in one of `boxes` (when `status` is complete, in a
-/// certified or solution box).
-#[derive(Clone, Debug)]
-pub struct SingularSet {
-    /// Complete, or the last limit met.
-    pub status: Status,
-    /// The boxes of all charts, minus those proven to belong to another chart.
-    pub boxes: Vec<SingularBox>,
-    /// Per box, its cluster.
-    pub labels: Vec<usize>,
-    /// Clusters by configuration part.
-    pub clusters: Vec<Cluster>,
-    /// Per chart, the solver's counters.
-    pub stats: Vec<SolveStats>,
-    /// Boxes dropped as duplicates owned by another chart.
-    pub dropped_other_chart: u64,
-    /// Wall-clock seconds.
-    pub seconds: f64,
-}
-
-impl SingularSet {
-    /// Clusters with a certified box.
-    pub fn certified_clusters(&self) -> usize {
-        self.clusters.iter().filter(|c| c.certified).count()
-    }
 }

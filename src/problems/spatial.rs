@@ -36,7 +36,7 @@ use super::linkage::LinkageError;
 use super::stated::{self as st, IMat3, IVec3};
 use crate::contract::{Contraction, Contractor, Filtered, Propagation, Verdict};
 use crate::interval::{interval, point, Interval, IntervalBox};
-use crate::manip3r::trig;
+use crate::interval::trig;
 use crate::model::{Compound, JointKind, Mechanism};
 use crate::search::{default_contractor, SolveError, Solver, SolverSettings};
 use crate::system::{Equation, EquationKind, EquationSystem, Monomial, Term, VarId, VarRole};

@@ -3,7 +3,7 @@
 //!
 //! A parsed decimal is the nearest `f64` to it, so `angles::stated` (one ulp each way) encloses
 //! it; rotations are then products of elementary rotations whose sines and cosines come from the
-//! sound `manip3r::trig`, in outward-rounded inari arithmetic. Axes arrive normalised in `f64`
+//! sound `interval::trig`, in outward-rounded inari arithmetic. Axes arrive normalised in `f64`
 //! (a sum of squares, a square root and a division: under 3 ulps per component, plus half an ulp
 //! for the parse); they are enclosed by 8 ulps relative, and components that are exactly 0 or ±1
 //! stay exact, so axis-aligned models keep point coefficients.

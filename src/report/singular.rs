@@ -3,7 +3,8 @@
 
 use super::Bounds;
 use crate::interval::IntervalBox;
-use crate::problems::singular::{BoxKind, Coordinates, Output, SingularProblem, SingularSet};
+use crate::problems::singular::{Coordinates, Output, SingularProblem};
+use crate::singular::{BoxKind, SingularSet};
 use crate::search::{SolveStats, SolverSettings, Status};
 use serde::Serialize;
 use std::collections::BTreeMap;

@@ -157,7 +157,7 @@ pub(crate) fn load_one(s: &Source, config: &ServeConfig, used_fixes: &mut [bool]
             traces.push((link.clone(), *x, *y));
         }
     }
-    let analysis = app::load_urdf(&m, &s.xml, &fixed, &traces).with_context(|| format!("loading {}", s.label))?;
+    let analysis = app::load_urdf(&m, &fixed, &traces).with_context(|| format!("loading {}", s.label))?;
     Ok(Loaded { analysis, root_link: m.links[m.root].name.clone(), token: name_token(&m.name), description: s.description })
 }
 

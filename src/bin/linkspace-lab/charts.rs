@@ -405,7 +405,7 @@ fn distance_sweeps(dir: &Path, quick: bool) -> Result<()> {
     lines(&mut svg, "Octahedral platform b: CPU seconds against worst box diagonal (runs that hit the time limit omitted)", "worst solution-box diagonal", "CPU seconds", &series, Scale::Log, Scale::Log)?;
     write(dir, "speed_accuracy_octahedral.svg", &svg)?;
 
-    let spheres = linkspace::problems::distance_file::parse(FOUR_SPHERES, &[])?;
+    let spheres = linkspace::distances::file::parse(FOUR_SPHERES, &[])?;
     let sigmas: &[f64] = if quick { &[0.1] } else { &[0.1, 0.03, 0.01, 0.003] };
     let mut series = Vec::new();
     for (label, redundant) in [("shared, Bernstein corners", false), ("shared, Bernstein corners, redundant (C1-C4)", true)] {

@@ -3,8 +3,9 @@
 
 use anyhow::Result;
 use linkspace::model::urdf;
-use linkspace::problems::singular::image;
-use linkspace::problems::singular::sets::SingularSets;
+use linkspace::problems::singular::image::{CuspProblem, NodeProblem};
+use linkspace::singular::image;
+use linkspace::singular::sets::SingularSets;
 use linkspace::problems::singular::{Output, SingularKind, SingularProblem};
 use linkspace::search::SolverSettings;
 use std::io::Write;
@@ -90,8 +91,8 @@ fn bench_image(out: &mut impl Write, repeat: usize) -> Result<()> {
     let p = SingularProblem::new(&m, &[], SingularKind::Input, &actuated, None)?;
     let settings = SolverSettings { sigma: 1e-2, max_boxes: 2_000_000, ..SolverSettings::default() };
     let cancel = AtomicBool::new(false);
-    let cusp_problem = image::CuspProblem::new(&p)?;
-    let node_problem = image::NodeProblem::new(&p)?;
+    let cusp_problem = CuspProblem::new(&p)?;
+    let node_problem = NodeProblem::new(&p)?;
     let median = |f: &mut dyn FnMut() -> Result<String>| -> Result<(f64, String)> {
         let mut times = Vec::new();
         let mut what = String::new();

@@ -3,8 +3,7 @@
 //! modes), its workspace with the type-I and type-II curves, and the double butterfly's θ6
 //! along each branch of its configuration curve with the certified turning points.
 //!
-//! Everything drawn is a box or a point of a certified search (`problems::singular`,
-//! `problems::singular::image`); the summary lines printed here are what the tests read.
+//! Everything drawn is a box or a point of a certified search (`singular`, `singular::image`); the summary lines printed here are what the tests read.
 
 use super::write;
 use crate::plot::{layered_panels, Layer, LayeredPanel, Marker};
@@ -12,8 +11,9 @@ use anyhow::{Context, Result};
 use linkspace::contract::{Contraction, Contractor, Propagation};
 use linkspace::interval::{components, IntervalBox};
 use linkspace::model::urdf;
-use linkspace::problems::singular::image::{self, CuspProblem, ImageReport, NodeProblem};
+use linkspace::problems::singular::image::{CuspProblem, NodeProblem};
 use linkspace::problems::singular::{Output, SingularKind, SingularProblem};
+use linkspace::singular::image::{self, ImageReport};
 use linkspace::problems::LinkageProblem;
 use linkspace::search::SolverSettings;
 use std::f64::consts::PI;

@@ -4,20 +4,19 @@
 //! boxes.
 //!
 //! The model is `problems::Linkage::build`'s, as `solve --model auto` chooses: planar when the
-//! planar builder accepts the mechanism, spatial otherwise (`velocity`), with the reason.
+//! planar builder accepts the mechanism, spatial otherwise (`problems::singular::velocity`),
+//! with the reason.
 //!
 //! Building every set's problem comes first (`SingularSets::new`), so a bad request (unknown
 //! actuated joint, wrong actuator count) is answered before any search starts; `solve` then runs
 //! the sets in order under one timeout: what the first set leaves of it goes to the next.
 
-use super::velocity::point_label;
-use super::{Augmented, Coordinates, Output, SingularError, SingularKind, SingularProblem, SingularSet};
-use crate::interval::IntervalBox;
+use super::SingularSet;
 use crate::model::Mechanism;
+use crate::problems::singular::velocity::point_label;
+use crate::problems::singular::{Output, SingularError, SingularKind, SingularProblem};
 use crate::problems::{Linkage, ModelChoice};
-use crate::search::{SolveError, Solver, SolverSettings};
-use crate::system::EquationSystem;
-use std::collections::BTreeMap;
+use crate::search::{SolveError, SolverSettings};
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
@@ -31,11 +30,11 @@ pub struct Actuation {
 }
 
 impl Actuation {
-    /// The default: the joints of the URDF's `<transmission>` elements (`transmission_joints`),
-    /// minus those `fixed` (a fixed joint is locked already, so it is no longer a free joint to
-    /// actuate); none when the URDF has no transmission.
-    pub fn from_urdf(xml: &str, fixed: &[(String, f64)]) -> Self {
-        let named = super::transmission_joints(xml);
+    /// The default: the joints of the URDF's `<transmission>` elements
+    /// (`Mechanism::transmission_joints`), minus those `fixed` (a fixed joint is locked already,
+    /// so it is no longer a free joint to actuate); none when the URDF has no transmission.
+    pub fn from_transmissions(m: &Mechanism, fixed: &[(String, f64)]) -> Self {
+        let named = m.transmission_joints.clone();
         if named.is_empty() {
             return Actuation { joints: Vec::new(), source: "none (the URDF has no <transmission> element)".to_string() };
         }
@@ -60,65 +59,6 @@ pub fn all_kinds(actuated: &[String]) -> Vec<SingularKind> {
         vec![SingularKind::Cspace, SingularKind::Output]
     } else {
         vec![SingularKind::Cspace, SingularKind::Input, SingularKind::Output]
-    }
-}
-
-/// The model-chosen linkage as a coordinate source: either builder's rows, one orchestration.
-impl Coordinates for Linkage {
-    fn system(&self) -> &EquationSystem {
-        match self {
-            Linkage::Planar(p) => Coordinates::system(p),
-            Linkage::Spatial(p, _) => Coordinates::system(p),
-        }
-    }
-
-    fn name(&self) -> &str {
-        match self {
-            Linkage::Planar(p) => Coordinates::name(p),
-            Linkage::Spatial(p, _) => Coordinates::name(p),
-        }
-    }
-
-    fn model(&self) -> &'static str {
-        match self {
-            Linkage::Planar(p) => p.model(),
-            Linkage::Spatial(p, _) => p.model(),
-        }
-    }
-
-    fn fixed_joints(&self) -> &[(String, f64)] {
-        match self {
-            Linkage::Planar(p) => Coordinates::fixed_joints(p),
-            Linkage::Spatial(p, _) => Coordinates::fixed_joints(p),
-        }
-    }
-
-    fn joint_values(&self, b: &IntervalBox) -> BTreeMap<String, (f64, f64)> {
-        match self {
-            Linkage::Planar(p) => p.joint_values(b),
-            Linkage::Spatial(p, _) => p.joint_values(b),
-        }
-    }
-
-    fn extended_solver<'s>(&'s self, system: &'s EquationSystem, settings: SolverSettings) -> Result<Solver<'s>, SolveError> {
-        match self {
-            Linkage::Planar(p) => p.extended_solver(system, settings),
-            Linkage::Spatial(p, _) => p.extended_solver(system, settings),
-        }
-    }
-
-    fn augment(&self, kind: SingularKind, actuated: &[String], output: Option<&Output>) -> Result<Augmented, SingularError> {
-        match self {
-            Linkage::Planar(p) => p.augment(kind, actuated, output),
-            Linkage::Spatial(p, _) => p.augment(kind, actuated, output),
-        }
-    }
-
-    fn rows_faithful(&self, b: &IntervalBox) -> bool {
-        match self {
-            Linkage::Planar(p) => p.rows_faithful(b),
-            Linkage::Spatial(p, _) => p.rows_faithful(b),
-        }
     }
 }
 
@@ -174,7 +114,7 @@ impl SingularSets {
 mod tests {
     use super::*;
 
-    const FOUR_BAR: &str = include_str!("../../../urdf/four_bar.urdf");
+    const FOUR_BAR: &str = include_str!("../../urdf/four_bar.urdf");
 
     fn with_transmission(joint: &str) -> String {
         FOUR_BAR.replace("</robot>", &format!("<transmission name=\"t\"><type>transmission_interface/SimpleTransmission</type><joint name=\"{joint}\"/></transmission></robot>"))
@@ -182,10 +122,11 @@ mod tests {
 
     #[test]
     fn actuated_joints_default_to_transmissions_minus_fixed_ones() {
-        assert_eq!(Actuation::from_urdf(FOUR_BAR, &[]).joints, Vec::<String>::new());
-        let xml = with_transmission("rocker_joint");
-        assert_eq!(Actuation::from_urdf(&xml, &[]).joints, vec!["rocker_joint".to_string()]);
-        let fixed = Actuation::from_urdf(&xml, &[("rocker_joint".into(), 0.3)]);
+        let parse = |xml: &str| crate::model::urdf::parse(xml).expect("bundled");
+        assert_eq!(Actuation::from_transmissions(&parse(FOUR_BAR), &[]).joints, Vec::<String>::new());
+        let m = parse(&with_transmission("rocker_joint"));
+        assert_eq!(Actuation::from_transmissions(&m, &[]).joints, vec!["rocker_joint".to_string()]);
+        let fixed = Actuation::from_transmissions(&m, &[("rocker_joint".into(), 0.3)]);
         assert_eq!(fixed.joints, Vec::<String>::new());
         assert!(fixed.source.contains("left out: rocker_joint"), "{}", fixed.source);
         assert_eq!(all_kinds(&[]), vec![SingularKind::Cspace, SingularKind::Output]);

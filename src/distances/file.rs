@@ -16,7 +16,7 @@
 //! }
 //! ```
 
-use super::cayley_menger::{DistanceError, DistanceProblem, Orientation};
+use crate::problems::cayley_menger::{DistanceError, DistanceProblem, Orientation};
 use crate::interval::{interval, point};
 use serde::Deserialize;
 
@@ -75,7 +75,7 @@ struct OrientSpec {
 /// # Examples
 ///
 /// ```
-/// use linkspace::problems::distance_file;
+/// use linkspace::distances::file as distance_file;
 /// let text = r#"{"points": [{"name": "a", "xyz": [0,0,0]}, {"name": "b", "xyz": [1,0,0]},
 ///                {"name": "c", "xyz": [0,1,0]}, {"name": "d"}],
 ///                "distances": [{"between": ["a","d"], "squared": 1}, {"between": ["b","d"], "name": "bd"}]}"#;

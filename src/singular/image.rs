@@ -1,0 +1,695 @@
+//! The type-II singular set's image in actuator space, for 2-dof linkages whose actuated joints
+//! are coordinates of their own (revolute joints to the ground, sliders): the searches on the
+//! cusp and node systems of `problems::singular::image` (whose doc gives the systems), certified
+//! like the 3R ones (Krawczyk, seed 003), the regions of actuator space the set cuts and the
+//! assembly modes over each, the verdict on non-singular assembly-mode change, and the JSON
+//! report (`ImageReport`).
+//!
+//! ## Regions and the verdict
+//! The image of `S`'s cover is rasterised on a grid of actuator space (periodic for revolute
+//! actuators); the free cells' connected components are regions, and over one sample point of
+//! each a certified `solve` counts the configurations and the sign of `det F_p` (the passive
+//! Jacobian) at each. `det F_p ≠ 0` on `C ∖ S`, so an assembly-mode change without crossing `S`
+//! joins two configurations over the same actuator point with the same sign, and by
+//! continuation inside the region two such configurations over every point of a region.
+//! - **yes**: a certified cusp (encircling it changes assembly mode, McAree & Daniel 1999).
+//! - **no**: the cusp and node searches complete with none found, every region sampled,
+//!   certified, and holding at most one configuration of each sign. What the grid cannot see:
+//!   a region lying wholly inside the cover of `S` (thinner than the boxes); with no cusp and no
+//!   node the image is a union of disjoint embedded curves, so such a region would lie between
+//!   two image curves closer than the cover's width (or inside a loop smaller than it).
+//! - **undecided** otherwise, with the reason.
+
+use super::{BoxKind, SingularSet};
+use crate::interval::{components, point, Bounds, Interval, IntervalBox};
+use crate::model::Mechanism;
+use crate::problems::linkage::LinkageProblem;
+use crate::problems::singular::image::{check, CuspProblem, ImageError, NodeProblem};
+use crate::problems::singular::{Parts, SingularError, SingularKind, SingularProblem};
+use crate::search::{Limit, SolveError, SolveStats, SolverSettings, Status};
+use crate::system::{EquationSystem, Monomial, VarId};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::f64::consts::PI;
+use std::sync::atomic::AtomicBool;
+use std::time::Instant;
+
+/// True when every direction of `vars` in `b` (chart `k`: `vars[k] = 1`) is owned by another
+/// chart (see `SingularProblem::owned_elsewhere`); `skip` is never the largest (fixed to 0).
+fn owned_elsewhere(vars: &[VarId], k: usize, b: &[Interval], skip: Option<usize>) -> bool {
+    vars.iter().enumerate().any(|(j, &m)| {
+        if Some(j) == skip {
+            return false;
+        }
+        let mig = b[m].mig();
+        (j < k && mig >= 1.0) || (j > k && mig > 1.0)
+    })
+}
+
+impl CuspProblem {
+    /// Runs the solver on every chart pair, in scaled widths (`scaled`); boxes proven to be
+    /// another chart's are dropped, the rest clustered by configuration.
+    pub fn solve(&self, sp: &SingularProblem, settings: &SolverSettings, cancel: &AtomicBool) -> Result<PointSearch, SolveError> {
+        let t0 = Instant::now();
+        let mut found = Vec::new();
+        let mut status = Status::Complete;
+        let mut stats = Vec::new();
+        let mut dropped = 0u64;
+        for ((k, tau), chart) in &self.charts {
+            let Some(s) = remaining(settings, t0) else {
+                status = Status::Incomplete(Limit::Time);
+                found.push((chart.initial_box(), BoxKind::Undecided));
+                continue;
+            };
+            let e = sp.linkage.extended_solver(chart, s)?.enclose(cancel, &mut |_| {});
+            if e.status != Status::Complete {
+                status = e.status;
+            }
+            for (bx, u) in e.solutions.into_iter().zip(e.unique) {
+                if owned_elsewhere(&self.v, *k, &bx.dims, None) || owned_elsewhere(&self.tangent, *tau, &bx.dims, Some(k + 1)) {
+                    dropped += 1;
+                    continue;
+                }
+                found.push((bx, if u { BoxKind::Certified } else { BoxKind::Solution }));
+            }
+            found.extend(e.undecided.into_iter().map(|bx| (bx, BoxKind::Undecided)));
+            stats.push(e.stats);
+        }
+        let projected: Vec<IntervalBox> = found.iter().map(|(bx, _)| IntervalBox::new(bx.dims[..self.base_vars].to_vec())).collect();
+        let (labels, n) = components(&projected);
+        let mut points: Vec<FoundPoint> = (0..n).map(|_| FoundPoint::default()).collect();
+        for (i, &l) in labels.iter().enumerate() {
+            points[l].boxes.push(found[i].0.clone());
+            points[l].kinds.push(found[i].1);
+        }
+        for p in &mut points {
+            // μ away from 0 on every certified box: a tangent, so a cusp (not a corank-2 point).
+            p.degenerate = p.boxes.iter().any(|bx| bx.dims[self.tangent[0]].contains(0.0));
+        }
+        Ok(PointSearch { status, points, stats, dropped_other_chart: dropped, seconds: t0.elapsed().as_secs_f64() })
+    }
+}
+
+/// The settings for the rest of a run that started at `t0`; `None` when no time is left.
+/// Widths are scaled (`SolverSettings::scaled_widths`): see `scaled`.
+fn remaining(settings: &SolverSettings, t0: Instant) -> Option<SolverSettings> {
+    let left = settings.timeout.map(|t| t.saturating_sub(t0.elapsed()));
+    if left.is_some_and(|r| r.is_zero()) {
+        return None;
+    }
+    Some(SolverSettings { timeout: left, ..scaled(settings) })
+}
+
+/// `settings` with `scaled_widths` on, as the image searches (cover, cusps, nodes) run: their
+/// systems mix travels (a slider's range, [1, 40] on the 3-RPR), cosines and sines ([−1, 1])
+/// and chart directions ([−1.05, 1.05]); in absolute widths sigma and the bisection treat a
+/// travel as twenty times longer than an angle, so the searches tile `S` twenty times finer
+/// along the travels than across the angles (the 3-RPR cusp search: over ten minutes, against
+/// under a minute scaled). On mechanisms without sliders every unit is 1 or 1.05.
+pub fn scaled(settings: &SolverSettings) -> SolverSettings {
+    SolverSettings { scaled_widths: true, ..settings.clone() }
+}
+
+/// A cluster of boxes of a point search (cusps).
+#[derive(Clone, Debug, Default)]
+pub struct FoundPoint {
+    /// The boxes (in the chart system's variables).
+    pub boxes: Vec<IntervalBox>,
+    /// Their kinds.
+    pub kinds: Vec<BoxKind>,
+    /// `μ` may vanish: possibly a corank-two point rather than a cusp.
+    pub degenerate: bool,
+}
+
+impl FoundPoint {
+    /// Holds a certified box.
+    pub fn certified(&self) -> bool {
+        self.kinds.contains(&BoxKind::Certified)
+    }
+
+    /// Exactly one root proven: every box certified and all overlapping the first (the same
+    /// root seen from two charts).
+    pub fn unique(&self) -> bool {
+        self.kinds.iter().all(|k| *k == BoxKind::Certified) && self.boxes.iter().all(|b| self.boxes[0].dims.iter().zip(&b.dims).all(|(x, y)| !x.intersection(*y).is_empty()))
+    }
+}
+
+/// The result of the cusp search.
+#[derive(Clone, Debug)]
+pub struct PointSearch {
+    /// Complete, or the last limit met.
+    pub status: Status,
+    /// Clusters by configuration.
+    pub points: Vec<FoundPoint>,
+    /// Per chart pair, the solver's counters.
+    pub stats: Vec<SolveStats>,
+    /// Boxes dropped as another chart's.
+    pub dropped_other_chart: u64,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+impl PointSearch {
+    /// Proven cusps: certified clusters with `μ ≠ 0`.
+    pub fn proven(&self) -> usize {
+        self.points.iter().filter(|p| p.certified() && !p.degenerate).count()
+    }
+}
+
+impl NodeProblem {
+    /// Runs the node search, in scaled widths (`scaled`).
+    pub fn solve(&self, sp: &SingularProblem, settings: &SolverSettings, cancel: &AtomicBool) -> Result<NodeSearch, SolveError> {
+        let t0 = Instant::now();
+        let mut status = Status::Complete;
+        let mut out = NodeSearch { status, pairs: Vec::new(), near_diagonal: Vec::new(), injective: 0, dropped_other_chart: 0, stats: Vec::new(), seconds: 0.0 };
+        let config: Vec<VarId> = (0..sp.base_vars).filter(|i| !self.shared.contains(i)).collect();
+        for ((k, k2), system, map) in &self.charts {
+            let Some(s) = remaining(settings, t0) else {
+                status = Status::Incomplete(Limit::Time);
+                out.near_diagonal.push(system.initial_box());
+                continue;
+            };
+            let e = sp.linkage.extended_solver(system, s)?.enclose(cancel, &mut |_| {});
+            if e.status != Status::Complete {
+                status = e.status;
+            }
+            let mapped: Vec<VarId> = sp.multipliers.iter().map(|&m| map[m]).collect();
+            let boxes = e.solutions.into_iter().zip(e.unique).map(|(b, u)| (b, if u { BoxKind::Certified } else { BoxKind::Solution }));
+            for (bx, kind) in boxes.chain(e.undecided.into_iter().map(|b| (b, BoxKind::Undecided))) {
+                let d = &bx.dims;
+                if owned_elsewhere(&sp.multipliers, *k, d, None) || owned_elsewhere(&mapped, *k2, d, None) {
+                    out.dropped_other_chart += 1;
+                    continue;
+                }
+                let apart = config.iter().find(|&&i| d[i].intersection(d[map[i]]).is_empty());
+                match apart {
+                    Some(&i) => {
+                        // In (k, k) both orders of a pair are roots: keep copy A first.
+                        if k == k2 && d[i].sup() > d[map[i]].inf() {
+                            continue;
+                        }
+                        let a = IntervalBox::new(d[..sp.base_vars].to_vec());
+                        let b = IntervalBox::new((0..sp.base_vars).map(|j| d[map[j]]).collect());
+                        out.pairs.push(NodePair { points: [a, b], kind });
+                    }
+                    None if k == k2 && kind != BoxKind::Undecided && injective(&sp.charts[*k], &self.shared, &bx, map) => out.injective += 1,
+                    None => out.near_diagonal.push(bx),
+                }
+            }
+            out.stats.push(e.stats);
+        }
+        out.status = status;
+        out.seconds = t0.elapsed().as_secs_f64();
+        Ok(out)
+    }
+}
+
+/// A node pair: two configuration boxes (the linkage's variables).
+#[derive(Clone, Debug)]
+pub struct NodePair {
+    /// The two points' boxes.
+    pub points: [IntervalBox; 2],
+    /// Certified (one pair in the doubled box), solution (unproven) or undecided (a limit).
+    pub kind: BoxKind,
+}
+
+/// The result of the node search.
+#[derive(Clone, Debug)]
+pub struct NodeSearch {
+    /// Complete, or the last limit met.
+    pub status: Status,
+    /// Pairs of disjoint configuration boxes with shared actuator values.
+    pub pairs: Vec<NodePair>,
+    /// Doubled boxes meeting the diagonal without an injectivity certificate (undecided).
+    pub near_diagonal: Vec<IntervalBox>,
+    /// Doubled boxes meeting the diagonal dropped by the injectivity certificate.
+    pub injective: u64,
+    /// Boxes dropped as another chart's.
+    pub dropped_other_chart: u64,
+    /// Per chart pair, the solver's counters.
+    pub stats: Vec<SolveStats>,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+impl NodeSearch {
+    /// Certified node pairs.
+    pub fn proven(&self) -> usize {
+        self.pairs.iter().filter(|p| p.kind == BoxKind::Certified).count()
+    }
+    /// Unproven pairs plus near-diagonal boxes.
+    pub fn undecided(&self) -> usize {
+        self.pairs.len() - self.proven() + self.near_diagonal.len()
+    }
+}
+
+/// The injectivity certificate of a doubled box meeting the diagonal (both copies in chart `sys`):
+/// with the shared (actuator) variables fixed, the chart system's interval Jacobian over the hull
+/// of both copies has full column rank, so the copies coincide (mean-value theorem).
+fn injective(sys: &EquationSystem, shared: &[VarId], bx: &IntervalBox, map: &[VarId]) -> bool {
+    let hull: Vec<Interval> = (0..sys.vars.len()).map(|i| bx.dims[i].convex_hull(bx.dims[map[i]])).collect();
+    let cols: Vec<VarId> = (0..sys.vars.len()).filter(|i| !shared.contains(i)).collect();
+    let col_of: BTreeMap<VarId, usize> = cols.iter().enumerate().map(|(j, &v)| (v, j)).collect();
+    let mut rows: Vec<Vec<Interval>> = Vec::new();
+    for e in &sys.equations {
+        if e.vars().all(|v| shared.contains(&v)) {
+            continue;
+        }
+        let mut row = vec![point(0.0); cols.len()];
+        let mut add = |v: VarId, x: Interval| {
+            if let Some(&j) = col_of.get(&v) {
+                row[j] += x;
+            }
+        };
+        for t in &e.terms {
+            match t.mono {
+                Monomial::Linear(x) => add(x, t.coef),
+                Monomial::Square(x) => add(x, point(2.0) * t.coef * hull[x]),
+                Monomial::Product(x, y) => {
+                    add(x, t.coef * hull[y]);
+                    add(y, t.coef * hull[x]);
+                }
+            }
+        }
+        rows.push(row);
+    }
+    full_column_rank(&rows)
+}
+
+/// True when every real matrix in the interval matrix `m` (rows ≥ columns) has full column rank:
+/// `P = (M_cᵀ M_c)⁻¹ M_cᵀ` from the midpoint, and `‖I − P·M‖∞ < 1` in interval arithmetic.
+pub fn full_column_rank(m: &[Vec<Interval>]) -> bool {
+    let r = m.len();
+    let Some(c) = m.first().map(Vec::len) else { return false };
+    if r < c || c == 0 {
+        return r >= c;
+    }
+    let mc: Vec<Vec<f64>> = m.iter().map(|row| row.iter().map(|x| x.mid()).collect()).collect();
+    if mc.iter().flatten().any(|x| !x.is_finite()) {
+        return false;
+    }
+    // Normal matrix and its inverse (Gauss–Jordan with partial pivoting, f64: only a preconditioner).
+    let mut a: Vec<Vec<f64>> = (0..c).map(|i| (0..c).map(|j| (0..r).map(|k| mc[k][i] * mc[k][j]).sum::<f64>()).chain((0..c).map(move |j| if i == j { 1.0 } else { 0.0 })).collect()).collect();
+    for col in 0..c {
+        let p = (col..c).max_by(|&x, &y| a[x][col].abs().total_cmp(&a[y][col].abs())).unwrap_or(col);
+        if a[p][col].abs() < 1e-300 {
+            return false;
+        }
+        a.swap(col, p);
+        let piv = a[col][col];
+        for x in a[col].iter_mut() {
+            *x /= piv;
+        }
+        let pivot_row = a[col].clone();
+        for (i, row) in a.iter_mut().enumerate() {
+            let f = row[col];
+            if i != col && f != 0.0 {
+                for (x, y) in row.iter_mut().zip(&pivot_row) {
+                    *x -= f * y;
+                }
+            }
+        }
+    }
+    // P = N⁻¹ M_cᵀ.
+    let p: Vec<Vec<f64>> = (0..c).map(|i| (0..r).map(|k| (0..c).map(|j| a[i][c + j] * mc[k][j]).sum()).collect()).collect();
+    let mut norm = 0.0f64;
+    for (i, p_row) in p.iter().enumerate() {
+        let mut row_sum = point(0.0);
+        for j in 0..c {
+            let mut x = point(if i == j { 1.0 } else { 0.0 });
+            for (pk, m_row) in p_row.iter().zip(m) {
+                x -= point(*pk) * m_row[j];
+            }
+            row_sum += x.abs();
+        }
+        norm = norm.max(row_sum.sup());
+    }
+    norm < 1.0
+}
+
+/// Interval determinant by Laplace expansion along the first row (small matrices).
+fn det(m: &[Vec<Interval>]) -> Interval {
+    match m.len() {
+        0 => point(1.0),
+        1 => m[0][0],
+        2 => m[0][0] * m[1][1] - m[0][1] * m[1][0],
+        n => (0..n).fold(point(0.0), |acc, j| {
+            let minor: Vec<Vec<Interval>> = m[1..].iter().map(|row| row.iter().enumerate().filter(|(c, _)| *c != j).map(|(_, x)| *x).collect()).collect();
+            let t = m[0][j] * det(&minor);
+            if j % 2 == 0 {
+                acc + t
+            } else {
+                acc - t
+            }
+        }),
+    }
+}
+
+/// One actuator axis of the region grid.
+#[derive(Clone, Copy, Debug)]
+struct Axis {
+    lo: f64,
+    hi: f64,
+    periodic: bool,
+}
+
+impl Axis {
+    fn cell(&self, i: usize, n: usize) -> (f64, f64) {
+        let w = (self.hi - self.lo) / n as f64;
+        (self.lo + w * i as f64, self.lo + w * (i + 1) as f64)
+    }
+    /// Does the cell `[a, b]` meet `[lo, hi]` (modulo 2π on a periodic axis)?
+    fn meets(&self, (a, b): (f64, f64), (lo, hi): (f64, f64)) -> bool {
+        if !(lo.is_finite() && hi.is_finite()) {
+            return true;
+        }
+        let shifts: &[f64] = if self.periodic { &[-2.0 * PI, 0.0, 2.0 * PI] } else { &[0.0] };
+        hi - lo >= self.hi - self.lo || shifts.iter().any(|s| lo + s <= b && a <= hi + s)
+    }
+}
+
+/// A region of actuator space (a component of the grid's free cells) and its assembly modes.
+#[derive(Clone, Debug, Serialize)]
+pub struct Region {
+    /// Grid cells in the region.
+    pub cells: usize,
+    /// The sample point (actuator values, in the order of `actuated`).
+    pub sample: Vec<f64>,
+    /// Configurations over the sample, when every solution box was certified and the run complete.
+    pub configurations: Option<usize>,
+    /// Of those, how many with `det F_p > 0` and `< 0` (`None` where a sign is not proven).
+    pub signs: Option<[usize; 2]>,
+    /// Certified solution boxes, unproven boxes, undecided boxes of the sample's solve.
+    pub boxes: [usize; 3],
+}
+
+/// Regions of actuator space cut by the image of `S`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Regions {
+    /// Grid cells per axis.
+    pub grid: usize,
+    /// Cells meeting the image of the cover of `S`.
+    pub blocked_cells: usize,
+    /// The regions.
+    pub regions: Vec<Region>,
+    /// Wall-clock seconds (raster and samples).
+    pub seconds: f64,
+}
+
+/// The regions of actuator space for `sp`'s input set `set` (its cover), on a `grid × grid`
+/// raster, with a certified solve of `m` at one sample of each. `settings.timeout` bounds all
+/// the samples together (each gets what the ones before it left, at least a millisecond, so a
+/// sample that finds no time reports itself unproven instead of being skipped).
+pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usize, settings: &SolverSettings, cancel: &AtomicBool) -> Result<Regions, ImageError> {
+    check(sp)?;
+    let t0 = Instant::now();
+    let mut scratch = sp.linkage.system.clone();
+    let parts = Parts::new(&sp.linkage, &mut scratch)?;
+    let mut axes = Vec::new();
+    for a in &sp.actuated {
+        let (_, vars) = parts.own_coordinate(&sp.linkage, a).ok_or_else(|| ImageError::NotCoordinate(a.clone()))?;
+        axes.push(if vars.len() == 2 {
+            Axis { lo: -PI, hi: PI, periodic: true }
+        } else {
+            let d = sp.linkage.system.vars[vars[0]].domain;
+            Axis { lo: d.inf(), hi: d.sup(), periodic: false }
+        });
+    }
+    let images: Vec<Vec<(f64, f64)>> = set.boxes.iter().map(|b| sp.actuator_values(&b.b)).collect();
+    let mut blocked = vec![false; grid * grid];
+    for i in 0..grid {
+        let ci = axes[0].cell(i, grid);
+        for j in 0..grid {
+            let cj = axes[1].cell(j, grid);
+            blocked[i * grid + j] = images.iter().any(|im| axes[0].meets(ci, im[0]) && axes[1].meets(cj, im[1]));
+        }
+    }
+    let mut out = Regions { grid, blocked_cells: blocked.iter().filter(|b| **b).count(), regions: Vec::new(), seconds: 0.0 };
+    let wrap = |x: i64, ax: &Axis| if (0..grid as i64).contains(&x) { Some(x as usize) } else if ax.periodic { Some(x.rem_euclid(grid as i64) as usize) } else { None };
+    let free_regions = crate::interval::flood_fill(grid * grid, |c| !blocked[c], |c, next| {
+        let (i, j) = (c / grid, c % grid);
+        for (axis, di) in [(0usize, -1i64), (0, 1), (1, -1), (1, 1)] {
+            let (mut a, mut b) = (i as i64, j as i64);
+            if axis == 0 { a += di } else { b += di }
+            if let (Some(a), Some(b)) = (wrap(a, &axes[0]), wrap(b, &axes[1])) {
+                next.push(a * grid + b);
+            }
+        }
+    });
+    for members in free_regions {
+        let start = members[0];
+        // The sample: the member cell nearest the members' mean (in grid indices), so a chart's
+        // label sits inside the region rather than at its first cell; any cell would do for the
+        // count, which is constant over the region.
+        let n = members.len() as f64;
+        let (mi, mj) = members.iter().fold((0.0, 0.0), |(a, b), &c| (a + (c / grid) as f64 / n, b + (c % grid) as f64 / n));
+        let far = |c: usize| ((c / grid) as f64 - mi).powi(2) + ((c % grid) as f64 - mj).powi(2);
+        let pick = members.iter().copied().min_by(|&x, &y| far(x).total_cmp(&far(y))).unwrap_or(start);
+        let cells = members.len();
+        let (i, j) = (pick / grid, pick % grid);
+        let (a, b) = (axes[0].cell(i, grid), axes[1].cell(j, grid));
+        let sample = vec![0.5 * (a.0 + a.1), 0.5 * (b.0 + b.1)];
+        let left = SolverSettings { timeout: settings.timeout.map(|t| t.saturating_sub(t0.elapsed()).max(std::time::Duration::from_millis(1))), ..settings.clone() };
+        out.regions.push(sample_region(m, sp, &sample, cells, &left, cancel)?);
+    }
+    out.seconds = t0.elapsed().as_secs_f64();
+    Ok(out)
+}
+
+/// A certified solve with the actuators at `sample`: configurations and the signs of `det F_p`.
+fn sample_region(m: &Mechanism, sp: &SingularProblem, sample: &[f64], cells: usize, settings: &SolverSettings, cancel: &AtomicBool) -> Result<Region, ImageError> {
+    let fixed: Vec<(String, f64)> = sp.actuated.iter().cloned().zip(sample.iter().copied()).collect();
+    let lp = LinkageProblem::new(m, &fixed, &[]).map_err(SingularError::from)?;
+    let mut scratch = lp.system.clone();
+    let parts = Parts::new(&lp, &mut scratch)?;
+    let s = SolverSettings { sigma: settings.sigma.min(1e-6), ..settings.clone() };
+    let Ok(solver) = lp.solver(s) else {
+        return Ok(Region { cells, sample: sample.to_vec(), configurations: None, signs: None, boxes: [0, 0, 0] });
+    };
+    let e = solver.enclose(cancel, &mut |_| {});
+    let certified: Vec<&IntervalBox> = e.solutions.iter().zip(&e.unique).filter(|(_, u)| **u).map(|(b, _)| b).collect();
+    let boxes = [certified.len(), e.solutions.len() - certified.len(), e.undecided.len()];
+    let complete = e.status == Status::Complete && boxes[1] == 0 && boxes[2] == 0;
+    let configurations = complete.then_some(certified.len());
+    let mut signs = Some([0usize, 0]);
+    for b in &certified {
+        let d = det(&parts.jacobian(&b.dims));
+        match (d.inf() > 0.0, d.sup() < 0.0, signs.as_mut()) {
+            (true, _, Some(s)) => s[0] += 1,
+            (_, true, Some(s)) => s[1] += 1,
+            _ => signs = None,
+        }
+    }
+    Ok(Region { cells, sample: sample.to_vec(), configurations, signs: if complete { signs } else { None }, boxes })
+}
+
+/// `yes`, `no` or `undecided`, with the argument.
+#[derive(Clone, Debug, Serialize)]
+pub struct Verdict {
+    /// Can the mechanism change assembly mode without crossing a type-II singularity?
+    pub answer: &'static str,
+    /// Why.
+    pub reason: String,
+}
+
+/// The verdict from the searches (see the module doc for what each answer rests on).
+pub fn verdict(cover: &SingularSet, cusps: &PointSearch, nodes: &NodeSearch, regions: &Regions) -> Verdict {
+    if cusps.proven() > 0 {
+        return Verdict { answer: "yes", reason: format!("{} certified cusp(s) of the type-II image: a loop around one changes assembly mode without crossing a singularity", cusps.proven()) };
+    }
+    let mut gaps = Vec::new();
+    if cover.status != Status::Complete {
+        gaps.push("the type-II cover is incomplete".to_string());
+    }
+    if cusps.status != Status::Complete || !cusps.points.is_empty() {
+        gaps.push(format!("the cusp search is {} with {} unproven cluster(s)", status_word(cusps.status), cusps.points.len()));
+    }
+    if nodes.status != Status::Complete || nodes.undecided() > 0 {
+        gaps.push(format!("the node search is {} with {} undecided pair(s) or near-diagonal box(es)", status_word(nodes.status), nodes.undecided()));
+    }
+    if nodes.proven() > 0 {
+        gaps.push(format!("{} certified node(s): the image crosses itself", nodes.proven()));
+    }
+    for (i, r) in regions.regions.iter().enumerate() {
+        match r.signs {
+            None => gaps.push(format!("region {i} (sample {:?}): configurations or their signs not proven", r.sample)),
+            Some([p, n]) if p > 1 || n > 1 => gaps.push(format!("region {i} (sample {:?}): {p} configurations with det F_p > 0 and {n} with < 0 (two of one sign may be one sheet)", r.sample)),
+            Some(_) => {}
+        }
+    }
+    if regions.regions.is_empty() {
+        gaps.push("no region found on the grid".to_string());
+    }
+    if gaps.is_empty() {
+        Verdict {
+            answer: "no",
+            reason: format!(
+                "no cusp and no node (searches complete); over each of the {} regions the grid reaches, at most one configuration with each sign of det F_p, a sign no path off the type-II set can change (regions thinner than the cover are not sampled)",
+                regions.regions.len()
+            ),
+        }
+    } else {
+        Verdict { answer: "undecided", reason: gaps.join("; ") }
+    }
+}
+
+fn status_word(s: Status) -> &'static str {
+    if s == Status::Complete {
+        "complete"
+    } else {
+        "incomplete"
+    }
+}
+
+/// One cusp: the 3R `CuspRecord`'s fields; `workspace` is the image in actuator space.
+#[derive(Clone, Debug, Serialize)]
+pub struct CuspRecord {
+    /// Free joint values (hull over the cluster).
+    pub joints: BTreeMap<String, Bounds>,
+    /// Its image: actuator values by joint name.
+    pub workspace: BTreeMap<String, Bounds>,
+    /// True when exactly one cusp is proven in the box.
+    pub unique: bool,
+    /// `μ` may vanish there: a corank-two point rather than a cusp (never counted proven).
+    pub degenerate: bool,
+}
+
+/// One node: two joint boxes with a shared image (the 3R `NodeRecord`'s fields).
+#[derive(Clone, Debug, Serialize)]
+pub struct NodeRecord {
+    /// The two joint boxes.
+    pub points: [BTreeMap<String, Bounds>; 2],
+    /// Their shared image in actuator space.
+    pub workspace: BTreeMap<String, Bounds>,
+    /// True when exactly one pair is proven in the two boxes.
+    pub unique: bool,
+}
+
+/// Proven and undecided counts.
+#[derive(Clone, Debug, Serialize)]
+pub struct Counts {
+    /// Certified.
+    pub proven: usize,
+    /// Neither proven nor excluded.
+    pub undecided: usize,
+}
+
+/// What `loop-singularities --kind image --json` writes.
+#[derive(Clone, Debug, Serialize)]
+pub struct ImageReport {
+    /// Robot name.
+    pub mechanism: String,
+    /// Actuated joints (the keys of `workspace`).
+    pub actuated: Vec<String>,
+    /// `complete` when every search completed.
+    pub status: &'static str,
+    /// Cusps: certified first.
+    pub cusps: Vec<CuspRecord>,
+    /// Node pairs.
+    pub nodes: Vec<NodeRecord>,
+    /// Cusp counts.
+    pub cusp_counts: Counts,
+    /// Node counts (undecided: unproven pairs plus near-diagonal boxes).
+    pub node_counts: Counts,
+    /// Doubled boxes on the diagonal dropped by the injectivity certificate.
+    pub injective: u64,
+    /// Regions of actuator space and their assembly modes.
+    pub regions: Regions,
+    /// The verdict.
+    pub verdict: Verdict,
+    /// Seconds: cover, cusps, nodes, regions.
+    pub seconds: [f64; 4],
+}
+
+/// The hull of a joint map over boxes.
+fn hull_joints(sp: &SingularProblem, boxes: &[IntervalBox]) -> (BTreeMap<String, Bounds>, BTreeMap<String, Bounds>) {
+    let mut joints: BTreeMap<String, Bounds> = BTreeMap::new();
+    for b in boxes {
+        for (n, v) in sp.joint_values(b) {
+            let e = joints.entry(n).or_insert([v.0, v.1]);
+            *e = [e[0].min(v.0), e[1].max(v.1)];
+        }
+    }
+    let image = sp.actuated.iter().filter_map(|a| joints.get(a).map(|b| (a.clone(), *b))).collect();
+    (joints, image)
+}
+
+impl ImageReport {
+    /// The report of the searches.
+    pub fn new(sp: &SingularProblem, cover: &SingularSet, cusps: &PointSearch, nodes: &NodeSearch, regions: Regions) -> Self {
+        let mut cusp_records: Vec<CuspRecord> = cusps
+            .points
+            .iter()
+            .map(|p| {
+                let (joints, workspace) = hull_joints(sp, &p.boxes);
+                CuspRecord { joints, workspace, unique: p.unique() && !p.degenerate, degenerate: p.degenerate }
+            })
+            .collect();
+        cusp_records.sort_by_key(|c| !c.unique);
+        let node_records = nodes
+            .pairs
+            .iter()
+            .map(|p| {
+                let (a, wa) = hull_joints(sp, std::slice::from_ref(&p.points[0]));
+                let (b, wb) = hull_joints(sp, std::slice::from_ref(&p.points[1]));
+                let workspace = wa.iter().map(|(n, x)| (n.clone(), wb.get(n).map_or(*x, |y| [x[0].max(y[0]), x[1].min(y[1])]))).collect();
+                NodeRecord { points: [a, b], workspace, unique: p.kind == BoxKind::Certified }
+            })
+            .collect();
+        let regions_seconds = regions.seconds;
+        let verdict = verdict(cover, cusps, nodes, &regions);
+        // "complete" is the crate's one rule: no limit met and nothing undecided (an unproven
+        // cusp or node, a near-diagonal box, a region whose assembly modes are not proven).
+        let complete = [cover.status, cusps.status, nodes.status].iter().all(|s| *s == Status::Complete)
+            && cusps.points.len() == cusps.proven()
+            && nodes.undecided() == 0
+            && regions.regions.iter().all(|r| r.configurations.is_some() && r.signs.is_some());
+        Self {
+            mechanism: sp.linkage.name.clone(),
+            actuated: sp.actuated.clone(),
+            status: if complete { "complete" } else { "incomplete" },
+            cusps: cusp_records,
+            nodes: node_records,
+            cusp_counts: Counts { proven: cusps.proven(), undecided: cusps.points.len() - cusps.proven() },
+            node_counts: Counts { proven: nodes.proven(), undecided: nodes.undecided() },
+            injective: nodes.injective,
+            regions,
+            verdict,
+            seconds: [cover.seconds, cusps.seconds, nodes.seconds, regions_seconds],
+        }
+    }
+}
+
+/// What `analyse` can fail on.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum AnalyseError {
+    /// The set does not build.
+    #[error(transparent)]
+    Singular(#[from] SingularError),
+    /// Not a 2-dof mechanism with coordinate actuators.
+    #[error(transparent)]
+    Image(#[from] ImageError),
+    /// Bad settings.
+    #[error(transparent)]
+    Solve(#[from] SolveError),
+}
+
+/// The whole analysis of `m`'s type-II image: the cover of `S` (the input set at `settings`),
+/// cusps, nodes, regions on a `grid × grid` raster and the verdict. `settings.timeout` bounds
+/// the whole analysis, as it bounds every set of `sets::SingularSets`: each search gets what the
+/// ones before it left (at least a millisecond, so a search that finds no time still reports its
+/// pending cells instead of being skipped silently).
+pub fn analyse(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String], settings: &SolverSettings, grid: usize, cancel: &AtomicBool) -> Result<ImageReport, AnalyseError> {
+    let t0 = Instant::now();
+    let left = || SolverSettings {
+        timeout: settings.timeout.map(|t| t.saturating_sub(t0.elapsed()).max(std::time::Duration::from_millis(1))),
+        ..settings.clone()
+    };
+    let p = SingularProblem::new(m, fixed, SingularKind::Input, actuated, None)?;
+    let cover = p.solve(&scaled(&left()), cancel)?;
+    let cusps = CuspProblem::new(&p)?.solve(&p, &left(), cancel)?;
+    let nodes = NodeProblem::new(&p)?.solve(&p, &left(), cancel)?;
+    let regions = regions(m, &p, &cover, grid, &left(), cancel)?;
+    Ok(ImageReport::new(&p, &cover, &cusps, &nodes, regions))
+}

@@ -1,0 +1,144 @@
+//! Singular sets of closed-loop mechanisms: the searches on the augmented systems that
+//! `problems::singular` builds (a client of the kernel's `Solver`, as `distances` and `manip3r`
+//! are of `search`), their clustering, and the orchestrations front ends run (`sets`: C-space,
+//! input and output sets under one deadline; `image`: the type-II image of 2-dof mechanisms,
+//! its cusps, nodes, regions and the assembly-mode verdict).
+//!
+//! `SingularProblem::solve` runs the kernel's `Solver` on each chart: a box of chart `k` proven
+//! to hold only directions owned by another chart (the first index of largest |m|) is dropped,
+//! because that chart finds them; the rest are merged by their configuration parts.
+
+use crate::interval::{components, IntervalBox};
+use crate::problems::singular::{Coordinates, SingularProblem};
+use crate::search::{Limit, SolveError, SolveStats, SolverSettings, Status};
+use std::sync::atomic::AtomicBool;
+use std::time::Instant;
+
+pub mod image;
+pub mod sets;
+
+impl<L: Coordinates> SingularProblem<L> {
+    /// Runs the solver on every chart and merges the results. `settings.max_boxes` applies per
+    /// chart; `settings.timeout` to the whole call.
+    pub fn solve(&self, settings: &SolverSettings, cancel: &AtomicBool) -> Result<SingularSet, SolveError> {
+        let t0 = Instant::now();
+        let mut boxes = Vec::new();
+        let mut status = Status::Complete;
+        let mut stats = Vec::new();
+        let mut dropped_other_chart = 0u64;
+        for (k, chart) in self.charts.iter().enumerate() {
+            let remaining = settings.timeout.map(|t| t.saturating_sub(t0.elapsed()));
+            if remaining.is_some_and(|r| r.is_zero()) {
+                // No time left: the whole chart is undecided.
+                status = Status::Incomplete(Limit::Time);
+                boxes.push(SingularBox { chart: k, b: chart.initial_box(), status: BoxKind::Undecided });
+                continue;
+            }
+            let s = SolverSettings { timeout: remaining, ..settings.clone() };
+            let solver = self.linkage.extended_solver(chart, s)?;
+            let e = solver.enclose(cancel, &mut |_| {});
+            if e.status != Status::Complete {
+                status = e.status;
+            }
+            for (b, u) in e.solutions.into_iter().zip(e.unique) {
+                if self.owned_elsewhere(k, &b) {
+                    dropped_other_chart += 1;
+                    continue;
+                }
+                // A certificate of the augmented system is one of the mechanism only where its
+                // rows are faithful (see `Coordinates::rows_faithful`); elsewhere the box stays.
+                let certified = u && self.linkage.rows_faithful(&b);
+                boxes.push(SingularBox { chart: k, b, status: if certified { BoxKind::Certified } else { BoxKind::Solution } });
+            }
+            for b in e.undecided {
+                boxes.push(SingularBox { chart: k, b, status: BoxKind::Undecided });
+            }
+            stats.push(e.stats);
+        }
+        // Clusters by configuration part: the same configuration found in two charts (or a
+        // curve crossing from one chart to the next) is one cluster.
+        let projected: Vec<IntervalBox> = boxes.iter().map(|x| IntervalBox::new(x.b.dims[..self.base_vars].to_vec())).collect();
+        let (labels, n) = components(&projected);
+        let mut clusters = vec![Cluster::default(); n];
+        for (i, &l) in labels.iter().enumerate() {
+            clusters[l].boxes.push(i);
+            match boxes[i].status {
+                BoxKind::Certified => clusters[l].certified = true,
+                BoxKind::Undecided => clusters[l].undecided = true,
+                BoxKind::Solution => {}
+            }
+        }
+        Ok(SingularSet { status, boxes, labels, clusters, stats, dropped_other_chart, seconds: t0.elapsed().as_secs_f64() })
+    }
+
+    /// True when every direction in `b` (chart `k`, `m_k = 1`) is owned by another chart: some
+    /// earlier component has |m_j| ≥ 1 or some later one |m_j| > 1, so the largest |m| is first
+    /// reached elsewhere, inside that chart's domain, and that chart reports it.
+    fn owned_elsewhere(&self, k: usize, b: &IntervalBox) -> bool {
+        self.multipliers.iter().enumerate().any(|(j, &m)| {
+            let mig = b.dims[m].mig();
+            (j < k && mig >= 1.0) || (j > k && mig > 1.0)
+        })
+    }
+}
+
+/// What a reported box is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BoxKind {
+    /// Certified (Krawczyk) to hold exactly one solution of its chart's system.
+    Certified,
+    /// At sigma, not proven empty, no proof of a solution.
+    Solution,
+    /// Left by a limit.
+    Undecided,
+}
+
+/// One box of a singular set, in its chart's variables.
+#[derive(Clone, Debug)]
+pub struct SingularBox {
+    /// The chart (index of the multiplier fixed to 1).
+    pub chart: usize,
+    /// The box.
+    pub b: IntervalBox,
+    /// Its status.
+    pub status: BoxKind,
+}
+
+/// Boxes whose configuration parts touch.
+#[derive(Clone, Debug, Default)]
+pub struct Cluster {
+    /// Indices into `SingularSet::boxes`.
+    pub boxes: Vec<usize>,
+    /// Holds a certified box: at least one singular configuration is proven inside.
+    pub certified: bool,
+    /// Holds an undecided box.
+    pub undecided: bool,
+}
+
+/// Every singular configuration lies in one of `boxes` (when `status` is complete, in a
+/// certified or solution box).
+#[derive(Clone, Debug)]
+pub struct SingularSet {
+    /// Complete, or the last limit met.
+    pub status: Status,
+    /// The boxes of all charts, minus those proven to belong to another chart.
+    pub boxes: Vec<SingularBox>,
+    /// Per box, its cluster.
+    pub labels: Vec<usize>,
+    /// Clusters by configuration part.
+    pub clusters: Vec<Cluster>,
+    /// Per chart, the solver's counters.
+    pub stats: Vec<SolveStats>,
+    /// Boxes dropped as duplicates owned by another chart.
+    pub dropped_other_chart: u64,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+impl SingularSet {
+    /// Clusters with a certified box.
+    pub fn certified_clusters(&self) -> usize {
+        self.clusters.iter().filter(|c| c.certified).count()
+    }
+}
