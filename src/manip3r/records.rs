@@ -33,7 +33,7 @@ pub struct Workspace {
 }
 
 impl Workspace {
-    /// `[radius, z]`, the order of `analysis::SingularityResult::workspace_names`.
+    /// `[radius, z]`, the order of `app::SingularityResult::workspace_names`.
     pub fn bounds(&self) -> [Bounds; 2] {
         [self.radius, self.z]
     }
