@@ -519,8 +519,8 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
             0 => String::new(),
             n => format!("{n} near-degenerate strips (undecided), "),
         },
-        report.status,
-        report.limit.map_or(String::new(), |l| format!(" ({l})")),
+        report.completeness.status(),
+        report.completeness.0.map_or(String::new(), |l| format!(" ({})", l.name())),
         report.stats.seconds
     )
     .ok();
@@ -588,7 +588,7 @@ fn collisions(args: CollisionsArgs) -> Result<()> {
         pct(s.free_area),
         report.undecided.len(),
         pct(s.undecided_area),
-        report.status,
+        report.completeness.status(),
         s.seconds
     )
     .ok();
@@ -612,7 +612,7 @@ fn ik(args: IkArgs) -> Result<()> {
     let report = found.report(&arm);
     let s = &found.solutions;
     let mut out = std::io::stdout().lock();
-    writeln!(out, "{}: {} solutions proven unique, {} clusters undecided, status {}", report.robot, s.unique.len(), s.clusters.len(), report.status).ok();
+    writeln!(out, "{}: {} solutions proven unique, {} clusters undecided, status {}", report.robot, s.unique.len(), s.clusters.len(), report.completeness.status()).ok();
     writeln!(out, "  chain: {}", arm.prepared.choice.reason).ok();
     writeln!(out, "  {}", found.limit_effect.text).ok();
     for sol in &report.solutions {

@@ -6,9 +6,9 @@
 //! conventions against each other and against Table 1.
 
 use linkspace::manip3r::{self, cusps, ik, select::ChainSpec, verdict, Chain3R, LoadOptions};
-use linkspace::search::Control;
+use linkspace::manip3r::report::Completeness;
 use linkspace::model::{urdf, JointKind, Mechanism};
-use linkspace::search::{Limits, Status};
+use linkspace::search::{Control, Incompleteness, Limits, Status};
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use std::f64::consts::FRAC_PI_2;
 
@@ -225,7 +225,7 @@ fn exact_geometry_on_a_truncated_robot_reports_near_degenerate_strips() {
         let v = verdict::decide(&p.mechanism, &chain, &run, &p.limits, &Control::with_limits(Limits::default()));
         assert_eq!((v.cuspidal, v.certified), (None, false), "{v:?}");
         let report = manip3r::report::SingularityReport::new(&chain, 1e-4, &run.cusps, run.nodes.as_ref(), run.seconds);
-        assert_eq!((report.status, report.limit), ("incomplete", Some("near_degenerate")));
+        assert_eq!(report.completeness, Completeness(Some(Incompleteness::NearDegenerate)));
         assert!(report.undecided.cusps.len() <= manip3r::report::MAX_LISTED);
         // The strips sit where the snapped robot has its internal-motion lines.
         let snapped = prepare(&xml, &LoadOptions::default()).expect("loads");
@@ -263,7 +263,7 @@ fn a_report_with_undecided_boxes_is_never_complete() {
     assert!(run.status.is_complete(), "no limit stops the cusp search on this arm");
     assert!(!run.cusps.undecided.is_empty(), "the crossing branches leave boxes the seed's system cannot decide");
     let report = manip3r::report::SingularityReport::new(&chain, 1e-4, &run.cusps, None, run.seconds);
-    assert_eq!((report.status, report.limit), ("incomplete", Some("undecided")));
+    assert_eq!(report.completeness, Completeness(Some(Incompleteness::Undecided)));
     assert_eq!(report.undecided_total[0], run.cusps.undecided.len());
 }
 

@@ -4,7 +4,7 @@
 //! result is the same as `linkspace solve --json` for the same input.
 //!
 //! Planar and spatial linkages also answer `singularities` with their singular sets
-//! (`problems::singular`: C-space, input and output, through `SingularSets`, the orchestration
+//! (`singular`: C-space, input and output, through `SingularSets`, the orchestration
 //! `linkspace loop-singularities` runs on the same model, so the boxes are those of its
 //! `--json`), and `classify` with a lower bound on the joint-space distance to the nearest
 //! singular configuration once those sets are complete.

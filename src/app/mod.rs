@@ -26,8 +26,7 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 use thiserror::Error;
 
-/// `[lower, upper]`
-pub type Bounds = [f64; 2];
+pub use crate::interval::Bounds;
 
 /// What kind of mechanism an analysis answers for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -359,7 +358,7 @@ pub struct SingularityResult {
     pub branches: Option<crate::manip3r::branches::SingularBranches>,
 }
 
-/// The singular sets of a closed-loop mechanism (`problems::singular`), as `linkspace
+/// The singular sets of a closed-loop mechanism (`singular`), as `linkspace
 /// loop-singularities --json` finds them for the same URDF, fixed joints and settings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LoopSingularities {

@@ -6,13 +6,11 @@ use super::drive::{drive, no_progress};
 use crate::search::Control;
 use super::motion::PI_UP;
 use super::Chain3R;
-use crate::interval::{interval, point};
+use crate::interval::{interval, point, Bounds};
 use crate::search::{Prune, Stats, Status, Step};
 use inari::Interval;
 use std::time::Instant;
 
-/// `[lower, upper]`
-pub type Bounds = [f64; 2];
 
 /// The singular-curve cover: cells of an `n` × `n` grid on [-π, π]² (slightly wider: the range
 /// of the searches) where det Df may vanish, and the regions between them.

@@ -18,7 +18,7 @@ pub(crate) fn bounds(x: Interval) -> Bounds {
 pub type Joints = BTreeMap<String, Bounds>;
 
 /// `joints` in the order of `names` (records keyed by name → the positional records of
-/// `analysis` and the ROS messages); a joint the record does not name is unbounded.
+/// `app` and the ROS messages); a joint the record does not name is unbounded.
 pub fn joints_over(joints: &Joints, names: &[String]) -> Vec<Bounds> {
     names.iter().map(|n| joints.get(n).copied().unwrap_or([f64::NEG_INFINITY, f64::INFINITY])).collect()
 }

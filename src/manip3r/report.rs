@@ -10,7 +10,7 @@ use super::ik::IkSolutions;
 use super::motion::Band;
 use super::nodes::NodeSearch;
 use inari::Interval;
-use crate::search::Status;
+use crate::search::{Incompleteness, Status};
 pub(crate) use super::records::{bounds, joints, workspace};
 pub use super::records::{joints_over, radius, Bounds, Joints, Workspace};
 use serde::Serialize;
@@ -155,33 +155,47 @@ impl From<&NodeSearch> for NodeStats {
     }
 }
 
-/// The one rule for "complete" of a singularity run, used by this report and by the ROS
-/// `SingularityReport` (`ros::convert`): complete means no limit stopped a search *and*
-/// nothing is undecided, i.e. no box or pair left at the precision, no cusp left without a
-/// uniqueness proof (`undecided` counts these) and no near-degenerate strip set aside
-/// (`near_degenerate`). The kernel's `Complete` says only that no limit stopped it.
-///
-/// Returns `None` when complete, else the word for the `limit` fields: the kernel's limit
-/// (`boxes`, `time`, `memory`, `cancelled`), else `near_degenerate`, else `undecided`.
-///
-/// # Examples
-///
-/// ```
-/// use linkspace::manip3r::report::incompleteness;
-/// use linkspace::search::{Limit, Status};
-/// assert_eq!(incompleteness(Status::Complete, 0, false), None);
-/// assert_eq!(incompleteness(Status::Complete, 3, false), Some("undecided"));
-/// assert_eq!(incompleteness(Status::Incomplete(Limit::Boxes), 3, true), Some("boxes"));
-/// ```
-pub fn incompleteness(status: Status, undecided: usize, near_degenerate: bool) -> Option<&'static str> {
-    limit_of(status).or(near_degenerate.then_some("near_degenerate")).or((undecided > 0).then_some("undecided"))
+/// Whether a report's answer is complete, written as its `status` (`complete` or `incomplete`)
+/// and, when incomplete, its `limit`: the kernel's limit that stopped a search (`boxes`, `time`,
+/// `memory`, `cancelled`), else `near_degenerate` (strips set aside), else `undecided` (boxes or
+/// pairs left at the precision, cusps without a uniqueness proof). `search::Incompleteness::of`
+/// is the one rule.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Completeness(pub Option<Incompleteness>);
+
+impl Completeness {
+    /// Complete: every cell decided, nothing left open.
+    pub const COMPLETE: Completeness = Completeness(None);
+
+    /// Of a run that left nothing else open: complete exactly when no limit stopped it.
+    pub fn of_run(status: Status) -> Self {
+        Completeness(Incompleteness::of(status, 0, false))
+    }
+
+    /// True when nothing is undecided.
+    pub fn is_complete(self) -> bool {
+        self.0.is_none()
+    }
+
+    /// `complete` or `incomplete`.
+    pub fn status(self) -> &'static str {
+        if self.is_complete() {
+            "complete"
+        } else {
+            "incomplete"
+        }
+    }
 }
 
-/// The name of the limit that stopped a run, for `limit` fields.
-fn limit_of(status: Status) -> Option<&'static str> {
-    match status {
-        Status::Complete => None,
-        Status::Incomplete(l) => Some(l.name()),
+impl Serialize for Completeness {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = serializer.serialize_map(None)?;
+        map.serialize_entry("status", self.status())?;
+        if let Some(why) = self.0 {
+            map.serialize_entry("limit", why.name())?;
+        }
+        map.end()
     }
 }
 
@@ -207,13 +221,9 @@ pub struct SingularityReport {
     pub tip_link: String,
     /// Settings.
     pub settings: Settings,
-    /// `complete` or `incomplete`.
-    pub status: &'static str,
-    /// Why the run is incomplete: the limit that stopped it (`boxes`, `time`, `memory`,
-    /// `cancelled`), else `near_degenerate` (strips set aside) or `undecided` (boxes or pairs
-    /// left at the precision).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub limit: Option<&'static str>,
+    /// `status` and, when incomplete, `limit` (why).
+    #[serde(flatten)]
+    pub completeness: Completeness,
     /// Certified cusps.
     pub cusps: Vec<CuspRecord>,
     /// Certified nodes (absent when not searched).
@@ -292,10 +302,10 @@ impl SingularityReport {
     /// Builds the report from a cusp search and an optional node search.
     pub fn new(chain: &Chain3R, precision: f64, cusps: &CuspSearch, nodes: Option<&NodeSearch>, seconds: f64) -> Self {
         let status = nodes.map_or(cusps.status, |n| cusps.status.and(n.status));
-        // Counted as `analysis` counts its uncertified records, for the one rule of `incompleteness`.
+        // Counted as `app` counts its uncertified records, for the one rule of `Incompleteness::of`.
         let undecided = cusps.undecided.len() + cusps.cusps.iter().filter(|c| !c.unique).count() + nodes.map_or(0, |n| n.undecided.len());
         let near = cusps.bands.iter().any(|b| b.near.is_some());
-        let limit = incompleteness(status, undecided, near);
+        let completeness = Completeness(Incompleteness::of(status, undecided, near));
         let internal_motions = cusps
             .bands
             .iter()
@@ -309,8 +319,7 @@ impl SingularityReport {
             joints: chain.joints.clone(),
             tip_link: chain.tip_link.clone(),
             settings: Settings { precision, nodes: nodes.is_some(), uncertainty: chain.uncertainty },
-            status: if limit.is_none() { "complete" } else { "incomplete" },
-            limit,
+            completeness,
             cusps: cusps.cusps.iter().map(|c| CuspRecord { joints: joints(chain, &c.theta), workspace: workspace(c.rho, c.z), unique: c.unique }).collect(),
             nodes: nodes.map(|n| {
                 n.nodes
@@ -341,13 +350,12 @@ impl SingularityReport {
     /// only reason for `incomplete` was undecided boxes, they are moved out of `undecided`
     /// (and cusp boxes without a uniqueness proof out of `cusps`) and the report is complete.
     pub fn explain(&mut self, attribution: super::branches::Attribution) {
-        let moves = attribution.explained && self.limit == Some("undecided") && self.undecided_total[1] == 0 && self.cusps.iter().all(|c| !c.unique);
+        let moves = attribution.explained && self.completeness == Completeness(Some(Incompleteness::Undecided)) && self.undecided_total[1] == 0 && self.cusps.iter().all(|c| !c.unique);
         if moves {
             self.undecided.cusps.clear();
             self.undecided_total[0] = 0;
             self.cusps.clear();
-            self.limit = None;
-            self.status = "complete";
+            self.completeness = Completeness::COMPLETE;
         }
         self.explained_undecided = Some(attribution);
     }
@@ -372,11 +380,10 @@ pub struct IkReport {
     pub robot: String,
     /// The query: (radius, z) in the first joint's frame, or (x, y, z) in the root frame.
     pub point: Vec<f64>,
-    /// `complete` or `incomplete`.
-    pub status: &'static str,
-    /// The limit that stopped an incomplete run: `boxes`, `time`, `memory` or `cancelled`.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub limit: Option<&'static str>,
+    /// `status` and, when incomplete, `limit`: the limit that stopped the run (`boxes`, `time`,
+    /// `memory` or `cancelled`).
+    #[serde(flatten)]
+    pub completeness: Completeness,
     /// Solutions, unique ones first.
     pub solutions: Vec<IkRecord>,
     /// Boxes processed.
@@ -401,7 +408,7 @@ impl IkReport {
         };
         let mut solutions: Vec<IkRecord> = s.unique.iter().map(|b| IkRecord { joints: record(b), unique: true, boxes: 0 }).collect();
         solutions.extend(s.clusters.iter().map(|c| IkRecord { joints: record(&c.hull), unique: false, boxes: c.boxes }));
-        IkReport { robot: chain.name.clone(), point, status: if s.status.is_complete() { "complete" } else { "incomplete" }, limit: limit_of(s.status), solutions, processed: s.stats.processed, reading: None }
+        IkReport { robot: chain.name.clone(), point, completeness: Completeness::of_run(s.status), solutions, processed: s.stats.processed, reading: None }
     }
 }
 
@@ -447,11 +454,10 @@ pub struct CollisionReport {
     pub bodies: Vec<BodyRecord>,
     /// The pairs checked, by body name.
     pub pairs: Vec<[String; 2]>,
-    /// `complete` or `incomplete`.
-    pub status: &'static str,
-    /// The limit that stopped an incomplete run: `boxes`, `time`, `memory` or `cancelled`.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub limit: Option<&'static str>,
+    /// `status` and, when incomplete, `limit`: the limit that stopped the run (`boxes`, `time`,
+    /// `memory` or `cancelled`).
+    #[serde(flatten)]
+    pub completeness: Completeness,
     /// Boxes where a pair collides everywhere.
     pub colliding: Vec<CollidingRecord>,
     /// Boxes where no pair collides anywhere.
@@ -494,8 +500,7 @@ impl CollisionReport {
             precision,
             bodies: capsules.iter().map(|c| BodyRecord { name: c.name.clone(), link: c.link.clone(), radius: c.radius, segment: c.segment }).collect(),
             pairs: (0..scene.pairs().len()).map(name).collect(),
-            status: if set.status.is_complete() { "complete" } else { "incomplete" },
-            limit: limit_of(set.status),
+            completeness: Completeness::of_run(set.status),
             colliding: set.colliding.iter().map(|c| CollidingRecord { joints: joints(&c.theta), pair: name(c.pair) }).collect(),
             free: set.free.iter().map(|b| BoxRecord { joints: joints(b) }).collect(),
             undecided: set.undecided.iter().map(|b| BoxRecord { joints: joints(b) }).collect(),

@@ -183,7 +183,7 @@ fn intervals(b: &[Bounds]) -> Vec<msgs::Interval> {
 pub fn singularity_report(r: &SingularityResult, run_id: u64) -> SingularityReport {
     // Near-degenerate strips travel as undecided internal-motion boxes.
     let near = r.internal_motions.boxes.iter().any(|b| b.status == BoxStatus::Undecided);
-    let limit = crate::manip3r::report::incompleteness(r.status, r.undecided(), near);
+    let limit = Incompleteness::of(r.status, r.undecided(), near);
     SingularityReport {
         header: header(&joint_frame(&r.mechanism)),
         mechanism: r.mechanism.clone(),
@@ -203,7 +203,7 @@ pub fn singularity_report(r: &SingularityResult, run_id: u64) -> SingularityRepo
         // Complete means nothing undecided: the CLI report's rule, one function.
         complete: limit.is_none(),
         precision: r.query.precision,
-        limit: limit.unwrap_or_default().to_string(),
+        limit: limit.map_or("", Incompleteness::name).to_string(),
         set_kinds: r.loops.iter().flat_map(|l| &l.sets).map(|s| s.kind.to_string()).collect(),
         sets: r.loops.iter().flat_map(|l| &l.sets).map(|s| box_set(&s.boxes, run_id)).collect(),
         set_proven: r.loops.iter().flat_map(|l| &l.sets).map(|s| s.proven.min(u32::MAX as usize) as u32).collect(),
@@ -320,7 +320,7 @@ fn crossing_set(r: &SingularityResult, b: Option<&SingularBranches>, run_id: u64
     if b.is_some_and(|b| b.crossings.is_none()) {
         // Existence of crossings not decided everywhere: incomplete, as a run with boxes left
         // undecided.
-        (out.status, out.limit) = (msgs::SET_INCOMPLETE, "undecided".into());
+        (out.status, out.limit) = (msgs::SET_INCOMPLETE, Incompleteness::Undecided.name().into());
     }
     out
 }
