@@ -231,7 +231,8 @@ pub fn serve(mut args: ServeArgs) -> Result<()> {
         republish,
         robot_description_topic: args.robot_description_topic,
         rosout,
-    })
+    })?;
+    Ok(())
 }
 
 /// What `--ros-args` asked for (the ROS 2 command-line grammar, the parts a node honours).

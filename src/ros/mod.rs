@@ -188,10 +188,17 @@ pub(crate) fn load(config: &ServeConfig) -> Result<Vec<Loaded>> {
     Ok(loaded)
 }
 
+/// Why the node could not start, or stopped: one line, the context chain outermost first
+/// ("loading robot.urdf: ...", "joining DDS domain 7: ..."). Opaque: the middleware's own
+/// error types stay inside this module.
+#[derive(Debug, thiserror::Error)]
+#[error("{0:#}")]
+pub struct ServeError(anyhow::Error);
+
 /// Runs the node until the process is stopped.
-pub fn serve(config: ServeConfig) -> Result<()> {
-    let loaded = load(&config)?;
-    node::run(config, loaded)
+pub fn serve(config: ServeConfig) -> Result<(), ServeError> {
+    let loaded = load(&config).map_err(ServeError)?;
+    node::run(config, loaded).map_err(ServeError)
 }
 
 #[cfg(test)]
