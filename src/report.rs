@@ -10,6 +10,7 @@ use crate::system::{EquationSystem, VarRole};
 use serde::Serialize;
 
 pub mod distances;
+pub(crate) mod kernel;
 pub mod singular;
 use std::collections::BTreeMap;
 
@@ -55,6 +56,7 @@ pub struct VariableInfo {
     /// Name, e.g. `cos_link7`.
     pub name: String,
     /// `primary` or `derived`.
+    #[serde(with = "kernel::VarRoleDef")]
     pub role: VarRole,
 }
 
@@ -75,9 +77,10 @@ pub struct SolveReport {
     /// Joints fixed with `--fix`.
     pub fixed_joints: BTreeMap<String, f64>,
     /// The solver settings.
+    #[serde(with = "kernel::SolverSettingsDef")]
     pub settings: SolverSettings,
     /// `complete`, or `incomplete` with the limit.
-    #[serde(flatten)]
+    #[serde(flatten, with = "kernel::StatusDef")]
     pub status: Status,
     /// The system's variables, in box order.
     pub variables: Vec<VariableInfo>,
@@ -88,6 +91,7 @@ pub struct SolveReport {
     /// Boxes left undecided by a limit (empty when complete).
     pub undecided: Vec<BoxRecord>,
     /// Counters and time.
+    #[serde(with = "kernel::SolveStatsDef")]
     pub stats: Stats,
 }
 

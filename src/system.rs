@@ -17,8 +17,7 @@ pub mod multilinear;
 pub type VarId = usize;
 
 /// Whether the solver branches on a variable and measures box size on it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum VarRole {
     /// Independent unknown: bisected, and counted in the box size compared with sigma.
     Primary,

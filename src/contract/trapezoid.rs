@@ -29,8 +29,7 @@ use crate::system::VarId;
 use thiserror::Error;
 
 /// How the vertical sides of the trapezoids are bounded.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FaceBounds {
     /// From the control points (the corner values of a multilinear equation): tight, `O(k·2^k)`.
     Corners,

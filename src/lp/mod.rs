@@ -61,7 +61,7 @@ pub enum LpOutcome {
 }
 
 /// The LP solver that proposes multipliers to `safe_bound` (soundness never depends on it).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum LpBackend {
     /// The dense bounded-variable simplex of this module, warm-started across objectives.
     #[default]
@@ -71,7 +71,7 @@ pub enum LpBackend {
 }
 
 /// Counters for statistics.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct LpCounters {
     /// Linear programs solved.
     pub solved: u64,

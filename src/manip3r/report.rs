@@ -268,6 +268,7 @@ pub struct Rounding {
     /// Angle tolerance (radians).
     pub tolerance: f64,
     /// Every value changed.
+    #[serde(serialize_with = "crate::report::kernel::snaps")]
     pub snaps: Vec<crate::model::rounding::Snap>,
 }
 

@@ -20,7 +20,6 @@
 
 use super::{JointKind, Mechanism};
 use nalgebra::{UnitQuaternion, Vector3};
-use serde::Serialize;
 use std::f64::consts::FRAC_PI_2;
 
 /// Angles (radians) within this of a quarter-turn multiple are snapped. 1e-5 covers every
@@ -29,7 +28,7 @@ use std::f64::consts::FRAC_PI_2;
 pub const ANGLE_TOLERANCE: f64 = 1e-5;
 
 /// One value the policy changed.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Snap {
     /// The joint's name.
     pub joint: String,

@@ -62,15 +62,17 @@ pub struct DistancesReport {
     /// Formulation and whether redundant equations were added.
     pub build: BuildOptions,
     /// How trapezoid sides were bounded.
+    #[serde(with = "super::kernel::FaceBoundsDef")]
     pub faces: FaceBounds,
     /// The equations, one label each.
     pub equations: Vec<String>,
     /// The system's variables, in box order.
     pub variables: Vec<String>,
     /// Solver settings.
+    #[serde(with = "super::kernel::SolverSettingsDef")]
     pub settings: SolverSettings,
     /// `complete`, or `incomplete` with the limit.
-    #[serde(flatten)]
+    #[serde(flatten, with = "super::kernel::StatusDef")]
     pub status: Status,
     /// Solution boxes.
     pub solutions: Vec<DistanceRecord>,
@@ -93,6 +95,7 @@ pub struct DistancesReport {
     /// Boxes left undecided by a limit.
     pub undecided: Vec<DistanceRecord>,
     /// Counters and time.
+    #[serde(with = "super::kernel::SolveStatsDef")]
     pub stats: Stats,
 }
 

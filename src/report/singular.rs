@@ -33,9 +33,10 @@ pub struct SingularReport {
     /// Charts of the projective sphere of multipliers searched.
     pub charts: usize,
     /// The solver settings (max_boxes per chart, timeout for all).
+    #[serde(with = "super::kernel::SolverSettingsDef")]
     pub settings: SolverSettings,
     /// `complete`, or `incomplete` with the limit.
-    #[serde(flatten)]
+    #[serde(flatten, with = "super::kernel::StatusDef")]
     pub status: Status,
     /// Counts.
     pub summary: Summary,
@@ -44,6 +45,7 @@ pub struct SingularReport {
     /// Every box.
     pub boxes: Vec<SingularBoxRecord>,
     /// Per chart, the solver's counters.
+    #[serde(serialize_with = "super::kernel::solve_stats_list")]
     pub stats: Vec<SolveStats>,
     /// Wall-clock seconds, all charts.
     pub seconds: f64,

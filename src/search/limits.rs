@@ -25,8 +25,7 @@ impl Default for Limits {
 }
 
 /// Why a run stopped early.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Limit {
     /// `max_cells` cells were processed.
     Boxes,
@@ -54,8 +53,7 @@ impl Limit {
 }
 
 /// How a run ended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case", tag = "status", content = "limit")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Status {
     /// Every cell was decided: the results enclose everything sought in the start cell.
     Complete,
@@ -123,7 +121,7 @@ impl Incompleteness {
 }
 
 /// A snapshot of a run's progress.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Progress {
     /// Cells processed so far.
     pub processed: u64,

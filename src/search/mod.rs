@@ -114,7 +114,7 @@ pub trait Sink<C, F> {
 }
 
 /// Counters of a run, the same for every search.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Stats {
     /// Cells processed.
     pub processed: u64,

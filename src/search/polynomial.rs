@@ -24,8 +24,7 @@ use std::time::Instant;
 use thiserror::Error;
 
 /// The tag of a reported box.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BoxStatus {
     /// No wider than sigma and not proven empty.
     Solution,
@@ -75,7 +74,7 @@ impl BoxSink for Collect {
 }
 
 /// Counters of a run of the polynomial solver (the kernel's `Stats` in the names of seed 000).
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct SolveStats {
     /// Boxes taken from the pool.
     pub processed: u64,

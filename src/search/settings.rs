@@ -5,7 +5,7 @@ use std::time::Duration;
 use thiserror::Error;
 
 /// What the driver is allowed to do, and when a box counts as a solution.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct SolverSettings {
     /// A box whose primary components are all at most this wide is a solution box. Default 1e-3.
     pub sigma: f64,
@@ -15,7 +15,6 @@ pub struct SolverSettings {
     /// Stop after processing this many boxes (the run ends `incomplete`). Default 1,000,000.
     pub max_boxes: u64,
     /// Stop after this much wall-clock time (the run ends `incomplete`). Default: none.
-    #[serde(serialize_with = "seconds")]
     pub timeout: Option<Duration>,
     /// Stop before pending boxes hold more than this many bytes (the run ends `incomplete`).
     /// Default 2 GiB.
@@ -36,13 +35,6 @@ pub struct SolverSettings {
     /// [1, 40] next to cosines spanning [−1, 1] is split as often, relative to its range, as
     /// they are. Default false: widths are absolute (every primary in the same unit).
     pub scaled_widths: bool,
-}
-
-fn seconds<S: serde::Serializer>(d: &Option<Duration>, s: S) -> Result<S::Ok, S::Error> {
-    match d {
-        Some(d) => s.serialize_some(&d.as_secs_f64()),
-        None => s.serialize_none(),
-    }
 }
 
 impl Default for SolverSettings {
