@@ -152,3 +152,19 @@ fn builders_never_solve() {
         assert!(problems.is_empty(), "a builder runs a search ({call}):\n{}", problems.join("\n"));
     }
 }
+
+#[test]
+fn the_kernel_and_the_model_know_no_serde() {
+    for dir in ["interval", "system", "contract", "lp", "search", "model"] {
+        let path = src().join(dir);
+        let files = if path.is_dir() { files(&path) } else { vec![src().join(format!("{dir}.rs"))] };
+        let mut all = files;
+        if src().join(format!("{dir}.rs")).is_file() {
+            all.push(src().join(format!("{dir}.rs")));
+        }
+        for f in all {
+            let hits: Vec<String> = code_lines(&f).into_iter().filter(|(_, l)| l.contains("serde")).map(|(n, l)| format!("{}:{n}: {}", f.display(), l.trim())).collect();
+            assert!(hits.is_empty(), "serde in `{dir}` (the JSON writers in `report` say how its values are written):\n{}", hits.join("\n"));
+        }
+    }
+}
