@@ -20,7 +20,7 @@ use linkspace::model::urdf;
 use linkspace::problems::singular::{Coordinates, Output, SingularKind, SingularProblem};
 use linkspace::singular::sets::SingularSets;
 use linkspace::singular::SingularSet;
-use linkspace::problems::{Linkage, LinkageProblem, SpatialProblem};
+use linkspace::problems::{Linkage, LinkageProblem, Model, SpatialProblem};
 use linkspace::search::{SolverSettings, Status};
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 use std::f64::consts::PI;
@@ -35,7 +35,7 @@ fn run(xml: &str, kind: SingularKind, actuated: &[&str], output: Option<Output>)
     let m = urdf::parse(xml).expect("URDF parses");
     let actuated: Vec<String> = actuated.iter().map(|s| s.to_string()).collect();
     let sets = SingularSets::new(&m, &[], &[kind], &actuated, output).expect("builds");
-    assert_eq!(sets.model, "spatial", "{}: the model `solve --model auto` picks", m.name);
+    assert_eq!(sets.model, Model::Spatial, "{}: the model `solve --model auto` picks", m.name);
     let set = sets.solve(&settings(), &AtomicBool::new(false)).expect("valid settings").remove(0);
     (sets.problems.into_iter().next().expect("one problem"), set)
 }
@@ -222,7 +222,7 @@ fn planar_four_bar_through_the_spatial_model_has_the_planar_dead_centres() {
     let output = Some(Output::Joints(vec!["rocker_joint".into()]));
     let planar = SingularProblem::with_linkage(LinkageProblem::new(&m, &[], &[]).expect("planar"), SingularKind::Output, &actuated, output.clone()).expect("builds");
     let spatial = SingularProblem::with_linkage(SpatialProblem::new(&m, &[], &[]).expect("spatial"), SingularKind::Output, &actuated, output).expect("builds");
-    assert_eq!((planar.model(), spatial.model()), ("planar", "spatial"));
+    assert_eq!((planar.model(), spatial.model()), (Model::Planar, Model::Spatial));
     let cancel = AtomicBool::new(false);
     let a = planar.solve(&settings(), &cancel).expect("valid");
     let b = spatial.solve(&settings(), &cancel).expect("valid");

@@ -6,6 +6,7 @@ use super::{parse_fix, LimitArgs};
 use anyhow::{bail, Context, Result};
 use linkspace::model::urdf;
 use linkspace::problems::singular::{Output, SingularKind};
+use linkspace::problems::Model;
 use linkspace::singular::image;
 use linkspace::singular::sets::{all_kinds, Actuation, SingularSets};
 use linkspace::report::singular::SingularReport;
@@ -109,7 +110,7 @@ pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
     let solved = sets.solve(&settings, &AtomicBool::new(false))?;
     let mut reports = Vec::new();
     let mut out = std::io::stdout().lock();
-    if sets.model == "spatial" {
+    if sets.model == Model::Spatial {
         writeln!(out, "{}: spatial model ({})", mechanism.name, sets.model_reason).ok();
     }
     for (p, set) in sets.problems.iter().zip(&solved) {

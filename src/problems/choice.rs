@@ -18,6 +18,25 @@ pub enum ModelChoice {
     Spatial,
 }
 
+/// The builder a linkage was built with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Model {
+    /// One angle per rigid group, one vector equation per loop.
+    Planar,
+    /// Rotation matrices of linear forms, closures as linear rows.
+    Spatial,
+}
+
+impl Model {
+    /// `planar` or `spatial`, as reports write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Model::Planar => "planar",
+            Model::Spatial => "spatial",
+        }
+    }
+}
+
 /// A traced point: link, coordinates in the link's frame, and its name as given (`LINK@X,Y[,Z]`).
 pub type TracedPoint = (String, [f64; 3], String);
 

@@ -12,7 +12,7 @@ pub mod spatial;
 pub(crate) mod stated;
 
 pub use cayley_menger::{CayleyMenger, DistanceError, DistanceProblem};
-pub use choice::{Linkage, ModelChoice};
+pub use choice::{Linkage, Model, ModelChoice};
 pub use linkage::{LinkageError, LinkageProblem};
 pub use platform::{PlatformError, PlatformProblem};
 pub use spatial::SpatialProblem;

@@ -29,7 +29,7 @@
 //! each chart.
 
 use super::linkage::{JointCoordinate, LinkageError, LinkageProblem};
-use super::Linkage;
+use super::{Linkage, Model};
 use crate::interval::{interval, point, Interval, IntervalBox};
 use crate::model::Mechanism;
 use crate::search::{SolveError, Solver, SolverSettings};
@@ -191,8 +191,8 @@ pub trait Coordinates {
     fn system(&self) -> &EquationSystem;
     /// Robot name.
     fn name(&self) -> &str;
-    /// `planar` or `spatial`.
-    fn model(&self) -> &'static str;
+    /// The builder of the configuration system.
+    fn model(&self) -> Model;
     /// Joints fixed by the user, with their values.
     fn fixed_joints(&self) -> &[(String, f64)];
     /// Free joint values over a box of the configuration variables (radians or metres).
@@ -219,8 +219,8 @@ impl Coordinates for LinkageProblem {
         &self.name
     }
 
-    fn model(&self) -> &'static str {
-        "planar"
+    fn model(&self) -> Model {
+        Model::Planar
     }
 
     fn fixed_joints(&self) -> &[(String, f64)] {
@@ -344,7 +344,7 @@ impl Coordinates for Linkage {
         }
     }
 
-    fn model(&self) -> &'static str {
+    fn model(&self) -> Model {
         match self {
             Linkage::Planar(p) => p.model(),
             Linkage::Spatial(p, _) => p.model(),
@@ -437,8 +437,8 @@ impl<L: Coordinates> SingularProblem<L> {
         self.linkage.joint_values(&IntervalBox::new(b.dims[..self.base_vars].to_vec()))
     }
 
-    /// `planar` or `spatial`: the model the linkage was built with.
-    pub fn model(&self) -> &'static str {
+    /// The model the linkage was built with.
+    pub fn model(&self) -> Model {
         self.linkage.model()
     }
 }

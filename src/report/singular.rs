@@ -158,7 +158,7 @@ impl SingularReport {
         };
         SingularReport {
             mechanism: p.linkage.name().to_string(),
-            model: p.model(),
+            model: p.model().name(),
             kind: p.kind.name(),
             actuated: p.actuated.clone(),
             output,

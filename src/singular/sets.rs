@@ -15,7 +15,7 @@ use super::SingularSet;
 use crate::model::Mechanism;
 use crate::problems::singular::velocity::point_label;
 use crate::problems::singular::{Output, SingularError, SingularKind, SingularProblem};
-use crate::problems::{Linkage, ModelChoice};
+use crate::problems::{Linkage, Model, ModelChoice};
 use crate::search::{SolveError, SolverSettings};
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
@@ -67,8 +67,8 @@ pub fn all_kinds(actuated: &[String]) -> Vec<SingularKind> {
 pub struct SingularSets {
     /// One per kind.
     pub problems: Vec<SingularProblem<Linkage>>,
-    /// `planar` or `spatial`.
-    pub model: &'static str,
+    /// The builder every set was built with.
+    pub model: Model,
     /// Why the spatial model was chosen; empty for planar linkages.
     pub model_reason: String,
 }
@@ -89,8 +89,8 @@ impl SingularSets {
         };
         let problems: Vec<SingularProblem<Linkage>> = kinds.iter().map(|&k| build(k)).collect::<Result<_, _>>()?;
         let (model, model_reason) = match problems.first().map(|p| &p.linkage) {
-            Some(Linkage::Spatial(_, why)) => ("spatial", why.clone()),
-            _ => ("planar", String::new()),
+            Some(Linkage::Spatial(_, why)) => (Model::Spatial, why.clone()),
+            _ => (Model::Planar, String::new()),
         };
         Ok(Self { problems, model, model_reason })
     }

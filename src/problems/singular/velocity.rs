@@ -25,6 +25,7 @@
 //! coordinate. Axis closures written with two rows are widened to three at this level
 //! (`Faithful`), so neither construction inherits the two rows' rank loss.
 
+use crate::problems::Model;
 use super::{merge, Augmented, Coordinates, Output, SingularError, SingularKind, CHART_REACH};
 use crate::interval::{interval, point, Interval, IntervalBox};
 use crate::problems::spatial::{AxisVelocity, JointMotion, LinearForm, SpatialProblem};
@@ -401,8 +402,8 @@ impl Coordinates for SpatialProblem {
         &self.name
     }
 
-    fn model(&self) -> &'static str {
-        "spatial"
+    fn model(&self) -> Model {
+        Model::Spatial
     }
 
     fn fixed_joints(&self) -> &[(String, f64)] {
