@@ -147,8 +147,8 @@ pub fn components_counted(boxes: &[IntervalBox]) -> (Vec<usize>, usize, u64) {
 }
 
 /// The all-pairs definition of `components`, O(n²): the reference the tests hold the sweep to.
-#[doc(hidden)]
-pub fn components_all_pairs(boxes: &[IntervalBox]) -> (Vec<usize>, usize) {
+#[cfg(test)]
+fn components_all_pairs(boxes: &[IntervalBox]) -> (Vec<usize>, usize) {
     components_by(boxes.len(), |i, j| boxes[i].intersects(&boxes[j]))
 }
 

@@ -431,8 +431,9 @@ type Ends = ([V3; 2], [[f64; 3]; 2]);
 impl Prune for CollisionPrune<'_> {
     type Cell = CollisionCell;
     type Found = (Order, Class);
+    type Reason = crate::search::NoDiscard;
 
-    fn process(&mut self, cell: CollisionCell) -> Step<CollisionCell, (Order, Class)> {
+    fn process(&mut self, cell: CollisionCell) -> Step<CollisionCell, (Order, Class), crate::search::NoDiscard> {
         let scene = self.scene;
         let b = cell.b;
         let e2 = [trig::cos(b[0]), trig::sin(b[0]), point(1.0)];

@@ -61,15 +61,32 @@ struct CoverPrune<'a> {
     lines: &'a Lines,
 }
 
+/// Why the singular-curve cover discards a cell.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CoverDiscard {
+    /// det Df ≠ 0 on it.
+    Regular,
+}
+
+impl crate::search::Reason for CoverDiscard {
+    fn name(self) -> &'static str {
+        match self {
+            CoverDiscard::Regular => "regular",
+        }
+    }
+}
+
+
 impl Prune for CoverPrune<'_> {
     type Cell = QuadCell;
     type Found = (usize, usize);
+    type Reason = CoverDiscard;
 
-    fn process(&mut self, c: QuadCell) -> Step<QuadCell, (usize, usize)> {
+    fn process(&mut self, c: QuadCell) -> Step<QuadCell, (usize, usize), CoverDiscard> {
         let [a, b] = self.lines.span(c.i, c.s);
         let [d, e] = self.lines.span(c.j, c.s);
         if !det_may_vanish(self.chain, [interval(a, b), interval(d, e)]) {
-            return Step::Discard("regular");
+            return Step::Discard(CoverDiscard::Regular);
         }
         if c.s == 1 {
             return Step::Found((c.i, c.j));

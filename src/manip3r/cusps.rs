@@ -285,22 +285,48 @@ fn full_area() -> f64 {
     (2.0 * motion::PI_UP) * (2.0 * motion::PI_UP)
 }
 
+/// Why the cusp search discards a box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CuspDiscard {
+    /// It lies in an internal-motion strip (reported with the strip).
+    InStrips,
+    /// det Df ≠ 0 on it.
+    Regular,
+    /// A row of system (2) ≠ 0 on it.
+    NotTangent,
+    /// Krawczyk proves it holds no zero.
+    KrawczykEmpty,
+}
+
+impl crate::search::Reason for CuspDiscard {
+    fn name(self) -> &'static str {
+        match self {
+            CuspDiscard::InStrips => "in_strips",
+            CuspDiscard::Regular => "regular",
+            CuspDiscard::NotTangent => "not_tangent",
+            CuspDiscard::KrawczykEmpty => "krawczyk_empty",
+        }
+    }
+}
+
+
 impl Prune for CuspPrune<'_> {
     type Cell = CuspCell;
     type Found = CuspFound;
+    type Reason = CuspDiscard;
 
-    fn process(&mut self, cell: CuspCell) -> Step<CuspCell, CuspFound> {
+    fn process(&mut self, cell: CuspCell) -> Step<CuspCell, CuspFound, CuspDiscard> {
         let (chain, eps) = (self.chain, self.eps);
         let b = cell.theta;
         if self.bands.iter().any(|band| band.holds(b[1])) {
-            return Step::Discard("in_strips");
+            return Step::Discard(CuspDiscard::InStrips);
         }
         let e = evaluate(chain, b);
         if !e.det.contains(0.0) {
-            return Step::Discard("regular");
+            return Step::Discard(CuspDiscard::Regular);
         }
         if !e.g[0].contains(0.0) || !e.g[1].contains(0.0) {
-            return Step::Discard("not_tangent");
+            return Step::Discard(CuspDiscard::NotTangent);
         }
         let grad_det_ok = excludes_zero(&e.grad_det);
         let row = (0..2).filter(|&k| excludes_zero(&e.df[k])).max_by(|&i, &j| {
@@ -312,7 +338,7 @@ impl Prune for CuspPrune<'_> {
         if self.method == Method::Krawczyk {
             if let Some(k) = row {
                 match krawczyk_cusp(&b, &e, k) {
-                    K::Empty => return Step::Discard("krawczyk_empty"),
+                    K::Empty => return Step::Discard(CuspDiscard::KrawczykEmpty),
                     K::Unique(inner) if grad_det_ok => return found(refine(chain, inner, k, eps), Proof::Krawczyk),
                     K::Unique(_) if small => return Step::Undecided(cell, GRAD_DET_MAY_VANISH),
                     K::Contracted(k_box) if small && grad_det_ok && chain.uncertainty > 0.0 => {

@@ -72,11 +72,31 @@ struct IkPrune<'a> {
     precision: f64,
 }
 
+/// Why the inverse-kinematics search discards a box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IkDiscard {
+    /// Its image misses the target.
+    NoSolution,
+    /// Krawczyk proves it holds no solution.
+    KrawczykEmpty,
+}
+
+impl crate::search::Reason for IkDiscard {
+    fn name(self) -> &'static str {
+        match self {
+            IkDiscard::NoSolution => "no_solution",
+            IkDiscard::KrawczykEmpty => "krawczyk_empty",
+        }
+    }
+}
+
+
 impl Prune for IkPrune<'_> {
     type Cell = IkCell;
     type Found = (Order, [Interval; 2]);
+    type Reason = IkDiscard;
 
-    fn process(&mut self, cell: IkCell) -> Step<IkCell, (Order, [Interval; 2])> {
+    fn process(&mut self, cell: IkCell) -> Step<IkCell, (Order, [Interval; 2]), IkDiscard> {
         let (chain, target, precision) = (self.chain, self.target, self.precision);
         let b = cell.b;
         let m = [b[0].mid(), b[1].mid()];
@@ -96,10 +116,10 @@ impl Prune for IkPrune<'_> {
             jac[k] = g;
         }
         if empty {
-            return Step::Discard("no_solution");
+            return Step::Discard(IkDiscard::NoSolution);
         }
         match krawczyk::step_array(&b, &m, &fm, &jac) {
-            K::Empty => return Step::Discard("krawczyk_empty"),
+            K::Empty => return Step::Discard(IkDiscard::KrawczykEmpty),
             K::Unique(k) => {
                 let k = krawczyk::tighten(k, precision, |k| {
                     let mk = [k[0].mid(), k[1].mid()];

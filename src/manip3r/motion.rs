@@ -77,8 +77,9 @@ struct StripPrune<'a> {
 impl Prune for StripPrune<'_> {
     type Cell = (Interval, Order);
     type Found = (Order, (Interval, bool, Option<f64>));
+    type Reason = crate::search::NoDiscard;
 
-    fn process(&mut self, (t, order): (Interval, Order)) -> Step<Self::Cell, Self::Found> {
+    fn process(&mut self, (t, order): (Interval, Order)) -> Step<Self::Cell, Self::Found, crate::search::NoDiscard> {
         let off = self.chain.off_axis2(t);
         let possible = off.iter().all(|c| c.contains(0.0));
         // May the point come within `near` of the axis (each component's smallest magnitude)?

@@ -442,29 +442,61 @@ struct NodePrune<'t, 'a, 'r> {
     _boxes: std::marker::PhantomData<&'r TreeBox>,
 }
 
+/// Why the node search discards a pair of boxes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NodeDiscard {
+    /// det Df ≠ 0 on one of the boxes.
+    Regular,
+    /// A box lies in an internal-motion strip.
+    InStrips,
+    /// Their images are disjoint.
+    Apart,
+    /// A cusp-neighbourhood certificate excludes a node there.
+    NearCusp,
+    /// The mean-value injectivity certificate holds on them.
+    Injective,
+    /// Krawczyk proves the pair holds no node.
+    KrawczykEmpty,
+}
+
+impl crate::search::Reason for NodeDiscard {
+    fn name(self) -> &'static str {
+        match self {
+            NodeDiscard::Regular => "regular",
+            NodeDiscard::InStrips => "in_strips",
+            NodeDiscard::Apart => "apart",
+            NodeDiscard::NearCusp => "near_cusp",
+            NodeDiscard::Injective => "injective",
+            NodeDiscard::KrawczykEmpty => "krawczyk_empty",
+        }
+    }
+}
+
+
 impl<'r> Prune for NodePrune<'_, '_, 'r> {
     type Cell = NodeCell<'r>;
     type Found = NodeFound;
+    type Reason = NodeDiscard;
 
-    fn process(&mut self, cell: NodeCell<'r>) -> Step<NodeCell<'r>, NodeFound> {
+    fn process(&mut self, cell: NodeCell<'r>) -> Step<NodeCell<'r>, NodeFound, NodeDiscard> {
         let tree = self.tree;
         let (chain, eps) = (tree.chain, tree.eps);
         let (p, q) = (cell.p, cell.q);
         let same = std::ptr::eq(p, q);
         if !p.singular || !q.singular {
-            return Step::Discard("regular");
+            return Step::Discard(NodeDiscard::Regular);
         }
         if p.in_strip || q.in_strip {
-            return Step::Discard("in_strips");
+            return Step::Discard(NodeDiscard::InStrips);
         }
         if (0..2).any(|k| p.eval.f[k].disjoint(q.eval.f[k])) {
-            return Step::Discard("apart");
+            return Step::Discard(NodeDiscard::Apart);
         }
         let (pb, qb) = (p.b, q.b);
         let near = nearest_copy(&pb, &qb);
         let hull = [pb[0].convex_hull(near[0]), pb[1].convex_hull(near[1])];
         if tree.regions.iter().any(|u| contains(u, &hull)) {
-            return Step::Discard("near_cusp");
+            return Step::Discard(NodeDiscard::NearCusp);
         }
         let disjoint = !same && !meet_on_torus(&pb, &qb);
         // The smallest tree box holding both boxes holds their hull too (unless the hull goes
@@ -490,13 +522,13 @@ impl<'r> Prune for NodePrune<'_, '_, 'r> {
         // Far pairs first meet Krawczyk, which is cheap on cached evaluations; near ones the
         // injectivity certificate, for which Krawczyk cannot work (the diagonal is a curve of zeros).
         if !disjoint && injective() {
-            return Step::Discard("injective");
+            return Step::Discard(NodeDiscard::Injective);
         }
         // Krawczyk only below a width: on the bundled robots it never concluded on boxes a
         // radian wide or more (thousands of calls on robot f), as its linearisation is too loose.
         if disjoint && width(&pb).max(width(&qb)) < KRAWCZYK_WIDTH {
             match krawczyk_node(&pb, &p.eval, &qb, &q.eval) {
-                K::Empty => return Step::Discard("krawczyk_empty"),
+                K::Empty => return Step::Discard(NodeDiscard::KrawczykEmpty),
                 K::Unique(k) => {
                     let (a, b) = refine(chain, [k[0], k[1]], [k[2], k[3]], eps);
                     let (ja, jb) = (chain.jets(a, 0), chain.jets(b, 0));
@@ -506,7 +538,7 @@ impl<'r> Prune for NodePrune<'_, '_, 'r> {
                 _ => {}
             }
             if width(&hull) < 0.5 && injective() {
-                return Step::Discard("injective");
+                return Step::Discard(NodeDiscard::Injective);
             }
         }
         let (wp, wq) = (width(&pb), width(&qb));

@@ -5,10 +5,10 @@
 //! and z (along the first axis, from the first joint's origin).
 
 use super::chain::Chain3R;
-use super::cusps::{CuspSearch, Reason};
+use super::cusps::{CuspDiscard, CuspSearch, Reason};
 use super::ik::IkSolutions;
 use super::motion::Band;
-use super::nodes::NodeSearch;
+use super::nodes::{NodeDiscard, NodeSearch};
 use inari::Interval;
 use crate::search::{Incompleteness, Status};
 pub(crate) use super::records::{bounds, joints, workspace};
@@ -107,19 +107,18 @@ pub struct CuspStats {
     pub seconds: f64,
 }
 
-/// A report's counters from a search: the fields listed as discard reasons are read from the
-/// kernel's per-reason counts under their own names (a field is named after its reason, so
-/// the two cannot drift apart), the others are given.
-macro_rules! counters {
-    ($ty:ident { $($field:ident: $value:expr),* $(,)? }, $stats:expr, discards: [$($reason:ident),* $(,)?]) => {
-        $ty { $($field: $value,)* $($reason: $stats.discarded(stringify!($reason)),)* }
-    };
-}
-
 impl From<&CuspSearch> for CuspStats {
     fn from(c: &CuspSearch) -> Self {
         let s = &c.stats;
-        counters!(CuspStats { processed: s.processed, bisected: s.split - c.contracted, seconds: c.seconds }, s, discards: [regular, not_tangent, krawczyk_empty, in_strips])
+        CuspStats {
+            processed: s.processed,
+            regular: s.discarded(CuspDiscard::Regular),
+            not_tangent: s.discarded(CuspDiscard::NotTangent),
+            krawczyk_empty: s.discarded(CuspDiscard::KrawczykEmpty),
+            bisected: s.split - c.contracted,
+            in_strips: s.discarded(CuspDiscard::InStrips),
+            seconds: c.seconds,
+        }
     }
 }
 
@@ -151,7 +150,18 @@ pub struct NodeStats {
 impl From<&NodeSearch> for NodeStats {
     fn from(n: &NodeSearch) -> Self {
         let s = &n.stats;
-        counters!(NodeStats { pairs: s.processed, cells: n.cells, cusp_regions: n.cusp_regions, settled: n.settled, seconds: n.seconds }, s, discards: [apart, injective, near_cusp, krawczyk_empty, in_strips])
+        NodeStats {
+            pairs: s.processed,
+            apart: s.discarded(NodeDiscard::Apart),
+            injective: s.discarded(NodeDiscard::Injective),
+            near_cusp: s.discarded(NodeDiscard::NearCusp),
+            krawczyk_empty: s.discarded(NodeDiscard::KrawczykEmpty),
+            in_strips: s.discarded(NodeDiscard::InStrips),
+            cells: n.cells,
+            cusp_regions: n.cusp_regions,
+            settled: n.settled,
+            seconds: n.seconds,
+        }
     }
 }
 

@@ -198,18 +198,38 @@ struct SmoothPrune<'a> {
     min_width: f64,
 }
 
+/// Why the smoothness proof of det Df = 0 discards a box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SmoothDiscard {
+    /// det Df ≠ 0 on it.
+    Regular,
+    /// ∇det Df ≠ 0 on it: the singular set is a smooth curve there.
+    Smooth,
+}
+
+impl crate::search::Reason for SmoothDiscard {
+    fn name(self) -> &'static str {
+        match self {
+            SmoothDiscard::Regular => "regular",
+            SmoothDiscard::Smooth => "smooth",
+        }
+    }
+}
+
+
 impl Prune for SmoothPrune<'_> {
     type Cell = [Interval; 2];
     type Found = std::convert::Infallible;
+    type Reason = SmoothDiscard;
 
-    fn process(&mut self, b: [Interval; 2]) -> Step<[Interval; 2], Self::Found> {
+    fn process(&mut self, b: [Interval; 2]) -> Step<[Interval; 2], Self::Found, SmoothDiscard> {
         let e = evaluate_without_tangency(self.chain, b);
         let excludes = |x: Interval| strict_sign(x).is_some();
         if excludes(e.det) {
-            return Step::Discard("regular");
+            return Step::Discard(SmoothDiscard::Regular);
         }
         if excludes(e.grad_det[0]) || excludes(e.grad_det[1]) {
-            return Step::Discard("smooth");
+            return Step::Discard(SmoothDiscard::Smooth);
         }
         if b[0].wid().max(b[1].wid()) < self.min_width {
             return Step::Undecided(b, "gradient may vanish");

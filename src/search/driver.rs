@@ -13,7 +13,7 @@
 
 use super::limits::{process_cpu_seconds, Budget, Limit, Limits, Progress, Status};
 use super::store::{Pool, Store};
-use super::{Prune, Sink, Stats, Step, Undecided};
+use super::{Prune, Reason, Sink, Stats, Step, Undecided};
 use smallvec::SmallVec;
 use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -35,17 +35,25 @@ const PROGRESS_EVERY: Duration = Duration::from_millis(200);
 /// Bisect [0, 1] until pieces are shorter than 1/8, keeping those that hold 0.3:
 ///
 /// ```
-/// use linkspace::search::{run, Prune, Sink, Step, Store, Limits, Undecided, Status};
+/// use linkspace::search::{run, Prune, Reason, Sink, Step, Store, Limits, Undecided, Status};
 /// use std::ops::ControlFlow;
 /// use std::sync::atomic::AtomicBool;
 ///
+/// #[derive(Clone, Copy)]
+/// struct Apart;
+/// impl Reason for Apart {
+///     fn name(self) -> &'static str {
+///         "apart"
+///     }
+/// }
 /// struct Bisect;
 /// impl Prune for Bisect {
 ///     type Cell = (f64, f64);
 ///     type Found = (f64, f64);
-///     fn process(&mut self, (a, b): (f64, f64)) -> Step<(f64, f64), (f64, f64)> {
+///     type Reason = Apart;
+///     fn process(&mut self, (a, b): (f64, f64)) -> Step<(f64, f64), (f64, f64), Apart> {
 ///         if !(a <= 0.3 && 0.3 <= b) {
-///             Step::Discard("apart")
+///             Step::Discard(Apart)
 ///         } else if b - a < 0.125 {
 ///             Step::Found((a, b))
 ///         } else {
@@ -63,7 +71,7 @@ const PROGRESS_EVERY: Duration = Duration::from_millis(200);
 /// let (status, stats) = run(&mut Bisect, (0.0, 1.0), Store::DepthFirst, &Limits::default(), &AtomicBool::new(false), &mut keep);
 /// assert_eq!(status, Status::Complete);
 /// assert_eq!(keep.0, vec![(0.25, 0.3125)]);
-/// assert_eq!(stats.discarded("apart"), 4);
+/// assert_eq!(stats.discarded(Apart), 4);
 /// ```
 pub fn run<P: Prune>(prune: &mut P, start: P::Cell, store: Store, limits: &Limits, cancel: &AtomicBool, sink: &mut impl Sink<P::Cell, P::Found>) -> (Status, Stats) {
     let budget = Budget::start(*limits, cancel);
@@ -200,14 +208,17 @@ fn recv_spinning<T>(rx: &mpsc::Receiver<T>) -> Option<T> {
 
 /// The decisions of a level, in level order: each with its cell's level and the bytes of the
 /// children it made (for the memory limit).
-type Decided<C, F> = Vec<(u32, usize, Step<C, F>)>;
+type Decided<C, F, R> = Vec<(u32, usize, Step<C, F, R>)>;
+
+/// The step a `Prune` returns.
+type PruneStep<P> = Step<<P as Prune>::Cell, <P as Prune>::Found, <P as Prune>::Reason>;
 
 /// A level's decisions, and the cells cancel or time kept from being taken.
-type LevelOutcome<C, F> = (Decided<C, F>, Vec<C>);
+type LevelOutcome<C, F, R> = (Decided<C, F, R>, Vec<C>);
 
 /// The breadth-first walk: takes each level's decisions from `decide_level` (which also returns
 /// the cells cancel or time kept it from taking) and routes them in level order.
-fn walk_levels<C, F>(start: C, budget: &Budget<'_>, sink: &mut impl Sink<C, F>, mut decide_level: impl FnMut(Vec<C>) -> LevelOutcome<C, F>) -> (Status, Stats) {
+fn walk_levels<C, F, R: Reason>(start: C, budget: &Budget<'_>, sink: &mut impl Sink<C, F>, mut decide_level: impl FnMut(Vec<C>) -> LevelOutcome<C, F, R>) -> (Status, Stats) {
     let c0 = process_cpu_seconds();
     let mut stats = Stats::default();
     let mut discards = Discards::default();
@@ -274,7 +285,7 @@ fn walk_levels<C, F>(start: C, budget: &Budget<'_>, sink: &mut impl Sink<C, F>, 
 }
 
 /// Decides one cell: its level, the bytes of its children, the step.
-fn decide<P: Prune>(p: &mut P, c: P::Cell) -> (u32, usize, Step<P::Cell, P::Found>) {
+fn decide<P: Prune>(p: &mut P, c: P::Cell) -> (u32, usize, PruneStep<P>) {
     let l = p.level(&c);
     let step = p.process(c);
     let bytes = match &step {
@@ -285,7 +296,7 @@ fn decide<P: Prune>(p: &mut P, c: P::Cell) -> (u32, usize, Step<P::Cell, P::Foun
 }
 
 /// Decides a level on one worker, stopping when cancel or time interrupts it.
-fn decide_alone<P: Prune>(p: &mut P, level: Vec<P::Cell>, budget: &Budget<'_>) -> LevelOutcome<P::Cell, P::Found> {
+fn decide_alone<P: Prune>(p: &mut P, level: Vec<P::Cell>, budget: &Budget<'_>) -> LevelOutcome<P::Cell, P::Found, P::Reason> {
     let mut out = Vec::with_capacity(level.len());
     let mut cells = level.into_iter();
     for c in cells.by_ref() {
@@ -318,9 +329,9 @@ impl<C> LevelJob<C> {
 }
 
 /// A worker's share of a level: the chunks it took, by index.
-type Taken<C, F> = Vec<(usize, Decided<C, F>)>;
+type Taken<C, F, R> = Vec<(usize, Decided<C, F, R>)>;
 
-fn take_chunks<P: Prune>(p: &mut P, job: &LevelJob<P::Cell>, budget: &Budget<'_>) -> Taken<P::Cell, P::Found> {
+fn take_chunks<P: Prune>(p: &mut P, job: &LevelJob<P::Cell>, budget: &Budget<'_>) -> Taken<P::Cell, P::Found, P::Reason> {
     let mut mine = Vec::new();
     while !job.stop.load(Ordering::Relaxed) {
         let i = job.next.fetch_add(1, Ordering::Relaxed);
@@ -336,8 +347,8 @@ fn take_chunks<P: Prune>(p: &mut P, job: &LevelJob<P::Cell>, budget: &Budget<'_>
 
 /// The decisions in chunk order; the chunks no worker took (cancel or time) stay pending. Only
 /// an interrupted run, which depends on the clock anyway, has such gaps.
-fn collect<C, F>(job: Arc<LevelJob<C>>, done: Vec<Taken<C, F>>) -> LevelOutcome<C, F> {
-    let mut by_chunk: Vec<Option<Decided<C, F>>> = (0..job.chunks.len()).map(|_| None).collect();
+fn collect<C, F, R>(job: Arc<LevelJob<C>>, done: Vec<Taken<C, F, R>>) -> LevelOutcome<C, F, R> {
+    let mut by_chunk: Vec<Option<Decided<C, F, R>>> = (0..job.chunks.len()).map(|_| None).collect();
     for (i, steps) in done.into_iter().flatten() {
         by_chunk[i] = Some(steps);
     }
@@ -363,10 +374,10 @@ fn report_undecided<C, F>(pending: impl IntoIterator<Item = C>, stats: &mut Stat
 
 /// Counts a decision and passes it on: results and undecided cells to the sink, children to
 /// `split`. `Break` when the sink asks to stop.
-fn route<C, F>(step: Step<C, F>, stats: &mut Stats, discards: &mut Discards, sink: &mut impl Sink<C, F>, split: impl FnOnce(SmallVec<[C; 4]>)) -> ControlFlow<()> {
+fn route<C, F, R: Reason>(step: Step<C, F, R>, stats: &mut Stats, discards: &mut Discards, sink: &mut impl Sink<C, F>, split: impl FnOnce(SmallVec<[C; 4]>)) -> ControlFlow<()> {
     match step {
         Step::Discard(reason) => {
-            discards.count(reason);
+            discards.count(reason.name());
             ControlFlow::Continue(())
         }
         Step::Found(f) => {
@@ -418,14 +429,22 @@ mod tests {
     #[derive(Clone)]
     struct Roots;
     type Cell = (f64, f64, u32);
+    #[derive(Clone, Copy)]
+    struct OneSign;
+    impl Reason for OneSign {
+        fn name(self) -> &'static str {
+            "one sign"
+        }
+    }
     impl Prune for Roots {
         type Cell = Cell;
         type Found = (f64, f64);
-        fn process(&mut self, (a, b, l): Cell) -> Step<Cell, (f64, f64)> {
+        type Reason = OneSign;
+        fn process(&mut self, (a, b, l): Cell) -> Step<Cell, (f64, f64), OneSign> {
             let (fa, fb) = ((20.0 * a).sin(), (20.0 * b).sin());
             // |f'| ≤ 20, so f cannot reach 0 on [a, b] when min(|fa|, |fb|) > 20 (b − a).
             if fa * fb > 0.0 && fa.abs().min(fb.abs()) > 20.0 * (b - a) {
-                return Step::Discard("one sign");
+                return Step::Discard(OneSign);
             }
             if b - a < 1e-3 {
                 return Step::Found((a, b));

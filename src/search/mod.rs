@@ -46,9 +46,12 @@ pub trait Prune {
     type Cell: Send;
     /// What is reported, with its certificate (a unique root, a point inside a strip, ...).
     type Found: Send;
+    /// Why a cell is discarded: the search's closed set of proofs, counted per reason in
+    /// `Stats::discarded` (`NoDiscard` for a search that discards nothing).
+    type Reason: Reason;
 
     /// Decides one cell.
-    fn process(&mut self, cell: Self::Cell) -> Step<Self::Cell, Self::Found>;
+    fn process(&mut self, cell: Self::Cell) -> Step<Self::Cell, Self::Found, Self::Reason>;
 
     /// The cell's share of the start cell's measure, in [0, 1], for `Progress::decided`;
     /// 0 (the default) when the search has no measure.
@@ -72,10 +75,26 @@ pub trait Prune {
     }
 }
 
+/// A discard reason of one search: a proof that a cell holds nothing sought.
+pub trait Reason: Copy + Send {
+    /// Its name in `Stats::discarded` and in reports.
+    fn name(self) -> &'static str;
+}
+
+/// The reason type of a search that never discards a cell.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NoDiscard {}
+
+impl Reason for NoDiscard {
+    fn name(self) -> &'static str {
+        match self {}
+    }
+}
+
 /// What `Prune::process` decided.
-pub enum Step<C, F> {
+pub enum Step<C, F, R> {
     /// Provably holds nothing sought; the reason is counted in `Stats::discarded`.
-    Discard(&'static str),
+    Discard(R),
     /// Holds what is sought, with the certificate inside `F`.
     Found(F),
     /// Neither discarded nor proven at the precision asked for; the reason travels to the sink.
@@ -141,8 +160,8 @@ impl Stats {
     }
 
     /// Cells discarded for `reason`.
-    pub fn discarded(&self, reason: &str) -> u64 {
-        self.discarded.get(reason).copied().unwrap_or(0)
+    pub fn discarded(&self, reason: impl Reason) -> u64 {
+        self.discarded.get(reason.name()).copied().unwrap_or(0)
     }
 }
 

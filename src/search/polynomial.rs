@@ -435,11 +435,25 @@ impl SystemPrune<'_, '_> {
     }
 }
 
+/// Why the polynomial search discards a box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SystemDiscard {
+    /// The contractors proved it empty.
+    Empty,
+}
+
+impl super::Reason for SystemDiscard {
+    fn name(self) -> &'static str {
+        "empty"
+    }
+}
+
 impl Prune for SystemPrune<'_, '_> {
     type Cell = IntervalBox;
     type Found = (BoxStatus, IntervalBox);
+    type Reason = SystemDiscard;
 
-    fn process(&mut self, mut b: IntervalBox) -> Step<IntervalBox, (BoxStatus, IntervalBox)> {
+    fn process(&mut self, mut b: IntervalBox) -> Step<IntervalBox, (BoxStatus, IntervalBox), SystemDiscard> {
         let shrunk = self.shrink(&mut b);
         if let Some(d) = &mut self.diagonals {
             if !matches!(shrunk, Shrunk::Empty) {
@@ -451,7 +465,7 @@ impl Prune for SystemPrune<'_, '_> {
             }
         }
         match shrunk {
-            Shrunk::Empty => Step::Discard("empty"),
+            Shrunk::Empty => Step::Discard(SystemDiscard::Empty),
             Shrunk::Solution => Step::Found((BoxStatus::Solution, b)),
             Shrunk::Unique => Step::Found((BoxStatus::Unique, b)),
             Shrunk::Stalled => {
@@ -496,7 +510,7 @@ impl SolveStats {
     fn from_kernel(s: &Stats) -> Self {
         SolveStats {
             processed: s.processed,
-            empty: s.discarded("empty"),
+            empty: s.discarded(SystemDiscard::Empty),
             bisected: s.split,
             solutions: s.found,
             max_level: s.max_level,
