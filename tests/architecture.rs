@@ -38,14 +38,16 @@ fn top_module(path: &Path) -> Option<String> {
     }
 }
 
-/// The code of a file without comment lines and without its unit tests (which may use
-/// anything), as (line number, text).
+/// The code of a file without comment lines and without its unit-test module (which may use
+/// anything), as (line number, text). A `#[cfg(test)]` item other than a module (a test-only
+/// helper) does not end the file.
 fn code_lines(path: &Path) -> Vec<(usize, String)> {
     let text = std::fs::read_to_string(path).expect("readable");
+    let lines: Vec<&str> = text.lines().collect();
     let mut out = Vec::new();
-    for (k, line) in text.lines().enumerate() {
+    for (k, line) in lines.iter().enumerate() {
         let t = line.trim_start();
-        if t.starts_with("#[cfg(test)]") {
+        if t.starts_with("#[cfg(test)]") && lines.get(k + 1).is_some_and(|next| next.trim_start().starts_with("mod ")) {
             break;
         }
         if t.starts_with("//") {
@@ -54,6 +56,16 @@ fn code_lines(path: &Path) -> Vec<(usize, String)> {
         out.push((k + 1, line.to_string()));
     }
     out
+}
+
+/// The files of the library's top-level module `name` (`src/name.rs` and `src/name/`).
+fn module_files(name: &str) -> Vec<PathBuf> {
+    files(&src()).into_iter().filter(|p| top_module(p).as_deref() == Some(name)).collect()
+}
+
+/// Lines of `paths` that name `needle`, as `path:line: text`.
+fn lines_naming(paths: &[PathBuf], needle: &str) -> Vec<String> {
+    paths.iter().flat_map(|p| code_lines(p).into_iter().filter(|(_, l)| l.contains(needle)).map(move |(n, l)| format!("{}:{n}: {}", p.display(), l.trim()))).collect()
 }
 
 /// Which top-level modules each library module names (`crate::x`).
@@ -144,27 +156,17 @@ fn each_foreign_crate_is_behind_one_module() {
 
 #[test]
 fn builders_never_solve() {
+    let problems = module_files("problems");
     for call in [".enclose(", "search::run", "run_by_level", "drop_spurious("] {
-        let problems: Vec<String> = files(&src().join("problems"))
-            .iter()
-            .flat_map(|p| code_lines(p).into_iter().filter(|(_, l)| l.contains(call)).map(move |(n, l)| format!("{}:{n}: {}", p.display(), l.trim())))
-            .collect();
-        assert!(problems.is_empty(), "a builder runs a search ({call}):\n{}", problems.join("\n"));
+        let hits = lines_naming(&problems, call);
+        assert!(hits.is_empty(), "a builder runs a search ({call}):\n{}", hits.join("\n"));
     }
 }
 
 #[test]
 fn the_kernel_and_the_model_know_no_serde() {
-    for dir in ["interval", "system", "contract", "lp", "search", "model"] {
-        let path = src().join(dir);
-        let files = if path.is_dir() { files(&path) } else { vec![src().join(format!("{dir}.rs"))] };
-        let mut all = files;
-        if src().join(format!("{dir}.rs")).is_file() {
-            all.push(src().join(format!("{dir}.rs")));
-        }
-        for f in all {
-            let hits: Vec<String> = code_lines(&f).into_iter().filter(|(_, l)| l.contains("serde")).map(|(n, l)| format!("{}:{n}: {}", f.display(), l.trim())).collect();
-            assert!(hits.is_empty(), "serde in `{dir}` (the JSON writers in `report` say how its values are written):\n{}", hits.join("\n"));
-        }
+    for module in ["interval", "system", "contract", "lp", "search", "model"] {
+        let hits = lines_naming(&module_files(module), "serde");
+        assert!(hits.is_empty(), "serde in `{module}` (the JSON writers in `report` say how its values are written):\n{}", hits.join("\n"));
     }
 }
