@@ -23,9 +23,10 @@ use inari::Interval;
 use std::time::Instant;
 
 use super::{
-    gap, Analysis, AnalysisError, MechanismKind, Bounds, BoxSetResult, Classification, IkQuery, IkResult, IkSolution, PreparedRun, ResultBox, Service, SingularPair, SingularPoint,
+    gap, Analysis, AnalysisError, MechanismKind, BoxSetResult, Classification, IkQuery, IkResult, IkSolution, PreparedRun, ResultBox, Service, SingularPair, SingularPoint,
     SingularityQuery, SingularityResult,
 };
+use crate::interval::bounds;
 use crate::manip3r::{curves::Cover, motion, report::radius};
 use crate::search::{BoxStatus, Limit, Limits, SolveStats as Stats, SolverSettings, Status};
 use std::sync::atomic::AtomicBool;
@@ -253,10 +254,6 @@ pub fn collisions(mechanism: &Mechanism, options: &LoadOptions, precision: f64, 
 /// between them, coarse enough for a message of a few thousand boxes.
 pub const CURVE_DEPTH: u32 = 8;
 
-fn bounds(x: Interval) -> Bounds {
-    [x.inf(), x.sup()]
-}
-
 /// A serial arm as the node loads it: its 3R positioning structure, read as `linkspace
 /// singularities` reads a file with no options.
 ///
@@ -322,9 +319,8 @@ impl Analysis for Manip3rAnalysis {
     }
 
     fn inverse_kinematics(&self, query: &IkQuery) -> Result<Box<dyn PreparedRun<IkResult>>, AnalysisError> {
-        let p = query.point;
-        if p.iter().any(|v| !v.is_finite()) {
-            return Err(AnalysisError::BadRequest(format!("point ({}, {}, {}) is not finite", p[0], p[1], p[2])));
+        if query.point.iter().any(|v| !v.is_finite()) {
+            return Err(AnalysisError::BadRequest(Manip3rError::BadTarget(query.point).to_string()));
         }
         manip3r::check_precision(query.precision).map_err(|e| AnalysisError::BadRequest(e.to_string()))?;
         if query.max_boxes == 0 {
@@ -536,7 +532,7 @@ impl PreparedRun<IkResult> for IkRun {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::interval::point;
+    use crate::interval::{point, Bounds};
     use crate::manip3r::ik;
     use crate::app::load;
     use crate::model::{urdf, JointKind};

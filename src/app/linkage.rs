@@ -275,7 +275,7 @@ fn set_result(p: &SingularProblem<Linkage>, settings: &SolverSettings, set: &Sin
             };
             ResultBox {
                 status,
-                bounds: sb.b.dims.iter().map(|x| [x.inf(), x.sup()]).collect(),
+                bounds: sb.b.dims.iter().map(|&x| crate::interval::bounds(x)).collect(),
                 joints: names.iter().map(|n| record.joints.get(n).copied().unwrap_or([f64::NAN, f64::NAN])).collect(),
                 level: sb.b.level,
                 cluster: (sb.status != BoxKind::Undecided).then_some(label),

@@ -16,6 +16,11 @@ pub use inari::Interval;
 /// `[lower, upper]`: an interval as the JSON reports write it.
 pub type Bounds = [f64; 2];
 
+/// `x` as `[lower, upper]`.
+pub fn bounds(x: Interval) -> Bounds {
+    [x.inf(), x.sup()]
+}
+
 /// The interval `[lo, hi]`, or `Interval::EMPTY` when `lo > hi` or either bound is NaN.
 ///
 /// Bounds are taken as they are: callers that computed them in floating point must round

@@ -7,12 +7,8 @@ use inari::Interval;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
+pub(crate) use crate::interval::bounds;
 pub use crate::interval::Bounds;
-
-/// `x` as `[lower, upper]`.
-pub(crate) fn bounds(x: Interval) -> Bounds {
-    [x.inf(), x.sup()]
-}
 
 /// Joint intervals keyed by joint name (the second and third joints).
 pub type Joints = BTreeMap<String, Bounds>;
