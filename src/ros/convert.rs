@@ -43,10 +43,10 @@ pub fn box_set(r: &BoxSetResult, run_id: u64) -> BoxSet {
     }
     // Complete means nothing undecided, as in the CLI's reports: a finished run that left
     // undecided boxes (a platform's cluster without a proof) is incomplete, limit "undecided".
-    let (status, limit) = match r.status {
-        Status::Complete if r.boxes.iter().any(|b| b.status == BoxStatus::Undecided) => (msgs::SET_INCOMPLETE, Incompleteness::Undecided.name()),
-        Status::Complete => (msgs::SET_COMPLETE, ""),
-        Status::Incomplete(l) => (msgs::SET_INCOMPLETE, l.name()),
+    let undecided = r.boxes.iter().filter(|b| b.status == BoxStatus::Undecided).count();
+    let (status, limit) = match Incompleteness::of(r.status, undecided, false) {
+        None => (msgs::SET_COMPLETE, ""),
+        Some(why) => (msgs::SET_INCOMPLETE, why.name()),
     };
     BoxSet {
         header: header(&joint_frame(&r.mechanism)),
