@@ -285,6 +285,38 @@ fn ik_takes_a_point_of_the_root_frame() {
     assert_eq!(root["point"], serde_json::json!([r, 0.0, z]));
 }
 
+/// Test idea: with a point of the root frame joint 1 is fixed, so its limits count. On PUMA 560
+/// (joint_1 in [-2.7925, 2.7925] in the file) the point (0.4, 0.2, 0.3) has four solutions on
+/// the full torus, two of them with joint 1 near -3.02: with the file's limits those two are
+/// dropped and said so, and every listed joint 1 lies within its limits.
+#[test]
+fn ik_of_a_root_frame_point_honours_the_first_joints_limits() {
+    let puma = fixture("puma560.urdf");
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let query = |extra: &[&str], name: &str| -> serde_json::Value {
+        let path = dir.join(format!("ik-puma-{name}-{}.json", std::process::id()));
+        let mut args = vec!["ik", &puma, "--point", "0.4,0.2,0.3", "--json", path.to_str().expect("utf-8")];
+        args.extend_from_slice(extra);
+        let (ok, _, err) = run(&args);
+        assert!(ok, "{err}");
+        let v = serde_json::from_str(&std::fs::read_to_string(&path).expect("report")).expect("json");
+        let _ = std::fs::remove_file(&path);
+        v
+    };
+    let joint1 = |v: &serde_json::Value| -> Vec<[f64; 2]> {
+        v["solutions"].as_array().expect("solutions").iter().map(|s| [s["joints"]["joint_1"][0].as_f64().expect("lo"), s["joints"]["joint_1"][1].as_f64().expect("hi")]).collect()
+    };
+    let free = query(&["--ignore-limits"], "free");
+    let limited = query(&[], "limited");
+    let (all, kept) = (joint1(&free), joint1(&limited));
+    assert_eq!(all.len(), 4, "{free}");
+    let outside = all.iter().filter(|j| j[1] < -2.7925 || j[0] > 2.7925).count();
+    assert_eq!(outside, 2, "two configurations turn joint 1 past its limit: {all:?}");
+    assert_eq!(kept.len(), 2, "{limited}");
+    assert!(kept.iter().all(|j| -2.7925 <= j[0] && j[1] <= 2.7925), "{kept:?}");
+    assert_eq!(limited["joint_limits"]["dropped"], 2);
+}
+
 #[test]
 fn collisions_bad_input_and_json_schema() {
     let scene = fixture("orthogonal_3r_a_column.urdf");

@@ -101,7 +101,7 @@ fn joint_limits_drop_solutions_and_ignore_limits_restores_them() {
         let p = prepare(&xml, &LoadOptions { ignore_limits: ignore, ..Default::default() }).expect("puma");
         let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
         let mut s = ik::solve(&chain, 0.5, 0.3, 1e-8, 100_000).expect("query");
-        let effect = p.limits.apply_ik(&mut s);
+        let effect = p.limits.apply_ik(&mut s, |_| None);
         (s.unique.len(), effect.dropped)
     };
     let (free, free_dropped) = solve(true);

@@ -187,7 +187,7 @@ pub struct ArmIk {
 /// Every joint solution of `arm` reaching `point`, within `control`.
 pub fn inverse_kinematics(arm: &Arm, point: IkPoint, precision: f64, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<ArmIk, Manip3rError> {
     let start = Instant::now();
-    let (mut solutions, target) = match point {
+    let (mut solutions, target): (_, Option<Target>) = match point {
         IkPoint::HalfSection { radius, z } => (manip3r::ik::solve_with(&arm.chain, radius, z, precision, control, progress)?, None),
         IkPoint::Root(p) => {
             if p.iter().any(|v| !v.is_finite()) {
@@ -199,7 +199,7 @@ pub fn inverse_kinematics(arm: &Arm, point: IkPoint, precision: f64, control: &C
     };
     // Solutions outside the file's joint limits are not solutions of the arm; those on a limit
     // are kept.
-    let limit_effect = arm.prepared.limits.apply_ik(&mut solutions);
+    let limit_effect = arm.prepared.limits.apply_ik(&mut solutions, |b| target.map(|t| arm.frame.theta1(&arm.chain, &t, b)));
     Ok(ArmIk { point, target, solutions, limit_effect, seconds: start.elapsed().as_secs_f64() })
 }
 

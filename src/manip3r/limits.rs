@@ -4,8 +4,8 @@
 //! read against the limits: a box is *outside* when no 2π-translate of it meets [lower, upper]
 //! (proven with an outward-rounded 2π), *inside* when one translate lies within them, and *on a
 //! limit* otherwise. Outside boxes are dropped and counted; boxes on a limit are kept and
-//! counted. Joint 1 does not enter (θ₂, θ₃): its limits only restrict θ₁ in inverse kinematics,
-//! which the CLI's (θ₂, θ₃) answer does not give, so they are listed, not used.
+//! counted. Joint 1 does not enter (θ₂, θ₃): its limits restrict θ₁ where a result fixes it (inverse
+//! kinematics of a point of the root frame), and are listed otherwise.
 
 use super::ik::IkSolutions;
 use super::Singularities;
@@ -127,12 +127,20 @@ impl JointLimits {
         LimitEffect { limits: self.clone(), dropped, on_limit, text }
     }
 
-    /// Drops inverse-kinematics solutions outside the limits.
-    pub fn apply_ik(&self, s: &mut IkSolutions) -> LimitEffect {
+    /// Drops inverse-kinematics solutions outside the limits. `theta1` encloses the first
+    /// joint's angle of a solution box over (θ₂, θ₃) when the query fixes it (a point of the
+    /// root frame); `None` leaves joint 1 free.
+    pub fn apply_ik(&self, s: &mut IkSolutions, theta1: impl Fn(&[Interval; 2]) -> Option<Interval>) -> LimitEffect {
         let (mut dropped, mut on_limit) = (0u64, 0u64);
         let mut keep = |p: Place| tally(p, &mut dropped, &mut on_limit);
-        s.unique.retain(|b| keep(self.of_box(b)));
-        s.clusters.retain(|c| keep(self.of_box(&c.hull)));
+        // All three joints when θ₁ is fixed by the point, joints 2 and 3 otherwise.
+        let of_solution = |b: &[Interval; 2]| match (theta1(b).map(|t| place(self.limits[0], t)), self.of_box(b)) {
+            (Some(Place::Outside), _) | (_, Place::Outside) => Place::Outside,
+            (Some(Place::OnLimit), _) | (_, Place::OnLimit) => Place::OnLimit,
+            _ => Place::Inside,
+        };
+        s.unique.retain(|b| keep(of_solution(b)));
+        s.clusters.retain(|c| keep(of_solution(&c.hull)));
         let text = format!("{}; {dropped} solutions outside dropped, {on_limit} on a limit kept", self.describe());
         LimitEffect { limits: self.clone(), dropped, on_limit, text }
     }
