@@ -638,8 +638,9 @@ mod tests {
     }
 
     /// Test idea: the node honours the file's joint limits as `ik` and `singularities` do.
-    /// PUMA 560 limits joint 2 to [-3.927, 0.7854] and joint 3 to [-0.7854, 3.927]: on the
-    /// circle, θ₂ in (0.7854, 2.3562) and θ₃ in (-2.3562, -0.7854) are out of reach. The same
+    /// PUMA 560 limits joint 1 to [-2.7925, 2.7925], joint 2 to [-3.927, 0.7854] and joint 3 to
+    /// [-0.7854, 3.927]: on the circle, θ₁ beyond ±2.7925, θ₂ in (0.7854, 2.3562) and θ₃ in
+    /// (-2.3562, -0.7854) are out of reach (θ₁ is fixed by the point, so its limits count). The same
     /// arm with continuous joints answers a superset; what the limited one leaves out is
     /// exactly the solutions in those arcs (checked against the decimal limits, not the
     /// library's filter), and some point must lose one.
@@ -650,7 +651,7 @@ mod tests {
         let limited = load(&urdf::parse(PUMA).expect("bundled"), &[], &[]).expect("puma");
         let free = load(&urdf::parse(&PUMA.replace("type=\"revolute\"", "type=\"continuous\"")).expect("continuous"), &[], &[]).expect("puma");
         let tau = std::f64::consts::TAU;
-        let outside = |j: &[Bounds]| (j[1][0] > 0.7854 && j[1][1] < -3.927 + tau) || (j[2][0] > 3.927 - tau && j[2][1] < -0.7854);
+        let outside = |j: &[Bounds]| (j[0][0] > 2.7925 && j[0][1] < -2.7925 + tau) || (j[0][1] < -2.7925 && j[0][0] > 2.7925 - tau) || (j[1][0] > 0.7854 && j[1][1] < -3.927 + tau) || (j[2][0] > 3.927 - tau && j[2][1] < -0.7854);
         let mut dropped = 0;
         for point in [[0.5, 0.0, 0.3], [0.4, 0.2, 0.6], [0.3, -0.3, 0.9], [0.6, 0.1, 0.2], [0.2, 0.2, 0.2]] {
             let q = IkQuery { point, precision: 1e-8, max_boxes: 200_000, timeout: None, threads: 1 };
