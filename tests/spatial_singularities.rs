@@ -18,7 +18,7 @@
 use super::util::urdf_text;
 use linkspace::model::urdf;
 use linkspace::problems::singular::{Coordinates, Output, SingularKind, SingularProblem};
-use linkspace::singular::sets::SingularSets;
+use linkspace::app::loops::SingularSets;
 use linkspace::singular::SingularSet;
 use linkspace::problems::{Linkage, LinkageProblem, Model, SpatialProblem};
 use linkspace::search::{SolverSettings, Status};

@@ -32,3 +32,4 @@ run dist_spheres distances urdf/four_spheres.json
 run loops_five_bar loop-singularities urdf/five_bar.urdf
 run loops_four_bar loop-singularities urdf/four_bar.urdf
 run ik_e_xyz ik urdf/orthogonal_3r_e.urdf --point 1.5,0.5,1
+run loops_five_bar_image loop-singularities urdf/five_bar_unequal.urdf --actuated crank1_joint,crank2_joint --kind image --sigma 1e-2 --grid 64

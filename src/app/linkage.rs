@@ -17,7 +17,7 @@ use crate::interval::components;
 use crate::model::{JointKind, Mechanism};
 use crate::problems::choice::TracedPoint;
 use crate::problems::singular::{Coordinates, SingularProblem};
-use crate::singular::sets::{all_kinds, SingularSets};
+use super::loops::{all_kinds, SingularSets};
 use crate::singular::{BoxKind, SingularSet};
 use crate::problems::{Linkage, LinkageError, ModelChoice};
 use crate::report::singular::SingularReport;

@@ -11,12 +11,14 @@
 //! requests are answered at once), moves it to a thread of its own and converts the result.
 
 pub mod arm;
+pub mod distances;
 pub mod linkage;
+pub mod loops;
 mod platform;
 
 pub use arm::{Arm, Manip3rAnalysis};
 pub use linkage::{LinkageAnalysis, SolveJob};
-pub use crate::singular::sets::Actuation;
+pub use loops::Actuation;
 pub use platform::PlatformAnalysis;
 
 use crate::model::Mechanism;

@@ -14,9 +14,9 @@ use super::{MechanismKind, Analysis, AnalysisError, BoxSetResult, PreparedRun, R
 use crate::contract::FaceBounds;
 use crate::model::Mechanism;
 use crate::problems::cayley_menger::{BuildOptions, CayleyMenger, DistanceSolverError, Formulation};
-use crate::problems::{PlatformError, PlatformProblem};
-use crate::distances::{solve as certified_solve, Choice};
-use crate::report::distances::report_certified;
+use crate::problems::PlatformError;
+use super::distances::{DistancesJob, DistancesRequest};
+use crate::distances::Choice;
 use crate::search::{BoxStatus, Progress, SolverSettings};
 use crate::system::VarRole;
 use std::sync::atomic::AtomicBool;
@@ -37,7 +37,7 @@ pub struct PlatformAnalysis {
 
 /// A validated platform run.
 struct PlatformRun {
-    platform: PlatformProblem,
+    job: DistancesJob,
     cm: CayleyMenger,
     fixed: Vec<(String, f64)>,
     settings: SolverSettings,
@@ -53,15 +53,15 @@ impl PlatformAnalysis {
 
     /// Everything a run needs, validated (legs, determinants, clipper, settings).
     fn build(mechanism: &Mechanism, fixed: &[(String, f64)], settings: &SolverSettings, analysis: &str) -> Result<PlatformRun, AnalysisError> {
-        let platform = PlatformProblem::new(mechanism, fixed)?;
-        let cm = CayleyMenger::build(&platform.distances, BUILD).map_err(PlatformError::Distance)?;
+        let job = DistancesJob::platform(mechanism, fixed)?;
+        let cm = CayleyMenger::build(job.problem(), BUILD).map_err(PlatformError::Distance)?;
         // Validate now, so that a bad request is answered before any thread starts.
         match cm.solver(FACES, settings.clone()) {
             Ok(_) => {}
             Err(DistanceSolverError::Solve(e)) => return Err(e.into()),
             Err(e) => return Err(AnalysisError::BadRequest(e.to_string())),
         }
-        Ok(PlatformRun { platform, cm, fixed: fixed.to_vec(), settings: settings.clone(), analysis: analysis.to_string() })
+        Ok(PlatformRun { job, cm, fixed: fixed.to_vec(), settings: settings.clone(), analysis: analysis.to_string() })
     }
 }
 
@@ -107,10 +107,10 @@ impl Analysis for PlatformAnalysis {
 impl PreparedRun for PlatformRun {
     fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> BoxSetResult {
         let _ = progress;
-        let c = certified_solve(&self.platform.distances, Choice::Shared, BUILD.redundant, FACES, self.settings.clone(), cancel).expect("invariant: validated when prepared");
-        // The CLI's report, so the published boxes are exactly those of `distances --json`.
-        let fixed_map = self.fixed.iter().cloned().collect();
-        let rep = report_certified(&c, Some(&self.platform), fixed_map, FACES, &self.settings);
+        // The CLI's job, so the published boxes are exactly those of `distances --json`.
+        let request = DistancesRequest { formulation: Choice::Shared, redundant: BUILD.redundant, faces: FACES };
+        let run = self.job.run(&request, &self.settings, cancel).expect("invariant: validated when prepared");
+        let (c, rep) = (run.certified, run.report);
         let joint_names: Vec<String> = self.cm.unknowns.iter().map(|u| u.name.clone()).collect();
         let convert = |r: &crate::report::distances::DistanceRecord, status: BoxStatus, cluster: Option<usize>| ResultBox {
             status,
@@ -165,7 +165,10 @@ impl PreparedRun for PlatformRun {
 mod tests {
     use super::*;
     use crate::app::load;
+    use crate::distances::solve as certified_solve;
     use crate::model::urdf;
+    use crate::problems::PlatformProblem;
+    use crate::report::distances::report_certified;
     use crate::search::Status;
 
     const OCTAHEDRAL: &str = include_str!("../../urdf/octahedral.urdf");

@@ -3,13 +3,11 @@
 
 use super::parse_fix;
 use anyhow::{Context, Result};
+use linkspace::app::distances::{default_rho, DistancesJob, DistancesRequest};
 use linkspace::contract::FaceBounds;
+use linkspace::distances::Choice;
 use linkspace::model::urdf;
-use linkspace::distances::file as distance_file;
-use linkspace::problems::cayley_menger::DistanceProblem;
-use linkspace::problems::PlatformProblem;
-use linkspace::distances::{solve as certified_solve, Choice};
-use linkspace::report::distances::{report_certified, DistancesReport};
+use linkspace::report::distances::DistancesReport;
 use linkspace::search::SolverSettings;
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -71,34 +69,18 @@ pub struct DistancesArgs {
     json: Option<PathBuf>,
 }
 
-/// A loaded problem: the distances, and the platform when it came from URDF.
-pub struct Loaded {
-    pub distances: DistanceProblem,
-    pub platform: Option<PlatformProblem>,
-}
-
-pub fn load(path: &Path, text: &str, fixed: &[(String, f64)]) -> Result<Loaded> {
+/// The distance job of a URDF platform or a distance file (a file starting with '<' is URDF).
+pub fn load(path: &Path, text: &str, fixed: &[(String, f64)]) -> Result<DistancesJob> {
     let is_urdf = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf")) || text.trim_start().starts_with('<');
     if is_urdf {
         let m = urdf::parse(text).with_context(|| format!("loading {}", path.display()))?;
-        let p = PlatformProblem::new(&m, fixed).with_context(|| format!("building {}", path.display()))?;
-        Ok(Loaded { distances: p.distances.clone(), platform: Some(p) })
+        DistancesJob::platform(&m, fixed).with_context(|| format!("building {}", path.display()))
     } else {
-        let d = distance_file::parse(text, fixed).with_context(|| format!("loading {}", path.display()))?;
-        Ok(Loaded { distances: d, platform: None })
+        DistancesJob::file(text, fixed).with_context(|| format!("loading {}", path.display()))
     }
 }
 
-/// The default rho of a formulation: the seed's 0.99 for the determinants, 0.9 in coordinates.
-pub fn default_rho(c: Choice) -> f64 {
-    if matches!(c, Choice::Points | Choice::Line) {
-        0.9
-    } else {
-        0.99
-    }
-}
-
-pub fn choice(form: Form) -> Choice {
+fn choice(form: Form) -> Choice {
     match form {
         Form::Auto => Choice::Auto,
         Form::Points => Choice::Points,
@@ -121,18 +103,12 @@ pub fn run(args: DistancesArgs) -> Result<()> {
     args.limits.solver_settings(SolverSettings::default().max_boxes, SolverSettings { sigma: args.sigma, rho: args.rho.unwrap_or(0.99), ..Default::default() })?.validate()?;
     let fixed = args.fix.iter().map(|s| parse_fix(s)).collect::<Result<Vec<_>>>()?;
     let text = std::fs::read_to_string(&args.file).with_context(|| format!("reading {}", args.file.display()))?;
-    let loaded = load(&args.file, &text, &fixed)?;
-    let chosen = match choice(args.formulation) {
-        Choice::Auto => linkspace::distances::choose(&loaded.distances),
-        c => c,
-    };
-    let rho = args.rho.unwrap_or(default_rho(chosen));
+    let job = load(&args.file, &text, &fixed)?;
+    let request = DistancesRequest { formulation: job.formulation(choice(args.formulation)), redundant: args.redundant, faces: face_bounds(args.faces) };
+    let rho = args.rho.unwrap_or(default_rho(request.formulation));
     let settings = args.limits.solver_settings(SolverSettings::default().max_boxes, SolverSettings { sigma: args.sigma, rho, ..Default::default() })?;
     settings.validate()?;
-    let faces = face_bounds(args.faces);
-    let c = certified_solve(&loaded.distances, chosen, args.redundant, faces, settings.clone(), &AtomicBool::new(false)).with_context(|| format!("solving {}", args.file.display()))?;
-    let fixed_map: BTreeMap<String, f64> = fixed.into_iter().collect();
-    let rep = report_certified(&c, loaded.platform.as_ref(), fixed_map, faces, &settings);
+    let rep = job.run(&request, &settings, &AtomicBool::new(false)).with_context(|| format!("solving {}", args.file.display()))?.report;
     summarize(&rep)?;
     if let Some(path) = args.json {
         let text = serde_json::to_string_pretty(&rep)?;

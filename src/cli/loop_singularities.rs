@@ -7,8 +7,7 @@ use anyhow::{bail, Context, Result};
 use linkspace::model::urdf;
 use linkspace::problems::singular::{Output, SingularKind};
 use linkspace::problems::Model;
-use linkspace::singular::image;
-use linkspace::singular::sets::{all_kinds, Actuation, SingularSets};
+use linkspace::app::loops::{all_kinds, analyse_image, Actuation, SingularSets};
 use linkspace::report::singular::SingularReport;
 use linkspace::search::SolverSettings;
 use std::io::Write;
@@ -161,7 +160,7 @@ fn run_image(args: &LoopSingularitiesArgs, mechanism: &linkspace::model::Mechani
     if args.grid < 2 {
         bail!("--grid must be at least 2");
     }
-    let r = image::analyse(mechanism, fixed, actuated, settings, args.grid, &AtomicBool::new(false)).with_context(|| format!("analysing {}", args.urdf.display()))?;
+    let r = analyse_image(mechanism, fixed, actuated, settings, args.grid, &AtomicBool::new(false)).with_context(|| format!("analysing {}", args.urdf.display()))?;
     let mut out = std::io::stdout().lock();
     writeln!(
         out,

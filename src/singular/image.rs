@@ -25,7 +25,7 @@ use crate::interval::{components, point, Bounds, Interval, IntervalBox};
 use crate::model::Mechanism;
 use crate::problems::linkage::LinkageProblem;
 use crate::problems::singular::image::{check, CuspProblem, ImageError, NodeProblem};
-use crate::problems::singular::{Parts, SingularError, SingularKind, SingularProblem};
+use crate::problems::singular::{Parts, SingularError, SingularProblem};
 use crate::search::{Limit, SolveError, SolveStats, SolverSettings, Status};
 use crate::system::{EquationSystem, Monomial, VarId};
 use serde::Serialize;
@@ -660,36 +660,3 @@ impl ImageReport {
     }
 }
 
-/// What `analyse` can fail on.
-#[derive(Debug, thiserror::Error)]
-#[non_exhaustive]
-pub enum AnalyseError {
-    /// The set does not build.
-    #[error(transparent)]
-    Singular(#[from] SingularError),
-    /// Not a 2-dof mechanism with coordinate actuators.
-    #[error(transparent)]
-    Image(#[from] ImageError),
-    /// Bad settings.
-    #[error(transparent)]
-    Solve(#[from] SolveError),
-}
-
-/// The whole analysis of `m`'s type-II image: the cover of `S` (the input set at `settings`),
-/// cusps, nodes, regions on a `grid × grid` raster and the verdict. `settings.timeout` bounds
-/// the whole analysis, as it bounds every set of `sets::SingularSets`: each search gets what the
-/// ones before it left (at least a millisecond, so a search that finds no time still reports its
-/// pending cells instead of being skipped silently).
-pub fn analyse(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String], settings: &SolverSettings, grid: usize, cancel: &AtomicBool) -> Result<ImageReport, AnalyseError> {
-    let t0 = Instant::now();
-    let left = || SolverSettings {
-        timeout: settings.timeout.map(|t| t.saturating_sub(t0.elapsed()).max(std::time::Duration::from_millis(1))),
-        ..settings.clone()
-    };
-    let p = SingularProblem::new(m, fixed, SingularKind::Input, actuated, None)?;
-    let cover = p.solve(&scaled(&left()), cancel)?;
-    let cusps = CuspProblem::new(&p)?.solve(&p, &left(), cancel)?;
-    let nodes = NodeProblem::new(&p)?.solve(&p, &left(), cancel)?;
-    let regions = regions(m, &p, &cover, grid, &left(), cancel)?;
-    Ok(ImageReport::new(&p, &cover, &cusps, &nodes, regions))
-}

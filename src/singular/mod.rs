@@ -1,8 +1,8 @@
 //! Singular sets of closed-loop mechanisms: the searches on the augmented systems that
 //! `problems::singular` builds (a client of the kernel's `Solver`, as `distances` and `manip3r`
-//! are of `search`), their clustering, and the orchestrations front ends run (`sets`: C-space,
-//! input and output sets under one deadline; `image`: the type-II image of 2-dof mechanisms,
-//! its cusps, nodes, regions and the assembly-mode verdict).
+//! are of `search`), their clustering, and the searches on the type-II image of 2-dof mechanisms (`image`: its
+//! cusps, nodes, regions and the assembly-mode verdict). The orchestrations front ends run are
+//! jobs of the application layer (`app::loops`).
 //!
 //! `SingularProblem::solve` runs the kernel's `Solver` on each chart: a box of chart `k` proven
 //! to hold only directions owned by another chart (the first index of largest |m|) is dropped,
@@ -15,7 +15,6 @@ use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 pub mod image;
-pub mod sets;
 
 impl<L: Coordinates> SingularProblem<L> {
     /// Runs the solver on every chart and merges the results. `settings.max_boxes` applies per

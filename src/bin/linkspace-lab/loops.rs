@@ -5,7 +5,7 @@ use anyhow::Result;
 use linkspace::model::urdf;
 use linkspace::problems::singular::image::{CuspProblem, NodeProblem};
 use linkspace::singular::image;
-use linkspace::singular::sets::SingularSets;
+use linkspace::app::loops::SingularSets;
 use linkspace::problems::singular::{Output, SingularKind, SingularProblem};
 use linkspace::search::SolverSettings;
 use std::io::Write;

@@ -1,7 +1,8 @@
-//! The singular sets of one linkage in one call: which kinds, the default actuated joints, one
-//! deadline for all of them. `linkspace loop-singularities` and the node's `LinkageAnalysis`
-//! both run this, so a topic and a `--json` file of the same URDF and settings hold the same
-//! boxes.
+//! The loop-singularity jobs: the singular sets of one linkage in one call (which kinds, the
+//! default actuated joints, one deadline for all of them), and the analysis of a 2-dof
+//! mechanism's type-II image. `linkspace loop-singularities` and the node's `LinkageAnalysis`
+//! both run `SingularSets`, so a topic and a `--json` file of the same URDF and settings hold the
+//! same boxes.
 //!
 //! The model is `problems::Linkage::build`'s, as `solve --model auto` chooses: planar when the
 //! planar builder accepts the mechanism, spatial otherwise (`problems::singular::velocity`),
@@ -11,7 +12,9 @@
 //! actuated joint, wrong actuator count) is answered before any search starts; `solve` then runs
 //! the sets in order under one timeout: what the first set leaves of it goes to the next.
 
-use super::SingularSet;
+use crate::problems::singular::image::{CuspProblem, ImageError, NodeProblem};
+use crate::singular::image::{regions, scaled, ImageReport};
+use crate::singular::SingularSet;
 use crate::model::Mechanism;
 use crate::problems::singular::velocity::point_label;
 use crate::problems::singular::{Output, SingularError, SingularKind, SingularProblem};
@@ -108,6 +111,40 @@ impl SingularSets {
             })
             .collect()
     }
+}
+
+/// What `analyse_image` can fail on.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum ImageAnalysisError {
+    /// The set does not build.
+    #[error(transparent)]
+    Singular(#[from] SingularError),
+    /// Not a 2-dof mechanism with coordinate actuators.
+    #[error(transparent)]
+    Image(#[from] ImageError),
+    /// Bad settings.
+    #[error(transparent)]
+    Solve(#[from] SolveError),
+}
+
+/// The whole analysis of `m`'s type-II image: the cover of `S` (the input set at `settings`),
+/// cusps, nodes, regions on a `grid × grid` raster and the verdict. `settings.timeout` bounds
+/// the whole analysis, as it bounds every set of `SingularSets`: each search gets what the
+/// ones before it left (at least a millisecond, so a search that finds no time still reports its
+/// pending cells instead of being skipped silently).
+pub fn analyse_image(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String], settings: &SolverSettings, grid: usize, cancel: &AtomicBool) -> Result<ImageReport, ImageAnalysisError> {
+    let t0 = Instant::now();
+    let left = || SolverSettings {
+        timeout: settings.timeout.map(|t| t.saturating_sub(t0.elapsed()).max(std::time::Duration::from_millis(1))),
+        ..settings.clone()
+    };
+    let p = SingularProblem::new(m, fixed, SingularKind::Input, actuated, None)?;
+    let cover = p.solve(&scaled(&left()), cancel)?;
+    let cusps = CuspProblem::new(&p)?.solve(&p, &left(), cancel)?;
+    let nodes = NodeProblem::new(&p)?.solve(&p, &left(), cancel)?;
+    let regions = regions(m, &p, &cover, grid, &left(), cancel)?;
+    Ok(ImageReport::new(&p, &cover, &cusps, &nodes, regions))
 }
 
 #[cfg(test)]

@@ -1,0 +1,89 @@
+//! The distance job (seed 004): a platform read from URDF, or a pure distance problem read from
+//! a distance file, certified by `distances::solve` and reported as a `DistancesReport`. What
+//! `linkspace distances` runs, and what the node's platform analysis publishes.
+
+use crate::contract::FaceBounds;
+use crate::distances::{choose, solve, Certified, Choice, DistancesError};
+use crate::model::Mechanism;
+use crate::problems::cayley_menger::{DistanceError, DistanceProblem};
+use crate::problems::{PlatformError, PlatformProblem};
+use crate::report::distances::{report_certified, DistancesReport};
+use crate::search::SolverSettings;
+use std::sync::atomic::AtomicBool;
+
+/// How to solve: the formulation, the redundant determinants, the trapezoid sides.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DistancesRequest {
+    /// The formulation; `Auto` lets `distances::choose` pick.
+    pub formulation: Choice,
+    /// Add the redundant determinants (platform: the seed's Eq. 7; files: six-point ones).
+    pub redundant: bool,
+    /// How trapezoid sides are bounded.
+    pub faces: FaceBounds,
+}
+
+/// A loaded distance problem, with the platform it came from when it came from URDF.
+#[derive(Clone, Debug)]
+pub struct DistancesJob {
+    distances: DistanceProblem,
+    platform: Option<PlatformProblem>,
+    fixed: Vec<(String, f64)>,
+}
+
+/// A finished run: the certified result and its report.
+pub struct DistancesRun {
+    /// What the solver proved, over the solved formulation's variables.
+    pub certified: Certified,
+    /// The same in the problem's terms (distances, poses, lines).
+    pub report: DistancesReport,
+}
+
+impl DistancesJob {
+    /// The platform of `mechanism` with the squared leg lengths `fixed`.
+    pub fn platform(mechanism: &Mechanism, fixed: &[(String, f64)]) -> Result<Self, PlatformError> {
+        let p = PlatformProblem::new(mechanism, fixed)?;
+        Ok(Self { distances: p.distances.clone(), platform: Some(p), fixed: fixed.to_vec() })
+    }
+
+    /// A problem read from a distance file's text (schema in README), with named distances
+    /// `fixed`.
+    pub fn file(text: &str, fixed: &[(String, f64)]) -> Result<Self, DistanceError> {
+        Ok(Self { distances: crate::distances::file::parse(text, fixed)?, platform: None, fixed: fixed.to_vec() })
+    }
+
+    /// The distance problem.
+    pub fn problem(&self) -> &DistanceProblem {
+        &self.distances
+    }
+
+    /// The platform, when the problem came from URDF.
+    pub fn platform_problem(&self) -> Option<&PlatformProblem> {
+        self.platform.as_ref()
+    }
+
+    /// The formulation `asked` resolves to (`Auto`: what `distances::choose` picks).
+    pub fn formulation(&self, asked: Choice) -> Choice {
+        match asked {
+            Choice::Auto => choose(&self.distances),
+            c => c,
+        }
+    }
+
+    /// Solves and reports. `request.formulation` may be `Auto`.
+    pub fn run(&self, request: &DistancesRequest, settings: &SolverSettings, cancel: &AtomicBool) -> Result<DistancesRun, DistancesError> {
+        let formulation = self.formulation(request.formulation);
+        let certified = solve(&self.distances, formulation, request.redundant, request.faces, settings.clone(), cancel)?;
+        let report = report_certified(&certified, self.platform.as_ref(), self.fixed.iter().cloned().collect(), request.faces, settings);
+        Ok(DistancesRun { certified, report })
+    }
+}
+
+/// The default rho of a formulation: the seed's 0.99 for the determinants; 0.9 in coordinates
+/// (points, line), where bisecting is cheaper than slow propagation fixpoints.
+pub fn default_rho(formulation: Choice) -> f64 {
+    if matches!(formulation, Choice::Points | Choice::Line) {
+        0.9
+    } else {
+        0.99
+    }
+}
