@@ -17,8 +17,58 @@ use super::{Collision, Compound, Joint, JointKind, Link, LoopClosure, Mechanism,
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use std::collections::HashMap;
 
+/// The deepest element nesting accepted. A URDF needs a handful of levels (robot, link, visual,
+/// geometry, mesh); `urdf_rs` reads nested elements recursively, so a hostile document nested
+/// tens of thousands deep would overflow the stack, which no error handling can catch.
+pub const MAX_DEPTH: usize = 256;
+
+/// Refuses a document nested deeper than `MAX_DEPTH`. A scan of the text, before any parser
+/// (the XML parser recurses too): for a well-formed document it counts exactly; a malformed one
+/// is left to the parser's error.
+fn check_depth(xml: &str) -> Result<(), ModelError> {
+    let bytes = xml.as_bytes();
+    let skip_past = |from: usize, end: &str| xml[from..].find(end).map_or(bytes.len(), |k| from + k + end.len());
+    let (mut i, mut depth) = (0usize, 0usize);
+    while i < bytes.len() {
+        match bytes[i] {
+            b'<' if xml[i..].starts_with("<!--") => i = skip_past(i, "-->"),
+            b'<' if xml[i..].starts_with("<![CDATA[") => i = skip_past(i, "]]>"),
+            b'<' if xml[i..].starts_with("<?") => i = skip_past(i, "?>"),
+            b'<' if xml[i..].starts_with("<!") => i = skip_past(i, ">"),
+            b'<' if xml[i..].starts_with("</") => {
+                depth = depth.saturating_sub(1);
+                i = skip_past(i, ">");
+            }
+            b'<' => {
+                // An opening tag: its end is the first '>' outside quoted attribute values.
+                let mut j = i + 1;
+                let mut quote = None;
+                while j < bytes.len() && !(quote.is_none() && bytes[j] == b'>') {
+                    match (quote, bytes[j]) {
+                        (None, q @ (b'"' | b'\'')) => quote = Some(q),
+                        (Some(q), c) if c == q => quote = None,
+                        _ => {}
+                    }
+                    j += 1;
+                }
+                if bytes.get(j.wrapping_sub(1)) != Some(&b'/') {
+                    depth += 1;
+                    if depth > MAX_DEPTH {
+                        let line = 1 + xml[..i].matches('\n').count();
+                        return Err(ModelError::Malformed(format!("elements are nested more than {MAX_DEPTH} deep (line {line})")));
+                    }
+                }
+                i = j + 1;
+            }
+            _ => i += 1,
+        }
+    }
+    Ok(())
+}
+
 /// Parses a URDF document (with optional `<loop>` elements) into a checked `Mechanism`.
 pub fn parse(xml: &str) -> Result<Mechanism, ModelError> {
+    check_depth(xml)?;
     let doc = roxmltree::Document::parse(xml).map_err(|e| ModelError::Malformed(e.to_string()))?;
     let robot_el = doc.root_element();
     if robot_el.tag_name().name() != "robot" {
@@ -270,6 +320,16 @@ fn unit_axis(element: &str, xyz: [f64; 3]) -> Result<Vector3<f64>, ModelError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn deeply_nested_documents_are_refused_in_one_line() {
+        let nested = |n: usize| format!("<robot name=\"r\"><link name=\"a\"/>{}{}</robot>", "<x>".repeat(n), "</x>".repeat(n));
+        // Deep enough to overflow the stack of a recursive reader: refused before any.
+        let err = parse(&nested(20_000)).expect_err("refused").to_string();
+        assert!(err.contains("nested more than 256 deep") && !err.contains('\n'), "{err}");
+        // Within the bound the document is read (a robot with one link and an unknown element).
+        assert_eq!(parse(&nested(MAX_DEPTH - 2)).expect("read").links.len(), 1);
+    }
 
     #[test]
     fn bundled_butterfly_has_three_loops_on_a_tree() {
