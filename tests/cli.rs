@@ -439,3 +439,27 @@ fn bench3r_arms_has_a_row_per_robot_and_the_new_path_completes() {
         }
     }
 }
+
+#[test]
+fn a_deeply_nested_document_gets_one_line() {
+    let depth = 20_000;
+    let deep = tempfile_path::Path::write(&format!("<robot name=\"r\"><link name=\"a\"/>{}{}</robot>", "<x>".repeat(depth), "</x>".repeat(depth)));
+    assert_clear_error(&["solve", deep.as_str()], "nested more than 256 deep");
+    assert_clear_error(&["singularities", deep.as_str()], "nested more than 256 deep");
+}
+
+/// The image analysis ends within its deadline, however fine the raster: a grid of 1000 cells
+/// per axis is a million cells, which the raster marks per image box, checking the deadline as
+/// it goes. A deadline bound, not a speed test: the margin is the brief's 10 % plus 0.5 s.
+#[test]
+fn the_image_analysis_honours_its_deadline_and_its_memory_limit() {
+    let five_bar = fixture("five_bar.urdf");
+    let t0 = std::time::Instant::now();
+    let (ok, out, err) = run(&["loop-singularities", &five_bar, "--actuated", "crank1_joint,crank2_joint", "--kind", "image", "--grid", "1000", "--timeout", "3"]);
+    let elapsed = t0.elapsed().as_secs_f64();
+    assert!(ok, "{err}");
+    assert!(out.contains("status incomplete"), "{out}");
+    assert!(elapsed < 3.0 * 1.1 + 0.5, "took {elapsed:.2} s for --timeout 3");
+    // A raster that would hold more than the memory limit is refused before any search.
+    assert_clear_error(&["loop-singularities", &five_bar, "--actuated", "crank1_joint,crank2_joint", "--kind", "image", "--grid", "20000"], "raster of regions needs about");
+}

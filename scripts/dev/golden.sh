@@ -14,6 +14,7 @@ run() { # name, args...
   fi
   # the text summary without timings
   sed -i -E 's/[0-9]+\.[0-9]+ s\b/T s/g' "$out/$name.txt"
+  sed -i -E "s/\((cover|cusps) [^)]*\)/(T)/" "$out/$name.txt"
 }
 run solve_four_bar solve urdf/four_bar.urdf --fix crank_joint=0.5 --sigma 1e-4
 run solve_butterfly_rigid solve urdf/double_butterfly.urdf --fix joint6=1.1760052070951352 --sigma 1e-4

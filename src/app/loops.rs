@@ -13,7 +13,7 @@
 //! the sets in order under one timeout: what the first set leaves of it goes to the next.
 
 use crate::problems::singular::image::{CuspProblem, ImageError, NodeProblem};
-use crate::singular::image::{regions, scaled, ImageReport};
+use crate::singular::image::{regions, scaled, ImageReport, RASTER_BYTES_PER_CELL};
 use crate::singular::SingularSet;
 use crate::model::Mechanism;
 use crate::problems::singular::velocity::point_label;
@@ -126,6 +126,16 @@ pub enum ImageAnalysisError {
     /// Bad settings.
     #[error(transparent)]
     Solve(#[from] SolveError),
+    /// The raster of regions would hold more than the memory limit.
+    #[error("a {grid} × {grid} raster of regions needs about {need_mib} MiB, over the memory limit of {limit_mib} MiB (use a smaller grid or raise the limit)")]
+    Raster {
+        /// cells per axis
+        grid: usize,
+        /// what it would hold
+        need_mib: usize,
+        /// the limit
+        limit_mib: usize,
+    },
 }
 
 /// The whole analysis of `m`'s type-II image: the cover of `S` (the input set at `settings`),
@@ -134,6 +144,10 @@ pub enum ImageAnalysisError {
 /// ones before it left (at least a millisecond, so a search that finds no time still reports its
 /// pending cells instead of being skipped silently).
 pub fn analyse_image(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String], settings: &SolverSettings, grid: usize, cancel: &AtomicBool) -> Result<ImageReport, ImageAnalysisError> {
+    let need = grid.saturating_mul(grid).saturating_mul(RASTER_BYTES_PER_CELL);
+    if need > settings.max_memory {
+        return Err(ImageAnalysisError::Raster { grid, need_mib: need >> 20, limit_mib: settings.max_memory >> 20 });
+    }
     let t0 = Instant::now();
     let left = || SolverSettings {
         timeout: settings.timeout.map(|t| t.saturating_sub(t0.elapsed()).max(std::time::Duration::from_millis(1))),

@@ -366,7 +366,33 @@ impl Axis {
         let shifts: &[f64] = if self.periodic { &[-2.0 * PI, 0.0, 2.0 * PI] } else { &[0.0] };
         hi - lo >= self.hi - self.lo || shifts.iter().any(|s| lo + s <= b && a <= hi + s)
     }
+    /// The cells of an `n`-cell axis that `[lo, hi]` meets, ascending: the index range of each
+    /// shift, widened by a cell against rounding, each candidate then checked with `meets`, so
+    /// the raster is exactly that of testing every cell, at the cost of the cells an image covers.
+    fn cells_meeting(&self, (lo, hi): (f64, f64), n: usize) -> Vec<usize> {
+        if !(lo.is_finite() && hi.is_finite()) || hi - lo >= self.hi - self.lo {
+            return (0..n).collect();
+        }
+        let w = (self.hi - self.lo) / n as f64;
+        let shifts: &[f64] = if self.periodic { &[-2.0 * PI, 0.0, 2.0 * PI] } else { &[0.0] };
+        let mut out = Vec::new();
+        for s in shifts {
+            let first = (((lo + s - self.lo) / w).floor() - 1.0).max(0.0);
+            let last = (((hi + s - self.lo) / w).floor() + 1.0).min(n as f64 - 1.0);
+            if first <= last {
+                out.extend(first as usize..=last as usize);
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out.retain(|&i| self.meets(self.cell(i, n), (lo, hi)));
+        out
+    }
 }
+
+/// Bytes the raster of a `grid × grid` region search holds per cell: the blocked flag, the
+/// flood fill's reached flag and its member index.
+pub const RASTER_BYTES_PER_CELL: usize = 2 + std::mem::size_of::<usize>();
 
 /// A region of actuator space (a component of the grid's free cells) and its assembly modes.
 #[derive(Clone, Debug, Serialize)]
@@ -388,6 +414,10 @@ pub struct Region {
 pub struct Regions {
     /// Grid cells per axis.
     pub grid: usize,
+    /// `complete`, or `incomplete` when the deadline or cancel stopped the raster (then no
+    /// region is listed).
+    #[serde(flatten, with = "crate::report::kernel::StatusDef")]
+    pub status: Status,
     /// Cells meeting the image of the cover of `S`.
     pub blocked_cells: usize,
     /// The regions.
@@ -416,15 +446,32 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
         });
     }
     let images: Vec<Vec<(f64, f64)>> = set.boxes.iter().map(|b| sp.actuator_values(&b.b)).collect();
+    let stopped = || -> Option<Limit> {
+        if cancel.load(std::sync::atomic::Ordering::Relaxed) {
+            Some(Limit::Cancelled)
+        } else {
+            settings.timeout.filter(|t| t0.elapsed() >= *t).map(|_| Limit::Time)
+        }
+    };
+    let unfinished = |limit: Limit| Regions { grid, status: Status::Incomplete(limit), blocked_cells: 0, regions: Vec::new(), seconds: t0.elapsed().as_secs_f64() };
     let mut blocked = vec![false; grid * grid];
-    for i in 0..grid {
-        let ci = axes[0].cell(i, grid);
-        for j in 0..grid {
-            let cj = axes[1].cell(j, grid);
-            blocked[i * grid + j] = images.iter().any(|im| axes[0].meets(ci, im[0]) && axes[1].meets(cj, im[1]));
+    for (k, im) in images.iter().enumerate() {
+        if k % 64 == 0 {
+            if let Some(limit) = stopped() {
+                return Ok(unfinished(limit));
+            }
+        }
+        let rows = axes[0].cells_meeting(im[0], grid);
+        for j in axes[1].cells_meeting(im[1], grid) {
+            for &i in &rows {
+                blocked[i * grid + j] = true;
+            }
         }
     }
-    let mut out = Regions { grid, blocked_cells: blocked.iter().filter(|b| **b).count(), regions: Vec::new(), seconds: 0.0 };
+    if let Some(limit) = stopped() {
+        return Ok(unfinished(limit));
+    }
+    let mut out = Regions { grid, status: Status::Complete, blocked_cells: blocked.iter().filter(|b| **b).count(), regions: Vec::new(), seconds: 0.0 };
     let wrap = |x: i64, ax: &Axis| if (0..grid as i64).contains(&x) { Some(x as usize) } else if ax.periodic { Some(x.rem_euclid(grid as i64) as usize) } else { None };
     let free_regions = crate::interval::flood_fill(grid * grid, |c| !blocked[c], |c, next| {
         let (i, j) = (c / grid, c % grid);
@@ -436,6 +483,9 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
             }
         }
     });
+    if let Some(limit) = stopped() {
+        return Ok(unfinished(limit));
+    }
     for members in free_regions {
         let start = members[0];
         // The sample: the member cell nearest the members' mean (in grid indices), so a chart's
@@ -517,7 +567,9 @@ pub fn verdict(cover: &SingularSet, cusps: &PointSearch, nodes: &NodeSearch, reg
             Some(_) => {}
         }
     }
-    if regions.regions.is_empty() {
+    if let Status::Incomplete(limit) = regions.status {
+        gaps.push(format!("the raster of regions stopped early ({} limit)", limit.name()));
+    } else if regions.regions.is_empty() {
         gaps.push("no region found on the grid".to_string());
     }
     if gaps.is_empty() {
@@ -643,6 +695,7 @@ impl ImageReport {
         let complete = [cover.status, cusps.status, nodes.status].iter().all(|s| *s == Status::Complete)
             && cusps.points.len() == cusps.proven()
             && nodes.undecided() == 0
+            && regions.status == Status::Complete
             && regions.regions.iter().all(|r| r.configurations.is_some() && r.signs.is_some());
         Self {
             mechanism: sp.linkage.name.clone(),
