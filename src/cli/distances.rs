@@ -159,7 +159,7 @@ fn summarize(rep: &DistancesReport) -> Result<()> {
         rep.clusters,
         rep.placements,
         if platform { "poses" } else { "placements" },
-        serde_json::to_value(rep.formulation).ok().and_then(|v| v.as_str().map(str::to_string)).unwrap_or_default(),
+        rep.formulation.name(),
         rep.stats.processed,
         rep.stats.empty,
         rep.stats.bisected,
