@@ -4,7 +4,19 @@
 //! Only this module and `ros` know serde: `kernel` states how the kernel's and `model`'s values
 //! are written.
 
+/// `fn $name(&[$ty], Serializer)`: a list of `$ty` written through its remote definition `$def`.
+macro_rules! list_with {
+    ($name:ident, $ty:ty, $def:literal) => {
+        fn $name<S: serde::Serializer>(items: &[$ty], s: S) -> Result<S::Ok, S::Error> {
+            #[derive(serde::Serialize)]
+            struct One<'a>(#[serde(with = $def)] &'a $ty);
+            s.collect_seq(items.iter().map(One))
+        }
+    };
+}
+
 pub mod distances;
+pub mod image;
 pub(crate) mod kernel;
 pub mod singular;
 pub mod solve;

@@ -28,7 +28,6 @@ use crate::problems::singular::image::{check, CuspProblem, ImageError, NodeProbl
 use crate::problems::singular::{Parts, SingularError, SingularKind, SingularProblem};
 use crate::search::{Limit, SolveError, SolveStats, SolverSettings, Status};
 use crate::system::{EquationSystem, Monomial, VarId};
-use serde::Serialize;
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 use std::sync::atomic::AtomicBool;
@@ -369,7 +368,7 @@ impl Axis {
 }
 
 /// A region of actuator space (a component of the grid's free cells) and its assembly modes.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct Region {
     /// Grid cells in the region.
     pub cells: usize,
@@ -384,7 +383,7 @@ pub struct Region {
 }
 
 /// Regions of actuator space cut by the image of `S`.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct Regions {
     /// Grid cells per axis.
     pub grid: usize,
@@ -484,7 +483,7 @@ fn sample_region(m: &Mechanism, sp: &SingularProblem, sample: &[f64], cells: usi
 }
 
 /// `yes`, `no` or `undecided`, with the argument.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct Verdict {
     /// Can the mechanism change assembly mode without crossing a type-II singularity?
     pub answer: &'static str,
@@ -542,7 +541,7 @@ fn status_word(s: Status) -> &'static str {
 }
 
 /// One cusp: the 3R `CuspRecord`'s fields; `workspace` is the image in actuator space.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct CuspRecord {
     /// Free joint values (hull over the cluster).
     pub joints: BTreeMap<String, Bounds>,
@@ -555,7 +554,7 @@ pub struct CuspRecord {
 }
 
 /// One node: two joint boxes with a shared image (the 3R `NodeRecord`'s fields).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct NodeRecord {
     /// The two joint boxes.
     pub points: [BTreeMap<String, Bounds>; 2],
@@ -566,7 +565,7 @@ pub struct NodeRecord {
 }
 
 /// Proven and undecided counts.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct Counts {
     /// Certified.
     pub proven: usize,
@@ -575,7 +574,7 @@ pub struct Counts {
 }
 
 /// What `loop-singularities --kind image --json` writes.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct ImageReport {
     /// Robot name.
     pub mechanism: String,
