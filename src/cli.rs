@@ -15,8 +15,11 @@ use linkspace::manip3r::{
     collision,
     report::CollisionReport,
 };
+use linkspace::app::Bounds;
+use linkspace::problems::singular::Coordinates;
+use linkspace::report;
 use linkspace::search::Control;
-use linkspace::search::{Limits, Progress, SolverSettings};
+use linkspace::search::{BoxStatus, Limits, Progress, SolverSettings};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
@@ -411,51 +414,58 @@ fn solve(args: SolveArgs) -> Result<()> {
             let _ = std::io::stderr().flush();
         }
     };
-    let report = job.run(&AtomicBool::new(false), &mut progress).report;
+    let result = job.run(&AtomicBool::new(false), &mut progress);
     if show {
         eprintln!();
     }
-    let status = report.status;
+    let solutions: Vec<&app::ResultBox> = result.boxes.iter().filter(|b| b.status.is_solution()).collect();
+    let proven = result.boxes.iter().filter(|b| b.status == BoxStatus::Unique).count();
+    let undecided = result.boxes.len() - solutions.len();
+    let stats = &result.stats;
     // Write through a handle: `println!` panics when the reader of a pipe has gone.
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
         "{}: {} proven, {} undecided ({} solution boxes in {} clusters), status {}, {} boxes processed ({} empty, {} bisected), {} LPs, {:.3} s",
-        report.mechanism,
-        report.solutions.iter().filter(|s| s.unique).count(),
-        report.undecided.len(),
-        report.solutions.len(),
-        report.clusters,
-        match status {
+        result.mechanism,
+        proven,
+        undecided,
+        solutions.len(),
+        result.clusters,
+        match result.status {
             linkspace::Status::Complete => "complete".to_string(),
-            linkspace::Status::Incomplete(l) => format!("incomplete ({l:?} limit, {} boxes undecided)", report.undecided.len()),
+            linkspace::Status::Incomplete(l) => format!("incomplete ({l:?} limit, {undecided} boxes undecided)"),
         },
-        report.stats.processed,
-        report.stats.empty,
-        report.stats.bisected,
-        report.stats.lp.solved,
-        report.stats.seconds
+        stats.processed,
+        stats.empty,
+        stats.bisected,
+        stats.lp.solved,
+        stats.seconds
     )
     .ok();
     // "Proven": a box certified (Krawczyk) to hold exactly one configuration; the other solution
     // boxes are not refuted at sigma (points of a curve, or roots not yet proven).
-    writeln!(out, "  model: {} ({})", report.model, report.model_reason).ok();
-    for r in &report.reductions {
+    let problem = job.problem();
+    writeln!(out, "  model: {} ({})", problem.model().name(), problem.model_reason()).ok();
+    for r in problem.reductions() {
         writeln!(out, "  reduced: {r}").ok();
     }
-    if report.stats.post_processing_cut_short {
+    if stats.post_processing_cut_short {
         // Honest about what the limit cost: these boxes were reported without the deeper
         // search that drops near misses, so the count may include a few spurious ones.
         writeln!(out, "  the time limit cut the spurious-box check short: some lone boxes were kept unexamined").ok();
     }
-    if report.solutions.len() <= 20 {
-        for (k, s) in report.solutions.iter().enumerate() {
-            let joints: Vec<String> = s.joints.iter().map(|(n, [lo, hi])| format!("{n}={:.6}", 0.5 * (lo + hi))).collect();
+    if solutions.len() <= 20 {
+        for (k, s) in solutions.iter().enumerate() {
+            // By joint name, as the JSON lists them.
+            let mut joints: Vec<(&String, &Bounds)> = result.joint_names.iter().zip(&s.joints).collect();
+            joints.sort_by(|a, b| a.0.cmp(b.0));
+            let joints: Vec<String> = joints.iter().map(|(n, [lo, hi])| format!("{n}={:.6}", 0.5 * (lo + hi))).collect();
             writeln!(out, "  #{k}: {}", joints.join(" ")).ok();
         }
     }
     if let Some(path) = args.json {
-        let text = serde_json::to_string_pretty(&report)?;
+        let text = serde_json::to_string_pretty(&report::SolveReport::new(problem, &result))?;
         std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())

@@ -31,8 +31,7 @@ use crate::search::{Collect, SolveStats, Solver, SolverSettings, Status};
 use std::sync::atomic::AtomicBool;
 
 /// Which formulation to solve.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Choice {
     /// Let the builder pick (see `choose`).
     Auto,
@@ -44,6 +43,19 @@ pub enum Choice {
     Shared,
     /// Determinants, the seed's split variables.
     Split,
+}
+
+impl Choice {
+    /// The name used on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Choice::Auto => "auto",
+            Choice::Points => "points",
+            Choice::Line => "line",
+            Choice::Shared => "shared",
+            Choice::Split => "split",
+        }
+    }
 }
 
 /// Why a problem cannot be solved.
@@ -62,7 +74,7 @@ pub enum DistancesError {
 }
 
 /// What was settled about one cluster.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct ClusterVerdict {
     /// Distinct solutions proven (certified placements) in the cluster.
     pub proven: usize,

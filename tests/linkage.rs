@@ -238,10 +238,9 @@ fn four_bar_matches_the_closed_form_across_the_crank_range() {
         for (t4, cp) in four_bar_closed_form(t2) {
             let hit = run.solutions.iter().any(|b| {
                 let rocker = p.link_angles(b)["rocker"];
-                let rec = p.record(b);
-                let tp = &rec.traces["coupler@2,1"];
-                let near = |v: f64, [lo, hi]: [f64; 2]| lo - 1e-9 <= v && v <= hi + 1e-9;
-                rocker.0 - 1e-9 <= t4 && t4 <= rocker.1 + 1e-9 && near(cp[0], tp.x) && near(cp[1], tp.y)
+                let tp = p.traces.iter().find(|t| t.name == "coupler@2,1").expect("traced");
+                let near = |v: f64, x: linkspace::Interval| x.inf() - 1e-9 <= v && v <= x.sup() + 1e-9;
+                rocker.0 - 1e-9 <= t4 && t4 <= rocker.1 + 1e-9 && near(cp[0], b.dims[tp.x]) && near(cp[1], b.dims[tp.y])
             });
             assert!(hit, "crank {t2}: rocker {t4} / coupler point {cp:?} in no box");
         }

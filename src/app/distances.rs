@@ -1,13 +1,12 @@
 //! The distance job (seed 004): a platform read from URDF, or a pure distance problem read from
-//! a distance file, certified by `distances::solve` and reported as a `DistancesReport`. What
-//! `linkspace distances` runs, and what the node's platform analysis publishes.
+//! a distance file, certified by `distances::solve`. What `linkspace distances` runs (its JSON
+//! writer, `report::distances`, reads the result) and what the node's platform analysis publishes.
 
 use crate::contract::FaceBounds;
 use crate::distances::{choose, solve, Certified, Choice, DistancesError};
 use crate::model::Mechanism;
 use crate::problems::cayley_menger::{DistanceError, DistanceProblem};
 use crate::problems::{PlatformError, PlatformProblem};
-use crate::report::distances::{report_certified, DistancesReport};
 use crate::search::SolverSettings;
 use std::sync::atomic::AtomicBool;
 
@@ -28,14 +27,6 @@ pub struct DistancesJob {
     distances: DistanceProblem,
     platform: Option<PlatformProblem>,
     fixed: Vec<(String, f64)>,
-}
-
-/// A finished run: the certified result and its report.
-pub struct DistancesRun {
-    /// What the solver proved, over the solved formulation's variables.
-    pub certified: Certified,
-    /// The same in the problem's terms (distances, poses, lines).
-    pub report: DistancesReport,
 }
 
 impl DistancesJob {
@@ -69,12 +60,15 @@ impl DistancesJob {
         }
     }
 
-    /// Solves and reports. `request.formulation` may be `Auto`.
-    pub fn run(&self, request: &DistancesRequest, settings: &SolverSettings, cancel: &AtomicBool) -> Result<DistancesRun, DistancesError> {
-        let formulation = self.formulation(request.formulation);
-        let certified = solve(&self.distances, formulation, request.redundant, request.faces, settings.clone(), cancel)?;
-        let report = report_certified(&certified, self.platform.as_ref(), self.fixed.iter().cloned().collect(), request.faces, settings);
-        Ok(DistancesRun { certified, report })
+    /// Joints fixed at load time: the platform's squared leg lengths, or the file's named
+    /// distances.
+    pub fn fixed(&self) -> &[(String, f64)] {
+        &self.fixed
+    }
+
+    /// Solves. `request.formulation` may be `Auto`.
+    pub fn run(&self, request: &DistancesRequest, settings: &SolverSettings, cancel: &AtomicBool) -> Result<Certified, DistancesError> {
+        solve(&self.distances, self.formulation(request.formulation), request.redundant, request.faces, settings.clone(), cancel)
     }
 }
 

@@ -11,17 +11,15 @@
 
 use super::{
     classify, gap, Actuation, Analysis, MechanismKind, AnalysisError, BoxSetResult, Classification, LoopSingularities, PreparedRun, ResultBox, Service, SingularSetResult, SingularityQuery,
-    SingularityResult,
+    SingularityResult, TracedBounds,
 };
-use crate::interval::components;
+use crate::interval::{bounds, components, IntervalBox};
 use crate::model::{JointKind, Mechanism};
 use crate::problems::choice::TracedPoint;
 use crate::problems::singular::{Coordinates, SingularProblem};
 use super::loops::{all_kinds, SingularSets};
 use crate::singular::{BoxKind, SingularSet};
 use crate::problems::{Linkage, LinkageError, ModelChoice};
-use crate::report::singular::SingularReport;
-use crate::report::SolveReport;
 use crate::search::{BoxStatus, Progress, SolveStats, SolverSettings, Status};
 use crate::system::VarRole;
 use std::sync::atomic::AtomicBool;
@@ -256,34 +254,34 @@ impl PreparedRun<SingularityResult> for SingularSetsRun {
     }
 }
 
-/// One solved set as a box set, through the CLI's report (`SingularReport`), so its joint
-/// values are those of `loop-singularities --json` bit for bit.
+/// One solved set as a box set: the boxes, joint values and counts of `loop-singularities
+/// --json` for the same set.
 fn set_result(p: &SingularProblem<Linkage>, settings: &SolverSettings, set: &SingularSet) -> SingularSetResult {
-    let report = SingularReport::new(p, settings, set);
     let names = p.linkage.free_joints().to_vec();
     let chart = &p.charts[0];
     let boxes: Vec<ResultBox> = set
         .boxes
         .iter()
-        .zip(&report.boxes)
         .zip(&set.labels)
-        .map(|((sb, record), &label)| {
+        .map(|(sb, &label)| {
             let status = match sb.status {
                 BoxKind::Certified => BoxStatus::Unique,
                 BoxKind::Solution => BoxStatus::Solution,
                 BoxKind::Undecided => BoxStatus::Undecided,
             };
+            let values = p.joint_values(&sb.b);
             ResultBox {
                 status,
-                bounds: sb.b.dims.iter().map(|&x| crate::interval::bounds(x)).collect(),
-                joints: names.iter().map(|n| record.joints.get(n).copied().unwrap_or([f64::NAN, f64::NAN])).collect(),
+                bounds: sb.b.dims.iter().map(|&x| bounds(x)).collect(),
+                joints: names.iter().map(|n| values.get(n).map_or([f64::NAN, f64::NAN], |&(lo, hi)| [lo, hi])).collect(),
                 level: sb.b.level,
                 cluster: (sb.status != BoxKind::Undecided).then_some(label),
                 traces: vec![],
             }
         })
         .collect();
-    let undecided = report.summary.undecided_boxes;
+    let undecided = set.boxes.iter().filter(|b| b.status == BoxKind::Undecided).count();
+    let (clusters, certified_clusters) = (set.clusters.len(), set.certified_clusters());
     let mut stats = SolveStats::default();
     for s in &set.stats {
         stats.processed += s.processed;
@@ -300,18 +298,12 @@ fn set_result(p: &SingularProblem<Linkage>, settings: &SolverSettings, set: &Sin
         d if d < 0 => "generically none",
         _ => "surfaces",
     };
-    let s = &report.summary;
+    let n = boxes.len();
     let verdict = match set.status {
-        Status::Complete if s.boxes == 0 => format!("none (proven: a complete search left no box; expected {shape})"),
-        Status::Complete if undecided == 0 => format!("{} clusters ({} certified, {} unproven), {} boxes, complete (expected {shape})", s.clusters, s.certified_clusters, s.unproven_clusters, s.boxes),
-        Status::Complete => format!("{} clusters ({} certified), {} boxes, {undecided} undecided (expected {shape})", s.clusters, s.certified_clusters, s.boxes),
-        Status::Incomplete(l) => format!(
-            "incomplete ({} limit): {} clusters ({} certified), {} boxes, {undecided} undecided (expected {shape})",
-            l.name(),
-            s.clusters,
-            s.certified_clusters,
-            s.boxes
-        ),
+        Status::Complete if n == 0 => format!("none (proven: a complete search left no box; expected {shape})"),
+        Status::Complete if undecided == 0 => format!("{clusters} clusters ({certified_clusters} certified, {} unproven), {n} boxes, complete (expected {shape})", clusters - certified_clusters),
+        Status::Complete => format!("{clusters} clusters ({certified_clusters} certified), {n} boxes, {undecided} undecided (expected {shape})"),
+        Status::Incomplete(l) => format!("incomplete ({} limit): {clusters} clusters ({certified_clusters} certified), {n} boxes, {undecided} undecided (expected {shape})", l.name()),
     };
     SingularSetResult {
         kind: p.kind.name(),
@@ -329,7 +321,7 @@ fn set_result(p: &SingularProblem<Linkage>, settings: &SolverSettings, set: &Sin
             clusters: set.clusters.len(),
             stats,
         },
-        proven: s.certified_clusters,
+        proven: certified_clusters,
         undecided,
         verdict,
     }
@@ -367,22 +359,60 @@ impl SolveJob {
         &self.settings
     }
 
-    /// Encloses every configuration, within the settings' limits or until `cancel` is raised.
-    pub fn run(&self, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> SolveRun {
+    /// Encloses every configuration, within the settings' limits or until `cancel` is raised:
+    /// the box set of analysis `solve`, solution boxes first (in the order found), then the
+    /// undecided ones, each with its joint values and traced points.
+    pub fn run(&self, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> BoxSetResult {
         let solver = self.problem.solver(self.settings.clone()).expect("invariant: validated when built");
         let e = solver.enclose(cancel, progress);
-        let report = self.problem.report(&self.settings, e.status, e.stats.clone(), &e.solutions, &e.unique, &e.undecided);
-        SolveRun { report, solutions: e.solutions }
+        let (labels, clusters) = components(&e.solutions);
+        let problem = &self.problem;
+        let joint_names = problem.free_joints().to_vec();
+        let result_box = |b: &IntervalBox, status: BoxStatus, cluster: Option<usize>| {
+            let values = problem.joint_values(b);
+            ResultBox {
+                status,
+                bounds: b.dims.iter().map(|&x| bounds(x)).collect(),
+                joints: joint_names.iter().map(|n| values.get(n).map_or([f64::NAN, f64::NAN], |&(lo, hi)| [lo, hi])).collect(),
+                level: b.level,
+                cluster,
+                traces: traced(problem, b),
+            }
+        };
+        let mut boxes: Vec<ResultBox> =
+            e.solutions.iter().zip(&e.unique).zip(&labels).map(|((b, &unique), &l)| result_box(b, if unique { BoxStatus::Unique } else { BoxStatus::Solution }, Some(l))).collect();
+        boxes.extend(e.undecided.iter().map(|b| result_box(b, BoxStatus::Undecided, None)));
+        let system = problem.system();
+        BoxSetResult {
+            mechanism: problem.name().to_string(),
+            analysis: "solve".to_string(),
+            status: e.status,
+            settings: self.settings.clone(),
+            variables: system.vars.iter().map(|v| v.name.clone()).collect(),
+            primaries: system.vars.iter().enumerate().filter(|(_, v)| v.role == VarRole::Primary).map(|(i, _)| i).collect(),
+            joint_names,
+            fixed_joints: problem.fixed_joints().to_vec(),
+            traces: problem.trace_names(),
+            boxes,
+            clusters,
+            stats: e.stats,
+        }
     }
 }
 
-/// The outcome of a `SolveJob`.
-#[derive(Clone, Debug)]
-pub struct SolveRun {
-    /// Every box with its joint values and traces (what `solve --json` writes).
-    pub report: SolveReport,
-    /// The solution boxes in the system's variables, in the report's order.
-    pub solutions: Vec<crate::interval::IntervalBox>,
+/// World coordinates of the problem's traced points over a box, in `trace_names` order.
+fn traced(problem: &Linkage, b: &IntervalBox) -> Vec<TracedBounds> {
+    match problem {
+        Linkage::Planar(p) => p.traces.iter().map(|t| TracedBounds { x: bounds(b.dims[t.x]), y: bounds(b.dims[t.y]), z: None }).collect(),
+        Linkage::Spatial(p, _) => p
+            .traces
+            .iter()
+            .map(|t| {
+                let [x, y, z] = t.xyz.map(|v| bounds(b.dims[v]));
+                TracedBounds { x, y, z: Some(z) }
+            })
+            .collect(),
+    }
 }
 
 /// A validated linkage run.
@@ -393,34 +423,7 @@ struct LinkageRun {
 
 impl PreparedRun for LinkageRun {
     fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> BoxSetResult {
-        let SolveRun { report, solutions } = self.job.run(cancel, progress);
-        let labels = components(&solutions).0;
-        let joint_names = self.job.problem.free_joints().to_vec();
-        let traces = self.job.problem.trace_names();
-        let convert = |record: &crate::report::BoxRecord, status: BoxStatus, cluster: Option<usize>| ResultBox {
-            status,
-            bounds: record.box_.clone(),
-            joints: joint_names.iter().map(|n| record.joints.get(n).copied().unwrap_or([f64::NAN, f64::NAN])).collect(),
-            level: record.level,
-            cluster,
-            traces: traces.iter().map(|t| record.traces.get(t).map_or([[f64::NAN; 2]; 2], |p| [p.x, p.y])).collect(),
-        };
-        let mut boxes: Vec<ResultBox> = report.solutions.iter().zip(&labels).map(|(r, &l)| convert(r, if r.unique { BoxStatus::Unique } else { BoxStatus::Solution }, Some(l))).collect();
-        boxes.extend(report.undecided.iter().map(|r| convert(r, BoxStatus::Undecided, None)));
-        BoxSetResult {
-            mechanism: report.mechanism,
-            analysis: self.analysis,
-            status: report.status,
-            settings: report.settings,
-            variables: report.variables.iter().map(|v| v.name.clone()).collect(),
-            primaries: report.variables.iter().enumerate().filter(|(_, v)| v.role == VarRole::Primary).map(|(i, _)| i).collect(),
-            joint_names,
-            fixed_joints: report.fixed_joints.into_iter().collect(),
-            traces,
-            boxes,
-            clusters: report.clusters,
-            stats: report.stats,
-        }
+        BoxSetResult { analysis: self.analysis, ..self.job.run(cancel, progress) }
     }
 }
 

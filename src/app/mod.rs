@@ -137,8 +137,19 @@ pub struct ResultBox {
     pub level: u32,
     /// Connected component among the solution boxes; `None` for undecided boxes.
     pub cluster: Option<usize>,
-    /// World (x, y) of every traced point (`BoxSetResult::traces`).
-    pub traces: Vec<[Bounds; 2]>,
+    /// World coordinates of every traced point (`BoxSetResult::traces`).
+    pub traces: Vec<TracedBounds>,
+}
+
+/// A traced point's world coordinates over a box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TracedBounds {
+    /// x interval
+    pub x: Bounds,
+    /// y interval
+    pub y: Bounds,
+    /// z interval (spatial model only)
+    pub z: Option<Bounds>,
 }
 
 /// The result of one run: boxes that together enclose every solution.

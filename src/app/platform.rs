@@ -14,9 +14,11 @@ use super::{MechanismKind, Analysis, AnalysisError, BoxSetResult, PreparedRun, R
 use crate::contract::FaceBounds;
 use crate::model::Mechanism;
 use crate::problems::cayley_menger::{BuildOptions, CayleyMenger, DistanceSolverError, Formulation};
-use crate::problems::PlatformError;
 use super::distances::{DistancesJob, DistancesRequest};
+use crate::problems::PlatformError;
 use crate::distances::Choice;
+use crate::interval::{bounds, Interval, IntervalBox};
+use std::collections::BTreeMap;
 use crate::search::{BoxStatus, Progress, SolverSettings};
 use crate::system::VarRole;
 use std::sync::atomic::AtomicBool;
@@ -109,19 +111,22 @@ impl PreparedRun for PlatformRun {
         let _ = progress;
         // The CLI's job, so the published boxes are exactly those of `distances --json`.
         let request = DistancesRequest { formulation: Choice::Shared, redundant: BUILD.redundant, faces: FACES };
-        let run = self.job.run(&request, &self.settings, cancel).expect("invariant: validated when prepared");
-        let (c, rep) = (run.certified, run.report);
+        let c = self.job.run(&request, &self.settings, cancel).expect("invariant: validated when prepared");
         let joint_names: Vec<String> = self.cm.unknowns.iter().map(|u| u.name.clone()).collect();
-        let convert = |r: &crate::report::distances::DistanceRecord, status: BoxStatus, cluster: Option<usize>| ResultBox {
-            status,
-            bounds: r.box_.clone(),
-            joints: joint_names.iter().map(|n| r.distances.get(n).copied().unwrap_or([f64::NAN, f64::NAN])).collect(),
-            level: r.level,
-            cluster,
-            traces: Vec::new(),
+        // The boxes and distances of `distances --json` for the same run, read off it directly.
+        let convert = |b: &IntervalBox, status: BoxStatus, cluster: Option<usize>| {
+            let distances: BTreeMap<String, Interval> = c.cm.unknown_intervals(b).into_iter().collect();
+            ResultBox {
+                status,
+                bounds: b.dims.iter().map(|&x| bounds(x)).collect(),
+                joints: joint_names.iter().map(|n| distances.get(n).map_or([f64::NAN, f64::NAN], |&x| bounds(x))).collect(),
+                level: b.level,
+                cluster,
+                traces: Vec::new(),
+            }
         };
         let settled = |k: usize| c.clusters.get(k).is_some_and(|v| v.undecided.is_none());
-        let mut boxes: Vec<ResultBox> = rep.solutions.iter().map(|r| convert(r, if settled(r.cluster) { BoxStatus::Solution } else { BoxStatus::Undecided }, Some(r.cluster))).collect();
+        let mut boxes: Vec<ResultBox> = c.solutions.iter().zip(&c.cluster).map(|(b, &k)| convert(b, if settled(k) { BoxStatus::Solution } else { BoxStatus::Undecided }, Some(k))).collect();
         // Certified placements: the distances of a placement and of its mirror image are one
         // box (the mirror image is the same solution of the distance system).
         if let Some(pl) = &c.placed {
@@ -143,20 +148,20 @@ impl PreparedRun for PlatformRun {
                 boxes.push(ResultBox { status: BoxStatus::Unique, bounds, joints: d, level: 0, cluster: Some(root.cluster), traces: Vec::new() });
             }
         }
-        boxes.extend(rep.undecided.iter().map(|r| convert(r, BoxStatus::Undecided, None)));
+        boxes.extend(c.undecided.iter().map(|b| convert(b, BoxStatus::Undecided, None)));
         BoxSetResult {
-            mechanism: rep.problem,
+            mechanism: c.cm.problem.name.clone(),
             analysis: self.analysis,
-            status: rep.status,
-            settings: rep.settings,
-            variables: rep.variables,
+            status: c.status,
+            settings: self.settings,
+            variables: c.cm.system.vars.iter().map(|v| v.name.clone()).collect(),
             primaries: self.cm.system.vars.iter().enumerate().filter(|(_, v)| v.role == VarRole::Primary).map(|(i, _)| i).collect(),
             joint_names,
             fixed_joints: self.fixed,
             traces: Vec::new(),
             boxes,
-            clusters: rep.clusters,
-            stats: rep.stats,
+            clusters: c.clusters.len(),
+            stats: c.stats,
         }
     }
 }
@@ -165,8 +170,8 @@ impl PreparedRun for PlatformRun {
 mod tests {
     use super::*;
     use crate::app::load;
-    use crate::distances::solve as certified_solve;
     use crate::model::urdf;
+    use crate::distances::solve as certified_solve;
     use crate::problems::PlatformProblem;
     use crate::report::distances::report_certified;
     use crate::search::Status;

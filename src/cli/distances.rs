@@ -7,7 +7,7 @@ use linkspace::app::distances::{default_rho, DistancesJob, DistancesRequest};
 use linkspace::contract::FaceBounds;
 use linkspace::distances::Choice;
 use linkspace::model::urdf;
-use linkspace::report::distances::DistancesReport;
+use linkspace::report::distances::{report_certified, DistancesReport};
 use linkspace::search::SolverSettings;
 use std::collections::BTreeMap;
 use std::io::Write;
@@ -108,7 +108,8 @@ pub fn run(args: DistancesArgs) -> Result<()> {
     let rho = args.rho.unwrap_or(default_rho(request.formulation));
     let settings = args.limits.solver_settings(SolverSettings::default().max_boxes, SolverSettings { sigma: args.sigma, rho, ..Default::default() })?;
     settings.validate()?;
-    let rep = job.run(&request, &settings, &AtomicBool::new(false)).with_context(|| format!("solving {}", args.file.display()))?.report;
+    let certified = job.run(&request, &settings, &AtomicBool::new(false)).with_context(|| format!("solving {}", args.file.display()))?;
+    let rep = report_certified(&certified, job.platform_problem(), job.fixed().iter().cloned().collect(), request.faces, &settings);
     summarize(&rep)?;
     if let Some(path) = args.json {
         let text = serde_json::to_string_pretty(&rep)?;
@@ -135,7 +136,7 @@ fn summarize(rep: &DistancesReport) -> Result<()> {
         rep.clusters,
         rep.placements,
         if platform { "poses" } else { "placements" },
-        serde_json::to_value(rep.formulation).ok().and_then(|v| v.as_str().map(str::to_string)).unwrap_or_default(),
+        rep.formulation.name(),
         rep.stats.processed,
         rep.stats.empty,
         rep.stats.bisected,

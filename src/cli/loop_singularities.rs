@@ -193,7 +193,7 @@ fn run_image(args: &LoopSingularitiesArgs, mechanism: &linkspace::model::Mechani
     }
     writeln!(out, "  can change assembly mode without crossing a type-II singularity: {} ({})", r.verdict.answer, r.verdict.reason).ok();
     if let Some(path) = &args.json {
-        std::fs::write(path, serde_json::to_string_pretty(&r)?).with_context(|| format!("writing {}", path.display()))?;
+        std::fs::write(path, serde_json::to_string_pretty(&linkspace::report::image::ImageJson(&r))?).with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
 }

@@ -13,7 +13,8 @@ use inari::Interval;
 use crate::search::{Incompleteness, Status};
 pub(crate) use super::records::{bounds, joints, workspace};
 pub use super::records::{joints_over, radius, Bounds, Joints, Workspace};
-use serde::Serialize;
+use crate::model::rounding::Snap;
+use serde::{Serialize, Serializer};
 use std::collections::BTreeMap;
 
 /// One cusp.
@@ -278,8 +279,24 @@ pub struct Rounding {
     /// Angle tolerance (radians).
     pub tolerance: f64,
     /// Every value changed.
-    #[serde(serialize_with = "crate::report::kernel::snaps")]
-    pub snaps: Vec<crate::model::rounding::Snap>,
+    #[serde(serialize_with = "snaps")]
+    pub snaps: Vec<Snap>,
+}
+
+#[derive(Serialize)]
+#[serde(remote = "Snap")]
+struct SnapDef {
+    joint: String,
+    what: String,
+    original: [f64; 3],
+    snapped: [f64; 3],
+}
+
+/// The rounding policy's changes (`model` knows no serde), as a list of `{joint, what, original, snapped}`.
+fn snaps<S: Serializer>(snaps: &[Snap], s: S) -> Result<S::Ok, S::Error> {
+    #[derive(Serialize)]
+    struct One<'a>(#[serde(with = "SnapDef")] &'a Snap);
+    s.collect_seq(snaps.iter().map(One))
 }
 
 impl Rounding {

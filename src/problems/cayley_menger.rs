@@ -250,8 +250,7 @@ impl DistanceProblem {
 }
 
 /// Which variables stand for the unknown distances.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Formulation {
     /// The seed's: `r_ij` and `r_ji` are separate variables with `r_ij = r_ji`; every
     /// determinant is multilinear, so trapezoids come from corner values.
@@ -261,7 +260,7 @@ pub enum Formulation {
 }
 
 /// How to build the system.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BuildOptions {
     /// Split (the seed's) or shared variables.
     pub formulation: Formulation,

@@ -37,6 +37,9 @@ impl Model {
     }
 }
 
+/// Why a mechanism the planar builder accepts is solved with it.
+pub const PLANAR_REASON: &str = "every revolute axis is parallel and every slider lies in the plane: one angle per rigid group";
+
 /// A traced point: link, coordinates in the link's frame, and its name as given (`LINK@X,Y[,Z]`).
 pub type TracedPoint = (String, [f64; 3], String);
 
@@ -71,6 +74,22 @@ impl Linkage {
                     Err(e) => Err(e),
                 }
             }
+        }
+    }
+
+    /// Why that builder: what made the mechanism planar, or why the spatial one was taken.
+    pub fn model_reason(&self) -> &str {
+        match self {
+            Self::Planar(_) => PLANAR_REASON,
+            Self::Spatial(_, why) => why,
+        }
+    }
+
+    /// What the spatial builder simplified (legs between ball joints reduced to distances).
+    pub fn reductions(&self) -> &[String] {
+        match self {
+            Self::Planar(_) => &[],
+            Self::Spatial(p, _) => &p.reductions,
         }
     }
 

@@ -68,7 +68,7 @@ pub struct Leg {
 }
 
 /// A pose of the platform frame in the base frame.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Pose {
     /// Origin of the platform frame, in base coordinates.
     pub position: [f64; 3],

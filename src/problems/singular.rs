@@ -45,8 +45,7 @@ pub mod velocity;
 const CHART_REACH: f64 = 1.05;
 
 /// Which singular set.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SingularKind {
     /// C-space singularities: the loop constraints lose rank (branches cross).
     Cspace,

@@ -250,7 +250,7 @@ struct LoopFrames {
 }
 
 /// A link's pose over a box.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct LinkPose {
     /// Frame origin in the root frame, per coordinate `[lo, hi]`; `None` when it is not
     /// determined (a leg between two ball joints spins freely).

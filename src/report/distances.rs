@@ -10,7 +10,7 @@ use crate::problems::cayley_menger::{BuildOptions, CayleyMenger, Formulation};
 use crate::problems::platform::{PlatformProblem, Pose};
 use crate::search::{SolveStats as Stats, SolverSettings, Status};
 use nalgebra::Vector3;
-use serde::Serialize;
+use serde::{Serialize, Serializer};
 use std::collections::BTreeMap;
 
 /// A line placed from a solution: through two of the problem's points.
@@ -35,7 +35,7 @@ pub struct DistanceRecord {
     /// Index of the cluster (connected component) the box belongs to.
     pub cluster: usize,
     /// Platform poses placed from the box midpoint (platform problems only).
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[serde(skip_serializing_if = "Vec::is_empty", serialize_with = "poses")]
     pub poses: Vec<Pose>,
     /// Every point's coordinates, once per placement (distance files only).
     #[serde(skip_serializing_if = "Vec::is_empty")]
@@ -60,6 +60,7 @@ pub struct DistancesReport {
     /// Squared distances given with `--fix`.
     pub fixed: BTreeMap<String, f64>,
     /// Formulation and whether redundant equations were added.
+    #[serde(with = "BuildOptionsDef")]
     pub build: BuildOptions,
     /// How trapezoid sides were bounded.
     #[serde(with = "super::kernel::FaceBoundsDef")]
@@ -77,6 +78,7 @@ pub struct DistancesReport {
     /// Solution boxes.
     pub solutions: Vec<DistanceRecord>,
     /// The formulation solved (`points`, `shared`, `split`).
+    #[serde(with = "ChoiceDef")]
     pub formulation: Choice,
     /// True when the search finished and nothing is undecided: every solution is proven and
     /// every other part of the domain proven empty.
@@ -86,6 +88,7 @@ pub struct DistancesReport {
     /// Clusters with something unproven: regions that may or may not hold solutions.
     pub undecided_regions: usize,
     /// Per cluster: proven solutions, and why it is undecided (absent when settled).
+    #[serde(serialize_with = "cluster_verdicts")]
     pub cluster_verdicts: Vec<ClusterVerdict>,
     /// Connected components of the solution boxes.
     pub clusters: usize,
@@ -97,6 +100,62 @@ pub struct DistancesReport {
     /// Counters and time.
     #[serde(with = "super::kernel::SolveStatsDef")]
     pub stats: Stats,
+}
+
+/// `Choice`: `auto`, `points`, `line`, `shared` or `split`.
+#[derive(Serialize)]
+#[serde(remote = "Choice", rename_all = "snake_case")]
+enum ChoiceDef {
+    Auto,
+    Points,
+    Line,
+    Shared,
+    Split,
+}
+
+/// `Formulation`: `split` or `shared`.
+#[derive(Serialize)]
+#[serde(remote = "Formulation", rename_all = "snake_case")]
+enum FormulationDef {
+    Split,
+    Shared,
+}
+
+#[derive(Serialize)]
+#[serde(remote = "BuildOptions")]
+struct BuildOptionsDef {
+    #[serde(with = "FormulationDef")]
+    formulation: Formulation,
+    redundant: bool,
+}
+
+#[derive(Serialize)]
+#[serde(remote = "ClusterVerdict")]
+struct ClusterVerdictDef {
+    proven: usize,
+    undecided: Option<&'static str>,
+    boxes: usize,
+}
+
+#[derive(Serialize)]
+#[serde(remote = "Pose")]
+struct PoseDef {
+    position: [f64; 3],
+    quaternion: [f64; 4],
+    rpy: [f64; 3],
+    leg_residual: f64,
+}
+
+fn poses<S: Serializer>(poses: &[Pose], s: S) -> Result<S::Ok, S::Error> {
+    #[derive(Serialize)]
+    struct One<'a>(#[serde(with = "PoseDef")] &'a Pose);
+    s.collect_seq(poses.iter().map(One))
+}
+
+fn cluster_verdicts<S: Serializer>(verdicts: &[ClusterVerdict], s: S) -> Result<S::Ok, S::Error> {
+    #[derive(Serialize)]
+    struct One<'a>(#[serde(with = "ClusterVerdictDef")] &'a ClusterVerdict);
+    s.collect_seq(verdicts.iter().map(One))
 }
 
 /// The record of one box; `platform` given for platform problems.

@@ -1,11 +1,11 @@
 //! How the kernel's values are written in the JSON reports. The kernel (`search`, `lp`,
 //! `system`, `contract`) and `model` know no serde: the schema of what they contribute to a
 //! report is stated here, field for field, with serde's remote derive (a field added to one of
-//! these types and not here fails to compile).
+//! these types and not here fails to compile). `model`'s rounding snaps are stated by the 3R
+//! reports that write them (`manip3r::report`).
 
 use crate::contract::FaceBounds;
 use crate::lp::{LpBackend, LpCounters};
-use crate::model::rounding::Snap;
 use crate::search::{Limit, SolveStats, SolverSettings, Status};
 use crate::system::VarRole;
 use serde::{Serialize, Serializer};
@@ -103,22 +103,6 @@ pub(crate) enum VarRoleDef {
 pub(crate) enum FaceBoundsDef {
     Corners,
     IntervalArithmetic,
-}
-
-#[derive(Serialize)]
-#[serde(remote = "Snap")]
-struct SnapDef {
-    joint: String,
-    what: String,
-    original: [f64; 3],
-    snapped: [f64; 3],
-}
-
-/// The rounding policy's changes, as a list of `{joint, what, original, snapped}`.
-pub(crate) fn snaps<S: Serializer>(snaps: &[Snap], s: S) -> Result<S::Ok, S::Error> {
-    #[derive(Serialize)]
-    struct One<'a>(#[serde(with = "SnapDef")] &'a Snap);
-    s.collect_seq(snaps.iter().map(One))
 }
 
 /// Per-chart counters, as a list.

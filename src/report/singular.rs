@@ -90,6 +90,7 @@ pub struct SingularBoxRecord {
     /// Chart index.
     pub chart: usize,
     /// `certified`, `solution` or `undecided`.
+    #[serde(with = "BoxKindDef")]
     pub status: BoxKind,
     /// Index into `clusters`.
     pub cluster: usize,
@@ -99,6 +100,15 @@ pub struct SingularBoxRecord {
     pub actuators: Vec<Bounds>,
     /// The null vector's components (velocity or row multipliers), in the chart's scale.
     pub multipliers: Vec<Bounds>,
+}
+
+/// `BoxKind`: `certified`, `solution` or `undecided`.
+#[derive(Serialize)]
+#[serde(remote = "BoxKind", rename_all = "snake_case")]
+pub(crate) enum BoxKindDef {
+    Certified,
+    Solution,
+    Undecided,
 }
 
 fn hull(a: Bounds, b: (f64, f64)) -> Bounds {

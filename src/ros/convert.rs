@@ -134,7 +134,7 @@ pub fn markers(r: &BoxSetResult, world_frame: &str, cap: usize) -> MarkerArray {
     for (t, name) in r.traces.iter().enumerate() {
         let ns = format!("trace:{name}");
         for b in r.boxes.iter().take(cap) {
-            let [x, y] = b.traces[t];
+            let (x, y) = (b.traces[t].x, b.traces[t].y);
             let c = [0.5 * (x[0] + x[1]), 0.5 * (y[0] + y[1]), 0.0];
             markers.push(cube(world_frame, &ns, id, c, [x[1] - x[0], y[1] - y[0], 0.0], colour(b.cluster)));
             id += 1;

@@ -28,7 +28,6 @@ use crate::problems::singular::image::{check, CuspProblem, ImageError, NodeProbl
 use crate::problems::singular::{Parts, SingularError, SingularProblem};
 use crate::search::{Limit, SolveError, SolveStats, SolverSettings, Status};
 use crate::system::{EquationSystem, Monomial, VarId};
-use serde::Serialize;
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 use std::sync::atomic::AtomicBool;
@@ -395,7 +394,7 @@ impl Axis {
 pub const RASTER_BYTES_PER_CELL: usize = 2 + std::mem::size_of::<usize>();
 
 /// A region of actuator space (a component of the grid's free cells) and its assembly modes.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct Region {
     /// Grid cells in the region.
     pub cells: usize,
@@ -410,13 +409,12 @@ pub struct Region {
 }
 
 /// Regions of actuator space cut by the image of `S`.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct Regions {
     /// Grid cells per axis.
     pub grid: usize,
     /// `complete`, or `incomplete` when the deadline or cancel stopped the raster (then no
     /// region is listed).
-    #[serde(flatten, with = "crate::report::kernel::StatusDef")]
     pub status: Status,
     /// Cells meeting the image of the cover of `S`.
     pub blocked_cells: usize,
@@ -534,7 +532,7 @@ fn sample_region(m: &Mechanism, sp: &SingularProblem, sample: &[f64], cells: usi
 }
 
 /// `yes`, `no` or `undecided`, with the argument.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct Verdict {
     /// Can the mechanism change assembly mode without crossing a type-II singularity?
     pub answer: &'static str,
@@ -594,7 +592,7 @@ fn status_word(s: Status) -> &'static str {
 }
 
 /// One cusp: the 3R `CuspRecord`'s fields; `workspace` is the image in actuator space.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct CuspRecord {
     /// Free joint values (hull over the cluster).
     pub joints: BTreeMap<String, Bounds>,
@@ -607,7 +605,7 @@ pub struct CuspRecord {
 }
 
 /// One node: two joint boxes with a shared image (the 3R `NodeRecord`'s fields).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct NodeRecord {
     /// The two joint boxes.
     pub points: [BTreeMap<String, Bounds>; 2],
@@ -618,7 +616,7 @@ pub struct NodeRecord {
 }
 
 /// Proven and undecided counts.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct Counts {
     /// Certified.
     pub proven: usize,
@@ -627,7 +625,7 @@ pub struct Counts {
 }
 
 /// What `loop-singularities --kind image --json` writes.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct ImageReport {
     /// Robot name.
     pub mechanism: String,

@@ -82,8 +82,7 @@ impl<L: Coordinates> SingularProblem<L> {
 }
 
 /// What a reported box is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BoxKind {
     /// Certified (Krawczyk) to hold exactly one solution of its chart's system.
     Certified,
