@@ -465,7 +465,7 @@ fn solve(args: SolveArgs) -> Result<()> {
         }
     }
     if let Some(path) = args.json {
-        let text = serde_json::to_string_pretty(&report::SolveReport::new(problem, &result))?;
+        let text = serde_json::to_string_pretty(&report::SolveReport::new(problem, &result, mechanism.rigid_links()))?;
         std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())

@@ -7,6 +7,7 @@
 pub mod rounding;
 pub mod urdf;
 
+use std::collections::{BTreeMap, HashMap};
 use nalgebra::{Isometry3, Vector3};
 use thiserror::Error;
 
@@ -253,6 +254,26 @@ pub enum ModelError {
 }
 
 impl Mechanism {
+    /// Links joined to their parent by a fixed joint, each with the link it moves with (the
+    /// nearest ancestor whose own joint is not fixed, or the root): such a link's pose is that
+    /// body's composed with the fixed joints' origins, so reports list it once instead of in every
+    /// box.
+    pub fn rigid_links(&self) -> BTreeMap<String, String> {
+        let parent_joint: HashMap<usize, &Joint> = self.joints.iter().map(|j| (j.child, j)).collect();
+        let mut out = BTreeMap::new();
+        for (i, link) in self.links.iter().enumerate() {
+            let mut body = i;
+            // A tree: following parents ends at the root within `links.len()` steps.
+            while let Some(j) = parent_joint.get(&body).filter(|j| j.kind == JointKind::Fixed) {
+                body = j.parent;
+            }
+            if body != i {
+                out.insert(link.name.clone(), self.links[body].name.clone());
+            }
+        }
+        out
+    }
+
     /// Index of the link named `name`.
     pub fn link(&self, name: &str) -> Option<usize> {
         self.links.iter().position(|l| l.name == name)

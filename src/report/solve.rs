@@ -82,6 +82,10 @@ pub struct SolveReport {
     /// What the spatial builder simplified (legs between ball joints reduced to distances).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub reductions: Vec<String>,
+    /// Links joined to their parent by a fixed joint, each with the link it moves with: a box
+    /// lists only the links that move on their own (`Mechanism::rigid_links`).
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub rigid_links: BTreeMap<String, String>,
     /// Joints whose values were solved for.
     pub free_joints: Vec<String>,
     /// Joints fixed with `--fix`.
@@ -106,14 +110,16 @@ pub struct SolveReport {
 }
 
 impl SolveReport {
-    /// The report of `result`, a run of `problem` (`app::SolveJob::run`).
-    pub fn new(problem: &Linkage, result: &BoxSetResult) -> Self {
-        let record = |b: &ResultBox| box_record(problem, result, b);
+    /// The report of `result`, a run of `problem` (`app::SolveJob::run`); `rigid_links` as
+    /// `Mechanism::rigid_links` gives them.
+    pub fn new(problem: &Linkage, result: &BoxSetResult, rigid_links: BTreeMap<String, String>) -> Self {
+        let record = |b: &ResultBox| box_record(problem, result, b, &rigid_links);
         SolveReport {
             mechanism: result.mechanism.clone(),
             model: problem.model().name().to_string(),
             model_reason: problem.model_reason().to_string(),
             reductions: problem.reductions().to_vec(),
+            rigid_links: rigid_links.clone(),
             free_joints: result.joint_names.clone(),
             fixed_joints: result.fixed_joints.iter().cloned().collect(),
             settings: result.settings.clone(),
@@ -134,12 +140,13 @@ impl SolveReport {
 
 /// One box of `result` in the user's terms; the links' orientations and poses are read off the
 /// box by `problem`.
-fn box_record(problem: &Linkage, result: &BoxSetResult, b: &ResultBox) -> BoxRecord {
+fn box_record(problem: &Linkage, result: &BoxSetResult, b: &ResultBox, rigid_links: &BTreeMap<String, String>) -> BoxRecord {
+    let moves = |name: &String| !rigid_links.contains_key(name);
     let original = || IntervalBox { dims: b.bounds.iter().map(|&[lo, hi]| interval(lo, hi)).collect(), level: b.level };
     let traced = |t: &TracedBounds| TracedPoint { x: t.x, y: t.y, z: t.z };
     let (link_angles, link_poses) = match problem {
-        Linkage::Planar(p) => (p.link_angles(&original()).into_iter().map(|(k, (lo, hi))| (k, [lo, hi])).collect(), None),
-        Linkage::Spatial(p, _) => (BTreeMap::new(), Some(p.link_poses(&original()).into_iter().map(|(k, pose)| (k, LinkPoseRecord(pose))).collect())),
+        Linkage::Planar(p) => (p.link_angles(&original()).into_iter().filter(|(k, _)| moves(k)).map(|(k, (lo, hi))| (k, [lo, hi])).collect(), None),
+        Linkage::Spatial(p, _) => (BTreeMap::new(), Some(p.link_poses(&original()).into_iter().filter(|(k, _)| moves(k)).map(|(k, pose)| (k, LinkPoseRecord(pose))).collect())),
     };
     BoxRecord {
         joints: result.joint_names.iter().cloned().zip(b.joints.iter().copied()).collect(),
