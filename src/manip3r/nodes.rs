@@ -33,7 +33,7 @@ use super::drive::{drive, no_progress, Order};
 use crate::search::Control;
 use crate::contract::krawczyk::{self, Step as K};
 use super::motion::{self, Band};
-use crate::interval::{interval, point, strict_sign};
+use crate::interval::{interval, merge_touching, point, strict_sign};
 use crate::search::{Limit, Limits, Progress, Prune, Stats, Status, Step};
 use inari::Interval;
 use smallvec::SmallVec;
@@ -341,38 +341,21 @@ fn hull2(a: &[Interval; 2], b: &[Interval; 2]) -> [Interval; 2] {
     [a[0].convex_hull(b[0]), a[1].convex_hull(b[1])]
 }
 
-/// Touching pairs, gathered into clusters: (hull, members). `b` joins a cluster when its two
-/// boxes touch the hull's two boxes in one orientation; it is stored in that orientation.
+/// Touching pairs, gathered into clusters: (hull, members), by smallest member. A pair joins a
+/// cluster when its two boxes touch the hull's two boxes in one orientation; it is taken in
+/// that orientation.
 fn clusters(pairs: &[[[Interval; 2]; 2]]) -> Vec<([[Interval; 2]; 2], Vec<usize>)> {
-    let touch = |h: &[[Interval; 2]; 2], b: &[[Interval; 2]; 2]| -> Option<[[Interval; 2]; 2]> {
-        let meet = |x: &[Interval; 2], y: &[Interval; 2]| (0..2).all(|i| !x[i].disjoint(y[i]));
-        if meet(&h[0], &b[0]) && meet(&h[1], &b[1]) {
-            Some(*b)
+    let meet = |x: &[Interval; 2], y: &[Interval; 2]| (0..2).all(|i| !x[i].disjoint(y[i]));
+    merge_touching(pairs, |h, b| {
+        let b = if meet(&h[0], &b[0]) && meet(&h[1], &b[1]) {
+            *b
         } else if meet(&h[0], &b[1]) && meet(&h[1], &b[0]) {
-            Some([b[1], b[0]])
+            [b[1], b[0]]
         } else {
-            None
-        }
-    };
-    let mut out: Vec<([[Interval; 2]; 2], Vec<usize>)> = Vec::new();
-    for (i, pair) in pairs.iter().enumerate() {
-        let mut hull = *pair;
-        let mut members = vec![i];
-        let mut k = 0;
-        while k < out.len() {
-            if let Some(h) = touch(&hull, &out[k].0) {
-                let (_, m) = out.remove(k);
-                hull = [hull2(&hull[0], &h[0]), hull2(&hull[1], &h[1])];
-                members.extend(m);
-                k = 0;
-            } else {
-                k += 1;
-            }
-        }
-        out.push((hull, members));
-    }
-    out.sort_by_key(|(_, m)| m.iter().copied().min());
-    out
+            return None;
+        };
+        Some([hull2(&h[0], &b[0]), hull2(&h[1], &b[1])])
+    })
 }
 
 /// Pairs left at the precision, settled by clusters after the search.
