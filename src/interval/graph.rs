@@ -1,5 +1,6 @@
 //! Connected components: of box sets (boxes sharing a point), of grid cells, of any graph given
-//! by its neighbours, its edges or a symmetric "touches" test. One flood fill does the labelling
+//! by its neighbours, its edges or a symmetric "touches" test, and parts merged while their hulls
+//! touch. One flood fill does the labelling
 //! for all of them, so every caller numbers components the same way: by their smallest vertex
 //! (order of first appearance), each component's vertices listed in the order the fill reaches
 //! them.
@@ -83,6 +84,40 @@ pub fn components_of_edges(n: usize, edges: impl IntoIterator<Item = (usize, usi
         fill[b] += 1;
     }
     flood_fill(n, |_| true, |v, out| out.extend_from_slice(&adjacent[start[v]..start[v + 1]]))
+}
+
+/// Parts of `0..hulls.len()` merged until no two touch, each with its hull; `join(a, b)` is the
+/// hull of `a` and `b` when they touch, `None` when they do not. Parts are listed by their
+/// smallest member.
+///
+/// Unlike the components of the items' own contacts, two parts merge when their hulls touch,
+/// though no member of one touches a member of the other. Each round joins the components of
+/// the current parts under `join` (`flood_fill`) and ends when a round joins nothing. Every
+/// merge is forced (hulls only grow, so parts that touch keep touching), so the parts are the
+/// finest ones whose hulls are pairwise apart, whatever the order of merges. `join` must be
+/// symmetric in whether it touches; it may return `b` reoriented (pairs of boxes taken in
+/// either order).
+pub fn merge_touching<H: Clone>(hulls: &[H], join: impl Fn(&H, &H) -> Option<H>) -> Vec<(H, Vec<usize>)> {
+    let mut parts: Vec<(H, Vec<usize>)> = hulls.iter().cloned().enumerate().map(|(i, h)| (h, vec![i])).collect();
+    loop {
+        let n = parts.len();
+        let groups = flood_fill(n, |_| true, |v, out| out.extend((0..n).filter(|&w| w != v && join(&parts[v].0, &parts[w].0).is_some())));
+        if groups.len() == n {
+            return parts;
+        }
+        parts = groups
+            .into_iter()
+            .map(|group| {
+                let (mut hull, mut members) = parts[group[0]].clone();
+                // In fill order each part touches one taken before it, hence the hull so far.
+                for &v in &group[1..] {
+                    hull = join(&hull, &parts[v].0).expect("invariant: a part met in the fill touches the hull of those before it");
+                    members.extend_from_slice(&parts[v].1);
+                }
+                (hull, members)
+            })
+            .collect();
+    }
 }
 
 /// The pairs `(i, j)`, `i ≠ j`, of the `live` boxes that share a point, boxes given by their
@@ -191,6 +226,25 @@ mod tests {
         }
     }
 
+    /// Hull of two 2-D boxes when they share a point.
+    fn join2(a: &[Interval; 2], b: &[Interval; 2]) -> Option<[Interval; 2]> {
+        (0..2).all(|d| !a[d].disjoint(b[d])).then(|| [a[0].convex_hull(b[0]), a[1].convex_hull(b[1])])
+    }
+
+    #[test]
+    fn merge_touching_joins_parts_whose_hulls_touch() {
+        let iv = crate::interval::interval;
+        // 0 and 1 touch; their hull reaches 2, which touches neither; 3 stays apart.
+        let boxes = [[iv(0.0, 1.0), iv(0.0, 1.0)], [iv(1.0, 3.0), iv(1.0, 3.0)], [iv(2.5, 3.0), iv(0.0, 0.5)], [iv(5.0, 6.0), iv(5.0, 6.0)]];
+        let parts = merge_touching(&boxes, join2);
+        assert_eq!(parts.len(), 2);
+        assert_eq!(parts[0].0, [iv(0.0, 3.0), iv(0.0, 3.0)]);
+        let mut members = parts[0].1.clone();
+        members.sort_unstable();
+        assert_eq!(members, vec![0, 1, 2]);
+        assert_eq!(parts[1], (boxes[3], vec![3]));
+    }
+
     proptest! {
         #[test]
         fn components_by_a_test_equal_union_find(n in 0usize..30, edges in prop::collection::vec((0usize..30, 0usize..30), 0..40)) {
@@ -221,6 +275,38 @@ mod tests {
             let touches = |i: usize, j: usize| edges.iter().any(|&(a, b)| (a, b) == (i, j) || (b, a) == (i, j));
             prop_assert_eq!(components_by(n, touches), (want.clone(), ids.len()));
             prop_assert_eq!(labels(n, &components_of_edges(n, edges.iter().copied())), (want, ids.len()));
+        }
+
+        #[test]
+        fn merge_touching_equals_merging_one_box_at_a_time(corners in prop::collection::vec((0u8..40, 0u8..40, 0u8..4, 0u8..4), 0..40)) {
+            let iv = crate::interval::interval;
+            let boxes: Vec<[Interval; 2]> = corners.iter().map(|&(x, y, w, h)| [iv(f64::from(x), f64::from(x + w)), iv(f64::from(y), f64::from(y + h))]).collect();
+            // Reference: each box in turn absorbs every cluster its growing hull touches.
+            let mut want: Vec<([Interval; 2], Vec<usize>)> = Vec::new();
+            for (i, b) in boxes.iter().enumerate() {
+                let (mut hull, mut members) = (*b, vec![i]);
+                let mut k = 0;
+                while k < want.len() {
+                    if let Some(h) = join2(&hull, &want[k].0) {
+                        hull = h;
+                        members.extend(want.remove(k).1);
+                        k = 0;
+                    } else {
+                        k += 1;
+                    }
+                }
+                want.push((hull, members));
+            }
+            let sorted = |mut parts: Vec<([Interval; 2], Vec<usize>)>| {
+                for p in &mut parts {
+                    p.1.sort_unstable();
+                }
+                parts.sort_by_key(|p| p.1[0]);
+                parts
+            };
+            let got = merge_touching(&boxes, join2);
+            prop_assert!(got.windows(2).all(|w| w[0].1.iter().min() < w[1].1.iter().min()));
+            prop_assert_eq!(sorted(got), sorted(want));
         }
     }
 }

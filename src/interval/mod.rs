@@ -9,7 +9,7 @@ pub(crate) mod fast;
 mod graph;
 pub mod trig;
 
-pub use graph::{components_by, components_of_edges, flood_fill, labels, touching_pairs};
+pub use graph::{components_by, components_of_edges, flood_fill, labels, merge_touching, touching_pairs};
 
 pub use inari::Interval;
 
@@ -155,33 +155,6 @@ pub fn components_counted(boxes: &[IntervalBox]) -> (Vec<usize>, usize, u64) {
 #[cfg(test)]
 fn components_all_pairs(boxes: &[IntervalBox]) -> (Vec<usize>, usize) {
     components_by(boxes.len(), |i, j| boxes[i].intersects(&boxes[j]))
-}
-
-/// Disjoint sets over `0..n` (union–find with path halving). Only the IK clusters use it: their
-/// order is the order of the representatives, which the reports keep.
-pub(crate) struct UnionFind {
-    parent: Vec<usize>,
-}
-
-impl UnionFind {
-    /// `n` singletons.
-    pub(crate) fn new(n: usize) -> Self {
-        UnionFind { parent: (0..n).collect() }
-    }
-
-    /// The representative of `i`'s set.
-    pub(crate) fn find(&mut self, mut i: usize) -> usize {
-        while self.parent[i] != i {
-            self.parent[i] = self.parent[self.parent[i]];
-            i = self.parent[i];
-        }
-        i
-    }
-
-    /// Puts the set whose representative is `a` under representative `b`.
-    pub(crate) fn link(&mut self, a: usize, b: usize) {
-        self.parent[a] = b;
-    }
 }
 
 #[cfg(test)]

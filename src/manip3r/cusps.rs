@@ -26,7 +26,7 @@ use super::drive::{drive, no_progress, Order, Outcome};
 use crate::search::Control;
 use crate::contract::krawczyk::{self, Inflation, Step as K};
 use super::motion::{self, Band};
-use crate::interval::{interval, point};
+use crate::interval::{interval, merge_touching, point};
 use crate::search::{self, Limits, Progress, Prune, Stats, Status, Step};
 use inari::Interval;
 use smallvec::smallvec;
@@ -469,26 +469,14 @@ pub fn search_with(chain: &Chain3R, settings: &CuspSettings, control: &Control, 
     Ok(CuspSearch { cusps, undecided, bands, status, stats, contracted, seconds: t0.elapsed().as_secs_f64() })
 }
 
-/// Merges touching candidate boxes (baseline only) into one hull per cluster.
+/// Merges touching candidate boxes (baseline only) into one hull per cluster, listed by their
+/// first candidate.
 fn merge_candidates(chain: &Chain3R, boxes: Vec<Cusp>) -> Vec<Cusp> {
-    let mut clusters: Vec<[Interval; 2]> = Vec::new();
-    for c in boxes {
-        let mut hull = c.theta;
-        let mut i = 0;
-        while i < clusters.len() {
-            if (0..2).all(|d| !clusters[i][d].disjoint(hull[d])) {
-                let other = clusters.swap_remove(i);
-                hull = [hull[0].convex_hull(other[0]), hull[1].convex_hull(other[1])];
-                i = 0;
-            } else {
-                i += 1;
-            }
-        }
-        clusters.push(hull);
-    }
-    clusters
+    let thetas: Vec<[Interval; 2]> = boxes.iter().map(|c| c.theta).collect();
+    let hull = |a: &[Interval; 2], b: &[Interval; 2]| (0..2).all(|d| !a[d].disjoint(b[d])).then(|| [a[0].convex_hull(b[0]), a[1].convex_hull(b[1])]);
+    merge_touching(&thetas, hull)
         .into_iter()
-        .map(|theta| {
+        .map(|(theta, _)| {
             let j = chain.jets(theta, 0);
             Cusp { theta, rho: j.rho.value(), z: j.z.value(), unique: false }
         })

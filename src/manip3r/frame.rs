@@ -86,9 +86,9 @@ impl BaseFrame {
     }
 
     /// Direction about the first axis of a vector perpendicular to it (radians), or `None` when
-    /// it may vanish.
+    /// it may vanish or its enclosure spans half a turn or more.
     fn direction(&self, v: &V3) -> Option<Interval> {
-        direction(dot(v, &self.e1), dot(v, &self.e2))
+        crate::interval::angle::arg(dot(v, &self.e1), dot(v, &self.e2)).filter(|a| a.wid() < 3.0)
     }
 
     /// The point `p` of the root frame (metres) as the searches take it.
@@ -108,53 +108,5 @@ impl BaseFrame {
             (Some(t), Some(u)) => crate::interval::angle::wrap(t - u),
             _ => super::motion::full_range(),
         }
-    }
-}
-
-/// An enclosure of the angle of every vector (x, y) of the box, or `None` when the box may hold
-/// the origin or spans half a turn or more.
-///
-/// The candidate comes from `f64::atan2` at the corners; it is then proven: every vector of the
-/// box lies strictly left of direction α and right of direction β
-/// (`interval::angle::strictly_between`), so every angle lies in [α, β] (modulo 2π). A failed
-/// proof widens the candidate, then gives up.
-fn direction(x: Interval, y: Interval) -> Option<Interval> {
-    if x.contains(0.0) && y.contains(0.0) {
-        return None;
-    }
-    let centre = y.mid().atan2(x.mid());
-    let wrap = |a: f64| {
-        let tau = std::f64::consts::TAU;
-        a - tau * (a / tau).round()
-    };
-    let rel: Vec<f64> = [(x.inf(), y.inf()), (x.inf(), y.sup()), (x.sup(), y.inf()), (x.sup(), y.sup())].iter().map(|&(a, b)| wrap(b.atan2(a) - centre)).collect();
-    let lo = centre + rel.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = centre + rel.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    for margin in [1e-12, 1e-9, 1e-6] {
-        let (alpha, beta) = (lo - margin, hi + margin);
-        if beta - alpha >= 3.0 {
-            return None;
-        }
-        if crate::interval::angle::strictly_between(x, y, alpha, beta) {
-            return Some(interval(alpha, beta));
-        }
-    }
-    None
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn directions_are_enclosed() {
-        for k in 0..64 {
-            let angle = -3.1 + 6.2 * f64::from(k) / 63.0;
-            let (x, y) = (2.0 * angle.cos(), 2.0 * angle.sin());
-            let d = direction(interval(x - 1e-3, x + 1e-3), interval(y - 1e-3, y + 1e-3)).expect("away from 0");
-            let shifted = [0.0, std::f64::consts::TAU, -std::f64::consts::TAU].iter().any(|s| d.contains(angle + s));
-            assert!(shifted && d.wid() < 2e-3, "{angle}: {d:?}");
-        }
-        assert!(direction(interval(-1.0, 1.0), interval(-1.0, 1.0)).is_none());
     }
 }

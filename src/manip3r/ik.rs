@@ -14,7 +14,7 @@ use crate::search::Control;
 use crate::contract::krawczyk::{self, Step as K};
 use super::motion;
 use super::Manip3rError;
-use crate::interval::point;
+use crate::interval::{components_of_edges, point, touching_pairs};
 use crate::search::{Limits, Progress, Prune, Stats, Status, Step};
 use inari::Interval;
 use smallvec::smallvec;
@@ -169,47 +169,25 @@ pub fn solve_target(chain: &Chain3R, target: [Interval; 2], precision: f64, cont
     Ok(IkSolutions { unique, clusters: cluster(&undecided), status: run.status, stats: run.stats })
 }
 
-/// Groups boxes that touch on the torus.
+/// Groups boxes that touch on the torus, listed by their first box.
 fn cluster(boxes: &[[Interval; 2]]) -> Vec<IkCluster> {
     let n = boxes.len();
-    let mut uf = crate::interval::UnionFind::new(n);
-    // Sweep along θ₂ for ordinary contacts, then an all-pairs pass over the few boxes on the
-    // ±π edges for contacts across the seam.
-    let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by(|&a, &b| boxes[a][0].inf().total_cmp(&boxes[b][0].inf()));
-    for x in 0..n {
-        let i = order[x];
-        for &j in &order[x + 1..] {
-            if boxes[j][0].inf() > boxes[i][0].sup() {
-                break;
-            }
-            if !boxes[i][1].disjoint(boxes[j][1]) {
-                let (a, b) = (uf.find(i), uf.find(j));
-                uf.link(a, b);
-            }
-        }
-    }
+    // Contacts in the plane by the sweep, then an all-pairs pass over the few boxes on the ±π
+    // edges for contacts across the seam.
+    let all: Vec<usize> = (0..n).collect();
+    let (mut contacts, _) = touching_pairs(&all, 2, |i, d| boxes[i][d]);
     // Deliberately a little below π: boxes this close to the seam may meet copies across it.
     #[allow(clippy::approx_constant)]
     const NEAR_SEAM: f64 = 3.14159;
-    let edge: Vec<usize> = (0..n).filter(|&i| boxes[i].iter().any(|d| d.inf() <= -NEAR_SEAM || d.sup() >= NEAR_SEAM)).collect();
+    let edge: Vec<usize> = all.iter().copied().filter(|&i| boxes[i].iter().any(|d| d.inf() <= -NEAR_SEAM || d.sup() >= NEAR_SEAM)).collect();
     for (x, &i) in edge.iter().enumerate() {
-        for &j in &edge[x + 1..] {
-            if meet_on_torus(&boxes[i], &boxes[j]) {
-                let (a, b) = (uf.find(i), uf.find(j));
-                uf.link(a, b);
-            }
-        }
+        contacts.extend(edge[x + 1..].iter().filter(|&&j| meet_on_torus(&boxes[i], &boxes[j])).map(|&j| (i, j)));
     }
-    let mut out: std::collections::BTreeMap<usize, IkCluster> = std::collections::BTreeMap::new();
-    for (i, b) in boxes.iter().enumerate() {
-        let r = uf.find(i);
-        out.entry(r)
-            .and_modify(|c| {
-                c.hull = [c.hull[0].convex_hull(b[0]), c.hull[1].convex_hull(b[1])];
-                c.boxes += 1;
-            })
-            .or_insert(IkCluster { hull: *b, boxes: 1 });
-    }
-    out.into_values().collect()
+    components_of_edges(n, contacts)
+        .into_iter()
+        .map(|members| {
+            let hull = members.iter().fold(boxes[members[0]], |h, &i| [h[0].convex_hull(boxes[i][0]), h[1].convex_hull(boxes[i][1])]);
+            IkCluster { hull, boxes: members.len() }
+        })
+        .collect()
 }

@@ -33,8 +33,9 @@ use super::drive::{drive, no_progress, Order};
 use crate::search::Control;
 use crate::contract::krawczyk::{self, Step as K};
 use super::motion::{self, Band};
-use crate::interval::{interval, point, strict_sign};
-use crate::search::{Limit, Limits, Progress, Prune, Stats, Status, Step};
+use crate::interval::{interval, merge_touching, point, strict_sign};
+use crate::search::{Limit, Limits, Progress, Prune, Stats, Status, Step, Store};
+use std::ops::ControlFlow;
 use inari::Interval;
 use smallvec::SmallVec;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -201,18 +202,73 @@ fn injective_from(grad_det: [Interval; 2], df: [[Interval; 2]; 2], tangent: [Int
     })
 }
 
-/// True when `test` holds on every part of `b`, trying `b` whole and then its halves down to
-/// `depth` bisections: the conditions of the cusp certificate are local, so most of a
-/// neighbourhood is decided on large cells and only the hard spots are refined.
-fn everywhere(b: [Interval; 2], depth: u32, test: &mut impl FnMut(&[Interval; 2]) -> bool) -> bool {
-    if test(&b) {
-        return true;
+/// A part of a cusp neighbourhood, with the bisections left to it.
+#[derive(Clone, Copy, Debug)]
+struct Part {
+    b: [Interval; 2],
+    depth: u32,
+}
+
+/// Why a part leaves the check of a certificate condition: the condition holds on it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Holds;
+
+impl crate::search::Reason for Holds {
+    fn name(self) -> &'static str {
+        "holds"
     }
-    if depth == 0 {
-        return false;
+}
+
+/// The check of one certificate condition on the kernel: a part goes when `test` holds on it,
+/// is bisected while it has depth left, and is left undecided (the condition fails) otherwise.
+struct ConditionPrune<T> {
+    test: T,
+}
+
+impl<T: FnMut(&[Interval; 2]) -> bool> Prune for ConditionPrune<T> {
+    type Cell = Part;
+    type Found = std::convert::Infallible;
+    type Reason = Holds;
+
+    fn process(&mut self, part: Part) -> Step<Part, Self::Found, Holds> {
+        if (self.test)(&part.b) {
+            Step::Discard(Holds)
+        } else if part.depth == 0 {
+            Step::Undecided(part, "fails")
+        } else {
+            let (lo, hi) = cusps::bisect(part.b, false);
+            Step::Split(smallvec::smallvec![Part { b: lo, depth: part.depth - 1 }, Part { b: hi, depth: part.depth - 1 }])
+        }
     }
-    let (lo, hi) = cusps::bisect(b, false);
-    everywhere(lo, depth - 1, test) && everywhere(hi, depth - 1, test)
+}
+
+/// Stops a condition's check at the first part where it fails.
+struct FirstFailure;
+
+impl crate::search::Sink<Part, std::convert::Infallible> for FirstFailure {
+    fn found(&mut self, found: std::convert::Infallible) -> ControlFlow<()> {
+        match found {}
+    }
+
+    fn undecided(&mut self, _: Part, _: crate::search::Undecided) -> ControlFlow<()> {
+        ControlFlow::Break(())
+    }
+}
+
+/// Whether `test` holds on every part of `b`, trying `b` whole and then its halves down to
+/// `DEPTH` bisections, depth first (halves in order): the conditions of the cusp certificate are
+/// local, so most of a neighbourhood is decided on large cells and only the hard spots are
+/// refined. `Err` names the limit of `control` (the time left since `start`, the cancel flag)
+/// that stopped the check first; its own cell budget is one full tree of `DEPTH` bisections.
+fn everywhere(b: [Interval; 2], control: &Control, start: Instant, test: impl FnMut(&[Interval; 2]) -> bool) -> Result<bool, Limit> {
+    let control = control.remaining_since(start);
+    let limits = Limits { max_cells: CONDITION_CELLS, ..control.limits };
+    let (status, _) = crate::search::run(&mut ConditionPrune { test }, Part { b, depth: DEPTH }, Store::DepthFirst, &limits, control.cancel, &mut FirstFailure);
+    match status {
+        Status::Complete => Ok(true),
+        Status::Incomplete(Limit::Sink) => Ok(false),
+        Status::Incomplete(limit) => Err(limit),
+    }
 }
 
 /// Widest box of a pair on which the node search tries Krawczyk (radians).
@@ -220,6 +276,9 @@ const KRAWCZYK_WIDTH: f64 = 1.0;
 
 /// Bisections allowed per certificate condition: cells down to 1/64 of the neighbourhood.
 const DEPTH: u32 = 12;
+
+/// Cells of one condition's check at most: the full tree of `DEPTH` bisections.
+const CONDITION_CELLS: u64 = (2 << DEPTH) - 1;
 
 /// F'' = ∇g·T and F''' = ∇(∇g·T)·T over `b` (see the module doc).
 fn flow_derivatives(chain: &Chain3R, b: [Interval; 2]) -> ([Interval; 2], [Interval; 2]) {
@@ -232,28 +291,40 @@ fn flow_derivatives(chain: &Chain3R, b: [Interval; 2]) -> ([Interval; 2], [Inter
 
 /// The cusp certificate on `u` around the certified cusp box `c` ⊂ `u` (see the module doc).
 /// Each condition is checked on adaptive sub-boxes (`everywhere`), with one strict sign over
-/// all of them, and F''(c) on the cusp box itself, which keeps the enclosures tight.
-pub fn injective_near_cusp(chain: &Chain3R, u: [Interval; 2], c: [Interval; 2]) -> bool {
+/// all of them, and F''(c) on the cusp box itself, which keeps the enclosures tight. `Err`: a
+/// limit of `control` stopped a check before the certificate was decided.
+pub fn injective_near_cusp(chain: &Chain3R, u: [Interval; 2], c: [Interval; 2], control: &Control, start: Instant) -> Result<bool, Limit> {
     let at_c = evaluate(chain, c);
     // (a) and (b): with ∂det/∂θₖ of one strict sign on u, every segment along θₖ meets S at most
     // once; with det ≠ 0 on the two edges θₖ = const, the signs there are fixed, so S ∩ u is
     // empty or one arc across u.
-    let arc = (0..2).any(|k| {
-        let Some(s) = strict_sign(at_c.grad_det[k]) else { return false };
-        everywhere(u, DEPTH, &mut |b| strict_sign(evaluate(chain, *b).grad_det[k]) == Some(s))
-            && [u[k].inf(), u[k].sup()].into_iter().all(|at| {
-                let mut edge = u;
-                edge[k] = point(at);
-                everywhere(edge, DEPTH, &mut |b| !evaluate(chain, *b).det.contains(0.0))
-            })
-    });
+    let mut arc = false;
+    for k in 0..2 {
+        let Some(s) = strict_sign(at_c.grad_det[k]) else { continue };
+        if !everywhere(u, control, start, |b| strict_sign(evaluate(chain, *b).grad_det[k]) == Some(s))? {
+            continue;
+        }
+        let mut edges = true;
+        for at in [u[k].inf(), u[k].sup()] {
+            let mut edge = u;
+            edge[k] = point(at);
+            if !everywhere(edge, control, start, |b| !evaluate(chain, *b).det.contains(0.0))? {
+                edges = false;
+                break;
+            }
+        }
+        if edges {
+            arc = true;
+            break;
+        }
+    }
     if !arc {
-        return false;
+        return Ok(false);
     }
     // (c) F''(c) × F'''(τ) of one strict sign for τ on S ∩ u.
     let (f2c, f3c) = flow_derivatives(chain, c);
-    let Some(want) = strict_sign(f2c[0] * f3c[1] - f2c[1] * f3c[0]) else { return false };
-    everywhere(u, DEPTH, &mut |b| {
+    let Some(want) = strict_sign(f2c[0] * f3c[1] - f2c[1] * f3c[0]) else { return Ok(false) };
+    everywhere(u, control, start, |b| {
         if !evaluate(chain, *b).det.contains(0.0) {
             return true;
         }
@@ -262,17 +333,18 @@ pub fn injective_near_cusp(chain: &Chain3R, u: [Interval; 2], c: [Interval; 2]) 
     })
 }
 
-/// A box around `c` on which `injective_near_cusp` holds, trying radii from 0.4 down.
-fn cusp_region(chain: &Chain3R, c: &Cusp) -> Option<[Interval; 2]> {
+/// A box around `c` on which `injective_near_cusp` holds, trying radii from 0.4 down; `Err` when
+/// a limit stopped the trials.
+fn cusp_region(chain: &Chain3R, c: &Cusp, control: &Control, start: Instant) -> Result<Option<[Interval; 2]>, Limit> {
     let mut r = 0.4;
     while r > 1e-7 {
         let u = [0, 1].map(|i| interval(c.theta[i].inf() - r, c.theta[i].sup() + r));
-        if injective_near_cusp(chain, u, c.theta) {
-            return Some(u);
+        if injective_near_cusp(chain, u, c.theta, control, start)? {
+            return Ok(Some(u));
         }
         r *= 0.7;
     }
-    None
+    Ok(None)
 }
 
 fn contains(outer: &[Interval; 2], inner: &[Interval; 2]) -> bool {
@@ -341,38 +413,21 @@ fn hull2(a: &[Interval; 2], b: &[Interval; 2]) -> [Interval; 2] {
     [a[0].convex_hull(b[0]), a[1].convex_hull(b[1])]
 }
 
-/// Touching pairs, gathered into clusters: (hull, members). `b` joins a cluster when its two
-/// boxes touch the hull's two boxes in one orientation; it is stored in that orientation.
+/// Touching pairs, gathered into clusters: (hull, members), by smallest member. A pair joins a
+/// cluster when its two boxes touch the hull's two boxes in one orientation; it is taken in
+/// that orientation.
 fn clusters(pairs: &[[[Interval; 2]; 2]]) -> Vec<([[Interval; 2]; 2], Vec<usize>)> {
-    let touch = |h: &[[Interval; 2]; 2], b: &[[Interval; 2]; 2]| -> Option<[[Interval; 2]; 2]> {
-        let meet = |x: &[Interval; 2], y: &[Interval; 2]| (0..2).all(|i| !x[i].disjoint(y[i]));
-        if meet(&h[0], &b[0]) && meet(&h[1], &b[1]) {
-            Some(*b)
+    let meet = |x: &[Interval; 2], y: &[Interval; 2]| (0..2).all(|i| !x[i].disjoint(y[i]));
+    merge_touching(pairs, |h, b| {
+        let b = if meet(&h[0], &b[0]) && meet(&h[1], &b[1]) {
+            *b
         } else if meet(&h[0], &b[1]) && meet(&h[1], &b[0]) {
-            Some([b[1], b[0]])
+            [b[1], b[0]]
         } else {
-            None
-        }
-    };
-    let mut out: Vec<([[Interval; 2]; 2], Vec<usize>)> = Vec::new();
-    for (i, pair) in pairs.iter().enumerate() {
-        let mut hull = *pair;
-        let mut members = vec![i];
-        let mut k = 0;
-        while k < out.len() {
-            if let Some(h) = touch(&hull, &out[k].0) {
-                let (_, m) = out.remove(k);
-                hull = [hull2(&hull[0], &h[0]), hull2(&hull[1], &h[1])];
-                members.extend(m);
-                k = 0;
-            } else {
-                k += 1;
-            }
-        }
-        out.push((hull, members));
-    }
-    out.sort_by_key(|(_, m)| m.iter().copied().min());
-    out
+            return None;
+        };
+        Some([hull2(&h[0], &b[0]), hull2(&h[1], &b[1])])
+    })
 }
 
 /// Pairs left at the precision, settled by clusters after the search.
@@ -597,12 +652,23 @@ pub fn search_with(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &N
     super::check_precision(settings.precision)?;
     let start = Instant::now();
     let unique: Vec<&Cusp> = cusps.iter().filter(|c| c.unique).collect();
-    let regions: Vec<[Interval; 2]> = crate::search::map_parallel(&unique, control.threads, |c| cusp_region(chain, c)).into_iter().flatten().collect();
+    // A neighbourhood a limit left uncertified only lets fewer pairs go; the limit is reported.
+    let mut regions: Vec<[Interval; 2]> = Vec::new();
+    let mut certificates = Status::Complete;
+    for region in crate::search::map_parallel(&unique, control.threads, |c| cusp_region(chain, c, control, start)) {
+        match region {
+            Ok(u) => regions.extend(u),
+            Err(limit) => certificates = certificates.and(Status::Incomplete(limit)),
+        }
+    }
+    // One deadline: the pair search gets what the certificates left.
+    let control = &control.remaining_since(start);
     let max_boxes = (control.limits.max_memory / std::mem::size_of::<TreeBox>()) as u64;
     let tree = Tree { chain, bands, regions: &regions, eps: settings.precision, boxes: AtomicU64::new(0), max_boxes };
     let root = tree.make([motion::full_range(), motion::full_range()]);
     let start_cell = NodeCell { p: &root, q: &root, ancestor: &root, order: Order::ROOT, level: 0 };
     let mut run = drive(|| NodePrune { tree: &tree, _boxes: std::marker::PhantomData }, start_cell, control, progress);
+    run.status = certificates.and(run.status);
     if run.undecided.iter().any(|(_, why)| *why == crate::search::Undecided::Precision(TREE_FULL)) {
         run.status = run.status.and(Status::Incomplete(Limit::Memory));
     }
@@ -631,6 +697,56 @@ pub fn search_with(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &N
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+    use std::sync::atomic::AtomicBool;
+
+    /// The plain recursion `everywhere` runs on the kernel, counting the tests made.
+    fn recursive(b: [Interval; 2], depth: u32, test: &mut impl FnMut(&[Interval; 2]) -> bool) -> bool {
+        if test(&b) {
+            return true;
+        }
+        if depth == 0 {
+            return false;
+        }
+        let (lo, hi) = cusps::bisect(b, false);
+        recursive(lo, depth - 1, test) && recursive(hi, depth - 1, test)
+    }
+
+    #[test]
+    fn everywhere_decides_as_the_recursion_with_the_same_tests() {
+        let full = [motion::full_range(), motion::full_range()];
+        let tests: [fn(&[Interval; 2]) -> bool; 4] = [
+            |b| b[0].wid() < 0.5 && b[1].wid() < 0.5,
+            |b| !(b[0].contains(1.0) && b[1].contains(-2.0)),
+            |b| b[0].sup() < 2.0 || b[1].inf() > 0.0 || b[0].wid() < 1e-3,
+            |_| false,
+        ];
+        let control = Control::with_limits(Limits::default());
+        for (i, test) in tests.iter().enumerate() {
+            let (mut by_kernel, mut by_recursion) = (Vec::new(), Vec::new());
+            let got = everywhere(full, &control, Instant::now(), |b| {
+                by_kernel.push(*b);
+                test(b)
+            });
+            let want = recursive(full, DEPTH, &mut |b| {
+                by_recursion.push(*b);
+                test(b)
+            });
+            assert_eq!(got, Ok(want), "test {i}");
+            assert_eq!(by_kernel, by_recursion, "test {i}");
+        }
+    }
+
+    #[test]
+    fn everywhere_stops_on_the_runs_limits() {
+        let full = [motion::full_range(), motion::full_range()];
+        let cancel = AtomicBool::new(true);
+        let cancelled = Control { cancel: &cancel, ..Control::with_limits(Limits::default()) };
+        assert_eq!(everywhere(full, &cancelled, Instant::now(), |_| true), Err(Limit::Cancelled));
+        let late = Control::with_limits(Limits { timeout: Some(std::time::Duration::ZERO), ..Limits::default() });
+        assert_eq!(everywhere(full, &late, Instant::now(), |_| true), Err(Limit::Time));
+    }
+
     /// The tree's box count is capped by the memory limit over this size; README's figures for
     /// flooding arms rest on it.
     #[test]

@@ -61,27 +61,19 @@ pub fn cos_sin(x: Interval) -> (Interval, Interval) {
     (trig::cos(x), trig::sin(x))
 }
 
-/// Absolute error allowed for `f64::atan2` (glibc: at most 1 ulp; ulp(π) ≈ 4.4e-16).
-const ATAN2_SLACK: f64 = 4.0e-15;
+/// Margin beyond ±π of the whole-turn interval: any margin is sound, since [−π, π] already holds
+/// every angle.
+const TURN_MARGIN: f64 = 4.0e-15;
 
 /// The angles `atan2(s, c)` over the box `[c]×[s]`, as one connected interval (it may exceed
-/// (−π, π] to stay connected; the whole circle when the box holds the origin).
+/// (−π, π] to stay connected; the whole circle when the box holds the origin): the proven
+/// `interval::angle::arg`. Empty for an empty box.
 pub fn angle_interval(c: Interval, s: Interval) -> Interval {
     let pi = std::f64::consts::PI;
-    if c.contains(0.0) && s.contains(0.0) {
-        return interval(-pi - ATAN2_SLACK, pi + ATAN2_SLACK);
+    if c.is_empty() || s.is_empty() {
+        return Interval::EMPTY;
     }
-    // Over a box that misses the origin the extreme angles sit at corners.
-    let corners = [(c.inf(), s.inf()), (c.inf(), s.sup()), (c.sup(), s.inf()), (c.sup(), s.sup())];
-    // Behind the origin (c < 0) the branch cut of atan2 runs through the box: use [0, 2π).
-    let wrap = c.sup() < 0.0 && s.contains(0.0);
-    let mut lo = Interval::EMPTY;
-    for (x, y) in corners {
-        let a = point(y.atan2(x)) + interval(-ATAN2_SLACK, ATAN2_SLACK);
-        let a = if wrap && y.atan2(x) < 0.0 { a + tau() } else { a };
-        lo = lo.convex_hull(a);
-    }
-    lo
+    crate::interval::angle::arg(c, s).unwrap_or(interval(-pi, pi) + interval(-TURN_MARGIN, TURN_MARGIN))
 }
 
 /// The same set of angles, shifted by a whole number of turns so that its midpoint lies in
@@ -89,11 +81,11 @@ pub fn angle_interval(c: Interval, s: Interval) -> Interval {
 pub fn wrap(x: Interval) -> Interval {
     let pi = std::f64::consts::PI;
     if x.is_empty() || !(x.wid() < std::f64::consts::TAU) {
-        return interval(-pi, pi) + interval(-ATAN2_SLACK, ATAN2_SLACK);
+        return interval(-pi, pi) + interval(-TURN_MARGIN, TURN_MARGIN);
     }
     match reduce(x) {
         Some(r) => r,
-        None => interval(-pi, pi) + interval(-ATAN2_SLACK, ATAN2_SLACK),
+        None => interval(-pi, pi) + interval(-TURN_MARGIN, TURN_MARGIN),
     }
 }
 
