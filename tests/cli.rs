@@ -463,3 +463,38 @@ fn the_image_analysis_honours_its_deadline_and_its_memory_limit() {
     // A raster that would hold more than the memory limit is refused before any search.
     assert_clear_error(&["loop-singularities", &five_bar, "--actuated", "crank1_joint,crank2_joint", "--kind", "image", "--grid", "20000"], "raster of regions needs about");
 }
+
+/// Fixed links cost nothing: the four-bar with 300 sensor and tool frames (a chain of fixed
+/// joints off the ground and a star of them on the coupler) has the same variables and the same
+/// boxes as the bare four-bar, and its boxes list the same links; the frames are listed once,
+/// each with the link it moves with.
+#[test]
+fn fixed_links_add_no_variable_and_no_per_box_output() {
+    let bare = std::fs::read_to_string(fixture("four_bar.urdf")).expect("fixture");
+    let mut frames = String::new();
+    for i in 0..150 {
+        let parent = if i == 0 { "ground".to_string() } else { format!("frame{}", i - 1) };
+        frames += &format!("<link name=\"frame{i}\"/><joint name=\"frame{i}_joint\" type=\"fixed\"><parent link=\"{parent}\"/><child link=\"frame{i}\"/><origin xyz=\"0.01 0 0\" rpy=\"0 0 0.1\"/><axis xyz=\"0 0 0\"/></joint>");
+        frames += &format!("<link name=\"tool{i}\"/><joint name=\"tool{i}_joint\" type=\"fixed\"><parent link=\"coupler\"/><child link=\"tool{i}\"/><origin xyz=\"0 0.01 0\"/></joint>");
+    }
+    let framed = tempfile_path::Path::write(&bare.replace("</robot>", &format!("{frames}</robot>")));
+    let json = |urdf: &str| -> serde_json::Value {
+        let path = std::env::temp_dir().join(format!("linkspace-frames-{}-{}.json", std::process::id(), urdf.len()));
+        let (ok, _, err) = run(&["solve", urdf, "--sigma", "0.1", "--json", path.to_str().expect("utf-8")]);
+        assert!(ok, "{err}");
+        let v = serde_json::from_str(&std::fs::read_to_string(&path).expect("written")).expect("json");
+        let _ = std::fs::remove_file(&path);
+        v
+    };
+    let (a, b) = (json(&fixture("four_bar.urdf")), json(framed.as_str()));
+    assert_eq!(a["variables"], b["variables"]);
+    assert_eq!(a["solutions"].as_array().map(Vec::len), b["solutions"].as_array().map(Vec::len));
+    for (x, y) in a["solutions"].as_array().expect("boxes").iter().zip(b["solutions"].as_array().expect("boxes")) {
+        assert_eq!(x["box"], y["box"]);
+        assert_eq!(x["link_angles"], y["link_angles"], "a box lists the links that move on their own only");
+    }
+    let rigid = b["rigid_links"].as_object().expect("listed once");
+    assert_eq!(rigid.len(), 300);
+    assert_eq!((rigid["frame149"].as_str(), rigid["tool7"].as_str()), (Some("ground"), Some("coupler")));
+    assert!(a.get("rigid_links").is_none(), "no fixed link, no list");
+}
