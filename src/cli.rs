@@ -6,17 +6,17 @@ mod serve;
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use linkspace::model::urdf;
-use linkspace::problems::choice::TracedPoint;
+use linkspace::problems::TracedPoint;
 use linkspace::problems::ModelChoice;
 use linkspace::LpBackend;
-use linkspace::app::{self, arm::IkPoint, Arm};
+use linkspace::app::{self, Arm, IkPoint};
 use linkspace::manip3r::{
     self,
     collision,
     report::CollisionReport,
 };
 use linkspace::app::Bounds;
-use linkspace::problems::singular::Coordinates;
+use linkspace::problems::Coordinates;
 use linkspace::report;
 use linkspace::search::Control;
 use linkspace::search::{BoxStatus, Limits, Progress, SolverSettings};
@@ -129,7 +129,7 @@ impl ChainArgs {
                 Ok((j.to_string(), v))
             })
             .collect::<Result<Vec<_>>>()?;
-        let spec = manip3r::select::ChainSpec { base: self.base.clone(), tip: self.tip.clone(), tip_point, locks, length_tolerance: 0.0 };
+        let spec = manip3r::ChainSpec { base: self.base.clone(), tip: self.tip.clone(), tip_point, locks, length_tolerance: 0.0 };
         Ok(manip3r::LoadOptions { spec, exact_geometry: self.exact_geometry, ignore_limits: self.ignore_limits })
     }
 }
@@ -511,8 +511,8 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     let arm = load_arm(&args.urdf, args.uncertainty, &args.chain)?;
     let cancel = AtomicBool::new(false);
     let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };
-    let request = app::arm::SingularitiesRequest { precision: args.precision, nodes: args.nodes, search_anyway: args.search_anyway };
-    let found = app::arm::singularities(&arm, &request, &control, &mut |_| {})?;
+    let request = app::SingularitiesRequest { precision: args.precision, nodes: args.nodes, search_anyway: args.search_anyway };
+    let found = app::singularities(&arm, &request, &control, &mut |_| {})?;
     let report = found.report(&arm);
     let (prepared, verdict, effect) = (&arm.prepared, &found.verdict, &found.limit_effect);
     let mut out = std::io::stdout().lock();
@@ -579,7 +579,7 @@ fn collisions(args: CollisionsArgs) -> Result<()> {
     let mechanism = load_mechanism(&args.urdf)?;
     let cancel = AtomicBool::new(false);
     let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };
-    let found = app::arm::collisions(&mechanism, &options, args.precision, &control, &mut |_| {}).with_context(|| format!("loading {}", args.urdf.display()))?;
+    let found = app::collisions(&mechanism, &options, args.precision, &control, &mut |_| {}).with_context(|| format!("loading {}", args.urdf.display()))?;
     eprintln!("chain: {}", found.prepared.choice.reason);
     let (scene, set) = (&found.scene, &found.set);
     let report = CollisionReport::new(scene, args.precision, set);
@@ -618,7 +618,7 @@ fn ik(args: IkArgs) -> Result<()> {
     let arm = load_arm(&args.urdf, args.uncertainty, &args.chain)?;
     let cancel = AtomicBool::new(false);
     let control = Control { limits: args.limits.limits(200_000)?, threads: args.limits.threads(), cancel: &cancel };
-    let found = app::arm::inverse_kinematics(&arm, point, args.precision, &control, &mut |_| {})?;
+    let found = app::inverse_kinematics(&arm, point, args.precision, &control, &mut |_| {})?;
     let report = found.report(&arm);
     let s = &found.solutions;
     let mut out = std::io::stdout().lock();

@@ -11,7 +11,7 @@
 use crate::interval::{point, Interval, IntervalBox};
 use thiserror::Error;
 
-pub mod multilinear;
+pub(crate) mod multilinear;
 
 /// Index of a variable in its system (and of its component in an `IntervalBox`).
 pub type VarId = usize;

@@ -7,7 +7,7 @@
 use linkspace::contract::FaceBounds;
 use linkspace::interval::{components, point};
 use linkspace::model::urdf;
-use linkspace::problems::cayley_menger::{BuildOptions, CayleyMenger, DistanceProblem, Formulation};
+use linkspace::problems::{BuildOptions, CayleyMenger, DistanceProblem, Formulation};
 use linkspace::distances::file as distance_file;
 use linkspace::problems::PlatformProblem;
 use linkspace::report::distances::{report, DistancesReport};
@@ -65,7 +65,7 @@ pub fn four_spheres(orient: bool) -> DistanceProblem {
     }
     p.lines.push((t, u));
     if orient {
-        p.orientations.push(linkspace::problems::cayley_menger::Orientation { a: t, b: u, toward: 1 });
+        p.orientations.push(linkspace::problems::Orientation { a: t, b: u, toward: 1 });
     }
     p
 }

@@ -7,7 +7,7 @@
 use linkspace::contract::FaceBounds;
 use linkspace::distances::{solve, Certified, Choice};
 use linkspace::interval::point;
-use linkspace::problems::cayley_menger::DistanceProblem;
+use linkspace::problems::DistanceProblem;
 use linkspace::search::SolverSettings;
 use nalgebra::{Matrix6, Vector3, Vector6};
 use std::sync::atomic::AtomicBool;
@@ -34,7 +34,7 @@ fn spheres(c: [[f64; 3]; 4], r: [f64; 4]) -> DistanceProblem {
     for k in 1..4 {
         p.add_point_line(k, t, u, point(r[k]) * point(r[k])).unwrap();
     }
-    p.orientations.push(linkspace::problems::cayley_menger::Orientation { a: t, b: u, toward: 1 });
+    p.orientations.push(linkspace::problems::Orientation { a: t, b: u, toward: 1 });
     p.lines.push((t, u));
     p
 }

@@ -5,8 +5,8 @@
 
 use super::util::urdf_text;
 use linkspace::model::urdf;
-use linkspace::problems::singular::image::CuspProblem;
-use linkspace::problems::singular::{Output, SingularKind, SingularProblem};
+use linkspace::problems::CuspProblem;
+use linkspace::problems::{Output, SingularKind, SingularProblem};
 use linkspace::singular::{BoxKind, SingularSet};
 use linkspace::search::{SolverSettings, Status};
 use std::f64::consts::PI;
@@ -818,7 +818,7 @@ fn five_bar_image_has_no_cusp_no_node_and_four_regions_as_the_references() {
     let m = urdf::parse(&urdf_text("five_bar_unequal.urdf")).expect("parses");
     let actuated: Vec<String> = FIVE_BAR_ACTUATORS.iter().map(|s| s.to_string()).collect();
     let settings = SolverSettings { sigma: 1e-2, ..Default::default() };
-    let r = linkspace::app::loops::analyse_image(&m, &[], &actuated, &settings, 64, &AtomicBool::new(false)).expect("analyses");
+    let r = linkspace::app::analyse_image(&m, &[], &actuated, &settings, 64, &AtomicBool::new(false)).expect("analyses");
     assert_eq!(r.status, "complete");
     assert_eq!((r.cusp_counts.proven, r.cusp_counts.undecided), (0, 0), "cusps {:?}", r.cusps);
     assert_eq!((r.node_counts.proven, r.node_counts.undecided), (0, 0), "nodes {:?}", r.nodes);

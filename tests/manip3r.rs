@@ -447,7 +447,7 @@ fn collision_boxes_agree_with_sampling() {
     }
     let s = &set;
     let total = s.colliding_area + s.free_area + s.undecided_area;
-    let square = (2.0 * linkspace::manip3r::motion::PI_UP).powi(2);
+    let square = (2.0 * linkspace::manip3r::PI_UP).powi(2);
     assert!((total - square).abs() < 1e-9 * square, "boxes tile the square: {total} vs {square}");
     // Non-trivial: the forearm meets the column on a few per cent of joint space, the upper arm
     // never (its segment stays 0.447 from the axis, more than 0.3 + 0.1).

@@ -5,7 +5,7 @@
 //! solutions where the verdict says at most four); the seed's robots written in three
 //! conventions against each other and against Table 1.
 
-use linkspace::manip3r::{self, cusps, ik, select::ChainSpec, verdict, Chain3R, LoadOptions};
+use linkspace::manip3r::{self, cusps, ik, ChainSpec, verdict, Chain3R, LoadOptions};
 use linkspace::manip3r::report::Completeness;
 use linkspace::model::{urdf, JointKind, Mechanism};
 use linkspace::search::{Control, Incompleteness, Limits, Status};
@@ -230,7 +230,7 @@ fn exact_geometry_on_a_truncated_robot_reports_near_degenerate_strips() {
         // The strips sit where the snapped robot has its internal-motion lines.
         let snapped = prepare(&xml, &LoadOptions::default()).expect("loads");
         let c2 = Chain3R::from_mechanism(&snapped.mechanism, 0.0).expect("3R");
-        let lines = manip3r::motion::bands(&c2, 1e-4);
+        let lines = manip3r::bands(&c2, 1e-4);
         assert!(lines.iter().all(|l| l.near.is_none()) && lines.len() == 2);
         for (l, s) in lines.iter().zip(&near) {
             assert!(s.strip[0] <= l.theta3[0] && l.theta3[1] <= s.strip[1], "{l:?} in {s:?}");

@@ -17,8 +17,8 @@
 
 use super::util::urdf_text;
 use linkspace::model::urdf;
-use linkspace::problems::singular::{Coordinates, Output, SingularKind, SingularProblem};
-use linkspace::app::loops::SingularSets;
+use linkspace::problems::{Coordinates, Output, SingularKind, SingularProblem};
+use linkspace::app::SingularSets;
 use linkspace::singular::SingularSet;
 use linkspace::problems::{Linkage, LinkageProblem, Model, SpatialProblem};
 use linkspace::search::{SolverSettings, Status};

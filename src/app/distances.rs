@@ -66,18 +66,18 @@ impl DistancesJob {
         &self.fixed
     }
 
+    /// The default rho of a formulation: the seed's 0.99 for the determinants; 0.9 in
+    /// coordinates (points, line), where bisecting is cheaper than slow propagation fixpoints.
+    pub fn default_rho(formulation: Choice) -> f64 {
+        if matches!(formulation, Choice::Points | Choice::Line) {
+            0.9
+        } else {
+            0.99
+        }
+    }
+
     /// Solves. `request.formulation` may be `Auto`.
     pub fn run(&self, request: &DistancesRequest, settings: &SolverSettings, cancel: &AtomicBool) -> Result<Certified, DistancesError> {
         solve(&self.distances, self.formulation(request.formulation), request.redundant, request.faces, settings.clone(), cancel)
-    }
-}
-
-/// The default rho of a formulation: the seed's 0.99 for the determinants; 0.9 in coordinates
-/// (points, line), where bisecting is cheaper than slow propagation fixpoints.
-pub fn default_rho(formulation: Choice) -> f64 {
-    if matches!(formulation, Choice::Points | Choice::Line) {
-        0.9
-    } else {
-        0.99
     }
 }

@@ -10,15 +10,17 @@
 //! No IO and no async here: a front end prepares a run (all validation happens then, so bad
 //! requests are answered at once), moves it to a thread of its own and converts the result.
 
-pub mod arm;
-pub mod distances;
-pub mod linkage;
-pub mod loops;
+pub(crate) mod arm;
+pub(crate) mod distances;
+pub(crate) mod linkage;
+pub(crate) mod loops;
 mod platform;
 
-pub use arm::{Arm, Manip3rAnalysis};
+// One job per question, each with its request and its typed result.
+pub use arm::{collisions, inverse_kinematics, singularities, Arm, ArmCollisions, ArmIk, ArmSingularities, IkPoint, Manip3rAnalysis, SingularitiesRequest, CURVE_DEPTH};
+pub use distances::{DistancesJob, DistancesRequest};
 pub use linkage::{LinkageAnalysis, SolveJob};
-pub use loops::Actuation;
+pub use loops::{all_kinds, analyse_image, Actuation, ImageAnalysisError, SingularSets};
 pub use platform::PlatformAnalysis;
 
 use crate::model::Mechanism;

@@ -3,7 +3,7 @@
 
 use super::parse_fix;
 use anyhow::{Context, Result};
-use linkspace::app::distances::{default_rho, DistancesJob, DistancesRequest};
+use linkspace::app::{DistancesJob, DistancesRequest};
 use linkspace::contract::FaceBounds;
 use linkspace::distances::Choice;
 use linkspace::model::urdf;
@@ -105,7 +105,7 @@ pub fn run(args: DistancesArgs) -> Result<()> {
     let text = std::fs::read_to_string(&args.file).with_context(|| format!("reading {}", args.file.display()))?;
     let job = load(&args.file, &text, &fixed)?;
     let request = DistancesRequest { formulation: job.formulation(choice(args.formulation)), redundant: args.redundant, faces: face_bounds(args.faces) };
-    let rho = args.rho.unwrap_or(default_rho(request.formulation));
+    let rho = args.rho.unwrap_or(DistancesJob::default_rho(request.formulation));
     let settings = args.limits.solver_settings(SolverSettings::default().max_boxes, SolverSettings { sigma: args.sigma, rho, ..Default::default() })?;
     settings.validate()?;
     let certified = job.run(&request, &settings, &AtomicBool::new(false)).with_context(|| format!("solving {}", args.file.display()))?;

@@ -5,9 +5,9 @@
 use super::{parse_fix, LimitArgs};
 use anyhow::{bail, Context, Result};
 use linkspace::model::urdf;
-use linkspace::problems::singular::{Output, SingularKind};
+use linkspace::problems::{Output, SingularKind};
 use linkspace::problems::Model;
-use linkspace::app::loops::{all_kinds, analyse_image, Actuation, SingularSets};
+use linkspace::app::{all_kinds, analyse_image, Actuation, SingularSets};
 use linkspace::report::singular::SingularReport;
 use linkspace::search::SolverSettings;
 use std::io::Write;

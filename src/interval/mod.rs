@@ -4,10 +4,10 @@
 //! which it was made), bisection, and the few set operations the driver needs.
 //! It does no IO and knows nothing of equations.
 
-pub mod angle;
+pub(crate) mod angle;
 pub(crate) mod fast;
 mod graph;
-pub mod trig;
+pub(crate) mod trig;
 
 pub use graph::{components_by, components_of_edges, flood_fill, labels, merge_touching, touching_pairs};
 

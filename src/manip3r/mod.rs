@@ -15,28 +15,35 @@
 //! of 3R robotic manipulators* (seed 003). R. Krawczyk, *Newton-Algorithmen zur Bestimmung von
 //! Nullstellen mit Fehlerschranken*, Computing 4 (1969).
 
-pub mod aspects;
+// The searches and readings a caller drives directly are namespaces of their own (`cusps::search`,
+// `ik::solve`, `collision::classify`, ...); the rest is reached through the list below.
+pub(crate) mod aspects;
 pub mod branches;
-pub mod chain;
+pub(crate) mod chain;
 pub mod collision;
-pub mod curves;
+pub(crate) mod curves;
 pub mod cusps;
-pub mod drive;
-pub mod frame;
+pub(crate) mod drive;
+pub(crate) mod frame;
 pub mod ik;
-pub mod limits;
-pub mod motion;
+pub(crate) mod limits;
+pub(crate) mod motion;
 pub mod nodes;
 mod records;
 pub mod report;
-pub mod select;
+pub(crate) mod select;
 pub(crate) mod taylor;
 pub mod verdict;
 
 pub use chain::{Chain3R, Jets};
+pub use curves::Cover;
 pub use cusps::{Cusp, CuspSearch};
 pub use drive::Order;
+pub use frame::BaseFrame;
+pub use limits::JointLimits;
+pub use motion::{bands, Band, PI_UP};
 pub use nodes::{Node, NodeSearch};
+pub use select::ChainSpec;
 
 use crate::search::{Control, Progress, Status};
 use std::time::Instant;

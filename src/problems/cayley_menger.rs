@@ -375,13 +375,6 @@ pub fn collinear(entry: &dyn Fn(usize, usize) -> Poly) -> Poly {
     determinant(3, entry).expect("invariant: 3 points")
 }
 
-/// The segments `p1 p2` and `p2 p3` are orthogonal: `Ξ(p1,p2) + Ξ(p2,p3) − Ξ(p1,p3) = 0`
-/// (Pythagoras), with `entry` indexing the three points 0, 1, 2.
-pub fn orthogonal(entry: &dyn Fn(usize, usize) -> Poly) -> Poly {
-    let two = point(2.0);
-    entry(0, 1).scale(two).add(&entry(1, 2).scale(two)).add(&entry(0, 2).scale(-two))
-}
-
 /// Point 0 at squared distance `d2` from the line through points 1 and 2:
 /// `Ξ(p0, p1, p2) + 4 r12 d² = 0` (the seed's Eq. 5).
 pub fn point_line(entry: &dyn Fn(usize, usize) -> Poly, d2: Interval) -> Poly {
@@ -939,8 +932,6 @@ mod tests {
     fn derived_constraints_vanish_where_they_should() {
         let p = [Vector3::new(0.0, 0.0, 0.0), Vector3::new(1.0, 2.0, 0.0), Vector3::new(2.0, 4.0, 0.0)];
         assert!(collinear(&entry_of(&p)).eval(&[]).contains(0.0));
-        let q = [Vector3::new(1.0, 0.0, 0.0), Vector3::new(0.0, 0.0, 0.0), Vector3::new(0.0, 3.0, 1.0)];
-        assert!(orthogonal(&entry_of(&q)).eval(&[]).contains(0.0));
         // (1, 1, 0) is at distance 1 from the x-axis through (0,0,0) and (2,0,0).
         let r = [Vector3::new(1.0, 1.0, 0.0), Vector3::new(0.0, 0.0, 0.0), Vector3::new(2.0, 0.0, 0.0)];
         assert!(point_line(&entry_of(&r), point(1.0)).eval(&[]).contains(0.0));

@@ -339,13 +339,6 @@ fn equation_from(terms: &[(VarId, Interval)], constant: Interval) -> Option<Equa
     }
 }
 
-/// Interval of angles `atan2(s, c)` over the box `[c]×[s]` (may exceed (−π, π] to stay
-/// connected; the whole circle when the box holds the origin), rounded outward.
-pub fn angle_interval(c: Interval, s: Interval) -> (f64, f64) {
-    let a = angles::angle_interval(c, s);
-    (a.inf(), a.sup())
-}
-
 /// The bounding box on the unit circle of the arc of angles `arc` (sound cos and sin).
 fn arc_box(arc: Interval) -> (Interval, Interval) {
     let (c, s) = (trig::cos(arc), trig::sin(arc));
@@ -853,14 +846,6 @@ fn bounds(x: Interval) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn angle_interval_handles_the_branch_cut() {
-        let (lo, hi) = angle_interval(interval(-1.0, -0.9), interval(-0.1, 0.1));
-        assert!(lo < PI && hi > PI && hi - lo < 0.3);
-        let (lo, hi) = angle_interval(interval(0.5, 0.6), interval(0.7, 0.8));
-        assert!(lo <= 0.8f64.atan2(0.6) && hi >= 0.7f64.atan2(0.5));
-    }
 
     #[test]
     fn arc_box_encloses_the_arc() {

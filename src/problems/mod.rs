@@ -2,17 +2,20 @@
 //! out. Builders never solve.
 
 pub(crate) mod angles;
-pub mod cayley_menger;
-pub mod choice;
-pub mod coordinates;
-pub mod linkage;
-pub mod platform;
-pub mod singular;
-pub mod spatial;
+pub(crate) mod cayley_menger;
+pub(crate) mod choice;
+pub(crate) mod coordinates;
+pub(crate) mod linkage;
+pub(crate) mod platform;
+pub(crate) mod singular;
+pub(crate) mod spatial;
 pub(crate) mod stated;
 
-pub use cayley_menger::{CayleyMenger, DistanceError, DistanceProblem};
-pub use choice::{Linkage, Model, ModelChoice};
+pub use cayley_menger::{BuildOptions, CayleyMenger, DistanceError, DistanceProblem, DistanceSolverError, Formulation, Orientation};
+pub use choice::{Linkage, Model, ModelChoice, TracedPoint};
+pub use coordinates::{Placed, PlacedError};
 pub use linkage::{LinkageError, LinkageProblem};
-pub use platform::{PlatformError, PlatformProblem};
-pub use spatial::SpatialProblem;
+pub use platform::{PlatformError, PlatformProblem, Pose};
+pub use singular::image::{CuspProblem, ImageError, NodeProblem};
+pub use singular::{Coordinates, Output, SingularError, SingularKind, SingularProblem};
+pub use spatial::{LinkPose, SpatialProblem};

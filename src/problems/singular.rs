@@ -37,8 +37,8 @@ use crate::system::{Equation, EquationKind, EquationSystem, Monomial, Term, VarI
 use std::collections::BTreeMap;
 use thiserror::Error;
 
-pub mod image;
-pub mod velocity;
+pub(crate) mod image;
+pub(crate) mod velocity;
 
 /// Half-width of a chart's free components: above 1, so a direction whose largest components
 /// tie (|m_j| = |m_k| = 1) lies inside both charts' domains, not on their boundary.

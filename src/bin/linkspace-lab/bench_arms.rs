@@ -10,7 +10,7 @@
 use crate::bench3r::{Bench3rArgs, ROBOTS};
 use crate::median;
 use anyhow::{bail, Context, Result};
-use linkspace::manip3r::{self, select::ChainSpec, LoadOptions};
+use linkspace::manip3r::{self, ChainSpec, LoadOptions};
 use linkspace::search::Control;
 use linkspace::model::urdf;
 use linkspace::search::{Limits, Status};

@@ -289,12 +289,12 @@ const ROBOTS_3R: [(&str, &str); 3] = [
     ("f", include_str!("../../../urdf/orthogonal_3r_f.urdf")),
 ];
 
-/// The singular-curve cover (`manip3r::curves::Cover`, the one the ROS node publishes) on a
+/// The singular-curve cover (`manip3r::Cover`, the one the ROS node publishes) on a
 /// `2^depth` grid, its images, and the certified cusps and nodes marked on both; then the
 /// workspace regions between the images with their number of IK solutions (seed 003's style).
 fn singular_curves(dir: &Path, depth: u32, quick: bool) -> Result<()> {
     use linkspace::interval::interval;
-    use linkspace::manip3r::{curves::Cover, cusps, nodes, report::radius, Chain3R};
+    use linkspace::manip3r::{Cover, cusps, nodes, report::radius, Chain3R};
     use linkspace::search::Control;
     let mut joint_panels = Vec::new();
     let mut work_panels = Vec::new();
@@ -375,11 +375,11 @@ const FOUR_SPHERES: &str = include_str!("../../../urdf/four_spheres.json");
 /// split formulation and on our shared one).
 fn distance_sweeps(dir: &Path, quick: bool) -> Result<()> {
     use linkspace::contract::FaceBounds;
-    use linkspace::problems::cayley_menger::{BuildOptions, CayleyMenger, Formulation};
+    use linkspace::problems::{BuildOptions, CayleyMenger, Formulation};
     let solve = |cm: &CayleyMenger, faces: FaceBounds, settings: SolverSettings| -> Result<Enclosure> { Ok(cm.solver(faces, settings)?.enclose(&AtomicBool::new(false), &mut |_| {})) };
     let legs = ["leg15", "leg16", "leg26", "leg24", "leg34", "leg35"];
     let fixed: Vec<(String, f64)> = legs.iter().map(|l| (l.to_string(), 4.75)).collect();
-    let platform = linkspace::problems::platform::PlatformProblem::new(&urdf::parse(OCTAHEDRAL)?, &fixed)?;
+    let platform = linkspace::problems::PlatformProblem::new(&urdf::parse(OCTAHEDRAL)?, &fixed)?;
     let sigmas: &[f64] = if quick { &[0.1, 1e-3] } else { &[0.1, 1e-2, 1e-3, 1e-4, 1e-6] };
     let methods = [
         ("split, corners (seed 004)", Formulation::Split, FaceBounds::Corners, false),

@@ -3,10 +3,10 @@
 
 use anyhow::Result;
 use linkspace::model::urdf;
-use linkspace::problems::singular::image::{CuspProblem, NodeProblem};
+use linkspace::problems::{CuspProblem, NodeProblem};
 use linkspace::singular::image;
-use linkspace::app::loops::SingularSets;
-use linkspace::problems::singular::{Output, SingularKind, SingularProblem};
+use linkspace::app::SingularSets;
+use linkspace::problems::{Output, SingularKind, SingularProblem};
 use linkspace::search::SolverSettings;
 use std::io::Write;
 use std::sync::atomic::AtomicBool;

@@ -410,7 +410,7 @@ pub fn manip3r_findings() -> Vec<Finding> {
     at_roots.retain(|r| torus_distance(*r, cusp) > 1e-3);
     at_roots.push(cusp);
     out.push(study_ik("3R robot a, IK at a cusp", "a triple root: singular Jacobian, quadratic-free convergence", &a, at, at_roots, None));
-    let bands = linkspace::manip3r::motion::bands(&f, 1e-9);
+    let bands = linkspace::manip3r::bands(&f, 1e-9);
     let band = bands.first().expect("robot f has internal motions");
     let t3 = 0.5 * (band.theta3[0] + band.theta3[1]);
     let line_point = f.eval_f64(0.0, t3);

@@ -1,7 +1,7 @@
 //! Workspace regions of a 3R arm in the half-section (ρ, z) with their number of inverse
 //! kinematic solutions (seed 003's figures).
 //!
-//! The images of the singular-curve cover's boxes (`manip3r::curves::Cover`, enclosed by
+//! The images of the singular-curve cover's boxes (`manip3r::Cover`, enclosed by
 //! `cusps::evaluate`) are rasterised on a grid of the half-plane; a cell they miss holds no
 //! critical value of the map, so the number of solutions is constant on each connected component
 //! of free cells (the map is proper: the torus is compact). One certified `ik::solve` at a
