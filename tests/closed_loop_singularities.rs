@@ -761,7 +761,7 @@ mod five_bar_ref {
         out
     }
 
-    /// Regions of the torus cut by the levels |r1 ± r2| of the gap: connected components of a
+    /// ActuatorRegions of the torus cut by the levels |r1 ± r2| of the gap: connected components of a
     /// grid's cells by band (below, between, above), with the modes of each (4-neighbours, wrapping).
     pub fn regions(n: usize, r1: f64, r2: f64) -> Vec<usize> {
         let step = 2.0 * PI / n as f64;

@@ -595,7 +595,7 @@ proptest::proptest! {
             }
             proptest::prop_assert!(inside(&c), "{} cut the true configuration {}", step.name(), what);
         }
-        proptest::prop_assert!(p.limit_verdict(&b) != linkspace::contract::Verdict::Outside, "the filters drop {}", what);
+        proptest::prop_assert!(p.limit_verdict(&b) != linkspace::contract::Inclusion::Outside, "the filters drop {}", what);
     }
 }
 

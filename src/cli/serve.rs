@@ -2,7 +2,7 @@
 
 use super::{parse_fix, parse_trace};
 use anyhow::{bail, Context, Result};
-use linkspace::ros::{self, Limits, Mapping, Network, ServeConfig, Source};
+use linkspace::ros::{self, NodeLimits, Mapping, Network, ServeConfig, Source};
 use linkspace::search::SolverSettings;
 use std::io::Read;
 use std::path::PathBuf;
@@ -70,19 +70,19 @@ pub struct ServeArgs {
     #[arg(long, default_value_t = 1e-4, allow_hyphen_values = true)]
     precision: f64,
     /// Largest max_boxes a Solve request may ask for.
-    #[arg(long, default_value_t = Limits::default().max_boxes)]
+    #[arg(long, default_value_t = NodeLimits::default().max_boxes)]
     max_request_boxes: u64,
     /// Largest timeout (seconds) a Solve request may ask for.
-    #[arg(long, default_value_t = Limits::default().max_timeout)]
+    #[arg(long, default_value_t = NodeLimits::default().max_timeout)]
     max_request_timeout: f64,
     /// Longest a Solve request may wait for its result before the reply (seconds).
-    #[arg(long, default_value_t = Limits::default().max_wait)]
+    #[arg(long, default_value_t = NodeLimits::default().max_wait)]
     max_wait: f64,
     /// Requested runs that may go on at once; more are refused.
-    #[arg(long, default_value_t = Limits::default().max_runs)]
+    #[arg(long, default_value_t = NodeLimits::default().max_runs)]
     max_runs: usize,
     /// Boxes drawn per marker namespace.
-    #[arg(long, default_value_t = Limits::default().max_markers)]
+    #[arg(long, default_value_t = NodeLimits::default().max_markers)]
     max_markers: usize,
     /// Publish the configuration spaces and markers again every this many seconds (for
     /// subscribers with volatile durability, such as RViz's default); 0: only when they change.
@@ -158,7 +158,7 @@ pub fn serve(mut args: ServeArgs) -> Result<()> {
     let settings = args.limits.solver_settings(SolverSettings::default().max_boxes, SolverSettings { sigma: args.sigma, rho: args.rho, ..Default::default() })?;
     settings.validate()?;
     linkspace::manip3r::check_precision(args.precision)?;
-    let limits = Limits { max_boxes: args.max_request_boxes, max_timeout: args.max_request_timeout, max_wait: args.max_wait, max_runs: args.max_runs, max_markers: args.max_markers };
+    let limits = NodeLimits { max_boxes: args.max_request_boxes, max_timeout: args.max_request_timeout, max_wait: args.max_wait, max_runs: args.max_runs, max_markers: args.max_markers };
     if limits.max_boxes == 0 || !(limits.max_timeout > 0.0 && limits.max_timeout.is_finite()) || !(limits.max_wait >= 0.0 && limits.max_wait.is_finite()) || limits.max_runs == 0 {
         bail!("--max-request-boxes, --max-request-timeout and --max-runs must be positive, --max-wait at least 0");
     }

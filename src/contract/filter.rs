@@ -11,7 +11,7 @@ use crate::lp::LpCounters;
 
 /// Where a box lies with respect to a filter's admissible set.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Verdict {
+pub enum Inclusion {
     /// Every point of the box is admissible.
     Inside,
     /// No point of the box is admissible (proven).
@@ -20,14 +20,14 @@ pub enum Verdict {
     Straddles,
 }
 
-impl Verdict {
+impl Inclusion {
     /// The verdict on the intersection of two admissible sets: `Outside` when either is,
     /// `Inside` only when both are.
-    pub fn and(self, other: Verdict) -> Verdict {
+    pub fn and(self, other: Inclusion) -> Inclusion {
         match (self, other) {
-            (Verdict::Outside, _) | (_, Verdict::Outside) => Verdict::Outside,
-            (Verdict::Inside, Verdict::Inside) => Verdict::Inside,
-            _ => Verdict::Straddles,
+            (Inclusion::Outside, _) | (_, Inclusion::Outside) => Inclusion::Outside,
+            (Inclusion::Inside, Inclusion::Inside) => Inclusion::Inside,
+            _ => Inclusion::Straddles,
         }
     }
 }
@@ -35,12 +35,12 @@ impl Verdict {
 /// A sound test of a box against a condition that is not an equation.
 pub trait Filter {
     /// `Outside` only when no point of `b` is admissible; `Inside` only when every point is.
-    fn judge(&self, b: &IntervalBox) -> Verdict;
+    fn judge(&self, b: &IntervalBox) -> Inclusion;
 }
 
 /// A judging function is a filter (a problem's own limit test, borrowed).
-impl<F: Fn(&IntervalBox) -> Verdict> Filter for F {
-    fn judge(&self, b: &IntervalBox) -> Verdict {
+impl<F: Fn(&IntervalBox) -> Inclusion> Filter for F {
+    fn judge(&self, b: &IntervalBox) -> Inclusion {
         self(b)
     }
 }
@@ -54,11 +54,11 @@ pub struct Filtered<'a> {
 }
 
 impl Filtered<'_> {
-    fn verdict(&self, b: &IntervalBox) -> Verdict {
-        let mut verdict = Verdict::Inside;
+    fn verdict(&self, b: &IntervalBox) -> Inclusion {
+        let mut verdict = Inclusion::Inside;
         for f in &self.filters {
             verdict = verdict.and(f.judge(b));
-            if verdict == Verdict::Outside {
+            if verdict == Inclusion::Outside {
                 break;
             }
         }
@@ -73,10 +73,10 @@ impl Contractor for Filtered<'_> {
             return outcome;
         }
         match (self.verdict(b), outcome) {
-            (Verdict::Outside, _) => Contraction::Empty,
+            (Inclusion::Outside, _) => Contraction::Empty,
             // The one root may lie outside the admissible set: keep the box, without the
             // certificate, so the search goes on narrowing or splitting it.
-            (Verdict::Straddles, Contraction::Proven) => Contraction::Reduced,
+            (Inclusion::Straddles, Contraction::Proven) => Contraction::Reduced,
             (_, o) => o,
         }
     }
@@ -93,7 +93,7 @@ impl Contractor for Filtered<'_> {
     /// certificate then speaks of an admissible root.
     fn certify(&mut self, b: &IntervalBox) -> Option<IntervalBox> {
         let proven = self.inner.certify(b)?;
-        (self.verdict(&proven) == Verdict::Inside).then_some(proven)
+        (self.verdict(&proven) == Inclusion::Inside).then_some(proven)
     }
 }
 
@@ -119,14 +119,14 @@ mod tests {
     /// Admits x ≤ 1.
     struct AtMostOne;
     impl Filter for AtMostOne {
-        fn judge(&self, b: &IntervalBox) -> Verdict {
+        fn judge(&self, b: &IntervalBox) -> Inclusion {
             let x = b.dims[0];
             if x.sup() <= 1.0 {
-                Verdict::Inside
+                Inclusion::Inside
             } else if x.inf() > 1.0 {
-                Verdict::Outside
+                Inclusion::Outside
             } else {
-                Verdict::Straddles
+                Inclusion::Straddles
             }
         }
     }

@@ -15,7 +15,7 @@ mod newton;
 mod propagate;
 mod trapezoid;
 
-pub use filter::{Filter, Filtered, Verdict};
+pub use filter::{Filter, Filtered, Inclusion};
 pub use lp_shrink::LpShrink;
 pub use newton::Newton;
 pub use propagate::Propagation;

@@ -7,7 +7,7 @@
 //! so `v − 2πk` keeps the accuracy of `v`'s own ulp instead of losing `|k|·ulp(2π)`. Beyond
 //! `MAX_REDUCIBLE` radians the split is no longer exact and a value is refused.
 
-use crate::contract::Verdict;
+use crate::contract::Inclusion;
 use crate::interval::{interval, point, Interval};
 use crate::interval::trig;
 
@@ -94,15 +94,15 @@ pub fn wrap(x: Interval) -> Interval {
 /// `lower`, `upper` enclose the stated limits. `Outside` means no angle of `r` is congruent to a
 /// value within the limits; `Inside` that every one is. Limits too large to reduce accurately
 /// give `Straddles` unless they span a whole turn.
-pub fn against_limits(r: Interval, lower: Interval, upper: Interval) -> Verdict {
+pub fn against_limits(r: Interval, lower: Interval, upper: Interval) -> Inclusion {
     let span = upper - lower;
     if span.inf() >= tau().sup() {
-        return Verdict::Inside;
+        return Inclusion::Inside;
     }
     if !(r.wid() < std::f64::consts::TAU) {
-        return Verdict::Straddles;
+        return Inclusion::Straddles;
     }
-    let (Some(r), Some(lo)) = (reduce(r), reduce(lower)) else { return Verdict::Straddles };
+    let (Some(r), Some(lo)) = (reduce(r), reduce(lower)) else { return Inclusion::Straddles };
     // Both now sit within about a turn of 0, and `lo + span` within two: turns −3..=3 cover
     // every congruent copy of the limit range that could meet `r`.
     let hi = lo + span;
@@ -119,11 +119,11 @@ pub fn against_limits(r: Interval, lower: Interval, upper: Interval) -> Verdict 
         }
     }
     if inside {
-        Verdict::Inside
+        Inclusion::Inside
     } else if meets {
-        Verdict::Straddles
+        Inclusion::Straddles
     } else {
-        Verdict::Outside
+        Inclusion::Outside
     }
 }
 
@@ -145,11 +145,11 @@ mod tests {
     fn multi_turn_limits_are_compared_modulo_a_turn() {
         let six_pi = 3.0 * std::f64::consts::TAU;
         let (lo, hi) = (stated(1.0 + six_pi), stated(2.0 + six_pi));
-        assert_eq!(against_limits(interval(1.51, 1.52), lo, hi), Verdict::Inside);
-        assert_eq!(against_limits(interval(-1.0, 0.5), lo, hi), Verdict::Outside);
-        assert_eq!(against_limits(interval(0.9, 1.1), lo, hi), Verdict::Straddles);
+        assert_eq!(against_limits(interval(1.51, 1.52), lo, hi), Inclusion::Inside);
+        assert_eq!(against_limits(interval(-1.0, 0.5), lo, hi), Inclusion::Outside);
+        assert_eq!(against_limits(interval(0.9, 1.1), lo, hi), Inclusion::Straddles);
         let four_pi = stated(2.0 * std::f64::consts::TAU);
-        assert_eq!(against_limits(interval(3.0, 3.1), -four_pi, four_pi), Verdict::Inside);
+        assert_eq!(against_limits(interval(3.0, 3.1), -four_pi, four_pi), Inclusion::Inside);
     }
 
     #[test]

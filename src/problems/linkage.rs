@@ -12,7 +12,7 @@
 
 use super::angles::{self, against_limits, cos_sin, reduce, stated, wrap};
 use super::stated::{self, IMat3, IVec3};
-use crate::contract::{Contraction, Contractor, Filtered, Propagation, Verdict};
+use crate::contract::{Contraction, Contractor, Filtered, Propagation, Inclusion};
 use crate::search::{default_contractor, SolveError, Solver, SolverSettings};
 use crate::interval::{interval, point, Interval, IntervalBox};
 use crate::interval::trig;
@@ -728,11 +728,11 @@ impl LinkageProblem {
     /// Where the box lies against the limits of the limited revolute joints (angles compared
     /// modulo 2π, any number of turns). The joint intervals are outward-rounded enclosures
     /// (`angles`), so `Outside` means no point of the box respects the limits.
-    pub fn limit_verdict(&self, b: &IntervalBox) -> Verdict {
-        let mut verdict = Verdict::Inside;
+    pub fn limit_verdict(&self, b: &IntervalBox) -> Inclusion {
+        let mut verdict = Inclusion::Inside;
         for &(k, lower, upper) in &self.limits {
             verdict = verdict.and(against_limits(self.reading(&self.readings[k].1, b), lower, upper));
-            if verdict == Verdict::Outside {
+            if verdict == Inclusion::Outside {
                 return verdict;
             }
         }
@@ -741,7 +741,7 @@ impl LinkageProblem {
 
     /// True when some limited revolute joint's value over `b` lies wholly outside its limits.
     pub fn violates_limits(&self, b: &IntervalBox) -> bool {
-        self.limit_verdict(b) == Verdict::Outside
+        self.limit_verdict(b) == Inclusion::Outside
     }
 
     /// A solver for this problem: the default pipeline, plus a joint-limit filter when joints

@@ -34,7 +34,7 @@
 use super::angles::{self, against_limits, cos_sin, reduce, stated, wrap};
 use super::linkage::LinkageError;
 use super::stated::{self as st, IMat3, IVec3};
-use crate::contract::{Contraction, Contractor, Filtered, Propagation, Verdict};
+use crate::contract::{Contraction, Contractor, Filtered, Propagation, Inclusion};
 use crate::interval::{interval, point, Interval, IntervalBox};
 use crate::interval::trig;
 use crate::model::{Compound, JointKind, Mechanism};
@@ -1287,20 +1287,20 @@ impl SpatialProblem {
 
     /// Where the box lies against the limits of the limited revolute joints and loops, and
     /// against the sign agreement of the axis closures written with two rows.
-    pub fn limit_verdict(&self, b: &IntervalBox) -> Verdict {
-        let mut verdict = Verdict::Inside;
+    pub fn limit_verdict(&self, b: &IntervalBox) -> Inclusion {
+        let mut verdict = Inclusion::Inside;
         for (u, v) in &self.signs {
             let (u, v) = (u.eval(&b.dims), v.eval(&b.dims));
             if (u.sup() < 0.0 && v.inf() > 0.0) || (u.inf() > 0.0 && v.sup() < 0.0) {
-                return Verdict::Outside;
+                return Inclusion::Outside;
             }
             if !((u.inf() > 0.0 && v.inf() > 0.0) || (u.sup() < 0.0 && v.sup() < 0.0)) {
-                verdict = Verdict::Straddles;
+                verdict = Inclusion::Straddles;
             }
         }
         for &(k, lower, upper) in &self.limits {
             verdict = verdict.and(against_limits(self.reading(&self.readings[k].1, b), lower, upper));
-            if verdict == Verdict::Outside {
+            if verdict == Inclusion::Outside {
                 return verdict;
             }
         }

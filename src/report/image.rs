@@ -2,7 +2,7 @@
 //! field for field.
 
 use crate::interval::Bounds;
-use crate::singular::image::{Counts, CuspRecord, ImageReport, NodeRecord, Region, Regions, Verdict};
+use crate::singular::image::{Counts, ImageCusp, ImageReport, ImageNode, ActuatorRegion, ActuatorRegions, AssemblyChangeVerdict};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -11,8 +11,8 @@ use std::collections::BTreeMap;
 pub struct ImageJson<'a>(#[serde(with = "ImageReportDef")] pub &'a ImageReport);
 
 #[derive(Serialize)]
-#[serde(remote = "Region")]
-struct RegionDef {
+#[serde(remote = "ActuatorRegion")]
+struct ActuatorRegionDef {
     cells: usize,
     sample: Vec<f64>,
     configurations: Option<usize>,
@@ -20,47 +20,47 @@ struct RegionDef {
     boxes: [usize; 3],
 }
 
-list_with!(regions, Region, "RegionDef");
+list_with!(regions, ActuatorRegion, "ActuatorRegionDef");
 
 #[derive(Serialize)]
-#[serde(remote = "Regions")]
-struct RegionsDef {
+#[serde(remote = "ActuatorRegions")]
+struct ActuatorRegionsDef {
     grid: usize,
     #[serde(flatten, with = "super::kernel::StatusDef")]
     status: crate::search::Status,
     blocked_cells: usize,
     #[serde(serialize_with = "regions")]
-    regions: Vec<Region>,
+    regions: Vec<ActuatorRegion>,
     seconds: f64,
 }
 
 #[derive(Serialize)]
-#[serde(remote = "Verdict")]
-struct VerdictDef {
+#[serde(remote = "AssemblyChangeVerdict")]
+struct AssemblyChangeVerdictDef {
     answer: &'static str,
     reason: String,
 }
 
 #[derive(Serialize)]
-#[serde(remote = "CuspRecord")]
-struct CuspRecordDef {
+#[serde(remote = "ImageCusp")]
+struct ImageCuspDef {
     joints: BTreeMap<String, Bounds>,
     workspace: BTreeMap<String, Bounds>,
     unique: bool,
     degenerate: bool,
 }
 
-list_with!(cusps, CuspRecord, "CuspRecordDef");
+list_with!(cusps, ImageCusp, "ImageCuspDef");
 
 #[derive(Serialize)]
-#[serde(remote = "NodeRecord")]
-struct NodeRecordDef {
+#[serde(remote = "ImageNode")]
+struct ImageNodeDef {
     points: [BTreeMap<String, Bounds>; 2],
     workspace: BTreeMap<String, Bounds>,
     unique: bool,
 }
 
-list_with!(nodes, NodeRecord, "NodeRecordDef");
+list_with!(nodes, ImageNode, "ImageNodeDef");
 
 #[derive(Serialize)]
 #[serde(remote = "Counts")]
@@ -76,17 +76,17 @@ struct ImageReportDef {
     actuated: Vec<String>,
     status: &'static str,
     #[serde(serialize_with = "cusps")]
-    cusps: Vec<CuspRecord>,
+    cusps: Vec<ImageCusp>,
     #[serde(serialize_with = "nodes")]
-    nodes: Vec<NodeRecord>,
+    nodes: Vec<ImageNode>,
     #[serde(with = "CountsDef")]
     cusp_counts: Counts,
     #[serde(with = "CountsDef")]
     node_counts: Counts,
     injective: u64,
-    #[serde(with = "RegionsDef")]
-    regions: Regions,
-    #[serde(with = "VerdictDef")]
-    verdict: Verdict,
+    #[serde(with = "ActuatorRegionsDef")]
+    regions: ActuatorRegions,
+    #[serde(with = "AssemblyChangeVerdictDef")]
+    verdict: AssemblyChangeVerdict,
     seconds: [f64; 4],
 }

@@ -42,7 +42,7 @@ pub enum Network {
 
 /// What a request may ask for; beyond it the node refuses with a reason.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Limits {
+pub struct NodeLimits {
     /// Largest `settings.max_boxes` of a Solve request.
     pub max_boxes: u64,
     /// Largest `settings.timeout` of a Solve request, seconds.
@@ -55,7 +55,7 @@ pub struct Limits {
     pub max_markers: usize,
 }
 
-impl Default for Limits {
+impl Default for NodeLimits {
     fn default() -> Self {
         Self { max_boxes: 200_000, max_timeout: 300.0, max_wait: 30.0, max_runs: 4, max_markers: 20_000 }
     }
@@ -97,7 +97,7 @@ pub struct ServeConfig {
     /// Network interfaces.
     pub network: Network,
     /// Request limits.
-    pub limits: Limits,
+    pub limits: NodeLimits,
     /// Publish the configuration spaces again at this period (none: only when they change).
     pub republish: Option<std::time::Duration>,
     /// Take URDFs from this topic (std_msgs/String, TransientLocal), e.g. `/robot_description`.
@@ -228,7 +228,7 @@ mod tests {
             node_name: "linkspace".into(),
             mapping: Mapping::Enhanced,
             network: Network::Loopback,
-            limits: Limits::default(),
+            limits: NodeLimits::default(),
             republish: None,
             robot_description_topic: None,
             rosout: false,

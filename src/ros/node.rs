@@ -6,13 +6,13 @@
 //! that trips a bug is answered with an error instead of taking the node down.
 //!
 //! Runs (the load-time analyses, requested solves, singularity and inverse-kinematics queries)
-//! go on threads of their own. At most `Limits::max_runs` requested runs go on at once, each
+//! go on threads of their own. At most `NodeLimits::max_runs` requested runs go on at once, each
 //! bounded by the request's `max_boxes` and `timeout` (within the node's limits), so memory
 //! stays bounded however many requests arrive: the excess is refused with a reason.
 
 use super::convert;
 use super::msgs::{self, *};
-use super::{Limits, Loaded, Mapping, Network, ServeConfig, Source};
+use super::{NodeLimits, Loaded, Mapping, Network, ServeConfig, Source};
 use crate::app::{AnalysisError, BoxSetResult, MechanismKind, IkQuery, IkResult, Service, SingularityQuery, SingularityResult};
 use crate::search::{Limit, SolverSettings, Status};
 use anyhow::{Context as _, Result};
@@ -120,7 +120,7 @@ enum RunKind {
 }
 
 impl RunKind {
-    /// Runs started by a request, which count against `Limits::max_runs`.
+    /// Runs started by a request, which count against `NodeLimits::max_runs`.
     fn requested(self) -> bool {
         matches!(self, RunKind::Solve | RunKind::SolveAction | RunKind::Singularities { load_time: false } | RunKind::InverseKinematics)
     }
@@ -232,7 +232,7 @@ struct State {
     /// Recently finished run ids, so Cancel can tell "finished" from "unknown".
     finished: VecDeque<u64>,
     next_run: u64,
-    limits: Limits,
+    limits: NodeLimits,
     settings: SolverSettings,
     /// Precision of the load-time singularity analyses.
     precision: f64,

@@ -5,7 +5,7 @@
 //! assembly modes over each, the verdict on non-singular assembly-mode change, and the JSON
 //! report (`ImageReport`).
 //!
-//! ## Regions and the verdict
+//! ## ActuatorRegions and the verdict
 //! The image of `S`'s cover is rasterised on a grid of actuator space (periodic for revolute
 //! actuators); the free cells' connected components are regions, and over one sample point of
 //! each a certified `solve` counts the configurations and the sign of `det F_p` (the passive
@@ -395,7 +395,7 @@ pub const RASTER_BYTES_PER_CELL: usize = 2 + std::mem::size_of::<usize>();
 
 /// A region of actuator space (a component of the grid's free cells) and its assembly modes.
 #[derive(Clone, Debug)]
-pub struct Region {
+pub struct ActuatorRegion {
     /// Grid cells in the region.
     pub cells: usize,
     /// The sample point (actuator values, in the order of `actuated`).
@@ -408,9 +408,9 @@ pub struct Region {
     pub boxes: [usize; 3],
 }
 
-/// Regions of actuator space cut by the image of `S`.
+/// ActuatorRegions of actuator space cut by the image of `S`.
 #[derive(Clone, Debug)]
-pub struct Regions {
+pub struct ActuatorRegions {
     /// Grid cells per axis.
     pub grid: usize,
     /// `complete`, or `incomplete` when the deadline or cancel stopped the raster (then no
@@ -419,7 +419,7 @@ pub struct Regions {
     /// Cells meeting the image of the cover of `S`.
     pub blocked_cells: usize,
     /// The regions.
-    pub regions: Vec<Region>,
+    pub regions: Vec<ActuatorRegion>,
     /// Wall-clock seconds (raster and samples).
     pub seconds: f64,
 }
@@ -428,7 +428,7 @@ pub struct Regions {
 /// raster, with a certified solve of `m` at one sample of each. `settings.timeout` bounds all
 /// the samples together (each gets what the ones before it left, at least a millisecond, so a
 /// sample that finds no time reports itself unproven instead of being skipped).
-pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usize, settings: &SolverSettings, cancel: &AtomicBool) -> Result<Regions, ImageError> {
+pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usize, settings: &SolverSettings, cancel: &AtomicBool) -> Result<ActuatorRegions, ImageError> {
     check(sp)?;
     let t0 = Instant::now();
     let mut scratch = sp.linkage.system.clone();
@@ -451,7 +451,7 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
             settings.timeout.filter(|t| t0.elapsed() >= *t).map(|_| Limit::Time)
         }
     };
-    let unfinished = |limit: Limit| Regions { grid, status: Status::Incomplete(limit), blocked_cells: 0, regions: Vec::new(), seconds: t0.elapsed().as_secs_f64() };
+    let unfinished = |limit: Limit| ActuatorRegions { grid, status: Status::Incomplete(limit), blocked_cells: 0, regions: Vec::new(), seconds: t0.elapsed().as_secs_f64() };
     let mut blocked = vec![false; grid * grid];
     for (k, im) in images.iter().enumerate() {
         if k % 64 == 0 {
@@ -469,7 +469,7 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
     if let Some(limit) = stopped() {
         return Ok(unfinished(limit));
     }
-    let mut out = Regions { grid, status: Status::Complete, blocked_cells: blocked.iter().filter(|b| **b).count(), regions: Vec::new(), seconds: 0.0 };
+    let mut out = ActuatorRegions { grid, status: Status::Complete, blocked_cells: blocked.iter().filter(|b| **b).count(), regions: Vec::new(), seconds: 0.0 };
     let wrap = |x: i64, ax: &Axis| if (0..grid as i64).contains(&x) { Some(x as usize) } else if ax.periodic { Some(x.rem_euclid(grid as i64) as usize) } else { None };
     let free_regions = crate::interval::flood_fill(grid * grid, |c| !blocked[c], |c, next| {
         let (i, j) = (c / grid, c % grid);
@@ -505,14 +505,14 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
 }
 
 /// A certified solve with the actuators at `sample`: configurations and the signs of `det F_p`.
-fn sample_region(m: &Mechanism, sp: &SingularProblem, sample: &[f64], cells: usize, settings: &SolverSettings, cancel: &AtomicBool) -> Result<Region, ImageError> {
+fn sample_region(m: &Mechanism, sp: &SingularProblem, sample: &[f64], cells: usize, settings: &SolverSettings, cancel: &AtomicBool) -> Result<ActuatorRegion, ImageError> {
     let fixed: Vec<(String, f64)> = sp.actuated.iter().cloned().zip(sample.iter().copied()).collect();
     let lp = LinkageProblem::new(m, &fixed, &[]).map_err(SingularError::from)?;
     let mut scratch = lp.system.clone();
     let parts = Parts::new(&lp, &mut scratch)?;
     let s = SolverSettings { sigma: settings.sigma.min(1e-6), ..settings.clone() };
     let Ok(solver) = lp.solver(s) else {
-        return Ok(Region { cells, sample: sample.to_vec(), configurations: None, signs: None, boxes: [0, 0, 0] });
+        return Ok(ActuatorRegion { cells, sample: sample.to_vec(), configurations: None, signs: None, boxes: [0, 0, 0] });
     };
     let e = solver.enclose(cancel, &mut |_| {});
     let certified: Vec<&IntervalBox> = e.solutions.iter().zip(&e.unique).filter(|(_, u)| **u).map(|(b, _)| b).collect();
@@ -528,12 +528,12 @@ fn sample_region(m: &Mechanism, sp: &SingularProblem, sample: &[f64], cells: usi
             _ => signs = None,
         }
     }
-    Ok(Region { cells, sample: sample.to_vec(), configurations, signs: if complete { signs } else { None }, boxes })
+    Ok(ActuatorRegion { cells, sample: sample.to_vec(), configurations, signs: if complete { signs } else { None }, boxes })
 }
 
 /// `yes`, `no` or `undecided`, with the argument.
 #[derive(Clone, Debug)]
-pub struct Verdict {
+pub struct AssemblyChangeVerdict {
     /// Can the mechanism change assembly mode without crossing a type-II singularity?
     pub answer: &'static str,
     /// Why.
@@ -541,9 +541,9 @@ pub struct Verdict {
 }
 
 /// The verdict from the searches (see the module doc for what each answer rests on).
-pub fn verdict(cover: &SingularSet, cusps: &PointSearch, nodes: &NodeSearch, regions: &Regions) -> Verdict {
+pub fn verdict(cover: &SingularSet, cusps: &PointSearch, nodes: &NodeSearch, regions: &ActuatorRegions) -> AssemblyChangeVerdict {
     if cusps.proven() > 0 {
-        return Verdict { answer: "yes", reason: format!("{} certified cusp(s) of the type-II image: a loop around one changes assembly mode without crossing a singularity", cusps.proven()) };
+        return AssemblyChangeVerdict { answer: "yes", reason: format!("{} certified cusp(s) of the type-II image: a loop around one changes assembly mode without crossing a singularity", cusps.proven()) };
     }
     let mut gaps = Vec::new();
     if cover.status != Status::Complete {
@@ -571,7 +571,7 @@ pub fn verdict(cover: &SingularSet, cusps: &PointSearch, nodes: &NodeSearch, reg
         gaps.push("no region found on the grid".to_string());
     }
     if gaps.is_empty() {
-        Verdict {
+        AssemblyChangeVerdict {
             answer: "no",
             reason: format!(
                 "no cusp and no node (searches complete); over each of the {} regions the grid reaches, at most one configuration with each sign of det F_p, a sign no path off the type-II set can change (regions thinner than the cover are not sampled)",
@@ -579,7 +579,7 @@ pub fn verdict(cover: &SingularSet, cusps: &PointSearch, nodes: &NodeSearch, reg
             ),
         }
     } else {
-        Verdict { answer: "undecided", reason: gaps.join("; ") }
+        AssemblyChangeVerdict { answer: "undecided", reason: gaps.join("; ") }
     }
 }
 
@@ -591,9 +591,9 @@ fn status_word(s: Status) -> &'static str {
     }
 }
 
-/// One cusp: the 3R `CuspRecord`'s fields; `workspace` is the image in actuator space.
+/// One cusp: the fields of the 3R `CuspRecord`; `workspace` is the image in actuator space.
 #[derive(Clone, Debug)]
-pub struct CuspRecord {
+pub struct ImageCusp {
     /// Free joint values (hull over the cluster).
     pub joints: BTreeMap<String, Bounds>,
     /// Its image: actuator values by joint name.
@@ -604,9 +604,9 @@ pub struct CuspRecord {
     pub degenerate: bool,
 }
 
-/// One node: two joint boxes with a shared image (the 3R `NodeRecord`'s fields).
+/// One node: two joint boxes with a shared image (the fields of the 3R `NodeRecord`).
 #[derive(Clone, Debug)]
-pub struct NodeRecord {
+pub struct ImageNode {
     /// The two joint boxes.
     pub points: [BTreeMap<String, Bounds>; 2],
     /// Their shared image in actuator space.
@@ -634,19 +634,19 @@ pub struct ImageReport {
     /// `complete` when every search completed.
     pub status: &'static str,
     /// Cusps: certified first.
-    pub cusps: Vec<CuspRecord>,
+    pub cusps: Vec<ImageCusp>,
     /// Node pairs.
-    pub nodes: Vec<NodeRecord>,
+    pub nodes: Vec<ImageNode>,
     /// Cusp counts.
     pub cusp_counts: Counts,
     /// Node counts (undecided: unproven pairs plus near-diagonal boxes).
     pub node_counts: Counts,
     /// Doubled boxes on the diagonal dropped by the injectivity certificate.
     pub injective: u64,
-    /// Regions of actuator space and their assembly modes.
-    pub regions: Regions,
+    /// ActuatorRegions of actuator space and their assembly modes.
+    pub regions: ActuatorRegions,
     /// The verdict.
-    pub verdict: Verdict,
+    pub verdict: AssemblyChangeVerdict,
     /// Seconds: cover, cusps, nodes, regions.
     pub seconds: [f64; 4],
 }
@@ -666,13 +666,13 @@ fn hull_joints(sp: &SingularProblem, boxes: &[IntervalBox]) -> (BTreeMap<String,
 
 impl ImageReport {
     /// The report of the searches.
-    pub fn new(sp: &SingularProblem, cover: &SingularSet, cusps: &PointSearch, nodes: &NodeSearch, regions: Regions) -> Self {
-        let mut cusp_records: Vec<CuspRecord> = cusps
+    pub fn new(sp: &SingularProblem, cover: &SingularSet, cusps: &PointSearch, nodes: &NodeSearch, regions: ActuatorRegions) -> Self {
+        let mut cusp_records: Vec<ImageCusp> = cusps
             .points
             .iter()
             .map(|p| {
                 let (joints, workspace) = hull_joints(sp, &p.boxes);
-                CuspRecord { joints, workspace, unique: p.unique() && !p.degenerate, degenerate: p.degenerate }
+                ImageCusp { joints, workspace, unique: p.unique() && !p.degenerate, degenerate: p.degenerate }
             })
             .collect();
         cusp_records.sort_by_key(|c| !c.unique);
@@ -683,7 +683,7 @@ impl ImageReport {
                 let (a, wa) = hull_joints(sp, std::slice::from_ref(&p.points[0]));
                 let (b, wb) = hull_joints(sp, std::slice::from_ref(&p.points[1]));
                 let workspace = wa.iter().map(|(n, x)| (n.clone(), wb.get(n).map_or(*x, |y| [x[0].max(y[0]), x[1].min(y[1])]))).collect();
-                NodeRecord { points: [a, b], workspace, unique: p.kind == BoxKind::Certified }
+                ImageNode { points: [a, b], workspace, unique: p.kind == BoxKind::Certified }
             })
             .collect();
         let regions_seconds = regions.seconds;
