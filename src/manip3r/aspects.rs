@@ -53,9 +53,32 @@ impl Cell {
     }
 }
 
+/// Why the aspects were not counted (on the last grid tried); `Display` is the sentence reports
+/// show.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum AspectsUndecided {
+    /// A limit stopped the cover of the singular curves.
+    #[error("the singular-curve cover ({0} x {0}) was stopped by a limit")]
+    CoverStopped(usize),
+    /// The sign of det at a regular cell was not decided.
+    #[error("a regular cell's sign is not decided")]
+    RegularSign,
+    /// A crossed cell is neither regular nor monotone with edges of known signs.
+    #[error("a cell of the {grid} x {grid} cover around ({:.4}, {:.4}) is neither regular nor monotone in one direction with edges of known signs", at[0], at[1])]
+    CellShape {
+        /// cells per axis
+        grid: usize,
+        /// the cell's middle (θ₂, θ₃)
+        at: [f64; 2],
+    },
+    /// The signs of det on an edge between two crossed cells were not decided.
+    #[error("the signs of det on a cell edge of the {0} x {0} cover are not decided")]
+    EdgeSigns(usize),
+}
+
 /// The number of aspects on the full torus, or why it is not proven.
-pub fn count(chain: &Chain3R, control: &Control) -> Result<u32, String> {
-    let mut why = String::new();
+pub fn count(chain: &Chain3R, control: &Control) -> Result<u32, AspectsUndecided> {
+    let mut why = AspectsUndecided::RegularSign;
     for (depth, shift) in GRIDS {
         match count_at(chain, depth, shift, control) {
             Ok(n) => return Ok(n),
@@ -66,10 +89,10 @@ pub fn count(chain: &Chain3R, control: &Control) -> Result<u32, String> {
 }
 
 /// `count` on one grid.
-fn count_at(chain: &Chain3R, depth: u32, shift: f64, control: &Control) -> Result<u32, String> {
+fn count_at(chain: &Chain3R, depth: u32, shift: f64, control: &Control) -> Result<u32, AspectsUndecided> {
     let cover = Cover::shifted(chain, depth, shift, control);
     if !cover.status.is_complete() {
-        return Err(format!("the singular-curve cover ({0} x {0}) was stopped by a limit", cover.n));
+        return Err(AspectsUndecided::CoverStopped(cover.n));
     }
     let n = cover.n;
     let side = |i: usize| {
@@ -83,7 +106,7 @@ fn count_at(chain: &Chain3R, depth: u32, shift: f64, control: &Control) -> Resul
         let r = cover.region[c];
         if r >= 0 && region_sign[r as usize].is_none() {
             let (i, j) = (c / n, c % n);
-            region_sign[r as usize] = Some(at(side(i).mid(), side(j).mid()).ok_or("a regular cell's sign is not decided")?);
+            region_sign[r as usize] = Some(at(side(i).mid(), side(j).mid()).ok_or(AspectsUndecided::RegularSign)?);
         }
     }
     // The signs det takes on an edge (`free` the coordinate along it), exactly: one sign over
@@ -123,7 +146,7 @@ fn count_at(chain: &Chain3R, depth: u32, shift: f64, control: &Control) -> Resul
             let (neg_side, pos_side) = if up { (lo, hi) } else { (hi, lo) };
             Some(Cell::Arc { signs: [neg_side[0], pos_side[1]] })
         });
-        arc.ok_or_else(|| format!("a cell of the {n} x {n} cover around ({:.4}, {:.4}) is neither regular nor monotone in one direction with edges of known signs", b[0].mid(), b[1].mid()))
+        arc.ok_or(AspectsUndecided::CellShape { grid: n, at: [b[0].mid(), b[1].mid()] })
     });
     for (&(i, j), arc) in cover.boxes.iter().zip(arcs) {
         cells[i * n + j] = arc?;
@@ -151,7 +174,7 @@ fn count_at(chain: &Chain3R, depth: u32, shift: f64, control: &Control) -> Resul
             let (cx, cy) = (cells[x], cells[y]);
             let signs: [bool; 2] = match (cx, cy) {
                 (Cell::Regular(s), _) | (_, Cell::Regular(s)) => [!s, s],
-                _ => arc_edge_signs[&(x, dir)].ok_or_else(|| format!("the signs of det on a cell edge of the {n} x {n} cover are not decided"))?,
+                _ => arc_edge_signs[&(x, dir)].ok_or(AspectsUndecided::EdgeSigns(n))?,
             };
             for s in [false, true] {
                 if signs[s as usize] && cx.has(s) && cy.has(s) {
