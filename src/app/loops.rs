@@ -13,7 +13,7 @@
 //! the sets in order under one timeout: what the first set leaves of it goes to the next.
 
 use crate::problems::singular::image::{CuspProblem, ImageError, NodeProblem};
-use crate::singular::image::{regions, scaled, ImageReport, RASTER_BYTES_PER_CELL};
+use crate::singular::image::{regions, scaled, ImagePoints, ImageReport, RASTER_BYTES_PER_CELL};
 use crate::singular::SingularSet;
 use crate::model::Mechanism;
 use crate::problems::singular::velocity::point_label;
@@ -159,6 +159,25 @@ pub fn analyse_image(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String]
     let nodes = NodeProblem::new(&p)?.solve(&p, &left(), cancel)?;
     let regions = regions(m, &p, &cover, grid, &left(), cancel)?;
     Ok(ImageReport::new(&p, &cover, &cusps, &nodes, regions))
+}
+
+/// One search of a 2-dof mechanism's type-II image on its own.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageSearch {
+    /// Its cusps (the extended system with the second determinant), nothing else.
+    Cusps,
+    /// Its nodes (pairs of configurations with one image), nothing else.
+    Nodes,
+}
+
+/// The cusps or the nodes of `m`'s type-II image, without the cover and the regions: what a user
+/// who wants only the points pays for. `settings.timeout` bounds the search.
+pub fn image_points(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String], search: ImageSearch, settings: &SolverSettings, cancel: &AtomicBool) -> Result<ImagePoints, ImageAnalysisError> {
+    let p = SingularProblem::new(m, fixed, SingularKind::Input, actuated, None)?;
+    Ok(match search {
+        ImageSearch::Cusps => ImagePoints::cusps(&p, &CuspProblem::new(&p)?.solve(&p, settings, cancel)?),
+        ImageSearch::Nodes => ImagePoints::nodes(&p, &NodeProblem::new(&p)?.solve(&p, settings, cancel)?),
+    })
 }
 
 #[cfg(test)]

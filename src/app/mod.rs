@@ -20,7 +20,7 @@ mod platform;
 pub use arm::{collisions, inverse_kinematics, singularities, Arm, ArmCollisions, ArmIk, ArmSingularities, IkPoint, Manip3rAnalysis, SingularitiesRequest, CURVE_DEPTH};
 pub use distances::{DistancesJob, DistancesRequest};
 pub use linkage::{LinkageAnalysis, SolveJob};
-pub use loops::{all_kinds, analyse_image, Actuation, ImageAnalysisError, SingularSets};
+pub use loops::{all_kinds, analyse_image, image_points, Actuation, ImageAnalysisError, ImageSearch, SingularSets};
 pub use platform::PlatformAnalysis;
 
 use crate::model::Mechanism;

@@ -7,7 +7,7 @@ use anyhow::{bail, Context, Result};
 use linkspace::model::urdf;
 use linkspace::problems::{Output, SingularKind};
 use linkspace::problems::Model;
-use linkspace::app::{all_kinds, analyse_image, Actuation, SingularSets};
+use linkspace::app::{all_kinds, analyse_image, image_points, Actuation, ImageSearch, SingularSets};
 use linkspace::report::singular::SingularReport;
 use linkspace::search::SolverSettings;
 use std::io::Write;
@@ -27,6 +27,10 @@ pub(crate) enum Kind {
     /// 2-dof mechanisms: cusps and nodes of the type-II image in actuator space, the regions it
     /// cuts with their assembly modes, and the verdict on non-singular assembly-mode change.
     Image,
+    /// 2-dof mechanisms: the cusps of the type-II image alone (no cover, nodes or regions).
+    Cusps,
+    /// 2-dof mechanisms: the nodes of the type-II image alone (no cover, cusps or regions).
+    Nodes,
 }
 
 #[derive(clap::Args)]
@@ -94,15 +98,18 @@ pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
         None => Actuation::from_transmissions(&mechanism, &fixed),
     }
     .joints;
-    if matches!(args.kind, Kind::Image) {
-        return run_image(&args, &mechanism, &fixed, &actuated, &settings);
+    match args.kind {
+        Kind::Image => return run_image(&args, &mechanism, &fixed, &actuated, &settings),
+        Kind::Cusps => return run_points(&args, &mechanism, &fixed, &actuated, ImageSearch::Cusps, &settings),
+        Kind::Nodes => return run_points(&args, &mechanism, &fixed, &actuated, ImageSearch::Nodes, &settings),
+        _ => {}
     }
     let kinds: Vec<SingularKind> = match args.kind {
         Kind::Cspace => vec![SingularKind::Cspace],
         Kind::Input => vec![SingularKind::Input],
         Kind::Output => vec![SingularKind::Output],
         Kind::All => all_kinds(&actuated),
-        Kind::Image => unreachable!("handled above"),
+        Kind::Image | Kind::Cusps | Kind::Nodes => unreachable!("handled above"),
     };
     // The orchestration the node runs as well: every problem built first, one timeout for all.
     let sets = SingularSets::new(&mechanism, &fixed, &kinds, &actuated, output).with_context(|| format!("building {}", args.urdf.display()))?;
@@ -194,6 +201,23 @@ fn run_image(args: &LoopSingularitiesArgs, mechanism: &linkspace::model::Mechani
     writeln!(out, "  can change assembly mode without crossing a type-II singularity: {} ({})", r.verdict.answer, r.verdict.reason).ok();
     if let Some(path) = &args.json {
         std::fs::write(path, serde_json::to_string_pretty(&linkspace::report::image::ImageJson(&r))?).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// One search of the type-II image (cusps or nodes); one summary and one JSON report.
+fn run_points(args: &LoopSingularitiesArgs, mechanism: &linkspace::model::Mechanism, fixed: &[(String, f64)], actuated: &[String], search: ImageSearch, settings: &SolverSettings) -> Result<()> {
+    let r = image_points(mechanism, fixed, actuated, search, settings, &AtomicBool::new(false)).with_context(|| format!("analysing {}", args.urdf.display()))?;
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{} type-II image {}: {} proven, {} undecided; status {}; {:.3} s", r.mechanism, r.search, r.counts.proven, r.counts.undecided, r.status, r.seconds).ok();
+    for c in r.cusps.iter().take(20) {
+        writeln!(out, "  cusp{}{}: {:?}", if c.unique { " (certified)" } else { " (undecided)" }, if c.degenerate { " degenerate" } else { "" }, c.workspace).ok();
+    }
+    for n in r.nodes.iter().take(20) {
+        writeln!(out, "  node{}: {:?}", if n.unique { " (certified)" } else { " (undecided)" }, n.workspace).ok();
+    }
+    if let Some(path) = &args.json {
+        std::fs::write(path, serde_json::to_string_pretty(&linkspace::report::image::ImagePointsJson(&r))?).with_context(|| format!("writing {}", path.display()))?;
     }
     Ok(())
 }

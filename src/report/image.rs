@@ -2,7 +2,7 @@
 //! field for field.
 
 use crate::interval::Bounds;
-use crate::singular::image::{Counts, ImageCusp, ImageReport, ImageNode, ActuatorRegion, ActuatorRegions, AssemblyChangeVerdict};
+use crate::singular::image::{ImagePoints, Counts, ImageCusp, ImageReport, ImageNode, ActuatorRegion, ActuatorRegions, AssemblyChangeVerdict};
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -90,3 +90,24 @@ struct ImageReportDef {
     verdict: AssemblyChangeVerdict,
     seconds: [f64; 4],
 }
+
+#[derive(Serialize)]
+#[serde(remote = "ImagePoints")]
+struct ImagePointsDef {
+    mechanism: String,
+    actuated: Vec<String>,
+    search: &'static str,
+    status: &'static str,
+    #[serde(serialize_with = "cusps", skip_serializing_if = "Vec::is_empty")]
+    cusps: Vec<ImageCusp>,
+    #[serde(serialize_with = "nodes", skip_serializing_if = "Vec::is_empty")]
+    nodes: Vec<ImageNode>,
+    #[serde(with = "CountsDef")]
+    counts: Counts,
+    injective: u64,
+    seconds: f64,
+}
+
+/// How `loop-singularities --kind cusps` and `--kind nodes` write their report.
+#[derive(Serialize)]
+pub struct ImagePointsJson<'a>(#[serde(with = "ImagePointsDef")] pub &'a ImagePoints);

@@ -664,28 +664,97 @@ fn hull_joints(sp: &SingularProblem, boxes: &[IntervalBox]) -> (BTreeMap<String,
     (joints, image)
 }
 
+/// The records of a cusp search: certified first.
+pub fn cusp_records(sp: &SingularProblem, cusps: &PointSearch) -> Vec<ImageCusp> {
+    let mut records: Vec<ImageCusp> = cusps
+        .points
+        .iter()
+        .map(|p| {
+            let (joints, workspace) = hull_joints(sp, &p.boxes);
+            ImageCusp { joints, workspace, unique: p.unique() && !p.degenerate, degenerate: p.degenerate }
+        })
+        .collect();
+    records.sort_by_key(|c| !c.unique);
+    records
+}
+
+/// The records of a node search.
+pub fn node_records(sp: &SingularProblem, nodes: &NodeSearch) -> Vec<ImageNode> {
+    nodes
+        .pairs
+        .iter()
+        .map(|p| {
+            let (a, wa) = hull_joints(sp, std::slice::from_ref(&p.points[0]));
+            let (b, wb) = hull_joints(sp, std::slice::from_ref(&p.points[1]));
+            let workspace = wa.iter().map(|(n, x)| (n.clone(), wb.get(n).map_or(*x, |y| [x[0].max(y[0]), x[1].min(y[1])]))).collect();
+            ImageNode { points: [a, b], workspace, unique: p.kind == BoxKind::Certified }
+        })
+        .collect()
+}
+
+/// What `loop-singularities --kind cusps` or `--kind nodes` writes: one search of the type-II
+/// image on its own, without the cover and the regions the verdict needs.
+#[derive(Clone, Debug)]
+pub struct ImagePoints {
+    /// Robot name.
+    pub mechanism: String,
+    /// Actuated joints (the keys of `workspace`).
+    pub actuated: Vec<String>,
+    /// `cusps` or `nodes`.
+    pub search: &'static str,
+    /// `complete` when the search completed with every point certified.
+    pub status: &'static str,
+    /// Cusps found (empty for a node search), certified first.
+    pub cusps: Vec<ImageCusp>,
+    /// Node pairs found (empty for a cusp search).
+    pub nodes: Vec<ImageNode>,
+    /// Certified and undecided points.
+    pub counts: Counts,
+    /// Node search only: doubled boxes on the diagonal dropped by the injectivity certificate.
+    pub injective: u64,
+    /// Seconds.
+    pub seconds: f64,
+}
+
+impl ImagePoints {
+    /// The report of a cusp search.
+    pub fn cusps(sp: &SingularProblem, cusps: &PointSearch) -> Self {
+        let complete = cusps.status == Status::Complete && cusps.points.len() == cusps.proven();
+        Self {
+            mechanism: sp.linkage.name.clone(),
+            actuated: sp.actuated.clone(),
+            search: "cusps",
+            status: if complete { "complete" } else { "incomplete" },
+            cusps: cusp_records(sp, cusps),
+            nodes: Vec::new(),
+            counts: Counts { proven: cusps.proven(), undecided: cusps.points.len() - cusps.proven() },
+            injective: 0,
+            seconds: cusps.seconds,
+        }
+    }
+
+    /// The report of a node search.
+    pub fn nodes(sp: &SingularProblem, nodes: &NodeSearch) -> Self {
+        let complete = nodes.status == Status::Complete && nodes.undecided() == 0;
+        Self {
+            mechanism: sp.linkage.name.clone(),
+            actuated: sp.actuated.clone(),
+            search: "nodes",
+            status: if complete { "complete" } else { "incomplete" },
+            cusps: Vec::new(),
+            nodes: node_records(sp, nodes),
+            counts: Counts { proven: nodes.proven(), undecided: nodes.undecided() },
+            injective: nodes.injective,
+            seconds: nodes.seconds,
+        }
+    }
+}
+
 impl ImageReport {
     /// The report of the searches.
     pub fn new(sp: &SingularProblem, cover: &SingularSet, cusps: &PointSearch, nodes: &NodeSearch, regions: ActuatorRegions) -> Self {
-        let mut cusp_records: Vec<ImageCusp> = cusps
-            .points
-            .iter()
-            .map(|p| {
-                let (joints, workspace) = hull_joints(sp, &p.boxes);
-                ImageCusp { joints, workspace, unique: p.unique() && !p.degenerate, degenerate: p.degenerate }
-            })
-            .collect();
-        cusp_records.sort_by_key(|c| !c.unique);
-        let node_records = nodes
-            .pairs
-            .iter()
-            .map(|p| {
-                let (a, wa) = hull_joints(sp, std::slice::from_ref(&p.points[0]));
-                let (b, wb) = hull_joints(sp, std::slice::from_ref(&p.points[1]));
-                let workspace = wa.iter().map(|(n, x)| (n.clone(), wb.get(n).map_or(*x, |y| [x[0].max(y[0]), x[1].min(y[1])]))).collect();
-                ImageNode { points: [a, b], workspace, unique: p.kind == BoxKind::Certified }
-            })
-            .collect();
+        let cusp_records = cusp_records(sp, cusps);
+        let node_records = node_records(sp, nodes);
         let regions_seconds = regions.seconds;
         let verdict = verdict(cover, cusps, nodes, &regions);
         // "complete" is the crate's one rule: no limit met and nothing undecided (an unproven
