@@ -582,3 +582,32 @@ fn the_node_tree_stays_within_the_memory_limit() {
         assert!(full_nodes.nodes.iter().any(|m| m.theta == n.theta || m.theta == [n.theta[1], n.theta[0]]), "{n:?}");
     }
 }
+
+/// Joint values are stated in each joint's own range: a Jaco-style file's limits lie in
+/// [0, 2π], and every inverse-kinematics solution, θ₁ included, is written inside them.
+#[test]
+fn ik_solutions_are_written_in_the_joints_own_ranges() {
+    use linkspace::app::arm::{inverse_kinematics, Arm, IkPoint};
+    let xml = std::fs::read_to_string(format!("{}/tests/data/jaco_style_3r.urdf", env!("CARGO_MANIFEST_DIR"))).expect("fixture");
+    let m = urdf::parse(&xml).expect("parses");
+    let arm = Arm::load(&m, &LoadOptions::default(), 0.0).expect("3R");
+    let limits = |name: &str| match m.joints[m.joint(name).expect("a joint")].kind {
+        JointKind::Revolute { limits: Some(l) } => l,
+        _ => panic!("{name} has limits in the file"),
+    };
+    let mut written = 0;
+    for point in [[0.2, 0.3, 0.4], [-0.3, -0.2, 0.5], [0.1, -0.4, 0.2]] {
+        let found = inverse_kinematics(&arm, IkPoint::Root(point), 1e-8, &bounded(200_000), &mut |_| {}).expect("valid query");
+        let report = found.report(&arm);
+        assert!(!report.solutions.is_empty(), "{point:?} is reachable");
+        for sol in &report.solutions {
+            assert_eq!(sol.joints.len(), 3, "θ₁ is written for a point of the root frame");
+            for (name, b) in &sol.joints {
+                let (lo, hi) = limits(name);
+                assert!(lo <= b[0] && b[1] <= hi, "{point:?}: {name} in {b:?}, outside its limits [{lo}, {hi}]");
+                written += 1;
+            }
+        }
+    }
+    assert!(written >= 18, "{written}");
+}
