@@ -611,3 +611,19 @@ fn ik_solutions_are_written_in_the_joints_own_ranges() {
     }
     assert!(written >= 18, "{written}");
 }
+
+/// A floating root joint places the robot in the world: the chain starts at the link it
+/// carries, and the arm is the same as the file without it.
+#[test]
+fn a_floating_root_joint_is_read_as_the_robot_base() {
+    let xml = std::fs::read_to_string(format!("{}/tests/data/floating_base_3r.urdf", env!("CARGO_MANIFEST_DIR"))).expect("fixture");
+    let floating = prepare(&xml, &LoadOptions::default()).expect("a floating root is accepted");
+    let plain = prepare(&text("orthogonal_3r_a.urdf"), &LoadOptions::default()).expect("robot a");
+    assert_eq!((floating.choice.base.as_str(), &floating.choice.joints), ("base", &plain.choice.joints));
+    let [a, b] = [&floating, &plain].map(|p| Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R"));
+    for (t2, t3) in [(0.3, -1.2), (2.0, 0.7), (-2.5, 3.0)] {
+        assert_eq!(a.eval_f64(t2, t3), b.eval_f64(t2, t3));
+    }
+    let s = ik::solve(&a, 3.0, 1.0, 1e-8, 100_000).expect("valid query");
+    assert_eq!((s.status, s.unique.len(), s.clusters.len()), (Status::Complete, 2, 0));
+}

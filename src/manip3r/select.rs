@@ -6,7 +6,8 @@
 //! them and returns a reduced `Mechanism` (that path only) that every 3R analysis takes as is,
 //! with a `Choice` that says what was chosen and why.
 //!
-//! - Base and tip follow KDL/MoveIt: `base` (default: the root) and `tip` (default: the end
+//! - Base and tip follow KDL/MoveIt: `base` (default: the root, or the link a floating root
+//!   joint carries) and `tip` (default: the end
 //!   link of the longest revolute path: the child of its last revolute joint, followed down a
 //!   single line of fixed joints to its end, so a 3R file's `tool` link is the tip, while side
 //!   links that branch off (`tool0` beside `flange`) stop the descent).
@@ -81,7 +82,7 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
     let link = |name: &str, what: &str| m.link(name).ok_or_else(|| Manip3rError::Selection(format!("{what} '{name}' is not a link of the file")));
     let base = match &spec.base {
         Some(b) => link(b, "--base")?,
-        None => m.root,
+        None => floating_root(m).unwrap_or(m.root),
     };
     for (name, value) in &spec.locks {
         let j = m.joint(name).ok_or_else(|| Manip3rError::Selection(format!("--lock: '{name}' is not a joint of the file")))?;
@@ -326,6 +327,17 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
         links.push(Link { name, parent_joint: Some(joints_out.len() - 1), collisions: Vec::new() });
     }
     Ok((Mechanism { name: m.name.clone(), links, joints: joints_out, loops: Vec::new(), root: 0, transmission_joints: Vec::new() }, choice))
+}
+
+/// The default base below a floating root joint: the link it carries (the robot's own frame;
+/// the floating joint only places the robot in the world, as a virtual joint does in MoveIt).
+/// `None` unless the root's only joint is floating.
+fn floating_root(m: &Mechanism) -> Option<usize> {
+    let mut from_root = m.joints.iter().filter(|j| j.parent == m.root);
+    match (from_root.next(), from_root.next()) {
+        (Some(j), None) if j.kind == JointKind::Floating => Some(j.child),
+        _ => None,
+    }
 }
 
 /// Where the analysed point is attached in the reduced mechanism, with its link's name.
