@@ -542,7 +542,11 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     } else {
         writeln!(out, "  rounding: {} values snapped to quarter turns / coordinate axes (tolerance {:e} rad)", snaps.len(), linkspace::model::rounding::ANGLE_TOLERANCE).ok();
         for sn in snaps {
-            writeln!(out, "    {} {}: {:?} -> {:?}", sn.joint, sn.what, sn.original, sn.snapped).ok();
+            if sn.what == "lock" {
+                writeln!(out, "    {} lock: {} -> {}", sn.joint, sn.original[0], sn.snapped[0]).ok();
+            } else {
+                writeln!(out, "    {} {}: {:?} -> {:?}", sn.joint, sn.what, sn.original, sn.snapped).ok();
+            }
         }
     }
     writeln!(out, "  {}", effect.text).ok();

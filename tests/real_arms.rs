@@ -627,3 +627,25 @@ fn a_floating_root_joint_is_read_as_the_robot_base() {
     let s = ik::solve(&a, 3.0, 1.0, 1e-8, 100_000).expect("valid query");
     assert_eq!((s.status, s.unique.len(), s.clusters.len()), (Status::Complete, 2, 0));
 }
+
+/// A lock value is a joint angle like the file's: a half turn written 3.141592653589793 or
+/// 3.14159 keeps the iiwa's axes 2 and 4 exactly parallel, as the lock at 0 does (joint 3 made
+/// continuous here so that a half turn is allowed); exact geometry takes it as written.
+#[test]
+fn lock_values_are_snapped_like_the_files_angles() {
+    let xml = text("iiwa14.urdf");
+    let at = xml.find("<joint name=\"joint_3\" type=\"revolute\">").expect("joint 3");
+    let xml = format!("{}{}", &xml[..at], xml[at..].replacen("type=\"revolute\"", "type=\"continuous\"", 1));
+    let lock = |v: f64, exact_geometry: bool| {
+        let spec = ChainSpec { locks: vec![("joint_3".into(), v)], ..Default::default() };
+        prepare(&xml, &LoadOptions { spec, exact_geometry, ignore_limits: true }).expect("a 6R arm")
+    };
+    for v in [0.0, std::f64::consts::PI, -3.14159] {
+        let p = lock(v, false);
+        let verdict = verdict::parallel_structure(&p.mechanism).unwrap_or_else(|| panic!("lock {v}: axes 2 and 4 proven parallel"));
+        assert_eq!((verdict.cuspidal, verdict.certified), (Some(false), true), "lock {v}");
+        let listed = p.snaps.iter().any(|s| s.what == "lock" && s.joint == "joint_3");
+        assert_eq!(listed, v == -3.14159, "lock {v}: {:?}", p.snaps);
+    }
+    assert!(verdict::parallel_structure(&lock(-3.14159, true).mechanism).is_none(), "as written, 3.14159 is not a half turn");
+}

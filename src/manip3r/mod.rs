@@ -170,8 +170,23 @@ pub struct Prepared {
 
 /// Rounding, then chain choice: the one way every 3R command reads a file.
 pub fn prepare(m: &crate::model::Mechanism, options: &LoadOptions) -> Result<Prepared, Manip3rError> {
-    let (rounded, snaps) = if options.exact_geometry { (m.clone(), Vec::new()) } else { crate::model::rounding::snap(m) };
-    let (mechanism, choice) = select::positioning(&rounded, &options.spec)?;
+    let (rounded, mut snaps) = if options.exact_geometry { (m.clone(), Vec::new()) } else { crate::model::rounding::snap(m) };
+    // Lock values are joint angles written as the file's are: snapped alike.
+    let mut spec = options.spec.clone();
+    if !options.exact_geometry {
+        for (joint, v) in &mut spec.locks {
+            // Not past a limit the written value honours (a lock at a limit written 3.14159).
+            let within = |q: f64| match rounded.joint(joint).map(|j| rounded.joints[j].kind) {
+                Some(crate::model::JointKind::Revolute { limits: Some((lo, hi)) }) => lo <= q && q <= hi,
+                _ => true,
+            };
+            if let Some(q) = crate::model::rounding::snap_value(*v).filter(|&q| within(q)) {
+                snaps.push(crate::model::rounding::Snap { joint: joint.clone(), what: "lock".into(), original: [*v, 0.0, 0.0], snapped: [q, 0.0, 0.0] });
+                *v = q;
+            }
+        }
+    }
+    let (mechanism, choice) = select::positioning(&rounded, &spec)?;
     // Snaps of joints outside the chosen chain are irrelevant to the analysis; keep them listed
     // anyway: the report says what was read differently from the file.
     let limits = limits::JointLimits::of(&mechanism, &choice.joints, options.ignore_limits);

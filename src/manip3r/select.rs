@@ -297,9 +297,12 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
             joint.origin *= Isometry3::from_parts(Translation3::identity(), UnitQuaternion::from_axis_angle(&Unit::new_normalize(joint.axis), v));
             let (r, p, y) = joint.origin.rotation.euler_angles();
             joint.rpy = [r, p, y];
-            if v != 0.0 {
-                joint.exact_rotation = None;
-            }
+            // A quarter turn about a coordinate axis keeps an exact frame exact.
+            joint.exact_rotation = match (joint.exact_rotation, crate::model::rounding::exact_turn(&joint.axis, v)) {
+                (Some(frame), Some(turn)) => Some(crate::model::rounding::compose(&frame, &turn)),
+                (frame, _) if v == 0.0 => frame,
+                _ => None,
+            };
             joint.kind = JointKind::Fixed;
             joint.mimic = None;
         }
