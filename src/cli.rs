@@ -514,7 +514,7 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
         "{}: {} cusps, {node_text}, {} internal-motion lines, {}{undecided} undecided, status {}{}, {:.3} s",
         report.robot,
         report.cusps.len(),
-        report.internal_motions.iter().filter(|m| m.near_degenerate.is_none()).count(),
+        linkspace::manip3r::motion::line_count(&found.run.cusps.bands),
         match report.internal_motions.iter().filter(|m| m.near_degenerate.is_some()).count() {
             0 => String::new(),
             n => format!("{n} near-degenerate strips (undecided), "),
@@ -621,7 +621,11 @@ fn ik(args: IkArgs) -> Result<()> {
     writeln!(out, "  {}", found.limit_effect.text).ok();
     for sol in &report.solutions {
         let text: Vec<String> = sol.joints.iter().map(|(n, b)| format!("{n} in [{:.9}, {:.9}]", b[0], b[1])).collect();
-        let tag = if sol.unique { "unique".to_string() } else { format!("cluster of {} boxes (one or more solutions)", sol.boxes) };
+        let tag = match (sol.unique, sol.boxes) {
+            (true, _) => "unique".to_string(),
+            (false, 0) => format!("internal-motion line: every {} solves the point; the strip about it is not searched", arm.chain.joints[1]),
+            (false, n) => format!("cluster of {n} boxes (one or more solutions)"),
+        };
         writeln!(out, "  {} ({tag})", text.join(", ")).ok();
     }
     if let Some(path) = args.json {

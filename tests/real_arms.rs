@@ -649,3 +649,29 @@ fn lock_values_are_snapped_like_the_files_angles() {
     }
     assert!(verdict::parallel_structure(&lock(-3.14159, true).mechanism).is_none(), "as written, 3.14159 is not a half turn");
 }
+
+/// Stäubli TX90 (arm = forearm = 0.425 m): folded, the wrist centre lies on axis 2 and θ₂
+/// turns it in place. The bound of 4 solutions says it holds off that line; inverse
+/// kinematics at the line's image reports the line without searching along it, and its
+/// other solutions map to the point (checked on the map in floating point).
+#[test]
+fn an_internal_motion_line_is_reported_by_the_verdict_and_by_ik() {
+    use linkspace::app::arm::{self, Arm, IkPoint, SingularitiesRequest};
+    let m = urdf::parse(&text("staubli_tx90.urdf")).expect("parses");
+    let a = Arm::load(&m, &LoadOptions { ignore_limits: true, ..Default::default() }, 0.0).expect("6R with a spherical wrist");
+    let request = SingularitiesRequest { precision: 1e-4, nodes: false, search_anyway: false };
+    let s = arm::singularities(&a, &request, &bounded(200_000), &mut |_| {}).expect("runs");
+    assert_eq!(manip3r::motion::line_count(&s.run.cusps.bands), 1, "the folded line at θ₃ = ±π is one line");
+    assert_eq!(s.verdict.max_ik_solutions, Some(4));
+    assert!(s.verdict.reason.contains("internal-motion line"), "{}", s.verdict.reason);
+    let (radius, z) = (0.0707106781186548, 0.0);
+    let found = arm::inverse_kinematics(&a, IkPoint::HalfSection { radius, z }, 1e-8, &bounded(200_000), &mut |_| {}).expect("valid query");
+    let sol = &found.solutions;
+    assert!(sol.status.is_complete(), "{:?}", sol.status);
+    let lines: Vec<_> = sol.clusters.iter().filter(|c| c.boxes == 0).collect();
+    assert!(!lines.is_empty() && lines.iter().all(|c| c.hull[0].wid() > 6.28 && (c.hull[1].contains(std::f64::consts::PI) || c.hull[1].contains(-std::f64::consts::PI))), "{:?}", sol.clusters);
+    for b in &sol.unique {
+        let [rho, zz] = a.chain.eval_f64(b[0].mid(), b[1].mid());
+        assert!((rho - radius * radius).abs() < 1e-9 && (zz - z).abs() < 1e-9, "{b:?}");
+    }
+}

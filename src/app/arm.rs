@@ -431,7 +431,7 @@ impl PreparedRun<SingularityResult> for SingularityRun {
             } else {
                 "nodes not searched".to_string()
             },
-            cusps.bands.len(),
+            motion::line_count(&cusps.bands),
             cusps.undecided.len() + node_search.as_ref().map_or(0, |n| n.undecided.len()),
             self.cover.boxes.len(),
             self.cover.clusters,
