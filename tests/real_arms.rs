@@ -675,3 +675,16 @@ fn an_internal_motion_line_is_reported_by_the_verdict_and_by_ik() {
         assert!((rho - radius * radius).abs() < 1e-9 && (zz - z).abs() < 1e-9, "{b:?}");
     }
 }
+
+/// The rounding list names what the analysis reads: a side link's truncated quarter turn (a
+/// camera mount beside the chain) is not listed, the chain's own snaps are.
+#[test]
+fn the_rounding_list_names_only_the_chain() {
+    let xml = text("orthogonal_3r_a.urdf").replace(
+        "<link name=\"tool\"/>",
+        "<link name=\"tool\"/><link name=\"camera\"/>\n  <joint name=\"camera_mount\" type=\"fixed\"><parent link=\"link1\"/><child link=\"camera\"/><origin xyz=\"0 0 0.2\" rpy=\"1.5708 0 0\"/></joint>",
+    ).replace("<origin xyz=\"1 0 0\" rpy=\"0 0 0\"/><axis xyz=\"0 -1 0\"/>", "<origin xyz=\"1 0 0\" rpy=\"0 0 3.14159\"/><axis xyz=\"0 1 0\"/>");
+    let p = prepare(&xml, &LoadOptions::default()).expect("robot a");
+    let joints: Vec<&str> = p.snaps.iter().map(|s| s.joint.as_str()).collect();
+    assert_eq!(joints, ["joint2"], "{:?}", p.snaps);
+}

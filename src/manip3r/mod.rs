@@ -56,10 +56,10 @@ pub enum Manip3rError {
     #[error("not a 3R chain: {0}")]
     NotThreeR(String),
     /// The end point does not move at all.
-    #[error("the tip link '{0}' does not move with joints 2 and 3")]
+    #[error("the analysed point '{0}' does not move with joints 2 and 3: choose another with --tip-point LINK@X,Y,Z")]
     TipDoesNotMove(String),
     /// det Df vanishes identically: the end point moves along a curve only.
-    #[error("the map of tip link '{0}' is degenerate: det Df vanishes everywhere (is the tip on the axis of joint 2 or 3?)")]
+    #[error("the map of the analysed point '{0}' is degenerate: det Df vanishes everywhere (is the point on the axis of joint 2 or 3?): choose another with --tip-point LINK@X,Y,Z")]
     Degenerate(String),
     /// The requested precision is not in (0, 1).
     #[error("precision must be a number in (0, 1), got {0}")]
@@ -187,8 +187,10 @@ pub fn prepare(m: &crate::model::Mechanism, options: &LoadOptions) -> Result<Pre
         }
     }
     let (mechanism, choice) = select::positioning(&rounded, &spec)?;
-    // Snaps of joints outside the chosen chain are irrelevant to the analysis; keep them listed
-    // anyway: the report says what was read differently from the file.
+    // Only what the analysis reads is listed: snaps on the chosen chain (side links and
+    // fingers off it do not enter).
+    let on_chain: Vec<&str> = rounded.link(&choice.tip).map_or(Vec::new(), |t| rounded.path_to(t).iter().map(|&j| rounded.joints[j].name.as_str()).collect());
+    snaps.retain(|s| on_chain.contains(&s.joint.as_str()));
     let limits = limits::JointLimits::of(&mechanism, &choice.joints, options.ignore_limits);
     Ok(Prepared { mechanism, choice, snaps, exact_geometry: options.exact_geometry, limits })
 }
