@@ -44,7 +44,7 @@ pub(crate) struct LimitArgs {
     #[arg(long, value_name = "SECONDS")]
     timeout: Option<f64>,
     /// Stop before pending boxes hold more than this many MiB; the run is then reported
-    /// incomplete. Default 2048.
+    /// incomplete. Default 2048 (`singularities`: 256).
     #[arg(long, value_name = "MIB")]
     max_memory: Option<u64>,
     /// Worker threads (1: depth first on one thread; more: breadth first level by level, the

@@ -320,7 +320,7 @@ pub fn decide(mechanism: &Mechanism, chain: &Chain3R, run: &Singularities, limit
             aspects: None,
             max_ik_solutions: None,
             certified: false,
-            reason: format!("no certified cusp, but the cusp search left {undecided} boxes undecided on the full torus (status {})", if run.cusps.status.is_complete() { "complete" } else { "incomplete" }),
+            reason: format!("no certified cusp, but the cusp search left {undecided} boxes undecided on the full torus ({})", if run.cusps.status.is_complete() { "no limit stopped it" } else { "a limit stopped it" }),
         };
     }
     match smooth_singular_set(chain, 1e-6, &control.max_cells(SMOOTH_CELLS)) {
