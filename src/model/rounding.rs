@@ -188,6 +188,7 @@ mod tests {
     }
 
     #[test]
+    #[allow(clippy::approx_constant)] // the truncated values a user types, not π
     fn joint_values_snap_and_turn_exactly() {
         assert_eq!(snap_value(3.14159), Some(std::f64::consts::PI));
         assert_eq!(snap_value(std::f64::consts::PI), None, "already exact");
