@@ -47,7 +47,7 @@ pub(crate) struct LimitArgs {
     #[arg(long, value_name = "SECONDS")]
     timeout: Option<f64>,
     /// Stop before pending boxes hold more than this many MiB; the run is then reported
-    /// incomplete. Default 2048.
+    /// incomplete. Default 2048 (`singularities`: 256).
     #[arg(long, value_name = "MIB")]
     max_memory: Option<u64>,
     /// Worker threads (1: depth first on one thread; more: breadth first level by level, the
@@ -524,7 +524,7 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
         "{}: {} cusps, {node_text}, {} internal-motion lines, {}{undecided} undecided, status {}{}, {:.3} s",
         report.robot,
         report.cusps.len(),
-        report.internal_motions.iter().filter(|m| m.near_degenerate.is_none()).count(),
+        linkspace::manip3r::motion::line_count(&found.run.cusps.bands),
         match report.internal_motions.iter().filter(|m| m.near_degenerate.is_some()).count() {
             0 => String::new(),
             n => format!("{n} near-degenerate strips (undecided), "),
@@ -552,7 +552,11 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     } else {
         writeln!(out, "  rounding: {} values snapped to quarter turns / coordinate axes (tolerance {:e} rad)", snaps.len(), linkspace::model::rounding::ANGLE_TOLERANCE).ok();
         for sn in snaps {
-            writeln!(out, "    {} {}: {:?} -> {:?}", sn.joint, sn.what, sn.original, sn.snapped).ok();
+            if sn.what == "lock" {
+                writeln!(out, "    {} lock: {} -> {}", sn.joint, sn.original[0], sn.snapped[0]).ok();
+            } else {
+                writeln!(out, "    {} {}: {:?} -> {:?}", sn.joint, sn.what, sn.original, sn.snapped).ok();
+            }
         }
     }
     writeln!(out, "  {}", effect.text).ok();
@@ -627,7 +631,11 @@ fn ik(args: IkArgs) -> Result<()> {
     writeln!(out, "  {}", found.limit_effect.text).ok();
     for sol in &report.solutions {
         let text: Vec<String> = sol.joints.iter().map(|(n, b)| format!("{n} in [{:.9}, {:.9}]", b[0], b[1])).collect();
-        let tag = if sol.unique { "unique".to_string() } else { format!("cluster of {} boxes (one or more solutions)", sol.boxes) };
+        let tag = match (sol.unique, sol.boxes) {
+            (true, _) => "unique".to_string(),
+            (false, 0) => format!("internal-motion line: every {} solves the point; the strip about it is not searched", arm.chain.joints[1]),
+            (false, n) => format!("cluster of {n} boxes (one or more solutions)"),
+        };
         writeln!(out, "  {} ({tag})", text.join(", ")).ok();
     }
     if let Some(path) = args.json {

@@ -174,6 +174,7 @@ fn singularities_bad_input_gives_one_clear_line() {
     // All lengths zero: the tip sits on every axis and never moves.
     let still = variant_all("orthogonal_3r_e.urdf", &[("xyz=\"1 0 0\"", "xyz=\"0 0 0\""), ("xyz=\"1.5 0.5 0\"", "xyz=\"0 0 0\""), ("xyz=\"0.7 0 0\"", "xyz=\"0 0 0\"")]);
     assert_clear_error(&["singularities", still.as_str()], "does not move");
+    assert_clear_error(&["singularities", still.as_str()], "--tip-point LINK@X,Y,Z");
     // Tip on the third axis: it moves with joint 2 only, det Df = 0 everywhere.
     let on_axis3 = robot_variant("e", "<origin xyz=\"0.7 0 0\" rpy=\"0 0 0\"/>", "<origin xyz=\"0 0 0.3\" rpy=\"0 0 0\"/>");
     assert_clear_error(&["singularities", on_axis3.as_str()], "degenerate");

@@ -561,3 +561,112 @@ fn a_cancelled_singularity_run_says_so_and_keeps_its_undecided_cells() {
     }
     assert!(!r.nodes.expect("searched").undecided.is_empty());
 }
+
+/// Random 3R chains with a random point on the last link (`--tip-point`): the IK count of the
+/// library at a reachable point equals the count of a dense Newton search on a forward
+/// kinematics written here with nalgebra, and every Newton solution lies in a reported box.
+#[test]
+fn random_tip_points_on_the_last_link_give_the_ik_of_that_point() {
+    use linkspace::manip3r::{ik, select::ChainSpec, LoadOptions};
+    use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
+    struct Rng(u64);
+    impl Rng {
+        fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            lo + (hi - lo) * (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+        /// Three decimals, as vendors write them.
+        fn v3(&mut self, lo: f64, hi: f64) -> [f64; 3] {
+            [0; 3].map(|_| (self.uniform(lo, hi) * 1000.0).round() / 1000.0)
+        }
+    }
+    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let mut compared = 0;
+    for trial in 0..12 {
+        let (o2, rpy2, a2) = (rng.v3(-1.0, 1.0), rng.v3(-1.5, 1.5), rng.v3(-1.0, 1.0));
+        let (o3, rpy3, a3) = (rng.v3(-1.0, 1.0), rng.v3(-1.5, 1.5), rng.v3(-1.0, 1.0));
+        let (ot, rpyt, point) = (rng.v3(-1.0, 1.0), rng.v3(-1.5, 1.5), rng.v3(-0.8, 0.8));
+        let s = |v: [f64; 3]| format!("{} {} {}", v[0], v[1], v[2]);
+        let xml = format!(
+            r#"<?xml version="1.0"?>
+<!-- A random 3R arm with a tool flange on the last link. -->
+<robot name="random_3r_{trial}">
+  <link name="base"/><link name="link1"/><link name="link2"/><link name="link3"/><link name="tool"/>
+  <joint name="joint1" type="continuous"><parent link="base"/><child link="link1"/><origin xyz="0 0 0" rpy="0 0 0"/><axis xyz="0 0 1"/></joint>
+  <joint name="joint2" type="continuous"><parent link="link1"/><child link="link2"/><origin xyz="{}" rpy="{}"/><axis xyz="{}"/></joint>
+  <joint name="joint3" type="continuous"><parent link="link2"/><child link="link3"/><origin xyz="{}" rpy="{}"/><axis xyz="{}"/></joint>
+  <joint name="flange" type="fixed"><parent link="link3"/><child link="tool"/><origin xyz="{}" rpy="{}"/></joint>
+</robot>"#,
+            s(o2), s(rpy2), s(a2), s(o3), s(rpy3), s(a3), s(ot), s(rpyt)
+        );
+        let m = urdf::parse(&xml).expect("parses");
+        let spec = ChainSpec { tip_point: Some(("tool".into(), point)), ..Default::default() };
+        let p = linkspace::manip3r::prepare(&m, &LoadOptions { spec, exact_geometry: true, ignore_limits: true }).expect("a 3R chain");
+        let c = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
+        // Forward kinematics of the point at θ₁ = 0, from the file's numbers.
+        let origin = |o: [f64; 3], rpy: [f64; 3]| Isometry3::from_parts(Translation3::new(o[0], o[1], o[2]), UnitQuaternion::from_euler_angles(rpy[0], rpy[1], rpy[2]));
+        let turn = |a: [f64; 3], t: f64| UnitQuaternion::from_axis_angle(&Unit::new_normalize(Vector3::from(a)), t);
+        let fk = |t: [f64; 2]| {
+            let pose = origin(o2, rpy2) * turn(a2, t[0]) * origin(o3, rpy3) * turn(a3, t[1]) * origin(ot, rpyt);
+            let x = pose * nalgebra::Point3::from(point);
+            [x.x * x.x + x.y * x.y, x.z]
+        };
+        let jacobian = |t: [f64; 2]| {
+            let h = 1e-7;
+            let col = |k: usize| {
+                let (mut a, mut b) = (t, t);
+                a[k] += h;
+                b[k] -= h;
+                let (fa, fb) = (fk(a), fk(b));
+                [(fa[0] - fb[0]) / (2.0 * h), (fa[1] - fb[1]) / (2.0 * h)]
+            };
+            let (c0, c1) = (col(0), col(1));
+            [[c0[0], c1[0]], [c0[1], c1[1]]]
+        };
+        let wrap = |x: f64| (x + PI).rem_euclid(2.0 * PI) - PI;
+        for _ in 0..2 {
+            let goal = fk([rng.uniform(-PI, PI), rng.uniform(-PI, PI)]);
+            // Every solution from a 64 × 64 grid of Newton starts.
+            let mut found: Vec<[f64; 2]> = Vec::new();
+            let mut near_singular = false;
+            for i in 0..64 {
+                for j in 0..64 {
+                    let mut t = [-PI + (i as f64 + 0.5) * PI / 32.0, -PI + (j as f64 + 0.5) * PI / 32.0];
+                    for _ in 0..40 {
+                        let (f, jm) = (fk(t), jacobian(t));
+                        let det = jm[0][0] * jm[1][1] - jm[0][1] * jm[1][0];
+                        if det.abs() < 1e-12 {
+                            break;
+                        }
+                        let r = [f[0] - goal[0], f[1] - goal[1]];
+                        t = [t[0] - (jm[1][1] * r[0] - jm[0][1] * r[1]) / det, t[1] - (jm[0][0] * r[1] - jm[1][0] * r[0]) / det];
+                    }
+                    let f = fk(t);
+                    if (f[0] - goal[0]).abs() + (f[1] - goal[1]).abs() < 1e-11 {
+                        let t = [wrap(t[0]), wrap(t[1])];
+                        let jm = jacobian(t);
+                        near_singular |= (jm[0][0] * jm[1][1] - jm[0][1] * jm[1][0]).abs() < 1e-3;
+                        let same = |u: &[f64; 2]| (0..2).all(|k| wrap(u[k] - t[k]).abs() < 1e-6);
+                        if !found.iter().any(same) {
+                            found.push(t);
+                        }
+                    }
+                }
+            }
+            if near_singular {
+                continue;
+            }
+            let solved = ik::solve(&c, goal[0].sqrt(), goal[1], 1e-9, 400_000).expect("valid query");
+            assert!(solved.status.is_complete() && solved.clusters.is_empty(), "trial {trial}: {:?}", solved.status);
+            assert_eq!(solved.unique.len(), found.len(), "trial {trial}: point {point:?}, goal {goal:?}: {:?} vs Newton {found:?}", solved.unique);
+            for t in &found {
+                let inside = |b: &[linkspace::Interval; 2]| (0..2).all(|k| wrap(t[k] - b[k].mid()).abs() <= b[k].rad() + 1e-7);
+                assert!(solved.unique.iter().any(inside), "trial {trial}: Newton solution {t:?} not in {:?}", solved.unique);
+            }
+            compared += 1;
+        }
+    }
+    assert!(compared >= 16, "only {compared} points away from singularities");
+}

@@ -582,3 +582,110 @@ fn the_node_tree_stays_within_the_memory_limit() {
         assert!(full_nodes.nodes.iter().any(|m| m.theta == n.theta || m.theta == [n.theta[1], n.theta[0]]), "{n:?}");
     }
 }
+
+/// Joint values are stated in each joint's own range: a Jaco-style file's limits lie in
+/// [0, 2π], and every inverse-kinematics solution, θ₁ included, is written inside them.
+#[test]
+fn ik_solutions_are_written_in_the_joints_own_ranges() {
+    use linkspace::app::arm::{inverse_kinematics, Arm, IkPoint};
+    let xml = std::fs::read_to_string(format!("{}/tests/data/jaco_style_3r.urdf", env!("CARGO_MANIFEST_DIR"))).expect("fixture");
+    let m = urdf::parse(&xml).expect("parses");
+    let arm = Arm::load(&m, &LoadOptions::default(), 0.0).expect("3R");
+    let limits = |name: &str| match m.joints[m.joint(name).expect("a joint")].kind {
+        JointKind::Revolute { limits: Some(l) } => l,
+        _ => panic!("{name} has limits in the file"),
+    };
+    let mut written = 0;
+    for point in [[0.2, 0.3, 0.4], [-0.3, -0.2, 0.5], [0.1, -0.4, 0.2]] {
+        let found = inverse_kinematics(&arm, IkPoint::Root(point), 1e-8, &bounded(200_000), &mut |_| {}).expect("valid query");
+        let report = found.report(&arm);
+        assert!(!report.solutions.is_empty(), "{point:?} is reachable");
+        for sol in &report.solutions {
+            assert_eq!(sol.joints.len(), 3, "θ₁ is written for a point of the root frame");
+            for (name, b) in &sol.joints {
+                let (lo, hi) = limits(name);
+                assert!(lo <= b[0] && b[1] <= hi, "{point:?}: {name} in {b:?}, outside its limits [{lo}, {hi}]");
+                written += 1;
+            }
+        }
+    }
+    assert!(written >= 18, "{written}");
+}
+
+/// A floating root joint places the robot in the world: the chain starts at the link it
+/// carries, and the arm is the same as the file without it.
+#[test]
+fn a_floating_root_joint_is_read_as_the_robot_base() {
+    let xml = std::fs::read_to_string(format!("{}/tests/data/floating_base_3r.urdf", env!("CARGO_MANIFEST_DIR"))).expect("fixture");
+    let floating = prepare(&xml, &LoadOptions::default()).expect("a floating root is accepted");
+    let plain = prepare(&text("orthogonal_3r_a.urdf"), &LoadOptions::default()).expect("robot a");
+    assert_eq!((floating.choice.base.as_str(), &floating.choice.joints), ("base", &plain.choice.joints));
+    let [a, b] = [&floating, &plain].map(|p| Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R"));
+    for (t2, t3) in [(0.3, -1.2), (2.0, 0.7), (-2.5, 3.0)] {
+        assert_eq!(a.eval_f64(t2, t3), b.eval_f64(t2, t3));
+    }
+    let s = ik::solve(&a, 3.0, 1.0, 1e-8, 100_000).expect("valid query");
+    assert_eq!((s.status, s.unique.len(), s.clusters.len()), (Status::Complete, 2, 0));
+}
+
+/// A lock value is a joint angle like the file's: a half turn written 3.141592653589793 or
+/// 3.14159 keeps the iiwa's axes 2 and 4 exactly parallel, as the lock at 0 does (joint 3 made
+/// continuous here so that a half turn is allowed); exact geometry takes it as written.
+#[test]
+#[allow(clippy::approx_constant)] // 3.14159 is the truncated half turn a user types
+fn lock_values_are_snapped_like_the_files_angles() {
+    let xml = text("iiwa14.urdf");
+    let at = xml.find("<joint name=\"joint_3\" type=\"revolute\">").expect("joint 3");
+    let xml = format!("{}{}", &xml[..at], xml[at..].replacen("type=\"revolute\"", "type=\"continuous\"", 1));
+    let lock = |v: f64, exact_geometry: bool| {
+        let spec = ChainSpec { locks: vec![("joint_3".into(), v)], ..Default::default() };
+        prepare(&xml, &LoadOptions { spec, exact_geometry, ignore_limits: true }).expect("a 6R arm")
+    };
+    for v in [0.0, std::f64::consts::PI, -3.14159] {
+        let p = lock(v, false);
+        let verdict = verdict::parallel_structure(&p.mechanism).unwrap_or_else(|| panic!("lock {v}: axes 2 and 4 proven parallel"));
+        assert_eq!((verdict.cuspidal, verdict.certified), (Some(false), true), "lock {v}");
+        let listed = p.snaps.iter().any(|s| s.what == "lock" && s.joint == "joint_3");
+        assert_eq!(listed, v == -3.14159, "lock {v}: {:?}", p.snaps);
+    }
+    assert!(verdict::parallel_structure(&lock(-3.14159, true).mechanism).is_none(), "as written, 3.14159 is not a half turn");
+}
+
+/// Stäubli TX90 (arm = forearm = 0.425 m): folded, the wrist centre lies on axis 2 and θ₂
+/// turns it in place. The bound of 4 solutions says it holds off that line; inverse
+/// kinematics at the line's image reports the line without searching along it, and its
+/// other solutions map to the point (checked on the map in floating point).
+#[test]
+fn an_internal_motion_line_is_reported_by_the_verdict_and_by_ik() {
+    use linkspace::app::arm::{self, Arm, IkPoint, SingularitiesRequest};
+    let m = urdf::parse(&text("staubli_tx90.urdf")).expect("parses");
+    let a = Arm::load(&m, &LoadOptions { ignore_limits: true, ..Default::default() }, 0.0).expect("6R with a spherical wrist");
+    let request = SingularitiesRequest { precision: 1e-4, nodes: false, search_anyway: false };
+    let s = arm::singularities(&a, &request, &bounded(200_000), &mut |_| {}).expect("runs");
+    assert_eq!(manip3r::motion::line_count(&s.run.cusps.bands), 1, "the folded line at θ₃ = ±π is one line");
+    assert_eq!(s.verdict.max_ik_solutions, Some(4));
+    assert!(s.verdict.reason.contains("internal-motion line"), "{}", s.verdict.reason);
+    let (radius, z) = (0.0707106781186548, 0.0);
+    let found = arm::inverse_kinematics(&a, IkPoint::HalfSection { radius, z }, 1e-8, &bounded(200_000), &mut |_| {}).expect("valid query");
+    let sol = &found.solutions;
+    assert!(sol.status.is_complete(), "{:?}", sol.status);
+    let lines: Vec<_> = sol.clusters.iter().filter(|c| c.boxes == 0).collect();
+    assert!(!lines.is_empty() && lines.iter().all(|c| c.hull[0].wid() >= std::f64::consts::TAU && (c.hull[1].contains(std::f64::consts::PI) || c.hull[1].contains(-std::f64::consts::PI))), "{:?}", sol.clusters);
+    for b in &sol.unique {
+        let [rho, zz] = a.chain.eval_f64(b[0].mid(), b[1].mid());
+        assert!((rho - radius * radius).abs() < 1e-9 && (zz - z).abs() < 1e-9, "{b:?}");
+    }
+}
+
+/// The rounding list names what the analysis reads: a side link's truncated quarter turn (a
+/// camera mount beside the chain) is not listed, the chain's own snaps are.
+#[test]
+fn the_rounding_list_names_only_the_chain() {
+    let xml = text("orthogonal_3r_a.urdf").replace(
+        "<link name=\"tool\"/>",
+        "<link name=\"tool\"/><link name=\"camera\"/>\n  <joint name=\"camera_mount\" type=\"fixed\"><parent link=\"link1\"/><child link=\"camera\"/><origin xyz=\"0 0 0.2\" rpy=\"1.5708 0 0\"/></joint>",
+    ).replace("<origin xyz=\"1 0 0\" rpy=\"0 0 0\"/><axis xyz=\"0 -1 0\"/>", "<origin xyz=\"1 0 0\" rpy=\"0 0 3.14159\"/><axis xyz=\"0 1 0\"/>");
+    let p = prepare(&xml, &LoadOptions::default()).expect("robot a");
+    let joints: Vec<&str> = p.snaps.iter().map(|s| s.joint.as_str()).collect();
+    assert_eq!(joints, ["joint2"], "{:?}", p.snaps);
+}

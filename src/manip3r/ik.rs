@@ -38,7 +38,8 @@ pub struct IkSolutions {
 pub struct IkCluster {
     /// Hull of the boxes.
     pub hull: [Interval; 2],
-    /// How many boxes.
+    /// How many boxes; 0 for a strip about an internal-motion line whose image may be the
+    /// point, set aside unsearched: every θ₂ solves the query on the line (`solve_target`).
     pub boxes: usize,
 }
 
@@ -70,6 +71,8 @@ struct IkPrune<'a> {
     chain: &'a Chain3R,
     target: [Interval; 2],
     precision: f64,
+    /// θ₃ strips about internal-motion lines, reported whole and not searched.
+    aside: &'a [Interval],
 }
 
 /// Why the inverse-kinematics search discards a box.
@@ -79,6 +82,8 @@ pub enum IkDiscard {
     NoSolution,
     /// Krawczyk proves it holds no solution.
     KrawczykEmpty,
+    /// It lies in a strip about an internal-motion line, which the result reports whole.
+    InternalMotion,
 }
 
 impl crate::search::Reason for IkDiscard {
@@ -86,6 +91,7 @@ impl crate::search::Reason for IkDiscard {
         match self {
             IkDiscard::NoSolution => "no_solution",
             IkDiscard::KrawczykEmpty => "krawczyk_empty",
+            IkDiscard::InternalMotion => "internal_motion",
         }
     }
 }
@@ -99,6 +105,14 @@ impl Prune for IkPrune<'_> {
     fn process(&mut self, cell: IkCell) -> Step<IkCell, (Order, [Interval; 2]), IkDiscard> {
         let (chain, target, precision) = (self.chain, self.target, self.precision);
         let b = cell.b;
+        if self.aside.iter().any(|s| s.inf() <= b[1].inf() && b[1].sup() <= s.sup()) {
+            return Step::Discard(IkDiscard::InternalMotion);
+        }
+        // A box reaching into a strip is cut at its edge, so the strip is set aside whole.
+        if let Some(cut) = self.aside.iter().flat_map(|s| [s.inf(), s.sup()]).find(|&c| b[1].inf() < c && c < b[1].sup()) {
+            let child = |t3, i| IkCell { b: [b[0], t3], order: cell.order.child(i, 2), level: cell.level + 1 };
+            return Step::Split(smallvec![child(crate::interval::interval(b[1].inf(), cut), 0), child(crate::interval::interval(cut, b[1].sup()), 1)]);
+        }
         let m = [b[0].mid(), b[1].mid()];
         // `derived` tightens enclosures over uncertain lengths (mean-value form in them).
         let over = chain.derived(b, 1);
@@ -153,8 +167,12 @@ pub fn solve_target(chain: &Chain3R, target: [Interval; 2], precision: f64, cont
     if target.iter().any(|t| t.is_empty() || !t.inf().is_finite() || !t.sup().is_finite()) {
         return Err(Manip3rError::BadPoint(target[0].mid(), target[1].mid()));
     }
+    // A point that may be the image of an internal-motion line is solved by the whole line:
+    // found before searching, a strip about the line is set aside (a search there would go
+    // down to the precision all along the line) and reported as one cluster of 0 boxes.
+    let aside = line_strips(chain, target, precision);
     let start = IkCell { b: [motion::full_range(), motion::full_range()], order: Order::ROOT, level: 0 };
-    let mut run = drive(|| IkPrune { chain, target, precision }, start, control, progress);
+    let mut run = drive(|| IkPrune { chain, target, precision, aside: &aside }, start, control, progress);
     run.found.sort_by_key(|(order, _)| *order);
     let mut unique: Vec<[Interval; 2]> = Vec::new();
     for (_, k) in run.found {
@@ -166,7 +184,31 @@ pub fn solve_target(chain: &Chain3R, target: [Interval; 2], precision: f64, cont
     }
     run.undecided.sort_by_key(|(c, _)| c.order);
     let undecided: Vec<[Interval; 2]> = run.undecided.iter().map(|(c, _)| c.b).collect();
-    Ok(IkSolutions { unique, clusters: cluster(&undecided), status: run.status, stats: run.stats })
+    let mut clusters = cluster(&undecided);
+    clusters.extend(aside.iter().map(|t3| IkCluster { hull: [motion::full_range(), *t3], boxes: 0 }));
+    Ok(IkSolutions { unique, clusters, status: run.status, stats: run.stats })
+}
+
+/// Half-width (radians of θ₃) of the strip set aside about an internal-motion line: boxes
+/// beside it must be about as narrow as their distance from the line to be decided, so the
+/// search costs about 2π over this per side.
+const LINE_MARGIN: f64 = 1.0 / 1024.0;
+
+/// The θ₃ strips about the internal-motion lines whose image may be the target (the image of
+/// a line is one point: f at any θ₂ over the band's θ₃ encloses it).
+fn line_strips(chain: &Chain3R, target: [Interval; 2], precision: f64) -> Vec<Interval> {
+    let mut out: Vec<Interval> = Vec::new();
+    for band in motion::bands(chain, precision).iter().filter(|b| b.near.is_none()) {
+        let t3 = crate::interval::interval(band.theta3[0], band.theta3[1]);
+        let image = chain.derived([point(0.0), t3], 0);
+        if (0..2).all(|k| !image.f[k].value().disjoint(target[k])) {
+            let full = motion::full_range();
+            let lo = (band.theta3[0] - LINE_MARGIN).max(full.inf());
+            let hi = (band.theta3[1] + LINE_MARGIN).min(full.sup());
+            out.push(crate::interval::interval(lo, hi));
+        }
+    }
+    out
 }
 
 /// Groups boxes that touch on the torus, listed by their first box.

@@ -104,6 +104,17 @@ impl JointLimits {
         }
     }
 
+    /// Joint `k`'s angle `x` (read modulo 2π) translated by a multiple of 2π into the joint's
+    /// range: a translate inside the limits if there is one, else one that meets them; `x`
+    /// itself for a joint without limits or when no translate meets them.
+    pub fn in_range(&self, k: usize, x: Interval) -> Interval {
+        let Some([lo, hi]) = self.limits[k] else { return x };
+        let translates = [0i32, 1, -1, 2, -2, 3, -3].map(|n| x + Interval::TAU * crate::interval::point(f64::from(n)));
+        let inside = translates.iter().find(|y| lo <= y.inf() && y.sup() <= hi);
+        let meets = || translates.iter().find(|y| y.inf() <= hi && lo <= y.sup());
+        inside.or_else(meets).copied().unwrap_or(x)
+    }
+
     /// Drops what lies outside the limits from a singularity run; counts what is on a limit.
     pub fn apply(&self, run: &mut Singularities) -> LimitEffect {
         let (mut dropped, mut on_limit) = (0u64, 0u64);
@@ -127,9 +138,10 @@ impl JointLimits {
         LimitEffect { limits: self.clone(), dropped, on_limit, text }
     }
 
-    /// Drops inverse-kinematics solutions outside the limits. `theta1` encloses the first
-    /// joint's angle of a solution box over (θ₂, θ₃) when the query fixes it (a point of the
-    /// root frame); `None` leaves joint 1 free.
+    /// Drops inverse-kinematics solutions outside the limits and states the others' (θ₂, θ₃)
+    /// in the joints' ranges (`in_range`). `theta1` encloses the first joint's angle of a
+    /// solution box over (θ₂, θ₃) when the query fixes it (a point of the root frame); `None`
+    /// leaves joint 1 free.
     pub fn apply_ik(&self, s: &mut IkSolutions, theta1: impl Fn(&[Interval; 2]) -> Option<Interval>) -> LimitEffect {
         let (mut dropped, mut on_limit) = (0u64, 0u64);
         let mut keep = |p: Place| tally(p, &mut dropped, &mut on_limit);
@@ -141,6 +153,10 @@ impl JointLimits {
         };
         s.unique.retain(|b| keep(of_solution(b)));
         s.clusters.retain(|c| keep(of_solution(&c.hull)));
+        // The map is 2π-periodic: the kept boxes are stated in the joints' own ranges.
+        let in_range = |b: &mut [Interval; 2]| *b = [self.in_range(1, b[0]), self.in_range(2, b[1])];
+        s.unique.iter_mut().for_each(in_range);
+        s.clusters.iter_mut().for_each(|c| in_range(&mut c.hull));
         let text = format!("{}; {dropped} solutions outside dropped, {on_limit} on a limit kept", self.describe());
         LimitEffect { limits: self.clone(), dropped, on_limit, text }
     }
@@ -177,6 +193,18 @@ mod tests {
         assert_eq!(place(Some([5.5, 7.0]), interval(-0.7, -0.6)), Place::Inside);
         assert_eq!(place(Some([-4.0, 4.0]), interval(3.0, 3.1)), Place::Inside);
         assert_eq!(place(None, interval(3.0, 3.1)), Place::Inside);
+    }
+
+    #[test]
+    fn angles_are_stated_in_the_joint_range() {
+        let limits = JointLimits { joints: Default::default(), limits: [Some([0.82, 5.46]), Some([-0.087, 6.196]), None], ignored: false };
+        let x = limits.in_range(0, interval(-3.09, -3.08));
+        assert!(x.inf() > 3.19 && x.sup() < 3.21, "{x:?}");
+        // Already inside: unchanged; meeting a limit only: the translate that meets it.
+        assert_eq!(limits.in_range(1, interval(0.5, 0.6)), interval(0.5, 0.6));
+        let y = limits.in_range(1, interval(-0.1, -0.05));
+        assert!(y.inf() <= -0.087 && y.sup() >= -0.087, "{y:?}");
+        assert_eq!(limits.in_range(2, interval(-3.0, -2.9)), interval(-3.0, -2.9));
     }
 }
 

@@ -63,10 +63,10 @@ pub enum Manip3rError {
     #[error("not a 3R chain: {0}")]
     NotThreeR(String),
     /// The end point does not move at all.
-    #[error("the tip link '{0}' does not move with joints 2 and 3")]
+    #[error("the analysed point '{0}' does not move with joints 2 and 3: choose another with --tip-point LINK@X,Y,Z")]
     TipDoesNotMove(String),
     /// det Df vanishes identically: the end point moves along a curve only.
-    #[error("the map of tip link '{0}' is degenerate: det Df vanishes everywhere (is the tip on the axis of joint 2 or 3?)")]
+    #[error("the map of the analysed point '{0}' is degenerate: det Df vanishes everywhere (is the point on the axis of joint 2 or 3?): choose another with --tip-point LINK@X,Y,Z")]
     Degenerate(String),
     /// The requested precision is not in (0, 1).
     #[error("precision must be a number in (0, 1), got {0}")]
@@ -177,10 +177,27 @@ pub struct Prepared {
 
 /// Rounding, then chain choice: the one way every 3R command reads a file.
 pub fn prepare(m: &crate::model::Mechanism, options: &LoadOptions) -> Result<Prepared, Manip3rError> {
-    let (rounded, snaps) = if options.exact_geometry { (m.clone(), Vec::new()) } else { crate::model::rounding::snap(m) };
-    let (mechanism, choice) = select::positioning(&rounded, &options.spec)?;
-    // Snaps of joints outside the chosen chain are irrelevant to the analysis; keep them listed
-    // anyway: the report says what was read differently from the file.
+    let (rounded, mut snaps) = if options.exact_geometry { (m.clone(), Vec::new()) } else { crate::model::rounding::snap(m) };
+    // Lock values are joint angles written as the file's are: snapped alike.
+    let mut spec = options.spec.clone();
+    if !options.exact_geometry {
+        for (joint, v) in &mut spec.locks {
+            // Not past a limit the written value honours (a lock at a limit written 3.14159).
+            let within = |q: f64| match rounded.joint(joint).map(|j| rounded.joints[j].kind) {
+                Some(crate::model::JointKind::Revolute { limits: Some((lo, hi)) }) => lo <= q && q <= hi,
+                _ => true,
+            };
+            if let Some(q) = crate::model::rounding::snap_value(*v).filter(|&q| within(q)) {
+                snaps.push(crate::model::rounding::Snap { joint: joint.clone(), what: "lock".into(), original: [*v, 0.0, 0.0], snapped: [q, 0.0, 0.0] });
+                *v = q;
+            }
+        }
+    }
+    let (mechanism, choice) = select::positioning(&rounded, &spec)?;
+    // Only what the analysis reads is listed: snaps on the chosen chain (side links and
+    // fingers off it do not enter).
+    let on_chain: Vec<&str> = rounded.link(&choice.tip).map_or(Vec::new(), |t| rounded.path_to(t).iter().map(|&j| rounded.joints[j].name.as_str()).collect());
+    snaps.retain(|s| on_chain.contains(&s.joint.as_str()));
     let limits = limits::JointLimits::of(&mechanism, &choice.joints, options.ignore_limits);
     Ok(Prepared { mechanism, choice, snaps, exact_geometry: options.exact_geometry, limits })
 }

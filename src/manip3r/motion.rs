@@ -50,6 +50,17 @@ impl Band {
     }
 }
 
+/// How many internal-motion lines the true bands (`near` is `None`) hold: a line at θ₃ = ±π
+/// gives a band at each end of [-π, π], one line on the circle.
+pub fn line_count(bands: &[Band]) -> usize {
+    let lines: Vec<&Band> = bands.iter().filter(|b| b.near.is_none()).collect();
+    let seam = match (lines.first(), lines.last()) {
+        (Some(first), Some(last)) if lines.len() > 1 => first.theta3[0] <= -std::f64::consts::PI && last.theta3[1] >= std::f64::consts::PI,
+        _ => false,
+    };
+    lines.len() - usize::from(seam)
+}
+
 /// The cell no wider than `precision` at the upper (`upper`) or lower end of `cell`, by
 /// repeated midpoint bisection.
 fn fine_end(mut cell: Interval, precision: f64, upper: bool) -> Interval {

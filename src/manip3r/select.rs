@@ -6,7 +6,8 @@
 //! them and returns a reduced `Mechanism` (that path only) that every 3R analysis takes as is,
 //! with a `Choice` that says what was chosen and why.
 //!
-//! - Base and tip follow KDL/MoveIt: `base` (default: the root) and `tip` (default: the end
+//! - Base and tip follow KDL/MoveIt: `base` (default: the root, or the link a floating root
+//!   joint carries) and `tip` (default: the end
 //!   link of the longest revolute path: the child of its last revolute joint, followed down a
 //!   single line of fixed joints to its end, so a 3R file's `tool` link is the tip, while side
 //!   links that branch off (`tool0` beside `flange`) stop the descent).
@@ -81,7 +82,7 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
     let link = |name: &str, what: &str| m.link(name).ok_or_else(|| Manip3rError::Selection(format!("{what} '{name}' is not a link of the file")));
     let base = match &spec.base {
         Some(b) => link(b, "--base")?,
-        None => m.root,
+        None => floating_root(m).unwrap_or(m.root),
     };
     for (name, value) in &spec.locks {
         let j = m.joint(name).ok_or_else(|| Manip3rError::Selection(format!("--lock: '{name}' is not a joint of the file")))?;
@@ -207,8 +208,8 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
         reason: String::new(),
     };
     let lock_text = if spec.locks.is_empty() { String::new() } else { format!(" with {} locked", spec.locks.iter().map(|(n, v)| format!("{n}={v}")).collect::<Vec<_>>().join(", ")) };
-    // The point in l3's frame (None: keep the whole path, the tip's origin being the point).
-    let point_in_l3: Option<(V3, String)> = if let Some((pl, xyz)) = &spec.tip_point {
+    // Where the point hangs (None: keep the whole path, the tip's origin being the point).
+    let point_in_l3: Option<Attach> = if let Some((pl, xyz)) = &spec.tip_point {
         let l = link(pl, "--tip-point")?;
         if !xyz.iter().all(|v| v.is_finite()) {
             return Err(Manip3rError::Selection("--tip-point: coordinates must be finite".into()));
@@ -229,7 +230,14 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
         choice.point = *xyz;
         choice.wrist_miss = mv;
         choice.reason = format!("chain {b} -> {t}{lock_text}, {n} revolute joints; the point {xyz:?} of link '{pl}' given by --tip-point, moved by {} only", joints.join(", "));
-        if n == 3 && l == tip { None } else { Some((in_l3, format!("{pl}@{},{},{}", xyz[0], xyz[1], xyz[2]))) }
+        let name = format!("{pl}@{},{},{}", xyz[0], xyz[1], xyz[2]);
+        if n == 3 && l == tip {
+            // The whole path is kept (its links carry collision shapes); the point hangs
+            // under the tip at its coordinates there, unless it is the tip's origin.
+            (xyz != &[0.0; 3]).then_some(Attach::UnderTip(local, name))
+        } else {
+            Some(Attach::UnderJoint3(in_l3, name))
+        }
     } else if n == 3 {
         choice.reason = format!("chain {b} -> {t}{lock_text}: three revolute joints; the point is the origin of '{t}'");
         None
@@ -254,7 +262,7 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
                     "chain {b} -> {t}{lock_text}: 6 revolute joints with a spherical wrist (axes of {} meet within {mv:.1e} m); joints {} position the wrist centre {:?} in '{}'",
                     wrist_joints.join(", "), joints.join(", "), choice.point, choice.point_link
                 );
-                Some(([x[0], x[1], x[2]].map(point), "wrist_centre".into()))
+                Some(Attach::UnderJoint3([x[0], x[1], x[2]].map(point), "wrist_centre".into()))
             }
             _ => {
                 let o = o4;
@@ -269,7 +277,7 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
                 // The origin of joint 4 lies on axis 4 only; joints 5 and 6 do not move it
                 // because it is in joint 4's parent link.
                 choice.wrist_miss = 0.0;
-                Some((o, format!("{}_origin", wrist_joints[0])))
+                Some(Attach::UnderJoint3(o, format!("{}_origin", wrist_joints[0])))
             }
         }
     } else {
@@ -278,7 +286,7 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
     };
     // The reduced mechanism: base, the links down to joint 3's child (or the whole path when the
     // tip's origin is the point), and a virtual tip link at the point.
-    let keep: Vec<usize> = if point_in_l3.is_some() { path[..=third].to_vec() } else { path.clone() };
+    let keep: Vec<usize> = if matches!(point_in_l3, Some(Attach::UnderJoint3(..))) { path[..=third].to_vec() } else { path.clone() };
     let mut links = vec![Link { name: m.links[base].name.clone(), parent_joint: None, collisions: m.links[base].collisions.clone() }];
     let mut joints_out: Vec<Joint> = Vec::new();
     for &j in &keep {
@@ -289,9 +297,12 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
             joint.origin *= Isometry3::from_parts(Translation3::identity(), UnitQuaternion::from_axis_angle(&Unit::new_normalize(joint.axis), v));
             let (r, p, y) = joint.origin.rotation.euler_angles();
             joint.rpy = [r, p, y];
-            if v != 0.0 {
-                joint.exact_rotation = None;
-            }
+            // A quarter turn about a coordinate axis keeps an exact frame exact.
+            joint.exact_rotation = match (joint.exact_rotation, crate::model::rounding::exact_turn(&joint.axis, v)) {
+                (Some(frame), Some(turn)) => Some(crate::model::rounding::compose(&frame, &turn)),
+                (frame, _) if v == 0.0 => frame,
+                _ => None,
+            };
             joint.kind = JointKind::Fixed;
             joint.mimic = None;
         }
@@ -299,8 +310,7 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
         links.push(Link { name: child.name.clone(), parent_joint: Some(joints_out.len()), collisions: child.collisions.clone() });
         joints_out.push(joint);
     }
-    if let Some((p, name)) = point_in_l3 {
-        let mut name = name;
+    if let Some(Attach::UnderJoint3(p, mut name) | Attach::UnderTip(p, mut name)) = point_in_l3 {
         while m.link(&name).is_some() || m.joint(&name).is_some() {
             name.push('_');
         }
@@ -320,6 +330,25 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
         links.push(Link { name, parent_joint: Some(joints_out.len() - 1), collisions: Vec::new() });
     }
     Ok((Mechanism { name: m.name.clone(), links, joints: joints_out, loops: Vec::new(), root: 0, transmission_joints: Vec::new() }, choice))
+}
+
+/// The default base below a floating root joint: the link it carries (the robot's own frame;
+/// the floating joint only places the robot in the world, as a virtual joint does in MoveIt).
+/// `None` unless the root's only joint is floating.
+fn floating_root(m: &Mechanism) -> Option<usize> {
+    let mut from_root = m.joints.iter().filter(|j| j.parent == m.root);
+    match (from_root.next(), from_root.next()) {
+        (Some(j), None) if j.kind == JointKind::Floating => Some(j.child),
+        _ => None,
+    }
+}
+
+/// Where the analysed point is attached in the reduced mechanism, with its link's name.
+enum Attach {
+    /// In the frame of joint 3's child, the path cut there.
+    UnderJoint3(V3, String),
+    /// In the tip's frame, the whole path kept.
+    UnderTip(V3, String),
 }
 
 /// The rotation of a locked joint about its axis by `v`, as a pose.

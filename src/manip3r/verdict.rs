@@ -269,7 +269,12 @@ fn counts(chain: &Chain3R, cusps: &[[f64; 2]], internal_motion: bool, control: &
 /// (`SMOOTH_CELLS`, `COVER_CELLS`, `IK_CELLS` a sample); a limit that stops one leaves its
 /// count `null`, with the limit named.
 pub fn decide(mechanism: &Mechanism, chain: &Chain3R, run: &Singularities, limits: &JointLimits, control: &Control) -> Verdict {
-    if let Some(v) = parallel_structure(mechanism) {
+    if let Some(mut v) = parallel_structure(mechanism) {
+        // The bound counts isolated solutions: at an internal-motion line's image they form a line.
+        let lines = super::motion::line_count(&run.cusps.bands);
+        if v.max_ik_solutions.is_some() && lines > 0 {
+            v.reason = format!("off the images of its {lines} internal-motion line(s), where the solutions form a whole line; {}", v.reason);
+        }
         return v;
     }
     if chain.uncertainty > 0.0 {
@@ -315,7 +320,7 @@ pub fn decide(mechanism: &Mechanism, chain: &Chain3R, run: &Singularities, limit
             aspects: None,
             max_ik_solutions: None,
             certified: false,
-            reason: format!("no certified cusp, but the cusp search left {undecided} boxes undecided on the full torus (status {})", if run.cusps.status.is_complete() { "complete" } else { "incomplete" }),
+            reason: format!("no certified cusp, but the cusp search left {undecided} boxes undecided on the full torus ({})", if run.cusps.status.is_complete() { "no limit stopped it" } else { "a limit stopped it" }),
         };
     }
     match smooth_singular_set(chain, 1e-6, &control.max_cells(SMOOTH_CELLS)) {
@@ -328,7 +333,7 @@ pub fn decide(mechanism: &Mechanism, chain: &Chain3R, run: &Singularities, limit
                 certified: true,
                 reason: format!(
                     "no cusp on the whole torus (search complete) and det Df = 0 proven a smooth curve: a generic 3R without cusp is non-cuspidal (Salunkhe, Spartalis, Capco, Chablat, Wenger 2022){}{more}",
-                    if run.cusps.bands.is_empty() { String::new() } else { format!("; {} internal-motion lines (each mapped to one point) were set aside by the cusp search and are not cusps", run.cusps.bands.len()) }
+                    if run.cusps.bands.is_empty() { String::new() } else { format!("; {} internal-motion lines (each mapped to one point) were set aside by the cusp search and are not cusps", super::motion::line_count(&run.cusps.bands)) }
                 ),
             }
         }

@@ -32,7 +32,7 @@ pub const ANGLE_TOLERANCE: f64 = 1e-5;
 pub struct Snap {
     /// The joint's name.
     pub joint: String,
-    /// `"rpy"` or `"axis"`.
+    /// `"rpy"`, `"axis"` or `"lock"` (a `--lock` value, in `original[0]` and `snapped[0]`).
     pub what: String,
     /// As written in the file.
     pub original: [f64; 3],
@@ -72,6 +72,32 @@ fn exact_rpy(k: [i64; 3]) -> [[f64; 3]; 3] {
     let ry = [[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]];
     let rz = [[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]];
     mul(&rz, &mul(&ry, &rx))
+}
+
+/// A joint value (a lock) within [`ANGLE_TOLERANCE`] of a quarter-turn multiple, snapped to it
+/// as the file's angles are; `None` when it is not near one or already exact.
+pub fn snap_value(v: f64) -> Option<f64> {
+    quarter(v).map(|(_, q)| q).filter(|&q| q != v)
+}
+
+/// The exact rotation by `v` about `axis` when `v` is a quarter-turn multiple (as the f64
+/// `k·π/2`) and `axis` a unit coordinate axis; `None` otherwise.
+pub fn exact_turn(axis: &Vector3<f64>, v: f64) -> Option<[[f64; 3]; 3]> {
+    let (k, q) = quarter(v)?;
+    let i = (0..3).find(|&i| axis[i].abs() == 1.0)?;
+    if q != v || axis.norm_squared() != 1.0 {
+        return None;
+    }
+    // About −e the turn is −k quarter turns about e.
+    let k = if axis[i] < 0.0 { (-k).rem_euclid(4) } else { k };
+    let mut turns = [0; 3];
+    turns[i] = k;
+    Some(exact_rpy(turns))
+}
+
+/// The product of two exact rotations (entries −1, 0, 1), exactly.
+pub fn compose(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    mul(a, b)
 }
 
 /// The mechanism with the policy applied, and the list of what changed.
@@ -159,5 +185,17 @@ mod tests {
         assert_eq!(snaps[0].snapped[0], FRAC_PI_2);
         assert_eq!(s.joints[0].axis, Vector3::z());
         assert_eq!(s.joints[0].exact_rotation, Some([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]]));
+    }
+
+    #[test]
+    #[allow(clippy::approx_constant)] // the truncated values a user types, not π
+    fn joint_values_snap_and_turn_exactly() {
+        assert_eq!(snap_value(3.14159), Some(std::f64::consts::PI));
+        assert_eq!(snap_value(std::f64::consts::PI), None, "already exact");
+        assert_eq!(snap_value(0.5), None);
+        assert_eq!(exact_turn(&Vector3::z(), FRAC_PI_2), Some([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]));
+        assert_eq!(exact_turn(&-Vector3::z(), FRAC_PI_2), Some([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]));
+        assert_eq!(exact_turn(&Vector3::z(), 1.5708), None, "not a stored quarter turn");
+        assert_eq!(exact_turn(&Vector3::new(0.6, 0.8, 0.0), FRAC_PI_2), None);
     }
 }
