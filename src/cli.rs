@@ -524,7 +524,7 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
         "{}: {} cusps, {node_text}, {} internal-motion lines, {}{undecided} undecided, status {}{}, {:.3} s",
         report.robot,
         report.cusps.len(),
-        linkspace::manip3r::motion::line_count(&found.run.cusps.bands),
+        linkspace::manip3r::line_count(&found.run.cusps.bands),
         match report.internal_motions.iter().filter(|m| m.near_degenerate.is_some()).count() {
             0 => String::new(),
             n => format!("{n} near-degenerate strips (undecided), "),

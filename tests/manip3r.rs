@@ -567,7 +567,7 @@ fn a_cancelled_singularity_run_says_so_and_keeps_its_undecided_cells() {
 /// kinematics written here with nalgebra, and every Newton solution lies in a reported box.
 #[test]
 fn random_tip_points_on_the_last_link_give_the_ik_of_that_point() {
-    use linkspace::manip3r::{ik, select::ChainSpec, LoadOptions};
+    use linkspace::manip3r::{ik, ChainSpec, LoadOptions};
     use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
     struct Rng(u64);
     impl Rng {

@@ -587,7 +587,7 @@ fn the_node_tree_stays_within_the_memory_limit() {
 /// [0, 2π], and every inverse-kinematics solution, θ₁ included, is written inside them.
 #[test]
 fn ik_solutions_are_written_in_the_joints_own_ranges() {
-    use linkspace::app::arm::{inverse_kinematics, Arm, IkPoint};
+    use linkspace::app::{inverse_kinematics, Arm, IkPoint};
     let xml = std::fs::read_to_string(format!("{}/tests/data/jaco_style_3r.urdf", env!("CARGO_MANIFEST_DIR"))).expect("fixture");
     let m = urdf::parse(&xml).expect("parses");
     let arm = Arm::load(&m, &LoadOptions::default(), 0.0).expect("3R");
@@ -657,12 +657,12 @@ fn lock_values_are_snapped_like_the_files_angles() {
 /// other solutions map to the point (checked on the map in floating point).
 #[test]
 fn an_internal_motion_line_is_reported_by_the_verdict_and_by_ik() {
-    use linkspace::app::arm::{self, Arm, IkPoint, SingularitiesRequest};
+    use linkspace::app::{self, Arm, IkPoint, SingularitiesRequest};
     let m = urdf::parse(&text("staubli_tx90.urdf")).expect("parses");
     let a = Arm::load(&m, &LoadOptions { ignore_limits: true, ..Default::default() }, 0.0).expect("6R with a spherical wrist");
     let request = SingularitiesRequest { precision: 1e-4, nodes: false, search_anyway: false };
-    let s = arm::singularities(&a, &request, &bounded(200_000), &mut |_| {}).expect("runs");
-    assert_eq!(manip3r::motion::line_count(&s.run.cusps.bands), 1, "the folded line at θ₃ = ±π is one line");
+    let s = app::singularities(&a, &request, &bounded(200_000), &mut |_| {}).expect("runs");
+    assert_eq!(manip3r::line_count(&s.run.cusps.bands), 1, "the folded line at θ₃ = ±π is one line");
     assert_eq!(s.verdict.max_ik_solutions, Some(4));
     assert!(s.verdict.reason.contains("internal-motion line"), "{}", s.verdict.reason);
     let (radius, z) = (0.0707106781186548, 0.0);

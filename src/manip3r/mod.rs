@@ -41,7 +41,7 @@ pub use cusps::{Cusp, CuspSearch};
 pub use drive::Order;
 pub use frame::BaseFrame;
 pub use limits::JointLimits;
-pub use motion::{bands, Band, PI_UP};
+pub use motion::{bands, line_count, Band, PI_UP};
 pub use nodes::{Node, NodeSearch};
 pub use select::ChainSpec;
 
