@@ -666,7 +666,7 @@ fn an_internal_motion_line_is_reported_by_the_verdict_and_by_ik() {
     assert_eq!(s.verdict.max_ik_solutions, Some(4));
     assert!(s.verdict.reason.contains("internal-motion line"), "{}", s.verdict.reason);
     let (radius, z) = (0.0707106781186548, 0.0);
-    let found = arm::inverse_kinematics(&a, IkPoint::HalfSection { radius, z }, 1e-8, &bounded(200_000), &mut |_| {}).expect("valid query");
+    let found = app::inverse_kinematics(&a, IkPoint::HalfSection { radius, z }, 1e-8, &bounded(200_000), &mut |_| {}).expect("valid query");
     let sol = &found.solutions;
     assert!(sol.status.is_complete(), "{:?}", sol.status);
     let lines: Vec<_> = sol.clusters.iter().filter(|c| c.boxes == 0).collect();
