@@ -499,3 +499,22 @@ fn fixed_links_add_no_variable_and_no_per_box_output() {
     assert_eq!((rigid["frame149"].as_str(), rigid["tool7"].as_str()), (Some("ground"), Some("coupler")));
     assert!(a.get("rigid_links").is_none(), "no fixed link, no list");
 }
+
+/// `--kind cusps` and `--kind nodes` run one search of the type-II image alone: the generic
+/// five-bar has neither (the image test in `closed_loop_singularities` checks that against the
+/// gap function's critical points), each search completes and says which it was.
+#[test]
+fn one_search_of_the_image_runs_alone() {
+    let five_bar = fixture("five_bar_unequal.urdf");
+    for (kind, summary) in [("cusps", "type-II image cusps: 0 proven, 0 undecided; status complete"), ("nodes", "type-II image nodes: 0 proven, 0 undecided; status complete")] {
+        let path = std::env::temp_dir().join(format!("linkspace-points-{kind}-{}.json", std::process::id()));
+        let (ok, out, err) = run(&["loop-singularities", &five_bar, "--actuated", "crank1_joint,crank2_joint", "--kind", kind, "--sigma", "1e-2", "--json", path.to_str().expect("utf-8")]);
+        assert!(ok, "{err}");
+        assert!(out.contains(summary), "{out}");
+        let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).expect("written")).expect("json");
+        let _ = std::fs::remove_file(&path);
+        assert_eq!((report["search"].as_str(), report["status"].as_str()), (Some(kind), Some("complete")));
+        assert_eq!(report["counts"]["proven"], 0);
+        assert!(report.get("regions").is_none() && report.get("verdict").is_none());
+    }
+}
