@@ -10,11 +10,7 @@ use linkspace::problems::TracedPoint;
 use linkspace::problems::ModelChoice;
 use linkspace::LpBackend;
 use linkspace::app::{self, Arm, IkPoint};
-use linkspace::manip3r::{
-    self,
-    collision,
-    report::CollisionReport,
-};
+use linkspace::manip3r::{self, collision};
 use linkspace::app::Bounds;
 use linkspace::problems::Coordinates;
 use linkspace::report;
@@ -513,7 +509,7 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };
     let request = app::SingularitiesRequest { precision: args.precision, nodes: args.nodes, search_anyway: args.search_anyway };
     let found = app::singularities(&arm, &request, &control, &mut |_| {})?;
-    let report = found.report(&arm);
+    let report = report::manip3r::SingularityReport::of(&arm, &found);
     let (prepared, verdict, effect) = (&arm.prepared, &found.verdict, &found.limit_effect);
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}", verdict.line()).ok();
@@ -535,7 +531,7 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     )
     .ok();
     let mid = |b: &[f64; 2]| 0.5 * (b[0] + b[1]);
-    let fmt = |j: &manip3r::report::Joints| j.iter().map(|(n, b)| format!("{n}={:.6}", mid(b))).collect::<Vec<_>>().join(" ");
+    let fmt = |j: &manip3r::Joints| j.iter().map(|(n, b)| format!("{n}={:.6}", mid(b))).collect::<Vec<_>>().join(" ");
     if let Some(why) = &report.not_searched {
         writeln!(out, "  not searched: {why}").ok();
     }
@@ -585,8 +581,8 @@ fn collisions(args: CollisionsArgs) -> Result<()> {
     let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };
     let found = app::collisions(&mechanism, &options, args.precision, &control, &mut |_| {}).with_context(|| format!("loading {}", args.urdf.display()))?;
     eprintln!("chain: {}", found.prepared.choice.reason);
-    let (scene, set) = (&found.scene, &found.set);
-    let report = CollisionReport::new(scene, args.precision, set);
+    let set = &found.set;
+    let report = report::manip3r::CollisionReport::of(&found, args.precision);
     let s = &report.stats;
     let total = s.colliding_area + s.free_area + s.undecided_area;
     let pct = |a: f64| 100.0 * a / total;
@@ -623,7 +619,7 @@ fn ik(args: IkArgs) -> Result<()> {
     let cancel = AtomicBool::new(false);
     let control = Control { limits: args.limits.limits(200_000)?, threads: args.limits.threads(), cancel: &cancel };
     let found = app::inverse_kinematics(&arm, point, args.precision, &control, &mut |_| {})?;
-    let report = found.report(&arm);
+    let report = report::manip3r::IkReport::of(&arm, &found);
     let s = &found.solutions;
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}: {} solutions proven unique, {} clusters undecided, status {}", report.robot, s.unique.len(), s.clusters.len(), report.completeness.status()).ok();

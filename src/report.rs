@@ -15,9 +15,25 @@ macro_rules! list_with {
     };
 }
 
+/// `fn $name(&Option<$ty>, Serializer)`: an optional `$ty` written through its remote definition
+/// `$def` (with `skip_serializing_if = "Option::is_none"`, only `Some` is ever written).
+macro_rules! some_with {
+    ($name:ident, $ty:ty, $def:literal) => {
+        fn $name<S: serde::Serializer>(item: &Option<$ty>, s: S) -> Result<S::Ok, S::Error> {
+            #[derive(serde::Serialize)]
+            struct One<'a>(#[serde(with = $def)] &'a $ty);
+            match item {
+                Some(v) => s.serialize_some(&One(v)),
+                None => s.serialize_none(),
+            }
+        }
+    };
+}
+
 pub mod distances;
 pub mod image;
 pub(crate) mod kernel;
+pub mod manip3r;
 pub mod singular;
 pub mod solve;
 

@@ -6,7 +6,7 @@
 //! conventions against each other and against Table 1.
 
 use linkspace::manip3r::{self, cusps, ik, ChainSpec, verdict, Chain3R, LoadOptions};
-use linkspace::manip3r::report::Completeness;
+use linkspace::report::manip3r::Completeness;
 use linkspace::model::{urdf, JointKind, Mechanism};
 use linkspace::search::{Control, Incompleteness, Limits, Status};
 use nalgebra::{Matrix3, Rotation3, Vector3};
@@ -224,9 +224,9 @@ fn exact_geometry_on_a_truncated_robot_reports_near_degenerate_strips() {
         assert!(run.status.is_complete(), "outside the strips everything is decided");
         let v = verdict::decide(&p.mechanism, &chain, &run, &p.limits, &Control::with_limits(Limits::default()));
         assert_eq!((v.cuspidal, v.certified), (None, false), "{v:?}");
-        let report = manip3r::report::SingularityReport::new(&chain, 1e-4, &run.cusps, run.nodes.as_ref(), run.seconds);
+        let report = linkspace::report::manip3r::SingularityReport::new(&chain, 1e-4, &run.cusps, run.nodes.as_ref(), run.seconds);
         assert_eq!(report.completeness, Completeness(Some(Incompleteness::NearDegenerate)));
-        assert!(report.undecided.cusps.len() <= manip3r::report::MAX_LISTED);
+        assert!(report.undecided.cusps.len() <= linkspace::report::manip3r::MAX_LISTED);
         // The strips sit where the snapped robot has its internal-motion lines.
         let snapped = prepare(&xml, &LoadOptions::default()).expect("loads");
         let c2 = Chain3R::from_mechanism(&snapped.mechanism, 0.0).expect("3R");
@@ -262,7 +262,7 @@ fn a_report_with_undecided_boxes_is_never_complete() {
     let run = manip3r::singularities(&chain, 1e-4, false, &bounded(2_000_000), &mut |_| {}).expect("runs");
     assert!(run.status.is_complete(), "no limit stops the cusp search on this arm");
     assert!(!run.cusps.undecided.is_empty(), "the crossing branches leave boxes the seed's system cannot decide");
-    let report = manip3r::report::SingularityReport::new(&chain, 1e-4, &run.cusps, None, run.seconds);
+    let report = linkspace::report::manip3r::SingularityReport::new(&chain, 1e-4, &run.cusps, None, run.seconds);
     assert_eq!(report.completeness, Completeness(Some(Incompleteness::Undecided)));
     assert_eq!(report.undecided_total[0], run.cusps.undecided.len());
 }
@@ -598,7 +598,7 @@ fn ik_solutions_are_written_in_the_joints_own_ranges() {
     let mut written = 0;
     for point in [[0.2, 0.3, 0.4], [-0.3, -0.2, 0.5], [0.1, -0.4, 0.2]] {
         let found = inverse_kinematics(&arm, IkPoint::Root(point), 1e-8, &bounded(200_000), &mut |_| {}).expect("valid query");
-        let report = found.report(&arm);
+        let report = linkspace::report::manip3r::IkReport::of(&arm, &found);
         assert!(!report.solutions.is_empty(), "{point:?} is reachable");
         for sol in &report.solutions {
             assert_eq!(sol.joints.len(), 3, "θ₁ is written for a point of the root frame");

@@ -3,7 +3,7 @@
 //!
 //! An `Arm` is read once (`manip3r::prepare`: rounding policy, chain and point, joint limits);
 //! each job takes it with the front end's `Control` and returns what happened as values. The
-//! CLI prints and writes the JSON reports (`manip3r::report`) from these results; the ROS node
+//! CLI prints and writes the JSON reports (`report::manip3r`) from these results; the ROS node
 //! converts the same results into its messages.
 
 use crate::manip3r::{
@@ -13,7 +13,6 @@ use crate::manip3r::{
     frame::{BaseFrame, Target},
     ik::IkSolutions,
     limits::LimitEffect,
-    report::{IkReport, Reading, SingularityReport},
     verdict::{self, Verdict},
     Chain3R, LoadOptions, Manip3rError, Prepared, Singularities,
 };
@@ -27,7 +26,7 @@ use super::{
     SingularityQuery, SingularityResult,
 };
 use crate::interval::bounds;
-use crate::manip3r::{curves::Cover, motion, report::radius};
+use crate::manip3r::{curves::Cover, motion, records::radius};
 use crate::search::{BoxStatus, Limit, Limits, SolveStats as Stats, SolverSettings, Status};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
@@ -54,11 +53,6 @@ impl Arm {
         let frame = BaseFrame::of(&prepared.mechanism, &chain);
         let branches = manip3r::branches::of(&prepared.mechanism, &chain);
         Ok(Self { prepared, chain, frame, branches })
-    }
-
-    /// How the file was read, with what the joint limits removed from a result.
-    pub fn reading(&self, effect: LimitEffect) -> Reading {
-        Reading::of(&self.prepared, effect)
     }
 }
 
@@ -138,21 +132,6 @@ pub fn singularities(arm: &Arm, request: &SingularitiesRequest, control: &Contro
     Ok(ArmSingularities { request: *request, run, verdict, limit_effect, structural, nodes_searched, explained, not_searched, seconds: start.elapsed().as_secs_f64() })
 }
 
-impl ArmSingularities {
-    /// What `linkspace singularities --json` writes.
-    pub fn report(&self, arm: &Arm) -> SingularityReport {
-        let mut report = SingularityReport::new(&arm.chain, self.request.precision, &self.run.cusps, self.run.nodes.as_ref(), self.seconds);
-        report.verdict = Some(self.verdict.clone());
-        report.reading = Some(arm.reading(self.limit_effect.clone()));
-        if let Some(a) = &self.explained {
-            report.explain(a.clone());
-        }
-        report.not_searched = self.not_searched.clone();
-        report.singular_branches = arm.branches.clone();
-        report
-    }
-}
-
 /// A point asked of inverse kinematics.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum IkPoint {
@@ -209,17 +188,6 @@ impl ArmIk {
     /// may lie on the first axis.
     pub fn theta1(&self, arm: &Arm, b: &[Interval; 2]) -> Option<Interval> {
         self.target.map(|t| arm.prepared.limits.in_range(0, arm.frame.theta1(&arm.chain, &t, b)))
-    }
-
-    /// What `linkspace ik --json` writes.
-    pub fn report(&self, arm: &Arm) -> IkReport {
-        let point = match self.point {
-            IkPoint::Root(p) => p.to_vec(),
-            IkPoint::HalfSection { radius, z } => vec![radius, z],
-        };
-        let mut report = IkReport::new(&arm.chain, point, &self.solutions, |b| self.theta1(arm, b));
-        report.reading = Some(arm.reading(self.limit_effect.clone()));
-        report
     }
 }
 

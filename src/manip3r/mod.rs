@@ -3,7 +3,8 @@
 //! Owns the kinematic map of a serial chain of three revolute joints (`Chain3R`), its sound
 //! evaluation with derivatives over boxes (`taylor`, over `interval::trig`), and the searches built on it:
 //! internal-motion lines (`motion`), cusps (`cusps`), nodes (`nodes`), inverse kinematics
-//! (`ik`), collision sets (`collision`) and the report types (`report`).
+//! (`ik`), collision sets (`collision`), and the joint and workspace records of their results
+//! (`records`; `report::manip3r` writes them as JSON).
 //! Every search is branch and prune over (θ₂, θ₃) with interval Newton (Krawczyk) proofs; a box
 //! is discarded only when interval arithmetic proves it holds nothing sought. Each is a
 //! `search::Prune` run by the kernel within a `Control` (`drive`); `singularities` runs cusps
@@ -29,8 +30,7 @@ pub mod ik;
 pub(crate) mod limits;
 pub(crate) mod motion;
 pub mod nodes;
-mod records;
-pub mod report;
+pub(crate) mod records;
 pub(crate) mod select;
 pub(crate) mod taylor;
 pub mod verdict;
@@ -43,6 +43,7 @@ pub use frame::BaseFrame;
 pub use limits::JointLimits;
 pub use motion::{bands, line_count, Band, PI_UP};
 pub use nodes::{Node, NodeSearch};
+pub use records::{joints_over, radius, Joints, Workspace};
 pub use select::ChainSpec;
 
 use crate::search::{Control, Progress, Status};

@@ -1,4 +1,4 @@
-//! The joint and workspace records shared by the 3R reports (`report`) and the closed-form
+//! The joint and workspace records shared by the 3R reports (`report::manip3r`) and the closed-form
 //! singular branches (`branches`): intervals as `[lower, upper]`, joints by URDF name, the
 //! workspace as radius and z.
 

@@ -1,11 +1,11 @@
 //! How the kernel's values are written in the JSON reports. The kernel (`search`, `lp`,
 //! `system`, `contract`) and `model` know no serde: the schema of what they contribute to a
 //! report is stated here, field for field, with serde's remote derive (a field added to one of
-//! these types and not here fails to compile). `model`'s rounding snaps are stated by the 3R
-//! reports that write them (`manip3r::report`).
+//! these types and not here fails to compile).
 
 use crate::contract::FaceBounds;
 use crate::lp::{LpBackend, LpCounters};
+use crate::model::rounding::Snap;
 use crate::search::{Limit, SolveStats, SolverSettings, Status};
 use crate::system::VarRole;
 use serde::{Serialize, Serializer};
@@ -110,4 +110,21 @@ pub(crate) fn solve_stats_list<S: Serializer>(stats: &[SolveStats], s: S) -> Res
     #[derive(Serialize)]
     struct One<'a>(#[serde(with = "SolveStatsDef")] &'a SolveStats);
     s.collect_seq(stats.iter().map(One))
+}
+
+/// `model::rounding::Snap`: what the rounding policy changed on one joint.
+#[derive(Serialize)]
+#[serde(remote = "Snap")]
+pub(crate) struct SnapDef {
+    joint: String,
+    what: String,
+    original: [f64; 3],
+    snapped: [f64; 3],
+}
+
+/// The rounding policy's changes, as a list of `{joint, what, original, snapped}`.
+pub(crate) fn snaps<S: Serializer>(snaps: &[Snap], s: S) -> Result<S::Ok, S::Error> {
+    #[derive(Serialize)]
+    struct One<'a>(#[serde(with = "SnapDef")] &'a Snap);
+    s.collect_seq(snaps.iter().map(One))
 }

@@ -6,7 +6,7 @@ use super::msgs::{
 };
 use crate::app::{Bounds, BoxSetResult, IkResult, ResultBox, SingularityResult};
 use crate::manip3r::branches::SingularBranches;
-use crate::manip3r::report::joints_over;
+use crate::manip3r::joints_over;
 use crate::search::{BoxStatus, Incompleteness, SolverSettings, Status};
 
 /// A header stamped now (wall clock) in `frame`.

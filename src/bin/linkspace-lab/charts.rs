@@ -294,7 +294,7 @@ const ROBOTS_3R: [(&str, &str); 3] = [
 /// workspace regions between the images with their number of IK solutions (seed 003's style).
 fn singular_curves(dir: &Path, depth: u32, quick: bool) -> Result<()> {
     use linkspace::interval::interval;
-    use linkspace::manip3r::{Cover, cusps, nodes, report::radius, Chain3R};
+    use linkspace::manip3r::{Cover, cusps, nodes, radius, Chain3R};
     use linkspace::search::Control;
     let mut joint_panels = Vec::new();
     let mut work_panels = Vec::new();

@@ -1,20 +1,30 @@
-//! The JSON reports of `linkspace singularities` and `linkspace ik` (schema in README).
+//! What `linkspace singularities`, `linkspace ik` and `linkspace collisions` write with `--json`
+//! (schema in README), built from the application layer's results (`app::arm`).
 //!
-//! Pure data built from search outcomes; no IO. Joint intervals are keyed by URDF joint name,
-//! workspace intervals give the radius (distance of the end point from the first axis, √ρ)
-//! and z (along the first axis, from the first joint's origin).
+//! Pure data; no IO. Joint intervals are keyed by URDF joint name, workspace intervals give the
+//! radius (distance of the end point from the first axis, √ρ) and z (along the first axis, from
+//! the first joint's origin). The 3R analyses' own records (`manip3r`'s verdict, singular
+//! branches, chain choice, joint limits) are written through the remote definitions at the end.
 
-use super::chain::Chain3R;
-use super::cusps::{CuspDiscard, CuspSearch, Reason};
-use super::ik::IkSolutions;
-use super::motion::Band;
-use super::nodes::{NodeDiscard, NodeSearch};
-use inari::Interval;
-use crate::search::{Incompleteness, Status};
-pub(crate) use super::records::{bounds, joints, workspace};
-pub use super::records::{joints_over, radius, Bounds, Joints, Workspace};
+use crate::app::{Arm, ArmCollisions, ArmIk, ArmSingularities, IkPoint};
+use crate::manip3r::branches::{Attribution, CrossingRecord, FoldSample, ImageRecord, IsolatedNode, SingularBranch, SingularBranches};
+use crate::manip3r::chain::Chain3R;
+use crate::manip3r::collision::{CollisionSet, Scene};
+use crate::manip3r::cusps::{CuspDiscard, CuspSearch, Reason};
+use crate::manip3r::ik::IkSolutions;
+use crate::manip3r::limits::{JointLimits, LimitEffect};
+use crate::manip3r::motion::{self, Band};
+use crate::manip3r::nodes::{NodeDiscard, NodeSearch};
+use crate::interval::Bounds;
+use crate::manip3r::records::{bounds, joints, workspace};
+pub use crate::manip3r::{Joints, Workspace};
+use crate::manip3r::select::Choice;
+use crate::manip3r::verdict::Verdict;
+use crate::manip3r::Prepared;
 use crate::model::rounding::Snap;
-use serde::{Serialize, Serializer};
+use crate::search::{Incompleteness, Status};
+use inari::Interval;
+use serde::Serialize;
 use std::collections::BTreeMap;
 
 /// One cusp.
@@ -23,6 +33,7 @@ pub struct CuspRecord {
     /// Joint box holding the cusp.
     pub joints: Joints,
     /// Its image.
+    #[serde(with = "WorkspaceDef")]
     pub workspace: Workspace,
     /// True when exactly one cusp is proven in the box.
     pub unique: bool,
@@ -34,6 +45,7 @@ pub struct NodeRecord {
     /// The two joint boxes, each holding one of the two singular points.
     pub points: [Joints; 2],
     /// Their shared image.
+    #[serde(with = "WorkspaceDef")]
     pub workspace: Workspace,
     /// True when exactly one pair is proven in the two boxes.
     pub unique: bool,
@@ -59,6 +71,7 @@ pub struct UndecidedCusp {
     /// Joint box.
     pub joints: Joints,
     /// Why it is undecided.
+    #[serde(with = "ReasonDef")]
     pub reason: Reason,
 }
 
@@ -248,8 +261,8 @@ pub struct SingularityReport {
     /// Counters.
     pub stats: Stats,
     /// The first answer: cuspidal or not, aspects, IK solutions, and the argument.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub verdict: Option<super::verdict::Verdict>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "some_verdict")]
+    pub verdict: Option<Verdict>,
     /// How the file was read (`chain`, `rounding`, `joint_limits` in the JSON); `None` for a
     /// report built from searches alone.
     #[serde(flatten)]
@@ -259,12 +272,12 @@ pub struct SingularityReport {
     pub not_searched: Option<String>,
     /// Arms with axes 2 and 3 exactly parallel: the singular set as certified branches
     /// (`manip3r::branches`).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub singular_branches: Option<super::branches::SingularBranches>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "some_branches")]
+    pub singular_branches: Option<SingularBranches>,
     /// `--search-anyway` on such an arm: where the cusp search's undecided boxes (and cusp
     /// boxes without a uniqueness proof) lie, and whether the branches' argument explains them.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub explained_undecided: Option<super::branches::Attribution>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "some_attribution")]
+    pub explained_undecided: Option<Attribution>,
 }
 
 /// Undecided boxes listed in a report, at most, per search: the counts are always given, and
@@ -279,29 +292,13 @@ pub struct Rounding {
     /// Angle tolerance (radians).
     pub tolerance: f64,
     /// Every value changed.
-    #[serde(serialize_with = "snaps")]
+    #[serde(serialize_with = "super::kernel::snaps")]
     pub snaps: Vec<Snap>,
-}
-
-#[derive(Serialize)]
-#[serde(remote = "Snap")]
-struct SnapDef {
-    joint: String,
-    what: String,
-    original: [f64; 3],
-    snapped: [f64; 3],
-}
-
-/// The rounding policy's changes (`model` knows no serde), as a list of `{joint, what, original, snapped}`.
-fn snaps<S: Serializer>(snaps: &[Snap], s: S) -> Result<S::Ok, S::Error> {
-    #[derive(Serialize)]
-    struct One<'a>(#[serde(with = "SnapDef")] &'a Snap);
-    s.collect_seq(snaps.iter().map(One))
 }
 
 impl Rounding {
     /// From a prepared arm.
-    pub fn of(p: &super::Prepared) -> Self {
+    pub fn of(p: &Prepared) -> Self {
         Rounding { snapping: !p.exact_geometry, tolerance: crate::model::rounding::ANGLE_TOLERANCE, snaps: p.snaps.clone() }
     }
 }
@@ -312,16 +309,18 @@ impl Rounding {
 #[derive(Clone, Debug, Serialize)]
 pub struct Reading {
     /// Which chain and point of the file were analysed, and why.
-    pub chain: super::select::Choice,
+    #[serde(with = "ChoiceDef")]
+    pub chain: Choice,
     /// The rounding policy's changes.
     pub rounding: Rounding,
     /// Joint limits and what they removed.
-    pub joint_limits: super::limits::LimitEffect,
+    #[serde(with = "LimitEffectDef")]
+    pub joint_limits: LimitEffect,
 }
 
 impl Reading {
     /// From a prepared arm and what its limits did to the results.
-    pub fn of(p: &super::Prepared, joint_limits: super::limits::LimitEffect) -> Self {
+    pub fn of(p: &Prepared, joint_limits: LimitEffect) -> Self {
         Reading { chain: p.choice.clone(), rounding: Rounding::of(p), joint_limits }
     }
 }
@@ -338,7 +337,7 @@ impl SingularityReport {
             .bands
             .iter()
             .map(|b: &Band| {
-                let full = super::motion::full_range();
+                let full = motion::full_range();
                 MotionRecord { joints: joints(chain, &[full, crate::interval::interval(b.theta3[0], b.theta3[1])]), strip: b.strip, near_degenerate: b.near }
             })
             .collect();
@@ -372,12 +371,26 @@ impl SingularityReport {
 }
 
 impl SingularityReport {
+    /// What `linkspace singularities --json` writes of `found`, a run on `arm`.
+    pub fn of(arm: &Arm, found: &ArmSingularities) -> Self {
+        let run = &found.run;
+        let mut report = SingularityReport::new(&arm.chain, found.request.precision, &run.cusps, run.nodes.as_ref(), found.seconds);
+        report.verdict = Some(found.verdict.clone());
+        report.reading = Some(Reading::of(&arm.prepared, found.limit_effect.clone()));
+        if let Some(a) = &found.explained {
+            report.explain(a.clone());
+        }
+        report.not_searched = found.not_searched.clone();
+        report.singular_branches = arm.branches.clone();
+        report
+    }
+
     /// Records where the cusp search's undecided boxes lie (`attribution`). When the branches'
     /// argument proves that none holds a cusp, no cusp was certified (a certified one would
     /// contradict it: then nothing is moved), the node search left nothing undecided and the
     /// only reason for `incomplete` was undecided boxes, they are moved out of `undecided`
     /// (and cusp boxes without a uniqueness proof out of `cusps`) and the report is complete.
-    pub fn explain(&mut self, attribution: super::branches::Attribution) {
+    pub fn explain(&mut self, attribution: Attribution) {
         let moves = attribution.explained && self.completeness == Completeness(Some(Incompleteness::Undecided)) && self.undecided_total[1] == 0 && self.cusps.iter().all(|c| !c.unique);
         if moves {
             self.undecided.cusps.clear();
@@ -437,6 +450,17 @@ impl IkReport {
         let mut solutions: Vec<IkRecord> = s.unique.iter().map(|b| IkRecord { joints: record(b), unique: true, boxes: 0 }).collect();
         solutions.extend(s.clusters.iter().map(|c| IkRecord { joints: record(&c.hull), unique: false, boxes: c.boxes }));
         IkReport { robot: chain.name.clone(), point, completeness: Completeness::of_run(s.status), solutions, processed: s.stats.processed, reading: None }
+    }
+
+    /// What `linkspace ik --json` writes of `found`, a query on `arm`.
+    pub fn of(arm: &Arm, found: &ArmIk) -> Self {
+        let point = match found.point {
+            IkPoint::Root(p) => p.to_vec(),
+            IkPoint::HalfSection { radius, z } => vec![radius, z],
+        };
+        let mut report = IkReport::new(&arm.chain, point, &found.solutions, |b| found.theta1(arm, b));
+        report.reading = Some(Reading::of(&arm.prepared, found.limit_effect.clone()));
+        report
     }
 }
 
@@ -514,8 +538,13 @@ pub struct CollisionStats {
 }
 
 impl CollisionReport {
+    /// What `linkspace collisions --json` writes of `found`, classified at `precision`.
+    pub fn of(found: &ArmCollisions, precision: f64) -> Self {
+        Self::new(&found.scene, precision, &found.set)
+    }
+
     /// Builds the report of a classification.
-    pub fn new(scene: &super::collision::Scene, precision: f64, set: &super::collision::CollisionSet) -> Self {
+    pub fn new(scene: &Scene, precision: f64, set: &CollisionSet) -> Self {
         let capsules = scene.capsules();
         let name = |k: usize| {
             let (i, j) = scene.pairs()[k];
@@ -543,6 +572,171 @@ impl CollisionReport {
         }
     }
 }
+
+// How the 3R analyses' records are written: `manip3r` knows no serde, so each record it
+// contributes to a report is stated here field for field (a field added there and not here
+// fails to compile).
+
+#[derive(Serialize)]
+#[serde(remote = "Workspace")]
+struct WorkspaceDef {
+    radius: Bounds,
+    z: Bounds,
+}
+
+/// `cusps::Reason`: `grad_det_may_vanish`, `precision`, `limit`.
+#[derive(Serialize)]
+#[serde(remote = "Reason", rename_all = "snake_case")]
+enum ReasonDef {
+    GradDetMayVanish,
+    Precision,
+    Limit,
+}
+
+#[derive(Serialize)]
+#[serde(remote = "Verdict")]
+struct VerdictDef {
+    cuspidal: Option<bool>,
+    aspects: Option<u32>,
+    max_ik_solutions: Option<u32>,
+    certified: bool,
+    reason: String,
+}
+
+some_with!(some_verdict, Verdict, "VerdictDef");
+
+/// `select::Choice`, the locked joints as `[name, value]` pairs.
+#[derive(Serialize)]
+#[serde(remote = "Choice")]
+struct ChoiceDef {
+    base: String,
+    tip: String,
+    joints: [String; 3],
+    wrist_joints: Vec<String>,
+    locked: Vec<(String, f64)>,
+    point_link: String,
+    point: [f64; 3],
+    wrist_miss: f64,
+    reason: String,
+}
+
+#[derive(Serialize)]
+#[serde(remote = "JointLimits")]
+struct JointLimitsDef {
+    joints: [String; 3],
+    limits: [Option<[f64; 2]>; 3],
+    ignored: bool,
+}
+
+#[derive(Serialize)]
+#[serde(remote = "LimitEffect")]
+struct LimitEffectDef {
+    #[serde(with = "JointLimitsDef")]
+    limits: JointLimits,
+    dropped: u64,
+    on_limit: u64,
+    text: String,
+}
+
+/// `branches::CrossingRecord`, without the enclosure kept for attribution.
+#[derive(Serialize)]
+#[serde(remote = "CrossingRecord")]
+struct CrossingRecordDef {
+    name: String,
+    joints: Joints,
+    #[serde(with = "WorkspaceDef")]
+    workspace: Workspace,
+    #[serde(skip)]
+    #[allow(dead_code)]
+    theta: [Interval; 2],
+}
+
+list_with!(crossing_records, CrossingRecord, "CrossingRecordDef");
+
+#[derive(Serialize)]
+#[serde(remote = "FoldSample")]
+struct FoldSampleDef {
+    theta3: f64,
+    theta2: [Bounds; 2],
+}
+
+list_with!(fold_samples, FoldSample, "FoldSampleDef");
+
+#[derive(Serialize)]
+#[serde(remote = "ImageRecord")]
+struct ImageRecordDef {
+    description: String,
+    radius: Bounds,
+    z: Bounds,
+}
+
+/// `branches::SingularBranch`: `joints` only for a θ₃ line, `samples` only for the fold of g.
+#[derive(Serialize)]
+#[serde(remote = "SingularBranch")]
+struct SingularBranchDef {
+    name: String,
+    kind: &'static str,
+    description: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    joints: Option<Joints>,
+    #[serde(skip_serializing_if = "Vec::is_empty", serialize_with = "fold_samples")]
+    samples: Vec<FoldSample>,
+    #[serde(with = "ImageRecordDef")]
+    image: ImageRecord,
+    curve_of_nodes: Option<bool>,
+    #[serde(serialize_with = "crossing_records")]
+    crossings: Vec<CrossingRecord>,
+    proof: String,
+    #[serde(skip)]
+    #[allow(dead_code)]
+    theta3: Option<Interval>,
+}
+
+list_with!(singular_branches, SingularBranch, "SingularBranchDef");
+
+#[derive(Serialize)]
+#[serde(remote = "IsolatedNode")]
+struct IsolatedNodeDef {
+    points: [Joints; 2],
+    #[serde(with = "WorkspaceDef")]
+    workspace: Workspace,
+}
+
+list_with!(isolated_nodes, IsolatedNode, "IsolatedNodeDef");
+
+/// `"singular_branches"`.
+#[derive(Serialize)]
+#[serde(remote = "SingularBranches")]
+struct SingularBranchesDef {
+    #[serde(serialize_with = "singular_branches")]
+    branches: Vec<SingularBranch>,
+    crossings: Option<usize>,
+    #[serde(serialize_with = "isolated_nodes")]
+    isolated_nodes: Vec<IsolatedNode>,
+    l2: Bounds,
+    l3: Bounds,
+    d: Bounds,
+    no_cusp_proven: bool,
+    argument: String,
+}
+
+some_with!(some_branches, SingularBranches, "SingularBranchesDef");
+
+/// `branches::Attribution`, the counts per crossing and per branch as `[name, count]` pairs.
+#[derive(Serialize)]
+#[serde(remote = "Attribution")]
+struct AttributionDef {
+    boxes: usize,
+    near_crossings: Vec<(String, usize)>,
+    radius: f64,
+    max_distance: f64,
+    on_branch: Vec<(String, usize)>,
+    elsewhere: usize,
+    explained: bool,
+    text: String,
+}
+
+some_with!(some_attribution, Attribution, "AttributionDef");
 
 #[cfg(test)]
 mod tests {
