@@ -167,17 +167,8 @@ fn builders_never_solve() {
 /// the reader of the distance file format.
 const SERDE_HOMES: [&str; 7] = ["report.rs", "report/", "ros/", "main.rs", "cli", "bin/", "distances/file.rs"];
 
-/// The 3R analyses whose records `report::manip3r` still serialises directly.
-const SERDE_PENDING: [&str; 7] = ["manip3r/branches.rs", "manip3r/cusps.rs", "manip3r/limits.rs", "manip3r/motion.rs", "manip3r/records.rs", "manip3r/select.rs", "manip3r/verdict.rs"];
-
 #[test]
 fn only_the_edges_know_serde() {
-    let allowed: Vec<&str> = SERDE_HOMES.iter().chain(&SERDE_PENDING).copied().collect();
-    let outside = uses_outside("serde", &allowed);
+    let outside = uses_outside("serde", &SERDE_HOMES);
     assert!(outside.is_empty(), "serde outside the edges (library types are plain data; `report` says how they are written, with remote definitions where a type is more than a record):\n{}", outside.join("\n"));
-    // The kernel and `model` are never an exception.
-    for module in ["interval", "system", "contract", "lp", "search", "model"] {
-        let hits = lines_naming(&module_files(module), "serde");
-        assert!(hits.is_empty(), "serde in `{module}` (`report::kernel` says how its values are written):\n{}", hits.join("\n"));
-    }
 }

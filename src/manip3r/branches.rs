@@ -56,7 +56,6 @@ use super::verdict::Geometry;
 use crate::interval::{interval, point};
 use crate::model::Mechanism;
 use inari::Interval;
-use serde::Serialize;
 
 pub use crate::interval::angle::{arg, wrap};
 
@@ -176,7 +175,7 @@ impl Planar {
 }
 
 /// One crossing of two branches.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct CrossingRecord {
     /// e.g. `outstretched x fold, t > 0`.
     pub name: String,
@@ -185,12 +184,11 @@ pub struct CrossingRecord {
     /// Image enclosure.
     pub workspace: Workspace,
     /// (θ₂, θ₃) enclosed.
-    #[serde(skip)]
     pub theta: [Interval; 2],
 }
 
 /// A point of a fold branch at a given θ₃.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct FoldSample {
     /// The third joint (exact).
     pub theta3: f64,
@@ -199,7 +197,7 @@ pub struct FoldSample {
 }
 
 /// The image of a branch.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct ImageRecord {
     /// In words, with numbers.
     pub description: String,
@@ -210,7 +208,7 @@ pub struct ImageRecord {
 }
 
 /// One branch of the singular set.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct SingularBranch {
     /// `outstretched`, `folded` or `fold_of_g`.
     pub name: String,
@@ -219,10 +217,8 @@ pub struct SingularBranch {
     /// Joint-space description in words.
     pub description: String,
     /// For a θ₃ line: the box (θ₂ over the full range, θ₃ enclosed).
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub joints: Option<Joints>,
     /// For the fold of g: θ₂ enclosures at sample values of θ₃.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
     pub samples: Vec<FoldSample>,
     /// Its image.
     pub image: ImageRecord,
@@ -234,12 +230,11 @@ pub struct SingularBranch {
     /// Why.
     pub proof: String,
     /// θ₃ enclosure of a line, for attribution.
-    #[serde(skip)]
     pub theta3: Option<Interval>,
 }
 
 /// An isolated node between the two θ₃ lines (d > 0 only).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct IsolatedNode {
     /// Its two points (outstretched, folded).
     pub points: [Joints; 2],
@@ -248,7 +243,7 @@ pub struct IsolatedNode {
 }
 
 /// `"singular_branches"` in the JSON.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct SingularBranches {
     /// The branches.
     pub branches: Vec<SingularBranch>,
@@ -501,7 +496,7 @@ fn arc_pieces<'a>(radius: Interval, steps: usize, arc: &'a dyn Fn(usize) -> Inte
 }
 
 /// Where the undecided boxes of a search lie relative to the branches.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct Attribution {
     /// Boxes attributed.
     pub boxes: usize,

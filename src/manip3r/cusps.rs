@@ -33,8 +33,7 @@ use smallvec::smallvec;
 use std::time::Instant;
 
 /// How boxes are decided.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
     /// Exclusion tests plus Krawczyk proofs (the default).
     Krawczyk,
@@ -75,8 +74,7 @@ pub struct Cusp {
 }
 
 /// Why a box was left undecided.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Reason {
     /// A zero of (det, gₖ) is proven but ∇det Df may vanish there: a crossing, not a cusp, if
     /// ∇det = 0 exactly.

@@ -11,10 +11,9 @@ use super::ik::IkSolutions;
 use super::Singularities;
 use crate::model::{JointKind, Mechanism};
 use inari::Interval;
-use serde::Serialize;
 
 /// Limits of joints 1–3 (radians).
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default)]
 pub struct JointLimits {
     /// Joint names, base first.
     pub joints: [String; 3],
@@ -25,7 +24,7 @@ pub struct JointLimits {
 }
 
 /// What applying the limits did, for the report.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default)]
 pub struct LimitEffect {
     /// The limits used.
     pub limits: JointLimits,

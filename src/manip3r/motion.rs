@@ -16,7 +16,6 @@ use crate::search::Control;
 use crate::interval::interval;
 use crate::search::{Limits, Prune, Step};
 use inari::Interval;
-use serde::Serialize;
 
 /// Upper end of the joint range: the smallest double above π, so [-PI_UP, PI_UP] covers the
 /// whole circle.
@@ -28,7 +27,7 @@ pub fn full_range() -> Interval {
 }
 
 /// One internal-motion strip (see the module doc).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Band {
     /// Encloses every θ₃ in the strip where the end point may lie on the second axis.
     pub theta3: [f64; 2],

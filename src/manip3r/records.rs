@@ -4,7 +4,6 @@
 
 use super::chain::Chain3R;
 use inari::Interval;
-use serde::Serialize;
 use std::collections::BTreeMap;
 
 pub(crate) use crate::interval::bounds;
@@ -20,7 +19,7 @@ pub fn joints_over(joints: &Joints, names: &[String]) -> Vec<Bounds> {
 }
 
 /// A workspace box.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Workspace {
     /// Distance from the first axis.
     pub radius: Bounds,

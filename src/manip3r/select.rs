@@ -28,7 +28,6 @@ use super::Manip3rError;
 use crate::interval::point;
 use crate::model::{Joint, JointKind, Link, Mechanism};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Unit, Vector3};
-use serde::Serialize;
 
 /// What the user asked for (all optional).
 #[derive(Clone, Debug, Default)]
@@ -51,7 +50,7 @@ pub struct ChainSpec {
 pub const LENGTH_TOLERANCE: f64 = 1e-6;
 
 /// What was chosen, for the report.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct Choice {
     /// Base link.
     pub base: String,

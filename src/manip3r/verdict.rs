@@ -44,7 +44,6 @@ use crate::search::{Limit, Prune, Status, Step};
 use crate::interval::{point, strict_sign};
 use crate::model::{JointKind, Mechanism};
 use inari::Interval;
-use serde::Serialize;
 
 /// Cell budgets of the verdict's searches: the smoothness quadtree (a few thousand boxes on
 /// the robots seen), the singular-curve cover behind the aspects, and one sample's IK.
@@ -53,7 +52,7 @@ const COVER_CELLS: u64 = 4_000_000;
 const IK_CELLS: u64 = 200_000;
 
 /// `"verdict"` in the JSON.
-#[derive(Clone, Debug, Serialize, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Verdict {
     /// true, false, or null (undecided).
     pub cuspidal: Option<bool>,

@@ -647,7 +647,6 @@ struct CrossingRecordDef {
     #[serde(with = "WorkspaceDef")]
     workspace: Workspace,
     #[serde(skip)]
-    #[allow(dead_code)]
     theta: [Interval; 2],
 }
 
@@ -688,7 +687,6 @@ struct SingularBranchDef {
     crossings: Vec<CrossingRecord>,
     proof: String,
     #[serde(skip)]
-    #[allow(dead_code)]
     theta3: Option<Interval>,
 }
 
