@@ -84,7 +84,7 @@ pub struct UndecidedNode {
 
 /// Undecided boxes, by search.
 #[derive(Clone, Debug, Serialize)]
-pub struct Undecided {
+pub struct UndecidedRecords {
     /// Of the cusp search.
     pub cusps: Vec<UndecidedCusp>,
     /// Of the node search.
@@ -225,7 +225,7 @@ impl Serialize for Completeness {
 
 /// Counters.
 #[derive(Clone, Debug, Serialize)]
-pub struct Stats {
+pub struct SearchCounts {
     /// Of the cusp search.
     pub cusps: CuspStats,
     /// Of the node search, when run.
@@ -255,11 +255,11 @@ pub struct SingularityReport {
     /// Internal-motion lines.
     pub internal_motions: Vec<MotionRecord>,
     /// Undecided boxes (at most `MAX_LISTED` of each search; `undecided_total` counts all).
-    pub undecided: Undecided,
+    pub undecided: UndecidedRecords,
     /// Undecided boxes (cusp search) and pairs (node search), all of them.
     pub undecided_total: [usize; 2],
     /// Counters.
-    pub stats: Stats,
+    pub stats: SearchCounts,
     /// The first answer: cuspidal or not, aspects, IK solutions, and the argument.
     #[serde(skip_serializing_if = "Option::is_none", serialize_with = "some_verdict")]
     pub verdict: Option<Verdict>,
@@ -355,12 +355,12 @@ impl SingularityReport {
                     .collect()
             }),
             internal_motions,
-            undecided: Undecided {
+            undecided: UndecidedRecords {
                 cusps: cusps.undecided.iter().take(MAX_LISTED).map(|u| UndecidedCusp { joints: joints(chain, &u.theta), reason: u.reason }).collect(),
                 nodes: nodes.map_or(Vec::new(), |n| n.undecided.iter().take(MAX_LISTED).map(|p| UndecidedNode { points: [joints(chain, &p[0]), joints(chain, &p[1])] }).collect()),
             },
             undecided_total: [cusps.undecided.len(), nodes.map_or(0, |n| n.undecided.len())],
-            stats: Stats { cusps: CuspStats::from(cusps), nodes: nodes.map(NodeStats::from), seconds },
+            stats: SearchCounts { cusps: CuspStats::from(cusps), nodes: nodes.map(NodeStats::from), seconds },
             verdict: None,
             reading: None,
             not_searched: None,
