@@ -1,6 +1,8 @@
 //! The command line: argument parsing and the `solve` command. `anyhow` lives here and in main.
 
 #[cfg(feature = "ros")]
+mod ros_args;
+#[cfg(feature = "ros")]
 mod serve;
 
 use anyhow::{bail, Context, Result};

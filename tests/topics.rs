@@ -107,16 +107,15 @@ struct Node {
 
 impl Node {
     fn start(domain: u16, args: &[&str]) -> Node {
-        let mut child = Command::new(env!("CARGO_BIN_EXE_linkspace"))
-            .arg("serve")
-            // Before the caller's arguments, which may end with --ros-args.
-            .args(["--domain", &domain.to_string(), "--network", "loopback"])
-            .args(args)
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("starting linkspace serve");
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_linkspace"));
+        // Before the caller's arguments, which may end with --ros-args.
+        cmd.arg("serve").args(["--domain", &domain.to_string(), "--network", "loopback"]).args(args);
+        Node::spawn(cmd)
+    }
+
+    /// Starts a node with a command line of the caller's.
+    fn spawn(mut cmd: Command) -> Node {
+        let mut child = cmd.stdin(Stdio::null()).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap_or_else(|e| panic!("starting {cmd:?}: {e}"));
         let log = Arc::new(Mutex::new(String::new()));
         let mut stderr = child.stderr.take().expect("piped");
         let sink = log.clone();
@@ -1278,4 +1277,95 @@ fn a_linkage_publishes_its_singular_sets_as_the_cli_finds_them() {
     assert_eq!(r[2]["report"]["set_proven"], json!([0, 4, 0]));
     let _ = std::fs::remove_file(&path);
     assert!(node.alive(), "the node died:\n{}", node.log());
+}
+
+/// Test idea: the package under `ros/linkspace_bringup`, installed with its own CMakeLists.txt
+/// (ament_cmake from the venv, the binary under test as `lib/linkspace_bringup/linkspace`), started
+/// the way its launch file starts it: robot_description is the output of `xacro` on the package's
+/// four-bar xacro file, written to a parameters file as launch_ros writes `parameters=[{...}]`
+/// (PyYAML: a multi-line quoted scalar) after the package's own parameters file. ROS's launch
+/// tools have no PyPI wheels, so `tests/launch_check.py` builds that command line from the
+/// installed launch file's functions and the ament index. The node must load the description and
+/// answer a Solve request from rclpy with the CLI's boxes for `urdf/four_bar.urdf`.
+#[test]
+fn the_launch_package_starts_the_node_with_a_xacro_description_that_answers_rclpy() {
+    let Some(python) = python() else { return };
+    let domain = 54;
+    let venv_bin = std::path::Path::new(python).parent().expect("venv bin").to_path_buf();
+    let path = format!("{}:{}", venv_bin.display(), std::env::var("PATH").unwrap_or_default());
+    let work = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("launch-{}", std::process::id()));
+    let (build, prefix) = (work.join("build"), work.join("install"));
+    let venv = venv_bin.parent().expect("venv");
+    let cmake = |args: Vec<String>| {
+        let mut cmd = Command::new("cmake");
+        cmd.args(args).env("PATH", &path);
+        let (ok, out, err) = run_with_timeout(cmd, Duration::from_secs(120));
+        assert!(ok, "cmake failed:\n{out}\n{err}");
+    };
+    cmake(vec![
+        "-S".into(),
+        format!("{ROOT}/ros/linkspace_bringup"),
+        "-B".into(),
+        build.display().to_string(),
+        format!("-DCMAKE_PREFIX_PATH={}", venv.display()),
+        format!("-DCMAKE_INSTALL_PREFIX={}", prefix.display()),
+        format!("-DLINKSPACE_BIN={}", env!("CARGO_BIN_EXE_linkspace")),
+    ]);
+    cmake(vec!["--build".into(), build.display().to_string()]);
+    cmake(vec!["--install".into(), build.display().to_string()]);
+
+    let mut cmd = Command::new(python);
+    cmd.arg(format!("{ROOT}/tests/launch_check.py")).env("AMENT_PREFIX_PATH", &prefix).env("PATH", &path);
+    let (ok, out, err) = run_with_timeout(cmd, Duration::from_secs(60));
+    assert!(ok, "launch_check.py failed:\n{out}\n{err}");
+    let launch: Value = serde_json::from_str(out.lines().last().expect("a JSON line")).expect("JSON");
+    let argv: Vec<String> = launch["argv"].as_array().expect("argv").iter().map(|a| a.as_str().expect("str").to_string()).collect();
+    assert_eq!(argv[0], prefix.join("lib/linkspace_bringup/linkspace").display().to_string());
+    let written = std::fs::read_to_string(launch["params_files"][1].as_str().expect("path")).expect("launch params file");
+    assert!(written.lines().count() > 10, "robot_description should span many lines, as PyYAML dumps it:\n{written}");
+    let description = launch["robot_description"].as_str().expect("xacro output");
+    assert!(description.contains("<robot name=\"four_bar\">") && !description.contains("xacro:"), "{description}");
+
+    let mut cmd = Command::new(&argv[0]);
+    cmd.args(&argv[1..]);
+    ros_env(&mut cmd, domain);
+    let mut node = Node::spawn(cmd);
+    node.wait_for(&["ready: node /linkspace on domain 54", "four_bar: published configuration_space"], Duration::from_secs(90));
+    let _ = std::fs::remove_file(launch["params_files"][1].as_str().expect("path"));
+
+    let script = json!([call("solve", "Solve", json!({"mechanism": "four_bar", "fixed_joint_names": ["crank_joint"], "fixed_joint_values": [0.5], "settings": settings(1e-3, 100000, 60.0), "wait": 30.0}))]);
+    let file = work.join("script.json");
+    std::fs::write(&file, script.to_string()).expect("script written");
+    let got = py(python, domain, "tests/ros_client.py", &["services", "--script", file.to_str().expect("utf-8")], Duration::from_secs(120));
+    let _ = std::fs::remove_dir_all(&work);
+    let reply = &got["results"][0];
+    assert!(reply.get("error").is_none() && reply["ok"] == json!(true), "{reply}\nnode log:\n{}", node.log());
+    let reference = solve_json(&[&format!("{ROOT}/urdf/four_bar.urdf"), "--fix", "crank_joint=0.5", "--sigma", "1e-3"]);
+    assert_same_boxes(&reply["result"], &reference);
+    assert!(node.alive(), "the node died:\n{}", node.log());
+}
+
+/// Test idea: two nodes of one name on a domain answer each other's clients, so the one that
+/// joins says so in one line (as `ros2 node list` would show the name twice), while a node of
+/// another name says nothing; `--log-level warn` keeps that warning and drops the INFO lines
+/// (ready, published results).
+#[test]
+fn a_node_warns_once_when_its_name_is_taken_on_the_domain_and_log_level_warn_hides_info() {
+    let domain = 55;
+    let four_bar = format!("{ROOT}/urdf/four_bar.urdf");
+    let slider = format!("{ROOT}/urdf/slider_crank.urdf");
+    let mut first = Node::start(domain, &[&four_bar]);
+    first.wait_for(&["ready: node /linkspace"], Duration::from_secs(60));
+    let mut other = Node::start(domain, &[&slider, "--node-name", "other"]);
+    let mut second = Node::start(domain, &[&slider, "--ros-args", "--log-level", "warn"]);
+    let warning = "another node named /linkspace is also on domain 55";
+    second.wait_for(&[warning], Duration::from_secs(60));
+    first.wait_for(&[warning], Duration::from_secs(30));
+    other.wait_for(&["slider_crank: published configuration_space"], Duration::from_secs(60));
+    let log = second.log();
+    let lines: Vec<&str> = log.lines().collect();
+    assert_eq!(lines.len(), 1, "one warning line and nothing at INFO under --log-level warn:\n{log}");
+    assert!(lines[0].contains("give this one another name"), "{log}");
+    assert!(!other.log().contains("another node named"), "a node of another name was warned:\n{}", other.log());
+    assert_eq!(first.log().matches(warning).count(), 1, "once per other participant:\n{}", first.log());
 }

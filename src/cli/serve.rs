@@ -1,8 +1,9 @@
 //! `linkspace serve`: arguments of the ROS 2 node, turned into `ros::ServeConfig`.
 
+use super::ros_args::parse_ros_args;
 use super::{parse_fix, parse_trace};
 use anyhow::{bail, Context, Result};
-use linkspace::ros::{self, NodeLimits, Mapping, Network, ServeConfig, Source};
+use linkspace::ros::{self, NodeLimits, Mapping, Network, ServeConfig, Severity, Source};
 use linkspace::search::SolverSettings;
 use std::io::Read;
 use std::path::PathBuf;
@@ -95,7 +96,8 @@ pub struct ServeArgs {
     robot_description_topic: Option<String>,
     /// ROS 2 arguments, as `ros2 run` and launch files pass them: -r __ns:=/NS, -r __node:=NAME,
     /// -p NAME:=VALUE (robot_description, sigma, rho, precision, max_request_boxes,
-    /// max_request_timeout, max_wait, max_runs, max_markers, republish), --params-file FILE.
+    /// max_request_timeout, max_wait, max_runs, max_markers, republish), --params-file FILE,
+    /// --log-level LEVEL.
     /// Everything after it is taken as ROS arguments.
     #[arg(long = "ros-args", value_name = "ARGS", num_args = 0.., allow_hyphen_values = true)]
     ros_args: Option<Vec<String>>,
@@ -133,8 +135,9 @@ fn robot_prefix(s: &str, stop: char) -> (Option<String>, &str) {
 pub fn serve(mut args: ServeArgs) -> Result<()> {
     bound_malloc_arenas();
     let mut rosout = true;
+    let mut log_level = Severity::Info;
     if let Some(tokens) = args.ros_args.take() {
-        let ros = parse_ros_args(&tokens, &args.node_name)?;
+        let ros = parse_ros_args(&tokens, &args.node_name, &args.namespace)?;
         if let Some(ns) = ros.namespace {
             args.namespace = ns;
         }
@@ -143,6 +146,7 @@ pub fn serve(mut args: ServeArgs) -> Result<()> {
         }
         apply_params(&mut args, &ros.params)?;
         rosout = !ros.no_rosout;
+        log_level = ros.log_level.unwrap_or(log_level);
     }
     let domain = match args.domain {
         Some(d) => d,
@@ -231,159 +235,9 @@ pub fn serve(mut args: ServeArgs) -> Result<()> {
         republish,
         robot_description_topic: args.robot_description_topic,
         rosout,
+        log_level,
     })?;
     Ok(())
-}
-
-/// What `--ros-args` asked for (the ROS 2 command-line grammar, the parts a node honours).
-#[derive(Debug, Default, PartialEq)]
-struct RosArgs {
-    namespace: Option<String>,
-    node_name: Option<String>,
-    /// Parameters in the order given (`--params-file` files and `-p`), later ones win.
-    params: Vec<(String, String)>,
-    /// `--disable-rosout-logs`.
-    no_rosout: bool,
-}
-
-/// The value of a ROS argument that takes one.
-fn next_value<'a>(it: &mut std::slice::Iter<'a, String>, flag: &str) -> Result<&'a String> {
-    it.next().with_context(|| format!("--ros-args: {flag} needs a value"))
-}
-
-/// Parses the tokens after `--ros-args`: `-r`/`--remap` (`__ns:=`, `__node:=`/`__name:=`, with an
-/// optional `NODE:` prefix), `-p`/`--param NAME:=VALUE`, `--params-file FILE`, `--log-level`
-/// and the rosout/stdout switches (accepted). Anything else is refused with a reason.
-fn parse_ros_args(tokens: &[String], node_name: &str) -> Result<RosArgs> {
-    let mut out = RosArgs::default();
-    let mut it = tokens.iter();
-    // A `NODE:` prefix applies the rule to that node only: ours, or not at all.
-    let for_us = |rule: &str| -> Option<String> {
-        match rule.split_once(':') {
-            Some((node, rest)) if !node.is_empty() && !rest.starts_with('=') && !node.starts_with('_') => (node == node_name).then(|| rest.to_string()),
-            _ => Some(rule.to_string()),
-        }
-    };
-    while let Some(t) = it.next() {
-        match t.as_str() {
-            "--ros-args" => {}
-            "--" => {
-                if let Some(rest) = it.next() {
-                    bail!("--ros-args: '{rest}' after '--': give linkspace's own options before --ros-args");
-                }
-            }
-            "-r" | "--remap" => {
-                let rule = next_value(&mut it, t)?;
-                let Some(rule) = for_us(rule) else { continue };
-                let (from, to) = rule.split_once(":=").with_context(|| format!("--ros-args -r '{rule}': expected FROM:=TO"))?;
-                match from {
-                    "__ns" => {
-                        if !to.starts_with('/') {
-                            bail!("--ros-args -r __ns:={to}: a namespace starts with '/'");
-                        }
-                        out.namespace = Some(to.to_string());
-                    }
-                    "__node" | "__name" => out.node_name = Some(to.to_string()),
-                    _ => bail!("--ros-args -r {from}:={to}: only the node's name and namespace can be remapped (__node, __ns), not topics or services"),
-                }
-            }
-            "-p" | "--param" => {
-                let p = next_value(&mut it, t)?;
-                let Some(p) = for_us(p) else { continue };
-                let (name, value) = p.split_once(":=").with_context(|| format!("--ros-args -p '{p}': expected NAME:=VALUE"))?;
-                out.params.push((name.to_string(), yaml_scalar(value)));
-            }
-            "--params-file" => {
-                let path = next_value(&mut it, t)?;
-                let text = std::fs::read_to_string(path).with_context(|| format!("--ros-args --params-file {path}"))?;
-                let params = params_file(&text, node_name).with_context(|| format!("--ros-args --params-file {path}"))?;
-                out.params.extend(params);
-            }
-            "--log-level" => {
-                next_value(&mut it, t)?;
-            }
-            "--enable-rosout-logs" | "--enable-stdout-logs" | "--disable-stdout-logs" | "--enable-external-lib-logs" | "--disable-external-lib-logs" => {}
-            "--disable-rosout-logs" => out.no_rosout = true,
-            "-e" | "--enclave" => bail!("--ros-args {t}: security enclaves are not supported by this node"),
-            other => bail!("--ros-args: '{other}' is not understood (this node takes -r __ns:=/NS, -r __node:=NAME, -p NAME:=VALUE, --params-file FILE, --log-level)"),
-        }
-    }
-    Ok(out)
-}
-
-/// A YAML scalar as text: quotes removed.
-fn yaml_scalar(v: &str) -> String {
-    let v = v.trim();
-    for q in ['"', '\''] {
-        if v.len() >= 2 && v.starts_with(q) && v.ends_with(q) {
-            return v[1..v.len() - 1].to_string();
-        }
-    }
-    v.to_string()
-}
-
-/// The parameters for `node_name` in a ROS 2 parameters file: the sections `/**`, `NODE` and
-/// `/NS/NODE`-style keys ending in the node name, each with `ros__parameters:` holding
-/// `name: scalar` lines or block scalars (`|`, for a URDF). Nested maps and lists are refused.
-fn params_file(text: &str, node_name: &str) -> Result<Vec<(String, String)>> {
-    let lines: Vec<&str> = text.lines().collect();
-    let indent = |l: &str| l.len() - l.trim_start().len();
-    let mut out = Vec::new();
-    let mut section: Option<bool> = None; // Some(ours) inside a node section
-    let mut in_params = false;
-    let mut k = 0;
-    while k < lines.len() {
-        let line = lines[k];
-        k += 1;
-        let trimmed = line.trim();
-        if trimmed.is_empty() || trimmed.starts_with('#') || trimmed == "---" {
-            continue;
-        }
-        let (key, rest) = trimmed.split_once(':').with_context(|| format!("line {k}: expected KEY: VALUE"))?;
-        let key = yaml_scalar(key);
-        let rest = rest.trim();
-        match indent(line) {
-            0 => {
-                let ours = key == "/**" || key == "**" || key.trim_start_matches('/').rsplit('/').next() == Some(node_name);
-                section = Some(ours);
-                in_params = false;
-            }
-            _ if section.is_none() => bail!("line {k}: indented before any node section"),
-            _ if key == "ros__parameters" => in_params = true,
-            _ if !in_params => bail!("line {k}: '{key}' outside ros__parameters"),
-            ind => {
-                let value = if rest == "|" || rest == ">" || rest == "|-" || rest == ">-" {
-                    // A block scalar: the following lines indented deeper.
-                    let mut block = Vec::new();
-                    let mut base = None;
-                    while k < lines.len() && (lines[k].trim().is_empty() || indent(lines[k]) > ind) {
-                        let l = lines[k];
-                        k += 1;
-                        if l.trim().is_empty() {
-                            block.push(String::new());
-                            continue;
-                        }
-                        let b = *base.get_or_insert(indent(l));
-                        block.push(l.get(b.min(indent(l))..).unwrap_or("").to_string());
-                    }
-                    let sep = if rest.starts_with('>') { " " } else { "\n" };
-                    let mut v = block.join(sep).trim_end().to_string();
-                    if !rest.ends_with('-') {
-                        v.push('\n');
-                    }
-                    v
-                } else if rest.is_empty() || rest.starts_with('[') || rest.starts_with('-') || rest.starts_with('{') {
-                    bail!("line {k}: parameter '{key}': only scalar values are supported");
-                } else {
-                    yaml_scalar(rest.split(" #").next().unwrap_or(rest))
-                };
-                if section == Some(true) {
-                    out.push((key, value));
-                }
-            }
-        }
-    }
-    Ok(out)
 }
 
 /// A parameter's text as a number, for `-p`, `--params-file`.
@@ -417,37 +271,12 @@ fn apply_params(args: &mut ServeArgs, params: &[(String, String)]) -> Result<()>
 
 #[cfg(test)]
 mod tests {
-    use super::{params_file, parse_ros_args, robot_prefix, RosArgs};
+    use super::robot_prefix;
 
     #[test]
     fn robot_prefixes_end_before_the_value() {
         assert_eq!(robot_prefix("four_bar:crank=1", '='), (Some("four_bar".to_string()), "crank=1"));
         assert_eq!(robot_prefix("crank=1", '='), (None, "crank=1"));
         assert_eq!(robot_prefix("link@1:2,3", '@'), (None, "link@1:2,3"));
-    }
-
-    // Test idea: the ROS 2 argument grammar as `ros2 run` and launch files write it, and a
-    // parameters file in the layout `ros2 param dump` writes, including a URDF as a block
-    // scalar; what the node does not honour is refused with a reason, not ignored.
-    #[test]
-    fn ros_args_and_params_files_are_read_the_ros_way() {
-        let v = |s: &[&str]| s.iter().map(|x| x.to_string()).collect::<Vec<_>>();
-        let got = parse_ros_args(&v(&["-r", "__ns:=/lab", "-r", "linkspace:__node:=ls", "-p", "sigma:=1e-4", "--log-level", "debug", "-p", "other_node:sigma:=5"]), "linkspace").expect("parses");
-        assert_eq!(got, RosArgs { namespace: Some("/lab".into()), node_name: Some("ls".into()), params: vec![("sigma".into(), "1e-4".into())], no_rosout: false });
-        let err = |s: &[&str]| format!("{:#}", parse_ros_args(&v(s), "linkspace").expect_err("refused"));
-        assert!(err(&["-r", "chatter:=talk"]).contains("only the node's name and namespace can be remapped"));
-        assert!(err(&["-r", "__ns:=lab"]).contains("a namespace starts with '/'"));
-        assert!(err(&["--bogus"]).contains("'--bogus' is not understood"));
-        assert!(err(&["-p"]).contains("-p needs a value"));
-        assert!(err(&["--", "x.urdf"]).contains("before --ros-args"));
-
-        let file = "# dumped\n/lab/linkspace:\n  ros__parameters:\n    precision: 0.001\n    max_runs: 2\n    robot_description: |\n      <robot name=\"r\">\n        <link name=\"a\"/>\n      </robot>\n    use_sim_time: false\nother:\n  ros__parameters:\n    sigma: 9.0\n/**:\n  ros__parameters:\n    rho: \"0.9\"\n";
-        let p = params_file(file, "linkspace").expect("parses");
-        assert_eq!(p[0], ("precision".to_string(), "0.001".to_string()));
-        assert_eq!(p[1], ("max_runs".to_string(), "2".to_string()));
-        assert_eq!(p[2], ("robot_description".to_string(), "<robot name=\"r\">\n  <link name=\"a\"/>\n</robot>\n".to_string()));
-        assert_eq!(p[4], ("rho".to_string(), "0.9".to_string()));
-        assert_eq!(p.len(), 5, "{p:?}");
-        assert!(format!("{:#}", params_file("linkspace:\n  ros__parameters:\n    joints: [1, 2]\n", "linkspace").expect_err("list")).contains("only scalar values"));
     }
 }

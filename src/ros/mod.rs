@@ -61,6 +61,23 @@ impl Default for NodeLimits {
     }
 }
 
+/// ROS 2's log severities, least severe first: the node writes lines at `ServeConfig::log_level`
+/// and above (`--ros-args --log-level`), on stderr and `/rosout` alike.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Severity {
+    /// Detail for debugging.
+    Debug,
+    /// Progress: ready, each finished run, new descriptions, parameter changes.
+    #[default]
+    Info,
+    /// Something the user should look at (a name taken twice, an analysis not available).
+    Warn,
+    /// A refused description, an internal error.
+    Error,
+    /// The node cannot go on.
+    Fatal,
+}
+
 /// A URDF to load, with a label for error messages (its path, or `robot_description`).
 #[derive(Clone, Debug)]
 pub struct Source {
@@ -104,6 +121,8 @@ pub struct ServeConfig {
     pub robot_description_topic: Option<String>,
     /// Log to `/rosout` as well as stderr.
     pub rosout: bool,
+    /// The least severe lines written.
+    pub log_level: Severity,
 }
 
 /// A loaded mechanism, ready for the node.
@@ -232,6 +251,7 @@ mod tests {
             republish: None,
             robot_description_topic: None,
             rosout: false,
+            log_level: Severity::Info,
         };
         let src = |label: &str, xml: &str| Source { label: label.into(), xml: xml.into(), description: false };
         let err = |c: ServeConfig| format!("{:#}", load(&c).err().expect("should fail"));

@@ -12,7 +12,7 @@
 
 use super::convert;
 use super::msgs::{self, *};
-use super::{NodeLimits, Loaded, Mapping, Network, ServeConfig, Source};
+use super::{NodeLimits, Loaded, Mapping, Network, ServeConfig, Severity, Source};
 use crate::app::{AnalysisError, BoxSetResult, MechanismKind, IkQuery, IkResult, Service, SingularityQuery, SingularityResult};
 use crate::search::{Limit, SolverSettings, Status};
 use anyhow::{Context as _, Result};
@@ -21,6 +21,7 @@ use ros2_client::dds::rustdds::DomainParticipantBuilder;
 use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::action::{ActionServerQosPolicies, AsyncActionServer, CancelHandle, ExecutingGoalHandle, GoalEndStatus, GoalError, NewGoalHandle};
 use ros2_client::log::LogLevel;
+use ros2_client::entities_info::ParticipantEntitiesInfo;
 use ros2_client::ActionTypeName;
 use ros2_client::{rosout, Context, Message, MessageTypeName, Name, Node, NodeName, NodeOptions, ParameterValue, Publisher, QosProfile, RmwRequestId, Server, ServiceMapping, ServiceTypeName};
 use std::collections::{BTreeMap, VecDeque};
@@ -49,6 +50,8 @@ enum Event {
     Goal(NewGoalHandle<SolveGoal>),
     /// A cancel request of the Solve action.
     GoalCancel(CancelHandle),
+    /// Another participant on the domain holds a node of this node's name (the warning).
+    NameTaken(String),
 }
 
 /// The Solve action server (`~/solve`, `linkspace_msgs/action/Solve`).
@@ -220,6 +223,8 @@ struct State {
     node: Node,
     base: String,
     rosout: bool,
+    /// The least severe lines written (stderr and `/rosout`).
+    log_level: Severity,
     config: ServeConfig,
     tf_static: Publisher<TfMessage>,
     action: Arc<SolveAction>,
@@ -488,6 +493,7 @@ pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
         })
         .detach();
     }
+    watch_for_namesakes(&context, &mut node, &ex, tx.clone())?;
     {
         let (goals, events) = (action.clone(), tx.clone());
         ex.spawn(async move {
@@ -554,6 +560,7 @@ pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
         node,
         base: base.clone(),
         rosout: config.rosout,
+        log_level: config.log_level,
         config: config.clone(),
         tf_static,
         action,
@@ -596,6 +603,53 @@ fn solve_error(message: String) -> SolveResponse {
     SolveResponse { ok: false, message, ..Default::default() }
 }
 
+/// Two nodes of one name on a domain serve the same service names, so each answers the other's
+/// clients: warn (once per other participant) when `ros_discovery_info`, where every ROS 2
+/// participant lists its nodes and `ros2 node list` reads them, shows this node's name elsewhere.
+fn watch_for_namesakes(context: &Context, node: &mut Node, ex: &smol::LocalExecutor<'_>, events: smol::channel::Sender<Event>) -> Result<()> {
+    let own = context.participant_entities_info().gid();
+    let name = node.fully_qualified_name();
+    let domain = node.domain_id();
+    let qos = latched(64);
+    let topic = context
+        .create_topic("ros_discovery_info".to_string(), MessageTypeName::new("rmw_dds_common", "ParticipantEntitiesInfo"), &qos)
+        .context("creating topic ros_discovery_info")?;
+    let sub = node.create_subscription::<ParticipantEntitiesInfo>(&topic, Some(qos)).context("subscribing to ros_discovery_info")?;
+    ex.spawn(async move {
+        let mut warned = std::collections::BTreeSet::new();
+        let stream = sub.async_stream();
+        futures::pin_mut!(stream);
+        while let Some(r) = stream.next().await {
+            let Ok((info, _)) = r else { continue };
+            let namesake = info.nodes().iter().any(|n| {
+                let ns = n.namespace().trim_end_matches('/');
+                format!("{ns}/{}", n.name()) == name
+            });
+            if info.gid() != own && namesake && warned.insert(info.gid()) {
+                let message = format!(
+                    "another node named {name} is also on domain {domain}: clients of either get replies from both; give this one another name (--node-name NAME or --ros-args -r __node:=NAME) or namespace"
+                );
+                if events.send(Event::NameTaken(message)).await.is_err() {
+                    break;
+                }
+            }
+        }
+    })
+    .detach();
+    Ok(())
+}
+
+/// ros2-client's log level as the node's severity.
+fn severity(level: LogLevel) -> Severity {
+    match level {
+        LogLevel::Debug => Severity::Debug,
+        LogLevel::Info => Severity::Info,
+        LogLevel::Warn => Severity::Warn,
+        LogLevel::Error => Severity::Error,
+        LogLevel::Fatal => Severity::Fatal,
+    }
+}
+
 /// A Singularities reply carrying the whole `report` (the patched RustDDS sends replies of any
 /// size: vendor/README.md).
 fn singularity_reply(report: &SingularityReport) -> SingularitiesResponse {
@@ -603,8 +657,12 @@ fn singularity_reply(report: &SingularityReport) -> SingularitiesResponse {
 }
 
 impl State {
-    /// Logs a line on stderr and, unless `--disable-rosout-logs`, on `/rosout`.
+    /// Logs a line on stderr and, unless `--disable-rosout-logs`, on `/rosout`, if `level` is
+    /// at least the node's `--log-level`.
     fn log(&self, level: LogLevel, message: String) {
+        if severity(level) < self.log_level {
+            return;
+        }
         eprintln!("linkspace: {message}");
         if self.rosout {
             rosout!(self.node, level, "{}", message);
@@ -828,6 +886,7 @@ impl State {
             }
             Event::Finished { run, result } => self.finished(run, result).await,
             Event::Tick => self.expire_waits(),
+            Event::NameTaken(message) => self.log(LogLevel::Warn, message),
             Event::Republish => self.republish().await,
             // Under catch_unwind like requests: a bug logs an error and the node goes on.
             Event::Parameter(name, value) => {
@@ -919,7 +978,9 @@ impl State {
             Outcome::BoxSet(result) => self.finished_box_set(run, r, result).await,
             Outcome::Singularities(result) => self.finished_singularities(run, r, result).await,
             Outcome::InverseKinematics(result) => {
-                eprintln!("linkspace: {name}: run {run} (inverse kinematics): {} solutions, {} boxes, {:.3} s", result.solutions.len(), result.processed, result.seconds);
+                if self.log_level <= Severity::Info {
+                    eprintln!("linkspace: {name}: run {run} (inverse kinematics): {} solutions, {} boxes, {:.3} s", result.solutions.len(), result.processed, result.seconds);
+                }
                 let reply = convert::ik_response(&result);
                 for (id, _) in r.waiters {
                     self.reply_ik(id, reply.clone());
@@ -957,7 +1018,9 @@ impl State {
                 m.configuration_space = Some(Arc::new(result));
                 self.publish_markers(r.mechanism).await;
                 self.settle(r.mechanism);
-                eprintln!("linkspace: {name}: published configuration_space");
+                if self.log_level <= Severity::Info {
+                    eprintln!("linkspace: {name}: published configuration_space");
+                }
             }
             RunKind::Solve => {
                 if let Err(e) = m.topics.solve_result.async_publish(set.clone()).await {
@@ -967,7 +1030,9 @@ impl State {
                 for (id, _) in r.waiters {
                     self.reply_solve(id, SolveResponse { ok: true, message: message.clone(), run_id: run, done: true, result: set.clone() });
                 }
-                eprintln!("linkspace: {name}: published solve_result of run {run}");
+                if self.log_level <= Severity::Info {
+                    eprintln!("linkspace: {name}: published solve_result of run {run}");
+                }
             }
             RunKind::SolveAction => {
                 if let Err(e) = m.topics.solve_result.async_publish(set.clone()).await {
@@ -988,7 +1053,9 @@ impl State {
         let report = convert::singularity_report(&result, run);
         let m = &mut self.mechanisms[r.mechanism];
         let name = m.loaded.analysis.mechanism().to_string();
-        eprintln!("linkspace: {name}: run {run} (singularities, precision {}): {}, {:.3} s", result.query.precision, result.summary, result.seconds);
+        if self.log_level <= Severity::Info {
+            eprintln!("linkspace: {name}: run {run} (singularities, precision {}): {}, {:.3} s", result.query.precision, result.summary, result.seconds);
+        }
         if r.kind == (RunKind::Singularities { load_time: true }) {
             m.singular_note = format!("run {run}: {}", result.summary);
             let markers = convert::singularity_markers(&result, self.limits.max_markers);
@@ -1000,7 +1067,9 @@ impl State {
             m.singularity_run = None;
             self.publish_markers(r.mechanism).await;
             self.settle(r.mechanism);
-            eprintln!("linkspace: {name}: published singularities");
+            if self.log_level <= Severity::Info {
+                eprintln!("linkspace: {name}: published singularities");
+            }
         }
         let reply = singularity_reply(&report);
         for (id, _) in r.waiters {
