@@ -101,8 +101,12 @@ pub(crate) struct ChainArgs {
     #[arg(long, value_name = "JOINT=VALUE", allow_hyphen_values = true)]
     lock: Vec<String>,
     /// Take every angle as written: no snapping of near quarter turns (see README).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "snap_tolerance")]
     exact_geometry: bool,
+    /// Snap angles within this many radians of a quarter turn (axes of a coordinate axis), at
+    /// most 0.01; 0 takes every value as written. Default 1e-5 (covers `1.5708`; `1.571` needs 3e-4).
+    #[arg(long, value_name = "RAD")]
+    snap_tolerance: Option<f64>,
     /// Analyse the full torus, ignoring the file's joint limits.
     #[arg(long)]
     ignore_limits: bool,
@@ -130,7 +134,8 @@ impl ChainArgs {
             })
             .collect::<Result<Vec<_>>>()?;
         let spec = manip3r::ChainSpec { base: self.base.clone(), tip: self.tip.clone(), tip_point, locks, length_tolerance: 0.0 };
-        Ok(manip3r::LoadOptions { spec, exact_geometry: self.exact_geometry, ignore_limits: self.ignore_limits })
+        let snap_tolerance = self.snap_tolerance.unwrap_or(linkspace::model::rounding::ANGLE_TOLERANCE);
+        Ok(manip3r::LoadOptions { spec, exact_geometry: self.exact_geometry, snap_tolerance, ignore_limits: self.ignore_limits })
     }
 }
 
@@ -548,9 +553,10 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     }
     let snaps = &prepared.snaps;
     if prepared.exact_geometry {
-        writeln!(out, "  rounding: off (--exact-geometry): angles taken as written").ok();
+        let why = if prepared.snap_tolerance == 0.0 { "--snap-tolerance 0" } else { "--exact-geometry" };
+        writeln!(out, "  rounding: off ({why}): angles taken as written").ok();
     } else {
-        writeln!(out, "  rounding: {} values snapped to quarter turns / coordinate axes (tolerance {:e} rad)", snaps.len(), linkspace::model::rounding::ANGLE_TOLERANCE).ok();
+        writeln!(out, "  rounding: {} values snapped to quarter turns / coordinate axes (tolerance {:e} rad)", snaps.len(), prepared.snap_tolerance).ok();
         for sn in snaps {
             if sn.what == "lock" {
                 writeln!(out, "    {} lock: {} -> {}", sn.joint, sn.original[0], sn.snapped[0]).ok();

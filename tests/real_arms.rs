@@ -639,7 +639,7 @@ fn lock_values_are_snapped_like_the_files_angles() {
     let xml = format!("{}{}", &xml[..at], xml[at..].replacen("type=\"revolute\"", "type=\"continuous\"", 1));
     let lock = |v: f64, exact_geometry: bool| {
         let spec = ChainSpec { locks: vec![("joint_3".into(), v)], ..Default::default() };
-        prepare(&xml, &LoadOptions { spec, exact_geometry, ignore_limits: true }).expect("a 6R arm")
+        prepare(&xml, &LoadOptions { spec, exact_geometry, ignore_limits: true, ..Default::default() }).expect("a 6R arm")
     };
     for v in [0.0, std::f64::consts::PI, -3.14159] {
         let p = lock(v, false);
@@ -688,4 +688,44 @@ fn the_rounding_list_names_only_the_chain() {
     let p = prepare(&xml, &LoadOptions::default()).expect("robot a");
     let joints: Vec<&str> = p.snaps.iter().map(|s| s.joint.as_str()).collect();
     assert_eq!(joints, ["joint2"], "{:?}", p.snaps);
+}
+
+fn fixture(name: &str) -> String {
+    std::fs::read_to_string(format!("{}/tests/data/{name}", env!("CARGO_MANIFEST_DIR"))).expect("fixture")
+}
+
+/// A Doosan-style file writes every quarter turn `1.571` (2.04e-4 rad off): at the default
+/// tolerance nothing snaps, the wrist is not spherical and the verdict stays undecided; with
+/// the tolerance raised to 3e-4 every frame is an exact quarter turn, axes 2 and 3 are proven
+/// parallel and the verdict is certified. 0 takes the file as written, as --exact-geometry does.
+#[test]
+fn the_snapping_tolerance_can_cover_quarter_turns_written_with_three_decimals() {
+    use linkspace::app::{self, Arm, SingularitiesRequest};
+    let m = urdf::parse(&fixture("doosan_style_6r.urdf")).expect("parses");
+    let request = SingularitiesRequest { precision: 1e-4, nodes: false, search_anyway: false };
+    let load = |snap_tolerance: f64| Arm::load(&m, &LoadOptions { snap_tolerance, ..Default::default() }, 0.0).expect("a 6R arm");
+    let default = load(linkspace::model::rounding::ANGLE_TOLERANCE);
+    assert!(default.prepared.snaps.is_empty(), "{:?}", default.prepared.snaps);
+    let s = app::singularities(&default, &request, &bounded(2_000_000), &mut |_| {}).expect("runs");
+    assert_eq!((s.verdict.cuspidal, s.verdict.certified), (None, false), "{}", s.verdict.reason);
+    let raised = load(3e-4);
+    assert_eq!(raised.prepared.snaps.iter().filter(|s| s.what == "rpy").count(), 5, "{:?}", raised.prepared.snaps);
+    assert!(raised.prepared.choice.reason.contains("spherical wrist"), "{}", raised.prepared.choice.reason);
+    let s = app::singularities(&raised, &request, &bounded(2_000_000), &mut |_| {}).expect("runs");
+    assert_eq!((s.verdict.cuspidal, s.verdict.certified, s.verdict.aspects), (Some(false), true, Some(4)), "{}", s.verdict.reason);
+    let written = load(0.0);
+    assert!(written.prepared.exact_geometry && written.prepared.snaps.is_empty());
+    let refused = Arm::load(&m, &LoadOptions { snap_tolerance: 0.5, ..Default::default() }, 0.0).err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(refused.contains("snap tolerance must be"), "{refused}");
+    // The command line takes it on every arm command, and says what it used.
+    let bin = env!("CARGO_BIN_EXE_linkspace");
+    let file = format!("{}/tests/data/doosan_style_6r.urdf", env!("CARGO_MANIFEST_DIR"));
+    let out = std::process::Command::new(bin).args(["singularities", &file, "--snap-tolerance", "3e-4"]).output().expect("runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.starts_with("verdict: NON-CUSPIDAL (certified)") && stdout.contains("(tolerance 3e-4 rad)"), "{stdout}");
+    let out = std::process::Command::new(bin).args(["ik", &file, "--snap-tolerance", "3e-4", "--point", "0.5,0.2,0.6"]).output().expect("runs");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = std::process::Command::new(bin).args(["singularities", &file, "--snap-tolerance", "1e-3", "--exact-geometry"]).output().expect("runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && stderr.trim().lines().count() == 1, "{stderr}");
 }

@@ -302,7 +302,7 @@ fn snaps<S: Serializer>(snaps: &[Snap], s: S) -> Result<S::Ok, S::Error> {
 impl Rounding {
     /// From a prepared arm.
     pub fn of(p: &super::Prepared) -> Self {
-        Rounding { snapping: !p.exact_geometry, tolerance: crate::model::rounding::ANGLE_TOLERANCE, snaps: p.snaps.clone() }
+        Rounding { snapping: !p.exact_geometry, tolerance: p.snap_tolerance, snaps: p.snaps.clone() }
     }
 }
 
