@@ -47,9 +47,10 @@ pub(crate) struct LimitArgs {
     #[arg(long, value_name = "SECONDS")]
     timeout: Option<f64>,
     /// Stop before pending boxes hold more than this many MiB; the run is then reported
-    /// incomplete. Default 2048 (`singularities`: 256).
-    #[arg(long, value_name = "MIB")]
-    max_memory: Option<u64>,
+    /// incomplete.
+    // The kernel's default; `singularities` sets its own in `parse_args`, and each --help shows it.
+    #[arg(long, value_name = "MIB", default_value_t = (Limits::default().max_memory >> 20) as u64)]
+    max_memory: u64,
     /// Worker threads (1: depth first on one thread; more: breadth first level by level, the
     /// same boxes).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=1024))]
@@ -63,11 +64,10 @@ impl LimitArgs {
         if max_cells == 0 {
             bail!("--max-boxes must be at least 1");
         }
-        let max_memory = match self.max_memory {
-            Some(0) => bail!("--max-memory must be at least 1 MiB"),
-            Some(m) => usize::try_from(m.saturating_mul(1 << 20)).unwrap_or(usize::MAX),
-            None => Limits::default().max_memory,
-        };
+        if self.max_memory == 0 {
+            bail!("--max-memory must be at least 1 MiB");
+        }
+        let max_memory = usize::try_from(self.max_memory.saturating_mul(1 << 20)).unwrap_or(usize::MAX);
         Ok(Limits { max_cells, timeout: seconds_arg(self.timeout)?, max_memory })
     }
 
@@ -325,7 +325,10 @@ where
     // negative number misses exponents); positionals keep clap's rule, so a flag is never
     // taken for a file name. An option whose value is optional (`--robot-description-topic
     // [TOPIC]`) keeps clap's rule too, or it would swallow the next flag as its value.
-    let command = Cli::command().mut_subcommands(|s| {
+    // `singularities` bounds the pending cells of a flooding search (near-degenerate geometry)
+    // well below the kernel's general default; its --help shows its own.
+    let command = Cli::command().mut_subcommand("singularities", |s| s.mut_arg("max_memory", |a| a.default_value(SINGULARITIES_MAX_MEMORY_MIB)));
+    let command = command.mut_subcommands(|s| {
         s.mut_args(|a| match (a.get_action().takes_values(), a.is_positional()) {
             (true, false) if a.get_num_args().is_some_and(|r| r.min_values() == 0) => a,
             (true, false) => a.allow_hyphen_values(true),
@@ -493,8 +496,8 @@ fn load_arm(path: &std::path::Path, uncertainty: f64, args: &ChainArgs) -> Resul
 /// cells and, separately, the node search's box tree (kept whole until the run ends).
 const SINGULARITIES_MAX_BOXES: u64 = 5_000_000;
 
-/// Default `--max-memory` of `singularities` (bytes of pending cells): 256 MiB.
-const SINGULARITIES_MAX_MEMORY: usize = 256 << 20;
+/// Default `--max-memory` of `singularities` (MiB of pending cells).
+const SINGULARITIES_MAX_MEMORY_MIB: &str = "256";
 
 /// `--timeout` as a duration: positive and finite, or absent.
 pub(crate) fn seconds_arg(t: Option<f64>) -> Result<Option<Duration>> {
@@ -507,12 +510,7 @@ pub(crate) fn seconds_arg(t: Option<f64>) -> Result<Option<Duration>> {
 
 fn singularities(args: SingularitiesArgs) -> Result<()> {
     manip3r::check_precision(args.precision)?;
-    let mut limits = args.limits.limits(SINGULARITIES_MAX_BOXES)?;
-    if args.limits.max_memory.is_none() {
-        // Pending cells of a flooding search (near-degenerate geometry) are bounded well below
-        // the kernel's general default: the run stops on `memory` with its cells listed.
-        limits.max_memory = SINGULARITIES_MAX_MEMORY;
-    }
+    let limits = args.limits.limits(SINGULARITIES_MAX_BOXES)?;
     let arm = load_arm(&args.urdf, args.uncertainty, &args.chain)?;
     let cancel = AtomicBool::new(false);
     let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };

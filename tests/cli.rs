@@ -499,3 +499,21 @@ fn fixed_links_add_no_variable_and_no_per_box_output() {
     assert_eq!((rigid["frame149"].as_str(), rigid["tool7"].as_str()), (Some("ground"), Some("coupler")));
     assert!(a.get("rigid_links").is_none(), "no fixed link, no list");
 }
+
+/// Each command's --help states the --max-memory default that command uses: `singularities`
+/// bounds its pending cells at 256 MiB, the others at the kernel's 2048.
+#[test]
+fn each_command_shows_its_own_memory_default() {
+    let line = |command: &str| {
+        let (ok, out, _) = run(&[command, "--help"]);
+        assert!(ok, "{command} --help");
+        // The option and its text (on the next lines when clap lays the help out long).
+        let lines: Vec<&str> = out.lines().collect();
+        lines.iter().position(|l| l.contains("--max-memory")).map(|k| lines[k..(k + 4).min(lines.len())].join(" ")).unwrap_or_default()
+    };
+    assert!(line("singularities").contains("[default: 256]"), "{}", line("singularities"));
+    for command in ["solve", "ik", "collisions", "distances", "loop-singularities"] {
+        assert!(line(command).contains("[default: 2048]"), "{command}: {}", line(command));
+    }
+    assert_clear_error(&["ik", &fixture("puma560.urdf"), "--point", "0.5,0,0.3", "--max-memory", "0"], "--max-memory must be at least 1 MiB");
+}
