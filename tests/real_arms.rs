@@ -729,3 +729,27 @@ fn the_snapping_tolerance_can_cover_quarter_turns_written_with_three_decimals() 
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && stderr.trim().lines().count() == 1, "{stderr}");
 }
+
+/// A 6R arm without a spherical wrist is analysed at the origin of joint 4; when that origin
+/// lies on axis 3 the map is degenerate, and the error names joint 4 and the link holding its
+/// origin (the reduced chain's own name for the point is not in the file).
+#[test]
+fn a_degenerate_joint_origin_is_named_by_the_files_joint_and_link() {
+    let joint = |name: &str, parent: &str, child: &str, origin: &str, axis: &str| {
+        format!("<joint name='{name}' type='revolute'><parent link='{parent}'/><child link='{child}'/><origin {origin}/><axis xyz='{axis}'/><limit lower='-3' upper='3' effort='1' velocity='1'/></joint>")
+    };
+    let xml = format!(
+        "<robot name='r'><link name='base'/><link name='l1'/><link name='l2'/><link name='l3'/><link name='l4'/><link name='l5'/><link name='l6'/>{}{}{}{}{}{}</robot>",
+        joint("j1", "base", "l1", "xyz='0 0 0.5'", "0 0 1"),
+        joint("j2", "l1", "l2", "rpy='-1.5707963267948966 0 0'", "0 0 1"),
+        joint("j3", "l2", "l3", "xyz='0.4 0 0'", "0 0 1"),
+        // On axis 3: joint 3 does not move this origin.
+        joint("j4", "l3", "l4", "xyz='0 0 0.1'", "1 0 0"),
+        joint("j5", "l4", "l5", "xyz='0.2 0 0'", "0 1 0"),
+        joint("j6", "l5", "l6", "xyz='0 0.1 0'", "1 0 0"),
+    );
+    let m = urdf::parse(&xml).expect("parses");
+    let err = linkspace::app::Arm::load(&m, &LoadOptions::default(), 0.0).err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(err.contains("the analysed point (the origin of joint 'j4', in link 'l3') is degenerate") && err.contains("--tip-point"), "{err}");
+    assert!(!err.contains("_origin"), "{err}");
+}

@@ -50,7 +50,12 @@ impl Arm {
     /// metres (0 for the nominal geometry).
     pub fn load(mechanism: &Mechanism, options: &LoadOptions, uncertainty: f64) -> Result<Self, Manip3rError> {
         let prepared = manip3r::prepare(mechanism, options)?;
-        let chain = Chain3R::from_mechanism(&prepared.mechanism, uncertainty)?;
+        // The chain names its point by the reduced mechanism's link, made up for a joint's origin.
+        let chain = Chain3R::from_mechanism(&prepared.mechanism, uncertainty).map_err(|e| match (e, prepared.choice.origin_text()) {
+            (Manip3rError::TipDoesNotMove(_), Some(point)) => Manip3rError::TipDoesNotMove(point),
+            (Manip3rError::Degenerate(_), Some(point)) => Manip3rError::Degenerate(point),
+            (e, _) => e,
+        })?;
         let frame = BaseFrame::of(&prepared.mechanism, &chain);
         let branches = manip3r::branches::of(&prepared.mechanism, &chain);
         Ok(Self { prepared, chain, frame, branches })

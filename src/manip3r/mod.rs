@@ -63,10 +63,10 @@ pub enum Manip3rError {
     #[error("not a 3R chain: {0}")]
     NotThreeR(String),
     /// The end point does not move at all.
-    #[error("the analysed point '{0}' does not move with joints 2 and 3: choose another with --tip-point LINK@X,Y,Z")]
+    #[error("the analysed point {0} does not move with joints 2 and 3: choose another with --tip-point LINK@X,Y,Z")]
     TipDoesNotMove(String),
     /// det Df vanishes identically: the end point moves along a curve only.
-    #[error("the map of the analysed point '{0}' is degenerate: det Df vanishes everywhere (is the point on the axis of joint 2 or 3?): choose another with --tip-point LINK@X,Y,Z")]
+    #[error("the map of the analysed point {0} is degenerate: det Df vanishes everywhere (is the point on the axis of joint 2 or 3?): choose another with --tip-point LINK@X,Y,Z")]
     Degenerate(String),
     /// The snapping tolerance is not in [0, `rounding::LARGEST_TOLERANCE`].
     #[error("snap tolerance must be a number of radians in [0, 0.01], got {0}")]
