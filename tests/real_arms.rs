@@ -753,3 +753,31 @@ fn a_degenerate_joint_origin_is_named_by_the_files_joint_and_link() {
     assert!(err.contains("the analysed point (the origin of joint 'j4', in link 'l3') is degenerate") && err.contains("--tip-point"), "{err}");
     assert!(!err.contains("_origin"), "{err}");
 }
+
+/// An undecided verdict names what blocks it and what would settle it. The Doosan-style file
+/// (quarter turns written 1.571): axes 1 and 2 nearly perpendicular and nearly meeting, the
+/// wrist nearly spherical, and --snap-tolerance 3e-4 (which certifies it, see above). The iiwa
+/// with joint 3 locked at 0.5: nothing near-degenerate and nothing to snap; its undecided boxes
+/// sit where det Df and its gradient may both vanish, which a finer precision does not settle
+/// (the same 336 boxes at 1e-4, 1e-5 and 1e-6).
+#[test]
+fn an_undecided_verdict_names_its_near_degeneracy_and_the_option_that_settles_it() {
+    use linkspace::app::{self, Arm, SingularitiesRequest};
+    let request = SingularitiesRequest { precision: 1e-4, nodes: false, search_anyway: false };
+    let doosan = Arm::load(&urdf::parse(&fixture("doosan_style_6r.urdf")).expect("parses"), &LoadOptions::default(), 0.0).expect("a 6R arm");
+    let v = app::singularities(&doosan, &request, &bounded(2_000_000), &mut |_| {}).expect("runs").verdict;
+    assert_eq!(v.cuspidal, None);
+    for needle in ["axes of joint1 and joint2 within 2.0e-4 rad of perpendicular", "axes of joint1 and joint2 within 7.0e-6 m of meeting", "a nearly spherical wrist (axes of joint4, joint5, joint6 miss one point by 2.5e-5 m", "written up to 2.0e-4 rad off a quarter turn", "--snap-tolerance 3e-4 would snap them"] {
+        assert!(v.reason.contains(needle), "{needle}: {}", v.reason);
+    }
+    let spec = ChainSpec { locks: vec![("joint_3".into(), 0.5)], ..Default::default() };
+    let iiwa = Arm::load(&urdf::parse(&text("iiwa14.urdf")).expect("parses"), &LoadOptions { spec, ..Default::default() }, 0.0).expect("a 6R arm");
+    let v = app::singularities(&iiwa, &request, &bounded(2_000_000), &mut |_| {}).expect("runs").verdict;
+    assert_eq!(v.cuspidal, None);
+    assert!(v.reason.contains("no near-degenerate geometry") && !v.reason.contains("--snap-tolerance"), "{}", v.reason);
+    assert!(v.reason.contains("crossing singular branches") || v.reason.contains("--precision 1e-5"), "{}", v.reason);
+    // A decided verdict is unchanged.
+    let puma = Arm::load(&urdf::parse(&text("puma560.urdf")).expect("parses"), &LoadOptions::default(), 0.0).expect("puma");
+    let v = app::singularities(&puma, &request, &bounded(2_000_000), &mut |_| {}).expect("runs").verdict;
+    assert!(v.certified && !v.reason.contains("near-degenerate"), "{}", v.reason);
+}

@@ -119,7 +119,12 @@ pub fn singularities(arm: &Arm, request: &SingularitiesRequest, control: &Contro
         manip3r::singularities(chain, request.precision, nodes_searched, control, progress)?
     };
     // The verdict reads the full-torus run; the limits then filter what is listed.
-    let verdict = verdict::decide(mechanism, chain, &run, &arm.prepared.limits, &control.remaining_since(start));
+    let mut verdict = verdict::decide(mechanism, chain, &run, &arm.prepared.limits, &control.remaining_since(start));
+    // An undecided verdict says what blocks it (not for uncertain lengths, nor for certified cusps
+    // outside the limits: those reasons say what to do).
+    if verdict.cuspidal.is_none() && chain.uncertainty == 0.0 && !run.cusps.cusps.iter().any(|c| c.unique) {
+        verdict.reason.push_str(&verdict::blockers(&arm.prepared, chain, request.precision, &control.remaining_since(start)));
+    }
     let limit_effect = arm.prepared.limits.apply(&mut run);
     let mut explained = None;
     let mut not_searched = None;

@@ -185,6 +185,10 @@ pub struct Prepared {
     pub exact_geometry: bool,
     /// The rounding policy's tolerance as asked (radians).
     pub snap_tolerance: f64,
+    /// The largest offset from a quarter turn or a coordinate axis left as written on the chain
+    /// (`rounding::offsets`), when at most `rounding::LARGEST_TOLERANCE`: what a larger
+    /// tolerance would snap.
+    pub unsnapped: Option<f64>,
     /// Limits of the three joints, `None` where absent or ignored.
     pub limits: limits::JointLimits,
 }
@@ -217,8 +221,15 @@ pub fn prepare(m: &crate::model::Mechanism, options: &LoadOptions) -> Result<Pre
     // fingers off it do not enter).
     let on_chain: Vec<&str> = rounded.link(&choice.tip).map_or(Vec::new(), |t| rounded.path_to(t).iter().map(|&j| rounded.joints[j].name.as_str()).collect());
     snaps.retain(|s| on_chain.contains(&s.joint.as_str()));
+    let unsnapped = rounded
+        .joints
+        .iter()
+        .filter(|j| on_chain.contains(&j.name.as_str()))
+        .flat_map(crate::model::rounding::offsets)
+        .filter(|&d| d > 0.0 && d <= crate::model::rounding::LARGEST_TOLERANCE)
+        .reduce(f64::max);
     let limits = limits::JointLimits::of(&mechanism, &choice.joints, options.ignore_limits);
-    Ok(Prepared { mechanism, choice, snaps, exact_geometry, snap_tolerance: tolerance, limits })
+    Ok(Prepared { mechanism, choice, snaps, exact_geometry, snap_tolerance: tolerance, unsnapped, limits })
 }
 
 /// For an arm whose verdict is structural (`verdict::parallel_structure`): the cusp search's

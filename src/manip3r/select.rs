@@ -75,6 +75,10 @@ pub struct Choice {
     /// without a spherical wrist): the reduced chain's link for it is made up.
     #[serde(skip)]
     pub origin_of: Option<String>,
+    /// Six joints without a spherical wrist: a lower bound (metres) of how far the wrist axes
+    /// miss one point, when measured.
+    #[serde(skip)]
+    pub wrist_spread: Option<f64>,
 }
 
 impl Choice {
@@ -219,6 +223,7 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
         wrist_miss: 0.0,
         reason: String::new(),
         origin_of: None,
+        wrist_spread: None,
     };
     let lock_text = if spec.locks.is_empty() { String::new() } else { format!(" with {} locked", spec.locks.iter().map(|(n, v)| format!("{n}={v}")).collect::<Vec<_>>().join(", ")) };
     // Where the point hangs (None: keep the whole path, the tip's origin being the point).
@@ -291,6 +296,7 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
                 // because it is in joint 4's parent link.
                 choice.wrist_miss = 0.0;
                 choice.origin_of = Some(wrist_joints[0].clone());
+                choice.wrist_spread = bound;
                 Some(Attach::UnderJoint3(o, format!("{}_origin", wrist_joints[0])))
             }
         }

@@ -19,7 +19,7 @@
 //! already exact is not listed. Loop closures (`<loop>`) are left as written: the planar
 //! builders enclose the stated decimals themselves. `--exact-geometry` skips this module.
 
-use super::{JointKind, Mechanism};
+use super::{Joint, JointKind, Mechanism};
 use nalgebra::{UnitQuaternion, Vector3};
 use std::f64::consts::FRAC_PI_2;
 
@@ -111,6 +111,24 @@ pub fn compose(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
     mul(a, b)
 }
 
+/// The coordinate axis nearest in angle to `a`, and the sine of the angle (|component across it|).
+fn nearest_axis(a: &Vector3<f64>) -> (usize, f64) {
+    let i = (0..3).max_by(|&x, &y| a[x].abs().total_cmp(&a[y].abs())).expect("three components");
+    (i, (a.norm_squared() - a[i] * a[i]).max(0.0).sqrt())
+}
+
+/// How far each of `joint`'s values lies from what the policy would make it (0 when exact):
+/// each roll, pitch and yaw from its nearest quarter turn, a revolute or prismatic axis (as the
+/// sine of the angle) from its nearest coordinate axis. The tolerance that snaps a value is at
+/// least its offset.
+pub fn offsets(joint: &Joint) -> Vec<f64> {
+    let mut out: Vec<f64> = joint.rpy.iter().map(|&x| (x - (x / FRAC_PI_2).round() * FRAC_PI_2).abs()).collect();
+    if matches!(joint.kind, JointKind::Revolute { .. } | JointKind::Prismatic { .. }) {
+        out.push(nearest_axis(&joint.axis).1);
+    }
+    out
+}
+
 /// The mechanism with the policy applied at `tolerance` (radians), and the list of what changed.
 pub fn snap(m: &Mechanism, tolerance: f64) -> (Mechanism, Vec<Snap>) {
     let mut out = m.clone();
@@ -128,9 +146,7 @@ pub fn snap(m: &Mechanism, tolerance: f64) -> (Mechanism, Vec<Snap>) {
         }
         if matches!(j.kind, JointKind::Revolute { .. } | JointKind::Prismatic { .. }) {
             let a = j.axis;
-            // The coordinate axis nearest in angle; sin of the angle = |component across it|.
-            let i = (0..3).max_by(|&x, &y| a[x].abs().total_cmp(&a[y].abs())).expect("three components");
-            let across = (a.norm_squared() - a[i] * a[i]).max(0.0).sqrt();
+            let (i, across) = nearest_axis(&a);
             if across <= tolerance && across > 0.0 {
                 let mut e = Vector3::zeros();
                 e[i] = a[i].signum();
@@ -209,6 +225,14 @@ mod tests {
         assert_eq!(snap_value(1.5708, 0.0), None);
         assert!(valid_tolerance(0.0) && valid_tolerance(LARGEST_TOLERANCE) && valid_tolerance(3e-4));
         assert!(!valid_tolerance(-1e-5) && !valid_tolerance(0.5) && !valid_tolerance(f64::NAN));
+        // The offsets say which tolerance would snap a joint's values.
+        let xml = "<robot name='r'><link name='a'/><link name='b'/>\
+            <joint name='j' type='revolute'><parent link='a'/><child link='b'/><origin rpy='1.571 0 0'/><axis xyz='0 0 1'/>\
+            <limit lower='-1' upper='1' effort='1' velocity='1'/></joint></robot>";
+        let m = super::super::urdf::parse(xml).expect("parses");
+        let off = offsets(&m.joints[0]);
+        assert_eq!(off.len(), 4);
+        assert!((off[0] - (1.571 - FRAC_PI_2)).abs() < 1e-15 && off[1..] == [0.0; 3], "{off:?}");
     }
 
     #[test]
