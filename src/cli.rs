@@ -45,9 +45,10 @@ pub(crate) struct LimitArgs {
     #[arg(long, value_name = "SECONDS")]
     timeout: Option<f64>,
     /// Stop before pending boxes hold more than this many MiB; the run is then reported
-    /// incomplete. Default 2048 (`singularities`: 256).
-    #[arg(long, value_name = "MIB")]
-    max_memory: Option<u64>,
+    /// incomplete.
+    // The kernel's default; `singularities` sets its own in `parse_args`, and each --help shows it.
+    #[arg(long, value_name = "MIB", default_value_t = (Limits::default().max_memory >> 20) as u64)]
+    max_memory: u64,
     /// Worker threads (1: depth first on one thread; more: breadth first level by level, the
     /// same boxes).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=1024))]
@@ -61,11 +62,10 @@ impl LimitArgs {
         if max_cells == 0 {
             bail!("--max-boxes must be at least 1");
         }
-        let max_memory = match self.max_memory {
-            Some(0) => bail!("--max-memory must be at least 1 MiB"),
-            Some(m) => usize::try_from(m.saturating_mul(1 << 20)).unwrap_or(usize::MAX),
-            None => Limits::default().max_memory,
-        };
+        if self.max_memory == 0 {
+            bail!("--max-memory must be at least 1 MiB");
+        }
+        let max_memory = usize::try_from(self.max_memory.saturating_mul(1 << 20)).unwrap_or(usize::MAX);
         Ok(Limits { max_cells, timeout: seconds_arg(self.timeout)?, max_memory })
     }
 
@@ -99,8 +99,12 @@ pub(crate) struct ChainArgs {
     #[arg(long, value_name = "JOINT=VALUE", allow_hyphen_values = true)]
     lock: Vec<String>,
     /// Take every angle as written: no snapping of near quarter turns (see README).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "snap_tolerance")]
     exact_geometry: bool,
+    /// Snap angles within this many radians of a quarter turn (axes of a coordinate axis), at
+    /// most 0.01; 0 takes every value as written. Default 1e-5 (covers `1.5708`; `1.571` needs 3e-4).
+    #[arg(long, value_name = "RAD")]
+    snap_tolerance: Option<f64>,
     /// Analyse the full torus, ignoring the file's joint limits.
     #[arg(long)]
     ignore_limits: bool,
@@ -128,7 +132,8 @@ impl ChainArgs {
             })
             .collect::<Result<Vec<_>>>()?;
         let spec = manip3r::ChainSpec { base: self.base.clone(), tip: self.tip.clone(), tip_point, locks, length_tolerance: 0.0 };
-        Ok(manip3r::LoadOptions { spec, exact_geometry: self.exact_geometry, ignore_limits: self.ignore_limits })
+        let snap_tolerance = self.snap_tolerance.unwrap_or(linkspace::model::rounding::ANGLE_TOLERANCE);
+        Ok(manip3r::LoadOptions { spec, exact_geometry: self.exact_geometry, snap_tolerance, ignore_limits: self.ignore_limits })
     }
 }
 
@@ -318,7 +323,10 @@ where
     // negative number misses exponents); positionals keep clap's rule, so a flag is never
     // taken for a file name. An option whose value is optional (`--robot-description-topic
     // [TOPIC]`) keeps clap's rule too, or it would swallow the next flag as its value.
-    let command = Cli::command().mut_subcommands(|s| {
+    // `singularities` bounds the pending cells of a flooding search (near-degenerate geometry)
+    // well below the kernel's general default; its --help shows its own.
+    let command = Cli::command().mut_subcommand("singularities", |s| s.mut_arg("max_memory", |a| a.default_value(SINGULARITIES_MAX_MEMORY_MIB)));
+    let command = command.mut_subcommands(|s| {
         s.mut_args(|a| match (a.get_action().takes_values(), a.is_positional()) {
             (true, false) if a.get_num_args().is_some_and(|r| r.min_values() == 0) => a,
             (true, false) => a.allow_hyphen_values(true),
@@ -486,8 +494,8 @@ fn load_arm(path: &std::path::Path, uncertainty: f64, args: &ChainArgs) -> Resul
 /// cells and, separately, the node search's box tree (kept whole until the run ends).
 const SINGULARITIES_MAX_BOXES: u64 = 5_000_000;
 
-/// Default `--max-memory` of `singularities` (bytes of pending cells): 256 MiB.
-const SINGULARITIES_MAX_MEMORY: usize = 256 << 20;
+/// Default `--max-memory` of `singularities` (MiB of pending cells).
+const SINGULARITIES_MAX_MEMORY_MIB: &str = "256";
 
 /// `--timeout` as a duration: positive and finite, or absent.
 pub(crate) fn seconds_arg(t: Option<f64>) -> Result<Option<Duration>> {
@@ -500,12 +508,7 @@ pub(crate) fn seconds_arg(t: Option<f64>) -> Result<Option<Duration>> {
 
 fn singularities(args: SingularitiesArgs) -> Result<()> {
     manip3r::check_precision(args.precision)?;
-    let mut limits = args.limits.limits(SINGULARITIES_MAX_BOXES)?;
-    if args.limits.max_memory.is_none() {
-        // Pending cells of a flooding search (near-degenerate geometry) are bounded well below
-        // the kernel's general default: the run stops on `memory` with its cells listed.
-        limits.max_memory = SINGULARITIES_MAX_MEMORY;
-    }
+    let limits = args.limits.limits(SINGULARITIES_MAX_BOXES)?;
     let arm = load_arm(&args.urdf, args.uncertainty, &args.chain)?;
     let cancel = AtomicBool::new(false);
     let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };
@@ -546,9 +549,10 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     }
     let snaps = &prepared.snaps;
     if prepared.exact_geometry {
-        writeln!(out, "  rounding: off (--exact-geometry): angles taken as written").ok();
+        let why = if prepared.snap_tolerance == 0.0 { "--snap-tolerance 0" } else { "--exact-geometry" };
+        writeln!(out, "  rounding: off ({why}): angles taken as written").ok();
     } else {
-        writeln!(out, "  rounding: {} values snapped to quarter turns / coordinate axes (tolerance {:e} rad)", snaps.len(), linkspace::model::rounding::ANGLE_TOLERANCE).ok();
+        writeln!(out, "  rounding: {} values snapped to quarter turns / coordinate axes (tolerance {:e} rad)", snaps.len(), prepared.snap_tolerance).ok();
         for sn in snaps {
             if sn.what == "lock" {
                 writeln!(out, "    {} lock: {} -> {}", sn.joint, sn.original[0], sn.snapped[0]).ok();

@@ -525,3 +525,21 @@ fn one_search_of_the_image_runs_alone() {
     assert!(out.contains("type-II image nodes:") && out.contains("status incomplete"), "{out}");
     assert_eq!((nodes["search"].as_str(), nodes["status"].as_str()), (Some("nodes"), Some("incomplete")));
 }
+
+/// Each command's --help states the --max-memory default that command uses: `singularities`
+/// bounds its pending cells at 256 MiB, the others at the kernel's 2048.
+#[test]
+fn each_command_shows_its_own_memory_default() {
+    let line = |command: &str| {
+        let (ok, out, _) = run(&[command, "--help"]);
+        assert!(ok, "{command} --help");
+        // The option and its text (on the next lines when clap lays the help out long).
+        let lines: Vec<&str> = out.lines().collect();
+        lines.iter().position(|l| l.contains("--max-memory")).map(|k| lines[k..(k + 4).min(lines.len())].join(" ")).unwrap_or_default()
+    };
+    assert!(line("singularities").contains("[default: 256]"), "{}", line("singularities"));
+    for command in ["solve", "ik", "collisions", "distances", "loop-singularities"] {
+        assert!(line(command).contains("[default: 2048]"), "{command}: {}", line(command));
+    }
+    assert_clear_error(&["ik", &fixture("puma560.urdf"), "--point", "0.5,0,0.3", "--max-memory", "0"], "--max-memory must be at least 1 MiB");
+}

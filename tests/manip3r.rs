@@ -603,7 +603,7 @@ fn random_tip_points_on_the_last_link_give_the_ik_of_that_point() {
         );
         let m = urdf::parse(&xml).expect("parses");
         let spec = ChainSpec { tip_point: Some(("tool".into(), point)), ..Default::default() };
-        let p = linkspace::manip3r::prepare(&m, &LoadOptions { spec, exact_geometry: true, ignore_limits: true }).expect("a 3R chain");
+        let p = linkspace::manip3r::prepare(&m, &LoadOptions { spec, exact_geometry: true, ignore_limits: true, ..Default::default() }).expect("a 3R chain");
         let c = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
         // Forward kinematics of the point at θ₁ = 0, from the file's numbers.
         let origin = |o: [f64; 3], rpy: [f64; 3]| Isometry3::from_parts(Translation3::new(o[0], o[1], o[2]), UnitQuaternion::from_euler_angles(rpy[0], rpy[1], rpy[2]));

@@ -639,7 +639,7 @@ fn lock_values_are_snapped_like_the_files_angles() {
     let xml = format!("{}{}", &xml[..at], xml[at..].replacen("type=\"revolute\"", "type=\"continuous\"", 1));
     let lock = |v: f64, exact_geometry: bool| {
         let spec = ChainSpec { locks: vec![("joint_3".into(), v)], ..Default::default() };
-        prepare(&xml, &LoadOptions { spec, exact_geometry, ignore_limits: true }).expect("a 6R arm")
+        prepare(&xml, &LoadOptions { spec, exact_geometry, ignore_limits: true, ..Default::default() }).expect("a 6R arm")
     };
     for v in [0.0, std::f64::consts::PI, -3.14159] {
         let p = lock(v, false);
@@ -688,4 +688,96 @@ fn the_rounding_list_names_only_the_chain() {
     let p = prepare(&xml, &LoadOptions::default()).expect("robot a");
     let joints: Vec<&str> = p.snaps.iter().map(|s| s.joint.as_str()).collect();
     assert_eq!(joints, ["joint2"], "{:?}", p.snaps);
+}
+
+fn fixture(name: &str) -> String {
+    std::fs::read_to_string(format!("{}/tests/data/{name}", env!("CARGO_MANIFEST_DIR"))).expect("fixture")
+}
+
+/// A Doosan-style file writes every quarter turn `1.571` (2.04e-4 rad off): at the default
+/// tolerance nothing snaps, the wrist is not spherical and the verdict stays undecided; with
+/// the tolerance raised to 3e-4 every frame is an exact quarter turn, axes 2 and 3 are proven
+/// parallel and the verdict is certified. 0 takes the file as written, as --exact-geometry does.
+#[test]
+fn the_snapping_tolerance_can_cover_quarter_turns_written_with_three_decimals() {
+    use linkspace::app::{self, Arm, SingularitiesRequest};
+    let m = urdf::parse(&fixture("doosan_style_6r.urdf")).expect("parses");
+    let request = SingularitiesRequest { precision: 1e-4, nodes: false, search_anyway: false };
+    let load = |snap_tolerance: f64| Arm::load(&m, &LoadOptions { snap_tolerance, ..Default::default() }, 0.0).expect("a 6R arm");
+    let default = load(linkspace::model::rounding::ANGLE_TOLERANCE);
+    assert!(default.prepared.snaps.is_empty(), "{:?}", default.prepared.snaps);
+    let s = app::singularities(&default, &request, &bounded(2_000_000), &mut |_| {}).expect("runs");
+    assert_eq!((s.verdict.cuspidal, s.verdict.certified), (None, false), "{}", s.verdict.reason);
+    let raised = load(3e-4);
+    assert_eq!(raised.prepared.snaps.iter().filter(|s| s.what == "rpy").count(), 5, "{:?}", raised.prepared.snaps);
+    assert!(raised.prepared.choice.reason.contains("spherical wrist"), "{}", raised.prepared.choice.reason);
+    let s = app::singularities(&raised, &request, &bounded(2_000_000), &mut |_| {}).expect("runs");
+    assert_eq!((s.verdict.cuspidal, s.verdict.certified, s.verdict.aspects), (Some(false), true, Some(4)), "{}", s.verdict.reason);
+    let written = load(0.0);
+    assert!(written.prepared.exact_geometry && written.prepared.snaps.is_empty());
+    let refused = Arm::load(&m, &LoadOptions { snap_tolerance: 0.5, ..Default::default() }, 0.0).err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(refused.contains("snap tolerance must be"), "{refused}");
+    // The command line takes it on every arm command, and says what it used.
+    let bin = env!("CARGO_BIN_EXE_linkspace");
+    let file = format!("{}/tests/data/doosan_style_6r.urdf", env!("CARGO_MANIFEST_DIR"));
+    let out = std::process::Command::new(bin).args(["singularities", &file, "--snap-tolerance", "3e-4"]).output().expect("runs");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.starts_with("verdict: NON-CUSPIDAL (certified)") && stdout.contains("(tolerance 3e-4 rad)"), "{stdout}");
+    let out = std::process::Command::new(bin).args(["ik", &file, "--snap-tolerance", "3e-4", "--point", "0.5,0.2,0.6"]).output().expect("runs");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = std::process::Command::new(bin).args(["singularities", &file, "--snap-tolerance", "1e-3", "--exact-geometry"]).output().expect("runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && stderr.trim().lines().count() == 1, "{stderr}");
+}
+
+/// A 6R arm without a spherical wrist is analysed at the origin of joint 4; when that origin
+/// lies on axis 3 the map is degenerate, and the error names joint 4 and the link holding its
+/// origin (the reduced chain's own name for the point is not in the file).
+#[test]
+fn a_degenerate_joint_origin_is_named_by_the_files_joint_and_link() {
+    let joint = |name: &str, parent: &str, child: &str, origin: &str, axis: &str| {
+        format!("<joint name='{name}' type='revolute'><parent link='{parent}'/><child link='{child}'/><origin {origin}/><axis xyz='{axis}'/><limit lower='-3' upper='3' effort='1' velocity='1'/></joint>")
+    };
+    let xml = format!(
+        "<robot name='r'><link name='base'/><link name='l1'/><link name='l2'/><link name='l3'/><link name='l4'/><link name='l5'/><link name='l6'/>{}{}{}{}{}{}</robot>",
+        joint("j1", "base", "l1", "xyz='0 0 0.5'", "0 0 1"),
+        joint("j2", "l1", "l2", "rpy='-1.5707963267948966 0 0'", "0 0 1"),
+        joint("j3", "l2", "l3", "xyz='0.4 0 0'", "0 0 1"),
+        // On axis 3: joint 3 does not move this origin.
+        joint("j4", "l3", "l4", "xyz='0 0 0.1'", "1 0 0"),
+        joint("j5", "l4", "l5", "xyz='0.2 0 0'", "0 1 0"),
+        joint("j6", "l5", "l6", "xyz='0 0.1 0'", "1 0 0"),
+    );
+    let m = urdf::parse(&xml).expect("parses");
+    let err = linkspace::app::Arm::load(&m, &LoadOptions::default(), 0.0).err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(err.contains("the analysed point (the origin of joint 'j4', in link 'l3') is degenerate") && err.contains("--tip-point"), "{err}");
+    assert!(!err.contains("_origin"), "{err}");
+}
+
+/// An undecided verdict names what blocks it and what would settle it. The Doosan-style file
+/// (quarter turns written 1.571): axes 1 and 2 nearly perpendicular and nearly meeting, the
+/// wrist nearly spherical, and --snap-tolerance 3e-4 (which certifies it, see above). The iiwa
+/// with joint 3 locked at 0.5: nothing near-degenerate and nothing to snap; its undecided boxes
+/// sit where det Df and its gradient may both vanish, which a finer precision does not settle
+/// (the same 336 boxes at 1e-4, 1e-5 and 1e-6).
+#[test]
+fn an_undecided_verdict_names_its_near_degeneracy_and_the_option_that_settles_it() {
+    use linkspace::app::{self, Arm, SingularitiesRequest};
+    let request = SingularitiesRequest { precision: 1e-4, nodes: false, search_anyway: false };
+    let doosan = Arm::load(&urdf::parse(&fixture("doosan_style_6r.urdf")).expect("parses"), &LoadOptions::default(), 0.0).expect("a 6R arm");
+    let v = app::singularities(&doosan, &request, &bounded(2_000_000), &mut |_| {}).expect("runs").verdict;
+    assert_eq!(v.cuspidal, None);
+    for needle in ["axes of joint1 and joint2 within 2.0e-4 rad of perpendicular", "axes of joint1 and joint2 within 7.0e-6 m of meeting", "a nearly spherical wrist (axes of joint4, joint5, joint6 miss one point by 2.5e-5 m", "written up to 2.0e-4 rad off a quarter turn", "--snap-tolerance 3e-4 would snap them"] {
+        assert!(v.reason.contains(needle), "{needle}: {}", v.reason);
+    }
+    let spec = ChainSpec { locks: vec![("joint_3".into(), 0.5)], ..Default::default() };
+    let iiwa = Arm::load(&urdf::parse(&text("iiwa14.urdf")).expect("parses"), &LoadOptions { spec, ..Default::default() }, 0.0).expect("a 6R arm");
+    let v = app::singularities(&iiwa, &request, &bounded(2_000_000), &mut |_| {}).expect("runs").verdict;
+    assert_eq!(v.cuspidal, None);
+    assert!(v.reason.contains("no near-degenerate geometry") && !v.reason.contains("--snap-tolerance"), "{}", v.reason);
+    assert!(v.reason.contains("crossing singular branches") || v.reason.contains("--precision 1e-5"), "{}", v.reason);
+    // A decided verdict is unchanged.
+    let puma = Arm::load(&urdf::parse(&text("puma560.urdf")).expect("parses"), &LoadOptions::default(), 0.0).expect("puma");
+    let v = app::singularities(&puma, &request, &bounded(2_000_000), &mut |_| {}).expect("runs").verdict;
+    assert!(v.certified && !v.reason.contains("near-degenerate"), "{}", v.reason);
 }

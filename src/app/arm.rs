@@ -49,7 +49,12 @@ impl Arm {
     /// metres (0 for the nominal geometry).
     pub fn load(mechanism: &Mechanism, options: &LoadOptions, uncertainty: f64) -> Result<Self, Manip3rError> {
         let prepared = manip3r::prepare(mechanism, options)?;
-        let chain = Chain3R::from_mechanism(&prepared.mechanism, uncertainty)?;
+        // The chain names its point by the reduced mechanism's link, made up for a joint's origin.
+        let chain = Chain3R::from_mechanism(&prepared.mechanism, uncertainty).map_err(|e| match (e, prepared.choice.origin_text()) {
+            (Manip3rError::TipDoesNotMove(_), Some(point)) => Manip3rError::TipDoesNotMove(point),
+            (Manip3rError::Degenerate(_), Some(point)) => Manip3rError::Degenerate(point),
+            (e, _) => e,
+        })?;
         let frame = BaseFrame::of(&prepared.mechanism, &chain);
         let branches = manip3r::branches::of(&prepared.mechanism, &chain);
         Ok(Self { prepared, chain, frame, branches })
@@ -108,7 +113,12 @@ pub fn singularities(arm: &Arm, request: &SingularitiesRequest, control: &Contro
         manip3r::singularities(chain, request.precision, nodes_searched, control, progress)?
     };
     // The verdict reads the full-torus run; the limits then filter what is listed.
-    let verdict = verdict::decide(mechanism, chain, &run, &arm.prepared.limits, &control.remaining_since(start));
+    let mut verdict = verdict::decide(mechanism, chain, &run, &arm.prepared.limits, &control.remaining_since(start));
+    // An undecided verdict says what blocks it (not for uncertain lengths, nor for certified cusps
+    // outside the limits: those reasons say what to do).
+    if verdict.cuspidal.is_none() && chain.uncertainty == 0.0 && !run.cusps.cusps.iter().any(|c| c.unique) {
+        verdict.reason.push_str(&verdict::blockers(&arm.prepared, chain, request.precision, &control.remaining_since(start)));
+    }
     let limit_effect = arm.prepared.limits.apply(&mut run);
     let mut explained = None;
     let mut not_searched = None;

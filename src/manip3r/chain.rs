@@ -483,10 +483,10 @@ impl Chain3R {
             }
         }
         if spread <= 1e-12 * (1.0 + scale * scale) {
-            return Err(Manip3rError::TipDoesNotMove(self.tip_link.clone()));
+            return Err(Manip3rError::TipDoesNotMove(format!("'{}'", self.tip_link)));
         }
         if det_max <= 1e-9 * (1.0 + scale).powi(4) {
-            return Err(Manip3rError::Degenerate(self.tip_link.clone()));
+            return Err(Manip3rError::Degenerate(format!("'{}'", self.tip_link)));
         }
         Ok(())
     }

@@ -64,11 +64,14 @@ pub enum Manip3rError {
     #[error("not a 3R chain: {0}")]
     NotThreeR(String),
     /// The end point does not move at all.
-    #[error("the analysed point '{0}' does not move with joints 2 and 3: choose another with --tip-point LINK@X,Y,Z")]
+    #[error("the analysed point {0} does not move with joints 2 and 3: choose another with --tip-point LINK@X,Y,Z")]
     TipDoesNotMove(String),
     /// det Df vanishes identically: the end point moves along a curve only.
-    #[error("the map of the analysed point '{0}' is degenerate: det Df vanishes everywhere (is the point on the axis of joint 2 or 3?): choose another with --tip-point LINK@X,Y,Z")]
+    #[error("the map of the analysed point {0} is degenerate: det Df vanishes everywhere (is the point on the axis of joint 2 or 3?): choose another with --tip-point LINK@X,Y,Z")]
     Degenerate(String),
+    /// The snapping tolerance is not in [0, `rounding::LARGEST_TOLERANCE`].
+    #[error("snap tolerance must be a number of radians in [0, 0.01], got {0}")]
+    BadSnapTolerance(f64),
     /// The requested precision is not in (0, 1).
     #[error("precision must be a number in (0, 1), got {0}")]
     BadPrecision(f64),
@@ -149,16 +152,25 @@ pub fn singularities(chain: &Chain3R, precision: f64, with_nodes: bool, control:
 }
 
 /// How a mechanism is turned into the analysed 3R chain: the rounding policy, the chain
-/// choice and the joint limits (CLI flags `--exact-geometry`, `--base`, `--tip`, `--tip-point`,
-/// `--lock`, `--ignore-limits`).
-#[derive(Clone, Debug, Default)]
+/// choice and the joint limits (CLI flags `--exact-geometry`, `--snap-tolerance`, `--base`,
+/// `--tip`, `--tip-point`, `--lock`, `--ignore-limits`).
+#[derive(Clone, Debug)]
 pub struct LoadOptions {
     /// Which chain and point.
     pub spec: select::ChainSpec,
     /// Skip the rounding policy (`crate::model::rounding`).
     pub exact_geometry: bool,
+    /// The rounding policy's tolerance (radians; default `rounding::ANGLE_TOLERANCE`); 0 takes
+    /// every value as written, as `exact_geometry` does.
+    pub snap_tolerance: f64,
     /// Analyse the full torus whatever the files' limits say.
     pub ignore_limits: bool,
+}
+
+impl Default for LoadOptions {
+    fn default() -> Self {
+        Self { spec: select::ChainSpec::default(), exact_geometry: false, snap_tolerance: crate::model::rounding::ANGLE_TOLERANCE, ignore_limits: false }
+    }
 }
 
 /// A real arm made ready for the 3R analyses.
@@ -170,25 +182,36 @@ pub struct Prepared {
     pub choice: select::Choice,
     /// What the rounding policy changed (empty with exact geometry).
     pub snaps: Vec<crate::model::rounding::Snap>,
-    /// Whether the rounding policy was skipped.
+    /// Whether the rounding policy was skipped (`--exact-geometry`, or a tolerance of 0).
     pub exact_geometry: bool,
+    /// The rounding policy's tolerance as asked (radians).
+    pub snap_tolerance: f64,
+    /// The largest offset from a quarter turn or a coordinate axis left as written on the chain
+    /// (`rounding::offsets`), when at most `rounding::LARGEST_TOLERANCE`: what a larger
+    /// tolerance would snap.
+    pub unsnapped: Option<f64>,
     /// Limits of the three joints, `None` where absent or ignored.
     pub limits: limits::JointLimits,
 }
 
 /// Rounding, then chain choice: the one way every 3R command reads a file.
 pub fn prepare(m: &crate::model::Mechanism, options: &LoadOptions) -> Result<Prepared, Manip3rError> {
-    let (rounded, mut snaps) = if options.exact_geometry { (m.clone(), Vec::new()) } else { crate::model::rounding::snap(m) };
+    let tolerance = options.snap_tolerance;
+    if !crate::model::rounding::valid_tolerance(tolerance) {
+        return Err(Manip3rError::BadSnapTolerance(tolerance));
+    }
+    let exact_geometry = options.exact_geometry || tolerance == 0.0;
+    let (rounded, mut snaps) = if exact_geometry { (m.clone(), Vec::new()) } else { crate::model::rounding::snap(m, tolerance) };
     // Lock values are joint angles written as the file's are: snapped alike.
     let mut spec = options.spec.clone();
-    if !options.exact_geometry {
+    if !exact_geometry {
         for (joint, v) in &mut spec.locks {
             // Not past a limit the written value honours (a lock at a limit written 3.14159).
             let within = |q: f64| match rounded.joint(joint).map(|j| rounded.joints[j].kind) {
                 Some(crate::model::JointKind::Revolute { limits: Some((lo, hi)) }) => lo <= q && q <= hi,
                 _ => true,
             };
-            if let Some(q) = crate::model::rounding::snap_value(*v).filter(|&q| within(q)) {
+            if let Some(q) = crate::model::rounding::snap_value(*v, tolerance).filter(|&q| within(q)) {
                 snaps.push(crate::model::rounding::Snap { joint: joint.clone(), what: "lock".into(), original: [*v, 0.0, 0.0], snapped: [q, 0.0, 0.0] });
                 *v = q;
             }
@@ -199,8 +222,15 @@ pub fn prepare(m: &crate::model::Mechanism, options: &LoadOptions) -> Result<Pre
     // fingers off it do not enter).
     let on_chain: Vec<&str> = rounded.link(&choice.tip).map_or(Vec::new(), |t| rounded.path_to(t).iter().map(|&j| rounded.joints[j].name.as_str()).collect());
     snaps.retain(|s| on_chain.contains(&s.joint.as_str()));
+    let unsnapped = rounded
+        .joints
+        .iter()
+        .filter(|j| on_chain.contains(&j.name.as_str()))
+        .flat_map(crate::model::rounding::offsets)
+        .filter(|&d| d > 0.0 && d <= crate::model::rounding::LARGEST_TOLERANCE)
+        .reduce(f64::max);
     let limits = limits::JointLimits::of(&mechanism, &choice.joints, options.ignore_limits);
-    Ok(Prepared { mechanism, choice, snaps, exact_geometry: options.exact_geometry, limits })
+    Ok(Prepared { mechanism, choice, snaps, exact_geometry, snap_tolerance: tolerance, unsnapped, limits })
 }
 
 /// For an arm whose verdict is structural (`verdict::parallel_structure`): the cusp search's

@@ -70,6 +70,20 @@ pub struct Choice {
     pub wrist_miss: f64,
     /// Why this chain and point.
     pub reason: String,
+    /// The joint whose frame origin is the analysed point, when that is the choice (a 6R arm
+    /// without a spherical wrist): the reduced chain's link for it is made up.
+    pub origin_of: Option<String>,
+    /// Six joints without a spherical wrist: a lower bound (metres) of how far the wrist axes
+    /// miss one point, when measured.
+    pub wrist_spread: Option<f64>,
+}
+
+impl Choice {
+    /// The analysed point as the file names it, for messages, when the reduced chain's name for
+    /// it is made up: the joint whose origin it is and the link that holds it.
+    pub fn origin_text(&self) -> Option<String> {
+        self.origin_of.as_ref().map(|joint| format!("(the origin of joint '{joint}', in link '{}')", self.point_link))
+    }
 }
 
 /// The reduced mechanism and what was chosen.
@@ -205,6 +219,8 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
         point: [0.0; 3],
         wrist_miss: 0.0,
         reason: String::new(),
+        origin_of: None,
+        wrist_spread: None,
     };
     let lock_text = if spec.locks.is_empty() { String::new() } else { format!(" with {} locked", spec.locks.iter().map(|(n, v)| format!("{n}={v}")).collect::<Vec<_>>().join(", ")) };
     // Where the point hangs (None: keep the whole path, the tip's origin being the point).
@@ -276,6 +292,8 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
                 // The origin of joint 4 lies on axis 4 only; joints 5 and 6 do not move it
                 // because it is in joint 4's parent link.
                 choice.wrist_miss = 0.0;
+                choice.origin_of = Some(wrist_joints[0].clone());
+                choice.wrist_spread = bound;
                 Some(Attach::UnderJoint3(o, format!("{}_origin", wrist_joints[0])))
             }
         }

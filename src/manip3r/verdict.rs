@@ -166,6 +166,91 @@ pub fn parallel_structure(m: &Mechanism) -> Option<Verdict> {
     })
 }
 
+/// Consecutive axes within this angle (radians) of parallel or perpendicular, or this distance
+/// (metres) of meeting, without being proven so, are the near-degeneracies an undecided verdict
+/// names.
+const NEAR_ANGLE: f64 = 1e-2;
+const NEAR_DISTANCE: f64 = 1e-3;
+
+/// The near-degeneracies of the pairs of axes 1-2 and 2-3 of a reduced mechanism (`joints` its
+/// three joints' names), measured at θ₂ = θ₃ = 0 (their angles and distances do not depend on
+/// the joints): each a phrase with an upper bound of its measure.
+pub fn near_degeneracies(mechanism: &Mechanism, joints: &[String; 3]) -> Vec<String> {
+    let Some(Geometry { a1, o2, d2, o3, d3, .. }) = geometry(mechanism) else {
+        return Vec::new();
+    };
+    let exact_zero = |x: Interval| x.inf() == 0.0 && x.sup() == 0.0;
+    let mut found = Vec::new();
+    for (k, (oa, da, ob, db)) in [([point(0.0); 3], a1, o2, d2), (o2, d2, o3, d3)].into_iter().enumerate() {
+        let names = format!("axes of {} and {}", joints[k], joints[k + 1]);
+        let norms = (dot(&da, &da) * dot(&db, &db)).sqrt();
+        let c = cross(&da, &db);
+        let sin = (dot(&c, &c).sqrt() / norms).sup();
+        if !c.iter().all(|x| exact_zero(*x)) && sin <= NEAR_ANGLE {
+            // Nearly parallel: their distance is not a measure worth stating.
+            found.push(format!("{names} within {:.1e} rad of parallel", sin.asin()));
+            continue;
+        }
+        let along = dot(&da, &db);
+        let cos = (along.abs() / norms).sup();
+        if !exact_zero(along) && cos <= NEAR_ANGLE {
+            found.push(format!("{names} within {:.1e} rad of perpendicular", cos.asin()));
+        }
+        // The distance between the lines: |(ob − oa)·(da × db)| / |da × db|.
+        let offset = dot(&sub(&ob, &oa), &c);
+        let distance = (offset.abs() / dot(&c, &c).sqrt()).sup();
+        if !exact_zero(offset) && distance <= NEAR_DISTANCE {
+            found.push(format!("{names} within {distance:.1e} m of meeting"));
+        }
+    }
+    found
+}
+
+/// The smallest tolerance written with one digit that covers `offset` (2.04e-4 → 3e-4).
+fn covering(offset: f64) -> f64 {
+    let unit = 10f64.powf(offset.log10().floor());
+    let mut digit = (offset / unit).ceil();
+    loop {
+        let t: f64 = format!("{:.0e}", digit * unit).parse().expect("a number");
+        if t >= offset {
+            return t;
+        }
+        digit += 1.0;
+    }
+}
+
+/// What an undecided verdict adds to its reason: the near-degeneracies measured on the chain
+/// (axes nearly parallel, perpendicular or meeting; a nearly spherical wrist), and the option
+/// that would settle them (`--snap-tolerance` covering the values left as written). With none
+/// measured and nothing to snap, whether a finer `--precision` can help: yes where det Df = 0
+/// is proven a smooth curve (the undecided boxes are only too wide), not where det and its
+/// gradient may both vanish (crossing branches). That proof runs within `control`.
+pub fn blockers(prepared: &super::Prepared, chain: &Chain3R, precision: f64, control: &Control) -> String {
+    let mut near = near_degeneracies(&prepared.mechanism, &chain.joints);
+    if let Some(d) = prepared.choice.wrist_spread.filter(|&d| d <= NEAR_DISTANCE) {
+        near.push(format!("a nearly spherical wrist (axes of {} miss one point by {d:.1e} m, so the origin of {} is analysed, not the wrist centre)", prepared.choice.wrist_joints.join(", "), prepared.choice.wrist_joints[0]));
+    }
+    let mut text = if near.is_empty() { String::new() } else { format!("; near-degenerate geometry: {}", near.join("; ")) };
+    match prepared.unsnapped {
+        Some(offset) => {
+            let t = covering(offset);
+            let option = match (prepared.exact_geometry, t <= crate::model::rounding::ANGLE_TOLERANCE) {
+                (true, true) => "dropping --exact-geometry".to_string(),
+                (true, false) => format!("--snap-tolerance {t:e} instead of --exact-geometry"),
+                (false, _) => format!("--snap-tolerance {t:e}"),
+            };
+            text.push_str(&format!("; values on the chain are written up to {offset:.1e} rad off a quarter turn or a coordinate axis: {option} would snap them"));
+        }
+        None if !near.is_empty() => text.push_str("; no value on the chain is near enough a quarter turn to snap, so no option settles it"),
+        None => match smooth_singular_set(chain, 1e-6, &control.max_cells(SMOOTH_CELLS)) {
+            Smooth::Proven => text.push_str(&format!("; no near-degenerate geometry, and det Df = 0 is proven a smooth curve: the undecided boxes are only too wide, a finer --precision {:.0e} may settle them", precision / 10.0)),
+            Smooth::Undecided(n) => text.push_str(&format!("; no near-degenerate geometry, but det Df and its gradient may both vanish in {n} boxes (crossing singular branches?), which a finer --precision is not expected to settle")),
+            Smooth::Stopped(..) => {}
+        },
+    }
+    text
+}
+
 /// Outcome of the smoothness proof of det Df = 0.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Smooth {

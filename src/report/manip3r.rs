@@ -299,7 +299,7 @@ pub struct Rounding {
 impl Rounding {
     /// From a prepared arm.
     pub fn of(p: &Prepared) -> Self {
-        Rounding { snapping: !p.exact_geometry, tolerance: crate::model::rounding::ANGLE_TOLERANCE, snaps: p.snaps.clone() }
+        Rounding { snapping: !p.exact_geometry, tolerance: p.snap_tolerance, snaps: p.snaps.clone() }
     }
 }
 

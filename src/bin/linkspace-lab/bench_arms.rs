@@ -200,7 +200,7 @@ pub fn baseline_child(args: &Bench3rArgs, file: &Path) -> Result<()> {
         .collect::<Result<Vec<_>>>()?;
     // What `linkspace singularities FILE --lock ... --ignore-limits` reads: the same rounding
     // and chain choice.
-    let options = LoadOptions { spec: ChainSpec { locks, length_tolerance: 0.0, ..Default::default() }, exact_geometry: false, ignore_limits: true };
+    let options = LoadOptions { spec: ChainSpec { locks, length_tolerance: 0.0, ..Default::default() }, exact_geometry: false, ignore_limits: true, ..Default::default() };
     let xml = std::fs::read_to_string(file).with_context(|| format!("reading {}", file.display()))?;
     let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", file.display()))?;
     let chain = linkspace::app::Arm::load(&mechanism, &options, 0.0).with_context(|| format!("loading {}", file.display()))?.chain;
