@@ -531,3 +531,69 @@ fn axis3(joint: &Joint) -> V3 {
     let a = joint.axis;
     [point(a[0]), point(a[1]), point(a[2])]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn line(o: Vector3<f64>, u: Vector3<f64>) -> (V3, V3) {
+        ([o[0], o[1], o[2]].map(point), [u[0], u[1], u[2]].map(point))
+    }
+
+    fn unit(a: f64, b: f64) -> Vector3<f64> {
+        Vector3::new(a.cos() * b.cos(), a.sin() * b.cos(), b.sin())
+    }
+
+    proptest! {
+        /// Three axes through one point, each given by a point anywhere along it (as frames can
+        /// be placed anywhere on their axes): proven to meet, at that point.
+        #[test]
+        fn concurrent_axes_meet_wherever_their_frames_are(
+            c in prop::array::uniform3(-1.0f64..1.0),
+            dirs in prop::array::uniform3((0.0f64..6.28, -1.5f64..1.5)),
+            along in prop::array::uniform3(-1.0f64..1.0),
+        ) {
+            let c = Vector3::from(c);
+            let us = dirs.map(|(a, b)| unit(a, b));
+            // Skip nearly parallel pairs: then no point is fixed by the geometry.
+            prop_assume!((0..3).all(|i| us[i].cross(&us[(i + 1) % 3]).norm() > 0.1));
+            let axes = [0, 1, 2].map(|k| line(c + us[k] * along[k], us[k]));
+            match wrist(&axes, &|_| LENGTH_TOLERANCE) {
+                Wrist::Spherical { centre, miss } => {
+                    prop_assert!(miss <= LENGTH_TOLERANCE);
+                    prop_assert!((Vector3::from(centre.map(|x| x.mid())) - c).norm() < 1e-9);
+                }
+                _ => prop_assert!(false, "not proven to meet"),
+            }
+        }
+
+        /// The same with the third axis moved off the point by more than twice the tolerance:
+        /// proven to miss (or, very close to parallel, at least never claimed to meet).
+        #[test]
+        fn an_offset_axis_is_proven_apart(
+            c in prop::array::uniform3(-1.0f64..1.0),
+            dirs in prop::array::uniform3((0.0f64..6.28, -1.5f64..1.5)),
+            offset in 1e-5f64..0.2,
+        ) {
+            let c = Vector3::from(c);
+            let us = dirs.map(|(a, b)| unit(a, b));
+            prop_assume!((0..3).all(|i| us[i].cross(&us[(i + 1) % 3]).norm() > 0.1));
+            let away = us[2].cross(&us[0]).normalize() * offset;
+            let axes = [line(c, us[0]), line(c, us[1]), line(c + away, us[2])];
+            match wrist(&axes, &|_| LENGTH_TOLERANCE) {
+                Wrist::Apart(t) => prop_assert_eq!(t, LENGTH_TOLERANCE),
+                Wrist::Spherical { .. } => prop_assert!(false, "an axis {offset} m off was said to meet"),
+                Wrist::Undecided => prop_assert!(offset < 1e-3, "undecided at {offset} m"),
+            }
+        }
+    }
+
+    #[test]
+    fn parallel_wrist_axes_are_apart() {
+        // Axes 4 and 6 parallel 0.15 apart, axis 5 meeting axis 4 (a CRX-like wrist).
+        let axes = [line(Vector3::zeros(), Vector3::x()), line(Vector3::new(0.54, -0.15, 0.0), Vector3::y()), line(Vector3::new(0.7, -0.15, 0.0), Vector3::x())];
+        assert!(matches!(wrist(&axes, &|_| LENGTH_TOLERANCE), Wrist::Apart(_)));
+        assert_eq!(nearest_on_first(&[0.0; 3], &[1.0, 0.0, 0.0], &[0.54, -0.15, 0.0], &[0.0, 1.0, 0.0]), Some([0.54, 0.0, 0.0]));
+    }
+}
