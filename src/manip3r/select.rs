@@ -13,10 +13,14 @@
 //!   links that branch off (`tool0` beside `flange`) stop the descent).
 //! - Joints named in `locks` become fixed at the given value (a 7R arm is a 6R arm then).
 //! - Three revolute joints: the point is the tip link's origin (or `tip_point`).
-//! - Six: joints 1–3 position the wrist. With a spherical wrist (axes 4, 5 and 6 through one
-//!   point) the point is the wrist centre, which joints 4–6 do not move; otherwise (e.g. UR)
-//!   the origin of joint 4's frame, on axis 4, which joints 4–6 do not move either; `tip_point`
-//!   picks another point.
+//! - Six: joints 1–3 position the wrist, judged from the axes of joints 4–6 wherever the file
+//!   puts their frames (`wrist`: proven to meet within the tolerance, proven not to, or
+//!   neither). With a spherical wrist the point is the wrist centre, which joints 4–6 do not
+//!   move; otherwise a point of joint 3's child, which they do not move either: the origin of
+//!   joint 4's frame (e.g. UR), or the point of axis 4 nearest axis 5 when that origin is on
+//!   axis 3 (e.g. Fanuc CRX), where joint 3 would not move it; `tip_point` picks another point.
+//! - `Scope` says what a verdict on the choice is about: the arm (a 3R arm, or a spherical
+//!   wrist's centre), or only a 3R sub-chain and a point (the headline then names both).
 //! - A point on a link after joint 3 is accepted only when every revolute axis between joint 3
 //!   and that link passes through it (within `length_tolerance`), so the point is moved by
 //!   joints 1–3 alone.
