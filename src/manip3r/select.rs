@@ -555,7 +555,7 @@ mod tests {
         #[test]
         fn concurrent_axes_meet_wherever_their_frames_are(
             c in prop::array::uniform3(-1.0f64..1.0),
-            dirs in prop::array::uniform3((0.0f64..6.28, -1.5f64..1.5)),
+            dirs in prop::array::uniform3((0.0f64..std::f64::consts::TAU, -1.5f64..1.5)),
             along in prop::array::uniform3(-1.0f64..1.0),
         ) {
             let c = Vector3::from(c);
@@ -577,7 +577,7 @@ mod tests {
         #[test]
         fn an_offset_axis_is_proven_apart(
             c in prop::array::uniform3(-1.0f64..1.0),
-            dirs in prop::array::uniform3((0.0f64..6.28, -1.5f64..1.5)),
+            dirs in prop::array::uniform3((0.0f64..std::f64::consts::TAU, -1.5f64..1.5)),
             offset in 1e-5f64..0.2,
         ) {
             let c = Vector3::from(c);
