@@ -517,7 +517,11 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     let report = report::manip3r::SingularityReport::of(&arm, &found);
     let (prepared, verdict, effect) = (&arm.prepared, &found.verdict, &found.limit_effect);
     let mut out = std::io::stdout().lock();
-    writeln!(out, "{}", verdict.line()).ok();
+    let scope = &prepared.choice.scope;
+    writeln!(out, "{}", verdict.headline(scope)).ok();
+    if let Some(open) = scope.not_answered.as_ref().filter(|_| !scope.stands_for_arm) {
+        writeln!(out, "  {open}").ok();
+    }
     let node_text = report.nodes.as_ref().map_or("nodes not searched".to_string(), |n| format!("{} nodes", n.len()));
     let undecided = report.undecided_total[0] + report.undecided_total[1];
     writeln!(

@@ -781,3 +781,111 @@ fn an_undecided_verdict_names_its_near_degeneracy_and_the_option_that_settles_it
     let v = app::singularities(&puma, &request, &bounded(2_000_000), &mut |_| {}).expect("runs").verdict;
     assert!(v.certified && !v.reason.contains("near-degenerate"), "{}", v.reason);
 }
+
+fn data(name: &str) -> String {
+    std::fs::read_to_string(format!("{}/tests/data/{name}", env!("CARGO_MANIFEST_DIR"))).expect("fixture")
+}
+
+/// Rotation about x by k quarter turns, exactly (the fixtures' 1.5708 snapped).
+fn rx(k: i32) -> Matrix3<f64> {
+    let (c, s) = [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)][k.rem_euclid(4) as usize];
+    Matrix3::new(1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c)
+}
+
+/// The common point of two lines `p + s u` and `q + t v` that meet, from the 2x2 normal
+/// equations of their closest points (plain floating point, no linkspace code).
+fn meeting_point(p: Vector3<f64>, u: Vector3<f64>, q: Vector3<f64>, v: Vector3<f64>) -> Vector3<f64> {
+    let w = p - q;
+    let (a, b, c, d, e) = (u.dot(&u), u.dot(&v), v.dot(&v), u.dot(&w), v.dot(&w));
+    p + u * ((b * e - c * d) / (a * c - b * b))
+}
+
+/// The IRB 140 layout (joint 4's frame on axis 3, joint 6's at the flange) is read at its wrist
+/// centre without options, where axes 4, 5 and 6 meet as computed here from the file's numbers;
+/// the CRX-style cobot, whose axis 6 is 0.150 m off axis 4, is read at the point where axes 4
+/// and 5 meet (joint 4's origin is on axis 3, where joint 3 would not move it), and its verdict
+/// names the sub-chain and the point.
+#[test]
+fn vendor_frame_layouts_are_read_at_the_points_their_axes_fix() {
+    // IRB 140 in link_3's frame: joint 4 at the origin turned Rx(pi/2), joint 5 at (0, 0, 0.38)
+    // of joint 4's frame turned Rx(-pi/2), joint 6 at (0, -0.065, 0) of joint 5's turned Rx(pi/2);
+    // every axis is z of its frame.
+    let z = Vector3::z();
+    let (r4, r5, r6) = (rx(1), rx(1) * rx(-1), rx(1) * rx(-1) * rx(1));
+    let (o4, o5) = (Vector3::zeros(), rx(1) * Vector3::new(0.0, 0.0, 0.38));
+    let o6 = o5 + r5 * Vector3::new(0.0, -0.065, 0.0);
+    let centre = meeting_point(o4, r4 * z, o5, r5 * z);
+    assert!((centre - o6).cross(&(r6 * z)).norm() < 1e-15, "axis 6 passes through the centre of axes 4 and 5");
+    let p = prepare(&data("abb_irb140_style.urdf"), &LoadOptions::default()).expect("no options needed");
+    assert_eq!((p.choice.point_link.as_str(), p.choice.spherical_wrist), ("link_3", Some(true)), "{}", p.choice.reason);
+    assert!((Vector3::from(p.choice.point) - centre).norm() < 1e-12, "{:?} vs {centre}", p.choice.point);
+    assert!(p.choice.scope.stands_for_arm && p.choice.scope.not_answered.is_none(), "{:?}", p.choice.scope);
+    let v = verdict::parallel_structure(&p.mechanism).expect("axes 2 and 3 proven parallel");
+    assert_eq!((v.cuspidal, v.aspects, v.max_ik_solutions), (Some(false), Some(4), Some(4)));
+    // Taken literally, 1.5708 turns the wrist frames by 3.7e-6 rad: the axes still meet within
+    // what a turn of the snapping tolerance allows, at the same centre to that order.
+    let exact = prepare(&data("abb_irb140_style.urdf"), &LoadOptions { exact_geometry: true, ..Default::default() }).expect("literal angles");
+    assert_eq!(exact.choice.spherical_wrist, Some(true), "{}", exact.choice.reason);
+    assert!((Vector3::from(exact.choice.point) - centre).norm() < 1e-5, "{:?}", exact.choice.point);
+
+    // CRX in link_3's frame (all frames aligned): axis 4 along x through the origin, axis 5
+    // along y through (0.54, -0.15, 0), axis 6 along x through (0.70, -0.15, 0).
+    let (x, y) = (Vector3::x(), Vector3::y());
+    let point = meeting_point(Vector3::zeros(), x, Vector3::new(0.54, -0.15, 0.0), y);
+    assert!((Vector3::new(0.70, -0.15, 0.0) - point).cross(&x).norm() > 0.1, "axis 6 misses it");
+    let crx = prepare(&data("fanuc_crx10ial_style.urdf"), &LoadOptions::default()).expect("no options needed");
+    assert_eq!((crx.choice.point_link.as_str(), crx.choice.spherical_wrist), ("link_3", Some(false)), "{}", crx.choice.reason);
+    assert!((Vector3::from(crx.choice.point) - point).norm() < 1e-12, "{:?} vs {point}", crx.choice.point);
+    let scope = &crx.choice.scope;
+    assert!(!scope.stands_for_arm, "{scope:?}");
+    assert!(scope.subject.starts_with("3R sub-chain joints 1-3 (joint_1, joint_2, joint_3) of 'fanuc_crx10ial', point link_3@0.54,0,0"), "{}", scope.subject);
+    let v = verdict::parallel_structure(&crx.mechanism).expect("axes 2 and 3 proven parallel");
+    assert_eq!(v.cuspidal, Some(false), "the 3R sub-chain's verdict");
+    assert!(v.headline(scope).starts_with(&format!("verdict of the {}: NON-CUSPIDAL (certified)", scope.subject)), "{}", v.headline(scope));
+    assert!(v.scoped(scope).reason.starts_with(&scope.subject) && v.scoped(scope).reason.contains("not answered"));
+}
+
+/// The CLI's first line says what the verdict is about, and the JSON says whether it is the
+/// arm's; a spherical-wrist arm's line is unchanged.
+#[test]
+fn a_sub_chain_verdict_names_its_sub_chain_and_point() {
+    let bin = env!("CARGO_BIN_EXE_linkspace");
+    let json = std::env::temp_dir().join(format!("linkspace-crx-{}.json", std::process::id()));
+    let out = std::process::Command::new(bin)
+        .args(["singularities", &format!("{}/tests/data/fanuc_crx10ial_style.urdf", env!("CARGO_MANIFEST_DIR")), "--json", json.to_str().expect("utf-8")])
+        .output()
+        .expect("runs");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert!(lines[0].starts_with("verdict of the 3R sub-chain joints 1-3 (joint_1, joint_2, joint_3) of 'fanuc_crx10ial', point link_3@0.54,0,0: NON-CUSPIDAL (certified)"), "{stdout}");
+    assert!(lines[1].contains("6-joint arm 'fanuc_crx10ial' is cuspidal is a different question, not answered"), "{stdout}");
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("written")).expect("JSON");
+    std::fs::remove_file(&json).ok();
+    assert_eq!(report["chain"]["scope"]["stands_for_arm"], false, "{}", report["chain"]);
+    assert_eq!(report["chain"]["spherical_wrist"], false);
+    assert!(report["chain"]["scope"]["subject"].as_str().is_some_and(|s| s.contains("link_3@0.54,0,0")));
+}
+
+/// Which bundled arms' verdicts stand for the arm: the spherical wrists' (at their centre), not
+/// the UR's (a point of its sub-chain) nor a locked iiwa's; the verdicts themselves unchanged.
+#[test]
+fn bundled_arms_say_whether_their_verdict_is_the_arms() {
+    for (file, locks, spherical, arm) in [
+        ("puma560.urdf", vec![], Some(true), true),
+        ("kuka_kr16.urdf", vec![], Some(true), true),
+        ("staubli_tx90.urdf", vec![], Some(true), true),
+        ("ur5.urdf", vec![], Some(false), false),
+        ("iiwa14.urdf", vec![("joint_3".to_string(), 0.0)], Some(true), false),
+    ] {
+        let spec = ChainSpec { locks, ..Default::default() };
+        let p = prepare(&text(file), &LoadOptions { spec, ..Default::default() }).expect(file);
+        assert_eq!((p.choice.spherical_wrist, p.choice.scope.stands_for_arm), (spherical, arm), "{file}: {:?}", p.choice.scope);
+        assert_eq!(p.choice.scope.not_answered.is_some(), !arm, "{file}");
+    }
+    let ur = prepare(&text("ur5.urdf"), &LoadOptions::default()).expect("ur5");
+    assert_eq!(ur.choice.point, [-0.39225, 0.0, 0.0], "joint 4's origin is off axis 3: kept");
+    assert!(ur.choice.scope.subject.contains("3R sub-chain joints 1-3") && ur.choice.scope.subject.contains("link_3@-0.39225,0,0"), "{}", ur.choice.scope.subject);
+    let iiwa = prepare(&text("iiwa14.urdf"), &LoadOptions { spec: ChainSpec { locks: vec![("joint_3".into(), 0.0)], ..Default::default() }, ..Default::default() }).expect("locked");
+    assert!(iiwa.choice.scope.subject.contains("joints 1, 2, 4") && iiwa.choice.scope.subject.contains("joint_3=0 locked"), "{}", iiwa.choice.scope.subject);
+}

@@ -421,10 +421,15 @@ impl PreparedRun<SingularityResult> for SingularityRun {
             }
         );
         // The joint limits' effect is named only when the file has limits.
+        let scope = &arm.prepared.choice.scope;
+        let headline = match &scope.not_answered {
+            Some(open) if !scope.stands_for_arm => format!("{}; {open}", found.verdict.headline(scope)),
+            _ => found.verdict.headline(scope),
+        };
         let summary = if arm.prepared.limits.restrict() {
-            format!("{}; {}; {}", found.verdict.line(), summary, found.limit_effect.text)
+            format!("{headline}; {}; {}", summary, found.limit_effect.text)
         } else {
-            format!("{}; {}", found.verdict.line(), summary)
+            format!("{headline}; {}", summary)
         };
         SingularityResult {
             mechanism: chain.name.clone(),
@@ -440,7 +445,7 @@ impl PreparedRun<SingularityResult> for SingularityRun {
             seconds: found.seconds + self.cover.seconds,
             summary,
             loops: None,
-            verdict: Some(found.verdict),
+            verdict: Some(found.verdict.scoped(scope)),
             branches: arm.branches.clone(),
         }
     }

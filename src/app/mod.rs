@@ -365,7 +365,8 @@ pub struct SingularityResult {
     /// the cusps, nodes and curves above).
     pub loops: Option<LoopSingularities>,
     /// 3R chains: the verdict of `linkspace singularities --json` (`manip3r::verdict::decide` on
-    /// the full-torus run); `None` for closed-loop mechanisms.
+    /// the full-torus run), its reason naming the analysed sub-chain and point when the verdict
+    /// does not stand for the arm (`manip3r::select::Scope`); `None` for closed-loop mechanisms.
     pub verdict: Option<crate::manip3r::verdict::Verdict>,
     /// 3R chains with parallel axes 2 and 3: the certified singular branches, the very
     /// `"singular_branches"` of `linkspace singularities --json` (`manip3r::branches::of`; joints

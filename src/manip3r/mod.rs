@@ -217,7 +217,7 @@ pub fn prepare(m: &crate::model::Mechanism, options: &LoadOptions) -> Result<Pre
             }
         }
     }
-    let (mechanism, choice) = select::positioning(&rounded, &spec)?;
+    let (mechanism, choice) = select::positioning(&rounded, &spec, tolerance)?;
     // Only what the analysis reads is listed: snaps on the chosen chain (side links and
     // fingers off it do not enter).
     let on_chain: Vec<&str> = rounded.link(&choice.tip).map_or(Vec::new(), |t| rounded.path_to(t).iter().map(|&j| rounded.joints[j].name.as_str()).collect());

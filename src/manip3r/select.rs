@@ -13,10 +13,14 @@
 //!   links that branch off (`tool0` beside `flange`) stop the descent).
 //! - Joints named in `locks` become fixed at the given value (a 7R arm is a 6R arm then).
 //! - Three revolute joints: the point is the tip link's origin (or `tip_point`).
-//! - Six: joints 1–3 position the wrist. With a spherical wrist (axes 4, 5 and 6 through one
-//!   point) the point is the wrist centre, which joints 4–6 do not move; otherwise (e.g. UR)
-//!   the origin of joint 4's frame, on axis 4, which joints 4–6 do not move either; `tip_point`
-//!   picks another point.
+//! - Six: joints 1–3 position the wrist, judged from the axes of joints 4–6 wherever the file
+//!   puts their frames (`wrist`: proven to meet within the tolerance, proven not to, or
+//!   neither). With a spherical wrist the point is the wrist centre, which joints 4–6 do not
+//!   move; otherwise a point of joint 3's child, which they do not move either: the origin of
+//!   joint 4's frame (e.g. UR), or the point of axis 4 nearest axis 5 when that origin is on
+//!   axis 3 (e.g. Fanuc CRX), where joint 3 would not move it; `tip_point` picks another point.
+//! - `Scope` says what a verdict on the choice is about: the arm (a 3R arm, or a spherical
+//!   wrist's centre), or only a 3R sub-chain and a point (the headline then names both).
 //! - A point on a link after joint 3 is accepted only when every revolute axis between joint 3
 //!   and that link passes through it (within `length_tolerance`), so the point is moved by
 //!   joints 1–3 alone.
@@ -76,6 +80,11 @@ pub struct Choice {
     /// Six joints without a spherical wrist: a lower bound (metres) of how far the wrist axes
     /// miss one point, when measured.
     pub wrist_spread: Option<f64>,
+    /// Six-joint chains: whether axes 4-6 were proven to meet in one point (true) or to miss
+    /// every point (false); `None` for other chains or when neither was proven.
+    pub spherical_wrist: Option<bool>,
+    /// What a verdict on this chain and point is about.
+    pub scope: Scope,
 }
 
 impl Choice {
@@ -86,8 +95,23 @@ impl Choice {
     }
 }
 
-/// The reduced mechanism and what was chosen.
-pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice), Manip3rError> {
+/// What the 3R analyses of a choice speak for: the arm, or only a sub-chain and a point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scope {
+    /// The analysed sub-chain and point, e.g. `3R sub-chain joints 1-3 (joint_1, joint_2,
+    /// joint_3) of 'ur5', point link_3@-0.39225,0,0`.
+    pub subject: String,
+    /// True when the 3R verdict is the arm's: a three-joint arm, or a six-joint arm analysed at
+    /// the centre of its spherical wrist (its positioning structure). False when the wrist is
+    /// not spherical, joints are locked or the point was given by hand on a longer chain.
+    pub stands_for_arm: bool,
+    /// When it does not stand for the arm: the question it leaves open.
+    pub not_answered: Option<String>,
+}
+
+/// The reduced mechanism and what was chosen. `snap_tolerance` is the rounding policy's (radians):
+/// wrist axes that a turn of it could make meet are judged to meet.
+pub fn positioning(m: &Mechanism, spec: &ChainSpec, snap_tolerance: f64) -> Result<(Mechanism, Choice), Manip3rError> {
     if !m.loops.is_empty() {
         return Err(Manip3rError::NotSerial(format!("it has {} loop closures", m.loops.len())));
     }
@@ -221,6 +245,8 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
         reason: String::new(),
         origin_of: None,
         wrist_spread: None,
+        spherical_wrist: None,
+        scope: Scope { subject: String::new(), stands_for_arm: false, not_answered: None },
     };
     let lock_text = if spec.locks.is_empty() { String::new() } else { format!(" with {} locked", spec.locks.iter().map(|(n, v)| format!("{n}={v}")).collect::<Vec<_>>().join(", ")) };
     // Where the point hangs (None: keep the whole path, the tip's origin being the point).
@@ -257,44 +283,67 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
         choice.reason = format!("chain {b} -> {t}{lock_text}: three revolute joints; the point is the origin of '{t}'");
         None
     } else if n == 6 {
-        let (o4, d4) = axis_line(&later[0].1, later[0].0);
-        let (o5, d5) = axis_line(&later[1].1, later[1].0);
-        // Closest point of axis 4 to axis 5, in floating point; its distance from every wrist
-        // axis is then bounded soundly, so the choice rests on the bound, not on this guess.
-        let mid = |v: &V3| v.map(|x| x.mid());
-        let (p, u, q, v) = (Vector3::from(mid(&o4)), Vector3::from(mid(&d4)), Vector3::from(mid(&o5)), Vector3::from(mid(&d5)));
-        let w = p - q;
-        let (a, bb, c, d, e) = (u.dot(&u), u.dot(&v), v.dot(&v), u.dot(&w), v.dot(&w));
-        let den = a * c - bb * bb;
-        let centre = (den.abs() > 1e-12).then(|| p + u * ((bb * e - c * d) / den));
-        let bound = centre.map(|x| miss(&[x[0], x[1], x[2]].map(point)));
-        match (centre, bound) {
-            (Some(x), Some(mv)) if mv <= tol => {
+        let axes: [(V3, V3); 3] = [0, 1, 2].map(|k| axis_line(&later[k].1, later[k].0));
+        // A turn of the snapping tolerance at a wrist frame moves an axis by that angle times
+        // the frame's distance from the point: the axes "meet" within that much, and never
+        // within less than the length tolerance.
+        let origins: Vec<V3> = frames.iter().take_while(|(j, _, _)| *j != later[2].0).map(|(_, f, _)| f.t).chain([later[2].1.t]).collect();
+        let wrist_tol = |c: &V3| {
+            let lever: f64 = origins.iter().map(|o| { let d = sub(c, o); dot(&d, &d).sup().max(0.0).sqrt() }).sum();
+            tol.max(snap_tolerance * lever)
+        };
+        match wrist(&axes, &wrist_tol) {
+            Wrist::Spherical { centre, miss: mv } => {
+                let x = centre.map(|v| v.mid());
                 choice.point_link = m.links[l3].name.clone();
-                choice.point = [x[0], x[1], x[2]];
+                choice.point = x;
                 choice.wrist_miss = mv;
+                choice.spherical_wrist = Some(true);
                 choice.reason = format!(
                     "chain {b} -> {t}{lock_text}: 6 revolute joints with a spherical wrist (axes of {} meet within {mv:.1e} m); joints {} position the wrist centre {:?} in '{}'",
                     wrist_joints.join(", "), joints.join(", "), choice.point, choice.point_link
                 );
-                Some(Attach::UnderJoint3([x[0], x[1], x[2]].map(point), "wrist_centre".into()))
+                Some(Attach::UnderJoint3(x.map(point), "wrist_centre".into()))
             }
-            _ => {
-                let o = o4;
+            test => {
+                choice.spherical_wrist = matches!(test, Wrist::Apart(_)).then_some(false);
+                let why = match &test {
+                    Wrist::Apart(t) => format!("no point lies within {t:.1e} m of the axes of {}", wrist_joints.join(", ")),
+                    _ => format!("the axes of {} neither provably meet nor provably miss one point", wrist_joints.join(", ")),
+                };
+                // Every point of joint 3's child is moved by joints 1-3 alone; one on axis 3
+                // would not move with joint 3 (a degenerate map). Joint 4's frame origin is
+                // taken when it is off axis 3, else the point of axis 4 nearest axis 5 (where
+                // they meet, when they do), a point of the wrist fixed by the geometry.
+                let (o4, d4) = axes[0];
+                let a3 = axis3(&m.joints[revolute[2]]);
+                let off_axis3 = |p: &V3| {
+                    let c = cross(p, &a3);
+                    dot(&c, &c).inf() > tol * tol * dot(&a3, &a3).sup()
+                };
+                let mid = |v: &V3| v.map(|x| x.mid());
+                let foot = nearest_on_first(&mid(&o4), &mid(&d4), &mid(&axes[1].0), &mid(&axes[1].1)).map(|x| x.map(point));
+                let (p, what) = match foot {
+                    Some(f) if !off_axis3(&o4) && off_axis3(&f) => (f, format!("the point of the axis of '{}' nearest the axis of '{}'", wrist_joints[0], wrist_joints[1])),
+                    _ => (o4, format!("the origin of joint '{}'", wrist_joints[0])),
+                };
                 choice.point_link = m.links[l3].name.clone();
-                choice.point = mid(&o);
-                choice.wrist_miss = miss(&o);
-                let why = bound.map_or("axes 4 and 5 are parallel".to_string(), |mv| format!("axes of {} miss one point by at least {mv:.3e} m", wrist_joints.join(", ")));
-                choice.reason = format!(
-                    "chain {b} -> {t}{lock_text}: 6 revolute joints, wrist not spherical ({why}); analysing the origin of joint '{}' {:?} in '{}', on its axis, which joints 4-6 do not move (--tip-point LINK@X,Y,Z for another point)",
-                    wrist_joints[0], choice.point, choice.point_link
-                );
-                // The origin of joint 4 lies on axis 4 only; joints 5 and 6 do not move it
-                // because it is in joint 4's parent link.
+                choice.point = mid(&p);
+                // A point of joint 4's parent link: joints 4-6 do not move it.
                 choice.wrist_miss = 0.0;
-                choice.origin_of = Some(wrist_joints[0].clone());
-                choice.wrist_spread = bound;
-                Some(Attach::UnderJoint3(o, format!("{}_origin", wrist_joints[0])))
+                choice.reason = format!(
+                    "chain {b} -> {t}{lock_text}: 6 revolute joints, wrist not spherical ({why}); analysing {what} {:?} in '{}', on its axis, which joints 4-6 do not move (--tip-point LINK@X,Y,Z for another point)",
+                    choice.point, choice.point_link
+                );
+                if what.starts_with("the origin") {
+                    choice.origin_of = Some(wrist_joints[0].clone());
+                }
+                choice.wrist_spread = match test {
+                    Wrist::Apart(t) => Some(t),
+                    _ => None,
+                };
+                let name = if what.starts_with("the origin") { format!("{}_origin", wrist_joints[0]) } else { "wrist_point".into() };
+                Some(Attach::UnderJoint3(p, name))
             }
         }
     } else {
@@ -346,7 +395,34 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec) -> Result<(Mechanism, Choice
         });
         links.push(Link { name, parent_joint: Some(joints_out.len() - 1), collisions: Vec::new() });
     }
+    let on_path: Vec<usize> = path.iter().copied().filter(|&j| matches!(m.joints[j].kind, JointKind::Revolute { .. })).collect();
+    let numbers: Vec<usize> = revolute[..3].iter().map(|j| 1 + on_path.iter().position(|k| k == j).expect("invariant: on the path")).collect();
+    choice.scope = scope(&m.name, &choice, &numbers, on_path.len(), spec.tip_point.is_some(), &lock_text);
     Ok((Mechanism { name: m.name.clone(), links, joints: joints_out, loops: Vec::new(), root: 0, transmission_joints: Vec::new() }, choice))
+}
+
+/// What a verdict on `choice` is about. `numbers` are the analysed joints' places (from 1) among
+/// the `total` revolute joints of the chain.
+fn scope(robot: &str, choice: &Choice, numbers: &[usize], total: usize, by_hand: bool, lock_text: &str) -> Scope {
+    let [x, y, z] = choice.point;
+    let point = format!("{}@{x},{y},{z}", choice.point_link);
+    let places = if numbers.windows(2).all(|w| w[1] == w[0] + 1) {
+        format!("joints {}-{}", numbers[0], numbers[2])
+    } else {
+        format!("joints {}", numbers.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(", "))
+    };
+    let names = choice.joints.join(", ");
+    if total == 3 {
+        return Scope { subject: format!("3R arm '{robot}' ({names}), point {point}"), stands_for_arm: true, not_answered: None };
+    }
+    if choice.spherical_wrist == Some(true) && !by_hand && choice.locked.is_empty() {
+        return Scope { subject: format!("positioning structure of '{robot}' ({places}: {names}), wrist centre {point}"), stands_for_arm: true, not_answered: None };
+    }
+    Scope {
+        subject: format!("3R sub-chain {places} ({names}) of '{robot}'{lock_text}, point {point}"),
+        stands_for_arm: false,
+        not_answered: Some(format!("not the arm's verdict: whether the {total}-joint arm '{robot}' is cuspidal is a different question, not answered here")),
+    }
 }
 
 /// The default base below a floating root joint: the link it carries (the robot's own frame;
@@ -358,6 +434,100 @@ fn floating_root(m: &Mechanism) -> Option<usize> {
         (Some(j), None) if j.kind == JointKind::Floating => Some(j.child),
         _ => None,
     }
+}
+
+/// What the axes of the three wrist joints (at the wrist's zero, which suffices: a common point
+/// of the three lies on axes 4 and 5 and stays put as they turn) were proven to do.
+enum Wrist {
+    /// They pass within `miss` metres (at most the tolerance) of `centre`.
+    Spherical { centre: V3, miss: f64 },
+    /// No point lies within this tolerance (metres) of all three.
+    Apart(f64),
+    /// Neither could be proven.
+    Undecided,
+}
+
+/// The three-valued test of a spherical wrist on the stated geometry, in interval arithmetic.
+/// `tolerance` gives the allowed miss about a candidate point.
+///
+/// Meeting: the point nearest the three lines (least squares, in floating point) is a guess;
+/// the bound on its distance from each axis is what decides. Missing: for a pair of
+/// non-parallel axes, every point within `t` of both has its foot on the first at a parameter
+/// `s` where that foot is within `2t` of the second (a quadratic in `s`, solved in intervals);
+/// the box of those points, widened by `t`, is then proven farther than `t` from the third axis.
+/// Exactly parallel axes more than `2t` apart are apart outright.
+fn wrist(axes: &[(V3, V3); 3], tolerance: &dyn Fn(&V3) -> f64) -> Wrist {
+    let mid = |v: &V3| Vector3::from(v.map(|x| x.mid()));
+    let dist2 = |x: &V3, (o, u): &(V3, V3)| {
+        let c = cross(&sub(x, o), u);
+        dot(&c, &c) / dot(u, u)
+    };
+    // Least squares: sum over the axes of (I - u u^T) x = sum of (I - u u^T) o.
+    let (mut a, mut rhs) = (nalgebra::Matrix3::zeros(), Vector3::zeros());
+    for (o, u) in axes {
+        let (o, u) = (mid(o), mid(u).normalize());
+        let proj = nalgebra::Matrix3::identity() - u * u.transpose();
+        a += proj;
+        rhs += proj * o;
+    }
+    let mut fallback = f64::INFINITY;
+    if let Some(x) = a.try_inverse().map(|inv| inv * rhs) {
+        let centre: V3 = [x[0], x[1], x[2]].map(point);
+        let miss = axes.iter().map(|l| dist2(&centre, l).sup().max(0.0).sqrt()).fold(0.0, f64::max);
+        let t = tolerance(&centre);
+        if miss <= t {
+            return Wrist::Spherical { centre, miss };
+        }
+        fallback = t;
+    }
+    // The tolerance about any point that could be within it is the one about the guess (the
+    // lever barely changes over such distances); without a guess, the length floor.
+    let t = if fallback.is_finite() { fallback } else { tolerance(&axes[0].0) };
+    let ti = point(t);
+    for (i, j, k) in [(0, 1, 2), (1, 2, 0), (0, 2, 1)] {
+        let ((oi, ui), (oj, uj), lk) = (&axes[i], &axes[j], &axes[k]);
+        let b = cross(ui, uj);
+        let bb = dot(&b, &b);
+        let uu = dot(uj, uj);
+        if b.iter().all(|x| x.inf() == 0.0 && x.sup() == 0.0) {
+            // Exactly parallel: the distance of oi from axis j is their distance.
+            if dist2(oi, &(*oj, *uj)).inf() > (point(2.0) * ti).sqr().sup() {
+                return Wrist::Apart(t);
+            }
+            continue;
+        }
+        if bb.inf() <= 0.0 {
+            continue;
+        }
+        // |a + s b|^2 / |uj|^2 <= 4 t^2, with a = (oi - oj) x uj.
+        let av = cross(&sub(oi, oj), uj);
+        let (ab, aa) = (dot(&av, &b), dot(&av, &av));
+        let disc = ab.sqr() - bb * (aa - point(4.0) * ti.sqr() * uu);
+        if disc.sup() < 0.0 {
+            return Wrist::Apart(t);
+        }
+        let root = disc.sqrt();
+        let (lo, hi) = (((-ab) - root) / bb, ((-ab) + root) / bb);
+        let s = crate::interval::interval(lo.inf(), hi.sup());
+        let widen = crate::interval::interval(-t, t);
+        let region: V3 = [0, 1, 2].map(|c| oi[c] + s * ui[c] + widen);
+        if dist2(&region, lk).inf() > ti.sqr().sup() {
+            return Wrist::Apart(t);
+        }
+    }
+    Wrist::Undecided
+}
+
+/// The point of the first line nearest the second (floating point); `None` when parallel.
+fn nearest_on_first(p: &[f64; 3], u: &[f64; 3], q: &[f64; 3], v: &[f64; 3]) -> Option<[f64; 3]> {
+    let (p, u, q, v) = (Vector3::from(*p), Vector3::from(*u), Vector3::from(*q), Vector3::from(*v));
+    let w = p - q;
+    let (a, b, c, d, e) = (u.dot(&u), u.dot(&v), v.dot(&v), u.dot(&w), v.dot(&w));
+    let den = a * c - b * b;
+    (den.abs() > 1e-12 * a * c).then(|| {
+        let x = p + u * ((b * e - c * d) / den);
+        [x[0], x[1], x[2]]
+    })
 }
 
 /// Where the analysed point is attached in the reduced mechanism, with its link's name.
@@ -388,4 +558,70 @@ fn rotation(joint: &Joint, v: f64) -> Pose {
 fn axis3(joint: &Joint) -> V3 {
     let a = joint.axis;
     [point(a[0]), point(a[1]), point(a[2])]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn line(o: Vector3<f64>, u: Vector3<f64>) -> (V3, V3) {
+        ([o[0], o[1], o[2]].map(point), [u[0], u[1], u[2]].map(point))
+    }
+
+    fn unit(a: f64, b: f64) -> Vector3<f64> {
+        Vector3::new(a.cos() * b.cos(), a.sin() * b.cos(), b.sin())
+    }
+
+    proptest! {
+        /// Three axes through one point, each given by a point anywhere along it (as frames can
+        /// be placed anywhere on their axes): proven to meet, at that point.
+        #[test]
+        fn concurrent_axes_meet_wherever_their_frames_are(
+            c in prop::array::uniform3(-1.0f64..1.0),
+            dirs in prop::array::uniform3((0.0f64..std::f64::consts::TAU, -1.5f64..1.5)),
+            along in prop::array::uniform3(-1.0f64..1.0),
+        ) {
+            let c = Vector3::from(c);
+            let us = dirs.map(|(a, b)| unit(a, b));
+            // Skip nearly parallel pairs: then no point is fixed by the geometry.
+            prop_assume!((0..3).all(|i| us[i].cross(&us[(i + 1) % 3]).norm() > 0.1));
+            let axes = [0, 1, 2].map(|k| line(c + us[k] * along[k], us[k]));
+            match wrist(&axes, &|_| LENGTH_TOLERANCE) {
+                Wrist::Spherical { centre, miss } => {
+                    prop_assert!(miss <= LENGTH_TOLERANCE);
+                    prop_assert!((Vector3::from(centre.map(|x| x.mid())) - c).norm() < 1e-9);
+                }
+                _ => prop_assert!(false, "not proven to meet"),
+            }
+        }
+
+        /// The same with the third axis moved off the point by more than twice the tolerance:
+        /// proven to miss (or, very close to parallel, at least never claimed to meet).
+        #[test]
+        fn an_offset_axis_is_proven_apart(
+            c in prop::array::uniform3(-1.0f64..1.0),
+            dirs in prop::array::uniform3((0.0f64..std::f64::consts::TAU, -1.5f64..1.5)),
+            offset in 1e-5f64..0.2,
+        ) {
+            let c = Vector3::from(c);
+            let us = dirs.map(|(a, b)| unit(a, b));
+            prop_assume!((0..3).all(|i| us[i].cross(&us[(i + 1) % 3]).norm() > 0.1));
+            let away = us[2].cross(&us[0]).normalize() * offset;
+            let axes = [line(c, us[0]), line(c, us[1]), line(c + away, us[2])];
+            match wrist(&axes, &|_| LENGTH_TOLERANCE) {
+                Wrist::Apart(t) => prop_assert_eq!(t, LENGTH_TOLERANCE),
+                Wrist::Spherical { .. } => prop_assert!(false, "an axis {offset} m off was said to meet"),
+                Wrist::Undecided => prop_assert!(offset < 1e-3, "undecided at {offset} m"),
+            }
+        }
+    }
+
+    #[test]
+    fn parallel_wrist_axes_are_apart() {
+        // Axes 4 and 6 parallel 0.15 apart, axis 5 meeting axis 4 (a CRX-like wrist).
+        let axes = [line(Vector3::zeros(), Vector3::x()), line(Vector3::new(0.54, -0.15, 0.0), Vector3::y()), line(Vector3::new(0.7, -0.15, 0.0), Vector3::x())];
+        assert!(matches!(wrist(&axes, &|_| LENGTH_TOLERANCE), Wrist::Apart(_)));
+        assert_eq!(nearest_on_first(&[0.0; 3], &[1.0, 0.0, 0.0], &[0.54, -0.15, 0.0], &[0.0, 1.0, 0.0]), Some([0.54, 0.0, 0.0]));
+    }
 }

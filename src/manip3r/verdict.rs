@@ -44,6 +44,7 @@ use crate::search::{Limit, Prune, Status, Step};
 use crate::interval::{point, strict_sign};
 use crate::model::{JointKind, Mechanism};
 use inari::Interval;
+use super::select::Scope;
 
 /// Cell budgets of the verdict's searches: the smoothness quadtree (a few thousand boxes on
 /// the robots seen), the singular-curve cover behind the aspects, and one sample's IK.
@@ -76,6 +77,25 @@ impl Verdict {
         };
         let n = |x: Option<u32>| x.map_or("?".into(), |v| v.to_string());
         format!("verdict: {c} ({}), aspects {}, at most {} IK solutions: {}", if self.certified { "certified" } else { "not certified" }, n(self.aspects), n(self.max_ik_solutions), self.reason)
+    }
+
+    /// The CLI's first line for an arm read as `scope` says: [`Verdict::line`] when the verdict
+    /// is the arm's, otherwise naming the sub-chain and point it is about.
+    pub fn headline(&self, scope: &Scope) -> String {
+        let line = self.line();
+        if scope.stands_for_arm {
+            return line;
+        }
+        format!("verdict of the {}:{}", scope.subject, line.strip_prefix("verdict:").unwrap_or(&line))
+    }
+
+    /// The verdict with its reason naming the sub-chain and point, and the question left open,
+    /// when it does not stand for the arm (for a front end that shows the reason alone).
+    pub fn scoped(&self, scope: &Scope) -> Verdict {
+        match &scope.not_answered {
+            Some(open) if !scope.stands_for_arm => Verdict { reason: format!("{}: {}; {open}", scope.subject, self.reason), ..self.clone() },
+            _ => self.clone(),
+        }
     }
 }
 

@@ -18,7 +18,7 @@ use crate::manip3r::nodes::{NodeDiscard, NodeSearch};
 use crate::interval::Bounds;
 use crate::manip3r::records::{bounds, joints, workspace};
 pub use crate::manip3r::{Joints, Workspace};
-use crate::manip3r::select::Choice;
+use crate::manip3r::select::{Choice, Scope};
 use crate::manip3r::verdict::Verdict;
 use crate::manip3r::Prepared;
 use crate::model::rounding::Snap;
@@ -618,6 +618,18 @@ struct ChoiceDef {
     point: [f64; 3],
     wrist_miss: f64,
     reason: String,
+    spherical_wrist: Option<bool>,
+    #[serde(with = "ScopeDef")]
+    scope: Scope,
+}
+
+/// `select::Scope`: what a verdict on the chosen chain and point is about.
+#[derive(Serialize)]
+#[serde(remote = "Scope")]
+struct ScopeDef {
+    subject: String,
+    stands_for_arm: bool,
+    not_answered: Option<String>,
 }
 
 #[derive(Serialize)]
