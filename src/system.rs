@@ -13,6 +13,8 @@ use thiserror::Error;
 
 pub(crate) mod multilinear;
 
+pub use multilinear::Poly;
+
 /// Index of a variable in its system (and of its component in an `IntervalBox`).
 pub type VarId = usize;
 

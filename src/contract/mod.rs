@@ -9,7 +9,7 @@
 //! A contractor does no IO; numerical trouble gives `Unchanged`, never `Empty`.
 
 mod filter;
-pub(crate) mod krawczyk;
+pub mod krawczyk;
 mod lp_shrink;
 mod newton;
 mod propagate;

@@ -122,7 +122,7 @@ impl Compiled {
 /// ```
 /// use linkspace::contract::{Contraction, Contractor, FaceBounds, TrapezoidClip};
 /// use linkspace::interval::{interval, point};
-/// use linkspace::system::multilinear::Poly;
+/// use linkspace::system::Poly;
 /// use linkspace::IntervalBox;
 /// // x·y − 1 = 0 on [0.5, 4] × [0.5, 1]: x ≥ 1 follows.
 /// let p = Poly::var(0).mul(&Poly::var(1)).add(&Poly::constant(point(-1.0)));

@@ -7,7 +7,7 @@
 pub(crate) mod angle;
 pub(crate) mod fast;
 mod graph;
-pub(crate) mod trig;
+pub mod trig;
 
 pub use graph::{components_by, components_of_edges, flood_fill, labels, merge_touching, touching_pairs};
 

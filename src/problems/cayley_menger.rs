@@ -317,16 +317,16 @@ pub struct CayleyMenger {
 ///
 /// ```
 /// use linkspace::interval::point;
-/// use linkspace::problems::cayley_menger::determinant;
-/// use linkspace::system::multilinear::Poly;
+/// use linkspace::problems::cayley_menger_determinant;
+/// use linkspace::system::Poly;
 /// // Two points at squared distance r (variable 0): Ξ = 2r.
-/// let d = determinant(2, &|_, _| Poly::var(0)).unwrap();
+/// let d = cayley_menger_determinant(2, &|_, _| Poly::var(0)).unwrap();
 /// assert_eq!(d, Poly::var(0).scale(point(2.0)));
 /// ```
 ///
 /// # References
 /// K. Menger, "New foundation of Euclidean geometry", Amer. J. Math. 53, 1931; the seed, Sec. II.
-pub fn determinant(n: usize, entry: &dyn Fn(usize, usize) -> Poly) -> Result<Poly, DistanceError> {
+pub fn cayley_menger_determinant(n: usize, entry: &dyn Fn(usize, usize) -> Poly) -> Result<Poly, DistanceError> {
     if !(2..=6).contains(&n) {
         return Err(DistanceError::DeterminantSize(n.to_string()));
     }
@@ -372,7 +372,7 @@ pub fn determinant(n: usize, entry: &dyn Fn(usize, usize) -> Poly) -> Result<Pol
 
 /// Three points are collinear: `Ξ(p1, p2, p3) = 0` (zero area).
 pub fn collinear(entry: &dyn Fn(usize, usize) -> Poly) -> Poly {
-    determinant(3, entry).expect("invariant: 3 points")
+    cayley_menger_determinant(3, entry).expect("invariant: 3 points")
 }
 
 /// Point 0 at squared distance `d2` from the line through points 1 and 2:
@@ -515,7 +515,7 @@ impl CayleyMenger {
             labels.push(format!("dist({}, line {} {})² = {}", p.points[pl.point].name, p.points[pl.line.0].name, p.points[pl.line.1].name, pl.squared.mid()));
         }
         for s in &sets {
-            equations.push(determinant(s.len(), &entry_for(s.clone()))?);
+            equations.push(cayley_menger_determinant(s.len(), &entry_for(s.clone()))?);
             labels.push(format!("CM({})", names(s)));
         }
         for o in &p.orientations {
@@ -792,7 +792,7 @@ fn check_tetrahedra(p: &DistanceProblem) -> Result<(), DistanceError> {
                 }
             }
         }
-        if all && determinant(4, &|i, j| Poly::constant(r[i][j])).expect("4 points").eval(&[]).sup() < 0.0 {
+        if all && cayley_menger_determinant(4, &|i, j| Poly::constant(r[i][j])).expect("4 points").eval(&[]).sup() < 0.0 {
             return Err(DistanceError::Tetrahedron(t.iter().map(|&i| p.points[i].name.as_str()).collect::<Vec<_>>().join(", ")));
         }
     }
@@ -916,7 +916,7 @@ mod tests {
         for seed in 0..5 {
             let p = random_points(seed, 6);
             let e = entry_of(&p);
-            let val = |n: usize| determinant(n, &e).unwrap().eval(&[]).mid();
+            let val = |n: usize| cayley_menger_determinant(n, &e).unwrap().eval(&[]).mid();
             assert!((val(2) - 2.0 * (p[0] - p[1]).norm_squared()).abs() < 1e-9);
             let area = 0.5 * (p[1] - p[0]).cross(&(p[2] - p[0])).norm();
             assert!((val(3) + 16.0 * area * area).abs() < 1e-8);
@@ -925,7 +925,7 @@ mod tests {
             assert!(val(5).abs() < 1e-7 * 1e3, "Ξ5 = {}", val(5));
             assert!(val(6).abs() < 1e-6 * 1e4, "Ξ6 = {}", val(6));
         }
-        assert!(determinant(7, &|_, _| Poly::zero()).is_err());
+        assert!(cayley_menger_determinant(7, &|_, _| Poly::zero()).is_err());
     }
 
     #[test]

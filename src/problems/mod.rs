@@ -11,7 +11,7 @@ pub(crate) mod singular;
 pub(crate) mod spatial;
 pub(crate) mod stated;
 
-pub use cayley_menger::{BuildOptions, CayleyMenger, DistanceError, DistanceProblem, DistanceSolverError, Formulation, Orientation};
+pub use cayley_menger::{cayley_menger_determinant, BuildOptions, CayleyMenger, DistanceError, DistanceProblem, DistanceSolverError, Formulation, Orientation};
 pub use choice::{Linkage, Model, ModelChoice, TracedPoint};
 pub use coordinates::{Placed, PlacedError};
 pub use linkage::{LinkageError, LinkageProblem};
