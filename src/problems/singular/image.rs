@@ -30,6 +30,11 @@
 //! map `C → actuator space` (the fold condition degenerates transversally), whose image point
 //! is a cusp of the image of `S`.
 //!
+//! This is the `Coordinates` formulation (any 2-dof linkage). A planar platform on three R-P-R
+//! legs, one locked, takes the `Pose` one by default (`CuspFormulation::Auto`): the same
+//! conditions over the two angles that place the platform (`pose`'s module doc), 4 chart pairs
+//! of a two-dimensional search instead of 36 over every leg's coordinates.
+//!
 //! ## Nodes
 //! A doubled system (`S`'s chart `k` for one point, chart `k'` for the other) whose two copies
 //! *share* the actuated coordinates' variables, so the pairs have equal actuator values; it is

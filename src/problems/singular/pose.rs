@@ -1,19 +1,22 @@
-//! The cusp system of a planar platform on R-P-R legs in pose coordinates: the unknowns are the
-//! platform's pose (the position `P` of its frame and its angle `φ`, held as `c, s`), not the
-//! joint coordinates of every leg. Each leg `i` is a revolute joint to the ground at `A_i`, a
-//! slider along the leg whose axis passes through `A_i`, and a revolute joint on the platform at
-//! `B_i = P + R(φ) b_i` on the slider's axis, so its travel is `|B_i − A_i|` (limits above 0):
-//! a pose determines the legs' angles and travels, and the pose curve `C` is the linkage's.
-//! Three legs, one locked (`--fix`), two actuated: `C` is `g = |B_l − A_l|² − L² = 0`, the
-//! actuator map `h_i = |B_i − A_i|²` (a diffeomorphism of the travels, so the same cusps).
+//! The cusp system of a planar platform on R-P-R legs in pose coordinates, not in the joint
+//! coordinates of every leg. Each leg `i` is a revolute joint to the ground at `A_i`, a slider
+//! along the leg whose axis passes through `A_i`, and a revolute joint on the platform at
+//! `B_i = P + R(φ) b_i` on the slider's axis, so its travel is `|B_i − A_i|` (limits above 0).
+//! Three legs, one locked (`--fix`) at length `L`, two actuated. The locked leg's end is
+//! `B_l = A_l + L u`, `u = (cos α, sin α)`, so a configuration is a point `(α, φ)` of a torus
+//! (held as two `(c, s)` pairs) and the legs' angles and travels follow from it: `C` is the
+//! torus itself, no constraint row is left, and the search is two-dimensional.
 //!
-//! With `X_i, Y_i = B_i − A_i`, `R_i = R(φ) b_i`, the rows `h_i / 2` have gradient
-//! `(X_i, Y_i, K_i)` in `(x, y, φ)`, `K_i = R_i × (B_i − A_i)`, and second derivative along
-//! `v = (v_x, v_y, v_φ)`: `v_x² + v_y² − 2 R_iy v_x v_φ + 2 R_ix v_y v_φ − L_i v_φ²`,
-//! `L_i = R_i · (P − A_i)`. The system is the one of `image`'s module doc with these rows for
-//! `F` (the locked leg) and `A` (the actuated legs): `J v = 0`, `μ H[v, v] + J w = 0` over the
-//! three rows, `v_k = 1`, `w_k = 0`, one chart of `(μ, w)`: 11 unknowns, 11 equations, 9 chart
-//! pairs (against one `(c, s)` per leg and one travel per slider in the joint coordinates).
+//! The actuator map is `h_i = |E_i|²`, `E_i = B_i − A_i = A_l + L u + R(φ) d_i − A_i`,
+//! `d_i = b_i − b_l` (a diffeomorphism of the travels, so the same cusps). With `U = L u`,
+//! `D_i = R(φ) d_i`, the gradient of `h_i / 2` in `(α, φ)` is `(U × E_i, D_i × E_i)` and its
+//! second derivative along `v` is `v_α² (L² − E_i·U) + 2 v_α v_φ U·D_i + v_φ² (|d_i|² − E_i·D_i)`.
+//! The system is the one of `image`'s module doc with no `F` rows and these for `A`: `A v = 0`,
+//! `μ H[v, v] + A w = 0`, `v_k = 1`, `w_k = 0`, one chart of `(μ, w)`: 4 chart pairs (36 in the
+//! joint coordinates of the bundled 3-RPR). `v`, `w` and `μ` are derived variables: once the
+//! pose is known they solve a linear system, so the search bisects the pose alone and Krawczyk,
+//! on the whole square system, narrows them and certifies the roots. A regular root with `μ ≠ 0`
+//! is a Whitney cusp as in `image`.
 
 use super::image::{pin, Builder};
 use super::CHART_REACH;
@@ -53,6 +56,15 @@ struct Leg {
     slider: String,
     /// The slider's limits.
     limits: (f64, f64),
+}
+
+/// What `recognise` reads: the legs, which one is locked and at what length, and the readings
+/// of the joints that are not computed from an `h` variable.
+struct Platform {
+    legs: Vec<Leg>,
+    locked: usize,
+    length: f64,
+    readings: Vec<(String, Reading)>,
 }
 
 /// The cusp systems in pose coordinates and how to read joint values off their boxes.
@@ -123,7 +135,7 @@ const X: Vector3<f64> = Vector3::new(1.0, 0.0, 0.0);
 /// R-P-R legs (every frame unrotated, revolute axes `+z`, slider axes `+x`, continuous revolute
 /// joints, slider limits above 0) with one slider fixed at `locked` and the two others
 /// actuated; `None` for any other mechanism.
-fn recognise(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String]) -> Option<(Vec<Leg>, usize, f64, Vec<(String, Reading)>)> {
+fn recognise(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String]) -> Option<Platform> {
     let unrotated = |rpy: [f64; 3]| rpy == [0.0; 3];
     if m.joints.iter().any(|j| j.mimic.is_some() || !unrotated(j.rpy)) || m.loops.iter().any(|l| l.compound.is_some() || !unrotated(l.predecessor_rpy) || !unrotated(l.successor_rpy)) {
         return None;
@@ -186,7 +198,7 @@ fn recognise(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String]) -> Opt
     if !(length > 0.0) || actuated.iter().any(|a| a == &fixed[0].0 || !legs.iter().any(|l| &l.slider == a)) || actuated[0] == actuated[1] {
         return None;
     }
-    Some((legs, locked, length, readings))
+    Some(Platform { legs, locked, length, readings })
 }
 
 fn lin(coef: Interval, v: VarId) -> Term {
@@ -225,78 +237,56 @@ impl PoseCusps {
     /// The pose cusp systems of `m` with `fixed` and `actuated`, or `None` when `m` is not a
     /// planar platform on three R-P-R legs (see `recognise`).
     pub fn new(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String]) -> Option<Self> {
-        let (legs, locked, length, mut readings) = recognise(m, fixed, actuated)?;
+        let Platform { legs, locked, length, mut readings } = recognise(m, fixed, actuated)?;
         let mut b = Builder::new(EquationSystem::default());
-        let reach_of = |l: &Leg| {
-            let hi = if l.slider == legs[locked].slider { stated(length) } else { stated(l.limits.1) };
-            hi + (l.platform[0].sqr() + l.platform[1].sqr()).sqrt()
-        };
-        // P lies within reach of every ground point.
-        let mut px = Interval::ENTIRE;
-        let mut py = Interval::ENTIRE;
-        for l in &legs {
-            let r = reach_of(l);
-            px = px.intersection(l.ground[0] + interval(-r.sup(), r.sup()));
-            py = py.intersection(l.ground[1] + interval(-r.sup(), r.sup()));
-        }
-        if px.is_empty() || py.is_empty() {
-            return None;
-        }
-        let x = b.aug.add_var("x_platform", VarRole::Primary, px);
-        let y = b.aug.add_var("y_platform", VarRole::Primary, py);
-        let c = b.aug.add_var("cos_platform", VarRole::Primary, interval(-1.0, 1.0));
-        let s = b.aug.add_var("sin_platform", VarRole::Primary, interval(-1.0, 1.0));
+        let unit = interval(-1.0, 1.0);
+        // The locked leg's direction u and the platform's angle: the torus C lies in.
+        let cl = b.aug.add_var(format!("cos_{}", legs[locked].slider), VarRole::Primary, unit);
+        let sl = b.aug.add_var(format!("sin_{}", legs[locked].slider), VarRole::Primary, unit);
+        let c = b.aug.add_var("cos_platform", VarRole::Primary, unit);
+        let s = b.aug.add_var("sin_platform", VarRole::Primary, unit);
+        b.aug.add(Equation::circle(cl, sl));
         b.aug.add(Equation::circle(c, s));
         let base_vars = b.aug.vars.len();
-        let reach = interval(-CHART_REACH, CHART_REACH);
         // v, w and μ follow from the pose (a linear system once it is known): bisecting the pose
-        // alone, the search is three-dimensional, and Krawczyk narrows them.
-        let role = VarRole::Derived;
-        let v: Vec<VarId> = ["x", "y", "phi"].iter().map(|n| b.aug.add_var(format!("v_{n}"), role, reach)).collect();
-        let w: Vec<VarId> = ["x", "y", "phi"].iter().map(|n| b.aug.add_var(format!("w_{n}"), role, reach)).collect();
-        let mu = b.aug.add_var("mu", role, reach);
-        // μ v_a and μ v_a v_φ: the second-order terms as products of two unknowns.
-        let t: Vec<VarId> = (0..3).map(|a| quadratic(&mut b, format!("mu*v_{a}"), &[(point(1.0), mu, v[a])], point(0.0), Interval::ENTIRE)).collect();
-        let r: Vec<VarId> = (0..3).map(|a| quadratic(&mut b, format!("mu*v_{a}*v_phi"), &[(point(1.0), t[a], v[2])], point(0.0), Interval::ENTIRE)).collect();
-        let mut leg_vars = Vec::new();
+        // alone, the search is two-dimensional, and Krawczyk narrows them.
+        let reach = interval(-CHART_REACH, CHART_REACH);
+        let v: Vec<VarId> = ["alpha", "phi"].iter().map(|n| b.aug.add_var(format!("v_{n}"), VarRole::Derived, reach)).collect();
+        let w: Vec<VarId> = ["alpha", "phi"].iter().map(|n| b.aug.add_var(format!("w_{n}"), VarRole::Derived, reach)).collect();
+        let mu = b.aug.add_var("mu", VarRole::Derived, reach);
+        // μ v_a v_b: the second-order terms as products of two unknowns.
+        let t: Vec<VarId> = (0..2).map(|a| quadratic(&mut b, format!("mu*v_{a}"), &[(point(1.0), mu, v[a])], point(0.0), Interval::ENTIRE)).collect();
+        let r = [(0, 0), (0, 1), (1, 1)].map(|(i, j)| quadratic(&mut b, format!("mu*v_{i}*v_{j}"), &[(point(1.0), t[i], v[j])], point(0.0), Interval::ENTIRE));
+        let len = stated(length);
+        let (al, bl) = (legs[locked].ground, legs[locked].platform);
+        let mut leg_xy = vec![(cl, sl); legs.len()];
         for (i, l) in legs.iter().enumerate() {
-            let hi = if i == locked { stated(length) } else { stated(l.limits.1) };
-            let bound = interval(-hi.sup(), hi.sup());
-            let [bx, by] = l.platform;
-            // X, Y = B − A = P + R(φ) b − A.
-            let xv = linear(&mut b, format!("X_{i}"), &[(point(1.0), x), (bx, c), (-by, s)], -l.ground[0], bound);
-            let yv = linear(&mut b, format!("Y_{i}"), &[(point(1.0), y), (by, c), (bx, s)], -l.ground[1], bound);
-            let sq = [(point(1.0), xv, xv), (point(1.0), yv, yv)];
             if i == locked {
-                b.aug.add(Equation::new(sq.iter().map(|&(k, p, q)| prod(k, p, q)).collect(), -stated(length).sqr()));
-            } else {
-                let lo = stated(l.limits.0);
-                let h = quadratic(&mut b, format!("{}^2", l.slider), &sq, point(0.0), interval(lo.sqr().inf(), hi.sqr().sup()));
-                readings.push((l.slider.clone(), Reading::Travel(h)));
+                continue;
             }
-            // K = R × (B − A) and L = R · (P − A) = R · (B − A) − |b|², R = (bx c − by s, by c + bx s).
-            let offset = bx != point(0.0) || by != point(0.0);
-            let kl = offset.then(|| {
-                let k = quadratic(&mut b, format!("K_{i}"), &[(bx, c, yv), (-by, s, yv), (-by, c, xv), (-bx, s, xv)], point(0.0), Interval::ENTIRE);
-                let ll = quadratic(&mut b, format!("L_{i}"), &[(bx, c, xv), (-by, s, xv), (by, c, yv), (bx, s, yv)], -(bx.sqr() + by.sqr()), Interval::ENTIRE);
-                (k, ll)
-            });
-            leg_vars.push((xv, yv, bx, by, kl));
-        }
-        for &(xv, yv, bx, by, kl) in &leg_vars {
-            // J v = 0.
-            let mut row = vec![prod(point(1.0), xv, v[0]), prod(point(1.0), yv, v[1])];
-            if let Some((k, _)) = kl {
-                row.push(prod(point(1.0), k, v[2]));
-            }
-            b.aug.add(Equation::new(row, point(0.0)));
-            // μ H[v, v] + J w = 0: H = v_x² + v_y² − 2 R_y v_x v_φ + 2 R_x v_y v_φ − L v_φ².
-            let mut row = vec![prod(point(1.0), xv, w[0]), prod(point(1.0), yv, w[1]), prod(point(1.0), t[0], v[0]), prod(point(1.0), t[1], v[1])];
-            if let Some((k, ll)) = kl {
-                let two = point(2.0);
-                row.extend([prod(point(1.0), k, w[2]), prod(-two * by, c, r[0]), prod(-two * bx, s, r[0]), prod(two * bx, c, r[1]), prod(-two * by, s, r[1]), prod(point(-1.0), ll, r[2])]);
-            }
-            b.aug.add(Equation::new(row, point(0.0)));
+            let hi = stated(l.limits.1);
+            let bound = interval(-hi.sup(), hi.sup());
+            // E = B − A = A_l + L u + R(φ) d − A, d = b − b_l.
+            let d = [l.platform[0] - bl[0], l.platform[1] - bl[1]];
+            let xv = linear(&mut b, format!("X_{i}"), &[(len, cl), (d[0], c), (-d[1], s)], al[0] - l.ground[0], bound);
+            let yv = linear(&mut b, format!("Y_{i}"), &[(len, sl), (d[1], c), (d[0], s)], al[1] - l.ground[1], bound);
+            leg_xy[i] = (xv, yv);
+            let lo = stated(l.limits.0);
+            let h = quadratic(&mut b, format!("{}^2", l.slider), &[(point(1.0), xv, xv), (point(1.0), yv, yv)], point(0.0), interval(lo.sqr().inf(), hi.sqr().sup()));
+            readings.push((l.slider.clone(), Reading::Travel(h)));
+            // The gradient of |E|²/2 in (α, φ): (U × E, D × E), U = L u, D = R(φ) d.
+            let ga = quadratic(&mut b, format!("grad_alpha_{i}"), &[(len, cl, yv), (-len, sl, xv)], point(0.0), Interval::ENTIRE);
+            let gp = quadratic(&mut b, format!("grad_phi_{i}"), &[(d[0], c, yv), (-d[1], s, yv), (-d[1], c, xv), (-d[0], s, xv)], point(0.0), Interval::ENTIRE);
+            // Its second derivative along v: v_α² (L² − E·U) + 2 v_α v_φ U·D + v_φ² (|d|² − E·D).
+            let paa = quadratic(&mut b, format!("h_aa_{i}"), &[(-len, cl, xv), (-len, sl, yv)], len.sqr(), Interval::ENTIRE);
+            let pap = quadratic(&mut b, format!("h_ap_{i}"), &[(len * d[0], cl, c), (-len * d[1], cl, s), (len * d[1], sl, c), (len * d[0], sl, s)], point(0.0), Interval::ENTIRE);
+            let ppp = quadratic(&mut b, format!("h_pp_{i}"), &[(-d[0], c, xv), (d[1], s, xv), (-d[1], c, yv), (-d[0], s, yv)], d[0].sqr() + d[1].sqr(), Interval::ENTIRE);
+            // A v = 0; μ H[v, v] + A w = 0.
+            b.aug.add(Equation::new(vec![prod(point(1.0), ga, v[0]), prod(point(1.0), gp, v[1])], point(0.0)));
+            b.aug.add(Equation::new(
+                vec![prod(point(1.0), ga, w[0]), prod(point(1.0), gp, w[1]), prod(point(1.0), paa, r[0]), prod(point(2.0), pap, r[1]), prod(point(1.0), ppp, r[2])],
+                point(0.0),
+            ));
         }
         let mut tangent = vec![mu];
         tangent.extend(&w);
@@ -313,7 +303,43 @@ impl PoseCusps {
                 charts.push(((k, tau), sys));
             }
         }
-        let legs_xy = leg_vars.iter().map(|&(xv, yv, ..)| (xv, yv)).collect();
-        Some(Self { charts, v, tangent, base_vars, readout: PoseReadout { legs: legs_xy, platform: (c, s), readings } })
+        Some(Self { charts, v, tangent, base_vars, readout: PoseReadout { legs: leg_xy, platform: (c, s), readings } })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::urdf;
+
+    const THREE_RPR: &str = include_str!("../../../urdf/three_rpr.urdf");
+
+    fn names(xs: &[&str]) -> Vec<String> {
+        xs.iter().map(|s| s.to_string()).collect()
+    }
+
+    #[test]
+    fn the_three_rpr_with_one_locked_leg_takes_the_pose_formulation() {
+        let m = urdf::parse(THREE_RPR).expect("bundled");
+        let p = PoseCusps::new(&m, &[("rho3".into(), 17.0)], &names(&["rho1", "rho2"])).expect("a platform on R-P-R legs");
+        assert_eq!(p.charts.len(), 4);
+        assert_eq!(p.base_vars, 4);
+        for (_, s) in &p.charts {
+            assert_eq!(s.vars.len(), s.equations.len(), "square");
+        }
+    }
+
+    #[test]
+    fn other_mechanisms_and_actuations_do_not() {
+        let m = urdf::parse(THREE_RPR).expect("bundled");
+        // No leg locked, a revolute joint fixed, a locked leg actuated.
+        assert!(PoseCusps::new(&m, &[], &names(&["rho1", "rho2"])).is_none());
+        assert!(PoseCusps::new(&m, &[("a3_joint".into(), 0.5)], &names(&["rho1", "rho2"])).is_none());
+        assert!(PoseCusps::new(&m, &[("rho3".into(), 17.0)], &names(&["rho1", "rho3"])).is_none());
+        // A rotated frame.
+        let rotated = urdf::parse(&THREE_RPR.replacen("<origin xyz=\"15.91 0 0\" rpy=\"0 0 0\"/>", "<origin xyz=\"15.91 0 0\" rpy=\"0 0 0.1\"/>", 1)).expect("parses");
+        assert!(PoseCusps::new(&rotated, &[("rho3".into(), 17.0)], &names(&["rho1", "rho2"])).is_none());
+        let five_bar = urdf::parse(include_str!("../../../urdf/five_bar.urdf")).expect("bundled");
+        assert!(PoseCusps::new(&five_bar, &[], &names(&["crank1_joint", "crank2_joint"])).is_none());
     }
 }
