@@ -5,7 +5,7 @@
 
 use super::util::urdf_text;
 use linkspace::model::urdf;
-use linkspace::problems::CuspProblem;
+use linkspace::problems::{CuspFormulation, CuspProblem};
 use linkspace::problems::{Output, SingularKind, SingularProblem};
 use linkspace::singular::{BoxKind, SingularSet};
 use linkspace::search::{SolverSettings, Status};
@@ -863,7 +863,7 @@ fn five_bar_equal_rods_cusp_roots_are_the_folded_circles() {
     let m = urdf::parse(&urdf_text("five_bar.urdf")).expect("parses");
     let actuated: Vec<String> = FIVE_BAR_ACTUATORS.iter().map(|s| s.to_string()).collect();
     let p = SingularProblem::new(&m, &[], SingularKind::Input, &actuated, None).expect("builds");
-    let cusps = CuspProblem::new(&p).expect("2 dof").solve(&p, &SolverSettings { sigma: 5e-2, ..Default::default() }, &AtomicBool::new(false)).expect("runs");
+    let cusps = CuspProblem::new(&m, &p).expect("2 dof").solve(&p, &SolverSettings { sigma: 5e-2, ..Default::default() }, &AtomicBool::new(false)).expect("runs");
     assert_eq!(cusps.status, Status::Complete);
     assert_eq!(cusps.proven(), 0);
     assert!(!cusps.points.is_empty());
@@ -959,18 +959,17 @@ mod three_rpr_ref {
     }
 }
 
-/// The 3-RPR with ρ3 = 17: every cusp of its type-II image in (ρ1, ρ2) certified, against the
-/// independent Newton of `three_rpr_ref` (none missed, none extra).
-/// The search runs in scaled widths (`CuspProblem::solve`): in absolute widths it ran over ten
-/// minutes without finishing (16 of its 36 chart pairs open; see `diag_three_rpr_cusp_charts`).
-#[test]
-fn three_rpr_cusps_match_an_independent_newton() {
+/// The 3-RPR with ρ3 = 17 in `formulation`: every cusp of its type-II image in (ρ1, ρ2)
+/// certified, against the independent Newton of `three_rpr_ref` (none missed, none extra).
+fn three_rpr_cusps_match(formulation: CuspFormulation) {
     let reference = three_rpr_ref::cusps(17.0);
     assert_eq!(reference.len(), 6, "{reference:?}");
     let m = urdf::parse(&urdf_text("three_rpr.urdf")).expect("parses");
     let actuated = vec!["rho1".to_string(), "rho2".to_string()];
     let p = SingularProblem::new(&m, &[("rho3".to_string(), 17.0)], SingularKind::Input, &actuated, None).expect("builds");
-    let cusps = CuspProblem::new(&p).expect("2 dof").solve(&p, &SolverSettings { sigma: 1e-3, ..Default::default() }, &AtomicBool::new(false)).expect("runs");
+    let cp = CuspProblem::with_formulation(&m, &p, formulation).expect("2 dof");
+    assert_eq!(cp.formulation, formulation);
+    let cusps = cp.solve(&p, &SolverSettings { sigma: 1e-3, ..Default::default() }, &AtomicBool::new(false)).expect("runs");
     assert_eq!(cusps.status, Status::Complete);
     let images: Vec<(Vec<(f64, f64)>, bool)> = cusps
         .points
@@ -978,7 +977,7 @@ fn three_rpr_cusps_match_an_independent_newton() {
         .map(|pt| {
             let mut hull = vec![(f64::INFINITY, f64::NEG_INFINITY); 2];
             for b in &pt.boxes {
-                for (h, v) in hull.iter_mut().zip(p.actuator_values(b)) {
+                for (h, v) in hull.iter_mut().zip(cp.actuator_values(&p, b)) {
                     *h = (h.0.min(v.0), h.1.max(v.1));
                 }
             }
@@ -992,6 +991,24 @@ fn three_rpr_cusps_match_an_independent_newton() {
         assert_eq!(n, 1, "cusp at {hull:?} holds {n} reference cusps");
     }
     assert_eq!(cusps.proven(), reference.len());
+}
+
+/// The default (`Auto`) picks the pose formulation for the 3-RPR.
+#[test]
+fn three_rpr_cusps_match_an_independent_newton() {
+    let m = urdf::parse(&urdf_text("three_rpr.urdf")).expect("parses");
+    let p = SingularProblem::new(&m, &[("rho3".to_string(), 17.0)], SingularKind::Input, &["rho1".to_string(), "rho2".to_string()], None).expect("builds");
+    assert_eq!(CuspProblem::new(&m, &p).expect("2 dof").formulation, CuspFormulation::Pose);
+    three_rpr_cusps_match(CuspFormulation::Pose);
+}
+
+/// The joint-coordinate formulation finds the same cusps; it runs in scaled widths
+/// (`CuspProblem::solve`): in absolute widths it ran over ten minutes without finishing (16 of
+/// its 36 chart pairs open; see `diag_three_rpr_cusp_charts`).
+#[test]
+#[ignore = "long: about 40 s"]
+fn three_rpr_cusps_in_joint_coordinates_match_an_independent_newton() {
+    three_rpr_cusps_match(CuspFormulation::Coordinates);
 }
 
 /// Diagnostics, not a check: per cusp chart pair of the 3-RPR (rho3 = 17), the solver's counters
@@ -1009,7 +1026,7 @@ fn diag_three_rpr_cusp_charts() {
     let m = urdf::parse(&urdf_text("three_rpr.urdf")).expect("parses");
     let actuated = vec!["rho1".to_string(), "rho2".to_string()];
     let p = SingularProblem::new(&m, &[("rho3".to_string(), 17.0)], SingularKind::Input, &actuated, None).expect("builds");
-    let cp = CuspProblem::new(&p).expect("2 dof");
+    let cp = CuspProblem::with_formulation(&m, &p, CuspFormulation::Coordinates).expect("2 dof");
     let secs: u64 = env("DIAG_SECS", "10").parse().unwrap();
     let use_lp = env("DIAG_LP", "1") == "1";
     let nw: f64 = env("DIAG_NW", "0.25").parse().unwrap();

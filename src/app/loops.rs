@@ -155,7 +155,7 @@ pub fn analyse_image(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String]
     };
     let p = SingularProblem::new(m, fixed, SingularKind::Input, actuated, None)?;
     let cover = p.solve(&scaled(&left()), cancel)?;
-    let cusps = CuspProblem::new(&p)?.solve(&p, &left(), cancel)?;
+    let cusps = CuspProblem::new(m, &p)?.solve(&p, &left(), cancel)?;
     let nodes = NodeProblem::new(&p)?.solve(&p, &left(), cancel)?;
     let regions = regions(m, &p, &cover, grid, &left(), cancel)?;
     Ok(ImageReport::new(&p, &cover, &cusps, &nodes, regions))
@@ -175,7 +175,7 @@ pub enum ImageSearch {
 pub fn image_points(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String], search: ImageSearch, settings: &SolverSettings, cancel: &AtomicBool) -> Result<ImagePoints, ImageAnalysisError> {
     let p = SingularProblem::new(m, fixed, SingularKind::Input, actuated, None)?;
     Ok(match search {
-        ImageSearch::Cusps => ImagePoints::cusps(&p, &CuspProblem::new(&p)?.solve(&p, settings, cancel)?),
+        ImageSearch::Cusps => ImagePoints::cusps(&p, &CuspProblem::new(m, &p)?.solve(&p, settings, cancel)?),
         ImageSearch::Nodes => ImagePoints::nodes(&p, &NodeProblem::new(&p)?.solve(&p, settings, cancel)?),
     })
 }

@@ -16,6 +16,6 @@ pub use choice::{Linkage, Model, ModelChoice, TracedPoint};
 pub use coordinates::{Placed, PlacedError};
 pub use linkage::{LinkageError, LinkageProblem};
 pub use platform::{PlatformError, PlatformProblem, Pose};
-pub use singular::image::{CuspProblem, ImageError, NodeProblem};
+pub use singular::image::{CuspFormulation, CuspProblem, ImageError, NodeProblem};
 pub use singular::{Coordinates, Output, SingularError, SingularKind, SingularProblem};
 pub use spatial::{LinkPose, SpatialProblem};

@@ -24,9 +24,9 @@ use super::{BoxKind, SingularSet};
 use crate::interval::{components, point, Bounds, Interval, IntervalBox};
 use crate::model::Mechanism;
 use crate::problems::linkage::LinkageProblem;
-use crate::problems::singular::image::{check, CuspProblem, ImageError, NodeProblem};
+use crate::problems::singular::image::{check, CuspFormulation, CuspProblem, ImageError, NodeProblem};
 use crate::problems::singular::{Parts, SingularError, SingularProblem};
-use crate::search::{Limit, SolveError, SolveStats, SolverSettings, Status};
+use crate::search::{Limit, SolveError, SolveStats, Solver, SolverSettings, Status};
 use crate::system::{EquationSystem, Monomial, VarId};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
@@ -60,7 +60,14 @@ impl CuspProblem {
                 found.push((chart.initial_box(), BoxKind::Undecided));
                 continue;
             };
-            let e = sp.linkage.extended_solver(chart, s)?.enclose(cancel, &mut |_| {});
+            // The pose systems are not extensions of the linkage's: no joint-limit filter (the
+            // pose formulation takes continuous revolute joints only, its travels bound h). Their
+            // rows are general quadratics, which the LP relaxation leaves out: no LP shrink.
+            let solver = match self.formulation {
+                CuspFormulation::Pose => Solver::new(chart, SolverSettings { use_lp: false, ..s })?,
+                _ => sp.linkage.extended_solver(chart, s)?,
+            };
+            let e = solver.enclose(cancel, &mut |_| {});
             if e.status != Status::Complete {
                 status = e.status;
             }
@@ -84,6 +91,12 @@ impl CuspProblem {
         for p in &mut points {
             // μ away from 0 on every certified box: a tangent, so a cusp (not a corank-2 point).
             p.degenerate = p.boxes.iter().any(|bx| bx.dims[self.tangent[0]].contains(0.0));
+            for b in &p.boxes {
+                for (n, v) in self.joint_values(sp, b) {
+                    let e = p.joints.entry(n).or_insert([v.0, v.1]);
+                    *e = [e[0].min(v.0), e[1].max(v.1)];
+                }
+            }
         }
         Ok(PointSearch { status, points, stats, dropped_other_chart: dropped, seconds: t0.elapsed().as_secs_f64() })
     }
@@ -118,6 +131,8 @@ pub struct FoundPoint {
     pub kinds: Vec<BoxKind>,
     /// `μ` may vanish: possibly a corank-two point rather than a cusp.
     pub degenerate: bool,
+    /// Free joint values, the hull over the boxes (radians or metres).
+    pub joints: BTreeMap<String, Bounds>,
 }
 
 impl FoundPoint {
@@ -670,7 +685,8 @@ pub fn cusp_records(sp: &SingularProblem, cusps: &PointSearch) -> Vec<ImageCusp>
         .points
         .iter()
         .map(|p| {
-            let (joints, workspace) = hull_joints(sp, &p.boxes);
+            let joints = p.joints.clone();
+            let workspace = sp.actuated.iter().filter_map(|a| joints.get(a).map(|b| (a.clone(), *b))).collect();
             ImageCusp { joints, workspace, unique: p.unique() && !p.degenerate, degenerate: p.degenerate }
         })
         .collect();

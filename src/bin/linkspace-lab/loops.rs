@@ -3,7 +3,7 @@
 
 use anyhow::Result;
 use linkspace::model::urdf;
-use linkspace::problems::{CuspProblem, NodeProblem};
+use linkspace::problems::{CuspFormulation, CuspProblem, NodeProblem};
 use linkspace::singular::image;
 use linkspace::app::SingularSets;
 use linkspace::problems::{Output, SingularKind, SingularProblem};
@@ -20,7 +20,9 @@ pub struct BenchArgs {
     #[arg(long)]
     butterfly: bool,
     /// Also time the type-II image of the five-bar with unequal rods (cusps, nodes, regions;
-    /// about a minute a run), each search against the cover of the type-II set in the same run.
+    /// about a minute a run), each search against the cover of the type-II set in the same run,
+    /// and the 3-RPR's cusps (rho3 = 17) in the pose formulation against the joint coordinates
+    /// (about 40 s a run of the latter).
     #[arg(long)]
     image: bool,
 }
@@ -31,6 +33,7 @@ const BUTTERFLY: &str = include_str!("../../../urdf/double_butterfly.urdf");
 const FIVE_BAR_UNEQUAL: &str = include_str!("../../../urdf/five_bar_unequal.urdf");
 const RSSR: &str = include_str!("../../../urdf/rssr.urdf");
 const SPHERICAL: &str = include_str!("../../../urdf/spherical_four_bar.urdf");
+const THREE_RPR: &str = include_str!("../../../urdf/three_rpr.urdf");
 
 /// A bench case: name, URDF text, set, actuated joints, output, sigma.
 type Case = (&'static str, &'static str, SingularKind, Vec<String>, Option<Output>, f64);
@@ -79,6 +82,40 @@ pub fn bench(args: BenchArgs) -> Result<()> {
     }
     if args.image {
         bench_image(&mut out, args.repeat)?;
+        bench_three_rpr_cusps(&mut out, args.repeat)?;
+    }
+    Ok(())
+}
+
+/// The 3-RPR's cusps at rho3 = 17 (sigma 1e-3, one thread): the pose formulation against the
+/// joint coordinates (the baseline), both solving the same problem in the same run; CPU seconds,
+/// medians of `repeat` runs.
+fn bench_three_rpr_cusps(out: &mut impl Write, repeat: usize) -> Result<()> {
+    let m = urdf::parse(THREE_RPR)?;
+    let actuated: Vec<String> = vec!["rho1".into(), "rho2".into()];
+    let p = SingularProblem::new(&m, &[("rho3".into(), 17.0)], SingularKind::Input, &actuated, None)?;
+    let settings = SolverSettings { sigma: 1e-3, threads: 1, ..SolverSettings::default() };
+    let cancel = AtomicBool::new(false);
+    writeln!(out, "3-RPR cusps (rho3 = 17, sigma 1e-3) | formulation | chart pairs | median CPU s | boxes processed | result | vs the joint coordinates (same run)").ok();
+    let mut base = None;
+    for formulation in [CuspFormulation::Coordinates, CuspFormulation::Pose] {
+        let problem = CuspProblem::with_formulation(&m, &p, formulation)?;
+        let mut times = Vec::new();
+        let mut what = String::new();
+        let mut processed = 0;
+        for _ in 0..repeat {
+            let c0 = linkspace::search::process_cpu_seconds();
+            let c = problem.solve(&p, &settings, &cancel)?;
+            times.push(linkspace::search::process_cpu_seconds() - c0);
+            processed = c.stats.iter().map(|s| s.processed).sum::<u64>();
+            let status = if c.status == linkspace::Status::Complete { "complete" } else { "incomplete" };
+            what = format!("{} proven, {} undecided, {status}", c.proven(), c.points.len() - c.proven());
+        }
+        times.sort_by(|a, b| a.total_cmp(b));
+        let t = times[times.len() / 2];
+        let ratio = base.map_or("1.00x (baseline)".to_string(), |b: f64| crate::speed_against(b, t));
+        writeln!(out, "3-RPR cusps | {} | {} | {t:.3} | {processed} | {what} | {ratio}", formulation.name(), problem.charts.len()).ok();
+        base.get_or_insert(t);
     }
     Ok(())
 }
@@ -91,7 +128,7 @@ fn bench_image(out: &mut impl Write, repeat: usize) -> Result<()> {
     let p = SingularProblem::new(&m, &[], SingularKind::Input, &actuated, None)?;
     let settings = SolverSettings { sigma: 1e-2, max_boxes: 2_000_000, ..SolverSettings::default() };
     let cancel = AtomicBool::new(false);
-    let cusp_problem = CuspProblem::new(&p)?;
+    let cusp_problem = CuspProblem::new(&m, &p)?;
     let node_problem = NodeProblem::new(&p)?;
     let median = |f: &mut dyn FnMut() -> Result<String>| -> Result<(f64, String)> {
         let mut times = Vec::new();

@@ -30,6 +30,11 @@
 //! map `C → actuator space` (the fold condition degenerates transversally), whose image point
 //! is a cusp of the image of `S`.
 //!
+//! This is the `Coordinates` formulation (any 2-dof linkage). A planar platform on three R-P-R
+//! legs, one locked, takes the `Pose` one by default (`CuspFormulation::Auto`): the same
+//! conditions over the two angles that place the platform (`pose`'s module doc), 4 chart pairs
+//! of a two-dimensional search instead of 36 over every leg's coordinates.
+//!
 //! ## Nodes
 //! A doubled system (`S`'s chart `k` for one point, chart `k'` for the other) whose two copies
 //! *share* the actuated coordinates' variables, so the pairs have equal actuator values; it is
@@ -45,20 +50,26 @@
 //! system is symmetric under swapping the copies); in chart pairs `(k, k)` a pair is kept in one
 //! order.
 //!
+use super::pose::{PoseCusps, PoseReadout};
 use super::{merge, Parts, SingularError, SingularKind, SingularProblem, CHART_REACH};
-use crate::interval::{interval, point, Interval};
+use crate::interval::{interval, point, Interval, IntervalBox};
+use crate::model::Mechanism;
 use crate::system::{Equation, EquationSystem, Monomial, Term, VarId, VarRole};
 use std::collections::BTreeMap;
 
 /// Adds product variables to a system, each once.
-struct Builder {
-    aug: EquationSystem,
+pub(super) struct Builder {
+    pub(super) aug: EquationSystem,
     cache: BTreeMap<(VarId, VarId), VarId>,
 }
 
 impl Builder {
+    pub(super) fn new(aug: EquationSystem) -> Self {
+        Self { aug, cache: BTreeMap::new() }
+    }
+
     /// The variable `x·y` (a square for `x = y`).
-    fn product(&mut self, x: VarId, y: VarId) -> VarId {
+    pub(super) fn product(&mut self, x: VarId, y: VarId) -> VarId {
         let key = (x.min(y), x.max(y));
         if let Some(&p) = self.cache.get(&key) {
             return p;
@@ -80,7 +91,7 @@ impl Builder {
     }
 
     /// `coef · factor · m` as a linear term.
-    fn term(&mut self, coef: Interval, factor: Option<VarId>, m: VarId) -> Term {
+    pub(super) fn term(&mut self, coef: Interval, factor: Option<VarId>, m: VarId) -> Term {
         let v = match factor {
             Some(f) => self.product(f, m),
             None => m,
@@ -88,7 +99,7 @@ impl Builder {
         Term { coef, mono: Monomial::Linear(v) }
     }
 
-    fn row(&mut self, terms: Vec<Term>) {
+    pub(super) fn row(&mut self, terms: Vec<Term>) {
         if !terms.is_empty() {
             self.aug.add(Equation::new(merge(terms), point(0.0)));
         }
@@ -96,7 +107,7 @@ impl Builder {
 }
 
 /// Fixes `var` to `value` in `s` (domain and equation).
-fn pin(s: &mut EquationSystem, var: VarId, value: f64) {
+pub(super) fn pin(s: &mut EquationSystem, var: VarId, value: f64) {
     s.vars[var].domain = point(value);
     s.add(Equation::new(vec![Term { coef: point(1.0), mono: Monomial::Linear(var) }], point(-value)));
 }
@@ -111,6 +122,9 @@ pub enum ImageError {
     /// Not an input set of a 2-dof mechanism.
     #[error("cusps, nodes and assembly-mode regions need the input (type-II) set of a mechanism with 2 degrees of freedom and 2 actuators (this one: {0} dof)")]
     NotTwoDof(isize),
+    /// The pose formulation was asked for a mechanism it does not fit.
+    #[error("the pose formulation of the cusp system takes a planar platform on three R-P-R legs (unrotated frames, revolute axes +z, slider axes +x, continuous revolute joints, slider limits above 0) with one slider fixed and the two others actuated")]
+    NotPosePlatform,
     /// An actuated joint is not a coordinate of its own.
     #[error("actuated joint '{0}' is not a coordinate of its own (a revolute joint to the ground or a slider): nodes and regions compare actuator values through shared variables")]
     NotCoordinate(String),
@@ -119,6 +133,30 @@ pub enum ImageError {
 /// A `Rate` list as terms in `m`.
 fn rates_terms(b: &mut Builder, rates: &[super::Rate], m: &[VarId]) -> Vec<Term> {
     rates.iter().map(|r| b.term(r.coef, r.factor, m[r.coord])).collect()
+}
+
+/// How the cusp system is written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CuspFormulation {
+    /// `Pose` when the mechanism fits it, else `Coordinates`.
+    Auto,
+    /// The platform's pose as unknowns (`pose`'s module doc): a planar platform on three R-P-R
+    /// legs, one locked.
+    Pose,
+    /// The linkage's joint coordinates (one `(c, s)` per rigid group, one travel per slider)
+    /// with the null vector and tangent over all of them (this module's doc): any 2-dof linkage.
+    Coordinates,
+}
+
+impl CuspFormulation {
+    /// The name used on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            CuspFormulation::Auto => "auto",
+            CuspFormulation::Pose => "pose",
+            CuspFormulation::Coordinates => "coordinates",
+        }
+    }
 }
 
 /// The cusp systems of one input-singular set.
@@ -130,8 +168,12 @@ pub struct CuspProblem {
     pub v: Vec<VarId>,
     /// `[μ, w_0, ..., w_{n−1}]`: the tangent's direction.
     pub tangent: Vec<VarId>,
-    /// Number of the linkage's variables.
+    /// Number of the configuration variables (the linkage's, or the pose's).
     pub base_vars: usize,
+    /// The formulation built (`Pose` or `Coordinates`).
+    pub formulation: CuspFormulation,
+    /// Joint values of a pose box; `None` in the joint coordinates.
+    pose: Option<PoseReadout>,
 }
 
 /// Checks the set is an input set of a 2-dof mechanism with 2 actuators.
@@ -143,8 +185,42 @@ pub(crate) fn check(sp: &SingularProblem) -> Result<(), ImageError> {
 }
 
 impl CuspProblem {
-    /// Builds the cusp systems (see the module doc) of `sp`, an input set of a 2-dof linkage.
-    pub fn new(sp: &SingularProblem) -> Result<Self, ImageError> {
+    /// Builds the cusp systems of `sp`, an input set of the 2-dof linkage `m`, in the pose
+    /// formulation when `m` fits it (far fewer unknowns and charts), else in the joint coordinates.
+    pub fn new(m: &Mechanism, sp: &SingularProblem) -> Result<Self, ImageError> {
+        Self::with_formulation(m, sp, CuspFormulation::Auto)
+    }
+
+    /// Builds the cusp systems of `sp` in `formulation` (`Pose` on a mechanism it does not fit is
+    /// an error).
+    pub fn with_formulation(m: &Mechanism, sp: &SingularProblem, formulation: CuspFormulation) -> Result<Self, ImageError> {
+        check(sp)?;
+        if formulation == CuspFormulation::Coordinates {
+            return Self::coordinates(sp);
+        }
+        match PoseCusps::new(m, &sp.linkage.fixed_joints, &sp.actuated) {
+            Some(p) => Ok(Self { base_vars: p.base_vars, v: p.v, tangent: p.tangent, charts: p.charts, formulation: CuspFormulation::Pose, pose: Some(p.readout) }),
+            None if formulation == CuspFormulation::Auto => Self::coordinates(sp),
+            None => Err(ImageError::NotPosePlatform),
+        }
+    }
+
+    /// Free joint values over a box of one of the charts (radians or metres), outward rounded.
+    pub fn joint_values(&self, sp: &SingularProblem, b: &IntervalBox) -> BTreeMap<String, (f64, f64)> {
+        match &self.pose {
+            Some(p) => p.joint_values(b),
+            None => sp.joint_values(b),
+        }
+    }
+
+    /// Values of the actuated joints over a box of one of the charts.
+    pub fn actuator_values(&self, sp: &SingularProblem, b: &IntervalBox) -> Vec<(f64, f64)> {
+        let all = self.joint_values(sp, b);
+        sp.actuated.iter().map(|a| all.get(a).copied().unwrap_or((f64::NAN, f64::NAN))).collect()
+    }
+
+    /// Builds the cusp systems (see the module doc) of `sp` in the joint coordinates.
+    pub fn coordinates(sp: &SingularProblem) -> Result<Self, ImageError> {
         check(sp)?;
         let linkage = &sp.linkage;
         let mut aug = linkage.system.clone();
@@ -193,7 +269,7 @@ impl CuspProblem {
                 charts.push(((k, tau), s));
             }
         }
-        Ok(Self { charts, v, tangent, base_vars: sp.base_vars })
+        Ok(Self { charts, v, tangent, base_vars: sp.base_vars, formulation: CuspFormulation::Coordinates, pose: None })
     }
 }
 
