@@ -131,19 +131,20 @@ pub struct Progress {
     pub decided: f64,
 }
 
-/// The clock and counters the drivers check before taking work.
-pub(super) struct Budget<'a> {
+/// The clock and counters the drivers (and the phases of a job outside them) check before taking
+/// work.
+pub(crate) struct Budget<'a> {
     limits: Limits,
     cancel: &'a AtomicBool,
     t0: Instant,
 }
 
 impl<'a> Budget<'a> {
-    pub(super) fn start(limits: Limits, cancel: &'a AtomicBool) -> Self {
+    pub(crate) fn start(limits: Limits, cancel: &'a AtomicBool) -> Self {
         Budget { limits, cancel, t0: Instant::now() }
     }
 
-    pub(super) fn elapsed(&self) -> Duration {
+    pub(crate) fn elapsed(&self) -> Duration {
         self.t0.elapsed()
     }
 
@@ -163,7 +164,7 @@ impl<'a> Budget<'a> {
     }
 
     /// Cancel or time: the limits that do not depend on counts.
-    pub(super) fn interrupted(&self) -> Option<Limit> {
+    pub(crate) fn interrupted(&self) -> Option<Limit> {
         if self.cancel.load(Ordering::Relaxed) {
             return Some(Limit::Cancelled);
         }

@@ -28,6 +28,7 @@ mod store;
 pub use control::Control;
 pub use driver::{run, run_by_level};
 pub use limits::{process_cpu_seconds, Incompleteness, Limit, Limits, Progress, Status};
+pub(crate) use limits::Budget;
 pub use polynomial::{default_contractor, width_units, BoxSink, BoxStatus, Collect, ContractorFactory, Enclosure, SolveError, SolveStats, Solver};
 pub use settings::{SettingsError, SolverSettings};
 pub use store::Store;

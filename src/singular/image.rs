@@ -26,7 +26,7 @@ use crate::model::Mechanism;
 use crate::problems::linkage::LinkageProblem;
 use crate::problems::singular::image::{check, CuspFormulation, CuspProblem, ImageError, NodeProblem};
 use crate::problems::singular::{Parts, SingularError, SingularProblem};
-use crate::search::{Limit, SolveError, SolveStats, Solver, SolverSettings, Status};
+use crate::search::{Budget, Limit, Limits, SolveError, SolveStats, Solver, SolverSettings, Status};
 use crate::system::{EquationSystem, Monomial, VarId};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
@@ -446,6 +446,8 @@ pub struct ActuatorRegions {
 pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usize, settings: &SolverSettings, cancel: &AtomicBool) -> Result<ActuatorRegions, ImageError> {
     check(sp)?;
     let t0 = Instant::now();
+    // The kernel's own cancel-or-time check, from the same start.
+    let budget = Budget::start(Limits { timeout: settings.timeout, ..Limits::default() }, cancel);
     let mut scratch = sp.linkage.system.clone();
     let parts = Parts::new(&sp.linkage, &mut scratch)?;
     let mut axes = Vec::new();
@@ -459,13 +461,7 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
         });
     }
     let images: Vec<Vec<(f64, f64)>> = set.boxes.iter().map(|b| sp.actuator_values(&b.b)).collect();
-    let stopped = || -> Option<Limit> {
-        if cancel.load(std::sync::atomic::Ordering::Relaxed) {
-            Some(Limit::Cancelled)
-        } else {
-            settings.timeout.filter(|t| t0.elapsed() >= *t).map(|_| Limit::Time)
-        }
-    };
+    let stopped = || budget.interrupted();
     let unfinished = |limit: Limit| ActuatorRegions { grid, status: Status::Incomplete(limit), blocked_cells: 0, regions: Vec::new(), seconds: t0.elapsed().as_secs_f64() };
     let mut blocked = vec![false; grid * grid];
     for (k, im) in images.iter().enumerate() {
