@@ -697,7 +697,12 @@ impl LinkageProblem {
     /// World orientation of every link over the box, radians, keyed by link name; outward
     /// rounded.
     pub fn link_angles(&self, b: &IntervalBox) -> BTreeMap<String, (f64, f64)> {
-        self.links.iter().map(|(name, angle, off, yaw)| (name.clone(), bounds(wrap(self.angle(b, *angle, *off + *yaw))))).collect()
+        self.link_angles_of(b, |_| true)
+    }
+
+    /// `link_angles` of the links `keep` names only (the others are not computed).
+    pub fn link_angles_of(&self, b: &IntervalBox, keep: impl Fn(&str) -> bool) -> BTreeMap<String, (f64, f64)> {
+        self.links.iter().filter(|(name, ..)| keep(name)).map(|(name, angle, off, yaw)| (name.clone(), bounds(wrap(self.angle(b, *angle, *off + *yaw))))).collect()
     }
 
     fn angle(&self, b: &IntervalBox, angle: Angle, off: Interval) -> Interval {

@@ -1265,9 +1265,15 @@ impl SpatialProblem {
 
     /// Every link's pose over the box, keyed by link name.
     pub fn link_poses(&self, b: &IntervalBox) -> BTreeMap<String, LinkPose> {
+        self.link_poses_of(b, |_| true)
+    }
+
+    /// `link_poses` of the links `keep` names only (the others are not computed).
+    pub fn link_poses_of(&self, b: &IntervalBox, keep: impl Fn(&str) -> bool) -> BTreeMap<String, LinkPose> {
         let d = &b.dims;
         self.links
             .iter()
+            .filter(|place| keep(&place.name))
             .map(|place| {
                 let position = place.position.as_ref().map(|p| self.eval_pos(p, d).map(|x| [x.inf(), x.sup()]));
                 let (quaternion, rotation_width) = match place.rotation {

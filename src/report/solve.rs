@@ -141,12 +141,12 @@ impl SolveReport {
 /// One box of `result` in the user's terms; the links' orientations and poses are read off the
 /// box by `problem`.
 fn box_record(problem: &Linkage, result: &BoxSetResult, b: &ResultBox, rigid_links: &BTreeMap<String, String>) -> BoxRecord {
-    let moves = |name: &String| !rigid_links.contains_key(name);
+    let moves = |name: &str| !rigid_links.contains_key(name);
     let original = || IntervalBox { dims: b.bounds.iter().map(|&[lo, hi]| interval(lo, hi)).collect(), level: b.level };
     let traced = |t: &TracedBounds| TracedPoint { x: t.x, y: t.y, z: t.z };
     let (link_angles, link_poses) = match problem {
-        Linkage::Planar(p) => (p.link_angles(&original()).into_iter().filter(|(k, _)| moves(k)).map(|(k, (lo, hi))| (k, [lo, hi])).collect(), None),
-        Linkage::Spatial(p, _) => (BTreeMap::new(), Some(p.link_poses(&original()).into_iter().filter(|(k, _)| moves(k)).map(|(k, pose)| (k, LinkPoseRecord(pose))).collect())),
+        Linkage::Planar(p) => (p.link_angles_of(&original(), moves).into_iter().map(|(k, (lo, hi))| (k, [lo, hi])).collect(), None),
+        Linkage::Spatial(p, _) => (BTreeMap::new(), Some(p.link_poses_of(&original(), moves).into_iter().map(|(k, pose)| (k, LinkPoseRecord(pose))).collect())),
     };
     BoxRecord {
         joints: result.joint_names.iter().cloned().zip(b.joints.iter().copied()).collect(),
