@@ -12,6 +12,7 @@
 //! their order, do not depend on the number of threads or on scheduling.
 
 use super::limits::{process_cpu_seconds, Budget, Limit, Limits, Progress, Status};
+use super::share::{self, Decision, Named, Peers, Wire};
 use super::store::{Pool, Store};
 use super::{Prune, Reason, Sink, Stats, Step, Undecided};
 use smallvec::SmallVec;
@@ -139,11 +140,49 @@ pub fn run_by_level<P>(workers: &mut [P], start: P::Cell, limits: &Limits, cance
 where
     P: Prune + Send,
 {
-    assert!(!workers.is_empty(), "invariant: run_by_level needs at least one worker");
     let budget = Budget::start(*limits, cancel);
+    with_crew(workers, &budget, |decide| walk_levels(start, &budget, sink, None, decide))
+}
+
+/// As `run_by_level`, with each level shared among the processes of `share::Peers` when this
+/// thread has them (`share`): every process gets the cells and the order a single process
+/// reports. Its cells and results travel between processes, hence `Wire`.
+pub fn run_shared<P>(workers: &mut [P], start: P::Cell, limits: &Limits, cancel: &AtomicBool, sink: &mut impl Sink<P::Cell, P::Found>) -> (Status, Stats)
+where
+    P: Prune + Send,
+    P::Cell: Wire,
+    P::Found: Wire,
+{
+    run_shared_with(share::peers(), workers, start, limits, cancel, sink)
+}
+
+/// `run_shared` among `peers`.
+pub(crate) fn run_shared_with<P>(peers: Option<&dyn Peers>, workers: &mut [P], start: P::Cell, limits: &Limits, cancel: &AtomicBool, sink: &mut impl Sink<P::Cell, P::Found>) -> (Status, Stats)
+where
+    P: Prune + Send,
+    P::Cell: Wire,
+    P::Found: Wire,
+{
+    let Some(peers) = peers else {
+        return run_by_level(workers, start, limits, cancel, sink);
+    };
+    let budget = Budget::start(*limits, cancel);
+    let (status, mut stats) = with_crew(workers, &budget, |decide| walk_levels(start, &budget, sink, Some(peers), |level| decide_shared(level, peers, decide)));
+    stats.cpu_seconds = share::sum(peers, &[stats.cpu_seconds])[0];
+    (status, stats)
+}
+
+/// The level decider one thread per worker gives: the calling thread is the first worker; the
+/// others are started once for the whole run (not per level: starting a thread costs as much
+/// as deciding a few 3R cells) and are handed each level through a channel.
+fn with_crew<P, T>(workers: &mut [P], budget: &Budget<'_>, body: impl FnOnce(&mut dyn FnMut(Vec<P::Cell>) -> LevelOutcome<P::Cell, P::Found, P::Reason>) -> T) -> T
+where
+    P: Prune + Send,
+{
+    assert!(!workers.is_empty(), "invariant: run_by_level needs at least one worker");
     let (first, rest) = workers.split_first_mut().expect("invariant: at least one worker");
     if rest.is_empty() {
-        return walk_levels(start, &budget, sink, |level| decide_alone(first, level, &budget));
+        return body(&mut |level| decide_alone(first, level, budget));
     }
     std::thread::scope(|s| {
         let (done_tx, done_rx) = mpsc::channel();
@@ -151,7 +190,7 @@ where
         for p in rest.iter_mut() {
             let (job_tx, job_rx) = mpsc::channel::<Arc<LevelJob<P::Cell>>>();
             job_txs.push(job_tx);
-            let (done_tx, budget) = (done_tx.clone(), &budget);
+            let done_tx = done_tx.clone();
             s.spawn(move || {
                 while let Some(job) = recv_spinning(&job_rx) {
                     if done_tx.send(take_chunks(p, &job, budget)).is_err() {
@@ -161,24 +200,71 @@ where
             });
         }
         drop(done_tx);
-        let out = walk_levels(start, &budget, sink, |level| {
-            // A level of a few cells costs less than waking the crew for it: the first worker
-            // decides it alone, with the same answers.
-            if level.len() < SERIAL_BELOW {
-                return decide_alone(first, level, &budget);
-            }
-            let job = Arc::new(LevelJob::new(level, job_txs.len() + 1));
-            for tx in &job_txs {
-                tx.send(job.clone()).expect("invariant: the crew lives as long as the run");
-            }
-            let mut done = vec![take_chunks(first, &job, &budget)];
-            done.extend((0..job_txs.len()).map(|_| recv_spinning(&done_rx).expect("invariant: Prune::process does not panic")));
-            collect(job, done)
-        });
+        let out = {
+            let mut decide = |level: Vec<P::Cell>| {
+                // A level of a few cells costs less than waking the crew for it: the first
+                // worker decides it alone, with the same answers.
+                if level.len() < SERIAL_BELOW {
+                    return decide_alone(first, level, budget);
+                }
+                let job = Arc::new(LevelJob::new(level, job_txs.len() + 1));
+                for tx in &job_txs {
+                    tx.send(job.clone()).expect("invariant: the crew lives as long as the run");
+                }
+                let mut done = vec![take_chunks(first, &job, budget)];
+                done.extend((0..job_txs.len()).map(|_| recv_spinning(&done_rx).expect("invariant: Prune::process does not panic")));
+                collect(job, done)
+            };
+            body(&mut decide)
+        };
         // Dropping the senders ends the crew's loops; the scope joins them.
         drop(job_txs);
         out
     })
+}
+
+/// Decides this process's share of a level and returns every process's decisions: chunk `j`
+/// of the level goes to process `j mod size`; the decisions come back in level order (a
+/// level no process was interrupted in), or process by process (an interrupted level, which
+/// depends on the clock anyway).
+fn decide_shared<C: Wire, F: Wire, R: Reason>(level: Vec<C>, peers: &dyn Peers, decide: &mut dyn FnMut(Vec<C>) -> LevelOutcome<C, F, R>) -> LevelOutcome<C, F, Named> {
+    let (rank, size) = (peers.rank(), peers.size());
+    // Chunks small enough to balance the load, large enough that messages stay few.
+    let chunk = (level.len() / (size * 8)).clamp(1, 256);
+    let lengths: Vec<usize> = (0..level.len().div_ceil(chunk)).map(|j| chunk.min(level.len() - j * chunk)).collect();
+    let mine: Vec<C> = level.into_iter().enumerate().filter(|(i, _)| (i / chunk) % size == rank).map(|(_, c)| c).collect();
+    let (steps, unprocessed) = decide(mine);
+    let mut bytes = Vec::new();
+    steps.len().put(&mut bytes);
+    for d in &steps {
+        share::put_decision(d, &mut bytes);
+    }
+    drop(steps);
+    unprocessed.put(&mut bytes);
+    let mut theirs: Vec<(std::vec::IntoIter<Decision<C, F, Named>>, Vec<C>)> = peers
+        .all_gather(&bytes)
+        .iter()
+        .map(|b| {
+            let mut input = b.as_slice();
+            let n = usize::take(&mut input);
+            let steps: Vec<_> = (0..n).map(|_| share::take_decision::<C, F>(&mut input)).collect();
+            (steps.into_iter(), Vec::<C>::take(&mut input))
+        })
+        .collect();
+    let interrupted = theirs.iter().any(|(_, u)| !u.is_empty());
+    let mut out = Vec::with_capacity(lengths.iter().sum());
+    let mut unprocessed = Vec::new();
+    if interrupted {
+        for (steps, u) in theirs {
+            out.extend(steps);
+            unprocessed.extend(u);
+        }
+    } else {
+        for (j, &n) in lengths.iter().enumerate() {
+            out.extend(theirs[j % size].0.by_ref().take(n));
+        }
+    }
+    (out, unprocessed)
 }
 
 /// How long a thread waiting for the next level (or for the crew's decisions) spins before it
@@ -208,7 +294,7 @@ fn recv_spinning<T>(rx: &mpsc::Receiver<T>) -> Option<T> {
 
 /// The decisions of a level, in level order: each with its cell's level and the bytes of the
 /// children it made (for the memory limit).
-type Decided<C, F, R> = Vec<(u32, usize, Step<C, F, R>)>;
+type Decided<C, F, R> = Vec<Decision<C, F, R>>;
 
 /// The step a `Prune` returns.
 type PruneStep<P> = Step<<P as Prune>::Cell, <P as Prune>::Found, <P as Prune>::Reason>;
@@ -218,7 +304,14 @@ type LevelOutcome<C, F, R> = (Decided<C, F, R>, Vec<C>);
 
 /// The breadth-first walk: takes each level's decisions from `decide_level` (which also returns
 /// the cells cancel or time kept it from taking) and routes them in level order.
-fn walk_levels<C, F, R: Reason>(start: C, budget: &Budget<'_>, sink: &mut impl Sink<C, F>, mut decide_level: impl FnMut(Vec<C>) -> LevelOutcome<C, F, R>) -> (Status, Stats) {
+///
+/// With `peers`, the processes agree on every clock-dependent stop (each reads its own clock
+/// and cancel flag), so they walk the same tree.
+fn walk_levels<C, F, R: Reason>(start: C, budget: &Budget<'_>, sink: &mut impl Sink<C, F>, peers: Option<&dyn Peers>, mut decide_level: impl FnMut(Vec<C>) -> LevelOutcome<C, F, R>) -> (Status, Stats) {
+    let agree = |limit: Option<Limit>| match peers {
+        Some(p) => share::agree(p, limit),
+        None => limit,
+    };
     let c0 = process_cpu_seconds();
     let mut stats = Stats::default();
     let mut discards = Discards::default();
@@ -228,7 +321,7 @@ fn walk_levels<C, F, R: Reason>(start: C, budget: &Budget<'_>, sink: &mut impl S
     let mut pending = Vec::new();
 
     while !level.is_empty() {
-        if let Some(limit) = budget.exhausted(stats.processed, 0) {
+        if let Some(limit) = agree(budget.exhausted(stats.processed, 0)) {
             status = Status::Incomplete(limit);
             pending = level;
             break;
@@ -257,7 +350,7 @@ fn walk_levels<C, F, R: Reason>(start: C, budget: &Budget<'_>, sink: &mut impl S
             break;
         }
         let stopped = if !unprocessed.is_empty() {
-            budget.interrupted().or(Some(Limit::Time))
+            agree(budget.interrupted()).or(Some(Limit::Time))
         } else if !rest.is_empty() {
             Some(Limit::Boxes)
         } else if next_bytes > budget.max_memory() {
@@ -519,6 +612,54 @@ mod tests {
             assert_eq!(status, Status::Complete);
             assert_eq!(keep.found, serial, "{workers} workers");
         }
+    }
+
+    #[test]
+    fn processes_sharing_a_search_each_report_what_one_process_reports() {
+        let serial = {
+            let mut keep = Keep::default();
+            run_by_level(&mut [Roots], (0.0, 3.0, 0), &Limits::default(), &AtomicBool::new(false), &mut keep);
+            keep.found
+        };
+        for size in [2, 3] {
+            let group = crate::search::share::tests::ThreadPeers::group(size);
+            let results: Vec<_> = std::thread::scope(|s| {
+                let handles: Vec<_> = group
+                    .iter()
+                    .map(|p| {
+                        s.spawn(move || {
+                            let mut keep = Keep::default();
+                            let (status, stats) = run_shared_with(Some(p), &mut [Roots, Roots], (0.0, 3.0, 0), &Limits::default(), &AtomicBool::new(false), &mut keep);
+                            (status, stats.processed, keep.found)
+                        })
+                    })
+                    .collect();
+                handles.into_iter().map(|h| h.join().unwrap()).collect()
+            });
+            let processed = results[0].1;
+            for (status, p, found) in results {
+                assert_eq!((status, p), (Status::Complete, processed));
+                assert_eq!(found, serial, "{size} processes");
+            }
+        }
+        // A cell limit stops every process at the same cell, with the same pending cells.
+        let group = crate::search::share::tests::ThreadPeers::group(2);
+        let limits = Limits { max_cells: 40, ..Limits::default() };
+        let results: Vec<_> = std::thread::scope(|s| {
+            let handles: Vec<_> = group
+                .iter()
+                .map(|p| {
+                    s.spawn(move || {
+                        let mut keep = Keep::default();
+                        let (status, stats) = run_shared_with(Some(p), &mut [Roots], (0.0, 3.0, 0), &limits, &AtomicBool::new(false), &mut keep);
+                        (status, stats.processed, keep.found, keep.pending)
+                    })
+                })
+                .collect();
+            handles.into_iter().map(|h| h.join().unwrap()).collect()
+        });
+        assert_eq!(results[0], results[1]);
+        assert_eq!((results[0].0, results[0].1), (Status::Incomplete(Limit::Boxes), 40));
     }
 
     #[test]

@@ -13,6 +13,9 @@
 //! it breadth first on as many threads as it is given `Prune`s, and reports exactly the cells
 //! the serial breadth-first walk would, in the same order, for any thread count.
 //!
+//! `run_shared` is `run_by_level` with each level shared among processes (`share`: MPI ranks
+//! through the binary's `Peers`), reporting what one process reports.
+//!
 //! `polynomial` is the kernel's client for `EquationSystem`s (the seed-000 solver and the
 //! trapezoid distance solver): `Solver`, `SolverSettings`, `BoxSink`.
 //!
@@ -23,14 +26,16 @@ mod driver;
 mod limits;
 mod polynomial;
 mod settings;
+mod share;
 mod store;
 
 pub use control::Control;
-pub use driver::{run, run_by_level};
+pub use driver::{run, run_by_level, run_shared};
 pub use limits::{process_cpu_seconds, Incompleteness, Limit, Limits, Progress, Status};
 pub(crate) use limits::Budget;
 pub use polynomial::{default_contractor, width_units, BoxSink, BoxStatus, Collect, ContractorFactory, Enclosure, SolveError, SolveStats, Solver};
 pub use settings::{SettingsError, SolverSettings};
+pub use share::{rank_and_size, share_searches, Peers, Wire};
 pub use store::Store;
 
 use smallvec::SmallVec;

@@ -12,6 +12,7 @@
 
 use super::limits::{process_cpu_seconds, Limit, Limits, Progress, Status};
 use super::settings::{SettingsError, SolverSettings};
+use super::share::Wire;
 use super::{driver, Prune, Sink, Stats, Step, Store, Undecided};
 use crate::contract::{Contraction, Contractor, LpShrink, Newton, Propagation, Sequence};
 use crate::interval::IntervalBox;
@@ -32,6 +33,19 @@ pub enum BoxStatus {
     Unique,
     /// Left unprocessed when a limit stopped the run.
     Undecided,
+}
+
+impl Wire for BoxStatus {
+    fn put(&self, out: &mut Vec<u8>) {
+        (*self as u8).put(out)
+    }
+    fn take(input: &mut &[u8]) -> Self {
+        match u8::take(input) {
+            0 => BoxStatus::Solution,
+            1 => BoxStatus::Unique,
+            _ => BoxStatus::Undecided,
+        }
+    }
 }
 
 impl BoxStatus {
@@ -250,7 +264,7 @@ impl<'a> Solver<'a> {
     pub fn run_parallel(&self, threads: usize, cancel: &AtomicBool, sink: &mut dyn BoxSink, level_diagonals: Option<&mut Vec<f64>>) -> (Status, SolveStats) {
         let start = self.system.initial_box();
         let mut workers: Vec<_> = (0..threads.max(1)).map(|_| self.prune(&start, level_diagonals.is_some())).collect();
-        let (status, stats) = driver::run_by_level(&mut workers, start, &self.limits(), cancel, &mut Boxes(sink));
+        let (status, stats) = driver::run_shared(&mut workers, start, &self.limits(), cancel, &mut Boxes(sink));
         let mut out = SolveStats::from_kernel(&stats);
         let mut widest: Vec<f64> = Vec::new();
         for w in &workers {
@@ -260,6 +274,16 @@ impl<'a> Solver<'a> {
                     widest.resize(l + 1, 0.0);
                 }
                 widest[l] = widest[l].max(d);
+            }
+        }
+        if let Some(peers) = super::share::peers() {
+            // Each process counted the cells it decided: the run's counters are their sums, and
+            // a level's widest diagonal the widest any process saw.
+            let mine = [out.shrink_rounds, out.certified, out.lp.solved, out.lp.unverified].map(|c| c as f64);
+            let [shrink_rounds, certified, solved, unverified] = <[f64; 4]>::try_from(super::share::sum(peers, &mine)).expect("invariant: four sums");
+            (out.shrink_rounds, out.certified, out.lp.solved, out.lp.unverified) = (shrink_rounds as u64, certified as u64, solved as u64, unverified as u64);
+            if level_diagonals.is_some() {
+                widest = super::share::widest(peers, &widest);
             }
         }
         if let Some(d) = level_diagonals {
@@ -286,7 +310,8 @@ impl<'a> Solver<'a> {
         let t0 = Instant::now();
         let c0 = process_cpu_seconds();
         let mut sink = Forward { collect: Collect::default(), progress };
-        let (status, mut stats) = if self.settings.threads > 1 {
+        // Shared among processes, a run goes level by level (`run_shared`), whatever the threads.
+        let (status, mut stats) = if self.settings.threads > 1 || super::share::peers().is_some() {
             self.run_parallel(self.settings.threads, cancel, &mut sink, None)
         } else {
             self.run(cancel, &mut sink)
