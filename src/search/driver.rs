@@ -223,6 +223,9 @@ where
     })
 }
 
+/// One process's decisions of a level, and the cells it did not take.
+type Share<C, F> = (std::vec::IntoIter<Decision<C, F, Named>>, Vec<C>);
+
 /// Decides this process's share of a level and returns every process's decisions: chunk `j`
 /// of the level goes to process `j mod size`; the decisions come back in level order (a
 /// level no process was interrupted in), or process by process (an interrupted level, which
@@ -241,7 +244,7 @@ fn decide_shared<C: Wire, F: Wire, R: Reason>(level: Vec<C>, peers: &dyn Peers, 
     }
     drop(steps);
     unprocessed.put(&mut bytes);
-    let mut theirs: Vec<(std::vec::IntoIter<Decision<C, F, Named>>, Vec<C>)> = peers
+    let mut theirs: Vec<Share<C, F>> = peers
         .all_gather(&bytes)
         .iter()
         .map(|b| {

@@ -63,7 +63,7 @@ pub trait Wire: Sized {
     fn take(input: &mut &[u8]) -> Self;
 }
 
-fn take_bytes<'a, const N: usize>(input: &mut &'a [u8]) -> [u8; N] {
+fn take_bytes<const N: usize>(input: &mut &[u8]) -> [u8; N] {
     let (head, rest) = input.split_first_chunk::<N>().expect("invariant: peers send what they read");
     *input = rest;
     *head
