@@ -4,6 +4,8 @@
 mod ros_args;
 #[cfg(feature = "ros")]
 mod serve;
+#[cfg(feature = "mpi")]
+mod ranks;
 
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
@@ -295,6 +297,13 @@ struct SolveArgs {
 /// Parses arguments and runs; errors come back as one chain of context.
 pub fn run() -> Result<()> {
     let cli = parse_args(std::env::args_os());
+    // Held to the end: dropping it finalises MPI.
+    #[cfg(feature = "mpi")]
+    let ranks = ranks::join()?;
+    #[cfg(feature = "mpi")]
+    if ranks.is_some() && linkspace::search::rank_and_size().1 > 1 && matches!(cli.command, Command::Serve(_)) {
+        bail!("serve runs in one process: start it without mpirun");
+    }
     match cli.command {
         Command::Solve(args) => solve(args),
         Command::Singularities(args) => singularities(args),
@@ -472,9 +481,18 @@ fn solve(args: SolveArgs) -> Result<()> {
     }
     if let Some(path) = args.json {
         let text = serde_json::to_string_pretty(&report::SolveReport::new(problem, &result, mechanism.rigid_links()))?;
-        std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
+        write_file(&path, text)?;
     }
     Ok(())
+}
+
+/// Writes a report; under `mpirun`, only rank 0 writes (every rank holds the same result).
+pub(crate) fn write_file(path: &std::path::Path, contents: impl AsRef<[u8]>) -> Result<()> {
+    #[cfg(feature = "mpi")]
+    if !ranks::writes() {
+        return Ok(());
+    }
+    std::fs::write(path, contents).with_context(|| format!("writing {}", path.display()))
 }
 
 /// Reads a file's robot description.
@@ -577,7 +595,7 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
         writeln!(out, "  {kind} {}", m.joints.iter().map(|(n, b)| format!("{n} in [{:.6}, {:.6}]", b[0], b[1])).collect::<Vec<_>>().join(", ")).ok();
     }
     if let Some(path) = args.json {
-        std::fs::write(&path, serde_json::to_string_pretty(&report)?).with_context(|| format!("writing {}", path.display()))?;
+        write_file(&path, serde_json::to_string_pretty(&report)?)?;
     }
     Ok(())
 }
@@ -617,7 +635,7 @@ fn collisions(args: CollisionsArgs) -> Result<()> {
         writeln!(out, "  {} x {}: proven colliding on {boxes} boxes", p[0], p[1]).ok();
     }
     if let Some(path) = args.json {
-        std::fs::write(&path, serde_json::to_string_pretty(&report)?).with_context(|| format!("writing {}", path.display()))?;
+        write_file(&path, serde_json::to_string_pretty(&report)?)?;
     }
     Ok(())
 }
@@ -645,7 +663,7 @@ fn ik(args: IkArgs) -> Result<()> {
         writeln!(out, "  {} ({tag})", text.join(", ")).ok();
     }
     if let Some(path) = args.json {
-        std::fs::write(&path, serde_json::to_string_pretty(&report)?).with_context(|| format!("writing {}", path.display()))?;
+        write_file(&path, serde_json::to_string_pretty(&report)?)?;
     }
     Ok(())
 }

@@ -113,7 +113,7 @@ pub fn run(args: DistancesArgs) -> Result<()> {
     summarize(&rep)?;
     if let Some(path) = args.json {
         let text = serde_json::to_string_pretty(&rep)?;
-        std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
+        super::write_file(&path, text)?;
     }
     Ok(())
 }

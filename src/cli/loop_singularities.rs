@@ -157,7 +157,7 @@ pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
         reports.push(r);
     }
     if let Some(path) = args.json {
-        std::fs::write(&path, serde_json::to_string_pretty(&reports)?).with_context(|| format!("writing {}", path.display()))?;
+        super::write_file(&path, serde_json::to_string_pretty(&reports)?)?;
     }
     Ok(())
 }
@@ -200,7 +200,7 @@ fn run_image(args: &LoopSingularitiesArgs, mechanism: &linkspace::model::Mechani
     }
     writeln!(out, "  can change assembly mode without crossing a type-II singularity: {} ({})", r.verdict.answer, r.verdict.reason).ok();
     if let Some(path) = &args.json {
-        std::fs::write(path, serde_json::to_string_pretty(&linkspace::report::image::ImageJson(&r))?).with_context(|| format!("writing {}", path.display()))?;
+        super::write_file(path, serde_json::to_string_pretty(&linkspace::report::image::ImageJson(&r))?)?;
     }
     Ok(())
 }
@@ -217,7 +217,7 @@ fn run_points(args: &LoopSingularitiesArgs, mechanism: &linkspace::model::Mechan
         writeln!(out, "  node{}: {:?}", if n.unique { " (certified)" } else { " (undecided)" }, n.workspace).ok();
     }
     if let Some(path) = &args.json {
-        std::fs::write(path, serde_json::to_string_pretty(&linkspace::report::image::ImagePointsJson(&r))?).with_context(|| format!("writing {}", path.display()))?;
+        super::write_file(path, serde_json::to_string_pretty(&linkspace::report::image::ImagePointsJson(&r))?)?;
     }
     Ok(())
 }

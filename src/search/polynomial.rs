@@ -324,6 +324,10 @@ impl<'a> Solver<'a> {
         stats.solutions -= dropped;
         stats.seconds = t0.elapsed().as_secs_f64();
         stats.cpu_seconds = process_cpu_seconds() - c0;
+        if let Some(peers) = super::share::peers() {
+            // The CPU time of every process of a shared run.
+            stats.cpu_seconds = super::share::sum(peers, &[stats.cpu_seconds])[0];
+        }
         Enclosure { status, stats, solutions, unique, undecided: sink.collect.undecided }
     }
 

@@ -1,0 +1,128 @@
+//! Searches shared by MPI ranks (`mpirun -np N linkspace ...`, the `mpi` feature) report what
+//! one process reports: the same boxes in the same order, the same counts and status.
+//!
+//! The default build has no MPI, so these tests build the `mpi` binary themselves, in its own
+//! target directory (`target/mpi`), after `scripts/mpi_env.sh` has installed OpenMPI and
+//! libclang (Debian packages).
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+
+fn repo() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The `linkspace` binary built with `--features mpi` (built once per test run).
+fn mpi_binary() -> &'static Path {
+    static BIN: OnceLock<PathBuf> = OnceLock::new();
+    BIN.get_or_init(|| {
+        let env = Command::new("sh").arg(repo().join("scripts/mpi_env.sh")).output().expect("sh runs");
+        assert!(env.status.success(), "scripts/mpi_env.sh failed (it installs OpenMPI with apt, as root or with sudo): {}", String::from_utf8_lossy(&env.stderr));
+        let target = repo().join("target/mpi");
+        // Seeded from the default build: the dependencies are the same, so only the `mpi`
+        // crates and linkspace itself compile (minutes less on a fresh machine).
+        let seed = repo().join("target/release");
+        if !target.exists() && seed.exists() {
+            std::fs::create_dir_all(&target).expect("target/mpi");
+            let copied = Command::new("cp").arg("-a").arg(&seed).arg(target.join("release")).status().expect("cp runs");
+            assert!(copied.success(), "seeding target/mpi from target/release");
+        }
+        let build = Command::new(env!("CARGO"))
+            .current_dir(repo())
+            .args(["build", "--release", "--features", "mpi", "--bin", "linkspace", "--target-dir"])
+            .arg(&target)
+            .output()
+            .expect("cargo runs");
+        assert!(build.status.success(), "building with --features mpi failed: {}", String::from_utf8_lossy(&build.stderr));
+        target.join("release/linkspace")
+    })
+}
+
+/// Runs `linkspace ARGS --json F` under `mpirun -np ranks` (or alone for 0), and returns the
+/// report and stdout.
+fn report(ranks: usize, args: &[&str]) -> (Value, String) {
+    let json = std::env::temp_dir().join(format!("linkspace-shared-{}-{ranks}-{}.json", std::process::id(), args.join("_").replace(['/', '='], "-")));
+    let bin = mpi_binary();
+    let mut cmd = if ranks == 0 {
+        Command::new(bin)
+    } else {
+        let mut c = Command::new("mpirun");
+        // CI runs as root, and on 2 cores: both need saying to OpenMPI.
+        c.env("OMPI_ALLOW_RUN_AS_ROOT", "1").env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
+        c.args(["--oversubscribe", "-np", &ranks.to_string()]).arg(bin);
+        c
+    };
+    let out = cmd.current_dir(repo()).args(args).arg("--json").arg(&json).output().expect("mpirun runs");
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    assert!(out.status.success(), "{ranks} ranks, {args:?}: {stdout}{}", String::from_utf8_lossy(&out.stderr));
+    let value = serde_json::from_str(&std::fs::read_to_string(&json).expect("rank 0 writes the report")).expect("json");
+    let _ = std::fs::remove_file(&json);
+    (value, stdout)
+}
+
+/// The report without what depends on the run rather than the problem, at any depth: times
+/// and counters of the machine, and the thread count.
+fn answer(mut v: Value) -> Value {
+    fn strip(v: &mut Value) {
+        match v {
+            Value::Object(o) => {
+                for key in ["stats", "seconds", "cpu_seconds", "threads"] {
+                    o.remove(key);
+                }
+                o.values_mut().for_each(strip);
+            }
+            Value::Array(a) => a.iter_mut().for_each(strip),
+            _ => {}
+        }
+    }
+    strip(&mut v);
+    v
+}
+
+/// The same answer from one process on two threads and from two and three ranks on one thread
+/// each.
+fn same_everywhere(args: &[&str]) -> Value {
+    let mut alone = args.to_vec();
+    alone.extend(["--threads", "2"]);
+    let (reference, _) = report(0, &alone);
+    let reference = answer(reference);
+    let mut shared = args.to_vec();
+    shared.extend(["--threads", "1"]);
+    for ranks in [2, 3] {
+        let (got, _) = report(ranks, &shared);
+        assert!(answer(got) == reference, "{ranks} ranks differ from one process: {args:?}");
+    }
+    reference
+}
+
+#[test]
+fn planar_solve_is_the_same_on_ranks() {
+    let r = same_everywhere(&["solve", "urdf/double_butterfly.urdf", "--sigma", "0.05"]);
+    assert!(r["solutions"].as_array().is_some_and(|s| s.len() > 1000), "the mobile butterfly's curve");
+    let r = same_everywhere(&["solve", "urdf/double_butterfly.urdf", "--fix", "joint6=1.1760052070951352", "--sigma", "1e-4"]);
+    assert_eq!(r["status"], "complete");
+}
+
+#[test]
+fn spatial_solve_distances_and_loop_singularities_are_the_same_on_ranks() {
+    let r = same_everywhere(&["solve", "urdf/bennett.urdf", "--model", "spatial", "--sigma", "0.02"]);
+    assert_eq!(r["model"], "spatial");
+    same_everywhere(&["distances", "urdf/four_spheres.json", "--sigma", "0.01"]);
+    same_everywhere(&["loop-singularities", "urdf/five_bar.urdf", "--sigma", "0.01"]);
+    same_everywhere(&["loop-singularities", "urdf/five_bar_unequal.urdf", "--actuated", "crank1_joint,crank2_joint", "--kind", "cusps", "--sigma", "1e-2"]);
+    same_everywhere(&["singularities", "urdf/orthogonal_3r_e.urdf"]);
+}
+
+/// A box limit stops every rank at the same box: the same boxes reported and the same left
+/// undecided as one process; a time limit ends the run on every rank, with rank 0 reporting it.
+#[test]
+fn limits_hold_for_the_whole_run() {
+    let r = same_everywhere(&["solve", "urdf/double_butterfly.urdf", "--sigma", "0.05", "--max-boxes", "300"]);
+    assert_eq!(r["status"], "incomplete");
+    assert!(r["undecided"].as_array().is_some_and(|u| !u.is_empty()));
+    let (r, out) = report(2, &["solve", "urdf/five_bar.urdf", "--sigma", "0.002", "--timeout", "1", "--threads", "1"]);
+    assert_eq!(r["status"], "incomplete", "{out}");
+    assert!(out.matches("five_bar").count() == 1, "rank 0 alone prints: {out}");
+}
