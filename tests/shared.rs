@@ -113,6 +113,7 @@ fn spatial_solve_distances_and_loop_singularities_are_the_same_on_ranks() {
     same_everywhere(&["loop-singularities", "urdf/five_bar.urdf", "--sigma", "0.01"]);
     same_everywhere(&["loop-singularities", "urdf/five_bar_unequal.urdf", "--actuated", "crank1_joint,crank2_joint", "--kind", "cusps", "--sigma", "1e-2"]);
     same_everywhere(&["singularities", "urdf/orthogonal_3r_e.urdf"]);
+    same_everywhere(&["ik", "urdf/orthogonal_3r_a.urdf", "--point", "3,1"]);
 }
 
 /// A box limit stops every rank at the same box: the same boxes reported and the same left

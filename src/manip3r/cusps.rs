@@ -22,7 +22,8 @@
 //! Boxes inside an internal-motion strip are set aside (see `motion`).
 
 use super::chain::Chain3R;
-use super::drive::{drive, no_progress, Order, Outcome};
+use super::drive::{drive_shared, no_progress, Order, Outcome};
+use crate::search::Wire;
 use crate::search::Control;
 use crate::contract::krawczyk::{self, Inflation, Step as K};
 use super::motion::{self, Band};
@@ -257,6 +258,44 @@ enum Proof {
     Candidate,
 }
 
+impl Wire for CuspCell {
+    fn put(&self, out: &mut Vec<u8>) {
+        (self.theta, self.order, self.level).put(out)
+    }
+    fn take(input: &mut &[u8]) -> Self {
+        let (theta, order, level) = Wire::take(input);
+        CuspCell { theta, order, level }
+    }
+}
+
+impl Wire for Proof {
+    fn put(&self, out: &mut Vec<u8>) {
+        match *self {
+            Proof::Krawczyk => (0u8, 0usize),
+            Proof::Inflated(k) => (1, k),
+            Proof::Candidate => (2, 0),
+        }
+        .put(out)
+    }
+    fn take(input: &mut &[u8]) -> Self {
+        match <(u8, usize)>::take(input) {
+            (0, _) => Proof::Krawczyk,
+            (1, k) => Proof::Inflated(k),
+            _ => Proof::Candidate,
+        }
+    }
+}
+
+impl Wire for CuspFound {
+    fn put(&self, out: &mut Vec<u8>) {
+        ((self.order, self.source), (self.theta, self.proof)).put(out)
+    }
+    fn take(input: &mut &[u8]) -> Self {
+        let ((order, source), (theta, proof)) = Wire::take(input);
+        CuspFound { order, source, theta, proof }
+    }
+}
+
 /// What one box yielded: a cusp box, before the decisions that look at other cusps.
 #[derive(Clone, Copy, Debug)]
 pub struct CuspFound {
@@ -403,8 +442,9 @@ pub fn search_with(chain: &Chain3R, settings: &CuspSettings, control: &Control, 
     let eps = settings.precision;
     let bands = motion::bands(chain, eps);
     let start = CuspCell { theta: [motion::full_range(), motion::full_range()], order: Order::ROOT, level: 0 };
-    let Outcome { status, stats, found, undecided: pending, workers } = drive(|| CuspPrune { chain, bands: &bands, eps, method: settings.method, contracted: 0 }, start, control, progress);
-    let contracted = workers.iter().map(|p| p.contracted).sum();
+    let Outcome { status, stats, found, undecided: pending, workers } = drive_shared(|| CuspPrune { chain, bands: &bands, eps, method: settings.method, contracted: 0 }, start, control, progress);
+    // Each process counted the boxes it decided.
+    let contracted = search::total(&[workers.iter().map(|p| p.contracted).sum::<u64>() as f64])[0] as u64;
     drop(workers);
     // The decisions that look at other cusps, in depth-first order (see `drive`).
     enum Event {

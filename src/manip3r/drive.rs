@@ -10,7 +10,7 @@
 //! driver or thread count ran the search.
 
 use crate::search::Control;
-use crate::search::{self, Progress, Prune, Sink, Stats, Status, Store, Undecided};
+use crate::search::{self, Progress, Prune, Sink, Stats, Status, Store, Undecided, Wire};
 use std::ops::ControlFlow;
 
 /// A cell's place in the depth-first walk of the search tree: the cell owns the slice
@@ -85,6 +85,40 @@ pub(crate) fn drive<P: Prune + Send>(mut make: impl FnMut() -> P, start: P::Cell
         search::run_by_level(&mut workers, start, &control.limits, control.cancel, &mut sink)
     };
     Outcome { status, stats, found: sink.found, undecided: sink.undecided, workers }
+}
+
+/// As `drive`, with the search shared among the processes of `search::run_shared` when there
+/// are any (every process then gets every result; the workers' own counters count only what
+/// this process decided).
+pub(crate) fn drive_shared<P>(mut make: impl FnMut() -> P, start: P::Cell, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Outcome<P>
+where
+    P: Prune + Send,
+    P::Cell: Wire,
+    P::Found: Wire,
+{
+    if search::rank_and_size().1 == 1 {
+        return drive(make, start, control, progress);
+    }
+    let mut sink = Gather { found: Vec::new(), undecided: Vec::new(), progress };
+    let mut workers: Vec<P> = (0..control.threads.max(1)).map(|_| make()).collect();
+    let (status, stats) = search::run_shared(&mut workers, start, &control.limits, control.cancel, &mut sink);
+    Outcome { status, stats, found: sink.found, undecided: sink.undecided, workers }
+}
+
+impl Wire for Order {
+    fn put(&self, out: &mut Vec<u8>) {
+        for w in [self.at, self.span] {
+            ((w >> 64) as u64, w as u64).put(out);
+        }
+    }
+    fn take(input: &mut &[u8]) -> Self {
+        let mut word = || {
+            let (hi, lo) = <(u64, u64)>::take(input);
+            (u128::from(hi) << 64) | u128::from(lo)
+        };
+        let at = word();
+        Order { at, span: word() }
+    }
 }
 
 /// Ignores progress.

@@ -9,7 +9,8 @@
 
 use super::chain::Chain3R;
 use super::cusps::{bisect, meet_on_torus};
-use super::drive::{drive, no_progress, Order};
+use super::drive::{drive_shared, no_progress, Order};
+use crate::search::Wire;
 use crate::search::Control;
 use crate::contract::krawczyk::{self, Step as K};
 use super::motion;
@@ -64,6 +65,16 @@ pub struct IkCell {
     b: [Interval; 2],
     order: Order,
     level: u32,
+}
+
+impl Wire for IkCell {
+    fn put(&self, out: &mut Vec<u8>) {
+        (self.b, self.order, self.level).put(out)
+    }
+    fn take(input: &mut &[u8]) -> Self {
+        let (b, order, level) = Wire::take(input);
+        IkCell { b, order, level }
+    }
 }
 
 /// The test of the module doc, one box at a time.
@@ -172,7 +183,7 @@ pub fn solve_target(chain: &Chain3R, target: [Interval; 2], precision: f64, cont
     // down to the precision all along the line) and reported as one cluster of 0 boxes.
     let aside = line_strips(chain, target, precision);
     let start = IkCell { b: [motion::full_range(), motion::full_range()], order: Order::ROOT, level: 0 };
-    let mut run = drive(|| IkPrune { chain, target, precision, aside: &aside }, start, control, progress);
+    let mut run = drive_shared(|| IkPrune { chain, target, precision, aside: &aside }, start, control, progress);
     run.found.sort_by_key(|(order, _)| *order);
     let mut unique: Vec<[Interval; 2]> = Vec::new();
     for (_, k) in run.found {

@@ -36,6 +36,7 @@ pub(crate) use limits::Budget;
 pub use polynomial::{default_contractor, width_units, BoxSink, BoxStatus, Collect, ContractorFactory, Enclosure, SolveError, SolveStats, Solver};
 pub use settings::{SettingsError, SolverSettings};
 pub use share::{rank_and_size, share_searches, Peers, Wire};
+pub(crate) use share::total;
 pub use store::Store;
 
 use smallvec::SmallVec;

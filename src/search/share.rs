@@ -290,6 +290,15 @@ pub(crate) fn sum(peers: &dyn Peers, values: &[f64]) -> Vec<f64> {
     total
 }
 
+/// The sum over the processes sharing this thread's searches of each one's `values` (the
+/// values themselves in a process alone): counters a search keeps beside the kernel's.
+pub(crate) fn total(values: &[f64]) -> Vec<f64> {
+    match peers() {
+        Some(p) => sum(p, values),
+        None => values.to_vec(),
+    }
+}
+
 /// Per index, the largest of the processes' `values` (of any lengths).
 pub(crate) fn widest(peers: &dyn Peers, values: &[f64]) -> Vec<f64> {
     let mut mine = Vec::new();
