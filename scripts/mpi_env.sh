@@ -5,6 +5,9 @@
 #
 # Usage: scripts/mpi_env.sh        (as root, or with sudo available)
 set -eu
+# One installer at a time (.ci/run starts one early; the MPI tests call it too).
+exec 9>/tmp/linkspace-mpi-env.lock
+flock 9
 if command -v mpirun >/dev/null 2>&1 && [ -e /usr/lib/x86_64-linux-gnu/openmpi/include/mpi.h ] && ls /usr/lib/llvm-*/lib/libclang.so* >/dev/null 2>&1; then
   exit 0
 fi
