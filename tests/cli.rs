@@ -465,6 +465,43 @@ fn the_image_analysis_honours_its_deadline_and_its_memory_limit() {
     assert_clear_error(&["loop-singularities", &five_bar, "--actuated", "crank1_joint,crank2_joint", "--kind", "image", "--grid", "20000"], "raster of regions needs about");
 }
 
+/// A box whose one shrink takes minutes (an LP per side of each of hundreds of variables)
+/// still ends at the deadline: 200 independent four-bars on one ground (600 angles), and one
+/// loop closing a chain of 1,000 joints. Before the LP checked the deadline, the first ran 58 s
+/// and the second 92 s with `--timeout 8`. A deadline bound, not a speed test.
+#[test]
+fn one_long_box_does_not_outlast_the_deadline() {
+    let mut many = String::from("<robot name='many_four_bars'><link name='ground'/>");
+    for i in 0..200 {
+        let y = 10 * i;
+        many += &format!(
+            "<link name='crank{i}'/><link name='coupler{i}'/><link name='rocker{i}'/>\
+             <joint name='crank_joint{i}' type='continuous'><parent link='ground'/><child link='crank{i}'/><origin xyz='0 {y} 0'/><axis xyz='0 0 1'/></joint>\
+             <joint name='coupler_joint{i}' type='continuous'><parent link='crank{i}'/><child link='coupler{i}'/><origin xyz='1.5 0 0'/><axis xyz='0 0 1'/></joint>\
+             <joint name='rocker_joint{i}' type='continuous'><parent link='ground'/><child link='rocker{i}'/><origin xyz='4 {y} 0'/><axis xyz='0 0 1'/></joint>\
+             <loop name='loop{i}' type='revolute'><predecessor link='coupler{i}'><origin xyz='4 0 0'/></predecessor><successor link='rocker{i}'><origin xyz='3.5 0 0'/></successor><axis xyz='0 0 1'/></loop>"
+        );
+    }
+    many += "</robot>";
+    let mut chain = String::from("<robot name='long_chain'><link name='ground'/>");
+    let mut parent = String::from("ground");
+    for i in 0..1000 {
+        let x = if i == 0 { 0.0 } else { 0.01 };
+        chain += &format!("<link name='l{i}'/><joint name='j{i}' type='continuous'><parent link='{parent}'/><child link='l{i}'/><origin xyz='{x} 0 0'/><axis xyz='0 0 1'/></joint>");
+        parent = format!("l{i}");
+    }
+    chain += &format!("<loop name='close' type='revolute'><predecessor link='{parent}'><origin xyz='0.01 0 0'/></predecessor><successor link='ground'><origin xyz='5 0 0'/></successor><axis xyz='0 0 1'/></loop></robot>");
+    for (name, text) in [("many_four_bars", many), ("long_chain", chain)] {
+        let path = tempfile_path::Path::write(&text);
+        let t0 = std::time::Instant::now();
+        let (ok, out, err) = run(&["solve", path.as_str(), "--timeout", "2"]);
+        let elapsed = t0.elapsed().as_secs_f64();
+        assert!(ok, "{name}: {err}");
+        assert!(out.contains("status incomplete (Time limit"), "{name}: {out}");
+        assert!(elapsed < 2.0 * 1.1 + 2.0, "{name}: took {elapsed:.2} s for --timeout 2");
+    }
+}
+
 /// Fixed links cost nothing: the four-bar with 300 sensor and tool frames (a chain of fixed
 /// joints off the ground and a star of them on the coupler) has the same variables and the same
 /// boxes as the bare four-bar, and its boxes list the same links; the frames are listed once,

@@ -68,7 +68,11 @@ impl Filtered<'_> {
 
 impl Contractor for Filtered<'_> {
     fn contract(&mut self, b: &mut IntervalBox) -> Contraction {
-        let outcome = self.inner.contract(b);
+        self.contract_until(b, &|| false)
+    }
+
+    fn contract_until(&mut self, b: &mut IntervalBox, stop: &dyn Fn() -> bool) -> Contraction {
+        let outcome = self.inner.contract_until(b, stop);
         if outcome == Contraction::Empty {
             return outcome;
         }

@@ -32,11 +32,15 @@ impl<'a> LpShrink<'a> {
 
 impl Contractor for LpShrink<'_> {
     fn contract(&mut self, b: &mut IntervalBox) -> Contraction {
+        self.contract_until(b, &|| false)
+    }
+
+    fn contract_until(&mut self, b: &mut IntervalBox, stop: &dyn Fn() -> bool) -> Contraction {
         let rel = match relax(self.system, &b.dims) {
             Some(r) => r,
             None => return Contraction::Empty,
         };
-        match rel.bound_with(self.backend, &b.dims, &self.targets, &mut self.counters) {
+        match rel.bound_with(self.backend, &b.dims, &self.targets, &mut self.counters, stop) {
             LpOutcome::Infeasible => Contraction::Empty,
             LpOutcome::Bounds(bounds) => {
                 let mut outcome = Contraction::Unchanged;

@@ -57,6 +57,14 @@ impl Contraction {
 pub trait Contractor {
     /// Narrows `b` to what may still hold solutions.
     fn contract(&mut self, b: &mut IntervalBox) -> Contraction;
+    /// As `contract`, giving up early once `stop` says so (the run's deadline or cancel), with
+    /// what it proved so far; the default asks only before it starts.
+    fn contract_until(&mut self, b: &mut IntervalBox, stop: &dyn Fn() -> bool) -> Contraction {
+        if stop() {
+            return Contraction::Unchanged;
+        }
+        self.contract(b)
+    }
     /// A short name for statistics and charts.
     fn name(&self) -> &'static str;
     /// LPs this contractor solved so far (zero for those that solve none).
@@ -77,9 +85,13 @@ pub struct Sequence<'a>(pub Vec<Box<dyn Contractor + Send + 'a>>);
 
 impl Contractor for Sequence<'_> {
     fn contract(&mut self, b: &mut IntervalBox) -> Contraction {
+        self.contract_until(b, &|| false)
+    }
+
+    fn contract_until(&mut self, b: &mut IntervalBox, stop: &dyn Fn() -> bool) -> Contraction {
         let mut outcome = Contraction::Unchanged;
         for c in &mut self.0 {
-            outcome = outcome.then(c.contract(b));
+            outcome = outcome.then(c.contract_until(b, stop));
             if matches!(outcome, Contraction::Empty | Contraction::Proven) {
                 break;
             }

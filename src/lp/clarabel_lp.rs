@@ -58,7 +58,7 @@ fn assemble(rel: &Relaxation, b: &[Interval]) -> Assembled {
     a
 }
 
-pub(super) fn bound(rel: &Relaxation, b: &[Interval], targets: &[VarId], counters: &mut LpCounters) -> LpOutcome {
+pub(super) fn bound(rel: &Relaxation, b: &[Interval], targets: &[VarId], counters: &mut LpCounters, stop: &dyn Fn() -> bool) -> LpOutcome {
     let n = rel.n;
     let asm = assemble(rel, b);
     let m = asm.rhs.len();
@@ -93,6 +93,9 @@ pub(super) fn bound(rel: &Relaxation, b: &[Interval], targets: &[VarId], counter
     let mut result = Vec::with_capacity(targets.len());
     for &t in targets {
         for sign in [1.0, -1.0] {
+            if stop() {
+                break;
+            }
             q.iter_mut().for_each(|v| *v = 0.0);
             q[t] = sign;
             if solver.update_q(&q).is_err() {

@@ -85,16 +85,20 @@ impl Relaxation {
     ///
     /// Inclusion: every `x ∈ b` satisfying all rows has `x[targets[k]] ∈ result[k]`, for every
     /// backend.
+    ///
+    /// `stop` is asked before each LP; once it says yes, the remaining bounds are left as they
+    /// are (one LP per side of each target: a large system's relaxation can take minutes).
     pub fn bound_with(
         &self,
         backend: LpBackend,
         b: &[Interval],
         targets: &[VarId],
         counters: &mut LpCounters,
+        stop: &dyn Fn() -> bool,
     ) -> LpOutcome {
         match backend {
-            LpBackend::Simplex => simplex::bound(self, b, targets, counters),
-            LpBackend::Clarabel => clarabel_lp::bound(self, b, targets, counters),
+            LpBackend::Simplex => simplex::bound(self, b, targets, counters, stop),
+            LpBackend::Clarabel => clarabel_lp::bound(self, b, targets, counters, stop),
         }
     }
 }
@@ -117,7 +121,7 @@ mod tests {
         for backend in [LpBackend::Simplex, LpBackend::Clarabel] {
             let b = [interval(0.0, 1.0), interval(0.0, 1.0)];
             let mut c = LpCounters::default();
-            match rel.bound_with(backend, &b, &[0, 1], &mut c) {
+            match rel.bound_with(backend, &b, &[0, 1], &mut c, &|| false) {
                 LpOutcome::Bounds(v) => {
                     assert!(v[0].inf() > 0.49 && v[0].inf() <= 0.5 && v[0].sup() >= 0.75 && v[0].sup() < 0.76, "{backend:?}");
                     assert!(v[1].inf() > 0.24 && v[1].inf() <= 0.25 && v[1].sup() >= 0.5 && v[1].sup() < 0.51, "{backend:?}");
@@ -126,7 +130,7 @@ mod tests {
             }
             assert_eq!(c, LpCounters { solved: 4, unverified: 0 }, "{backend:?}");
             let small = [interval(0.0, 0.2), interval(0.0, 0.2)];
-            assert_eq!(rel.bound_with(backend, &small, &[0, 1], &mut c), LpOutcome::Infeasible, "{backend:?}");
+            assert_eq!(rel.bound_with(backend, &small, &[0, 1], &mut c, &|| false), LpOutcome::Infeasible, "{backend:?}");
         }
     }
 }

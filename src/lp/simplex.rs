@@ -426,7 +426,7 @@ impl Tableau {
 }
 
 /// Verified bounds of each target over the rows and the box `b`: see `Relaxation::bound`.
-pub(super) fn bound(rel: &Relaxation, b: &[Interval], targets: &[VarId], counters: &mut LpCounters) -> LpOutcome {
+pub(super) fn bound(rel: &Relaxation, b: &[Interval], targets: &[VarId], counters: &mut LpCounters, stop: &dyn Fn() -> bool) -> LpOutcome {
     let unchanged = || LpOutcome::Bounds(targets.iter().map(|&t| b[t]).collect());
     if b.iter().take(rel.n).any(|x| x.is_empty()) {
         return LpOutcome::Infeasible; // the box itself holds no point
@@ -460,6 +460,9 @@ pub(super) fn bound(rel: &Relaxation, b: &[Interval], targets: &[VarId], counter
     let mut result = Vec::with_capacity(targets.len());
     for &t in targets {
         for sign in [1.0, -1.0] {
+            if stop() {
+                break;
+            }
             tab.refresh_values();
             tab.set_objective(t, sign);
             counters.solved += 1;
@@ -515,7 +518,7 @@ mod tests {
         };
         let b = [interval(0.0, 1.0), interval(0.0, 1.0), interval(0.25, 0.25)];
         let mut c = LpCounters::default();
-        let LpOutcome::Bounds(v) = bound(&rel, &b, &[0, 1, 2], &mut c) else { panic!("feasible") };
+        let LpOutcome::Bounds(v) = bound(&rel, &b, &[0, 1, 2], &mut c, &|| false) else { panic!("feasible") };
         assert!((v[0].inf() - 0.25).abs() < 1e-12 && v[0].sup() == 1.0, "{v:?}");
         assert!(v[1].inf() == 0.0 && (v[1].sup() - 0.75).abs() < 1e-12, "{v:?}");
         assert_eq!(v[2], interval(0.25, 0.25));
@@ -527,8 +530,8 @@ mod tests {
         let rel = Relaxation { n: 2, rows: vec![] };
         let b = [interval(-1.0, 2.0), interval(3.0, 4.0)];
         let mut c = LpCounters::default();
-        assert_eq!(bound(&rel, &b, &[1, 0], &mut c), LpOutcome::Bounds(vec![b[1], b[0]]));
-        assert_eq!(bound(&segment(), &[Interval::EMPTY, b[0]], &[0], &mut c), LpOutcome::Infeasible);
+        assert_eq!(bound(&rel, &b, &[1, 0], &mut c, &|| false), LpOutcome::Bounds(vec![b[1], b[0]]));
+        assert_eq!(bound(&segment(), &[Interval::EMPTY, b[0]], &[0], &mut c, &|| false), LpOutcome::Infeasible);
     }
 
     /// Dyadic numbers `k / 2^s`: sums of their products stay exact in `f64`, so `x0` satisfies
@@ -613,8 +616,8 @@ mod tests {
             prop_assert!(satisfies(&rel, &x0));
             let targets: Vec<usize> = (0..6).collect();
             let (mut cs, mut cc) = (LpCounters::default(), LpCounters::default());
-            let s = bound(&rel, &b, &targets, &mut cs);
-            let k = clarabel_lp::bound(&rel, &b, &targets, &mut cc);
+            let s = bound(&rel, &b, &targets, &mut cs, &|| false);
+            let k = clarabel_lp::bound(&rel, &b, &targets, &mut cc, &|| false);
             let LpOutcome::Bounds(s) = s else { return Err(TestCaseError::fail("simplex: x0 is feasible")) };
             prop_assert_eq!(cs.unverified, 0);
             for (j, v) in s.iter().enumerate() {
@@ -637,7 +640,7 @@ mod tests {
             let (b, x0, rel) = build(&c, shift);
             let targets: Vec<usize> = (0..6).collect();
             let mut cs = LpCounters::default();
-            let s = bound(&rel, &b, &targets, &mut cs);
+            let s = bound(&rel, &b, &targets, &mut cs, &|| false);
             if satisfies(&rel, &x0) {
                 let LpOutcome::Bounds(s) = s else { return Err(TestCaseError::fail("x0 is feasible")) };
                 for (j, v) in s.iter().enumerate() {
@@ -656,7 +659,7 @@ mod tests {
             let v = range.sup() + far;
             r.bounds = interval(v, v);
             let mut cs = LpCounters::default();
-            prop_assert_eq!(bound(&rel, &b, &[0, 1, 2], &mut cs), LpOutcome::Infeasible);
+            prop_assert_eq!(bound(&rel, &b, &[0, 1, 2], &mut cs, &|| false), LpOutcome::Infeasible);
         }
     }
 }

@@ -14,7 +14,7 @@
 use super::limits::{process_cpu_seconds, Budget, Limit, Limits, Progress, Status};
 use super::share::{self, Decision, Named, Peers, Wire};
 use super::store::{Pool, Store};
-use super::{Prune, Reason, Sink, Stats, Step, Undecided};
+use super::{Prune, Reason, Sink, Stats, Step, Undecided, INTERRUPTED};
 use smallvec::SmallVec;
 use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -99,7 +99,9 @@ pub fn run<P: Prune>(prune: &mut P, start: P::Cell, store: Store, limits: &Limit
         pending_bytes = pending_bytes.saturating_sub(prune.bytes(&cell));
         stats.processed += 1;
         stats.max_level = stats.max_level.max(prune.level(&cell));
-        let flow = route(prune.process(cell), &mut stats, &mut discards, sink, |children| {
+        let step = prune.process_until(cell, &|| budget.interrupted().is_some());
+        let cut_short = is_interrupted(&step);
+        let flow = route(step, &mut stats, &mut discards, sink, |children| {
             for c in &children {
                 pending_share += prune.share(c);
                 pending_bytes += prune.bytes(c);
@@ -112,6 +114,10 @@ pub fn run<P: Prune>(prune: &mut P, start: P::Cell, store: Store, limits: &Limit
         if flow.is_break() {
             status = Status::Incomplete(Limit::Sink);
             report_pending = false;
+            break;
+        }
+        if cut_short {
+            status = Status::Incomplete(budget.interrupted().unwrap_or(Limit::Time));
             break;
         }
         // The clock is read every 64 cells only: a cell can cost less than reading it.
@@ -336,6 +342,7 @@ fn walk_levels<C, F, R: Reason>(start: C, budget: &Budget<'_>, sink: &mut impl S
         let (steps, unprocessed) = decide_level(level);
         let mut next = Vec::new();
         let mut next_bytes = 0usize;
+        let cut_short = steps.iter().any(|(_, _, s)| is_interrupted(s));
         for (level_of, bytes, step) in steps {
             stats.processed += 1;
             stats.max_level = stats.max_level.max(level_of);
@@ -352,7 +359,7 @@ fn walk_levels<C, F, R: Reason>(start: C, budget: &Budget<'_>, sink: &mut impl S
         if !report_pending {
             break;
         }
-        let stopped = if !unprocessed.is_empty() {
+        let stopped = if !unprocessed.is_empty() || cut_short {
             agree(budget.interrupted()).or(Some(Limit::Time))
         } else if !rest.is_empty() {
             Some(Limit::Boxes)
@@ -380,10 +387,15 @@ fn walk_levels<C, F, R: Reason>(start: C, budget: &Budget<'_>, sink: &mut impl S
     (status, stats)
 }
 
+/// Whether a `Prune` left the cell undecided because the deadline or cancel came.
+fn is_interrupted<C, F, R>(step: &Step<C, F, R>) -> bool {
+    matches!(step, Step::Undecided(_, why) if *why == INTERRUPTED)
+}
+
 /// Decides one cell: its level, the bytes of its children, the step.
-fn decide<P: Prune>(p: &mut P, c: P::Cell) -> (u32, usize, PruneStep<P>) {
+fn decide<P: Prune>(p: &mut P, c: P::Cell, budget: &Budget<'_>) -> (u32, usize, PruneStep<P>) {
     let l = p.level(&c);
-    let step = p.process(c);
+    let step = p.process_until(c, &|| budget.interrupted().is_some());
     let bytes = match &step {
         Step::Split(children) => children.iter().map(|c| p.bytes(c)).sum(),
         _ => 0,
@@ -396,7 +408,7 @@ fn decide_alone<P: Prune>(p: &mut P, level: Vec<P::Cell>, budget: &Budget<'_>) -
     let mut out = Vec::with_capacity(level.len());
     let mut cells = level.into_iter();
     for c in cells.by_ref() {
-        out.push(decide(p, c));
+        out.push(decide(p, c, budget));
         if budget.interrupted().is_some() {
             break;
         }
@@ -433,7 +445,7 @@ fn take_chunks<P: Prune>(p: &mut P, job: &LevelJob<P::Cell>, budget: &Budget<'_>
         let i = job.next.fetch_add(1, Ordering::Relaxed);
         let Some(slot) = job.chunks.get(i) else { break };
         let cells = slot.lock().expect("invariant: no worker panics holding a chunk").take().expect("invariant: each chunk is taken once");
-        mine.push((i, cells.into_iter().map(|c| decide(p, c)).collect()));
+        mine.push((i, cells.into_iter().map(|c| decide(p, c, budget)).collect()));
         if budget.interrupted().is_some() {
             job.stop.store(true, Ordering::Relaxed);
         }

@@ -60,6 +60,14 @@ pub trait Prune {
     /// Decides one cell.
     fn process(&mut self, cell: Self::Cell) -> Step<Self::Cell, Self::Found, Self::Reason>;
 
+    /// As `process`, for a search whose one cell can take long (an LP per variable of a large
+    /// system): once `stop` says so (the run's deadline or cancel), it may leave the cell
+    /// `Undecided` instead of finishing it. The default finishes it.
+    fn process_until(&mut self, cell: Self::Cell, stop: &dyn Fn() -> bool) -> Step<Self::Cell, Self::Found, Self::Reason> {
+        let _ = stop;
+        self.process(cell)
+    }
+
     /// The cell's share of the start cell's measure, in [0, 1], for `Progress::decided`;
     /// 0 (the default) when the search has no measure.
     fn share(&self, _cell: &Self::Cell) -> f64 {
@@ -109,6 +117,10 @@ pub enum Step<C, F, R> {
     /// To be searched further as these children (in the order they should be explored).
     Split(SmallVec<[C; 4]>),
 }
+
+/// The reason of a cell a `Prune` left `Undecided` because the run's deadline or cancel came
+/// while it was deciding it (`Prune::process_until`): the run then ends `Incomplete` on that limit.
+pub const INTERRUPTED: &str = "interrupted";
 
 /// Why a cell is reported undecided.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -418,14 +418,14 @@ struct SystemPrune<'a, 's> {
 
 impl SystemPrune<'_, '_> {
     /// Lines 5–9 of the seed's Algorithm 1.
-    fn shrink(&mut self, b: &mut IntervalBox) -> Shrunk {
+    fn shrink(&mut self, b: &mut IntervalBox, stop: &dyn Fn() -> bool) -> Shrunk {
         let sigma = self.solver.settings.sigma;
         loop {
             self.shrink_rounds += 1;
             let before = b.clone();
             // The whole pipeline runs even when its first step reached sigma: the LP is what
             // proves most near-miss boxes empty, and a spurious solution box costs more than it.
-            match self.contractor.contract(b) {
+            match self.contractor.contract_until(b, stop) {
                 Contraction::Empty => return Shrunk::Empty,
                 Contraction::Proven if self.solver.size(b) <= sigma => {
                     self.certified += 1;
@@ -442,6 +442,11 @@ impl SystemPrune<'_, '_> {
                     }
                 }
                 return Shrunk::Solution;
+            }
+            // The deadline (or a cancel) may have cut the contraction short: what it proved
+            // holds, but the box is not finished.
+            if stop() {
+                return Shrunk::Interrupted;
             }
             if self.relative_volume(b, &before) > self.solver.settings.rho {
                 return Shrunk::Stalled;
@@ -482,8 +487,12 @@ impl Prune for SystemPrune<'_, '_> {
     type Found = (BoxStatus, IntervalBox);
     type Reason = SystemDiscard;
 
-    fn process(&mut self, mut b: IntervalBox) -> Step<IntervalBox, (BoxStatus, IntervalBox), SystemDiscard> {
-        let shrunk = self.shrink(&mut b);
+    fn process(&mut self, b: IntervalBox) -> Step<IntervalBox, (BoxStatus, IntervalBox), SystemDiscard> {
+        self.process_until(b, &|| false)
+    }
+
+    fn process_until(&mut self, mut b: IntervalBox, stop: &dyn Fn() -> bool) -> Step<IntervalBox, (BoxStatus, IntervalBox), SystemDiscard> {
+        let shrunk = self.shrink(&mut b, stop);
         if let Some(d) = &mut self.diagonals {
             if !matches!(shrunk, Shrunk::Empty) {
                 let l = b.level as usize;
@@ -497,6 +506,7 @@ impl Prune for SystemPrune<'_, '_> {
             Shrunk::Empty => Step::Discard(SystemDiscard::Empty),
             Shrunk::Solution => Step::Found((BoxStatus::Solution, b)),
             Shrunk::Unique => Step::Found((BoxStatus::Unique, b)),
+            Shrunk::Interrupted => Step::Undecided(b, super::INTERRUPTED),
             Shrunk::Stalled => {
                 let (i, _) = self.solver.widest(&b).expect("invariant: a box wider than sigma has a primary");
                 let (lower, upper) = b.bisect(i);
@@ -566,6 +576,8 @@ enum Shrunk {
     Solution,
     Unique,
     Stalled,
+    /// The deadline or a cancel came before the box was finished.
+    Interrupted,
 }
 
 #[cfg(test)]
