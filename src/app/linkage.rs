@@ -258,7 +258,7 @@ impl PreparedRun<SingularityResult> for SingularSetsRun {
 /// --json` for the same set.
 fn set_result(p: &SingularProblem<Linkage>, settings: &SolverSettings, set: &SingularSet) -> SingularSetResult {
     let names = p.linkage.free_joints().to_vec();
-    let chart = &p.charts[0];
+    let chart = &p.augmented;
     let boxes: Vec<ResultBox> = set
         .boxes
         .iter()

@@ -213,7 +213,7 @@ mod tests {
         let solved = sets.solve(&settings, &AtomicBool::new(false)).expect("valid");
         for (p, s) in sets.problems.iter().zip(&solved) {
             assert!(!s.status.is_complete(), "{:?}", p.kind);
-            assert_eq!(s.boxes.len(), p.charts.len());
+            assert_eq!(s.boxes.len(), p.chart_count());
         }
         // A bad actuator list fails before any search.
         let err = SingularSets::new(&m, &[], &all_kinds(&["nope".to_string()]), &["nope".to_string()], None).expect_err("refused");

@@ -130,9 +130,16 @@ pub fn merge_touching<H: Clone>(hulls: &[H], join: impl Fn(&H, &H) -> Option<H>)
 /// pairs, so the whole is O(n log n) in practice.
 pub fn touching_pairs(live: &[usize], dims: usize, side: impl Fn(usize, usize) -> Interval) -> (Vec<(usize, usize)>, u64) {
     let mut pairs = Vec::new();
+    let compared = sweep(live, dims, side, |_, _| false, |i, j| pairs.push((i, j)));
+    (pairs, compared)
+}
+
+/// The sweep of `touching_pairs`: `touch(i, j)` for each pair that shares a point, except the
+/// pairs `skip` rules out before their full comparison; returns how many were compared in full.
+fn sweep(live: &[usize], dims: usize, side: impl Fn(usize, usize) -> Interval, mut skip: impl FnMut(usize, usize) -> bool, mut touch: impl FnMut(usize, usize)) -> u64 {
     let mut compared = 0u64;
     if dims == 0 || live.len() < 2 {
-        return (pairs, compared);
+        return compared;
     }
     let by_inf = |d: usize| {
         let mut order = live.to_vec();
@@ -166,13 +173,42 @@ pub fn touching_pairs(live: &[usize], dims: usize, side: impl Fn(usize, usize) -
             if side(j, d).inf() > sup {
                 break;
             }
+            if skip(i, j) {
+                continue;
+            }
             compared += 1;
             if (0..dims).all(|e| !side(i, e).disjoint(side(j, e))) {
-                pairs.push((i, j));
+                touch(i, j);
             }
         }
     }
-    (pairs, compared)
+    compared
+}
+
+/// Which vertices are joined so far (union–find with path halving).
+struct Joined(Vec<usize>);
+
+impl Joined {
+    fn new(n: usize) -> Self {
+        Joined((0..n).collect())
+    }
+
+    fn root(&mut self, mut v: usize) -> usize {
+        while self.0[v] != v {
+            self.0[v] = self.0[self.0[v]];
+            v = self.0[v];
+        }
+        v
+    }
+
+    fn same(&mut self, a: usize, b: usize) -> bool {
+        self.root(a) == self.root(b)
+    }
+
+    fn join(&mut self, a: usize, b: usize) {
+        let (ra, rb) = (self.root(a), self.root(b));
+        self.0[ra] = rb;
+    }
 }
 
 /// `components` with the number of box pairs compared in full (see `super::components_counted`).
@@ -181,11 +217,20 @@ pub(super) fn box_components(boxes: &[IntervalBox]) -> (Vec<usize>, usize, u64) 
     // A void box shares no point with anything: it is its own component.
     let live: Vec<usize> = (0..n).filter(|&i| !boxes[i].is_void()).collect();
     let dims = live.first().map_or(0, |&i| boxes[i].len());
-    let (pairs, compared) = if dims == 0 {
+    let mut pairs = Vec::new();
+    let compared = if dims == 0 {
         // Boxes over no variable are all the one point of a zero-dimensional space.
-        (live.windows(2).map(|w| (w[0], w[1])).collect(), 0)
+        pairs.extend(live.windows(2).map(|w| (w[0], w[1])));
+        0
     } else {
-        touching_pairs(&live, dims, |i, d| boxes[i].dims[d])
+        // A pair already joined through others adds nothing to the components: skipping it
+        // keeps many mutually overlapping boxes (a limit's undecided boxes of a large system)
+        // from costing n² full comparisons of thousands of coordinates.
+        let joined = std::cell::RefCell::new(Joined::new(n));
+        sweep(&live, dims, |i, d| boxes[i].dims[d], |i, j| joined.borrow_mut().same(i, j), |i, j| {
+            joined.borrow_mut().join(i, j);
+            pairs.push((i, j));
+        })
     };
     let (labels, count) = labels(n, &components_of_edges(n, pairs));
     (labels, count, compared)

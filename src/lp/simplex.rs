@@ -39,6 +39,13 @@ enum State {
     Free(usize),
 }
 
+/// Entries of the largest dense tableau built: 4 Mi (32 MiB of `f64`).
+const MAX_TABLEAU_ENTRIES: usize = 1 << 22;
+
+/// Pivots between two looks at the run's deadline: one LP of a large system (thousands of
+/// columns) takes seconds, and a look costs about as much as one pivot of a small one.
+const PIVOTS_PER_STOP_CHECK: usize = 16;
+
 /// How a phase ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Status {
@@ -319,9 +326,12 @@ impl Tableau {
     }
 
     /// Phase 1: minimises the sum of infeasibilities from the current basis.
-    fn phase1(&mut self, cap: usize) -> Status {
+    fn phase1(&mut self, cap: usize, stop: &dyn Fn() -> bool) -> Status {
         self.degenerate = 0;
-        for _ in 0..cap {
+        for k in 0..cap {
+            if k % PIVOTS_PER_STOP_CHECK == PIVOTS_PER_STOP_CHECK - 1 && stop() {
+                return Status::Stalled;
+            }
             let mut any = false;
             for i in 0..self.m {
                 let p = self.head[i];
@@ -397,8 +407,11 @@ impl Tableau {
     }
 
     /// Phase 2 from a feasible basis for the cost set by `set_objective`.
-    fn phase2(&mut self, cap: usize) -> Status {
-        for _ in 0..cap {
+    fn phase2(&mut self, cap: usize, stop: &dyn Fn() -> bool) -> Status {
+        for k in 0..cap {
+            if k % PIVOTS_PER_STOP_CHECK == PIVOTS_PER_STOP_CHECK - 1 && stop() {
+                return Status::Stalled;
+            }
             let Some((c, dir)) = self.entering() else { return Status::Optimal };
             let step = self.ratio(c, dir, false);
             if matches!(step, Step::Unbounded) {
@@ -437,10 +450,16 @@ pub(super) fn bound(rel: &Relaxation, b: &[Interval], targets: &[VarId], counter
         counters.unverified += 2 * targets.len() as u64;
         return unchanged();
     }
+    // The tableau is dense: past a few million entries it costs more memory and time than
+    // propagation alone would (a loop through a chain of thousands of joints), so the box is
+    // left to the other contractors.
+    if rel.n.saturating_mul(rel.rows.len()) > MAX_TABLEAU_ENTRIES {
+        return unchanged();
+    }
     let mut tab = Tableau::new(rel, b);
     let cap = 50 * (tab.n + tab.m + 1);
     let mut mu = vec![0.0; tab.m];
-    match tab.phase1(cap) {
+    match tab.phase1(cap, stop) {
         Status::Optimal => {}
         Status::Infeasible => {
             tab.phase1_duals(&mut mu);
@@ -466,7 +485,7 @@ pub(super) fn bound(rel: &Relaxation, b: &[Interval], targets: &[VarId], counter
             tab.refresh_values();
             tab.set_objective(t, sign);
             counters.solved += 1;
-            if tab.phase2(cap) != Status::Optimal {
+            if tab.phase2(cap, stop) != Status::Optimal {
                 counters.unverified += 1;
                 continue;
             }

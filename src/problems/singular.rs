@@ -160,8 +160,10 @@ pub struct SingularProblem<L = LinkageProblem> {
     pub dof: isize,
     /// Expected dimension of the set for generic geometry (negative: generically empty).
     pub expected_dimension: isize,
-    /// One system per chart; they share every variable id.
-    pub charts: Vec<EquationSystem>,
+    /// The linkage's system with the multipliers and the null-vector rows; chart `k` adds
+    /// `m[k] = 1` (`chart`). Built one at a time when solved: a chart is as large as this
+    /// system, and a mechanism of n joints has about n charts.
+    pub augmented: EquationSystem,
     /// Ids of the multiplier variables `m` (velocity or row multipliers), chart `k` fixing `m[k] = 1`.
     pub multipliers: Vec<VarId>,
     /// Number of the linkage's variables (the configuration part of every box).
@@ -413,16 +415,21 @@ impl<L: Coordinates> SingularProblem<L> {
         let n_mult = multipliers.len();
         // Unknowns added: the multipliers (one fixed by the chart); equations added: the rows.
         let expected_dimension = dof + (n_mult as isize - 1) - rows;
-        let charts = (0..n_mult)
-            .map(|k| {
-                let mut s = aug.clone();
-                s.vars[multipliers[k]].domain = point(1.0);
-                s.add(Equation::new(vec![Term { coef: point(1.0), mono: Monomial::Linear(multipliers[k]) }], point(-1.0)));
-                s
-            })
-            .collect();
         let output = if kind == SingularKind::Output { output } else { None };
-        Ok(Self { linkage, kind, actuated: actuated.to_vec(), output, dof, expected_dimension, charts, multipliers, base_vars })
+        Ok(Self { linkage, kind, actuated: actuated.to_vec(), output, dof, expected_dimension, augmented: aug, multipliers, base_vars })
+    }
+
+    /// Number of charts: one per multiplier.
+    pub fn chart_count(&self) -> usize {
+        self.multipliers.len()
+    }
+
+    /// The system of chart `k` (`m[k] = 1`); every chart shares every variable id.
+    pub fn chart(&self, k: usize) -> EquationSystem {
+        let mut s = self.augmented.clone();
+        s.vars[self.multipliers[k]].domain = point(1.0);
+        s.add(Equation::new(vec![Term { coef: point(1.0), mono: Monomial::Linear(self.multipliers[k]) }], point(-1.0)));
+        s
     }
 
     /// Values of the actuated joints over a box (radians or metres), outward rounded.

@@ -175,7 +175,7 @@ impl SingularReport {
             fixed_joints: p.linkage.fixed_joints().iter().cloned().collect(),
             dof: p.dof,
             expected_dimension: p.expected_dimension,
-            charts: p.charts.len(),
+            charts: p.chart_count(),
             settings: settings.clone(),
             status: set.status,
             summary,

@@ -206,7 +206,7 @@ impl NodeProblem {
                         let b = IntervalBox::new((0..sp.base_vars).map(|j| d[map[j]]).collect());
                         out.pairs.push(NodePair { points: [a, b], kind });
                     }
-                    None if k == k2 && kind != BoxKind::Undecided && injective(&sp.charts[*k], &self.shared, &bx, map) => out.injective += 1,
+                    None if k == k2 && kind != BoxKind::Undecided && injective(&sp.chart(*k), &self.shared, &bx, map) => out.injective += 1,
                     None => out.near_diagonal.push(bx),
                 }
             }

@@ -25,16 +25,21 @@ impl<L: Coordinates> SingularProblem<L> {
         let mut status = Status::Complete;
         let mut stats = Vec::new();
         let mut dropped_other_chart = 0u64;
-        for (k, chart) in self.charts.iter().enumerate() {
+        for k in 0..self.chart_count() {
             let remaining = settings.timeout.map(|t| t.saturating_sub(t0.elapsed()));
-            if remaining.is_some_and(|r| r.is_zero()) {
-                // No time left: the whole chart is undecided.
-                status = Status::Incomplete(Limit::Time);
-                boxes.push(SingularBox { chart: k, b: chart.initial_box(), status: BoxKind::Undecided });
+            let cancelled = cancel.load(std::sync::atomic::Ordering::Relaxed);
+            if cancelled || remaining.is_some_and(|r| r.is_zero()) {
+                // No time left: the whole chart is undecided (its box is the augmented system's
+                // with its multiplier at 1; it is not built).
+                status = Status::Incomplete(if cancelled { Limit::Cancelled } else { Limit::Time });
+                let mut b = self.augmented.initial_box();
+                b.dims[self.multipliers[k]] = crate::interval::point(1.0);
+                boxes.push(SingularBox { chart: k, b, status: BoxKind::Undecided });
                 continue;
             }
+            let chart = self.chart(k);
             let s = SolverSettings { timeout: remaining, ..settings.clone() };
-            let solver = self.linkage.extended_solver(chart, s)?;
+            let solver = self.linkage.extended_solver(&chart, s)?;
             let e = solver.enclose(cancel, &mut |_| {});
             if e.status != Status::Complete {
                 status = e.status;

@@ -295,10 +295,10 @@ impl NodeProblem {
             shared.extend(vars);
         }
         let mut charts = Vec::new();
-        for k in 0..sp.charts.len() {
-            for k2 in k..sp.charts.len() {
-                let mut s = sp.charts[k].clone();
-                let other = &sp.charts[k2];
+        for k in 0..sp.chart_count() {
+            for k2 in k..sp.chart_count() {
+                let mut s = sp.chart(k);
+                let other = &sp.chart(k2);
                 let map: Vec<VarId> = other
                     .vars
                     .iter()
