@@ -35,6 +35,8 @@ mod spatial_singularities;
 /// `linkspace chart`: the singular-set charts of closed loops and the 3R workspace
 /// regions show what the references of the other modules establish.
 mod charts;
+/// `linkspace sweep`: verdicts and counts over design grids against references without the solver.
+mod sweeps;
 /// The ROS 2 node against real rclpy over DDS on loopback: topics, services, load.
 #[cfg(feature = "ros")]
 mod topics;
