@@ -178,7 +178,8 @@ fn poses(rho: [f64; 3]) -> usize {
 fn three_rpr_assembly_modes_match_an_independent_count() {
     let spec = std::fs::read_to_string(repo("examples/sweeps/three_rpr_assembly_modes.json")).expect("shipped spec");
     // The shipped spec's design, on a 5 × 5 grid.
-    let spec = spec.replace("\"steps\": 9", "\"steps\": 5");
+    assert!(spec.contains("\"steps\": 17"), "the shipped grid");
+    let spec = spec.replace("\"steps\": 17", "\"steps\": 5");
     let plan = sweep::parse(&spec).expect("valid");
     let mechanism = urdf::parse(&std::fs::read_to_string(repo("urdf/three_rpr.urdf")).expect("bundled")).expect("parses");
     let tasks = plan.tasks(100).expect("small");

@@ -124,7 +124,7 @@ pub(crate) fn run(args: SweepArgs) -> Result<()> {
     let mut stdout = std::io::stdout().lock();
     writeln!(
         stdout,
-        "{}: {} of {total} tasks done ({run_now} now), {}; {}: {}; {wall:.3} s wall on {threads} threads ({:.3} s of tasks); results in {}{}",
+        "{}: {} of {total} tasks done ({run_now} now), {}; {}: {}; {wall:.3} s wall, {threads} at a time ({:.3} s of tasks); results in {}{}",
         mechanism.name,
         results.len(),
         counts(&summary.by_status),

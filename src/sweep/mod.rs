@@ -310,6 +310,8 @@ mod tests {
         let t = |name: &str| edited.joints[edited.joint(name).expect("joint")].origin.translation.vector;
         assert_eq!((t("joint3").x, t("joint3").y, t("tool_joint").x), (2.0, 0.25, 1.5));
         assert!(matches!(plan.tasks(5), Err(SweepError::TooManyTasks { tasks: 6, max: 5 })));
+        let grid = parse(r#"{"urdf": "a", "analysis": "cuspidality", "parameters": [{"param": "fix.j", "from": 0.3, "to": 2.7, "steps": 5}]}"#).expect("valid");
+        assert_eq!(grid.axes[0], vec![0.3, 0.9, 1.5, 2.1, 2.7], "the decimals of the grid");
     }
 
     #[test]

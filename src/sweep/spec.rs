@@ -116,7 +116,9 @@ pub fn parse(text: &str) -> Result<Plan, SweepError> {
                     0 => return Err(bad(format!("{field}.steps"), "must be at least 1")),
                     1 if from != to => return Err(bad(format!("{field}.steps"), "1 step needs from = to")),
                     1 => vec![from],
-                    n => (0..n).map(|i| from + (to - from) * i as f64 / (n - 1) as f64).collect(),
+                    // Rounded to 12 significant digits: the decimals a user reads in the grid
+                    // (0.9, not 0.9000000000000001), which the results and a resume key on.
+                    n => (0..n).map(|i| from + (to - from) * i as f64 / (n - 1) as f64).map(|v| format!("{v:.11e}").parse().unwrap_or(v)).collect(),
                 }
             }
             (None, None, None, None) if file.tuples.is_some() => Vec::new(),
