@@ -37,7 +37,7 @@ pub fn sweep_task(plan: &Plan, base: &Mechanism, task: &Task, limits: &Limits, c
         Ok(m) => m,
         Err(e) => return failed(e.to_string()),
     };
-    let control = Control { limits: limits.clone(), threads: 1, cancel };
+    let control = Control { limits: *limits, threads: 1, cancel };
     let result = |status: Status, verdict: Option<String>, count: Option<u64>, proven: u64, undecided: u64| {
         let (status, limit) = match status {
             Status::Complete => (TaskStatus::Complete, None),
