@@ -16,7 +16,7 @@ mod spec;
 pub use chart::map_svg;
 pub use records::{csv, fingerprint, read_done, Header, Summary, TaskResult, TaskStatus};
 pub use run::run_tasks;
-pub use spec::parse;
+pub use spec::{parse, MAX_STEPS};
 
 use crate::model::{Mechanism, ModelError};
 use thiserror::Error;
@@ -322,6 +322,7 @@ mod tests {
             (r#"{"urdf": "a", "analysis": "cuspidality", "parameters": [{"param": "joint.j.abc.0", "values": [1]}]}"#, "parameters[0].param"),
             (r#"{"urdf": "a", "analysis": "cuspidality", "parameters": [{"param": "fix.j", "from": 1, "to": 2, "steps": 0}]}"#, "parameters[0].steps"),
             (r#"{"urdf": "a", "analysis": "cuspidality", "parameters": [{"param": "fix.j", "from": 1, "to": 2}]}"#, "parameters[0]"),
+            (r#"{"urdf": "a", "analysis": "cuspidality", "parameters": [{"param": "fix.j", "from": 1, "to": 2, "steps": 1000000000000}]}"#, "parameters[0].steps"),
             (r#"{"urdf": "a", "analysis": "cuspidality", "parameters": [{"param": "fix.j", "values": [1]}], "tuples": [[1, 2]]}"#, "parameters[0]"),
             (r#"{"urdf": "a", "analysis": "cuspidality", "parameters": [{"param": "fix.j"}], "tuples": [[1, 2]]}"#, "tuples[0]"),
             (r#"{"urdf": "a", "analysis": "cuspidality", "parameters": [{"param": "fix.j", "values": [1]}], "limits": {"timeout": -1}}"#, "limits.timeout"),

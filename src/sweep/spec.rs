@@ -62,6 +62,9 @@ struct LimitsFile {
     max_memory: Option<u64>,
 }
 
+/// The most values one range may list.
+pub const MAX_STEPS: u64 = 10_000_000;
+
 fn bad(field: impl Into<String>, problem: impl Into<String>) -> SweepError {
     SweepError::Spec { field: field.into(), problem: problem.into() }
 }
@@ -114,6 +117,8 @@ pub fn parse(text: &str) -> Result<Plan, SweepError> {
                 }
                 match steps {
                     0 => return Err(bad(format!("{field}.steps"), "must be at least 1")),
+                    // Values are listed when the spec is read, before the task count is bounded.
+                    n if n > MAX_STEPS => return Err(bad(format!("{field}.steps"), format!("{n}: at most {MAX_STEPS}"))),
                     1 if from != to => return Err(bad(format!("{field}.steps"), "1 step needs from = to")),
                     1 => vec![from],
                     // Rounded to 12 significant digits: the decimals a user reads in the grid
