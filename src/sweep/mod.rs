@@ -326,7 +326,14 @@ mod tests {
             (r#"{"urdf": "a", "analysis": "cuspidality", "parameters": [{"param": "fix.j", "values": [1]}], "tuples": [[1, 2]]}"#, "parameters[0]"),
             (r#"{"urdf": "a", "analysis": "cuspidality", "parameters": [{"param": "fix.j"}], "tuples": [[1, 2]]}"#, "tuples[0]"),
             (r#"{"urdf": "a", "analysis": "cuspidality", "parameters": [{"param": "fix.j", "values": [1]}], "limits": {"timeout": -1}}"#, "limits.timeout"),
-            (r#"{"urdf": "a", "analysis": "cuspidality", "parameters": [{"param": "fix.j", "values": [1]}], "bogus": 1}"#, "(file)"),
+            (r#"{"urdf": "a", "analysis": "cuspidality", "parameters": [{"param": "fix.j", "values": [1]}], "bogus": 1}"#, "bogus"),
+            (r#"{"urdf": "a", "analysis": "cuspidality", "parameters": [{"param": "fix.j", "values": [1], "step": 2}]}"#, "parameters[0]"),
+            (r#"{"urdf": "a", "analysis": "cuspidality", "parameters": [{"param": "fix.j", "from": 1, "to": 2, "steps": -3}]}"#, "parameters[0]"),
+            (r#"{"urdf": 3, "analysis": "cuspidality", "parameters": []}"#, "urdf"),
+            (r#"{"analysis": "cuspidality", "parameters": []}"#, "urdf"),
+            (r#"{"urdf": "a", "analysis": "cuspidality", "parameters": [{"param": "fix.j", "values": [1]}], "limits": {"max_boxes": "many"}}"#, "limits"),
+            (r#"[1, 2]"#, "(file)"),
+            (r#"{"urdf": "a", "#, "(file)"),
         ];
         for (text, field) in cases {
             let e = parse(text).expect_err(text).to_string();

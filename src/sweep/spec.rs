@@ -2,12 +2,12 @@
 //! design. Read once and checked into a `Plan`; every error names the field at fault.
 
 use super::{Parameter, Plan, Sweep, SweepError, TaskLimits};
+use serde::de::DeserializeOwned;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 
 /// The file as written (README "Design sweeps" documents each field).
-#[derive(Deserialize, Debug)]
-#[serde(deny_unknown_fields)]
+#[derive(Debug)]
 struct SpecFile {
     /// The URDF, relative to the spec file's directory.
     urdf: String,
@@ -16,23 +16,51 @@ struct SpecFile {
     /// The varied parameters: each a range or a list of values.
     parameters: Vec<ParameterFile>,
     /// Explicit tasks, one value per parameter each, instead of the cartesian product.
-    #[serde(default)]
     tuples: Option<Vec<Vec<f64>>>,
     /// Parameters held at one value in every task.
-    #[serde(default)]
     constants: BTreeMap<String, f64>,
     /// Cusp search precision (radians), for `cuspidality`.
-    #[serde(default)]
     precision: Option<f64>,
     /// Solution box width, for `assembly_modes`.
-    #[serde(default)]
     sigma: Option<f64>,
     /// Limits of each task.
-    #[serde(default)]
     limits: LimitsFile,
     /// Which two parameters the map shows (default: the first two).
-    #[serde(default)]
     map: Option<[String; 2]>,
+}
+
+/// The spec's fields.
+const FIELDS: [&str; 9] = ["urdf", "analysis", "parameters", "tuples", "constants", "precision", "sigma", "limits", "map"];
+
+impl SpecFile {
+    /// Reads the file field by field, so that a value of the wrong type is named by its field.
+    fn read(text: &str) -> Result<Self, SweepError> {
+        let value: serde_json::Value = serde_json::from_str(text).map_err(|e| bad("(file)", e.to_string()))?;
+        let serde_json::Value::Object(map) = value else { return Err(bad("(file)", "expected a JSON object")) };
+        if let Some(k) = map.keys().find(|k| !FIELDS.contains(&k.as_str())) {
+            return Err(bad(k.as_str(), format!("unknown field; expected one of {}", FIELDS.join(", "))));
+        }
+        fn get<T: DeserializeOwned>(map: &serde_json::Map<String, serde_json::Value>, name: &str) -> Result<Option<T>, SweepError> {
+            map.get(name).map(|v| serde_json::from_value(v.clone()).map_err(|e| bad(name, e.to_string()))).transpose()
+        }
+        let parameters: Vec<serde_json::Value> = get(&map, "parameters")?.ok_or_else(|| bad("parameters", "missing"))?;
+        let parameters = parameters
+            .into_iter()
+            .enumerate()
+            .map(|(k, v)| serde_json::from_value(v).map_err(|e| bad(format!("parameters[{k}]"), e.to_string())))
+            .collect::<Result<_, _>>()?;
+        Ok(Self {
+            urdf: get(&map, "urdf")?.ok_or_else(|| bad("urdf", "missing"))?,
+            analysis: get(&map, "analysis")?.ok_or_else(|| bad("analysis", "missing"))?,
+            parameters,
+            tuples: get(&map, "tuples")?,
+            constants: get(&map, "constants")?.unwrap_or_default(),
+            precision: get(&map, "precision")?,
+            sigma: get(&map, "sigma")?,
+            limits: get(&map, "limits")?.unwrap_or_default(),
+            map: get(&map, "map")?,
+        })
+    }
 }
 
 #[derive(Deserialize, Debug)]
@@ -71,7 +99,7 @@ fn bad(field: impl Into<String>, problem: impl Into<String>) -> SweepError {
 
 /// Reads a spec's text into a checked plan (`urdf` is left relative: the caller resolves it).
 pub fn parse(text: &str) -> Result<Plan, SweepError> {
-    let file: SpecFile = serde_json::from_str(text).map_err(|e| SweepError::Spec { field: "(file)".into(), problem: e.to_string() })?;
+    let file = SpecFile::read(text)?;
     let analysis = match file.analysis.as_str() {
         "cuspidality" => Sweep::Cuspidality { precision: file.precision.unwrap_or(1e-4) },
         "assembly_modes" => Sweep::AssemblyModes { sigma: file.sigma.unwrap_or(1e-3) },
