@@ -352,6 +352,26 @@ mod tests {
     }
 
     #[test]
+    fn loop_frames_angles_and_fixed_values_are_applied() {
+        let plan = parse(
+            r#"{"urdf": "a", "analysis": "assembly_modes",
+                "parameters": [{"param": "loop.b2.predecessor.xyz.0", "values": [18]}, {"param": "joint.a2_joint.rpy.2", "values": [0.5]}, {"param": "fix.rho1", "values": [9]}],
+                "constants": {"fix.rho3": 12}}"#,
+        )
+        .expect("valid");
+        let m = crate::model::urdf::parse(include_str!("../../urdf/three_rpr.urdf")).expect("bundled");
+        let (edited, fixed) = apply(&m, &plan, &plan.tasks(10).expect("one")[0]).expect("applies");
+        let b2 = edited.loops.iter().position(|l| l.name == "b2").expect("loop");
+        assert_eq!(edited.loops[b2].predecessor_origin.translation.vector.x, 18.0);
+        assert_eq!(edited.loops[b2].successor_origin, m.loops[b2].successor_origin, "the other side is left alone");
+        let a2 = &edited.joints[edited.joint("a2_joint").expect("joint")];
+        assert_eq!((a2.rpy, a2.origin.translation.vector.x), ([0.0, 0.0, 0.5], 15.91));
+        assert!((a2.origin.rotation.euler_angles().2 - 0.5).abs() < 1e-15);
+        // Constants first, then the task's values.
+        assert_eq!(fixed, vec![("rho3".to_string(), 12.0), ("rho1".to_string(), 9.0)]);
+    }
+
+    #[test]
     fn unknown_joints_are_named() {
         let plan = parse(r#"{"urdf": "a", "analysis": "cuspidality", "parameters": [{"param": "joint.nope.xyz.0", "values": [1]}]}"#).expect("valid");
         let m = crate::model::urdf::parse(include_str!("../../urdf/orthogonal_3r_a.urdf")).expect("bundled");
