@@ -20,6 +20,8 @@ mod stability;
 mod manip3r;
 /// Real arms' URDFs: chain choice, rounding, limits, the verdict, three conventions.
 mod real_arms;
+/// `linkspace sweep`: verdicts and counts over design grids against references without the solver.
+mod sweeps;
 /// Distance problems through Cayley–Menger determinants: octahedral platform, four spheres.
 mod cayley_menger;
 /// Distance answers certified (Krawczyk in coordinates) or labelled undecided.
@@ -35,8 +37,6 @@ mod spatial_singularities;
 /// `linkspace chart`: the singular-set charts of closed loops and the 3R workspace
 /// regions show what the references of the other modules establish.
 mod charts;
-/// `linkspace sweep`: verdicts and counts over design grids against references without the solver.
-mod sweeps;
 /// The ROS 2 node against real rclpy over DDS on loopback: topics, services, load.
 #[cfg(feature = "ros")]
 mod topics;
