@@ -27,6 +27,7 @@ use std::time::Duration;
 
 pub(crate) mod distances;
 mod loop_singularities;
+mod sweep;
 
 #[derive(Parser)]
 #[command(name = "linkspace", version, about = "Every configuration a mechanism can take, with guarantees.")]
@@ -156,6 +157,8 @@ enum Command {
     Collisions(CollisionsArgs),
     /// Certified singular sets (C-space, input/type II, output/type I) of a planar closed-loop linkage.
     LoopSingularities(loop_singularities::LoopSingularitiesArgs),
+    /// Run one analysis over a grid (or a list) of design parameters of a URDF (a JSON spec).
+    Sweep(sweep::SweepArgs),
 }
 
 #[derive(clap::Args)]
@@ -313,6 +316,7 @@ pub fn run() -> Result<()> {
         Command::Serve(args) => serve::serve(args),
         Command::Collisions(args) => collisions(args),
         Command::LoopSingularities(args) => loop_singularities::run(args),
+        Command::Sweep(args) => sweep::run(args),
     }
 }
 
@@ -510,7 +514,7 @@ fn load_arm(path: &std::path::Path, uncertainty: f64, args: &ChainArgs) -> Resul
 
 /// Default `--max-boxes` of `singularities`, per search. `--max-memory` bounds the pending
 /// cells and, separately, the node search's box tree (kept whole until the run ends).
-const SINGULARITIES_MAX_BOXES: u64 = 5_000_000;
+pub(crate) const SINGULARITIES_MAX_BOXES: u64 = 5_000_000;
 
 /// Default `--max-memory` of `singularities` (MiB of pending cells).
 const SINGULARITIES_MAX_MEMORY_MIB: &str = "256";

@@ -38,6 +38,7 @@ pub mod problems;
 pub mod report;
 pub mod search;
 pub mod singular;
+pub mod sweep;
 pub mod system;
 
 pub use app::{load, Analysis, AnalysisError};

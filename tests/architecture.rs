@@ -163,9 +163,10 @@ fn builders_never_solve() {
     }
 }
 
-/// Where serde may be named: the JSON writers (`report`), the node (`ros`), the binaries, and
-/// the reader of the distance file format.
-const SERDE_HOMES: [&str; 7] = ["report.rs", "report/", "ros/", "main.rs", "cli", "bin/", "distances/file.rs"];
+/// Where serde may be named: the JSON writers (`report`), the node (`ros`), the binaries, the
+/// reader of the distance file format, and the sweep's own file formats (its spec and its
+/// result lines, which it reads back to resume).
+const SERDE_HOMES: [&str; 9] = ["report.rs", "report/", "ros/", "main.rs", "cli", "bin/", "distances/file.rs", "sweep/spec.rs", "sweep/records.rs"];
 
 #[test]
 fn only_the_edges_know_serde() {

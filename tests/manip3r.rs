@@ -55,18 +55,18 @@ fn loaded_map_equals_the_seed_formulas() {
 
 
 /// What dense sampling of the seed's closed form sees: cusps and nodes as workspace points.
-struct Sampled {
+pub struct Sampled {
     /// Joint points where the image of the singular curve turns back.
-    cusps: Vec<[f64; 2]>,
+    pub cusps: Vec<[f64; 2]>,
     /// Workspace points where the image of the singular curve crosses itself.
-    nodes: Vec<[f64; 2]>,
+    pub nodes: Vec<[f64; 2]>,
 }
 
 /// Traces det Df = 0 (from central differences of `seed_map`) by marching squares on an n × n
 /// periodic grid, maps the polyline, and reads cusps (image direction reverses at a vertex) and
 /// nodes (images of two segments at least `5h` apart in joint space cross). Points closer than
 /// 0.05 to a line d4 cos θ3 + d3 = 0 (internal motion) are left out.
-fn sample(p: (f64, f64, f64, f64, f64), n: usize) -> Sampled {
+pub fn sample(p: (f64, f64, f64, f64, f64), n: usize) -> Sampled {
     let h = 2.0 * PI / n as f64;
     let at = |i: usize, j: usize| [-PI + (i as f64 + 0.37) * h, -PI + (j as f64 + 0.61) * h];
     let det = |t: [f64; 2]| {

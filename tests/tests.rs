@@ -20,6 +20,8 @@ mod stability;
 mod manip3r;
 /// Real arms' URDFs: chain choice, rounding, limits, the verdict, three conventions.
 mod real_arms;
+/// `linkspace sweep`: verdicts and counts over design grids against references without the solver.
+mod sweeps;
 /// Distance problems through Cayley–Menger determinants: octahedral platform, four spheres.
 mod cayley_menger;
 /// Distance answers certified (Krawczyk in coordinates) or labelled undecided.

@@ -296,6 +296,30 @@ impl Mechanism {
         path
     }
 
+    /// Moves the origin of tree joint `joint` to `xyz`, `rpy` (as a file would state them):
+    /// `origin` and `rpy` change together, and an exact rotation the rounding policy set is
+    /// dropped (the policy runs again on the new values when an analysis reads the mechanism).
+    pub fn set_joint_origin(&mut self, joint: usize, xyz: [f64; 3], rpy: [f64; 3]) -> Result<(), ModelError> {
+        let j = &mut self.joints[joint];
+        j.origin = urdf::pose(&format!("joint '{}'", j.name), xyz, rpy)?;
+        j.rpy = rpy;
+        j.exact_rotation = None;
+        Ok(())
+    }
+
+    /// Moves one closure frame of loop `closure` (`successor` false: the predecessor's) to
+    /// `xyz`, `rpy`.
+    pub fn set_loop_origin(&mut self, closure: usize, successor: bool, xyz: [f64; 3], rpy: [f64; 3]) -> Result<(), ModelError> {
+        let l = &mut self.loops[closure];
+        let origin = urdf::pose(&format!("loop '{}'", l.name), xyz, rpy)?;
+        if successor {
+            (l.successor_origin, l.successor_rpy) = (origin, rpy);
+        } else {
+            (l.predecessor_origin, l.predecessor_rpy) = (origin, rpy);
+        }
+        Ok(())
+    }
+
     /// Number of independent cycles (one per loop closure on a spanning tree).
     pub fn cycle_count(&self) -> usize {
         self.loops.len()

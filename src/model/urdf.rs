@@ -299,7 +299,7 @@ fn triple(element: &str, text: Option<&str>, default: [f64; 3]) -> Result<[f64; 
     }
 }
 
-fn pose(element: &str, xyz: [f64; 3], rpy: [f64; 3]) -> Result<Isometry3<f64>, ModelError> {
+pub(super) fn pose(element: &str, xyz: [f64; 3], rpy: [f64; 3]) -> Result<Isometry3<f64>, ModelError> {
     check_finite(element, &xyz)?;
     check_finite(element, &rpy)?;
     // URDF rpy is roll about x, then pitch about y, then yaw about z, all fixed axes.

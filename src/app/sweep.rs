@@ -1,0 +1,104 @@
+//! Design sweeps: one job of this module per task of a `sweep::Plan`, each on its own edited
+//! mechanism, single-threaded, within its own limits; `sweep::run_tasks` runs them side by side.
+//!
+//! A task that cannot run (the edited arm is degenerate, a leg length is out of its limits) is
+//! a failed result, not an error: the sweep goes on.
+
+use super::{singularities, Arm, SingularitiesRequest, SolveJob};
+use crate::manip3r::LoadOptions;
+use crate::model::Mechanism;
+use crate::problems::ModelChoice;
+use crate::search::{BoxStatus, Control, Limit, Limits, SolverSettings, Status};
+use crate::sweep::{self, Parameter, Plan, Sweep, SweepError, Task, TaskResult, TaskStatus};
+use std::collections::HashSet;
+use std::sync::atomic::AtomicBool;
+use std::time::Instant;
+
+/// Checks that `plan` fits `base` before any task runs: every parameter names a joint or loop
+/// of the mechanism, and the analysis takes the kind of parameters given.
+pub fn check_sweep(plan: &Plan, base: &Mechanism, tasks: &[Task]) -> Result<(), SweepError> {
+    if let Sweep::Cuspidality { .. } = plan.analysis {
+        let fix = plan.parameters.iter().map(|(_, p)| p).chain(plan.constants.iter().map(|(p, _)| p)).find(|p| matches!(p, Parameter::Fix { .. }));
+        if let Some(p) = fix {
+            return Err(SweepError::Parameter { param: p.text(), problem: "the cuspidality of an arm takes no fixed joints".into() });
+        }
+    }
+    if let Some(first) = tasks.first() {
+        sweep::apply(base, plan, first)?;
+    }
+    Ok(())
+}
+
+/// Runs one task of `plan` on `base` within `limits`, on the calling thread.
+pub fn sweep_task(plan: &Plan, base: &Mechanism, task: &Task, limits: &Limits, cancel: &AtomicBool) -> TaskResult {
+    let start = Instant::now();
+    let failed = |e: String| TaskResult::failed(task, e, start.elapsed().as_secs_f64());
+    let (mechanism, fixed) = match sweep::apply(base, plan, task) {
+        Ok(m) => m,
+        Err(e) => return failed(e.to_string()),
+    };
+    let control = Control { limits: *limits, threads: 1, cancel };
+    let result = |status: Status, verdict: Option<String>, count: Option<u64>, proven: u64, undecided: u64| {
+        let (status, limit) = match status {
+            Status::Complete => (TaskStatus::Complete, None),
+            Status::Incomplete(l) => (TaskStatus::Incomplete, Some(l.name().to_string())),
+        };
+        TaskResult { index: task.index, values: task.values.clone(), status, limit, verdict, count, proven, undecided, error: None, seconds: start.elapsed().as_secs_f64() }
+    };
+    match plan.analysis {
+        Sweep::Cuspidality { precision } => {
+            let arm = match Arm::load(&mechanism, &LoadOptions::default(), 0.0) {
+                Ok(a) => a,
+                Err(e) => return failed(e.to_string()),
+            };
+            let request = SingularitiesRequest { precision, nodes: false, search_anyway: false };
+            let found = match singularities(&arm, &request, &control, &mut |_| {}) {
+                Ok(f) => f,
+                Err(e) => return failed(e.to_string()),
+            };
+            let cusps = &found.run.cusps;
+            let proven = cusps.cusps.iter().filter(|c| c.unique).count() as u64;
+            let undecided = (cusps.cusps.len() as u64 - proven) + cusps.undecided.len() as u64;
+            let verdict = match found.verdict.cuspidal {
+                Some(true) => "cuspidal",
+                Some(false) => "non_cuspidal",
+                None => "undecided",
+            };
+            // The verdict runs after the searches on what is left of the deadline: an undecided
+            // verdict past the deadline was cut short, whatever the searches' status.
+            let out_of_time = limits.timeout.is_some_and(|t| start.elapsed() >= t);
+            let status = match found.run.status {
+                Status::Complete if found.verdict.cuspidal.is_none() && out_of_time => Status::Incomplete(Limit::Time),
+                s => s,
+            };
+            result(status, Some(verdict.into()), Some(proven), proven, undecided)
+        }
+        Sweep::AssemblyModes { sigma } => {
+            let settings = SolverSettings { sigma, max_boxes: limits.max_cells, timeout: limits.timeout, max_memory: limits.max_memory, threads: 1, ..SolverSettings::default() };
+            let job = match SolveJob::build(&mechanism, ModelChoice::Auto, &fixed, &[], settings) {
+                Ok(j) => j,
+                Err(e) => return failed(e.to_string()),
+            };
+            let found = job.run(cancel, &mut |_| {});
+            let proven = found.boxes.iter().filter(|b| b.status == BoxStatus::Unique).count() as u64;
+            let undecided = found.boxes.iter().filter(|b| !b.status.is_solution()).count() as u64;
+            result(found.status, None, Some(found.assembly_modes().len() as u64), proven, undecided)
+        }
+    }
+}
+
+/// Runs every task of `tasks` not in `already_done` on `threads` threads (one task per thread,
+/// each single-threaded), handing each result to `on_result` as it finishes.
+#[allow(clippy::too_many_arguments)]
+pub fn run_sweep<E>(
+    plan: &Plan,
+    base: &Mechanism,
+    tasks: &[Task],
+    threads: usize,
+    already_done: &HashSet<usize>,
+    limits: &Limits,
+    cancel: &AtomicBool,
+    on_result: impl FnMut(TaskResult) -> Result<(), E>,
+) -> Result<(), E> {
+    sweep::run_tasks(tasks, threads, already_done, |task| sweep_task(plan, base, task, limits, cancel), on_result)
+}
