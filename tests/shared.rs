@@ -127,3 +127,54 @@ fn limits_hold_for_the_whole_run() {
     assert_eq!(r["status"], "incomplete", "{out}");
     assert!(out.matches("five_bar").count() == 1, "rank 0 alone prints: {out}");
 }
+
+/// A sweep on ranks: each rank runs its share of the tasks, and rank 0 writes the same table as
+/// one process; a sweep stopped on ranks resumes from every rank's results file.
+#[test]
+fn a_sweep_on_ranks_gives_the_table_of_one_process_and_resumes_from_rank_files() {
+    let spec = "examples/sweeps/three_rpr_assembly_modes.json";
+    let dir = |name: &str| std::env::temp_dir().join(format!("linkspace-sweep-{}-{name}", std::process::id()));
+    let sweep = |ranks: usize, out: &Path, extra: &[&str]| {
+        let bin = mpi_binary();
+        let mut cmd = if ranks == 0 {
+            Command::new(bin)
+        } else {
+            let mut c = Command::new("mpirun");
+            c.env("OMPI_ALLOW_RUN_AS_ROOT", "1").env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
+            c.args(["--oversubscribe", "-np", &ranks.to_string()]).arg(bin);
+            c
+        };
+        let o = cmd.current_dir(repo()).args(["sweep", spec, "--out"]).arg(out).args(extra).output().expect("runs");
+        assert!(o.status.success(), "{ranks} ranks: {}", String::from_utf8_lossy(&o.stderr));
+    };
+    // The table without its time column (the last but one; `error` is last).
+    let table = |out: &Path| -> Vec<String> {
+        let text = std::fs::read_to_string(out.join("results.csv")).expect("results.csv");
+        text.lines().map(|l| l.split(',').collect::<Vec<_>>()).map(|f| [&f[..f.len() - 2], &f[f.len() - 1..]].concat().join(",")).collect()
+    };
+    let (alone, shared, resumed) = (dir("alone"), dir("ranks"), dir("resumed"));
+    for d in [&alone, &shared, &resumed] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+    sweep(0, &alone, &[]);
+    sweep(2, &shared, &[]);
+    assert_eq!(table(&shared), table(&alone));
+    assert!(table(&alone).len() > 200);
+    let left: Vec<_> = std::fs::read_dir(&shared).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).filter(|n| n.contains("rank")).collect();
+    assert!(left.is_empty(), "rank files left: {left:?}");
+    // A run on 2 ranks stopped midway: rank 0 had written the even tasks up to 100, rank 1 the
+    // odd ones up to 50 (in its own file).
+    std::fs::create_dir_all(&resumed).unwrap();
+    let lines: Vec<String> = std::fs::read_to_string(alone.join("results.jsonl")).unwrap().lines().map(String::from).collect();
+    let index = |l: &str| serde_json::from_str::<Value>(l).ok().and_then(|v| v["index"].as_u64());
+    let header = &lines[0];
+    let pick = |keep: &dyn Fn(u64) -> bool| -> String { std::iter::once(header.clone()).chain(lines[1..].iter().filter(|l| index(l).is_some_and(keep)).cloned()).collect::<Vec<_>>().join("\n") + "\n" };
+    std::fs::write(resumed.join("results.jsonl"), pick(&|i| i % 2 == 0 && i <= 100)).unwrap();
+    std::fs::write(resumed.join("results.rank-1.jsonl"), pick(&|i| i % 2 == 1 && i <= 50)).unwrap();
+    sweep(2, &resumed, &["--resume"]);
+    assert_eq!(table(&resumed), table(&alone));
+    assert!(!resumed.join("results.rank-1.jsonl").exists());
+    for d in [&alone, &shared, &resumed] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}

@@ -47,6 +47,11 @@ pub fn writes() -> bool {
     linkspace::search::rank_and_size().0 == 0
 }
 
+/// Every rank's bytes, in rank order (a collective, on the thread that joined).
+pub fn all_gather(mine: &[u8]) -> Vec<Vec<u8>> {
+    World.all_gather(mine)
+}
+
 /// Points stdout and stderr at /dev/null: rank 0 speaks for the run.
 fn silence() {
     use std::os::fd::AsRawFd;

@@ -1,5 +1,11 @@
 //! `linkspace sweep SPEC`: reads the spec and the URDF, runs `app::run_sweep`, appends each
 //! result to `results.jsonl` as it finishes, then writes the table, the summary and the map.
+//!
+//! Under `mpirun` (feature `mpi`) the ranks share the tasks: rank R runs the pending tasks whose
+//! index is R modulo the number of ranks, each on its own `--threads`. Rank 0 appends its
+//! results to `results.jsonl` as they finish, the others to `results.rank-R.jsonl` (with the
+//! same header), so an interrupted sweep loses nothing; at the end rank 0 gathers every rank's
+//! results into `results.jsonl` and removes the rank files. `--resume` reads them all.
 
 use anyhow::{bail, Context, Result};
 use linkspace::app;
@@ -66,34 +72,47 @@ pub(crate) fn run(args: SweepArgs) -> Result<()> {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
         Err(e) => return Err(e).with_context(|| format!("reading {}", jsonl.display())),
     };
-    let earlier = match (&existing, args.resume) {
-        (Some(_), false) => bail!("{} exists: --resume continues that sweep, or choose another --out", jsonl.display()),
-        (Some(t), true) => sweep::read_done(t, &header, &tasks)?,
-        (None, _) => Vec::new(),
+    let (rank, ranks) = linkspace::search::rank_and_size();
+    // Rank 0 reads and rewrites the results; the others learn what is done (or that rank 0
+    // refused) from it, so no rank waits for one that stopped.
+    let prepared = if rank == 0 { prepare(&out, &jsonl, &existing, args.resume, &header, &tasks) } else { Ok(Vec::new()) };
+    let (earlier, done_before): (Vec<TaskResult>, HashSet<usize>) = if ranks > 1 {
+        let mine: Vec<u8> = match &prepared {
+            Ok(earlier) => std::iter::once(1u8).chain(earlier.iter().flat_map(|r| (r.index as u64).to_le_bytes())).collect(),
+            Err(_) => vec![0u8],
+        };
+        let from_rank_0 = gather(mine).swap_remove(0);
+        let Some((1, indices)) = from_rank_0.split_first() else {
+            return Err(prepared.err().unwrap_or_else(|| anyhow::anyhow!("rank 0 stopped before the sweep started")));
+        };
+        let done: HashSet<usize> = indices.chunks_exact(8).map(|b| u64::from_le_bytes(b.try_into().expect("eight bytes")) as usize).collect();
+        (prepared?, done)
+    } else {
+        let earlier = prepared?;
+        let done = earlier.iter().map(|r| r.index).collect();
+        (earlier, done)
     };
-    // Rewritten from what was read: a line cut short by an interruption is dropped, so the
-    // file stays one header and whole lines.
-    let mut lines = header.line() + "\n";
-    for r in &earlier {
-        lines.push_str(&serde_json::to_string(r)?);
-        lines.push('\n');
+    let mut done = done_before.clone();
+    let my_file = if rank == 0 { jsonl.clone() } else { out.join(format!("results.rank-{rank}.jsonl")) };
+    if rank != 0 {
+        std::fs::write(&my_file, header.line() + "\n").with_context(|| format!("writing {}", my_file.display()))?;
     }
-    std::fs::write(&jsonl, lines).with_context(|| format!("writing {}", jsonl.display()))?;
-    let mut file = std::fs::OpenOptions::new().append(true).open(&jsonl).with_context(|| format!("opening {}", jsonl.display()))?;
-
-    let done: HashSet<usize> = earlier.iter().map(|r| r.index).collect();
+    let mut file = std::fs::OpenOptions::new().append(true).open(&my_file).with_context(|| format!("opening {}", my_file.display()))?;
+    // Another rank's tasks are, for this one, as good as done.
+    let already_done = done.len();
+    done.extend(tasks.iter().map(|t| t.index).filter(|i| i % ranks != rank));
     let labels = header.parameters.clone();
     let threads = usize::from(args.threads.max(1));
     let total = tasks.len();
     let mut results = earlier;
     let mut run_now = 0usize;
     let start = Instant::now();
-    if !done.is_empty() {
-        eprintln!("resuming: {} of {total} tasks already done", done.len());
+    if already_done > 0 {
+        eprintln!("resuming: {already_done} of {total} tasks already done");
     }
     let cancel = AtomicBool::new(false);
     app::run_sweep(&plan, &mechanism, &tasks, threads, &done, &limits, &cancel, |r: TaskResult| -> Result<()> {
-        writeln!(file, "{}", serde_json::to_string(&r)?).and_then(|_| file.flush()).with_context(|| format!("writing {}", jsonl.display()))?;
+        writeln!(file, "{}", serde_json::to_string(&r)?).and_then(|_| file.flush()).with_context(|| format!("writing {}", my_file.display()))?;
         run_now += 1;
         let params: Vec<String> = labels.iter().zip(&r.values).map(|(l, v)| format!("{l}={v}")).collect();
         let what = match (&r.verdict, r.count, &r.error) {
@@ -107,6 +126,24 @@ pub(crate) fn run(args: SweepArgs) -> Result<()> {
         results.push(r);
         Ok(())
     })?;
+    if ranks > 1 {
+        // Every rank's results of this run to rank 0, which writes them all.
+        let mine: Vec<u8> = results.iter().filter(|r| r.index % ranks == rank && !done_before.contains(&r.index)).map(|r| serde_json::to_string(r).map(|l| l + "\n")).collect::<Result<String, _>>()?.into_bytes();
+        let all = gather(mine);
+        if rank != 0 {
+            std::fs::remove_file(&my_file).with_context(|| format!("removing {}", my_file.display()))?;
+            return Ok(());
+        }
+        for (other, bytes) in all.iter().enumerate().skip(1) {
+            for line in String::from_utf8_lossy(bytes).lines() {
+                let r: TaskResult = serde_json::from_str(line).with_context(|| format!("a result from rank {other}"))?;
+                writeln!(file, "{line}").with_context(|| format!("writing {}", jsonl.display()))?;
+                run_now += 1;
+                results.push(r);
+            }
+        }
+        file.flush().with_context(|| format!("writing {}", jsonl.display()))?;
+    }
     let wall = start.elapsed().as_secs_f64();
     results.sort_by_key(|r| r.index);
 
@@ -136,6 +173,64 @@ pub(crate) fn run(args: SweepArgs) -> Result<()> {
     )
     .ok();
     Ok(())
+}
+
+/// Rank 0's start: the results already written (with `--resume`), `results.jsonl` rewritten
+/// from them with whole lines only, and the rank files of a stopped run on ranks merged in.
+fn prepare(out: &Path, jsonl: &Path, existing: &Option<String>, resume: bool, header: &Header, tasks: &[sweep::Task]) -> Result<Vec<TaskResult>> {
+    let mut earlier = match (existing, resume) {
+        (Some(_), false) => bail!("{} exists: --resume continues that sweep, or choose another --out", jsonl.display()),
+        (Some(t), true) => sweep::read_done(t, header, tasks)?,
+        (None, _) => Vec::new(),
+    };
+    // What other ranks had finished when an earlier run on ranks stopped.
+    for path in rank_files(out)? {
+        if !resume {
+            bail!("{} exists: --resume continues that sweep, or choose another --out", path.display());
+        }
+        let text = std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+        for r in sweep::read_done(&text, header, tasks).with_context(|| format!("reading {}", path.display()))? {
+            if !earlier.iter().any(|e: &TaskResult| e.index == r.index) {
+                earlier.push(r);
+            }
+        }
+    }
+    earlier.sort_by_key(|r| r.index);
+    // Rewritten from what was read: a line cut short by an interruption is dropped, so the
+    // file stays one header and whole lines.
+    let mut lines = header.line() + "\n";
+    for r in &earlier {
+        lines.push_str(&serde_json::to_string(r)?);
+        lines.push('\n');
+    }
+    std::fs::write(jsonl, lines).with_context(|| format!("writing {}", jsonl.display()))?;
+    for path in rank_files(out)? {
+        std::fs::remove_file(&path).with_context(|| format!("removing {}", path.display()))?;
+    }
+    Ok(earlier)
+}
+
+/// The results files of ranks other than 0 in `out` (left by a run on ranks that stopped).
+fn rank_files(out: &Path) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(out).with_context(|| format!("listing {}", out.display()))? {
+        let path = entry.with_context(|| format!("listing {}", out.display()))?.path();
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        if name.starts_with("results.rank-") && name.ends_with(".jsonl") {
+            files.push(path);
+        }
+    }
+    files.sort();
+    Ok(files)
+}
+
+/// Every rank's bytes, in rank order (this process's alone without MPI).
+fn gather(mine: Vec<u8>) -> Vec<Vec<u8>> {
+    #[cfg(feature = "mpi")]
+    if linkspace::search::rank_and_size().1 > 1 {
+        return super::ranks::all_gather(&mine);
+    }
+    vec![mine]
 }
 
 /// Each task's limits: the command line over the spec over the defaults.

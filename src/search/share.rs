@@ -32,24 +32,35 @@ pub trait Peers: Send + Sync {
     fn all_gather(&self, mine: &[u8]) -> Vec<Vec<u8>>;
 }
 
-static PEERS: OnceLock<(Box<dyn Peers>, ThreadId)> = OnceLock::new();
+/// The installed peers, the thread that installed them, and their rank and size (read once:
+/// only that thread may talk to them).
+struct Installed {
+    peers: Box<dyn Peers>,
+    thread: ThreadId,
+    rank: usize,
+    size: usize,
+}
+
+static PEERS: OnceLock<Installed> = OnceLock::new();
 
 /// Shares the searches this thread runs from now on with `peers` (once per process; a second
 /// call is refused and returns false).
 pub fn share_searches(peers: Box<dyn Peers>) -> bool {
-    PEERS.set((peers, std::thread::current().id())).is_ok()
+    let (rank, size) = (peers.rank(), peers.size());
+    PEERS.set(Installed { peers, thread: std::thread::current().id(), rank, size }).is_ok()
 }
 
 /// The peers a search started now shares its work with: `None` in a process alone, and on a
 /// thread other than the one that installed them.
 pub(crate) fn peers() -> Option<&'static dyn Peers> {
-    let (peers, thread) = PEERS.get()?;
-    (peers.size() > 1 && *thread == std::thread::current().id()).then_some(peers.as_ref())
+    let installed = PEERS.get()?;
+    (installed.size > 1 && installed.thread == std::thread::current().id()).then_some(installed.peers.as_ref())
 }
 
-/// This process's rank and the number of processes (0 and 1 in a process alone).
+/// This process's rank and the number of processes (0 and 1 in a process alone), from any
+/// thread.
 pub fn rank_and_size() -> (usize, usize) {
-    PEERS.get().map_or((0, 1), |(p, _)| (p.rank(), p.size()))
+    PEERS.get().map_or((0, 1), |i| (i.rank, i.size))
 }
 
 /// A value as bytes, for another process running the same program.
