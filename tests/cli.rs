@@ -465,6 +465,21 @@ fn the_image_analysis_honours_its_deadline_and_its_memory_limit() {
     assert_clear_error(&["loop-singularities", &five_bar, "--actuated", "crank1_joint,crank2_joint", "--kind", "image", "--grid", "20000"], "raster of regions needs about");
 }
 
+/// A ball joint takes no single `--fix` value, and says so; an uncertainty as large as a
+/// length of the arm (10 m, 1e308 m on robot e) is refused naming that length, instead of
+/// analysing a geometry whose lengths may vanish (which read as one internal-motion line over
+/// the whole range, certified).
+#[test]
+fn a_ball_joint_and_an_uncertainty_wider_than_a_length_are_named() {
+    assert_clear_error(&["solve", &fixture("delta.urdf"), "--fix", "elbow1=0.3"], "joint 'elbow1' is a ball joint");
+    let e = fixture("orthogonal_3r_e.urdf");
+    for h in ["10", "1e308"] {
+        assert_clear_error(&["singularities", &e, "--uncertainty", h], "every length would have to stay away from 0");
+    }
+    let (ok, _, err) = run(&["singularities", &e, "--uncertainty", "1e-3"]);
+    assert!(ok, "a small uncertainty is analysed: {err}");
+}
+
 /// A box whose one shrink takes minutes (an LP per side of each of hundreds of variables)
 /// still ends at the deadline: 200 independent four-bars on one ground (600 angles), and one
 /// loop closing a chain of 1,000 joints, for `solve` and `loop-singularities` (whose charts, one

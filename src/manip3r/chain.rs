@@ -313,6 +313,12 @@ impl Chain3R {
                 }
             }
         }
+        if let Some(&(j, i)) = lengths.iter().min_by(|a, b| m.joints[a.0].origin.translation.vector[a.1].abs().total_cmp(&m.joints[b.0].origin.translation.vector[b.1].abs())) {
+            let length = m.joints[j].origin.translation.vector[i].abs();
+            if h >= length {
+                return Err(Manip3rError::UncertaintyTooLarge { h, joint: m.joints[j].name.clone(), length, axis: ["x", "y", "z"][i] });
+            }
+        }
         let nominal = Coefficients::new(m, &path, &axes, &|j| Pose::from_origin(&m.joints[j], 0.0).t);
         let sensitivity = lengths
             .iter()

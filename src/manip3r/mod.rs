@@ -78,6 +78,19 @@ pub enum Manip3rError {
     /// The requested uncertainty is negative or not finite.
     #[error("uncertainty must be a finite number >= 0, got {0}")]
     BadUncertainty(f64),
+    /// An uncertainty as large as a length of the chain: that length could vanish or change
+    /// sign, and the arm would be no particular geometry at all.
+    #[error("--uncertainty {h}: every length would have to stay away from 0, but joint '{joint}' has a length of {length} m along {axis}; give an uncertainty below {length}")]
+    UncertaintyTooLarge {
+        /// The half-width asked for.
+        h: f64,
+        /// The joint whose origin holds the shortest length.
+        joint: String,
+        /// That length's magnitude (metres).
+        length: f64,
+        /// Its component: x, y or z of the joint origin.
+        axis: &'static str,
+    },
     /// A workspace point for inverse kinematics is not finite or has a negative radius.
     #[error("workspace point ({0}, {1}) is not valid: radius must be >= 0 and both finite")]
     BadPoint(f64, f64),

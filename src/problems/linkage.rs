@@ -39,6 +39,9 @@ pub enum LinkageError {
     /// `--fix` on a joint that does not move.
     #[error("--fix: joint '{0}' is fixed and takes no value")]
     NotMovable(String),
+    /// `--fix` on a joint of more than one degree of freedom.
+    #[error("--fix: joint '{0}' is a {1} joint: --fix sets one value, of a revolute, continuous or prismatic joint")]
+    NotOneValue(String, &'static str),
     /// A fixed value outside the joint's limits, or not finite.
     #[error("--fix {joint}={value}: outside its limits [{lower}, {upper}]")]
     OutsideLimits {
@@ -442,7 +445,9 @@ impl LinkageProblem {
                 return Err(LinkageError::UnknownJoint(name.clone()));
             };
             let limits = match kind {
-                JointKind::Fixed | JointKind::Spherical | JointKind::Floating => return Err(LinkageError::NotMovable(name.clone())),
+                JointKind::Fixed => return Err(LinkageError::NotMovable(name.clone())),
+                JointKind::Spherical => return Err(LinkageError::NotOneValue(name.clone(), "ball")),
+                JointKind::Floating => return Err(LinkageError::NotOneValue(name.clone(), "floating")),
                 JointKind::Revolute { limits } => {
                     if reduce(stated(*value)).is_none() {
                         return Err(LinkageError::TooManyTurns { joint: name.clone(), value: *value });

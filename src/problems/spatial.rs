@@ -702,7 +702,9 @@ impl SpatialProblem {
                 return Err(LinkageError::UnknownJoint(name.clone()));
             };
             let limits = match (kind, compound) {
-                (JointKind::Fixed | JointKind::Spherical | JointKind::Floating, _) | (_, Some(_)) => return Err(LinkageError::NotMovable(name.clone())),
+                (JointKind::Spherical, _) => return Err(LinkageError::NotOneValue(name.clone(), "ball")),
+                (JointKind::Floating, _) => return Err(LinkageError::NotOneValue(name.clone(), "floating")),
+                (JointKind::Fixed, _) | (_, Some(_)) => return Err(LinkageError::NotMovable(name.clone())),
                 (JointKind::Revolute { limits }, None) => {
                     if reduce(stated(*value)).is_none() {
                         return Err(LinkageError::TooManyTurns { joint: name.clone(), value: *value });
