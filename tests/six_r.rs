@@ -127,3 +127,17 @@ fn timing_figures() {
         println!("{name}: median {:.1} ms, max {:.1} ms, counts {hist:?}", 1e3 * median(times.clone()), 1e3 * times.iter().cloned().fold(0.0, f64::max));
     }
 }
+
+#[test]
+#[ignore = "long: counters"]
+fn counters() {
+    let chain = chain_of(&random_dh(1));
+    let mut rng = Lcg(1);
+    for _ in 0..2 {
+        let q = random_q(&chain, &mut rng);
+        let target = PoseTarget::around(&chain.pose(&q), 1e-12).expect("finite");
+        let t = Instant::now();
+        let sol = ik::solve(&chain, &target, 1e-10, &control()).expect("solves");
+        println!("{:?} {} unique, {:?}", t.elapsed(), sol.unique.len(), sol.stats);
+    }
+}

@@ -15,6 +15,7 @@ pub(crate) mod distances;
 pub(crate) mod linkage;
 pub(crate) mod loops;
 mod platform;
+pub(crate) mod six;
 
 // One job per question, each with its request and its typed result.
 pub use arm::{collisions, inverse_kinematics, singularities, Arm, ArmCollisions, ArmIk, ArmSingularities, IkPoint, Manip3rAnalysis, SingularitiesRequest, CURVE_DEPTH};
@@ -22,6 +23,7 @@ pub use distances::{DistancesJob, DistancesRequest};
 pub use linkage::{LinkageAnalysis, SolveJob};
 pub use loops::{all_kinds, analyse_image, image_points, Actuation, ImageAnalysisError, ImageSearch, SingularSets};
 pub use platform::PlatformAnalysis;
+pub use six::{arm_cuspidality, chain6, inverse_kinematics6, ArmCuspidality, ArmIk6};
 
 use crate::model::Mechanism;
 use crate::problems::{LinkageError, PlatformError};

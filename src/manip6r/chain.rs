@@ -345,21 +345,31 @@ impl Chain6R {
         }
     }
 
-    /// The two sides of `Pre₁R₁Pre₂R₂Pre₃R₃Pre₄ = G·R₆(−θ₆)Pre₆⁻¹·R₅(−θ₅)Pre₅⁻¹·R₄(−θ₄)` with
-    /// `G = target·Post⁻¹`; the right side's blocks are joints 6, 5, 4 in that order.
-    pub(crate) fn halves(&self, target: &IAffine) -> (Side<3>, Side<3>) {
+    /// The two sides of the equation split after joint `f` (0, 1 or 2), joints `f+1..f+3` on
+    /// the left: `Pre_{f+1}R_{f+1}···R_{f+3}Pre_{f+4}` equals the rest moved to the other side
+    /// (rotations by −θ, inverses of the constant maps, `G = target·Post⁻¹`). For `f = 0`:
+    /// `Pre₁R₁Pre₂R₂Pre₃R₃Pre₄ = G·R₆(−θ₆)Pre₆⁻¹·R₅(−θ₅)Pre₅⁻¹·R₄(−θ₄)`. Returns the sides and
+    /// the joint of each block (left, then right in block order).
+    pub(crate) fn split(&self, target: &IAffine, f: usize) -> (Side<3>, Side<3>, [usize; 3], [usize; 3]) {
+        let lv = [f, f + 1, f + 2];
+        let rv = [(f + 5) % 6, (f + 4) % 6, (f + 3) % 6];
         let left = Side {
-            k0: self.pre[0].fast(),
-            blocks: [0, 1, 2].map(|k| Block::new(&self.axes[k], 1.0, &self.pre[k + 1])),
-            axes: [0, 1, 2].map(|k| self.axes[k].map(Iv::from)),
+            k0: self.pre[f].fast(),
+            blocks: lv.map(|k| Block::new(&self.axes[k], 1.0, &self.pre[k + 1])),
+            axes: lv.map(|k| self.axes[k].map(Iv::from)),
         };
         let g = target.then(&self.post.inverse());
-        let right = Side {
-            k0: g.fast(),
-            blocks: [5, 4, 3].map(|k| Block::new(&self.axes[k], -1.0, &if k > 3 { self.pre[k].inverse() } else { IAffine::identity() })),
-            axes: [5, 4, 3].map(|k| self.axes[k].map(Iv::from)),
+        let next = |b: usize, j: usize| match (b, j) {
+            (2, _) => IAffine::identity(),
+            (_, 0) => self.pre[0].inverse().then(&g),
+            _ => self.pre[j].inverse(),
         };
-        (left, right)
+        let right = Side {
+            k0: if f == 0 { g.fast() } else { IAffine::identity().fast() },
+            blocks: [0, 1, 2].map(|b| Block::new(&self.axes[rv[b]], -1.0, &next(b, rv[b]))),
+            axes: rv.map(|k| self.axes[k].map(Iv::from)),
+        };
+        (left, right, lv, rv)
     }
 
     /// The tip pose at `q` in `f64` (from the midpoints of the coefficients).
