@@ -3,7 +3,7 @@
 //! every returned box mapping back to the pose, and UR5 counts against an independent closed
 //! form. The cuspidality witness of the CRX fixture re-checked in `f64`.
 
-use linkspace::manip6r::{ik, Chain6R, CuspidalVerdict, Pose64, PoseTarget};
+use linkspace::manip6r::{ik, Chain6R, CuspidalVerdict, PoseTarget};
 use linkspace::model::{rounding, urdf};
 use linkspace::search::{Control, Limits, Status};
 use std::path::Path;
@@ -131,13 +131,55 @@ fn timing_figures() {
 #[test]
 #[ignore = "long: counters"]
 fn counters() {
-    let chain = chain_of(&random_dh(1));
-    let mut rng = Lcg(1);
-    for _ in 0..2 {
+    let file = std::env::var("SIX_R_ARM").unwrap_or_default();
+    let chain = if file.is_empty() { chain_of(&random_dh(1)) } else { chain_of(&repo(&file)) };
+    let mut rng = Lcg(7);
+    for _ in 0..3 {
         let q = random_q(&chain, &mut rng);
         let target = PoseTarget::around(&chain.pose(&q), 1e-12).expect("finite");
         let t = Instant::now();
         let sol = ik::solve(&chain, &target, 1e-10, &control()).expect("solves");
-        println!("{:?} {} unique, {:?}", t.elapsed(), sol.unique.len(), sol.stats);
+        println!("{:?} {} unique, {} clusters {:?} {:?}", t.elapsed(), sol.unique.len(), sol.clusters.len(), sol.status, sol.stats);
     }
+}
+
+fn never() -> &'static std::sync::atomic::AtomicBool {
+    static NEVER: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+    &NEVER
+}
+
+/// The CRX fixture is cuspidal: the witness re-checked in `f64` (both ends map to the pose,
+/// det J keeps its sign along the path sampled densely).
+#[test]
+fn crx_is_cuspidal_with_a_witness_checked_in_f64() {
+    let chain = chain_of(&repo("tests/data/fanuc_crx10ial_style.urdf"));
+    let control = Control { limits: Limits { max_cells: 3_000_000, ..Limits::default() }, threads: 1, cancel: never() };
+    let t = Instant::now();
+    let verdict = linkspace::manip6r::cuspidal::search(&chain, Duration::from_secs(600), 1, &control);
+    let CuspidalVerdict::Cuspidal(w) = verdict else { panic!("no witness: {verdict:?}") };
+    println!("CRX witness in {:.1} s: {} pieces, min |det J| {:.3e}", t.elapsed().as_secs_f64(), w.pieces, w.min_abs_det);
+    let ends: [[f64; 6]; 2] = [w.path[0], *w.path.last().expect("a path")];
+    for q in ends {
+        assert!(chain.pose(&q).distance(&w.pose) < 1e-7);
+    }
+    assert!((0..6).any(|k| {
+        let d = (ends[0][k] - ends[1][k]).rem_euclid(std::f64::consts::TAU);
+        d > 1e-3 && d < std::f64::consts::TAU - 1e-3
+    }), "two distinct configurations");
+    for seg in w.path.windows(2) {
+        for i in 0..=2000 {
+            let t = i as f64 / 2000.0;
+            let q: [f64; 6] = [0, 1, 2, 3, 4, 5].map(|k| seg[0][k] + t * (seg[1][k] - seg[0][k]));
+            assert!(chain.det_jacobian(&q) * w.det_sign > 0.0, "det J changes sign at {q:?}");
+        }
+    }
+}
+
+/// UR5 (three consecutive parallel axes) is never reported cuspidal.
+#[test]
+fn ur5_is_never_cuspidal() {
+    let chain = chain_of(&repo("urdf/ur5.urdf"));
+    let control = Control { limits: Limits { max_cells: 3_000_000, ..Limits::default() }, threads: 1, cancel: never() };
+    let verdict = linkspace::manip6r::cuspidal::search(&chain, Duration::from_secs(20), 1, &control);
+    assert!(matches!(verdict, CuspidalVerdict::Undecided { .. }), "{verdict:?}");
 }

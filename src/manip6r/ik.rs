@@ -101,6 +101,14 @@ pub struct Ik6Cell {
 /// the attempt costs about two evaluations.
 const KRAWCZYK_WIDTH: f64 = 0.25;
 
+const PRECONDITION: bool = false;
+
+/// Rows of the invariants of axis 4 relative to axis 1 (`invariants`).
+const INVARIANTS: usize = 5;
+
+/// Joints 1 and 4 are split only once joints 2, 3, 5, 6 are this narrow (radians).
+const FIRST_WIDTH: f64 = 0.3;
+
 /// One split of the equation (`Chain6R::split`): sides and the joint of each block.
 type Split = (Side<3>, Side<3>, [usize; 3], [usize; 3]);
 
@@ -158,6 +166,68 @@ fn mid(b: &[[f64; 2]; 6]) -> [f64; 6] {
 
 fn width(b: &[[f64; 2]; 6]) -> f64 {
     b.iter().map(|x| x[1] - x[0]).fold(0.0, f64::max)
+}
+
+fn dot(a: &V, b: &V) -> Iv {
+    add(add(mul(a[0], b[0]), mul(a[1], b[1])), mul(a[2], b[2]))
+}
+
+/// `(a·u, u·u, a·d, u·d, (a×u)·d)` of the point `u` (from a point of axis 1) and direction `d`
+/// of axis 4, `a` the direction of axis 1: unchanged by turns about axis 1, and with their
+/// derivatives `(du, dd)` when given.
+fn line_invariants(a: &V, u: &V, d: &V) -> [Iv; INVARIANTS] {
+    [dot(a, u), dot(u, u), dot(a, d), dot(u, d), dot(&cross(a, u), d)]
+}
+
+fn line_invariants_derivative(a: &V, u: &V, d: &V, du: &V, dd: &V) -> [Iv; INVARIANTS] {
+    [dot(a, du), dot(u, du).scale(2.0), dot(a, dd), add(dot(du, d), dot(u, dd)), add(dot(&cross(a, du), d), dot(&cross(a, u), dd))]
+}
+
+/// Five equations in joints 2, 3, 5, 6 alone: axis 4 (its frame's origin and direction) seen
+/// from axis 1 is the same from both sides. The left side puts it where joints 1–3 do
+/// (turning joint 1 moves it about axis 1, which leaves the invariants alone: joint 1 is taken
+/// at 0), the right side where the pose and joints 6, 5 do (joint 4 turns about axis 4 itself).
+/// Residuals at `m` and Jacobian over `b` as `equations`.
+fn invariants(split: &Split, b: &[[f64; 2]; 6], m: &[f64; 6], jac: &mut [[Iv; 6]; INVARIANTS]) -> Option<[Iv; INVARIANTS]> {
+    let (left, right, _, _) = split;
+    let one = Iv { lo: 1.0, hi: 1.0 };
+    let a4 = &right.axes[2];
+    let (c1, a1) = (left.k0.t, mv(&left.k0.r, &left.axes[0]));
+    let sides = |b: &[[f64; 2]; 6]| {
+        let cs = |k: usize| cos_sin(b[k][0], b[k][1]);
+        let fl = left.frames(&[(one, Iv::ZERO), cs(1), cs(2)]);
+        let fr = right.frames(&[cs(5), cs(4), cs(3)]);
+        let (ul, dl) = (sub3(&fl[3].t, &c1), mv(&fl[3].r, a4));
+        let (ur, dr) = (sub3(&fr[2].t, &c1), mv(&fr[2].r, a4));
+        (fl, fr, ul, dl, ur, dr)
+    };
+    let (fl, fr, ul, dl, ur, dr) = sides(b);
+    let (il, ir) = (line_invariants(&a1, &ul, &dl), line_invariants(&a1, &ur, &dr));
+    if (0..INVARIANTS).any(|i| excludes_zero(il[i].sub(ir[i]))) {
+        return None;
+    }
+    let (_, _, mul_, mdl, mur, mdr) = sides(&m.map(|x| [x, x]));
+    let (ml, mr) = (line_invariants(&a1, &mul_, &mdl), line_invariants(&a1, &mur, &mdr));
+    for row in jac.iter_mut() {
+        *row = [Iv::ZERO; 6];
+    }
+    for (blk, v) in [(1, 1), (2, 2)] {
+        let (w, p) = left.axis(&fl, blk);
+        let col = line_invariants_derivative(&a1, &ul, &dl, &cross(&w, &sub3(&fl[3].t, &p)), &cross(&w, &dl));
+        for i in 0..INVARIANTS {
+            jac[i][v] = col[i];
+        }
+    }
+    // The right side turns by −θ: its derivative is minus the twist's, and it enters with a
+    // minus, so the column is the twist's.
+    for (blk, v) in [(0, 5), (1, 4)] {
+        let (w, p) = right.axis(&fr, blk);
+        let col = line_invariants_derivative(&a1, &ur, &dr, &cross(&w, &sub3(&fr[2].t, &p)), &cross(&w, &dr));
+        for i in 0..INVARIANTS {
+            jac[i][v] = col[i];
+        }
+    }
+    Some([0, 1, 2, 3, 4].map(|i| ml[i].sub(mr[i])))
 }
 
 /// A split's two sides' frames over the box `b`.
@@ -281,9 +351,16 @@ impl Prune for Ik6Prune<'_> {
     fn process(&mut self, cell: Ik6Cell) -> Step<Ik6Cell, [Interval; 6], Ik6Discard> {
         let b = cell.b;
         let m = mid(&b);
-        let mut hm = [Iv::ZERO; 3 * ROWS];
-        let mut jac = [[Iv::ZERO; 6]; 3 * ROWS];
-        let rows = self.splits.len() * ROWS;
+        let mut hm = [Iv::ZERO; 3 * ROWS + INVARIANTS];
+        let mut jac = [[Iv::ZERO; 6]; 3 * ROWS + INVARIANTS];
+        let mut rows = self.splits.len() * ROWS;
+        {
+            let inv: &mut [[Iv; 6]; INVARIANTS] = (&mut jac[rows..rows + INVARIANTS]).try_into().expect("invariant: INVARIANTS rows");
+            let Some(h) = invariants(&self.splits[0], &b, &m, inv) else {
+                return Step::Discard(Ik6Discard::NoSolution);
+            };
+            hm[rows..rows + INVARIANTS].copy_from_slice(&h);
+        }
         for (i, split) in self.splits.iter().enumerate() {
             let at = i * ROWS;
             let rows: &mut [[Iv; 6]; ROWS] = (&mut jac[at..at + ROWS]).try_into().expect("invariant: ROWS rows");
@@ -292,6 +369,7 @@ impl Prune for Ik6Prune<'_> {
             };
             hm[at..at + ROWS].copy_from_slice(&h);
         }
+        rows += INVARIANTS;
         let mut dx: [Iv; 6] = [0, 1, 2, 3, 4, 5].map(|v| Iv { lo: b[v][0], hi: b[v][1] }.sub(Iv { lo: m[v], hi: m[v] }));
         for row in 0..rows {
             let acc = (0..6).fold(hm[row], |acc, v| add(acc, mul(jac[row][v], dx[v])));
@@ -302,6 +380,34 @@ impl Prune for Ik6Prune<'_> {
         // One Gauss–Seidel sweep of the mean-value form (valid for any x in b: the segment
         // from m to x stays in b, over which `jac` encloses the derivative).
         let mut nb = b;
+        // Preconditioned first: with Y a least-squares inverse of mid J, `Y·H(x) = 0` at every
+        // solution and `Y·J(B)` is close to the identity, so each combined row pins one angle
+        // (Hansen–Sengupta on the overdetermined system; any real Y is sound).
+        if PRECONDITION {
+            let jm = nalgebra::DMatrix::from_fn(rows, 6, |i, j| 0.5 * (jac[i][j].lo + jac[i][j].hi));
+            if let Ok(y) = jm.clone().pseudo_inverse(1e-12) {
+                if y.iter().all(|x| x.is_finite()) {
+                    for v in 0..6 {
+                        let g = (0..rows).fold(Iv::ZERO, |acc, r| add(acc, hm[r].scale(y[(v, r)])));
+                        let a: [Iv; 6] = [0, 1, 2, 3, 4, 5].map(|u| (0..rows).fold(Iv::ZERO, |acc, r| add(acc, jac[r][u].scale(y[(v, r)]))));
+                        if !excludes_zero(a[v]) {
+                            continue;
+                        }
+                        let rest = (0..6).filter(|&u| u != v).fold(g, |acc, u| add(acc, mul(a[u], dx[u])));
+                        if !(rest.lo.is_finite() && rest.hi.is_finite()) {
+                            continue;
+                        }
+                        let x = point(m[v]) - rest.to() / a[v].to();
+                        let cut = x.intersection(interval(nb[v][0], nb[v][1]));
+                        if cut.is_empty() {
+                            return Step::Discard(Ik6Discard::NoSolution);
+                        }
+                        nb[v] = [cut.inf(), cut.sup()];
+                        dx[v] = Iv { lo: nb[v][0], hi: nb[v][1] }.sub(Iv { lo: m[v], hi: m[v] });
+                    }
+                }
+            }
+        }
         for row in 0..rows {
             for v in 0..6 {
                 let a = jac[row][v];
@@ -348,8 +454,12 @@ impl Prune for Ik6Prune<'_> {
         }
         // Bisect where the box's width moves the equations most (the largest smear).
         let smear = |v: usize| (0..rows).map(|row| jac[row][v].lo.abs().max(jac[row][v].hi.abs())).sum::<f64>() * (nb[v][1] - nb[v][0]);
-        let widest = (0..6).max_by(|&x, &y| (nb[x][1] - nb[x][0]).total_cmp(&(nb[y][1] - nb[y][0]))).unwrap_or(0);
-        let pick = (0..6).filter(|&v| smear(v).is_finite()).max_by(|&x, &y| smear(x).total_cmp(&smear(y)));
+        // Joints 2, 3, 5, 6 first: the invariants decide them alone, and joints 1 and 4
+        // follow from them (contracted, or split once the others are narrow).
+        let inner = [1, 2, 4, 5].iter().any(|&v| nb[v][1] - nb[v][0] > FIRST_WIDTH);
+        let allowed = |v: &usize| !inner || ![0, 3].contains(v);
+        let widest = (0..6).filter(allowed).max_by(|&x, &y| (nb[x][1] - nb[x][0]).total_cmp(&(nb[y][1] - nb[y][0]))).unwrap_or(0);
+        let pick = (0..6).filter(allowed).filter(|&v| smear(v).is_finite()).max_by(|&x, &y| smear(x).total_cmp(&smear(y)));
         let v = match pick {
             Some(v) if smear(v) > 0.0 && nb[v][1] - nb[v][0] > self.precision => v,
             _ => widest,
