@@ -104,7 +104,7 @@ fn random_general_6r_loses_no_solution() {
 #[test]
 fn bundled_arms_lose_no_solution() {
     for file in ["urdf/puma560.urdf", "urdf/ur5.urdf", "urdf/kuka_kr16.urdf", "tests/data/fanuc_crx10ial_style.urdf", "tests/data/abb_irb140_style.urdf"] {
-        let chain = chain_of(&repo(file));
+        let chain = chain_of(&repo(file)).within_one_turn();
         sweep(&chain, 3, 7);
     }
 }
@@ -118,7 +118,7 @@ fn timing_figures() {
         v[v.len() / 2]
     };
     for (name, xml) in [("general 6R", random_dh(11)), ("ur5", repo("urdf/ur5.urdf")), ("crx", repo("tests/data/fanuc_crx10ial_style.urdf")), ("puma", repo("urdf/puma560.urdf"))] {
-        let chain = chain_of(&xml);
+        let chain = chain_of(&xml).within_one_turn();
         let (counts, times) = sweep(&chain, 50, 3);
         let mut hist = std::collections::BTreeMap::new();
         for c in counts {

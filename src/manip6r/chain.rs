@@ -335,6 +335,21 @@ impl Chain6R {
         })
     }
 
+    /// The same chain searched over one turn per joint: each range cut to [−π, π] (a joint
+    /// whose limits span more than a turn then covers the whole circle once, and its solutions
+    /// are configurations rather than joint vectors).
+    pub fn within_one_turn(mut self) -> Chain6R {
+        let pi = crate::manip3r::PI_UP;
+        for k in 0..6 {
+            let (lo, hi) = self.ranges[k];
+            if hi - lo >= std::f64::consts::TAU {
+                self.continuous[k] = true;
+            }
+            self.ranges[k] = (lo.max(-pi), hi.min(pi));
+        }
+        self
+    }
+
     /// The whole arm as one side: `Pre₁·R₁·Pre₂···R₆·Post` (frames 0..5 are the joint frames).
     pub(crate) fn arm(&self) -> Side<6> {
         let next = |k: usize| if k < 5 { self.pre[k + 1] } else { self.post };

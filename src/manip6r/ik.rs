@@ -79,6 +79,8 @@ pub enum Ik6Discard {
     NoSolution,
     /// Krawczyk proves it holds no solution.
     KrawczykEmpty,
+    /// Axis 4 seen from axis 1 differs on the two sides (the first phase: joints 2, 3, 5, 6).
+    Axis4,
 }
 
 impl crate::search::Reason for Ik6Discard {
@@ -86,6 +88,7 @@ impl crate::search::Reason for Ik6Discard {
         match self {
             Ik6Discard::NoSolution => "no_solution",
             Ik6Discard::KrawczykEmpty => "krawczyk_empty",
+            Ik6Discard::Axis4 => "axis_4_invariants",
         }
     }
 }
@@ -107,7 +110,10 @@ const PRECONDITION: bool = false;
 const INVARIANTS: usize = 5;
 
 /// Joints 1 and 4 are split only once joints 2, 3, 5, 6 are this narrow (radians).
-const FIRST_WIDTH: f64 = 0.3;
+const FIRST_WIDTH: f64 = 0.02;
+
+/// Krawczyk on the invariants is tried on boxes whose joints 2, 3, 5, 6 are at most this wide.
+const INVARIANT_KRAWCZYK_WIDTH: f64 = 0.0;
 
 /// One split of the equation (`Chain6R::split`): sides and the joint of each block.
 type Split = (Side<3>, Side<3>, [usize; 3], [usize; 3]);
@@ -228,6 +234,52 @@ fn invariants(split: &Split, b: &[[f64; 2]; 6], m: &[f64; 6], jac: &mut [[Iv; 6]
         }
     }
     Some([0, 1, 2, 3, 4].map(|i| ml[i].sub(mr[i])))
+}
+
+/// Joints 2, 3, 5, 6: the unknowns of the invariants.
+const INNER: [usize; 4] = [1, 2, 4, 5];
+
+/// The first phase, on the invariants alone: their mean-value test, one Gauss–Seidel sweep,
+/// then a split of joint 2, 3, 5 or 6 (joints 1 and 4 keep their whole ranges).
+fn first_phase(cell: &Ik6Cell, m: &[f64; 6], hm: &[Iv; INVARIANTS], jac: &[[Iv; 6]; INVARIANTS]) -> Step<Ik6Cell, [Interval; 6], Ik6Discard> {
+    let b = cell.b;
+    let mut dx: [Iv; 6] = [0, 1, 2, 3, 4, 5].map(|v| Iv { lo: b[v][0], hi: b[v][1] }.sub(Iv { lo: m[v], hi: m[v] }));
+    for row in 0..INVARIANTS {
+        let acc = INNER.iter().fold(hm[row], |acc, &v| add(acc, mul(jac[row][v], dx[v])));
+        if excludes_zero(acc) {
+            return Step::Discard(Ik6Discard::Axis4);
+        }
+    }
+    let mut nb = b;
+    for row in 0..INVARIANTS {
+        for &v in &INNER {
+            let a = jac[row][v];
+            if !excludes_zero(a) {
+                continue;
+            }
+            let rest = INNER.iter().filter(|&&u| u != v).fold(hm[row], |acc, &u| add(acc, mul(jac[row][u], dx[u])));
+            let cut = (point(m[v]) - rest.to() / a.to()).intersection(interval(nb[v][0], nb[v][1]));
+            if cut.is_empty() {
+                return Step::Discard(Ik6Discard::Axis4);
+            }
+            nb[v] = [cut.inf(), cut.sup()];
+            dx[v] = Iv { lo: nb[v][0], hi: nb[v][1] }.sub(Iv { lo: m[v], hi: m[v] });
+        }
+    }
+    if INNER.iter().any(|&v| nb[v][1] - nb[v][0] < 0.8 * (b[v][1] - b[v][0])) {
+        return Step::Split(smallvec![Ik6Cell { b: nb, level: cell.level }]);
+    }
+    let smear = |v: usize| (0..INVARIANTS).map(|row| jac[row][v].lo.abs().max(jac[row][v].hi.abs())).sum::<f64>() * (nb[v][1] - nb[v][0]);
+    let widest = INNER.into_iter().max_by(|&x, &y| (nb[x][1] - nb[x][0]).total_cmp(&(nb[y][1] - nb[y][0]))).unwrap_or(1);
+    let v = match INNER.into_iter().filter(|&v| smear(v).is_finite()).max_by(|&x, &y| smear(x).total_cmp(&smear(y))) {
+        Some(v) if smear(v) > 0.0 => v,
+        _ => widest,
+    };
+    let c = 0.5 * (nb[v][0] + nb[v][1]);
+    let (mut lo, mut hi) = (nb, nb);
+    lo[v][1] = c;
+    hi[v][0] = c;
+    Step::Split(smallvec![Ik6Cell { b: lo, level: cell.level + 1 }, Ik6Cell { b: hi, level: cell.level + 1 }])
 }
 
 /// A split's two sides' frames over the box `b`.
@@ -357,9 +409,12 @@ impl Prune for Ik6Prune<'_> {
         {
             let inv: &mut [[Iv; 6]; INVARIANTS] = (&mut jac[rows..rows + INVARIANTS]).try_into().expect("invariant: INVARIANTS rows");
             let Some(h) = invariants(&self.splits[0], &b, &m, inv) else {
-                return Step::Discard(Ik6Discard::NoSolution);
+                return Step::Discard(Ik6Discard::Axis4);
             };
             hm[rows..rows + INVARIANTS].copy_from_slice(&h);
+            if INNER.iter().any(|&v| b[v][1] - b[v][0] > FIRST_WIDTH) {
+                return first_phase(&cell, &m, &h, inv);
+            }
         }
         for (i, split) in self.splits.iter().enumerate() {
             let at = i * ROWS;
@@ -369,8 +424,29 @@ impl Prune for Ik6Prune<'_> {
             };
             hm[at..at + ROWS].copy_from_slice(&h);
         }
+        let inv_at = rows;
         rows += INVARIANTS;
         let mut dx: [Iv; 6] = [0, 1, 2, 3, 4, 5].map(|v| Iv { lo: b[v][0], hi: b[v][1] }.sub(Iv { lo: m[v], hi: m[v] }));
+        // Krawczyk on the first four invariants in joints 2, 3, 5, 6 (a square system every
+        // solution satisfies): it discards or contracts those four, whatever joints 1 and 4.
+        let mut b = b;
+        let inner4 = [1, 2, 4, 5];
+        if inner4.iter().all(|&v| b[v][1] - b[v][0] <= INVARIANT_KRAWCZYK_WIDTH) {
+            let b4 = inner4.map(|v| interval(b[v][0], b[v][1]));
+            let m4 = inner4.map(|v| m[v]);
+            let f4 = [0, 1, 2, 3].map(|i| hm[inv_at + i].to());
+            let j4 = [0, 1, 2, 3].map(|i| inner4.map(|v| jac[inv_at + i][v].to()));
+            match krawczyk::step_array(&b4, &m4, &f4, &j4) {
+                K::Empty => return Step::Discard(Ik6Discard::KrawczykEmpty),
+                K::Unique(k) | K::Contracted(k) => {
+                    for (i, &v) in inner4.iter().enumerate() {
+                        b[v] = [k[i].inf().max(b[v][0]), k[i].sup().min(b[v][1])];
+                        dx[v] = Iv { lo: b[v][0], hi: b[v][1] }.sub(Iv { lo: m[v], hi: m[v] });
+                    }
+                }
+                K::Failed => {}
+            }
+        }
         for row in 0..rows {
             let acc = (0..6).fold(hm[row], |acc, v| add(acc, mul(jac[row][v], dx[v])));
             if excludes_zero(acc) {
