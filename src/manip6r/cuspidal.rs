@@ -174,6 +174,9 @@ fn hull(b: &[Interval; 6]) -> [[f64; 2]; 6] {
 /// and its cancel flag stops the search.
 pub fn search(chain: &Chain6R, budget: Duration, seed: u64, control: &Control) -> CuspidalVerdict {
     let start = Instant::now();
+    // Cuspidality is a property of configurations: joint limits play no part, one turn per
+    // joint holds every configuration once.
+    let chain = &chain.clone().within_one_turn();
     let arm = chain.arm();
     let mut rng = Rng(seed);
     let (mut poses, mut pairs) = (0, 0);
