@@ -79,6 +79,8 @@ pub enum Ik6Discard {
     NoSolution,
     /// Krawczyk proves it holds no solution.
     KrawczykEmpty,
+    /// The only solution near it lies outside it: a neighbouring cell claims it.
+    ClaimedElsewhere,
     /// Axis 4 seen from axis 1 differs on the two sides (the first phase: joints 2, 3, 5, 6).
     Axis4,
 }
@@ -88,6 +90,7 @@ impl crate::search::Reason for Ik6Discard {
         match self {
             Ik6Discard::NoSolution => "no_solution",
             Ik6Discard::KrawczykEmpty => "krawczyk_empty",
+            Ik6Discard::ClaimedElsewhere => "claimed_elsewhere",
             Ik6Discard::Axis4 => "axis_4_invariants",
         }
     }
@@ -111,6 +114,9 @@ const INVARIANTS: usize = 5;
 
 /// Joints 1 and 4 are split only once joints 2, 3, 5, 6 are this narrow (radians).
 const FIRST_WIDTH: f64 = 0.02;
+
+/// Cells this narrow (radians) that Krawczyk cannot decide are tried once more, inflated.
+const INFLATE_WIDTH: f64 = 1e-5;
 
 /// Krawczyk on the invariants is tried on boxes whose joints 2, 3, 5, 6 are at most this wide.
 const INVARIANT_KRAWCZYK_WIDTH: f64 = 0.0;
@@ -241,7 +247,7 @@ const INNER: [usize; 4] = [1, 2, 4, 5];
 
 /// The first phase, on the invariants alone: their mean-value test, one Gauss–Seidel sweep,
 /// then a split of joint 2, 3, 5 or 6 (joints 1 and 4 keep their whole ranges).
-fn first_phase(cell: &Ik6Cell, m: &[f64; 6], hm: &[Iv; INVARIANTS], jac: &[[Iv; 6]; INVARIANTS]) -> Step<Ik6Cell, [Interval; 6], Ik6Discard> {
+fn first_phase(cell: &Ik6Cell, m: &[f64; 6], hm: &[Iv; INVARIANTS], jac: &[[Iv; 6]; INVARIANTS]) -> Step<Ik6Cell, ([Interval; 6], [Interval; 6]), Ik6Discard> {
     let b = cell.b;
     let mut dx: [Iv; 6] = [0, 1, 2, 3, 4, 5].map(|v| Iv { lo: b[v][0], hi: b[v][1] }.sub(Iv { lo: m[v], hi: m[v] }));
     for row in 0..INVARIANTS {
@@ -397,10 +403,11 @@ impl Ik6Prune<'_> {
 
 impl Prune for Ik6Prune<'_> {
     type Cell = Ik6Cell;
-    type Found = [Interval; 6];
+    /// The solution's box and a box in which it is proven the only solution.
+    type Found = ([Interval; 6], [Interval; 6]);
     type Reason = Ik6Discard;
 
-    fn process(&mut self, cell: Ik6Cell) -> Step<Ik6Cell, [Interval; 6], Ik6Discard> {
+    fn process(&mut self, cell: Ik6Cell) -> Step<Ik6Cell, ([Interval; 6], [Interval; 6]), Ik6Discard> {
         let b = cell.b;
         let m = mid(&b);
         let mut hm = [Iv::ZERO; 3 * ROWS + INVARIANTS];
@@ -511,7 +518,7 @@ impl Prune for Ik6Prune<'_> {
                 K::Unique(k) => {
                     let k = krawczyk::tighten(k, self.precision, |k| self.newton(k));
                     if self.not_a_half_turn(&k) {
-                        return Step::Found(k);
+                        return Step::Found((k, bi));
                     }
                 }
                 K::Contracted(k) => {
@@ -523,6 +530,25 @@ impl Prune for Ik6Prune<'_> {
                     }
                 }
                 K::Failed => {}
+            }
+        }
+        if width(&nb) <= INFLATE_WIDTH {
+            // A solution on or near the cell's faces: Krawczyk cannot put its image inside the
+            // cell; a box about the cell's centre, a few times wider, may prove it (ε-inflation).
+            // The cell claims the solution when its box meets the cell; neighbours claiming the
+            // same one are merged after the run (each box is proven to hold only one).
+            let c = mid(&nb);
+            let r = (4.0 * width(&nb)).max(1e-9);
+            let wide = c.map(|x| interval(x - r, x + r));
+            if let K::Unique(k) = self.newton(&wide) {
+                let k = krawczyk::tighten(k, self.precision, |k| self.newton(k));
+                let meets = (0..6).all(|v| k[v].sup() >= cell.b[v][0] && k[v].inf() <= cell.b[v][1]);
+                if !meets {
+                    return Step::Discard(Ik6Discard::ClaimedElsewhere);
+                }
+                if self.not_a_half_turn(&k) {
+                    return Step::Found((k, wide));
+                }
             }
         }
         if width(&nb) <= self.precision {
@@ -567,15 +593,17 @@ pub fn solve_with(chain: &Chain6R, target: &PoseTarget, precision: f64, control:
     let splits: Vec<Split> = (0..SPLITS).map(|f| chain.split(&target.0, f)).collect();
     let start = Ik6Cell { b: chain.ranges.map(|(lo, hi)| [lo, hi]), level: 0 };
     let mut run = drive(|| Ik6Prune { splits: &splits, precision }, start, control, progress);
-    run.found.sort_by(|a, b| a.iter().map(|x| x.inf()).partial_cmp(b.iter().map(|x| x.inf())).unwrap_or(std::cmp::Ordering::Equal));
-    let mut unique: Vec<[Interval; 6]> = Vec::new();
-    for k in run.found {
-        // A continuous joint's range overlaps itself at ±π by an ulp: one solution there can
-        // be proven at both ends; the first is kept.
-        if !unique.iter().any(|u| same_on_seam(chain, u, &k)) {
-            unique.push(k);
+    run.found.sort_by(|a, b| a.0.iter().map(|x| x.inf()).partial_cmp(b.0.iter().map(|x| x.inf())).unwrap_or(std::cmp::Ordering::Equal));
+    let mut kept: Vec<([Interval; 6], [Interval; 6])> = Vec::new();
+    let inside = |k: &[Interval; 6], r: &[Interval; 6]| (0..6).all(|d| k[d].subset(r[d]));
+    for (k, region) in run.found {
+        // One solution claimed twice: by neighbours (its box inside the other's proof region,
+        // which holds only one), or at both ends of a continuous joint's range (±π).
+        if !kept.iter().any(|(u, ur)| inside(&k, ur) || inside(u, &region) || same_on_seam(chain, u, &k)) {
+            kept.push((k, region));
         }
     }
+    let unique: Vec<[Interval; 6]> = kept.into_iter().map(|(k, _)| k).collect();
     let undecided: Vec<[Interval; 6]> = run.undecided.iter().map(|(c, _)| c.b.map(|x| interval(x[0], x[1]))).collect();
     let all: Vec<usize> = (0..undecided.len()).collect();
     let (contacts, _) = touching_pairs(&all, 6, |i, d| undecided[i][d]);
