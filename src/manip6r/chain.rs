@@ -8,6 +8,9 @@
 //! *block* `A + c·B + s·C` in which c and s occur once per entry (less interval wrapping than a
 //! product), and axis-aligned joints keep exact zeros and ones.
 
+// Matrix and joint indices read as the formulas they implement.
+#![allow(clippy::needless_range_loop)]
+
 use super::Manip6rError;
 use crate::interval::fast::Iv;
 use crate::interval::{point, trig, Interval};

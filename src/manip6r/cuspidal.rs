@@ -13,6 +13,9 @@
 //! within a time budget. Proving an arm non-cuspidal needs a theorem, which this module does
 //! not apply (the caller states when one does, e.g. a spherical wrist and the 3R verdict).
 
+// Matrix and joint indices read as the formulas they implement.
+#![allow(clippy::needless_range_loop)]
+
 use super::chain::{cos_sin, cross, Chain6R, Side, V};
 use super::ik::{self, PoseTarget};
 use super::Pose64;
@@ -180,8 +183,8 @@ pub fn search(chain: &Chain6R, budget: Duration, seed: u64, control: &Control) -
     let arm = chain.arm();
     let mut rng = Rng(seed);
     let (mut poses, mut pairs) = (0, 0);
-    let limits = Limits { max_cells: control.limits.max_cells.min(400_000), ..control.limits.clone() };
-    let ik_control = Control { limits, ..control.clone() };
+    let limits = Limits { max_cells: control.limits.max_cells.min(400_000), ..control.limits };
+    let ik_control = Control { limits, ..*control };
     let radius = 1e-12;
     let in_range = |rng: &mut Rng| -> [f64; 6] { [0, 1, 2, 3, 4, 5].map(|k| rng.uniform(chain.ranges[k].0, chain.ranges[k].1)) };
     while start.elapsed() < budget && !control.cancel.load(std::sync::atomic::Ordering::Relaxed) {

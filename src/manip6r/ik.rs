@@ -14,6 +14,9 @@
 //! singularities. Boxes reaching the precision undecided (near a singular pose) are reported
 //! as clusters: nothing is lost.
 
+// Matrix and joint indices read as the formulas they implement.
+#![allow(clippy::needless_range_loop)]
+
 use super::chain::{add, cos_sin, cross, mm, mul, mv, Affine, Chain6R, IAffine, Side, M, V};
 use super::{Manip6rError, Pose64};
 use crate::contract::krawczyk::{self, Step as K};
