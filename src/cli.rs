@@ -197,7 +197,7 @@ struct SingularitiesArgs {
     limits: LimitArgs,
     /// Seconds for the whole-arm cuspidality search of a six-joint arm without a spherical
     /// wrist (0: not searched).
-    #[arg(long, default_value_t = 30.0, value_name = "SECONDS")]
+    #[arg(long, default_value_t = 10.0, value_name = "SECONDS")]
     arm_budget: f64,
     /// Write the full report as JSON here.
     #[arg(long, value_name = "FILE")]
