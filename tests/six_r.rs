@@ -3,7 +3,7 @@
 //! every returned box mapping back to the pose, and UR5 counts against an independent closed
 //! form. The cuspidality witness of the CRX fixture re-checked in `f64`.
 
-use linkspace::manip6r::{ik, Chain6R, CuspidalVerdict, PoseTarget};
+use linkspace::manip6r::{ik, Chain6R, CuspidalVerdict, Pose64, PoseTarget};
 use linkspace::model::{rounding, urdf};
 use linkspace::search::{Control, Limits, Status};
 use std::path::Path;
@@ -182,4 +182,85 @@ fn ur5_is_never_cuspidal() {
     let control = Control { limits: Limits { max_cells: 3_000_000, ..Limits::default() }, threads: 1, cancel: never() };
     let verdict = linkspace::manip6r::cuspidal::search(&chain, Duration::from_secs(20), 1, &control);
     assert!(matches!(verdict, CuspidalVerdict::Undecided { .. }), "{verdict:?}");
+}
+
+/// UR5 (`urdf/ur5.urdf` is the standard DH table, tool0 = frame 6) against an independent
+/// closed form: the number of configurations for poses of random joint vectors.
+mod ur5_closed_form {
+    use nalgebra::{Matrix4, Vector3};
+    const D: [f64; 6] = [0.089159, 0.0, 0.0, 0.10915, 0.09465, 0.0823];
+    const A: [f64; 6] = [0.0, -0.425, -0.39225, 0.0, 0.0, 0.0];
+    const ALPHA: [f64; 6] = [std::f64::consts::FRAC_PI_2, 0.0, 0.0, std::f64::consts::FRAC_PI_2, -std::f64::consts::FRAC_PI_2, 0.0];
+
+    fn dh(i: usize, t: f64) -> Matrix4<f64> {
+        let (s, c) = t.sin_cos();
+        let (sa, ca) = ALPHA[i].sin_cos();
+        Matrix4::new(c, -s * ca, s * sa, A[i] * c, s, c * ca, -c * sa, A[i] * s, 0.0, sa, ca, D[i], 0.0, 0.0, 0.0, 1.0)
+    }
+
+    pub fn fk(q: &[f64; 6]) -> Matrix4<f64> {
+        (0..6).fold(Matrix4::identity(), |t, i| t * dh(i, q[i]))
+    }
+
+    /// Every configuration of the pose `t` (Hawkins' closed form), each checked by `fk`.
+    pub fn solve(t: &Matrix4<f64>) -> Vec<[f64; 6]> {
+        let (n, o, a, p) = (t.fixed_view::<3, 1>(0, 0), t.fixed_view::<3, 1>(0, 1), t.fixed_view::<3, 1>(0, 2), t.fixed_view::<3, 1>(0, 3));
+        let p05: Vector3<f64> = p - a * D[5];
+        let r = p05.x.hypot(p05.y);
+        let mut out = Vec::new();
+        if r < D[3].abs() {
+            return out;
+        }
+        for s1sign in [1.0, -1.0] {
+            let t1 = p05.y.atan2(p05.x) + s1sign * (D[3] / r).acos() + std::f64::consts::FRAC_PI_2;
+            let (s1, c1) = t1.sin_cos();
+            let c5 = (p.x * s1 - p.y * c1 - D[3]) / D[5];
+            if c5.abs() > 1.0 {
+                continue;
+            }
+            for s5sign in [1.0, -1.0] {
+                let t5 = s5sign * c5.acos();
+                let s5 = t5.sin();
+                let t6 = (-(o.x * s1 - o.y * c1) / s5).atan2((n.x * s1 - n.y * c1) / s5);
+                let t14 = dh(0, t1).try_inverse().expect("rigid") * t * (dh(4, t5) * dh(5, t6)).try_inverse().expect("rigid");
+                let (px, pz) = (t14[(0, 3)], t14[(1, 3)]);
+                // Frame 1 after joint 1's α: the planar chain lies in its x–y plane.
+                let len2 = px * px + pz * pz;
+                let c3 = (len2 - A[1] * A[1] - A[2] * A[2]) / (2.0 * A[1] * A[2]);
+                if c3.abs() > 1.0 {
+                    continue;
+                }
+                for s3sign in [1.0, -1.0] {
+                    let t3 = s3sign * c3.acos();
+                    let t2 = pz.atan2(px) - (A[2] * t3.sin()).atan2(A[1] + A[2] * t3.cos());
+                    let t34 = (dh(1, t2) * dh(2, t3)).try_inverse().expect("rigid") * t14;
+                    let t4 = t34[(1, 0)].atan2(t34[(0, 0)]);
+                    let q = [t1, t2, t3, t4, t5, t6];
+                    if (fk(&q) - t).norm() < 1e-8 {
+                        out.push(q);
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
+#[test]
+fn ur5_counts_match_the_closed_form() {
+    let chain = chain_of(&repo("urdf/ur5.urdf")).within_one_turn();
+    let mut rng = Lcg(5);
+    for _ in 0..12 {
+        let q = random_q(&chain, &mut rng);
+        let t = ur5_closed_form::fk(&q);
+        let pose = chain.pose(&q);
+        let m = Pose64 { r: [0, 1, 2].map(|i| [0, 1, 2].map(|j| t[(i, j)])), t: [t[(0, 3)], t[(1, 3)], t[(2, 3)]] };
+        assert!(pose.distance(&m) < 1e-9, "the file is the DH table: {pose:?} {m:?}");
+        let analytic = ur5_closed_form::solve(&t);
+        assert!(analytic.iter().any(|a| (0..6).all(|k| (a[k] - q[k]).rem_euclid(std::f64::consts::TAU).min((q[k] - a[k]).rem_euclid(std::f64::consts::TAU)) < 1e-6)), "closed form misses q");
+        let sol = ik::solve(&chain, &PoseTarget::around(&pose, 1e-12).expect("finite"), 1e-10, &control()).expect("solves");
+        assert_eq!(sol.status, Status::Complete);
+        assert!(sol.clusters.is_empty());
+        assert_eq!(sol.unique.len(), analytic.len(), "q = {q:?}");
+    }
 }
