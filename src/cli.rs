@@ -148,6 +148,8 @@ enum Command {
     Singularities(SingularitiesArgs),
     /// Every joint solution of an arm's 3R positioning structure for a point (X,Y,Z or R,Z).
     Ik(IkArgs),
+    /// Every joint solution of a six-revolute arm for a pose of its tip frame, each certified.
+    Ik6(Ik6Args),
     /// Solve a distance problem by Cayley–Menger determinants: a platform in URDF or a JSON file.
     Distances(distances::DistancesArgs),
     /// Run the ROS 2 node: analyse each URDF, publish the results, serve queries (launch_notes.md).
@@ -198,6 +200,10 @@ struct SingularitiesArgs {
     search_anyway: bool,
     #[command(flatten)]
     limits: LimitArgs,
+    /// Seconds for the whole-arm cuspidality search of a six-joint arm without a spherical
+    /// wrist (0: not searched).
+    #[arg(long, default_value_t = 10.0, value_name = "SECONDS")]
+    arm_budget: f64,
     /// Write the full report as JSON here.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
@@ -220,6 +226,25 @@ struct IkArgs {
     /// Turn every length of the URDF into an interval of this half-width (metres).
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     uncertainty: f64,
+    #[command(flatten)]
+    limits: LimitArgs,
+    /// Write the report as JSON here.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+struct Ik6Args {
+    /// URDF file of an arm with six revolute joints from base to tip (fixed joints merged).
+    urdf: PathBuf,
+    #[command(flatten)]
+    chain: ChainArgs,
+    /// The tip frame's pose in the base frame: X,Y,Z (metres), ROLL,PITCH,YAW (radians, URDF convention).
+    #[arg(long, value_name = "X,Y,Z,ROLL,PITCH,YAW", allow_hyphen_values = true)]
+    pose: String,
+    /// Largest width (radians) of reported boxes, in (0, 1).
+    #[arg(long, default_value_t = 1e-9, allow_hyphen_values = true)]
+    precision: f64,
     #[command(flatten)]
     limits: LimitArgs,
     /// Write the report as JSON here.
@@ -311,6 +336,7 @@ pub fn run() -> Result<()> {
         Command::Solve(args) => solve(args),
         Command::Singularities(args) => singularities(args),
         Command::Ik(args) => ik(args),
+        Command::Ik6(args) => ik6(args),
         Command::Distances(args) => distances::run(args),
         #[cfg(feature = "ros")]
         Command::Serve(args) => serve::serve(args),
@@ -597,6 +623,74 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     for m in &report.internal_motions {
         let kind = if m.near_degenerate.is_some() { "near-degenerate strip (undecided)" } else { "internal motion" };
         writeln!(out, "  {kind} {}", m.joints.iter().map(|(n, b)| format!("{n} in [{:.6}, {:.6}]", b[0], b[1])).collect::<Vec<_>>().join(", ")).ok();
+    }
+    let arm_section = whole_arm(&args, &arm, &control)?;
+    if let Some(a) = &arm_section {
+        writeln!(out, "arm {}: {} ({})", a.arm, a.verdict, a.reason).ok();
+        if let Some(w) = &a.witness {
+            let fmt = |b: &std::collections::BTreeMap<String, [f64; 2]>| b.iter().map(|(n, x)| format!("{n}={:.6}", 0.5 * (x[0] + x[1]))).collect::<Vec<_>>().join(" ");
+            writeln!(out, "  witness pose translation {:?}; solutions {} and {}; min |det J| on the path {:.3e}", w.pose_translation, fmt(&w.from), fmt(&w.to), w.min_abs_det).ok();
+        }
+    }
+    if let Some(path) = args.json {
+        let mut value = serde_json::to_value(&report)?;
+        if let (Some(a), Some(map)) = (&arm_section, value.as_object_mut()) {
+            map.insert("arm_cuspidality".into(), serde_json::to_value(a)?);
+        }
+        std::fs::write(&path, serde_json::to_string_pretty(&value)?).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// The whole-arm verdict of a six-joint arm whose 3R verdict is a sub-chain's (or whose wrist
+/// is spherical), as its report section; `None` for other arms or `--arm-budget 0`.
+fn whole_arm(args: &SingularitiesArgs, arm: &Arm, control: &Control) -> Result<Option<report::six::ArmCuspidalityReport>> {
+    if !(args.arm_budget.is_finite() && args.arm_budget >= 0.0) {
+        bail!("--arm-budget must be a number of seconds >= 0, got {}", args.arm_budget);
+    }
+    if args.arm_budget == 0.0 {
+        return Ok(None);
+    }
+    let options = args.chain.options()?;
+    let mechanism = load_mechanism(&args.urdf)?;
+    let found = app::arm_cuspidality(&mechanism, arm, &options, Duration::from_secs_f64(args.arm_budget), control);
+    Ok(found.map(|(chain, c)| report::six::ArmCuspidalityReport::of(&chain, &c)))
+}
+
+fn ik6(args: Ik6Args) -> Result<()> {
+    let values: Vec<f64> = args
+        .pose
+        .split(',')
+        .map(|t| t.trim().parse::<f64>().map_err(|_| anyhow::anyhow!("--pose '{}': '{}' is not a number", args.pose, t.trim())))
+        .collect::<Result<_>>()?;
+    let pose: [f64; 6] = values.try_into().map_err(|_| anyhow::anyhow!("--pose '{}': expected X,Y,Z,ROLL,PITCH,YAW", args.pose))?;
+    let options = args.chain.options()?;
+    let mechanism = load_mechanism(&args.urdf)?;
+    let chain = app::chain6(&mechanism, &options).with_context(|| format!("loading {}", args.urdf.display()))?;
+    let cancel = AtomicBool::new(false);
+    let control = Control { limits: args.limits.limits(20_000_000)?, threads: args.limits.threads(), cancel: &cancel };
+    let found = app::inverse_kinematics6(&chain, pose, args.precision, &control)?;
+    let report = report::six::Ik6Report::of(&chain, &found);
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "{} -> {}: {} solutions proven unique, {} clusters undecided, status {}, {} boxes, {:.3} s",
+        report.base,
+        report.tip,
+        report.unique.len(),
+        report.clusters.len(),
+        report.completeness.status(),
+        report.processed,
+        report.seconds
+    )
+    .ok();
+    writeln!(out, "  joint ranges: {}", chain.joints.iter().zip(&chain.ranges).map(|(n, r)| format!("{n} [{:.6}, {:.6}]", r.0, r.1)).collect::<Vec<_>>().join(", ")).ok();
+    for (tag, boxes) in [("unique", &report.unique), ("cluster (may hold solutions)", &report.clusters)] {
+        for b in boxes {
+            // In the file's joint order, each in its own range.
+            let text: Vec<String> = chain.joints.iter().map(|n| (n, b[n])).map(|(n, x)| format!("{n} in [{:.9}, {:.9}]", x[0], x[1])).collect();
+            writeln!(out, "  {} ({tag})", text.join(", ")).ok();
+        }
     }
     if let Some(path) = args.json {
         write_file(&path, serde_json::to_string_pretty(&report)?)?;

@@ -31,6 +31,7 @@ pub mod distances;
 pub mod interval;
 mod lp;
 pub mod manip3r;
+pub mod manip6r;
 pub mod model;
 #[cfg(feature = "ros")]
 pub mod ros;

@@ -35,6 +35,7 @@ pub mod image;
 pub(crate) mod kernel;
 pub mod manip3r;
 pub mod singular;
+pub mod six;
 pub mod solve;
 
 pub use crate::interval::Bounds;

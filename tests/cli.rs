@@ -242,6 +242,18 @@ fn singularities_json_follows_the_documented_schema() {
     assert!(r["nodes"].is_null());
 }
 
+/// `ik6` on the CRX fixture: a reachable pose is solved complete with twelve unique boxes, in
+/// the joints' own ranges (joint 3 beyond π); a pose of five numbers is refused in one line.
+#[test]
+fn ik6_solves_a_pose_of_a_six_joint_arm() {
+    let crx = format!("{}/tests/data/fanuc_crx10ial_style.urdf", env!("CARGO_MANIFEST_DIR"));
+    assert_clear_error(&["ik6", &crx, "--pose", "1,2,3,4,5"], "expected X,Y,Z,ROLL,PITCH,YAW");
+    let (ok, out, err) = run(&["ik6", &crx, "--pose", "0.5,0.2,0.6,0.3,0.2,0.1"]);
+    assert!(ok, "{err}");
+    assert!(out.starts_with("base_link -> tool0: 12 solutions proven unique, 0 clusters undecided, status complete"), "{out}");
+    assert!(out.contains("joint_1 in [0.729757621, 0.729757621]"), "{out}");
+}
+
 #[test]
 fn ik_reports_every_solution() {
     let (ok, out, err) = run(&["ik", &fixture("orthogonal_3r_e.urdf"), "--point", "1.3,0.2"]);

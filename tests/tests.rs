@@ -42,3 +42,6 @@ mod shared;
 /// The ROS 2 node against real rclpy over DDS on loopback: topics, services, load.
 #[cfg(feature = "ros")]
 mod topics;
+/// Six-revolute arms whole: certified IK against forward kinematics and a closed form, and
+/// the whole-arm cuspidality witness re-checked in `f64`.
+mod six_r;

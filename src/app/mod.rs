@@ -15,6 +15,7 @@ pub(crate) mod distances;
 pub(crate) mod linkage;
 pub(crate) mod loops;
 mod platform;
+pub(crate) mod six;
 pub(crate) mod sweep;
 
 // One job per question, each with its request and its typed result.
@@ -23,6 +24,7 @@ pub use distances::{DistancesJob, DistancesRequest};
 pub use linkage::{LinkageAnalysis, SolveJob};
 pub use loops::{all_kinds, analyse_image, image_points, Actuation, ImageAnalysisError, ImageSearch, SingularSets};
 pub use platform::PlatformAnalysis;
+pub use six::{arm_cuspidality, chain6, inverse_kinematics6, ArmCuspidality, ArmIk6};
 pub use sweep::{check_sweep, run_sweep, sweep_task};
 
 use crate::model::Mechanism;

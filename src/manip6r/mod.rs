@@ -1,0 +1,31 @@
+//! Six-revolute arms taken whole: certified inverse kinematics of the tip frame (`ik`) and a
+//! whole-arm cuspidality verdict (`cuspidal`), for any 6R chain (no closed form assumed).
+//!
+//! `Chain6R` reads the six revolute joints from base to tip of a URDF `Mechanism` (fixed joints
+//! merged) with every coefficient an interval enclosing the file's decimals; the searches run on
+//! the kernel (`search::run`, `contract::krawczyk`). No IO.
+
+pub(crate) mod chain;
+pub mod cuspidal;
+pub mod ik;
+
+pub use chain::{Chain6R, Pose64};
+pub use cuspidal::{CuspidalVerdict, Witness};
+pub use ik::{Ik6Solutions, PoseTarget};
+
+use thiserror::Error;
+
+/// What is wrong with a 6R problem. Messages are one line and name the culprit.
+#[derive(Debug, Error, PartialEq)]
+#[non_exhaustive]
+pub enum Manip6rError {
+    /// The base, tip or chain cannot be chosen, or it is not six revolute joints.
+    #[error("not a 6R chain: {0}")]
+    NotSixR(String),
+    /// The pose is not finite.
+    #[error("the pose must be finite numbers: {0}")]
+    BadPose(String),
+    /// The requested precision is not in (0, 1).
+    #[error("precision must be a number in (0, 1), got {0}")]
+    BadPrecision(f64),
+}

@@ -1,0 +1,134 @@
+//! The JSON of `linkspace ik6` and the `arm_cuspidality` section of `singularities` for
+//! six-joint arms, from `app`'s results.
+
+use super::manip3r::Completeness;
+use crate::app::{ArmCuspidality, ArmIk6};
+use crate::interval::Interval;
+use crate::manip6r::{Chain6R, CuspidalVerdict};
+use crate::search::Incompleteness;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// One solution box: joint name → [lo, hi] (radians).
+pub type JointBoxes = BTreeMap<String, [f64; 2]>;
+
+fn joints(chain: &Chain6R, b: &[Interval; 6]) -> JointBoxes {
+    chain.joints.iter().zip(b).map(|(n, x)| (n.clone(), [x.inf(), x.sup()])).collect()
+}
+
+/// What `linkspace ik6 --json` writes.
+#[derive(Clone, Debug, Serialize)]
+pub struct Ik6Report {
+    /// Base and tip links.
+    pub base: String,
+    /// See `base`.
+    pub tip: String,
+    /// The six joints, base first.
+    pub joints: Vec<String>,
+    /// The pose: x, y, z, roll, pitch, yaw (base frame).
+    pub pose: [f64; 6],
+    /// `status` and, when incomplete, `limit`.
+    #[serde(flatten)]
+    pub completeness: Completeness,
+    /// Boxes each proven to hold exactly one solution.
+    pub unique: Vec<JointBoxes>,
+    /// Hulls of undecided boxes (near singular poses): each may hold solutions.
+    pub clusters: Vec<JointBoxes>,
+    /// Boxes processed.
+    pub processed: u64,
+    /// Wall time (seconds).
+    pub seconds: f64,
+}
+
+impl Ik6Report {
+    /// The report of a query.
+    pub fn of(chain: &Chain6R, found: &ArmIk6) -> Self {
+        let s = &found.solutions;
+        Ik6Report {
+            base: chain.base.clone(),
+            tip: chain.tip.clone(),
+            joints: chain.joints.to_vec(),
+            pose: found.pose,
+            completeness: Completeness(Incompleteness::of(s.status, s.clusters.len(), false)),
+            unique: s.unique.iter().map(|b| joints(chain, b)).collect(),
+            clusters: s.clusters.iter().map(|c| joints(chain, &c.hull)).collect(),
+            processed: s.stats.processed,
+            seconds: found.seconds,
+        }
+    }
+}
+
+/// The `arm_cuspidality` field of `singularities --json` for six-joint arms.
+#[derive(Clone, Debug, Serialize)]
+pub struct ArmCuspidalityReport {
+    /// The arm: base, tip and its six joints.
+    pub arm: String,
+    /// `cuspidal`, `undecided`, or `as_positioning_structure` (spherical wrist: the 3R verdict
+    /// is the arm's).
+    pub verdict: &'static str,
+    /// Why, in one line.
+    pub reason: String,
+    /// The witness of a cuspidal verdict.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub witness: Option<WitnessRecord>,
+}
+
+/// A cuspidality witness: a pose, two certified solutions, a path proven free of singularities.
+#[derive(Clone, Debug, Serialize)]
+pub struct WitnessRecord {
+    /// The pose's rotation (row-major) and translation, base frame.
+    pub pose_rotation: [[f64; 3]; 3],
+    /// See `pose_rotation`.
+    pub pose_translation: [f64; 3],
+    /// Entry-wise radius of the pose enclosure solved.
+    pub pose_radius: f64,
+    /// The two solutions' boxes, each holding exactly one.
+    pub from: JointBoxes,
+    /// See `from`.
+    pub to: JointBoxes,
+    /// The path's vertices (radians, joints base first).
+    pub path: Vec<[f64; 6]>,
+    /// Boxes proven free of singularities along it.
+    pub pieces: usize,
+    /// The sign of det J along the path.
+    pub det_sign: f64,
+    /// The smallest |det J| at the sampled points.
+    pub min_abs_det: f64,
+}
+
+impl ArmCuspidalityReport {
+    /// The section of an arm's verdict.
+    pub fn of(chain: &Chain6R, c: &ArmCuspidality) -> Self {
+        let arm = format!("{} -> {} ({})", chain.base, chain.tip, chain.joints.join(", "));
+        match c {
+            ArmCuspidality::PositioningVerdict => ArmCuspidalityReport {
+                arm,
+                verdict: "as_positioning_structure",
+                reason: "spherical wrist: the arm is cuspidal iff its 3R positioning structure is (the verdict above is the arm's)".into(),
+                witness: None,
+            },
+            ArmCuspidality::Searched { verdict: CuspidalVerdict::Cuspidal(w), seconds, .. } => ArmCuspidalityReport {
+                arm,
+                verdict: "cuspidal",
+                reason: format!("witness found in {seconds:.1} s: two certified solutions of one pose joined by a path on which det J is proven nonzero ({} pieces)", w.pieces),
+                witness: Some(WitnessRecord {
+                    pose_rotation: w.pose.r,
+                    pose_translation: w.pose.t,
+                    pose_radius: w.pose_radius,
+                    from: joints(chain, &w.from),
+                    to: joints(chain, &w.to),
+                    path: w.path.clone(),
+                    pieces: w.pieces,
+                    det_sign: w.det_sign,
+                    min_abs_det: w.min_abs_det,
+                }),
+            },
+            ArmCuspidality::Searched { verdict: CuspidalVerdict::Undecided { poses, pairs }, budget, .. } => ArmCuspidalityReport {
+                arm,
+                verdict: "undecided",
+                reason: format!("no witness found within the budget ({budget:.0} s: {poses} poses solved, {pairs} pairs of solutions with one sign of det J tried); non-cuspidality is not proven"),
+                witness: None,
+            },
+        }
+    }
+}

@@ -1,0 +1,266 @@
+//! Certified 6R inverse kinematics against references computed without the solver: poses
+//! from forward kinematics of known joint vectors (the solver must return a box holding each),
+//! every returned box mapping back to the pose, and UR5 counts against an independent closed
+//! form. The cuspidality witness of the CRX fixture re-checked in `f64`.
+
+use linkspace::manip6r::{ik, Chain6R, CuspidalVerdict, Pose64, PoseTarget};
+use linkspace::model::{rounding, urdf};
+use linkspace::search::{Control, Limits, Status};
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+fn repo(rel: &str) -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)).expect("bundled file")
+}
+
+pub fn chain_of(xml: &str) -> Chain6R {
+    let m = urdf::parse(xml).expect("parses");
+    let (m, _) = rounding::snap(&m, rounding::ANGLE_TOLERANCE);
+    Chain6R::from_mechanism(&m, None, None).expect("a 6R chain")
+}
+
+/// A general 6R in modified DH (`a`, `α`, `d` per joint), as a URDF.
+pub fn random_dh(seed: u64) -> String {
+    let mut rng = Lcg(seed);
+    let mut xml = String::from("<robot name=\"dh\"><link name=\"l0\"/>");
+    let (mut a, mut alpha, mut d) = (0.0, 0.0, 0.0);
+    for i in 1..=6 {
+        xml += &format!(
+            "<link name=\"l{i}\"/><joint name=\"j{i}\" type=\"revolute\"><parent link=\"l{}\"/><child link=\"l{i}\"/><origin xyz=\"{a} 0 {d}\" rpy=\"{alpha} 0 0\"/><axis xyz=\"0 0 1\"/><limit lower=\"-3.14159\" upper=\"3.14159\" effort=\"1\" velocity=\"1\"/></joint>",
+            i - 1
+        );
+        a = rng.uniform(0.1, 0.6);
+        alpha = rng.uniform(0.3, 2.8);
+        d = rng.uniform(-0.4, 0.4);
+    }
+    xml += &format!("<link name=\"tool\"/><joint name=\"jt\" type=\"fixed\"><parent link=\"l6\"/><child link=\"tool\"/><origin xyz=\"{a} 0 {d}\" rpy=\"{alpha} 0 0\"/></joint></robot>");
+    xml
+}
+
+pub struct Lcg(pub u64);
+
+impl Lcg {
+    pub fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next()
+    }
+}
+
+fn control() -> Control<'static> {
+    static NEVER: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+    Control { limits: Limits { max_cells: 3_000_000, ..Limits::default() }, threads: 1, cancel: &NEVER }
+}
+
+/// Solves FK(q) and checks: complete, a unique box holds q, every unique box maps to the pose.
+/// Returns the number of unique boxes and the time.
+fn check_pose(chain: &Chain6R, q: &[f64; 6]) -> (usize, Duration) {
+    let pose = chain.pose(q);
+    let target = PoseTarget::around(&pose, 1e-12).expect("finite");
+    let t = Instant::now();
+    let sol = ik::solve(chain, &target, 1e-10, &control()).expect("solves");
+    let dt = t.elapsed();
+    assert_eq!(sol.status, Status::Complete, "q = {q:?}");
+    let holds = |b: &[linkspace::Interval; 6]| (0..6).all(|k| b[k].inf() - 1e-7 <= q[k] && q[k] <= b[k].sup() + 1e-7);
+    assert!(sol.unique.iter().any(holds) || sol.clusters.iter().any(|c| holds(&c.hull)), "q = {q:?} lost: {:?}", sol.unique);
+    for u in &sol.unique {
+        let m = u.map(|x| x.mid());
+        assert!(chain.pose(&m).distance(&pose) < 1e-6, "a box off the pose: {u:?}");
+        assert!(u.iter().all(|x| x.wid() < 1e-6));
+    }
+    (sol.unique.len(), dt)
+}
+
+fn random_q(chain: &Chain6R, rng: &mut Lcg) -> [f64; 6] {
+    [0, 1, 2, 3, 4, 5].map(|k| {
+        let (lo, hi) = chain.ranges[k];
+        rng.uniform(lo.max(-3.1), hi.min(3.1))
+    })
+}
+
+fn sweep(chain: &Chain6R, poses: usize, seed: u64) -> (Vec<usize>, Vec<f64>) {
+    let mut rng = Lcg(seed);
+    let (mut counts, mut times) = (Vec::new(), Vec::new());
+    for _ in 0..poses {
+        let q = random_q(chain, &mut rng);
+        let (n, dt) = check_pose(chain, &q);
+        counts.push(n);
+        times.push(dt.as_secs_f64());
+    }
+    (counts, times)
+}
+
+#[test]
+fn random_general_6r_loses_no_solution() {
+    for seed in 1..=3 {
+        let chain = chain_of(&random_dh(seed));
+        let (counts, _) = sweep(&chain, 4, seed);
+        assert!(counts.iter().all(|n| (1..=16).contains(n)), "{counts:?}");
+    }
+}
+
+#[test]
+fn bundled_arms_lose_no_solution() {
+    for file in ["urdf/puma560.urdf", "urdf/ur5.urdf", "urdf/kuka_kr16.urdf", "tests/data/fanuc_crx10ial_style.urdf", "tests/data/abb_irb140_style.urdf"] {
+        let chain = chain_of(&repo(file)).within_one_turn();
+        sweep(&chain, 3, 7);
+    }
+}
+
+/// Median time per pose and the solution counts (release build, one thread).
+#[test]
+#[ignore = "long: timing figures"]
+fn timing_figures() {
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    for (name, xml) in [("general 6R", random_dh(11)), ("ur5", repo("urdf/ur5.urdf")), ("crx", repo("tests/data/fanuc_crx10ial_style.urdf")), ("puma", repo("urdf/puma560.urdf"))] {
+        let chain = chain_of(&xml).within_one_turn();
+        let (counts, times) = sweep(&chain, 50, 3);
+        let mut hist = std::collections::BTreeMap::new();
+        for c in counts {
+            *hist.entry(c).or_insert(0) += 1;
+        }
+        println!("{name}: median {:.1} ms, max {:.1} ms, counts {hist:?}", 1e3 * median(times.clone()), 1e3 * times.iter().cloned().fold(0.0, f64::max));
+    }
+}
+
+#[test]
+#[ignore = "long: counters"]
+fn counters() {
+    let file = std::env::var("SIX_R_ARM").unwrap_or_default();
+    let chain = if file.is_empty() { chain_of(&random_dh(1)) } else { chain_of(&repo(&file)) };
+    let mut rng = Lcg(7);
+    for _ in 0..3 {
+        let q = random_q(&chain, &mut rng);
+        let target = PoseTarget::around(&chain.pose(&q), 1e-12).expect("finite");
+        let t = Instant::now();
+        let sol = ik::solve(&chain, &target, 1e-10, &control()).expect("solves");
+        println!("{:?} {} unique, {} clusters {:?} {:?}", t.elapsed(), sol.unique.len(), sol.clusters.len(), sol.status, sol.stats);
+    }
+}
+
+fn never() -> &'static std::sync::atomic::AtomicBool {
+    static NEVER: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+    &NEVER
+}
+
+/// The CRX fixture is cuspidal: the witness re-checked in `f64` (both ends map to the pose,
+/// det J keeps its sign along the path sampled densely).
+#[test]
+fn crx_is_cuspidal_with_a_witness_checked_in_f64() {
+    let chain = chain_of(&repo("tests/data/fanuc_crx10ial_style.urdf"));
+    let control = Control { limits: Limits { max_cells: 3_000_000, ..Limits::default() }, threads: 1, cancel: never() };
+    let t = Instant::now();
+    let verdict = linkspace::manip6r::cuspidal::search(&chain, Duration::from_secs(600), 1, &control);
+    let CuspidalVerdict::Cuspidal(w) = verdict else { panic!("no witness: {verdict:?}") };
+    println!("CRX witness in {:.1} s: {} pieces, min |det J| {:.3e}", t.elapsed().as_secs_f64(), w.pieces, w.min_abs_det);
+    let ends: [[f64; 6]; 2] = [w.path[0], *w.path.last().expect("a path")];
+    for q in ends {
+        assert!(chain.pose(&q).distance(&w.pose) < 1e-7);
+    }
+    assert!((0..6).any(|k| {
+        let d = (ends[0][k] - ends[1][k]).rem_euclid(std::f64::consts::TAU);
+        d > 1e-3 && d < std::f64::consts::TAU - 1e-3
+    }), "two distinct configurations");
+    for seg in w.path.windows(2) {
+        for i in 0..=2000 {
+            let t = i as f64 / 2000.0;
+            let q: [f64; 6] = [0, 1, 2, 3, 4, 5].map(|k| seg[0][k] + t * (seg[1][k] - seg[0][k]));
+            assert!(chain.det_jacobian(&q) * w.det_sign > 0.0, "det J changes sign at {q:?}");
+        }
+    }
+}
+
+/// UR5 (three consecutive parallel axes) is never reported cuspidal.
+#[test]
+fn ur5_is_never_cuspidal() {
+    let chain = chain_of(&repo("urdf/ur5.urdf"));
+    let control = Control { limits: Limits { max_cells: 3_000_000, ..Limits::default() }, threads: 1, cancel: never() };
+    let verdict = linkspace::manip6r::cuspidal::search(&chain, Duration::from_secs(20), 1, &control);
+    assert!(matches!(verdict, CuspidalVerdict::Undecided { .. }), "{verdict:?}");
+}
+
+/// UR5 (`urdf/ur5.urdf` is the standard DH table, tool0 = frame 6) against an independent
+/// closed form: the number of configurations for poses of random joint vectors.
+mod ur5_closed_form {
+    use nalgebra::{Matrix4, Vector3};
+    const D: [f64; 6] = [0.089159, 0.0, 0.0, 0.10915, 0.09465, 0.0823];
+    const A: [f64; 6] = [0.0, -0.425, -0.39225, 0.0, 0.0, 0.0];
+    const ALPHA: [f64; 6] = [std::f64::consts::FRAC_PI_2, 0.0, 0.0, std::f64::consts::FRAC_PI_2, -std::f64::consts::FRAC_PI_2, 0.0];
+
+    fn dh(i: usize, t: f64) -> Matrix4<f64> {
+        let (s, c) = t.sin_cos();
+        let (sa, ca) = ALPHA[i].sin_cos();
+        Matrix4::new(c, -s * ca, s * sa, A[i] * c, s, c * ca, -c * sa, A[i] * s, 0.0, sa, ca, D[i], 0.0, 0.0, 0.0, 1.0)
+    }
+
+    pub fn fk(q: &[f64; 6]) -> Matrix4<f64> {
+        (0..6).fold(Matrix4::identity(), |t, i| t * dh(i, q[i]))
+    }
+
+    /// Every configuration of the pose `t` (Hawkins' closed form), each checked by `fk`.
+    pub fn solve(t: &Matrix4<f64>) -> Vec<[f64; 6]> {
+        let (n, o, a, p) = (t.fixed_view::<3, 1>(0, 0), t.fixed_view::<3, 1>(0, 1), t.fixed_view::<3, 1>(0, 2), t.fixed_view::<3, 1>(0, 3));
+        let p05: Vector3<f64> = p - a * D[5];
+        let r = p05.x.hypot(p05.y);
+        let mut out = Vec::new();
+        if r < D[3].abs() {
+            return out;
+        }
+        for s1sign in [1.0, -1.0] {
+            let t1 = p05.y.atan2(p05.x) + s1sign * (D[3] / r).acos() + std::f64::consts::FRAC_PI_2;
+            let (s1, c1) = t1.sin_cos();
+            let c5 = (p.x * s1 - p.y * c1 - D[3]) / D[5];
+            if c5.abs() > 1.0 {
+                continue;
+            }
+            for s5sign in [1.0, -1.0] {
+                let t5 = s5sign * c5.acos();
+                let s5 = t5.sin();
+                let t6 = (-(o.x * s1 - o.y * c1) / s5).atan2((n.x * s1 - n.y * c1) / s5);
+                let t14 = dh(0, t1).try_inverse().expect("rigid") * t * (dh(4, t5) * dh(5, t6)).try_inverse().expect("rigid");
+                let (px, pz) = (t14[(0, 3)], t14[(1, 3)]);
+                // Frame 1 after joint 1's α: the planar chain lies in its x–y plane.
+                let len2 = px * px + pz * pz;
+                let c3 = (len2 - A[1] * A[1] - A[2] * A[2]) / (2.0 * A[1] * A[2]);
+                if c3.abs() > 1.0 {
+                    continue;
+                }
+                for s3sign in [1.0, -1.0] {
+                    let t3 = s3sign * c3.acos();
+                    let t2 = pz.atan2(px) - (A[2] * t3.sin()).atan2(A[1] + A[2] * t3.cos());
+                    let t34 = (dh(1, t2) * dh(2, t3)).try_inverse().expect("rigid") * t14;
+                    let t4 = t34[(1, 0)].atan2(t34[(0, 0)]);
+                    let q = [t1, t2, t3, t4, t5, t6];
+                    if (fk(&q) - t).norm() < 1e-8 {
+                        out.push(q);
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
+#[test]
+fn ur5_counts_match_the_closed_form() {
+    let chain = chain_of(&repo("urdf/ur5.urdf")).within_one_turn();
+    let mut rng = Lcg(5);
+    for _ in 0..12 {
+        let q = random_q(&chain, &mut rng);
+        let t = ur5_closed_form::fk(&q);
+        let pose = chain.pose(&q);
+        let m = Pose64 { r: [0, 1, 2].map(|i| [0, 1, 2].map(|j| t[(i, j)])), t: [t[(0, 3)], t[(1, 3)], t[(2, 3)]] };
+        assert!(pose.distance(&m) < 1e-9, "the file is the DH table: {pose:?} {m:?}");
+        let analytic = ur5_closed_form::solve(&t);
+        assert!(analytic.iter().any(|a| (0..6).all(|k| (a[k] - q[k]).rem_euclid(std::f64::consts::TAU).min((q[k] - a[k]).rem_euclid(std::f64::consts::TAU)) < 1e-6)), "closed form misses q");
+        let sol = ik::solve(&chain, &PoseTarget::around(&pose, 1e-12).expect("finite"), 1e-10, &control()).expect("solves");
+        assert_eq!(sol.status, Status::Complete);
+        assert!(sol.clusters.is_empty());
+        assert_eq!(sol.unique.len(), analytic.len(), "q = {q:?}");
+    }
+}
