@@ -202,7 +202,7 @@ struct SingularitiesArgs {
     limits: LimitArgs,
     /// Seconds for the whole-arm cuspidality search of a six-joint arm without a spherical
     /// wrist (0: not searched).
-    #[arg(long, default_value_t = 10.0, value_name = "SECONDS")]
+    #[arg(long, default_value_t = 2.0, value_name = "SECONDS")]
     arm_budget: f64,
     /// Write the full report as JSON here.
     #[arg(long, value_name = "FILE")]
@@ -566,9 +566,14 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     let (prepared, verdict, effect) = (&arm.prepared, &found.verdict, &found.limit_effect);
     let mut out = std::io::stdout().lock();
     let scope = &prepared.choice.scope;
+    // Searched before printing, so that the sub-chain's verdict can point to the arm's.
+    let arm_section = whole_arm(&args, &arm, &control)?;
     writeln!(out, "{}", verdict.headline(scope)).ok();
     if let Some(open) = scope.not_answered.as_ref().filter(|_| !scope.stands_for_arm) {
-        writeln!(out, "  {open}").ok();
+        match &arm_section {
+            Some(a) => writeln!(out, "  not the arm's verdict: the whole arm's is the line `arm {}` below", a.arm).ok(),
+            None => writeln!(out, "  {open}").ok(),
+        };
     }
     let node_text = report.nodes.as_ref().map_or("nodes not searched".to_string(), |n| format!("{} nodes", n.len()));
     let undecided = report.undecided_total[0] + report.undecided_total[1];
@@ -624,7 +629,6 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
         let kind = if m.near_degenerate.is_some() { "near-degenerate strip (undecided)" } else { "internal motion" };
         writeln!(out, "  {kind} {}", m.joints.iter().map(|(n, b)| format!("{n} in [{:.6}, {:.6}]", b[0], b[1])).collect::<Vec<_>>().join(", ")).ok();
     }
-    let arm_section = whole_arm(&args, &arm, &control)?;
     if let Some(a) = &arm_section {
         writeln!(out, "arm {}: {} ({})", a.arm, a.verdict, a.reason).ok();
         if let Some(w) = &a.witness {
@@ -637,7 +641,7 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
         if let (Some(a), Some(map)) = (&arm_section, value.as_object_mut()) {
             map.insert("arm_cuspidality".into(), serde_json::to_value(a)?);
         }
-        std::fs::write(&path, serde_json::to_string_pretty(&value)?).with_context(|| format!("writing {}", path.display()))?;
+        write_file(&path, serde_json::to_string_pretty(&value)?)?;
     }
     Ok(())
 }
@@ -653,7 +657,9 @@ fn whole_arm(args: &SingularitiesArgs, arm: &Arm, control: &Control) -> Result<O
     }
     let options = args.chain.options()?;
     let mechanism = load_mechanism(&args.urdf)?;
-    let found = app::arm_cuspidality(&mechanism, arm, &options, Duration::from_secs_f64(args.arm_budget), control);
+    // Within the run's --timeout too.
+    let budget = control.limits.timeout.map_or(Duration::from_secs_f64(args.arm_budget), |t| t.min(Duration::from_secs_f64(args.arm_budget)));
+    let found = app::arm_cuspidality(&mechanism, arm, &options, budget, control);
     Ok(found.map(|(chain, c)| report::six::ArmCuspidalityReport::of(&chain, &c)))
 }
 
