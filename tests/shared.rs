@@ -103,6 +103,57 @@ fn planar_solve_is_the_same_on_ranks() {
     assert!(r["solutions"].as_array().is_some_and(|s| s.len() > 1000), "the mobile butterfly's curve");
     let r = same_everywhere(&["solve", "urdf/double_butterfly.urdf", "--fix", "joint6=1.1760052070951352", "--sigma", "1e-4"]);
     assert_eq!(r["status"], "complete");
+    // The five-bar's configuration surface.
+    let r = same_everywhere(&["solve", "urdf/five_bar.urdf", "--sigma", "0.1"]);
+    assert!(r["solutions"].as_array().is_some_and(|s| s.len() > 1000), "the five-bar's surface");
+}
+
+/// A rank that dies mid-run ends the whole run with an error, well before its timeout: the
+/// other ranks are not left waiting for it.
+#[test]
+fn a_rank_killed_mid_run_ends_the_run_with_an_error() {
+    let bin = mpi_binary();
+    let mut run = Command::new("mpirun")
+        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
+        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
+        .args(["--oversubscribe", "-np", "2"])
+        .arg(bin)
+        .args(["solve", "urdf/five_bar.urdf", "--sigma", "0.001", "--timeout", "120", "--threads", "1"])
+        .current_dir(repo())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("mpirun starts");
+    // The ranks are mpirun's children; kill one of them once both are searching.
+    std::thread::sleep(std::time::Duration::from_secs(3));
+    let ranks: Vec<u32> = std::fs::read_dir("/proc")
+        .expect("/proc")
+        .filter_map(|e| e.ok()?.file_name().to_str()?.parse::<u32>().ok())
+        .filter(|pid| {
+            let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+            // pid (comm) state ppid ...
+            let after = stat.rsplit_once(')').map_or("", |(_, rest)| rest);
+            stat.contains("(linkspace)") && after.split_whitespace().nth(1).and_then(|p| p.parse::<u32>().ok()) == Some(run.id())
+        })
+        .collect();
+    assert_eq!(ranks.len(), 2, "two ranks under mpirun");
+    let killed = Command::new("kill").args(["-9", &ranks[1].to_string()]).status().expect("kill runs");
+    assert!(killed.success());
+    let t0 = std::time::Instant::now();
+    let status = loop {
+        if let Some(s) = run.try_wait().expect("mpirun waits") {
+            break s;
+        }
+        if t0.elapsed().as_secs() > 60 {
+            let _ = run.kill();
+            panic!("mpirun still running 60 s after a rank was killed");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    };
+    let out = run.wait_with_output().expect("output");
+    assert!(!status.success(), "a killed rank fails the run");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("signal 9") || stderr.contains("Killed") || stderr.contains("exited on signal"), "mpirun names the dead rank: {stderr}");
 }
 
 #[test]
@@ -112,7 +163,7 @@ fn spatial_solve_distances_and_loop_singularities_are_the_same_on_ranks() {
     same_everywhere(&["distances", "urdf/four_spheres.json", "--sigma", "0.01"]);
     same_everywhere(&["loop-singularities", "urdf/five_bar.urdf", "--sigma", "0.01"]);
     same_everywhere(&["loop-singularities", "urdf/five_bar_unequal.urdf", "--actuated", "crank1_joint,crank2_joint", "--kind", "cusps", "--sigma", "1e-2"]);
-    same_everywhere(&["singularities", "urdf/orthogonal_3r_e.urdf"]);
+    same_everywhere(&["singularities", "urdf/orthogonal_3r_e.urdf", "--nodes"]);
     same_everywhere(&["ik", "urdf/orthogonal_3r_a.urdf", "--point", "3,1"]);
 }
 
@@ -123,7 +174,7 @@ fn limits_hold_for_the_whole_run() {
     let r = same_everywhere(&["solve", "urdf/double_butterfly.urdf", "--sigma", "0.05", "--max-boxes", "300"]);
     assert_eq!(r["status"], "incomplete");
     assert!(r["undecided"].as_array().is_some_and(|u| !u.is_empty()));
-    let (r, out) = report(2, &["solve", "urdf/five_bar.urdf", "--sigma", "0.002", "--timeout", "1", "--threads", "1"]);
+    let (r, out) = report(3, &["solve", "urdf/five_bar.urdf", "--sigma", "0.002", "--timeout", "1", "--threads", "1"]);
     assert_eq!(r["status"], "incomplete", "{out}");
     assert!(out.matches("five_bar").count() == 1, "rank 0 alone prints: {out}");
 }
