@@ -860,12 +860,15 @@ fn a_sub_chain_verdict_names_its_sub_chain_and_point() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     let lines: Vec<&str> = stdout.lines().collect();
     assert!(lines[0].starts_with("verdict of the 3R sub-chain joints 1-3 (joint_1, joint_2, joint_3) of 'fanuc_crx10ial', point link_3@0.54,0,0: NON-CUSPIDAL (certified)"), "{stdout}");
-    assert!(lines[1].contains("6-joint arm 'fanuc_crx10ial' is cuspidal is a different question, not answered"), "{stdout}");
+    // The sub-chain's verdict points to the whole arm's, which a certified witness settles.
+    assert!(lines[1].contains("not the arm's verdict: the whole arm's is the line `arm base_link -> tool0"), "{stdout}");
+    assert!(stdout.lines().any(|l| l.starts_with("arm base_link -> tool0 (joint_1, joint_2, joint_3, joint_4, joint_5, joint_6): cuspidal (witness found")), "{stdout}");
     let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("written")).expect("JSON");
     std::fs::remove_file(&json).ok();
     assert_eq!(report["chain"]["scope"]["stands_for_arm"], false, "{}", report["chain"]);
     assert_eq!(report["chain"]["spherical_wrist"], false);
     assert!(report["chain"]["scope"]["subject"].as_str().is_some_and(|s| s.contains("link_3@0.54,0,0")));
+    assert_eq!(report["arm_cuspidality"]["verdict"], "cuspidal", "{}", report["arm_cuspidality"]);
 }
 
 /// Which bundled arms' verdicts stand for the arm: the spherical wrists' (at their centre), not

@@ -319,9 +319,9 @@ fn bad_spatial_input_is_one_clear_error() {
     let m = urdf::parse(&urdf_text("rssr.urdf")).expect("parses");
     let e = SpatialProblem::new(&m, &[], &[("coupler".into(), [1.0, 0.0, 0.0], "coupler@1,0,0".into())]).map(|_| ()).expect_err("refused");
     assert!(matches!(e, LinkageError::UnderConstrained(ref s) if s.contains("spins freely")), "{e}");
-    // A ball joint cannot be fixed to a value.
+    // A ball joint cannot be fixed to a value, and the refusal says it is a ball joint.
     let e = SpatialProblem::new(&m, &[("coupler_ball".into(), 1.0)], &[]).map(|_| ()).expect_err("refused");
-    assert_eq!(e, LinkageError::NotMovable("coupler_ball".into()));
+    assert_eq!(e, LinkageError::NotOneValue("coupler_ball".into(), "ball"));
     // Unsupported closure types are refused by the reader, with the type named.
     let odd = urdf_text("rssr.urdf").replace("type=\"spherical\">\n    <predecessor", "type=\"planar\">\n    <predecessor");
     let e = urdf::parse(&odd).expect_err("refused").to_string();
