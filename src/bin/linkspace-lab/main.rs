@@ -9,6 +9,7 @@ mod charts;
 mod distances;
 mod loops;
 mod plot;
+mod scaling;
 mod spatial;
 mod study;
 
@@ -39,6 +40,8 @@ enum Command {
     /// Time the spatial builder: planar fixtures against the planar model, spatial ones with
     /// and without the LP shrink, each in the same run.
     BenchSpatial(spatial::BenchArgs),
+    /// Record a planar solve's search tree and predict its time on 1 to 1024 MPI ranks.
+    Scaling(scaling::ScalingArgs),
 }
 
 #[derive(clap::Args)]
@@ -62,6 +65,7 @@ fn main() -> ExitCode {
         Command::BenchDistances(args) => distances::bench(args),
         Command::BenchLoopSingularities(args) => loops::bench(args),
         Command::BenchSpatial(args) => spatial::bench(args),
+        Command::Scaling(args) => scaling::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

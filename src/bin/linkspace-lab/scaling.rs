@@ -1,0 +1,85 @@
+//! `linkspace-lab scaling URDF`: the search tree of one planar solve recorded level by level,
+//! and the time it predicts for N MPI ranks sharing that search (`mpirun -np N linkspace
+//! solve ...`), up to 1024.
+//!
+//! The model is the shared driver's (`search::run_shared`): per level, the cells are dealt in
+//! chunks round robin, so the slowest rank decides `ceil(chunks / N)` chunks; then one gather
+//! (`latency` per doubling of N); then every rank decodes every decision (`decode` per cell:
+//! the part that does not shrink with N). A cell costs the run's CPU time over its cells.
+
+use anyhow::{Context, Result};
+use linkspace::model::urdf;
+use linkspace::problems::LinkageProblem;
+use linkspace::search::{Progress, SolverSettings};
+use std::io::Write;
+use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+
+#[derive(clap::Args)]
+pub struct ScalingArgs {
+    /// A planar or spatial closed-loop linkage.
+    urdf: PathBuf,
+    /// Boxes no wider than this are solutions.
+    #[arg(long, default_value_t = 0.1)]
+    sigma: f64,
+    /// Seconds one gather takes per doubling of the ranks (MPI_Allgatherv latency).
+    #[arg(long, default_value_t = 20e-6)]
+    latency: f64,
+    /// Seconds every rank spends per cell of a level to encode, move and decode its decision;
+    /// fitted to `--two-ranks` when that is given.
+    #[arg(long, default_value_t = 2e-6)]
+    decode: f64,
+    /// The measured search seconds (`stats.seconds`) of this solve on 2 ranks of one thread:
+    /// fits `--decode`.
+    #[arg(long, value_name = "SECONDS")]
+    two_ranks: Option<f64>,
+}
+
+/// The predicted search seconds on `n` ranks.
+fn predict(levels: &[usize], cell: f64, latency: f64, decode: f64, n: usize) -> f64 {
+    levels
+        .iter()
+        .map(|&cells| {
+            let chunk = (cells / (n * 8)).clamp(1, 256);
+            let chunks = cells.div_ceil(chunk);
+            let slowest = chunks.div_ceil(n) * chunk;
+            let talk = if n > 1 { latency * (n as f64).log2().ceil() + decode * cells as f64 } else { 0.0 };
+            slowest.min(cells) as f64 * cell + talk
+        })
+        .sum()
+}
+
+pub fn run(args: ScalingArgs) -> Result<()> {
+    let text = std::fs::read_to_string(&args.urdf).with_context(|| format!("reading {}", args.urdf.display()))?;
+    let m = urdf::parse(&text)?;
+    let problem = LinkageProblem::new(&m, &[], &[])?;
+    // Two threads: the level-by-level driver, which reports after each level.
+    let solver = problem.solver(SolverSettings { sigma: args.sigma, threads: 2, ..SolverSettings::default() })?;
+    let mut levels = vec![1usize];
+    let mut processed_before = 0u64;
+    let e = solver.enclose(&AtomicBool::new(false), &mut |p: &Progress| {
+        // After each level: what it processed, and the next level waiting.
+        if p.processed > processed_before {
+            processed_before = p.processed;
+            levels.push(p.pending);
+        }
+    });
+    levels.retain(|&n| n > 0);
+    let cells: usize = levels.iter().sum();
+    let cell = e.stats.cpu_seconds / cells as f64;
+    let decode = match args.two_ranks {
+        Some(t2) => ((t2 - predict(&levels, cell, args.latency, 0.0, 2)) / cells as f64).max(0.0),
+        None => args.decode,
+    };
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{}: sigma {}, {} levels, {cells} cells, {:.1} µs CPU per cell; latency {:.1} µs per doubling, decode {:.2} µs per cell{}", m.name, args.sigma, levels.len(), cell * 1e6, args.latency * 1e6, decode * 1e6, if args.two_ranks.is_some() { " (fitted to --two-ranks)" } else { "" })?;
+    writeln!(out, "| ranks | predicted search | speed-up | efficiency |")?;
+    writeln!(out, "|---|---|---|---|")?;
+    let one = predict(&levels, cell, args.latency, decode, 1);
+    for k in 0..=10 {
+        let n = 1usize << k;
+        let t = predict(&levels, cell, args.latency, decode, n);
+        writeln!(out, "| {n} | {t:.3} s | {:.1}x | {:.0} % |", one / t, 100.0 * one / t / n as f64)?;
+    }
+    Ok(())
+}
