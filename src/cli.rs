@@ -640,6 +640,10 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
         let mut value = serde_json::to_value(&report)?;
         if let (Some(a), Some(map)) = (&arm_section, value.as_object_mut()) {
             map.insert("arm_cuspidality".into(), serde_json::to_value(a)?);
+            // The sub-chain's verdict now points to the arm's, as the text does.
+            if let Some(open) = map.get_mut("chain").and_then(|c| c.get_mut("scope")).and_then(|s| s.get_mut("not_answered")).filter(|o| o.is_string()) {
+                *open = serde_json::Value::String("not the arm's verdict: the whole arm's is arm_cuspidality".into());
+            }
         }
         write_file(&path, serde_json::to_string_pretty(&value)?)?;
     }

@@ -869,6 +869,7 @@ fn a_sub_chain_verdict_names_its_sub_chain_and_point() {
     assert_eq!(report["chain"]["spherical_wrist"], false);
     assert!(report["chain"]["scope"]["subject"].as_str().is_some_and(|s| s.contains("link_3@0.54,0,0")));
     assert_eq!(report["arm_cuspidality"]["verdict"], "cuspidal", "{}", report["arm_cuspidality"]);
+    assert_eq!(report["chain"]["scope"]["not_answered"], "not the arm's verdict: the whole arm's is arm_cuspidality");
 }
 
 /// Which bundled arms' verdicts stand for the arm: the spherical wrists' (at their centre), not
