@@ -10,7 +10,9 @@
 use anyhow::{Context, Result};
 use linkspace::model::urdf;
 use linkspace::problems::LinkageProblem;
-use linkspace::search::{Progress, SolverSettings};
+use linkspace::interval::IntervalBox;
+use linkspace::search::{BoxSink, BoxStatus, Progress, SolverSettings};
+use std::ops::ControlFlow;
 use std::io::Write;
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
@@ -53,20 +55,31 @@ pub fn run(args: ScalingArgs) -> Result<()> {
     let text = std::fs::read_to_string(&args.urdf).with_context(|| format!("reading {}", args.urdf.display()))?;
     let m = urdf::parse(&text)?;
     let problem = LinkageProblem::new(&m, &[], &[])?;
-    // Two threads: the level-by-level driver, which reports after each level.
-    let solver = problem.solver(SolverSettings { sigma: args.sigma, threads: 2, ..SolverSettings::default() })?;
-    let mut levels = vec![1usize];
-    let mut processed_before = 0u64;
-    let e = solver.enclose(&AtomicBool::new(false), &mut |p: &Progress| {
-        // After each level: what it processed, and the next level waiting.
-        if p.processed > processed_before {
-            processed_before = p.processed;
-            levels.push(p.pending);
+    // The level-by-level driver on one thread, which reports after each level; the search
+    // alone (no post-processing), so that a cell's cost is the search's.
+    let solver = problem.solver(SolverSettings { sigma: args.sigma, threads: 1, ..SolverSettings::default() })?;
+    struct Levels {
+        sizes: Vec<usize>,
+        processed: u64,
+    }
+    impl BoxSink for Levels {
+        fn emit(&mut self, _: BoxStatus, _: &IntervalBox) -> ControlFlow<()> {
+            ControlFlow::Continue(())
         }
-    });
+        fn progress(&mut self, p: &Progress) {
+            // After each level: what it processed, and the next level waiting.
+            if p.processed > self.processed {
+                self.processed = p.processed;
+                self.sizes.push(p.pending);
+            }
+        }
+    }
+    let mut sink = Levels { sizes: vec![1], processed: 0 };
+    let (_, stats) = solver.run_parallel(1, &AtomicBool::new(false), &mut sink, None);
+    let mut levels = sink.sizes;
     levels.retain(|&n| n > 0);
     let cells: usize = levels.iter().sum();
-    let cell = e.stats.cpu_seconds / cells as f64;
+    let cell = stats.cpu_seconds / cells as f64;
     let decode = match args.two_ranks {
         Some(t2) => ((t2 - predict(&levels, cell, args.latency, 0.0, 2)) / cells as f64).max(0.0),
         None => args.decode,
