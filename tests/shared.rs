@@ -40,10 +40,8 @@ fn mpi_binary() -> &'static Path {
     })
 }
 
-/// Runs `linkspace ARGS --json F` under `mpirun -np ranks` (or alone for 0), and returns the
-/// report and stdout.
-fn report(ranks: usize, args: &[&str]) -> (Value, String) {
-    let json = std::env::temp_dir().join(format!("linkspace-shared-{}-{ranks}-{}.json", std::process::id(), args.join("_").replace(['/', '='], "-")));
+/// The `mpi` binary under `mpirun -np ranks` (alone for 0), in the repository.
+fn linkspace_on(ranks: usize) -> Command {
     let bin = mpi_binary();
     let mut cmd = if ranks == 0 {
         Command::new(bin)
@@ -54,7 +52,15 @@ fn report(ranks: usize, args: &[&str]) -> (Value, String) {
         c.args(["--oversubscribe", "-np", &ranks.to_string()]).arg(bin);
         c
     };
-    let out = cmd.current_dir(repo()).args(args).arg("--json").arg(&json).output().expect("mpirun runs");
+    cmd.current_dir(repo());
+    cmd
+}
+
+/// Runs `linkspace ARGS --json F` under `mpirun -np ranks` (or alone for 0), and returns the
+/// report and stdout.
+fn report(ranks: usize, args: &[&str]) -> (Value, String) {
+    let json = std::env::temp_dir().join(format!("linkspace-shared-{}-{ranks}-{}.json", std::process::id(), args.join("_").replace(['/', '='], "-")));
+    let out = linkspace_on(ranks).args(args).arg("--json").arg(&json).output().expect("mpirun runs");
     let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
     assert!(out.status.success(), "{ranks} ranks, {args:?}: {stdout}{}", String::from_utf8_lossy(&out.stderr));
     let value = serde_json::from_str(&std::fs::read_to_string(&json).expect("rank 0 writes the report")).expect("json");
@@ -112,14 +118,8 @@ fn planar_solve_is_the_same_on_ranks() {
 /// other ranks are not left waiting for it.
 #[test]
 fn a_rank_killed_mid_run_ends_the_run_with_an_error() {
-    let bin = mpi_binary();
-    let mut run = Command::new("mpirun")
-        .env("OMPI_ALLOW_RUN_AS_ROOT", "1")
-        .env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1")
-        .args(["--oversubscribe", "-np", "2"])
-        .arg(bin)
+    let mut run = linkspace_on(2)
         .args(["solve", "urdf/five_bar.urdf", "--sigma", "0.001", "--timeout", "120", "--threads", "1"])
-        .current_dir(repo())
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::piped())
         .spawn()
@@ -186,16 +186,7 @@ fn a_sweep_on_ranks_gives_the_table_of_one_process_and_resumes_from_rank_files()
     let spec = "examples/sweeps/three_rpr_assembly_modes.json";
     let dir = |name: &str| std::env::temp_dir().join(format!("linkspace-sweep-{}-{name}", std::process::id()));
     let sweep = |ranks: usize, out: &Path, extra: &[&str]| {
-        let bin = mpi_binary();
-        let mut cmd = if ranks == 0 {
-            Command::new(bin)
-        } else {
-            let mut c = Command::new("mpirun");
-            c.env("OMPI_ALLOW_RUN_AS_ROOT", "1").env("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
-            c.args(["--oversubscribe", "-np", &ranks.to_string()]).arg(bin);
-            c
-        };
-        let o = cmd.current_dir(repo()).args(["sweep", spec, "--out"]).arg(out).args(extra).output().expect("runs");
+        let o = linkspace_on(ranks).args(["sweep", spec, "--out"]).arg(out).args(extra).output().expect("runs");
         assert!(o.status.success(), "{ranks} ranks: {}", String::from_utf8_lossy(&o.stderr));
     };
     // The table without its time column (the last but one; `error` is last).

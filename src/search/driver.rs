@@ -629,6 +629,15 @@ mod tests {
         }
     }
 
+    /// `run(peer)` on one thread per peer of a group of `size` processes played by threads.
+    fn on_each_process<T: Send>(size: usize, run: impl Fn(&crate::search::share::tests::ThreadPeers) -> T + Sync) -> Vec<T> {
+        let group = crate::search::share::tests::ThreadPeers::group(size);
+        std::thread::scope(|s| {
+            let handles: Vec<_> = group.iter().map(|p| s.spawn(|| run(p))).collect();
+            handles.into_iter().map(|h| h.join().unwrap()).collect()
+        })
+    }
+
     #[test]
     fn processes_sharing_a_search_each_report_what_one_process_reports() {
         let serial = {
@@ -637,19 +646,10 @@ mod tests {
             keep.found
         };
         for size in [2, 3] {
-            let group = crate::search::share::tests::ThreadPeers::group(size);
-            let results: Vec<_> = std::thread::scope(|s| {
-                let handles: Vec<_> = group
-                    .iter()
-                    .map(|p| {
-                        s.spawn(move || {
-                            let mut keep = Keep::default();
-                            let (status, stats) = run_shared_with(Some(p), &mut [Roots, Roots], (0.0, 3.0, 0), &Limits::default(), &AtomicBool::new(false), &mut keep);
-                            (status, stats.processed, keep.found)
-                        })
-                    })
-                    .collect();
-                handles.into_iter().map(|h| h.join().unwrap()).collect()
+            let results = on_each_process(size, |p| {
+                let mut keep = Keep::default();
+                let (status, stats) = run_shared_with(Some(p), &mut [Roots, Roots], (0.0, 3.0, 0), &Limits::default(), &AtomicBool::new(false), &mut keep);
+                (status, stats.processed, keep.found)
             });
             let processed = results[0].1;
             for (status, p, found) in results {
@@ -658,20 +658,11 @@ mod tests {
             }
         }
         // A cell limit stops every process at the same cell, with the same pending cells.
-        let group = crate::search::share::tests::ThreadPeers::group(2);
         let limits = Limits { max_cells: 40, ..Limits::default() };
-        let results: Vec<_> = std::thread::scope(|s| {
-            let handles: Vec<_> = group
-                .iter()
-                .map(|p| {
-                    s.spawn(move || {
-                        let mut keep = Keep::default();
-                        let (status, stats) = run_shared_with(Some(p), &mut [Roots], (0.0, 3.0, 0), &limits, &AtomicBool::new(false), &mut keep);
-                        (status, stats.processed, keep.found, keep.pending)
-                    })
-                })
-                .collect();
-            handles.into_iter().map(|h| h.join().unwrap()).collect()
+        let results = on_each_process(2, |p| {
+            let mut keep = Keep::default();
+            let (status, stats) = run_shared_with(Some(p), &mut [Roots], (0.0, 3.0, 0), &limits, &AtomicBool::new(false), &mut keep);
+            (status, stats.processed, keep.found, keep.pending)
         });
         assert_eq!(results[0], results[1]);
         assert_eq!((results[0].0, results[0].1), (Status::Incomplete(Limit::Boxes), 40));
