@@ -14,6 +14,7 @@ pub(crate) mod arm;
 pub(crate) mod distances;
 pub(crate) mod linkage;
 pub(crate) mod loops;
+mod merge;
 mod platform;
 pub(crate) mod six;
 pub(crate) mod sweep;

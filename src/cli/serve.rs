@@ -85,6 +85,11 @@ pub struct ServeArgs {
     /// Boxes drawn per marker namespace.
     #[arg(long, default_value_t = NodeLimits::default().max_markers)]
     max_markers: usize,
+    /// Largest box set sent on a topic or in a reply, megabytes of boxes; a larger set is sent
+    /// merged into fewer, larger boxes (each the hull of neighbours of one cluster, so every
+    /// solution stays enclosed), and BoxSet.merged_from says how many boxes the run found.
+    #[arg(long, default_value_t = NodeLimits::default().max_set_megabytes)]
+    max_set_megabytes: f64,
     /// Publish the configuration spaces and markers again every this many seconds (for
     /// subscribers with volatile durability, such as RViz's default); 0: only when they change.
     #[arg(long, default_value_t = 0.0)]
@@ -96,7 +101,7 @@ pub struct ServeArgs {
     robot_description_topic: Option<String>,
     /// ROS 2 arguments, as `ros2 run` and launch files pass them: -r __ns:=/NS, -r __node:=NAME,
     /// -p NAME:=VALUE (robot_description, sigma, rho, precision, max_request_boxes,
-    /// max_request_timeout, max_wait, max_runs, max_markers, republish), --params-file FILE,
+    /// max_request_timeout, max_wait, max_runs, max_markers, max_set_megabytes, republish), --params-file FILE,
     /// --log-level LEVEL.
     /// Everything after it is taken as ROS arguments.
     #[arg(long = "ros-args", value_name = "ARGS", num_args = 0.., allow_hyphen_values = true)]
@@ -162,7 +167,7 @@ pub fn serve(mut args: ServeArgs) -> Result<()> {
     let settings = args.limits.solver_settings(SolverSettings::default().max_boxes, SolverSettings { sigma: args.sigma, rho: args.rho, ..Default::default() })?;
     settings.validate()?;
     linkspace::manip3r::check_precision(args.precision)?;
-    let limits = NodeLimits { max_boxes: args.max_request_boxes, max_timeout: args.max_request_timeout, max_wait: args.max_wait, max_runs: args.max_runs, max_markers: args.max_markers };
+    let limits = NodeLimits { max_boxes: args.max_request_boxes, max_timeout: args.max_request_timeout, max_wait: args.max_wait, max_runs: args.max_runs, max_markers: args.max_markers, max_set_megabytes: args.max_set_megabytes };
     if limits.max_boxes == 0 || !(limits.max_timeout > 0.0 && limits.max_timeout.is_finite()) || !(limits.max_wait >= 0.0 && limits.max_wait.is_finite()) || limits.max_runs == 0 {
         bail!("--max-request-boxes, --max-request-timeout and --max-runs must be positive, --max-wait at least 0");
     }
@@ -258,10 +263,11 @@ fn apply_params(args: &mut ServeArgs, params: &[(String, String)]) -> Result<()>
             "max_wait" => args.max_wait = param_number(name, value)?,
             "max_runs" => args.max_runs = param_number(name, value)?,
             "max_markers" => args.max_markers = param_number(name, value)?,
+            "max_set_megabytes" => args.max_set_megabytes = param_number(name, value)?,
             "republish" => args.republish = param_number(name, value)?,
             "use_sim_time" => {}
             other => bail!(
-                "parameter '{}' is not a parameter of this node (robot_description, sigma, rho, precision, max_request_boxes, max_request_timeout, max_wait, max_runs, max_markers, republish)",
+                "parameter '{}' is not a parameter of this node (robot_description, sigma, rho, precision, max_request_boxes, max_request_timeout, max_wait, max_runs, max_markers, max_set_megabytes, republish)",
                 linkspace::ros::bounded(other, 80)
             ),
         }

@@ -80,6 +80,7 @@ pub fn box_set(r: &BoxSetResult, run_id: u64) -> BoxSet {
             certified: r.stats.certified,
             post_processing_cut_short: r.stats.post_processing_cut_short,
         },
+        merged_from: 0,
     }
 }
 
@@ -146,10 +147,9 @@ pub fn markers(r: &BoxSetResult, world_frame: &str, cap: usize) -> MarkerArray {
 /// One `sensor_msgs/JointState` per isolated solution (assembly mode), in cluster order, in
 /// frame `root_link`, with its `linkspace_msgs/AssemblyMode` (the same configuration with its
 /// index, count and cluster, and the same stamp). The names cover the free joints (loop joints
-/// included) and the fixed ones; values in REP-103 units: radians and metres. `lengths_squared`:
-/// the analysis's joint values are squared lengths (a Cayley–Menger platform), published as
-/// their square roots.
-pub fn assembly_modes(r: &BoxSetResult, run_id: u64, root_link: &str, lengths_squared: bool) -> Vec<(JointState, AssemblyMode)> {
+/// included) and the fixed ones; values in REP-103 units (radians and metres), as the analyses
+/// give joint space.
+pub fn assembly_modes(r: &BoxSetResult, run_id: u64, root_link: &str) -> Vec<(JointState, AssemblyMode)> {
     let modes = r.assembly_modes();
     let n = modes.len();
     let h = header(root_link);
@@ -158,7 +158,7 @@ pub fn assembly_modes(r: &BoxSetResult, run_id: u64, root_link: &str, lengths_sq
         .enumerate()
         .map(|(k, m)| {
             let name: Vec<String> = m.joints.iter().map(|(j, _)| j.clone()).collect();
-            let position: Vec<f64> = m.joints.iter().map(|&(_, v)| if lengths_squared { v.max(0.0).sqrt() } else { v }).collect();
+            let position: Vec<f64> = m.joints.iter().map(|&(_, v)| v).collect();
             let js = JointState { header: h.clone(), name: name.clone(), position: position.clone(), velocity: vec![], effort: vec![] };
             let mode = AssemblyMode {
                 header: h.clone(),

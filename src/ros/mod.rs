@@ -53,11 +53,14 @@ pub struct NodeLimits {
     pub max_runs: usize,
     /// Boxes drawn per marker namespace.
     pub max_markers: usize,
+    /// Largest box set sent (topic sample or reply), megabytes of box columns: a larger one is
+    /// sent merged into fewer boxes (`BoxSet.merged_from`).
+    pub max_set_megabytes: f64,
 }
 
 impl Default for NodeLimits {
     fn default() -> Self {
-        Self { max_boxes: 200_000, max_timeout: 300.0, max_wait: 30.0, max_runs: 4, max_markers: 20_000 }
+        Self { max_boxes: 200_000, max_timeout: 300.0, max_wait: 30.0, max_runs: 4, max_markers: 20_000, max_set_megabytes: 16.0 }
     }
 }
 

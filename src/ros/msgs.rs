@@ -175,6 +175,7 @@ mirror! {
         fixed_joint_names: Vec<String>,
         fixed_joint_values: Vec<f64>,
         stats: SolveStats,
+        merged_from: u64,
     }
 }
 /// `BoxSet.COMPLETE`

@@ -13,7 +13,7 @@
 use super::convert;
 use super::msgs::{self, *};
 use super::{NodeLimits, Loaded, Mapping, Network, ServeConfig, Severity, Source};
-use crate::app::{AnalysisError, BoxSetResult, MechanismKind, IkQuery, IkResult, Service, SingularityQuery, SingularityResult};
+use crate::app::{AnalysisError, BoxSetResult, IkQuery, IkResult, Service, SingularityQuery, SingularityResult};
 use crate::search::{Limit, SolverSettings, Status};
 use anyhow::{Context as _, Result};
 use futures::StreamExt;
@@ -316,6 +316,7 @@ fn declared_parameters(config: &ServeConfig) -> Vec<(&'static str, ParameterValu
         ("max_wait", ParameterValue::Double(l.max_wait)),
         ("max_runs", ParameterValue::Integer(l.max_runs as i64)),
         ("max_markers", ParameterValue::Integer(l.max_markers as i64)),
+        ("max_set_megabytes", ParameterValue::Double(l.max_set_megabytes)),
     ]
 }
 
@@ -329,11 +330,11 @@ fn check_parameter(name: &str, value: &ParameterValue) -> Result<(), String> {
         ("sigma", ParameterValue::Double(v)) if positive(*v) => Ok(()),
         ("rho", ParameterValue::Double(v)) if *v > 0.0 && *v < 1.0 => Ok(()),
         ("precision", ParameterValue::Double(v)) if *v > 0.0 && *v < 1.0 => Ok(()),
-        ("max_request_timeout", ParameterValue::Double(v)) if positive(*v) => Ok(()),
+        ("max_request_timeout" | "max_set_megabytes", ParameterValue::Double(v)) if positive(*v) => Ok(()),
         ("max_wait", ParameterValue::Double(v)) if v.is_finite() && *v >= 0.0 => Ok(()),
         ("max_request_boxes" | "max_runs" | "max_markers", ParameterValue::Integer(v)) if *v > 0 => Ok(()),
         ("robot_description", _) => Err("robot_description must be a string (URDF XML)".into()),
-        ("sigma" | "max_request_timeout", _) => Err(format!("{name} must be a positive finite double")),
+        ("sigma" | "max_request_timeout" | "max_set_megabytes", _) => Err(format!("{name} must be a positive finite double")),
         ("rho" | "precision", _) => Err(format!("{name} must be a double in (0, 1)")),
         ("max_wait", _) => Err("max_wait must be a finite double >= 0".into()),
         ("max_request_boxes" | "max_runs" | "max_markers", _) => Err(format!("{name} must be a positive integer")),
@@ -833,6 +834,7 @@ impl State {
             ("max_wait", ParameterValue::Double(v)) => self.limits.max_wait = v,
             ("max_runs", ParameterValue::Integer(v)) => self.limits.max_runs = v.max(1) as usize,
             ("max_markers", ParameterValue::Integer(v)) => self.limits.max_markers = v.max(1) as usize,
+            ("max_set_megabytes", ParameterValue::Double(v)) => self.limits.max_set_megabytes = v,
             _ => return,
         }
         // New load-time settings: every mechanism is analysed again with them.
@@ -990,9 +992,19 @@ impl State {
     }
 
     async fn finished_box_set(&mut self, run: u64, r: Run, result: BoxSetResult) {
+        let name = self.mechanisms[r.mechanism].loaded.analysis.mechanism().to_string();
+        let max_bytes = (self.limits.max_set_megabytes * 1e6) as usize;
+        let set = match result.within_bytes(max_bytes) {
+            None => convert::box_set(&result, run),
+            Some(merged) => {
+                self.log(
+                    LogLevel::Warn,
+                    format!("{name}: run {run}: {} boxes ({:.1} MB) merged into {} boxes to stay within max_set_megabytes {}", result.boxes.len(), result.wire_bytes() as f64 / 1e6, merged.boxes.len(), self.limits.max_set_megabytes),
+                );
+                BoxSet { merged_from: result.boxes.len() as u64, ..convert::box_set(&merged, run) }
+            }
+        };
         let m = &mut self.mechanisms[r.mechanism];
-        let name = m.loaded.analysis.mechanism().to_string();
-        let set = convert::box_set(&result, run);
         let status = match result.status {
             Status::Complete => "complete".to_string(),
             Status::Incomplete(l) => format!("incomplete ({} limit)", l.name()),
@@ -1006,8 +1018,7 @@ impl State {
                     eprintln!("linkspace: publishing {}/configuration_space: {e:?}", m.prefix);
                 }
                 m.published = Some((set, markers));
-                let squared = m.loaded.analysis.kind() == MechanismKind::ParallelPlatform;
-                for (js, mode) in convert::assembly_modes(&result, run, &m.loaded.root_link, squared) {
+                for (js, mode) in convert::assembly_modes(&result, run, &m.loaded.root_link) {
                     if let Err(e) = m.topics.assembly_modes.async_publish(js).await {
                         eprintln!("linkspace: publishing {}/assembly_modes: {e:?}", m.prefix);
                     }
