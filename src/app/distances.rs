@@ -6,7 +6,7 @@ use crate::contract::FaceBounds;
 use crate::distances::{choose, solve, Certified, Choice, DistancesError};
 use crate::model::Mechanism;
 use crate::problems::cayley_menger::{DistanceError, DistanceProblem};
-use crate::problems::{PlatformError, PlatformProblem};
+use crate::problems::{LegValues, PlatformError, PlatformProblem};
 use crate::search::SolverSettings;
 use std::sync::atomic::AtomicBool;
 
@@ -32,7 +32,12 @@ pub struct DistancesJob {
 impl DistancesJob {
     /// The platform of `mechanism` with the squared leg lengths `fixed`.
     pub fn platform(mechanism: &Mechanism, fixed: &[(String, f64)]) -> Result<Self, PlatformError> {
-        let p = PlatformProblem::new(mechanism, fixed)?;
+        Self::platform_with(mechanism, fixed, LegValues::Squared)
+    }
+
+    /// The platform of `mechanism` with its legs `fixed` given as `values` say.
+    pub fn platform_with(mechanism: &Mechanism, fixed: &[(String, f64)], values: LegValues) -> Result<Self, PlatformError> {
+        let p = PlatformProblem::with_legs(mechanism, fixed, values)?;
         Ok(Self { distances: p.distances.clone(), platform: Some(p), fixed: fixed.to_vec() })
     }
 

@@ -2,7 +2,14 @@
 //! fixed, as the enclosure of the unknown squared distances (`PlatformProblem` ->
 //! `CayleyMenger`, shared variables with the redundant determinants, clipped by
 //! `TrapezoidClip`). The boxes are those of `linkspace distances --redundant --json` for the same
-//! input; the "joints" of a box are those unknown squared distances.
+//! input.
+//!
+//! Joint space is in metres (REP 103), as the node publishes it: the "joints" of a box are the
+//! unknown distances `d(a,b)` (enclosed by the square roots of the variables `r(a,b) = d(a,b)²`,
+//! outward rounded), the fixed legs are their lengths, and a Solve request's legs are lengths
+//! (squared as intervals, so the problem solved is exactly the one with those lengths). The legs
+//! given when the mechanism is loaded (`linkspace serve --fix`) are squared lengths, as
+//! `linkspace distances --fix` takes them.
 //!
 //! Runs are certified as the CLI's (`distances::solve`): each certified placement (Krawczyk in
 //! coordinates; a placement and its mirror image share their distances) is published as a
@@ -15,7 +22,7 @@ use crate::contract::FaceBounds;
 use crate::model::Mechanism;
 use crate::problems::cayley_menger::{BuildOptions, CayleyMenger, DistanceSolverError, Formulation};
 use super::distances::{DistancesJob, DistancesRequest};
-use crate::problems::PlatformError;
+use crate::problems::{LegValues, PlatformError};
 use crate::distances::Choice;
 use crate::interval::{bounds, Interval, IntervalBox};
 use std::collections::BTreeMap;
@@ -32,8 +39,9 @@ const FACES: FaceBounds = FaceBounds::Corners;
 #[derive(Clone, Debug)]
 pub struct PlatformAnalysis {
     mechanism: Mechanism,
-    fixed: Vec<(String, f64)>,
-    /// The unknown squared distances of the load-time problem (they do not depend on the legs).
+    /// The squared leg lengths it was loaded with.
+    squared: Vec<(String, f64)>,
+    /// The unknown distances `d(a,b)` of the load-time problem (they do not depend on the legs).
     unknowns: Vec<String>,
 }
 
@@ -41,21 +49,37 @@ pub struct PlatformAnalysis {
 struct PlatformRun {
     job: DistancesJob,
     cm: CayleyMenger,
+    /// The legs' lengths, metres.
     fixed: Vec<(String, f64)>,
     settings: SolverSettings,
     analysis: String,
 }
 
+/// The name of the distance whose square is the unknown `r(a,b)`.
+fn distance_name(cm: &CayleyMenger, a: usize, b: usize) -> String {
+    format!("d({},{})", cm.problem.points[a].name, cm.problem.points[b].name)
+}
+
+/// The lengths, in metres, of legs given as squared lengths.
+fn lengths(squared: &[(String, f64)]) -> Vec<(String, f64)> {
+    squared.iter().map(|(n, v)| (n.clone(), v.max(0.0).sqrt())).collect()
+}
+
+/// The enclosure of `√x` (the distance whose square `x` encloses), as bounds.
+fn distance_bounds(x: Interval) -> [f64; 2] {
+    bounds(x.sqrt())
+}
+
 impl PlatformAnalysis {
     /// Reads the platform of `mechanism` with the squared leg lengths `fixed`.
     pub fn new(mechanism: &Mechanism, fixed: &[(String, f64)]) -> Result<Self, AnalysisError> {
-        let run = Self::build(mechanism, fixed, &SolverSettings::default(), "")?;
-        Ok(Self { mechanism: mechanism.clone(), fixed: fixed.to_vec(), unknowns: run.cm.unknowns.iter().map(|u| u.name.clone()).collect() })
+        let run = Self::build(mechanism, fixed, LegValues::Squared, &SolverSettings::default(), "")?;
+        Ok(Self { mechanism: mechanism.clone(), squared: fixed.to_vec(), unknowns: run.cm.unknowns.iter().map(|u| distance_name(&run.cm, u.a, u.b)).collect() })
     }
 
     /// Everything a run needs, validated (legs, determinants, clipper, settings).
-    fn build(mechanism: &Mechanism, fixed: &[(String, f64)], settings: &SolverSettings, analysis: &str) -> Result<PlatformRun, AnalysisError> {
-        let job = DistancesJob::platform(mechanism, fixed)?;
+    fn build(mechanism: &Mechanism, fixed: &[(String, f64)], values: LegValues, settings: &SolverSettings, analysis: &str) -> Result<PlatformRun, AnalysisError> {
+        let job = DistancesJob::platform_with(mechanism, fixed, values)?;
         let cm = CayleyMenger::build(job.problem(), BUILD).map_err(PlatformError::Distance)?;
         // Validate now, so that a bad request is answered before any thread starts.
         match cm.solver(FACES, settings.clone()) {
@@ -63,7 +87,11 @@ impl PlatformAnalysis {
             Err(DistanceSolverError::Solve(e)) => return Err(e.into()),
             Err(e) => return Err(AnalysisError::BadRequest(e.to_string())),
         }
-        Ok(PlatformRun { job, cm, fixed: fixed.to_vec(), settings: settings.clone(), analysis: analysis.to_string() })
+        let fixed = match values {
+            LegValues::Squared => lengths(fixed),
+            LegValues::Lengths => fixed.to_vec(),
+        };
+        Ok(PlatformRun { job, cm, fixed, settings: settings.clone(), analysis: analysis.to_string() })
     }
 }
 
@@ -89,20 +117,21 @@ impl Analysis for PlatformAnalysis {
     }
 
     fn fixed_joints(&self) -> Vec<(String, f64)> {
-        self.fixed.clone()
+        lengths(&self.squared)
     }
 
     fn periodic(&self) -> Vec<bool> {
-        // Squared distances, not angles.
+        // Distances, not angles.
         vec![false; self.unknowns.len()]
     }
 
     fn configuration_space(&self, settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, AnalysisError> {
-        Ok(Box::new(Self::build(&self.mechanism, &self.fixed, settings, "configuration_space")?))
+        Ok(Box::new(Self::build(&self.mechanism, &self.squared, LegValues::Squared, settings, "configuration_space")?))
     }
 
     fn solve(&self, fixed: &[(String, f64)], settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, AnalysisError> {
-        Ok(Box::new(Self::build(&self.mechanism, fixed, settings, "solve")?))
+        // A request's legs are lengths (REP 103).
+        Ok(Box::new(Self::build(&self.mechanism, fixed, LegValues::Lengths, settings, "solve")?))
     }
 }
 
@@ -112,14 +141,14 @@ impl PreparedRun for PlatformRun {
         // The CLI's job, so the published boxes are exactly those of `distances --json`.
         let request = DistancesRequest { formulation: Choice::Shared, redundant: BUILD.redundant, faces: FACES };
         let c = self.job.run(&request, &self.settings, cancel).expect("invariant: validated when prepared");
-        let joint_names: Vec<String> = self.cm.unknowns.iter().map(|u| u.name.clone()).collect();
+        let joint_names: Vec<String> = self.cm.unknowns.iter().map(|u| distance_name(&self.cm, u.a, u.b)).collect();
         // The boxes and distances of `distances --json` for the same run, read off it directly.
         let convert = |b: &IntervalBox, status: BoxStatus, cluster: Option<usize>| {
-            let distances: BTreeMap<String, Interval> = c.cm.unknown_intervals(b).into_iter().collect();
+            let squared: BTreeMap<String, Interval> = c.cm.unknown_intervals(b).into_iter().collect();
             ResultBox {
                 status,
                 bounds: b.dims.iter().map(|&x| bounds(x)).collect(),
-                joints: joint_names.iter().map(|n| distances.get(n).map_or([f64::NAN, f64::NAN], |&x| bounds(x))).collect(),
+                joints: self.cm.unknowns.iter().map(|u| squared.get(&u.name).map_or([f64::NAN, f64::NAN], |&x| distance_bounds(x))).collect(),
                 level: b.level,
                 cluster,
                 traces: Vec::new(),
@@ -132,10 +161,9 @@ impl PreparedRun for PlatformRun {
         if let Some(pl) = &c.placed {
             let mut seen: Vec<Vec<[f64; 2]>> = Vec::new();
             for root in &c.roots {
-                let d: Vec<[f64; 2]> = c.cm.unknowns.iter().map(|u| {
-                    let i = pl.distance_over(u.a, u.b, &root.certified);
-                    [i.inf(), i.sup()]
-                }).collect();
+                let squared: Vec<Interval> = c.cm.unknowns.iter().map(|u| pl.distance_over(u.a, u.b, &root.certified)).collect();
+                let d: Vec<[f64; 2]> = squared.iter().map(|&x| bounds(x)).collect();
+                let joints: Vec<[f64; 2]> = squared.iter().map(|&x| distance_bounds(x)).collect();
                 let overlaps = |e: &Vec<[f64; 2]>| e.iter().zip(&d).all(|(a, b)| a[0] <= b[1] && b[0] <= a[1]);
                 if seen.iter().any(overlaps) {
                     continue;
@@ -145,7 +173,7 @@ impl PreparedRun for PlatformRun {
                 for (u, x) in c.cm.unknowns.iter().zip(&d) {
                     bounds[u.var] = *x;
                 }
-                boxes.push(ResultBox { status: BoxStatus::Unique, bounds, joints: d, level: 0, cluster: Some(root.cluster), traces: Vec::new() });
+                boxes.push(ResultBox { status: BoxStatus::Unique, bounds, joints, level: 0, cluster: Some(root.cluster), traces: Vec::new() });
             }
         }
         boxes.extend(c.undecided.iter().map(|b| convert(b, BoxStatus::Undecided, None)));
@@ -214,8 +242,19 @@ mod tests {
         assert!(!r.boxes.iter().any(|b| b.status == BoxStatus::Undecided));
         assert_eq!(r.joint_names.len(), r.boxes[0].joints.len());
         assert!(r.boxes.iter().all(|b| b.joints.iter().all(|j| j[0] <= j[1])));
-        // Re-solving with other legs: configuration b.
-        let b: Vec<(String, f64)> = LEGS.iter().map(|l| (l.to_string(), 4.75)).collect();
+        // Joint space in metres: the fixed legs are lengths, and every published distance box
+        // holds the square root of its squared-distance bounds.
+        assert_eq!(r.fixed_joints, fixed.iter().map(|(n, v)| (n.clone(), v.sqrt())).collect::<Vec<_>>());
+        assert!(r.joint_names.iter().all(|n| n.starts_with("d(")), "{:?}", r.joint_names);
+        for b in r.boxes.iter().filter(|b| b.status == BoxStatus::Solution) {
+            for (k, j) in b.joints.iter().enumerate() {
+                let var = r.variables.iter().position(|v| *v == r.joint_names[k].replacen("d(", "r(", 1)).expect("the squared distance's variable");
+                let squared = b.bounds[var];
+                assert!(j[0] * j[0] <= squared[0] * (1.0 + 1e-15) && j[1] * j[1] >= squared[1] * (1.0 - 1e-15), "{j:?} vs {squared:?}");
+            }
+        }
+        // Re-solving with other legs, given as lengths (metres): configuration b.
+        let b: Vec<(String, f64)> = LEGS.iter().map(|l| (l.to_string(), f64::sqrt(4.75))).collect();
         let rb = a.solve(&b, &settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
         assert_eq!(rb.analysis, "solve");
         assert_eq!(rb.fixed_joints, b);
@@ -237,6 +276,7 @@ mod tests {
         let a = load(&m, &config_a(), &[]).expect("platform");
         let query = crate::app::SingularityQuery { precision: 1e-4, nodes: false, max_boxes: 10, timeout: None, threads: 1 };
         assert!(a.singularities(&query).err().map(|e| e.to_string()).unwrap_or_default().contains("not available"));
-        assert!(a.solve(&config_a(), &SolverSettings { sigma: -1.0, ..Default::default() }).err().map(|e| e.to_string()).unwrap_or_default().contains("sigma"));
+        let lengths: Vec<(String, f64)> = config_a().into_iter().map(|(n, v)| (n, v.sqrt())).collect();
+        assert!(a.solve(&lengths, &SolverSettings { sigma: -1.0, ..Default::default() }).err().map(|e| e.to_string()).unwrap_or_default().contains("sigma"));
     }
 }

@@ -15,7 +15,7 @@ pub use cayley_menger::{cayley_menger_determinant, BuildOptions, CayleyMenger, D
 pub use choice::{Linkage, Model, ModelChoice, TracedPoint};
 pub use coordinates::{Placed, PlacedError};
 pub use linkage::{LinkageError, LinkageProblem};
-pub use platform::{PlatformError, PlatformProblem, Pose};
+pub use platform::{LegValues, PlatformError, PlatformProblem, Pose};
 pub use singular::image::{CuspFormulation, CuspProblem, ImageError, NodeProblem};
 pub use singular::{Coordinates, Output, SingularError, SingularKind, SingularProblem};
 pub use spatial::{LinkPose, SpatialProblem};

@@ -35,7 +35,7 @@ pub enum PlatformError {
     #[error("leg '{0}' has no --fix value: its length is one more unknown than the Cayley–Menger determinants constrain")]
     NotFixed(String),
     /// A squared length outside what the prismatic joint's limits allow.
-    #[error("--fix {leg}={value}: the squared length must lie in [{lower}, {upper}] (the joint limits)")]
+    #[error("leg {leg}: the squared length {value} must lie in [{lower}, {upper}] (the joint limits)")]
     OutsideLimits {
         /// leg
         leg: String,
@@ -99,6 +99,17 @@ pub struct PlatformProblem {
     pub distances: DistanceProblem,
 }
 
+/// How the values fixing a platform's legs are given: squared lengths (m², the distance
+/// problem's own quantity, as `linkspace distances --fix` takes them) or lengths (m, REP 103, as
+/// ROS messages carry them).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LegValues {
+    /// Squared lengths, m².
+    Squared,
+    /// Lengths, m.
+    Lengths,
+}
+
 fn same(a: &Vector3<f64>, b: &Vector3<f64>) -> bool {
     (a - b).norm() <= 1e-9 * (1.0 + a.norm())
 }
@@ -106,6 +117,13 @@ fn same(a: &Vector3<f64>, b: &Vector3<f64>) -> bool {
 impl PlatformProblem {
     /// Reads the platform from `m` with the squared leg lengths `fixed` (leg name, value).
     pub fn new(m: &Mechanism, fixed: &[(String, f64)]) -> Result<Self, PlatformError> {
+        Self::with_legs(m, fixed, LegValues::Squared)
+    }
+
+    /// Reads the platform from `m` with the legs `fixed` given as `values` say. A length `l`
+    /// enters the distance problem as the interval square `[l]²`, so the problem solved is
+    /// exactly the one with that length.
+    pub fn with_legs(m: &Mechanism, fixed: &[(String, f64)], values: LegValues) -> Result<Self, PlatformError> {
         let floating: Vec<usize> = (0..m.joints.len()).filter(|&j| m.joints[j].kind == JointKind::Floating && m.joints[j].parent == m.root).collect();
         let platform = match floating.as_slice() {
             [j] => m.joints[*j].child,
@@ -178,7 +196,7 @@ impl PlatformProblem {
             return Err(PlatformError::Unsupported("two legs join the same pair of points".into()));
         }
 
-        // Squared lengths from --fix.
+        // Leg values as given (squared below when given as lengths).
         let mut lengths = vec![f64::NAN; legs.len()];
         for (name, value) in fixed {
             let k = legs.iter().position(|l| &l.name == name).ok_or_else(|| PlatformError::UnknownLeg(name.clone()))?;
@@ -186,8 +204,12 @@ impl PlatformProblem {
                 return Err(PlatformError::NotFinite(name.clone()));
             }
             let (lower, upper) = legs[k].squared_range;
-            if *value < lower || *value > upper || *value <= 0.0 {
-                return Err(PlatformError::OutsideLimits { leg: name.clone(), value: *value, lower, upper });
+            let squared = match values {
+                LegValues::Squared => *value,
+                LegValues::Lengths => value * value,
+            };
+            if squared < lower || squared > upper || *value <= 0.0 {
+                return Err(PlatformError::OutsideLimits { leg: name.clone(), value: squared, lower, upper });
             }
             lengths[k] = *value;
         }
@@ -208,8 +230,16 @@ impl PlatformProblem {
                 d.set_known(3 + a, 3 + b, r)?;
             }
         }
-        for (leg, &r) in legs.iter().zip(&lengths) {
-            d.set_known(leg.base, leg.top, point(r))?;
+        for (leg, &v) in legs.iter().zip(&lengths) {
+            let r = match values {
+                LegValues::Squared => point(v),
+                LegValues::Lengths => point(v).sqr(),
+            };
+            d.set_known(leg.base, leg.top, r)?;
+        }
+        // Squared lengths from here on (pose residuals are measured against them).
+        if values == LegValues::Lengths {
+            lengths.iter_mut().for_each(|l| *l *= *l);
         }
         // The three base–platform pairs without a leg; the seed's Eqs. (6) take the first and the
         // last: Ξ(base ∪ {t1, t3}) and Ξ({b1, b3} ∪ platform), both in exactly those two unknowns.
