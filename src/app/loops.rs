@@ -99,8 +99,9 @@ impl SingularSets {
     }
 
     /// Solves every set in order. `settings.max_boxes` applies per chart of each set;
-    /// `settings.timeout` to the whole call (a set that starts with no time left reports every
-    /// chart undecided, so nothing is dropped unsearched). Raising `cancel` ends every set.
+    /// `settings.timeout` to the whole call (a set that starts with no time left reports one
+    /// undecided box holding all its charts, so nothing is dropped unsearched). Raising `cancel`
+    /// ends every set.
     pub fn solve(&self, settings: &SolverSettings, cancel: &AtomicBool) -> Result<Vec<SingularSet>, SolveError> {
         let t0 = Instant::now();
         self.problems
@@ -208,12 +209,19 @@ mod tests {
         let actuated = vec!["rocker_joint".to_string()];
         let sets = SingularSets::new(&m, &[], &all_kinds(&actuated), &actuated, None).expect("builds");
         assert_eq!(sets.problems.len(), 3);
-        // No time at all: every set reports its charts undecided, none is skipped.
+        // No time at all: every set reports its charts undecided, none is skipped: one box
+        // holds every chart, each chart's box (m_k = 1) inside it.
         let settings = SolverSettings { timeout: Some(std::time::Duration::ZERO), ..Default::default() };
         let solved = sets.solve(&settings, &AtomicBool::new(false)).expect("valid");
         for (p, s) in sets.problems.iter().zip(&solved) {
             assert!(!s.status.is_complete(), "{:?}", p.kind);
-            assert_eq!(s.boxes.len(), p.chart_count());
+            assert_eq!(s.unsearched_charts, p.chart_count());
+            assert_eq!(s.boxes.len(), 1);
+            assert_eq!(s.boxes[0].status, crate::singular::BoxKind::Undecided);
+            for k in 0..p.chart_count() {
+                let chart = p.chart(k).initial_box();
+                assert!(chart.dims.iter().zip(&s.boxes[0].b.dims).all(|(c, b)| c.subset(*b)), "chart {k} of {:?} is not held", p.kind);
+            }
         }
         // A bad actuator list fails before any search.
         let err = SingularSets::new(&m, &[], &all_kinds(&["nope".to_string()]), &["nope".to_string()], None).expect_err("refused");

@@ -130,7 +130,7 @@ pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
         };
         writeln!(
             out,
-            "{} {}: {} clusters ({} certified, {} unproven), {} boxes, {} undecided, status {}, {} charts, {} dof ({shape}), {:.3} s",
+            "{} {}: {} clusters ({} certified, {} unproven), {} boxes, {} undecided, status {}, {}, {} dof ({shape}), {:.3} s",
             r.mechanism,
             r.kind,
             s.clusters,
@@ -142,14 +142,23 @@ pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
                 linkspace::Status::Complete => "complete".to_string(),
                 linkspace::Status::Incomplete(l) => format!("incomplete ({l:?} limit)"),
             },
-            r.charts,
+            match s.unsearched_charts {
+                0 => format!("{} charts", r.charts),
+                n => format!("{} charts ({n} left unsearched, held by one undecided box)", r.charts),
+            },
             r.dof,
             r.seconds
         )
         .ok();
         if r.clusters.len() <= 40 {
             for c in &r.clusters {
-                let joints: Vec<String> = c.joints.iter().map(|(n, b)| format!("{n}={:.6}", 0.5 * (b[0] + b[1]))).collect();
+                // A line a reader can take in: the first joints, then how many more (the JSON
+                // report has them all).
+                const SHOWN: usize = 12;
+                let mut joints: Vec<String> = c.joints.iter().take(SHOWN).map(|(n, b)| format!("{n}={:.6}", 0.5 * (b[0] + b[1]))).collect();
+                if c.joints.len() > SHOWN {
+                    joints.push(format!("and {} more joints (--json)", c.joints.len() - SHOWN));
+                }
                 let tag = if c.certified { "certified" } else if c.undecided { "undecided" } else { "unproven" };
                 writeln!(out, "  {tag} ({} boxes): {}", c.boxes, joints.join(" ")).ok();
             }

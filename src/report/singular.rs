@@ -67,6 +67,8 @@ pub struct Summary {
     pub boxes: usize,
     /// Boxes dropped because they are proven to be another chart's (found there).
     pub dropped_as_other_charts: u64,
+    /// Charts a limit left unsearched (the last ones), all held by one undecided box.
+    pub unsearched_charts: usize,
 }
 
 /// A cluster: for a point set, one singular configuration (certified or not).
@@ -159,6 +161,7 @@ impl SingularReport {
             undecided_boxes: set.boxes.iter().filter(|b| b.status == BoxKind::Undecided).count(),
             boxes: boxes.len(),
             dropped_as_other_charts: set.dropped_other_chart,
+            unsearched_charts: set.unsearched_charts,
         };
         let output = match (&p.output, p.kind) {
             (Some(Output::Point { link, x, y }), _) => Some(format!("{link}@{x},{y}")),

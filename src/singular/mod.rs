@@ -25,17 +25,20 @@ impl<L: Coordinates> SingularProblem<L> {
         let mut status = Status::Complete;
         let mut stats = Vec::new();
         let mut dropped_other_chart = 0u64;
+        let mut unsearched_charts = 0;
         for k in 0..self.chart_count() {
             let remaining = settings.timeout.map(|t| t.saturating_sub(t0.elapsed()));
             let cancelled = cancel.load(std::sync::atomic::Ordering::Relaxed);
             if cancelled || remaining.is_some_and(|r| r.is_zero()) {
-                // No time left: the whole chart is undecided (its box is the augmented system's
-                // with its multiplier at 1; it is not built).
+                // No time left: the charts from k on are not built. One undecided box, the
+                // augmented system's whole box (every multiplier over its chart reach), holds
+                // each of them (chart j has m_j = 1 within that reach): a mechanism of thousands
+                // of joints has thousands of charts, and a box per chart would cost more to
+                // build and report than the deadline allows.
                 status = Status::Incomplete(if cancelled { Limit::Cancelled } else { Limit::Time });
-                let mut b = self.augmented.initial_box();
-                b.dims[self.multipliers[k]] = crate::interval::point(1.0);
-                boxes.push(SingularBox { chart: k, b, status: BoxKind::Undecided });
-                continue;
+                boxes.push(SingularBox { chart: k, b: self.augmented.initial_box(), status: BoxKind::Undecided });
+                unsearched_charts = self.chart_count() - k;
+                break;
             }
             let chart = self.chart(k);
             let s = SolverSettings { timeout: remaining, ..settings.clone() };
@@ -72,7 +75,7 @@ impl<L: Coordinates> SingularProblem<L> {
                 BoxKind::Solution => {}
             }
         }
-        Ok(SingularSet { status, boxes, labels, clusters, stats, dropped_other_chart, seconds: t0.elapsed().as_secs_f64() })
+        Ok(SingularSet { status, boxes, labels, clusters, stats, dropped_other_chart, unsearched_charts, seconds: t0.elapsed().as_secs_f64() })
     }
 
     /// True when every direction in `b` (chart `k`, `m_k = 1`) is owned by another chart: some
@@ -135,6 +138,9 @@ pub struct SingularSet {
     pub stats: Vec<SolveStats>,
     /// Boxes dropped as duplicates owned by another chart.
     pub dropped_other_chart: u64,
+    /// Charts a limit left unsearched (the last ones): one undecided box, of the first of them,
+    /// holds them all.
+    pub unsearched_charts: usize,
     /// Wall-clock seconds.
     pub seconds: f64,
 }
