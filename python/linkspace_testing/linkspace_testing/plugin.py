@@ -1,5 +1,7 @@
 """pytest fixtures of linkspace_testing (a pytest11 plugin once the package is installed).
 
+    from linkspace_testing import assert_matches_golden
+
     def test_four_bar(linkspace_node, golden):
         node = linkspace_node(["urdf/four_bar.urdf"], ["--fix", "crank_joint=0.5"])
         assert_matches_golden(node.box_set("four_bar"), golden("four_bar.json"), tol=1e-9)
