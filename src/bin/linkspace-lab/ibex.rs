@@ -48,7 +48,7 @@ pub fn coefficients(chain: &Chain3R) -> [Bilinear; 4] {
         let one = 0.5 * (v[0] + v[2]);
         [0.5 * (v[0] - v[2]), v[1] - one, one]
     };
-    samples.map(|s| {
+    let forms = samples.map(|s| {
         let rows: [[f64; 3]; 3] = [0, 1, 2].map(|i| solve(s[i]));
         let mut c = [[0.0; 3]; 3];
         for b in 0..3 {
@@ -58,7 +58,12 @@ pub fn coefficients(chain: &Chain3R) -> [Bilinear; 4] {
             }
         }
         c
-    })
+    });
+    // cos(π/2) and sin(π) are not 0 in f64: the samples carry errors of about 1e-16 of the
+    // arm's size, which a peer's model would not state. Coefficients under 1e-12 of the largest
+    // are 0; the rest are written to 12 significant digits (`form`).
+    let scale = forms.iter().flatten().flatten().fold(0.0f64, |m, c| m.max(c.abs()));
+    forms.map(|f| f.map(|row| row.map(|c| if c.abs() < 1e-12 * scale { 0.0 } else { c })))
 }
 
 /// The Minibex text of a form's derivative of order `d2` in θ₂ and `d3` in θ₃ (0 to 2).
@@ -77,7 +82,7 @@ fn form(c: &Bilinear, d2: usize, d3: usize) -> String {
             if c[a][b] == 0.0 || e2[a] == "0" || e3[b] == "0" {
                 continue;
             }
-            terms.push(format!("({:.17e})*{}*{}", c[a][b], e2[a], e3[b]));
+            terms.push(format!("({:.12e})*{}*{}", c[a][b], e2[a], e3[b]));
         }
     }
     if terms.is_empty() {

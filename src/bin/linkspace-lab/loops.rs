@@ -117,6 +117,27 @@ fn bench_three_rpr_cusps(out: &mut impl Write, repeat: usize) -> Result<()> {
         writeln!(out, "3-RPR cusps | {} | {} | {t:.3} | {processed} | {what} | {ratio}", formulation.name(), problem.charts.len()).ok();
         base.get_or_insert(t);
     }
+    // What `--kind image` pays before its cusps are known: the type-II cover, then the same
+    // cusp search, both at the image's sigma (5e-2, the coarsest the 3-RPR's image was run at).
+    let image_settings = SolverSettings { sigma: 5e-2, ..settings.clone() };
+    let problem = CuspProblem::new(&m, &p)?;
+    for (row, with_cover) in [("cusps alone (--kind cusps), sigma 5e-2", false), ("cover then cusps (--kind image up to its cusps), sigma 5e-2", true)] {
+        let mut times = Vec::new();
+        let mut what = String::new();
+        for _ in 0..repeat {
+            let c0 = linkspace::search::process_cpu_seconds();
+            if with_cover {
+                p.solve(&image::scaled(&image_settings), &cancel)?;
+            }
+            let c = problem.solve(&p, &image_settings, &cancel)?;
+            times.push(linkspace::search::process_cpu_seconds() - c0);
+            what = format!("{} proven, {} undecided", c.proven(), c.points.len() - c.proven());
+        }
+        times.sort_by(|a, b| a.total_cmp(b));
+        let t = times[times.len() / 2];
+        let ratio = base.map_or(String::new(), |b: f64| crate::speed_against(b, t));
+        writeln!(out, "3-RPR cusps | {row} | {} | {t:.3} | | {what} | {ratio}", problem.charts.len()).ok();
+    }
     Ok(())
 }
 
