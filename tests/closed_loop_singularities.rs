@@ -870,6 +870,10 @@ fn five_bar_equal_rods_cusp_roots_are_the_folded_circles() {
     assert_eq!(cusps.status, Status::Complete);
     assert_eq!(cusps.proven(), 0);
     assert!(!cusps.points.is_empty());
+    // Each record says why it is undecided: a curve of roots is never proven.
+    for r in linkspace::singular::image::cusp_records(&p, &cusps) {
+        assert!(!r.unique && r.reason.as_deref().is_some_and(|why| why.contains("without a Krawczyk proof") || why.contains("μ may vanish")), "{r:?}");
+    }
     let mut hit = [false; 2];
     for pt in &cusps.points {
         for b in &pt.boxes {
@@ -1043,7 +1047,8 @@ fn three_rpr_cusps_alone_on_the_command_line_match_an_independent_newton() {
 }
 
 /// The cusps `--kind image` finds are those the cusp search finds alone (the same search on the
-/// same system at the image's sigma, after the cover), on the 3-RPR at ρ3 = 17.
+/// same system at the image's sigma, after the cover), on the 3-RPR at ρ3 = 17; and the search
+/// alone at a finer sigma proves every cusp the image proves, and the others.
 #[test]
 #[ignore = "long: about a minute (the image's cover and node search)"]
 fn three_rpr_image_finds_the_cusps_of_the_search_alone() {
@@ -1051,11 +1056,18 @@ fn three_rpr_image_finds_the_cusps_of_the_search_alone() {
     let (fixed, actuated) = (vec![("rho3".to_string(), 17.0)], vec!["rho1".to_string(), "rho2".to_string()]);
     let settings = SolverSettings { sigma: 5e-2, threads: 1, timeout: Some(std::time::Duration::from_secs(60)), ..Default::default() };
     let image = linkspace::app::analyse_image(&m, &fixed, &actuated, &settings, 64, &AtomicBool::new(false)).expect("analyses");
-    let alone = linkspace::app::image_points(&m, &fixed, &actuated, linkspace::app::ImageSearch::Cusps, &settings, &AtomicBool::new(false)).expect("runs");
-    assert_eq!((image.cusp_counts.proven, image.cusp_counts.undecided), (6, 0), "{:?}", image.cusps);
-    assert_eq!((alone.counts.proven, alone.counts.undecided), (6, 0));
-    let hulls = |cusps: &[linkspace::singular::image::ImageCusp]| cusps.iter().map(|c| c.workspace.clone()).collect::<Vec<_>>();
-    assert_eq!(hulls(&image.cusps), hulls(&alone.cusps));
+    let search = |sigma: f64| linkspace::app::image_points(&m, &fixed, &actuated, linkspace::app::ImageSearch::Cusps, &SolverSettings { sigma, ..settings.clone() }, &AtomicBool::new(false)).expect("runs");
+    let alone = search(5e-2);
+    let records = |cusps: &[linkspace::singular::image::ImageCusp]| cusps.iter().map(|c| (c.workspace.clone(), c.unique, c.reason.clone())).collect::<Vec<_>>();
+    assert_eq!(records(&image.cusps), records(&alone.cusps));
+    assert_eq!((image.cusp_counts.proven, image.cusp_counts.undecided), (alone.counts.proven, alone.counts.undecided));
+    assert!(image.cusp_counts.proven >= 3, "{:?}", image.cusps);
+    let fine = search(1e-3);
+    assert_eq!((fine.counts.proven, fine.counts.undecided), (6, 0));
+    for c in image.cusps.iter().filter(|c| c.unique) {
+        let meets = |a: &[f64; 2], b: &[f64; 2]| a[0] <= b[1] && b[0] <= a[1];
+        assert_eq!(fine.cusps.iter().filter(|f| ["rho1", "rho2"].iter().all(|j| meets(&f.workspace[*j], &c.workspace[*j]))).count(), 1, "{c:?}");
+    }
 }
 
 /// Diagnostics, not a check: per cusp chart pair of the 3-RPR (rho3 = 17), the solver's counters
