@@ -453,6 +453,51 @@ fn bench3r_arms_has_a_row_per_robot_and_the_new_path_completes() {
     }
 }
 
+/// `linkspace-lab bench3r` divides only by a peer it ran itself: without `ibexsolve` on PATH no
+/// row has a ratio against Ibex and the stored figures come as dated references; with one (here a
+/// stand-in script that keeps the models it is given and reports three boxes), each robot's row
+/// has the peer's CPU time, its counts and a ratio, robot f's model over the θ₃ ranges outside
+/// its two internal-motion strips.
+#[test]
+fn bench3r_divides_only_by_a_peer_run_in_the_same_invocation() {
+    let lab = |path: &str| {
+        let out = Command::new(LAB).args(["bench3r", "--repeat", "1"]).env("PATH", path).output().expect("binary runs");
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let rows = |out: &str| -> Vec<Vec<String>> { out.lines().filter(|l| ["a", "b", "d", "e", "f"].iter().any(|r| l.starts_with(&format!("{r} | ")))).map(|l| l.split(" | ").map(str::to_string).collect()).collect() };
+    let alone = lab("/nonexistent");
+    assert!(alone.contains("ibexsolve not on PATH"), "{alone}");
+    assert!(alone.contains("recorded 2026-11-25") && alone.contains("f: cusps 0.0318 s"), "{alone}");
+    let got = rows(&alone);
+    assert_eq!(got.len(), 5, "{alone}");
+    for row in &got {
+        assert_eq!(&row[7..10], ["-", "-", "-"], "{row:?}");
+    }
+    let dir = std::env::temp_dir().join(format!("linkspace-fake-peer-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("models")).expect("temp dir");
+    let script = format!(
+        "#!/bin/sh\nfor a in \"$@\"; do last=\"$a\"; done\ncp \"$last\" {}/models/\nprintf ' solving successful!\\n number of inner boxes:\\t3\\n number of boundary boxes:\\t0\\n number of unknown boxes:\\t1\\n'\n",
+        dir.display()
+    );
+    let exe = dir.join("ibexsolve");
+    std::fs::write(&exe, script).expect("script");
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&exe, std::fs::Permissions::from_mode(0o755)).expect("chmod");
+    let with_peer = lab(&format!("{}:/usr/bin:/bin", dir.display()));
+    assert!(with_peer.contains("baseline peer:") && with_peer.contains("ibexsolve (run here"), "{with_peer}");
+    for row in rows(&with_peer) {
+        assert!(row[7].parse::<f64>().is_ok_and(|t| t >= 0.0), "{row:?}");
+        let pieces = if row[0] == "f" { 3 } else { 1 };
+        assert_eq!(row[8], format!("{}, {}", 3 * pieces, pieces), "{row:?}");
+        assert!(row[9].ends_with("faster") || row[9].ends_with("slower"), "{row:?}");
+    }
+    let models: Vec<String> = std::fs::read_dir(dir.join("models")).expect("models").map(|e| std::fs::read_to_string(e.expect("entry").path()).expect("model")).collect();
+    assert_eq!(models.len(), 7);
+    assert!(models.iter().all(|m| m.contains("det_df(t2, t3) = 0;") && m.contains("g2(t2, t3) = 0;")));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn a_deeply_nested_document_gets_one_line() {
     let depth = 20_000;

@@ -821,6 +821,9 @@ fn five_bar_image_has_no_cusp_no_node_and_four_regions_as_the_references() {
     let r = linkspace::app::analyse_image(&m, &[], &actuated, &settings, 64, &AtomicBool::new(false)).expect("analyses");
     assert_eq!(r.status, "complete");
     assert_eq!((r.cusp_counts.proven, r.cusp_counts.undecided), (0, 0), "cusps {:?}", r.cusps);
+    // The cusp search alone (`--kind cusps`) agrees: none, proven.
+    let alone = linkspace::app::image_points(&m, &[], &actuated, linkspace::app::ImageSearch::Cusps, &settings, &AtomicBool::new(false)).expect("runs");
+    assert_eq!((alone.status, alone.counts.proven, alone.counts.undecided, alone.cusps.len()), ("complete", 0, 0, 0));
     assert_eq!((r.node_counts.proven, r.node_counts.undecided), (0, 0), "nodes {:?}", r.nodes);
     assert!(r.injective > 0);
     assert_eq!(r.regions.regions.len(), reference_regions.len());
@@ -867,6 +870,10 @@ fn five_bar_equal_rods_cusp_roots_are_the_folded_circles() {
     assert_eq!(cusps.status, Status::Complete);
     assert_eq!(cusps.proven(), 0);
     assert!(!cusps.points.is_empty());
+    // Each record says why it is undecided: a curve of roots is never proven.
+    for r in linkspace::singular::image::cusp_records(&p, &cusps) {
+        assert!(!r.unique && r.reason.as_deref().is_some_and(|why| why.contains("without a Krawczyk proof") || why.contains("μ may vanish")), "{r:?}");
+    }
     let mut hit = [false; 2];
     for pt in &cusps.points {
         for b in &pt.boxes {
@@ -884,7 +891,7 @@ fn five_bar_equal_rods_cusp_roots_are_the_folded_circles() {
 /// torus and the actuator map (α3, φ) ↦ (ρ1, ρ2) = (|B1 − A1|, |B2 − A2|) is explicit. Its
 /// cusps: zeros of (J, ∇J·k), J the map's Jacobian determinant and k its kernel, by Newton
 /// (central differences) from a grid. No solver.
-mod three_rpr_ref {
+pub(crate) mod three_rpr_ref {
     use std::f64::consts::PI;
 
     const A: [[f64; 2]; 3] = [[0.0, 0.0], [15.91, 0.0], [0.0, 10.0]];
@@ -1009,6 +1016,58 @@ fn three_rpr_cusps_match_an_independent_newton() {
 #[ignore = "long: about 40 s"]
 fn three_rpr_cusps_in_joint_coordinates_match_an_independent_newton() {
     three_rpr_cusps_match(CuspFormulation::Coordinates);
+}
+
+/// `loop-singularities --kind cusps` on the 3-RPR (ρ3 = 17): the cusp system solved on its own,
+/// without the type-II cover; every cusp of the reference in one certified record of its own,
+/// none extra, none undecided.
+#[test]
+fn three_rpr_cusps_alone_on_the_command_line_match_an_independent_newton() {
+    let reference = three_rpr_ref::cusps(17.0);
+    let path = std::env::temp_dir().join(format!("linkspace-three-rpr-cusps-{}.json", std::process::id()));
+    let urdf = format!("{}/urdf/three_rpr.urdf", env!("CARGO_MANIFEST_DIR"));
+    let args = ["loop-singularities", &urdf, "--fix", "rho3=17", "--actuated", "rho1,rho2", "--kind", "cusps", "--sigma", "1e-3", "--threads", "1", "--json", path.to_str().expect("utf-8")];
+    let out = Command::new(env!("CARGO_BIN_EXE_linkspace")).args(args).output().expect("binary runs");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("type-II image cusps: 6 proven, 0 undecided; status complete"), "{text}");
+    let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).expect("written")).expect("json");
+    let _ = std::fs::remove_file(&path);
+    assert_eq!((r["counts"]["proven"].as_u64(), r["counts"]["undecided"].as_u64(), r["status"].as_str()), (Some(6), Some(0), Some("complete")));
+    let cusps = r["cusps"].as_array().expect("cusps");
+    assert_eq!(cusps.len(), reference.len());
+    for c in cusps {
+        assert_eq!(c["unique"], true, "{c}");
+        assert!(c.get("reason").is_none(), "a certified cusp carries no reason: {c}");
+        let hull = |j: &str| (c["workspace"][j][0].as_f64().expect("lower"), c["workspace"][j][1].as_f64().expect("upper"));
+        let (r1, r2) = (hull("rho1"), hull("rho2"));
+        let n = reference.iter().filter(|x| r1.0 - 1e-5 <= x[0] && x[0] <= r1.1 + 1e-5 && r2.0 - 1e-5 <= x[1] && x[1] <= r2.1 + 1e-5).count();
+        assert_eq!(n, 1, "record {c} holds {n} reference cusps");
+    }
+}
+
+/// The cusps `--kind image` finds are those the cusp search finds alone (the same search on the
+/// same system at the image's sigma, after the cover), on the 3-RPR at ρ3 = 17; and the search
+/// alone at a finer sigma proves every cusp the image proves, and the others.
+#[test]
+#[ignore = "long: about a minute (the image's cover and node search)"]
+fn three_rpr_image_finds_the_cusps_of_the_search_alone() {
+    let m = urdf::parse(&urdf_text("three_rpr.urdf")).expect("parses");
+    let (fixed, actuated) = (vec![("rho3".to_string(), 17.0)], vec!["rho1".to_string(), "rho2".to_string()]);
+    let settings = SolverSettings { sigma: 5e-2, threads: 1, timeout: Some(std::time::Duration::from_secs(60)), ..Default::default() };
+    let image = linkspace::app::analyse_image(&m, &fixed, &actuated, &settings, 64, &AtomicBool::new(false)).expect("analyses");
+    let search = |sigma: f64| linkspace::app::image_points(&m, &fixed, &actuated, linkspace::app::ImageSearch::Cusps, &SolverSettings { sigma, ..settings.clone() }, &AtomicBool::new(false)).expect("runs");
+    let alone = search(5e-2);
+    let records = |cusps: &[linkspace::singular::image::ImageCusp]| cusps.iter().map(|c| (c.workspace.clone(), c.unique, c.reason.clone())).collect::<Vec<_>>();
+    assert_eq!(records(&image.cusps), records(&alone.cusps));
+    assert_eq!((image.cusp_counts.proven, image.cusp_counts.undecided), (alone.counts.proven, alone.counts.undecided));
+    assert!(image.cusp_counts.proven >= 3, "{:?}", image.cusps);
+    let fine = search(1e-3);
+    assert_eq!((fine.counts.proven, fine.counts.undecided), (6, 0));
+    for c in image.cusps.iter().filter(|c| c.unique) {
+        let meets = |a: &[f64; 2], b: &[f64; 2]| a[0] <= b[1] && b[0] <= a[1];
+        assert_eq!(fine.cusps.iter().filter(|f| ["rho1", "rho2"].iter().all(|j| meets(&f.workspace[*j], &c.workspace[*j]))).count(), 1, "{c:?}");
+    }
 }
 
 /// Diagnostics, not a check: per cusp chart pair of the 3-RPR (rho3 = 17), the solver's counters

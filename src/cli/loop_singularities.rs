@@ -202,7 +202,8 @@ fn run_image(args: &LoopSingularitiesArgs, mechanism: &linkspace::model::Mechani
         writeln!(out, "  region {i}: {} cells, sample {:?}: {count} assembly modes{signs}", g.cells, g.sample).ok();
     }
     for c in r.cusps.iter().take(20) {
-        writeln!(out, "  cusp{}{}: {:?}", if c.unique { " (certified)" } else { " (undecided)" }, if c.degenerate { " degenerate" } else { "" }, c.workspace).ok();
+        let why = c.reason.as_ref().map_or(String::new(), |r| format!(" ({r})"));
+        writeln!(out, "  cusp{}{}: {:?}{why}", if c.unique { " (certified)" } else { " (undecided)" }, if c.degenerate { " degenerate" } else { "" }, c.workspace).ok();
     }
     for n in r.nodes.iter().take(20) {
         writeln!(out, "  node{}: {:?}", if n.unique { " (certified)" } else { " (undecided)" }, n.workspace).ok();
@@ -220,7 +221,8 @@ fn run_points(args: &LoopSingularitiesArgs, mechanism: &linkspace::model::Mechan
     let mut out = std::io::stdout().lock();
     writeln!(out, "{} type-II image {}: {} proven, {} undecided; status {}; {:.3} s", r.mechanism, r.search, r.counts.proven, r.counts.undecided, r.status, r.seconds).ok();
     for c in r.cusps.iter().take(20) {
-        writeln!(out, "  cusp{}{}: {:?}", if c.unique { " (certified)" } else { " (undecided)" }, if c.degenerate { " degenerate" } else { "" }, c.workspace).ok();
+        let why = c.reason.as_ref().map_or(String::new(), |r| format!(" ({r})"));
+        writeln!(out, "  cusp{}{}: {:?}{why}", if c.unique { " (certified)" } else { " (undecided)" }, if c.degenerate { " degenerate" } else { "" }, c.workspace).ok();
     }
     for n in r.nodes.iter().take(20) {
         writeln!(out, "  node{}: {:?}", if n.unique { " (certified)" } else { " (undecided)" }, n.workspace).ok();

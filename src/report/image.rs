@@ -48,6 +48,8 @@ struct ImageCuspDef {
     workspace: BTreeMap<String, Bounds>,
     unique: bool,
     degenerate: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    reason: Option<String>,
 }
 
 list_with!(cusps, ImageCusp, "ImageCuspDef");

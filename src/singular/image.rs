@@ -146,6 +146,27 @@ impl FoundPoint {
     pub fn unique(&self) -> bool {
         self.kinds.iter().all(|k| *k == BoxKind::Certified) && self.boxes.iter().all(|b| self.boxes[0].dims.iter().zip(&b.dims).all(|(x, y)| !x.intersection(*y).is_empty()))
     }
+
+    /// Why the cluster is not one proven cusp (`None` when it is): the first of a limit that
+    /// left boxes unsearched, `μ` that may vanish, boxes at sigma without a proof, and certified
+    /// boxes that do not overlap (possibly several roots). `status` is the search's.
+    pub fn unproven_reason(&self, status: Status) -> Option<String> {
+        if self.kinds.contains(&BoxKind::Undecided) {
+            let limit = match status {
+                Status::Incomplete(l) => format!("its {} limit", l.name()),
+                Status::Complete => "a limit".to_string(),
+            };
+            return Some(format!("the search stopped on {limit} with boxes of this cluster unsearched"));
+        }
+        if self.degenerate {
+            return Some("μ may vanish: possibly a corank-two point of the type-II set rather than a cusp".to_string());
+        }
+        let unproven = self.kinds.iter().filter(|k| **k == BoxKind::Solution).count();
+        if unproven > 0 {
+            return Some(format!("{unproven} of its {} boxes reached sigma without a Krawczyk proof (a multiple root or a curve of roots there?)", self.boxes.len()));
+        }
+        (!self.unique()).then(|| format!("{} certified boxes that do not all overlap: possibly more than one cusp", self.boxes.len()))
+    }
 }
 
 /// The result of the cusp search.
@@ -613,6 +634,8 @@ pub struct ImageCusp {
     pub unique: bool,
     /// `μ` may vanish there: a corank-two point rather than a cusp (never counted proven).
     pub degenerate: bool,
+    /// Why it is undecided (`None` when `unique`).
+    pub reason: Option<String>,
 }
 
 /// One node: two joint boxes with a shared image (the fields of the 3R `NodeRecord`).
@@ -683,7 +706,8 @@ pub fn cusp_records(sp: &SingularProblem, cusps: &PointSearch) -> Vec<ImageCusp>
         .map(|p| {
             let joints = p.joints.clone();
             let workspace = sp.actuated.iter().filter_map(|a| joints.get(a).map(|b| (a.clone(), *b))).collect();
-            ImageCusp { joints, workspace, unique: p.unique() && !p.degenerate, degenerate: p.degenerate }
+            let reason = p.unproven_reason(cusps.status);
+            ImageCusp { joints, workspace, unique: reason.is_none(), degenerate: p.degenerate, reason }
         })
         .collect();
     records.sort_by_key(|c| !c.unique);
@@ -792,3 +816,29 @@ impl ImageReport {
     }
 }
 
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::interval::interval;
+
+    fn point_of(boxes: &[(f64, f64)], kinds: &[BoxKind], degenerate: bool) -> FoundPoint {
+        let boxes = boxes.iter().map(|&(a, b)| IntervalBox::new(vec![interval(a, b)])).collect();
+        FoundPoint { boxes, kinds: kinds.to_vec(), degenerate, joints: BTreeMap::new() }
+    }
+
+    #[test]
+    fn an_unproven_cusp_says_why() {
+        let reason = |p: &FoundPoint, s: Status| p.unproven_reason(s).unwrap_or_default();
+        let proven = point_of(&[(0.0, 1.0), (0.5, 2.0)], &[BoxKind::Certified; 2], false);
+        assert_eq!(proven.unproven_reason(Status::Complete), None);
+        let cut = point_of(&[(0.0, 1.0)], &[BoxKind::Undecided], false);
+        assert!(reason(&cut, Status::Incomplete(Limit::Time)).contains("its time limit"), "{}", reason(&cut, Status::Incomplete(Limit::Time)));
+        let flat = point_of(&[(0.0, 1.0)], &[BoxKind::Certified], true);
+        assert!(reason(&flat, Status::Complete).contains("μ may vanish"));
+        let open = point_of(&[(0.0, 1.0), (1.0, 2.0)], &[BoxKind::Certified, BoxKind::Solution], false);
+        assert!(reason(&open, Status::Complete).starts_with("1 of its 2 boxes"), "{}", reason(&open, Status::Complete));
+        let two = point_of(&[(0.0, 1.0), (1.5, 2.0)], &[BoxKind::Certified; 2], false);
+        assert!(reason(&two, Status::Complete).contains("possibly more than one cusp"));
+    }
+}

@@ -1,6 +1,8 @@
-//! `linkspace-lab bench3r`: cusp and node searches on the bundled 3R robots, the Krawczyk cusp
-//! search against bisection alone (the baseline) in the same run. Ibex's figures were measured
-//! elsewhere, in CPU seconds; they are printed as references beside ours, never as ratios.
+//! `linkspace-lab bench3r`: cusp and node searches on the bundled 3R robots in CPU seconds, the
+//! Krawczyk cusp search against bisection alone (the baseline) in the same run, and against Ibex
+//! when `ibexsolve` is on PATH: run here on the same cusp systems, at the same precision and with
+//! the same internal-motion exclusion (`ibex`). Ibex's stored figures, measured elsewhere, are
+//! printed as dated references with their settings, never as ratios.
 
 use anyhow::Result;
 use linkspace::manip3r::{
@@ -42,14 +44,25 @@ pub struct Bench3rArgs {
 }
 
 /// The bundled 3R robots, compiled in so `bench3r` runs from anywhere, with Ibex's CPU seconds
-/// for the cusps and for the nodes (README, "Beside the peers").
+/// for the cusps (D&G2, robot f with the internal-motion lines excluded, as linkspace does) and
+/// for the nodes (separation 1e-2): references, printed with `IBEX_REFERENCE`, never divided.
 pub const ROBOTS: [(&str, &str, f64, f64); 5] = [
-    ("a", include_str!("../../../urdf/orthogonal_3r_a.urdf"), 0.034, 0.32),
-    ("b", include_str!("../../../urdf/orthogonal_3r_b.urdf"), 0.077, 0.54),
-    ("d", include_str!("../../../urdf/orthogonal_3r_d.urdf"), 0.019, 0.08),
-    ("e", include_str!("../../../urdf/orthogonal_3r_e.urdf"), 0.031, 0.44),
-    ("f", include_str!("../../../urdf/orthogonal_3r_f.urdf"), 59.0, 0.21),
+    ("a", include_str!("../../../urdf/orthogonal_3r_a.urdf"), 0.0354, 0.4632),
+    ("b", include_str!("../../../urdf/orthogonal_3r_b.urdf"), 0.0408, 0.8278),
+    ("d", include_str!("../../../urdf/orthogonal_3r_d.urdf"), 0.0153, 0.0990),
+    ("e", include_str!("../../../urdf/orthogonal_3r_e.urdf"), 0.0304, 0.4202),
+    ("f", include_str!("../../../urdf/orthogonal_3r_f.urdf"), 0.0318, 0.2216),
 ];
+
+/// Where the stored Ibex figures come from and how they were run.
+const IBEX_REFERENCE: &str = "Ibex 2.9.1 ibexsolve -e 1e-4, CPU s of the child (user + system), median of 3, recorded 2026-11-25 on 2 shared vCPUs (docs/peers.md), not run here: cusps on D&G2 (det Df = 0 and the seed's second row; its extra roots are not cusps), robot f with the internal-motion lines excluded as linkspace excludes them (without the exclusion: 59 s and 186,320 unknown boxes); nodes with the separation (t2 - u2)^2 + (t3 - u3)^2 >= 1e-2, which linkspace's node search does not need (a different problem)";
+
+/// CPU seconds of `f` (this process, every thread) and its value.
+fn cpu<T>(f: impl FnOnce() -> T) -> (f64, T) {
+    let c0 = linkspace::search::process_cpu_seconds();
+    let r = f();
+    (linkspace::search::process_cpu_seconds() - c0, r)
+}
 
 pub fn run(args: Bench3rArgs) -> Result<()> {
     crate::check_repeat(args.repeat)?;
@@ -60,51 +73,71 @@ pub fn run(args: Bench3rArgs) -> Result<()> {
     if args.arms {
         return crate::bench_arms::run(&args);
     }
+    let ibex = crate::ibex::on_path();
     let mut out = std::io::stdout().lock();
+    match &ibex {
+        Some(exe) => writeln!(out, "baseline peer: {} (run here on the same cusp systems, same precision, same internal-motion exclusion)", exe.display()),
+        None => writeln!(out, "baseline peer: ibexsolve not on PATH, so no ratio against Ibex (its stored figures follow as references)"),
+    }
+    .ok();
     writeln!(
         out,
-        "robot | cusps: Krawczyk wall s | found | undecided | bisection baseline wall s | clusters | speed-up (same run) | Ibex cusps CPU s (reference) | nodes wall s | found | undecided | Ibex nodes CPU s, separated (reference)"
+        "robot | cusps: Krawczyk CPU s | found | undecided | bisection baseline CPU s | clusters | speed-up (same run) | Ibex D&G2 CPU s (same run) | Ibex solutions, unknown | vs Ibex (same run, CPU/CPU) | nodes CPU s | found | undecided"
     )
     .ok();
-    for (name, xml, ibex_cusps, ibex_nodes) in ROBOTS {
+    for (name, xml, _, _) in ROBOTS {
         let chain = Chain3R::from_mechanism(&urdf::parse(xml)?, 0.0)?;
         let run = |method| {
             let settings = CuspSettings { precision: args.precision, method };
             let mut times = Vec::new();
             let mut last = None;
             for _ in 0..args.repeat {
-                let r = cusps::search(&chain, &settings).expect("validated precision");
-                times.push(r.seconds);
+                let (t, r) = cpu(|| cusps::search(&chain, &settings).expect("validated precision"));
+                times.push(t);
                 last = Some(r);
             }
             (crate::median(times), last.expect("repeat >= 1"))
         };
         let (t_base, base) = run(Method::Bisection);
         let (t_k, k) = run(Method::Krawczyk);
+        let peer = match &ibex {
+            Some(exe) => {
+                // The θ₃ ranges linkspace decides: the internal-motion strips set aside.
+                let strips: Vec<[f64; 2]> = k.bands.iter().map(|b| b.strip).collect();
+                let pieces = crate::ibex::outside(&strips);
+                let mut times = Vec::new();
+                let mut last = None;
+                for _ in 0..args.repeat {
+                    let r = crate::ibex::run(exe, &chain, &pieces, args.precision)?;
+                    times.push(r.cpu);
+                    last = Some(r);
+                }
+                let (t, r) = (crate::median(times), last.expect("repeat >= 1"));
+                format!("{t:.4} | {}, {} | {}", r.solutions, r.unknown, crate::speed_against(t, t_k))
+            }
+            None => "- | - | -".to_string(),
+        };
         let mut node_times = Vec::new();
         let mut node_run = None;
         for _ in 0..args.repeat {
-            let r = nodes::search(&chain, &k.cusps, &k.bands, &NodeSettings { precision: args.precision })?;
-            node_times.push(r.seconds);
-            node_run = Some(r);
+            let (t, r) = cpu(|| nodes::search(&chain, &k.cusps, &k.bands, &NodeSettings { precision: args.precision }));
+            node_times.push(t);
+            node_run = Some(r?);
         }
         let (t_n, n) = (crate::median(node_times), node_run.expect("repeat >= 1"));
         writeln!(
             out,
-            "{name} | {t_k:.4} | {} | {} | {t_base:.4} | {} | {:.1}x | {ibex_cusps} | {t_n:.4} | {} | {} | {ibex_nodes}",
+            "{name} | {t_k:.4} | {} | {} | {t_base:.4} | {} | {} | {peer} | {t_n:.4} | {} | {}",
             k.cusps.len(),
             k.undecided.len(),
             base.cusps.len(),
-            t_base / t_k,
+            crate::speed_against(t_base, t_k),
             n.nodes.len(),
             n.undecided.len(),
         )
         .ok();
     }
-    writeln!(
-        out,
-        "Ibex: CPU seconds at precision 1e-4, best formulation, nodes with a separation constraint, recorded by 2026-11-22 on the same 2-vCPU machine kind, not run here (README, \"Beside the peers\"); case f's cusp figure ends with 186,320 undecided boxes. Wall and CPU seconds are not comparable, so no ratio is given."
-    )
-    .ok();
+    let refs: Vec<String> = ROBOTS.iter().map(|(name, _, c, n)| format!("{name}: cusps {c} s, nodes {n} s")).collect();
+    writeln!(out, "references: {}. {IBEX_REFERENCE}.", refs.join("; ")).ok();
     Ok(())
 }

@@ -32,14 +32,16 @@ const ARMS: [(&str, &str, &[&str]); 4] = [
 const BASELINE_MAX_MEMORY: usize = 256 << 20;
 
 /// One child run: wall seconds, peak RSS (bytes), stdout.
-struct Measured {
+pub(crate) struct Measured {
     seconds: f64,
+    /// The child's own CPU seconds, user + system.
+    pub(crate) cpu: f64,
     rss: u64,
-    stdout: String,
+    pub(crate) stdout: String,
 }
 
-/// Runs `exe args` and reaps it with `wait4`, which gives the child's own peak RSS.
-fn measure(exe: &Path, args: &[String]) -> Result<Measured> {
+/// Runs `exe args` and reaps it with `wait4`, which gives the child's own peak RSS and CPU time.
+pub(crate) fn measure(exe: &Path, args: &[String]) -> Result<Measured> {
     let start = Instant::now();
     let mut child = Command::new(exe).args(args).stdout(Stdio::piped()).stderr(Stdio::piped()).spawn().context("starting a bench child")?;
     let mut stdout = String::new();
@@ -59,7 +61,8 @@ fn measure(exe: &Path, args: &[String]) -> Result<Measured> {
         bail!("bench child `{}` failed (status {status}): {}", args.join(" "), stderr.trim());
     }
     // Linux reports ru_maxrss in KiB.
-    Ok(Measured { seconds, rss: usage.ru_maxrss.max(0) as u64 * 1024, stdout })
+    let cpu = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    Ok(Measured { seconds, cpu: cpu(usage.ru_utime) + cpu(usage.ru_stime), rss: usage.ru_maxrss.max(0) as u64 * 1024, stdout })
 }
 
 /// What one path gave: status text, undecided count, and a short note (verdict or counts).

@@ -7,6 +7,7 @@ mod bench3r;
 mod bench_arms;
 mod charts;
 mod distances;
+mod ibex;
 mod loops;
 mod plot;
 mod scaling;
