@@ -399,6 +399,19 @@ impl Chain6R {
         p.then(&self.post.mid())
     }
 
+    /// Each joint's axis at `q` in `f64`, base frame: (unit direction, a point on it).
+    pub fn joint_axes(&self, q: &[f64; 6]) -> [([f64; 3], [f64; 3]); 6] {
+        let mut p = Pose64::IDENTITY;
+        let mut out = [([0.0; 3], [0.0; 3]); 6];
+        for k in 0..6 {
+            p = p.then(&self.pre[k].mid());
+            let a = self.axes[k].map(|x| x.mid());
+            out[k] = ([0, 1, 2].map(|i| (0..3).map(|j| p.r[i][j] * a[j]).sum()), p.t);
+            p = p.then(&rotation64(&a, q[k]));
+        }
+        out
+    }
+
     /// The spatial Jacobian at `q` in `f64`: column k is `(ωₖ, pₖ × ωₖ)` for joint k's axis
     /// direction ωₖ through the point pₖ, in the base frame.
     pub fn jacobian(&self, q: &[f64; 6]) -> [[f64; 6]; 6] {
