@@ -265,11 +265,15 @@ fn ur5_counts_match_the_closed_form() {
     }
 }
 
+/// A quarter turn as vendor files write it, truncated (the rounding policy snaps it).
+#[allow(clippy::approx_constant)]
+const QUARTER: f64 = 1.570796327;
+
 /// A member of the UR family in modified DH (joint i's origin `Tx(a)·Tz(d)·Rx(α)`), with
 /// offsets between axes 1 and 2 and between axes 4 and 5, and axis 1 at `alpha1` to axis 2.
 fn ur_family_dh(seed: u64, alpha1: f64) -> String {
     let mut rng = Lcg(seed);
-    let alpha = [0.0, alpha1, 0.0, 0.0, 1.570796327, -1.570796327];
+    let alpha = [0.0, alpha1, 0.0, 0.0, QUARTER, -QUARTER];
     let a = [0.0, rng.uniform(-0.1, 0.1), rng.uniform(0.2, 0.6), rng.uniform(-0.6, -0.2), rng.uniform(-0.1, 0.1), 0.0];
     let mut xml = String::from("<robot name=\"ur_family\"><link name=\"l0\"/>");
     for i in 0..6 {
@@ -289,7 +293,7 @@ fn ur_family_dh(seed: u64, alpha1: f64) -> String {
 #[test]
 fn ur_family_solutions_differ_in_the_signs_of_det_j_factors() {
     use linkspace::manip6r::three_parallel;
-    let arms = [repo("urdf/ur5.urdf"), repo("tests/data/ur5_ros_style.urdf"), ur_family_dh(3, 1.570796327), ur_family_dh(4, 0.7)];
+    let arms = [repo("urdf/ur5.urdf"), repo("tests/data/ur5_ros_style.urdf"), ur_family_dh(3, QUARTER), ur_family_dh(4, 0.7)];
     let same_angle = |x: f64, y: f64| (x - y).rem_euclid(std::f64::consts::TAU).min((y - x).rem_euclid(std::f64::consts::TAU)) < 1e-6;
     let mut most = 0;
     for (n, xml) in arms.iter().enumerate() {

@@ -158,6 +158,10 @@ mod tests {
     use super::*;
     use crate::model::{rounding, urdf};
 
+    /// A quarter turn as vendor files write it, truncated (the rounding policy snaps it).
+    #[allow(clippy::approx_constant)]
+    const QUARTER: f64 = 1.570796327;
+
     /// A member of the family in modified DH (joint i's origin `Tx(a)·Tz(d)·Rx(α)`), the
     /// quarter turns written truncated as vendors do; `alpha1` the angle between axes 1 and 2.
     pub(crate) fn family(seed: u64, alpha1: f64, offsets: bool) -> String {
@@ -168,7 +172,7 @@ mod tests {
             x ^= x << 17;
             lo + (hi - lo) * ((x >> 11) as f64 / (1u64 << 53) as f64)
         };
-        let alpha = [0.0, alpha1, 0.0, 0.0, 1.570796327, -1.570796327];
+        let alpha = [0.0, alpha1, 0.0, 0.0, QUARTER, -QUARTER];
         let mut a = [0.0, 0.0, uniform(0.2, 0.6), uniform(-0.6, -0.2), 0.0, 0.0];
         if offsets {
             a[1] = uniform(-0.1, 0.1);
@@ -199,7 +203,7 @@ mod tests {
             lo + (hi - lo) * ((x >> 11) as f64 / (1u64 << 53) as f64)
         };
         for seed in 1..=12 {
-            for (alpha1, offsets) in [(1.570796327, false), (1.570796327, true), (-1.570796327, true), (0.7, true)] {
+            for (alpha1, offsets) in [(QUARTER, false), (QUARTER, true), (-QUARTER, true), (0.7, true)] {
                 let c = chain(&family(seed, alpha1, offsets));
                 assert!(recognise(&c).is_some(), "seed {seed}, alpha1 {alpha1}");
                 // One sign per arm: det J = κ·g1·g3·g5 with κ = ±1.
