@@ -175,7 +175,7 @@ fn vee_skew(x: &M) -> V {
 }
 
 fn sub3(a: &V, b: &V) -> V {
-    [0, 1, 2].map(|i| a[i].sub(b[i]))
+    [a[0].sub(b[0]), a[1].sub(b[1]), a[2].sub(b[2])]
 }
 
 fn mid(b: &[[f64; 2]; 6]) -> [f64; 6] {
