@@ -204,13 +204,16 @@ impl Block {
 
     #[inline(always)]
     pub(crate) fn at(&self, c: Iv, s: Iv) -> Affine {
-        let e = |a: Iv, b: Iv, x: Iv| add(add(a, mul(c, b)), mul(s, x));
+        #[inline(always)]
+        fn e(a: Iv, b: Iv, x: Iv, c: Iv, s: Iv) -> Iv {
+            add(add(a, mul(c, b)), mul(s, x))
+        }
         let mut out = Affine { r: [[Iv::ZERO; 3]; 3], t: [Iv::ZERO; 3] };
         for i in 0..3 {
             for j in 0..3 {
-                out.r[i][j] = e(self.a.r[i][j], self.b.r[i][j], self.c.r[i][j]);
+                out.r[i][j] = e(self.a.r[i][j], self.b.r[i][j], self.c.r[i][j], c, s);
             }
-            out.t[i] = e(self.a.t[i], self.b.t[i], self.c.t[i]);
+            out.t[i] = e(self.a.t[i], self.b.t[i], self.c.t[i], c, s);
         }
         out
     }
