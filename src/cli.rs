@@ -631,6 +631,9 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     }
     if let Some(a) = &arm_section {
         writeln!(out, "arm {}: {} ({})", a.arm, a.verdict, a.reason).ok();
+        if let Some(proof) = &a.proof {
+            writeln!(out, "  proof: {proof}").ok();
+        }
         if let Some(w) = &a.witness {
             let fmt = |b: &std::collections::BTreeMap<String, [f64; 2]>| b.iter().map(|(n, x)| format!("{n}={:.6}", 0.5 * (x[0] + x[1]))).collect::<Vec<_>>().join(" ");
             writeln!(out, "  witness pose translation {:?}; solutions {} and {}; min |det J| on the path {:.3e}", w.pose_translation, fmt(&w.from), fmt(&w.to), w.min_abs_det).ok();

@@ -894,3 +894,36 @@ fn bundled_arms_say_whether_their_verdict_is_the_arms() {
     let iiwa = prepare(&text("iiwa14.urdf"), &LoadOptions { spec: ChainSpec { locks: vec![("joint_3".into(), 0.0)], ..Default::default() }, ..Default::default() }).expect("locked");
     assert!(iiwa.choice.scope.subject.contains("joints 1, 2, 4") && iiwa.choice.scope.subject.contains("joint_3=0 locked"), "{}", iiwa.choice.scope.subject);
 }
+
+/// UR-family arms are proven non-cuspidal without options, the proof cited in the text and the
+/// JSON and said to be about the snapped geometry; a UR with axis 3 tilted by 0.01 rad falls
+/// back to the witness search.
+#[test]
+fn ur_arms_are_proven_non_cuspidal() {
+    let bin = env!("CARGO_BIN_EXE_linkspace");
+    let dir = env!("CARGO_MANIFEST_DIR");
+    for file in ["urdf/ur5.urdf", "tests/data/ur5_ros_style.urdf"] {
+        let json = std::env::temp_dir().join(format!("linkspace-ur-{}-{}.json", std::process::id(), file.len()));
+        let out = std::process::Command::new(bin).args(["singularities", &format!("{dir}/{file}"), "--json", json.to_str().expect("utf-8")]).output().expect("runs");
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let line = stdout.lines().find(|l| l.starts_with("arm ")).unwrap_or_else(|| panic!("{file}: no arm line: {stdout}"));
+        assert!(line.contains(": non_cuspidal (UR family proven on the geometry after snapping"), "{line}");
+        assert!(stdout.lines().any(|l| l.starts_with("  proof: ") && l.contains("det J = ±g1·g3·g5")), "{stdout}");
+        let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).expect("written")).expect("JSON");
+        std::fs::remove_file(&json).ok();
+        let arm = &report["arm_cuspidality"];
+        assert_eq!(arm["verdict"], "non_cuspidal", "{arm}");
+        assert!(arm["proof"].as_str().is_some_and(|p| p.contains("manip6r::three_parallel") && p.contains("arXiv:2210.05204")), "{arm}");
+        assert!(arm.get("witness").is_none());
+    }
+    let tilted = std::fs::read_to_string(format!("{dir}/urdf/ur5.urdf")).expect("bundled").replacen("<origin rpy=\"0 0 0\" xyz=\"-0.425 0 0\"/>", "<origin rpy=\"0.01 0 0\" xyz=\"-0.425 0 0\"/>", 1);
+    let path = std::env::temp_dir().join(format!("linkspace-ur-tilted-{}.urdf", std::process::id()));
+    std::fs::write(&path, tilted).expect("written");
+    let out = std::process::Command::new(bin).args(["singularities", path.to_str().expect("utf-8"), "--arm-budget", "1"]).output().expect("runs");
+    std::fs::remove_file(&path).ok();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let line = stdout.lines().find(|l| l.starts_with("arm ")).unwrap_or_else(|| panic!("no arm line: {stdout}"));
+    assert!(!line.contains("non_cuspidal") && (line.contains(": undecided (") || line.contains(": cuspidal (")), "{line}");
+}

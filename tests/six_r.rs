@@ -264,3 +264,88 @@ fn ur5_counts_match_the_closed_form() {
         assert_eq!(sol.unique.len(), analytic.len(), "q = {q:?}");
     }
 }
+
+/// A quarter turn as vendor files write it, truncated (the rounding policy snaps it).
+#[allow(clippy::approx_constant)]
+const QUARTER: f64 = 1.570796327;
+
+/// A member of the UR family in modified DH (joint i's origin `Tx(a)·Tz(d)·Rx(α)`), with
+/// offsets between axes 1 and 2 and between axes 4 and 5, and axis 1 at `alpha1` to axis 2.
+fn ur_family_dh(seed: u64, alpha1: f64) -> String {
+    let mut rng = Lcg(seed);
+    let alpha = [0.0, alpha1, 0.0, 0.0, QUARTER, -QUARTER];
+    let a = [0.0, rng.uniform(-0.1, 0.1), rng.uniform(0.2, 0.6), rng.uniform(-0.6, -0.2), rng.uniform(-0.1, 0.1), 0.0];
+    let mut xml = String::from("<robot name=\"ur_family\"><link name=\"l0\"/>");
+    for i in 0..6 {
+        let d = rng.uniform(-0.2, 0.2);
+        xml += &format!(
+            "<link name=\"l{}\"/><joint name=\"j{}\" type=\"revolute\"><parent link=\"l{i}\"/><child link=\"l{}\"/><origin xyz=\"{} 0 {d}\" rpy=\"{} 0 0\"/><axis xyz=\"0 0 1\"/><limit lower=\"-3.14159\" upper=\"3.14159\" effort=\"1\" velocity=\"1\"/></joint>",
+            i + 1, i + 1, i + 1, a[i], alpha[i]
+        );
+    }
+    xml + "<link name=\"tool\"/><joint name=\"jt\" type=\"fixed\"><parent link=\"l6\"/><child link=\"tool\"/><origin xyz=\"0.02 0 0.1\" rpy=\"0.3 0.2 0.1\"/></joint></robot>"
+}
+
+/// The non-cuspidality proof's two claims checked on the solver's output: every certified
+/// solution of a pose has a sign pattern of (shoulder, elbow, wrist) factors of its own, and
+/// the patterns pick the closed-form roots (one sign of the shoulder factor, one θ1; one sign
+/// of shoulder and wrist, one θ5).
+#[test]
+fn ur_family_solutions_differ_in_the_signs_of_det_j_factors() {
+    use linkspace::manip6r::three_parallel;
+    let arms = [repo("urdf/ur5.urdf"), repo("tests/data/ur5_ros_style.urdf"), ur_family_dh(3, QUARTER), ur_family_dh(4, 0.7)];
+    let same_angle = |x: f64, y: f64| (x - y).rem_euclid(std::f64::consts::TAU).min((y - x).rem_euclid(std::f64::consts::TAU)) < 1e-6;
+    let mut most = 0;
+    for (n, xml) in arms.iter().enumerate() {
+        let chain = chain_of(xml).within_one_turn();
+        assert!(three_parallel::recognise(&chain).is_some(), "arm {n} recognised");
+        let mut rng = Lcg(10 + n as u64);
+        for _ in 0..6 {
+            let q = random_q(&chain, &mut rng);
+            let pose = chain.pose(&q);
+            let sol = ik::solve(&chain, &PoseTarget::around(&pose, 1e-12).expect("finite"), 1e-10, &control()).expect("solves");
+            assert_eq!(sol.status, Status::Complete);
+            most = most.max(sol.unique.len());
+            let mids: Vec<[f64; 6]> = sol.unique.iter().map(|u| u.map(|x| x.mid())).collect();
+            let signs: Vec<[bool; 3]> = mids
+                .iter()
+                .map(|m| {
+                    let g = three_parallel::factors(&chain, m);
+                    assert!(g.iter().all(|x| x.abs() > 1e-9), "a regular solution: {g:?}");
+                    g.map(|x| x > 0.0)
+                })
+                .collect();
+            for i in 0..mids.len() {
+                for j in i + 1..mids.len() {
+                    assert_ne!(signs[i], signs[j], "arm {n}: two solutions with one sign pattern: {:?} {:?}", mids[i], mids[j]);
+                    if signs[i][0] == signs[j][0] {
+                        assert!(same_angle(mids[i][0], mids[j][0]), "one shoulder sign, one theta1");
+                        if signs[i][2] == signs[j][2] {
+                            assert!(same_angle(mids[i][4], mids[j][4]), "one shoulder and wrist sign, one theta5");
+                        }
+                    } else {
+                        assert!(!same_angle(mids[i][0], mids[j][0]), "the shoulder sign tells the theta1 roots apart");
+                    }
+                }
+            }
+        }
+    }
+    assert_eq!(most, 8, "poses with all eight patterns seen");
+}
+
+/// The recognition asks for exact relations: axis 3 tilted by 0.01 rad is out of the family,
+/// and so are the CRX (axes 2, 3 parallel only) and the spherical-wrist arms.
+#[test]
+fn near_ur_arms_and_other_arms_are_not_recognised() {
+    use linkspace::manip6r::three_parallel;
+    let ur5 = repo("urdf/ur5.urdf");
+    let tilted = ur5.replacen("<origin rpy=\"0 0 0\" xyz=\"-0.425 0 0\"/>", "<origin rpy=\"0.01 0 0\" xyz=\"-0.425 0 0\"/>", 1);
+    assert_ne!(tilted, ur5);
+    assert!(three_parallel::recognise(&chain_of(&tilted)).is_none());
+    for file in ["tests/data/fanuc_crx10ial_style.urdf", "urdf/puma560.urdf", "urdf/kuka_kr16.urdf", "tests/data/abb_irb140_style.urdf", "tests/data/doosan_style_6r.urdf"] {
+        assert!(three_parallel::recognise(&chain_of(&repo(file))).is_none(), "{file}");
+    }
+    // Taken as written (no snapping), the truncated quarter turns are not exact.
+    let m = urdf::parse(&ur5).expect("parses");
+    assert!(three_parallel::recognise(&Chain6R::from_mechanism(&m, None, None).expect("6R")).is_none());
+}

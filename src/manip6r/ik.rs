@@ -174,8 +174,9 @@ fn vee_skew(x: &M) -> V {
     [x[2][1].sub(x[1][2]), x[0][2].sub(x[2][0]), x[1][0].sub(x[0][1])].map(|v| v.scale(0.5))
 }
 
+#[inline(always)]
 fn sub3(a: &V, b: &V) -> V {
-    [0, 1, 2].map(|i| a[i].sub(b[i]))
+    [a[0].sub(b[0]), a[1].sub(b[1]), a[2].sub(b[2])]
 }
 
 fn mid(b: &[[f64; 2]; 6]) -> [f64; 6] {
@@ -186,6 +187,7 @@ fn width(b: &[[f64; 2]; 6]) -> f64 {
     b.iter().map(|x| x[1] - x[0]).fold(0.0, f64::max)
 }
 
+#[inline(always)]
 fn dot(a: &V, b: &V) -> Iv {
     add(add(mul(a[0], b[0]), mul(a[1], b[1])), mul(a[2], b[2]))
 }
@@ -193,10 +195,12 @@ fn dot(a: &V, b: &V) -> Iv {
 /// `(a·u, u·u, a·d, u·d, (a×u)·d)` of the point `u` (from a point of axis 1) and direction `d`
 /// of axis 4, `a` the direction of axis 1: unchanged by turns about axis 1, and with their
 /// derivatives `(du, dd)` when given.
+#[inline(always)]
 fn line_invariants(a: &V, u: &V, d: &V) -> [Iv; INVARIANTS] {
     [dot(a, u), dot(u, u), dot(a, d), dot(u, d), dot(&cross(a, u), d)]
 }
 
+#[inline(always)]
 fn line_invariants_derivative(a: &V, u: &V, d: &V, du: &V, dd: &V) -> [Iv; INVARIANTS] {
     [dot(a, du), dot(u, du).scale(2.0), dot(a, dd), add(dot(du, d), dot(u, dd)), add(dot(&cross(a, du), d), dot(&cross(a, u), dd))]
 }

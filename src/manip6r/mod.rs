@@ -8,10 +8,12 @@
 pub(crate) mod chain;
 pub mod cuspidal;
 pub mod ik;
+pub mod three_parallel;
 
 pub use chain::{Chain6R, Pose64};
 pub use cuspidal::{CuspidalVerdict, Witness};
 pub use ik::{Ik6Solutions, PoseTarget};
+pub use three_parallel::ThreeParallel;
 
 use thiserror::Error;
 

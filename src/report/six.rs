@@ -63,11 +63,15 @@ impl Ik6Report {
 pub struct ArmCuspidalityReport {
     /// The arm: base, tip and its six joints.
     pub arm: String,
-    /// `cuspidal`, `undecided`, or `as_positioning_structure` (spherical wrist: the 3R verdict
-    /// is the arm's).
+    /// `cuspidal`, `non_cuspidal` (proven by a theorem the `proof` states), `undecided`, or
+    /// `as_positioning_structure` (spherical wrist: the 3R verdict is the arm's).
     pub verdict: &'static str,
     /// Why, in one line.
     pub reason: String,
+    /// The theorem a `non_cuspidal` verdict applies: its conditions, proven on the file's
+    /// geometry, and its argument.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub proof: Option<String>,
     /// The witness of a cuspidal verdict.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub witness: Option<WitnessRecord>,
@@ -105,12 +109,26 @@ impl ArmCuspidalityReport {
                 arm,
                 verdict: "as_positioning_structure",
                 reason: "spherical wrist: the arm is cuspidal iff its 3R positioning structure is (the verdict above is the arm's)".into(),
+                proof: None,
+                witness: None,
+            },
+            ArmCuspidality::ThreeParallel { proof, snapped } => ArmCuspidalityReport {
+                arm,
+                verdict: "non_cuspidal",
+                reason: format!(
+                    "UR family proven on the {}: axes 2, 3, 4 exactly parallel (distances {:.6} and {:.6}), axis 1 not parallel to them, axis 5 normal to them, axes 5 and 6 meeting at right angles; det J = ±g1·g3·g5 (shoulder, elbow, wrist) and the signs of the three factors tell every pose's solutions apart, so no two lie in one aspect",
+                    if snapped.is_empty() { "file's geometry as written".to_string() } else { format!("geometry after snapping {} values to quarter turns / coordinate axes", snapped.len()) },
+                    proof.l2.mid(),
+                    proof.l3.mid()
+                ),
+                proof: Some(crate::manip6r::three_parallel::CITATION.to_string()),
                 witness: None,
             },
             ArmCuspidality::Searched { verdict: CuspidalVerdict::Cuspidal(w), seconds, .. } => ArmCuspidalityReport {
                 arm,
                 verdict: "cuspidal",
                 reason: format!("witness found in {seconds:.1} s: two certified solutions of one pose joined by a path on which det J is proven nonzero ({} pieces)", w.pieces),
+                proof: None,
                 witness: Some(WitnessRecord {
                     pose_rotation: w.pose.r,
                     pose_translation: w.pose.t,
@@ -127,6 +145,7 @@ impl ArmCuspidalityReport {
                 arm,
                 verdict: "undecided",
                 reason: format!("no witness found within the budget ({budget:.0} s: {poses} poses solved, {pairs} pairs of solutions with one sign of det J tried); non-cuspidality is not proven"),
+                proof: None,
                 witness: None,
             },
         }
