@@ -914,7 +914,7 @@ fn ur_arms_are_proven_non_cuspidal() {
         std::fs::remove_file(&json).ok();
         let arm = &report["arm_cuspidality"];
         assert_eq!(arm["verdict"], "non_cuspidal", "{arm}");
-        assert!(arm["proof"].as_str().is_some_and(|p| p.contains("manip6r::three_parallel") && p.contains("arXiv:2210.05204")), "{arm}");
+        assert!(arm["proof"].as_str().is_some_and(|p| p.contains("manip6r::three_parallel") && p.contains("arXiv:2202.08686")), "{arm}");
         assert!(arm.get("witness").is_none());
     }
     let tilted = std::fs::read_to_string(format!("{dir}/urdf/ur5.urdf")).expect("bundled").replacen("<origin rpy=\"0 0 0\" xyz=\"-0.425 0 0\"/>", "<origin rpy=\"0.01 0 0\" xyz=\"-0.425 0 0\"/>", 1);
