@@ -1,12 +1,13 @@
 #!/bin/sh
 # Makes (once) the Python environment that talks ROS 2 Jazzy to the linkspace node: real rclpy
-# with Fast DDS from pinned PyPI wheels, plus linkspace_msgs (msgs/) built with rosidl into it.
+# with Fast DDS from pinned PyPI wheels, plus linkspace_msgs (msgs/) and tf2_msgs' TFMessage
+# (ros/tf2_msgs/) built with rosidl into it.
 # Nothing else is needed on the machine but CPython 3.11, a C/C++ compiler and PyPI.
 #
 # Usage: scripts/ros_env.sh [VENV]      (default: target/ros-venv)
 # Prints the venv's python on the last line. Idempotent: a stamp records the hash of the inputs
-# (this script, the requirements and msgs/), so a second call returns at once, and a change to
-# msgs/ rebuilds only the interfaces. Concurrent callers wait on a lock.
+# (this script, the requirements and the interface packages), so a second call returns at once,
+# and a change to msgs/ rebuilds only the interfaces. Concurrent callers wait on a lock.
 set -eu
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 VENV=${1:-$ROOT/target/ros-venv}
@@ -19,7 +20,8 @@ flock 9
 
 hash_of() { cat "$@" | sha256sum | cut -d' ' -f1; }
 REQ_HASH=$(hash_of "$ROOT/scripts/ros-requirements.txt")
-MSG_HASH=$(cd "$ROOT/msgs" && find . -type f | LC_ALL=C sort | xargs cat | sha256sum | cut -d' ' -f1)
+# The interface packages built here: linkspace_msgs, and tf2_msgs' TFMessage (no wheel on PyPI).
+MSG_HASH=$(cd "$ROOT" && find msgs ros/tf2_msgs -type f | LC_ALL=C sort | xargs cat | sha256sum | cut -d' ' -f1)
 SCRIPT_HASH=$(hash_of "$ROOT/scripts/ros_env.sh")
 
 if [ "$(cat "$VENV/.linkspace-req" 2>/dev/null)" != "$REQ_HASH $SCRIPT_HASH" ]; then
@@ -42,18 +44,21 @@ if [ "$(cat "$VENV/.linkspace-req" 2>/dev/null)" != "$REQ_HASH $SCRIPT_HASH" ]; 
 fi
 
 if [ "$(cat "$VENV/.linkspace-msgs" 2>/dev/null)" != "$MSG_HASH" ]; then
-  BUILD="$VENV.msgs-build"
-  rm -rf "$BUILD"
-  if ! { PATH="$VENV/bin:$PATH" cmake -S "$ROOT/msgs" -B "$BUILD" -DCMAKE_PREFIX_PATH="$VENV" \
-      -DCMAKE_INSTALL_PREFIX="$VENV" -DPython3_EXECUTABLE="$VENV/bin/python" -DBUILD_TESTING=OFF \
-      -DCMAKE_BUILD_TYPE=Release &&
-    PATH="$VENV/bin:$PATH" cmake --build "$BUILD" -j2 &&
-    PATH="$VENV/bin:$PATH" cmake --install "$BUILD"; } > "$VENV.msgs-build.log" 2>&1; then
-    echo "ros_env.sh: building linkspace_msgs failed; the end of $VENV.msgs-build.log:" >&2
-    tail -30 "$VENV.msgs-build.log" >&2
-    exit 1
-  fi
-  "$VENV/bin/python" -c "import linkspace_msgs.msg, linkspace_msgs.srv" >&2
+  : > "$VENV.msgs-build.log"
+  for PKG in ros/tf2_msgs msgs; do
+    BUILD="$VENV.msgs-build/$(basename "$PKG")"
+    rm -rf "$BUILD"
+    if ! { PATH="$VENV/bin:$PATH" cmake -S "$ROOT/$PKG" -B "$BUILD" -DCMAKE_PREFIX_PATH="$VENV" \
+        -DCMAKE_INSTALL_PREFIX="$VENV" -DPython3_EXECUTABLE="$VENV/bin/python" -DBUILD_TESTING=OFF \
+        -DCMAKE_BUILD_TYPE=Release &&
+      PATH="$VENV/bin:$PATH" cmake --build "$BUILD" -j2 &&
+      PATH="$VENV/bin:$PATH" cmake --install "$BUILD"; } >> "$VENV.msgs-build.log" 2>&1; then
+      echo "ros_env.sh: building $PKG failed; the end of $VENV.msgs-build.log:" >&2
+      tail -30 "$VENV.msgs-build.log" >&2
+      exit 1
+    fi
+  done
+  "$VENV/bin/python" -c "import linkspace_msgs.msg, linkspace_msgs.srv, tf2_msgs.msg" >&2
   echo "$MSG_HASH" > "$VENV/.linkspace-msgs"
 fi
 echo "$VENV/bin/python"

@@ -26,6 +26,7 @@ from rclpy.serialization import serialize_message  # noqa: E402
 from linkspace_msgs import srv  # noqa: E402
 from sensor_msgs.msg import JointState  # noqa: E402
 from visualization_msgs.msg import MarkerArray  # noqa: E402
+from tf2_msgs.msg import TFMessage  # noqa: E402
 
 
 def latched(depth=1):
@@ -50,7 +51,9 @@ def topics(args):
     node.create_subscription(AssemblyMode, f"{p}/assembly_mode", got["assembly_mode"].append, latched(64))
     node.create_subscription(Progress, f"{p}/progress", got["progress"].append, latched())
     node.create_subscription(SingularityReport, f"{p}/singularities", got["singularities"].append, latched())
-    single = ["configuration_space", "markers", "progress", "singularities"]
+    got["tf_static"] = []
+    node.create_subscription(TFMessage, "/tf_static", got["tf_static"].append, latched())
+    single = ["configuration_space", "markers", "progress", "singularities", "tf_static"]
     ok = spin_until(node, lambda: all(got[k] for k in single) and len(got["assembly_modes"]) >= args.modes
                     and len(got["assembly_mode"]) >= args.modes, args.timeout)
     # The remaining assembly modes (if any beyond --modes) arrive with the first ones.
@@ -62,8 +65,10 @@ def topics(args):
                        "scale": [m.scale.x, m.scale.y, m.scale.z]} for m in got["markers"][-1].markers] if got["markers"] else None
     out["assembly_modes"] = [{"frame": j.header.frame_id, "name": list(j.name), "position": list(j.position)} for j in got["assembly_modes"]]
     out["assembly_mode"] = [to_plain(m) for m in got["assembly_mode"]]
-    # tf2_msgs has no wheel here: the graph shows the node's /tf_static publisher and its type.
-    out["tf_static"] = [t for n, t in node.get_topic_names_and_types() if n == "/tf_static"]
+    out["tf_static"] = [{"parent": t.header.frame_id, "child": t.child_frame_id,
+                         "translation": [t.transform.translation.x, t.transform.translation.y, t.transform.translation.z],
+                         "rotation": [t.transform.rotation.x, t.transform.rotation.y, t.transform.rotation.z, t.transform.rotation.w]}
+                        for m in got["tf_static"] for t in m.transforms]
     out["tf_static_publishers"] = node.count_publishers("/tf_static")
     out["progress"] = to_plain(got["progress"][-1]) if got["progress"] else None
     s = got["singularities"][-1] if got["singularities"] else None

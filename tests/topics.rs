@@ -253,8 +253,14 @@ fn topics_carry_the_solver_result_to_late_rclpy_subscribers() {
     // Frames: the box set is in the joint-space frame, which the node itself ties to the root
     // link on /tf_static.
     assert_eq!(set["header"]["frame_id"], "four_bar/joint_space");
-    assert_eq!(got["tf_static"], json!([["tf2_msgs/msg/TFMessage"]]), "{got}");
+    // Read with tf2_msgs/TFMessage (built into the venv by scripts/ros_env.sh): the node's three
+    // mechanisms, each joint-space frame an identity child of its root link.
     assert_eq!(got["tf_static_publishers"], json!(1));
+    let frames = got["tf_static"].as_array().expect("transforms");
+    let four_bar_frame = frames.iter().find(|t| t["child"] == "four_bar/joint_space").unwrap_or_else(|| panic!("no four_bar/joint_space on /tf_static: {frames:?}"));
+    assert_eq!(four_bar_frame["parent"], "ground");
+    assert_eq!(four_bar_frame["translation"], json!([0.0, 0.0, 0.0]));
+    assert_eq!(four_bar_frame["rotation"], json!([0.0, 0.0, 0.0, 1.0]));
 
     // Markers: DELETEALL, then one cube per box in joint space and one per box for the trace.
     let markers = got["markers"].as_array().expect("markers");
@@ -305,6 +311,24 @@ fn topics_carry_the_solver_result_to_late_rclpy_subscribers() {
     let set = &got["configuration_space"];
     assert_eq!(set["mechanism"], "octahedral");
     assert_eq!(set["clusters"], json!(2), "{set}");
+    // REP 103 in the box set too: the fixed legs are lengths, and the joint-space boxes are the
+    // unknown distances d(a,b) in metres, each holding the square root of its variable r(a,b).
+    let fixed_names: Vec<&str> = set["fixed_joint_names"].as_array().expect("names").iter().map(|v| v.as_str().expect("str")).collect();
+    let fixed_values = floats(&set["fixed_joint_values"]);
+    let k = fixed_names.iter().position(|n| *n == "leg15").expect("leg15 is fixed");
+    assert!((fixed_values[k] - f64::sqrt(4.25)).abs() < 1e-12, "leg15 published as {}", fixed_values[k]);
+    let joint_names: Vec<&str> = set["joint_names"].as_array().expect("names").iter().map(|v| v.as_str().expect("str")).collect();
+    let variables: Vec<&str> = set["variable_names"].as_array().expect("names").iter().map(|v| v.as_str().expect("str")).collect();
+    let (dim, width) = (variables.len(), joint_names.len());
+    let (lower, upper, joint_lower, joint_upper) = (floats(&set["lower"]), floats(&set["upper"]), floats(&set["joint_lower"]), floats(&set["joint_upper"]));
+    for (j, name) in joint_names.iter().enumerate() {
+        assert!(name.starts_with("d("), "{name} is not a distance");
+        let v = variables.iter().position(|x| *x == name.replacen("d(", "r(", 1)).expect("its squared distance");
+        for b in 0..lower.len() / dim {
+            let (lo, hi) = (joint_lower[b * width + j], joint_upper[b * width + j]);
+            assert!(lo * lo <= lower[b * dim + v] * (1.0 + 1e-12) && hi * hi >= upper[b * dim + v] * (1.0 - 1e-12), "box {b}: {name} [{lo}, {hi}]");
+        }
+    }
     // REP 103: the legs' squared lengths (the analysis's unknowns and the --fix values) travel
     // as lengths in metres.
     for mode in got["assembly_modes"].as_array().expect("modes") {
@@ -1368,4 +1392,36 @@ fn a_node_warns_once_when_its_name_is_taken_on_the_domain_and_log_level_warn_hid
     assert!(lines[0].contains("give this one another name"), "{log}");
     assert!(!other.log().contains("another node named"), "a node of another name was warned:\n{}", other.log());
     assert_eq!(first.log().matches(warning).count(), 1, "once per other participant:\n{}", first.log());
+}
+
+/// Test idea: a configuration space bigger than `--max-set-megabytes` travels merged, and the
+/// merged set still encloses every box the CLI finds, each in a box of its own cluster; the set
+/// says how many boxes it merged and the node says so in its log. Before the cap, the same run
+/// published every box whatever its size.
+#[test]
+fn a_set_above_the_size_cap_travels_merged_and_still_encloses_every_box() {
+    let Some(python) = python() else { return };
+    let domain = 61;
+    let four_bar = format!("{ROOT}/urdf/four_bar.urdf");
+    let reference = solve_json(&[&four_bar, "--sigma", "2e-3"]);
+    let found = reference["solutions"].as_array().expect("solutions").len();
+    assert!(found > 3_000, "{found} boxes");
+    let mut node = Node::start(domain, &[&four_bar, "--sigma", "2e-3", "--max-set-megabytes", "0.05"]);
+    node.wait_for(&["four_bar: published configuration_space", "merged into"], Duration::from_secs(120));
+    let got = py(python, domain, "tests/ros_client.py", &["topics", "--prefix", "/linkspace/four_bar"], Duration::from_secs(90));
+    let set = &got["configuration_space"];
+    assert_eq!(set["merged_from"], json!(found), "{}", set["merged_from"]);
+    let dim = set["dim"].as_u64().expect("dim") as usize;
+    let (lower, upper) = (floats(&set["lower"]), floats(&set["upper"]));
+    let sent = lower.len() / dim;
+    let per_box = 16 * (dim + set["joint_names"].as_array().expect("names").len()) + 9;
+    assert!(sent * per_box <= 50_000 + 4 * per_box, "{sent} boxes of {per_box} bytes sent under a 0.05 MB cap");
+    let clusters: Vec<i64> = set["cluster"].as_array().expect("clusters").iter().map(|c| c.as_i64().expect("int")).collect();
+    assert_eq!(set["clusters"], reference["clusters"]);
+    for (i, s) in reference["solutions"].as_array().expect("solutions").iter().enumerate() {
+        let b: Vec<[f64; 2]> = s["box"].as_array().expect("box").iter().map(|x| [x[0].as_f64().expect("lo"), x[1].as_f64().expect("hi")]).collect();
+        let held = (0..sent).any(|k| clusters[k] >= 0 && (0..dim).all(|d| lower[k * dim + d] <= b[d][0] && b[d][1] <= upper[k * dim + d]));
+        assert!(held, "solution box {i} lies in no merged solution box");
+    }
+    assert!(node.alive());
 }
