@@ -160,7 +160,7 @@ def bench(args):
                         delivery, seconds, reply = call("rclpy", Solve.Request(mechanism=tmp.name), args.timeout)
                     if reply is not None and not reply.ok:
                         raise SystemExit(f"{name}: {reply.message}")
-                    if reply is not None and len(serialize_message(reply)) != size:
+                    if name == "rclpy" and reply is not None and len(serialize_message(reply)) != size:
                         raise SystemExit(f"{name}: a reply of {len(serialize_message(reply))} bytes, not {size}")
                     if delivery is not None:
                         times.append(delivery)
