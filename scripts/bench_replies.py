@@ -51,11 +51,13 @@ def serve(args):
     cache = {}
 
     def answer(request, _response):
-        if request.mechanism not in cache:
+        st = os.stat(request.mechanism)
+        key = (request.mechanism, st.st_size, st.st_mtime_ns)
+        if key not in cache:
             cache.clear()
             with open(request.mechanism, "rb") as f:
-                cache[request.mechanism] = deserialize_message(f.read(), Solve.Response)
-        reply = cache[request.mechanism]
+                cache[key] = deserialize_message(f.read(), Solve.Response)
+        reply = cache[key]
         now = time.time()
         reply.result.header.stamp.sec = int(now)
         reply.result.header.stamp.nanosec = int((now - int(now)) * 1e9)

@@ -584,6 +584,36 @@ impl RtpsReaderProxy {
     }
   }
 
+  // linkspace patch: every fragment of a fragmented sample requested at once
+  // (an ACKNACK for the whole sample), served by paced SendRepairFrags rounds.
+  pub fn mark_all_frags_requested(&mut self, seq_num: SequenceNumber, num_frags: u32) {
+    let req_set = self.frags_requested.entry(seq_num).or_default();
+    let n = num_frags as usize;
+    if req_set.len() < n {
+      req_set.grow(n - req_set.len(), false);
+    }
+    req_set.set_all(true);
+  }
+
+  // linkspace patch: `count` fragments from 1-based `start` on were sent.
+  pub fn mark_frags_sent(&mut self, seq_num: SequenceNumber, start: u32, count: u32) {
+    if let Some(frag_map) = self.frags_requested.get_mut(&seq_num) {
+      let from = (start.max(1) - 1) as usize;
+      let to = (from + count as usize).min(frag_map.len());
+      for idx in from..to {
+        frag_map.set(idx, false);
+      }
+      if frag_map.none() {
+        self.frags_requested.remove(&seq_num);
+      }
+    }
+  }
+
+  // linkspace patch: drop the fragment requests of a sample that cannot be sent.
+  pub fn forget_frags_requested(&mut self, seq_num: SequenceNumber) {
+    self.frags_requested.remove(&seq_num);
+  }
+
   // Note: The current implementation produces an iterator that iterates only
   // over one fragmented sample, but the upper layer should detect that
   // there are still other fragmented samples requested (if any)
