@@ -572,17 +572,8 @@ impl RtpsReaderProxy {
   }
 
   // This just removes the FragmentNumber entry from the set.
-  pub fn mark_frag_sent(&mut self, seq_num: SequenceNumber, frag_num: &FragmentNumber) {
-    let mut frag_map_emptied = false;
-    if let Some(frag_map) = self.frags_requested.get_mut(&seq_num) {
-      // -1 because FragmentNumbers start at 1
-      frag_map.set(usize::from(*frag_num) - 1, false);
-      frag_map_emptied = frag_map.none();
-    }
-    if frag_map_emptied {
-      self.frags_requested.remove(&seq_num);
-    }
-  }
+  // linkspace patch: mark_frag_sent (one fragment) gave way to mark_frags_sent
+  // (a run of them).
 
   // linkspace patch: every fragment of a fragmented sample requested at once
   // (an ACKNACK for the whole sample), served by paced SendRepairFrags rounds.
@@ -592,7 +583,7 @@ impl RtpsReaderProxy {
     if req_set.len() < n {
       req_set.grow(n - req_set.len(), false);
     }
-    req_set.set_all(true);
+    req_set.fill(true);
   }
 
   // linkspace patch: `count` fragments from 1-based `start` on were sent.
