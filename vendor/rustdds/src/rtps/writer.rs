@@ -2855,11 +2855,15 @@ mod tests {
       },
       discovery::discovery::Discovery,
       messages::submessages::{
-        elements::serialized_payload::SerializedPayload, submessages::AckNack,
+        elements::serialized_payload::SerializedPayload,
+        submessages::{AckNack, NackFrag},
       },
       polling::new_shared_timer,
       rtps::writer_send_buffer::Admission,
-      structure::{guid::EntityKind, sequence_number::SequenceNumberSet},
+      structure::{
+        guid::EntityKind,
+        sequence_number::{FragmentNumberSet, SequenceNumberSet},
+      },
       RepresentationIdentifier,
     };
 
@@ -2999,31 +3003,6 @@ mod tests {
           .handle_ack_nack(self.reader_guid.prefix, &AckSubmessage::AckNack(ack_nack));
       }
 
-      // Timed events addressed to our reader that expire within `max_wait`.
-      // This keeps SendRepairFrags, which next_repair_event skips.
-      fn reader_events(&self, max_wait: StdDuration) -> Vec<TimedEvent> {
-        let give_up = Instant::now() + max_wait;
-        let mut found = Vec::new();
-        loop {
-          while let Some(fired) = self.timer.borrow_mut().poll() {
-            if let DpTimerEvent::Writer { event, .. } = fired {
-              let to_reader = match event {
-                TimedEvent::SendRepairData { to_reader }
-                | TimedEvent::SendRepairFrags { to_reader } => Some(to_reader),
-                TimedEvent::Heartbeat | TimedEvent::CacheCleaning => None,
-              };
-              if to_reader == Some(self.reader_guid) {
-                found.push(event);
-              }
-            }
-          }
-          if Instant::now() >= give_up {
-            return found;
-          }
-          std::thread::sleep(StdDuration::from_millis(1));
-        }
-      }
-
       // The next SendRepairData timeout scheduled for our reader, waiting up to
       // `max_wait` for it to expire. Other timeouts are skipped.
       fn next_repair_event(&self, max_wait: StdDuration) -> Option<TimedEvent> {
@@ -3045,6 +3024,35 @@ mod tests {
           }
           std::thread::sleep(StdDuration::from_millis(1));
         }
+      }
+
+      // linkspace patch: fragments requested by our reader (of its lowest
+      // requested sample).
+      fn requested_frags(&self) -> usize {
+        self.reader_proxy().frags_requested_iterator().count()
+      }
+
+      // linkspace patch: run one SendRepairFrags round; returns how many
+      // fragments it sent.
+      fn frag_round(&mut self) -> usize {
+        let give_up = Instant::now() + StdDuration::from_secs(5);
+        let event = loop {
+          let fired = self.timer.borrow_mut().poll();
+          match fired {
+            Some(DpTimerEvent::Writer {
+              event: TimedEvent::SendRepairFrags { to_reader },
+              ..
+            }) if to_reader == self.reader_guid => break TimedEvent::SendRepairFrags { to_reader },
+            Some(_) => {}
+            None => {
+              assert!(Instant::now() < give_up, "SendRepairFrags was not scheduled");
+              std::thread::sleep(StdDuration::from_millis(1));
+            }
+          }
+        };
+        let before = self.requested_frags();
+        self.writer.handle_timed_event(event);
+        before - self.requested_frags()
       }
 
       // Run one repair round; returns how many changes it sent.
@@ -3103,9 +3111,9 @@ mod tests {
       assert_eq!(f.unsent(), 0);
     }
 
-    // A sample larger than a whole round still goes out, one per round. These
-    // samples are fragmented, and that send is the only one: it does not arm
-    // SendRepairFrags.
+    // A sample larger than a whole round still goes out, one per round.
+    // linkspace patch: a fragmented sample goes out as fragment repair: the
+    // data round requests all of its fragments and arms SendRepairFrags.
     #[test]
     fn repair_round_sends_at_least_one_sample() {
       let mut f = Fixture::user(3, 20_000, None);
@@ -3113,13 +3121,95 @@ mod tests {
       f.ack_nack(1..=3, 1);
       for _ in 0..3 {
         assert_eq!(f.repair_round(), 1);
+        assert_eq!(f.requested_frags(), 79, "every fragment of 20,000 bytes");
+        assert_eq!(f.frag_round(), 79, "one fragment round sends 20 KB");
         assert!(!f.reader_proxy().repair_frags_requested());
       }
       assert!(!f.reader_proxy().repair_mode);
-      assert!(f
-        .reader_events(StdDuration::from_millis(50))
-        .iter()
-        .all(|event| !matches!(event, TimedEvent::SendRepairFrags { .. })));
+    }
+
+    // linkspace patch: fragment repair of a sample of megabytes goes in rounds
+    // of REPAIR_FRAGS_BATCH_MAX_BYTES, each sending the requested fragments as
+    // contiguous runs, until all are sent.
+    #[test]
+    fn fragment_repair_rounds_are_byte_limited() {
+      let mut f = Fixture::user(1, 2_000_000, None);
+      f.writer.nack_response_delay = StdDuration::ZERO;
+      f.ack_nack(1..=1, 1);
+      assert_eq!(f.repair_round(), 1);
+      let total = f.requested_frags();
+      assert_eq!(total, 2_000_000_usize.div_ceil(FRAGMENT_SIZE));
+      let per_round = REPAIR_FRAGS_BATCH_MAX_BYTES / FRAGMENT_SIZE;
+      let mut rounds = 0;
+      let mut sent = 0;
+      while f.reader_proxy().repair_frags_requested() {
+        let n = f.frag_round();
+        assert!(n >= per_round.min(total - sent) && n <= per_round + 8, "round {rounds}: {n} fragments");
+        sent += n;
+        rounds += 1;
+      }
+      assert_eq!(sent, total);
+      assert!(rounds >= 7, "{rounds} rounds for 2 MB");
+    }
+
+    // linkspace patch: a NACK_FRAG is answered in one round with every
+    // fragment it names (upstream: 8 fragments per round).
+    #[test]
+    fn nack_frag_is_answered_in_one_round() {
+      let mut f = Fixture::user(1, 200_000, None);
+      f.writer.nackfrag_response_delay = StdDuration::ZERO;
+      // Fragments 100..=355 missing, except 200 (two runs).
+      let missing: BTreeSet<FragmentNumber> = (100..=355)
+        .filter(|&n| n != 200)
+        .map(FragmentNumber::new)
+        .collect();
+      let nack_frag = NackFrag {
+        reader_id: f.reader_guid.entity_id,
+        writer_id: f.writer.my_guid.entity_id,
+        writer_sn: SequenceNumber::new(1),
+        fragment_number_state: FragmentNumberSet::from_base_and_set(FragmentNumber::new(100), &missing),
+        count: 1,
+      };
+      f.writer
+        .handle_ack_nack(f.reader_guid.prefix, &AckSubmessage::NackFrag(nack_frag));
+      assert_eq!(f.requested_frags(), 255);
+      assert_eq!(f.frag_round(), 255);
+      assert!(!f.reader_proxy().repair_frags_requested());
+    }
+
+    // linkspace patch: the push of a fragmented sample pauses after each burst
+    // of PUSH_BURST_MAX_BYTES and resumes on ResumePush, where it stopped.
+    #[test]
+    fn fragmented_push_goes_in_paced_bursts() {
+      let mut f = Fixture::user(2, 2_000_000, None);
+      f.writer.process_pending();
+      assert!(f.writer.push_paused_until.is_some(), "paused after the first burst");
+      assert_eq!(f.writer.last_sent, SequenceNumber::zero());
+      assert!(matches!(f.writer.sample_cursor, SampleCursor::Frag(_)));
+      // A doorbell during the pause sends nothing.
+      let cursor = f.writer.sample_cursor;
+      f.writer.process_pending();
+      assert_eq!(f.writer.sample_cursor, cursor);
+      let mut pauses = 1;
+      let started = Instant::now();
+      while f.writer.last_sent < SequenceNumber::new(2) {
+        assert!(started.elapsed() < StdDuration::from_secs(10), "the push stalled");
+        let fired = f.timer.borrow_mut().poll();
+        match fired {
+          Some(DpTimerEvent::Writer {
+            event: TimedEvent::ResumePush,
+            ..
+          }) => {
+            f.writer.handle_timed_event(TimedEvent::ResumePush);
+            pauses += 1;
+          }
+          Some(_) => {}
+          None => std::thread::sleep(StdDuration::from_millis(1)),
+        }
+      }
+      // 4 MB in bursts of at most PUSH_BURST_MAX_BYTES.
+      assert!(pauses >= 4_000_000 / PUSH_BURST_MAX_BYTES, "{pauses} bursts");
+      assert!(f.writer.push_paused_until.is_none());
     }
 
     // A repeated ACKNACK count is a copy and changes nothing; a new count does.
