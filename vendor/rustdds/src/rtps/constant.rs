@@ -46,12 +46,14 @@ pub const REPAIR_BATCH_MAX_BYTES: usize = 8192;
 // repair never arrives as one burst larger than a reader's socket buffer.
 pub const REPAIR_FRAGS_BATCH_MAX_BYTES: usize = 256 * 1024;
 
-// linkspace patch: pacing of the first push of a fragmented sample. After
-// about PUSH_BURST_MAX_BYTES of DATAFRAG datagrams a user Writer pauses for
-// PUSH_BURST_INTERVAL (at most 128 MiB/s): a sample of many megabytes sent at
-// once overflows the reader's socket buffer (4 MiB with linkspace's Fast DDS
-// profile, 208 KiB by default on Linux) and the lost fragments cost repair
-// rounds.
+// linkspace patch: pacing of the first push of a fragmented sample. A user
+// Writer sends the first PUSH_FIRST_BURST_BYTES of a sample at once, then
+// pauses for PUSH_BURST_INTERVAL after each further PUSH_BURST_MAX_BYTES of
+// DATAFRAG datagrams (128 MiB/s): a sample of many megabytes sent at once
+// overflows the reader's socket buffer (4 MiB with linkspace's Fast DDS
+// profile) and the lost fragments cost repair rounds. Samples of up to
+// PUSH_FIRST_BURST_BYTES go out as before.
+pub const PUSH_FIRST_BURST_BYTES: usize = 2 * 1024 * 1024;
 pub const PUSH_BURST_MAX_BYTES: usize = 256 * 1024;
 pub const PUSH_BURST_INTERVAL: Duration = Duration::from_millis(2);
 

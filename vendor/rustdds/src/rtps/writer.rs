@@ -31,6 +31,7 @@ use crate::{
       DEFAULT_WRITER_MAX_SAMPLES, FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE, FRAGMENT_SIZE,
       HEARTBEAT_PERIOD_FAST, HEARTBEAT_PERIOD_SLOW, HEARTBEAT_SUBMESSAGE_SERIALIZED_SIZE,
       NACK_RESPONSE_DELAY, NACK_SUPPRESSION_DURATION, PUSH_BURST_INTERVAL, PUSH_BURST_MAX_BYTES,
+      PUSH_FIRST_BURST_BYTES,
       REPAIR_BATCH_MAX_BYTES, REPAIR_FRAGS_BATCH_MAX_BYTES, REPAIR_INTERVAL_DEFAULT,
       REPAIR_INTERVAL_MAX, REPAIR_INTERVAL_MIN,
     },
@@ -1042,10 +1043,16 @@ impl Writer {
     let messages_to_send =
       FragmentationIter::new_resume(self, cc, target_reader_opt, send_also_heartbeat, cursor);
     let fragmentation_needed = messages_to_send.fragmentation_needed();
-    // linkspace patch: a pushed (Bulk) fragmented sample goes out in bursts of
-    // about PUSH_BURST_MAX_BYTES, each datagram counted at the datagram budget.
+    // linkspace patch: a pushed (Bulk) fragmented sample goes out in bursts:
+    // PUSH_FIRST_BURST_BYTES from its start, PUSH_BURST_MAX_BYTES after a
+    // pause, each datagram counted at the datagram budget.
+    let burst_bytes = if cursor == SampleCursor::Fresh {
+      PUSH_FIRST_BURST_BYTES
+    } else {
+      PUSH_BURST_MAX_BYTES
+    };
     let burst_datagrams = (fragmentation_needed && class == TrafficClass::Bulk)
-      .then(|| (PUSH_BURST_MAX_BYTES / self.datagram_budget(target_reader_opt).max(1)).max(1));
+      .then(|| (burst_bytes / self.datagram_budget(target_reader_opt).max(1)).max(1));
     let mut sent_datagrams = 0;
 
     // Send the messages, either to all readers or just one, stopping at the
@@ -3177,11 +3184,17 @@ mod tests {
       assert!(!f.reader_proxy().repair_frags_requested());
     }
 
-    // linkspace patch: the push of a fragmented sample pauses after each burst
-    // of PUSH_BURST_MAX_BYTES and resumes on ResumePush, where it stopped.
+    // linkspace patch: the push of a fragmented sample pauses after its first
+    // PUSH_FIRST_BURST_BYTES and then after each PUSH_BURST_MAX_BYTES, and
+    // resumes on ResumePush, where it stopped. A smaller sample goes at once.
     #[test]
     fn fragmented_push_goes_in_paced_bursts() {
-      let mut f = Fixture::user(2, 2_000_000, None);
+      let mut small = Fixture::user(2, 1_000_000, None);
+      small.writer.process_pending();
+      assert_eq!(small.writer.last_sent, SequenceNumber::new(2));
+      assert!(small.writer.push_paused_until.is_none());
+
+      let mut f = Fixture::user(2, 4_000_000, None);
       f.writer.process_pending();
       assert!(f.writer.push_paused_until.is_some(), "paused after the first burst");
       assert_eq!(f.writer.last_sent, SequenceNumber::zero());
@@ -3207,8 +3220,9 @@ mod tests {
           None => std::thread::sleep(StdDuration::from_millis(1)),
         }
       }
-      // 4 MB in bursts of at most PUSH_BURST_MAX_BYTES.
-      assert!(pauses >= 4_000_000 / PUSH_BURST_MAX_BYTES, "{pauses} bursts");
+      // Twice 4 MB: 2 MiB at once, the rest in bursts of PUSH_BURST_MAX_BYTES.
+      let per_sample = (4_000_000 - PUSH_FIRST_BURST_BYTES) / PUSH_BURST_MAX_BYTES;
+      assert!(pauses >= 2 * per_sample, "{pauses} bursts");
       assert!(f.writer.push_paused_until.is_none());
     }
 
