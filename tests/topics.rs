@@ -1078,7 +1078,7 @@ fn reply_history_is_bounded_by_bytes() {
     std::thread::sleep(Duration::from_secs(2));
     let after = node.memory_kib("VmRSS:");
     eprintln!("VmRSS {before} KiB after one reply, {after} KiB after {} more ({total} bytes), budget {budget_mib} MiB", sizes.len());
-    assert!(after <= before + (budget_mib as u64 + 16) * 1024, "VmRSS grew from {before} to {after} KiB over {total} bytes of replies");
+    assert!(after <= before + (budget_mib + 16) * 1024, "VmRSS grew from {before} to {after} KiB over {total} bytes of replies");
     assert!(node.alive(), "the node died:\n{}", node.log());
 }
 

@@ -363,7 +363,7 @@ impl DomainParticipantBuilder {
 
     let mut dp = dp;
     dp.writer_history_max_bytes = self.writer_history_max_bytes; // linkspace patch
-    // outer DP wrapper
+                                                                 // outer DP wrapper
     let dp = DomainParticipant {
       dpi: Arc::new(Mutex::new(dp)),
     };

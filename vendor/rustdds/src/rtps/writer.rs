@@ -31,9 +31,8 @@ use crate::{
       DEFAULT_WRITER_MAX_SAMPLES, FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE, FRAGMENT_SIZE,
       HEARTBEAT_PERIOD_FAST, HEARTBEAT_PERIOD_SLOW, HEARTBEAT_SUBMESSAGE_SERIALIZED_SIZE,
       NACK_RESPONSE_DELAY, NACK_SUPPRESSION_DURATION, PUSH_BURST_INTERVAL, PUSH_BURST_MAX_BYTES,
-      PUSH_FIRST_BURST_BYTES,
-      REPAIR_BATCH_MAX_BYTES, REPAIR_FRAGS_BATCH_MAX_BYTES, REPAIR_INTERVAL_DEFAULT,
-      REPAIR_INTERVAL_MAX, REPAIR_INTERVAL_MIN,
+      PUSH_FIRST_BURST_BYTES, REPAIR_BATCH_MAX_BYTES, REPAIR_FRAGS_BATCH_MAX_BYTES,
+      REPAIR_INTERVAL_DEFAULT, REPAIR_INTERVAL_MAX, REPAIR_INTERVAL_MIN,
     },
     outbound::{SocketId, TrafficClass},
     rtps_reader_proxy::RtpsReaderProxy,
@@ -3052,7 +3051,10 @@ mod tests {
             }) if to_reader == self.reader_guid => break TimedEvent::SendRepairFrags { to_reader },
             Some(_) => {}
             None => {
-              assert!(Instant::now() < give_up, "SendRepairFrags was not scheduled");
+              assert!(
+                Instant::now() < give_up,
+                "SendRepairFrags was not scheduled"
+              );
               std::thread::sleep(StdDuration::from_millis(1));
             }
           }
@@ -3151,7 +3153,10 @@ mod tests {
       let mut sent = 0;
       while f.reader_proxy().repair_frags_requested() {
         let n = f.frag_round();
-        assert!(n >= per_round.min(total - sent) && n <= per_round + 8, "round {rounds}: {n} fragments");
+        assert!(
+          n >= per_round.min(total - sent) && n <= per_round + 8,
+          "round {rounds}: {n} fragments"
+        );
         sent += n;
         rounds += 1;
       }
@@ -3174,7 +3179,10 @@ mod tests {
         reader_id: f.reader_guid.entity_id,
         writer_id: f.writer.my_guid.entity_id,
         writer_sn: SequenceNumber::new(1),
-        fragment_number_state: FragmentNumberSet::from_base_and_set(FragmentNumber::new(100), &missing),
+        fragment_number_state: FragmentNumberSet::from_base_and_set(
+          FragmentNumber::new(100),
+          &missing,
+        ),
         count: 1,
       };
       f.writer
@@ -3196,7 +3204,10 @@ mod tests {
 
       let mut f = Fixture::user(2, 4_000_000, None);
       f.writer.process_pending();
-      assert!(f.writer.push_paused_until.is_some(), "paused after the first burst");
+      assert!(
+        f.writer.push_paused_until.is_some(),
+        "paused after the first burst"
+      );
       assert_eq!(f.writer.last_sent, SequenceNumber::zero());
       assert!(matches!(f.writer.sample_cursor, SampleCursor::Frag(_)));
       // A doorbell during the pause sends nothing.
@@ -3206,7 +3217,10 @@ mod tests {
       let mut pauses = 1;
       let started = Instant::now();
       while f.writer.last_sent < SequenceNumber::new(2) {
-        assert!(started.elapsed() < StdDuration::from_secs(10), "the push stalled");
+        assert!(
+          started.elapsed() < StdDuration::from_secs(10),
+          "the push stalled"
+        );
         let fired = f.timer.borrow_mut().poll();
         match fired {
           Some(DpTimerEvent::Writer {

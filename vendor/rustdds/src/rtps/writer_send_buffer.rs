@@ -703,7 +703,11 @@ mod tests {
     for _ in 0..5 {
       assert!(admit_now(&buf, WriteOptions::default()));
     }
-    assert_eq!(buf.retained_len(), 5, "nothing acknowledged: all kept for repair");
+    assert_eq!(
+      buf.retained_len(),
+      5,
+      "nothing acknowledged: all kept for repair"
+    );
     buf.set_acked_frontier(Some(SequenceNumber::new(5))); // 1..=4 acknowledged
     assert!(admit_now(&buf, WriteOptions::default()));
     assert_eq!(buf.retained_len(), 2, "5 (unacknowledged) and 6 stay");
@@ -724,7 +728,12 @@ mod tests {
       /* backlog_limit */ 1000,
       /* max_retain */ 256,
     );
-    let payload = |n: usize| DDSData::new(SerializedPayload::new(RepresentationIdentifier::CDR_LE, vec![0u8; n]));
+    let payload = |n: usize| {
+      DDSData::new(SerializedPayload::new(
+        RepresentationIdentifier::CDR_LE,
+        vec![0u8; n],
+      ))
+    };
     let admit = |n: usize| {
       matches!(
         buf.admit_blocking(WriteOptions::default(), payload(n), Some(StdDuration::ZERO)),
@@ -737,10 +746,17 @@ mod tests {
     for _ in 0..30 {
       assert!(admit(1000));
     }
-    assert_eq!(buf.retained_len(), 10_000 / size, "unacknowledged, yet bounded");
+    assert_eq!(
+      buf.retained_len(),
+      10_000 / size,
+      "unacknowledged, yet bounded"
+    );
     assert!(buf.retained_bytes() <= 10_000);
     assert_eq!(buf.last_change_sequence_number(), SequenceNumber::new(30));
-    assert_eq!(buf.first_change_sequence_number(), SequenceNumber::new(31 - (10_000 / size) as i64));
+    assert_eq!(
+      buf.first_change_sequence_number(),
+      SequenceNumber::new(31 - (10_000 / size) as i64)
+    );
     // A sample larger than the whole budget replaces everything before it.
     assert!(admit(50_000));
     assert_eq!(buf.retained_len(), 1);
@@ -755,7 +771,6 @@ mod tests {
     }
     assert_eq!(buf.retained_len(), 30);
   }
-
 
   // A VOLATILE reliable writer with no matched reliable reader trims KeepLast on
   // insert: there is no late joiner to serve, so retaining unacknowledged samples
