@@ -361,9 +361,11 @@ impl DomainParticipantBuilder {
       discovery_sample_sender,
     )?;
 
+    // linkspace patch: the byte bound of the writers' histories.
     let mut dp = dp;
-    dp.writer_history_max_bytes = self.writer_history_max_bytes; // linkspace patch
-                                                                 // outer DP wrapper
+    dp.writer_history_max_bytes = self.writer_history_max_bytes;
+
+    // outer DP wrapper
     let dp = DomainParticipant {
       dpi: Arc::new(Mutex::new(dp)),
     };
