@@ -134,7 +134,7 @@ def make_request(kind, fields):
 
 
 def services(args):
-    """Runs the calls of a script: a JSON list of {"service", "type", "request"} or
+    """Runs the calls of a script: a JSON list of {"service", "type", "request"[, "brief"]} or
     {"subscribe": name} (a fresh subscriber to a latched topic, collected after a settle) or
     {"sleep": seconds} or {"cancel_during": call step, "progress": topic} (the call is sent, the
     first Progress of a run not yet done on that topic gives the run id, Cancel is called with
@@ -179,9 +179,11 @@ def services(args):
         if not future.done():
             results.append({"service": name, "error": "no reply"})
             continue
-        reply = to_plain(future.result())
+        seconds = time.monotonic() - t
+        # "brief": only ok, message and the size (a reply of megabytes, read as JSON, is slow).
+        reply = to_plain(future.result()) if not step.get("brief") else {"ok": future.result().ok, "message": future.result().message}
         reply["service"] = name
-        reply["seconds"] = time.monotonic() - t
+        reply["seconds"] = seconds
         reply["bytes"] = len(serialize_message(future.result()))
         results.append(reply)
     print(json.dumps({"results": results}))

@@ -1029,6 +1029,102 @@ fn large_replies_reach_rclpy_and_a_long_name_blocks_no_one() {
     assert!(node.alive(), "the node died:\n{}", node.log());
 }
 
+/// Test idea: a service reply of megabytes far beyond a socket buffer (two Solve replies of
+/// about 16 MB: the four-bar at sigma 1e-6, 188,000 boxes processed) reaches rclpy whole, every
+/// time. RustDDS as published sent such a sample in one burst that overflowed the reader's
+/// receive buffer and then repaired the lost fragments at 2 KiB per 10 ms (vendor/README.md):
+/// such replies took from 20 s to over a minute. The client waits 60 s per reply; the times are
+/// printed (scripts/bench_replies.py measures them against rclpy).
+#[test]
+fn replies_of_sixteen_megabytes_reach_rclpy_whole() {
+    let Some(python) = python() else { return };
+    let domain = 56;
+    let four_bar = format!("{ROOT}/urdf/four_bar.urdf");
+    let mut node = Node::start(domain, &[&four_bar, "--sigma", "1e-2", "--max-request-boxes", "1000000", "--max-wait", "120"]);
+    node.wait_for(&["four_bar: published configuration_space"], Duration::from_secs(120));
+    let big = call("solve", "Solve", json!({"mechanism": "four_bar", "settings": settings(1e-6, 188_000, 0.0), "wait": 120.0}));
+    let script = json!([
+        {"brief": true, "timeout": 180.0, "service": big["service"], "type": big["type"], "request": big["request"]},
+        {"brief": true, "timeout": 180.0, "service": big["service"], "type": big["type"], "request": big["request"]},
+    ]);
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("sixteen-{}.json", std::process::id()));
+    std::fs::write(&path, serde_json::to_string(&script).expect("json")).expect("script written");
+    let got = py(python, domain, "tests/ros_client.py", &["services", "--script", path.to_str().expect("utf-8"), "--timeout", "60"], Duration::from_secs(600));
+    let _ = std::fs::remove_file(&path);
+    for (k, r) in got["results"].as_array().expect("results").iter().enumerate() {
+        assert!(r.get("error").is_none(), "reply {k}: {r}\nnode log:\n{}", linkspace::ros::bounded(&node.log(), 20_000));
+        assert_eq!(r["ok"], json!(true), "{r}");
+        let bytes = r["bytes"].as_u64().expect("bytes");
+        eprintln!("reply {k}: {bytes} bytes after {:.2} s (the run included)", r["seconds"].as_f64().unwrap_or(f64::NAN));
+        assert!(bytes > 15_000_000, "a reply of 16 MB: {bytes} bytes");
+    }
+    assert!(node.alive(), "the node died:\n{}", node.log());
+}
+
+/// Test idea: the node's reply history is bounded by bytes, not by its 256 samples. With
+/// `--max-history-mb 4`, sixteen Solve replies of about 2 MB (33 MB in all, eight times the
+/// budget) leave the node's resident memory (VmRSS) within the budget plus 16 MB of the level
+/// after the first reply, once the client has gone. Before, every reply stayed until 256 of them
+/// were held (25 replies of 2.9 MB: +104 MB, kept after the client left).
+#[test]
+fn reply_history_is_bounded_by_bytes() {
+    let Some(python) = python() else { return };
+    let domain = 57;
+    let four_bar = format!("{ROOT}/urdf/four_bar.urdf");
+    let budget_mib = 4;
+    let mut node = Node::start(domain, &[&four_bar, "--sigma", "1e-2", "--max-request-boxes", "1000000", "--max-history-mb", &budget_mib.to_string()]);
+    node.wait_for(&["four_bar: published configuration_space", "four_bar: published singularities"], Duration::from_secs(120));
+    let solve = call("solve", "Solve", json!({"mechanism": "four_bar", "settings": settings(1.5e-3, 1_000_000, 0.0), "wait": 30.0}));
+    let step = json!({"brief": true, "service": solve["service"], "type": solve["type"], "request": solve["request"]});
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let run = |n: usize, name: &str| -> Vec<u64> {
+        let path = dir.join(format!("history-{name}-{}.json", std::process::id()));
+        std::fs::write(&path, serde_json::to_string(&vec![step.clone(); n]).expect("json")).expect("script written");
+        let got = py(python, domain, "tests/ros_client.py", &["services", "--script", path.to_str().expect("utf-8"), "--timeout", "60"], Duration::from_secs(600));
+        let _ = std::fs::remove_file(&path);
+        got["results"]
+            .as_array()
+            .expect("results")
+            .iter()
+            .map(|r| {
+                assert!(r.get("error").is_none() && r["ok"] == json!(true), "{r}\nnode log:\n{}", linkspace::ros::bounded(&node.log(), 20_000));
+                r["bytes"].as_u64().expect("bytes")
+            })
+            .collect()
+    };
+    // The level after one reply: the solver's and the allocator's working memory included.
+    run(1, "first");
+    std::thread::sleep(Duration::from_secs(1));
+    let before = node.memory_kib("VmRSS:");
+    let sizes = run(16, "many");
+    let total: u64 = sizes.iter().sum();
+    assert!(total > 4 * (budget_mib << 20), "{total} bytes of replies against a budget of {budget_mib} MiB");
+    std::thread::sleep(Duration::from_secs(2));
+    let after = node.memory_kib("VmRSS:");
+    eprintln!("VmRSS {before} KiB after one reply, {after} KiB after {} more ({total} bytes), budget {budget_mib} MiB", sizes.len());
+    assert!(after <= before + (budget_mib + 16) * 1024, "VmRSS grew from {before} to {after} KiB over {total} bytes of replies");
+    assert!(node.alive(), "the node died:\n{}", node.log());
+}
+
+/// Benchmark, not a test (ignored): `cargo test --release --test integration
+/// topics::reply_delivery_benchmark -- --ignored --nocapture` runs scripts/bench_replies.py on
+/// this build: delivery times of Solve replies of 1, 4, 16 and 32 MB, ten tries each, from the
+/// node and from an rclpy server sending the same replies (the baseline). About half an hour.
+/// LINKSPACE_BENCH_SIZES and LINKSPACE_BENCH_TRIES change the sizes (MB, comma separated) and
+/// the tries.
+#[test]
+#[ignore]
+fn reply_delivery_benchmark() {
+    let Some(python) = python() else { return };
+    let sizes = std::env::var("LINKSPACE_BENCH_SIZES").unwrap_or_else(|_| "1,4,16,32".into());
+    let tries = std::env::var("LINKSPACE_BENCH_TRIES").unwrap_or_else(|_| "10".into());
+    let mut cmd = Command::new(python);
+    cmd.arg(format!("{ROOT}/scripts/bench_replies.py")).args(["--linkspace", env!("CARGO_BIN_EXE_linkspace"), "--sizes", &sizes, "--tries", &tries, "--domain", "58"]);
+    let (ok, out, err) = run_with_timeout(cmd, Duration::from_secs(7200));
+    assert!(ok, "bench_replies.py failed:\n{out}\n{err}");
+    println!("{out}");
+}
+
 /// Test idea: memory stays bounded when a writer has no matched reader. The node republishes a
 /// box set of about 2 MB (the four-bar's free curve at sigma 1e-3, 14,336 boxes) every 50 ms with
 /// nobody subscribed; unpatched RustDDS kept every sample of such a TransientLocal writer and

@@ -94,6 +94,10 @@ pub struct ServeArgs {
     /// subscribers with volatile durability, such as RViz's default); 0: only when they change.
     #[arg(long, default_value_t = 0.0)]
     republish: f64,
+    /// Most MiB of samples each of the node's DDS writers (one per service's replies, one per
+    /// topic) keeps for repair and late joiners; the oldest go first, the newest always stays.
+    #[arg(long, value_name = "MIB", default_value_t = linkspace::ros::DEFAULT_MAX_HISTORY_MB)]
+    max_history_mb: usize,
     /// Also take the URDF from this topic (std_msgs/String, TransientLocal, as
     /// robot_state_publisher publishes it); each new one replaces the mechanism and is analysed
     /// again. Without a value: /robot_description.
@@ -238,6 +242,7 @@ pub fn serve(mut args: ServeArgs) -> Result<()> {
         network,
         limits,
         republish,
+        max_history_bytes: args.max_history_mb.max(1).saturating_mul(1 << 20),
         robot_description_topic: args.robot_description_topic,
         rosout,
         log_level,

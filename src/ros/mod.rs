@@ -40,6 +40,9 @@ pub enum Network {
     All,
 }
 
+/// Default of `ServeConfig::max_history_bytes`, in MiB: four replies of 16 MB.
+pub const DEFAULT_MAX_HISTORY_MB: usize = 64;
+
 /// What a request may ask for; beyond it the node refuses with a reason.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NodeLimits {
@@ -120,6 +123,9 @@ pub struct ServeConfig {
     pub limits: NodeLimits,
     /// Publish the configuration spaces again at this period (none: only when they change).
     pub republish: Option<std::time::Duration>,
+    /// Most bytes of samples each DDS writer of the node (a service's replies, a topic) keeps
+    /// for repair and late joiners; the oldest go first, the newest always stays.
+    pub max_history_bytes: usize,
     /// Take URDFs from this topic (std_msgs/String, TransientLocal), e.g. `/robot_description`.
     pub robot_description_topic: Option<String>,
     /// Log to `/rosout` as well as stderr.
@@ -252,6 +258,7 @@ mod tests {
             network: Network::Loopback,
             limits: NodeLimits::default(),
             republish: None,
+            max_history_bytes: DEFAULT_MAX_HISTORY_MB << 20,
             robot_description_topic: None,
             rosout: false,
             log_level: Severity::Info,

@@ -254,6 +254,7 @@ fn latched(depth: usize) -> QosProfile {
 
 /// Reliable and volatile like rclpy's service default, but deeper than its keep-last 10: a
 /// burst of requests (or of replies to one client) must not overwrite unacknowledged ones.
+/// The node's participant bounds each writer's history by bytes too (`max_history_bytes`).
 fn service_qos() -> QosProfile {
     QosProfile::publisher_default()
         .reliability_reliable(WhenFull::Wait(Duration::from_secs(1)))
@@ -383,7 +384,9 @@ fn forward<Q: Message + Clone + 'static, A: Message + 'static>(
 
 /// Runs the node until the process is stopped.
 pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
-    let mut builder = DomainParticipantBuilder::new(config.domain);
+    // The service reply writers keep 256 samples (service_qos): with replies of megabytes the
+    // byte bound is what holds their memory.
+    let mut builder = DomainParticipantBuilder::new(config.domain).writer_history_max_bytes(config.max_history_bytes);
     if config.network == Network::Loopback {
         // RustDDS then announces and sends only on 127.0.0.1, and finds same-host participants
         // by unicast to the well-known discovery ports on loopback.

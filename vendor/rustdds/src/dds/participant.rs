@@ -81,6 +81,9 @@ pub struct DomainParticipantBuilder {
   socket_receive_buffer_size: usize,
   socket_send_buffer_size: usize,
 
+  // linkspace patch: see `writer_history_max_bytes`.
+  writer_history_max_bytes: Option<usize>,
+
   #[cfg(feature = "security")]
   security_plugins: Option<SecurityPlugins>,
   #[cfg(feature = "security")]
@@ -95,6 +98,7 @@ impl DomainParticipantBuilder {
       same_host_loopback: true,
       socket_receive_buffer_size: Self::DEFAULT_SOCKET_RECEIVE_BUFFER_SIZE,
       socket_send_buffer_size: Self::DEFAULT_SOCKET_SEND_BUFFER_SIZE,
+      writer_history_max_bytes: None,
       #[cfg(feature = "security")]
       security_plugins: None,
       #[cfg(feature = "security")]
@@ -161,6 +165,15 @@ impl DomainParticipantBuilder {
   /// - Linux: `sudo sysctl -w net.core.wmem_max=<bytes>`.
   pub fn socket_send_buffer_size(mut self, size: usize) -> Self {
     self.socket_send_buffer_size = size;
+    self
+  }
+
+  /// linkspace patch: the most payload bytes each user-defined DataWriter of
+  /// this participant keeps in its history (for repair and late joiners); the
+  /// oldest samples go first, the newest is always kept. Default: no byte
+  /// bound (only History depth and ResourceLimits count samples).
+  pub fn writer_history_max_bytes(mut self, bytes: usize) -> Self {
+    self.writer_history_max_bytes = Some(bytes);
     self
   }
 
@@ -348,6 +361,10 @@ impl DomainParticipantBuilder {
       discovery_sample_sender,
     )?;
 
+    // linkspace patch: the byte bound of the writers' histories.
+    let mut dp = dp;
+    dp.writer_history_max_bytes = self.writer_history_max_bytes;
+
     // outer DP wrapper
     let dp = DomainParticipant {
       dpi: Arc::new(Mutex::new(dp)),
@@ -523,6 +540,11 @@ impl DomainParticipant {
   /// ```
   pub fn domain_id(&self) -> u16 {
     self.dpi.lock().unwrap().domain_id()
+  }
+
+  /// linkspace patch: DomainParticipantBuilder::writer_history_max_bytes.
+  pub(crate) fn writer_history_max_bytes(&self) -> Option<usize> {
+    self.dpi.lock().unwrap().writer_history_max_bytes
   }
 
   /// # Examples
@@ -958,6 +980,8 @@ pub(crate) struct DomainParticipantDisc {
   discovery_join_handle: std::sync::mpsc::Receiver<JoinHandle<()>>,
   // This allows deterministic generation of EntityIds for DataReader, DataWriter, etc.
   entity_id_generator: atomic::AtomicU32,
+  // linkspace patch: DomainParticipantBuilder::writer_history_max_bytes.
+  writer_history_max_bytes: Option<usize>,
 }
 
 impl DomainParticipantDisc {
@@ -1003,6 +1027,7 @@ impl DomainParticipantDisc {
       discovery_command_sender,
       discovery_join_handle,
       entity_id_generator: atomic::AtomicU32::new(0),
+      writer_history_max_bytes: None,
     })
   }
 

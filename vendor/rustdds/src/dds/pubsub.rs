@@ -556,6 +556,8 @@ impl InnerPublisher {
       backlog_limit,
       max_retain,
     );
+    // linkspace patch: the participant's byte bound on each writer's history.
+    send_buffer.set_max_bytes(dp.writer_history_max_bytes());
     // Doorbell: enqueue this writer's entity id and wake the participant poll.
     let doorbell = Doorbell::new(guid.entity_id, self.writer_ready.clone());
 

@@ -39,6 +39,24 @@ pub const REPAIR_INTERVAL_MAX: Duration = Duration::from_millis(100);
 // one reader. A round always sends at least one sample, even a larger one.
 pub const REPAIR_BATCH_MAX_BYTES: usize = 8192;
 
+// linkspace patch: most bytes of DATAFRAG one SendRepairFrags round sends to
+// one reader, as contiguous runs packed to the reader's datagram budget. One
+// NACK_FRAG asks for at most 256 fragments (64 KiB at FRAGMENT_SIZE); an
+// ACKNACK for a whole fragmented sample is served in rounds of this size, so a
+// repair never arrives as one burst larger than a reader's socket buffer.
+pub const REPAIR_FRAGS_BATCH_MAX_BYTES: usize = 256 * 1024;
+
+// linkspace patch: pacing of the first push of a fragmented sample. A user
+// Writer sends the first PUSH_FIRST_BURST_BYTES of a sample at once, then
+// pauses for PUSH_BURST_INTERVAL after each further PUSH_BURST_MAX_BYTES of
+// DATAFRAG datagrams (128 MiB/s): a sample of many megabytes sent at once
+// overflows the reader's socket buffer (4 MiB with linkspace's Fast DDS
+// profile) and the lost fragments cost repair rounds. Samples of up to
+// PUSH_FIRST_BURST_BYTES go out as before.
+pub const PUSH_FIRST_BURST_BYTES: usize = 2 * 1024 * 1024;
+pub const PUSH_BURST_MAX_BYTES: usize = 256 * 1024;
+pub const PUSH_BURST_INTERVAL: Duration = Duration::from_millis(2);
+
 // Periodic HEARTBEAT period for reliable Writers. The period is adaptive: while
 // some matched reader is behind (has unacknowledged samples), heartbeats are
 // sent at the FAST period to prompt prompt repair (some peers rely on a

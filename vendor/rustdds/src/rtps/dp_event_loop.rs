@@ -515,6 +515,11 @@ impl DPEventLoop {
         DpTimerEvent::Writer { entity_id, event } => {
           if let Some(writer) = self.writers.get_mut(&entity_id) {
             writer.handle_timed_event(event);
+            // linkspace patch: a paced push resumed by its timer may block on a
+            // socket like any push.
+            for sid in writer.take_blocked_sockets() {
+              self.mark_writer_willing(sid, entity_id);
+            }
           } else if !preparing_to_stop {
             trace!("Timed event for unknown writer {entity_id:?}");
           }

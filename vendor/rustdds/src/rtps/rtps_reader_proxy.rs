@@ -572,16 +572,37 @@ impl RtpsReaderProxy {
   }
 
   // This just removes the FragmentNumber entry from the set.
-  pub fn mark_frag_sent(&mut self, seq_num: SequenceNumber, frag_num: &FragmentNumber) {
-    let mut frag_map_emptied = false;
+  // linkspace patch: mark_frag_sent (one fragment) gave way to mark_frags_sent
+  // (a run of them).
+
+  // linkspace patch: every fragment of a fragmented sample requested at once
+  // (an ACKNACK for the whole sample), served by paced SendRepairFrags rounds.
+  pub fn mark_all_frags_requested(&mut self, seq_num: SequenceNumber, num_frags: u32) {
+    let req_set = self.frags_requested.entry(seq_num).or_default();
+    let n = num_frags as usize;
+    if req_set.len() < n {
+      req_set.grow(n - req_set.len(), false);
+    }
+    req_set.fill(true);
+  }
+
+  // linkspace patch: `count` fragments from 1-based `start` on were sent.
+  pub fn mark_frags_sent(&mut self, seq_num: SequenceNumber, start: u32, count: u32) {
     if let Some(frag_map) = self.frags_requested.get_mut(&seq_num) {
-      // -1 because FragmentNumbers start at 1
-      frag_map.set(usize::from(*frag_num) - 1, false);
-      frag_map_emptied = frag_map.none();
+      let from = (start.max(1) - 1) as usize;
+      let to = (from + count as usize).min(frag_map.len());
+      for idx in from..to {
+        frag_map.set(idx, false);
+      }
+      if frag_map.none() {
+        self.frags_requested.remove(&seq_num);
+      }
     }
-    if frag_map_emptied {
-      self.frags_requested.remove(&seq_num);
-    }
+  }
+
+  // linkspace patch: drop the fragment requests of a sample that cannot be sent.
+  pub fn forget_frags_requested(&mut self, seq_num: SequenceNumber) {
+    self.frags_requested.remove(&seq_num);
   }
 
   // Note: The current implementation produces an iterator that iterates only

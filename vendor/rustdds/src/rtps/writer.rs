@@ -30,7 +30,8 @@ use crate::{
     constant::{
       DEFAULT_WRITER_MAX_SAMPLES, FALLBACK_MAX_AGGREGATED_DATAGRAM_SIZE, FRAGMENT_SIZE,
       HEARTBEAT_PERIOD_FAST, HEARTBEAT_PERIOD_SLOW, HEARTBEAT_SUBMESSAGE_SERIALIZED_SIZE,
-      NACK_RESPONSE_DELAY, NACK_SUPPRESSION_DURATION, REPAIR_BATCH_MAX_BYTES,
+      NACK_RESPONSE_DELAY, NACK_SUPPRESSION_DURATION, PUSH_BURST_INTERVAL, PUSH_BURST_MAX_BYTES,
+      PUSH_FIRST_BURST_BYTES, REPAIR_BATCH_MAX_BYTES, REPAIR_FRAGS_BATCH_MAX_BYTES,
       REPAIR_INTERVAL_DEFAULT, REPAIR_INTERVAL_MAX, REPAIR_INTERVAL_MIN,
     },
     outbound::{SocketId, TrafficClass},
@@ -108,6 +109,9 @@ pub(crate) enum SendProgress {
     cursor: SampleCursor,
     blocked: BTreeSet<SocketId>,
   },
+  /// linkspace patch: a burst of PUSH_BURST_MAX_BYTES went out; resume at
+  /// `cursor` after PUSH_BURST_INTERVAL.
+  Paused { cursor: SampleCursor },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -116,6 +120,8 @@ pub(crate) enum TimedEvent {
   CacheCleaning,
   SendRepairData { to_reader: GUID },
   SendRepairFrags { to_reader: GUID },
+  // linkspace patch: the end of a pause in the push of a fragmented sample.
+  ResumePush,
 }
 
 // This is used to construct an actual Writer.
@@ -250,6 +256,9 @@ pub(crate) struct Writer {
   /// WouldBlock. Drained by the event loop, which enqueues this writer on those
   /// sockets' round-robin queues and arms write readiness.
   blocked_sockets: BTreeSet<SocketId>,
+  /// linkspace patch: the push of a fragmented sample pauses between bursts
+  /// (PUSH_BURST_INTERVAL) until this instant; a ResumePush event ends it.
+  push_paused_until: Option<std::time::Instant>,
 
   /// Contains timer that needs to be set to timeout with duration of
   /// self.heartbeat_period timed_event_handler sends notification when timer
@@ -357,6 +366,7 @@ impl Writer {
       last_sent: SequenceNumber::zero(),
       sample_cursor: SampleCursor::Fresh,
       blocked_sockets: BTreeSet::new(),
+      push_paused_until: None,
       timed_event_timer,
       like_stateless: i.like_stateless,
       qos_policies: i.qos_policies,
@@ -522,6 +532,15 @@ impl Writer {
         {
           self.schedule_repair_data(reader_guid, self.repair_interval());
         }
+        // linkspace patch: a fragmented sample the ACKNACK asked for is sent by
+        // SendRepairFrags rounds.
+        if self
+          .readers
+          .get(&reader_guid)
+          .is_some_and(RtpsReaderProxy::repair_frags_requested)
+        {
+          self.schedule_repair_frags(reader_guid, std::time::Duration::ZERO);
+        }
       }
       TimedEvent::SendRepairFrags {
         to_reader: reader_guid,
@@ -541,6 +560,10 @@ impl Writer {
           self.schedule_repair_frags(reader_guid, self.repair_interval());
         }
       } // SendRepairFrags
+      TimedEvent::ResumePush => {
+        self.push_paused_until = None;
+        self.process_pending();
+      }
     } // match
   } // fn
 
@@ -772,6 +795,11 @@ impl Writer {
   }
 
   pub fn process_pending(&mut self) {
+    // linkspace patch: between two bursts of a fragmented sample, new samples
+    // wait too; the ResumePush event continues.
+    if self.push_paused_until.is_some() {
+      return;
+    }
     // The doorbell enqueues this writer's id and then wakes. A sample admitted
     // while we are here pushes another id, so the next wake runs us again. The
     // shared buffer's `last_seq` is the source of truth.
@@ -908,6 +936,12 @@ impl Writer {
             self.send_buffer.set_sent_frontier(sequence_number);
             self.mark_change_sent_to_all_readers(sequence_number);
           }
+          SendProgress::Paused { cursor } => {
+            self.sample_cursor = cursor;
+            self.push_paused_until = Some(std::time::Instant::now() + PUSH_BURST_INTERVAL);
+            self.schedule_timed_event(PUSH_BURST_INTERVAL, TimedEvent::ResumePush);
+            return;
+          }
         }
       } else {
         // Send Heartbeat only (control).
@@ -1008,10 +1042,32 @@ impl Writer {
     let messages_to_send =
       FragmentationIter::new_resume(self, cc, target_reader_opt, send_also_heartbeat, cursor);
     let fragmentation_needed = messages_to_send.fragmentation_needed();
+    // linkspace patch: a pushed (Bulk) fragmented sample goes out in bursts:
+    // PUSH_FIRST_BURST_BYTES from its start, PUSH_BURST_MAX_BYTES after a
+    // pause, each datagram counted at the datagram budget.
+    let burst_bytes = if cursor == SampleCursor::Fresh {
+      PUSH_FIRST_BURST_BYTES
+    } else {
+      PUSH_BURST_MAX_BYTES
+    };
+    let burst_datagrams = (fragmentation_needed && class == TrafficClass::Bulk)
+      .then(|| (burst_bytes / self.datagram_budget(target_reader_opt).max(1)).max(1));
+    let mut sent_datagrams = 0;
 
     // Send the messages, either to all readers or just one, stopping at the
     // first message that a socket could not accept.
     for (resume_cursor, msg) in messages_to_send {
+      if burst_datagrams.is_some_and(|n| sent_datagrams >= n)
+        && matches!(resume_cursor, SampleCursor::Frag(_))
+      {
+        return (
+          fragmentation_needed,
+          SendProgress::Paused {
+            cursor: resume_cursor,
+          },
+        );
+      }
+      sent_datagrams += 1;
       let blocked = match target_reader_opt {
         None => self.send_message_to_readers(
           DeliveryMode::Multicast,
@@ -1496,9 +1552,16 @@ impl Writer {
         // Keep the order: whatever is packed so far goes first.
         self.flush_repair_datagram(&mut datagram, reader_proxy);
         ts_active = false;
-        // This emits the whole sample, including every fragment when it does
-        // not fit one datagram. A later NACK_FRAG is what arms SendRepairFrags.
-        self.send_cache_change(&cc, false, Some(reader_proxy));
+        if payload_size > self.max_unfragmented_serialized_payload(Some(reader_proxy)) {
+          // linkspace patch: a fragmented sample is not sent whole at once (a
+          // burst of megabytes overflows the reader's socket buffer and is lost
+          // again): every fragment is requested, and SendRepairFrags sends them
+          // in rounds of REPAIR_FRAGS_BATCH_MAX_BYTES.
+          let (num_frags, _) = self.num_frags_and_frag_size(payload_size);
+          reader_proxy.mark_all_frags_requested(unsent_sn, num_frags);
+        } else {
+          self.send_cache_change(&cc, false, Some(reader_proxy));
+        }
         round_bytes += payload_size + DATA_SUBMESSAGE_OVERHEAD;
       } else {
         let source_timestamp = cc.write_options.source_timestamp();
@@ -1577,79 +1640,132 @@ impl Writer {
     }
   }
 
+  // linkspace patch: one round of fragment repair for a reader. The requested
+  // fragments of its lowest requested sample go out as contiguous runs, each
+  // DATAFRAG packing as many fragments as the reader's datagram budget allows,
+  // until REPAIR_FRAGS_BATCH_MAX_BYTES have gone out (the rest follows after the
+  // repair interval). Upstream sent 8 fragments, one per datagram, per round:
+  // 2 KiB per 10 ms. When nothing is left requested, a HEARTBEAT to the reader
+  // asks for its next NACK_FRAG at once (a NACK_FRAG names at most 256
+  // fragments), instead of at the next periodic heartbeat.
   fn handle_repair_frags_send_worker(
     &mut self,
     reader_proxy: &mut RtpsReaderProxy, /* This is mutable proxy temporarily detached from the
                                          * set of reader proxies */
   ) {
-    // Decide the (max) number of frags to be sent
-    let max_send_count = 8;
-
     let reader_guid = reader_proxy.remote_reader_guid;
-
-    // Get (an iterator to) frags requested but not yet sent
-    // reader_proxy.
-    // Iterate over frags to be sent
-    for (seq_num, frag_num) in reader_proxy.frags_requested_iterator().take(max_send_count) {
-      // Sanity check request
-      // ^^^ TODO
-
-      if let Some(cache_change) = self.send_buffer.get_by_sn(seq_num) {
-        // If the data is meant for a single reader only, make sure it is the one we're
-        // about to send frags to.
-        if let Some(single_reader_guid) = cache_change.write_options.to_single_reader() {
-          if single_reader_guid != reader_guid {
-            error!(
-              "We were asked to send datafrags meant for the reader {single_reader_guid:?} to a \
-               different reader {reader_guid:?}. Not gonna happen."
-            );
-            return;
-          }
-        }
-
-        // Generate datafrag message
-        let mut message_builder = MessageBuilder::new();
-        if let Some(src_ts) = cache_change.write_options.source_timestamp() {
-          message_builder = message_builder.ts_msg(self.endianness, Some(src_ts));
-        }
-
-        let fragment_size: u32 = FRAGMENT_SIZE as u32;
-        let data_size: u32 = cache_change.data_value.payload_size() as u32; // TODO: overflow check
-
-        message_builder = message_builder.data_frag_msg(
-          &cache_change,
-          reader_guid.entity_id, // reader
-          self.my_guid,          // writer
-          frag_num,
-          // Repair responds to specifically-NACKed fragment numbers (possibly
-          // non-contiguous), so retransmit one fragment per submessage.
-          1,
-          fragment_size as u16, // TODO: overflow check
-          data_size,
-          self.endianness,
-          self.security_plugins.as_ref(),
-        );
-
-        // Repair frags are a reliability action (response to a NACK_FRAG), so
-        // they must actually reach the reader. Use the never-dropped `Control`
-        // queue: dropping repair on WouldBlock livelocks under sustained send
-        // congestion (reader re-NACKs, retransmit dropped again, forever).
-        let _blocked = self.send_message_to_readers(
-          DeliveryMode::Unicast,
-          message_builder.add_header_and_build(self.my_guid.prefix),
-          &mut std::iter::once(&*reader_proxy),
-          TrafficClass::Control,
-        );
-      } else {
+    let requested: Vec<(SequenceNumber, FragmentNumber)> =
+      reader_proxy.frags_requested_iterator().collect();
+    let Some(&(seq_num, _)) = requested.first() else {
+      return;
+    };
+    let Some(cache_change) = self.send_buffer.get_by_sn(seq_num) else {
+      error!(
+        "handle_repair_frags_send_worker: {:?} missing from send buffer. topic={:?}",
+        seq_num, self.my_topic_name
+      );
+      // TODO: Should we send a GAP message then?
+      reader_proxy.forget_frags_requested(seq_num);
+      return;
+    };
+    // If the data is meant for a single reader only, make sure it is the one we're
+    // about to send frags to.
+    if let Some(single_reader_guid) = cache_change.write_options.to_single_reader() {
+      if single_reader_guid != reader_guid {
         error!(
-          "handle_repair_frags_send_worker: {:?} missing from send buffer. topic={:?}",
-          seq_num, self.my_topic_name
+          "We were asked to send datafrags meant for the reader {single_reader_guid:?} to a \
+           different reader {reader_guid:?}. Not gonna happen."
         );
-        // TODO: Should we send a GAP message then?
+        reader_proxy.forget_frags_requested(seq_num);
+        return;
       }
+    }
+    let data_size = cache_change.data_value.payload_size();
+    let Ok(sample_size) = u32::try_from(data_size) else {
+      error!("handle_repair_frags_send_worker: data_size {data_size} does not fit in u32");
+      reader_proxy.forget_frags_requested(seq_num);
+      return;
+    };
+    let (num_frags, fragment_size) = self.num_frags_and_frag_size(data_size);
+    let budget = reader_proxy.max_datagram_payload();
 
-      reader_proxy.mark_frag_sent(seq_num, &frag_num);
-    } // for
+    let mut round_bytes = 0;
+    let mut i = 0;
+    while i < requested.len() && round_bytes < REPAIR_FRAGS_BATCH_MAX_BYTES {
+      // The run of contiguous requested fragments starting at requested[i].
+      let start = u32::from(requested[i].1);
+      let mut run = 1;
+      while i + run < requested.len() && u32::from(requested[i + run].1) == start + run as u32 {
+        run += 1;
+      }
+      if start == 0 || start > num_frags {
+        // Not a fragment of this sample.
+        reader_proxy.mark_frags_sent(seq_num, start, run as u32);
+        i += run;
+        continue;
+      }
+      let run = run.min((num_frags - start + 1) as usize) as u32;
+      let mut message_builder = MessageBuilder::new();
+      if let Some(src_ts) = cache_change.write_options.source_timestamp() {
+        message_builder = message_builder.ts_msg(self.endianness, Some(src_ts));
+      }
+      message_builder = message_builder.dst_submessage(self.endianness, reader_guid.prefix);
+      let k = frags_per_datafrag(
+        message_builder.len_serialized(),
+        budget,
+        start,
+        num_frags,
+        fragment_size,
+        data_size,
+      )
+      .min(run)
+      .min(u32::from(u16::MAX));
+      message_builder = message_builder.data_frag_msg(
+        &cache_change,
+        reader_guid.entity_id, // reader
+        self.my_guid,          // writer
+        FragmentNumber::new(start),
+        k as u16,
+        fragment_size,
+        sample_size,
+        self.endianness,
+        self.security_plugins.as_ref(),
+      );
+      // Repair frags are a reliability action (response to a NACK_FRAG), so
+      // they must actually reach the reader. Use the never-dropped `Control`
+      // queue: dropping repair on WouldBlock livelocks under sustained send
+      // congestion (reader re-NACKs, retransmit dropped again, forever).
+      let _blocked = self.send_message_to_readers(
+        DeliveryMode::Unicast,
+        message_builder.add_header_and_build(self.my_guid.prefix),
+        &mut std::iter::once(&*reader_proxy),
+        TrafficClass::Control,
+      );
+      reader_proxy.mark_frags_sent(seq_num, start, k);
+      round_bytes += k as usize * usize::from(fragment_size);
+      i += k as usize;
+    }
+
+    let last_seq = self.send_buffer.last_change_sequence_number();
+    if !reader_proxy.repair_frags_requested() && reader_proxy.all_acked_before <= last_seq {
+      let hb_message = MessageBuilder::new()
+        .heartbeat_msg(
+          self.entity_id(),
+          self.send_buffer.first_change_sequence_number(),
+          last_seq,
+          self.next_heartbeat_count(),
+          self.endianness,
+          reader_guid.entity_id,
+          false, // final_flag: request ACKNACK / NACK_FRAG
+          false, // liveliness_flag
+        )
+        .add_header_and_build(self.my_guid.prefix);
+      self.send_control_to_readers(
+        DeliveryMode::Unicast,
+        hb_message,
+        &mut std::iter::once(&*reader_proxy),
+      );
+    }
   } // fn
 
   /// Removes permanently cacheChanges from DDSCache.
@@ -2745,11 +2861,15 @@ mod tests {
       },
       discovery::discovery::Discovery,
       messages::submessages::{
-        elements::serialized_payload::SerializedPayload, submessages::AckNack,
+        elements::serialized_payload::SerializedPayload,
+        submessages::{AckNack, NackFrag},
       },
       polling::new_shared_timer,
       rtps::writer_send_buffer::Admission,
-      structure::{guid::EntityKind, sequence_number::SequenceNumberSet},
+      structure::{
+        guid::EntityKind,
+        sequence_number::{FragmentNumberSet, SequenceNumberSet},
+      },
       RepresentationIdentifier,
     };
 
@@ -2889,31 +3009,6 @@ mod tests {
           .handle_ack_nack(self.reader_guid.prefix, &AckSubmessage::AckNack(ack_nack));
       }
 
-      // Timed events addressed to our reader that expire within `max_wait`.
-      // This keeps SendRepairFrags, which next_repair_event skips.
-      fn reader_events(&self, max_wait: StdDuration) -> Vec<TimedEvent> {
-        let give_up = Instant::now() + max_wait;
-        let mut found = Vec::new();
-        loop {
-          while let Some(fired) = self.timer.borrow_mut().poll() {
-            if let DpTimerEvent::Writer { event, .. } = fired {
-              let to_reader = match event {
-                TimedEvent::SendRepairData { to_reader }
-                | TimedEvent::SendRepairFrags { to_reader } => Some(to_reader),
-                TimedEvent::Heartbeat | TimedEvent::CacheCleaning => None,
-              };
-              if to_reader == Some(self.reader_guid) {
-                found.push(event);
-              }
-            }
-          }
-          if Instant::now() >= give_up {
-            return found;
-          }
-          std::thread::sleep(StdDuration::from_millis(1));
-        }
-      }
-
       // The next SendRepairData timeout scheduled for our reader, waiting up to
       // `max_wait` for it to expire. Other timeouts are skipped.
       fn next_repair_event(&self, max_wait: StdDuration) -> Option<TimedEvent> {
@@ -2935,6 +3030,38 @@ mod tests {
           }
           std::thread::sleep(StdDuration::from_millis(1));
         }
+      }
+
+      // linkspace patch: fragments requested by our reader (of its lowest
+      // requested sample).
+      fn requested_frags(&self) -> usize {
+        self.reader_proxy().frags_requested_iterator().count()
+      }
+
+      // linkspace patch: run one SendRepairFrags round; returns how many
+      // fragments it sent.
+      fn frag_round(&mut self) -> usize {
+        let give_up = Instant::now() + StdDuration::from_secs(5);
+        let event = loop {
+          let fired = self.timer.borrow_mut().poll();
+          match fired {
+            Some(DpTimerEvent::Writer {
+              event: TimedEvent::SendRepairFrags { to_reader },
+              ..
+            }) if to_reader == self.reader_guid => break TimedEvent::SendRepairFrags { to_reader },
+            Some(_) => {}
+            None => {
+              assert!(
+                Instant::now() < give_up,
+                "SendRepairFrags was not scheduled"
+              );
+              std::thread::sleep(StdDuration::from_millis(1));
+            }
+          }
+        };
+        let before = self.requested_frags();
+        self.writer.handle_timed_event(event);
+        before - self.requested_frags()
       }
 
       // Run one repair round; returns how many changes it sent.
@@ -2993,9 +3120,9 @@ mod tests {
       assert_eq!(f.unsent(), 0);
     }
 
-    // A sample larger than a whole round still goes out, one per round. These
-    // samples are fragmented, and that send is the only one: it does not arm
-    // SendRepairFrags.
+    // A sample larger than a whole round still goes out, one per round.
+    // linkspace patch: a fragmented sample goes out as fragment repair: the
+    // data round requests all of its fragments and arms SendRepairFrags.
     #[test]
     fn repair_round_sends_at_least_one_sample() {
       let mut f = Fixture::user(3, 20_000, None);
@@ -3003,13 +3130,114 @@ mod tests {
       f.ack_nack(1..=3, 1);
       for _ in 0..3 {
         assert_eq!(f.repair_round(), 1);
+        assert_eq!(f.requested_frags(), 79, "every fragment of 20,000 bytes");
+        assert_eq!(f.frag_round(), 79, "one fragment round sends 20 KB");
         assert!(!f.reader_proxy().repair_frags_requested());
       }
       assert!(!f.reader_proxy().repair_mode);
-      assert!(f
-        .reader_events(StdDuration::from_millis(50))
-        .iter()
-        .all(|event| !matches!(event, TimedEvent::SendRepairFrags { .. })));
+    }
+
+    // linkspace patch: fragment repair of a sample of megabytes goes in rounds
+    // of REPAIR_FRAGS_BATCH_MAX_BYTES, each sending the requested fragments as
+    // contiguous runs, until all are sent.
+    #[test]
+    fn fragment_repair_rounds_are_byte_limited() {
+      let mut f = Fixture::user(1, 2_000_000, None);
+      f.writer.nack_response_delay = StdDuration::ZERO;
+      f.ack_nack(1..=1, 1);
+      assert_eq!(f.repair_round(), 1);
+      let total = f.requested_frags();
+      assert_eq!(total, 2_000_000_usize.div_ceil(FRAGMENT_SIZE));
+      let per_round = REPAIR_FRAGS_BATCH_MAX_BYTES / FRAGMENT_SIZE;
+      let mut rounds = 0;
+      let mut sent = 0;
+      while f.reader_proxy().repair_frags_requested() {
+        let n = f.frag_round();
+        assert!(
+          n >= per_round.min(total - sent) && n <= per_round + 8,
+          "round {rounds}: {n} fragments"
+        );
+        sent += n;
+        rounds += 1;
+      }
+      assert_eq!(sent, total);
+      assert!(rounds >= 7, "{rounds} rounds for 2 MB");
+    }
+
+    // linkspace patch: a NACK_FRAG is answered in one round with every
+    // fragment it names (upstream: 8 fragments per round).
+    #[test]
+    fn nack_frag_is_answered_in_one_round() {
+      let mut f = Fixture::user(1, 200_000, None);
+      f.writer.nackfrag_response_delay = StdDuration::ZERO;
+      // Fragments 100..=355 missing, except 200 (two runs).
+      let missing: BTreeSet<FragmentNumber> = (100..=355)
+        .filter(|&n| n != 200)
+        .map(FragmentNumber::new)
+        .collect();
+      let nack_frag = NackFrag {
+        reader_id: f.reader_guid.entity_id,
+        writer_id: f.writer.my_guid.entity_id,
+        writer_sn: SequenceNumber::new(1),
+        fragment_number_state: FragmentNumberSet::from_base_and_set(
+          FragmentNumber::new(100),
+          &missing,
+        ),
+        count: 1,
+      };
+      f.writer
+        .handle_ack_nack(f.reader_guid.prefix, &AckSubmessage::NackFrag(nack_frag));
+      assert_eq!(f.requested_frags(), 255);
+      assert_eq!(f.frag_round(), 255);
+      assert!(!f.reader_proxy().repair_frags_requested());
+    }
+
+    // linkspace patch: the push of a fragmented sample pauses after its first
+    // PUSH_FIRST_BURST_BYTES and then after each PUSH_BURST_MAX_BYTES, and
+    // resumes on ResumePush, where it stopped. A smaller sample goes at once.
+    #[test]
+    fn fragmented_push_goes_in_paced_bursts() {
+      let mut small = Fixture::user(2, 1_000_000, None);
+      small.writer.process_pending();
+      assert_eq!(small.writer.last_sent, SequenceNumber::new(2));
+      assert!(small.writer.push_paused_until.is_none());
+
+      let mut f = Fixture::user(2, 4_000_000, None);
+      f.writer.process_pending();
+      assert!(
+        f.writer.push_paused_until.is_some(),
+        "paused after the first burst"
+      );
+      assert_eq!(f.writer.last_sent, SequenceNumber::zero());
+      assert!(matches!(f.writer.sample_cursor, SampleCursor::Frag(_)));
+      // A doorbell during the pause sends nothing.
+      let cursor = f.writer.sample_cursor;
+      f.writer.process_pending();
+      assert_eq!(f.writer.sample_cursor, cursor);
+      let mut pauses = 1;
+      let started = Instant::now();
+      while f.writer.last_sent < SequenceNumber::new(2) {
+        assert!(
+          started.elapsed() < StdDuration::from_secs(10),
+          "the push stalled"
+        );
+        let fired = f.timer.borrow_mut().poll();
+        match fired {
+          Some(DpTimerEvent::Writer {
+            event: TimedEvent::ResumePush,
+            ..
+          }) => {
+            f.writer.handle_timed_event(TimedEvent::ResumePush);
+            pauses += 1;
+          }
+          Some(_) => {}
+          None => std::thread::sleep(StdDuration::from_millis(1)),
+        }
+      }
+      // Twice 4 MB: 2 MiB at once, the rest in bursts of PUSH_BURST_MAX_BYTES.
+      let per_sample = (4_000_000 - PUSH_FIRST_BURST_BYTES) / PUSH_BURST_MAX_BYTES;
+      assert!(pauses >= 2 * per_sample, "{pauses} bursts");
+      assert!(f.writer.push_paused_until.is_none());
     }
 
     // A repeated ACKNACK count is a copy and changes nothing; a new count does.

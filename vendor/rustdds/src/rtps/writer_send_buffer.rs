@@ -70,6 +70,11 @@ struct Inner {
   // send window / unsent-backlog and must retain samples for repair.
   max_retain: usize,
 
+  // linkspace patch: payload bytes of the retained samples, and the most a
+  // user writer retains (see `set_max_bytes`; usize::MAX: no byte bound).
+  bytes: usize,
+  max_bytes: usize,
+
   // Wakers of async producers / ack-waiters parked because the window was full
   // or acknowledgements were still pending. Drained (woken) on any advance.
   wakers: Vec<Waker>,
@@ -129,6 +134,8 @@ impl WriterSendBuffer {
           backlog_limit: backlog_limit.max(1),
           sent_frontier: SequenceNumber::new(0),
           max_retain: max_retain.max(1),
+          bytes: 0,
+          max_bytes: usize::MAX,
           wakers: Vec::new(),
         }),
         progress: Condvar::new(),
@@ -268,6 +275,7 @@ impl WriterSendBuffer {
   ) -> SequenceNumber {
     let seq = inner.last_seq.plus_1();
     let cc = CacheChange::new(shared.writer_guid, seq, write_options, data);
+    inner.bytes += cc.data_value.payload_size();
     inner.changes.insert(seq, cc);
     inner.last_seq = seq;
 
@@ -310,11 +318,42 @@ impl WriterSendBuffer {
         if trim_acked && oldest >= inner.acked_before {
           break; // not yet acknowledged by every reader: kept for repair
         }
-        inner.changes.remove(&oldest);
+        if let Some(cc) = inner.changes.remove(&oldest) {
+          inner.bytes -= cc.data_value.payload_size();
+        }
+        inner.first_seq = oldest.plus_1();
+      }
+    }
+    // linkspace patch: a user writer keeps at most `max_bytes` of samples (the
+    // newest always), oldest dropped first: acknowledged ones, and beyond the
+    // budget unacknowledged ones too, as KeepLast drops them beyond its depth.
+    // A KeepLast(256) service reply writer otherwise held 256 replies, gigabytes
+    // when replies are megabytes.
+    if !shared.is_builtin {
+      while inner.bytes > inner.max_bytes && inner.changes.len() > 1 {
+        let Some(oldest) = inner.changes.keys().next().copied() else {
+          break;
+        };
+        if let Some(cc) = inner.changes.remove(&oldest) {
+          inner.bytes -= cc.data_value.payload_size();
+        }
         inner.first_seq = oldest.plus_1();
       }
     }
     seq
+  }
+
+  /// linkspace patch: the most payload bytes this writer retains (None: no
+  /// byte bound, the default). Applies from the next insert on; built-in
+  /// writers are exempt.
+  pub fn set_max_bytes(&self, max_bytes: Option<usize>) {
+    self.shared.inner.lock().unwrap().max_bytes = max_bytes.unwrap_or(usize::MAX);
+  }
+
+  /// linkspace patch: payload bytes of the retained samples.
+  #[cfg(test)]
+  pub fn retained_bytes(&self) -> usize {
+    self.shared.inner.lock().unwrap().bytes
   }
 
   // --- consumer side (Writer / event loop) ---
@@ -392,7 +431,13 @@ impl WriterSendBuffer {
     let shared = &*self.shared;
     let mut inner = shared.inner.lock().unwrap();
     let count_before = inner.changes.len();
-    inner.changes = inner.changes.split_off(&remove_before);
+    let kept = inner.changes.split_off(&remove_before);
+    let removed = std::mem::replace(&mut inner.changes, kept);
+    // linkspace patch: keep the byte count of the retained samples.
+    inner.bytes -= removed
+      .values()
+      .map(|cc| cc.data_value.payload_size())
+      .sum::<usize>();
     if remove_before > inner.first_seq {
       inner.first_seq = remove_before;
     }
@@ -658,11 +703,73 @@ mod tests {
     for _ in 0..5 {
       assert!(admit_now(&buf, WriteOptions::default()));
     }
-    assert_eq!(buf.retained_len(), 5, "nothing acknowledged: all kept for repair");
+    assert_eq!(
+      buf.retained_len(),
+      5,
+      "nothing acknowledged: all kept for repair"
+    );
     buf.set_acked_frontier(Some(SequenceNumber::new(5))); // 1..=4 acknowledged
     assert!(admit_now(&buf, WriteOptions::default()));
     assert_eq!(buf.retained_len(), 2, "5 (unacknowledged) and 6 stay");
     assert_eq!(buf.first_change_sequence_number(), SequenceNumber::new(5));
+  }
+  // linkspace patch: with a byte budget, a deep KeepLast writer keeps at most
+  // that many payload bytes (the newest sample always, even a larger one),
+  // acknowledged or not; the periodic cleaning keeps the count right.
+  #[test]
+  fn byte_budget_bounds_a_deep_history() {
+    let buf = WriterSendBuffer::new(
+      GUID::GUID_UNKNOWN,
+      "t".to_string(),
+      /* reliable_writer */ true,
+      /* is_builtin */ false,
+      /* volatile */ true,
+      /* window_limit */ 1000,
+      /* backlog_limit */ 1000,
+      /* max_retain */ 256,
+    );
+    let payload = |n: usize| {
+      DDSData::new(SerializedPayload::new(
+        RepresentationIdentifier::CDR_LE,
+        vec![0u8; n],
+      ))
+    };
+    let admit = |n: usize| {
+      matches!(
+        buf.admit_blocking(WriteOptions::default(), payload(n), Some(StdDuration::ZERO)),
+        Admission::Admitted(_)
+      )
+    };
+    buf.set_acked_frontier(Some(SequenceNumber::new(1)));
+    buf.set_max_bytes(Some(10_000));
+    let size = payload(1000).payload_size();
+    for _ in 0..30 {
+      assert!(admit(1000));
+    }
+    assert_eq!(
+      buf.retained_len(),
+      10_000 / size,
+      "unacknowledged, yet bounded"
+    );
+    assert!(buf.retained_bytes() <= 10_000);
+    assert_eq!(buf.last_change_sequence_number(), SequenceNumber::new(30));
+    assert_eq!(
+      buf.first_change_sequence_number(),
+      SequenceNumber::new(31 - (10_000 / size) as i64)
+    );
+    // A sample larger than the whole budget replaces everything before it.
+    assert!(admit(50_000));
+    assert_eq!(buf.retained_len(), 1);
+    assert_eq!(buf.first_change_sequence_number(), SequenceNumber::new(31));
+    // The cleaning's removal keeps the byte count.
+    buf.remove_changes_before(SequenceNumber::new(32));
+    assert_eq!((buf.retained_len(), buf.retained_bytes()), (0, 0));
+    // No budget (the default): the depth alone bounds the history.
+    buf.set_max_bytes(None);
+    for _ in 0..30 {
+      assert!(admit(1000));
+    }
+    assert_eq!(buf.retained_len(), 30);
   }
 
   // A VOLATILE reliable writer with no matched reliable reader trims KeepLast on
