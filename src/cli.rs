@@ -638,6 +638,9 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
             let fmt = |b: &std::collections::BTreeMap<String, [f64; 2]>| b.iter().map(|(n, x)| format!("{n}={:.6}", 0.5 * (x[0] + x[1]))).collect::<Vec<_>>().join(" ");
             writeln!(out, "  witness pose translation {:?}; solutions {} and {}; min |det J| on the path {:.3e}", w.pose_translation, fmt(&w.from), fmt(&w.to), w.min_abs_det).ok();
         }
+        if let Some(m) = &a.most_solutions {
+            writeln!(out, "  at least {} inverse-kinematics solutions at one pose (each certified in its own box; pose translation {:?}, the most the search solved)", m.count, m.pose_translation).ok();
+        }
     }
     if let Some(path) = args.json {
         let mut value = serde_json::to_value(&report)?;

@@ -155,8 +155,11 @@ fn crx_is_cuspidal_with_a_witness_checked_in_f64() {
     let chain = chain_of(&repo("tests/data/fanuc_crx10ial_style.urdf"));
     let control = Control { limits: Limits { max_cells: 3_000_000, ..Limits::default() }, threads: 1, cancel: never() };
     let t = Instant::now();
-    let verdict = linkspace::manip6r::cuspidal::search(&chain, Duration::from_secs(600), 1, &control);
-    let CuspidalVerdict::Cuspidal(w) = verdict else { panic!("no witness: {verdict:?}") };
+    let outcome = linkspace::manip6r::cuspidal::search(&chain, Duration::from_secs(600), 1, &control);
+    let CuspidalVerdict::Cuspidal(w) = outcome.verdict else { panic!("no witness: {:?}", outcome.verdict) };
+    // The most solutions seen: at least the witness's two, at most a 6R's sixteen.
+    let most = outcome.most.expect("poses were solved");
+    assert!((2..=16).contains(&most.count), "{most:?}");
     println!("CRX witness in {:.1} s: {} pieces, min |det J| {:.3e}", t.elapsed().as_secs_f64(), w.pieces, w.min_abs_det);
     let ends: [[f64; 6]; 2] = [w.path[0], *w.path.last().expect("a path")];
     for q in ends {
@@ -180,8 +183,20 @@ fn crx_is_cuspidal_with_a_witness_checked_in_f64() {
 fn ur5_is_never_cuspidal() {
     let chain = chain_of(&repo("urdf/ur5.urdf"));
     let control = Control { limits: Limits { max_cells: 3_000_000, ..Limits::default() }, threads: 1, cancel: never() };
-    let verdict = linkspace::manip6r::cuspidal::search(&chain, Duration::from_secs(20), 1, &control);
-    assert!(matches!(verdict, CuspidalVerdict::Undecided { .. }), "{verdict:?}");
+    let outcome = linkspace::manip6r::cuspidal::search(&chain, Duration::from_secs(20), 1, &control);
+    assert!(matches!(outcome.verdict, CuspidalVerdict::Undecided { .. }), "{:?}", outcome.verdict);
+    // The most solutions the search certified at one pose: exactly the closed form's count
+    // there (the file is the DH table).
+    let most = outcome.most.expect("poses were solved");
+    let mut t = nalgebra::Matrix4::identity();
+    for i in 0..3 {
+        for j in 0..3 {
+            t[(i, j)] = most.pose.r[i][j];
+        }
+        t[(i, 3)] = most.pose.t[i];
+    }
+    assert_eq!(most.count, ur5_closed_form::solve(&t).len(), "{most:?}");
+    assert!(most.count <= 8);
 }
 
 /// UR5 (`urdf/ur5.urdf` is the standard DH table, tool0 = frame 6) against an independent

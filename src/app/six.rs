@@ -3,7 +3,7 @@
 
 use super::arm::Arm;
 use crate::manip3r::LoadOptions;
-use crate::manip6r::{cuspidal, ik, three_parallel, Chain6R, CuspidalVerdict, Ik6Solutions, Manip6rError, PoseTarget, ThreeParallel};
+use crate::manip6r::{cuspidal, ik, three_parallel, Chain6R, CuspidalVerdict, Ik6Solutions, Manip6rError, MostSolutions, PoseTarget, SearchOutcome, ThreeParallel};
 use crate::model::{rounding, Mechanism};
 use crate::search::Control;
 use std::time::{Duration, Instant};
@@ -54,6 +54,8 @@ pub enum ArmCuspidality {
     Searched {
         /// Cuspidal with a witness, or undecided.
         verdict: CuspidalVerdict,
+        /// The pose with the most certified solutions the search solved.
+        most: Option<MostSolutions>,
         /// The search's budget and time spent.
         budget: f64,
         /// Wall time spent.
@@ -78,9 +80,9 @@ pub fn arm_cuspidality(m: &Mechanism, arm: &Arm, options: &LoadOptions, budget: 
         return Some((chain, ArmCuspidality::ThreeParallel { proof, snapped: snaps_on_chain(m, options) }));
     }
     let start = Instant::now();
-    let verdict = cuspidal::search(&chain, budget, 1, control);
+    let SearchOutcome { verdict, most } = cuspidal::search(&chain, budget, 1, control);
     let seconds = start.elapsed().as_secs_f64();
-    Some((chain, ArmCuspidality::Searched { verdict, budget: budget.as_secs_f64(), seconds }))
+    Some((chain, ArmCuspidality::Searched { verdict, most, budget: budget.as_secs_f64(), seconds }))
 }
 
 /// What the rounding policy of `options` changes on the joints from the chain's base to its tip.

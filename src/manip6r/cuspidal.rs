@@ -46,6 +46,29 @@ pub struct Witness {
     pub min_abs_det: f64,
 }
 
+/// The pose with the most solutions the search solved: a certified lower bound on the arm's
+/// maximum number of inverse-kinematics solutions.
+#[derive(Clone, Debug)]
+pub struct MostSolutions {
+    /// Solutions at `pose`, each in its own box proven to hold exactly one, no two the same
+    /// configuration.
+    pub count: usize,
+    /// The pose (tip frame in the base frame), as computed in `f64`; certified for every rigid
+    /// pose within `pose_radius` of it entry-wise.
+    pub pose: Pose64,
+    /// See `pose`.
+    pub pose_radius: f64,
+}
+
+/// What a search found: the verdict, and the pose with the most certified solutions seen.
+#[derive(Clone, Debug)]
+pub struct SearchOutcome {
+    /// Cuspidal with a witness, or undecided.
+    pub verdict: CuspidalVerdict,
+    /// `None` when no pose was solved.
+    pub most: Option<MostSolutions>,
+}
+
 /// The whole-arm verdict.
 #[derive(Clone, Debug)]
 pub enum CuspidalVerdict {
@@ -175,7 +198,7 @@ fn hull(b: &[Interval; 6]) -> [[f64; 2]; 6] {
 
 /// Searches a witness (module doc) for `budget`, from `seed`; `control` bounds each IK solve
 /// and its cancel flag stops the search.
-pub fn search(chain: &Chain6R, budget: Duration, seed: u64, control: &Control) -> CuspidalVerdict {
+pub fn search(chain: &Chain6R, budget: Duration, seed: u64, control: &Control) -> SearchOutcome {
     let start = Instant::now();
     // Cuspidality is a property of configurations: joint limits play no part, one turn per
     // joint holds every configuration once.
@@ -183,6 +206,7 @@ pub fn search(chain: &Chain6R, budget: Duration, seed: u64, control: &Control) -
     let arm = chain.arm();
     let mut rng = Rng(seed);
     let (mut poses, mut pairs) = (0, 0);
+    let mut most: Option<MostSolutions> = None;
     let limits = Limits { max_cells: control.limits.max_cells.min(400_000), ..control.limits };
     let ik_control = Control { limits, ..*control };
     let radius = 1e-12;
@@ -193,6 +217,10 @@ pub fn search(chain: &Chain6R, budget: Duration, seed: u64, control: &Control) -
         let Ok(target) = PoseTarget::around(&pose, radius) else { continue };
         let Ok(sol) = ik::solve(chain, &target, 1e-11, &ik_control) else { continue };
         poses += 1;
+        let distinct = (0..sol.unique.len()).filter(|&i| !(0..i).any(|j| same_on_torus(&sol.unique[i], &sol.unique[j]))).count();
+        if most.as_ref().is_none_or(|m: &MostSolutions| distinct > m.count) {
+            most = Some(MostSolutions { count: distinct, pose, pose_radius: radius });
+        }
         let signs: Vec<f64> = sol.unique.iter().map(|u| chain.det_jacobian(&mid6(u)).signum()).collect();
         for i in 0..sol.unique.len() {
             for j in i + 1..sol.unique.len() {
@@ -231,7 +259,7 @@ pub fn search(chain: &Chain6R, budget: Duration, seed: u64, control: &Control) -
                         None => false,
                     });
                     if proven {
-                        return CuspidalVerdict::Cuspidal(Box::new(Witness {
+                        let verdict = CuspidalVerdict::Cuspidal(Box::new(Witness {
                             pose,
                             pose_radius: radius,
                             from: *a,
@@ -241,10 +269,11 @@ pub fn search(chain: &Chain6R, budget: Duration, seed: u64, control: &Control) -
                             det_sign: signs[i],
                             min_abs_det: least,
                         }));
+                        return SearchOutcome { verdict, most };
                     }
                 }
             }
         }
     }
-    CuspidalVerdict::Undecided { poses, pairs }
+    SearchOutcome { verdict: CuspidalVerdict::Undecided { poses, pairs }, most }
 }

@@ -11,7 +11,7 @@ pub mod ik;
 pub mod three_parallel;
 
 pub use chain::{Chain6R, Pose64};
-pub use cuspidal::{CuspidalVerdict, Witness};
+pub use cuspidal::{CuspidalVerdict, MostSolutions, SearchOutcome, Witness};
 pub use ik::{Ik6Solutions, PoseTarget};
 pub use three_parallel::ThreeParallel;
 

@@ -4,7 +4,7 @@
 use super::manip3r::Completeness;
 use crate::app::{ArmCuspidality, ArmIk6};
 use crate::interval::Interval;
-use crate::manip6r::{Chain6R, CuspidalVerdict};
+use crate::manip6r::{Chain6R, CuspidalVerdict, MostSolutions};
 use crate::search::Incompleteness;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -75,6 +75,29 @@ pub struct ArmCuspidalityReport {
     /// The witness of a cuspidal verdict.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub witness: Option<WitnessRecord>,
+    /// The pose with the most inverse-kinematics solutions the witness search solved: a
+    /// certified lower bound on the arm's maximum (none for verdicts that need no search).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub most_solutions: Option<MostSolutionsRecord>,
+}
+
+/// A pose and how many solutions it has, each certified in its own box.
+#[derive(Clone, Debug, Serialize)]
+pub struct MostSolutionsRecord {
+    /// Distinct solutions, each proven unique in its box.
+    pub count: usize,
+    /// The pose's rotation (row-major) and translation, base frame.
+    pub pose_rotation: [[f64; 3]; 3],
+    /// See `pose_rotation`.
+    pub pose_translation: [f64; 3],
+    /// Entry-wise radius of the pose enclosure solved.
+    pub pose_radius: f64,
+}
+
+impl MostSolutionsRecord {
+    fn of(m: &Option<MostSolutions>) -> Option<Self> {
+        m.as_ref().map(|m| MostSolutionsRecord { count: m.count, pose_rotation: m.pose.r, pose_translation: m.pose.t, pose_radius: m.pose_radius })
+    }
 }
 
 /// A cuspidality witness: a pose, two certified solutions, a path proven free of singularities.
@@ -111,6 +134,7 @@ impl ArmCuspidalityReport {
                 reason: "spherical wrist: the arm is cuspidal iff its 3R positioning structure is (the verdict above is the arm's)".into(),
                 proof: None,
                 witness: None,
+                most_solutions: None,
             },
             ArmCuspidality::ThreeParallel { proof, snapped } => ArmCuspidalityReport {
                 arm,
@@ -123,8 +147,9 @@ impl ArmCuspidalityReport {
                 ),
                 proof: Some(crate::manip6r::three_parallel::CITATION.to_string()),
                 witness: None,
+                most_solutions: None,
             },
-            ArmCuspidality::Searched { verdict: CuspidalVerdict::Cuspidal(w), seconds, .. } => ArmCuspidalityReport {
+            ArmCuspidality::Searched { verdict: CuspidalVerdict::Cuspidal(w), seconds, most, .. } => ArmCuspidalityReport {
                 arm,
                 verdict: "cuspidal",
                 reason: format!("witness found in {seconds:.1} s: two certified solutions of one pose joined by a path on which det J is proven nonzero ({} pieces)", w.pieces),
@@ -140,13 +165,15 @@ impl ArmCuspidalityReport {
                     det_sign: w.det_sign,
                     min_abs_det: w.min_abs_det,
                 }),
+                most_solutions: MostSolutionsRecord::of(most),
             },
-            ArmCuspidality::Searched { verdict: CuspidalVerdict::Undecided { poses, pairs }, budget, .. } => ArmCuspidalityReport {
+            ArmCuspidality::Searched { verdict: CuspidalVerdict::Undecided { poses, pairs }, budget, most, .. } => ArmCuspidalityReport {
                 arm,
                 verdict: "undecided",
                 reason: format!("no witness found within the budget ({budget:.0} s: {poses} poses solved, {pairs} pairs of solutions with one sign of det J tried); non-cuspidality is not proven"),
                 proof: None,
                 witness: None,
+                most_solutions: MostSolutionsRecord::of(most),
             },
         }
     }
