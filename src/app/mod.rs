@@ -24,7 +24,7 @@ pub use distances::{DistancesJob, DistancesRequest};
 pub use linkage::{LinkageAnalysis, SolveJob};
 pub use loops::{all_kinds, analyse_image, image_points, Actuation, ImageAnalysisError, ImageSearch, SingularSets};
 pub use platform::PlatformAnalysis;
-pub use six::{arm_cuspidality, chain6, inverse_kinematics6, ArmCuspidality, ArmIk6};
+pub use six::{arm_cuspidality, chain6, check_path, inverse_kinematics6, ArmCuspidality, ArmIk6, ArmPathCheck};
 pub use sweep::{check_sweep, run_sweep, sweep_task};
 
 use crate::model::Mechanism;

@@ -3,7 +3,7 @@
 
 use super::arm::Arm;
 use crate::manip3r::LoadOptions;
-use crate::manip6r::{cuspidal, ik, Chain6R, CuspidalVerdict, Ik6Solutions, Manip6rError, PoseTarget};
+use crate::manip6r::{cuspidal, ik, path, Chain6R, CuspidalVerdict, Ik6Solutions, Manip6rError, PathCheck, PoseInput};
 use crate::model::{rounding, Mechanism};
 use crate::search::Control;
 use std::time::{Duration, Instant};
@@ -18,21 +18,40 @@ pub fn chain6(m: &Mechanism, options: &LoadOptions) -> Result<Chain6R, Manip6rEr
 /// What `ik6` found.
 #[derive(Clone, Debug)]
 pub struct ArmIk6 {
-    /// The pose asked for: x, y, z, roll, pitch, yaw.
-    pub pose: [f64; 6],
+    /// The pose asked for, as written (its count names the form).
+    pub pose: PoseInput,
     /// The certified solutions.
     pub solutions: Ik6Solutions,
     /// Wall time of the search.
     pub seconds: f64,
 }
 
-/// Every solution within the joint ranges of the tip pose `x, y, z, roll, pitch, yaw` (base
-/// frame; metres, radians), boxes tightened to `precision`.
-pub fn inverse_kinematics6(chain: &Chain6R, pose: [f64; 6], precision: f64, control: &Control) -> Result<ArmIk6, Manip6rError> {
+/// Every solution within the joint ranges of the tip pose (base frame; metres, radians; any
+/// form of `PoseInput`), boxes tightened to `precision`.
+pub fn inverse_kinematics6(chain: &Chain6R, pose: PoseInput, precision: f64, control: &Control) -> Result<ArmIk6, Manip6rError> {
     let start = Instant::now();
-    let target = PoseTarget::stated(pose)?;
+    let target = pose.target()?;
     let solutions = ik::solve(chain, &target, precision, control)?;
     Ok(ArmIk6 { pose, solutions, seconds: start.elapsed().as_secs_f64() })
+}
+
+/// What `path-check` found.
+#[derive(Clone, Debug)]
+pub struct ArmPathCheck {
+    /// One verdict per segment.
+    pub check: PathCheck,
+    /// The tolerance (radians) crossings were narrowed to.
+    pub tolerance: f64,
+    /// Wall time.
+    pub seconds: f64,
+}
+
+/// Decides each segment of the joint path through `waypoints` (joints in `chain.joints`
+/// order, radians): clear, crossing a singularity (narrowed to `tolerance`), or undecided.
+pub fn check_path(chain: &Chain6R, waypoints: &[[f64; 6]], tolerance: f64, control: &Control) -> Result<ArmPathCheck, Manip6rError> {
+    let start = Instant::now();
+    let check = path::check(chain, waypoints, tolerance, control)?;
+    Ok(ArmPathCheck { check, tolerance, seconds: start.elapsed().as_secs_f64() })
 }
 
 /// The whole-arm cuspidality verdict of a six-joint arm.
