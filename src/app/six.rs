@@ -76,16 +76,60 @@ pub enum ArmCuspidality {
 /// needs no search: the 3R verdict speaks for the arm. Otherwise a witness is searched within
 /// `budget` (and `control`).
 pub fn arm_cuspidality(m: &Mechanism, arm: &Arm, options: &LoadOptions, budget: Duration, control: &Control) -> Option<(Chain6R, ArmCuspidality)> {
-    let choice = &arm.prepared.choice;
-    if choice.wrist_joints.len() != 3 || !choice.locked.is_empty() {
+    if !whole_arm_applies(arm) {
         return None;
     }
     let chain = chain6(m, options).ok()?;
-    if choice.spherical_wrist == Some(true) {
-        return Some((chain, ArmCuspidality::PositioningVerdict));
+    let verdict = arm_cuspidality_of(&chain, arm, budget, control)?;
+    Some((chain, verdict))
+}
+
+/// Whether the arm's 3R verdict is a sub-chain's that the whole arm's may differ from: three
+/// wrist joints, none locked.
+fn whole_arm_applies(arm: &Arm) -> bool {
+    let choice = &arm.prepared.choice;
+    choice.wrist_joints.len() == 3 && choice.locked.is_empty()
+}
+
+/// `arm_cuspidality` on a chain already read.
+pub fn arm_cuspidality_of(chain: &Chain6R, arm: &Arm, budget: Duration, control: &Control) -> Option<ArmCuspidality> {
+    if !whole_arm_applies(arm) {
+        return None;
+    }
+    if arm.prepared.choice.spherical_wrist == Some(true) {
+        return Some(ArmCuspidality::PositioningVerdict);
     }
     let start = Instant::now();
-    let verdict = cuspidal::search(&chain, budget, 1, control);
+    let verdict = cuspidal::search(chain, budget, 1, control);
     let seconds = start.elapsed().as_secs_f64();
-    Some((chain, ArmCuspidality::Searched { verdict, budget: budget.as_secs_f64(), seconds }))
+    Some(ArmCuspidality::Searched { verdict, budget: budget.as_secs_f64(), seconds })
+}
+
+/// A whole-arm verdict in words: what the JSON's `arm_cuspidality` and the singularity topic say.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArmVerdictLine {
+    /// `cuspidal`, `undecided`, or `as_positioning_structure`.
+    pub verdict: &'static str,
+    /// Why, in one line.
+    pub reason: String,
+}
+
+impl ArmCuspidality {
+    /// The verdict's name and reason.
+    pub fn line(&self) -> ArmVerdictLine {
+        match self {
+            ArmCuspidality::PositioningVerdict => ArmVerdictLine {
+                verdict: "as_positioning_structure",
+                reason: "spherical wrist: the arm is cuspidal iff its 3R positioning structure is (the verdict above is the arm's)".into(),
+            },
+            ArmCuspidality::Searched { verdict: CuspidalVerdict::Cuspidal(w), seconds, .. } => ArmVerdictLine {
+                verdict: "cuspidal",
+                reason: format!("witness found in {seconds:.1} s: two certified solutions of one pose joined by a path on which det J is proven nonzero ({} pieces)", w.pieces),
+            },
+            ArmCuspidality::Searched { verdict: CuspidalVerdict::Undecided { poses, pairs }, budget, .. } => ArmVerdictLine {
+                verdict: "undecided",
+                reason: format!("no witness found within the budget ({budget:.0} s: {poses} poses solved, {pairs} pairs of solutions with one sign of det J tried); non-cuspidality is not proven"),
+            },
+        }
+    }
 }

@@ -101,36 +101,22 @@ impl ArmCuspidalityReport {
     /// The section of an arm's verdict.
     pub fn of(chain: &Chain6R, c: &ArmCuspidality) -> Self {
         let arm = format!("{} -> {} ({})", chain.base, chain.tip, chain.joints.join(", "));
-        match c {
-            ArmCuspidality::PositioningVerdict => ArmCuspidalityReport {
-                arm,
-                verdict: "as_positioning_structure",
-                reason: "spherical wrist: the arm is cuspidal iff its 3R positioning structure is (the verdict above is the arm's)".into(),
-                witness: None,
-            },
-            ArmCuspidality::Searched { verdict: CuspidalVerdict::Cuspidal(w), seconds, .. } => ArmCuspidalityReport {
-                arm,
-                verdict: "cuspidal",
-                reason: format!("witness found in {seconds:.1} s: two certified solutions of one pose joined by a path on which det J is proven nonzero ({} pieces)", w.pieces),
-                witness: Some(WitnessRecord {
-                    pose_rotation: w.pose.r,
-                    pose_translation: w.pose.t,
-                    pose_radius: w.pose_radius,
-                    from: joints(chain, &w.from),
-                    to: joints(chain, &w.to),
-                    path: w.path.clone(),
-                    pieces: w.pieces,
-                    det_sign: w.det_sign,
-                    min_abs_det: w.min_abs_det,
-                }),
-            },
-            ArmCuspidality::Searched { verdict: CuspidalVerdict::Undecided { poses, pairs }, budget, .. } => ArmCuspidalityReport {
-                arm,
-                verdict: "undecided",
-                reason: format!("no witness found within the budget ({budget:.0} s: {poses} poses solved, {pairs} pairs of solutions with one sign of det J tried); non-cuspidality is not proven"),
-                witness: None,
-            },
-        }
+        let line = c.line();
+        let witness = match c {
+            ArmCuspidality::Searched { verdict: CuspidalVerdict::Cuspidal(w), .. } => Some(WitnessRecord {
+                pose_rotation: w.pose.r,
+                pose_translation: w.pose.t,
+                pose_radius: w.pose_radius,
+                from: joints(chain, &w.from),
+                to: joints(chain, &w.to),
+                path: w.path.clone(),
+                pieces: w.pieces,
+                det_sign: w.det_sign,
+                min_abs_det: w.min_abs_det,
+            }),
+            _ => None,
+        };
+        ArmCuspidalityReport { arm, verdict: line.verdict, reason: line.reason, witness }
     }
 }
 
