@@ -296,6 +296,24 @@ fn ik6_takes_a_quaternion_or_a_matrix() {
     assert_clear_error(&["ik6", &crx, "--pose", "1,0,0,0, 0,1,0,0, 0,0,-1,0, 0,0,0,1"], "a reflection");
 }
 
+/// `path-check` on UR5: a crossing of θ5 = 0, a clear segment and a touch at the last waypoint,
+/// the same from `--waypoints` and from a JSON `--waypoints-file`; the headline counts them.
+#[test]
+fn path_check_counts_crossing_touching_and_clear_segments() {
+    let ur5 = format!("{}/urdf/ur5.urdf", env!("CARGO_MANIFEST_DIR"));
+    let w = [[0.3, -1.0, 1.2, -0.5, -0.4, 0.7], [0.5, -1.2, 1.4, -0.3, 0.6, 0.2], [0.8, -1.3, 1.5, -0.2, 1.0, 0.1], [0.4, -1.1, 1.3, -0.4, 0.0, 0.5]];
+    let text: Vec<String> = w.iter().map(|q| q.map(|x| x.to_string()).join(",")).collect();
+    let (ok, out, err) = run(&["path-check", &ur5, "--waypoints", &text.join(";")]);
+    assert!(ok, "{err}");
+    assert!(out.starts_with("world -> tool0 (joint_1, joint_2, joint_3, joint_4, joint_5, joint_6): 3 segments: 1 cross a singularity, 1 touch or undecided, 1 clear"), "{out}");
+    let file = tempfile_path::Path::write(&serde_json::to_string(&w).expect("json"));
+    let (ok, from_file, err) = run(&["path-check", &ur5, "--waypoints-file", file.as_str()]);
+    assert!(ok, "{err}");
+    assert_eq!(out, from_file);
+    assert_clear_error(&["path-check", &ur5, "--waypoints", "0,0,0,0,0,0"], "1 waypoint(s): a path needs at least two");
+    assert_clear_error(&["path-check", &ur5, "--waypoints", "0,0,0,0,0;1,1,1,1,1,1"], "waypoint 1 has 5 joint values: expected 6");
+}
+
 #[test]
 fn ik_reports_every_solution() {
     let (ok, out, err) = run(&["ik", &fixture("orthogonal_3r_e.urdf"), "--point", "1.3,0.2"]);
