@@ -102,11 +102,11 @@ fn det_of_point(m: &Matrix6<f64>) -> Interval {
         if pivot.contains(0.0) || pivot.is_empty() {
             return Interval::ENTIRE;
         }
-        det = det * pivot;
+        det *= pivot;
         for i in k + 1..6 {
             let f = a[i][k] / pivot;
             for j in k + 1..6 {
-                a[i][j] = a[i][j] - f * a[k][j];
+                a[i][j] -= f * a[k][j];
             }
         }
     }

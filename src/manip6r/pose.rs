@@ -8,6 +8,9 @@
 //! in floating point is trusted); for a matrix, the rotation nearest to the stated one (its
 //! polar factor), within the stated entries widened by a bound on their distance to it.
 
+// Matrix indices read as the formulas they implement.
+#![allow(clippy::needless_range_loop)]
+
 use super::ik::PoseTarget;
 use super::Manip6rError;
 use crate::interval::{interval, point, Interval};
@@ -110,7 +113,7 @@ fn matrix_target(v: &[f64; 16]) -> Result<PoseTarget, Manip6rError> {
     for i in 0..3 {
         for j in 0..3 {
             let g = m[0][i] * m[0][j] + m[1][i] * m[1][j] + m[2][i] * m[2][j] - point(if i == j { 1.0 } else { 0.0 });
-            frobenius2 = frobenius2 + g.sqr();
+            frobenius2 += g.sqr();
         }
     }
     let e = frobenius2.sqrt().sup();
