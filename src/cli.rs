@@ -15,6 +15,7 @@ use linkspace::problems::ModelChoice;
 use linkspace::LpBackend;
 use linkspace::app::{self, Arm, IkPoint};
 use linkspace::manip3r::{self, collision};
+use linkspace::manip6r::PoseInput;
 use linkspace::app::Bounds;
 use linkspace::problems::Coordinates;
 use linkspace::report;
@@ -150,6 +151,9 @@ enum Command {
     Ik(IkArgs),
     /// Every joint solution of a six-revolute arm for a pose of its tip frame, each certified.
     Ik6(Ik6Args),
+    /// Where a six-revolute arm's joint path (straight segments between waypoints) meets a
+    /// singularity: each segment clear, crossing det J = 0, or touching/undecided, with proofs.
+    PathCheck(PathCheckArgs),
     /// Solve a distance problem by Cayley–Menger determinants: a platform in URDF or a JSON file.
     Distances(distances::DistancesArgs),
     /// Run the ROS 2 node: analyse each URDF, publish the results, serve queries (launch_notes.md).
@@ -239,12 +243,38 @@ struct Ik6Args {
     urdf: PathBuf,
     #[command(flatten)]
     chain: ChainArgs,
-    /// The tip frame's pose in the base frame: X,Y,Z (metres), ROLL,PITCH,YAW (radians, URDF convention).
-    #[arg(long, value_name = "X,Y,Z,ROLL,PITCH,YAW", allow_hyphen_values = true)]
+    /// The tip frame's pose in the base frame (metres, radians), comma-separated; the count of
+    /// numbers names the form: 6 = X,Y,Z,ROLL,PITCH,YAW (URDF convention, Rz·Ry·Rx); 7 =
+    /// X,Y,Z,QX,QY,QZ,QW (a quaternion, normalised; zero refused); 16 = a 4x4 homogeneous
+    /// transform, row-major (rotation block orthonormal and last row 0,0,0,1 to within 1e-6).
+    #[arg(long, value_name = "6|7|16 NUMBERS", allow_hyphen_values = true)]
     pose: String,
     /// Largest width (radians) of reported boxes, in (0, 1).
     #[arg(long, default_value_t = 1e-9, allow_hyphen_values = true)]
     precision: f64,
+    #[command(flatten)]
+    limits: LimitArgs,
+    /// Write the report as JSON here.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+struct PathCheckArgs {
+    /// URDF file of an arm with six revolute joints from base to tip (fixed joints merged).
+    urdf: PathBuf,
+    #[command(flatten)]
+    chain: ChainArgs,
+    /// The waypoints: "q1;q2;...", each six comma-separated joint values (radians) in the
+    /// order ik6 prints the joints.
+    #[arg(long, value_name = "Q1;Q2;...", allow_hyphen_values = true, conflicts_with = "waypoints_file", required_unless_present = "waypoints_file")]
+    waypoints: Option<String>,
+    /// The waypoints as a JSON list of lists of six numbers (radians, joints in ik6's order).
+    #[arg(long, value_name = "FILE")]
+    waypoints_file: Option<PathBuf>,
+    /// Radians: crossings are narrowed until the joints' enclosure is this wide.
+    #[arg(long, default_value_t = 1e-9, allow_hyphen_values = true)]
+    tolerance: f64,
     #[command(flatten)]
     limits: LimitArgs,
     /// Write the report as JSON here.
@@ -337,6 +367,7 @@ pub fn run() -> Result<()> {
         Command::Singularities(args) => singularities(args),
         Command::Ik(args) => ik(args),
         Command::Ik6(args) => ik6(args),
+        Command::PathCheck(args) => path_check(args),
         Command::Distances(args) => distances::run(args),
         #[cfg(feature = "ros")]
         Command::Serve(args) => serve::serve(args),
@@ -679,7 +710,7 @@ fn ik6(args: Ik6Args) -> Result<()> {
         .split(',')
         .map(|t| t.trim().parse::<f64>().map_err(|_| anyhow::anyhow!("--pose '{}': '{}' is not a number", args.pose, t.trim())))
         .collect::<Result<_>>()?;
-    let pose: [f64; 6] = values.try_into().map_err(|_| anyhow::anyhow!("--pose '{}': expected X,Y,Z,ROLL,PITCH,YAW", args.pose))?;
+    let pose = PoseInput::from_numbers(&values).map_err(|e| anyhow::anyhow!("--pose '{}': {e}", args.pose))?;
     let options = args.chain.options()?;
     let mechanism = load_mechanism(&args.urdf)?;
     let chain = app::chain6(&mechanism, &options).with_context(|| format!("loading {}", args.urdf.display()))?;
@@ -706,6 +737,53 @@ fn ik6(args: Ik6Args) -> Result<()> {
             // In the file's joint order, each in its own range.
             let text: Vec<String> = chain.joints.iter().map(|n| (n, b[n])).map(|(n, x)| format!("{n} in [{:.9}, {:.9}]", x[0], x[1])).collect();
             writeln!(out, "  {} ({tag})", text.join(", ")).ok();
+        }
+    }
+    if let Some(path) = args.json {
+        write_file(&path, serde_json::to_string_pretty(&report)?)?;
+    }
+    Ok(())
+}
+
+/// The waypoints of `--waypoints` ("q1;q2;...") or `--waypoints-file` (JSON), six values each.
+fn waypoints(args: &PathCheckArgs) -> Result<Vec<[f64; 6]>> {
+    let rows: Vec<Vec<f64>> = match (&args.waypoints, &args.waypoints_file) {
+        (Some(text), _) => text
+            .split(';')
+            .filter(|w| !w.trim().is_empty())
+            .map(|w| w.split(',').map(|t| t.trim().parse::<f64>().map_err(|_| anyhow::anyhow!("--waypoints: '{}' is not a number", t.trim()))).collect::<Result<Vec<f64>>>())
+            .collect::<Result<_>>()?,
+        (None, Some(path)) => {
+            let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+            serde_json::from_str(&text).with_context(|| format!("{}: expected a JSON list of lists of six numbers", path.display()))?
+        }
+        (None, None) => bail!("give --waypoints or --waypoints-file"),
+    };
+    rows.into_iter()
+        .enumerate()
+        .map(|(k, r)| {
+            let n = r.len();
+            <[f64; 6]>::try_from(r).map_err(|_| anyhow::anyhow!("waypoint {} has {n} joint values: expected 6", k + 1))
+        })
+        .collect()
+}
+
+fn path_check(args: PathCheckArgs) -> Result<()> {
+    let points = waypoints(&args)?;
+    let options = args.chain.options()?;
+    let mechanism = load_mechanism(&args.urdf)?;
+    let chain = app::chain6(&mechanism, &options).with_context(|| format!("loading {}", args.urdf.display()))?;
+    let cancel = AtomicBool::new(false);
+    let control = Control { limits: args.limits.limits(1)?, threads: 1, cancel: &cancel };
+    let found = app::check_path(&chain, &points, args.tolerance, &control)?;
+    let report = report::six::PathCheckReport::of(&chain, &found);
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{}", report.headline()).ok();
+    for (k, s) in report.segments.iter().enumerate() {
+        writeln!(out, "  segment {} ({} -> {}): {}: {}", k + 1, k + 1, k + 2, s.verdict, s.reason).ok();
+        for c in &s.crossings {
+            let text: Vec<String> = chain.joints.iter().map(|n| format!("{n} in [{:.9}, {:.9}]", c.joints[n][0], c.joints[n][1])).collect();
+            writeln!(out, "    crossing at t in [{:.12}, {:.12}]: {}", c.t[0], c.t[1], text.join(", ")).ok();
         }
     }
     if let Some(path) = args.json {

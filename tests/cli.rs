@@ -247,11 +247,71 @@ fn singularities_json_follows_the_documented_schema() {
 #[test]
 fn ik6_solves_a_pose_of_a_six_joint_arm() {
     let crx = format!("{}/tests/data/fanuc_crx10ial_style.urdf", env!("CARGO_MANIFEST_DIR"));
-    assert_clear_error(&["ik6", &crx, "--pose", "1,2,3,4,5"], "expected X,Y,Z,ROLL,PITCH,YAW");
+    assert_clear_error(&["ik6", &crx, "--pose", "1,2,3,4,5"], "5 numbers: expected 6 (x,y,z,roll,pitch,yaw), 7 (x,y,z,qx,qy,qz,qw) or 16");
     let (ok, out, err) = run(&["ik6", &crx, "--pose", "0.5,0.2,0.6,0.3,0.2,0.1"]);
     assert!(ok, "{err}");
     assert!(out.starts_with("base_link -> tool0: 12 solutions proven unique, 0 clusters undecided, status complete"), "{out}");
     assert!(out.contains("joint_1 in [0.729757621, 0.729757621]"), "{out}");
+}
+
+/// `ik6 --pose` in its three forms: the pose above as a quaternion (scaled by 2, normalised by
+/// the solver) and as a 4x4 matrix printed to 9 decimals (computed here from the rpy angles in
+/// Python's double precision) gives the same twelve configurations; a non-rigid matrix and a zero
+/// quaternion are refused in one line naming the defect.
+#[test]
+fn ik6_takes_a_quaternion_or_a_matrix() {
+    let crx = format!("{}/tests/data/fanuc_crx10ial_style.urdf", env!("CARGO_MANIFEST_DIR"));
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let solve = |pose: &str, name: &str| -> serde_json::Value {
+        let path = dir.join(format!("ik6-{name}-{}.json", std::process::id()));
+        let (ok, _, err) = run(&["ik6", &crx, "--pose", pose, "--json", path.to_str().expect("utf-8")]);
+        assert!(ok, "{err}");
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("written")).expect("json")
+    };
+    let rpy = solve("0.5,0.2,0.6,0.3,0.2,0.1", "rpy");
+    let quaternion = solve("0.5,0.2,0.6,0.28714435005478384,0.21204102212359124,0.06854159710096422,1.9666948865127118", "quaternion");
+    let matrix = solve(
+        "0.975170327,-0.036957014,0.218350663,0.5,0.097843395,0.956425086,-0.275095847,0.2,-0.198669331,0.289629478,0.936293364,0.6,0,0,0,1",
+        "matrix",
+    );
+    assert_eq!(rpy["pose"].as_array().map(Vec::len), Some(6));
+    assert_eq!(quaternion["pose"].as_array().map(Vec::len), Some(7));
+    assert_eq!(matrix["pose"].as_array().map(Vec::len), Some(16));
+    let joints = |r: &serde_json::Value| -> Vec<Vec<f64>> {
+        let names: Vec<String> = r["joints"].as_array().expect("joints").iter().map(|n| n.as_str().expect("name").to_string()).collect();
+        r["unique"].as_array().expect("unique").iter().map(|b| names.iter().map(|n| b[n][0].as_f64().expect("bound")).collect()).collect()
+    };
+    let reference = joints(&rpy);
+    assert_eq!(reference.len(), 12);
+    for (form, other) in [("quaternion", joints(&quaternion)), ("matrix", joints(&matrix))] {
+        assert_eq!(other.len(), 12, "{form}");
+        // The same configurations (a joint whose range exceeds a turn compared modulo 2π).
+        let same = |a: &Vec<f64>, b: &Vec<f64>| a.iter().zip(b).all(|(x, y)| ((x - y) / std::f64::consts::TAU).round().mul_add(-std::f64::consts::TAU, x - y).abs() < 1e-7);
+        for a in &reference {
+            assert!(other.iter().any(|b| same(a, b)), "{form}: {a:?} not among {other:?}");
+        }
+    }
+    assert_clear_error(&["ik6", &crx, "--pose", "0,0,0,0,0,0,0"], "the quaternion is zero");
+    assert_clear_error(&["ik6", &crx, "--pose", "1.1,0,0,0, 0,1,0,0, 0,0,1,0, 0,0,0,1"], "not orthonormal: |RᵀR − I| (Frobenius) is 2.100e-1");
+    assert_clear_error(&["ik6", &crx, "--pose", "1,0,0,0, 0,1,0,0, 0,0,-1,0, 0,0,0,1"], "a reflection");
+}
+
+/// `path-check` on UR5: a crossing of θ5 = 0, a clear segment and a touch at the last waypoint,
+/// the same from `--waypoints` and from a JSON `--waypoints-file`; the headline counts them.
+#[test]
+fn path_check_counts_crossing_touching_and_clear_segments() {
+    let ur5 = format!("{}/urdf/ur5.urdf", env!("CARGO_MANIFEST_DIR"));
+    let w = [[0.3, -1.0, 1.2, -0.5, -0.4, 0.7], [0.5, -1.2, 1.4, -0.3, 0.6, 0.2], [0.8, -1.3, 1.5, -0.2, 1.0, 0.1], [0.4, -1.1, 1.3, -0.4, 0.0, 0.5]];
+    let text: Vec<String> = w.iter().map(|q| q.map(|x| x.to_string()).join(",")).collect();
+    let (ok, out, err) = run(&["path-check", &ur5, "--waypoints", &text.join(";")]);
+    assert!(ok, "{err}");
+    assert!(out.starts_with("world -> tool0 (joint_1, joint_2, joint_3, joint_4, joint_5, joint_6): 3 segments: 1 cross a singularity, 1 touch or undecided, 1 clear"), "{out}");
+    let file = tempfile_path::Path::write(&serde_json::to_string(&w).expect("json"));
+    let (ok, from_file, err) = run(&["path-check", &ur5, "--waypoints-file", file.as_str()]);
+    assert!(ok, "{err}");
+    assert_eq!(out, from_file);
+    assert_clear_error(&["path-check", &ur5, "--waypoints", "0,0,0,0,0,0"], "1 waypoint(s): a path needs at least two");
+    assert_clear_error(&["path-check", &ur5, "--waypoints", "0,0,0,0,0;1,1,1,1,1,1"], "waypoint 1 has 5 joint values: expected 6");
 }
 
 #[test]

@@ -10,6 +10,7 @@ test makes the assertions. Every wait has a timeout.
     action   --node /linkspace --script FILE           Solve action goals (feedback, cancel, result)
 """
 import argparse
+import importlib
 import json
 import sys
 import time
@@ -117,7 +118,16 @@ def fill(msg, fields):
     """Sets the fields of a message from a dict; nested messages from dicts or lists."""
     types = msg.get_fields_and_field_types()
     for k, v in fields.items():
-        if types[k].startswith(("linkspace_msgs/", "geometry_msgs/")):
+        if types[k].startswith("sequence<") and "/" in types[k]:  # a list of messages, from dicts
+            package, name = types[k][len("sequence<"):-1].split("/")
+            cls = getattr(importlib.import_module(f"{package}.msg"), name)
+            items = []
+            for item in v:
+                m = cls()
+                fill(m, item)
+                items.append(m)
+            setattr(msg, k, items)
+        elif types[k].startswith(("linkspace_msgs/", "geometry_msgs/", "trajectory_msgs/")):
             inner = getattr(msg, k)
             if isinstance(v, list):  # a point as [x, y, z]
                 v = dict(zip(inner.get_fields_and_field_types(), v))
@@ -151,7 +161,7 @@ def services(args):
             continue
         if "subscribe" in step:
             got = []
-            msg_type = {"BoxSet": BoxSet, "Progress": Progress}[step.get("type", "BoxSet")]
+            msg_type = {"BoxSet": BoxSet, "Progress": Progress, "SingularityReport": SingularityReport}[step.get("type", "BoxSet")]
             node.create_subscription(msg_type, step["subscribe"], got.append, latched())
             spin_until(node, lambda: bool(got), args.timeout)
             spin_until(node, lambda: False, step.get("settle", 0.5))

@@ -364,3 +364,79 @@ fn near_ur_arms_and_other_arms_are_not_recognised() {
     let m = urdf::parse(&ur5).expect("parses");
     assert!(three_parallel::recognise(&Chain6R::from_mechanism(&m, None, None).expect("6R")).is_none());
 }
+
+/// Path checks on UR5 against the closed form of its wrist singularity: det J has the factor
+/// sin θ5, so a straight segment on which θ5 runs from −0.4 to 0.6 (elbow and shoulder well away
+/// from theirs) crosses det J = 0 exactly where θ5 = 0, at t = 0.4; a segment with θ5 in
+/// [0.5, 1] is clear, its reported bound below |det J| sampled densely in `f64`; θ5 down to 0
+/// and back touches at the shared waypoint without a proven sign change.
+mod path_check {
+    use super::*;
+    use linkspace::manip6r::{path, SegmentVerdict, SpanReason};
+
+    fn ur5() -> Chain6R {
+        chain_of(&repo("urdf/ur5.urdf"))
+    }
+
+    fn lerp(x: &[f64; 6], y: &[f64; 6], t: f64) -> [f64; 6] {
+        [0, 1, 2, 3, 4, 5].map(|k| x[k] + t * (y[k] - x[k]))
+    }
+
+    #[test]
+    fn a_crossing_of_the_wrist_singularity_is_where_theta5_vanishes() {
+        let chain = ur5();
+        let (a, b) = ([0.3, -1.0, 1.2, -0.5, -0.4, 0.7], [0.5, -1.2, 1.4, -0.3, 0.6, 0.2]);
+        // The reference: the wrist singularity is θ5 = 0 on this arm (det J changes sign there).
+        assert!(chain.det_jacobian(&lerp(&a, &b, 0.39)) * chain.det_jacobian(&lerp(&a, &b, 0.41)) < 0.0);
+        let found = path::check(&chain, &[a, b], 1e-9, &control()).expect("checks");
+        let SegmentVerdict::Crosses { crossings, undecided } = &found.segments[0] else { panic!("{:?}", found.segments[0]) };
+        assert!(undecided.is_empty(), "{undecided:?}");
+        assert_eq!(crossings.len(), 1, "{crossings:?}");
+        let c = &crossings[0];
+        let t_exact = 0.4;
+        assert!(c.narrowed && c.t[0] <= t_exact + 1e-15 && t_exact - 1e-15 <= c.t[1], "{c:?}");
+        assert!((c.t[1] - c.t[0]) <= 1e-9, "{c:?}");
+        assert!(c.joints[4][0] <= 0.0 && 0.0 <= c.joints[4][1], "{c:?}");
+        assert_eq!(c.sign_before, chain.det_jacobian(&a).signum());
+    }
+
+    #[test]
+    fn a_clear_segment_bounds_det_j_from_below() {
+        let chain = ur5();
+        let (a, b) = ([0.3, -1.0, 1.2, -0.5, 0.5, 0.7], [0.8, -1.3, 1.5, -0.2, 1.0, 0.1]);
+        let found = path::check(&chain, &[a, b], 1e-9, &control()).expect("checks");
+        let SegmentVerdict::Clear { sign, min_abs_det, .. } = found.segments[0] else { panic!("{:?}", found.segments[0]) };
+        let sampled = (0..=20_000).map(|i| chain.det_jacobian(&lerp(&a, &b, i as f64 / 20_000.0)));
+        let least = sampled.clone().fold(f64::INFINITY, |m, d| m.min(d.abs()));
+        assert!(sampled.clone().all(|d| d.signum() == sign));
+        assert!(min_abs_det > 0.0 && min_abs_det <= least, "bound {min_abs_det} above the sampled {least}");
+        // Not a vacuous bound: within the factor the proof allows (0.75⁶ ≈ 0.18, and the cover's slack).
+        assert!(min_abs_det >= 0.01 * least, "bound {min_abs_det}, sampled {least}");
+    }
+
+    #[test]
+    fn touching_the_wrist_singularity_is_not_a_crossing() {
+        let chain = ur5();
+        let w = [[0.3, -1.0, 1.2, -0.5, 0.4, 0.7], [0.4, -1.1, 1.3, -0.4, 0.0, 0.5], [0.5, -1.2, 1.4, -0.3, 0.4, 0.2]];
+        let found = path::check(&chain, &w, 1e-9, &control()).expect("checks");
+        for (k, s) in found.segments.iter().enumerate() {
+            let SegmentVerdict::Undecided { spans } = s else { panic!("segment {k}: {s:?}") };
+            assert_eq!(spans.len(), 1, "{spans:?}");
+            assert_eq!(spans[0].reason, SpanReason::AtEnd);
+            // At the shared waypoint: the end of the first segment, the start of the second.
+            let end = if k == 0 { spans[0].t[1] } else { spans[0].t[0] };
+            assert_eq!(end, if k == 0 { 1.0 } else { 0.0 });
+            assert!(spans[0].t[1] - spans[0].t[0] < 1e-3, "{spans:?}");
+        }
+    }
+
+    #[test]
+    fn a_stopped_run_decides_nothing_more() {
+        static NEVER: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+        let stopped = Control { limits: Limits { timeout: Some(Duration::ZERO), ..Limits::default() }, threads: 1, cancel: &NEVER };
+        let w = [[0.3, -1.0, 1.2, -0.5, 0.4, 0.7], [0.5, -1.2, 1.4, -0.3, 0.6, 0.2]];
+        let found = path::check(&ur5(), &w, 1e-9, &stopped).expect("checks");
+        assert!(matches!(found.segments[0], SegmentVerdict::Stopped(linkspace::search::Limit::Time)), "{:?}", found.segments);
+        assert!(path::check(&ur5(), &w[..1], 1e-9, &control()).is_err());
+    }
+}

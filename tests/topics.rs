@@ -1521,3 +1521,82 @@ fn a_set_above_the_size_cap_travels_merged_and_still_encloses_every_box() {
     }
     assert!(node.alive());
 }
+
+/// The 6R services on UR5 and the CRX fixture, against the CLI: inverse_kinematics6 of a pose
+/// given as a geometry_msgs/Pose (the boxes of `ik6` with the same quaternion), path_check of a
+/// JointTrajectory whose joints come in another order (the verdicts and crossing of
+/// `path-check`), one clear line for a missing joint or a zero quaternion, and the whole-arm
+/// cuspidality verdict on the singularity topic (that of `singularities --json`).
+#[test]
+fn six_joint_arms_answer_inverse_kinematics6_and_path_check() {
+    let Some(python) = python() else { return };
+    let domain = 62;
+    let (ur5, crx) = (format!("{ROOT}/urdf/ur5.urdf"), format!("{ROOT}/tests/data/fanuc_crx10ial_style.urdf"));
+    let mut node = Node::start(domain, &[&ur5, &crx]);
+    node.wait_for(&["ur5: published singularities", "fanuc_crx10ial: published singularities"], Duration::from_secs(180));
+
+    let (position, quaternion) = ([0.3, 0.2, 0.4], [0.5, 0.5, 0.5, 0.5]);
+    let pose_arg = format!("{},{},{},{},{},{},{}", position[0], position[1], position[2], quaternion[0], quaternion[1], quaternion[2], quaternion[3]);
+    let ik_ref = cli_json("ik6", &[&ur5, "--pose", &pose_arg, "--precision", "1e-9"]);
+    let joints = ["joint_1", "joint_2", "joint_3", "joint_4", "joint_5", "joint_6"];
+    let (a, b) = ([0.3, -1.0, 1.2, -0.5, -0.4, 0.7], [0.5, -1.2, 1.4, -0.3, 0.6, 0.2]);
+    let waypoints = format!("{};{}", a.map(|x| x.to_string()).join(","), b.map(|x| x.to_string()).join(","));
+    let path_ref = cli_json("path-check", &[&ur5, "--waypoints", &waypoints]);
+    let crx_ref = cli_json("singularities", &[&crx]);
+    // The trajectory lists the joints last to first.
+    let reversed: Vec<&str> = joints.iter().rev().copied().collect();
+    let point = |q: &[f64; 6]| json!({"positions": q.iter().rev().copied().collect::<Vec<f64>>()});
+    let ik6 = |q: [f64; 4]| {
+        call("inverse_kinematics6", "InverseKinematics6", json!({"mechanism": "ur5", "pose": {"position": position, "orientation": {"x": q[0], "y": q[1], "z": q[2], "w": q[3]}}, "sigma": 1e-9}))
+    };
+    let script = json!([
+        ik6(quaternion),
+        call("path_check", "PathCheck", json!({"mechanism": "ur5", "trajectory": {"joint_names": reversed, "points": [point(&a), point(&b)]}})),
+        call("path_check", "PathCheck", json!({"mechanism": "ur5", "trajectory": {"joint_names": &reversed[1..], "points": [{"positions": vec![0.0; 5]}, {"positions": vec![0.1; 5]}]}})),
+        ik6([0.0; 4]),
+        {"subscribe": "/linkspace/fanuc_crx10ial/singularities", "type": "SingularityReport"},
+    ]);
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("services-6r-{}.json", std::process::id()));
+    std::fs::write(&path, serde_json::to_string(&script).expect("json")).expect("script written");
+    let got = py(python, domain, "tests/ros_client.py", &["services", "--script", path.to_str().expect("utf-8")], Duration::from_secs(180));
+    let _ = std::fs::remove_file(&path);
+    let r = got["results"].as_array().expect("results");
+    for (k, x) in r.iter().enumerate() {
+        assert!(x.get("error").is_none(), "step {k}: {x}\nnode log:\n{}", node.log());
+    }
+
+    // Inverse kinematics: the CLI's unique boxes, in its order, over the same joints.
+    assert_eq!((r[0]["ok"].clone(), r[0]["complete"].clone()), (json!(true), json!(true)), "{}", r[0]);
+    assert_eq!(r[0]["joint_names"], json!(joints));
+    let unique = ik_ref["unique"].as_array().expect("unique");
+    assert!(!unique.is_empty(), "the pose is reachable: {ik_ref}");
+    let boxes = r[0]["solutions"].as_array().expect("solutions");
+    assert_eq!(boxes.len(), unique.len());
+    for (got, want) in boxes.iter().zip(unique) {
+        for (k, j) in joints.iter().enumerate() {
+            let iv = &got["intervals"][k];
+            assert_eq!((iv["lower"].as_f64(), iv["upper"].as_f64()), (want[j][0].as_f64(), want[j][1].as_f64()), "{j}");
+        }
+    }
+
+    // Path check: the CLI's verdict, reason and crossing.
+    let segment = &path_ref["segments"][0];
+    assert_eq!(segment["verdict"], json!("crosses"));
+    assert_eq!(r[1]["verdicts"], json!(["crosses"]), "{}", r[1]);
+    assert_eq!(r[1]["reasons"][0], segment["reason"]);
+    assert_eq!(r[1]["crossing_segments"], json!([0]));
+    let t = &segment["crossings"][0]["t"];
+    assert_eq!((r[1]["crossing_t"][0]["lower"].as_f64(), r[1]["crossing_t"][0]["upper"].as_f64()), (t[0].as_f64(), t[1].as_f64()));
+    assert_eq!(r[1]["crossing_joints"].as_array().map(Vec::len), Some(6));
+    assert!(r[1]["message"].as_str().expect("headline").contains("1 cross a singularity"), "{}", r[1]);
+
+    // Refusals, one line each.
+    assert_eq!(r[2]["ok"], json!(false));
+    assert!(r[2]["message"].as_str().expect("message").contains("the trajectory has no joint 'joint_6'"), "{}", r[2]);
+    assert_eq!(r[3]["ok"], json!(false));
+    assert!(r[3]["message"].as_str().expect("message").contains("the quaternion is zero"), "{}", r[3]);
+
+    // The whole-arm verdict on the topic, as the CLI's.
+    let report = &r[4]["received"][0];
+    assert_eq!(report["arm_cuspidality"], crx_ref["arm_cuspidality"]["verdict"], "{}", report["arm_cuspidality_reason"]);
+}

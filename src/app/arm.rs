@@ -16,6 +16,7 @@ use crate::manip3r::{
     verdict::{self, Verdict},
     Chain3R, LoadOptions, Manip3rError, Prepared, Singularities,
 };
+use crate::manip6r::Chain6R;
 use crate::model::Mechanism;
 use crate::search::{Control, Progress};
 use inari::Interval;
@@ -240,6 +241,11 @@ pub const CURVE_DEPTH: u32 = 8;
 #[derive(Clone, Debug)]
 pub struct Manip3rAnalysis {
     arm: Arc<Arm>,
+    /// The six revolute joints of the whole arm, when it has exactly six.
+    six: Option<Arc<Chain6R>>,
+    /// Values of the six-joint chain the rounding policy changed (the whole-arm proof is about
+    /// the geometry after them).
+    six_snapped: usize,
     /// Cover of the singular curves, computed once (it does not depend on any request).
     cover: Arc<Cover>,
 }
@@ -250,7 +256,9 @@ impl Manip3rAnalysis {
     pub fn new(mechanism: &Mechanism) -> Result<Self, Manip3rError> {
         let arm = Arm::load(mechanism, &LoadOptions::default(), 0.0)?;
         let cover = Arc::new(Cover::new(&arm.chain, CURVE_DEPTH, &Control::with_limits(Limits::default())));
-        Ok(Self { arm: Arc::new(arm), cover })
+        let six = super::six::chain6(mechanism, &LoadOptions::default()).ok().map(Arc::new);
+        let six_snapped = super::six::snaps_on_chain(mechanism, &LoadOptions::default()).len();
+        Ok(Self { arm: Arc::new(arm), six, six_snapped, cover })
     }
 
     /// The chain's name tokens for records over (θ₂, θ₃).
@@ -293,7 +301,7 @@ impl Analysis for Manip3rAnalysis {
         if query.max_boxes == 0 {
             return Err(AnalysisError::BadRequest("max_boxes must be at least 1".into()));
         }
-        Ok(Box::new(SingularityRun { arm: self.arm.clone(), cover: self.cover.clone(), query: query.clone(), joints: self.record_joints() }))
+        Ok(Box::new(SingularityRun { arm: self.arm.clone(), six: self.six.clone(), six_snapped: self.six_snapped, cover: self.cover.clone(), query: query.clone(), joints: self.record_joints() }))
     }
 
     fn inverse_kinematics(&self, query: &IkQuery) -> Result<Box<dyn PreparedRun<IkResult>>, AnalysisError> {
@@ -305,6 +313,10 @@ impl Analysis for Manip3rAnalysis {
             return Err(AnalysisError::BadRequest("max_boxes must be at least 1".into()));
         }
         Ok(Box::new(IkRun { arm: self.arm.clone(), query: query.clone() }))
+    }
+
+    fn chain6(&self) -> Option<Arc<Chain6R>> {
+        self.six.clone()
     }
 
     fn classify(&self, values: &[f64], _cspace: Option<&BoxSetResult>, _singular: Option<&SingularityResult>) -> Result<Classification, AnalysisError> {
@@ -359,9 +371,15 @@ fn box_set(cover: &Cover, mechanism: &str, joints: &[String]) -> BoxSetResult {
     }
 }
 
+/// Seconds of the whole-arm cuspidality search in a singularity run (the CLI's default
+/// `--arm-budget`).
+const WHOLE_ARM_BUDGET: std::time::Duration = std::time::Duration::from_secs(2);
+
 /// A validated singularity run.
 struct SingularityRun {
     arm: Arc<Arm>,
+    six: Option<Arc<Chain6R>>,
+    six_snapped: usize,
     cover: Arc<Cover>,
     query: SingularityQuery,
     joints: Vec<String>,
@@ -374,6 +392,7 @@ impl PreparedRun<SingularityResult> for SingularityRun {
         let limits = Limits { max_cells: q.max_boxes, timeout: q.timeout, ..Limits::default() };
         let control = Control { limits, threads: q.threads.max(1), cancel };
         let request = SingularitiesRequest { precision: q.precision, nodes: q.nodes, search_anyway: false };
+        let found_at = Instant::now();
         let found = singularities(arm, &request, &control, progress).expect("invariant: precision validated when prepared");
         let (cusps, node_search) = (&found.run.cusps, &found.run.nodes);
         let two = |t: &[Interval; 2]| vec![bounds(t[0]), bounds(t[1])];
@@ -396,6 +415,10 @@ impl PreparedRun<SingularityResult> for SingularityRun {
             }));
         }
         let status = found.run.status;
+        // The whole arm's verdict, as `singularities --arm-budget` gives it by default, within
+        // what is left of the run's time.
+        let budget = q.timeout.map_or(WHOLE_ARM_BUDGET, |t| t.saturating_sub(found_at.elapsed()).min(WHOLE_ARM_BUDGET));
+        let arm_cuspidality = self.six.as_deref().and_then(|six| super::six::arm_cuspidality_of(six, self.six_snapped, arm, budget, &control)).map(|c| c.line());
         let motions = internal_motions(chain, &cusps.bands, &self.joints, q.precision);
         let processed = cusps.stats.processed + node_search.as_ref().map_or(0, |n| n.stats.processed);
         let certified_nodes = node_search.as_ref().map_or(0, |n| n.nodes.len());
@@ -447,6 +470,7 @@ impl PreparedRun<SingularityResult> for SingularityRun {
             loops: None,
             verdict: Some(found.verdict.scoped(scope)),
             branches: arm.branches.clone(),
+            arm_cuspidality,
         }
     }
 }

@@ -250,6 +250,7 @@ impl PreparedRun<SingularityResult> for SingularSetsRun {
             loops: Some(LoopSingularities { actuated: self.actuation.joints.clone(), actuated_source: self.actuation.source.clone(), sets }),
             verdict: None,
             branches: None,
+            arm_cuspidality: None,
         }
     }
 }

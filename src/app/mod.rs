@@ -25,7 +25,7 @@ pub use distances::{DistancesJob, DistancesRequest};
 pub use linkage::{LinkageAnalysis, SolveJob};
 pub use loops::{all_kinds, analyse_image, image_points, Actuation, ImageAnalysisError, ImageSearch, SingularSets};
 pub use platform::PlatformAnalysis;
-pub use six::{arm_cuspidality, chain6, inverse_kinematics6, ArmCuspidality, ArmIk6};
+pub use six::{arm_cuspidality, arm_cuspidality_of, chain6, check_path, inverse_kinematics6, ArmCuspidality, ArmIk6, ArmPathCheck, ArmVerdictLine};
 pub use sweep::{check_sweep, run_sweep, sweep_task};
 
 use crate::model::Mechanism;
@@ -377,6 +377,9 @@ pub struct SingularityResult {
     /// `"singular_branches"` of `linkspace singularities --json` (`manip3r::branches::of`; joints
     /// keyed by the names of `joint_names`, images in `workspace_names`); `None` otherwise.
     pub branches: Option<crate::manip3r::branches::SingularBranches>,
+    /// Six-joint arms whose 3R verdict is a sub-chain's: the whole arm's cuspidality verdict
+    /// (`arm_cuspidality`, as `linkspace singularities --json` gives it); `None` otherwise.
+    pub arm_cuspidality: Option<ArmVerdictLine>,
 }
 
 /// The singular sets of a closed-loop mechanism (`singular`), as `linkspace
@@ -528,6 +531,12 @@ pub trait Analysis: Send + Sync {
         let _ = singularities;
         let cspace = configuration_space.ok_or(AnalysisError::NotReady { what: "configuration_space" })?;
         Ok(classify(cspace, values, &self.periodic(), None))
+    }
+
+    /// The arm's six revolute joints base to tip, when it has exactly six (the 6R services:
+    /// `inverse_kinematics6`, `check_path`).
+    fn chain6(&self) -> Option<std::sync::Arc<crate::manip6r::Chain6R>> {
+        None
     }
 
     /// The `NotAvailable` error for `service`.

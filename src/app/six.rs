@@ -3,7 +3,7 @@
 
 use super::arm::Arm;
 use crate::manip3r::LoadOptions;
-use crate::manip6r::{cuspidal, ik, three_parallel, Chain6R, CuspidalVerdict, Ik6Solutions, Manip6rError, MostSolutions, PoseTarget, SearchOutcome, ThreeParallel};
+use crate::manip6r::{cuspidal, ik, path, three_parallel, Chain6R, CuspidalVerdict, Ik6Solutions, Manip6rError, MostSolutions, PathCheck, PoseInput, SearchOutcome, ThreeParallel};
 use crate::model::{rounding, Mechanism};
 use crate::search::Control;
 use std::time::{Duration, Instant};
@@ -18,21 +18,40 @@ pub fn chain6(m: &Mechanism, options: &LoadOptions) -> Result<Chain6R, Manip6rEr
 /// What `ik6` found.
 #[derive(Clone, Debug)]
 pub struct ArmIk6 {
-    /// The pose asked for: x, y, z, roll, pitch, yaw.
-    pub pose: [f64; 6],
+    /// The pose asked for, as written (its count names the form).
+    pub pose: PoseInput,
     /// The certified solutions.
     pub solutions: Ik6Solutions,
     /// Wall time of the search.
     pub seconds: f64,
 }
 
-/// Every solution within the joint ranges of the tip pose `x, y, z, roll, pitch, yaw` (base
-/// frame; metres, radians), boxes tightened to `precision`.
-pub fn inverse_kinematics6(chain: &Chain6R, pose: [f64; 6], precision: f64, control: &Control) -> Result<ArmIk6, Manip6rError> {
+/// Every solution within the joint ranges of the tip pose (base frame; metres, radians; any
+/// form of `PoseInput`), boxes tightened to `precision`.
+pub fn inverse_kinematics6(chain: &Chain6R, pose: PoseInput, precision: f64, control: &Control) -> Result<ArmIk6, Manip6rError> {
     let start = Instant::now();
-    let target = PoseTarget::stated(pose)?;
+    let target = pose.target()?;
     let solutions = ik::solve(chain, &target, precision, control)?;
     Ok(ArmIk6 { pose, solutions, seconds: start.elapsed().as_secs_f64() })
+}
+
+/// What `path-check` found.
+#[derive(Clone, Debug)]
+pub struct ArmPathCheck {
+    /// One verdict per segment.
+    pub check: PathCheck,
+    /// The tolerance (radians) crossings were narrowed to.
+    pub tolerance: f64,
+    /// Wall time.
+    pub seconds: f64,
+}
+
+/// Decides each segment of the joint path through `waypoints` (joints in `chain.joints`
+/// order, radians): clear, crossing a singularity (narrowed to `tolerance`), or undecided.
+pub fn check_path(chain: &Chain6R, waypoints: &[[f64; 6]], tolerance: f64, control: &Control) -> Result<ArmPathCheck, Manip6rError> {
+    let start = Instant::now();
+    let check = path::check(chain, waypoints, tolerance, control)?;
+    Ok(ArmPathCheck { check, tolerance, seconds: start.elapsed().as_secs_f64() })
 }
 
 /// The whole-arm cuspidality verdict of a six-joint arm.
@@ -46,9 +65,9 @@ pub enum ArmCuspidality {
     ThreeParallel {
         /// What the recognition proved.
         proof: ThreeParallel,
-        /// Values the rounding policy changed on the chain: the proof is about the geometry
-        /// after them (empty when the file is exactly of the family as written).
-        snapped: Vec<rounding::Snap>,
+        /// How many values the rounding policy changed on the chain: the proof is about the
+        /// geometry after them (0 when the file is exactly of the family as written).
+        snapped: usize,
     },
     /// A witness search ran (`manip6r::cuspidal`).
     Searched {
@@ -65,28 +84,19 @@ pub enum ArmCuspidality {
 
 /// The whole-arm verdict for a six-joint arm whose 3R verdict is about a sub-chain (`None`
 /// for other arms, whose 3R verdict is already the arm's or does not apply). A spherical wrist
-/// needs no search: the 3R verdict speaks for the arm; nor does an arm of the UR family, proven
-/// not cuspidal. Otherwise a witness is searched within `budget` (and `control`).
+/// needs no search: the 3R verdict speaks for the arm. Otherwise a witness is searched within
+/// `budget` (and `control`).
 pub fn arm_cuspidality(m: &Mechanism, arm: &Arm, options: &LoadOptions, budget: Duration, control: &Control) -> Option<(Chain6R, ArmCuspidality)> {
-    let choice = &arm.prepared.choice;
-    if choice.wrist_joints.len() != 3 || !choice.locked.is_empty() {
+    if !whole_arm_applies(arm) {
         return None;
     }
     let chain = chain6(m, options).ok()?;
-    if choice.spherical_wrist == Some(true) {
-        return Some((chain, ArmCuspidality::PositioningVerdict));
-    }
-    if let Some(proof) = three_parallel::recognise(&chain) {
-        return Some((chain, ArmCuspidality::ThreeParallel { proof, snapped: snaps_on_chain(m, options) }));
-    }
-    let start = Instant::now();
-    let SearchOutcome { verdict, most } = cuspidal::search(&chain, budget, 1, control);
-    let seconds = start.elapsed().as_secs_f64();
-    Some((chain, ArmCuspidality::Searched { verdict, most, budget: budget.as_secs_f64(), seconds }))
+    let verdict = arm_cuspidality_of(&chain, snaps_on_chain(m, options).len(), arm, budget, control)?;
+    Some((chain, verdict))
 }
 
 /// What the rounding policy of `options` changes on the joints from the chain's base to its tip.
-fn snaps_on_chain(m: &Mechanism, options: &LoadOptions) -> Vec<rounding::Snap> {
+pub fn snaps_on_chain(m: &Mechanism, options: &LoadOptions) -> Vec<rounding::Snap> {
     if options.exact_geometry || options.snap_tolerance == 0.0 {
         return Vec::new();
     }
@@ -96,4 +106,68 @@ fn snaps_on_chain(m: &Mechanism, options: &LoadOptions) -> Vec<rounding::Snap> {
     let below_base: Vec<usize> = rounded.path_to(base);
     let on_chain: Vec<&str> = rounded.path_to(tip).into_iter().filter(|j| !below_base.contains(j)).map(|j| rounded.joints[j].name.as_str()).collect();
     snaps.into_iter().filter(|s| on_chain.contains(&s.joint.as_str())).collect()
+}
+
+/// Whether the arm's 3R verdict is a sub-chain's that the whole arm's may differ from: three
+/// wrist joints, none locked.
+fn whole_arm_applies(arm: &Arm) -> bool {
+    let choice = &arm.prepared.choice;
+    choice.wrist_joints.len() == 3 && choice.locked.is_empty()
+}
+
+/// `arm_cuspidality` on a chain already read, `snapped` values of it changed by the rounding
+/// policy (`snaps_on_chain`). The UR family is proven non-cuspidal before any search.
+pub fn arm_cuspidality_of(chain: &Chain6R, snapped: usize, arm: &Arm, budget: Duration, control: &Control) -> Option<ArmCuspidality> {
+    if !whole_arm_applies(arm) {
+        return None;
+    }
+    if arm.prepared.choice.spherical_wrist == Some(true) {
+        return Some(ArmCuspidality::PositioningVerdict);
+    }
+    if let Some(proof) = three_parallel::recognise(chain) {
+        return Some(ArmCuspidality::ThreeParallel { proof, snapped });
+    }
+    let start = Instant::now();
+    let SearchOutcome { verdict, most } = cuspidal::search(chain, budget, 1, control);
+    let seconds = start.elapsed().as_secs_f64();
+    Some(ArmCuspidality::Searched { verdict, most, budget: budget.as_secs_f64(), seconds })
+}
+
+/// A whole-arm verdict in words: what the JSON's `arm_cuspidality` and the singularity topic say.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ArmVerdictLine {
+    /// `cuspidal`, `non_cuspidal` (proven by a theorem), `undecided`, or
+    /// `as_positioning_structure`.
+    pub verdict: &'static str,
+    /// Why, in one line.
+    pub reason: String,
+}
+
+impl ArmCuspidality {
+    /// The verdict's name and reason.
+    pub fn line(&self) -> ArmVerdictLine {
+        match self {
+            ArmCuspidality::PositioningVerdict => ArmVerdictLine {
+                verdict: "as_positioning_structure",
+                reason: "spherical wrist: the arm is cuspidal iff its 3R positioning structure is (the verdict above is the arm's)".into(),
+            },
+            ArmCuspidality::ThreeParallel { proof, snapped } => ArmVerdictLine {
+                verdict: "non_cuspidal",
+                reason: format!(
+                    "UR family proven on the {}: axes 2, 3, 4 exactly parallel (distances {:.6} and {:.6}), axis 1 not parallel to them, axis 5 normal to them, axes 5 and 6 meeting at right angles; det J = ±g1·g3·g5 (shoulder, elbow, wrist) and the signs of the three factors tell every pose's solutions apart, so no two lie in one aspect",
+                    if *snapped == 0 { "file's geometry as written".to_string() } else { format!("geometry after snapping {snapped} values to quarter turns / coordinate axes") },
+                    proof.l2.mid(),
+                    proof.l3.mid()
+                ),
+            },
+            ArmCuspidality::Searched { verdict: CuspidalVerdict::Cuspidal(w), seconds, .. } => ArmVerdictLine {
+                verdict: "cuspidal",
+                reason: format!("witness found in {seconds:.1} s: two certified solutions of one pose joined by a path on which det J is proven nonzero ({} pieces)", w.pieces),
+            },
+            ArmCuspidality::Searched { verdict: CuspidalVerdict::Undecided { poses, pairs }, budget, .. } => ArmVerdictLine {
+                verdict: "undecided",
+                reason: format!("no witness found within the budget ({budget:.0} s: {poses} poses solved, {pairs} pairs of solutions with one sign of det J tried); non-cuspidality is not proven"),
+            },
+        }
+    }
 }

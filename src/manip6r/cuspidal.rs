@@ -16,10 +16,10 @@
 // Matrix and joint indices read as the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
-use super::chain::{cos_sin, cross, Chain6R, Side, V};
+use super::chain::{Chain6R, Side};
+use super::jacobian::regular_over;
 use super::ik::{self, PoseTarget};
 use super::Pose64;
-use crate::interval::fast::Iv;
 use crate::interval::Interval;
 use crate::search::{Control, Limits};
 use std::time::{Duration, Instant};
@@ -99,38 +99,6 @@ impl Rng {
     fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * self.next()
     }
-}
-
-/// Whether every matrix in the interval Jacobian of the arm over the joint box `b` is regular.
-pub(crate) fn regular_over(arm: &Side<6>, b: &[[f64; 2]; 6]) -> bool {
-    let cs = [0, 1, 2, 3, 4, 5].map(|k| cos_sin(b[k][0], b[k][1]));
-    let frames = arm.frames(&cs);
-    let mut jac = [[Iv::ZERO; 6]; 6];
-    for k in 0..6 {
-        let (w, p): (V, V) = arm.axis(&frames, k);
-        let v = cross(&p, &w);
-        for i in 0..3 {
-            jac[i][k] = w[i];
-            jac[i + 3][k] = v[i];
-        }
-    }
-    let mid = nalgebra::Matrix6::from_fn(|i, j| 0.5 * (jac[i][j].lo + jac[i][j].hi));
-    let Some(y) = mid.try_inverse() else { return false };
-    if !y.iter().all(|x| x.is_finite()) {
-        return false;
-    }
-    (0..6).all(|i| {
-        let mut row = 0.0;
-        for j in 0..6 {
-            let mut e = if i == j { Iv { lo: 1.0, hi: 1.0 } } else { Iv::ZERO };
-            for l in 0..6 {
-                e = e.sub(jac[l][j].scale(y[(i, l)]));
-            }
-            // Upper bound of |e|, rounded up.
-            row = (row + e.lo.abs().max(e.hi.abs())).next_up();
-        }
-        row < 1.0
-    })
 }
 
 /// Proves the segment `x → y` free of singularities by subdividing it into at most

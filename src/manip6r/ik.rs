@@ -44,7 +44,7 @@ impl PoseTarget {
     /// enclosed exactly as a file's numbers are.
     pub fn stated(v: [f64; 6]) -> Result<PoseTarget, Manip6rError> {
         if !v.iter().all(|x| x.is_finite()) {
-            return Err(Manip6rError::BadPose(format!("{v:?}")));
+            return Err(Manip6rError::BadPose(format!("not finite numbers: {v:?}")));
         }
         Ok(PoseTarget(IAffine { r: st::rpy([v[3], v[4], v[5]]), t: [stated(v[0]), stated(v[1]), stated(v[2])] }))
     }
@@ -54,7 +54,7 @@ impl PoseTarget {
     pub fn around(p: &Pose64, radius: f64) -> Result<PoseTarget, Manip6rError> {
         let ok = p.r.iter().flatten().chain(p.t.iter()).all(|x| x.is_finite()) && radius.is_finite() && radius >= 0.0;
         if !ok {
-            return Err(Manip6rError::BadPose(format!("{p:?}")));
+            return Err(Manip6rError::BadPose(format!("not finite numbers: {p:?}")));
         }
         let w = |x: f64| interval(x - radius, x + radius);
         Ok(PoseTarget(IAffine { r: p.r.map(|row| row.map(w)), t: p.t.map(w) }))

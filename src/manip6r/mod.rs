@@ -9,11 +9,16 @@ pub(crate) mod chain;
 pub mod cuspidal;
 pub mod ik;
 pub mod three_parallel;
+pub(crate) mod jacobian;
+pub mod path;
+pub mod pose;
 
 pub use chain::{Chain6R, Pose64};
 pub use cuspidal::{CuspidalVerdict, MostSolutions, SearchOutcome, Witness};
 pub use ik::{Ik6Solutions, PoseTarget};
 pub use three_parallel::ThreeParallel;
+pub use path::{Crossing, PathCheck, SegmentVerdict, Span, SpanReason};
+pub use pose::PoseInput;
 
 use thiserror::Error;
 
@@ -25,8 +30,14 @@ pub enum Manip6rError {
     #[error("not a 6R chain: {0}")]
     NotSixR(String),
     /// The pose is not finite.
-    #[error("the pose must be finite numbers: {0}")]
+    #[error("bad pose: {0}")]
     BadPose(String),
+    /// A 4×4 pose matrix is not a rigid transform (the defect and its size).
+    #[error("not a rigid transform: {0}")]
+    NotRigid(String),
+    /// A joint path cannot be checked (too few waypoints, a bad number or tolerance).
+    #[error("bad path: {0}")]
+    BadPath(String),
     /// The requested precision is not in (0, 1).
     #[error("precision must be a number in (0, 1), got {0}")]
     BadPrecision(f64),

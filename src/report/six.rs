@@ -1,10 +1,10 @@
 //! The JSON of `linkspace ik6` and the `arm_cuspidality` section of `singularities` for
-//! six-joint arms, from `app`'s results.
+//! six-joint arms, and of `path-check`, from `app`'s results.
 
 use super::manip3r::Completeness;
-use crate::app::{ArmCuspidality, ArmIk6};
+use crate::app::{ArmCuspidality, ArmIk6, ArmPathCheck};
 use crate::interval::Interval;
-use crate::manip6r::{Chain6R, CuspidalVerdict, MostSolutions};
+use crate::manip6r::{Chain6R, CuspidalVerdict, MostSolutions, SegmentVerdict, Span, SpanReason};
 use crate::search::Incompleteness;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -25,8 +25,9 @@ pub struct Ik6Report {
     pub tip: String,
     /// The six joints, base first.
     pub joints: Vec<String>,
-    /// The pose: x, y, z, roll, pitch, yaw (base frame).
-    pub pose: [f64; 6],
+    /// The pose as given (base frame): 6 numbers x, y, z, roll, pitch, yaw; 7 x, y, z, qx, qy,
+    /// qz, qw; 16 a 4x4 matrix, row-major.
+    pub pose: Vec<f64>,
     /// `status` and, when incomplete, `limit`.
     #[serde(flatten)]
     pub completeness: Completeness,
@@ -48,7 +49,7 @@ impl Ik6Report {
             base: chain.base.clone(),
             tip: chain.tip.clone(),
             joints: chain.joints.to_vec(),
-            pose: found.pose,
+            pose: found.pose.numbers().to_vec(),
             completeness: Completeness(Incompleteness::of(s.status, s.clusters.len(), false)),
             unique: s.unique.iter().map(|b| joints(chain, b)).collect(),
             clusters: s.clusters.iter().map(|c| joints(chain, &c.hull)).collect(),
@@ -95,8 +96,8 @@ pub struct MostSolutionsRecord {
 }
 
 impl MostSolutionsRecord {
-    fn of(m: &Option<MostSolutions>) -> Option<Self> {
-        m.as_ref().map(|m| MostSolutionsRecord { count: m.count, pose_rotation: m.pose.r, pose_translation: m.pose.t, pose_radius: m.pose_radius })
+    fn of(m: &MostSolutions) -> Self {
+        MostSolutionsRecord { count: m.count, pose_rotation: m.pose.r, pose_translation: m.pose.t, pose_radius: m.pose_radius }
     }
 }
 
@@ -127,54 +128,209 @@ impl ArmCuspidalityReport {
     /// The section of an arm's verdict.
     pub fn of(chain: &Chain6R, c: &ArmCuspidality) -> Self {
         let arm = format!("{} -> {} ({})", chain.base, chain.tip, chain.joints.join(", "));
-        match c {
-            ArmCuspidality::PositioningVerdict => ArmCuspidalityReport {
-                arm,
-                verdict: "as_positioning_structure",
-                reason: "spherical wrist: the arm is cuspidal iff its 3R positioning structure is (the verdict above is the arm's)".into(),
-                proof: None,
-                witness: None,
-                most_solutions: None,
-            },
-            ArmCuspidality::ThreeParallel { proof, snapped } => ArmCuspidalityReport {
-                arm,
-                verdict: "non_cuspidal",
-                reason: format!(
-                    "UR family proven on the {}: axes 2, 3, 4 exactly parallel (distances {:.6} and {:.6}), axis 1 not parallel to them, axis 5 normal to them, axes 5 and 6 meeting at right angles; det J = ±g1·g3·g5 (shoulder, elbow, wrist) and the signs of the three factors tell every pose's solutions apart, so no two lie in one aspect",
-                    if snapped.is_empty() { "file's geometry as written".to_string() } else { format!("geometry after snapping {} values to quarter turns / coordinate axes", snapped.len()) },
-                    proof.l2.mid(),
-                    proof.l3.mid()
-                ),
-                proof: Some(crate::manip6r::three_parallel::CITATION.to_string()),
-                witness: None,
-                most_solutions: None,
-            },
-            ArmCuspidality::Searched { verdict: CuspidalVerdict::Cuspidal(w), seconds, most, .. } => ArmCuspidalityReport {
-                arm,
-                verdict: "cuspidal",
-                reason: format!("witness found in {seconds:.1} s: two certified solutions of one pose joined by a path on which det J is proven nonzero ({} pieces)", w.pieces),
-                proof: None,
-                witness: Some(WitnessRecord {
-                    pose_rotation: w.pose.r,
-                    pose_translation: w.pose.t,
-                    pose_radius: w.pose_radius,
-                    from: joints(chain, &w.from),
-                    to: joints(chain, &w.to),
-                    path: w.path.clone(),
-                    pieces: w.pieces,
-                    det_sign: w.det_sign,
-                    min_abs_det: w.min_abs_det,
-                }),
-                most_solutions: MostSolutionsRecord::of(most),
-            },
-            ArmCuspidality::Searched { verdict: CuspidalVerdict::Undecided { poses, pairs }, budget, most, .. } => ArmCuspidalityReport {
-                arm,
-                verdict: "undecided",
-                reason: format!("no witness found within the budget ({budget:.0} s: {poses} poses solved, {pairs} pairs of solutions with one sign of det J tried); non-cuspidality is not proven"),
-                proof: None,
-                witness: None,
-                most_solutions: MostSolutionsRecord::of(most),
-            },
+        let line = c.line();
+        let witness = match c {
+            ArmCuspidality::Searched { verdict: CuspidalVerdict::Cuspidal(w), .. } => Some(WitnessRecord {
+                pose_rotation: w.pose.r,
+                pose_translation: w.pose.t,
+                pose_radius: w.pose_radius,
+                from: joints(chain, &w.from),
+                to: joints(chain, &w.to),
+                path: w.path.clone(),
+                pieces: w.pieces,
+                det_sign: w.det_sign,
+                min_abs_det: w.min_abs_det,
+            }),
+            _ => None,
+        };
+        let proof = matches!(c, ArmCuspidality::ThreeParallel { .. }).then(|| crate::manip6r::three_parallel::CITATION.to_string());
+        let most_solutions = match c {
+            ArmCuspidality::Searched { most: Some(m), .. } => Some(MostSolutionsRecord::of(m)),
+            _ => None,
+        };
+        ArmCuspidalityReport { arm, verdict: line.verdict, reason: line.reason, proof, witness, most_solutions }
+    }
+}
+
+/// What `linkspace path-check --json` writes.
+#[derive(Clone, Debug, Serialize)]
+pub struct PathCheckReport {
+    /// The arm: base, tip and its six joints.
+    pub arm: String,
+    /// The six joints, in the order of the waypoints' values.
+    pub joints: Vec<String>,
+    /// Radians: the width crossings were narrowed to (joint space).
+    pub tolerance: f64,
+    /// Segments by verdict.
+    pub counts: PathCounts,
+    /// One per segment, in order.
+    pub segments: Vec<SegmentRecord>,
+    /// Wall time (seconds).
+    pub seconds: f64,
+}
+
+/// Segments by verdict.
+#[derive(Clone, Copy, Debug, Default, Serialize, PartialEq, Eq)]
+pub struct PathCounts {
+    /// det J proven nonzero throughout.
+    pub clear: usize,
+    /// A sign change of det J proven.
+    pub crosses: usize,
+    /// det J may vanish, no sign change proven.
+    pub touches_or_undecided: usize,
+    /// Not decided (a limit stopped the run).
+    pub not_decided: usize,
+}
+
+/// One segment's verdict.
+#[derive(Clone, Debug, Serialize)]
+pub struct SegmentRecord {
+    /// The segment's start and end waypoints (radians, joints in order).
+    pub from: [f64; 6],
+    /// See `from`.
+    pub to: [f64; 6],
+    /// `clear`, `crosses`, `touches_or_undecided` or `not_decided`.
+    pub verdict: &'static str,
+    /// Why, in one line.
+    pub reason: String,
+    /// For `clear`: the sign of det J on the segment.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub det_sign: Option<f64>,
+    /// For `clear`: a proven lower bound of |det J| on the segment.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min_abs_det: Option<f64>,
+    /// For `crosses`: each proven sign change.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub crossings: Vec<CrossingRecord>,
+    /// Stretches where det J may vanish without a proven sign change.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub undecided: Vec<SpanRecord>,
+}
+
+/// A proven sign change of det J on a segment.
+#[derive(Clone, Debug, Serialize)]
+pub struct CrossingRecord {
+    /// Enclosure [t_lo, t_hi] of the segment parameter (0 at `from`, 1 at `to`).
+    pub t: [f64; 2],
+    /// The joints over it: joint name → [lo, hi].
+    pub joints: JointBoxes,
+    /// The sign of det J before the crossing.
+    pub sign_before: f64,
+    /// Whether the enclosure reached the tolerance.
+    pub narrowed: bool,
+}
+
+/// A stretch where det J may vanish.
+#[derive(Clone, Debug, Serialize)]
+pub struct SpanRecord {
+    /// The parameter's range.
+    pub t: [f64; 2],
+    /// The joints over it: joint name → [lo, hi].
+    pub joints: JointBoxes,
+    /// `same_sign_both_sides`, `at_segment_end` or `piece_budget`.
+    pub reason: &'static str,
+}
+
+fn joint_bounds(chain: &Chain6R, b: &[[f64; 2]; 6]) -> JointBoxes {
+    chain.joints.iter().zip(b).map(|(n, x)| (n.clone(), *x)).collect()
+}
+
+/// The name of a span's reason in reports and messages.
+pub fn span_reason(r: SpanReason) -> &'static str {
+    match r {
+        SpanReason::SameSignBothSides => "same_sign_both_sides",
+        SpanReason::AtEnd => "at_segment_end",
+        SpanReason::PieceBudget => "piece_budget",
+    }
+}
+
+/// The name of a segment's verdict in reports and messages.
+pub fn verdict_name(v: &SegmentVerdict) -> &'static str {
+    match v {
+        SegmentVerdict::Clear { .. } => "clear",
+        SegmentVerdict::Crosses { .. } => "crosses",
+        SegmentVerdict::Undecided { .. } => "touches_or_undecided",
+        SegmentVerdict::Stopped(_) => "not_decided",
+    }
+}
+
+impl PathCheckReport {
+    /// The report of a check.
+    pub fn of(chain: &Chain6R, found: &ArmPathCheck) -> Self {
+        let mut counts = PathCounts::default();
+        let spans = |s: &[Span]| -> Vec<SpanRecord> { s.iter().map(|s| SpanRecord { t: s.t, joints: joint_bounds(chain, &s.joints), reason: span_reason(s.reason) }).collect() };
+        let w = &found.check.waypoints;
+        let segments = found
+            .check
+            .segments
+            .iter()
+            .enumerate()
+            .map(|(k, v)| {
+                let mut record = SegmentRecord {
+                    from: w[k],
+                    to: w[k + 1],
+                    verdict: verdict_name(v),
+                    reason: String::new(),
+                    det_sign: None,
+                    min_abs_det: None,
+                    crossings: Vec::new(),
+                    undecided: Vec::new(),
+                };
+                match v {
+                    SegmentVerdict::Clear { sign, min_abs_det, pieces } => {
+                        counts.clear += 1;
+                        record.reason = format!("det J proven {} on the whole segment ({pieces} pieces), |det J| >= {min_abs_det:.3e}", if *sign > 0.0 { "positive" } else { "negative" });
+                        record.det_sign = Some(*sign);
+                        record.min_abs_det = Some(*min_abs_det);
+                    }
+                    SegmentVerdict::Crosses { crossings, undecided } => {
+                        counts.crosses += 1;
+                        let at: Vec<String> = crossings.iter().map(|c| format!("t in [{:.12}, {:.12}]", c.t[0], c.t[1])).collect();
+                        record.reason = format!("det J proven to change sign: {}", at.join(", "));
+                        record.crossings = crossings
+                            .iter()
+                            .map(|c| CrossingRecord { t: c.t, joints: joint_bounds(chain, &c.joints), sign_before: c.sign_before, narrowed: c.narrowed })
+                            .collect();
+                        record.undecided = spans(undecided);
+                    }
+                    SegmentVerdict::Undecided { spans: s } => {
+                        counts.touches_or_undecided += 1;
+                        let at: Vec<String> = s.iter().map(|s| format!("t in [{:.6}, {:.6}] ({})", s.t[0], s.t[1], span_reason(s.reason))).collect();
+                        record.reason = format!("det J may vanish, no sign change proven: {}", at.join(", "));
+                        record.undecided = spans(s);
+                    }
+                    SegmentVerdict::Stopped(limit) => {
+                        counts.not_decided += 1;
+                        record.reason = format!("not decided: the run stopped ({}) first", limit.name());
+                    }
+                }
+                record
+            })
+            .collect();
+        PathCheckReport {
+            arm: format!("{} -> {} ({})", chain.base, chain.tip, chain.joints.join(", ")),
+            joints: chain.joints.to_vec(),
+            tolerance: found.tolerance,
+            counts,
+            segments,
+            seconds: found.seconds,
         }
+    }
+
+    /// The one-line summary: the arm and how many segments cross, touch or are clear.
+    pub fn headline(&self) -> String {
+        let c = &self.counts;
+        let mut line = format!(
+            "{}: {} segments: {} cross a singularity, {} touch or undecided, {} clear",
+            self.arm,
+            self.segments.len(),
+            c.crosses,
+            c.touches_or_undecided,
+            c.clear
+        );
+        if c.not_decided > 0 {
+            line += &format!(", {} not decided (stopped)", c.not_decided);
+        }
+        line
     }
 }

@@ -1,10 +1,11 @@
 //! From the analysis layer's plain results to wire types: box sets, markers, joint states.
 
 use super::msgs::{
-    self, AssemblyMode, BoxSet, ColorRGBA, CuspRecord, Header, InverseKinematicsResponse, JointState, LsBox, Marker, MarkerArray, NodeRecord, Point, Pose, Quaternion, SingularityReport,
+    self, AssemblyMode, BoxSet, ColorRGBA, CuspRecord, Header, InverseKinematics6Response, InverseKinematicsResponse, JointState, PathCheckResponse, LsBox, Marker, MarkerArray, NodeRecord, Point, Pose, Quaternion, SingularityReport,
     SolveStats, TfMessage, Time, Transform, TransformStamped, Vector3,
 };
-use crate::app::{Bounds, BoxSetResult, IkResult, ResultBox, SingularityResult};
+use crate::app::{ArmIk6, ArmPathCheck, Bounds, BoxSetResult, IkResult, ResultBox, SingularityResult};
+use crate::manip6r::{Chain6R, SegmentVerdict};
 use crate::manip3r::branches::SingularBranches;
 use crate::manip3r::joints_over;
 use crate::search::{BoxStatus, Incompleteness, SolverSettings, Status};
@@ -211,6 +212,8 @@ pub fn singularity_report(r: &SingularityResult, run_id: u64) -> SingularityRepo
         set_verdicts: r.loops.iter().flat_map(|l| &l.sets).map(|s| s.verdict.clone()).collect(),
         actuated: r.loops.as_ref().map_or_else(Vec::new, |l| l.actuated.clone()),
         actuated_source: r.loops.as_ref().map_or_else(String::new, |l| l.actuated_source.clone()),
+        arm_cuspidality: r.arm_cuspidality.as_ref().map_or_else(String::new, |a| a.verdict.to_string()),
+        arm_cuspidality_reason: r.arm_cuspidality.as_ref().map_or_else(String::new, |a| a.reason.clone()),
         ..verdict_and_branches(r, run_id)
     }
 }
@@ -407,6 +410,53 @@ pub fn ik_response(r: &IkResult) -> InverseKinematicsResponse {
         point_values: intervals(&r.point_values),
         processed: r.processed,
     }
+}
+
+/// The reply to a 6R inverse-kinematics request: the boxes of `linkspace ik6`.
+pub fn ik6_response(chain: &Chain6R, found: &ArmIk6) -> InverseKinematics6Response {
+    let s = &found.solutions;
+    let mut message = format!("{} solutions proven unique, {} clusters undecided at sigma", s.unique.len(), s.clusters.len());
+    if let crate::search::Status::Incomplete(limit) = s.status {
+        message.push_str(&format!("; incomplete ({} limit): the clusters include the boxes left pending", limit.name()));
+    }
+    let as_box = |k: usize, b: &[crate::interval::Interval; 6]| LsBox { intervals: b.iter().map(|x| msgs::Interval { lower: x.inf(), upper: x.sup() }).collect(), status: msgs::BOX_SOLUTION, level: 0, cluster: k as i32 };
+    let boxes: Vec<&[crate::interval::Interval; 6]> = s.unique.iter().chain(s.clusters.iter().map(|c| &c.hull)).collect();
+    InverseKinematics6Response {
+        ok: true,
+        message,
+        complete: crate::search::Incompleteness::of(s.status, s.clusters.len(), false).is_none(),
+        solutions: boxes.iter().enumerate().map(|(k, b)| as_box(k, b)).collect(),
+        joint_names: chain.joints.to_vec(),
+        unique: (0..boxes.len()).map(|k| k < s.unique.len()).collect(),
+        processed: s.stats.processed,
+    }
+}
+
+/// The reply to a path check: the verdicts and reasons of `linkspace path-check`.
+pub fn path_check_response(chain: &Chain6R, found: &ArmPathCheck) -> PathCheckResponse {
+    let report = crate::report::six::PathCheckReport::of(chain, found);
+    let mut reply = PathCheckResponse {
+        ok: true,
+        message: report.headline(),
+        complete: report.counts.not_decided == 0,
+        joint_names: chain.joints.to_vec(),
+        ..Default::default()
+    };
+    for (k, v) in found.check.segments.iter().enumerate() {
+        let record = &report.segments[k];
+        reply.verdicts.push(record.verdict.to_string());
+        reply.reasons.push(record.reason.clone());
+        reply.det_signs.push(record.det_sign.map_or(0, |s| if s > 0.0 { 1 } else { -1 }));
+        reply.min_abs_det.push(record.min_abs_det.unwrap_or(0.0));
+        if let SegmentVerdict::Crosses { crossings, .. } = v {
+            for c in crossings {
+                reply.crossing_segments.push(k.min(u32::MAX as usize) as u32);
+                reply.crossing_t.push(msgs::Interval { lower: c.t[0], upper: c.t[1] });
+                reply.crossing_joints.extend(c.joints.iter().map(|j| msgs::Interval { lower: j[0], upper: j[1] }));
+            }
+        }
+    }
+    reply
 }
 
 /// At most `max` characters of `s` (a string from a request echoed into a reply or a log), with

@@ -67,6 +67,17 @@ mirror! {
     Pose { position: Point, orientation: Quaternion }
 }
 
+// ---- trajectory_msgs ----
+
+mirror! {
+    /// trajectory_msgs/JointTrajectoryPoint
+    JointTrajectoryPoint { positions: Vec<f64>, velocities: Vec<f64>, accelerations: Vec<f64>, effort: Vec<f64>, time_from_start: Duration }
+}
+mirror! {
+    /// trajectory_msgs/JointTrajectory
+    JointTrajectory { header: Header, joint_names: Vec<String>, points: Vec<JointTrajectoryPoint> }
+}
+
 // ---- sensor_msgs, visualization_msgs ----
 
 mirror! {
@@ -233,6 +244,8 @@ mirror! {
         branch_isolated_nodes: Vec<NodeRecord>,
         branches_no_cusp_proven: bool,
         branches_argument: String,
+        arm_cuspidality: String,
+        arm_cuspidality_reason: String,
     }
 }
 /// `SingularityReport.YES` (a tri-state field: cuspidal, branch_curve_of_nodes)
@@ -303,6 +316,42 @@ mirror! {
         point_names: Vec<String>,
         point_values: Vec<Interval>,
         processed: u64,
+    }
+}
+mirror! {
+    /// linkspace_msgs/InverseKinematics6 request
+    InverseKinematics6Request { mechanism: String, pose: Pose, sigma: f64, max_boxes: u64 }
+}
+mirror! {
+    /// linkspace_msgs/InverseKinematics6 response
+    InverseKinematics6Response {
+        ok: bool,
+        message: String,
+        complete: bool,
+        solutions: Vec<LsBox>,
+        joint_names: Vec<String>,
+        unique: Vec<bool>,
+        processed: u64,
+    }
+}
+mirror! {
+    /// linkspace_msgs/PathCheck request
+    PathCheckRequest { mechanism: String, trajectory: JointTrajectory, tolerance: f64, timeout: f64 }
+}
+mirror! {
+    /// linkspace_msgs/PathCheck response
+    PathCheckResponse {
+        ok: bool,
+        message: String,
+        complete: bool,
+        joint_names: Vec<String>,
+        verdicts: Vec<String>,
+        reasons: Vec<String>,
+        det_signs: Vec<i8>,
+        min_abs_det: Vec<f64>,
+        crossing_segments: Vec<u32>,
+        crossing_t: Vec<Interval>,
+        crossing_joints: Vec<Interval>,
     }
 }
 mirror! {
@@ -455,6 +504,8 @@ mod tests {
             ("Singularities", mirrored::<SingularitiesRequest>(), mirrored::<SingularitiesResponse>()),
             ("InverseKinematics", mirrored::<InverseKinematicsRequest>(), mirrored::<InverseKinematicsResponse>()),
             ("Classify", mirrored::<ClassifyRequest>(), mirrored::<ClassifyResponse>()),
+            ("InverseKinematics6", mirrored::<InverseKinematics6Request>(), mirrored::<InverseKinematics6Response>()),
+            ("PathCheck", mirrored::<PathCheckRequest>(), mirrored::<PathCheckResponse>()),
             ("ListMechanisms", mirrored::<ListMechanismsRequest>(), mirrored::<ListMechanismsResponse>()),
         ];
         for (name, mirror) in &msgs {

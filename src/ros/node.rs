@@ -86,6 +86,8 @@ enum Request {
     Singularities(RmwRequestId, SingularitiesRequest),
     InverseKinematics(RmwRequestId, InverseKinematicsRequest),
     Classify(RmwRequestId, ClassifyRequest),
+    InverseKinematics6(RmwRequestId, InverseKinematics6Request),
+    PathCheck(RmwRequestId, PathCheckRequest),
     List(RmwRequestId),
 }
 
@@ -106,6 +108,8 @@ struct Servers {
     singularities: Server<SingularitiesRequest, SingularitiesResponse>,
     inverse_kinematics: Server<InverseKinematicsRequest, InverseKinematicsResponse>,
     classify: Server<ClassifyRequest, ClassifyResponse>,
+    inverse_kinematics6: Server<InverseKinematics6Request, InverseKinematics6Response>,
+    path_check: Server<PathCheckRequest, PathCheckResponse>,
     list: Server<ListMechanismsRequest, ListMechanismsResponse>,
 }
 
@@ -460,6 +464,8 @@ pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
         singularities: server(&mut node, mapping, &base, "singularities", "Singularities")?,
         inverse_kinematics: server(&mut node, mapping, &base, "inverse_kinematics", "InverseKinematics")?,
         classify: server(&mut node, mapping, &base, "classify", "Classify")?,
+        inverse_kinematics6: server(&mut node, mapping, &base, "inverse_kinematics6", "InverseKinematics6")?,
+        path_check: server(&mut node, mapping, &base, "path_check", "PathCheck")?,
         list: server(&mut node, mapping, &base, "list_mechanisms", "ListMechanisms")?,
     });
 
@@ -533,6 +539,8 @@ pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
     forward(&ex, servers.clone(), |s| &s.singularities, Request::Singularities, tx.clone());
     forward(&ex, servers.clone(), |s| &s.inverse_kinematics, Request::InverseKinematics, tx.clone());
     forward(&ex, servers.clone(), |s| &s.classify, Request::Classify, tx.clone());
+    forward(&ex, servers.clone(), |s| &s.inverse_kinematics6, Request::InverseKinematics6, tx.clone());
+    forward(&ex, servers.clone(), |s| &s.path_check, Request::PathCheck, tx.clone());
     forward(&ex, servers.clone(), |s| &s.list, |id, _| Request::List(id), tx.clone());
     let ticks = tx.clone();
     ex.spawn(async move {
@@ -1196,6 +1204,14 @@ impl State {
                 let a = catch_unwind(AssertUnwindSafe(|| self.classify(q))).unwrap_or_else(|p| ClassifyResponse { ok: false, message: internal(p), component: -1, ..Default::default() });
                 servers.classify.send_response(id, a)
             }
+            Request::InverseKinematics6(id, q) => {
+                let a = catch_unwind(AssertUnwindSafe(|| self.inverse_kinematics6(q))).unwrap_or_else(|p| InverseKinematics6Response { ok: false, message: internal(p), ..Default::default() });
+                servers.inverse_kinematics6.send_response(id, a)
+            }
+            Request::PathCheck(id, q) => {
+                let a = catch_unwind(AssertUnwindSafe(|| self.path_check(q))).unwrap_or_else(|p| PathCheckResponse { ok: false, message: internal(p), ..Default::default() });
+                servers.path_check.send_response(id, a)
+            }
             Request::List(id) => {
                 let a = catch_unwind(AssertUnwindSafe(|| self.list())).unwrap_or_else(|_| ListMechanismsResponse::default());
                 servers.list.send_response(id, a)
@@ -1440,6 +1456,77 @@ impl State {
         let deadline = Instant::now() + seconds(self.limits.max_wait);
         self.runs.get_mut(&run).expect("invariant: just started").waiters.push((id, deadline));
         None
+    }
+
+    /// The six joints of a loaded arm, or why there are none.
+    fn six_joint_arm(&self, name: &str, service: &str) -> Result<std::sync::Arc<crate::manip6r::Chain6R>, String> {
+        let k = self.mechanism(name)?;
+        self.mechanisms[k].loaded.analysis.chain6().ok_or_else(|| format!("{service}: '{}' is not an arm with six revolute joints from base to tip", convert::bounded(name, convert::ECHO_NAME)))
+    }
+
+    /// 6R inverse kinematics, answered at once: one search bounded by the request's boxes and
+    /// the node's longest wait (a 6R pose takes milliseconds to a few seconds).
+    fn inverse_kinematics6(&mut self, q: InverseKinematics6Request) -> InverseKinematics6Response {
+        let refuse = |message: String| InverseKinematics6Response { ok: false, message, ..Default::default() };
+        let chain = match self.six_joint_arm(&q.mechanism, "inverse_kinematics6") {
+            Ok(c) => c,
+            Err(e) => return refuse(e),
+        };
+        let (p, o) = (&q.pose.position, &q.pose.orientation);
+        let pose = match crate::manip6r::PoseInput::from_numbers(&[p.x, p.y, p.z, o.x, o.y, o.z, o.w]) {
+            Ok(pose) => pose,
+            Err(e) => return refuse(e.to_string()),
+        };
+        if !(q.sigma.is_finite() && q.sigma > 0.0 && q.sigma < 1.0) {
+            return refuse(format!("sigma must be a number in (0, 1), got {}", q.sigma));
+        }
+        let max_boxes = match self.box_limit(q.max_boxes) {
+            Ok(n) => n,
+            Err(e) => return refuse(e),
+        };
+        let cancel = AtomicBool::new(false);
+        let limits = crate::search::Limits { max_cells: max_boxes, timeout: Some(seconds(self.limits.max_wait)), ..Default::default() };
+        let control = crate::search::Control { limits, threads: self.settings.threads.max(1), cancel: &cancel };
+        match crate::app::inverse_kinematics6(&chain, pose, q.sigma, &control) {
+            Ok(found) => convert::ik6_response(&chain, &found),
+            Err(e) => refuse(e.to_string()),
+        }
+    }
+
+    /// A joint path's singularities, answered at once (a check takes milliseconds per segment),
+    /// within the request's timeout (at most the node's longest wait).
+    fn path_check(&mut self, q: PathCheckRequest) -> PathCheckResponse {
+        let refuse = |message: String| PathCheckResponse { ok: false, message, ..Default::default() };
+        let chain = match self.six_joint_arm(&q.mechanism, "path_check") {
+            Ok(c) => c,
+            Err(e) => return refuse(e),
+        };
+        let t = &q.trajectory;
+        let mut column = [0usize; 6];
+        for (k, joint) in chain.joints.iter().enumerate() {
+            match t.joint_names.iter().position(|n| n == joint) {
+                Some(i) => column[k] = i,
+                None => return refuse(format!("the trajectory has no joint '{joint}' (the arm's joints: {}; given: {})", chain.joints.join(", "), convert::bounded(&t.joint_names.join(", "), convert::ECHO_MESSAGE))),
+            }
+        }
+        let mut waypoints = Vec::with_capacity(t.points.len());
+        for (k, point) in t.points.iter().enumerate() {
+            if point.positions.len() != t.joint_names.len() {
+                return refuse(format!("point {k} has {} positions for {} joint names", point.positions.len(), t.joint_names.len()));
+            }
+            waypoints.push(column.map(|i| point.positions[i]));
+        }
+        let tolerance = if q.tolerance == 0.0 { 1e-9 } else { q.tolerance };
+        if !(q.timeout.is_finite() && q.timeout >= 0.0) {
+            return refuse(format!("timeout must be a number of seconds >= 0, got {}", q.timeout));
+        }
+        let timeout = if q.timeout == 0.0 { self.limits.max_wait } else { q.timeout.min(self.limits.max_wait) };
+        let cancel = AtomicBool::new(false);
+        let control = crate::search::Control { limits: crate::search::Limits { timeout: Some(seconds(timeout)), ..Default::default() }, threads: 1, cancel: &cancel };
+        match crate::app::check_path(&chain, &waypoints, tolerance, &control) {
+            Ok(found) => convert::path_check_response(&chain, &found),
+            Err(e) => refuse(e.to_string()),
+        }
     }
 
     fn classify(&mut self, q: ClassifyRequest) -> ClassifyResponse {
