@@ -158,9 +158,10 @@ pub struct RefinePlan {
 
 impl Default for RefinePlan {
     /// Two rounds, at sigma / 32 and sigma / 1024, 20 000 cells each, on clusters at most
-    /// 8 sigmas wide.
+    /// 16 sigmas wide (the 3-RPR's unproven cusp clusters at sigma 5e-2 span up to 9, the
+    /// equal five-bar's circles of cusp roots 40).
     fn default() -> Self {
-        Self { divisors: vec![32.0, 1024.0], max_boxes: 20_000, max_width: 8.0 }
+        Self { divisors: vec![32.0, 1024.0], max_boxes: 20_000, max_width: 16.0 }
     }
 }
 
@@ -683,6 +684,45 @@ mod tests {
             point(0.0),
         ));
         s
+    }
+
+    #[test]
+    fn refining_proves_a_root_a_coarse_sigma_leaves_unproven() {
+        // x² − y² = 0, x² + y² = 1 on [0, 1]²: one root at (1/√2, 1/√2). Propagation cannot
+        // narrow the whole box (in x² and y² the system is linear, [0, 1]² a fixed point of
+        // HC4), so at sigma 1 it is one solution box, where the Jacobian's range holds singular
+        // matrices and Krawczyk proves nothing.
+        let mut s = EquationSystem::default();
+        let x = s.add_var("x", VarRole::Primary, interval(0.0, 1.0));
+        let y = s.add_var("y", VarRole::Primary, interval(0.0, 1.0));
+        let sq = |v, c| Term { coef: point(c), mono: Monomial::Square(v) };
+        s.add(Equation::new(vec![sq(x, 1.0), sq(y, -1.0)], point(0.0)));
+        s.add(Equation::new(vec![sq(x, 1.0), sq(y, 1.0)], point(-1.0)));
+        let cancel = AtomicBool::new(false);
+        let coarse = Solver::new(&s, SolverSettings { sigma: 1.0, use_lp: false, ..Default::default() }).expect("valid");
+        let mut out = Collect::default();
+        assert_eq!(coarse.run(&cancel, &mut out).0, Status::Complete);
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        let cluster = out.solutions.clone();
+        assert!(cluster.iter().any(|b| b.contains(&[h, h])), "{cluster:?} {:?}", out.unique);
+        assert!(out.unique.iter().all(|u| !u), "{:?}", out.unique);
+        let all_certified = |_: &[IntervalBox], u: &[bool]| u.iter().all(|u| *u);
+        match coarse.refine(&cluster, &RefinePlan::default(), None, &all_certified, &cancel) {
+            Refinement::Settled(c) => {
+                assert!(!c.solutions.is_empty() && c.unique.iter().all(|u| *u));
+                assert!(c.solutions.iter().any(|b| b.contains(&[h, h])));
+            }
+            other => panic!("not settled: {other:?}"),
+        }
+        // A cluster wider than the plan allows is not tried; a round stopped by its budget
+        // says so, and settles nothing.
+        let narrow = RefinePlan { max_width: 0.1, ..RefinePlan::default() };
+        assert!(matches!(coarse.refine(&cluster, &narrow, None, &all_certified, &cancel), Refinement::TooWide));
+        let starved = RefinePlan { max_boxes: 1, ..RefinePlan::default() };
+        match coarse.refine(&cluster, &starved, None, &all_certified, &cancel) {
+            Refinement::Unsettled(why) => assert!(why.contains("boxes limit"), "{why}"),
+            other => panic!("settled on one box: {other:?}"),
+        }
     }
 
     #[test]
