@@ -268,7 +268,8 @@ impl FoundPoint {
 
     /// Why the cluster is not one proven cusp (`None` when it is): the first of a limit that
     /// left boxes unsearched, `μ` that may vanish, boxes at sigma without a proof, and certified
-    /// boxes that do not overlap (possibly several roots). `status` is the search's.
+    /// boxes that do not overlap (possibly several roots); then what a finer re-search tried
+    /// without settling it (`refine_points`). `status` is the search's.
     pub fn unproven_reason(&self, status: Status) -> Option<String> {
         let why = self.unproven_alone(status)?;
         Some(if self.refinement.is_empty() { why } else { format!("{why}; {}", self.refinement.join("; ")) })
