@@ -145,6 +145,37 @@ pub enum SolveError {
     System(#[from] SystemError),
 }
 
+/// The budget of `Solver::refine`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RefinePlan {
+    /// Per round, the run's sigma divided by this.
+    pub divisors: Vec<f64>,
+    /// Cells per round.
+    pub max_boxes: u64,
+    /// The widest cluster tried, in sigmas (scaled widths).
+    pub max_width: f64,
+}
+
+impl Default for RefinePlan {
+    /// Two rounds, at sigma / 32 and sigma / 1024, 20 000 cells each, on clusters at most
+    /// 16 sigmas wide (the 3-RPR's unproven cusp clusters at sigma 5e-2 span up to 9, the
+    /// equal five-bar's circles of cusp roots 40).
+    fn default() -> Self {
+        Self { divisors: vec![32.0, 1024.0], max_boxes: 20_000, max_width: 16.0 }
+    }
+}
+
+/// What `Solver::refine` made of a cluster.
+#[derive(Clone, Debug)]
+pub enum Refinement {
+    /// A round completed with boxes the caller accepts (none: the cluster holds no root).
+    Settled(Collect),
+    /// No round did; what was tried.
+    Unsettled(String),
+    /// Wider than the plan's `max_width`: not tried.
+    TooWide,
+}
+
 /// Makes the shrink pipeline for one run (a run owns its contractors: they keep scratch state).
 pub type ContractorFactory<'a> = Box<dyn Fn(&'a EquationSystem, &SolverSettings) -> Box<dyn Contractor + Send + 'a> + Send + Sync + 'a>;
 
@@ -391,6 +422,62 @@ impl<'a> Solver<'a> {
         (kept, kept_unique, dropped, cut_short)
     }
 
+    /// Re-searches one unproven cluster (`boxes`, boxes of this system from a run of this
+    /// solver) at finer sigmas, one round per entry of `plan.divisors`, to prove its roots.
+    /// Each round searches the cluster's hull, its primaries widened by this run's sigma (so a
+    /// root on a face of the hull lies inside the start box, where Krawczyk can certify it) and
+    /// cut to the initial box, at `sigma / divisor` with `plan.max_boxes` cells and at most
+    /// `timeout`, then drops proven-empty isolated boxes (`drop_spurious`). The start box holds
+    /// every box of the cluster, so a root of the cluster missing from a complete round's output
+    /// is proven absent: `Settled` when a round completes and `settled` accepts its solution
+    /// boxes and flags (every box certified, say); the caller may replace the cluster by them.
+    /// A cluster wider than `plan.max_width` sigmas (scaled widths, `width_units`) is not tried:
+    /// that is a curve of roots, not an isolated point. The search is this solver's (its
+    /// contractors and units) with other limits: nothing is a second implementation.
+    pub fn refine(&self, boxes: &[IntervalBox], plan: &RefinePlan, timeout: Option<std::time::Duration>, settled: &dyn Fn(&[IntervalBox], &[bool]) -> bool, cancel: &AtomicBool) -> Refinement {
+        let Some(first) = boxes.first() else { return Refinement::Settled(Collect::default()) };
+        let mut hull = first.clone();
+        for b in &boxes[1..] {
+            for (h, x) in hull.dims.iter_mut().zip(&b.dims) {
+                *h = h.convex_hull(*x);
+            }
+        }
+        if self.size(&hull) > plan.max_width * self.settings.sigma {
+            return Refinement::TooWide;
+        }
+        let initial = self.system.initial_box();
+        let mut start = initial.clone();
+        for &i in &self.primaries {
+            let margin = self.settings.sigma * self.units[i];
+            let (lo, hi) = (hull.dims[i].inf() - margin, hull.dims[i].sup() + margin);
+            start.dims[i] = crate::interval::interval(lo, hi).intersection(initial.dims[i]);
+        }
+        let t0 = Instant::now();
+        let mut tried = Vec::new();
+        for &d in &plan.divisors {
+            let sigma = self.settings.sigma / d;
+            let left = timeout.map(|t| t.saturating_sub(t0.elapsed()));
+            if cancel.load(Ordering::Relaxed) || left.is_some_and(|r| r.is_zero()) {
+                tried.push(format!("sigma {sigma:.1e}: no time left"));
+                break;
+            }
+            let finer = Solver { system: self.system, primaries: self.primaries.clone(), units: self.units.clone(), settings: SolverSettings { sigma, max_boxes: plan.max_boxes, timeout: left, threads: 1, ..self.settings.clone() }, factory: self.factory.clone() };
+            let mut found = Collect::default();
+            let (status, stats) = finer.run_from(start.clone(), cancel, &mut found);
+            if let Status::Incomplete(limit) = status {
+                tried.push(format!("sigma {sigma:.1e}: stopped on its {} limit after {} boxes", limit.name(), stats.processed));
+                break;
+            }
+            let deadline = left.map(|l| t0 + l);
+            let (solutions, unique, _, _) = finer.drop_spurious(found.solutions, found.unique, 2, cancel, deadline);
+            if settled(&solutions, &unique) {
+                return Refinement::Settled(Collect { solutions, unique, undecided: Vec::new() });
+            }
+            tried.push(format!("sigma {sigma:.1e}: {} boxes, {} certified", solutions.len(), unique.iter().filter(|u| **u).count()));
+        }
+        Refinement::Unsettled(format!("re-searched at a finer sigma without settling it ({})", tried.join("; ")))
+    }
+
     /// The widest primary of `b` in width units (`width_units`), with its scaled width.
     fn widest(&self, b: &IntervalBox) -> Option<(VarId, f64)> {
         self.primaries.iter().map(|&i| (i, b.width(i) / self.units[i])).fold(None, |best, (i, w)| match best {
@@ -597,6 +684,45 @@ mod tests {
             point(0.0),
         ));
         s
+    }
+
+    #[test]
+    fn refining_proves_a_root_a_coarse_sigma_leaves_unproven() {
+        // x² − y² = 0, x² + y² = 1 on [0, 1]²: one root at (1/√2, 1/√2). Propagation cannot
+        // narrow the whole box (in x² and y² the system is linear, [0, 1]² a fixed point of
+        // HC4), so at sigma 1 it is one solution box, where the Jacobian's range holds singular
+        // matrices and Krawczyk proves nothing.
+        let mut s = EquationSystem::default();
+        let x = s.add_var("x", VarRole::Primary, interval(0.0, 1.0));
+        let y = s.add_var("y", VarRole::Primary, interval(0.0, 1.0));
+        let sq = |v, c| Term { coef: point(c), mono: Monomial::Square(v) };
+        s.add(Equation::new(vec![sq(x, 1.0), sq(y, -1.0)], point(0.0)));
+        s.add(Equation::new(vec![sq(x, 1.0), sq(y, 1.0)], point(-1.0)));
+        let cancel = AtomicBool::new(false);
+        let coarse = Solver::new(&s, SolverSettings { sigma: 1.0, use_lp: false, ..Default::default() }).expect("valid");
+        let mut out = Collect::default();
+        assert_eq!(coarse.run(&cancel, &mut out).0, Status::Complete);
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        let cluster = out.solutions.clone();
+        assert!(cluster.iter().any(|b| b.contains(&[h, h])), "{cluster:?} {:?}", out.unique);
+        assert!(out.unique.iter().all(|u| !u), "{:?}", out.unique);
+        let all_certified = |_: &[IntervalBox], u: &[bool]| u.iter().all(|u| *u);
+        match coarse.refine(&cluster, &RefinePlan::default(), None, &all_certified, &cancel) {
+            Refinement::Settled(c) => {
+                assert!(!c.solutions.is_empty() && c.unique.iter().all(|u| *u));
+                assert!(c.solutions.iter().any(|b| b.contains(&[h, h])));
+            }
+            other => panic!("not settled: {other:?}"),
+        }
+        // A cluster wider than the plan allows is not tried; a round stopped by its budget
+        // says so, and settles nothing.
+        let narrow = RefinePlan { max_width: 0.1, ..RefinePlan::default() };
+        assert!(matches!(coarse.refine(&cluster, &narrow, None, &all_certified, &cancel), Refinement::TooWide));
+        let starved = RefinePlan { max_boxes: 1, ..RefinePlan::default() };
+        match coarse.refine(&cluster, &starved, None, &all_certified, &cancel) {
+            Refinement::Unsettled(why) => assert!(why.contains("boxes limit"), "{why}"),
+            other => panic!("settled on one box: {other:?}"),
+        }
     }
 
     #[test]

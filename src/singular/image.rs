@@ -26,7 +26,7 @@ use crate::model::Mechanism;
 use crate::problems::linkage::LinkageProblem;
 use crate::problems::singular::image::{check, CuspFormulation, CuspProblem, ImageError, NodeProblem};
 use crate::problems::singular::{Parts, SingularError, SingularProblem};
-use crate::search::{Budget, Limit, Limits, SolveError, SolveStats, Solver, SolverSettings, Status};
+use crate::search::{Budget, Limit, Limits, RefinePlan, Refinement, SolveError, SolveStats, Solver, SolverSettings, Status};
 use crate::system::{EquationSystem, Monomial, VarId};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
@@ -46,47 +46,78 @@ fn owned_elsewhere(vars: &[VarId], k: usize, b: &[Interval], skip: Option<usize>
 }
 
 impl CuspProblem {
+    /// The solver of chart pair `i`, at `settings`.
+    fn chart_solver<'s>(&'s self, sp: &'s SingularProblem, i: usize, settings: SolverSettings) -> Result<Solver<'s>, SolveError> {
+        let chart = &self.charts[i].1;
+        // The pose systems are not extensions of the linkage's: no joint-limit filter (the
+        // pose formulation takes continuous revolute joints only, its travels bound h). Their
+        // rows are general quadratics, which the LP relaxation leaves out: no LP shrink.
+        match self.formulation {
+            CuspFormulation::Pose => Solver::new(chart, SolverSettings { use_lp: false, ..settings }),
+            _ => sp.linkage.extended_solver(chart, settings),
+        }
+    }
+
+    /// True when `bx` of chart pair `i` is proven to be another chart's.
+    fn other_chart(&self, i: usize, bx: &IntervalBox) -> bool {
+        let (k, tau) = self.charts[i].0;
+        owned_elsewhere(&self.v, k, &bx.dims, None) || owned_elsewhere(&self.tangent, tau, &bx.dims, Some(k + 1))
+    }
+
     /// Runs the solver on every chart pair, in scaled widths (`scaled`); boxes proven to be
-    /// another chart's are dropped, the rest clustered by configuration.
+    /// another chart's are dropped, the rest clustered by configuration; each unproven cluster
+    /// is then re-searched finer (`refine_points`).
     pub fn solve(&self, sp: &SingularProblem, settings: &SolverSettings, cancel: &AtomicBool) -> Result<PointSearch, SolveError> {
         let t0 = Instant::now();
         let mut found = Vec::new();
         let mut status = Status::Complete;
         let mut stats = Vec::new();
         let mut dropped = 0u64;
-        for ((k, tau), chart) in &self.charts {
+        for (i, (_, chart)) in self.charts.iter().enumerate() {
             let Some(s) = remaining(settings, t0) else {
                 status = Status::Incomplete(Limit::Time);
-                found.push((chart.initial_box(), BoxKind::Undecided));
+                found.push(ChartBox { chart: i, b: chart.initial_box(), kind: BoxKind::Undecided, note: None });
                 continue;
             };
-            // The pose systems are not extensions of the linkage's: no joint-limit filter (the
-            // pose formulation takes continuous revolute joints only, its travels bound h). Their
-            // rows are general quadratics, which the LP relaxation leaves out: no LP shrink.
-            let solver = match self.formulation {
-                CuspFormulation::Pose => Solver::new(chart, SolverSettings { use_lp: false, ..s })?,
-                _ => sp.linkage.extended_solver(chart, s)?,
-            };
-            let e = solver.enclose(cancel, &mut |_| {});
+            let e = self.chart_solver(sp, i, s)?.enclose(cancel, &mut |_| {});
             if e.status != Status::Complete {
                 status = e.status;
             }
-            for (bx, u) in e.solutions.into_iter().zip(e.unique) {
-                if owned_elsewhere(&self.v, *k, &bx.dims, None) || owned_elsewhere(&self.tangent, *tau, &bx.dims, Some(k + 1)) {
+            for (b, u) in e.solutions.into_iter().zip(e.unique) {
+                if self.other_chart(i, &b) {
                     dropped += 1;
                     continue;
                 }
-                found.push((bx, if u { BoxKind::Certified } else { BoxKind::Solution }));
+                found.push(ChartBox { chart: i, b, kind: if u { BoxKind::Certified } else { BoxKind::Solution }, note: None });
             }
-            found.extend(e.undecided.into_iter().map(|bx| (bx, BoxKind::Undecided)));
+            found.extend(e.undecided.into_iter().map(|b| ChartBox { chart: i, b, kind: BoxKind::Undecided, note: None }));
             stats.push(e.stats);
         }
-        let projected: Vec<IntervalBox> = found.iter().map(|(bx, _)| IntervalBox::new(bx.dims[..self.base_vars].to_vec())).collect();
+        let tangent = self.tangent[0];
+        let cluster = |found: &[ChartBox]| self.cluster(sp, found);
+        // Proven: every box certified with μ away from 0, and the cluster one root (`unique`).
+        let proven = |p: &FoundPoint| p.unproven_reason(Status::Complete).is_none();
+        let accept = |b: &[IntervalBox], u: &[bool]| u.iter().all(|u| *u) && b.iter().all(|b| !b.dims[tangent].contains(0.0));
+        let found = refine_points(found, &cluster, &proven, &|i, s| self.chart_solver(sp, i, s), &|i, b| self.other_chart(i, b), &accept, settings, t0, cancel)?;
+        let points = cluster(&found);
+        Ok(PointSearch { status, points, stats, dropped_other_chart: dropped, seconds: t0.elapsed().as_secs_f64() })
+    }
+
+    /// The clusters of `found` by configuration (the base variables).
+    fn cluster(&self, sp: &SingularProblem, found: &[ChartBox]) -> Vec<FoundPoint> {
+        let projected: Vec<IntervalBox> = found.iter().map(|c| IntervalBox::new(c.b.dims[..self.base_vars].to_vec())).collect();
         let (labels, n) = components(&projected);
         let mut points: Vec<FoundPoint> = (0..n).map(|_| FoundPoint::default()).collect();
-        for (i, &l) in labels.iter().enumerate() {
-            points[l].boxes.push(found[i].0.clone());
-            points[l].kinds.push(found[i].1);
+        for (c, &l) in found.iter().zip(&labels) {
+            let p = &mut points[l];
+            p.boxes.push(c.b.clone());
+            p.kinds.push(c.kind);
+            p.members.push(c.chart);
+            if let Some(note) = &c.note {
+                if !p.refinement.contains(note) {
+                    p.refinement.push(note.clone());
+                }
+            }
         }
         for p in &mut points {
             // μ away from 0 on every certified box: a tangent, so a cusp (not a corank-2 point).
@@ -98,8 +129,92 @@ impl CuspProblem {
                 }
             }
         }
-        Ok(PointSearch { status, points, stats, dropped_other_chart: dropped, seconds: t0.elapsed().as_secs_f64() })
+        points
     }
+}
+
+/// A box of a point search, with the chart (system) it is a box of.
+#[derive(Clone, Debug)]
+struct ChartBox {
+    chart: usize,
+    b: IntervalBox,
+    kind: BoxKind,
+    /// What a refinement tried on it without settling it.
+    note: Option<String>,
+}
+
+/// The refinement of a point search (cusps, nodes): each cluster of `found` (`cluster`) that is
+/// not `proven` is re-searched, one chart at a time, by that chart's solver (`solver`) on the
+/// hull of the cluster's boxes of that chart (`Solver::refine`, the default `RefinePlan`), with
+/// a share of the time left of `settings.timeout` (counted from `t0`). When every chart of the
+/// cluster settles (each round's output `accept`ed), the cluster's boxes are replaced by the
+/// refined ones, minus those proven another chart's (`other_chart`) and those meeting none of
+/// the chart's original boxes (a root there lies in a box of another cluster, or of none, since
+/// the first search is complete on its chart's domain). Otherwise the cluster stays as it was,
+/// its boxes noting what was tried.
+#[allow(clippy::too_many_arguments)]
+fn refine_points<'s>(
+    mut found: Vec<ChartBox>,
+    cluster: &dyn Fn(&[ChartBox]) -> Vec<FoundPoint>,
+    proven: &dyn Fn(&FoundPoint) -> bool,
+    solver: &dyn Fn(usize, SolverSettings) -> Result<Solver<'s>, SolveError>,
+    other_chart: &dyn Fn(usize, &IntervalBox) -> bool,
+    accept: &dyn Fn(&[IntervalBox], &[bool]) -> bool,
+    settings: &SolverSettings,
+    t0: Instant,
+    cancel: &AtomicBool,
+) -> Result<Vec<ChartBox>, SolveError> {
+    let points = cluster(&found);
+    let todo: Vec<&FoundPoint> = points.iter().filter(|p| !proven(p)).collect();
+    let plan = RefinePlan::default();
+    let mut replaced = vec![false; found.len()];
+    let mut added = Vec::new();
+    for (n, p) in todo.iter().enumerate() {
+        let mut charts: Vec<usize> = p.members.clone();
+        charts.sort_unstable();
+        charts.dedup();
+        let mut results = Vec::new();
+        let mut note = None;
+        for &c in &charts {
+            let Some(s) = remaining(settings, t0) else {
+                note = Some("not re-searched finer: no time left".to_string());
+                break;
+            };
+            let share = s.timeout.map(|t| t / (todo.len() - n) as u32);
+            let boxes: Vec<IntervalBox> = p.boxes.iter().zip(&p.members).filter(|(_, m)| **m == c).map(|(b, _)| b.clone()).collect();
+            match solver(c, s)?.refine(&boxes, &plan, share, accept, cancel) {
+                Refinement::Settled(out) => results.push((c, boxes, out)),
+                Refinement::Unsettled(why) => {
+                    note = Some(why);
+                    break;
+                }
+                Refinement::TooWide => break,
+            }
+        }
+        let members = |f: &ChartBox| p.boxes.iter().zip(&p.members).any(|(b, c)| *c == f.chart && *b == f.b);
+        if note.is_none() && results.len() == charts.len() {
+            for (i, f) in found.iter().enumerate() {
+                if members(f) {
+                    replaced[i] = true;
+                }
+            }
+            for (c, originals, out) in results {
+                for (b, u) in out.solutions.into_iter().zip(out.unique) {
+                    if other_chart(c, &b) || !originals.iter().any(|o| o.intersects(&b)) {
+                        continue;
+                    }
+                    added.push(ChartBox { chart: c, b, kind: if u { BoxKind::Certified } else { BoxKind::Solution }, note: None });
+                }
+            }
+        } else if let Some(why) = note {
+            for f in found.iter_mut().filter(|f| members(f)) {
+                f.note = Some(why.clone());
+            }
+        }
+    }
+    let mut kept: Vec<ChartBox> = found.drain(..).zip(replaced).filter(|(_, r)| !r).map(|(f, _)| f).collect();
+    kept.extend(added);
+    Ok(kept)
 }
 
 /// The settings for the rest of a run that started at `t0`; `None` when no time is left.
@@ -133,6 +248,10 @@ pub struct FoundPoint {
     pub degenerate: bool,
     /// Free joint values, the hull over the boxes (radians or metres).
     pub joints: BTreeMap<String, Bounds>,
+    /// Per box, the chart (system) it is a box of.
+    pub members: Vec<usize>,
+    /// What a finer re-search tried without settling the cluster.
+    pub refinement: Vec<String>,
 }
 
 impl FoundPoint {
@@ -149,8 +268,14 @@ impl FoundPoint {
 
     /// Why the cluster is not one proven cusp (`None` when it is): the first of a limit that
     /// left boxes unsearched, `μ` that may vanish, boxes at sigma without a proof, and certified
-    /// boxes that do not overlap (possibly several roots). `status` is the search's.
+    /// boxes that do not overlap (possibly several roots); then what a finer re-search tried
+    /// without settling it (`refine_points`). `status` is the search's.
     pub fn unproven_reason(&self, status: Status) -> Option<String> {
+        let why = self.unproven_alone(status)?;
+        Some(if self.refinement.is_empty() { why } else { format!("{why}; {}", self.refinement.join("; ")) })
+    }
+
+    fn unproven_alone(&self, status: Status) -> Option<String> {
         if self.kinds.contains(&BoxKind::Undecided) {
             let limit = match status {
                 Status::Incomplete(l) => format!("its {} limit", l.name()),
@@ -824,7 +949,7 @@ mod tests {
 
     fn point_of(boxes: &[(f64, f64)], kinds: &[BoxKind], degenerate: bool) -> FoundPoint {
         let boxes = boxes.iter().map(|&(a, b)| IntervalBox::new(vec![interval(a, b)])).collect();
-        FoundPoint { boxes, kinds: kinds.to_vec(), degenerate, joints: BTreeMap::new() }
+        FoundPoint { boxes, kinds: kinds.to_vec(), degenerate, ..Default::default() }
     }
 
     #[test]
