@@ -256,8 +256,10 @@ impl Manip3rAnalysis {
     pub fn new(mechanism: &Mechanism) -> Result<Self, Manip3rError> {
         let arm = Arm::load(mechanism, &LoadOptions::default(), 0.0)?;
         let cover = Arc::new(Cover::new(&arm.chain, CURVE_DEPTH, &Control::with_limits(Limits::default())));
-        let six = super::six::chain6(mechanism, &LoadOptions::default()).ok().map(Arc::new);
-        let six_snapped = super::six::snaps_on_chain(mechanism, &LoadOptions::default()).len();
+        let (six, six_snapped) = match super::six::chain6_snapped(mechanism, &LoadOptions::default()) {
+            Ok((chain, snapped)) => (Some(Arc::new(chain)), snapped),
+            Err(_) => (None, 0),
+        };
         Ok(Self { arm: Arc::new(arm), six, six_snapped, cover })
     }
 

@@ -11,8 +11,22 @@ use std::time::{Duration, Instant};
 /// The arm's six joints as `manip6r` reads them, after the rounding policy of `options`
 /// (`--base`/`--tip` honoured; locks and points do not apply to the whole arm).
 pub fn chain6(m: &Mechanism, options: &LoadOptions) -> Result<Chain6R, Manip6rError> {
-    let rounded = if options.exact_geometry || options.snap_tolerance == 0.0 { m.clone() } else { rounding::snap(m, options.snap_tolerance).0 };
-    Chain6R::from_mechanism(&rounded, options.spec.base.as_deref(), options.spec.tip.as_deref())
+    chain6_snapped(m, options).map(|(chain, _)| chain)
+}
+
+/// `chain6`, with how many values the rounding policy changed on the joints from the chain's
+/// base to its tip (the whole-arm proof is about the geometry after them).
+pub fn chain6_snapped(m: &Mechanism, options: &LoadOptions) -> Result<(Chain6R, usize), Manip6rError> {
+    if options.exact_geometry || options.snap_tolerance == 0.0 {
+        return Ok((Chain6R::from_mechanism(m, options.spec.base.as_deref(), options.spec.tip.as_deref())?, 0));
+    }
+    let (rounded, snaps) = rounding::snap(m, options.snap_tolerance);
+    let chain = Chain6R::from_mechanism(&rounded, options.spec.base.as_deref(), options.spec.tip.as_deref())?;
+    let (Some(base), Some(tip)) = (rounded.link(&chain.base), rounded.link(&chain.tip)) else { return Ok((chain, 0)) };
+    let below_base: Vec<usize> = rounded.path_to(base);
+    let on_chain: Vec<&str> = rounded.path_to(tip).into_iter().filter(|j| !below_base.contains(j)).map(|j| rounded.joints[j].name.as_str()).collect();
+    let snapped = snaps.iter().filter(|s| on_chain.contains(&s.joint.as_str())).count();
+    Ok((chain, snapped))
 }
 
 /// What `ik6` found.
@@ -90,23 +104,11 @@ pub fn arm_cuspidality(m: &Mechanism, arm: &Arm, options: &LoadOptions, budget: 
     if !whole_arm_applies(arm) {
         return None;
     }
-    let chain = chain6(m, options).ok()?;
-    let verdict = arm_cuspidality_of(&chain, snaps_on_chain(m, options).len(), arm, budget, control)?;
+    let (chain, snapped) = chain6_snapped(m, options).ok()?;
+    let verdict = arm_cuspidality_of(&chain, snapped, arm, budget, control)?;
     Some((chain, verdict))
 }
 
-/// What the rounding policy of `options` changes on the joints from the chain's base to its tip.
-pub fn snaps_on_chain(m: &Mechanism, options: &LoadOptions) -> Vec<rounding::Snap> {
-    if options.exact_geometry || options.snap_tolerance == 0.0 {
-        return Vec::new();
-    }
-    let (rounded, snaps) = rounding::snap(m, options.snap_tolerance);
-    let Ok(chain) = Chain6R::from_mechanism(&rounded, options.spec.base.as_deref(), options.spec.tip.as_deref()) else { return Vec::new() };
-    let (Some(base), Some(tip)) = (rounded.link(&chain.base), rounded.link(&chain.tip)) else { return Vec::new() };
-    let below_base: Vec<usize> = rounded.path_to(base);
-    let on_chain: Vec<&str> = rounded.path_to(tip).into_iter().filter(|j| !below_base.contains(j)).map(|j| rounded.joints[j].name.as_str()).collect();
-    snaps.into_iter().filter(|s| on_chain.contains(&s.joint.as_str())).collect()
-}
 
 /// Whether the arm's 3R verdict is a sub-chain's that the whole arm's may differ from: three
 /// wrist joints, none locked.
@@ -116,7 +118,7 @@ fn whole_arm_applies(arm: &Arm) -> bool {
 }
 
 /// `arm_cuspidality` on a chain already read, `snapped` values of it changed by the rounding
-/// policy (`snaps_on_chain`). The UR family is proven non-cuspidal before any search.
+/// policy (`chain6_snapped`). The UR family is proven non-cuspidal before any search.
 pub fn arm_cuspidality_of(chain: &Chain6R, snapped: usize, arm: &Arm, budget: Duration, control: &Control) -> Option<ArmCuspidality> {
     if !whole_arm_applies(arm) {
         return None;
