@@ -476,6 +476,8 @@ fn stewart_platform_assemblies_are_all_certified() {
     let count = case["real_solutions"].as_u64().expect("count") as usize;
     assert_eq!(components(&e.solutions).1, count, "real assemblies");
     assert!(e.unique.iter().all(|&u| u), "every box certified");
+    // One certificate per assembly: two certified boxes of one assembly are merged.
+    assert_eq!(e.solutions.len(), count, "certified boxes");
     let f = |v: &serde_json::Value| v.as_f64().expect("number");
     for s in case["solutions"].as_array().expect("solutions") {
         let (pos, rpy) = (&s["platform_position"], &s["platform_rpy"]);

@@ -1572,6 +1572,9 @@ fn six_joint_arms_answer_inverse_kinematics6_and_path_check() {
     assert!(!unique.is_empty(), "the pose is reachable: {ik_ref}");
     let boxes = r[0]["solutions"].as_array().expect("solutions");
     assert_eq!(boxes.len(), unique.len());
+    // Solved as a run of the node (its own thread), not inside the request handler.
+    let ran = format!("(6R inverse kinematics): {} solutions", unique.len());
+    assert!(node.log().contains(&ran), "no 6R run logged:\n{}", node.log());
     for (got, want) in boxes.iter().zip(unique) {
         for (k, j) in joints.iter().enumerate() {
             let iv = &got["intervals"][k];

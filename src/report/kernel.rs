@@ -83,6 +83,7 @@ pub(crate) struct SolveStatsDef {
     lp: LpCounters,
     certified: u64,
     spurious_dropped: u64,
+    certificates_merged: u64,
     post_processing_cut_short: bool,
     max_level: u32,
     seconds: f64,

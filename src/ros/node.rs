@@ -63,6 +63,8 @@ enum Outcome {
     BoxSet(BoxSetResult),
     Singularities(SingularityResult),
     InverseKinematics(IkResult),
+    /// A 6R arm's inverse kinematics, with the chain its reply names the joints of.
+    InverseKinematics6(Result<crate::app::ArmIk6, String>, Arc<crate::manip6r::Chain6R>),
 }
 
 impl Outcome {
@@ -72,6 +74,8 @@ impl Outcome {
             Outcome::BoxSet(r) => (r.stats.processed, r.boxes.iter().filter(|b| b.status == crate::search::BoxStatus::Undecided).count(), r.status == Status::Complete),
             Outcome::Singularities(r) => (r.processed, r.undecided(), r.status == Status::Complete),
             Outcome::InverseKinematics(r) => (r.processed, 0, r.status == Status::Complete),
+            Outcome::InverseKinematics6(Ok(r), _) => (r.solutions.stats.processed, r.solutions.clusters.len(), r.solutions.status == Status::Complete),
+            Outcome::InverseKinematics6(Err(_), _) => (0, 0, false),
         }
     }
 }
@@ -124,12 +128,13 @@ enum RunKind {
     /// Singularities request with its own settings, answered in the reply only.
     Singularities { load_time: bool },
     InverseKinematics,
+    InverseKinematics6,
 }
 
 impl RunKind {
     /// Runs started by a request, which count against `NodeLimits::max_runs`.
     fn requested(self) -> bool {
-        matches!(self, RunKind::Solve | RunKind::SolveAction | RunKind::Singularities { load_time: false } | RunKind::InverseKinematics)
+        matches!(self, RunKind::Solve | RunKind::SolveAction | RunKind::Singularities { load_time: false } | RunKind::InverseKinematics | RunKind::InverseKinematics6)
     }
 
     /// The `analysis` field of its progress messages.
@@ -139,6 +144,7 @@ impl RunKind {
             RunKind::Solve | RunKind::SolveAction => "solve",
             RunKind::Singularities { .. } => "singularities",
             RunKind::InverseKinematics => "inverse_kinematics",
+            RunKind::InverseKinematics6 => "inverse_kinematics6",
         }
     }
 }
@@ -999,6 +1005,20 @@ impl State {
                     self.reply_ik(id, reply.clone());
                 }
             }
+            Outcome::InverseKinematics6(result, chain) => {
+                let reply = match result {
+                    Ok(found) => {
+                        if self.log_level <= Severity::Info {
+                            eprintln!("linkspace: {name}: run {run} (6R inverse kinematics): {} solutions, {} undecided clusters, {:.3} s", found.solutions.unique.len(), found.solutions.clusters.len(), found.seconds);
+                        }
+                        convert::ik6_response(&chain, &found)
+                    }
+                    Err(message) => InverseKinematics6Response { ok: false, message, ..Default::default() },
+                };
+                for (id, _) in r.waiters {
+                    self.reply_ik6(id, reply.clone());
+                }
+            }
         }
     }
 
@@ -1066,7 +1086,7 @@ impl State {
                     self.goal_result(h, end, SolveActionResult { ok: true, message: format!("run {run}: {status}"), run_id: run, result: set });
                 }
             }
-            RunKind::Singularities { .. } | RunKind::InverseKinematics => eprintln!("linkspace: {name}: run {run} returned a box set for a {:?} run", r.kind),
+            RunKind::Singularities { .. } | RunKind::InverseKinematics | RunKind::InverseKinematics6 => eprintln!("linkspace: {name}: run {run} returned a box set for a {:?} run", r.kind),
         }
         self.log(LogLevel::Info, summary);
     }
@@ -1155,6 +1175,7 @@ impl State {
             RunKind::Solve | RunKind::SolveAction | RunKind::ConfigurationSpace => self.reply_solve(id, solve_error(message)),
             RunKind::Singularities { .. } => self.reply_singularities(id, SingularitiesResponse { ok: false, message, report: convert::no_report() }),
             RunKind::InverseKinematics => self.reply_ik(id, InverseKinematicsResponse { ok: false, message, ..Default::default() }),
+            RunKind::InverseKinematics6 => self.reply_ik6(id, InverseKinematics6Response { ok: false, message, ..Default::default() }),
         }
     }
 
@@ -1167,6 +1188,12 @@ impl State {
     fn reply_ik(&self, id: RmwRequestId, reply: InverseKinematicsResponse) {
         if let Err(e) = self.servers.inverse_kinematics.send_response(id, reply) {
             eprintln!("linkspace: sending an inverse_kinematics reply: {e:?}");
+        }
+    }
+
+    fn reply_ik6(&self, id: RmwRequestId, reply: InverseKinematics6Response) {
+        if let Err(e) = self.servers.inverse_kinematics6.send_response(id, reply) {
+            eprintln!("linkspace: sending an inverse_kinematics6 reply: {e:?}");
         }
     }
 
@@ -1204,10 +1231,11 @@ impl State {
                 let a = catch_unwind(AssertUnwindSafe(|| self.classify(q))).unwrap_or_else(|p| ClassifyResponse { ok: false, message: internal(p), component: -1, ..Default::default() });
                 servers.classify.send_response(id, a)
             }
-            Request::InverseKinematics6(id, q) => {
-                let a = catch_unwind(AssertUnwindSafe(|| self.inverse_kinematics6(q))).unwrap_or_else(|p| InverseKinematics6Response { ok: false, message: internal(p), ..Default::default() });
-                servers.inverse_kinematics6.send_response(id, a)
-            }
+            Request::InverseKinematics6(id, q) => match catch_unwind(AssertUnwindSafe(|| self.inverse_kinematics6(id, q))) {
+                Ok(None) => Ok(()),
+                Ok(Some(a)) => servers.inverse_kinematics6.send_response(id, a),
+                Err(p) => servers.inverse_kinematics6.send_response(id, InverseKinematics6Response { ok: false, message: internal(p), ..Default::default() }),
+            },
             Request::PathCheck(id, q) => {
                 let a = catch_unwind(AssertUnwindSafe(|| self.path_check(q))).unwrap_or_else(|p| PathCheckResponse { ok: false, message: internal(p), ..Default::default() });
                 servers.path_check.send_response(id, a)
@@ -1464,10 +1492,12 @@ impl State {
         self.mechanisms[k].loaded.analysis.chain6().ok_or_else(|| format!("{service}: '{}' is not an arm with six revolute joints from base to tip", convert::bounded(name, convert::ECHO_NAME)))
     }
 
-    /// 6R inverse kinematics, answered at once: one search bounded by the request's boxes and
-    /// the node's longest wait (a 6R pose takes milliseconds to a few seconds).
-    fn inverse_kinematics6(&mut self, q: InverseKinematics6Request) -> InverseKinematics6Response {
-        let refuse = |message: String| InverseKinematics6Response { ok: false, message, ..Default::default() };
+    /// Validates and starts a 6R inverse-kinematics run on a thread of its own, as every search
+    /// of the node (a pose takes milliseconds to a few seconds, which the event loop must not
+    /// wait for); `None` when the reply waits for it. Bounded by the request's boxes and the
+    /// node's longest wait, and counted against `--max-runs`.
+    fn inverse_kinematics6(&mut self, id: RmwRequestId, q: InverseKinematics6Request) -> Option<InverseKinematics6Response> {
+        let refuse = |message: String| Some(InverseKinematics6Response { ok: false, message, ..Default::default() });
         let chain = match self.six_joint_arm(&q.mechanism, "inverse_kinematics6") {
             Ok(c) => c,
             Err(e) => return refuse(e),
@@ -1484,13 +1514,22 @@ impl State {
             Ok(n) => n,
             Err(e) => return refuse(e),
         };
-        let cancel = AtomicBool::new(false);
-        let limits = crate::search::Limits { max_cells: max_boxes, timeout: Some(seconds(self.limits.max_wait)), ..Default::default() };
-        let control = crate::search::Control { limits, threads: self.settings.threads.max(1), cancel: &cancel };
-        match crate::app::inverse_kinematics6(&chain, pose, q.sigma, &control) {
-            Ok(found) => convert::ik6_response(&chain, &found),
-            Err(e) => refuse(e.to_string()),
+        if let Some(busy) = self.busy() {
+            return refuse(busy);
         }
+        let k = self.mechanism(&q.mechanism).expect("invariant: six_joint_arm found it");
+        let (limits, threads, sigma) = (crate::search::Limits { max_cells: max_boxes, timeout: Some(seconds(self.limits.max_wait)), ..Default::default() }, self.settings.threads.max(1), q.sigma);
+        let run = self.start(
+            k,
+            RunKind::InverseKinematics6,
+            Box::new(move |cancel, _| {
+                let control = crate::search::Control { limits, threads, cancel };
+                Outcome::InverseKinematics6(crate::app::inverse_kinematics6(&chain, pose, sigma, &control).map_err(|e| e.to_string()), chain)
+            }),
+        );
+        let deadline = Instant::now() + seconds(self.limits.max_wait);
+        self.runs.get_mut(&run).expect("invariant: just started").waiters.push((id, deadline));
+        None
     }
 
     /// A joint path's singularities, answered at once (a check takes milliseconds per segment),

@@ -106,6 +106,9 @@ pub struct SolveStats {
     pub certified: u64,
     /// Solution boxes later proven empty by `Solver::drop_spurious`.
     pub spurious_dropped: u64,
+    /// Certified boxes proven to hold the same solution as another certified box, and merged
+    /// into it (`Solver::merge_shared_certificates`): each solution is counted once.
+    pub certificates_merged: u64,
     /// True when the time limit (or a cancel) stopped `drop_spurious` before it re-examined
     /// every candidate box; the boxes it did not reach are reported as they were.
     pub post_processing_cut_short: bool,
@@ -350,9 +353,11 @@ impl<'a> Solver<'a> {
         // The time limit covers the whole call, post-processing included.
         let deadline = self.settings.timeout.map(|t| t0 + t);
         let (solutions, unique, dropped, cut_short) = self.drop_spurious(std::mem::take(&mut sink.collect.solutions), std::mem::take(&mut sink.collect.unique), 2, cancel, deadline);
+        let (solutions, unique, merged) = self.merge_shared_certificates(solutions, unique);
         stats.spurious_dropped = dropped;
+        stats.certificates_merged = merged;
         stats.post_processing_cut_short = cut_short;
-        stats.solutions -= dropped;
+        stats.solutions -= dropped + merged;
         stats.seconds = t0.elapsed().as_secs_f64();
         stats.cpu_seconds = process_cpu_seconds() - c0;
         if let Some(peers) = super::share::peers() {
@@ -420,6 +425,98 @@ impl<'a> Solver<'a> {
             }
         }
         (kept, kept_unique, dropped, cut_short)
+    }
+
+    /// Makes each certificate count one solution. Two certified boxes of one run can hold the
+    /// same root: a root near a face of two cells is certified from both, and a certificate may
+    /// widen its cell (`Contractor::certify`). For every two certified boxes A and B that meet,
+    /// the contractors are run on A ∩ B:
+    /// - proven empty: A's root lies outside B and B's outside A, two solutions;
+    /// - proven to hold exactly one root (or a certified box inside A ∩ B holding every root of
+    ///   A ∩ B): that root is A's, since A holds one only, and B's likewise, so the two boxes hold
+    ///   the same solution and are replaced by the certified enclosure;
+    /// - otherwise B stays a solution box, no longer counted as certified (it may hold A's root).
+    ///
+    /// Returns the boxes, their flags, and how many boxes were merged away.
+    pub fn merge_shared_certificates(&self, boxes: Vec<IntervalBox>, unique: Vec<bool>) -> (Vec<IntervalBox>, Vec<bool>, u64) {
+        let certified: Vec<usize> = (0..boxes.len()).filter(|&i| unique[i]).collect();
+        let certified_boxes: Vec<IntervalBox> = certified.iter().map(|&i| boxes[i].clone()).collect();
+        let (labels, n) = crate::interval::components(&certified_boxes);
+        let mut sizes = vec![0usize; n];
+        for &l in &labels {
+            sizes[l] += 1;
+        }
+        if sizes.iter().all(|&s| s <= 1) {
+            return (boxes, unique, 0);
+        }
+        let mut boxes = boxes;
+        let mut unique = unique;
+        let mut gone = vec![false; boxes.len()];
+        let mut contractor = self.contractor();
+        let mut merged = 0;
+        for component in 0..n {
+            if sizes[component] <= 1 {
+                continue;
+            }
+            // Certified boxes kept so far in this component, by index into `boxes`.
+            let mut kept: Vec<usize> = Vec::new();
+            for (k, &i) in certified.iter().enumerate() {
+                if labels[k] != component {
+                    continue;
+                }
+                let mut placed = true;
+                for &j in &kept {
+                    if !boxes[j].intersects(&boxes[i]) {
+                        continue;
+                    }
+                    match Self::same_root(contractor.as_mut(), &boxes[j], &boxes[i]) {
+                        Shared::Distinct => {}
+                        Shared::Same(enclosure) => {
+                            boxes[j] = IntervalBox { level: boxes[j].level.max(boxes[i].level), ..enclosure };
+                            gone[i] = true;
+                            merged += 1;
+                            placed = false;
+                            break;
+                        }
+                        Shared::Unknown => {
+                            unique[i] = false;
+                            placed = false;
+                            break;
+                        }
+                    }
+                }
+                if placed {
+                    kept.push(i);
+                }
+            }
+        }
+        let mut out_boxes = Vec::with_capacity(boxes.len());
+        let mut out_unique = Vec::with_capacity(boxes.len());
+        for ((b, u), g) in boxes.into_iter().zip(unique).zip(gone) {
+            if !g {
+                out_boxes.push(b);
+                out_unique.push(u);
+            }
+        }
+        (out_boxes, out_unique, merged)
+    }
+
+    /// Whether certified boxes `a` and `b`, which meet, hold the same root (see
+    /// `merge_shared_certificates`).
+    fn same_root(contractor: &mut dyn Contractor, a: &IntervalBox, b: &IntervalBox) -> Shared {
+        let mut common = IntervalBox { dims: a.dims.iter().zip(&b.dims).map(|(x, y)| x.intersection(*y)).collect(), level: a.level };
+        if common.is_void() {
+            return Shared::Distinct;
+        }
+        let inside_both = |p: &IntervalBox| p.dims.iter().zip(a.dims.iter().zip(&b.dims)).all(|(p, (x, y))| p.subset(*x) && p.subset(*y));
+        match contractor.contract(&mut common) {
+            Contraction::Empty => Shared::Distinct,
+            Contraction::Proven => Shared::Same(common),
+            _ => match contractor.certify(&common) {
+                Some(p) if inside_both(&p) => Shared::Same(p),
+                _ => Shared::Unknown,
+            },
+        }
     }
 
     /// Re-searches one unproven cluster (`boxes`, boxes of this system from a run of this
@@ -648,6 +745,16 @@ impl SolveStats {
 }
 
 /// What re-examining one box showed.
+/// What `Solver::same_root` proved of two certified boxes that meet.
+enum Shared {
+    /// Their common part holds no root: two solutions.
+    Distinct,
+    /// One root, enclosed by this certified box inside both.
+    Same(IntervalBox),
+    /// Neither proven.
+    Unknown,
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Probe {
     /// Proven to hold no solution.
@@ -684,6 +791,33 @@ mod tests {
             point(0.0),
         ));
         s
+    }
+
+    #[test]
+    fn two_certificates_of_one_root_count_once() {
+        // Roots (h, h) and (−h, −h), h = 1/√2. Two certified boxes around (h, h) that overlap are
+        // merged into one inside both; two overlapping certified boxes each holding one root stay
+        // two; a certified box disjoint from the rest is left as it is.
+        let s = two_points();
+        let solver = Solver::new(&s, SolverSettings { sigma: 1e-6, ..Default::default() }).expect("valid");
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        let square = |lo: f64, hi: f64| IntervalBox::new(vec![interval(lo, hi), interval(lo, hi)]);
+        let around_h = [square(h - 1e-3, h + 2e-3), square(h - 2e-3, h + 1e-3)];
+        let (boxes, unique, merged) = solver.merge_shared_certificates(around_h.to_vec(), vec![true, true]);
+        assert_eq!((boxes.len(), merged), (1, 1), "{boxes:?}");
+        assert!(unique[0] && boxes[0].contains(&[h, h]));
+        assert!(boxes[0].dims.iter().all(|d| d.subset(interval(h - 1e-3, h + 1e-3))), "{boxes:?}");
+
+        let both_roots = [square(-0.8, 0.1), square(-0.1, 0.8)];
+        let (boxes, unique, merged) = solver.merge_shared_certificates(both_roots.to_vec(), vec![true, true]);
+        assert_eq!((boxes.len(), merged, unique), (2, 0, vec![true, true]));
+
+        let apart = [square(h - 1e-3, h + 1e-3), square(-h - 1e-3, -h + 1e-3)];
+        let (boxes, _, merged) = solver.merge_shared_certificates(apart.to_vec(), vec![true, true]);
+        assert_eq!((boxes, merged), (apart.to_vec(), 0));
+        // An uncertified box is never merged or dropped: it only encloses.
+        let (boxes, unique, merged) = solver.merge_shared_certificates(around_h.to_vec(), vec![true, false]);
+        assert_eq!((boxes.len(), unique, merged), (2, vec![true, false], 0));
     }
 
     #[test]
