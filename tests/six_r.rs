@@ -263,9 +263,22 @@ mod ur5_closed_form {
 
 #[test]
 fn ur5_counts_match_the_closed_form() {
+    ur5_against_the_closed_form(12, 5);
+}
+
+/// The same on 1,000 random poses (about two minutes in release on two shared cores).
+#[test]
+#[ignore = "long: 1,000 poses"]
+fn ur5_counts_match_the_closed_form_on_a_thousand_poses() {
+    ur5_against_the_closed_form(1000, 1000);
+}
+
+/// Random poses of UR5 (from random joint vectors): `ik6` finds exactly the closed form's
+/// solutions, each in its own certified box, the box holding that solution.
+fn ur5_against_the_closed_form(poses: usize, seed: u64) {
     let chain = chain_of(&repo("urdf/ur5.urdf")).within_one_turn();
-    let mut rng = Lcg(5);
-    for _ in 0..12 {
+    let mut rng = Lcg(seed);
+    for _ in 0..poses {
         let q = random_q(&chain, &mut rng);
         let t = ur5_closed_form::fk(&q);
         let pose = chain.pose(&q);
@@ -277,6 +290,11 @@ fn ur5_counts_match_the_closed_form() {
         assert_eq!(sol.status, Status::Complete);
         assert!(sol.clusters.is_empty());
         assert_eq!(sol.unique.len(), analytic.len(), "q = {q:?}");
+        let near = |a: f64, b: f64| (a - b).rem_euclid(std::f64::consts::TAU).min((b - a).rem_euclid(std::f64::consts::TAU)) < 1e-6;
+        for a in &analytic {
+            let holding: Vec<_> = sol.unique.iter().filter(|u| (0..6).all(|k| near(a[k], u[k].mid()))).collect();
+            assert_eq!(holding.len(), 1, "closed-form solution {a:?} of q = {q:?} in {} boxes", holding.len());
+        }
     }
 }
 
