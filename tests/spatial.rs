@@ -622,3 +622,74 @@ fn a_rod_with_welded_frames_is_still_a_distance() {
         assert!(covered(&p, &e.solutions, &[("rocker_joint", phi)], 1e-9), "rocker {phi} in no box");
     }
 }
+
+// ---------- placement: the same certified answers wherever the mechanism stands ----------
+
+/// `xml` hung from a new root link by a fixed joint at `xyz`, `rpy`, written as given (short,
+/// truncated decimals, as vendor files write them).
+fn placed(xml: &str, xyz: &str, rpy: &str) -> String {
+    let children: Vec<&str> = xml.split("<child link=\"").skip(1).map(|s| &s[..s.find('"').expect("closing quote")]).collect();
+    let root = xml
+        .split("<link name=\"")
+        .skip(1)
+        .map(|s| &s[..s.find('"').expect("closing quote")])
+        .find(|l| !children.contains(l))
+        .expect("a root link");
+    let placement = format!("<link name=\"placement_world\"/>\n  <joint name=\"placement\" type=\"fixed\"><parent link=\"placement_world\"/><child link=\"{root}\"/><origin xyz=\"{xyz}\" rpy=\"{rpy}\"/></joint>\n  ");
+    let at = xml.find("<link ").expect("a link");
+    format!("{}{placement}{}", &xml[..at], &xml[at..])
+}
+
+/// Proven boxes, all boxes, undecided boxes.
+fn certified_counts(xml: &str, fixed: &[(&str, f64)]) -> (usize, usize, usize) {
+    let m = urdf::parse(xml).expect("parses");
+    let fixed: Vec<(String, f64)> = fixed.iter().map(|(n, v)| (n.to_string(), *v)).collect();
+    let p = SpatialProblem::new(&m, &fixed, &[]).expect("builds");
+    let e = solve(&p, 1e-6);
+    (e.unique.iter().filter(|u| **u).count(), e.solutions.len(), e.undecided.len())
+}
+
+/// Random rigid placements of the bundled spatial mechanisms (and of the planar four-bar taken
+/// as spatial, turned about the normal of its plane), rpy truncated to a few decimals: the same
+/// proven counts as at the origin. Closure rows that only rounding keeps from cancelling (the
+/// same stated placement reached by two paths) must not make the system non-square.
+///
+/// A planar mechanism tilted out of its plane is not among them: taken as spatial, its axis rows
+/// then hold unknowns whose coefficients vanish only to rounding (the model has more rows than
+/// freedoms), which is why the builder's choice solves it planar.
+#[test]
+fn placement_in_space_does_not_change_the_certified_answers() {
+    let cases: [(&str, &[(&str, f64)], bool); 4] = [
+        ("spherical_four_bar.urdf", &[("crank_joint", 0.4)], true),
+        ("rssr.urdf", &[("crank_joint", 0.6)], true),
+        ("four_bar.urdf", &[("crank_joint", 0.5)], false),
+        ("delta.urdf", &[("actuator1", 0.2), ("actuator2", 0.75), ("actuator3", -0.1)], true),
+    ];
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut uniform = |lo: f64, hi: f64| {
+        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        lo + (hi - lo) * ((state >> 11) as f64 / (1u64 << 53) as f64)
+    };
+    for (file, fixed, tilt) in cases {
+        let xml = urdf_text(file);
+        let at_origin = certified_counts(&xml, fixed);
+        assert!(at_origin.0 > 0 && at_origin.0 == at_origin.1 && at_origin.2 == 0, "{file} at the origin: {at_origin:?}");
+        for k in 0..6 {
+            let xyz = format!("{:.3} {:.3} {:.3}", uniform(-2.0, 2.0), uniform(-2.0, 2.0), uniform(-2.0, 2.0));
+            let digits = 2 + k % 4;
+            let (roll, pitch, yaw) = (uniform(-PI, PI), uniform(-1.5, 1.5), uniform(-PI, PI));
+            let rpy = if tilt { format!("{roll:.digits$} {pitch:.digits$} {yaw:.digits$}") } else { format!("0 0 {yaw:.digits$}") };
+            let moved = placed(&xml, &xyz, &rpy);
+            assert_eq!(certified_counts(&moved, fixed), at_origin, "{file} placed at xyz {xyz}, rpy {rpy}");
+        }
+    }
+    // The spherical four-bar with its centre written on both ground joints, off the origin.
+    let xml = urdf_text("spherical_four_bar.urdf");
+    let ground = |joint: &str, xml: &str| {
+        let at = xml.find(&format!("<joint name=\"{joint}\"")).expect("joint");
+        let origin = at + xml[at..].find("<origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>").expect("origin");
+        format!("{}<origin xyz=\"0.317 -1.25 2.09\" rpy=\"0.31 -0.7 2.5\"/>{}", &xml[..origin], &xml[origin + "<origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>".len()..])
+    };
+    let off = ground("rocker_joint", &ground("crank_joint", &xml));
+    assert_eq!(certified_counts(&off, &[("crank_joint", 0.4)]), certified_counts(&xml, &[("crank_joint", 0.4)]));
+}

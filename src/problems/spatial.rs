@@ -334,7 +334,19 @@ struct Builder {
     norms: BTreeMap<Vec<VarId>, VarId>,
     /// Equations that are not closures (definitions), by index.
     definitions: Vec<usize>,
+    /// Magnitudes of the constant rows taken as identities (`VANISHING`), in order.
+    vanished: Vec<f64>,
 }
+
+/// A closure row left with no unknown whose constant encloses 0 and lies within this (metres,
+/// or unitless for axis rows) is an identity of the stated geometry, not a constraint: the same
+/// written coordinates reached by two paths (a spherical linkage's centre off the origin,
+/// ground joints sharing a z), whose difference interval arithmetic cannot cancel (x − x over
+/// an interval is not 0). Kept, such a row makes the system non-square and no assembly is ever
+/// certified. 1e-12 is a thousand times the rounding of metre-sized coordinates and far below
+/// any gap a designer means; a gap beyond it, or a constant that excludes 0, stays a row, which
+/// the search refutes (the loops cannot close as written).
+const VANISHING: f64 = 1e-12;
 
 impl Builder {
     fn define(&mut self, e: Equation) {
@@ -574,6 +586,10 @@ impl Builder {
         if is_zero(k) {
             return Ok(());
         }
+        if k.contains(0.0) && k.mag() <= VANISHING {
+            self.vanished.push(k.mag());
+            return Ok(());
+        }
         if self.check_closure && !k.contains(0.0) {
             return Err(());
         }
@@ -641,6 +657,12 @@ fn e_mentions(m: Monomial, v: VarId) -> bool {
         Monomial::Linear(x) | Monomial::Square(x) => x == v,
         Monomial::Product(x, y) => x == v || y == v,
     }
+}
+
+/// The report line of the rows of loop `name` taken as identities (`VANISHING`), if any.
+fn vanished_note(name: &str, magnitudes: &[f64]) -> Option<String> {
+    let largest = magnitudes.iter().copied().fold(0.0, f64::max);
+    (!magnitudes.is_empty()).then(|| format!("loop '{name}': {} closure row(s) left with no unknown, constant within {largest:.1e} of 0 (the same stated values reached by two paths): taken as identities", magnitudes.len()))
 }
 
 fn is_zero(x: Interval) -> bool {
@@ -828,7 +850,7 @@ impl SpatialProblem {
             }
         }
 
-        let mut b = Builder { check_closure, system: EquationSystem::default(), groups: vec![const_rot(&st::identity())], products: BTreeMap::new(), norms: BTreeMap::new(), definitions: Vec::new() };
+        let mut b = Builder { check_closure, system: EquationSystem::default(), groups: vec![const_rot(&st::identity())], products: BTreeMap::new(), norms: BTreeMap::new(), definitions: Vec::new(), vanished: Vec::new() };
         let mut order: Vec<usize> = (0..n_links).collect();
         order.sort_by_key(|&l| m.path_to(l).len());
 
@@ -1026,6 +1048,7 @@ impl SpatialProblem {
         let leg_of: BTreeMap<usize, &Leg> = legs.iter().map(|leg| (leg.closure, leg)).collect();
         for (k, lp) in m.loops.iter().enumerate() {
             let mut rows = Vec::new();
+            let vanished_before = b.vanished.len();
             let cannot = || LinkageError::CannotClose(lp.name.clone());
             if let Some(leg) = leg_of.get(&k) {
                 // |B − A|² = |u + d·w|² = |u|² + 2(u·w)d + d²
@@ -1051,6 +1074,7 @@ impl SpatialProblem {
                 b.distance(&d, length2, &lp.name, &mut rows).map_err(|_| cannot())?;
                 let names: Vec<&str> = leg.links.iter().map(|&x| m.links[x].name.as_str()).collect();
                 reductions.push(format!("{} (ball joints '{}' and '{}'): a distance constraint, no rotation", names.join(" + "), joint.name, lp.name));
+                reductions.extend(vanished_note(&lp.name, &b.vanished[vanished_before..]));
                 loop_rows.push((lp.name.clone(), rows));
                 continue;
             }
@@ -1152,6 +1176,7 @@ impl SpatialProblem {
                 (JointKind::Floating, _) => return Err(LinkageError::Unsupported(format!("loop '{}' is floating: it constrains nothing", lp.name))),
             }
             frames[k] = Some(LoopFrames { pred: fp, succ: fs, pred_at: pp, succ_at: ps, axis: a, across: across(&lp.axis) });
+            reductions.extend(vanished_note(&lp.name, &b.vanished[vanished_before..]));
             loop_rows.push((lp.name.clone(), rows));
         }
 
