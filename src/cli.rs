@@ -526,6 +526,11 @@ fn solve(args: SolveArgs) -> Result<()> {
     for r in problem.reductions() {
         writeln!(out, "  reduced: {r}").ok();
     }
+    if result.status == linkspace::Status::Complete && solutions.is_empty() {
+        // A complete run with no box is a proof, and says something about the input.
+        let why = if fixed.is_empty() { "the loops cannot close as written, within the joint limits" } else { "no assembly has the fixed values given" };
+        writeln!(out, "  no configuration: every box was proven empty, so {why}").ok();
+    }
     if stats.post_processing_cut_short {
         // Honest about what the limit cost: these boxes were reported without the deeper
         // search that drops near misses, so the count may include a few spurious ones.

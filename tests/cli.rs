@@ -79,6 +79,13 @@ fn bad_input_gives_one_clear_line() {
     // A rocker of length 30 can never reach the coupler: the loop cannot close.
     let long = variant("four_bar.urdf", "<successor link=\"rocker\"><origin xyz=\"3.5 0 0\"", "<successor link=\"rocker\"><origin xyz=\"30 0 0\"");
     assert_clear_error(&["solve", long.as_str()], "loop 'loop_coupler_rocker' cannot close");
+    // The spherical four-bar's rocker axis 46 nm off the common centre: its chains miss each
+    // other, which the error says with the gap (the spatial builder's closure check).
+    let gap = variant("spherical_four_bar.urdf", "<origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>\n    <axis xyz=\"0.8414709848078965", "<origin xyz=\"0 0 4.6e-8\" rpy=\"0 0 0\"/>\n    <axis xyz=\"0.8414709848078965");
+    assert_clear_error(&["solve", gap.as_str()], "cannot close as written: whatever the joint values, one of its closure rows");
+    // A complete run with no box says what that proves.
+    let (ok, out, _) = run(&["solve", &fb, "--fix", "crank_joint=0.5", "--fix", "rocker_joint=0.1"]);
+    assert!(ok && out.contains("0 solution boxes") && out.contains("no configuration: every box was proven empty, so no assembly has the fixed values given"), "{out}");
     // A joint turning about x makes the mechanism spatial.
     let tilted = variant("four_bar.urdf", "<axis xyz=\"0 0 1\"/>", "<axis xyz=\"1 0 0\"/>");
     assert_clear_error(&["solve", tilted.as_str(), "--model", "planar"], "not planar");

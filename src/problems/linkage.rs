@@ -68,6 +68,17 @@ pub enum LinkageError {
     /// The loop provably cannot close for any joint values.
     #[error("loop '{0}' cannot close: its links are too short or too long to meet (proven by interval propagation)")]
     CannotClose(String),
+    /// A closure row has no unknown left and its constant excludes 0: as written, the loop's
+    /// two chains miss each other whatever the joint values.
+    #[error("loop '{name}' cannot close as written: whatever the joint values, one of its closure rows (a coordinate difference of its two chains) is the constant [{lower:e}, {upper:e}], not 0")]
+    Gap {
+        /// The loop.
+        name: String,
+        /// The constant's enclosure.
+        lower: f64,
+        /// The constant's enclosure.
+        upper: f64,
+    },
     /// Fixed angles around a cycle contradict each other.
     #[error("loop '{0}': the fixed joint angles around it contradict each other")]
     Contradiction(String),

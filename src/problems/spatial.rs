@@ -478,14 +478,14 @@ impl Builder {
     }
 
     /// `a = b` row by row; `Err` when a row has no unknown and cannot hold.
-    fn equal(&mut self, a: &Vec3F, b: &Vec3F, rows: &mut Vec<usize>) -> Result<(), ()> {
+    fn equal(&mut self, a: &Vec3F, b: &Vec3F, rows: &mut Vec<usize>) -> Result<(), Interval> {
         for f in sub3(a, b) {
             self.zero(&f, rows)?;
         }
         Ok(())
     }
 
-    fn zero(&mut self, f: &Form, rows: &mut Vec<usize>) -> Result<(), ()> {
+    fn zero(&mut self, f: &Form, rows: &mut Vec<usize>) -> Result<(), Interval> {
         let f = f.merged();
         if f.terms.is_empty() {
             return self.constant_row(f.constant, rows);
@@ -497,7 +497,7 @@ impl Builder {
     }
 
     /// `|D|² − L² = 0` for `D = B − A`, with `|G·v|² = |v|²` per group (exact on solutions).
-    fn distance(&mut self, d: &Pos, length2: (Interval, Option<(Interval, VarId)>), tag: &str, rows: &mut Vec<usize>) -> Result<(), ()> {
+    fn distance(&mut self, d: &Pos, length2: (Interval, Option<(Interval, VarId)>), tag: &str, rows: &mut Vec<usize>) -> Result<(), Interval> {
         let groups = d.by_group();
         let rotated: Vec<(usize, Vec3F)> = groups.iter().map(|(&g, v)| (g, rot_apply(&self.groups[g], v))).collect();
         let mut lin = Form::constant(-length2.0);
@@ -582,7 +582,7 @@ impl Builder {
     /// solver refutes it (no configuration) or keeps it, and Newton cannot certify a closure
     /// that rounding cannot confirm (as the planar builder does); when judging closure alone,
     /// one that cannot hold is bad input.
-    fn constant_row(&mut self, k: Interval, rows: &mut Vec<usize>) -> Result<(), ()> {
+    fn constant_row(&mut self, k: Interval, rows: &mut Vec<usize>) -> Result<(), Interval> {
         if is_zero(k) {
             return Ok(());
         }
@@ -591,7 +591,7 @@ impl Builder {
             return Ok(());
         }
         if self.check_closure && !k.contains(0.0) {
-            return Err(());
+            return Err(k);
         }
         rows.push(self.system.equations.len());
         self.system.add(Equation::new(Vec::new(), k));
@@ -606,7 +606,7 @@ impl Builder {
 /// removed by the sign filter (`SignFilter`): a box where they have opposite signs holds no
 /// closure; a box is certified only where they provably share one. When the three rows are
 /// identities or constants (planar axes), they are written as they are.
-fn axes_agree(b: &mut Builder, u: &Vec3F, v: &Vec3F, w: Vector3<f64>, rows: &mut Vec<usize>, signs: &mut Vec<(Form, Form)>, pairs: &mut Vec<AxisPair>) -> Result<(), ()> {
+fn axes_agree(b: &mut Builder, u: &Vec3F, v: &Vec3F, w: Vector3<f64>, rows: &mut Vec<usize>, signs: &mut Vec<(Form, Form)>, pairs: &mut Vec<AxisPair>) -> Result<(), Interval> {
     let diff = sub3(u, v);
     if diff.iter().all(|f| f.terms.is_empty()) {
         for f in &diff {
@@ -1049,7 +1049,9 @@ impl SpatialProblem {
         for (k, lp) in m.loops.iter().enumerate() {
             let mut rows = Vec::new();
             let vanished_before = b.vanished.len();
-            let cannot = || LinkageError::CannotClose(lp.name.clone());
+            // A closure row left with no unknown, its constant excluding 0: the chains miss each
+            // other by that much whatever the joint values.
+            let cannot = |k: Interval| LinkageError::Gap { name: lp.name.clone(), lower: k.inf(), upper: k.sup() };
             if let Some(leg) = leg_of.get(&k) {
                 // |B − A|² = |u + d·w|² = |u|² + 2(u·w)d + d²
                 let joint = &m.joints[leg.joint];
@@ -1071,7 +1073,7 @@ impl SpatialProblem {
                     Some(Travel::Var(dv)) => (uu, Some((uw2, dv))),
                     None => (uu, None),
                 };
-                b.distance(&d, length2, &lp.name, &mut rows).map_err(|_| cannot())?;
+                b.distance(&d, length2, &lp.name, &mut rows).map_err(cannot)?;
                 let names: Vec<&str> = leg.links.iter().map(|&x| m.links[x].name.as_str()).collect();
                 reductions.push(format!("{} (ball joints '{}' and '{}'): a distance constraint, no rotation", names.join(" + "), joint.name, lp.name));
                 reductions.extend(vanished_note(&lp.name, &b.vanished[vanished_before..]));
@@ -1098,35 +1100,35 @@ impl SpatialProblem {
             let fixed_value = fixed_loop.get(&k).copied();
             let mut travel_var = None;
             match (lp.kind, lp.compound) {
-                (JointKind::Spherical, _) => b.equal(&pf, &sf, &mut rows).map_err(|_| cannot())?,
+                (JointKind::Spherical, _) => b.equal(&pf, &sf, &mut rows).map_err(cannot)?,
                 (JointKind::Fixed, _) => {
-                    b.equal(&pf, &sf, &mut rows).map_err(|_| cannot())?;
+                    b.equal(&pf, &sf, &mut rows).map_err(cannot)?;
                     for j in 0..2 {
-                        b.equal(&col(&rp, j), &col(&rs, j), &mut rows).map_err(|_| cannot())?;
+                        b.equal(&col(&rp, j), &col(&rs, j), &mut rows).map_err(cannot)?;
                     }
                 }
                 (JointKind::Revolute { .. }, Some(Compound::Universal { axis2 })) => {
-                    b.equal(&pf, &sf, &mut rows).map_err(|_| cannot())?;
+                    b.equal(&pf, &sf, &mut rows).map_err(cannot)?;
                     let a2 = rot_apply(&rs, &st::axis(&axis2));
                     let mut dot = Form::zero();
                     for i in 0..3 {
                         let p = b.times_form(&axis_p[i], &a2[i], (&format!("axis{i}_{}", lp.name), &format!("axis2{i}_{}", lp.name)));
                         dot.add(&p);
                     }
-                    b.zero(&dot, &mut rows).map_err(|_| cannot())?;
+                    b.zero(&dot, &mut rows).map_err(cannot)?;
                 }
                 (JointKind::Revolute { limits }, _) => {
-                    b.equal(&pf, &sf, &mut rows).map_err(|_| cannot())?;
+                    b.equal(&pf, &sf, &mut rows).map_err(cannot)?;
                     match fixed_value {
                         Some(v) => {
                             let turned = rot_times(&rp, &rot_about(&a, v));
                             for j in 0..2 {
-                                b.equal(&col(&turned, j), &col(&rs, j), &mut rows).map_err(|_| cannot())?;
+                                b.equal(&col(&turned, j), &col(&rs, j), &mut rows).map_err(cannot)?;
                             }
                         }
                         None => {
                             let w = rest[lp.predecessor] * (lp.predecessor_origin.rotation * lp.axis);
-                            axes_agree(&mut b, &axis_p, &axis_s, w, &mut rows, &mut signs, &mut axis_pairs).map_err(|_| cannot())?;
+                            axes_agree(&mut b, &axis_p, &axis_s, w, &mut rows, &mut signs, &mut axis_pairs).map_err(cannot)?;
                             if let (Some((lo, hi)), true) = (limits, respect_limits) {
                                 limit_list.push((readings.len(), stated(lo), stated(hi)));
                             }
@@ -1139,10 +1141,10 @@ impl SpatialProblem {
                     let cylindrical = compound == Some(Compound::Cylindrical);
                     if cylindrical {
                         let w = rest[lp.predecessor] * (lp.predecessor_origin.rotation * lp.axis);
-                        axes_agree(&mut b, &axis_p, &axis_s, w, &mut rows, &mut signs, &mut axis_pairs).map_err(|_| cannot())?;
+                        axes_agree(&mut b, &axis_p, &axis_s, w, &mut rows, &mut signs, &mut axis_pairs).map_err(cannot)?;
                     } else {
                         for j in 0..2 {
-                            b.equal(&col(&rp, j), &col(&rs, j), &mut rows).map_err(|_| cannot())?;
+                            b.equal(&col(&rp, j), &col(&rs, j), &mut rows).map_err(cannot)?;
                         }
                     }
                     // succ − pred = d·(axis in the world)
@@ -1162,7 +1164,7 @@ impl SpatialProblem {
                             travel_var = Some(d);
                         }
                     }
-                    b.equal(&target, &sf, &mut rows).map_err(|_| cannot())?;
+                    b.equal(&target, &sf, &mut rows).map_err(cannot)?;
                     if cylindrical {
                         readings.push((lp.name.clone(), Reading::LoopAngle(k)));
                         free_joints.push(lp.name.clone());
