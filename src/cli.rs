@@ -483,6 +483,11 @@ fn solve(args: SolveArgs) -> Result<()> {
     let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", args.urdf.display()))?;
     let named: Vec<TracedPoint> = traces.iter().zip(&args.trace).map(|((l, p), r)| (l.clone(), *p, r.clone())).collect();
     let job = app::SolveJob::build(&mechanism, args.model.into(), &fixed, &named, settings).with_context(|| format!("building {}", args.urdf.display()))?;
+    let (freedom, freedom_line) = job.freedom();
+    if freedom.at_point.is_some_and(|l| l.dof >= 2) {
+        // Said before the run: covering a continuum of two or more dimensions takes long.
+        eprintln!("linkspace: {}: {freedom_line}", mechanism.name);
+    }
     let show = std::io::stderr().is_terminal();
     let mut progress = |p: &Progress| {
         if show {
@@ -523,6 +528,7 @@ fn solve(args: SolveArgs) -> Result<()> {
     // boxes are not refuted at sigma (points of a curve, or roots not yet proven).
     let problem = job.problem();
     writeln!(out, "  model: {} ({})", problem.model().name(), problem.model_reason()).ok();
+    writeln!(out, "  freedom: {freedom_line}").ok();
     for r in problem.reductions() {
         writeln!(out, "  reduced: {r}").ok();
     }

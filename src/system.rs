@@ -11,8 +11,10 @@
 use crate::interval::{point, Interval, IntervalBox};
 use thiserror::Error;
 
+mod freedom;
 pub(crate) mod multilinear;
 
+pub use freedom::{freedom, Freedom, LocalFreedom};
 pub use multilinear::Poly;
 
 /// Index of a variable in its system (and of its component in an `IntervalBox`).

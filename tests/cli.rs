@@ -83,6 +83,13 @@ fn bad_input_gives_one_clear_line() {
     // other, which the error says with the gap (the spatial builder's closure check).
     let gap = variant("spherical_four_bar.urdf", "<origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>\n    <axis xyz=\"0.8414709848078965", "<origin xyz=\"0 0 4.6e-8\" rpy=\"0 0 0\"/>\n    <axis xyz=\"0.8414709848078965");
     assert_clear_error(&["solve", gap.as_str()], "cannot close as written: whatever the joint values, one of its closure rows");
+    // The model's freedoms, measured before the run: a 3-dimensional continuum is announced at
+    // once on stderr (the run then covers it within its limits); isolated assemblies say so.
+    let (_, out, err) = run(&["solve", &fixture("delta.urdf"), "--timeout", "0.5"]);
+    assert!(err.contains("delta: 3 degrees of freedom at a configuration Newton found") && err.contains("fix 3 joints"), "{err}");
+    assert!(out.contains("  freedom: 3 degrees of freedom"), "{out}");
+    let (_, out, _) = run(&["solve", &fb, "--fix", "crank_joint=0.5"]);
+    assert!(out.contains("  freedom: 0 degrees of freedom (4 unknowns, 4 rows;"), "{out}");
     // A complete run with no box says what that proves.
     let (ok, out, _) = run(&["solve", &fb, "--fix", "crank_joint=0.5", "--fix", "rocker_joint=0.1"]);
     assert!(ok && out.contains("0 solution boxes") && out.contains("no configuration: every box was proven empty, so no assembly has the fixed values given"), "{out}");

@@ -350,6 +350,13 @@ impl SolveJob {
         Ok(Self::new(problem, settings)?)
     }
 
+    /// The model's degrees of freedom, counted and measured at a configuration Newton finds
+    /// (`system::freedom`), with its one-line description: what the run will cover.
+    pub fn freedom(&self) -> (crate::system::Freedom, String) {
+        let f = crate::system::freedom(self.problem.system(), 12, 1);
+        (f, describe_freedom(&f, self.settings.sigma))
+    }
+
     /// The built problem.
     pub fn problem(&self) -> &Linkage {
         &self.problem
@@ -425,6 +432,28 @@ struct LinkageRun {
 impl PreparedRun for LinkageRun {
     fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> BoxSetResult {
         BoxSetResult { analysis: self.analysis, ..self.job.run(cancel, progress) }
+    }
+}
+
+/// `freedom`'s line: the degrees of freedom of the model and what they mean for the run.
+pub fn describe_freedom(f: &crate::system::Freedom, sigma: f64) -> String {
+    let counted = format!("{} unknowns, {} rows", f.unknowns, f.rows);
+    match f.at_point {
+        Some(l) if l.dof == 0 => format!("0 degrees of freedom ({counted}; the Jacobian has full rank at a configuration Newton found): isolated assemblies"),
+        Some(l) if l.dof == 1 && f.counted() <= 0 => format!(
+            "1 degree of freedom at a configuration Newton found ({counted}, rank {}): a curve where the count expects isolated assemblies (an overconstrained linkage that moves, an architecturally singular one, or a singular configuration); boxes on it are not certified",
+            l.rank
+        ),
+        Some(l) if l.dof == 1 => format!("1 degree of freedom ({counted}, rank {} at a configuration Newton found): a curve of configurations", l.rank),
+        Some(l) => format!(
+            "{} degrees of freedom at a configuration Newton found ({counted}, rank {}): a {}-dimensional continuum, whose cover at sigma {sigma:e} takes on the order of {:.0e} boxes; fix {} joints (--fix) for isolated assemblies, or raise --sigma",
+            l.dof,
+            l.rank,
+            l.dof,
+            sigma.powi(-(l.dof.min(30) as i32)),
+            l.dof
+        ),
+        None => format!("{} by count ({counted}); no configuration found by Newton to measure it", f.counted()),
     }
 }
 

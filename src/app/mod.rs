@@ -22,7 +22,7 @@ pub(crate) mod sweep;
 // One job per question, each with its request and its typed result.
 pub use arm::{collisions, inverse_kinematics, singularities, Arm, ArmCollisions, ArmIk, ArmSingularities, IkPoint, Manip3rAnalysis, SingularitiesRequest, CURVE_DEPTH};
 pub use distances::{DistancesJob, DistancesRequest};
-pub use linkage::{LinkageAnalysis, SolveJob};
+pub use linkage::{describe_freedom, LinkageAnalysis, SolveJob};
 pub use loops::{all_kinds, analyse_image, image_points, Actuation, ImageAnalysisError, ImageSearch, SingularSets};
 pub use platform::PlatformAnalysis;
 pub use six::{arm_cuspidality, arm_cuspidality_of, chain6, check_path, inverse_kinematics6, ArmCuspidality, ArmIk6, ArmPathCheck, ArmVerdictLine};

@@ -101,6 +101,14 @@ impl Linkage {
         }
     }
 
+    /// The built system.
+    pub fn system(&self) -> &crate::system::EquationSystem {
+        match self {
+            Self::Planar(p) => &p.system,
+            Self::Spatial(p, _) => &p.system,
+        }
+    }
+
     /// The solver for the built system (joint-limit filters included).
     pub fn solver(&self, settings: SolverSettings) -> Result<Solver<'_>, SolveError> {
         match self {
