@@ -603,12 +603,15 @@ pub(crate) fn seconds_arg(t: Option<f64>) -> Result<Option<Duration>> {
 fn singularities(args: SingularitiesArgs) -> Result<()> {
     manip3r::check_precision(args.precision)?;
     let limits = args.limits.limits(SINGULARITIES_MAX_BOXES)?;
-    let arm = load_arm(&args.urdf, args.uncertainty, &args.chain)?;
-    let cancel = AtomicBool::new(false);
-    let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };
     if args.kind == SingularitiesKind::Cusps && args.nodes {
         bail!("--kind cusps searches no nodes: drop --nodes, or give --kind nodes");
     }
+    // Read once: the whole-arm section reads the same mechanism.
+    let options = args.chain.options()?;
+    let mechanism = load_mechanism(&args.urdf)?;
+    let arm = Arm::load(&mechanism, &options, args.uncertainty).with_context(|| format!("loading {}", args.urdf.display()))?;
+    let cancel = AtomicBool::new(false);
+    let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };
     let verdict = args.kind == SingularitiesKind::All;
     let nodes = args.nodes || args.kind == SingularitiesKind::Nodes;
     let request = app::SingularitiesRequest { precision: args.precision, nodes, search_anyway: args.search_anyway, verdict };
@@ -618,7 +621,7 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     let mut out = std::io::stdout().lock();
     let scope = &prepared.choice.scope;
     // Searched before printing, so that the sub-chain's verdict can point to the arm's.
-    let arm_section = if verdict { whole_arm(&args, &arm, &control)? } else { None };
+    let arm_section = if verdict { whole_arm(&args, &mechanism, &options, &arm, &control)? } else { None };
     if let Some(v) = &found.verdict {
         writeln!(out, "{}", v.headline(scope)).ok();
     }
@@ -711,18 +714,16 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
 
 /// The whole-arm verdict of a six-joint arm whose 3R verdict is a sub-chain's (or whose wrist
 /// is spherical), as its report section; `None` for other arms or `--arm-budget 0`.
-fn whole_arm(args: &SingularitiesArgs, arm: &Arm, control: &Control) -> Result<Option<report::six::ArmCuspidalityReport>> {
+fn whole_arm(args: &SingularitiesArgs, mechanism: &linkspace::Mechanism, options: &manip3r::LoadOptions, arm: &Arm, control: &Control) -> Result<Option<report::six::ArmCuspidalityReport>> {
     if !(args.arm_budget.is_finite() && args.arm_budget >= 0.0) {
         bail!("--arm-budget must be a number of seconds >= 0, got {}", args.arm_budget);
     }
     if args.arm_budget == 0.0 {
         return Ok(None);
     }
-    let options = args.chain.options()?;
-    let mechanism = load_mechanism(&args.urdf)?;
     // Within the run's --timeout too.
     let budget = control.limits.timeout.map_or(Duration::from_secs_f64(args.arm_budget), |t| t.min(Duration::from_secs_f64(args.arm_budget)));
-    let found = app::arm_cuspidality(&mechanism, arm, &options, budget, control);
+    let found = app::arm_cuspidality(mechanism, arm, options, budget, control);
     Ok(found.map(|(chain, c)| report::six::ArmCuspidalityReport::of(&chain, &c)))
 }
 
