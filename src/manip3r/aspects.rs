@@ -313,3 +313,29 @@ pub fn max_ik_solutions(chain: &Chain3R, bound: u32, near: &[[f64; 2]], control:
     }
     (best, false)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::urdf;
+    use crate::search::Limits;
+
+    fn chain(text: &str) -> Chain3R {
+        Chain3R::from_mechanism(&urdf::parse(text).expect("bundled"), 0.0).expect("3R")
+    }
+
+    /// Every grid gives the same count (the number of aspects does not depend on the cover),
+    /// and a budget too small for the quadtree stops it with that reason.
+    #[test]
+    fn every_grid_counts_the_same_aspects_and_a_spent_budget_is_named() {
+        let control = Control::with_limits(Limits::default());
+        for (text, aspects) in [(include_str!("../../urdf/orthogonal_3r_e.urdf"), 2), (include_str!("../../urdf/orthogonal_3r_f.urdf"), 4)] {
+            let c = chain(text);
+            for (depth, shift) in GRIDS {
+                assert_eq!(count_at(&c, depth, shift, &control), Ok(aspects), "depth {depth}");
+            }
+            let tight = Control::with_limits(Limits { max_cells: 3, ..Limits::default() });
+            assert_eq!(count(&c, &tight), Err(AspectsUndecided::CoverStopped(1024)));
+        }
+    }
+}
