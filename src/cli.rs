@@ -183,6 +183,18 @@ struct CollisionsArgs {
     json: Option<PathBuf>,
 }
 
+#[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
+enum SingularitiesKind {
+    /// Cusps and internal-motion lines, the cuspidality verdict (aspects, IK solutions; the
+    /// whole arm's for a six-joint arm), and nodes with --nodes.
+    All,
+    /// The cusps and internal-motion lines alone (no verdict, no nodes).
+    Cusps,
+    /// The cusps, internal-motion lines and nodes (no verdict): the node search needs the
+    /// cusps.
+    Nodes,
+}
+
 #[derive(clap::Args)]
 struct SingularitiesArgs {
     /// URDF file of an arm: its 3R positioning structure is analysed (see --base, --tip, --tip-point, --lock).
@@ -192,6 +204,9 @@ struct SingularitiesArgs {
     /// Largest width (radians) of reported and undecided boxes, in (0, 1).
     #[arg(long, default_value_t = 1e-4, allow_hyphen_values = true)]
     precision: f64,
+    /// What to answer.
+    #[arg(long, value_enum, default_value_t = SingularitiesKind::All)]
+    kind: SingularitiesKind,
     /// Also search nodes (pairs of singular points with one image).
     #[arg(long)]
     nodes: bool,
@@ -599,19 +614,29 @@ pub(crate) fn seconds_arg(t: Option<f64>) -> Result<Option<Duration>> {
 fn singularities(args: SingularitiesArgs) -> Result<()> {
     manip3r::check_precision(args.precision)?;
     let limits = args.limits.limits(SINGULARITIES_MAX_BOXES)?;
-    let arm = load_arm(&args.urdf, args.uncertainty, &args.chain)?;
+    if args.kind == SingularitiesKind::Cusps && args.nodes {
+        bail!("--kind cusps searches no nodes: drop --nodes, or give --kind nodes");
+    }
+    // Read once: the whole-arm section reads the same mechanism.
+    let options = args.chain.options()?;
+    let mechanism = load_mechanism(&args.urdf)?;
+    let arm = Arm::load(&mechanism, &options, args.uncertainty).with_context(|| format!("loading {}", args.urdf.display()))?;
     let cancel = AtomicBool::new(false);
     let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };
-    let request = app::SingularitiesRequest { precision: args.precision, nodes: args.nodes, search_anyway: args.search_anyway };
+    let verdict = args.kind == SingularitiesKind::All;
+    let nodes = args.nodes || args.kind == SingularitiesKind::Nodes;
+    let request = app::SingularitiesRequest { precision: args.precision, nodes, search_anyway: args.search_anyway, verdict };
     let found = app::singularities(&arm, &request, &control, &mut |_| {})?;
     let report = report::manip3r::SingularityReport::of(&arm, &found);
-    let (prepared, verdict, effect) = (&arm.prepared, &found.verdict, &found.limit_effect);
+    let (prepared, effect) = (&arm.prepared, &found.limit_effect);
     let mut out = std::io::stdout().lock();
     let scope = &prepared.choice.scope;
     // Searched before printing, so that the sub-chain's verdict can point to the arm's.
-    let arm_section = whole_arm(&args, &arm, &control)?;
-    writeln!(out, "{}", verdict.headline(scope)).ok();
-    if let Some(open) = scope.not_answered.as_ref().filter(|_| !scope.stands_for_arm) {
+    let arm_section = if verdict { whole_arm(&args, &mechanism, &options, &arm, &control)? } else { None };
+    if let Some(v) = &found.verdict {
+        writeln!(out, "{}", v.headline(scope)).ok();
+    }
+    if let Some(open) = scope.not_answered.as_ref().filter(|_| verdict && !scope.stands_for_arm) {
         match &arm_section {
             Some(a) => writeln!(out, "  not the arm's verdict: the whole arm's is the line `arm {}` below", a.arm).ok(),
             None => writeln!(out, "  {open}").ok(),
@@ -700,18 +725,16 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
 
 /// The whole-arm verdict of a six-joint arm whose 3R verdict is a sub-chain's (or whose wrist
 /// is spherical), as its report section; `None` for other arms or `--arm-budget 0`.
-fn whole_arm(args: &SingularitiesArgs, arm: &Arm, control: &Control) -> Result<Option<report::six::ArmCuspidalityReport>> {
+fn whole_arm(args: &SingularitiesArgs, mechanism: &linkspace::Mechanism, options: &manip3r::LoadOptions, arm: &Arm, control: &Control) -> Result<Option<report::six::ArmCuspidalityReport>> {
     if !(args.arm_budget.is_finite() && args.arm_budget >= 0.0) {
         bail!("--arm-budget must be a number of seconds >= 0, got {}", args.arm_budget);
     }
     if args.arm_budget == 0.0 {
         return Ok(None);
     }
-    let options = args.chain.options()?;
-    let mechanism = load_mechanism(&args.urdf)?;
     // Within the run's --timeout too.
     let budget = control.limits.timeout.map_or(Duration::from_secs_f64(args.arm_budget), |t| t.min(Duration::from_secs_f64(args.arm_budget)));
-    let found = app::arm_cuspidality(&mechanism, arm, &options, budget, control);
+    let found = app::arm_cuspidality(mechanism, arm, options, budget, control);
     Ok(found.map(|(chain, c)| report::six::ArmCuspidalityReport::of(&chain, &c)))
 }
 

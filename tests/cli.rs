@@ -256,6 +256,38 @@ fn singularities_json_follows_the_documented_schema() {
     assert!(r["nodes"].is_null());
 }
 
+/// `singularities --kind cusps` gives the cusps and internal-motion lines of the full run,
+/// without the verdict (no `verdict` in the JSON, no verdict line); `--kind nodes` adds the
+/// nodes; `--kind cusps --nodes` is refused in one line.
+#[test]
+fn singularities_kind_runs_the_searches_without_the_verdict() {
+    let path = std::env::temp_dir().join(format!("linkspace-3r-kind-{}.json", std::process::id()));
+    let json = |args: &[&str]| -> (String, serde_json::Value) {
+        let mut all = vec!["singularities", args[0], "--json", path.to_str().expect("utf-8")];
+        all.extend_from_slice(&args[1..]);
+        let (ok, out, err) = run(&all);
+        assert!(ok, "{err}");
+        let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).expect("json")).expect("valid json");
+        let _ = std::fs::remove_file(&path);
+        (out, r)
+    };
+    for robot in ["orthogonal_3r_e.urdf", "orthogonal_3r_f.urdf"] {
+        let f = fixture(robot);
+        let (_, full) = json(&[&f]);
+        let (out, cusps) = json(&[&f, "--kind", "cusps"]);
+        assert!(!out.contains("verdict") && out.starts_with("orthogonal_3r_"), "{out}");
+        assert!(cusps.get("verdict").is_none() && full["verdict"].is_object());
+        for key in ["cusps", "internal_motions", "undecided_total", "status"] {
+            assert_eq!(cusps[key], full[key], "{robot}: {key}");
+        }
+        assert!(cusps["nodes"].is_null());
+        let (_, nodes) = json(&[&f, "--kind", "nodes"]);
+        assert!(nodes.get("verdict").is_none() && nodes["nodes"].is_array());
+        assert_eq!(nodes["cusps"], full["cusps"]);
+    }
+    assert_clear_error(&["singularities", &fixture("orthogonal_3r_e.urdf"), "--kind", "cusps", "--nodes"], "--kind cusps searches no nodes");
+}
+
 /// `ik6` on the CRX fixture: a reachable pose is solved complete with twelve unique boxes, in
 /// the joints' own ranges (joint 3 beyond π); a pose of five numbers is refused in one line.
 #[test]

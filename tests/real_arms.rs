@@ -660,11 +660,12 @@ fn an_internal_motion_line_is_reported_by_the_verdict_and_by_ik() {
     use linkspace::app::{self, Arm, IkPoint, SingularitiesRequest};
     let m = urdf::parse(&text("staubli_tx90.urdf")).expect("parses");
     let a = Arm::load(&m, &LoadOptions { ignore_limits: true, ..Default::default() }, 0.0).expect("6R with a spherical wrist");
-    let request = SingularitiesRequest { precision: 1e-4, nodes: false, search_anyway: false };
+    let request = SingularitiesRequest { precision: 1e-4, nodes: false, search_anyway: false, verdict: true };
     let s = app::singularities(&a, &request, &bounded(200_000), &mut |_| {}).expect("runs");
     assert_eq!(manip3r::line_count(&s.run.cusps.bands), 1, "the folded line at θ₃ = ±π is one line");
-    assert_eq!(s.verdict.max_ik_solutions, Some(4));
-    assert!(s.verdict.reason.contains("internal-motion line"), "{}", s.verdict.reason);
+    let verdict = s.verdict.expect("asked");
+    assert_eq!(verdict.max_ik_solutions, Some(4));
+    assert!(verdict.reason.contains("internal-motion line"), "{}", verdict.reason);
     let (radius, z) = (0.0707106781186548, 0.0);
     let found = app::inverse_kinematics(&a, IkPoint::HalfSection { radius, z }, 1e-8, &bounded(200_000), &mut |_| {}).expect("valid query");
     let sol = &found.solutions;
@@ -702,17 +703,17 @@ fn fixture(name: &str) -> String {
 fn the_snapping_tolerance_can_cover_quarter_turns_written_with_three_decimals() {
     use linkspace::app::{self, Arm, SingularitiesRequest};
     let m = urdf::parse(&fixture("doosan_style_6r.urdf")).expect("parses");
-    let request = SingularitiesRequest { precision: 1e-4, nodes: false, search_anyway: false };
+    let request = SingularitiesRequest { precision: 1e-4, nodes: false, search_anyway: false, verdict: true };
     let load = |snap_tolerance: f64| Arm::load(&m, &LoadOptions { snap_tolerance, ..Default::default() }, 0.0).expect("a 6R arm");
     let default = load(linkspace::model::rounding::ANGLE_TOLERANCE);
     assert!(default.prepared.snaps.is_empty(), "{:?}", default.prepared.snaps);
-    let s = app::singularities(&default, &request, &bounded(2_000_000), &mut |_| {}).expect("runs");
-    assert_eq!((s.verdict.cuspidal, s.verdict.certified), (None, false), "{}", s.verdict.reason);
+    let s = app::singularities(&default, &request, &bounded(2_000_000), &mut |_| {}).expect("runs").verdict.expect("asked");
+    assert_eq!((s.cuspidal, s.certified), (None, false), "{}", s.reason);
     let raised = load(3e-4);
     assert_eq!(raised.prepared.snaps.iter().filter(|s| s.what == "rpy").count(), 5, "{:?}", raised.prepared.snaps);
     assert!(raised.prepared.choice.reason.contains("spherical wrist"), "{}", raised.prepared.choice.reason);
-    let s = app::singularities(&raised, &request, &bounded(2_000_000), &mut |_| {}).expect("runs");
-    assert_eq!((s.verdict.cuspidal, s.verdict.certified, s.verdict.aspects), (Some(false), true, Some(4)), "{}", s.verdict.reason);
+    let s = app::singularities(&raised, &request, &bounded(2_000_000), &mut |_| {}).expect("runs").verdict.expect("asked");
+    assert_eq!((s.cuspidal, s.certified, s.aspects), (Some(false), true, Some(4)), "{}", s.reason);
     let written = load(0.0);
     assert!(written.prepared.exact_geometry && written.prepared.snaps.is_empty());
     let refused = Arm::load(&m, &LoadOptions { snap_tolerance: 0.5, ..Default::default() }, 0.0).err().map(|e| e.to_string()).unwrap_or_default();
@@ -764,22 +765,22 @@ fn a_degenerate_joint_origin_is_named_by_the_files_joint_and_link() {
 #[test]
 fn an_undecided_verdict_names_its_near_degeneracy_and_the_option_that_settles_it() {
     use linkspace::app::{self, Arm, SingularitiesRequest};
-    let request = SingularitiesRequest { precision: 1e-4, nodes: false, search_anyway: false };
+    let request = SingularitiesRequest { precision: 1e-4, nodes: false, search_anyway: false, verdict: true };
     let doosan = Arm::load(&urdf::parse(&fixture("doosan_style_6r.urdf")).expect("parses"), &LoadOptions::default(), 0.0).expect("a 6R arm");
-    let v = app::singularities(&doosan, &request, &bounded(2_000_000), &mut |_| {}).expect("runs").verdict;
+    let v = app::singularities(&doosan, &request, &bounded(2_000_000), &mut |_| {}).expect("runs").verdict.expect("asked");
     assert_eq!(v.cuspidal, None);
     for needle in ["axes of joint1 and joint2 within 2.0e-4 rad of perpendicular", "axes of joint1 and joint2 within 7.0e-6 m of meeting", "a nearly spherical wrist (axes of joint4, joint5, joint6 miss one point by", "written up to 2.0e-4 rad off a quarter turn", "--snap-tolerance 3e-4 would snap them"] {
         assert!(v.reason.contains(needle), "{needle}: {}", v.reason);
     }
     let spec = ChainSpec { locks: vec![("joint_3".into(), 0.5)], ..Default::default() };
     let iiwa = Arm::load(&urdf::parse(&text("iiwa14.urdf")).expect("parses"), &LoadOptions { spec, ..Default::default() }, 0.0).expect("a 6R arm");
-    let v = app::singularities(&iiwa, &request, &bounded(2_000_000), &mut |_| {}).expect("runs").verdict;
+    let v = app::singularities(&iiwa, &request, &bounded(2_000_000), &mut |_| {}).expect("runs").verdict.expect("asked");
     assert_eq!(v.cuspidal, None);
     assert!(v.reason.contains("no near-degenerate geometry") && !v.reason.contains("--snap-tolerance"), "{}", v.reason);
     assert!(v.reason.contains("crossing singular branches") || v.reason.contains("--precision 1e-5"), "{}", v.reason);
     // A decided verdict is unchanged.
     let puma = Arm::load(&urdf::parse(&text("puma560.urdf")).expect("parses"), &LoadOptions::default(), 0.0).expect("puma");
-    let v = app::singularities(&puma, &request, &bounded(2_000_000), &mut |_| {}).expect("runs").verdict;
+    let v = app::singularities(&puma, &request, &bounded(2_000_000), &mut |_| {}).expect("runs").verdict.expect("asked");
     assert!(v.certified && !v.reason.contains("near-degenerate"), "{}", v.reason);
 }
 

@@ -72,6 +72,9 @@ pub struct SingularitiesRequest {
     /// Run the interval searches even where the verdict is structural (axes 2 and 3 parallel),
     /// where they cannot complete.
     pub search_anyway: bool,
+    /// Decide the cuspidality verdict (with its aspects and IK counts) after the searches;
+    /// false for the searches alone.
+    pub verdict: bool,
 }
 
 /// Cusps, nodes, internal motions and the verdict of one arm.
@@ -81,8 +84,8 @@ pub struct ArmSingularities {
     pub request: SingularitiesRequest,
     /// The searches' results inside the joint limits (the verdict reads the full torus).
     pub run: Singularities,
-    /// The first answer: cuspidal or not, with its argument.
-    pub verdict: Verdict,
+    /// The first answer: cuspidal or not, with its argument (`None` when not asked).
+    pub verdict: Option<Verdict>,
     /// What the joint limits removed.
     pub limit_effect: LimitEffect,
     /// Axes 2 and 3 parallel, nominal geometry, searches not forced: the cusp answer comes from
@@ -114,12 +117,15 @@ pub fn singularities(arm: &Arm, request: &SingularitiesRequest, control: &Contro
         manip3r::singularities(chain, request.precision, nodes_searched, control, progress)?
     };
     // The verdict reads the full-torus run; the limits then filter what is listed.
-    let mut verdict = verdict::decide(mechanism, chain, &run, &arm.prepared.limits, &control.remaining_since(start));
-    // An undecided verdict says what blocks it (not for uncertain lengths, nor for certified cusps
-    // outside the limits: those reasons say what to do).
-    if verdict.cuspidal.is_none() && chain.uncertainty == 0.0 && !run.cusps.cusps.iter().any(|c| c.unique) {
-        verdict.reason.push_str(&verdict::blockers(&arm.prepared, chain, request.precision, &control.remaining_since(start)));
-    }
+    let verdict = request.verdict.then(|| {
+        let mut verdict = verdict::decide(mechanism, chain, &run, &arm.prepared.limits, &control.remaining_since(start));
+        // An undecided verdict says what blocks it (not for uncertain lengths, nor for certified
+        // cusps outside the limits: those reasons say what to do).
+        if verdict.cuspidal.is_none() && chain.uncertainty == 0.0 && !run.cusps.cusps.iter().any(|c| c.unique) {
+            verdict.reason.push_str(&verdict::blockers(&arm.prepared, chain, request.precision, &control.remaining_since(start)));
+        }
+        verdict
+    });
     let limit_effect = arm.prepared.limits.apply(&mut run);
     let mut explained = None;
     let mut not_searched = None;
@@ -393,7 +399,7 @@ impl PreparedRun<SingularityResult> for SingularityRun {
         let chain = &arm.chain;
         let limits = Limits { max_cells: q.max_boxes, timeout: q.timeout, ..Limits::default() };
         let control = Control { limits, threads: q.threads.max(1), cancel };
-        let request = SingularitiesRequest { precision: q.precision, nodes: q.nodes, search_anyway: false };
+        let request = SingularitiesRequest { precision: q.precision, nodes: q.nodes, search_anyway: false, verdict: true };
         let found_at = Instant::now();
         let found = singularities(arm, &request, &control, progress).expect("invariant: precision validated when prepared");
         let (cusps, node_search) = (&found.run.cusps, &found.run.nodes);
@@ -447,9 +453,10 @@ impl PreparedRun<SingularityResult> for SingularityRun {
         );
         // The joint limits' effect is named only when the file has limits.
         let scope = &arm.prepared.choice.scope;
+        let verdict = found.verdict.as_ref().expect("invariant: the node asks for the verdict");
         let headline = match &scope.not_answered {
-            Some(open) if !scope.stands_for_arm => format!("{}; {open}", found.verdict.headline(scope)),
-            _ => found.verdict.headline(scope),
+            Some(open) if !scope.stands_for_arm => format!("{}; {open}", verdict.headline(scope)),
+            _ => verdict.headline(scope),
         };
         let summary = if arm.prepared.limits.restrict() {
             format!("{headline}; {}; {}", summary, found.limit_effect.text)
@@ -470,7 +477,7 @@ impl PreparedRun<SingularityResult> for SingularityRun {
             seconds: found.seconds + self.cover.seconds,
             summary,
             loops: None,
-            verdict: Some(found.verdict.scoped(scope)),
+            verdict: Some(verdict.scoped(scope)),
             branches: arm.branches.clone(),
             arm_cuspidality,
         }

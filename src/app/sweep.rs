@@ -51,7 +51,7 @@ pub fn sweep_task(plan: &Plan, base: &Mechanism, task: &Task, limits: &Limits, c
                 Ok(a) => a,
                 Err(e) => return failed(e.to_string()),
             };
-            let request = SingularitiesRequest { precision, nodes: false, search_anyway: false };
+            let request = SingularitiesRequest { precision, nodes: false, search_anyway: false, verdict: true };
             let found = match singularities(&arm, &request, &control, &mut |_| {}) {
                 Ok(f) => f,
                 Err(e) => return failed(e.to_string()),
@@ -59,7 +59,8 @@ pub fn sweep_task(plan: &Plan, base: &Mechanism, task: &Task, limits: &Limits, c
             let cusps = &found.run.cusps;
             let proven = cusps.cusps.iter().filter(|c| c.unique).count() as u64;
             let undecided = (cusps.cusps.len() as u64 - proven) + cusps.undecided.len() as u64;
-            let verdict = match found.verdict.cuspidal {
+            let cuspidal = found.verdict.as_ref().and_then(|v| v.cuspidal);
+            let verdict = match cuspidal {
                 Some(true) => "cuspidal",
                 Some(false) => "non_cuspidal",
                 None => "undecided",
@@ -68,7 +69,7 @@ pub fn sweep_task(plan: &Plan, base: &Mechanism, task: &Task, limits: &Limits, c
             // verdict past the deadline was cut short, whatever the searches' status.
             let out_of_time = limits.timeout.is_some_and(|t| start.elapsed() >= t);
             let status = match found.run.status {
-                Status::Complete if found.verdict.cuspidal.is_none() && out_of_time => Status::Incomplete(Limit::Time),
+                Status::Complete if cuspidal.is_none() && out_of_time => Status::Incomplete(Limit::Time),
                 s => s,
             };
             result(status, Some(verdict.into()), Some(proven), proven, undecided)

@@ -1,21 +1,25 @@
 //! Aspects (connected components of det Df ≠ 0 on the torus) and the largest number of
 //! inverse-kinematics solutions, for arms outside the parallel-axes class of `verdict`.
 //!
-//! **Aspects**, from the singular-curve cover (`curves::Cover`): every cell of the grid is
-//! regular (det Df ≠ 0 on the closed cell, one *piece* of one sign), or **monotone**: for some
-//! direction k, ∂det/∂θₖ has one strict sign on the closed cell, and on each of its two edges
-//! θₖ = const det has one sign or is strictly monotone along the edge. Along each segment in
-//! direction k det is then strictly monotone (say increasing), so {det < 0} in the cell is the
-//! union of the segments' lower parts, attached to the part of the lower edge where det < 0,
-//! which is one interval: one connected piece, or none; likewise {det > 0} with the upper edge.
-//! Pieces of one sign in two cells sharing an edge E belong to one aspect exactly when det has
-//! that sign somewhere on E, and the signs on E are known exactly: E lies on a regular cell (its
-//! sign), or det over E excludes zero, or det is strictly monotone along E (the signs of its
-//! two end points). A path within an aspect crosses from cell to cell through such edge points (at a
-//! vertex, through the edges next to it), so the components of the piece graph are exactly the
-//! aspects. A cell that is neither regular nor an arc cell, or an end point whose sign is not
-//! decided, stops the argument (then the grid is refined once, and after that the count is
-//! `None` with the reason).
+//! **Aspects**, from a cover of the singular curves by the leaves of a quadtree on a grid
+//! of (θ₂, θ₃): every leaf is regular (det Df ≠ 0 on the closed leaf, one *piece* of one sign),
+//! or **monotone**: for some direction k, ∂det/∂θₖ has one strict sign on the closed leaf, and
+//! on each of its two edges θₖ = const det has one sign or is strictly monotone along the edge.
+//! Along each segment in direction k det is then strictly monotone (say increasing), so
+//! {det < 0} in the leaf is the union of the segments' lower parts, attached to the part of the
+//! lower edge where det < 0, which is one interval: one connected piece, or none; likewise
+//! {det > 0} with the upper edge. The argument holds for a leaf of any size, so a leaf is split
+//! only while it is neither regular nor monotone (down to one grid cell): the curves are
+//! covered by few large leaves where they are straight enough.
+//! Pieces of one sign in two leaves sharing a stretch E of edge (the smaller leaf's side: the
+//! leaves are dyadic squares) belong to one aspect exactly when det has that sign somewhere on
+//! E, and the signs on E are known exactly: E lies on a regular leaf (its sign), or det over E
+//! excludes zero, or det is strictly monotone along E (the signs of its two end points), or
+//! these hold on each half of E (down to one grid cell's edge). A path within an aspect crosses
+//! from leaf to leaf through such edge points (at a vertex, through the edges next to it), so
+//! the components of the piece graph are exactly the aspects. A grid cell that is neither
+//! regular nor monotone, or an edge whose signs are not decided, stops the argument (then a
+//! finer grid is tried, and after that the count is `None` with the reason).
 //!
 //! **Largest number of IK solutions.** A 3R has at most 4 solutions at a point not on the
 //! image of an internal-motion line (its inverse kinematics reduce to a quartic), and a
@@ -23,24 +27,25 @@
 //! complete with k solution boxes, each proven to hold exactly one, and nothing undecided, has
 //! exactly k; so when a sample reaches the upper bound, the maximum is proven.
 
-use super::curves::Cover;
-use super::cusps::evaluate_without_tangency as evaluate;
-use crate::search::Control;
+use super::curves::{det_over, Lines};
+use super::drive::{drive, no_progress};
+use crate::search::{Control, NoDiscard, Prune, Step};
 use super::ik;
 use super::Chain3R;
 use crate::interval::{interval, point, strict_sign};
 use inari::Interval;
+use smallvec::smallvec;
 
-/// Cover depths and grid shifts tried, in order. The shifts keep the grid lines off θ = 0, ±π,
+/// Grid depths and shifts tried, in order. The shifts keep the grid lines off θ = 0, ±π,
 /// where curves of arms symmetric in θ₂ are tangent to them (see `Cover::shifted`).
 const GRIDS: [(u32, f64); 3] = [(8, 0.0123456789), (9, 0.0071234567), (10, 0.0031234567)];
 
-/// What is known of one grid cell.
+/// What is known of one leaf.
 #[derive(Clone, Copy, Debug)]
 enum Cell {
-    /// det ≠ 0 on the closed cell, of this sign.
+    /// det ≠ 0 on the closed leaf, of this sign.
     Regular(bool),
-    /// A monotone cell; which signs occur in it (each as one piece).
+    /// A monotone leaf; which signs occur in it (each as one piece).
     Arc { signs: [bool; 2] },
 }
 
@@ -60,9 +65,6 @@ pub enum AspectsUndecided {
     /// A limit stopped the cover of the singular curves.
     #[error("the singular-curve cover ({0} x {0}) was stopped by a limit")]
     CoverStopped(usize),
-    /// The sign of det at a regular cell was not decided.
-    #[error("a regular cell's sign is not decided")]
-    RegularSign,
     /// A crossed cell is neither regular nor monotone with edges of known signs.
     #[error("a cell of the {grid} x {grid} cover around ({:.4}, {:.4}) is neither regular nor monotone in one direction with edges of known signs", at[0], at[1])]
     CellShape {
@@ -78,7 +80,7 @@ pub enum AspectsUndecided {
 
 /// The number of aspects on the full torus, or why it is not proven.
 pub fn count(chain: &Chain3R, control: &Control) -> Result<u32, AspectsUndecided> {
-    let mut why = AspectsUndecided::RegularSign;
+    let mut why = AspectsUndecided::EdgeSigns(0);
     for (depth, shift) in GRIDS {
         match count_at(chain, depth, shift, control) {
             Ok(n) => return Ok(n),
@@ -88,104 +90,185 @@ pub fn count(chain: &Chain3R, control: &Control) -> Result<u32, AspectsUndecided
     Err(why)
 }
 
-/// `count` on one grid.
-fn count_at(chain: &Chain3R, depth: u32, shift: f64, control: &Control) -> Result<u32, AspectsUndecided> {
-    let cover = Cover::shifted(chain, depth, shift, control);
-    if !cover.status.is_complete() {
-        return Err(AspectsUndecided::CoverStopped(cover.n));
+/// A quadtree square: grid cells `i..i + s` (θ₂) by `j..j + s` (θ₃).
+#[derive(Clone, Copy, Debug)]
+struct Square {
+    i: usize,
+    j: usize,
+    s: usize,
+    level: u32,
+}
+
+/// Strict sign of det at a point.
+fn sign_at(chain: &Chain3R, t2: f64, t3: f64) -> Option<bool> {
+    strict_sign(chain.jets([point(t2), point(t3)], 1).det().value())
+}
+
+/// The signs det takes on an edge `e` (`free` the coordinate along it), exactly: one sign over
+/// it, or strictly monotone along it (then the signs of its ends, each sign's set one interval
+/// of the edge).
+fn edge_signs(chain: &Chain3R, e: [Interval; 2], free: usize) -> Option<[bool; 2]> {
+    let (det, grad) = det_over(chain, e);
+    if let Some(s) = strict_sign(det) {
+        return Some([!s, s]);
     }
-    let n = cover.n;
-    let side = |i: usize| {
-        let [a, b] = cover.bounds(i);
-        interval(a, b)
-    };
-    let at = |t2: f64, t3: f64| strict_sign(evaluate(chain, [point(t2), point(t3)]).det);
-    // Regular regions' signs, from one cell of each.
-    let mut region_sign: Vec<Option<bool>> = vec![None; cover.regions];
-    for c in 0..n * n {
-        let r = cover.region[c];
-        if r >= 0 && region_sign[r as usize].is_none() {
-            let (i, j) = (c / n, c % n);
-            region_sign[r as usize] = Some(at(side(i).mid(), side(j).mid()).ok_or(AspectsUndecided::RegularSign)?);
-        }
+    strict_sign(grad[free])?;
+    let mut ends = [false; 2];
+    for t in [e[free].inf(), e[free].sup()] {
+        let mut p = [e[0].mid(), e[1].mid()];
+        p[free] = t;
+        ends[sign_at(chain, p[0], p[1])? as usize] = true;
     }
-    // The signs det takes on an edge (`free` the coordinate along it), exactly: one sign over
-    // it, or strictly monotone along it (then the signs of its ends, each sign's set one
-    // interval of the edge).
-    let edge_signs = |e: [Interval; 2], free: usize| -> Option<[bool; 2]> {
-        let ev = evaluate(chain, e);
-        if let Some(s) = strict_sign(ev.det) {
-            return Some([!s, s]);
+    Some(ends)
+}
+
+/// Splits a square until each leaf is regular or monotone (see the module doc); a grid cell
+/// that is neither is left undecided.
+struct LeafPrune<'a> {
+    chain: &'a Chain3R,
+    lines: &'a Lines,
+}
+
+const NOT_MONOTONE: &str = "neither regular nor monotone";
+
+impl Prune for LeafPrune<'_> {
+    type Cell = Square;
+    type Found = (Square, Cell);
+    type Reason = NoDiscard;
+
+    fn process(&mut self, c: Square) -> Step<Square, (Square, Cell), NoDiscard> {
+        let [a, b] = self.lines.span(c.i, c.s);
+        let [d, e] = self.lines.span(c.j, c.s);
+        let bx = [interval(a, b), interval(d, e)];
+        let (det, grad) = det_over(self.chain, bx);
+        if !det.is_empty() && !det.contains(0.0) {
+            if let Some(s) = strict_sign(det) {
+                return Step::Found((c, Cell::Regular(s)));
+            }
         }
-        strict_sign(ev.grad_det[free])?;
-        let mut ends = [false; 2];
-        for t in [e[free].inf(), e[free].sup()] {
-            let mut p = [e[0].mid(), e[1].mid()];
-            p[free] = t;
-            ends[at(p[0], p[1])? as usize] = true;
-        }
-        Some(ends)
-    };
-    let mut cells: Vec<Cell> = (0..n * n).map(|c| Cell::Regular(region_sign.get(cover.region[c].max(0) as usize).copied().flatten().unwrap_or(false))).collect();
-    // Each cover box's arc on its own (on the run's threads); the first failure in box order
-    // is the one reported, as a box-by-box walk would.
-    let arcs = crate::search::map_parallel(&cover.boxes, control.threads, |&(i, j)| {
-        let b = [side(i), side(j)];
-        let e = evaluate(chain, b);
         // Monotone along k: each sign is one piece, attached to the part of the lower (negative)
         // or upper (positive) k-edge where det has that sign (swapped when decreasing); that
         // part is one interval of the edge.
         let arc = (0..2).find_map(|k| {
-            let up = strict_sign(e.grad_det[k])?;
+            let up = strict_sign(grad[k])?;
             let edge = |at: f64| {
-                let mut x = b;
+                let mut x = bx;
                 x[k] = point(at);
-                edge_signs(x, 1 - k)
+                edge_signs(self.chain, x, 1 - k)
             };
-            let (lo, hi) = (edge(b[k].inf())?, edge(b[k].sup())?);
+            let (lo, hi) = (edge(bx[k].inf())?, edge(bx[k].sup())?);
             let (neg_side, pos_side) = if up { (lo, hi) } else { (hi, lo) };
             Some(Cell::Arc { signs: [neg_side[0], pos_side[1]] })
         });
-        arc.ok_or(AspectsUndecided::CellShape { grid: n, at: [b[0].mid(), b[1].mid()] })
-    });
-    for (&(i, j), arc) in cover.boxes.iter().zip(arcs) {
-        cells[i * n + j] = arc?;
+        if let Some(arc) = arc {
+            return Step::Found((c, arc));
+        }
+        if c.s == 1 {
+            return Step::Undecided(c, NOT_MONOTONE);
+        }
+        let (h, level) = (c.s / 2, c.level + 1);
+        let sub = |di: usize, dj: usize| Square { i: c.i + di, j: c.j + dj, s: h, level };
+        Step::Split(smallvec![sub(0, 0), sub(0, h), sub(h, 0), sub(h, h)])
     }
-    // The signs of det on the edges between two arc cells (both sides crossed by the curve),
-    // on the run's threads; edges beside a regular cell take its sign.
-    let edge_of = |x: usize, dir: usize| {
-        let (i, j) = (x / n, x % n);
-        let mut edge = [side(i), side(j)];
-        edge[dir] = point(edge[dir].sup());
-        edge
-    };
-    let upper = |x: usize, dir: usize| if dir == 0 { ((x / n + 1) % n) * n + x % n } else { (x / n) * n + (x % n + 1) % n };
-    let between_arcs: Vec<(usize, usize)> = (0..n * n).flat_map(|x| (0..2).map(move |dir| (x, dir))).filter(|&(x, dir)| matches!((cells[x], cells[upper(x, dir)]), (Cell::Arc { .. }, Cell::Arc { .. }))).collect();
-    let arc_edge_signs: std::collections::HashMap<(usize, usize), Option<[bool; 2]>> =
-        between_arcs.iter().copied().zip(crate::search::map_parallel(&between_arcs, control.threads, |&(x, dir)| edge_signs(edge_of(x, dir), 1 - dir))).collect();
-    // Pieces: node 2c + s for cell c and sign s.
-    let id = |c: usize, s: bool| 2 * c + s as usize;
-    let mut joined = Vec::new();
-    for x in 0..n * n {
-        // For cell x = i·n + j: the upper neighbour in θ₂ (edge θ₂ = line i + 1, spanning θ₃ over
-        // cell j), then in θ₃; the shared edge is seen from x: θ_dir fixed at x's upper bound.
+
+    fn level(&self, c: &Square) -> u32 {
+        c.level
+    }
+}
+
+/// `count` on one grid.
+fn count_at(chain: &Chain3R, depth: u32, shift: f64, control: &Control) -> Result<u32, AspectsUndecided> {
+    let n = 1usize << depth;
+    let lines = Lines { n, shift };
+    let run = drive(|| LeafPrune { chain, lines: &lines }, Square { i: 0, j: 0, s: n, level: 0 }, control, &mut no_progress);
+    if !run.status.is_complete() {
+        return Err(AspectsUndecided::CoverStopped(n));
+    }
+    // The first failing grid cell in grid order, whatever the driver's order.
+    if let Some((c, _)) = run.undecided.iter().min_by_key(|(c, _)| (c.i, c.j)) {
+        let mid = |i: usize| 0.5 * (lines.line(i) + lines.line(i + 1));
+        return Err(AspectsUndecided::CellShape { grid: n, at: [mid(c.i), mid(c.j)] });
+    }
+    let mut leaves = run.found;
+    leaves.sort_unstable_by_key(|(c, _)| (c.i, c.j));
+    let mut leaf_of = vec![u32::MAX; n * n];
+    for (k, (c, _)) in leaves.iter().enumerate() {
+        for i in c.i..c.i + c.s {
+            leaf_of[i * n + c.j..i * n + c.j + c.s].fill(k as u32);
+        }
+    }
+    // The signs of det on a stretch of grid line: line `fixed` of direction `dir` (0: θ₂ =
+    // const), cells `from..from + len` along it; halved where undecided, down to one cell.
+    fn stretch_signs(chain: &Chain3R, lines: &Lines, dir: usize, fixed: usize, from: usize, len: usize) -> Option<[bool; 2]> {
+        let mut e = [point(lines.line(fixed)); 2];
+        let [a, b] = lines.span(from, len);
+        e[1 - dir] = interval(a, b);
+        if let Some(s) = edge_signs(chain, e, 1 - dir) {
+            return Some(s);
+        }
+        if len == 1 {
+            return None;
+        }
+        let h = len / 2;
+        let (x, y) = (stretch_signs(chain, lines, dir, fixed, from, h)?, stretch_signs(chain, lines, dir, fixed, from + h, len - h)?);
+        Some([x[0] || y[0], x[1] || y[1]])
+    }
+    // Pieces: node 2k + s for leaf k and sign s. Every adjacency is seen from the leaf below
+    // it: walk each leaf's upper side in both directions (across the ±π seams), one stretch per
+    // neighbouring leaf; the stretch is the smaller of the two sides.
+    let mut pieces = Pieces::new(2 * leaves.len());
+    for (ka, &(a, ca)) in leaves.iter().enumerate() {
         for dir in 0..2 {
-            let y = upper(x, dir);
-            let (cx, cy) = (cells[x], cells[y]);
-            let signs: [bool; 2] = match (cx, cy) {
-                (Cell::Regular(s), _) | (_, Cell::Regular(s)) => [!s, s],
-                _ => arc_edge_signs[&(x, dir)].ok_or(AspectsUndecided::EdgeSigns(n))?,
-            };
-            for s in [false, true] {
-                if signs[s as usize] && cx.has(s) && cy.has(s) {
-                    joined.push((id(x, s), id(y, s)));
+            let (fixed_start, free_start) = if dir == 0 { (a.i, a.j) } else { (a.j, a.i) };
+            let across = (fixed_start + a.s) % n;
+            let mut at = free_start;
+            while at < free_start + a.s {
+                let cell = if dir == 0 { across * n + at } else { at * n + across };
+                let kb = leaf_of[cell] as usize;
+                let (b, cb) = leaves[kb];
+                let b_free = if dir == 0 { b.j } else { b.i };
+                let len = (free_start + a.s).min(b_free + b.s) - at;
+                let signs = match (ca, cb) {
+                    (Cell::Regular(s), _) | (_, Cell::Regular(s)) => [!s, s],
+                    _ => stretch_signs(chain, &lines, dir, fixed_start + a.s, at, len).ok_or(AspectsUndecided::EdgeSigns(n))?,
+                };
+                for s in [false, true] {
+                    if signs[s as usize] && ca.has(s) && cb.has(s) {
+                        pieces.join(2 * ka + s as usize, 2 * kb + s as usize);
+                    }
                 }
+                at += len;
             }
         }
     }
-    // A piece that does not exist is joined to nothing: its own group, not counted.
-    let pieces = crate::interval::components_of_edges(2 * n * n, joined);
-    Ok(pieces.iter().filter(|g| cells[g[0] / 2].has(g[0] % 2 == 1)).count() as u32)
+    // A piece that does not exist is joined to nothing and not counted.
+    Ok((0..2 * leaves.len()).filter(|&p| leaves[p / 2].1.has(p % 2 == 1) && pieces.root(p) == p).count() as u32)
+}
+
+/// Union–find over the pieces.
+struct Pieces {
+    parent: Vec<usize>,
+}
+
+impl Pieces {
+    fn new(n: usize) -> Self {
+        Self { parent: (0..n).collect() }
+    }
+
+    fn root(&mut self, mut p: usize) -> usize {
+        while self.parent[p] != p {
+            self.parent[p] = self.parent[self.parent[p]];
+            p = self.parent[p];
+        }
+        p
+    }
+
+    fn join(&mut self, a: usize, b: usize) {
+        let (ra, rb) = (self.root(a), self.root(b));
+        if ra != rb {
+            self.parent[ra.max(rb)] = ra.min(rb);
+        }
+    }
 }
 
 /// The largest number of IK solutions of one point, proven when a sample reaches `bound`.
@@ -229,4 +312,32 @@ pub fn max_ik_solutions(chain: &Chain3R, bound: u32, near: &[[f64; 2]], control:
         }
     }
     (best, false)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::urdf;
+    use crate::search::Limits;
+
+    fn chain(text: &str) -> Chain3R {
+        Chain3R::from_mechanism(&urdf::parse(text).expect("bundled"), 0.0).expect("3R")
+    }
+
+    /// Every grid that counts gives the same count (the number of aspects does not depend on
+    /// the cover; robot f's 256 x 256 grid has a cell by an internal-motion line that is
+    /// neither regular nor monotone, and the finer grids count), and a budget too small for
+    /// the quadtree stops it with that reason.
+    #[test]
+    fn every_grid_counts_the_same_aspects_and_a_spent_budget_is_named() {
+        let control = Control::with_limits(Limits::default());
+        for (text, aspects) in [(include_str!("../../urdf/orthogonal_3r_e.urdf"), 2), (include_str!("../../urdf/orthogonal_3r_f.urdf"), 4)] {
+            let c = chain(text);
+            let counts: Vec<_> = GRIDS.iter().map(|&(depth, shift)| count_at(&c, depth, shift, &control)).collect();
+            assert!(counts.iter().all(|n| matches!(n, Ok(k) if *k == aspects) || matches!(n, Err(AspectsUndecided::CellShape { .. }))), "{counts:?}");
+            assert!(counts[1..].iter().all(|n| *n == Ok(aspects)), "{counts:?}");
+            let tight = Control::with_limits(Limits { max_cells: 3, ..Limits::default() });
+            assert_eq!(count(&c, &tight), Err(AspectsUndecided::CoverStopped(1024)));
+        }
+    }
 }

@@ -102,18 +102,18 @@ impl Prune for CoverPrune<'_> {
 }
 
 /// The grid lines of an `n` × `n` grid (see `Cover::line`).
-struct Lines {
-    n: usize,
-    shift: f64,
+pub(super) struct Lines {
+    pub(super) n: usize,
+    pub(super) shift: f64,
 }
 
 impl Lines {
-    fn line(&self, i: usize) -> f64 {
+    pub(super) fn line(&self, i: usize) -> f64 {
         let base = if i == self.n { PI_UP } else { -PI_UP + (2.0 * PI_UP / self.n as f64) * i as f64 };
         base + self.shift
     }
 
-    fn span(&self, i: usize, s: usize) -> Bounds {
+    pub(super) fn span(&self, i: usize, s: usize) -> Bounds {
         [self.line(i), self.line(i + s)]
     }
 }
@@ -221,11 +221,17 @@ impl Cover {
 
 /// False when det Df provably does not vanish on `b` (centred form with the natural one).
 fn det_may_vanish(chain: &Chain3R, b: [Interval; 2]) -> bool {
+    det_over(chain, b).0.contains(0.0)
+}
+
+/// det Df over `b` (the centred form intersected with the natural one) and its gradient over
+/// `b` (natural form).
+pub(super) fn det_over(chain: &Chain3R, b: [Interval; 2]) -> (Interval, [Interval; 2]) {
     let m = [b[0].mid(), b[1].mid()];
     let over = chain.jets(b, 2).det();
     let at = chain.jets([point(m[0]), point(m[1])], 1).det().value();
     let g = over.grad();
     let centred = at + g[0] * (b[0] - point(m[0])) + g[1] * (b[1] - point(m[1]));
-    over.value().intersection(centred).contains(0.0)
+    (over.value().intersection(centred), g)
 }
 

@@ -22,8 +22,8 @@
 //!    any 3R cuspidal: near a cusp value three solutions merge, two of them in one aspect.
 //!    With joint limits, only a cusp strictly inside them counts (the argument is local).
 //! 3. **No cusp**, the cusp search complete with nothing undecided on the full torus, and the
-//!    singular set det Df = 0 proven a smooth curve (∇det ≠ 0 wherever det may vanish, on a
-//!    bounded quadtree): by Salunkhe, Spartalis, Capco, Chablat, Wenger (2022), a generic 3R
+//!    singular set det Df = 0 proven a smooth curve (∇det ≠ 0 wherever det may vanish: on the
+//!    leaves of the aspects' cover when they are counted, else on a bounded quadtree): by Salunkhe, Spartalis, Capco, Chablat, Wenger (2022), a generic 3R
 //!    is cuspidal iff it has a cusp, so **non-cuspidal**. We take a smooth singular set as the
 //!    genericity this needs; where smoothness is not proven (crossing branches, a box budget
 //!    spent) the verdict is `null`.
@@ -45,6 +45,7 @@ use crate::interval::{point, strict_sign};
 use crate::model::{JointKind, Mechanism};
 use inari::Interval;
 use super::select::Scope;
+use super::aspects::AspectsUndecided;
 
 /// Cell budgets of the verdict's searches: the smoothness quadtree (a few thousand boxes on
 /// the robots seen), the singular-curve cover behind the aspects, and one sample's IK.
@@ -343,10 +344,15 @@ impl Prune for SmoothPrune<'_> {
     }
 }
 
-/// Aspects and the largest number of IK solutions under arguments 2 and 3 (`aspects`), with
-/// what to add to the reason.
-fn counts(chain: &Chain3R, cusps: &[[f64; 2]], internal_motion: bool, control: &Control) -> (Option<u32>, Option<u32>, String) {
-    let (aspects, mut why) = match super::aspects::count(chain, &control.max_cells(COVER_CELLS)) {
+/// The aspects on the full torus (`aspects::count`) within `COVER_CELLS`.
+fn aspects(chain: &Chain3R, control: &Control) -> Result<u32, AspectsUndecided> {
+    super::aspects::count(chain, &control.max_cells(COVER_CELLS))
+}
+
+/// Aspects (counted already) and the largest number of IK solutions under arguments 2 and 3
+/// (`aspects`), with what to add to the reason.
+fn counts(chain: &Chain3R, aspects: Result<u32, AspectsUndecided>, cusps: &[[f64; 2]], internal_motion: bool, control: &Control) -> (Option<u32>, Option<u32>, String) {
+    let (aspects, mut why) = match aspects {
         Ok(n) => (Some(n), format!("; {n} aspects (components of det Df != 0, from the singular-curve cover: every cell regular or crossed by one arc)")),
         Err(e) => (None, format!("; aspects not proven: {e}")),
     };
@@ -387,7 +393,7 @@ pub fn decide(mechanism: &Mechanism, chain: &Chain3R, run: &Singularities, limit
     let certified: Vec<_> = run.cusps.cusps.iter().filter(|c| c.unique).collect();
     if let Some(c) = certified.iter().find(|c| limits.holds(&c.theta)) {
         let centres: Vec<[f64; 2]> = certified.iter().map(|c| [c.theta[0].mid(), c.theta[1].mid()]).collect();
-        let (aspects, max_ik_solutions, more) = counts(chain, &centres, !run.cusps.bands.is_empty(), control);
+        let (aspects, max_ik_solutions, more) = counts(chain, aspects(chain, control), &centres, !run.cusps.bands.is_empty(), control);
         return Verdict {
             cuspidal: Some(true),
             aspects,
@@ -427,9 +433,14 @@ pub fn decide(mechanism: &Mechanism, chain: &Chain3R, run: &Singularities, limit
             reason: format!("no certified cusp, but the cusp search left {undecided} boxes undecided on the full torus ({})", if run.cusps.status.is_complete() { "no limit stopped it" } else { "a limit stopped it" }),
         };
     }
-    match smooth_singular_set(chain, 1e-6, &control.max_cells(SMOOTH_CELLS)) {
+    // A counted aspect cover proves the smoothness too: each of its leaves has det ≠ 0 or a
+    // component of ∇det of one strict sign, and the leaves tile the torus. The smoothness
+    // quadtree runs only where the count fails.
+    let counted = aspects(chain, control);
+    let smooth = if counted.is_ok() { Smooth::Proven } else { smooth_singular_set(chain, 1e-6, &control.max_cells(SMOOTH_CELLS)) };
+    match smooth {
         Smooth::Proven => {
-            let (aspects, max_ik_solutions, more) = counts(chain, &[], !run.cusps.bands.is_empty(), control);
+            let (aspects, max_ik_solutions, more) = counts(chain, counted, &[], !run.cusps.bands.is_empty(), control);
             Verdict {
                 cuspidal: Some(false),
                 aspects,

@@ -375,7 +375,7 @@ impl SingularityReport {
     pub fn of(arm: &Arm, found: &ArmSingularities) -> Self {
         let run = &found.run;
         let mut report = SingularityReport::new(&arm.chain, found.request.precision, &run.cusps, run.nodes.as_ref(), found.seconds);
-        report.verdict = Some(found.verdict.clone());
+        report.verdict = found.verdict.clone();
         report.reading = Some(Reading::of(&arm.prepared, found.limit_effect.clone()));
         if let Some(a) = &found.explained {
             report.explain(a.clone());

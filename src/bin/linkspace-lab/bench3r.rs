@@ -2,7 +2,9 @@
 //! Krawczyk cusp search against bisection alone (the baseline) in the same run, and against Ibex
 //! when `ibexsolve` is on PATH: run here on the same cusp systems, at the same precision and with
 //! the same internal-motion exclusion (`ibex`). Ibex's stored figures, measured elsewhere, are
-//! printed as dated references with their settings, never as ratios.
+//! printed as dated references with their settings, never as ratios. The last columns time
+//! the `singularities` job as the CLI runs it (`app::singularities`: the cusp search, then the
+//! cuspidality verdict with its aspects and IK counts; no nodes), in the same process.
 
 use anyhow::Result;
 use linkspace::manip3r::{
@@ -11,7 +13,10 @@ use linkspace::manip3r::{
     nodes::{self, NodeSettings},
     Chain3R,
 };
+use linkspace::app;
+use linkspace::manip3r::LoadOptions;
 use linkspace::model::urdf;
+use linkspace::search::{Control, Limits};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -82,7 +87,7 @@ pub fn run(args: Bench3rArgs) -> Result<()> {
     .ok();
     writeln!(
         out,
-        "robot | cusps: Krawczyk CPU s | found | undecided | bisection baseline CPU s | clusters | speed-up (same run) | Ibex D&G2 CPU s (same run) | Ibex solutions, unknown | vs Ibex (same run, CPU/CPU) | nodes CPU s | found | undecided"
+        "robot | cusps: Krawczyk CPU s | found | undecided | bisection baseline CPU s | clusters | speed-up (same run) | Ibex D&G2 CPU s (same run) | Ibex solutions, unknown | vs Ibex (same run, CPU/CPU) | nodes CPU s | found | undecided | job: cusps and verdict CPU s | verdict"
     )
     .ok();
     for (name, xml, _, _) in ROBOTS {
@@ -125,9 +130,29 @@ pub fn run(args: Bench3rArgs) -> Result<()> {
             node_run = Some(r?);
         }
         let (t_n, n) = (crate::median(node_times), node_run.expect("repeat >= 1"));
+        let arm = app::Arm::load(&urdf::parse(xml)?, &LoadOptions::default(), 0.0)?;
+        let request = app::SingularitiesRequest { precision: args.precision, nodes: false, search_anyway: false, verdict: true };
+        let control = Control::with_limits(Limits { max_cells: cusps::DEFAULT_MAX_BOXES, ..Limits::default() });
+        let mut job_times = Vec::new();
+        let mut job = None;
+        for _ in 0..args.repeat {
+            let (t, r) = cpu(|| app::singularities(&arm, &request, &control, &mut |_| {}));
+            job_times.push(t);
+            job = Some(r?);
+        }
+        let t_job = crate::median(job_times);
+        let verdict = job.and_then(|j| j.verdict).map_or("-".to_string(), |v| {
+            let c = match v.cuspidal {
+                Some(true) => "cuspidal",
+                Some(false) => "non-cuspidal",
+                None => "undecided",
+            };
+            let n = |x: Option<u32>| x.map_or("?".to_string(), |v| v.to_string());
+            format!("{c}, {} aspects, {} IK", n(v.aspects), n(v.max_ik_solutions))
+        });
         writeln!(
             out,
-            "{name} | {t_k:.4} | {} | {} | {t_base:.4} | {} | {} | {peer} | {t_n:.4} | {} | {}",
+            "{name} | {t_k:.4} | {} | {} | {t_base:.4} | {} | {} | {peer} | {t_n:.4} | {} | {} | {t_job:.4} | {verdict}",
             k.cusps.len(),
             k.undecided.len(),
             base.cusps.len(),
