@@ -64,6 +64,7 @@ impl Analysis for LinkageAnalysis {
         match self.problem {
             Linkage::Planar(_) => MechanismKind::PlanarLinkage,
             Linkage::Spatial(..) => MechanismKind::SpatialLinkage,
+            Linkage::Pose(..) => MechanismKind::ParallelPlatform,
         }
     }
 
@@ -75,6 +76,7 @@ impl Analysis for LinkageAnalysis {
         match &self.problem {
             Linkage::Planar(_) => "a planar linkage: its configuration space and singular sets (C-space, input, output) are analysed; cusps and nodes of the type-II image are not (`linkspace loop-singularities --kind image`), nor is inverse kinematics".to_string(),
             Linkage::Spatial(_, why) => format!("a spatial linkage ({why}): its configuration space and singular sets (C-space, input, output; actuated and output joints are tree joints) are analysed; inverse kinematics is not"),
+            Linkage::Pose(_, why) => format!("a parallel platform ({why}): its assembly modes are solved in pose coordinates, its singular sets in the spatial model's joint coordinates; inverse kinematics is not analysed"),
         }
     }
 
@@ -366,6 +368,11 @@ impl SolveJob {
     pub fn run(&self, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> BoxSetResult {
         let solver = self.problem.solver(self.settings.clone()).expect("invariant: validated when built");
         let e = solver.enclose(cancel, progress);
+        // The pose model's certified boxes of one assembly become one box.
+        let e = match &self.problem {
+            Linkage::Pose(p, _) => p.merge_certified(e),
+            _ => e,
+        };
         let (labels, clusters) = components(&e.solutions);
         let problem = &self.problem;
         let joint_names = problem.free_joints().to_vec();
@@ -405,6 +412,7 @@ impl SolveJob {
 fn traced(problem: &Linkage, b: &IntervalBox) -> Vec<TracedBounds> {
     match problem {
         Linkage::Planar(p) => p.traces.iter().map(|t| TracedBounds { x: bounds(b.dims[t.x]), y: bounds(b.dims[t.y]), z: None }).collect(),
+        Linkage::Pose(..) => Vec::new(),
         Linkage::Spatial(p, _) => p
             .traces
             .iter()
