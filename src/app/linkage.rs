@@ -19,7 +19,10 @@ use crate::problems::choice::TracedPoint;
 use crate::problems::singular::{Coordinates, SingularProblem};
 use super::loops::{all_kinds, SingularSets};
 use crate::singular::{BoxKind, SingularSet};
-use crate::problems::{Linkage, LinkageError, ModelChoice};
+use crate::contract::Contractor;
+use crate::problems::{Linkage, LinkageError, ModelChoice, PoseProblem};
+use crate::search::{Enclosure, RefinePlan, Refinement, Solver};
+use std::time::{Duration, Instant};
 use crate::search::{BoxStatus, Progress, SolveStats, SolverSettings, Status};
 use crate::system::VarRole;
 use std::sync::atomic::AtomicBool;
@@ -367,10 +370,10 @@ impl SolveJob {
     /// undecided ones, each with its joint values and traced points.
     pub fn run(&self, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> BoxSetResult {
         let solver = self.problem.solver(self.settings.clone()).expect("invariant: validated when built");
+        let t0 = Instant::now();
         let e = solver.enclose(cancel, progress);
-        // The pose model's certified boxes of one assembly become one box.
         let e = match &self.problem {
-            Linkage::Pose(p, _) => p.merge_certified(e),
+            Linkage::Pose(p, _) => settle_pose(p, &solver, e, cancel, self.settings.timeout.map(|t| t.saturating_sub(t0.elapsed()))),
             _ => e,
         };
         let (labels, clusters) = components(&e.solutions);
@@ -406,6 +409,68 @@ impl SolveJob {
             stats: e.stats,
         }
     }
+}
+
+/// The pose model's answer, one certified box per assembly where it can be proven: each
+/// cluster holding an uncertified box is searched again at finer sigmas (`Solver::refine`) and
+/// replaced when every box of a completed round is certified (the round's start box holds the
+/// whole cluster, so no root of it is lost); then certified boxes that overlap are replaced by
+/// the one box Krawczyk certifies over their hull (it holds exactly one solution, so they held
+/// the same one). What cannot be settled is reported as found. `timeout`: what is left of the
+/// run's.
+fn settle_pose(p: &PoseProblem, solver: &Solver<'_>, mut e: Enclosure, cancel: &AtomicBool, timeout: Option<Duration>) -> Enclosure {
+    let t0 = Instant::now();
+    let (labels, n) = components(&e.solutions);
+    let mut solutions = Vec::new();
+    let mut unique = Vec::new();
+    for k in 0..n {
+        let members: Vec<usize> = (0..e.solutions.len()).filter(|&i| labels[i] == k).collect();
+        let boxes: Vec<IntervalBox> = members.iter().map(|&i| e.solutions[i].clone()).collect();
+        if members.iter().any(|&i| !e.unique[i]) {
+            let left = timeout.map(|t| t.saturating_sub(t0.elapsed()));
+            let all_certified = |_: &[IntervalBox], u: &[bool]| u.iter().all(|&x| x);
+            if let Refinement::Settled(found) = solver.refine(&boxes, &RefinePlan::default(), left, &all_certified, cancel) {
+                solutions.extend(found.solutions);
+                unique.extend(found.unique);
+                continue;
+            }
+        }
+        solutions.extend(boxes);
+        unique.extend(members.iter().map(|&i| e.unique[i]));
+    }
+    // Overlapping certified boxes: one box over their hull when Krawczyk proves it.
+    let certified: Vec<usize> = (0..solutions.len()).filter(|&i| unique[i]).collect();
+    let (labels, n) = components(&certified.iter().map(|&i| solutions[i].clone()).collect::<Vec<_>>());
+    let mut drop = vec![false; solutions.len()];
+    let mut merged = Vec::new();
+    if let Some(mut newton) = p.certifier() {
+        for k in 0..n {
+            let members: Vec<usize> = (0..certified.len()).filter(|&m| labels[m] == k).map(|m| certified[m]).collect();
+            let [first, rest @ ..] = members.as_slice() else { continue };
+            if rest.is_empty() {
+                continue;
+            }
+            let mut hull = solutions[*first].clone();
+            for &m in rest {
+                for (h, x) in hull.dims.iter_mut().zip(&solutions[m].dims) {
+                    *h = h.convex_hull(*x);
+                }
+            }
+            if let Some(proven) = newton.certify(&hull) {
+                members.iter().for_each(|&m| drop[m] = true);
+                merged.push(IntervalBox { level: hull.level, ..proven });
+            }
+        }
+    }
+    let kept = solutions.into_iter().zip(unique).zip(drop).filter(|(_, d)| !d).map(|(x, _)| x);
+    let (mut solutions, mut unique): (Vec<IntervalBox>, Vec<bool>) = kept.unzip();
+    unique.extend(merged.iter().map(|_| true));
+    solutions.extend(merged);
+    e.stats.solutions = solutions.len() as u64;
+    e.stats.certified = unique.iter().filter(|&&u| u).count() as u64;
+    e.solutions = solutions;
+    e.unique = unique;
+    e
 }
 
 /// World coordinates of the problem's traced points over a box, in `trace_names` order.
