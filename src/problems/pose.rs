@@ -197,11 +197,11 @@ impl PoseProblem {
         let (a, b, c) = (col(0), col(1), col(2));
         let (one, zero) = (point(1.0), point(0.0));
         // c = a × b.
-        for i in 0..3 {
+        for (i, &ci) in c.iter().enumerate() {
             let (j, k) = ((i + 1) % 3, (i + 2) % 3);
             let p = w.product(a[j], b[k]);
             let n = w.product(a[k], b[j]);
-            w.square(linear(&[(c[i], one), (p, -one), (n, one)], zero));
+            w.square(linear(&[(ci, one), (p, -one), (n, one)], zero));
         }
         // |a|² = |b|² = 1, a·b = 0.
         let sq = |v: [VarId; 3]| Equation::new(v.iter().map(|&x| Term { coef: one, mono: Monomial::Square(x) }).collect(), -one);
@@ -212,10 +212,10 @@ impl PoseProblem {
         // w = Rᵀt, s = |t|².
         let reach = tdom.iter().map(|d| d.mag()).fold(0.0, |acc: f64, m| acc + m * m).sqrt() * (1.0 + 1e-12);
         let wv = ["x", "y", "z"].map(|a| w.system.add_var(format!("w{a}"), VarRole::Derived, interval(-reach, reach)));
-        for j in 0..3 {
-            let mut terms = vec![(wv[j], one)];
-            for i in 0..3 {
-                terms.push((w.product(t[i], r[i][j]), -one));
+        for (j, &wj) in wv.iter().enumerate() {
+            let mut terms = vec![(wj, one)];
+            for (&ti, row) in t.iter().zip(&r) {
+                terms.push((w.product(ti, row[j]), -one));
             }
             w.square(linear(&terms, zero));
         }
@@ -227,9 +227,11 @@ impl PoseProblem {
         let two = point(2.0);
         for leg in &legs {
             let mut terms = vec![(s, one)];
-            for j in 0..3 {
-                terms.push((wv[j], two * leg.top[j]));
-                terms.push((t[j], -two * leg.base[j]));
+            for (&wj, &pj) in wv.iter().zip(&leg.top) {
+                terms.push((wj, two * pj));
+            }
+            for (&ti, &bi) in t.iter().zip(&leg.base) {
+                terms.push((ti, -two * bi));
             }
             for (i, row) in r.iter().enumerate() {
                 for (j, &x) in row.iter().enumerate() {
