@@ -142,7 +142,8 @@ impl PoseProblem {
         let mut legs = Vec::new();
         for leg in &read {
             let joint = &m.joints[leg.joint];
-            let value = fixed.iter().find(|(n, _)| *n == leg.name).map(|&(_, v)| v).ok_or_else(|| PlatformError::NotFixed(leg.name.clone()))?;
+            // The last value given counts, as for the other builders.
+            let value = fixed.iter().rev().find(|(n, _)| *n == leg.name).map(|&(_, v)| v).ok_or_else(|| PlatformError::NotFixed(leg.name.clone()))?;
             if !value.is_finite() {
                 return Err(PlatformError::NotFinite(leg.name.clone()));
             }
