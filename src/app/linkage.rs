@@ -19,8 +19,7 @@ use crate::problems::choice::TracedPoint;
 use crate::problems::singular::{Coordinates, SingularProblem};
 use super::loops::{all_kinds, SingularSets};
 use crate::singular::{BoxKind, SingularSet};
-use crate::contract::Contractor;
-use crate::problems::{Linkage, LinkageError, ModelChoice, PoseProblem};
+use crate::problems::{Linkage, LinkageError, ModelChoice};
 use crate::search::{Enclosure, RefinePlan, Refinement, Solver};
 use std::time::{Duration, Instant};
 use crate::search::{BoxStatus, Progress, SolveStats, SolverSettings, Status};
@@ -373,7 +372,7 @@ impl SolveJob {
         let t0 = Instant::now();
         let e = solver.enclose(cancel, progress);
         let e = match &self.problem {
-            Linkage::Pose(p, _) => settle_pose(p, &solver, e, cancel, self.settings.timeout.map(|t| t.saturating_sub(t0.elapsed()))),
+            Linkage::Pose(..) => settle_pose(&solver, e, cancel, self.settings.timeout.map(|t| t.saturating_sub(t0.elapsed()))),
             _ => e,
         };
         let (labels, clusters) = components(&e.solutions);
@@ -412,13 +411,13 @@ impl SolveJob {
 }
 
 /// The pose model's answer, one certified box per assembly where it can be proven: each
-/// cluster holding an uncertified box is searched again at finer sigmas (`Solver::refine`) and
-/// replaced when every box of a completed round is certified (the round's start box holds the
-/// whole cluster, so no root of it is lost); then certified boxes that overlap are replaced by
-/// the one box Krawczyk certifies over their hull (it holds exactly one solution, so they held
-/// the same one). What cannot be settled is reported as found. `timeout`: what is left of the
-/// run's.
-fn settle_pose(p: &PoseProblem, solver: &Solver<'_>, mut e: Enclosure, cancel: &AtomicBool, timeout: Option<Duration>) -> Enclosure {
+/// cluster holding an uncertified box (two assemblies close together, say) is searched again at
+/// finer sigmas (`Solver::refine`) and replaced when every box of a completed round is
+/// certified (the round's start box holds the whole cluster, so no root of it is lost; a round
+/// with no box proves the cluster empty); then certified boxes sharing one root are merged
+/// (`Solver::merge_shared_certificates`). What cannot be settled is reported as found.
+/// `timeout`: what is left of the run's.
+fn settle_pose(solver: &Solver<'_>, mut e: Enclosure, cancel: &AtomicBool, timeout: Option<Duration>) -> Enclosure {
     let t0 = Instant::now();
     let (labels, n) = components(&e.solutions);
     let mut solutions = Vec::new();
@@ -438,34 +437,9 @@ fn settle_pose(p: &PoseProblem, solver: &Solver<'_>, mut e: Enclosure, cancel: &
         solutions.extend(boxes);
         unique.extend(members.iter().map(|&i| e.unique[i]));
     }
-    // Overlapping certified boxes: one box over their hull when Krawczyk proves it.
-    let certified: Vec<usize> = (0..solutions.len()).filter(|&i| unique[i]).collect();
-    let (labels, n) = components(&certified.iter().map(|&i| solutions[i].clone()).collect::<Vec<_>>());
-    let mut drop = vec![false; solutions.len()];
-    let mut merged = Vec::new();
-    if let Some(mut newton) = p.certifier() {
-        for k in 0..n {
-            let members: Vec<usize> = (0..certified.len()).filter(|&m| labels[m] == k).map(|m| certified[m]).collect();
-            let [first, rest @ ..] = members.as_slice() else { continue };
-            if rest.is_empty() {
-                continue;
-            }
-            let mut hull = solutions[*first].clone();
-            for &m in rest {
-                for (h, x) in hull.dims.iter_mut().zip(&solutions[m].dims) {
-                    *h = h.convex_hull(*x);
-                }
-            }
-            if let Some(proven) = newton.certify(&hull) {
-                members.iter().for_each(|&m| drop[m] = true);
-                merged.push(IntervalBox { level: hull.level, ..proven });
-            }
-        }
-    }
-    let kept = solutions.into_iter().zip(unique).zip(drop).filter(|(_, d)| !d).map(|(x, _)| x);
-    let (mut solutions, mut unique): (Vec<IntervalBox>, Vec<bool>) = kept.unzip();
-    unique.extend(merged.iter().map(|_| true));
-    solutions.extend(merged);
+    // Refined clusters may hold boxes that share a certificate with their neighbours.
+    let (solutions, unique, merged) = solver.merge_shared_certificates(solutions, unique);
+    e.stats.certificates_merged += merged;
     e.stats.solutions = solutions.len() as u64;
     e.stats.certified = unique.iter().filter(|&&u| u).count() as u64;
     e.solutions = solutions;

@@ -285,11 +285,6 @@ impl PoseProblem {
         })))
     }
 
-    /// Krawczyk on the square rows (no width threshold): what certifies a box of this system.
-    pub fn certifier(&self) -> Option<Newton<'_>> {
-        Newton::new(&self.square, f64::INFINITY)
-    }
-
     /// The rotation over the box.
     fn rotation(&self, b: &IntervalBox) -> [[Interval; 3]; 3] {
         self.r.map(|row| row.map(|x| b.dims[x]))
