@@ -743,7 +743,9 @@ fn certified_counts(xml: &str, fixed: &[(&str, f64)]) -> (usize, usize, usize) {
 /// freedoms), which is why the builder's choice solves it planar.
 #[test]
 fn placement_in_space_does_not_change_the_certified_answers() {
-    let cases: [(&str, &[(&str, f64)], bool); 4] = [
+    // File, fixed joints, and whether placements tilt it (else they only turn it about z).
+    type Case = (&'static str, &'static [(&'static str, f64)], bool);
+    let cases: [Case; 4] = [
         ("spherical_four_bar.urdf", &[("crank_joint", 0.4)], true),
         ("rssr.urdf", &[("crank_joint", 0.6)], true),
         ("four_bar.urdf", &[("crank_joint", 0.5)], false),
