@@ -31,7 +31,7 @@ use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 use std::collections::BTreeMap;
 
 /// Which rows beyond the square system are written. The square system alone is the faster
-/// (README: 2.7x less CPU on the Stewart references, for the same boxes and certificates).
+/// (README: 2.7x less CPU on the Stewart references, for the same certified assemblies).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum PoseRows {
     /// The square system only.
