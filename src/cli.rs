@@ -318,6 +318,7 @@ enum ModelArg {
     Auto,
     Planar,
     Spatial,
+    Pose,
 }
 
 impl From<ModelArg> for ModelChoice {
@@ -326,6 +327,7 @@ impl From<ModelArg> for ModelChoice {
             ModelArg::Auto => ModelChoice::Auto,
             ModelArg::Planar => ModelChoice::Planar,
             ModelArg::Spatial => ModelChoice::Spatial,
+            ModelArg::Pose => ModelChoice::Pose,
         }
     }
 }
@@ -349,8 +351,9 @@ struct SolveArgs {
     #[arg(long = "trace", value_name = "LINK@X,Y[,Z]")]
     trace: Vec<String>,
     /// Which builder: planar (one angle per rigid group), spatial (any loop of revolute,
-    /// prismatic, spherical, universal, cylindrical and fixed joints), or auto: planar when the
-    /// mechanism is planar, spatial otherwise.
+    /// prismatic, spherical, universal, cylindrical and fixed joints), pose (a platform on six
+    /// legs, every leg fixed: its position and rotation), or auto: planar when the mechanism is
+    /// planar, else pose for a platform with every leg fixed and no traced point, else spatial.
     #[arg(long, value_enum, default_value_t = ModelArg::Auto)]
     model: ModelArg,
     /// Shrink by interval propagation only (no LP): for comparisons.

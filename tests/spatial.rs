@@ -8,7 +8,10 @@
 use crate::util::{problem, urdf_text};
 use linkspace::interval::components;
 use linkspace::model::urdf;
-use linkspace::problems::{LinkageError, SpatialProblem};
+use linkspace::app::SolveJob;
+use linkspace::problems::Coordinates;
+use linkspace::problems::{Linkage, LinkageError, Model, ModelChoice, PoseProblem, PoseRows, SpatialProblem};
+use linkspace::search::BoxStatus;
 use linkspace::search::{Enclosure, SolverSettings};
 use linkspace::{IntervalBox, Status};
 use std::collections::BTreeMap;
@@ -494,6 +497,87 @@ fn stewart_platform_assemblies_are_all_certified() {
     }
 }
 
+/// One case of the Stewart reference through `solve --model pose` (`app::SolveJob`, what the CLI
+/// and the node run): every real assembly in exactly one certified box, every box certified and
+/// holding one of them, the joint values (position, roll, pitch, yaw) enclosing the reference's.
+fn stewart_pose_case(index: usize) {
+    let refs = reference("stewart_6_6_fk.json");
+    let m = urdf::parse(&urdf_text("stewart_6_6.urdf")).expect("parses");
+    let case = &refs["cases"][index];
+    let name = case["name"].as_str().expect("name");
+    let fixed = fixed_from(case, "leg_lengths");
+    let job = SolveJob::build(&m, ModelChoice::Pose, &fixed, &[], SolverSettings { threads: 1, ..Default::default() }).expect("builds");
+    assert_eq!(job.problem().model(), Model::Pose);
+    let r = job.run(&AtomicBool::new(false), &mut |_| {});
+    assert_eq!(r.status, Status::Complete, "{name}");
+    let count = case["real_solutions"].as_u64().expect("count") as usize;
+    assert!(r.boxes.iter().all(|b| b.status == BoxStatus::Unique), "{name}: every box certified: {:?}", r.boxes.iter().map(|b| b.status).collect::<Vec<_>>());
+    assert_eq!(r.boxes.len(), count, "{name}: one box per real assembly");
+    let var = |n: &str| r.variables.iter().position(|v| v == n).expect("pose variable");
+    let position = ["tx", "ty", "tz"].map(var);
+    let rotation = [["R11", "R12", "R13"], ["R21", "R22", "R23"], ["R31", "R32", "R33"]].map(|row| row.map(var));
+    let f = |v: &serde_json::Value| v.as_f64().expect("number");
+    let inside = |[lo, hi]: [f64; 2], v: f64| lo - 1e-12 <= v && v <= hi + 1e-12;
+    let mut held = vec![0; r.boxes.len()];
+    for s in case["solutions"].as_array().expect("solutions") {
+        let pos = &s["platform_position"];
+        let rot = &s["platform_rotation_matrix"];
+        let holding: Vec<usize> = (0..r.boxes.len())
+            .filter(|&k| {
+                let b = &r.boxes[k].bounds;
+                (0..3).all(|i| inside(b[position[i]], f(&pos[i])) && (0..3).all(|j| inside(b[rotation[i][j]], f(&rot[i][j]))))
+            })
+            .collect();
+        assert_eq!(holding.len(), 1, "{name}: assembly at {pos} in {} certified boxes", holding.len());
+        let k = holding[0];
+        held[k] += 1;
+        let joints: BTreeMap<&str, (f64, f64)> = r.joint_names.iter().map(|n| n.as_str()).zip(r.boxes[k].joints.iter().map(|j| (j[0], j[1]))).collect();
+        let rpy = &s["platform_rpy"];
+        for (joint, v, angle) in [("x", f(&pos[0]), false), ("y", f(&pos[1]), false), ("z", f(&pos[2]), false), ("roll", f(&rpy[0]), true), ("pitch", f(&rpy[1]), true), ("yaw", f(&rpy[2]), true)] {
+            let j = joints[format!("platform_pose.{joint}").as_str()];
+            assert!(holds(j, v, angle, 1e-9), "{name}: {joint} {v} outside {j:?}");
+        }
+    }
+    assert!(held.iter().all(|&h| h == 1), "{name}: a certified box without a reference assembly: {held:?}");
+}
+
+#[test]
+fn stewart_pose_model_certifies_each_assembly_once_from_pose() {
+    stewart_pose_case(0);
+}
+
+#[test]
+fn stewart_pose_model_certifies_each_assembly_once_many_real() {
+    stewart_pose_case(1);
+}
+
+#[test]
+fn stewart_pose_model_certifies_each_assembly_once_near_singular() {
+    // Two assemblies 1.7e-3 apart: their cluster is searched again at finer sigmas.
+    stewart_pose_case(2);
+}
+
+#[test]
+fn a_platform_with_every_leg_fixed_gets_the_pose_model_by_default() {
+    let refs = reference("stewart_6_6_fk.json");
+    let m = urdf::parse(&urdf_text("stewart_6_6.urdf")).expect("parses");
+    let fixed = fixed_from(&refs["cases"][0], "leg_lengths");
+    let auto = Linkage::build(&m, ModelChoice::Auto, &fixed, &[]).expect("builds");
+    assert_eq!(auto.model(), Model::Pose, "{}", auto.model_reason());
+    // A leg left free: a curve of poses, in joint coordinates.
+    let partial = Linkage::build(&m, ModelChoice::Auto, &fixed[1..], &[]).expect("builds");
+    assert_eq!(partial.model(), Model::Spatial);
+    // Forced, on a mechanism that is no platform: a clear refusal.
+    let rssr = urdf::parse(&urdf_text("rssr.urdf")).expect("parses");
+    let err = Linkage::build(&rssr, ModelChoice::Pose, &[], &[]).err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(err.contains("--model pose") && err.contains("not a parallel platform"), "{err}");
+    // The redundant rows narrow boxes but change no answer.
+    let p = PoseProblem::with_rows(&m, &fixed, PoseRows::Redundant).expect("builds");
+    assert!(!p.is_square());
+    let e = enclose(&p.solver(SolverSettings::default()).expect("valid settings"));
+    assert_eq!(components(&e.solutions).1, 8);
+}
+
 // ---------- soundness of every contractor on the spatial systems ----------
 
 /// A true configuration of each fixture as a point in its system's variables: primaries from
@@ -659,7 +743,9 @@ fn certified_counts(xml: &str, fixed: &[(&str, f64)]) -> (usize, usize, usize) {
 /// freedoms), which is why the builder's choice solves it planar.
 #[test]
 fn placement_in_space_does_not_change_the_certified_answers() {
-    let cases: [(&str, &[(&str, f64)], bool); 4] = [
+    // File, fixed joints, and whether placements tilt it (else they only turn it about z).
+    type Case = (&'static str, &'static [(&'static str, f64)], bool);
+    let cases: [Case; 4] = [
         ("spherical_four_bar.urdf", &[("crank_joint", 0.4)], true),
         ("rssr.urdf", &[("crank_joint", 0.6)], true),
         ("four_bar.urdf", &[("crank_joint", 0.5)], false),

@@ -20,6 +20,8 @@ use crate::problems::singular::{Coordinates, SingularProblem};
 use super::loops::{all_kinds, SingularSets};
 use crate::singular::{BoxKind, SingularSet};
 use crate::problems::{Linkage, LinkageError, ModelChoice};
+use crate::search::{Enclosure, RefinePlan, Refinement, Solver};
+use std::time::{Duration, Instant};
 use crate::search::{BoxStatus, Progress, SolveStats, SolverSettings, Status};
 use crate::system::VarRole;
 use std::sync::atomic::AtomicBool;
@@ -64,6 +66,7 @@ impl Analysis for LinkageAnalysis {
         match self.problem {
             Linkage::Planar(_) => MechanismKind::PlanarLinkage,
             Linkage::Spatial(..) => MechanismKind::SpatialLinkage,
+            Linkage::Pose(..) => MechanismKind::ParallelPlatform,
         }
     }
 
@@ -75,6 +78,7 @@ impl Analysis for LinkageAnalysis {
         match &self.problem {
             Linkage::Planar(_) => "a planar linkage: its configuration space and singular sets (C-space, input, output) are analysed; cusps and nodes of the type-II image are not (`linkspace loop-singularities --kind image`), nor is inverse kinematics".to_string(),
             Linkage::Spatial(_, why) => format!("a spatial linkage ({why}): its configuration space and singular sets (C-space, input, output; actuated and output joints are tree joints) are analysed; inverse kinematics is not"),
+            Linkage::Pose(_, why) => format!("a parallel platform ({why}): its assembly modes are solved in pose coordinates, its singular sets in the spatial model's joint coordinates; inverse kinematics is not analysed"),
         }
     }
 
@@ -372,7 +376,12 @@ impl SolveJob {
     /// undecided ones, each with its joint values and traced points.
     pub fn run(&self, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> BoxSetResult {
         let solver = self.problem.solver(self.settings.clone()).expect("invariant: validated when built");
+        let t0 = Instant::now();
         let e = solver.enclose(cancel, progress);
+        let e = match &self.problem {
+            Linkage::Pose(..) => settle_pose(&solver, e, cancel, self.settings.timeout.map(|t| t.saturating_sub(t0.elapsed()))),
+            _ => e,
+        };
         let (labels, clusters) = components(&e.solutions);
         let problem = &self.problem;
         let joint_names = problem.free_joints().to_vec();
@@ -408,10 +417,48 @@ impl SolveJob {
     }
 }
 
+/// The pose model's answer, one certified box per assembly where it can be proven: each
+/// cluster holding an uncertified box (two assemblies close together, say) is searched again at
+/// finer sigmas (`Solver::refine`) and replaced when every box of a completed round is
+/// certified (the round's start box holds the whole cluster, so no root of it is lost; a round
+/// with no box proves the cluster empty); then certified boxes sharing one root are merged
+/// (`Solver::merge_shared_certificates`). What cannot be settled is reported as found.
+/// `timeout`: what is left of the run's.
+fn settle_pose(solver: &Solver<'_>, mut e: Enclosure, cancel: &AtomicBool, timeout: Option<Duration>) -> Enclosure {
+    let t0 = Instant::now();
+    let (labels, n) = components(&e.solutions);
+    let mut solutions = Vec::new();
+    let mut unique = Vec::new();
+    for k in 0..n {
+        let members: Vec<usize> = (0..e.solutions.len()).filter(|&i| labels[i] == k).collect();
+        let boxes: Vec<IntervalBox> = members.iter().map(|&i| e.solutions[i].clone()).collect();
+        if members.iter().any(|&i| !e.unique[i]) {
+            let left = timeout.map(|t| t.saturating_sub(t0.elapsed()));
+            let all_certified = |_: &[IntervalBox], u: &[bool]| u.iter().all(|&x| x);
+            if let Refinement::Settled(found) = solver.refine(&boxes, &RefinePlan::default(), left, &all_certified, cancel) {
+                solutions.extend(found.solutions);
+                unique.extend(found.unique);
+                continue;
+            }
+        }
+        solutions.extend(boxes);
+        unique.extend(members.iter().map(|&i| e.unique[i]));
+    }
+    // Refined clusters may hold boxes that share a certificate with their neighbours.
+    let (solutions, unique, merged) = solver.merge_shared_certificates(solutions, unique);
+    e.stats.certificates_merged += merged;
+    e.stats.solutions = solutions.len() as u64;
+    e.stats.certified = unique.iter().filter(|&&u| u).count() as u64;
+    e.solutions = solutions;
+    e.unique = unique;
+    e
+}
+
 /// World coordinates of the problem's traced points over a box, in `trace_names` order.
 fn traced(problem: &Linkage, b: &IntervalBox) -> Vec<TracedBounds> {
     match problem {
         Linkage::Planar(p) => p.traces.iter().map(|t| TracedBounds { x: bounds(b.dims[t.x]), y: bounds(b.dims[t.y]), z: None }).collect(),
+        Linkage::Pose(..) => Vec::new(),
         Linkage::Spatial(p, _) => p
             .traces
             .iter()

@@ -4,9 +4,9 @@
 //! both run `SingularSets`, so a topic and a `--json` file of the same URDF and settings hold the
 //! same boxes.
 //!
-//! The model is `problems::Linkage::build`'s, as `solve --model auto` chooses: planar when the
-//! planar builder accepts the mechanism, spatial otherwise (`problems::singular::velocity`),
-//! with the reason.
+//! The model is `problems::Linkage::build_in_joints`'s, as `solve --model auto` chooses among
+//! the joint-coordinate models: planar when the planar builder accepts the mechanism, spatial
+//! otherwise (`problems::singular::velocity`), with the reason.
 //!
 //! Building every set's problem comes first (`SingularSets::new`), so a bad request (unknown
 //! actuated joint, wrong actuator count) is answered before any search starts; `solve` then runs
@@ -78,7 +78,7 @@ pub struct SingularSets {
 
 impl SingularSets {
     /// Builds the problem of every kind of `kinds` for `m` with joints `fixed`, on the model
-    /// `solve --model auto` picks (`Linkage::build`; see `SingularProblem::with_linkage`); the
+    /// `solve --model auto` picks among the joint-coordinate models (`Linkage::build_in_joints`; see `SingularProblem::with_linkage`); the
     /// first that does not build is the error. A point output is traced in the output set's
     /// linkage only, as `SingularProblem::new` does.
     pub fn new(m: &Mechanism, fixed: &[(String, f64)], kinds: &[SingularKind], actuated: &[String], output: Option<Output>) -> Result<Self, SingularError> {
@@ -87,7 +87,7 @@ impl SingularSets {
                 (Some(Output::Point { link, x, y }), SingularKind::Output) => vec![(link.clone(), [*x, *y, 0.0], point_label(link, *x, *y))],
                 _ => Vec::new(),
             };
-            let linkage = Linkage::build(m, ModelChoice::Auto, fixed, &traces)?;
+            let linkage = Linkage::build_in_joints(m, ModelChoice::Auto, fixed, &traces)?;
             SingularProblem::with_linkage(linkage, kind, actuated, output.clone())
         };
         let problems: Vec<SingularProblem<Linkage>> = kinds.iter().map(|&k| build(k)).collect::<Result<_, _>>()?;

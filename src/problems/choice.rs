@@ -1,8 +1,11 @@
 //! Which builder a closed-loop mechanism gets: the planar one (one angle per rigid group) when it
-//! accepts the mechanism, the spatial one otherwise (`--model auto`), or the one the user forces.
+//! accepts the mechanism; else the pose one for a platform on six legs, every leg fixed and no
+//! point traced; else the spatial one (`--model auto`); or the one the user forces.
 //! One choice for the CLI's `solve` and the node's linkage analysis, so both say the same thing.
+//! The singular-set systems differentiate joint coordinates: they take the planar or the
+//! spatial builder (`Linkage::build_in_joints`).
 
-use super::{LinkageError, LinkageProblem, SpatialProblem};
+use super::{LinkageError, LinkageProblem, PoseProblem, SpatialProblem};
 use crate::search::{SolveError, Solver, SolverSettings};
 
 /// `--model`: which builder.
@@ -16,6 +19,8 @@ pub enum ModelChoice {
     Planar,
     /// The spatial builder, even for a planar mechanism.
     Spatial,
+    /// The pose builder (a platform on six legs, each fixed), or its refusal.
+    Pose,
 }
 
 /// The builder a linkage was built with.
@@ -25,6 +30,8 @@ pub enum Model {
     Planar,
     /// Rotation matrices of linear forms, closures as linear rows.
     Spatial,
+    /// A platform's position and rotation, leg rows linear in derived products.
+    Pose,
 }
 
 impl Model {
@@ -33,12 +40,16 @@ impl Model {
         match self {
             Model::Planar => "planar",
             Model::Spatial => "spatial",
+            Model::Pose => "pose",
         }
     }
 }
 
 /// Why a mechanism the planar builder accepts is solved with it.
 pub const PLANAR_REASON: &str = "every revolute axis is parallel and every slider lies in the plane: one angle per rigid group";
+
+/// Why a platform is solved in pose coordinates.
+pub const POSE_REASON: &str = "a platform on six legs, every leg fixed: its pose (position, rotation) is the unknown, the legs linear rows";
 
 /// A traced point: link, coordinates in the link's frame, and its name as given (`LINK@X,Y[,Z]`).
 pub type TracedPoint = (String, [f64; 3], String);
@@ -50,16 +61,33 @@ pub enum Linkage {
     Planar(LinkageProblem),
     /// The spatial builder's system, and why it was chosen.
     Spatial(SpatialProblem, String),
+    /// The pose builder's system, and why it was chosen.
+    Pose(PoseProblem, String),
 }
 
 impl Linkage {
     /// Picks the model and builds it, saying why in the spatial case.
     pub fn build(mechanism: &crate::model::Mechanism, choice: ModelChoice, fixed: &[(String, f64)], traces: &[TracedPoint]) -> Result<Self, LinkageError> {
+        Self::build_with(mechanism, choice, fixed, traces, true)
+    }
+
+    /// As `build`, among the models in joint coordinates only (`--model pose` refused, `auto`
+    /// planar or spatial): the singular-set systems differentiate joint coordinates.
+    pub fn build_in_joints(mechanism: &crate::model::Mechanism, choice: ModelChoice, fixed: &[(String, f64)], traces: &[TracedPoint]) -> Result<Self, LinkageError> {
+        Self::build_with(mechanism, choice, fixed, traces, false)
+    }
+
+    fn build_with(mechanism: &crate::model::Mechanism, choice: ModelChoice, fixed: &[(String, f64)], traces: &[TracedPoint], pose: bool) -> Result<Self, LinkageError> {
         let flat: Vec<(String, f64, f64)> = traces.iter().map(|(l, p, _)| (l.clone(), p[0], p[1])).collect();
         let off_plane = traces.iter().find(|(_, p, _)| p[2] != 0.0).map(|(_, _, r)| r.clone());
         let spatial = |reason: String| -> Result<Self, LinkageError> { Ok(Self::Spatial(SpatialProblem::new(mechanism, fixed, traces)?, reason)) };
         match choice {
             ModelChoice::Spatial => spatial("forced by --model spatial".into()),
+            ModelChoice::Pose if !pose => Err(LinkageError::NotJointModel),
+            ModelChoice::Pose => match traces.first() {
+                Some((_, _, r)) => Err(LinkageError::TraceOnPose(r.clone())),
+                None => Ok(Self::Pose(PoseProblem::new(mechanism, fixed)?, "forced by --model pose".into())),
+            },
             ModelChoice::Planar => match off_plane {
                 Some(r) => Err(LinkageError::TraceOffPlane(r)),
                 None => Ok(Self::Planar(LinkageProblem::new(mechanism, fixed, &flat)?)),
@@ -70,7 +98,10 @@ impl Linkage {
                 }
                 match LinkageProblem::new(mechanism, fixed, &flat) {
                     Ok(p) => Ok(Self::Planar(p)),
-                    Err(LinkageError::NonPlanar(why)) => spatial(format!("not planar: {why}")),
+                    Err(LinkageError::NonPlanar(why)) => match PoseProblem::new(mechanism, fixed) {
+                        Ok(p) if pose && traces.is_empty() => Ok(Self::Pose(p, POSE_REASON.into())),
+                        _ => spatial(format!("not planar: {why}")),
+                    },
                     Err(e) => Err(e),
                 }
             }
@@ -81,14 +112,14 @@ impl Linkage {
     pub fn model_reason(&self) -> &str {
         match self {
             Self::Planar(_) => PLANAR_REASON,
-            Self::Spatial(_, why) => why,
+            Self::Spatial(_, why) | Self::Pose(_, why) => why,
         }
     }
 
     /// What the spatial builder simplified (legs between ball joints reduced to distances).
     pub fn reductions(&self) -> &[String] {
         match self {
-            Self::Planar(_) => &[],
+            Self::Planar(_) | Self::Pose(..) => &[],
             Self::Spatial(p, _) => &p.reductions,
         }
     }
@@ -98,6 +129,7 @@ impl Linkage {
         match self {
             Self::Planar(_) => "planar_linkage",
             Self::Spatial(..) => "spatial_linkage",
+            Self::Pose(..) => "parallel_platform",
         }
     }
 
@@ -114,6 +146,7 @@ impl Linkage {
         match self {
             Self::Planar(p) => p.solver(settings),
             Self::Spatial(p, _) => p.solver(settings),
+            Self::Pose(p, _) => p.solver(settings),
         }
     }
 
@@ -122,6 +155,7 @@ impl Linkage {
         match self {
             Self::Planar(p) => &p.free_joints,
             Self::Spatial(p, _) => &p.free_joints,
+            Self::Pose(p, _) => &p.free_joints,
         }
     }
 
@@ -130,6 +164,7 @@ impl Linkage {
         match self {
             Self::Planar(p) => p.traces.iter().map(|t| t.name.clone()).collect(),
             Self::Spatial(p, _) => p.traces.iter().map(|t| t.name.clone()).collect(),
+            Self::Pose(..) => Vec::new(),
         }
     }
 }

@@ -107,6 +107,15 @@ pub enum LinkageError {
     /// A tree has no loop to close: every joint value is a configuration.
     #[error("the mechanism has no <loop> closure: every joint value is a configuration, there is nothing to enclose (serial chains: see `singularities`)")]
     NoLoops,
+    /// `--model pose` on a mechanism that is not a platform on six fixed legs.
+    #[error("--model pose: {0}")]
+    Platform(#[from] super::PlatformError),
+    /// A traced point with `--model pose`, which places only the platform.
+    #[error("--trace {0}: the pose model places the platform only; trace with --model spatial")]
+    TraceOnPose(String),
+    /// The pose model where joint coordinates are needed (singular sets).
+    #[error("the pose model has no joint coordinates to differentiate; singular sets take --model planar, spatial or auto")]
+    NotJointModel,
 }
 
 /// The pair of variables of a rotating group, or the ground.

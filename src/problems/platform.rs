@@ -110,6 +110,72 @@ pub enum LegValues {
     Lengths,
 }
 
+/// One leg as the file states it: a ball joint on the base, a prismatic joint, and a spherical
+/// loop onto the platform.
+#[derive(Clone, Debug)]
+pub(crate) struct RawLeg {
+    /// Name of the prismatic joint.
+    pub name: String,
+    /// Index of the prismatic joint.
+    pub joint: usize,
+    /// Index of the spherical loop closing the leg on the platform.
+    pub closure: usize,
+    /// Base ball centre, in the base frame (the ball joint's origin).
+    pub base: Vector3<f64>,
+    /// The rod's ball centre in the rod frame.
+    pub on_rod: Vector3<f64>,
+    /// Platform ball centre, in the platform frame.
+    pub on_platform: Vector3<f64>,
+    /// Range of the squared ball-to-ball length allowed by the joint limits.
+    pub squared_range: (f64, f64),
+}
+
+/// The platform link (child of the base through a floating joint) and its legs, in file order:
+/// what both platform builders read.
+pub(crate) fn read_legs(m: &Mechanism) -> Result<(usize, Vec<RawLeg>), PlatformError> {
+    let floating: Vec<usize> = (0..m.joints.len()).filter(|&j| m.joints[j].kind == JointKind::Floating && m.joints[j].parent == m.root).collect();
+    let platform = match floating.as_slice() {
+        [j] => m.joints[*j].child,
+        [] => return Err(PlatformError::NotAPlatform("no link hangs from the base by a floating joint (the platform)".into())),
+        _ => return Err(PlatformError::NotAPlatform("more than one floating link".into())),
+    };
+    let mut legs = Vec::new();
+    for (index, joint) in m.joints.iter().enumerate() {
+        let JointKind::Prismatic { limits } = joint.kind else { continue };
+        let element = format!("leg '{}'", joint.name);
+        // Below: the cylinder, on a ball joint of the base.
+        let cylinder = joint.parent;
+        let ball = match m.links[cylinder].parent_joint {
+            Some(b) if m.joints[b].kind == JointKind::Spherical && m.joints[b].parent == m.root => b,
+            _ => return Err(PlatformError::NotAPlatform(format!("{element}: its cylinder must hang from the base by a spherical joint"))),
+        };
+        let base = m.joints[ball].origin.translation.vector;
+        // Above: the rod, closed onto the platform by a spherical loop.
+        let rod = joint.child;
+        let index_of_closure = m.loops.iter().position(|l| l.kind == JointKind::Spherical && (l.predecessor == rod && l.successor == platform || l.successor == rod && l.predecessor == platform));
+        let Some(closure_index) = index_of_closure else {
+            return Err(PlatformError::NotAPlatform(format!("{element}: no <loop type=\"spherical\"> joins its rod '{}' to the platform", m.links[rod].name)));
+        };
+        let closure = &m.loops[closure_index];
+        let (on_rod, on_platform) = if closure.predecessor == rod {
+            (closure.predecessor_origin.translation.vector, closure.successor_origin.translation.vector)
+        } else {
+            (closure.successor_origin.translation.vector, closure.predecessor_origin.translation.vector)
+        };
+        // Top ball in the cylinder frame: o.t + o.R (q·axis + on_rod); a line in q.
+        let dir = joint.origin.rotation * joint.axis;
+        let at0 = joint.origin.translation.vector + joint.origin.rotation * on_rod;
+        if at0.cross(&dir).norm() > 1e-9 * (1.0 + at0.norm()) {
+            return Err(PlatformError::NotAPlatform(format!("{element}: the two ball centres must lie on the prismatic axis")));
+        }
+        let offset = at0.dot(&dir);
+        let (lo, hi) = (offset + limits.0, offset + limits.1);
+        let squared_range = if lo <= 0.0 && hi >= 0.0 { (0.0, (lo * lo).max(hi * hi)) } else { ((lo * lo).min(hi * hi), (lo * lo).max(hi * hi)) };
+        legs.push(RawLeg { name: joint.name.clone(), joint: index, closure: closure_index, base, on_rod, on_platform, squared_range });
+    }
+    Ok((platform, legs))
+}
+
 fn same(a: &Vector3<f64>, b: &Vector3<f64>) -> bool {
     (a - b).norm() <= 1e-9 * (1.0 + a.norm())
 }
@@ -124,53 +190,19 @@ impl PlatformProblem {
     /// enters the distance problem as the interval square `[l]²`, so the problem solved is
     /// exactly the one with that length.
     pub fn with_legs(m: &Mechanism, fixed: &[(String, f64)], values: LegValues) -> Result<Self, PlatformError> {
-        let floating: Vec<usize> = (0..m.joints.len()).filter(|&j| m.joints[j].kind == JointKind::Floating && m.joints[j].parent == m.root).collect();
-        let platform = match floating.as_slice() {
-            [j] => m.joints[*j].child,
-            [] => return Err(PlatformError::NotAPlatform("no link hangs from the base by a floating joint (the platform)".into())),
-            _ => return Err(PlatformError::NotAPlatform("more than one floating link".into())),
-        };
+        let (platform, read) = read_legs(m)?;
         let mut base_points: Vec<Vector3<f64>> = Vec::new();
         let mut platform_points: Vec<Vector3<f64>> = Vec::new();
         let mut legs = Vec::new();
         let mut tops = Vec::new();
-        for joint in &m.joints {
-            let JointKind::Prismatic { limits } = joint.kind else { continue };
-            let element = format!("leg '{}'", joint.name);
-            // Below: the cylinder, on a ball joint of the base.
-            let cylinder = joint.parent;
-            let ball = m.links[cylinder].parent_joint.map(|b| &m.joints[b]);
-            let ball = match ball {
-                Some(b) if b.kind == JointKind::Spherical && b.parent == m.root => b,
-                _ => return Err(PlatformError::NotAPlatform(format!("{element}: its cylinder must hang from the base by a spherical joint"))),
-            };
-            let base = ball.origin.translation.vector;
-            // Above: the rod, closed onto the platform by a spherical loop.
-            let rod = joint.child;
-            let closure = m.loops.iter().find(|l| l.kind == JointKind::Spherical && (l.predecessor == rod && l.successor == platform || l.successor == rod && l.predecessor == platform));
-            let Some(closure) = closure else {
-                return Err(PlatformError::NotAPlatform(format!("{element}: no <loop type=\"spherical\"> joins its rod '{}' to the platform", m.links[rod].name)));
-            };
-            let (on_rod, on_platform) = if closure.predecessor == rod {
-                (closure.predecessor_origin.translation.vector, closure.successor_origin.translation.vector)
-            } else {
-                (closure.successor_origin.translation.vector, closure.predecessor_origin.translation.vector)
-            };
-            // Top ball in the cylinder frame: o.t + o.R (q·axis + on_rod); a line in q.
-            let dir = joint.origin.rotation * joint.axis;
-            let at0 = joint.origin.translation.vector + joint.origin.rotation * on_rod;
-            if at0.cross(&dir).norm() > 1e-9 * (1.0 + at0.norm()) {
-                return Err(PlatformError::NotAPlatform(format!("{element}: the two ball centres must lie on the prismatic axis")));
-            }
-            let offset = at0.dot(&dir);
-            let (lo, hi) = (offset + limits.0, offset + limits.1);
-            let squared_range = if lo <= 0.0 && hi >= 0.0 { (0.0, (lo * lo).max(hi * hi)) } else { ((lo * lo).min(hi * hi), (lo * lo).max(hi * hi)) };
+        for leg in &read {
+            let base = leg.base;
             let bi = base_points.iter().position(|p| same(p, &base)).unwrap_or_else(|| {
                 base_points.push(base);
                 base_points.len() - 1
             });
-            legs.push(Leg { name: joint.name.clone(), base: bi, top: 0, squared_range });
-            tops.push((m.loops.iter().position(|l| std::ptr::eq(l, closure)).expect("closure is a loop"), on_platform));
+            legs.push(Leg { name: leg.name.clone(), base: bi, top: 0, squared_range: leg.squared_range });
+            tops.push((leg.closure, leg.on_platform));
         }
         // Platform points are numbered in the order of their loops in the file.
         let mut order: Vec<usize> = (0..legs.len()).collect();

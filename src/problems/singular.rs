@@ -336,6 +336,7 @@ impl Coordinates for Linkage {
         match self {
             Linkage::Planar(p) => Coordinates::system(p),
             Linkage::Spatial(p, _) => Coordinates::system(p),
+            Linkage::Pose(p, _) => &p.system,
         }
     }
 
@@ -343,6 +344,7 @@ impl Coordinates for Linkage {
         match self {
             Linkage::Planar(p) => Coordinates::name(p),
             Linkage::Spatial(p, _) => Coordinates::name(p),
+            Linkage::Pose(p, _) => &p.name,
         }
     }
 
@@ -350,6 +352,7 @@ impl Coordinates for Linkage {
         match self {
             Linkage::Planar(p) => p.model(),
             Linkage::Spatial(p, _) => p.model(),
+            Linkage::Pose(..) => Model::Pose,
         }
     }
 
@@ -357,6 +360,7 @@ impl Coordinates for Linkage {
         match self {
             Linkage::Planar(p) => Coordinates::fixed_joints(p),
             Linkage::Spatial(p, _) => Coordinates::fixed_joints(p),
+            Linkage::Pose(p, _) => &p.fixed,
         }
     }
 
@@ -364,6 +368,7 @@ impl Coordinates for Linkage {
         match self {
             Linkage::Planar(p) => p.joint_values(b),
             Linkage::Spatial(p, _) => p.joint_values(b),
+            Linkage::Pose(p, _) => p.joint_values(b),
         }
     }
 
@@ -371,6 +376,9 @@ impl Coordinates for Linkage {
         match self {
             Linkage::Planar(p) => p.extended_solver(system, settings),
             Linkage::Spatial(p, _) => p.extended_solver(system, settings),
+            // The pose model's own pipeline on its own system; no other system extends it.
+            Linkage::Pose(p, _) if std::ptr::eq(system, &p.system) => p.solver(settings),
+            Linkage::Pose(..) => Solver::new(system, settings),
         }
     }
 
@@ -378,6 +386,7 @@ impl Coordinates for Linkage {
         match self {
             Linkage::Planar(p) => p.augment(kind, actuated, output),
             Linkage::Spatial(p, _) => p.augment(kind, actuated, output),
+            Linkage::Pose(..) => Err(SingularError::Linkage(LinkageError::NotJointModel)),
         }
     }
 
@@ -385,6 +394,7 @@ impl Coordinates for Linkage {
         match self {
             Linkage::Planar(p) => p.rows_faithful(b),
             Linkage::Spatial(p, _) => p.rows_faithful(b),
+            Linkage::Pose(..) => true,
         }
     }
 }

@@ -454,8 +454,8 @@ impl<'a> Solver<'a> {
         let mut gone = vec![false; boxes.len()];
         let mut contractor = self.contractor();
         let mut merged = 0;
-        for component in 0..n {
-            if sizes[component] <= 1 {
+        for (component, &size) in sizes.iter().enumerate() {
+            if size <= 1 {
                 continue;
             }
             // Certified boxes kept so far in this component, by index into `boxes`.
