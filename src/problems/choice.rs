@@ -138,6 +138,7 @@ impl Linkage {
         match self {
             Self::Planar(p) => &p.system,
             Self::Spatial(p, _) => &p.system,
+            Self::Pose(p, _) => &p.system,
         }
     }
 
