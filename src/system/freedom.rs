@@ -18,7 +18,7 @@ pub struct Freedom {
     pub unknowns: usize,
     /// Equations.
     pub rows: usize,
-    /// At a point Newton found, if it found one.
+    /// At the point with the most freedoms among those Newton found, if it found one.
     pub at_point: Option<LocalFreedom>,
 }
 
@@ -45,9 +45,10 @@ impl Freedom {
 /// than the diagnosis is worth (a chain of thousands of joints).
 const LARGEST: usize = 240;
 
-/// Counts the freedoms of `system` and measures them at a solution point: Gauss–Newton
-/// (least-squares steps through the SVD) from up to `starts` pseudo-random points of the initial
-/// box (seeded by `seed`, so a run is repeatable), until one converges inside the box.
+/// Counts the freedoms of `system` and measures them at solution points: Gauss–Newton
+/// (least-squares steps through the SVD) from `starts` pseudo-random points of the initial box
+/// (seeded by `seed`, so a run is repeatable); of the points that converge inside the box, the
+/// one with the most freedoms is reported.
 pub fn freedom(system: &EquationSystem, starts: usize, seed: u64) -> Freedom {
     let free: Vec<usize> = (0..system.vars.len()).filter(|&i| system.vars[i].domain.wid() > 0.0).collect();
     let mut out = Freedom { unknowns: free.len(), rows: system.equations.len(), at_point: None };
@@ -92,8 +93,12 @@ pub fn freedom(system: &EquationSystem, starts: usize, seed: u64) -> Freedom {
             let sv = j.singular_values();
             let largest = sv.max().max(1.0);
             let rank = sv.iter().filter(|&&s| s > 1e-7 * largest).count();
-            out.at_point = Some(LocalFreedom { rank, dof: free.len() - rank, residual: r.amax() });
-            return out;
+            let found = LocalFreedom { rank, dof: free.len() - rank, residual: r.amax() };
+            // A solution set may have components of several dimensions (isolated assemblies
+            // beside a self-motion): the largest seen is what the search will have to cover.
+            if out.at_point.is_none_or(|best| found.dof > best.dof) {
+                out.at_point = Some(found);
+            }
         }
     }
     out
