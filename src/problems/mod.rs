@@ -17,5 +17,5 @@ pub use coordinates::{Placed, PlacedError};
 pub use linkage::{LinkageError, LinkageProblem};
 pub use platform::{LegValues, PlatformError, PlatformProblem, Pose};
 pub use singular::image::{CuspFormulation, CuspProblem, ImageError, NodeProblem};
-pub use singular::{Coordinates, Output, SingularError, SingularKind, SingularProblem};
+pub use singular::{Coordinates, Output, RateMatrix, SingularError, SingularKind, SingularProblem};
 pub use spatial::{LinkPose, SpatialProblem};

@@ -1,0 +1,248 @@
+//! Finite singular sets of 1-dof mechanisms: input or output sets whose velocity rows form a
+//! square matrix `M(q)` of the configuration (`RateMatrix`: `[F_q; A]` or `[F_q; O]`), singular
+//! exactly at the set's points (the turning points of an actuated joint, the dead centres of an
+//! output joint).
+//!
+//! Searching every chart from its whole box covers the configuration curve once per chart, at
+//! boxes fine enough for the null-vector rows to cut it: most of the time goes to boxes on the
+//! curve far from any point. Here the curve is searched once, in the configuration variables
+//! alone, and a box goes as soon as `M` is proven regular over it (`krawczyk::linear_hull`:
+//! `‖I − Y·M‖∞ < 1`), a proof that holds for boxes far wider than sigma away from the points.
+//! Each box left at `LEAF_WIDTH` is then solved in the square system of one chart: with `u`, `v`
+//! the singular vectors of `mid M` for its smallest singular value and `k` the largest component
+//! of `v`, the bordered matrix `[M with column k replaced by u]` proven regular over the box
+//! shows that every singular configuration there has a one-dimensional kernel with `v_k ≠ 0`,
+//! encloses its direction normalised by `v_k = 1`, and excludes the box when that enclosure
+//! keeps the border's unknown away from zero. When the enclosure proves chart `k` owns every such
+//! direction (`|v_j| < 1` before `k`, `≤ 1` after), chart `k` is searched from the box and that
+//! enclosure, where Krawczyk certifies its points at once; otherwise every chart is searched
+//! from the box, as the whole-box search would. Every point of the set lies in a reported box,
+//! certified or not, or in an undecided one: nothing is dropped without one of those proofs.
+
+use super::{BoxKind, SingularBox, SingularSet};
+use crate::contract::krawczyk::preconditioned_hull;
+use crate::contract::{Filter, Inclusion};
+use crate::interval::fast::Iv;
+use crate::interval::{interval, point, Interval, IntervalBox};
+use crate::problems::singular::{Coordinates, RateMatrix, SingularProblem};
+use crate::search::{Collect, Limit, SolveError, SolveStats, SolverSettings, Status};
+use crate::system::EquationSystem;
+use nalgebra::{DMatrix, DVector};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Width of the configuration boxes solved in a chart (or sigma, when coarser). Around a fold
+/// point the bordered matrix is regular over boxes of about this width, and Krawczyk then
+/// certifies the chart's system from a start box this wide.
+const LEAF_WIDTH: f64 = 0.05;
+
+/// Drops every box over which the rate matrix is proven regular.
+struct Regular<'r> {
+    rates: &'r RateMatrix,
+    base_vars: usize,
+}
+
+impl Filter for Regular<'_> {
+    fn judge(&self, b: &IntervalBox) -> Inclusion {
+        let cfg = &b.dims[..self.base_vars];
+        if regular(self.rates, cfg) || matches!(bordered(self.rates, cfg), Bordered::Empty) {
+            Inclusion::Outside
+        } else {
+            Inclusion::Straddles
+        }
+    }
+}
+
+/// `M` at the box's midpoint, in floating point (for preconditioners only).
+fn at_midpoint(rates: &RateMatrix, cfg: &[Interval]) -> Option<DMatrix<f64>> {
+    let mid: Vec<Interval> = cfg.iter().map(|d| point(d.mid())).collect();
+    let m = rates.over(&mid).map(|x| x.mid());
+    m.iter().all(|x| x.is_finite()).then_some(m)
+}
+
+/// A real approximate inverse, finite.
+fn inverse(m: DMatrix<f64>) -> Option<DMatrix<f64>> {
+    m.try_inverse().filter(|y| y.iter().all(|x| x.is_finite()))
+}
+
+/// Whether every matrix `M(q)`, `q` in the box, is proven regular.
+fn regular(rates: &RateMatrix, cfg: &[Interval]) -> bool {
+    let Some(y) = at_midpoint(rates, cfg).and_then(inverse) else { return false };
+    let n = rates.order();
+    let w = rates.preconditioned(&y, cfg);
+    let e = DMatrix::from_fn(n, n, |i, j| identity(i, j).sub(w[(i, j)]));
+    preconditioned_hull(&e, &DVector::from_element(n, Iv::ZERO)).is_some()
+}
+
+fn identity(i: usize, j: usize) -> Iv {
+    if i == j {
+        Iv { lo: 1.0, hi: 1.0 }
+    } else {
+        Iv::ZERO
+    }
+}
+
+/// What the bordered matrix shows over a box (module doc).
+enum Bordered {
+    /// No singular configuration.
+    Empty,
+    /// Every singular configuration's kernel, normalised by `v_k = 1`, lies in the enclosure
+    /// (component `k` holds the border's unknown).
+    Kernel(usize, DVector<Interval>),
+    /// Nothing proven.
+    Unknown,
+}
+
+/// The bordered system `Σ_{j≠k} M_j v_j + u·g = −M_k` over the box (module doc), preconditioned
+/// by the inverse of its matrix at the midpoint.
+fn bordered(rates: &RateMatrix, cfg: &[Interval]) -> Bordered {
+    let n = rates.order();
+    let Some(m0) = at_midpoint(rates, cfg) else { return Bordered::Unknown };
+    let svd = m0.clone().svd(true, true);
+    let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else { return Bordered::Unknown };
+    let Some(smallest) = (0..n).min_by(|&a, &b| svd.singular_values[a].total_cmp(&svd.singular_values[b])) else { return Bordered::Unknown };
+    let Some(k) = (0..n).max_by(|&a, &b| v_t[(smallest, a)].abs().total_cmp(&v_t[(smallest, b)].abs())) else { return Bordered::Unknown };
+    let border: Vec<f64> = (0..n).map(|i| u[(i, smallest)]).collect();
+    let mut a0 = m0;
+    for (i, &ui) in border.iter().enumerate() {
+        a0[(i, k)] = ui;
+    }
+    let Some(y) = inverse(a0) else { return Bordered::Unknown };
+    let w = rates.preconditioned(&y, cfg);
+    let e = DMatrix::from_fn(n, n, |i, j| {
+        if j == k {
+            // Column k of Y·A is Y·u.
+            border.iter().enumerate().fold(identity(i, j), |acc, (l, &ul)| acc.sub(Iv { lo: ul, hi: ul }.scale(y[(i, l)])))
+        } else {
+            identity(i, j).sub(w[(i, j)])
+        }
+    });
+    let z = DVector::from_fn(n, |i, _| w[(i, k)].neg());
+    let Some(x) = preconditioned_hull(&e, &z) else { return Bordered::Unknown };
+    if !x[k].contains(0.0) {
+        return Bordered::Empty;
+    }
+    Bordered::Kernel(k, x)
+}
+
+/// Where a configuration box's singular points are searched.
+enum Plan {
+    /// Proven to hold none.
+    Empty,
+    /// Chart `k` owns all of them; its search starts from this box.
+    One(usize, IntervalBox),
+    /// Not proven: every chart, from the configuration box.
+    Every,
+}
+
+impl<L: Coordinates> SingularProblem<L> {
+    /// The set of a 1-dof input or output set whose rows form `rates` (module doc): the
+    /// configuration curve first, then each of its boxes not proven regular in its chart.
+    /// `settings.max_boxes` applies to each search; `settings.timeout` to the whole call.
+    pub(super) fn solve_points(&self, rates: &RateMatrix, settings: &SolverSettings, cancel: &AtomicBool) -> Result<SingularSet, SolveError> {
+        let t0 = Instant::now();
+        let left = || settings.timeout.map(|t| t.saturating_sub(t0.elapsed()));
+        let regular: Arc<dyn Filter + Send + Sync + '_> = Arc::new(Regular { rates, base_vars: self.base_vars });
+        let leaf_width: f64 = std::env::var("LS_LEAF").ok().and_then(|x| x.parse().ok()).unwrap_or(LEAF_WIDTH);
+        let curve_settings = SolverSettings { sigma: leaf_width.max(settings.sigma), use_lp: settings.use_lp && std::env::var("LS_NOLP").is_err(), ..settings.clone() };
+        let curve = self.linkage.extended_solver(self.linkage.system(), curve_settings)?.with_filter(regular);
+        let mut leaves = Collect::default();
+        let (mut status, curve_stats) = if settings.threads > 1 { curve.run_parallel(settings.threads, cancel, &mut leaves, None) } else { curve.run(cancel, &mut leaves) };
+        let mut stats = vec![SolveStats::default(); self.chart_count()];
+        let mut boxes = Vec::new();
+        let mut dropped_other_chart = 0u64;
+        let mut charts: Vec<Option<EquationSystem>> = vec![None; self.chart_count()];
+        let undecided = |leaf: &IntervalBox| SingularBox { chart: 0, b: self.with_configuration(self.augmented.initial_box(), leaf), status: BoxKind::Undecided };
+        boxes.extend(leaves.undecided.iter().map(undecided));
+        if std::env::var("LS_DEBUG").is_ok() {
+            eprintln!("leaves {} undecided {}", leaves.solutions.len(), leaves.undecided.len());
+        }
+        for (i, leaf) in leaves.solutions.iter().enumerate() {
+            let remaining = left();
+            let cancelled = cancel.load(Ordering::Relaxed);
+            if cancelled || remaining.is_some_and(|r| r.is_zero()) {
+                status = Status::Incomplete(if cancelled { Limit::Cancelled } else { Limit::Time });
+                boxes.extend(leaves.solutions[i..].iter().map(undecided));
+                break;
+            }
+            let runs: Vec<(usize, IntervalBox)> = match self.plan(rates, leaf) {
+                Plan::Empty => continue,
+                Plan::One(k, start) => vec![(k, start)],
+                Plan::Every => (0..self.chart_count()).map(|k| (k, self.with_configuration(self.chart_box(k), leaf))).collect(),
+            };
+            for (k, start) in runs {
+                let chart = charts[k].get_or_insert_with(|| self.chart(k));
+                let solver = self.linkage.extended_solver(chart, SolverSettings { timeout: left(), threads: 1, ..settings.clone() })?;
+                let mut found = Collect::default();
+                let (s, st) = solver.run_from(start, cancel, &mut found);
+                if s != Status::Complete {
+                    status = s;
+                }
+                add(&mut stats[k], &st);
+                for (b, u) in found.solutions.into_iter().zip(found.unique) {
+                    if self.owned_elsewhere(k, &b) {
+                        dropped_other_chart += 1;
+                        continue;
+                    }
+                    let certified = u && self.linkage.rows_faithful(&b);
+                    boxes.push(SingularBox { chart: k, b, status: if certified { BoxKind::Certified } else { BoxKind::Solution } });
+                }
+                boxes.extend(found.undecided.into_iter().map(|b| SingularBox { chart: k, b, status: BoxKind::Undecided }));
+            }
+        }
+        // The curve's search comes after the charts' counters, so that entry k stays chart k's.
+        stats.push(curve_stats);
+        Ok(self.clustered(boxes, status, stats, dropped_other_chart, 0, t0))
+    }
+
+    /// Where the singular points of the configuration box `leaf` are searched (module doc).
+    fn plan(&self, rates: &RateMatrix, leaf: &IntervalBox) -> Plan {
+        let n = rates.order();
+        let (k, x) = match bordered(rates, &leaf.dims[..self.base_vars]) {
+            Bordered::Empty => return Plan::Empty,
+            Bordered::Unknown => return Plan::Every,
+            Bordered::Kernel(k, x) => (k, x),
+        };
+        if !(0..n).all(|j| j == k || if j < k { x[j].mag() < 1.0 } else { x[j].mag() <= 1.0 }) {
+            return Plan::Every;
+        }
+        let mut start = self.with_configuration(self.chart_box(k), leaf);
+        for (j, &mj) in self.multipliers.iter().enumerate() {
+            if j != k {
+                start.dims[mj] = x[j].intersection(start.dims[mj]);
+            }
+        }
+        Plan::One(k, start)
+    }
+
+    /// Chart `k`'s initial box (`m_k = 1`) without building its system.
+    fn chart_box(&self, k: usize) -> IntervalBox {
+        let mut b = self.augmented.initial_box();
+        b.dims[self.multipliers[k]] = interval(1.0, 1.0);
+        b
+    }
+
+    /// `b` with its configuration part replaced by `configuration`'s.
+    fn with_configuration(&self, mut b: IntervalBox, configuration: &IntervalBox) -> IntervalBox {
+        b.dims[..self.base_vars].copy_from_slice(&configuration.dims[..self.base_vars]);
+        b
+    }
+}
+
+/// Adds one search's counters to a chart's.
+fn add(total: &mut SolveStats, s: &SolveStats) {
+    total.processed += s.processed;
+    total.empty += s.empty;
+    total.bisected += s.bisected;
+    total.solutions += s.solutions;
+    total.shrink_rounds += s.shrink_rounds;
+    total.lp.solved += s.lp.solved;
+    total.lp.unverified += s.lp.unverified;
+    total.certified += s.certified;
+    total.spurious_dropped += s.spurious_dropped;
+    total.post_processing_cut_short |= s.post_processing_cut_short;
+    total.max_level = total.max_level.max(s.max_level);
+    total.seconds += s.seconds;
+    total.cpu_seconds += s.cpu_seconds;
+}
