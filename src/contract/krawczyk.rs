@@ -333,6 +333,25 @@ mod tests {
     use nalgebra::{DMatrix, DVector};
     use proptest::prelude::*;
 
+    #[test]
+    fn linear_hull_holds_every_member_solution_and_refuses_singular_families() {
+        // A = [[2, t], [1, 3]], r = (1, s) for t in [-0.5, 0.5], s in [0, 1]: every member is
+        // regular (det = 6 − t ≥ 5.5), and its solution must lie in the hull.
+        let a = DMatrix::from_row_slice(2, 2, &[point(2.0), interval(-0.5, 0.5), point(1.0), point(3.0)]);
+        let r = DVector::from_vec(vec![point(1.0), interval(0.0, 1.0)]);
+        let x = linear_hull(&a, &r).expect("a regular family");
+        for t in [-0.5, -0.1, 0.0, 0.3, 0.5] {
+            for s in [0.0, 0.4, 1.0] {
+                let det = 6.0 - t;
+                let sol = [(3.0 - t * s) / det, (2.0 * s - 1.0) / det];
+                assert!(x[0].contains(sol[0]) && x[1].contains(sol[1]), "t {t} s {s}: {sol:?} not in {x:?}");
+            }
+        }
+        // [[1, 1], [1, t]] holds the singular t = 1.
+        let singular = DMatrix::from_row_slice(2, 2, &[point(1.0), point(1.0), point(1.0), interval(0.5, 1.5)]);
+        assert!(linear_hull(&singular, &DVector::from_element(2, point(0.0))).is_none());
+    }
+
     /// F(x, y) = (x² + y² − 1, x − y): zeros at ±(1/√2, 1/√2).
     fn circle_line(b: &[Interval; 2]) -> Step<[Interval; 2]> {
         let m = [b[0].mid(), b[1].mid()];

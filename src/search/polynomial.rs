@@ -256,7 +256,7 @@ impl<'a> Solver<'a> {
                 None => default_contractor(system, settings),
             };
             // Judged before the pipeline too: a box the filter drops costs no contraction.
-            let screened: Box<dyn Contractor + Send + 'a> = if std::env::var("LS_NOSCREEN").is_ok() { pipeline } else { Box::new(Sequence(vec![Box::new(Screen(Shared(filter.clone()))), pipeline])) };
+            let screened: Box<dyn Contractor + Send + 'a> = Box::new(Sequence(vec![Box::new(Screen(Shared(filter.clone()))), pipeline]));
             Box::new(Filtered { inner: screened, filters: vec![Box::new(Shared(filter.clone()))] })
         })));
         self

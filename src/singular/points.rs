@@ -6,18 +6,25 @@
 //! Searching every chart from its whole box covers the configuration curve once per chart, at
 //! boxes fine enough for the null-vector rows to cut it: most of the time goes to boxes on the
 //! curve far from any point. Here the curve is searched once, in the configuration variables
-//! alone, and a box goes as soon as `M` is proven regular over it (`krawczyk::linear_hull`:
-//! `‖I − Y·M‖∞ < 1`), a proof that holds for boxes far wider than sigma away from the points.
-//! Each box left at `LEAF_WIDTH` is then solved in the square system of one chart: with `u`, `v`
-//! the singular vectors of `mid M` for its smallest singular value and `k` the largest component
-//! of `v`, the bordered matrix `[M with column k replaced by u]` proven regular over the box
-//! shows that every singular configuration there has a one-dimensional kernel with `v_k ≠ 0`,
-//! encloses its direction normalised by `v_k = 1`, and excludes the box when that enclosure
-//! keeps the border's unknown away from zero. When the enclosure proves chart `k` owns every such
-//! direction (`|v_j| < 1` before `k`, `≤ 1` after), chart `k` is searched from the box and that
-//! enclosure, where Krawczyk certifies its points at once; otherwise every chart is searched
-//! from the box, as the whole-box search would. Every point of the set lies in a reported box,
-//! certified or not, or in an undecided one: nothing is dropped without one of those proofs.
+//! alone (the linkage's own system and filters), and a box goes as soon as one of two proofs
+//! holds over it (a `Filter`, judged before and after each round of contraction):
+//! - `M` is regular: `‖I − Y·M‖∞ < 1` with `Y ≈ M(mid)⁻¹` (`krawczyk::preconditioned_hull`),
+//!   `Y·M` enclosed as `Σ_f (Y·C_f)·f` over the factors `f` of its entries
+//!   (`RateMatrix::preconditioned`), far tighter than the interval product `Y·M(b)`;
+//! - the bordered system has no root: with `u`, `v` the singular vectors of `M(mid)` for its
+//!   smallest singular value and `k` the largest component of `v`, the matrix `A` = `M` with
+//!   column `k` replaced by `u` regular over the box shows that every singular configuration
+//!   there has a one-dimensional kernel with `v_k ≠ 0`, and the solution of
+//!   `A (v_{−k}, g) = −M_k` (the kernel normalised by `v_k = 1`, and `g`, zero exactly at the
+//!   singular configurations) is enclosed; a `g` enclosure without zero drops the box.
+//!
+//! Each box left at `LEAF_WIDTH` is solved in the square system of one chart: when the bordered
+//! enclosure proves chart `k` owns every kernel direction there (`|v_j| < 1` before `k`, `≤ 1`
+//! after: the first largest component), chart `k` is searched from the box and that enclosure,
+//! where Krawczyk (the chart solver's `Newton`) certifies its point at once; otherwise every
+//! chart is searched from the box, as the whole-box search would. Every point of the set lies in
+//! a reported box, certified or not, or in an undecided one: nothing is dropped without one of
+//! those proofs.
 
 use super::{BoxKind, SingularBox, SingularSet};
 use crate::contract::krawczyk::preconditioned_hull;
@@ -35,7 +42,7 @@ use std::time::Instant;
 /// Width of the configuration boxes solved in a chart (or sigma, when coarser). Around a fold
 /// point the bordered matrix is regular over boxes of about this width, and Krawczyk then
 /// certifies the chart's system from a start box this wide.
-const LEAF_WIDTH: f64 = 0.05;
+const LEAF_WIDTH: f64 = 0.1;
 
 /// Drops every box over which the rate matrix is proven regular.
 struct Regular<'r> {
@@ -144,8 +151,7 @@ impl<L: Coordinates> SingularProblem<L> {
         let t0 = Instant::now();
         let left = || settings.timeout.map(|t| t.saturating_sub(t0.elapsed()));
         let regular: Arc<dyn Filter + Send + Sync + '_> = Arc::new(Regular { rates, base_vars: self.base_vars });
-        let leaf_width: f64 = std::env::var("LS_LEAF").ok().and_then(|x| x.parse().ok()).unwrap_or(LEAF_WIDTH);
-        let curve_settings = SolverSettings { sigma: leaf_width.max(settings.sigma), use_lp: settings.use_lp && std::env::var("LS_NOLP").is_err(), ..settings.clone() };
+        let curve_settings = SolverSettings { sigma: LEAF_WIDTH.max(settings.sigma), ..settings.clone() };
         let curve = self.linkage.extended_solver(self.linkage.system(), curve_settings)?.with_filter(regular);
         let mut leaves = Collect::default();
         let (mut status, curve_stats) = if settings.threads > 1 { curve.run_parallel(settings.threads, cancel, &mut leaves, None) } else { curve.run(cancel, &mut leaves) };
@@ -155,9 +161,6 @@ impl<L: Coordinates> SingularProblem<L> {
         let mut charts: Vec<Option<EquationSystem>> = vec![None; self.chart_count()];
         let undecided = |leaf: &IntervalBox| SingularBox { chart: 0, b: self.with_configuration(self.augmented.initial_box(), leaf), status: BoxKind::Undecided };
         boxes.extend(leaves.undecided.iter().map(undecided));
-        if std::env::var("LS_DEBUG").is_ok() {
-            eprintln!("leaves {} undecided {}", leaves.solutions.len(), leaves.undecided.len());
-        }
         for (i, leaf) in leaves.solutions.iter().enumerate() {
             let remaining = left();
             let cancelled = cancel.load(Ordering::Relaxed);
