@@ -148,6 +148,10 @@ impl<L: Coordinates> SingularProblem<L> {
     /// configuration curve first, then each of its boxes not proven regular in its chart.
     /// `settings.max_boxes` applies to each search; `settings.timeout` to the whole call.
     pub(super) fn solve_points(&self, rates: &RateMatrix, settings: &SolverSettings, cancel: &AtomicBool) -> Result<SingularSet, SolveError> {
+        if cancel.load(Ordering::Relaxed) || settings.timeout.is_some_and(|t| t.is_zero()) {
+            // Nothing searched: the charts' one undecided box, as the whole-box search reports.
+            return self.solve_charts(settings, cancel);
+        }
         let t0 = Instant::now();
         let left = || settings.timeout.map(|t| t.saturating_sub(t0.elapsed()));
         let regular: Arc<dyn Filter + Send + Sync + '_> = Arc::new(Regular { rates, base_vars: self.base_vars });
@@ -248,4 +252,55 @@ fn add(total: &mut SolveStats, s: &SolveStats) {
     total.max_level = total.max_level.max(s.max_level);
     total.seconds += s.seconds;
     total.cpu_seconds += s.cpu_seconds;
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::model::urdf;
+    use crate::problems::{SingularKind, SingularProblem};
+    use crate::search::SolverSettings;
+    use std::sync::atomic::AtomicBool;
+
+    /// A triple rocker (s + l > p + q): the crank turns back twice, the rocker twice.
+    const TRIPLE_ROCKER: &str = r#"<robot name="triple_rocker">
+  <link name="ground"/><link name="crank"/><link name="coupler"/><link name="rocker"/>
+  <joint name="crank_joint" type="continuous"><parent link="ground"/><child link="crank"/>
+    <origin xyz="0 0 0" rpy="0 0 0"/><axis xyz="0 0 1"/></joint>
+  <joint name="coupler_joint" type="continuous"><parent link="crank"/><child link="coupler"/>
+    <origin xyz="3 0 0" rpy="0 0 0"/><axis xyz="0 0 1"/></joint>
+  <joint name="rocker_joint" type="continuous"><parent link="ground"/><child link="rocker"/>
+    <origin xyz="4 0 0" rpy="0 0 0"/><axis xyz="0 0 1"/></joint>
+  <loop name="closure" type="revolute">
+    <predecessor link="coupler"><origin xyz="2.5 0 0" rpy="0 0 0"/></predecessor>
+    <successor link="rocker"><origin xyz="3 0 0" rpy="0 0 0"/></successor>
+    <axis xyz="0 0 1"/>
+  </loop>
+</robot>"#;
+
+    #[test]
+    fn the_curve_search_finds_what_every_chart_finds() {
+        let m = urdf::parse(TRIPLE_ROCKER).expect("parses");
+        let settings = SolverSettings { sigma: 1e-6, ..Default::default() };
+        let cancel = AtomicBool::new(false);
+        for (kind, actuated, output) in [
+            (SingularKind::Input, "crank_joint", None),
+            (SingularKind::Input, "rocker_joint", None),
+            (SingularKind::Output, "crank_joint", Some(crate::problems::Output::Joints(vec!["rocker_joint".into()]))),
+        ] {
+            let p = SingularProblem::new(&m, &[], kind, &[actuated.to_string()], output).expect("builds");
+            let rates = p.linkage.rate_matrix(kind, &p.actuated, p.output.as_ref()).expect("square rows");
+            let fast = p.solve_points(&rates, &settings, &cancel).expect("valid");
+            let charts = p.solve_charts(&settings, &cancel).expect("valid");
+            assert!(fast.status.is_complete() && charts.status.is_complete());
+            assert_eq!(fast.clusters.len(), 2, "{kind:?} {actuated}");
+            assert_eq!(fast.certified_clusters(), 2, "{kind:?} {actuated}");
+            assert_eq!(charts.clusters.len(), 2, "{kind:?} {actuated}");
+            // The same points, in the same charts: each box of one run meets a box of the other.
+            for a in &fast.boxes {
+                assert!(charts.boxes.iter().any(|b| b.chart == a.chart && a.b.dims.iter().zip(&b.b.dims).all(|(x, y)| !x.intersection(*y).is_empty())), "{kind:?} {actuated}: {a:?}");
+            }
+            // The curve search's counters come after the charts'.
+            assert_eq!(fast.stats.len(), p.chart_count() + 1);
+        }
+    }
 }
