@@ -257,7 +257,7 @@ fn add(total: &mut SolveStats, s: &SolveStats) {
 #[cfg(test)]
 mod tests {
     use crate::model::urdf;
-    use crate::problems::{SingularKind, SingularProblem};
+    use crate::problems::{Coordinates, SingularKind, SingularProblem};
     use crate::search::SolverSettings;
     use std::sync::atomic::AtomicBool;
 
