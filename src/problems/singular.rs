@@ -343,12 +343,15 @@ pub struct RateMatrix {
     rows: Vec<Vec<Rate>>,
     /// The entries grouped by their factor (`None`: constant): `M = Σ_f C_f · f`, each `C_f` a
     /// constant matrix given as `(row, column, coefficient)`.
-    by_factor: Vec<(Option<VarId>, Vec<(usize, usize, Interval)>)>,
+    by_factor: Vec<(Option<VarId>, Entries)>,
 }
+
+/// `(row, column, coefficient)` entries of a constant matrix.
+type Entries = Vec<(usize, usize, Interval)>;
 
 impl RateMatrix {
     fn new(parts: Parts, rows: Vec<Vec<Rate>>) -> Self {
-        let mut groups: BTreeMap<Option<VarId>, Vec<(usize, usize, Interval)>> = BTreeMap::new();
+        let mut groups: BTreeMap<Option<VarId>, Entries> = BTreeMap::new();
         for (i, rates) in rows.iter().enumerate() {
             for r in rates {
                 groups.entry(r.factor).or_default().push((i, r.coord, r.coef));
