@@ -28,7 +28,7 @@
 
 use super::{BoxKind, SingularBox, SingularSet};
 use crate::contract::krawczyk::preconditioned_hull;
-use crate::contract::{Filter, Inclusion};
+use crate::contract::{Contractor, Filter, Inclusion, Newton};
 use crate::interval::fast::Iv;
 use crate::interval::{interval, point, Interval, IntervalBox};
 use crate::problems::singular::{Coordinates, RateMatrix, SingularProblem};
@@ -198,6 +198,27 @@ impl<L: Coordinates> SingularProblem<L> {
                 boxes.extend(found.undecided.into_iter().map(|b| SingularBox { chart: k, b, status: BoxKind::Undecided }));
             }
         }
+        // A point on the face between two configuration boxes is found from both (a bisection
+        // line through a symmetric mechanism's point, say): two certified boxes of one chart
+        // that meet hold one point when Krawczyk proves their hull holds exactly one root.
+        let mut keep = vec![true; boxes.len()];
+        for i in 0..boxes.len() {
+            for j in i + 1..boxes.len() {
+                let (a, b) = (&boxes[i], &boxes[j]);
+                if !keep[i] || !keep[j] || a.status != BoxKind::Certified || b.status != BoxKind::Certified || a.chart != b.chart {
+                    continue;
+                }
+                let Some(chart) = charts[a.chart].as_ref() else { continue };
+                if a.b.dims.iter().zip(&b.b.dims).any(|(x, y)| x.intersection(*y).is_empty()) {
+                    continue;
+                }
+                let hull = IntervalBox { dims: a.b.dims.iter().zip(&b.b.dims).map(|(x, y)| x.convex_hull(*y)).collect(), level: a.b.level };
+                if Newton::new(chart, f64::INFINITY).and_then(|mut n| n.certify(&hull)).is_some() {
+                    keep[j] = false;
+                }
+            }
+        }
+        let boxes: Vec<SingularBox> = boxes.into_iter().zip(keep).filter_map(|(b, k)| k.then_some(b)).collect();
         // The curve's search comes after the charts' counters, so that entry k stays chart k's.
         stats.push(curve_stats);
         Ok(self.clustered(boxes, status, stats, dropped_other_chart, 0, t0))
@@ -294,6 +315,7 @@ mod tests {
             assert!(fast.status.is_complete() && charts.status.is_complete());
             assert_eq!(fast.clusters.len(), 2, "{kind:?} {actuated}");
             assert_eq!(fast.certified_clusters(), 2, "{kind:?} {actuated}");
+            assert_eq!(fast.boxes.len(), 2, "{kind:?} {actuated}: one box per point");
             assert_eq!(charts.clusters.len(), 2, "{kind:?} {actuated}");
             // The same points, in the same charts: each box of one run meets a box of the other.
             for a in &fast.boxes {
@@ -302,5 +324,11 @@ mod tests {
             // The curve search's counters come after the charts'.
             assert_eq!(fast.stats.len(), p.chart_count() + 1);
         }
+        // The bundled crank-rocker's rocker dead centres at crank ±2π/3 lie on bisection lines
+        // (cos = −1/2): found from two boxes each, reported once.
+        let m = urdf::parse(include_str!("../../urdf/four_bar.urdf")).expect("parses");
+        let p = SingularProblem::new(&m, &[], SingularKind::Output, &["crank_joint".to_string()], Some(crate::problems::Output::Joints(vec!["rocker_joint".into()]))).expect("builds");
+        let set = p.solve(&settings, &cancel).expect("valid");
+        assert_eq!((set.clusters.len(), set.certified_clusters(), set.boxes.len()), (4, 4, 4));
     }
 }
