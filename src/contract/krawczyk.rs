@@ -157,6 +157,71 @@ where
     Some(k)
 }
 
+/// Every solution `x` of every linear system `A x = r` with `A ∈ a` and `r ∈ r_box` (interval
+/// matrix and right-hand side, e.g. enclosures over a box of parameters), and the proof that every
+/// `A ∈ a` is regular; `None` when the preconditioned test fails. `Y ≈ (mid a)⁻¹`; see
+/// `preconditioned_hull`, which this calls with `E = I − Y·a` and `z = Y·r`.
+///
+/// See also `step` (the nonlinear operator).
+pub fn linear_hull(a: &nalgebra::DMatrix<Interval>, r_box: &nalgebra::DVector<Interval>) -> Option<nalgebra::DVector<Interval>> {
+    let n = a.nrows();
+    if a.ncols() != n || r_box.nrows() != n || n == 0 {
+        return None;
+    }
+    let mid = a.map(|x| x.mid());
+    if !mid.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let y = mid.try_inverse()?;
+    if !y.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let a = a.map(Iv::from);
+    let r = r_box.map(Iv::from);
+    let e = nalgebra::DMatrix::from_fn(n, n, |i, j| (0..n).fold(if i == j { Iv { lo: 1.0, hi: 1.0 } } else { Iv::ZERO }, |x, l| x.sub(a[(l, j)].scale(y[(i, l)]))));
+    let z = nalgebra::DVector::from_fn(n, |i, _| (0..n).fold(Iv::ZERO, |acc, l| acc.add(r[l].scale(y[(i, l)]))));
+    preconditioned_hull(&e, &z)
+}
+
+/// The solutions of `A x = r` over families of systems, from their preconditioned form: `e`
+/// encloses every `I − Y·A` and `z` every `Y·r`, for one real matrix `Y`. `‖e‖∞ ≤ δ < 1` proves
+/// every `A` regular (`Y·A` is within `δ` of the identity) and gives `‖x‖∞ ≤ ‖z‖∞ / (1 − δ)`
+/// from `x = Y·r + (I − Y·A)·x`; from that box, `x ∈ z + e·X` narrows it (three rounds). `None`
+/// when `δ < 1` is not shown. A caller that knows the structure of `A` (entries linear in a few
+/// parameters) can enclose `Y·A` far tighter than interval products would, hence this entry.
+///
+/// See also `linear_hull`.
+pub(crate) fn preconditioned_hull(e: &nalgebra::DMatrix<Iv>, z: &nalgebra::DVector<Iv>) -> Option<nalgebra::DVector<Interval>> {
+    let n = e.nrows();
+    if e.ncols() != n || z.nrows() != n || n == 0 {
+        return None;
+    }
+    let mut delta: f64 = 0.0;
+    for i in 0..n {
+        let row = (0..n).fold(0.0f64, |acc, j| (acc + e[(i, j)].lo.abs().max(e[(i, j)].hi.abs())).next_up());
+        delta = delta.max(row);
+    }
+    // NaN fails this test too.
+    if !(delta < 1.0) {
+        return None;
+    }
+    let zmax = z.iter().fold(0.0f64, |m, x| m.max(x.lo.abs()).max(x.hi.abs()));
+    let radius = (zmax / (1.0 - delta).next_down()).next_up().next_up();
+    if !radius.is_finite() {
+        return None;
+    }
+    let mut x: Vec<Iv> = vec![Iv { lo: -radius, hi: radius }; n];
+    for _ in 0..3 {
+        x = (0..n)
+            .map(|i| {
+                let k = (0..n).fold(z[i], |acc, j| acc.add(e[(i, j)].mul(x[j])));
+                Iv { lo: k.lo.max(x[i].lo), hi: k.hi.min(x[i].hi) }
+            })
+            .collect();
+    }
+    Some(nalgebra::DVector::from_iterator(n, x.into_iter().map(Iv::to)))
+}
+
 /// Compares `K(b)` with `b`: unique when inside its interior, empty when a component misses
 /// `b`, otherwise the intersection.
 #[inline]
@@ -267,6 +332,25 @@ mod tests {
     use crate::interval::point;
     use nalgebra::{DMatrix, DVector};
     use proptest::prelude::*;
+
+    #[test]
+    fn linear_hull_holds_every_member_solution_and_refuses_singular_families() {
+        // A = [[2, t], [1, 3]], r = (1, s) for t in [-0.5, 0.5], s in [0, 1]: every member is
+        // regular (det = 6 − t ≥ 5.5), and its solution must lie in the hull.
+        let a = DMatrix::from_row_slice(2, 2, &[point(2.0), interval(-0.5, 0.5), point(1.0), point(3.0)]);
+        let r = DVector::from_vec(vec![point(1.0), interval(0.0, 1.0)]);
+        let x = linear_hull(&a, &r).expect("a regular family");
+        for t in [-0.5, -0.1, 0.0, 0.3, 0.5] {
+            for s in [0.0, 0.4, 1.0] {
+                let det = 6.0 - t;
+                let sol = [(3.0 - t * s) / det, (2.0 * s - 1.0) / det];
+                assert!(x[0].contains(sol[0]) && x[1].contains(sol[1]), "t {t} s {s}: {sol:?} not in {x:?}");
+            }
+        }
+        // [[1, 1], [1, t]] holds the singular t = 1.
+        let singular = DMatrix::from_row_slice(2, 2, &[point(1.0), point(1.0), point(1.0), interval(0.5, 1.5)]);
+        assert!(linear_hull(&singular, &DVector::from_element(2, point(0.0))).is_none());
+    }
 
     /// F(x, y) = (x² + y² − 1, x − y): zeros at ±(1/√2, 1/√2).
     fn circle_line(b: &[Interval; 2]) -> Step<[Interval; 2]> {

@@ -19,5 +19,5 @@ pub use linkage::{LinkageError, LinkageProblem};
 pub use platform::{LegValues, PlatformError, PlatformProblem, Pose};
 pub use pose::{PoseLeg, PoseProblem, PoseRows};
 pub use singular::image::{CuspFormulation, CuspProblem, ImageError, NodeProblem};
-pub use singular::{Coordinates, Output, SingularError, SingularKind, SingularProblem};
+pub use singular::{Coordinates, Output, RateMatrix, SingularError, SingularKind, SingularProblem};
 pub use spatial::{LinkPose, SpatialProblem};

@@ -30,6 +30,7 @@
 
 use super::linkage::{JointCoordinate, LinkageError, LinkageProblem};
 use super::{Linkage, Model};
+use crate::interval::fast::Iv;
 use crate::interval::{interval, point, Interval, IntervalBox};
 use crate::model::Mechanism;
 use crate::search::{SolveError, Solver, SolverSettings};
@@ -210,6 +211,12 @@ pub trait Coordinates {
     fn rows_faithful(&self, _b: &IntervalBox) -> bool {
         true
     }
+    /// The velocity rows of an input or output set as a square matrix of the configuration
+    /// (`RateMatrix`), when they are as many as the coordinates and the model writes them as
+    /// such a matrix; `None` otherwise (C-space sets, non-square rows, the spatial model).
+    fn rate_matrix(&self, _kind: SingularKind, _actuated: &[String], _output: Option<&Output>) -> Option<RateMatrix> {
+        None
+    }
 }
 
 impl Coordinates for LinkageProblem {
@@ -256,11 +263,10 @@ impl Coordinates for LinkageProblem {
         let system = &linkage.system;
         let mut aug = system.clone();
         let parts = Parts::new(linkage, &mut aug)?;
-        let Parts { coords, loop_rates, trace_rates, .. } = &parts;
+        let Parts { coords, loop_rates, .. } = &parts;
         let loop_rows = &parts.loop_rows;
         let dof = parts.dof();
         let coord_name = |c: &Coord| parts.coord_name(system, c);
-        let joint_rates = |name: &str| parts.joint_rates(linkage, name);
 
         // Multipliers: velocities (input, output) or row multipliers (C-space).
         let n_mult = if kind == SingularKind::Cspace { loop_rows.len() } else { coords.len() };
@@ -297,22 +303,10 @@ impl Coordinates for LinkageProblem {
                 }
             }
             SingularKind::Input | SingularKind::Output => {
-                let mut velocity_rows: Vec<Vec<Rate>> = loop_rates.clone();
-                if kind == SingularKind::Input {
-                    if actuated.len() as isize != dof {
-                        return Err(SingularError::ActuatorCount { actuated: actuated.len(), names: actuated.join(","), dof });
-                    }
-                    velocity_rows.extend(actuated.iter().map(|a| joint_rates(a)));
-                } else {
-                    match output {
-                        Some(Output::Point { .. }) => velocity_rows.extend(trace_rates.iter().cloned()),
-                        Some(Output::Joints(js)) => velocity_rows.extend(js.iter().map(|j| joint_rates(j))),
-                        // Default: every passive joint stands still (the Jacobian with respect
-                        // to the actuated coordinates loses rank).
-                        None => velocity_rows.extend(linkage.free_joints.iter().filter(|j| !actuated.contains(j)).map(|j| joint_rates(j))),
-                    }
+                if kind == SingularKind::Input && actuated.len() as isize != dof {
+                    return Err(SingularError::ActuatorCount { actuated: actuated.len(), names: actuated.join(","), dof });
                 }
-                for rates in velocity_rows {
+                for rates in parts.velocity_rows(linkage, kind, actuated, output) {
                     let row = rates.iter().map(|r| term(&mut aug, r.coef, r.factor, multipliers[r.coord])).collect();
                     rows.push(row);
                 }
@@ -327,6 +321,90 @@ impl Coordinates for LinkageProblem {
             }
         }
         Ok(Augmented { system: aug, multipliers, dof, rows: n_rows })
+    }
+
+    fn rate_matrix(&self, kind: SingularKind, actuated: &[String], output: Option<&Output>) -> Option<RateMatrix> {
+        if kind == SingularKind::Cspace {
+            return None;
+        }
+        let mut scratch = self.system.clone();
+        let parts = Parts::new(self, &mut scratch).ok()?;
+        let rows = parts.velocity_rows(self, kind, actuated, output);
+        (rows.len() == parts.coords.len() && rows.iter().all(|r| !r.is_empty())).then(|| RateMatrix::new(parts, rows))
+    }
+}
+
+/// The square matrix of a singular set's velocity rows, `[F_q; A]` (input) or `[F_q; O]`
+/// (output), as a function of the configuration: the set is where it is singular. Columns are
+/// the coordinates in the order of the set's multipliers (column `k` is chart `k`'s).
+#[derive(Clone, Debug)]
+pub struct RateMatrix {
+    parts: Parts,
+    rows: Vec<Vec<Rate>>,
+    /// The entries grouped by their factor (`None`: constant): `M = Σ_f C_f · f`, each `C_f` a
+    /// constant matrix given as `(row, column, coefficient)`.
+    by_factor: Vec<(Option<VarId>, Entries)>,
+}
+
+/// `(row, column, coefficient)` entries of a constant matrix.
+type Entries = Vec<(usize, usize, Interval)>;
+
+impl RateMatrix {
+    fn new(parts: Parts, rows: Vec<Vec<Rate>>) -> Self {
+        let mut groups: BTreeMap<Option<VarId>, Entries> = BTreeMap::new();
+        for (i, rates) in rows.iter().enumerate() {
+            for r in rates {
+                groups.entry(r.factor).or_default().push((i, r.coord, r.coef));
+            }
+        }
+        RateMatrix { parts, rows, by_factor: groups.into_iter().collect() }
+    }
+
+    /// `Y·M` over a box of the linkage's variables, for a real matrix `Y`: each `Y·C_f` formed
+    /// first and then multiplied by the range of its factor `f`, which is the exact range of
+    /// each entry as a function of the factors, where the interval product `Y·M(b)` would add
+    /// up the widths of every entry it combines. Outward rounded (`fast::Iv`).
+    pub(crate) fn preconditioned(&self, y: &nalgebra::DMatrix<f64>, b: &[Interval]) -> nalgebra::DMatrix<Iv> {
+        let n = self.order();
+        let mut w = nalgebra::DMatrix::from_element(n, n, Iv::ZERO);
+        let mut acc = nalgebra::DMatrix::from_element(n, n, Iv::ZERO);
+        let mut touched = vec![false; n];
+        for (factor, entries) in &self.by_factor {
+            let x = Iv::from(factor.map_or(point(1.0), |f| self.parts.eval_var(b, f)));
+            acc.fill(Iv::ZERO);
+            touched.fill(false);
+            for &(l, j, coef) in entries {
+                let c = Iv::from(coef);
+                touched[j] = true;
+                for i in 0..n {
+                    acc[(i, j)] = acc[(i, j)].add(c.scale(y[(i, l)]));
+                }
+            }
+            for j in (0..n).filter(|&j| touched[j]) {
+                for i in 0..n {
+                    w[(i, j)] = w[(i, j)].add(acc[(i, j)].mul(x));
+                }
+            }
+        }
+        w
+    }
+
+    /// Its order (rows = columns = coordinates).
+    pub fn order(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// The matrix over a box of the linkage's variables (the configuration part of a chart's
+    /// box), outward rounded.
+    pub fn over(&self, b: &[Interval]) -> nalgebra::DMatrix<Interval> {
+        let n = self.order();
+        let mut m = nalgebra::DMatrix::from_element(n, n, point(0.0));
+        for (i, rates) in self.rows.iter().enumerate() {
+            for r in rates {
+                m[(i, r.coord)] += r.factor.map_or(r.coef, |f| r.coef * self.parts.eval_var(b, f));
+            }
+        }
+        m
     }
 }
 
@@ -395,6 +473,13 @@ impl Coordinates for Linkage {
             Linkage::Planar(p) => p.rows_faithful(b),
             Linkage::Spatial(p, _) => p.rows_faithful(b),
             Linkage::Pose(..) => true,
+        }
+    }
+
+    fn rate_matrix(&self, kind: SingularKind, actuated: &[String], output: Option<&Output>) -> Option<RateMatrix> {
+        match self {
+            Linkage::Planar(p) => p.rate_matrix(kind, actuated, output),
+            Linkage::Spatial(p, _) => p.rate_matrix(kind, actuated, output),
         }
     }
 }
@@ -522,6 +607,24 @@ impl Parts {
         p.loop_rates = loop_rows.iter().map(|&r| p.derivative(system, r, aug)).collect::<Result<_, _>>()?;
         p.trace_rates = trace_rows.iter().map(|&r| p.derivative(system, r, aug)).collect::<Result<_, _>>()?;
         Ok(p)
+    }
+
+    /// The rows of `F_q v = 0` and of the input's or output's rates (`A v = 0`, `O v = 0`).
+    fn velocity_rows(&self, linkage: &LinkageProblem, kind: SingularKind, actuated: &[String], output: Option<&Output>) -> Vec<Vec<Rate>> {
+        let mut rows: Vec<Vec<Rate>> = self.loop_rates.clone();
+        let joint_rates = |name: &str| self.joint_rates(linkage, name);
+        if kind == SingularKind::Input {
+            rows.extend(actuated.iter().map(|a| joint_rates(a)));
+        } else {
+            match output {
+                Some(Output::Point { .. }) => rows.extend(self.trace_rates.iter().cloned()),
+                Some(Output::Joints(js)) => rows.extend(js.iter().map(|j| joint_rates(j))),
+                // Default: every passive joint stands still (the Jacobian with respect to the
+                // actuated coordinates loses rank).
+                None => rows.extend(linkage.free_joints.iter().filter(|j| !actuated.contains(j)).map(|j| joint_rates(j))),
+            }
+        }
+        rows
     }
 
     /// Coordinates minus loop rows.

@@ -14,7 +14,7 @@ use super::limits::{process_cpu_seconds, Limit, Limits, Progress, Status};
 use super::settings::{SettingsError, SolverSettings};
 use super::share::Wire;
 use super::{driver, Prune, Sink, Stats, Step, Store, Undecided};
-use crate::contract::{Contraction, Contractor, LpShrink, Newton, Propagation, Sequence};
+use crate::contract::{Contraction, Contractor, Filter, Filtered, Inclusion, LpShrink, Newton, Propagation, Sequence};
 use crate::interval::IntervalBox;
 use crate::lp::LpCounters;
 use crate::system::{EquationSystem, SystemError, VarId};
@@ -245,6 +245,23 @@ impl<'a> Solver<'a> {
     /// contract: only proven-empty parts go.
     pub fn with_contractor(mut self, factory: ContractorFactory<'a>) -> Self {
         self.factory = Some(std::sync::Arc::new(factory));
+        self
+    }
+
+    /// Adds `filter` after the current pipeline (the default or `with_contractor`'s), wrapped in
+    /// `contract::Filtered`: a box it proves `Outside` is empty, and a box it cannot place
+    /// `Inside` keeps no certificate. For conditions that are not equations of the system.
+    pub fn with_filter(mut self, filter: std::sync::Arc<dyn Filter + Send + Sync + 'a>) -> Self {
+        let inner = self.factory.take();
+        self.factory = Some(std::sync::Arc::new(Box::new(move |system: &'a EquationSystem, settings: &SolverSettings| -> Box<dyn Contractor + Send + 'a> {
+            let pipeline = match &inner {
+                Some(f) => f(system, settings),
+                None => default_contractor(system, settings),
+            };
+            // Judged before the pipeline too: a box the filter drops costs no contraction.
+            let screened: Box<dyn Contractor + Send + 'a> = Box::new(Sequence(vec![Box::new(Screen(Shared(filter.clone()))), pipeline]));
+            Box::new(Filtered { inner: screened, filters: vec![Box::new(Shared(filter.clone()))] })
+        })));
         self
     }
 
@@ -585,6 +602,32 @@ impl<'a> Solver<'a> {
 
     fn size(&self, b: &IntervalBox) -> f64 {
         self.widest(b).map_or(0.0, |(_, w)| w)
+    }
+}
+
+/// A filter shared by every run's pipeline.
+struct Shared<'a>(std::sync::Arc<dyn Filter + Send + Sync + 'a>);
+
+impl Filter for Shared<'_> {
+    fn judge(&self, b: &IntervalBox) -> Inclusion {
+        self.0.judge(b)
+    }
+}
+
+/// A filter as the first step of a pipeline: `Empty` for a box it proves `Outside`, else
+/// `Unchanged`.
+struct Screen<F>(F);
+
+impl<F: Filter> Contractor for Screen<F> {
+    fn contract(&mut self, b: &mut IntervalBox) -> Contraction {
+        match self.0.judge(b) {
+            Inclusion::Outside => Contraction::Empty,
+            _ => Contraction::Unchanged,
+        }
+    }
+
+    fn name(&self) -> &'static str {
+        "screen"
     }
 }
 

@@ -15,11 +15,22 @@ use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 pub mod image;
+mod points;
 
 impl<L: Coordinates> SingularProblem<L> {
     /// Runs the solver on every chart and merges the results. `settings.max_boxes` applies per
     /// chart; `settings.timeout` to the whole call.
     pub fn solve(&self, settings: &SolverSettings, cancel: &AtomicBool) -> Result<SingularSet, SolveError> {
+        if self.expected_dimension == 0 && self.dof == 1 {
+            if let Some(rates) = self.linkage.rate_matrix(self.kind, &self.actuated, self.output.as_ref()) {
+                return self.solve_points(&rates, settings, cancel);
+            }
+        }
+        self.solve_charts(settings, cancel)
+    }
+
+    /// Every chart searched from its whole box.
+    fn solve_charts(&self, settings: &SolverSettings, cancel: &AtomicBool) -> Result<SingularSet, SolveError> {
         let t0 = Instant::now();
         let mut boxes = Vec::new();
         let mut status = Status::Complete;
@@ -62,8 +73,12 @@ impl<L: Coordinates> SingularProblem<L> {
             }
             stats.push(e.stats);
         }
-        // Clusters by configuration part: the same configuration found in two charts (or a
-        // curve crossing from one chart to the next) is one cluster.
+        Ok(self.clustered(boxes, status, stats, dropped_other_chart, unsearched_charts, t0))
+    }
+
+    /// The set from its boxes: clusters by configuration part (the same configuration found in
+    /// two charts, or a curve crossing from one chart to the next, is one cluster).
+    fn clustered(&self, boxes: Vec<SingularBox>, status: Status, stats: Vec<SolveStats>, dropped_other_chart: u64, unsearched_charts: usize, t0: Instant) -> SingularSet {
         let projected: Vec<IntervalBox> = boxes.iter().map(|x| IntervalBox::new(x.b.dims[..self.base_vars].to_vec())).collect();
         let (labels, n) = components(&projected);
         let mut clusters = vec![Cluster::default(); n];
@@ -75,7 +90,7 @@ impl<L: Coordinates> SingularProblem<L> {
                 BoxKind::Solution => {}
             }
         }
-        Ok(SingularSet { status, boxes, labels, clusters, stats, dropped_other_chart, unsearched_charts, seconds: t0.elapsed().as_secs_f64() })
+        SingularSet { status, boxes, labels, clusters, stats, dropped_other_chart, unsearched_charts, seconds: t0.elapsed().as_secs_f64() }
     }
 
     /// True when every direction in `b` (chart `k`, `m_k = 1`) is owned by another chart: some

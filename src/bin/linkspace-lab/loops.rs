@@ -16,7 +16,8 @@ pub struct BenchArgs {
     /// Runs per case; the median is reported.
     #[arg(long, default_value_t = 3)]
     repeat: usize,
-    /// Also time the double butterfly's turning points of θ6 (about half a minute a run).
+    /// Also time the double butterfly's turning points of θ6 (about a second a run with the LP,
+    /// longer with propagation only).
     #[arg(long)]
     butterfly: bool,
     /// Also time the type-II image of the five-bar with unequal rods (cusps, nodes, regions;
