@@ -480,6 +480,8 @@ impl Coordinates for Linkage {
         match self {
             Linkage::Planar(p) => p.rate_matrix(kind, actuated, output),
             Linkage::Spatial(p, _) => p.rate_matrix(kind, actuated, output),
+            // Singular sets are built in joint coordinates (`Linkage::build_in_joints`).
+            Linkage::Pose(..) => None,
         }
     }
 }

@@ -487,15 +487,15 @@ impl<'a> Solver<'a> {
                         continue;
                     }
                     match Self::same_root(contractor.as_mut(), &boxes[j], &boxes[i]) {
-                        Shared::Distinct => {}
-                        Shared::Same(enclosure) => {
+                        SharedRoot::Distinct => {}
+                        SharedRoot::Same(enclosure) => {
                             boxes[j] = IntervalBox { level: boxes[j].level.max(boxes[i].level), ..enclosure };
                             gone[i] = true;
                             merged += 1;
                             placed = false;
                             break;
                         }
-                        Shared::Unknown => {
+                        SharedRoot::Unknown => {
                             unique[i] = false;
                             placed = false;
                             break;
@@ -520,18 +520,18 @@ impl<'a> Solver<'a> {
 
     /// Whether certified boxes `a` and `b`, which meet, hold the same root (see
     /// `merge_shared_certificates`).
-    fn same_root(contractor: &mut dyn Contractor, a: &IntervalBox, b: &IntervalBox) -> Shared {
+    fn same_root(contractor: &mut dyn Contractor, a: &IntervalBox, b: &IntervalBox) -> SharedRoot {
         let mut common = IntervalBox { dims: a.dims.iter().zip(&b.dims).map(|(x, y)| x.intersection(*y)).collect(), level: a.level };
         if common.is_void() {
-            return Shared::Distinct;
+            return SharedRoot::Distinct;
         }
         let inside_both = |p: &IntervalBox| p.dims.iter().zip(a.dims.iter().zip(&b.dims)).all(|(p, (x, y))| p.subset(*x) && p.subset(*y));
         match contractor.contract(&mut common) {
-            Contraction::Empty => Shared::Distinct,
-            Contraction::Proven => Shared::Same(common),
+            Contraction::Empty => SharedRoot::Distinct,
+            Contraction::Proven => SharedRoot::Same(common),
             _ => match contractor.certify(&common) {
-                Some(p) if inside_both(&p) => Shared::Same(p),
-                _ => Shared::Unknown,
+                Some(p) if inside_both(&p) => SharedRoot::Same(p),
+                _ => SharedRoot::Unknown,
             },
         }
     }
@@ -789,7 +789,7 @@ impl SolveStats {
 
 /// What re-examining one box showed.
 /// What `Solver::same_root` proved of two certified boxes that meet.
-enum Shared {
+enum SharedRoot {
     /// Their common part holds no root: two solutions.
     Distinct,
     /// One root, enclosed by this certified box inside both.
