@@ -88,7 +88,9 @@ def minibex(model):
 def phc(model):
     eqs = model.all_equations()
     lines = [f"{len(eqs)} {len(model.symbols)}"]
-    lines += [f" {text(sp.expand(e))};" for e in eqs]
+    # phc reads decimal coefficients: rationals are written as 20-digit decimals.
+    decimal = lambda e: e.xreplace({r: sp.Float(r, DIGITS) for r in e.atoms(sp.Rational) if not r.is_Integer})
+    lines += [f" {text(decimal(sp.expand(e)))};" for e in eqs]
     return "\n".join(lines) + "\n"
 
 

@@ -431,8 +431,11 @@ def table(args):
                 t, summary["ibex"] = run_ibex(ibex, case, MODELS / f"{stem}.mbx")
                 peers["ibex"].append(t)
             if phc and f"{stem}.phc" in names:
-                t, summary["phc"], _ = run_phc(phc, MODELS / f"{stem}.phc")
+                t, summary["phc"], counts = run_phc(phc, MODELS / f"{stem}.phc")
                 peers["phc"].append(t)
+                want = case["expect"].get("phc_real")
+                if counts["real"] is not None and want is not None and counts["real"] != want:
+                    summary["phc"] += f" (documented: {want} real)"
         t_ours = statistics.median(ours) if ours else None
         ours_text = f"{t_ours:.4f}" if t_ours is not None else "-"
         peer_cells = []
