@@ -58,8 +58,13 @@ class Model:
         return not self.functions and all(e.is_polynomial(*self.symbols) for e in self.equations)
 
 
+def decimal(expr):
+    """Exact rationals written as 20-digit decimals (phc reads no fractions)."""
+    return expr.xreplace({r: sp.Float(r, DIGITS) for r in expr.atoms(sp.Rational) if not r.is_Integer})
+
+
 def text(expr):
-    return sp.sstr(expr, full_prec=False).replace("**", "^")
+    return sp.sstr(decimal(expr), full_prec=False).replace("**", "^")
 
 
 def minibex(model):
@@ -88,9 +93,7 @@ def minibex(model):
 def phc(model):
     eqs = model.all_equations()
     lines = [f"{len(eqs)} {len(model.symbols)}"]
-    # phc reads decimal coefficients: rationals are written as 20-digit decimals.
-    decimal = lambda e: e.xreplace({r: sp.Float(r, DIGITS) for r in e.atoms(sp.Rational) if not r.is_Integer})
-    lines += [f" {text(decimal(sp.expand(e)))};" for e in eqs]
+    lines += [f" {text(sp.expand(e))};" for e in eqs]
     return "\n".join(lines) + "\n"
 
 
@@ -433,26 +436,34 @@ def butterfly(angles=True):
 RPR_RHO3 = 17
 
 
+def det3(m):
+    """The determinant by cofactors, unexpanded (common subexpressions stay visible to cse)."""
+    return (m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]))
+
+
 def three_rpr():
+    """The cusp system at rho3 = 17 in the pose (x, y of B1, platform angle phi), derived
+    exactly (the URDF's decimals as rationals) and written with shared subexpressions."""
     o = urdf_origins(ROOT / "urdf/three_rpr.urdf")
-    A = [o[f"a{i}_joint"][0][:2] for i in (1, 2, 3)]
-    v2 = o["b2.predecessor"][0][:2]
-    v3 = o["b3.predecessor"][0][:2]
+    exact = lambda v: sp.Rational(repr(v))
+    A = [[exact(v) for v in o[f"a{i}_joint"][0][:2]] for i in (1, 2, 3)]
+    v2 = [exact(v) for v in o["b2.predecessor"][0][:2]]
+    v3 = [exact(v) for v in o["b3.predecessor"][0][:2]]
     x, y, phi = sp.symbols("x y phi")
     c, s = sp.cos(phi), sp.sin(phi)
-    B = [(x, y), (x + num(v2[0]) * c - num(v2[1]) * s, y + num(v2[0]) * s + num(v2[1]) * c),
-         (x + num(v3[0]) * c - num(v3[1]) * s, y + num(v3[0]) * s + num(v3[1]) * c)]
-    rho2 = [(B[i][0] - num(A[i][0])) ** 2 + (B[i][1] - num(A[i][1])) ** 2 for i in range(3)]
+    B = [(x, y), (x + v2[0] * c - v2[1] * s, y + v2[0] * s + v2[1] * c),
+         (x + v3[0] * c - v3[1] * s, y + v3[0] * s + v3[1] * c)]
+    rho2 = [(B[i][0] - A[i][0]) ** 2 + (B[i][1] - A[i][1]) ** 2 for i in range(3)]
     X = [x, y, phi]
     g = rho2[2] - RPR_RHO3 ** 2
     grad = lambda f: [sp.diff(f, v) for v in X]
-    D = sp.Matrix([grad(g), grad(rho2[0]), grad(rho2[1])]).det()
-    G1 = sp.Matrix([grad(rho2[0]), grad(g), grad(D)]).det()
+    D = det3([grad(g), grad(rho2[0]), grad(rho2[1])])
+    G1 = det3([grad(rho2[0]), grad(g), grad(D)])
     functions = []
     for fname, expr in (("det_d", D), ("cusp_g1", G1)):
         defs, (result,) = sp.cse(expr, symbols=sp.numbered_symbols("w"))
         functions.append((fname, defs, result))
     return Model("three_rpr_cusps", [(x, -40.0, 40.0), (y, -40.0, 40.0), (phi, -PI_UP, PI_UP)], [g],
                  functions=functions,
-                 note="rho3 = 17: g = rho3^2 - 17^2, D = det[grad g; grad rho1^2; grad rho2^2], G1 = det[grad rho1^2; grad g; grad D]"), {
-        "rho": [sp.lambdify(X, sp.sqrt(r)) for r in rho2], "equations": [g, D, G1], "vars": X}
+                 note="rho3 = 17: g = rho3^2 - 17^2, D = det[grad g; grad rho1^2; grad rho2^2], G1 = det[grad rho1^2; grad g; grad D]")
