@@ -211,8 +211,11 @@ def parse_phc(text):
 
 def run_phc(exe, path):
     with tempfile.TemporaryDirectory() as tmp:
+        # phc -b appends its solutions to the input file: it runs on a copy.
+        model = Path(tmp) / path.name
+        shutil.copyfile(path, model)
         out = Path(tmp) / "out.phc"
-        cpu, proc = measure([str(exe), "-b", str(path), str(out)], cwd=tmp)
+        cpu, proc = measure([str(exe), "-b", str(model), str(out)], cwd=tmp)
         text = out.read_text() if out.exists() else ""
     c = parse_phc(text)
     if c["regular"] is None:
