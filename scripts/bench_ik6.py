@@ -6,7 +6,8 @@ kinematics (independent of linkspace), then
 - linkspace: `ik6 ARM --pose <4x4> --json` (every solution in [-pi, pi]^6, each certified);
 - ikpy: `inverse_kinematics_frame` from R random starts (scipy least squares), the converged
   ones (position 1e-6 m, rotation 1e-6) deduplicated (1e-4 rad).
-Both solve the same problem: the arm's URDF with every revolute limit set to [-pi, pi].
+Both solve the same problem: the arm's URDF with every revolute limit set to [-pi, pi], every
+angle as written (`--exact-geometry`: no snapping of truncated quarter turns).
 
 Prints per arm: median and maximum seconds per pose (linkspace: its own solver time from the
 JSON, `seconds`; ikpy: all R starts), the histogram of solution counts each finds, and checks
@@ -104,7 +105,9 @@ def ikpy_solutions(chain, mask, target, restarts, rng):
 def linkspace_solutions(binary, urdf, target):
     pose = ",".join(repr(float(x)) for x in target.reshape(-1))
     with tempfile.NamedTemporaryFile(suffix=".json") as out:
-        subprocess.run([binary, "ik6", urdf, "--pose", pose, "--json", out.name], check=True, capture_output=True)
+        # --exact-geometry: ikpy takes every angle as written, so linkspace must not snap the
+        # file's truncated quarter turns (its default rounding policy) to solve the same arm.
+        subprocess.run([binary, "ik6", urdf, "--exact-geometry", "--pose", pose, "--json", out.name], check=True, capture_output=True)
         report = json.load(open(out.name))
     joints = report["joints"]
     boxes = [[b[j] for j in joints] for b in report["unique"]]
