@@ -22,10 +22,9 @@
 use super::angles::{angle_interval, stated};
 use super::platform::{read_legs, PlatformError};
 use super::stated::{self as st, IVec3};
-use crate::contract::{Contractor, LpShrink, Newton, Propagation, Sequence};
 use crate::interval::{interval, point, Interval, IntervalBox};
 use crate::model::{JointKind, Mechanism};
-use crate::search::{width_units, SolveError, Solver, SolverSettings};
+use crate::search::{contractor_with_newton_on, SolveError, Solver, SolverSettings};
 use crate::system::{Equation, EquationSystem, Monomial, Term, VarId, VarRole};
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion, Vector3};
 use std::collections::BTreeMap;
@@ -271,18 +270,7 @@ impl PoseProblem {
     /// `settings.newton_width` wide, and the LP shrink over every row.
     pub fn solver<'s>(&'s self, settings: SolverSettings) -> Result<Solver<'s>, SolveError> {
         let solver = Solver::new(&self.system, settings)?;
-        Ok(solver.with_contractor(Box::new(move |system: &'s EquationSystem, settings: &SolverSettings| -> Box<dyn Contractor + Send + 's> {
-            let mut steps: Vec<Box<dyn Contractor + Send + 's>> = vec![Box::new(Propagation::new(system))];
-            if let Some(newton) = Newton::new(&self.square, settings.newton_width) {
-                steps.push(Box::new(newton.with_units(width_units(system, settings))));
-            }
-            if settings.use_lp {
-                let mut lp = LpShrink::new(system);
-                lp.backend = settings.lp_backend;
-                steps.push(Box::new(lp));
-            }
-            Box::new(Sequence(steps))
-        })))
+        Ok(solver.with_contractor(Box::new(move |system: &'s EquationSystem, settings: &SolverSettings| contractor_with_newton_on(system, &self.square, settings))))
     }
 
     /// The rotation over the box.

@@ -33,7 +33,7 @@ pub use control::Control;
 pub use driver::{run, run_by_level, run_shared};
 pub use limits::{process_cpu_seconds, Incompleteness, Limit, Limits, Progress, Status};
 pub(crate) use limits::Budget;
-pub use polynomial::{default_contractor, width_units, BoxSink, BoxStatus, Collect, ContractorFactory, Enclosure, RefinePlan, Refinement, SolveError, SolveStats, Solver};
+pub use polynomial::{contractor_with_newton_on, default_contractor, width_units, BoxSink, BoxStatus, Collect, ContractorFactory, Enclosure, RefinePlan, Refinement, SolveError, SolveStats, Solver};
 pub use settings::{SettingsError, SolverSettings};
 pub use share::{rank_and_size, share_searches, Peers, Wire};
 pub(crate) use share::total;

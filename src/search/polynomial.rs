@@ -195,8 +195,15 @@ pub struct Solver<'a> {
 /// The default pipeline: propagation, then interval Newton on small boxes of square systems,
 /// then (unless disabled, and unless Newton certified the box) the LP shrink.
 pub fn default_contractor<'a>(system: &'a EquationSystem, settings: &SolverSettings) -> Box<dyn Contractor + Send + 'a> {
+    contractor_with_newton_on(system, system, settings)
+}
+
+/// The default pipeline on `system`, its interval Newton on `square` (the same variables, a
+/// square subset of the rows): for a system that carries redundant rows for propagation and the
+/// LP, which would keep Newton from certifying.
+pub fn contractor_with_newton_on<'a>(system: &'a EquationSystem, square: &'a EquationSystem, settings: &SolverSettings) -> Box<dyn Contractor + Send + 'a> {
     let mut steps: Vec<Box<dyn Contractor + Send + 'a>> = vec![Box::new(Propagation::new(system))];
-    if let Some(newton) = Newton::new(system, settings.newton_width) {
+    if let Some(newton) = Newton::new(square, settings.newton_width) {
         steps.push(Box::new(newton.with_units(width_units(system, settings))));
     }
     if settings.use_lp {
