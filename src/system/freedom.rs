@@ -45,6 +45,11 @@ impl Freedom {
 /// than the diagnosis is worth (a chain of thousands of joints).
 const LARGEST: usize = 240;
 
+/// The work all Newton steps together may take, in multiply-adds of their SVDs (rows × unknowns
+/// × the smaller of the two): about 50 ms. A small system gets every start; a large one fewer
+/// steps, so the diagnosis never delays a run noticeably (and stays repeatable: no clock).
+const BUDGET: f64 = 5e7;
+
 /// Counts the freedoms of `system` and measures them at solution points: Gauss–Newton
 /// (least-squares steps through the SVD) from `starts` pseudo-random points of the initial box
 /// (seeded by `seed`, so a run is repeatable); of the points that converge inside the box, the
@@ -67,10 +72,20 @@ pub fn freedom(system: &EquationSystem, starts: usize, seed: u64) -> Freedom {
         (state >> 11) as f64 / (1u64 << 53) as f64
     };
     let domains: Vec<(f64, f64)> = system.vars.iter().map(|v| (v.domain.inf(), v.domain.sup())).collect();
+    let (m, n) = (system.equations.len() as f64, free.len() as f64);
+    let step_cost = m * n * m.min(n);
+    let mut spent = 0.0;
     for _ in 0..starts {
+        if spent > BUDGET {
+            break;
+        }
         let mut x: Vec<f64> = domains.iter().map(|&(lo, hi)| if hi > lo { lo + (hi - lo) * uniform() } else { lo }).collect();
         let mut converged = false;
         for _ in 0..50 {
+            spent += step_cost;
+            if spent > BUDGET {
+                break;
+            }
             let (r, j) = residual_and_jacobian(system, &x, &column, free.len());
             if r.amax() < 1e-11 {
                 converged = true;
