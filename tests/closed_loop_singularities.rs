@@ -1000,12 +1000,19 @@ fn three_rpr_cusps_match(formulation: CuspFormulation) {
     assert_eq!(cusps.proven(), reference.len());
 }
 
-/// The default (`Auto`) picks the pose formulation for the 3-RPR.
+/// The default (`Auto`) picks the torus formulation for the 3-RPR.
 #[test]
 fn three_rpr_cusps_match_an_independent_newton() {
     let m = urdf::parse(&urdf_text("three_rpr.urdf")).expect("parses");
     let p = SingularProblem::new(&m, &[("rho3".to_string(), 17.0)], SingularKind::Input, &["rho1".to_string(), "rho2".to_string()], None).expect("builds");
-    assert_eq!(CuspProblem::new(&m, &p).expect("2 dof").formulation, CuspFormulation::Pose);
+    assert_eq!(CuspProblem::new(&m, &p).expect("2 dof").formulation, CuspFormulation::Torus);
+    three_rpr_cusps_match(CuspFormulation::Torus);
+}
+
+/// The pose formulation (the platform's angles with the null vector and tangent as unknowns)
+/// finds the same cusps.
+#[test]
+fn three_rpr_cusps_in_pose_coordinates_match_an_independent_newton() {
     three_rpr_cusps_match(CuspFormulation::Pose);
 }
 

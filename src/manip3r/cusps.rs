@@ -21,7 +21,7 @@
 //! vanish is bisected, and if it reaches the precision so, it is left undecided with that reason.
 //! Boxes inside an internal-motion strip are set aside (see `motion`).
 
-use super::chain::Chain3R;
+use super::map::TorusMap;
 use super::drive::{drive_shared, no_progress, Order, Outcome};
 use crate::search::Wire;
 use crate::search::Control;
@@ -139,18 +139,18 @@ pub struct BoxEval {
 }
 
 /// Evaluates everything a cusp or node test needs over `b`.
-pub fn evaluate(chain: &Chain3R, b: [Interval; 2]) -> BoxEval {
+pub fn evaluate<M: TorusMap + ?Sized>(chain: &M, b: [Interval; 2]) -> BoxEval {
     evaluate_to(chain, b, 3)
 }
 
 /// As `evaluate`, but from second-order jets over the box: everything but `grad_g` (left
 /// whole) and the centred form of `g` (natural only). The node search needs no more, and
 /// second-order jets cost about half as much.
-pub fn evaluate_without_tangency(chain: &Chain3R, b: [Interval; 2]) -> BoxEval {
+pub fn evaluate_without_tangency<M: TorusMap + ?Sized>(chain: &M, b: [Interval; 2]) -> BoxEval {
     evaluate_to(chain, b, 2)
 }
 
-fn evaluate_to(chain: &Chain3R, b: [Interval; 2], order: usize) -> BoxEval {
+fn evaluate_to<M: TorusMap + ?Sized>(chain: &M, b: [Interval; 2], order: usize) -> BoxEval {
     let m = [b[0].mid(), b[1].mid()];
     let over = chain.derived(b, order);
     let at = chain.derived([point(m[0]), point(m[1])], 2);
@@ -207,7 +207,7 @@ fn krawczyk_cusp(b: &[Interval; 2], e: &BoxEval, k: usize) -> K<[Interval; 2]> {
 }
 
 /// Shrinks a proven cusp box by repeated Krawczyk steps until it is no wider than `precision`.
-fn refine(chain: &Chain3R, b: [Interval; 2], k: usize, precision: f64) -> [Interval; 2] {
+fn refine<M: TorusMap + ?Sized>(chain: &M, b: [Interval; 2], k: usize, precision: f64) -> [Interval; 2] {
     krawczyk::tighten(b, precision, |b| krawczyk_cusp(b, &evaluate(chain, *b), k))
 }
 
@@ -216,7 +216,7 @@ fn refine(chain: &Chain3R, b: [Interval; 2], k: usize, precision: f64) -> [Inter
 /// the cusp moves with the geometry, so only a box wider than that motion can hold "one cusp
 /// for every geometry"; bisection alone would never produce one. A trial box where `∇det` or
 /// row `k` of Df may vanish ends the search. Returns the proven box.
-fn inflate(chain: &Chain3R, x: [Interval; 2], k: usize) -> Option<[Interval; 2]> {
+fn inflate<M: TorusMap + ?Sized>(chain: &M, x: [Interval; 2], k: usize) -> Option<[Interval; 2]> {
     let policy = Inflation { rounds: 8, own: 0.1, widest: 0.0, widest_of: &[], absolute: 1e-12, ulps: 0.0 };
     krawczyk::inflate(&x, &policy, |grown| {
         let e = evaluate(chain, *grown);
@@ -307,8 +307,8 @@ pub struct CuspFound {
 }
 
 /// The cusp test of the module doc, one box at a time.
-struct CuspPrune<'a> {
-    chain: &'a Chain3R,
+struct CuspPrune<'a, M: TorusMap + ?Sized> {
+    chain: &'a M,
     bands: &'a [Band],
     eps: f64,
     method: Method,
@@ -347,7 +347,7 @@ impl crate::search::Reason for CuspDiscard {
 }
 
 
-impl Prune for CuspPrune<'_> {
+impl<M: TorusMap + ?Sized> Prune for CuspPrune<'_, M> {
     type Cell = CuspCell;
     type Found = CuspFound;
     type Reason = CuspDiscard;
@@ -378,7 +378,7 @@ impl Prune for CuspPrune<'_> {
                     K::Empty => return Step::Discard(CuspDiscard::KrawczykEmpty),
                     K::Unique(inner) if grad_det_ok => return found(refine(chain, inner, k, eps), Proof::Krawczyk),
                     K::Unique(_) if small => return Step::Undecided(cell, GRAD_DET_MAY_VANISH),
-                    K::Contracted(k_box) if small && grad_det_ok && chain.uncertainty > 0.0 => {
+                    K::Contracted(k_box) if small && grad_det_ok && chain.uncertainty() > 0.0 => {
                         if let Some(inner) = inflate(chain, k_box, k) {
                             return found(refine(chain, inner, k, eps), Proof::Inflated(k));
                         }
@@ -430,17 +430,17 @@ fn inside(outer: &[Interval; 2], inner: &[Interval; 2]) -> bool {
 
 /// Finds every cusp in [-π, π]² (see the module doc), depth first on one thread, with at most
 /// `DEFAULT_MAX_BOXES` boxes.
-pub fn search(chain: &Chain3R, settings: &CuspSettings) -> Result<CuspSearch, super::Manip3rError> {
+pub fn search<M: TorusMap + ?Sized>(chain: &M, settings: &CuspSettings) -> Result<CuspSearch, super::Manip3rError> {
     let control = Control::with_limits(Limits { max_cells: DEFAULT_MAX_BOXES, ..Limits::default() });
     search_with(chain, settings, &control, &mut no_progress)
 }
 
 /// Finds every cusp in [-π, π]² within `control`, reporting progress.
-pub fn search_with(chain: &Chain3R, settings: &CuspSettings, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<CuspSearch, super::Manip3rError> {
+pub fn search_with<M: TorusMap + ?Sized>(chain: &M, settings: &CuspSettings, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<CuspSearch, super::Manip3rError> {
     super::check_precision(settings.precision)?;
     let t0 = Instant::now();
     let eps = settings.precision;
-    let bands = motion::bands(chain, eps);
+    let bands = chain.bands(eps);
     let start = CuspCell { theta: [motion::full_range(), motion::full_range()], order: Order::ROOT, level: 0 };
     let Outcome { status, stats, found, undecided: pending, workers } = drive_shared(|| CuspPrune { chain, bands: &bands, eps, method: settings.method, contracted: 0 }, start, control, progress);
     // Each process counted the boxes it decided.
@@ -470,12 +470,12 @@ pub fn search_with(chain: &Chain3R, settings: &CuspSettings, control: &Control, 
                 // Proven boxes lie in disjoint box interiors; only the ±π seam, where the range
                 // overlaps itself by an ulp, can show one cusp twice.
                 if !cusps.iter().any(|c| meet_across_seam(&c.theta, &theta)) {
-                    let j = chain.jets(theta, 0);
+                    let j = TorusMap::jets(chain, theta, 0);
                     cusps.push(Cusp { theta, rho: j.rho.value(), z: j.z.value(), unique: true });
                 }
             }
             Event::Found(CuspFound { theta, proof: Proof::Inflated(k), .. }) => {
-                let j = chain.jets(theta, 0);
+                let j = TorusMap::jets(chain, theta, 0);
                 // A second proof of an overlapping box is the same cusp only if the hull is
                 // proven too; otherwise both are kept, marked not unique.
                 match cusps.iter().position(|c| (0..2).all(|i| !c.theta[i].disjoint(theta[i]))) {
@@ -484,7 +484,7 @@ pub fn search_with(chain: &Chain3R, settings: &CuspSettings, control: &Control, 
                         let hull = [cusps[at].theta[0].convex_hull(theta[0]), cusps[at].theta[1].convex_hull(theta[1])];
                         match inflate(chain, hull, k) {
                             Some(h) => {
-                                let j = chain.jets(h, 0);
+                                let j = TorusMap::jets(chain, h, 0);
                                 cusps[at] = Cusp { theta: h, rho: j.rho.value(), z: j.z.value(), unique: true };
                             }
                             None => {
@@ -496,7 +496,7 @@ pub fn search_with(chain: &Chain3R, settings: &CuspSettings, control: &Control, 
                 }
             }
             Event::Found(CuspFound { theta, proof: Proof::Candidate, .. }) => {
-                let j = chain.jets(theta, 0);
+                let j = TorusMap::jets(chain, theta, 0);
                 cusps.push(Cusp { theta, rho: j.rho.value(), z: j.z.value(), unique: false });
             }
         }
@@ -509,13 +509,13 @@ pub fn search_with(chain: &Chain3R, settings: &CuspSettings, control: &Control, 
 
 /// Merges touching candidate boxes (baseline only) into one hull per cluster, listed by their
 /// first candidate.
-fn merge_candidates(chain: &Chain3R, boxes: Vec<Cusp>) -> Vec<Cusp> {
+fn merge_candidates<M: TorusMap + ?Sized>(chain: &M, boxes: Vec<Cusp>) -> Vec<Cusp> {
     let thetas: Vec<[Interval; 2]> = boxes.iter().map(|c| c.theta).collect();
     let hull = |a: &[Interval; 2], b: &[Interval; 2]| (0..2).all(|d| !a[d].disjoint(b[d])).then(|| [a[0].convex_hull(b[0]), a[1].convex_hull(b[1])]);
     merge_touching(&thetas, hull)
         .into_iter()
         .map(|(theta, _)| {
-            let j = chain.jets(theta, 0);
+            let j = TorusMap::jets(chain, theta, 0);
             Cusp { theta, rho: j.rho.value(), z: j.z.value(), unique: false }
         })
         .collect()

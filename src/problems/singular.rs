@@ -39,7 +39,7 @@ use std::collections::BTreeMap;
 use thiserror::Error;
 
 pub(crate) mod image;
-mod pose;
+pub(crate) mod pose;
 pub(crate) mod velocity;
 
 /// Half-width of a chart's free components: above 1, so a direction whose largest components

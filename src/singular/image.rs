@@ -26,7 +26,9 @@ use crate::model::Mechanism;
 use crate::problems::linkage::LinkageProblem;
 use crate::problems::singular::image::{check, CuspFormulation, CuspProblem, ImageError, NodeProblem};
 use crate::problems::singular::{Parts, SingularError, SingularProblem};
-use crate::search::{Budget, Limit, Limits, RefinePlan, Refinement, SolveError, SolveStats, Solver, SolverSettings, Status};
+use crate::manip3r::cusps;
+use crate::problems::singular::pose::LockedLegMap;
+use crate::search::{Budget, Control, Limit, Limits, RefinePlan, Refinement, SettingsError, SolveError, SolveStats, Solver, SolverSettings, Status};
 use crate::system::{EquationSystem, Monomial, VarId};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
@@ -68,6 +70,9 @@ impl CuspProblem {
     /// another chart's are dropped, the rest clustered by configuration; each unproven cluster
     /// is then re-searched finer (`refine_points`).
     pub fn solve(&self, sp: &SingularProblem, settings: &SolverSettings, cancel: &AtomicBool) -> Result<PointSearch, SolveError> {
+        if let Some(map) = self.torus() {
+            return self.solve_on_torus(map, sp, settings, cancel);
+        }
         let t0 = Instant::now();
         let mut found = Vec::new();
         let mut status = Status::Complete;
@@ -101,6 +106,104 @@ impl CuspProblem {
         let found = refine_points(found, &cluster, &proven, &|i, s| self.chart_solver(sp, i, s), &|i, b| self.other_chart(i, b), &accept, settings, t0, cancel)?;
         let points = cluster(&found);
         Ok(PointSearch { status, points, stats, dropped_other_chart: dropped, seconds: t0.elapsed().as_secs_f64() })
+    }
+
+    /// The `Torus` formulation: the 3R arms' cusp search (`manip3r::cusps`) on the platform's
+    /// actuator map, at precision sigma (radians of both angles), within the settings' limits.
+    /// Each certified cusp is one point (the search proves `∇det ≠ 0` there, so a Whitney cusp,
+    /// never a corank-two point); a cusp whose travels lie outside a slider's limits is not a
+    /// configuration and is dropped, one that may lie on a limit stays unproven. Undecided boxes
+    /// are clustered like the other formulations' boxes. Boxes are written in the pose systems'
+    /// variables (`LockedLegMap::pose_box`), so joint readings and clustering are theirs.
+    fn solve_on_torus(&self, map: &LockedLegMap, sp: &SingularProblem, settings: &SolverSettings, cancel: &AtomicBool) -> Result<PointSearch, SolveError> {
+        settings.validate()?;
+        if settings.sigma >= 1.0 {
+            return Err(SettingsError::Sigma(settings.sigma).into());
+        }
+        let t0 = Instant::now();
+        let control = Control { limits: Limits { max_cells: settings.max_boxes, timeout: settings.timeout, max_memory: settings.max_memory }, threads: settings.threads, cancel };
+        // A box the search leaves at the precision unproven (too coarse for Krawczyk near a
+        // cusp, at the image's sigma) is settled by the same search at the finer precisions
+        // of `RefinePlan`; each round is complete on its own, and the first round that leaves
+        // nothing at the precision is kept (the last one tried otherwise).
+        let mut precisions = vec![settings.sigma];
+        precisions.extend(RefinePlan::default().divisors.iter().map(|d| settings.sigma / d));
+        let mut found = None;
+        let mut tried = Vec::new();
+        for precision in precisions {
+            if found.is_some() && t0.elapsed() >= settings.timeout.unwrap_or(std::time::Duration::MAX) {
+                break;
+            }
+            let cusp_settings = cusps::CuspSettings { precision, method: cusps::Method::Krawczyk };
+            let round = cusps::search_with(map, &cusp_settings, &control.remaining_since(t0), &mut |_| {}).map_err(|_| SettingsError::Sigma(settings.sigma))?;
+            let settled = round.status != Status::Complete || round.undecided.is_empty() && round.cusps.iter().all(|c| c.unique);
+            tried.push(precision);
+            found = Some(round);
+            if settled {
+                break;
+            }
+        }
+        let found = found.expect("one round at least");
+        let refined = (tried.len() > 1).then(|| format!("searched again at precisions {}", tried[1..].iter().map(|p| format!("{p:e}")).collect::<Vec<_>>().join(", ")));
+        let template = self.charts[0].1.initial_box();
+        let joints = |theta: &[Interval; 2]| {
+            let b = map.pose_box(*theta, &template);
+            let mut joints: BTreeMap<String, Bounds> = BTreeMap::new();
+            for (n, v) in self.joint_values(sp, &b) {
+                joints.insert(n, [v.0, v.1]);
+            }
+            (b, joints)
+        };
+        let mut points = Vec::new();
+        for c in &found.cusps {
+            let (kind, note) = match map.within_travel(c.theta) {
+                Some(false) => continue,
+                Some(true) if c.unique => (BoxKind::Certified, None),
+                Some(true) => (BoxKind::Solution, None),
+                None => (BoxKind::Solution, Some("its travels may lie on a slider's limit".to_string())),
+            };
+            let (b, joints) = joints(&c.theta);
+            let refinement = note.into_iter().chain(refined.clone().filter(|_| kind != BoxKind::Certified)).collect();
+            points.push(FoundPoint { boxes: vec![b], kinds: vec![kind], degenerate: false, joints, members: vec![0], refinement });
+        }
+        // Undecided boxes, clustered; those proven outside the travels hold no configuration.
+        let open: Vec<&cusps::Undecided> = found.undecided.iter().filter(|u| map.within_travel(u.theta) != Some(false)).collect();
+        let (labels, n) = components(&open.iter().map(|u| IntervalBox::new(u.theta.to_vec())).collect::<Vec<_>>());
+        for l in 0..n {
+            let members: Vec<&&cusps::Undecided> = open.iter().zip(&labels).filter(|(_, k)| **k == l).map(|(u, _)| u).collect();
+            let mut p = FoundPoint::default();
+            for u in members {
+                let (b, joints) = joints(&u.theta);
+                p.boxes.push(b);
+                p.members.push(0);
+                p.kinds.push(if u.reason == cusps::Reason::Limit { BoxKind::Undecided } else { BoxKind::Solution });
+                for (name, v) in joints {
+                    let e = p.joints.entry(name).or_insert(v);
+                    *e = [e[0].min(v[0]), e[1].max(v[1])];
+                }
+                let why = match u.reason {
+                    cusps::Reason::GradDetMayVanish => Some("∇det may vanish there: a crossing of the type-II curve rather than a cusp?"),
+                    _ => None,
+                };
+                if let Some(why) = why.filter(|w| !p.refinement.iter().any(|r| r == w)) {
+                    p.refinement.push(why.to_string());
+                }
+            }
+            p.refinement.extend(refined.clone());
+            points.push(p);
+        }
+        let stats = SolveStats {
+            processed: found.stats.processed,
+            empty: found.stats.discarded_total(),
+            bisected: found.stats.split,
+            solutions: found.stats.found,
+            certified: found.cusps.iter().filter(|c| c.unique).count() as u64,
+            max_level: found.stats.max_level,
+            seconds: found.stats.seconds,
+            cpu_seconds: found.stats.cpu_seconds,
+            ..Default::default()
+        };
+        Ok(PointSearch { status: found.status, points, stats: vec![stats], dropped_other_chart: 0, seconds: t0.elapsed().as_secs_f64() })
     }
 
     /// The clusters of `found` by configuration (the base variables).

@@ -50,7 +50,7 @@
 //! system is symmetric under swapping the copies); in chart pairs `(k, k)` a pair is kept in one
 //! order.
 //!
-use super::pose::{PoseCusps, PoseReadout};
+use super::pose::{LockedLegMap, PoseCusps, PoseReadout};
 use super::{merge, Parts, SingularError, SingularKind, SingularProblem, CHART_REACH};
 use crate::interval::{interval, point, Interval, IntervalBox};
 use crate::model::Mechanism;
@@ -138,8 +138,12 @@ fn rates_terms(b: &mut Builder, rates: &[super::Rate], m: &[VarId]) -> Vec<Term>
 /// How the cusp system is written.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum CuspFormulation {
-    /// `Pose` when the mechanism fits it, else `Coordinates`.
+    /// `Torus` when the mechanism fits it, else `Coordinates`.
     Auto,
+    /// A planar platform on three R-P-R legs, one locked: its actuator map on the torus of the
+    /// locked leg's angle and the platform's (`pose::LockedLegMap`), searched by the 3R arms'
+    /// cusp search (`manip3r::cusps`): two angles, no null vector or tangent as unknowns.
+    Torus,
     /// The platform's pose as unknowns (`pose`'s module doc): a planar platform on three R-P-R
     /// legs, one locked.
     Pose,
@@ -153,6 +157,7 @@ impl CuspFormulation {
     pub fn name(self) -> &'static str {
         match self {
             CuspFormulation::Auto => "auto",
+            CuspFormulation::Torus => "torus",
             CuspFormulation::Pose => "pose",
             CuspFormulation::Coordinates => "coordinates",
         }
@@ -170,10 +175,13 @@ pub struct CuspProblem {
     pub tangent: Vec<VarId>,
     /// Number of the configuration variables (the linkage's, or the pose's).
     pub base_vars: usize,
-    /// The formulation built (`Pose` or `Coordinates`).
+    /// The formulation built (`Torus`, `Pose` or `Coordinates`).
     pub formulation: CuspFormulation,
     /// Joint values of a pose box; `None` in the joint coordinates.
     pose: Option<PoseReadout>,
+    /// The actuator map the `Torus` formulation searches (`charts` then serve its boxes' layout
+    /// and readings).
+    torus: Option<LockedLegMap>,
 }
 
 /// Checks the set is an input set of a 2-dof mechanism with 2 actuators.
@@ -191,18 +199,27 @@ impl CuspProblem {
         Self::with_formulation(m, sp, CuspFormulation::Auto)
     }
 
-    /// Builds the cusp systems of `sp` in `formulation` (`Pose` on a mechanism it does not fit is
-    /// an error).
+    /// Builds the cusp systems of `sp` in `formulation` (`Torus` or `Pose` on a mechanism they do
+    /// not fit is an error).
     pub fn with_formulation(m: &Mechanism, sp: &SingularProblem, formulation: CuspFormulation) -> Result<Self, ImageError> {
         check(sp)?;
         if formulation == CuspFormulation::Coordinates {
             return Self::coordinates(sp);
         }
         match PoseCusps::new(m, &sp.linkage.fixed_joints, &sp.actuated) {
-            Some(p) => Ok(Self { base_vars: p.base_vars, v: p.v, tangent: p.tangent, charts: p.charts, formulation: CuspFormulation::Pose, pose: Some(p.readout) }),
+            Some(p) => {
+                let formulation = if formulation == CuspFormulation::Pose { CuspFormulation::Pose } else { CuspFormulation::Torus };
+                let torus = (formulation == CuspFormulation::Torus).then_some(p.map);
+                Ok(Self { base_vars: p.base_vars, v: p.v, tangent: p.tangent, charts: p.charts, formulation, pose: Some(p.readout), torus })
+            }
             None if formulation == CuspFormulation::Auto => Self::coordinates(sp),
             None => Err(ImageError::NotPosePlatform),
         }
+    }
+
+    /// The actuator map searched on the torus (`CuspFormulation::Torus`).
+    pub(crate) fn torus(&self) -> Option<&LockedLegMap> {
+        self.torus.as_ref()
     }
 
     /// Free joint values over a box of one of the charts (radians or metres), outward rounded.
@@ -269,7 +286,7 @@ impl CuspProblem {
                 charts.push(((k, tau), s));
             }
         }
-        Ok(Self { charts, v, tangent, base_vars: sp.base_vars, formulation: CuspFormulation::Coordinates, pose: None })
+        Ok(Self { charts, v, tangent, base_vars: sp.base_vars, formulation: CuspFormulation::Coordinates, pose: None, torus: None })
     }
 }
 

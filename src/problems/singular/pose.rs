@@ -17,11 +17,17 @@
 //! pose is known they solve a linear system, so the search bisects the pose alone and Krawczyk,
 //! on the whole square system, narrows them and certifies the roots. A regular root with `μ ≠ 0`
 //! is a Whitney cusp as in `image`.
+//!
+//! The same map, `(α, φ) ↦ (h_a, h_b)` over the actuated legs, is also a `manip3r::TorusMap`
+//! (`LockedLegMap`): the cusp search of the 3R arms runs on it directly, two angles and no
+//! auxiliary unknown (`CuspFormulation::Torus`, the default for this platform).
 
 use super::image::{pin, Builder};
 use super::CHART_REACH;
 use crate::interval::angle::{arg, wrap};
 use crate::interval::{interval, point, Interval, IntervalBox};
+use crate::manip3r::taylor::Taylor;
+use crate::manip3r::{Jets, TorusMap};
 use crate::model::{JointKind, Mechanism};
 use crate::problems::angles::stated;
 use crate::system::{Equation, EquationSystem, Monomial, Term, VarId, VarRole};
@@ -79,6 +85,87 @@ pub(crate) struct PoseCusps {
     /// The pose variables `x, y, c, s` come first: the configuration part of a box.
     pub base_vars: usize,
     pub readout: PoseReadout,
+    /// The actuator map on the torus of the two angles.
+    pub map: LockedLegMap,
+}
+
+/// One actuated leg of `LockedLegMap`.
+#[derive(Clone, Copy, Debug)]
+struct ActuatedLeg {
+    /// `A_l − A_i`: the locked leg's ground point from this leg's.
+    ground: [Interval; 2],
+    /// `d_i = b_i − b_l` in the platform's frame.
+    platform: [Interval; 2],
+    /// The slider's travel limits.
+    travel: Interval,
+    /// The pose system's `X_i, Y_i` and `h_i` (`= X_i² + Y_i²`).
+    vars: (VarId, VarId, VarId),
+}
+
+/// The actuator map of the platform with its locked leg, `(α, φ) ↦ (h_a, h_b)`: the actuated
+/// legs' squared lengths `|E_i|²`, `E_i = A_l − A_i + L u(α) + R(φ) d_i`, over the torus of
+/// the locked leg's angle `α` and the platform's angle `φ`. Every point of the torus is a
+/// configuration while the travels stay within their limits (`within_travel`).
+#[derive(Clone, Debug)]
+pub(crate) struct LockedLegMap {
+    length: Interval,
+    legs: [ActuatedLeg; 2],
+    /// The pose system's `cos α, sin α, cos φ, sin φ`.
+    trig: [VarId; 4],
+}
+
+impl LockedLegMap {
+    /// `E_i` of both actuated legs over `theta = (α, φ)`, as jets to `order`.
+    fn ends(&self, theta: [Interval; 2], order: usize) -> [[Taylor; 2]; 2] {
+        let (sa, ca) = Taylor::sin_cos(0, theta[0], order);
+        let (sp, cp) = Taylor::sin_cos(1, theta[1], order);
+        let (ua, va) = (ca.scale(self.length), sa.scale(self.length));
+        self.legs.map(|l| {
+            let d = l.platform;
+            [(ua + cp.scale(d[0]) - sp.scale(d[1])).shift(l.ground[0]), (va + sp.scale(d[0]) + cp.scale(d[1])).shift(l.ground[1])]
+        })
+    }
+
+    /// `Some(true)` when both actuated travels over `theta` lie within their limits,
+    /// `Some(false)` when one lies wholly outside (no configuration there), `None` otherwise.
+    pub fn within_travel(&self, theta: [Interval; 2]) -> Option<bool> {
+        let e = self.ends(theta, 0);
+        let mut inside = true;
+        for (l, e) in self.legs.iter().zip(e) {
+            let travel = (e[0] * e[0] + e[1] * e[1]).value().sqrt();
+            if travel.disjoint(l.travel) {
+                return Some(false);
+            }
+            inside &= travel.subset(l.travel);
+        }
+        inside.then_some(true)
+    }
+
+    /// A box of the pose systems over `theta`: `template` (a chart's initial box) with the
+    /// angles' cosines and sines, the legs' `X_i, Y_i` and `h_i` set to their enclosures, which
+    /// is all `PoseReadout::joint_values` and the clustering read.
+    pub fn pose_box(&self, theta: [Interval; 2], template: &IntervalBox) -> IntervalBox {
+        let mut b = template.clone();
+        let [cl, sl, c, s] = self.trig;
+        b.dims[cl] = crate::interval::trig::cos(theta[0]);
+        b.dims[sl] = crate::interval::trig::sin(theta[0]);
+        b.dims[c] = crate::interval::trig::cos(theta[1]);
+        b.dims[s] = crate::interval::trig::sin(theta[1]);
+        for (l, e) in self.legs.iter().zip(self.ends(theta, 0)) {
+            let (x, y, h) = l.vars;
+            b.dims[x] = e[0].value();
+            b.dims[y] = e[1].value();
+            b.dims[h] = (e[0] * e[0] + e[1] * e[1]).value();
+        }
+        b
+    }
+}
+
+impl TorusMap for LockedLegMap {
+    fn jets(&self, theta: [Interval; 2], order: usize) -> Jets {
+        let [a, b] = self.ends(theta, order);
+        Jets { rho: a[0] * a[0] + a[1] * a[1], z: b[0] * b[0] + b[1] * b[1] }
+    }
 }
 
 /// Joint values over a pose box.
@@ -260,6 +347,7 @@ impl PoseCusps {
         let len = stated(length);
         let (al, bl) = (legs[locked].ground, legs[locked].platform);
         let mut leg_xy = vec![(cl, sl); legs.len()];
+        let mut actuated_legs = Vec::new();
         for (i, l) in legs.iter().enumerate() {
             if i == locked {
                 continue;
@@ -274,6 +362,7 @@ impl PoseCusps {
             let lo = stated(l.limits.0);
             let h = quadratic(&mut b, format!("{}^2", l.slider), &[(point(1.0), xv, xv), (point(1.0), yv, yv)], point(0.0), interval(lo.sqr().inf(), hi.sqr().sup()));
             readings.push((l.slider.clone(), Reading::Travel(h)));
+            actuated_legs.push(ActuatedLeg { ground: [al[0] - l.ground[0], al[1] - l.ground[1]], platform: d, travel: lo.convex_hull(hi), vars: (xv, yv, h) });
             // The gradient of |E|²/2 in (α, φ): (U × E, D × E), U = L u, D = R(φ) d.
             let ga = quadratic(&mut b, format!("grad_alpha_{i}"), &[(len, cl, yv), (-len, sl, xv)], point(0.0), Interval::ENTIRE);
             let gp = quadratic(&mut b, format!("grad_phi_{i}"), &[(d[0], c, yv), (-d[1], s, yv), (-d[1], c, xv), (-d[0], s, xv)], point(0.0), Interval::ENTIRE);
@@ -303,7 +392,9 @@ impl PoseCusps {
                 charts.push(((k, tau), sys));
             }
         }
-        Some(Self { charts, v, tangent, base_vars, readout: PoseReadout { legs: leg_xy, platform: (c, s), readings } })
+        let legs: [ActuatedLeg; 2] = actuated_legs.try_into().ok()?;
+        let map = LockedLegMap { length: len, legs, trig: [cl, sl, c, s] };
+        Some(Self { charts, v, tangent, base_vars, readout: PoseReadout { legs: leg_xy, platform: (c, s), readings }, map })
     }
 }
 
