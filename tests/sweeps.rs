@@ -129,7 +129,7 @@ const BASE: [[f64; 2]; 3] = [[0.0, 0.0], [15.91, 0.0], [0.0, 10.0]];
 const PLATFORM: [[f64; 2]; 3] = [[0.0, 0.0], [17.04, 0.0], [13.236373, 16.096708]];
 
 /// Number of platform poses with leg lengths `rho`, without the solver (module comment).
-fn poses(rho: [f64; 3]) -> usize {
+pub(crate) fn poses(rho: [f64; 3]) -> usize {
     // For angle φ: P = N / D from the two linear equations; h = |N|² − ρ1² D² vanishes at poses.
     let h = |phi: f64| {
         let (c, s) = (phi.cos(), phi.sin());

@@ -157,7 +157,7 @@ pub fn analyse_image(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String]
     let p = SingularProblem::new(m, fixed, SingularKind::Input, actuated, None)?;
     let cover = p.solve(&scaled(&left()), cancel)?;
     let cusps = CuspProblem::new(m, &p)?.solve(&p, &left(), cancel)?;
-    let nodes = NodeProblem::new(&p)?.solve(&p, &left(), cancel)?;
+    let nodes = NodeProblem::new(m, &p)?.solve(&p, &left(), cancel)?;
     let regions = regions(m, &p, &cover, grid, &left(), cancel)?;
     Ok(ImageReport::new(&p, &cover, &cusps, &nodes, regions))
 }
@@ -177,7 +177,7 @@ pub fn image_points(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String],
     let p = SingularProblem::new(m, fixed, SingularKind::Input, actuated, None)?;
     Ok(match search {
         ImageSearch::Cusps => ImagePoints::cusps(&p, &CuspProblem::new(m, &p)?.solve(&p, settings, cancel)?),
-        ImageSearch::Nodes => ImagePoints::nodes(&p, &NodeProblem::new(&p)?.solve(&p, settings, cancel)?),
+        ImageSearch::Nodes => ImagePoints::nodes(&p, &NodeProblem::new(m, &p)?.solve(&p, settings, cancel)?),
     })
 }
 

@@ -8,6 +8,7 @@
 //! internal-motion line, a whole line of them).
 
 use super::chain::Chain3R;
+use super::map::TorusMap;
 use super::cusps::{bisect, meet_on_torus};
 use super::drive::{drive_shared, no_progress, Order};
 use crate::search::Wire;
@@ -78,8 +79,8 @@ impl Wire for IkCell {
 }
 
 /// The test of the module doc, one box at a time.
-struct IkPrune<'a> {
-    chain: &'a Chain3R,
+struct IkPrune<'a, M: TorusMap + ?Sized> {
+    chain: &'a M,
     target: [Interval; 2],
     precision: f64,
     /// θ₃ strips about internal-motion lines, reported whole and not searched.
@@ -108,7 +109,7 @@ impl crate::search::Reason for IkDiscard {
 }
 
 
-impl Prune for IkPrune<'_> {
+impl<M: TorusMap + ?Sized> Prune for IkPrune<'_, M> {
     type Cell = IkCell;
     type Found = (Order, [Interval; 2]);
     type Reason = IkDiscard;
@@ -173,7 +174,7 @@ impl Prune for IkPrune<'_> {
 /// Solves `f(θ₂, θ₃) ∈ target`, with `target` enclosures of (ρ, z) (for a point known only up
 /// to rounding, e.g. after a change of frame): every solution for every target in the box is
 /// enclosed, and a box is unique when it holds exactly one for each. See `solve`.
-pub fn solve_target(chain: &Chain3R, target: [Interval; 2], precision: f64, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<IkSolutions, Manip3rError> {
+pub fn solve_target<M: TorusMap + ?Sized>(chain: &M, target: [Interval; 2], precision: f64, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<IkSolutions, Manip3rError> {
     super::check_precision(precision)?;
     if target.iter().any(|t| t.is_empty() || !t.inf().is_finite() || !t.sup().is_finite()) {
         return Err(Manip3rError::BadPoint(target[0].mid(), target[1].mid()));
@@ -207,9 +208,9 @@ const LINE_MARGIN: f64 = 1.0 / 1024.0;
 
 /// The θ₃ strips about the internal-motion lines whose image may be the target (the image of
 /// a line is one point: f at any θ₂ over the band's θ₃ encloses it).
-fn line_strips(chain: &Chain3R, target: [Interval; 2], precision: f64) -> Vec<Interval> {
+fn line_strips<M: TorusMap + ?Sized>(chain: &M, target: [Interval; 2], precision: f64) -> Vec<Interval> {
     let mut out: Vec<Interval> = Vec::new();
-    for band in motion::bands(chain, precision).iter().filter(|b| b.near.is_none()) {
+    for band in chain.bands(precision).iter().filter(|b| b.near.is_none()) {
         let t3 = crate::interval::interval(band.theta3[0], band.theta3[1]);
         let image = chain.derived([point(0.0), t3], 0);
         if (0..2).all(|k| !image.f[k].value().disjoint(target[k])) {

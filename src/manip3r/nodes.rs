@@ -27,7 +27,7 @@
 //! between the two points is assumed: every node, however close its two points, is found.
 //! Pairs touching an internal-motion strip are set aside.
 
-use super::chain::Chain3R;
+use super::map::TorusMap;
 use super::cusps::{self, evaluate_without_tangency as evaluate, meet_on_torus, BoxEval, Cusp};
 use super::drive::{drive, no_progress, Order};
 use crate::search::Control;
@@ -110,8 +110,8 @@ struct TreeBox {
 }
 
 /// What the workers of a node search share.
-struct Tree<'a> {
-    chain: &'a Chain3R,
+struct Tree<'a, M: TorusMap + ?Sized> {
+    chain: &'a M,
     bands: &'a [Band],
     /// Cusp neighbourhoods on which f restricted to S is proven injective.
     regions: &'a [[Interval; 2]],
@@ -123,7 +123,7 @@ struct Tree<'a> {
     max_boxes: u64,
 }
 
-impl Tree<'_> {
+impl<M: TorusMap + ?Sized> Tree<'_, M> {
     fn make(&self, b: [Interval; 2]) -> Box<TreeBox> {
         self.boxes.fetch_add(1, Ordering::Relaxed);
         let eval = evaluate(self.chain, b);
@@ -183,7 +183,7 @@ fn nearest_copy(p: &[Interval; 2], q: &[Interval; 2]) -> [Interval; 2] {
 
 /// The mean-value injectivity certificate on `h` (see the module doc); `tangent` is the image
 /// tangent `g` somewhere near `h`, the first direction tried.
-fn injective_mean_value(chain: &Chain3R, h: [Interval; 2], tangent: [Interval; 2]) -> bool {
+fn injective_mean_value<M: TorusMap + ?Sized>(chain: &M, h: [Interval; 2], tangent: [Interval; 2]) -> bool {
     let d = chain.derived(h, 2);
     let df = [[d.df[0][0].value(), d.df[0][1].value()], [d.df[1][0].value(), d.df[1][1].value()]];
     injective_from(d.det.grad(), df, tangent)
@@ -274,14 +274,17 @@ fn everywhere(b: [Interval; 2], control: &Control, start: Instant, test: impl Fn
 /// Widest box of a pair on which the node search tries Krawczyk (radians).
 const KRAWCZYK_WIDTH: f64 = 1.0;
 
-/// Bisections allowed per certificate condition: cells down to 1/64 of the neighbourhood.
-const DEPTH: u32 = 12;
+/// Bisections allowed per certificate condition: cells down to 1/256 of the neighbourhood. The
+/// larger the neighbourhood certified, the fewer pairs near the cusp are left to the mean-value
+/// certificate, which fails there; at 1/64 the 3-RPR's cusp neighbourhoods stopped short of the
+/// pairs the search reaches at its precision, which stayed undecided.
+const DEPTH: u32 = 16;
 
 /// Cells of one condition's check at most: the full tree of `DEPTH` bisections.
 const CONDITION_CELLS: u64 = (2 << DEPTH) - 1;
 
 /// F'' = ∇g·T and F''' = ∇(∇g·T)·T over `b` (see the module doc).
-fn flow_derivatives(chain: &Chain3R, b: [Interval; 2]) -> ([Interval; 2], [Interval; 2]) {
+fn flow_derivatives<M: TorusMap + ?Sized>(chain: &M, b: [Interval; 2]) -> ([Interval; 2], [Interval; 2]) {
     let jets = chain.derived(b, 4);
     let t = [-jets.det.d(1), jets.det.d(0)];
     let along = |h: &super::taylor::Taylor| h.d(0) * t[0] + h.d(1) * t[1];
@@ -293,7 +296,7 @@ fn flow_derivatives(chain: &Chain3R, b: [Interval; 2]) -> ([Interval; 2], [Inter
 /// Each condition is checked on adaptive sub-boxes (`everywhere`), with one strict sign over
 /// all of them, and F''(c) on the cusp box itself, which keeps the enclosures tight. `Err`: a
 /// limit of `control` stopped a check before the certificate was decided.
-pub fn injective_near_cusp(chain: &Chain3R, u: [Interval; 2], c: [Interval; 2], control: &Control, start: Instant) -> Result<bool, Limit> {
+pub fn injective_near_cusp<M: TorusMap + ?Sized>(chain: &M, u: [Interval; 2], c: [Interval; 2], control: &Control, start: Instant) -> Result<bool, Limit> {
     let at_c = evaluate(chain, c);
     // (a) and (b): with ∂det/∂θₖ of one strict sign on u, every segment along θₖ meets S at most
     // once; with det ≠ 0 on the two edges θₖ = const, the signs there are fixed, so S ∩ u is
@@ -333,16 +336,17 @@ pub fn injective_near_cusp(chain: &Chain3R, u: [Interval; 2], c: [Interval; 2], 
     })
 }
 
-/// A box around `c` on which `injective_near_cusp` holds, trying radii from 0.4 down; `Err` when
+/// A box around `c` on which `injective_near_cusp` holds, trying radii from 0.4 down by a
+/// factor 0.85 (a finer ladder certifies a neighbourhood nearer the largest one that holds); `Err` when
 /// a limit stopped the trials.
-fn cusp_region(chain: &Chain3R, c: &Cusp, control: &Control, start: Instant) -> Result<Option<[Interval; 2]>, Limit> {
+fn cusp_region<M: TorusMap + ?Sized>(chain: &M, c: &Cusp, control: &Control, start: Instant) -> Result<Option<[Interval; 2]>, Limit> {
     let mut r = 0.4;
     while r > 1e-7 {
         let u = [0, 1].map(|i| interval(c.theta[i].inf() - r, c.theta[i].sup() + r));
         if injective_near_cusp(chain, u, c.theta, control, start)? {
             return Ok(Some(u));
         }
-        r *= 0.7;
+        r *= 0.85;
     }
     Ok(None)
 }
@@ -375,7 +379,7 @@ fn node_system(ep: &BoxEval, eq: &BoxEval) -> ([Interval; 4], [[Interval; 4]; 4]
 }
 
 /// Krawczyk's image of system (3) over `x = P × Q` (for `krawczyk::inflate`).
-fn node_image(chain: &Chain3R, x: &[Interval; 4]) -> Option<[Interval; 4]> {
+fn node_image<M: TorusMap + ?Sized>(chain: &M, x: &[Interval; 4]) -> Option<[Interval; 4]> {
     let (p, q) = ([x[0], x[1]], [x[2], x[3]]);
     let (ep, eq) = (evaluate(chain, p), evaluate(chain, q));
     let m = x.map(|d| d.mid());
@@ -384,7 +388,7 @@ fn node_image(chain: &Chain3R, x: &[Interval; 4]) -> Option<[Interval; 4]> {
 }
 
 /// Shrinks a proven node to the precision.
-fn refine(chain: &Chain3R, p: [Interval; 2], q: [Interval; 2], precision: f64) -> ([Interval; 2], [Interval; 2]) {
+fn refine<M: TorusMap + ?Sized>(chain: &M, p: [Interval; 2], q: [Interval; 2], precision: f64) -> ([Interval; 2], [Interval; 2]) {
     let k = krawczyk::tighten([p[0], p[1], q[0], q[1]], precision, |k| {
         let (p, q) = ([k[0], k[1]], [k[2], k[3]]);
         krawczyk_node(&p, &evaluate(chain, p), &q, &evaluate(chain, q))
@@ -447,7 +451,7 @@ fn clusters(pairs: &[[[Interval; 2]; 2]]) -> Vec<([[Interval; 2]; 2], Vec<usize>
 /// Bounded: at most `SETTLE_PAIRS` pairs, clusters at most `SETTLE_WIDTH`·precision wide.
 /// Returns which of `pairs` stay undecided, and the clusters settled; only `eligible` pairs
 /// (those left at the precision) are tried.
-fn settle(chain: &Chain3R, eps: f64, nodes: &mut Vec<Node>, pairs: &[[[Interval; 2]; 2]], eligible: &[bool]) -> (Vec<bool>, u64) {
+fn settle<M: TorusMap + ?Sized>(chain: &M, eps: f64, nodes: &mut Vec<Node>, pairs: &[[[Interval; 2]; 2]], eligible: &[bool]) -> (Vec<bool>, u64) {
     let mut keep = vec![true; pairs.len()];
     let at: Vec<usize> = (0..pairs.len()).filter(|&i| eligible[i]).collect();
     if at.len() > SETTLE_PAIRS {
@@ -480,7 +484,7 @@ fn settle(chain: &Chain3R, eps: f64, nodes: &mut Vec<Node>, pairs: &[[[Interval;
             continue;
         } else {
             let (a, b) = refine(chain, small[0], small[1], eps);
-            let (ja, jb) = (chain.jets(a, 0), chain.jets(b, 0));
+            let (ja, jb) = (TorusMap::jets(chain, a, 0), TorusMap::jets(chain, b, 0));
             nodes.push(Node { theta: [a, b], rho: ja.rho.value().intersection(jb.rho.value()), z: ja.z.value().intersection(jb.z.value()) });
         }
         settled += 1;
@@ -492,8 +496,8 @@ fn settle(chain: &Chain3R, eps: f64, nodes: &mut Vec<Node>, pairs: &[[[Interval;
 }
 
 /// The node test of the module doc, one pair at a time.
-struct NodePrune<'t, 'a, 'r> {
-    tree: &'t Tree<'a>,
+struct NodePrune<'t, 'a, 'r, M: TorusMap + ?Sized> {
+    tree: &'t Tree<'a, M>,
     _boxes: std::marker::PhantomData<&'r TreeBox>,
 }
 
@@ -528,7 +532,7 @@ impl crate::search::Reason for NodeDiscard {
 }
 
 
-impl<'r> Prune for NodePrune<'_, '_, 'r> {
+impl<'r, M: TorusMap + ?Sized> Prune for NodePrune<'_, '_, 'r, M> {
     type Cell = NodeCell<'r>;
     type Found = NodeFound;
     type Reason = NodeDiscard;
@@ -586,7 +590,7 @@ impl<'r> Prune for NodePrune<'_, '_, 'r> {
                 K::Empty => return Step::Discard(NodeDiscard::KrawczykEmpty),
                 K::Unique(k) => {
                     let (a, b) = refine(chain, [k[0], k[1]], [k[2], k[3]], eps);
-                    let (ja, jb) = (chain.jets(a, 0), chain.jets(b, 0));
+                    let (ja, jb) = (TorusMap::jets(chain, a, 0), TorusMap::jets(chain, b, 0));
                     let node = Node { theta: [a, b], rho: ja.rho.value().intersection(jb.rho.value()), z: ja.z.value().intersection(jb.z.value()) };
                     return Step::Found(NodeFound { order: cell.order, node });
                 }
@@ -641,14 +645,14 @@ impl<'r> Prune for NodePrune<'_, '_, 'r> {
 /// Finds every node whose two points lie outside the internal-motion strips, depth first on
 /// one thread with at most `DEFAULT_MAX_PAIRS` pairs. `cusps` are the certified cusps (from
 /// `cusps::search` at any precision); they let pairs near a cusp go.
-pub fn search(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &NodeSettings) -> Result<NodeSearch, super::Manip3rError> {
+pub fn search<M: TorusMap + ?Sized>(chain: &M, cusps: &[Cusp], bands: &[Band], settings: &NodeSettings) -> Result<NodeSearch, super::Manip3rError> {
     let control = Control::with_limits(Limits { max_cells: DEFAULT_MAX_PAIRS, ..Limits::default() });
     search_with(chain, cusps, bands, settings, &control, &mut no_progress)
 }
 
 /// As `search`, within `control`, reporting progress. The cusp neighbourhoods are certified
 /// first, on `control.threads` threads.
-pub fn search_with(chain: &Chain3R, cusps: &[Cusp], bands: &[Band], settings: &NodeSettings, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<NodeSearch, super::Manip3rError> {
+pub fn search_with<M: TorusMap + ?Sized>(chain: &M, cusps: &[Cusp], bands: &[Band], settings: &NodeSettings, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<NodeSearch, super::Manip3rError> {
     super::check_precision(settings.precision)?;
     let start = Instant::now();
     let unique: Vec<&Cusp> = cusps.iter().filter(|c| c.unique).collect();

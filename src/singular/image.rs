@@ -26,8 +26,8 @@ use crate::model::Mechanism;
 use crate::problems::linkage::LinkageProblem;
 use crate::problems::singular::image::{check, CuspFormulation, CuspProblem, ImageError, NodeProblem};
 use crate::problems::singular::{Parts, SingularError, SingularProblem};
-use crate::manip3r::cusps;
-use crate::problems::singular::pose::LockedLegMap;
+use crate::manip3r::{self, cusps, nodes, TorusMap};
+use crate::problems::singular::pose::{LockedLegMap, PlatformTorus};
 use crate::search::{Budget, Control, Limit, Limits, RefinePlan, Refinement, SettingsError, SolveError, SolveStats, Solver, SolverSettings, Status};
 use crate::system::{EquationSystem, Monomial, VarId};
 use std::collections::BTreeMap;
@@ -70,8 +70,8 @@ impl CuspProblem {
     /// another chart's are dropped, the rest clustered by configuration; each unproven cluster
     /// is then re-searched finer (`refine_points`).
     pub fn solve(&self, sp: &SingularProblem, settings: &SolverSettings, cancel: &AtomicBool) -> Result<PointSearch, SolveError> {
-        if let Some(map) = self.torus() {
-            return self.solve_on_torus(map, sp, settings, cancel);
+        if let Some(torus) = self.torus() {
+            return solve_cusps_on_torus(torus, settings, cancel);
         }
         let t0 = Instant::now();
         let mut found = Vec::new();
@@ -108,104 +108,6 @@ impl CuspProblem {
         Ok(PointSearch { status, points, stats, dropped_other_chart: dropped, seconds: t0.elapsed().as_secs_f64() })
     }
 
-    /// The `Torus` formulation: the 3R arms' cusp search (`manip3r::cusps`) on the platform's
-    /// actuator map, at precision sigma (radians of both angles), within the settings' limits.
-    /// Each certified cusp is one point (the search proves `∇det ≠ 0` there, so a Whitney cusp,
-    /// never a corank-two point); a cusp whose travels lie outside a slider's limits is not a
-    /// configuration and is dropped, one that may lie on a limit stays unproven. Undecided boxes
-    /// are clustered like the other formulations' boxes. Boxes are written in the pose systems'
-    /// variables (`LockedLegMap::pose_box`), so joint readings and clustering are theirs.
-    fn solve_on_torus(&self, map: &LockedLegMap, sp: &SingularProblem, settings: &SolverSettings, cancel: &AtomicBool) -> Result<PointSearch, SolveError> {
-        settings.validate()?;
-        if settings.sigma >= 1.0 {
-            return Err(SettingsError::Sigma(settings.sigma).into());
-        }
-        let t0 = Instant::now();
-        let control = Control { limits: Limits { max_cells: settings.max_boxes, timeout: settings.timeout, max_memory: settings.max_memory }, threads: settings.threads, cancel };
-        // A box the search leaves at the precision unproven (too coarse for Krawczyk near a
-        // cusp, at the image's sigma) is settled by the same search at the finer precisions
-        // of `RefinePlan`; each round is complete on its own, and the first round that leaves
-        // nothing at the precision is kept (the last one tried otherwise).
-        let mut precisions = vec![settings.sigma];
-        precisions.extend(RefinePlan::default().divisors.iter().map(|d| settings.sigma / d));
-        let mut found = None;
-        let mut tried = Vec::new();
-        for precision in precisions {
-            if found.is_some() && t0.elapsed() >= settings.timeout.unwrap_or(std::time::Duration::MAX) {
-                break;
-            }
-            let cusp_settings = cusps::CuspSettings { precision, method: cusps::Method::Krawczyk };
-            let round = cusps::search_with(map, &cusp_settings, &control.remaining_since(t0), &mut |_| {}).map_err(|_| SettingsError::Sigma(settings.sigma))?;
-            let settled = round.status != Status::Complete || round.undecided.is_empty() && round.cusps.iter().all(|c| c.unique);
-            tried.push(precision);
-            found = Some(round);
-            if settled {
-                break;
-            }
-        }
-        let found = found.expect("one round at least");
-        let refined = (tried.len() > 1).then(|| format!("searched again at precisions {}", tried[1..].iter().map(|p| format!("{p:e}")).collect::<Vec<_>>().join(", ")));
-        let template = self.charts[0].1.initial_box();
-        let joints = |theta: &[Interval; 2]| {
-            let b = map.pose_box(*theta, &template);
-            let mut joints: BTreeMap<String, Bounds> = BTreeMap::new();
-            for (n, v) in self.joint_values(sp, &b) {
-                joints.insert(n, [v.0, v.1]);
-            }
-            (b, joints)
-        };
-        let mut points = Vec::new();
-        for c in &found.cusps {
-            let (kind, note) = match map.within_travel(c.theta) {
-                Some(false) => continue,
-                Some(true) if c.unique => (BoxKind::Certified, None),
-                Some(true) => (BoxKind::Solution, None),
-                None => (BoxKind::Solution, Some("its travels may lie on a slider's limit".to_string())),
-            };
-            let (b, joints) = joints(&c.theta);
-            let refinement = note.into_iter().chain(refined.clone().filter(|_| kind != BoxKind::Certified)).collect();
-            points.push(FoundPoint { boxes: vec![b], kinds: vec![kind], degenerate: false, joints, members: vec![0], refinement });
-        }
-        // Undecided boxes, clustered; those proven outside the travels hold no configuration.
-        let open: Vec<&cusps::Undecided> = found.undecided.iter().filter(|u| map.within_travel(u.theta) != Some(false)).collect();
-        let (labels, n) = components(&open.iter().map(|u| IntervalBox::new(u.theta.to_vec())).collect::<Vec<_>>());
-        for l in 0..n {
-            let members: Vec<&&cusps::Undecided> = open.iter().zip(&labels).filter(|(_, k)| **k == l).map(|(u, _)| u).collect();
-            let mut p = FoundPoint::default();
-            for u in members {
-                let (b, joints) = joints(&u.theta);
-                p.boxes.push(b);
-                p.members.push(0);
-                p.kinds.push(if u.reason == cusps::Reason::Limit { BoxKind::Undecided } else { BoxKind::Solution });
-                for (name, v) in joints {
-                    let e = p.joints.entry(name).or_insert(v);
-                    *e = [e[0].min(v[0]), e[1].max(v[1])];
-                }
-                let why = match u.reason {
-                    cusps::Reason::GradDetMayVanish => Some("∇det may vanish there: a crossing of the type-II curve rather than a cusp?"),
-                    _ => None,
-                };
-                if let Some(why) = why.filter(|w| !p.refinement.iter().any(|r| r == w)) {
-                    p.refinement.push(why.to_string());
-                }
-            }
-            p.refinement.extend(refined.clone());
-            points.push(p);
-        }
-        let stats = SolveStats {
-            processed: found.stats.processed,
-            empty: found.stats.discarded_total(),
-            bisected: found.stats.split,
-            solutions: found.stats.found,
-            certified: found.cusps.iter().filter(|c| c.unique).count() as u64,
-            max_level: found.stats.max_level,
-            seconds: found.stats.seconds,
-            cpu_seconds: found.stats.cpu_seconds,
-            ..Default::default()
-        };
-        Ok(PointSearch { status: found.status, points, stats: vec![stats], dropped_other_chart: 0, seconds: t0.elapsed().as_secs_f64() })
-    }
-
     /// The clusters of `found` by configuration (the base variables).
     fn cluster(&self, sp: &SingularProblem, found: &[ChartBox]) -> Vec<FoundPoint> {
         let projected: Vec<IntervalBox> = found.iter().map(|c| IntervalBox::new(c.b.dims[..self.base_vars].to_vec())).collect();
@@ -234,6 +136,146 @@ impl CuspProblem {
         }
         points
     }
+}
+
+/// The limits of `settings` as a `Control` with `cancel`.
+fn control_of<'c>(settings: &SolverSettings, cancel: &'c AtomicBool) -> Control<'c> {
+    Control { limits: Limits { max_cells: settings.max_boxes, timeout: settings.timeout, max_memory: settings.max_memory }, threads: settings.threads, cancel }
+}
+
+/// The 3R arms' cusp search (`manip3r::cusps`) on a platform's actuator map, at precision
+/// sigma (radians of both angles). A box the search leaves at the precision unproven (too
+/// coarse for Krawczyk near a cusp, at the image's sigma) is settled by the same search at the
+/// finer precisions of `RefinePlan`: each round is complete on its own, and the first round
+/// that leaves nothing at the precision is kept (the last one tried otherwise). Returns the
+/// round kept and the precisions tried after the first.
+fn torus_cusps(map: &LockedLegMap, settings: &SolverSettings, control: &Control, t0: Instant) -> Result<(cusps::CuspSearch, Vec<f64>), SolveError> {
+    in_rounds(settings, t0, |precision| {
+        let cusp_settings = cusps::CuspSettings { precision, method: cusps::Method::Krawczyk };
+        let round = cusps::search_with(map, &cusp_settings, &control.remaining_since(t0), &mut |_| {}).map_err(|_| SettingsError::Sigma(settings.sigma))?;
+        let settled = round.status != Status::Complete || round.undecided.is_empty() && round.cusps.iter().all(|c| c.unique);
+        Ok((round, settled))
+    })
+}
+
+/// Runs `search` at precision sigma, then, while a round leaves boxes at the precision
+/// undecided (`settled` false) and time is left, at the finer precisions of `RefinePlan`. Each
+/// round is a complete search on its own; the first settled round is kept (the last one run
+/// otherwise), with the precisions tried after the first.
+fn in_rounds<T>(settings: &SolverSettings, t0: Instant, mut search: impl FnMut(f64) -> Result<(T, bool), SolveError>) -> Result<(T, Vec<f64>), SolveError> {
+    settings.validate()?;
+    if settings.sigma >= 1.0 {
+        return Err(SettingsError::Sigma(settings.sigma).into());
+    }
+    let (mut kept, mut settled) = search(settings.sigma)?;
+    let mut tried = Vec::new();
+    for d in RefinePlan::default().divisors {
+        if settled || settings.timeout.is_some_and(|t| t0.elapsed() >= t) {
+            break;
+        }
+        tried.push(settings.sigma / d);
+        (kept, settled) = search(settings.sigma / d)?;
+    }
+    Ok((kept, tried))
+}
+
+/// The kernel's counters of a search on the torus, as the solver's.
+fn torus_stats(stats: &crate::search::Stats, certified: u64) -> SolveStats {
+    SolveStats {
+        processed: stats.processed,
+        empty: stats.discarded_total(),
+        bisected: stats.split,
+        solutions: stats.found,
+        certified,
+        max_level: stats.max_level,
+        seconds: stats.seconds,
+        cpu_seconds: stats.cpu_seconds,
+        ..Default::default()
+    }
+}
+
+/// The cusps of the `Torus` formulation (`torus_cusps`). Each certified cusp is one point (the
+/// search proves `∇det ≠ 0` there: a Whitney cusp, never a corank-two point); a cusp whose
+/// travels lie outside a slider's limits is no configuration and is dropped, one that may lie
+/// on a limit stays unproven. Undecided boxes are clustered. Boxes are written in the pose
+/// systems' variables (`PlatformTorus::pose_box`), so readings and clustering are theirs.
+fn solve_cusps_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel: &AtomicBool) -> Result<PointSearch, SolveError> {
+    let t0 = Instant::now();
+    let map = &torus.map;
+    let (found, tried) = torus_cusps(map, settings, &control_of(settings, cancel), t0)?;
+    let refined = (!tried.is_empty()).then(|| format!("searched again at precisions {}", tried.iter().map(|p| format!("{p:e}")).collect::<Vec<_>>().join(", ")));
+    let joints = |theta: [Interval; 2]| -> BTreeMap<String, Bounds> { torus.joint_values(theta).into_iter().map(|(n, v)| (n, [v.0, v.1])).collect() };
+    let mut points = Vec::new();
+    for c in &found.cusps {
+        let (kind, note) = match map.within_travel(c.theta) {
+            Some(false) => continue,
+            Some(true) if c.unique => (BoxKind::Certified, None),
+            Some(true) => (BoxKind::Solution, None),
+            None => (BoxKind::Solution, Some("its travels may lie on a slider's limit".to_string())),
+        };
+        let refinement = note.into_iter().chain(refined.clone().filter(|_| kind != BoxKind::Certified)).collect();
+        points.push(FoundPoint { boxes: vec![torus.pose_box(c.theta)], kinds: vec![kind], degenerate: false, joints: joints(c.theta), members: vec![0], refinement });
+    }
+    // Undecided boxes, clustered; those proven outside the travels hold no configuration.
+    let open: Vec<&cusps::Undecided> = found.undecided.iter().filter(|u| map.within_travel(u.theta) != Some(false)).collect();
+    let (labels, n) = components(&open.iter().map(|u| IntervalBox::new(u.theta.to_vec())).collect::<Vec<_>>());
+    for l in 0..n {
+        let mut p = FoundPoint::default();
+        for (u, _) in open.iter().zip(&labels).filter(|(_, k)| **k == l) {
+            p.boxes.push(torus.pose_box(u.theta));
+            p.members.push(0);
+            p.kinds.push(if u.reason == cusps::Reason::Limit { BoxKind::Undecided } else { BoxKind::Solution });
+            for (name, v) in joints(u.theta) {
+                let e = p.joints.entry(name).or_insert(v);
+                *e = [e[0].min(v[0]), e[1].max(v[1])];
+            }
+            let why = "∇det may vanish there: a crossing of the type-II curve rather than a cusp?";
+            if u.reason == cusps::Reason::GradDetMayVanish && !p.refinement.iter().any(|r| r == why) {
+                p.refinement.push(why.to_string());
+            }
+        }
+        p.refinement.extend(refined.clone());
+        points.push(p);
+    }
+    let certified = found.cusps.iter().filter(|c| c.unique).count() as u64;
+    Ok(PointSearch { status: found.status, points, stats: vec![torus_stats(&found.stats, certified)], dropped_other_chart: 0, seconds: t0.elapsed().as_secs_f64() })
+}
+
+/// The nodes of the `Torus` formulation: the 3R arms' node search (`manip3r::nodes`, system
+/// (3) of seed 003 over pairs of torus boxes) on the platform's actuator map, at precision
+/// sigma and, while pairs stay undecided at the precision, finer (`in_rounds`), with the
+/// certified cusps of `torus_cusps` for its injectivity certificates near cusps. A node one of whose points lies outside a slider's travel is dropped; one that may
+/// lie on a limit stays unproven.
+fn solve_nodes_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel: &AtomicBool) -> Result<NodeSearch, SolveError> {
+    let t0 = Instant::now();
+    let map = &torus.map;
+    let control = control_of(settings, cancel);
+    let (found_cusps, _) = torus_cusps(map, settings, &control, t0)?;
+    let (found, _) = in_rounds(settings, t0, |precision| {
+        let node_settings = nodes::NodeSettings { precision };
+        let round = nodes::search_with(map, &found_cusps.cusps, &[], &node_settings, &control.remaining_since(t0), &mut |_| {}).map_err(|_| SettingsError::Sigma(settings.sigma))?;
+        let settled = round.status != Status::Complete || round.undecided.is_empty();
+        Ok((round, settled))
+    })?;
+    let joints = |theta: [Interval; 2]| -> BTreeMap<String, Bounds> { torus.joint_values(theta).into_iter().map(|(n, v)| (n, [v.0, v.1])).collect() };
+    let mut pairs = Vec::new();
+    let certified = found.nodes.iter().map(|n| (n.theta, true));
+    let open = found.undecided.iter().map(|t| (*t, false));
+    for (theta, proven) in certified.chain(open) {
+        let (a, b) = (map.within_travel(theta[0]), map.within_travel(theta[1]));
+        if a == Some(false) || b == Some(false) {
+            continue;
+        }
+        let kind = match (proven, a == Some(true) && b == Some(true)) {
+            (true, true) => BoxKind::Certified,
+            (true, false) => BoxKind::Solution,
+            (false, _) if found.status == Status::Complete => BoxKind::Solution,
+            (false, _) => BoxKind::Undecided,
+        };
+        pairs.push(NodePair { joints: [joints(theta[0]), joints(theta[1])], kind });
+    }
+    let stats = torus_stats(&found.stats, found.nodes.len() as u64);
+    Ok(NodeSearch { status: found_cusps.status.and(found.status), pairs, near_diagonal: Vec::new(), injective: found.stats.discarded.get("injective").copied().unwrap_or(0), dropped_other_chart: 0, stats: vec![stats], seconds: t0.elapsed().as_secs_f64() })
 }
 
 /// A box of a point search, with the chart (system) it is a box of.
@@ -420,8 +462,12 @@ impl PointSearch {
 }
 
 impl NodeProblem {
-    /// Runs the node search, in scaled widths (`scaled`).
+    /// Runs the node search: on the torus for a platform with a locked leg
+    /// (`solve_nodes_on_torus`), otherwise on the doubled systems in scaled widths (`scaled`).
     pub fn solve(&self, sp: &SingularProblem, settings: &SolverSettings, cancel: &AtomicBool) -> Result<NodeSearch, SolveError> {
+        if let Some(torus) = self.torus() {
+            return solve_nodes_on_torus(torus, settings, cancel);
+        }
         let t0 = Instant::now();
         let mut status = Status::Complete;
         let mut out = NodeSearch { status, pairs: Vec::new(), near_diagonal: Vec::new(), injective: 0, dropped_other_chart: 0, stats: Vec::new(), seconds: 0.0 };
@@ -453,7 +499,7 @@ impl NodeProblem {
                         }
                         let a = IntervalBox::new(d[..sp.base_vars].to_vec());
                         let b = IntervalBox::new((0..sp.base_vars).map(|j| d[map[j]]).collect());
-                        out.pairs.push(NodePair { points: [a, b], kind });
+                        out.pairs.push(NodePair { joints: [joint_bounds(sp, &a), joint_bounds(sp, &b)], kind });
                     }
                     None if k == k2 && kind != BoxKind::Undecided && injective(&sp.chart(*k), &self.shared, &bx, map) => out.injective += 1,
                     None => out.near_diagonal.push(bx),
@@ -467,11 +513,16 @@ impl NodeProblem {
     }
 }
 
-/// A node pair: two configuration boxes (the linkage's variables).
+/// Free joint values over a box of the linkage's variables.
+fn joint_bounds(sp: &SingularProblem, b: &IntervalBox) -> BTreeMap<String, Bounds> {
+    sp.joint_values(b).into_iter().map(|(n, v)| (n, [v.0, v.1])).collect()
+}
+
+/// A node pair: the free joint values over its two configuration boxes.
 #[derive(Clone, Debug)]
 pub struct NodePair {
-    /// The two points' boxes.
-    pub points: [IntervalBox; 2],
+    /// The two points' joint values (radians or metres).
+    pub joints: [BTreeMap<String, Bounds>; 2],
     /// Certified (one pair in the doubled box), solution (unproven) or undecided (a limit).
     pub kind: BoxKind,
 }
@@ -744,6 +795,8 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
     if let Some(limit) = stopped() {
         return Ok(unfinished(limit));
     }
+    // A platform with a locked leg is sampled on its torus (`sample_region_on_torus`).
+    let torus = PlatformTorus::new(m, &sp.linkage.fixed_joints, &sp.actuated);
     for members in free_regions {
         let start = members[0];
         // The sample: the member cell nearest the members' mean (in grid indices), so a chart's
@@ -758,7 +811,10 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
         let (a, b) = (axes[0].cell(i, grid), axes[1].cell(j, grid));
         let sample = vec![0.5 * (a.0 + a.1), 0.5 * (b.0 + b.1)];
         let left = SolverSettings { timeout: settings.timeout.map(|t| t.saturating_sub(t0.elapsed()).max(std::time::Duration::from_millis(1))), ..settings.clone() };
-        out.regions.push(sample_region(m, sp, &sample, cells, &left, cancel)?);
+        out.regions.push(match &torus {
+            Some(torus) => sample_region_on_torus(torus, &sample, cells, &left, cancel),
+            None => sample_region(m, sp, &sample, cells, &left, cancel)?,
+        });
     }
     out.seconds = t0.elapsed().as_secs_f64();
     Ok(out)
@@ -789,6 +845,48 @@ fn sample_region(m: &Mechanism, sp: &SingularProblem, sample: &[f64], cells: usi
         }
     }
     Ok(ActuatorRegion { cells, sample: sample.to_vec(), configurations, signs: if complete { signs } else { None }, boxes })
+}
+
+/// `sample_region` on a platform's torus: every `(α, φ)` with the actuated legs' squared
+/// lengths at the sample (`manip3r::ik::solve_target` on the actuator map), and the sign of
+/// `det Df` at each. `det Df` vanishes exactly on the type-II set, as `det F_p` does, so a
+/// path of configurations off the set keeps its sign: the regions' argument holds with it.
+/// Solutions proven outside a slider's travel are no configurations; one that may lie on a
+/// limit leaves the count unproven.
+fn sample_region_on_torus(torus: &PlatformTorus, sample: &[f64], cells: usize, settings: &SolverSettings, cancel: &AtomicBool) -> ActuatorRegion {
+    let map = &torus.map;
+    let unproven = ActuatorRegion { cells, sample: sample.to_vec(), configurations: None, signs: None, boxes: [0, 0, 0] };
+    let order = torus.actuated_order();
+    let mut target = [Interval::EMPTY; 2];
+    for (k, &i) in order.iter().enumerate() {
+        target[k] = point(sample[i]).sqr();
+    }
+    let precision = settings.sigma.min(1e-6);
+    let Ok(found) = manip3r::ik::solve_target(map, target, precision, &control_of(settings, cancel), &mut |_| {}) else {
+        return unproven;
+    };
+    let mut counted = 0;
+    let mut signs = Some([0usize, 0]);
+    let mut open = found.clusters.len();
+    for b in &found.unique {
+        match map.within_travel(*b) {
+            Some(false) => continue,
+            Some(true) => {}
+            None => {
+                open += 1;
+                continue;
+            }
+        }
+        counted += 1;
+        let d = TorusMap::derived(map, *b, 1).det.value();
+        match (d.inf() > 0.0, d.sup() < 0.0, signs.as_mut()) {
+            (true, _, Some(s)) => s[0] += 1,
+            (_, true, Some(s)) => s[1] += 1,
+            _ => signs = None,
+        }
+    }
+    let complete = found.status == Status::Complete && open == 0;
+    ActuatorRegion { cells, sample: sample.to_vec(), configurations: complete.then_some(counted), signs: if complete { signs } else { None }, boxes: [counted, 0, open] }
 }
 
 /// `yes`, `no` or `undecided`, with the argument.
@@ -913,19 +1011,6 @@ pub struct ImageReport {
     pub seconds: [f64; 4],
 }
 
-/// The hull of a joint map over boxes.
-fn hull_joints(sp: &SingularProblem, boxes: &[IntervalBox]) -> (BTreeMap<String, Bounds>, BTreeMap<String, Bounds>) {
-    let mut joints: BTreeMap<String, Bounds> = BTreeMap::new();
-    for b in boxes {
-        for (n, v) in sp.joint_values(b) {
-            let e = joints.entry(n).or_insert([v.0, v.1]);
-            *e = [e[0].min(v.0), e[1].max(v.1)];
-        }
-    }
-    let image = sp.actuated.iter().filter_map(|a| joints.get(a).map(|b| (a.clone(), *b))).collect();
-    (joints, image)
-}
-
 /// The records of a cusp search: certified first.
 pub fn cusp_records(sp: &SingularProblem, cusps: &PointSearch) -> Vec<ImageCusp> {
     let mut records: Vec<ImageCusp> = cusps
@@ -944,14 +1029,14 @@ pub fn cusp_records(sp: &SingularProblem, cusps: &PointSearch) -> Vec<ImageCusp>
 
 /// The records of a node search.
 pub fn node_records(sp: &SingularProblem, nodes: &NodeSearch) -> Vec<ImageNode> {
+    let image = |joints: &BTreeMap<String, Bounds>| -> BTreeMap<String, Bounds> { sp.actuated.iter().filter_map(|a| joints.get(a).map(|b| (a.clone(), *b))).collect() };
     nodes
         .pairs
         .iter()
         .map(|p| {
-            let (a, wa) = hull_joints(sp, std::slice::from_ref(&p.points[0]));
-            let (b, wb) = hull_joints(sp, std::slice::from_ref(&p.points[1]));
+            let (wa, wb) = (image(&p.joints[0]), image(&p.joints[1]));
             let workspace = wa.iter().map(|(n, x)| (n.clone(), wb.get(n).map_or(*x, |y| [x[0].max(y[0]), x[1].min(y[1])]))).collect();
-            ImageNode { points: [a, b], workspace, unique: p.kind == BoxKind::Certified }
+            ImageNode { points: p.joints.clone(), workspace, unique: p.kind == BoxKind::Certified }
         })
         .collect()
 }

@@ -163,7 +163,7 @@ fn bench_image(out: &mut impl Write, repeat: usize) -> Result<()> {
     let settings = SolverSettings { sigma: 1e-2, max_boxes: 2_000_000, ..SolverSettings::default() };
     let cancel = AtomicBool::new(false);
     let cusp_problem = CuspProblem::new(&m, &p)?;
-    let node_problem = NodeProblem::new(&p)?;
+    let node_problem = NodeProblem::new(&m, &p)?;
     let median = |f: &mut dyn FnMut() -> Result<String>| -> Result<(f64, String)> {
         let mut times = Vec::new();
         let mut what = String::new();

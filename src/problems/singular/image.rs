@@ -50,7 +50,7 @@
 //! system is symmetric under swapping the copies); in chart pairs `(k, k)` a pair is kept in one
 //! order.
 //!
-use super::pose::{LockedLegMap, PoseCusps, PoseReadout};
+use super::pose::{PlatformTorus, PoseCusps, PoseReadout};
 use super::{merge, Parts, SingularError, SingularKind, SingularProblem, CHART_REACH};
 use crate::interval::{interval, point, Interval, IntervalBox};
 use crate::model::Mechanism;
@@ -179,9 +179,9 @@ pub struct CuspProblem {
     pub formulation: CuspFormulation,
     /// Joint values of a pose box; `None` in the joint coordinates.
     pose: Option<PoseReadout>,
-    /// The actuator map the `Torus` formulation searches (`charts` then serve its boxes' layout
-    /// and readings).
-    torus: Option<LockedLegMap>,
+    /// The actuator map the `Torus` formulation searches; its boxes are written in the pose
+    /// systems' variables (`charts`).
+    torus: Option<PlatformTorus>,
 }
 
 /// Checks the set is an input set of a 2-dof mechanism with 2 actuators.
@@ -209,7 +209,7 @@ impl CuspProblem {
         match PoseCusps::new(m, &sp.linkage.fixed_joints, &sp.actuated) {
             Some(p) => {
                 let formulation = if formulation == CuspFormulation::Pose { CuspFormulation::Pose } else { CuspFormulation::Torus };
-                let torus = (formulation == CuspFormulation::Torus).then_some(p.map);
+                let torus = if formulation == CuspFormulation::Torus { PlatformTorus::new(m, &sp.linkage.fixed_joints, &sp.actuated) } else { None };
                 Ok(Self { base_vars: p.base_vars, v: p.v, tangent: p.tangent, charts: p.charts, formulation, pose: Some(p.readout), torus })
             }
             None if formulation == CuspFormulation::Auto => Self::coordinates(sp),
@@ -218,7 +218,7 @@ impl CuspProblem {
     }
 
     /// The actuator map searched on the torus (`CuspFormulation::Torus`).
-    pub(crate) fn torus(&self) -> Option<&LockedLegMap> {
+    pub(crate) fn torus(&self) -> Option<&PlatformTorus> {
         self.torus.as_ref()
     }
 
@@ -298,11 +298,34 @@ pub struct NodeProblem {
     pub charts: Vec<((usize, usize), EquationSystem, Vec<VarId>)>,
     /// Variables shared by the copies (the actuated coordinates).
     pub shared: Vec<VarId>,
+    /// A planar platform with a locked leg: its actuator map, on which the node search runs
+    /// instead of the doubled systems.
+    torus: Option<PlatformTorus>,
 }
 
 impl NodeProblem {
-    /// Builds the doubled systems of `sp` (see the module doc).
-    pub fn new(sp: &SingularProblem) -> Result<Self, ImageError> {
+    /// The node search of `sp`, an input set of the 2-dof linkage `m`: on the torus of the
+    /// platform's two angles when `m` is a planar platform on three R-P-R legs with one locked
+    /// (as the cusps' `Torus` formulation), else on the doubled systems.
+    pub fn new(m: &Mechanism, sp: &SingularProblem) -> Result<Self, ImageError> {
+        let mut p = Self::in_coordinates(sp)?;
+        p.torus = PlatformTorus::new(m, &sp.linkage.fixed_joints, &sp.actuated);
+        Ok(p)
+    }
+
+    /// The platform's torus, when the node search runs on it.
+    pub(crate) fn torus(&self) -> Option<&PlatformTorus> {
+        self.torus.as_ref()
+    }
+
+    /// True when the node search runs on a platform's torus rather than the doubled systems.
+    pub fn on_torus(&self) -> bool {
+        self.torus.is_some()
+    }
+
+    /// Builds the doubled systems of `sp` (see the module doc), for the node search in the joint
+    /// coordinates whatever the mechanism.
+    pub fn in_coordinates(sp: &SingularProblem) -> Result<Self, ImageError> {
         check(sp)?;
         let mut scratch = sp.linkage.system.clone();
         let parts = Parts::new(&sp.linkage, &mut scratch)?;
@@ -343,6 +366,6 @@ impl NodeProblem {
                 charts.push(((k, k2), s, map));
             }
         }
-        Ok(Self { charts, shared })
+        Ok(Self { charts, shared, torus: None })
     }
 }

@@ -90,8 +90,10 @@ pub(crate) struct PoseCusps {
 }
 
 /// One actuated leg of `LockedLegMap`.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct ActuatedLeg {
+    /// The slider's name.
+    slider: String,
     /// `A_l − A_i`: the locked leg's ground point from this leg's.
     ground: [Interval; 2],
     /// `d_i = b_i − b_l` in the platform's frame.
@@ -120,7 +122,8 @@ impl LockedLegMap {
         let (sa, ca) = Taylor::sin_cos(0, theta[0], order);
         let (sp, cp) = Taylor::sin_cos(1, theta[1], order);
         let (ua, va) = (ca.scale(self.length), sa.scale(self.length));
-        self.legs.map(|l| {
+        [0, 1].map(|i| {
+            let l = &self.legs[i];
             let d = l.platform;
             [(ua + cp.scale(d[0]) - sp.scale(d[1])).shift(l.ground[0]), (va + sp.scale(d[0]) + cp.scale(d[1])).shift(l.ground[1])]
         })
@@ -140,24 +143,60 @@ impl LockedLegMap {
         }
         inside.then_some(true)
     }
+}
 
-    /// A box of the pose systems over `theta`: `template` (a chart's initial box) with the
-    /// angles' cosines and sines, the legs' `X_i, Y_i` and `h_i` set to their enclosures, which
-    /// is all `PoseReadout::joint_values` and the clustering read.
-    pub fn pose_box(&self, theta: [Interval; 2], template: &IntervalBox) -> IntervalBox {
-        let mut b = template.clone();
-        let [cl, sl, c, s] = self.trig;
+/// The platform's actuator map on its torus, with what reads joint values off a torus box: the
+/// cusp and node searches of the `Torus` formulation run on `map`.
+#[derive(Clone, Debug)]
+pub(crate) struct PlatformTorus {
+    pub map: LockedLegMap,
+    /// Per component of the map, its slider's index in the actuated joints.
+    actuated: [usize; 2],
+    readout: PoseReadout,
+    /// A box of the pose systems (a chart's initial box), which `pose_box` fills.
+    template: IntervalBox,
+}
+
+impl PlatformTorus {
+    /// The torus of `m` with `fixed` and `actuated`, or `None` when `m` is not a planar platform
+    /// on three R-P-R legs with one locked (see `recognise`).
+    pub fn new(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String]) -> Option<Self> {
+        let p = PoseCusps::new(m, fixed, actuated)?;
+        let index = |slider: &str| actuated.iter().position(|a| a == slider);
+        let order = [index(&p.map.legs[0].slider)?, index(&p.map.legs[1].slider)?];
+        let template = p.charts[0].1.initial_box();
+        Some(Self { map: p.map, actuated: order, readout: p.readout, template })
+    }
+
+    /// A box of the pose systems over `theta`: the angles' cosines and sines, the legs'
+    /// `X_i, Y_i` and `h_i` set to their enclosures (the rest as a chart's initial box), which
+    /// is all `PoseReadout::joint_values` and the clustering by pose read.
+    pub fn pose_box(&self, theta: [Interval; 2]) -> IntervalBox {
+        let map = &self.map;
+        let mut b = self.template.clone();
+        let [cl, sl, c, s] = map.trig;
         b.dims[cl] = crate::interval::trig::cos(theta[0]);
         b.dims[sl] = crate::interval::trig::sin(theta[0]);
         b.dims[c] = crate::interval::trig::cos(theta[1]);
         b.dims[s] = crate::interval::trig::sin(theta[1]);
-        for (l, e) in self.legs.iter().zip(self.ends(theta, 0)) {
+        for (l, e) in map.legs.iter().zip(map.ends(theta, 0)) {
             let (x, y, h) = l.vars;
             b.dims[x] = e[0].value();
             b.dims[y] = e[1].value();
             b.dims[h] = (e[0] * e[0] + e[1] * e[1]).value();
         }
         b
+    }
+
+    /// For each component of the map (`h_a`, `h_b`, in leg order), its slider's index in
+    /// `actuated`.
+    pub fn actuated_order(&self) -> [usize; 2] {
+        self.actuated
+    }
+
+    /// Free joint values over the torus box `theta` (radians or metres), outward rounded.
+    pub fn joint_values(&self, theta: [Interval; 2]) -> BTreeMap<String, (f64, f64)> {
+        self.readout.joint_values(&self.pose_box(theta))
     }
 }
 
@@ -362,7 +401,7 @@ impl PoseCusps {
             let lo = stated(l.limits.0);
             let h = quadratic(&mut b, format!("{}^2", l.slider), &[(point(1.0), xv, xv), (point(1.0), yv, yv)], point(0.0), interval(lo.sqr().inf(), hi.sqr().sup()));
             readings.push((l.slider.clone(), Reading::Travel(h)));
-            actuated_legs.push(ActuatedLeg { ground: [al[0] - l.ground[0], al[1] - l.ground[1]], platform: d, travel: lo.convex_hull(hi), vars: (xv, yv, h) });
+            actuated_legs.push(ActuatedLeg { slider: l.slider.clone(), ground: [al[0] - l.ground[0], al[1] - l.ground[1]], platform: d, travel: lo.convex_hull(hi), vars: (xv, yv, h) });
             // The gradient of |E|²/2 in (α, φ): (U × E, D × E), U = L u, D = R(φ) d.
             let ga = quadratic(&mut b, format!("grad_alpha_{i}"), &[(len, cl, yv), (-len, sl, xv)], point(0.0), Interval::ENTIRE);
             let gp = quadratic(&mut b, format!("grad_phi_{i}"), &[(d[0], c, yv), (-d[1], s, yv), (-d[1], c, xv), (-d[0], s, xv)], point(0.0), Interval::ENTIRE);

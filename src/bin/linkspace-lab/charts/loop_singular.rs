@@ -46,7 +46,7 @@ pub fn five_bar(dir: &Path, quick: bool) -> Result<()> {
     let p = SingularProblem::new(&m, &[], SingularKind::Input, &actuated, None)?;
     let cover = p.solve(&settings, &cancel)?;
     let cusps = CuspProblem::new(&m, &p)?.solve(&p, &settings, &cancel)?;
-    let nodes = NodeProblem::new(&p)?.solve(&p, &settings, &cancel)?;
+    let nodes = NodeProblem::new(&m, &p)?.solve(&p, &settings, &cancel)?;
     let grid = if quick { 32 } else { 64 };
     let regions = image::regions(&m, &p, &cover, grid, &settings, &cancel)?;
     let report = ImageReport::new(&p, &cover, &cusps, &nodes, regions);
@@ -72,7 +72,7 @@ pub fn five_bar(dir: &Path, quick: bool) -> Result<()> {
         let s2 = SolverSettings { sigma: 5e-2, timeout: Some(Duration::from_secs(60)), ..Default::default() };
         let cover2 = p2.solve(&s2, &cancel)?;
         let cusps2 = CuspProblem::new(&m2, &p2)?.solve(&p2, &s2, &cancel)?;
-        let empty = NodeProblem::new(&p2)?.solve(&p2, &SolverSettings { timeout: Some(Duration::ZERO), ..s2.clone() }, &cancel)?;
+        let empty = NodeProblem::new(&m2, &p2)?.solve(&p2, &SolverSettings { timeout: Some(Duration::ZERO), ..s2.clone() }, &cancel)?;
         let regions2 = image::regions(&m2, &p2, &cover2, 64, &s2, &cancel)?;
         let report2 = ImageReport::new(&p2, &cover2, &cusps2, &empty, regions2);
         let mut panel = actuator_panel(&p2, &cover2.boxes.iter().map(|b| &b.b).collect::<Vec<_>>(), &report2, "equal rods (nodes not searched)");
