@@ -198,7 +198,7 @@ fn run_image(args: &LoopSingularitiesArgs, mechanism: &linkspace::model::Mechani
     .ok();
     for (i, g) in r.regions.regions.iter().enumerate() {
         let count = g.configurations.map_or("undecided".to_string(), |c| c.to_string());
-        let signs = g.signs.map_or(String::new(), |[p, n]| format!(" ({p} with det F_p > 0, {n} < 0)"));
+        let signs = g.signs.map_or(String::new(), |[p, n]| format!(" ({p} with {} > 0, {n} < 0)", r.regions.sign));
         writeln!(out, "  region {i}: {} cells, sample {:?}: {count} assembly modes{signs}", g.cells, g.sample).ok();
     }
     for c in r.cusps.iter().take(20) {

@@ -29,6 +29,7 @@ struct ActuatorRegionsDef {
     #[serde(flatten, with = "super::kernel::StatusDef")]
     status: crate::search::Status,
     blocked_cells: usize,
+    sign: &'static str,
     #[serde(serialize_with = "regions")]
     regions: Vec<ActuatorRegion>,
     seconds: f64,

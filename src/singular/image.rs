@@ -704,6 +704,9 @@ impl Axis {
     }
 }
 
+/// `ActuatorRegions::sign` of the linkage's own samples.
+const SIGN_OF_F_P: &str = "det F_p";
+
 /// Bytes the raster of a `grid × grid` region search holds per cell: the blocked flag, the
 /// flood fill's reached flag and its member index.
 pub const RASTER_BYTES_PER_CELL: usize = 2 + std::mem::size_of::<usize>();
@@ -717,7 +720,8 @@ pub struct ActuatorRegion {
     pub sample: Vec<f64>,
     /// Configurations over the sample, when every solution box was certified and the run complete.
     pub configurations: Option<usize>,
-    /// Of those, how many with `det F_p > 0` and `< 0` (`None` where a sign is not proven).
+    /// Of those, how many with `ActuatorRegions::sign` `> 0` and `< 0` (`None` where a sign is
+    /// not proven).
     pub signs: Option<[usize; 2]>,
     /// Certified solution boxes, unproven boxes, undecided boxes of the sample's solve.
     pub boxes: [usize; 3],
@@ -733,6 +737,10 @@ pub struct ActuatorRegions {
     pub status: Status,
     /// Cells meeting the image of the cover of `S`.
     pub blocked_cells: usize,
+    /// The function whose signs the regions count: `det F_p`, or on a platform's torus `det Df`
+    /// of its actuator map, which vanishes on the same set (so its sign is `det F_p`'s, or the
+    /// opposite, over the whole torus: the two counts may be swapped).
+    pub sign: &'static str,
     /// The regions.
     pub regions: Vec<ActuatorRegion>,
     /// Wall-clock seconds (raster and samples).
@@ -762,7 +770,7 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
     }
     let images: Vec<Vec<(f64, f64)>> = set.boxes.iter().map(|b| sp.actuator_values(&b.b)).collect();
     let stopped = || budget.interrupted();
-    let unfinished = |limit: Limit| ActuatorRegions { grid, status: Status::Incomplete(limit), blocked_cells: 0, regions: Vec::new(), seconds: t0.elapsed().as_secs_f64() };
+    let unfinished = |limit: Limit| ActuatorRegions { grid, status: Status::Incomplete(limit), blocked_cells: 0, sign: SIGN_OF_F_P, regions: Vec::new(), seconds: t0.elapsed().as_secs_f64() };
     let mut blocked = vec![false; grid * grid];
     for (k, im) in images.iter().enumerate() {
         if k % 64 == 0 {
@@ -780,7 +788,7 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
     if let Some(limit) = stopped() {
         return Ok(unfinished(limit));
     }
-    let mut out = ActuatorRegions { grid, status: Status::Complete, blocked_cells: blocked.iter().filter(|b| **b).count(), regions: Vec::new(), seconds: 0.0 };
+    let mut out = ActuatorRegions { grid, status: Status::Complete, blocked_cells: blocked.iter().filter(|b| **b).count(), sign: SIGN_OF_F_P, regions: Vec::new(), seconds: 0.0 };
     let wrap = |x: i64, ax: &Axis| if (0..grid as i64).contains(&x) { Some(x as usize) } else if ax.periodic { Some(x.rem_euclid(grid as i64) as usize) } else { None };
     let free_regions = crate::interval::flood_fill(grid * grid, |c| !blocked[c], |c, next| {
         let (i, j) = (c / grid, c % grid);
@@ -797,6 +805,9 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
     }
     // A platform with a locked leg is sampled on its torus (`sample_region_on_torus`).
     let torus = PlatformTorus::new(m, &sp.linkage.fixed_joints, &sp.actuated);
+    if torus.is_some() {
+        out.sign = "det Df";
+    }
     for members in free_regions {
         let start = members[0];
         // The sample: the member cell nearest the members' mean (in grid indices), so a chart's
