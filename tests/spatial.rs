@@ -497,12 +497,17 @@ fn stewart_platform_assemblies_are_all_certified() {
     }
 }
 
-/// One case of the Stewart reference through `solve --model pose` (`app::SolveJob`, what the CLI
-/// and the node run): every real assembly in exactly one certified box, every box certified and
-/// holding one of them, the joint values (position, roll, pitch, yaw) enclosing the reference's.
+/// One case of a Stewart reference through `solve --model pose` (`app::SolveJob`, what the CLI
+/// and the node run) at default settings: every real assembly in exactly one certified box, every
+/// box certified and holding one of them, the joint values (position, roll, pitch, yaw) enclosing
+/// the reference's.
 fn stewart_pose_case(index: usize) {
-    let refs = reference("stewart_6_6_fk.json");
-    let m = urdf::parse(&urdf_text("stewart_6_6.urdf")).expect("parses");
+    stewart_pose_reference_case("stewart_6_6.urdf", "stewart_6_6_fk.json", index);
+}
+
+fn stewart_pose_reference_case(platform: &str, reference_file: &str, index: usize) {
+    let refs = reference(reference_file);
+    let m = urdf::parse(&urdf_text(platform)).expect("parses");
     let case = &refs["cases"][index];
     let name = case["name"].as_str().expect("name");
     let fixed = fixed_from(case, "leg_lengths");
@@ -555,6 +560,25 @@ fn stewart_pose_model_certifies_each_assembly_once_many_real() {
 fn stewart_pose_model_certifies_each_assembly_once_near_singular() {
     // Two assemblies 1.7e-3 apart: their cluster is searched again at finer sigmas.
     stewart_pose_case(2);
+}
+
+#[test]
+fn stewart_pose_model_certifies_each_of_36_assemblies_once() {
+    // Dietmaier's platform of 40 real assemblies, perturbed: 36 real, several near a singularity
+    // (smallest singular values of the leg Jacobian 1.1e-3, 2.8e-3, 3.3e-3, 4.1e-3).
+    let refs = reference("stewart_40_fk.json");
+    assert_eq!(refs["cases"][0]["real_solutions"].as_u64(), Some(36));
+    stewart_pose_reference_case("stewart_40.urdf", "stewart_40_fk.json", 0);
+}
+
+#[test]
+fn stewart_pose_model_certifies_assemblies_near_a_singularity_once() {
+    // The same platform perturbed less: 38 real, three with a leg Jacobian's smallest singular
+    // value below 1.3e-4 (3.8e-5 the least), whose unproven boxes at sigma 1e-3 stretch 22 to
+    // 31 sigmas along the near-null direction: each cluster is searched again at finer sigmas.
+    let refs = reference("stewart_40_near_singular_fk.json");
+    assert_eq!(refs["cases"][0]["real_solutions"].as_u64(), Some(38));
+    stewart_pose_reference_case("stewart_40_near_singular.urdf", "stewart_40_near_singular_fk.json", 0);
 }
 
 #[test]

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Reference forward kinematics of urdf/stewart_6_6.urdf: EVERY assembly, by homotopy.
+"""Reference forward kinematics of a 6-6 Stewart-Gough platform URDF (urdf/stewart_6_6.urdf by default): EVERY assembly, by homotopy.
 
 No interval solver and no linkspace code. Geometry is read from the URDF (scripts/dev/urdf_mp.py).
 
@@ -27,7 +27,10 @@ Method:
     seed; both must give 40 distinct solutions and the same real set.
 
 Run: python3 scripts/dev/stewart_fk.py   (writes tests/data/stewart_6_6_fk.json; numpy, mpmath)
+     python3 scripts/dev/stewart_fk.py --urdf urdf/stewart_40.urdf --out tests/data/stewart_40_fk.json \
+         --case NAME=L1,...,L6   (the stated leg lengths of another platform)
 """
+import argparse
 import json
 import os
 import sys
@@ -455,41 +458,8 @@ def fl(v):
     return [float(x) for x in v]
 
 
-def main():
-    t_start = time.time()
-    log = lambda m: print(f"[{time.time() - t_start:7.1f}s] {m}", flush=True)
-    mp.mp.dps = 50
-    st = Stewart(os.path.join(REPO, "urdf", "stewart_6_6.urdf"))
-    log(f"read {len(st.legs)} legs from urdf/stewart_6_6.urdf")
-
-    # two independent runs (seeds): monodromy start systems
-    runs = []
-    for seed in (20240512, 31337):
-        rng = np.random.default_rng(seed)
-        system, P0, x0 = start_system(rng)
-        log(f"seed {seed}: monodromy")
-        sols, loops = monodromy(system, P0, x0, rng, log)
-        log(f"seed {seed}: {len(sols)} solutions after {loops} loops")
-        assert len(sols) == N_SOLUTIONS, len(sols)
-        runs.append({"seed": seed, "system": system, "P0": P0, "sols": sols, "loops": loops,
-                     "rng_target": np.random.default_rng(seed + 1)})
-
-    def count(L, runs_=runs[:1]):
-        r = solve_case(st, L, runs_, log)[0]
-        good = r["ok"] & (r["res"] < 1e-8)
-        X = distinct(r["X"][good], 1e-7)
-        # quick float real test on (R, t)
-        nreal = 0
-        for x in X:
-            e, g = x[:4], x[4:]
-            ee = e @ e
-            tq = np.array(qmul(list(g), conj(list(e)))) / ee
-            sc = np.sqrt(ee)
-            en = e / sc
-            if np.abs(en.imag).max() < 1e-6 and np.abs(tq.imag).max() < 1e-6:
-                nreal += 1
-        return len(X), nreal
-
+def generated_cases(st, runs, count, log):
+    """from_pose, many_real, near_singular: leg lengths made from poses of the platform."""
     cases = []
     # case 1: from a known pose
     pose1 = {"xyz": ["0.0231", "-0.0417", "0.6538"], "rpy": ["0.0712", "-0.0535", "0.1289"]}
@@ -551,6 +521,63 @@ def main():
                               "two real assemblies merge (a singularity of the leg Jacobian) at lambda_merge; these lengths "
                               "(lambda about 1e-6 from it, rounded to 10 significant digits) keep two real assemblies close together"})
 
+    return cases
+
+
+def arguments():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--urdf", default="urdf/stewart_6_6.urdf", help="the platform (path from the repository root)")
+    ap.add_argument("--out", default="tests/data/stewart_6_6_fk.json", help="the reference written (path from the repository root)")
+    ap.add_argument("--case", action="append", default=[], metavar="NAME=L1,...,L6",
+                    help="a case of stated leg lengths (decimal strings); without any, the cases from_pose, many_real, near_singular are made")
+    ap.add_argument("--note", default="leg lengths as stated in the URDF's comment", help="the note of the --case cases")
+    return ap.parse_args()
+
+
+def main():
+    args = arguments()
+    t_start = time.time()
+    log = lambda m: print(f"[{time.time() - t_start:7.1f}s] {m}", flush=True)
+    mp.mp.dps = 50
+    st = Stewart(os.path.join(REPO, args.urdf))
+    log(f"read {len(st.legs)} legs from {args.urdf}")
+
+    # two independent runs (seeds): monodromy start systems
+    runs = []
+    for seed in (20240512, 31337):
+        rng = np.random.default_rng(seed)
+        system, P0, x0 = start_system(rng)
+        log(f"seed {seed}: monodromy")
+        sols, loops = monodromy(system, P0, x0, rng, log)
+        log(f"seed {seed}: {len(sols)} solutions after {loops} loops")
+        assert len(sols) == N_SOLUTIONS, len(sols)
+        runs.append({"seed": seed, "system": system, "P0": P0, "sols": sols, "loops": loops,
+                     "rng_target": np.random.default_rng(seed + 1)})
+
+    def count(L, runs_=runs[:1]):
+        r = solve_case(st, L, runs_, log)[0]
+        good = r["ok"] & (r["res"] < 1e-8)
+        X = distinct(r["X"][good], 1e-7)
+        # quick float real test on (R, t)
+        nreal = 0
+        for x in X:
+            e, g = x[:4], x[4:]
+            ee = e @ e
+            tq = np.array(qmul(list(g), conj(list(e)))) / ee
+            sc = np.sqrt(ee)
+            en = e / sc
+            if np.abs(en.imag).max() < 1e-6 and np.abs(tq.imag).max() < 1e-6:
+                nreal += 1
+        return len(X), nreal
+
+    cases = []
+    for spec in args.case:
+        name, lengths = spec.split("=", 1)
+        L = lengths.split(",")
+        assert len(L) == len(st.legs), spec
+        cases.append({"name": name, "L": L, "note": args.note})
+    if not cases:
+        cases = generated_cases(st, runs, count, log)
     out_cases = []
     for case in cases:
         log(f"case {case['name']}: tracking 40 paths for each of {len(runs)} runs")
@@ -650,8 +677,8 @@ def main():
         log(f"  {case['name']}: 40 complex, {len(solutions)} real; runs agree to {mp.nstr(maxdiff, 3)}")
 
     out = {
-        "mechanism": "stewart_6_6",
-        "urdf": "urdf/stewart_6_6.urdf",
+        "mechanism": st.u.name,
+        "urdf": args.urdf,
         "generator": "scripts/dev/stewart_fk.py (Study-parameter formulation, monodromy + parameter homotopy in "
                      "complex128, endpoints refined by Newton in mpmath at 60 digits, two independent seeds)",
         "units": "metres, radians",
@@ -665,7 +692,7 @@ def main():
         "cases": out_cases,
         "seconds": round(time.time() - t_start, 1),
     }
-    target = os.path.join(REPO, "tests", "data", "stewart_6_6_fk.json")
+    target = os.path.join(REPO, args.out)
     with open(target, "w") as f:
         json.dump(out, f, indent=1)
         f.write("\n")

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Second, independent check of tests/data/stewart_6_6_fk.json: real Newton from many random poses.
+"""Second, independent check of a Stewart reference (tests/data/stewart_6_6_fk.json by default): real Newton from many random poses.
 
 Different formulation from stewart_fk.py: unknowns = rotation vector (exponential map) and
 translation, six equations |R p_i + t - b_i|^2 - L_i^2 = 0, plain float64 Newton (damped) from
@@ -8,7 +8,10 @@ JSON's; it reports how many of the JSON's it rediscovered. (Evidence, not a comp
 completeness comes from the 40 complex solutions of the homotopy.)
 
 Run: python3 scripts/dev/stewart_newton_check.py  (exit status 1 on a real solution not in the JSON)
+     python3 scripts/dev/stewart_newton_check.py --json tests/data/stewart_40_fk.json --centre 0.7,0,0 --spread 0.7
+     (the URDF is the one the JSON names; starts: translations about --centre, --spread wide)
 """
+import argparse
 import json
 import os
 import sys
@@ -37,14 +40,20 @@ def residual(z, b, p, L2):
 
 
 def main():
-    st = Stewart(os.path.join(REPO, "urdf", "stewart_6_6.urdf"))
-    data = json.load(open(os.path.join(REPO, "tests", "data", "stewart_6_6_fk.json")))
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--json", default="tests/data/stewart_6_6_fk.json", help="the reference (path from the repository root)")
+    ap.add_argument("--centre", default="0,0,0.3", help="mean of the start translations")
+    ap.add_argument("--spread", type=float, default=0.6, help="standard deviation of the start translations")
+    args = ap.parse_args()
+    data = json.load(open(os.path.join(REPO, args.json)))
+    st = Stewart(os.path.join(REPO, data["urdf"]))
+    centre = [float(v) for v in args.centre.split(",")]
     rng = np.random.default_rng(99)
     fail = False
     for case in data["cases"]:
         L2 = np.array([float(v) ** 2 for v in case["leg_lengths"].values()])
         n = 20000
-        z = np.concatenate([rng.normal(0, 1.2, (n, 3)), rng.normal(0, 0.6, (n, 3)) + [0, 0, 0.3]], 1)
+        z = np.concatenate([rng.normal(0, 1.2, (n, 3)), rng.normal(0, args.spread, (n, 3)) + centre], 1)
         for _ in range(60):
             F = residual(z, st.b, st.p, L2)
             J = np.empty((n, 6, 6))

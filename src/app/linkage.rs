@@ -417,6 +417,15 @@ impl SolveJob {
     }
 }
 
+/// The pose model's refinement: `RefinePlan::default()`'s rounds and cells, on clusters up to 64
+/// sigmas wide. An assembly near a singularity of the leg Jacobian leaves uncertified boxes along
+/// its near-null direction, the farther the nearer it is (22 to 31 sigmas at sigma 1e-3 for
+/// smallest singular values of 4e-5 to 1.3e-4, README); a cluster of a curve of poses (an
+/// architecturally singular platform) spends the rounds' cells and stays as found.
+fn pose_refine_plan() -> RefinePlan {
+    RefinePlan { max_width: 64.0, ..RefinePlan::default() }
+}
+
 /// The pose model's answer, one certified box per assembly where it can be proven: each
 /// cluster holding an uncertified box (two assemblies close together, say) is searched again at
 /// finer sigmas (`Solver::refine`) and replaced when every box of a completed round is
@@ -435,7 +444,7 @@ fn settle_pose(solver: &Solver<'_>, mut e: Enclosure, cancel: &AtomicBool, timeo
         if members.iter().any(|&i| !e.unique[i]) {
             let left = timeout.map(|t| t.saturating_sub(t0.elapsed()));
             let all_certified = |_: &[IntervalBox], u: &[bool]| u.iter().all(|&x| x);
-            if let Refinement::Settled(found) = solver.refine(&boxes, &RefinePlan::default(), left, &all_certified, cancel) {
+            if let Refinement::Settled(found) = solver.refine(&boxes, &pose_refine_plan(), left, &all_certified, cancel) {
                 solutions.extend(found.solutions);
                 unique.extend(found.unique);
                 continue;
