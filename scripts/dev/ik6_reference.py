@@ -588,6 +588,9 @@ def main():
     ap.add_argument("--second-seed", choices=("always", "incomplete"), default="always",
                     help="track every pose with the second seed's start system too, or only when the first "
                          "finds fewer finite solutions than the generic count")
+    ap.add_argument("--compact", action="store_true",
+                    help="joint vectors q with 9 decimals, solutions in limits with 10 significant digits, "
+                         "no pose (it is the forward kinematics of q), no solutions outside the limits")
     args = ap.parse_args()
     t_start = time.time()
     log = (lambda *a: None) if args.quiet else (lambda m: print(f"[{time.time() - t_start:7.1f}s] {m}", flush=True))
@@ -623,6 +626,8 @@ def main():
         while len(poses) < args.poses:
             ip += 1
             q = random_q(chain, prng)
+            if args.compact:
+                q = [round(v, 9) for v in q]
             T = chain.fk([mp.mpf(v) for v in q])
             use = 2 if args.second_seed == "always" else 1
             per_seed, Pt = solve_pose(chain, systems[:use], P0s[:use], sols_list[:use], T, rngs[:use], log)
@@ -669,14 +674,17 @@ def main():
             sols.sort(key=lambda s: [float(v) for v in s[0]])
             inl = [s for s in sols if s[1]]
             hist[len(inl)] = hist.get(len(inl), 0) + 1
-            poses.append({
-                "q": q,
-                "pose": [[float(T[i, j]) for j in range(4)] for i in range(4)],
-                "finite_solutions": counts[0],
-                "real_solutions": len(sols),
-                "solutions": [[float(v) for v in s[0]] for s in inl],
-                "outside_limits": [[float(v) for v in s[0]] for s in sols if not s[1]],
-            })
+            if args.compact:
+                poses.append({"q": q, "solutions": [[float(f"{float(v):.10g}") for v in s[0]] for s in inl]})
+            else:
+                poses.append({
+                    "q": q,
+                    "pose": [[float(T[i, j]) for j in range(4)] for i in range(4)],
+                    "finite_solutions": counts[0],
+                    "real_solutions": len(sols),
+                    "solutions": [[float(v) for v in s[0]] for s in inl],
+                    "outside_limits": [[float(v) for v in s[0]] for s in sols if not s[1]],
+                })
             log(f"{name} pose {ip}: {counts[0]} finite ({per_seed[0]['diverged']} to infinity), "
                 f"{len(sols)} real, {len(inl)} in limits")
         seconds = time.time() - t_fix
@@ -710,6 +718,10 @@ def main():
         "seeds": list(seeds),
         "fixtures": out_fixtures,
     }
+    if args.compact:
+        out["compact"] = True
+        out["pose"] = "not stored: the forward kinematics of q (decimals as written) at 60 digits"
+        out["solutions"] += " (10 significant digits); outside_limits not stored"
     with open(args.out, "w") as f:
         json.dump(out, f, separators=(",", ":"))
         f.write("\n")
