@@ -578,6 +578,8 @@ mod homotopy_reference {
     #[test]
     #[ignore = "long: 1,000 poses per fixture"]
     fn certified_solutions_are_the_homotopy_references_on_a_thousand_poses() {
-        summary(&check("ik6_reference_1000.json", |_, _| true));
+        let found = check("ik6_reference_1000.json", |_, _| true);
+        assert!(found.iter().all(|(_, hist, _)| hist.values().sum::<usize>() == 1000));
+        summary(&found);
     }
 }

@@ -65,6 +65,7 @@ REAL_TOL = 1e-8     # relative imaginary part below which a solution is real
 DIVERGED = 1e7      # |x| beyond which a path is taken to go to infinity
 PRED_TOL = 1e-4     # largest Newton correction of a predicted point (relative) for the step to count
 SNAP = mp.mpf("1e-5")
+SEEDS = (20250101, 4242)
 
 FIXTURES = {
     "general_6r": "tests/data/ik6_general_6r.urdf",
@@ -514,7 +515,9 @@ def to_target(system, sols, P0, Pt, rng, hmax=0.25, tries=4):
             Y, ok1, div1 = sols, np.ones(len(sols), bool), np.zeros(len(sols), bool)
             Pg = P0
         else:
-            Pg = random_param(rng)
+            # near the segment's middle: a random point far away (tiny u.u on the way) makes
+            # slow paths
+            Pg = (P0 + Pt) / 2 + 0.5 * crandn(rng, 7)
             Y, ok1, div1 = track(system, sols, P0, Pg, hmax=hmax)
         Z = np.full_like(Y, np.nan)
         ok2 = np.zeros(len(sols), bool)
@@ -600,7 +603,6 @@ def main():
     t_start = time.time()
     log = (lambda *a: None) if args.quiet else (lambda m: print(f"[{time.time() - t_start:7.1f}s] {m}", flush=True))
     mp.mp.dps = 60
-    seeds = (20250101, 4242)
     out_fixtures = []
     for name in args.fixtures.split(","):
         rel = FIXTURES[name]
@@ -608,7 +610,7 @@ def main():
         chain = Chain(os.path.join(REPO, rel))
         ncmp = NpChain(chain, mpobj=True)
         systems, P0s, sols_list, rngs, loops = [], [], [], [], []
-        for seed in seeds:
+        for seed in SEEDS:
             rng = np.random.default_rng(seed)
             system = System(chain)
             P0, x0 = start(system, rng)
@@ -623,6 +625,27 @@ def main():
         assert generic[0] == generic[1], generic
         t_mono = time.time() - t_fix
         prng = np.random.default_rng(args.seed + 1000 * list(FIXTURES).index(name))
+
+        def entry():
+            return {
+                "name": name,
+                "urdf": rel,
+                "joints": chain.names,
+                "tip": chain.tip,
+                "ranges": [None if r is None else [float(r[0]), float(r[1])] for r in chain.ranges],
+                "generic_finite_solutions": generic[0],
+                "monodromy_loops": loops,
+                "solutions_in_limits_histogram": {str(k): v for k, v in sorted(hist.items())},
+                "max_fk_residual_50_digits": float(worst_res),
+                "max_seed_difference": float(worst_diff),
+                "second_seed": args.second_seed,
+                "tracking_runs_histogram": {str(k): v for k, v in sorted(runs_hist.items())},
+                "unresolved_poses": unresolved,
+                "seconds": round(time.time() - t_fix, 1),
+                "seconds_monodromy": round(t_mono, 1),
+                "poses": poses,
+            }
+
         poses = []
         hist = {}
         worst_res, worst_diff = mp.mpf(0), 0.0
@@ -691,30 +714,17 @@ def main():
                     "outside_limits": [[float(v) for v in s[0]] for s in sols if not s[1]],
                 })
             if args.checkpoint and len(poses) % 50 == 0:
-                with open(args.out + ".partial", "w") as f:
-                    json.dump({"fixture": name, "poses": poses}, f, separators=(",", ":"))
+                write(args, out_fixtures + [entry()], args.out + ".partial")
             log(f"{name} pose {ip}: {counts[0]} finite ({per_seed[0]['diverged']} to infinity), "
                 f"{len(sols)} real, {len(inl)} in limits")
         seconds = time.time() - t_fix
-        out_fixtures.append({
-            "name": name,
-            "urdf": rel,
-            "joints": chain.names,
-            "tip": chain.tip,
-            "ranges": [None if r is None else [float(r[0]), float(r[1])] for r in chain.ranges],
-            "generic_finite_solutions": generic[0],
-            "monodromy_loops": loops,
-            "solutions_in_limits_histogram": {str(k): v for k, v in sorted(hist.items())},
-            "max_fk_residual_50_digits": float(worst_res),
-            "max_seed_difference": float(worst_diff),
-            "second_seed": args.second_seed,
-            "tracking_runs_histogram": {str(k): v for k, v in sorted(runs_hist.items())},
-            "unresolved_poses": unresolved,
-            "seconds": round(seconds, 1),
-            "seconds_monodromy": round(t_mono, 1),
-            "poses": poses,
-        })
+        out_fixtures.append(entry())
         log(f"{name}: generic {generic[0]}, histogram {hist}, {seconds:.0f} s")
+    write(args, out_fixtures, args.out)
+    log(f"wrote {args.out} ({os.path.getsize(args.out)} bytes)")
+
+
+def write(args, fixtures, path):
     out = {
         "generator": "scripts/dev/ik6_reference.py (monodromy + parameter homotopy in complex128, real solutions "
                      "refined by Newton in mpmath at 60 digits, two independent seeds)",
@@ -723,17 +733,16 @@ def main():
         "solutions": "every real solution with each angle in (-pi, pi] inside the joint's one-turn range "
                      "(range = limits cut to [-pi, pi]; a joint whose limits span a turn: the whole circle); "
                      "outside_limits: the other real solutions",
-        "seeds": list(seeds),
-        "fixtures": out_fixtures,
+        "seeds": list(SEEDS),
+        "fixtures": fixtures,
     }
     if args.compact:
         out["compact"] = True
         out["pose"] = "not stored: the forward kinematics of q (decimals as written) at 60 digits"
         out["solutions"] += " (10 significant digits); outside_limits not stored"
-    with open(args.out, "w") as f:
+    with open(path, "w") as f:
         json.dump(out, f, separators=(",", ":"))
         f.write("\n")
-    log(f"wrote {args.out} ({os.path.getsize(args.out)} bytes)")
 
 
 if __name__ == "__main__":
