@@ -597,7 +597,7 @@ def main():
                          "finds fewer finite solutions than the generic count")
     ap.add_argument("--checkpoint", action="store_true", help="write the poses so far to OUT.partial every 50")
     ap.add_argument("--compact", action="store_true",
-                    help="joint vectors q with 9 decimals, solutions in limits with 10 significant digits, "
+                    help="joint vectors q with 9 decimals, solutions in limits with 9 significant digits, "
                          "no pose (it is the forward kinematics of q), no solutions outside the limits")
     args = ap.parse_args()
     t_start = time.time()
@@ -703,7 +703,7 @@ def main():
             inl = [s for s in sols if s[1]]
             hist[len(inl)] = hist.get(len(inl), 0) + 1
             if args.compact:
-                poses.append({"q": q, "solutions": [[float(f"{float(v):.10g}") for v in s[0]] for s in inl]})
+                poses.append({"q": q, "solutions": [[float(f"{float(v):.9g}") for v in s[0]] for s in inl]})
             else:
                 poses.append({
                     "q": q,
@@ -739,7 +739,7 @@ def write(args, fixtures, path):
     if args.compact:
         out["compact"] = True
         out["pose"] = "not stored: the forward kinematics of q (decimals as written) at 60 digits"
-        out["solutions"] += " (10 significant digits); outside_limits not stored"
+        out["solutions"] += " (9 significant digits); outside_limits not stored"
     with open(path, "w") as f:
         json.dump(out, f, separators=(",", ":"))
         f.write("\n")
