@@ -458,3 +458,137 @@ mod path_check {
         assert!(path::check(&ur5(), &w[..1], 1e-9, &control()).is_err());
     }
 }
+
+/// Every real solution of poses of a general 6R (`tests/data/ik6_general_6r.urdf`, up to 16)
+/// and of the CRX fixture, from `scripts/dev/ik6_reference.py` (monodromy and parameter
+/// homotopy, refined at 60 digits, two seeds; no interval code): the certified solutions are
+/// exactly the reference's, one per box, nothing undecided.
+mod homotopy_reference {
+    use super::*;
+    use serde_json::Value;
+
+    fn reference(file: &str) -> Value {
+        serde_json::from_str(&repo(&format!("tests/data/{file}"))).expect("reference JSON")
+    }
+
+    fn numbers(v: &Value) -> Vec<f64> {
+        v.as_array().expect("a list").iter().map(|x| x.as_f64().expect("a number")).collect()
+    }
+
+    fn six(v: &Value) -> [f64; 6] {
+        numbers(v).try_into().expect("six angles")
+    }
+
+    /// `x` (radians) in the interval `[lo, hi]` up to `slack`, modulo a turn.
+    fn holds(lo: f64, hi: f64, x: f64, slack: f64) -> bool {
+        let mid = 0.5 * (lo + hi);
+        let x = mid + (x - mid + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU) - std::f64::consts::PI;
+        lo - slack <= x && x <= hi + slack
+    }
+
+    /// Checks the poses of every fixture of `file` that `pick` selects (from the pose's index and
+    /// the index of the fixture's first pose with the most solutions); returns per fixture the
+    /// histogram of solution counts and the solver's times (seconds).
+    fn check(file: &str, pick: impl Fn(usize, usize) -> bool) -> Vec<(String, std::collections::BTreeMap<usize, usize>, Vec<f64>)> {
+        let refs = reference(file);
+        // Solutions are written with 17 significant digits, or 9 in a compact file.
+        let slack = if refs.get("compact").and_then(Value::as_bool) == Some(true) { 2e-8 } else { 1e-9 };
+        let mut out = Vec::new();
+        for fixture in refs["fixtures"].as_array().expect("fixtures") {
+            let name = fixture["name"].as_str().expect("a name");
+            let chain = chain_of(&repo(fixture["urdf"].as_str().expect("a file"))).within_one_turn();
+            // The reference's one-turn ranges are the chain's.
+            for (k, r) in fixture["ranges"].as_array().expect("ranges").iter().enumerate() {
+                if r.is_null() {
+                    assert!(chain.continuous[k], "{name}: joint {k} turns freely");
+                } else {
+                    let r = numbers(r);
+                    assert!(!chain.continuous[k] && (chain.ranges[k].0 - r[0]).abs() < 1e-12 && (chain.ranges[k].1 - r[1]).abs() < 1e-12, "{name}: joint {k} {:?} {r:?}", chain.ranges[k]);
+                }
+            }
+            let (mut hist, mut times) = (std::collections::BTreeMap::new(), Vec::new());
+            let poses = fixture["poses"].as_array().expect("poses");
+            let count = |p: &Value| p["solutions"].as_array().expect("solutions").len();
+            let most = poses.iter().map(count).max().expect("poses");
+            let first_most = poses.iter().position(|p| count(p) == most).expect("poses");
+            for (i, p) in poses.iter().enumerate() {
+                if !pick(i, first_most) {
+                    continue;
+                }
+                let q = six(&p["q"]);
+                // A compact file leaves the pose out: it is q's (the reference solved q's pose
+                // at 60 digits; the two differ by rounding).
+                let pose = match p.get("pose") {
+                    Some(m) => {
+                        let m: Vec<Vec<f64>> = m.as_array().expect("4x4").iter().map(numbers).collect();
+                        Pose64 { r: [0, 1, 2].map(|r| [0, 1, 2].map(|c| m[r][c])), t: [m[0][3], m[1][3], m[2][3]] }
+                    }
+                    None => chain.pose(&q),
+                };
+                assert!(chain.pose(&q).distance(&pose) < 1e-9, "{name} pose {i}: the reference's pose is q's");
+                let expected: Vec<[f64; 6]> = p["solutions"].as_array().expect("solutions").iter().map(six).collect();
+                let t = Instant::now();
+                let sol = ik::solve(&chain, &PoseTarget::around(&pose, 1e-12).expect("finite"), 1e-10, &control()).expect("solves");
+                times.push(t.elapsed().as_secs_f64());
+                assert_eq!(sol.status, Status::Complete, "{name} pose {i}");
+                assert!(sol.clusters.is_empty(), "{name} pose {i}: undecided {:?}", sol.clusters);
+                let inside = |u: &[linkspace::Interval; 6], a: &[f64; 6]| (0..6).all(|k| holds(u[k].inf(), u[k].sup(), a[k], slack));
+                for a in &expected {
+                    let n = sol.unique.iter().filter(|u| inside(u, a)).count();
+                    assert_eq!(n, 1, "{name} pose {i}: reference solution {a:?} in {n} certified boxes of {:?}", sol.unique);
+                }
+                for u in &sol.unique {
+                    let n = expected.iter().filter(|a| inside(u, a)).count();
+                    assert_eq!(n, 1, "{name} pose {i}: certified box {u:?} holds {n} reference solutions of {expected:?}");
+                }
+                assert_eq!(sol.unique.len(), expected.len(), "{name} pose {i}");
+                *hist.entry(expected.len()).or_insert(0) += 1;
+            }
+            out.push((name.to_string(), hist, times));
+        }
+        out
+    }
+
+    fn summary(found: &[(String, std::collections::BTreeMap<usize, usize>, Vec<f64>)]) {
+        for (name, hist, times) in found {
+            let mut t = times.clone();
+            t.sort_by(f64::total_cmp);
+            println!("{name}: {} poses, counts {hist:?}, median {:.1} ms, max {:.1} ms", t.len(), 1e3 * t[t.len() / 2], 1e3 * t[t.len() - 1]);
+        }
+    }
+
+    /// Per fixture: the first pose and the first with the most solutions (6 for the general
+    /// 6R, 16 for the CRX); a few seconds.
+    #[test]
+    fn certified_solutions_are_the_homotopy_references() {
+        let found = check("ik6_reference.json", |i, first_most| i == 0 || i == first_most);
+        let most: Vec<usize> = found.iter().map(|(_, hist, _)| *hist.keys().last().expect("poses")).collect();
+        assert_eq!(most, [6, 16]);
+        summary(&found);
+    }
+
+    /// Every pose of the default file (30 per fixture; about a minute in release).
+    #[test]
+    #[ignore = "long: every pose of the default reference"]
+    fn certified_solutions_are_the_homotopy_references_on_every_pose() {
+        summary(&check("ik6_reference.json", |_, _| true));
+    }
+
+    /// 1,000 poses per fixture (`tests/data/ik6_reference_1000.json`, compact). `IK6_REFERENCE`
+    /// names another file of `tests/data` (say a checkpoint of the generator) and `IK6_POSES`
+    /// (`a..b`) a range of poses, to check part of a file.
+    #[test]
+    #[ignore = "long: 1,000 poses per fixture"]
+    fn certified_solutions_are_the_homotopy_references_on_a_thousand_poses() {
+        let file = std::env::var("IK6_REFERENCE").unwrap_or_else(|_| "ik6_reference_1000.json".into());
+        let range = std::env::var("IK6_POSES").ok().map(|r| {
+            let (a, b) = r.split_once("..").expect("IK6_POSES=a..b");
+            a.parse::<usize>().expect("a number")..b.parse::<usize>().expect("a number")
+        });
+        let found = check(&file, |i, _| range.as_ref().is_none_or(|r| r.contains(&i)));
+        summary(&found);
+        if range.is_none() {
+            assert!(found.iter().all(|(_, hist, _)| hist.values().sum::<usize>() == 1000));
+        }
+    }
+}
