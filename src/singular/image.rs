@@ -158,23 +158,23 @@ fn torus_cusps(map: &LockedLegMap, settings: &SolverSettings, control: &Control,
     })
 }
 
-/// Runs `search` at precision sigma, then, while a round leaves boxes at the precision
+/// Runs `search` at precision sigma (at most 0.5 rad), then, while a round leaves boxes at the precision
 /// undecided (`settled` false) and time is left, at the finer precisions of `RefinePlan`. Each
 /// round is a complete search on its own; the first settled round is kept (the last one run
 /// otherwise), with the precisions tried after the first.
 fn in_rounds<T>(settings: &SolverSettings, t0: Instant, mut search: impl FnMut(f64) -> Result<(T, bool), SolveError>) -> Result<(T, Vec<f64>), SolveError> {
     settings.validate()?;
-    if settings.sigma >= 1.0 {
-        return Err(SettingsError::Sigma(settings.sigma).into());
-    }
-    let (mut kept, mut settled) = search(settings.sigma)?;
+    // Boxes are at most sigma wide in both angles; the torus searches take precisions below one
+    // radian, and a box half a radian wide is already coarser than any useful answer.
+    let sigma = settings.sigma.min(0.5);
+    let (mut kept, mut settled) = search(sigma)?;
     let mut tried = Vec::new();
     for d in RefinePlan::default().divisors {
         if settled || settings.timeout.is_some_and(|t| t0.elapsed() >= t) {
             break;
         }
-        tried.push(settings.sigma / d);
-        (kept, settled) = search(settings.sigma / d)?;
+        tried.push(sigma / d);
+        (kept, settled) = search(sigma / d)?;
     }
     Ok((kept, tried))
 }

@@ -318,11 +318,6 @@ impl NodeProblem {
         self.torus.as_ref()
     }
 
-    /// True when the node search runs on a platform's torus rather than the doubled systems.
-    pub fn on_torus(&self) -> bool {
-        self.torus.is_some()
-    }
-
     /// Builds the doubled systems of `sp` (see the module doc), for the node search in the joint
     /// coordinates whatever the mechanism.
     pub fn in_coordinates(sp: &SingularProblem) -> Result<Self, ImageError> {
