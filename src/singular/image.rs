@@ -128,10 +128,7 @@ impl CuspProblem {
             // μ away from 0 on every certified box: a tangent, so a cusp (not a corank-2 point).
             p.degenerate = p.boxes.iter().any(|bx| bx.dims[self.tangent[0]].contains(0.0));
             for b in &p.boxes {
-                for (n, v) in self.joint_values(sp, b) {
-                    let e = p.joints.entry(n).or_insert([v.0, v.1]);
-                    *e = [e[0].min(v.0), e[1].max(v.1)];
-                }
+                widen(&mut p.joints, bounds(self.joint_values(sp, b)));
             }
         }
         points
@@ -158,10 +155,10 @@ fn torus_cusps(map: &LockedLegMap, settings: &SolverSettings, control: &Control,
     })
 }
 
-/// Runs `search` at precision sigma (at most 0.5 rad), then, while a round leaves boxes at the precision
-/// undecided (`settled` false) and time is left, at the finer precisions of `RefinePlan`. Each
-/// round is a complete search on its own; the first settled round is kept (the last one run
-/// otherwise), with the precisions tried after the first.
+/// Runs `search` at precision sigma (at most 0.5 rad), then, while a round leaves boxes at the
+/// precision undecided (`settled` false) and time is left, at the finer precisions of
+/// `RefinePlan`. Each round is a complete search on its own; the first settled round is kept
+/// (the last one run otherwise), with the precisions tried after the first.
 fn in_rounds<T>(settings: &SolverSettings, t0: Instant, mut search: impl FnMut(f64) -> Result<(T, bool), SolveError>) -> Result<(T, Vec<f64>), SolveError> {
     settings.validate()?;
     // Boxes are at most sigma wide in both angles; the torus searches take precisions below one
@@ -204,7 +201,6 @@ fn solve_cusps_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel
     let map = &torus.map;
     let (found, tried) = torus_cusps(map, settings, &control_of(settings, cancel), t0)?;
     let refined = (!tried.is_empty()).then(|| format!("searched again at precisions {}", tried.iter().map(|p| format!("{p:e}")).collect::<Vec<_>>().join(", ")));
-    let joints = |theta: [Interval; 2]| -> BTreeMap<String, Bounds> { torus.joint_values(theta).into_iter().map(|(n, v)| (n, [v.0, v.1])).collect() };
     let mut points = Vec::new();
     for c in &found.cusps {
         let (kind, note) = match map.within_travel(c.theta) {
@@ -214,7 +210,7 @@ fn solve_cusps_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel
             None => (BoxKind::Solution, Some("its travels may lie on a slider's limit".to_string())),
         };
         let refinement = note.into_iter().chain(refined.clone().filter(|_| kind != BoxKind::Certified)).collect();
-        points.push(FoundPoint { boxes: vec![torus.pose_box(c.theta)], kinds: vec![kind], degenerate: false, joints: joints(c.theta), members: vec![0], refinement });
+        points.push(FoundPoint { boxes: vec![torus.pose_box(c.theta)], kinds: vec![kind], degenerate: false, joints: bounds(torus.joint_values(c.theta)), members: vec![0], refinement });
     }
     // Undecided boxes, clustered; those proven outside the travels hold no configuration.
     let open: Vec<&cusps::Undecided> = found.undecided.iter().filter(|u| map.within_travel(u.theta) != Some(false)).collect();
@@ -225,10 +221,7 @@ fn solve_cusps_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel
             p.boxes.push(torus.pose_box(u.theta));
             p.members.push(0);
             p.kinds.push(if u.reason == cusps::Reason::Limit { BoxKind::Undecided } else { BoxKind::Solution });
-            for (name, v) in joints(u.theta) {
-                let e = p.joints.entry(name).or_insert(v);
-                *e = [e[0].min(v[0]), e[1].max(v[1])];
-            }
+            widen(&mut p.joints, bounds(torus.joint_values(u.theta)));
             let why = "∇det may vanish there: a crossing of the type-II curve rather than a cusp?";
             if u.reason == cusps::Reason::GradDetMayVanish && !p.refinement.iter().any(|r| r == why) {
                 p.refinement.push(why.to_string());
@@ -244,8 +237,9 @@ fn solve_cusps_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel
 /// The nodes of the `Torus` formulation: the 3R arms' node search (`manip3r::nodes`, system
 /// (3) of seed 003 over pairs of torus boxes) on the platform's actuator map, at precision
 /// sigma and, while pairs stay undecided at the precision, finer (`in_rounds`), with the
-/// certified cusps of `torus_cusps` for its injectivity certificates near cusps. A node one of whose points lies outside a slider's travel is dropped; one that may
-/// lie on a limit stays unproven.
+/// certified cusps of `torus_cusps` for its injectivity certificates near cusps. A node one of
+/// whose points lies outside a slider's travel is dropped; one that may lie on a limit stays
+/// unproven.
 fn solve_nodes_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel: &AtomicBool) -> Result<NodeSearch, SolveError> {
     let t0 = Instant::now();
     let map = &torus.map;
@@ -257,7 +251,6 @@ fn solve_nodes_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel
         let settled = round.status != Status::Complete || round.undecided.is_empty();
         Ok((round, settled))
     })?;
-    let joints = |theta: [Interval; 2]| -> BTreeMap<String, Bounds> { torus.joint_values(theta).into_iter().map(|(n, v)| (n, [v.0, v.1])).collect() };
     let mut pairs = Vec::new();
     let certified = found.nodes.iter().map(|n| (n.theta, true));
     let open = found.undecided.iter().map(|t| (*t, false));
@@ -272,7 +265,7 @@ fn solve_nodes_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel
             (false, _) if found.status == Status::Complete => BoxKind::Solution,
             (false, _) => BoxKind::Undecided,
         };
-        pairs.push(NodePair { joints: [joints(theta[0]), joints(theta[1])], kind });
+        pairs.push(NodePair { joints: [bounds(torus.joint_values(theta[0])), bounds(torus.joint_values(theta[1]))], kind });
     }
     let stats = torus_stats(&found.stats, found.nodes.len() as u64);
     Ok(NodeSearch { status: found_cusps.status.and(found.status), pairs, near_diagonal: Vec::new(), injective: found.stats.discarded.get("injective").copied().unwrap_or(0), dropped_other_chart: 0, stats: vec![stats], seconds: t0.elapsed().as_secs_f64() })
@@ -499,7 +492,7 @@ impl NodeProblem {
                         }
                         let a = IntervalBox::new(d[..sp.base_vars].to_vec());
                         let b = IntervalBox::new((0..sp.base_vars).map(|j| d[map[j]]).collect());
-                        out.pairs.push(NodePair { joints: [joint_bounds(sp, &a), joint_bounds(sp, &b)], kind });
+                        out.pairs.push(NodePair { joints: [bounds(sp.joint_values(&a)), bounds(sp.joint_values(&b))], kind });
                     }
                     None if k == k2 && kind != BoxKind::Undecided && injective(&sp.chart(*k), &self.shared, &bx, map) => out.injective += 1,
                     None => out.near_diagonal.push(bx),
@@ -513,9 +506,22 @@ impl NodeProblem {
     }
 }
 
-/// Free joint values over a box of the linkage's variables.
-fn joint_bounds(sp: &SingularProblem, b: &IntervalBox) -> BTreeMap<String, Bounds> {
-    sp.joint_values(b).into_iter().map(|(n, v)| (n, [v.0, v.1])).collect()
+/// Joint values as `Bounds`.
+fn bounds(values: BTreeMap<String, (f64, f64)>) -> BTreeMap<String, Bounds> {
+    values.into_iter().map(|(n, v)| (n, [v.0, v.1])).collect()
+}
+
+/// `joints` widened to hold `more` too.
+fn widen(joints: &mut BTreeMap<String, Bounds>, more: BTreeMap<String, Bounds>) {
+    for (n, v) in more {
+        let e = joints.entry(n).or_insert(v);
+        *e = [e[0].min(v[0]), e[1].max(v[1])];
+    }
+}
+
+/// The actuated joints' values among `joints`: a point's image in actuator space.
+fn actuator_image(sp: &SingularProblem, joints: &BTreeMap<String, Bounds>) -> BTreeMap<String, Bounds> {
+    sp.actuated.iter().filter_map(|a| joints.get(a).map(|b| (a.clone(), *b))).collect()
 }
 
 /// A node pair: the free joint values over its two configuration boxes.
@@ -1029,7 +1035,7 @@ pub fn cusp_records(sp: &SingularProblem, cusps: &PointSearch) -> Vec<ImageCusp>
         .iter()
         .map(|p| {
             let joints = p.joints.clone();
-            let workspace = sp.actuated.iter().filter_map(|a| joints.get(a).map(|b| (a.clone(), *b))).collect();
+            let workspace = actuator_image(sp, &joints);
             let reason = p.unproven_reason(cusps.status);
             ImageCusp { joints, workspace, unique: reason.is_none(), degenerate: p.degenerate, reason }
         })
@@ -1040,12 +1046,11 @@ pub fn cusp_records(sp: &SingularProblem, cusps: &PointSearch) -> Vec<ImageCusp>
 
 /// The records of a node search.
 pub fn node_records(sp: &SingularProblem, nodes: &NodeSearch) -> Vec<ImageNode> {
-    let image = |joints: &BTreeMap<String, Bounds>| -> BTreeMap<String, Bounds> { sp.actuated.iter().filter_map(|a| joints.get(a).map(|b| (a.clone(), *b))).collect() };
     nodes
         .pairs
         .iter()
         .map(|p| {
-            let (wa, wb) = (image(&p.joints[0]), image(&p.joints[1]));
+            let (wa, wb) = (actuator_image(sp, &p.joints[0]), actuator_image(sp, &p.joints[1]));
             let workspace = wa.iter().map(|(n, x)| (n.clone(), wb.get(n).map_or(*x, |y| [x[0].max(y[0]), x[1].min(y[1])]))).collect();
             ImageNode { points: p.joints.clone(), workspace, unique: p.kind == BoxKind::Certified }
         })
