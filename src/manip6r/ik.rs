@@ -33,7 +33,8 @@ use crate::interval::{components_of_edges, interval, point, touching_pairs, Inte
 use crate::manip3r::drive::{drive, no_progress};
 use crate::problems::{angles::stated, stated as st};
 use crate::search::{Control, Progress, Prune, Stats, Status, Step};
-use smallvec::smallvec;
+use super::invariant_pairs;
+use smallvec::{smallvec, SmallVec};
 
 /// The tip pose sought: an enclosure of one rigid transform (base frame).
 #[derive(Clone, Copy, Debug)]
@@ -119,16 +120,20 @@ pub struct Ik6Cell {
 const KRAWCZYK_WIDTH: f64 = 0.25;
 
 /// Rows of the invariants of axis 4 relative to axis 1 (`invariants`).
-const INVARIANTS: usize = 5;
+pub(super) const INVARIANTS: usize = 5;
 
 /// Joints 1 and 4 are split only once joints 2, 3, 5, 6 are this narrow (radians).
 const FIRST_WIDTH: f64 = 0.02;
+
+/// The pair traversal's limits: past them its pending pairs are searched as cells (the
+/// nodes' arena then holds at most about 65 MB).
+const PAIR_BUDGET: invariant_pairs::Budget = invariant_pairs::Budget { pairs: 20_000_000, boxes: 500_000 };
 
 /// Cells this narrow (radians) that Krawczyk cannot decide are tried once more, inflated.
 const INFLATE_WIDTH: f64 = 1e-5;
 
 /// One split of the equation (`Chain6R::split`): sides and the joint of each block.
-type Split = (Side<3>, Side<3>, [usize; 3], [usize; 3]);
+pub(super) type Split = (Side<3>, Side<3>, [usize; 3], [usize; 3]);
 
 /// Rows per split: nine rotation entries, three coordinates, and the last right joint's axis
 /// direction, which that joint does not turn (three more rows free of its angle).
@@ -205,51 +210,72 @@ fn line_invariants_derivative(a: &V, u: &V, d: &V, du: &V, dd: &V) -> [Iv; INVAR
     [dot(a, du), dot(u, du).scale(2.0), dot(a, dd), add(dot(du, d), dot(u, dd)), add(dot(&cross(a, du), d), dot(&cross(a, u), dd))]
 }
 
-/// Five equations in joints 2, 3, 5, 6 alone: axis 4 (its frame's origin and direction) seen
-/// from axis 1 is the same from both sides. The left side puts it where joints 1–3 do
-/// (turning joint 1 moves it about axis 1, which leaves the invariants alone: joint 1 is taken
-/// at 0), the right side where the pose and joints 6, 5 do (joint 4 turns about axis 4 itself).
-/// Residuals at `m` and Jacobian over `b` as `equations`.
-fn invariants(split: &Split, b: &[[f64; 2]; 6], m: &[f64; 6], jac: &mut [[Iv; 6]; INVARIANTS]) -> Option<[Iv; INVARIANTS]> {
+/// The five invariants of axis 4 seen from one side, over a box of that side's two joints
+/// (`Side::Left`: joints 2, 3; `Side::Right`: joints 6, 5, in the right side's block order),
+/// and their derivative columns in those two joints.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct SideValue {
+    pub inv: [Iv; INVARIANTS],
+    pub cols: [[Iv; INVARIANTS]; 2],
+}
+
+/// Which side of the invariants' equation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Half {
+    /// Joints 2, 3 place axis 4 (joint 1 at 0: turning it leaves the invariants alone).
+    Left,
+    /// The pose and joints 6, 5 place it (joint 4 turns about axis 4 itself).
+    Right,
+}
+
+/// One side's invariants over `b` (its two joints, see `SideValue`), with derivative columns
+/// when `cols` is set. The right side turns by −θ; its columns are the twists' all the same
+/// (the sign is the derivative's, and both uses below take it with a symmetric factor or
+/// through the difference of the two sides, where the minus cancels).
+#[inline]
+pub(super) fn side_value(split: &Split, half: Half, b: &[[f64; 2]; 2], cols: bool) -> SideValue {
     let (left, right, _, _) = split;
     let one = Iv { lo: 1.0, hi: 1.0 };
     let a4 = &right.axes[2];
     let (c1, a1) = (left.k0.t, mv(&left.k0.r, &left.axes[0]));
-    let sides = |b: &[[f64; 2]; 6]| {
-        let cs = |k: usize| cos_sin(b[k][0], b[k][1]);
-        let fl = left.frames(&[(one, Iv::ZERO), cs(1), cs(2)]);
-        let fr = right.frames(&[cs(5), cs(4), cs(3)]);
-        let (ul, dl) = (sub3(&fl[3].t, &c1), mv(&fl[3].r, a4));
-        let (ur, dr) = (sub3(&fr[2].t, &c1), mv(&fr[2].r, a4));
-        (fl, fr, ul, dl, ur, dr)
+    let cs = |k: usize| cos_sin(b[k][0], b[k][1]);
+    let (frames, side, at, blocks) = match half {
+        Half::Left => (left.frames(&[(one, Iv::ZERO), cs(0), cs(1)]), left, 3, [1, 2]),
+        Half::Right => (right.frames(&[cs(0), cs(1), (one, Iv::ZERO)]), right, 2, [0, 1]),
     };
-    let (fl, fr, ul, dl, ur, dr) = sides(b);
-    let (il, ir) = (line_invariants(&a1, &ul, &dl), line_invariants(&a1, &ur, &dr));
-    if (0..INVARIANTS).any(|i| excludes_zero(il[i].sub(ir[i]))) {
+    let (u, d) = (sub3(&frames[at].t, &c1), mv(&frames[at].r, a4));
+    let inv = line_invariants(&a1, &u, &d);
+    let mut out = SideValue { inv, cols: [[Iv::ZERO; INVARIANTS]; 2] };
+    if cols {
+        for (c, blk) in blocks.into_iter().enumerate() {
+            let (w, p) = side.axis(&frames, blk);
+            out.cols[c] = line_invariants_derivative(&a1, &u, &d, &cross(&w, &sub3(&frames[at].t, &p)), &cross(&w, &d));
+        }
+    }
+    out
+}
+
+/// Five equations in joints 2, 3, 5, 6 alone: axis 4 (its frame's origin and direction) seen
+/// from axis 1 is the same from both sides (`side_value`). Residuals at `m` and Jacobian over
+/// `b` as `equations`, or None when a residual's natural enclosure over `b` excludes 0.
+fn invariants(split: &Split, b: &[[f64; 2]; 6], m: &[f64; 6], jac: &mut [[Iv; 6]; INVARIANTS]) -> Option<[Iv; INVARIANTS]> {
+    let (l, r) = (side_value(split, Half::Left, &[b[1], b[2]], true), side_value(split, Half::Right, &[b[5], b[4]], true));
+    if (0..INVARIANTS).any(|i| excludes_zero(l.inv[i].sub(r.inv[i]))) {
         return None;
     }
-    let (_, _, mul_, mdl, mur, mdr) = sides(&m.map(|x| [x, x]));
-    let (ml, mr) = (line_invariants(&a1, &mul_, &mdl), line_invariants(&a1, &mur, &mdr));
+    let (ml, mr) = (side_value(split, Half::Left, &[[m[1]; 2], [m[2]; 2]], false), side_value(split, Half::Right, &[[m[5]; 2], [m[4]; 2]], false));
     for row in jac.iter_mut() {
         *row = [Iv::ZERO; 6];
     }
-    for (blk, v) in [(1, 1), (2, 2)] {
-        let (w, p) = left.axis(&fl, blk);
-        let col = line_invariants_derivative(&a1, &ul, &dl, &cross(&w, &sub3(&fl[3].t, &p)), &cross(&w, &dl));
-        for i in 0..INVARIANTS {
-            jac[i][v] = col[i];
-        }
-    }
     // The right side turns by −θ: its derivative is minus the twist's, and it enters with a
     // minus, so the column is the twist's.
-    for (blk, v) in [(0, 5), (1, 4)] {
-        let (w, p) = right.axis(&fr, blk);
-        let col = line_invariants_derivative(&a1, &ur, &dr, &cross(&w, &sub3(&fr[2].t, &p)), &cross(&w, &dr));
-        for i in 0..INVARIANTS {
-            jac[i][v] = col[i];
-        }
+    for i in 0..INVARIANTS {
+        jac[i][1] = l.cols[0][i];
+        jac[i][2] = l.cols[1][i];
+        jac[i][5] = r.cols[0][i];
+        jac[i][4] = r.cols[1][i];
     }
-    Some([0, 1, 2, 3, 4].map(|i| ml[i].sub(mr[i])))
+    Some([0, 1, 2, 3, 4].map(|i| ml.inv[i].sub(mr.inv[i])))
 }
 
 /// Joints 2, 3, 5, 6: the unknowns of the invariants.
@@ -411,13 +437,30 @@ impl Ik6Prune<'_> {
     }
 }
 
-impl Prune for Ik6Prune<'_> {
-    type Cell = Ik6Cell;
-    /// The solution's box and a box in which it is proven the only solution.
-    type Found = ([Interval; 6], [Interval; 6]);
-    type Reason = Ik6Discard;
+impl Ik6Prune<'_> {
+    /// The start cell: joints 2, 3, 5, 6 narrowed by the pair traversal of the invariants
+    /// (`invariant_pairs`), joints 1 and 4 whole; the pairs it leaves are the cells to search.
+    fn start(&self, cell: Ik6Cell, stop: &dyn Fn() -> bool) -> Step<Ik6Cell, ([Interval; 6], [Interval; 6]), Ik6Discard> {
+        let b = cell.b;
+        let found = invariant_pairs::pairs(&self.splits[0], [b[1], b[2]], [b[5], b[4]], FIRST_WIDTH, PAIR_BUDGET, stop);
+        let cells: SmallVec<[Ik6Cell; 4]> = found
+            .leaves
+            .iter()
+            .chain(&found.pending)
+            .map(|&(l, r)| {
+                let mut nb = b;
+                (nb[1], nb[2], nb[5], nb[4]) = (l[0], l[1], r[0], r[1]);
+                Ik6Cell { b: nb, level: 1 }
+            })
+            .collect();
+        if cells.is_empty() {
+            return Step::Discard(Ik6Discard::Axis4);
+        }
+        Step::Split(cells)
+    }
 
-    fn process(&mut self, cell: Ik6Cell) -> Step<Ik6Cell, ([Interval; 6], [Interval; 6]), Ik6Discard> {
+    /// Any cell but the start cell (see the module doc).
+    fn examine(&mut self, cell: Ik6Cell) -> Step<Ik6Cell, ([Interval; 6], [Interval; 6]), Ik6Discard> {
         let b = cell.b;
         let m = mid(&b);
         let mut hm = [Iv::ZERO; 3 * ROWS + INVARIANTS];
@@ -527,6 +570,27 @@ impl Prune for Ik6Prune<'_> {
         hi[v][0] = c;
         let child = |b| Ik6Cell { b, level: cell.level + 1 };
         Step::Split(smallvec![child(lo), child(hi)])
+    }
+
+}
+
+impl Prune for Ik6Prune<'_> {
+    type Cell = Ik6Cell;
+    /// The solution's box and a box in which it is proven the only solution.
+    type Found = ([Interval; 6], [Interval; 6]);
+    type Reason = Ik6Discard;
+
+    fn process(&mut self, cell: Ik6Cell) -> Step<Ik6Cell, ([Interval; 6], [Interval; 6]), Ik6Discard> {
+        self.process_until(cell, &|| false)
+    }
+
+    fn process_until(&mut self, cell: Ik6Cell, stop: &dyn Fn() -> bool) -> Step<Ik6Cell, ([Interval; 6], [Interval; 6]), Ik6Discard> {
+        // Only the start cell is at level 0: every other cell descends from it.
+        if cell.level == 0 {
+            self.start(cell, stop)
+        } else {
+            self.examine(cell)
+        }
     }
 
     fn level(&self, cell: &Ik6Cell) -> u32 {

@@ -8,6 +8,7 @@
 pub(crate) mod chain;
 pub mod cuspidal;
 pub mod ik;
+mod invariant_pairs;
 pub mod three_parallel;
 pub(crate) mod jacobian;
 pub mod path;

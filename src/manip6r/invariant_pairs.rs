@@ -1,0 +1,159 @@
+//! The first phase of the 6R inverse kinematics (`ik`) as a traversal of pairs of boxes.
+//!
+//! The five invariants of axis 4 seen from axis 1 are `f(θ₂, θ₃) = g(θ₆, θ₅)`: each side
+//! depends on two joints only. A 4-dimensional box of joints 2, 3, 5, 6 is a pair (left box,
+//! right box), and the test that discards it compares an enclosure of `f` over the left box
+//! with one of `g` over the right box, row by row. Each side's boxes form a binary tree
+//! (halves of halves of the joint ranges), and a box's enclosure is computed once, when the
+//! box is first met, whatever pairs it is part of: measured on a general 6R, the pairs
+//! processed outnumber the distinct boxes of either side 20 to 70 times, so the test of a pair
+//! costs ten comparisons instead of two evaluations of the invariants.
+//!
+//! A box's enclosure is its natural enclosure intersected with its mean-value form (both hold
+//! every value over the box). A pair with disjoint enclosures in some row holds no solution.
+//! The wider of the two boxes of a surviving pair is halved (across the joint whose width moves
+//! its invariants most) until both are `narrow`; such pairs are the traversal's leaves. No IO;
+//! the caller bounds the work (`budget`, `stop`) and gets back the pairs not yet decided.
+
+use super::ik::{side_value, Half, Split, INVARIANTS};
+use crate::interval::fast::Iv;
+
+/// A box of one side's two joints, its enclosure of the invariants, and its children.
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    b: [[f64; 2]; 2],
+    enc: [Iv; INVARIANTS],
+    /// The joint (0 or 1) whose halving moves the invariants most.
+    cut: usize,
+    /// Index of the first of its two children in the tree, once made (0: not yet).
+    children: u32,
+}
+
+/// One side's binary tree of boxes, made as the traversal needs them.
+struct Tree<'a> {
+    split: &'a Split,
+    half: Half,
+    nodes: Vec<Node>,
+}
+
+impl<'a> Tree<'a> {
+    fn new(split: &'a Split, half: Half, b: [[f64; 2]; 2]) -> Tree<'a> {
+        let mut tree = Tree { split, half, nodes: Vec::new() };
+        let root = tree.node(b);
+        tree.nodes.push(root);
+        tree
+    }
+
+    /// The enclosure of the invariants over `b`: natural ∩ mean-value form.
+    fn node(&self, b: [[f64; 2]; 2]) -> Node {
+        let over = side_value(self.split, self.half, &b, true);
+        let m = b.map(|x| 0.5 * (x[0] + x[1]));
+        let at = side_value(self.split, self.half, &m.map(|x| [x, x]), false);
+        let dx = [0, 1].map(|k| Iv { lo: b[k][0], hi: b[k][1] }.sub(Iv { lo: m[k], hi: m[k] }));
+        let mut enc = over.inv;
+        for i in 0..INVARIANTS {
+            let form = at.inv[i].add(over.cols[0][i].mul(dx[0])).add(over.cols[1][i].mul(dx[1]));
+            // Both enclose every value over the box; where rounding leaves them apart (which
+            // cannot happen to exact enclosures), keep the natural one.
+            let meet = Iv { lo: enc[i].lo.max(form.lo), hi: enc[i].hi.min(form.hi) };
+            if meet.lo <= meet.hi {
+                enc[i] = meet;
+            }
+        }
+        let smear = |k: usize| (0..INVARIANTS).map(|i| over.cols[k][i].lo.abs().max(over.cols[k][i].hi.abs())).sum::<f64>() * (b[k][1] - b[k][0]);
+        let (s0, s1) = (smear(0), smear(1));
+        let cut = if s0.is_finite() && s1.is_finite() && (s0 > 0.0 || s1 > 0.0) {
+            usize::from(s1 > s0)
+        } else {
+            usize::from(b[1][1] - b[1][0] > b[0][1] - b[0][0])
+        };
+        Node { b, enc, cut, children: 0 }
+    }
+
+    fn width(&self, n: u32) -> f64 {
+        let b = &self.nodes[n as usize].b;
+        (b[0][1] - b[0][0]).max(b[1][1] - b[1][0])
+    }
+
+    /// The two halves of node `n`, made on first use.
+    fn children(&mut self, n: u32) -> [u32; 2] {
+        let node = self.nodes[n as usize];
+        if node.children == 0 {
+            let (k, b) = (node.cut, node.b);
+            let c = 0.5 * (b[k][0] + b[k][1]);
+            let (mut lo, mut hi) = (b, b);
+            lo[k][1] = c;
+            hi[k][0] = c;
+            let first = self.nodes.len() as u32;
+            let (lo, hi) = (self.node(lo), self.node(hi));
+            self.nodes.push(lo);
+            self.nodes.push(hi);
+            self.nodes[n as usize].children = first;
+        }
+        let first = self.nodes[n as usize].children;
+        [first, first + 1]
+    }
+}
+
+/// Pairs of boxes (joints 2, 3; joints 6, 5) that may hold solutions.
+#[derive(Debug, Default)]
+pub(super) struct Pairs {
+    /// Pairs with both boxes at most `narrow` wide.
+    pub leaves: Vec<([[f64; 2]; 2], [[f64; 2]; 2])>,
+    /// Pairs not examined when the budget ran out or `stop` said so.
+    pub pending: Vec<([[f64; 2]; 2], [[f64; 2]; 2])>,
+    /// Pairs examined.
+    pub examined: u64,
+    /// Pairs discarded (their enclosures disjoint in some row).
+    pub discarded: u64,
+}
+
+/// How much work a traversal may do before it hands its pending pairs back.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Budget {
+    /// Pairs examined.
+    pub pairs: u64,
+    /// Boxes made on either side (each holds its enclosure: about 130 bytes).
+    pub boxes: usize,
+}
+
+/// How often (pairs examined) the traversal asks `stop`.
+const STOP_EVERY: u64 = 4096;
+
+/// Every pair of a left box within `left` (joints 2, 3) and a right box within `right` (joints
+/// 6, 5) that may hold a solution of the invariants, each side halved down to `narrow`
+/// (radians). Once `budget` is spent, pairs not examined then, or once `stop`
+/// says so, are returned as `pending`, none lost.
+pub(super) fn pairs(split: &Split, left: [[f64; 2]; 2], right: [[f64; 2]; 2], narrow: f64, budget: Budget, stop: &dyn Fn() -> bool) -> Pairs {
+    let mut trees = [Tree::new(split, Half::Left, left), Tree::new(split, Half::Right, right)];
+    let mut out = Pairs::default();
+    let mut stack: Vec<[u32; 2]> = vec![[0, 0]];
+    while let Some(pair) = stack.pop() {
+        let spent = out.examined >= budget.pairs || trees.iter().any(|t| t.nodes.len() >= budget.boxes);
+        if spent || (out.examined % STOP_EVERY == 0 && out.examined > 0 && stop()) {
+            stack.push(pair);
+            out.pending = stack.iter().map(|&[a, b]| (trees[0].nodes[a as usize].b, trees[1].nodes[b as usize].b)).collect();
+            break;
+        }
+        out.examined += 1;
+        let (ea, eb) = (&trees[0].nodes[pair[0] as usize].enc, &trees[1].nodes[pair[1] as usize].enc);
+        if (0..INVARIANTS).any(|i| ea[i].hi < eb[i].lo || eb[i].hi < ea[i].lo) {
+            out.discarded += 1;
+            continue;
+        }
+        let (wa, wb) = (trees[0].width(pair[0]), trees[1].width(pair[1]));
+        if wa <= narrow && wb <= narrow {
+            out.leaves.push((trees[0].nodes[pair[0] as usize].b, trees[1].nodes[pair[1] as usize].b));
+            continue;
+        }
+        let side = usize::from(wb > wa);
+        let kids = trees[side].children(pair[side]);
+        // Pushed in reverse: the first half is examined first (a depth-first walk).
+        for &k in kids.iter().rev() {
+            let mut p = pair;
+            p[side] = k;
+            stack.push(p);
+        }
+    }
+    out
+}
