@@ -50,16 +50,18 @@ impl<'a> Tree<'a> {
         let m = b.map(|x| 0.5 * (x[0] + x[1]));
         let at = side_value(self.split, self.half, &m.map(|x| [x, x]), false);
         let dx = [0, 1].map(|k| Iv { lo: b[k][0], hi: b[k][1] }.sub(Iv { lo: m[k], hi: m[k] }));
-        let mut enc = over.inv;
-        for i in 0..INVARIANTS {
+        let enc: [Iv; INVARIANTS] = std::array::from_fn(|i| {
+            let natural = over.inv[i];
             let form = at.inv[i].add(over.cols[0][i].mul(dx[0])).add(over.cols[1][i].mul(dx[1]));
-            // Both enclose every value over the box; where rounding leaves them apart (which
-            // cannot happen to exact enclosures), keep the natural one.
-            let meet = Iv { lo: enc[i].lo.max(form.lo), hi: enc[i].hi.min(form.hi) };
+            // Both enclose every value over the box, so they meet; should rounding ever leave
+            // them apart, the natural one is kept.
+            let meet = Iv { lo: natural.lo.max(form.lo), hi: natural.hi.min(form.hi) };
             if meet.lo <= meet.hi {
-                enc[i] = meet;
+                meet
+            } else {
+                natural
             }
-        }
+        });
         let smear = |k: usize| (0..INVARIANTS).map(|i| over.cols[k][i].lo.abs().max(over.cols[k][i].hi.abs())).sum::<f64>() * (b[k][1] - b[k][0]);
         let (s0, s1) = (smear(0), smear(1));
         let cut = if s0.is_finite() && s1.is_finite() && (s0 > 0.0 || s1 > 0.0) {
@@ -95,13 +97,16 @@ impl<'a> Tree<'a> {
     }
 }
 
-/// Pairs of boxes (joints 2, 3; joints 6, 5) that may hold solutions.
+/// A left box (joints 2, 3) and a right box (joints 6, 5).
+pub(super) type Pair = ([[f64; 2]; 2], [[f64; 2]; 2]);
+
+/// Pairs of boxes that may hold solutions.
 #[derive(Debug, Default)]
 pub(super) struct Pairs {
     /// Pairs with both boxes at most `narrow` wide.
-    pub leaves: Vec<([[f64; 2]; 2], [[f64; 2]; 2])>,
+    pub leaves: Vec<Pair>,
     /// Pairs not examined when the budget ran out or `stop` said so.
-    pub pending: Vec<([[f64; 2]; 2], [[f64; 2]; 2])>,
+    pub pending: Vec<Pair>,
     /// Pairs examined.
     pub examined: u64,
     /// Pairs discarded (their enclosures disjoint in some row).
