@@ -153,7 +153,7 @@ pub fn factors(chain: &Chain6R, q: &[f64; 6]) -> [f64; 3] {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::model::{rounding, urdf};
 
