@@ -15,6 +15,7 @@ pub(crate) mod distances;
 pub(crate) mod linkage;
 pub(crate) mod loops;
 mod merge;
+pub(crate) mod path;
 mod platform;
 pub(crate) mod six;
 pub(crate) mod sweep;
@@ -25,7 +26,8 @@ pub use distances::{DistancesJob, DistancesRequest};
 pub use linkage::{describe_freedom, LinkageAnalysis, SolveJob};
 pub use loops::{all_kinds, analyse_image, image_points, Actuation, ImageAnalysisError, ImageSearch, SingularSets};
 pub use platform::PlatformAnalysis;
-pub use six::{arm_cuspidality, arm_cuspidality_of, chain6, check_path, inverse_kinematics6, ArmCuspidality, ArmIk6, ArmPathCheck, ArmVerdictLine};
+pub use path::{check_path, check_path3, positioning_joints, ArmPathCheck, SingularSet};
+pub use six::{arm_cuspidality, arm_cuspidality_of, chain6, inverse_kinematics6, ArmCuspidality, ArmIk6, ArmVerdictLine};
 pub use sweep::{check_sweep, run_sweep, sweep_task};
 
 use crate::model::Mechanism;

@@ -1563,7 +1563,7 @@ impl State {
         let cancel = AtomicBool::new(false);
         let control = crate::search::Control { limits: crate::search::Limits { timeout: Some(seconds(timeout)), ..Default::default() }, threads: 1, cancel: &cancel };
         match crate::app::check_path(&chain, &waypoints, tolerance, &control) {
-            Ok(found) => convert::path_check_response(&chain, &found),
+            Ok(found) => convert::path_check_response(&found),
             Err(e) => refuse(e.to_string()),
         }
     }
