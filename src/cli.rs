@@ -843,9 +843,10 @@ fn path_check(args: PathCheckArgs) -> Result<()> {
         }
         SingularSetArg::ThreeR => {
             let arm = Arm::load(&mechanism, &options, 0.0).with_context(|| format!("loading {}", args.urdf.display()))?;
-            eprintln!("chain: {}", arm.prepared.choice.reason);
             let points = waypoints(&args, app::positioning_joints(&arm).len())?;
-            app::check_path3(&arm, &points, args.tolerance, &control)?
+            let found = app::check_path3(&arm, &points, args.tolerance, &control)?;
+            eprintln!("chain: {}", arm.prepared.choice.reason);
+            found
         }
     };
     let report = report::six::PathCheckReport::of(&found);

@@ -541,6 +541,12 @@ pub trait Analysis: Send + Sync {
         None
     }
 
+    /// The serial arm whose 3R positioning structure the analysis reads (the 3R path check),
+    /// when it is one.
+    fn positioning_arm(&self) -> Option<std::sync::Arc<Arm>> {
+        None
+    }
+
     /// The `NotAvailable` error for `service`.
     fn not_available(&self, service: Service) -> AnalysisError {
         AnalysisError::NotAvailable { service: service.name(), mechanism: self.mechanism().to_string(), kind: self.kind().name(), reason: self.limitation() }

@@ -439,6 +439,8 @@ pub fn path_check_response(found: &ArmPathCheck) -> PathCheckResponse {
         ok: true,
         message: report.headline(),
         complete: report.counts.not_decided == 0,
+        singular_set: report.singular_set.to_string(),
+        subject: report.subject.clone(),
         joint_names: found.joints.clone(),
         ..Default::default()
     };
