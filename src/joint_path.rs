@@ -303,3 +303,39 @@ impl Segment<'_> {
         Crossing { t: [lo, hi], joints: self.hull(lo, hi), sign_before: before, narrowed }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::atomic::AtomicBool;
+
+    /// `det = (q₀ − 0.3)·(q₁ + 2)`, proven from its interval value on the box.
+    struct Toy;
+
+    impl SignProof for Toy {
+        fn joints(&self) -> usize {
+            2
+        }
+
+        fn prove(&self, b: &[[f64; 2]]) -> Option<Proof> {
+            let d = crate::interval::interval(b[0][0], b[0][1]) - crate::interval::point(0.3);
+            let e = crate::interval::interval(b[1][0], b[1][1]) + crate::interval::point(2.0);
+            let v = d * e;
+            (!v.contains(0.0)).then(|| Proof { sign: v.inf().signum(), min_abs: v.mig(), tight: v.mig() >= 0.25 * v.mag() })
+        }
+    }
+
+    #[test]
+    fn a_sign_change_is_a_crossing_and_a_zero_free_segment_is_clear() {
+        let cancel = AtomicBool::new(false);
+        let control = Control { limits: Default::default(), threads: 1, cancel: &cancel };
+        let w = [vec![0.0, 0.0], vec![1.0, 1.0], vec![2.0, 0.5]];
+        let found = check(&Toy, &w, 1e-10, &control).expect("checks");
+        let SegmentVerdict::Crosses { crossings, undecided } = &found.segments[0] else { panic!("{:?}", found.segments[0]) };
+        assert!(undecided.is_empty() && crossings.len() == 1);
+        assert!(crossings[0].t[0] <= 0.3 && 0.3 <= crossings[0].t[1] && crossings[0].narrowed && crossings[0].sign_before == -1.0, "{crossings:?}");
+        let SegmentVerdict::Clear { sign, min_abs_det, .. } = found.segments[1] else { panic!("{:?}", found.segments[1]) };
+        assert!(sign == 1.0 && min_abs_det > 0.0 && min_abs_det <= 0.7 * 2.5);
+        assert_eq!(check(&Toy, &[vec![0.0, 0.0], vec![1.0]], 1e-9, &control).err(), Some(BadPath("waypoint 2 is not 2 finite numbers".into())));
+    }
+}
