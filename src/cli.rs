@@ -292,8 +292,8 @@ struct PathCheckArgs {
     waypoints_file: Option<PathBuf>,
     /// The singular set to check against: 6r, the six-revolute arm's (det J = 0); 3r, its 3R
     /// positioning structure's (det Df = 0 of the sub-chain and point `singularities` analyses).
-    /// Default: 6r when the arm has six revolute joints and no --lock or --tip-point is given,
-    /// else 3r.
+    /// Default: 6r when a chain of six revolute joints is found from base to tip (as ik6 reads
+    /// it) and no --lock or --tip-point is given, else 3r.
     #[arg(long, value_enum)]
     singular_set: Option<SingularSetArg>,
     /// Radians: crossings are narrowed until the joints' enclosure is this wide.
