@@ -11,7 +11,7 @@
 //! bound below the sampled least `|det Df|`. Bundled arms: the seed's orthogonal 3R robots, UR5
 //! and the CRX fixture (six joints, wrist not spherical: the sub-chain's point is on axis 4).
 
-use linkspace::app::{self, Arm, SingularSet};
+use linkspace::app::{self, Arm, PathSet};
 use linkspace::joint_path::SegmentVerdict;
 use linkspace::manip3r::LoadOptions;
 use linkspace::model::{urdf, JointKind, Mechanism};
@@ -190,7 +190,7 @@ fn segments_through_a_singular_point_cross_there() {
             let Some((x, y, t_star)) = crossing_segment(&reference, &mut rng) else { continue };
             checked += 1;
             let found = app::check_path3(&arm, &[x.clone(), y.clone()], 1e-9, &control()).expect("checks");
-            assert_eq!(found.set, SingularSet::Positioning3R);
+            assert_eq!(found.set, PathSet::Positioning3R);
             let SegmentVerdict::Crosses { crossings, undecided } = &found.check.segments[0] else { panic!("{file} {x:?} -> {y:?} (t* = {t_star}): {:?}", found.check.segments[0]) };
             assert!(undecided.is_empty(), "{file}: {undecided:?}");
             assert_eq!(crossings.len(), 1, "{file}: {crossings:?}");

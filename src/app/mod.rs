@@ -26,7 +26,7 @@ pub use distances::{DistancesJob, DistancesRequest};
 pub use linkage::{describe_freedom, LinkageAnalysis, SolveJob};
 pub use loops::{all_kinds, analyse_image, image_points, Actuation, ImageAnalysisError, ImageSearch, SingularSets};
 pub use platform::PlatformAnalysis;
-pub use path::{check_path, check_path3, positioning_joints, ArmPathCheck, SingularSet};
+pub use path::{check_path, check_path3, positioning_joints, ArmPathCheck, PathSet};
 pub use six::{arm_cuspidality, arm_cuspidality_of, chain6, inverse_kinematics6, ArmCuspidality, ArmIk6, ArmVerdictLine};
 pub use sweep::{check_sweep, run_sweep, sweep_task};
 

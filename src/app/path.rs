@@ -10,7 +10,7 @@ use std::time::Instant;
 
 /// Which singular set a path is checked against.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SingularSet {
+pub enum PathSet {
     /// The six-revolute arm's: `det J = 0` (the arm loses a direction of the tip's motion).
     Arm6R,
     /// The 3R positioning structure's: `det Df = 0` of its half-section map (the analysed point
@@ -18,20 +18,20 @@ pub enum SingularSet {
     Positioning3R,
 }
 
-impl SingularSet {
+impl PathSet {
     /// The set's short name in reports and messages: `6r` or `3r`.
     pub fn name(self) -> &'static str {
         match self {
-            SingularSet::Arm6R => "6r",
-            SingularSet::Positioning3R => "3r",
+            PathSet::Arm6R => "6r",
+            PathSet::Positioning3R => "3r",
         }
     }
 
     /// The determinant whose zeros the set is, as the reasons write it.
     pub fn det(self) -> &'static str {
         match self {
-            SingularSet::Arm6R => "det J",
-            SingularSet::Positioning3R => "det Df",
+            PathSet::Arm6R => "det J",
+            PathSet::Positioning3R => "det Df",
         }
     }
 }
@@ -42,7 +42,7 @@ pub struct ArmPathCheck {
     /// One verdict per segment.
     pub check: PathCheck,
     /// The set checked against.
-    pub set: SingularSet,
+    pub set: PathSet,
     /// What the verdicts concern: the arm or the sub-chain and point, and the determinant.
     pub subject: String,
     /// The arm: base, tip and the joints of the waypoints.
@@ -64,8 +64,8 @@ pub fn check_path(chain: &Chain6R, waypoints: &[[f64; 6]], tolerance: f64, contr
     let arm = format!("{} -> {} ({})", chain.base, chain.tip, chain.joints.join(", "));
     Ok(ArmPathCheck {
         check,
-        set: SingularSet::Arm6R,
-        subject: format!("6R arm {} -> {}: {}", chain.base, chain.tip, SingularSet::Arm6R.det()),
+        set: PathSet::Arm6R,
+        subject: format!("6R arm {} -> {}: {}", chain.base, chain.tip, PathSet::Arm6R.det()),
         arm,
         joints: chain.joints.to_vec(),
         tolerance,
@@ -96,8 +96,8 @@ pub fn check_path3(arm: &Arm, waypoints: &[Vec<f64>], tolerance: f64, control: &
     let check = manip3r::path::check(&arm.chain, theta, joints.len(), waypoints, tolerance, control)?;
     Ok(ArmPathCheck {
         check,
-        set: SingularSet::Positioning3R,
-        subject: format!("{}: {}", choice.scope.subject, SingularSet::Positioning3R.det()),
+        set: PathSet::Positioning3R,
+        subject: format!("{}: {}", choice.scope.subject, PathSet::Positioning3R.det()),
         arm: format!("{} -> {} ({})", choice.base, choice.tip, joints.join(", ")),
         joints,
         tolerance,

@@ -3,7 +3,7 @@
 //! singular set), from `app`'s results.
 
 use super::manip3r::Completeness;
-use crate::app::{ArmCuspidality, ArmIk6, ArmPathCheck, SingularSet};
+use crate::app::{ArmCuspidality, ArmIk6, ArmPathCheck, PathSet};
 use crate::interval::Interval;
 use crate::joint_path::{SegmentVerdict, Span, SpanReason};
 use crate::manip6r::{Chain6R, CuspidalVerdict, MostSolutions};
@@ -335,7 +335,7 @@ impl PathCheckReport {
         let c = &self.counts;
         let mut line = format!(
             "{}: {} segments: {} cross a singularity, {} touch or undecided, {} clear",
-            if self.singular_set == SingularSet::Arm6R.name() { &self.arm } else { &self.subject },
+            if self.singular_set == PathSet::Arm6R.name() { &self.arm } else { &self.subject },
             self.segments.len(),
             c.crosses,
             c.touches_or_undecided,
