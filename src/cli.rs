@@ -151,8 +151,9 @@ enum Command {
     Ik(IkArgs),
     /// Every joint solution of a six-revolute arm for a pose of its tip frame, each certified.
     Ik6(Ik6Args),
-    /// Where a six-revolute arm's joint path (straight segments between waypoints) meets a
-    /// singularity: each segment clear, crossing det J = 0, or touching/undecided, with proofs.
+    /// Where an arm's joint path (straight segments between waypoints) meets a singularity of
+    /// the six-revolute arm (det J = 0) or of its 3R positioning structure (det Df = 0): each
+    /// segment clear, crossing, or touching/undecided, with proofs.
     PathCheck(PathCheckArgs),
     /// Solve a distance problem by Cayley–Menger determinants: a platform in URDF or a JSON file.
     Distances(distances::DistancesArgs),
@@ -276,17 +277,25 @@ struct Ik6Args {
 
 #[derive(clap::Args)]
 struct PathCheckArgs {
-    /// URDF file of an arm with six revolute joints from base to tip (fixed joints merged).
+    /// URDF file of an arm: six revolute joints from base to tip (fixed joints merged) for the
+    /// 6R set; any serial arm with at least three for the 3R set.
     urdf: PathBuf,
     #[command(flatten)]
     chain: ChainArgs,
-    /// The waypoints: "q1;q2;...", each six comma-separated joint values (radians) in the
-    /// order ik6 prints the joints.
+    /// The waypoints: "q1;q2;...", each the joint values (radians) comma-separated: for the 6R
+    /// set the six in the order ik6 prints them; for the 3R set the sub-chain's three, then
+    /// the joints after them on the chain (locked joints left out).
     #[arg(long, value_name = "Q1;Q2;...", allow_hyphen_values = true, conflicts_with = "waypoints_file", required_unless_present = "waypoints_file")]
     waypoints: Option<String>,
-    /// The waypoints as a JSON list of lists of six numbers (radians, joints in ik6's order).
+    /// The waypoints as a JSON list of lists of numbers (radians, joints as for --waypoints).
     #[arg(long, value_name = "FILE")]
     waypoints_file: Option<PathBuf>,
+    /// The singular set to check against: 6r, the six-revolute arm's (det J = 0); 3r, its 3R
+    /// positioning structure's (det Df = 0 of the sub-chain and point `singularities` analyses).
+    /// Default: 6r when a chain of six revolute joints is found from base to tip (as ik6 reads
+    /// it) and no --lock or --tip-point is given, else 3r.
+    #[arg(long, value_enum)]
+    singular_set: Option<SingularSetArg>,
     /// Radians: crossings are narrowed until the joints' enclosure is this wide.
     #[arg(long, default_value_t = 1e-9, allow_hyphen_values = true)]
     tolerance: f64,
@@ -295,6 +304,15 @@ struct PathCheckArgs {
     /// Write the report as JSON here.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
+}
+
+/// `path-check --singular-set`.
+#[derive(Clone, Copy, Debug, PartialEq, clap::ValueEnum)]
+enum SingularSetArg {
+    #[value(name = "6r")]
+    SixR,
+    #[value(name = "3r")]
+    ThreeR,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -782,8 +800,8 @@ fn ik6(args: Ik6Args) -> Result<()> {
     Ok(())
 }
 
-/// The waypoints of `--waypoints` ("q1;q2;...") or `--waypoints-file` (JSON), six values each.
-fn waypoints(args: &PathCheckArgs) -> Result<Vec<[f64; 6]>> {
+/// The waypoints of `--waypoints` ("q1;q2;...") or `--waypoints-file` (JSON), `n` values each.
+fn waypoints(args: &PathCheckArgs, n: usize) -> Result<Vec<Vec<f64>>> {
     let rows: Vec<Vec<f64>> = match (&args.waypoints, &args.waypoints_file) {
         (Some(text), _) => text
             .split(';')
@@ -792,34 +810,52 @@ fn waypoints(args: &PathCheckArgs) -> Result<Vec<[f64; 6]>> {
             .collect::<Result<_>>()?,
         (None, Some(path)) => {
             let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-            serde_json::from_str(&text).with_context(|| format!("{}: expected a JSON list of lists of six numbers", path.display()))?
+            serde_json::from_str(&text).with_context(|| format!("{}: expected a JSON list of lists of numbers", path.display()))?
         }
         (None, None) => bail!("give --waypoints or --waypoints-file"),
     };
-    rows.into_iter()
-        .enumerate()
-        .map(|(k, r)| {
-            let n = r.len();
-            <[f64; 6]>::try_from(r).map_err(|_| anyhow::anyhow!("waypoint {} has {n} joint values: expected 6", k + 1))
-        })
-        .collect()
+    if let Some((k, r)) = rows.iter().enumerate().find(|(_, r)| r.len() != n) {
+        bail!("waypoint {} has {} joint values: expected {n}", k + 1, r.len());
+    }
+    Ok(rows)
 }
 
 fn path_check(args: PathCheckArgs) -> Result<()> {
-    let points = waypoints(&args)?;
     let options = args.chain.options()?;
     let mechanism = load_mechanism(&args.urdf)?;
-    let chain = app::chain6(&mechanism, &options).with_context(|| format!("loading {}", args.urdf.display()))?;
+    let sub_chain_chosen = args.chain.tip_point.is_some() || !args.chain.lock.is_empty();
+    let set = match args.singular_set {
+        Some(set) => set,
+        None if !sub_chain_chosen && app::chain6(&mechanism, &options).is_ok() => SingularSetArg::SixR,
+        None => SingularSetArg::ThreeR,
+    };
     let cancel = AtomicBool::new(false);
     let control = Control { limits: args.limits.limits(1)?, threads: 1, cancel: &cancel };
-    let found = app::check_path(&chain, &points, args.tolerance, &control)?;
-    let report = report::six::PathCheckReport::of(&chain, &found);
+    let found = match set {
+        SingularSetArg::SixR => {
+            if sub_chain_chosen {
+                bail!("--lock and --tip-point choose a 3R sub-chain and its point: they apply with --singular-set 3r");
+            }
+            let points = waypoints(&args, 6)?;
+            let chain = app::chain6(&mechanism, &options).with_context(|| format!("loading {}", args.urdf.display()))?;
+            let points: Vec<[f64; 6]> = points.into_iter().map(|w| <[f64; 6]>::try_from(w).expect("invariant: six values checked")).collect();
+            app::check_path(&chain, &points, args.tolerance, &control)?
+        }
+        SingularSetArg::ThreeR => {
+            let arm = Arm::load(&mechanism, &options, 0.0).with_context(|| format!("loading {}", args.urdf.display()))?;
+            let points = waypoints(&args, app::positioning_joints(&arm).len())?;
+            let found = app::check_path3(&arm, &points, args.tolerance, &control)?;
+            eprintln!("chain: {}", arm.prepared.choice.reason);
+            found
+        }
+    };
+    let report = report::six::PathCheckReport::of(&found);
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}", report.headline()).ok();
     for (k, s) in report.segments.iter().enumerate() {
         writeln!(out, "  segment {} ({} -> {}): {}: {}", k + 1, k + 1, k + 2, s.verdict, s.reason).ok();
         for c in &s.crossings {
-            let text: Vec<String> = chain.joints.iter().map(|n| format!("{n} in [{:.9}, {:.9}]", c.joints[n][0], c.joints[n][1])).collect();
+            let text: Vec<String> = report.joints.iter().map(|n| format!("{n} in [{:.9}, {:.9}]", c.joints[n][0], c.joints[n][1])).collect();
             writeln!(out, "    crossing at t in [{:.12}, {:.12}]: {}", c.t[0], c.t[1], text.join(", ")).ok();
         }
     }

@@ -29,6 +29,7 @@ pub mod app;
 pub mod contract;
 pub mod distances;
 pub mod interval;
+pub mod joint_path;
 mod lp;
 pub mod manip3r;
 pub mod manip6r;

@@ -360,6 +360,24 @@ fn path_check_counts_crossing_touching_and_clear_segments() {
     assert_clear_error(&["path-check", &ur5, "--waypoints", "0,0,0,0,0;1,1,1,1,1,1"], "waypoint 1 has 5 joint values: expected 6");
 }
 
+/// `path-check --singular-set`: a 3R arm is checked against det Df by default, a six-joint arm
+/// against det J unless 3r is asked for (then over its six joints, det Df of its sub-chain);
+/// the 6R set of a 3R arm, or a sub-chain option with it, is one clear line.
+#[test]
+fn path_check_names_the_singular_set() {
+    let ur5 = format!("{}/urdf/ur5.urdf", env!("CARGO_MANIFEST_DIR"));
+    let (ok, out, err) = run(&["path-check", &fixture("orthogonal_3r_b.urdf"), "--waypoints", "0.1,0.2,0.3;0.2,0.4,0.6"]);
+    assert!(ok, "{err}");
+    assert!(out.starts_with("3R arm 'orthogonal_3r_b' (joint1, joint2, joint3), point tool@0,0,0: det Df: 1 segments: 1 cross a singularity"), "{out}");
+    let (ok, out, err) = run(&["path-check", &ur5, "--singular-set", "3r", "--waypoints", "0.3,-1.0,1.2,-0.5,-0.4,0.7;0.5,-1.2,-1.4,-0.3,0.6,0.2"]);
+    assert!(ok, "{err}");
+    assert!(out.starts_with("3R sub-chain joints 1-3 (joint_1, joint_2, joint_3) of 'ur5', point link_3@"), "{out}");
+    assert!(out.contains("det Df proven to change sign"), "{out}");
+    assert_clear_error(&["path-check", &fixture("orthogonal_3r_b.urdf"), "--singular-set", "6r", "--waypoints", "0,0,0,0,0,0;1,1,1,1,1,1"], "not a 6R chain");
+    assert_clear_error(&["path-check", &ur5, "--singular-set", "6r", "--lock", "joint_6=0", "--waypoints", "0,0,0,0,0,0;1,1,1,1,1,1"], "they apply with --singular-set 3r");
+    assert_clear_error(&["path-check", &fixture("orthogonal_3r_b.urdf"), "--waypoints", "0,0,0,0,0,0;1,1,1,1,1,1"], "waypoint 1 has 6 joint values: expected 3");
+}
+
 #[test]
 fn ik_reports_every_solution() {
     let (ok, out, err) = run(&["ik", &fixture("orthogonal_3r_e.urdf"), "--point", "1.3,0.2"]);

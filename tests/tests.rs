@@ -45,3 +45,6 @@ mod topics;
 /// Six-revolute arms whole: certified IK against forward kinematics and a closed form, and
 /// the whole-arm cuspidality witness re-checked in `f64`.
 mod six_r;
+/// Joint paths against a 3R positioning structure's singular set: crossings through singular
+/// points and clear segments from an `f64` forward-kinematics reference.
+mod path_check_3r;

@@ -1603,3 +1603,44 @@ fn six_joint_arms_answer_inverse_kinematics6_and_path_check() {
     let report = &r[4]["received"][0];
     assert_eq!(report["arm_cuspidality"], crx_ref["arm_cuspidality"]["verdict"], "{}", report["arm_cuspidality_reason"]);
 }
+
+/// path_check on a 3R arm checks its positioning structure's det Df (the default for an arm
+/// without six revolute joints), as `path-check` does: verdict, reason, crossing, set and
+/// subject; asking for the 6R set or an unknown one is refused in one line.
+#[test]
+fn three_joint_arms_answer_path_check_against_det_df() {
+    let Some(python) = python() else { return };
+    let domain = 63;
+    let b = format!("{ROOT}/urdf/orthogonal_3r_b.urdf");
+    let mut node = Node::start(domain, &[&b]);
+    node.wait_for(&["orthogonal_3r_b: published singularities"], Duration::from_secs(180));
+    let (from, to) = ([0.1, 0.2, 0.3], [0.2, 0.4, 0.6]);
+    let waypoints = format!("{};{}", from.map(|x| x.to_string()).join(","), to.map(|x| x.to_string()).join(","));
+    let want = cli_json("path-check", &[&b, "--waypoints", &waypoints]);
+    let trajectory = json!({"joint_names": ["joint1", "joint2", "joint3"], "points": [{"positions": from}, {"positions": to}]});
+    let script = json!([
+        call("path_check", "PathCheck", json!({"mechanism": "orthogonal_3r_b", "trajectory": trajectory})),
+        call("path_check", "PathCheck", json!({"mechanism": "orthogonal_3r_b", "trajectory": trajectory, "singular_set": "6r"})),
+        call("path_check", "PathCheck", json!({"mechanism": "orthogonal_3r_b", "trajectory": trajectory, "singular_set": "4r"})),
+    ]);
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("services-3r-path-{}.json", std::process::id()));
+    std::fs::write(&path, serde_json::to_string(&script).expect("json")).expect("script written");
+    let got = py(python, domain, "tests/ros_client.py", &["services", "--script", path.to_str().expect("utf-8")], Duration::from_secs(180));
+    let _ = std::fs::remove_file(&path);
+    let r = got["results"].as_array().expect("results");
+    for (k, x) in r.iter().enumerate() {
+        assert!(x.get("error").is_none(), "step {k}: {x}\nnode log:\n{}", node.log());
+    }
+    let segment = &want["segments"][0];
+    assert_eq!((want["singular_set"].clone(), segment["verdict"].clone()), (json!("3r"), json!("crosses")), "{want}");
+    assert_eq!((r[0]["ok"].clone(), r[0]["singular_set"].clone(), r[0]["subject"].clone()), (json!(true), json!("3r"), want["subject"].clone()), "{}", r[0]);
+    assert_eq!(r[0]["verdicts"], json!(["crosses"]));
+    assert_eq!(r[0]["reasons"][0], segment["reason"]);
+    let t = &segment["crossings"][0]["t"];
+    assert_eq!((r[0]["crossing_t"][0]["lower"].as_f64(), r[0]["crossing_t"][0]["upper"].as_f64()), (t[0].as_f64(), t[1].as_f64()));
+    assert_eq!(r[0]["crossing_joints"].as_array().map(Vec::len), Some(3));
+    assert_eq!(r[1]["ok"], json!(false));
+    assert!(r[1]["message"].as_str().expect("message").contains("is not an arm with six revolute joints"), "{}", r[1]);
+    assert_eq!(r[2]["ok"], json!(false));
+    assert!(r[2]["message"].as_str().expect("message").contains("singular_set must be \"6r\", \"3r\" or empty"), "{}", r[2]);
+}

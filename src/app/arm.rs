@@ -327,6 +327,10 @@ impl Analysis for Manip3rAnalysis {
         self.six.clone()
     }
 
+    fn positioning_arm(&self) -> Option<Arc<Arm>> {
+        Some(self.arm.clone())
+    }
+
     fn classify(&self, values: &[f64], _cspace: Option<&BoxSetResult>, _singular: Option<&SingularityResult>) -> Result<Classification, AnalysisError> {
         let c = &self.cover;
         let (t2, t3) = (values[1], values[2]);

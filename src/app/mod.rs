@@ -15,6 +15,7 @@ pub(crate) mod distances;
 pub(crate) mod linkage;
 pub(crate) mod loops;
 mod merge;
+pub(crate) mod path;
 mod platform;
 pub(crate) mod six;
 pub(crate) mod sweep;
@@ -25,7 +26,8 @@ pub use distances::{DistancesJob, DistancesRequest};
 pub use linkage::{describe_freedom, LinkageAnalysis, SolveJob};
 pub use loops::{all_kinds, analyse_image, image_points, Actuation, ImageAnalysisError, ImageSearch, SingularSets};
 pub use platform::PlatformAnalysis;
-pub use six::{arm_cuspidality, arm_cuspidality_of, chain6, check_path, inverse_kinematics6, ArmCuspidality, ArmIk6, ArmPathCheck, ArmVerdictLine};
+pub use path::{check_path, check_path3, positioning_joints, ArmPathCheck, PathSet};
+pub use six::{arm_cuspidality, arm_cuspidality_of, chain6, inverse_kinematics6, ArmCuspidality, ArmIk6, ArmVerdictLine};
 pub use sweep::{check_sweep, run_sweep, sweep_task};
 
 use crate::model::Mechanism;
@@ -536,6 +538,12 @@ pub trait Analysis: Send + Sync {
     /// The arm's six revolute joints base to tip, when it has exactly six (the 6R services:
     /// `inverse_kinematics6`, `check_path`).
     fn chain6(&self) -> Option<std::sync::Arc<crate::manip6r::Chain6R>> {
+        None
+    }
+
+    /// The serial arm whose 3R positioning structure the analysis reads (the 3R path check),
+    /// when it is one.
+    fn positioning_arm(&self) -> Option<std::sync::Arc<Arm>> {
         None
     }
 

@@ -3,7 +3,7 @@
 
 use super::arm::Arm;
 use crate::manip3r::LoadOptions;
-use crate::manip6r::{cuspidal, ik, path, three_parallel, Chain6R, CuspidalVerdict, Ik6Solutions, Manip6rError, MostSolutions, PathCheck, PoseInput, SearchOutcome, ThreeParallel};
+use crate::manip6r::{cuspidal, ik, three_parallel, Chain6R, CuspidalVerdict, Ik6Solutions, Manip6rError, MostSolutions, PoseInput, SearchOutcome, ThreeParallel};
 use crate::model::{rounding, Mechanism};
 use crate::search::Control;
 use std::time::{Duration, Instant};
@@ -47,25 +47,6 @@ pub fn inverse_kinematics6(chain: &Chain6R, pose: PoseInput, precision: f64, con
     let target = pose.target()?;
     let solutions = ik::solve(chain, &target, precision, control)?;
     Ok(ArmIk6 { pose, solutions, seconds: start.elapsed().as_secs_f64() })
-}
-
-/// What `path-check` found.
-#[derive(Clone, Debug)]
-pub struct ArmPathCheck {
-    /// One verdict per segment.
-    pub check: PathCheck,
-    /// The tolerance (radians) crossings were narrowed to.
-    pub tolerance: f64,
-    /// Wall time.
-    pub seconds: f64,
-}
-
-/// Decides each segment of the joint path through `waypoints` (joints in `chain.joints`
-/// order, radians): clear, crossing a singularity (narrowed to `tolerance`), or undecided.
-pub fn check_path(chain: &Chain6R, waypoints: &[[f64; 6]], tolerance: f64, control: &Control) -> Result<ArmPathCheck, Manip6rError> {
-    let start = Instant::now();
-    let check = path::check(chain, waypoints, tolerance, control)?;
-    Ok(ArmPathCheck { check, tolerance, seconds: start.elapsed().as_secs_f64() })
 }
 
 /// The whole-arm cuspidality verdict of a six-joint arm.

@@ -31,6 +31,7 @@ pub(crate) mod limits;
 pub(crate) mod map;
 pub(crate) mod motion;
 pub mod nodes;
+pub mod path;
 pub(crate) mod records;
 pub(crate) mod select;
 pub(crate) mod taylor;
@@ -77,6 +78,9 @@ pub enum Manip3rError {
     /// The requested precision is not in (0, 1).
     #[error("precision must be a number in (0, 1), got {0}")]
     BadPrecision(f64),
+    /// A joint path cannot be checked (too few waypoints, a bad number or tolerance).
+    #[error("bad path: {0}")]
+    BadPath(String),
     /// The requested uncertainty is negative or not finite.
     #[error("uncertainty must be a finite number >= 0, got {0}")]
     BadUncertainty(f64),

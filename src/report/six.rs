@@ -1,10 +1,12 @@
 //! The JSON of `linkspace ik6` and the `arm_cuspidality` section of `singularities` for
-//! six-joint arms, and of `path-check`, from `app`'s results.
+//! six-joint arms, and of `path-check` (against the 6R arm's or a 3R positioning structure's
+//! singular set), from `app`'s results.
 
 use super::manip3r::Completeness;
-use crate::app::{ArmCuspidality, ArmIk6, ArmPathCheck};
+use crate::app::{ArmCuspidality, ArmIk6, ArmPathCheck, PathSet};
 use crate::interval::Interval;
-use crate::manip6r::{Chain6R, CuspidalVerdict, MostSolutions, SegmentVerdict, Span, SpanReason};
+use crate::joint_path::{SegmentVerdict, Span, SpanReason};
+use crate::manip6r::{Chain6R, CuspidalVerdict, MostSolutions};
 use crate::search::Incompleteness;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -155,9 +157,15 @@ impl ArmCuspidalityReport {
 /// What `linkspace path-check --json` writes.
 #[derive(Clone, Debug, Serialize)]
 pub struct PathCheckReport {
-    /// The arm: base, tip and its six joints.
+    /// The arm: base, tip and the joints of the waypoints.
     pub arm: String,
-    /// The six joints, in the order of the waypoints' values.
+    /// The singular set checked against: `6r` (the six-revolute arm's, det J = 0) or `3r` (its
+    /// 3R positioning structure's, det Df = 0).
+    pub singular_set: &'static str,
+    /// What the verdicts concern: the arm, or the 3R sub-chain and its point, and the
+    /// determinant (`det J` or `det Df`; "det" in the fields below).
+    pub subject: String,
+    /// The joints, in the order of the waypoints' values.
     pub joints: Vec<String>,
     /// Radians: the width crossings were narrowed to (joint space).
     pub tolerance: f64,
@@ -172,11 +180,11 @@ pub struct PathCheckReport {
 /// Segments by verdict.
 #[derive(Clone, Copy, Debug, Default, Serialize, PartialEq, Eq)]
 pub struct PathCounts {
-    /// det J proven nonzero throughout.
+    /// det proven nonzero throughout.
     pub clear: usize,
-    /// A sign change of det J proven.
+    /// A sign change of det proven.
     pub crosses: usize,
-    /// det J may vanish, no sign change proven.
+    /// det may vanish, no sign change proven.
     pub touches_or_undecided: usize,
     /// Not decided (a limit stopped the run).
     pub not_decided: usize,
@@ -186,41 +194,41 @@ pub struct PathCounts {
 #[derive(Clone, Debug, Serialize)]
 pub struct SegmentRecord {
     /// The segment's start and end waypoints (radians, joints in order).
-    pub from: [f64; 6],
+    pub from: Vec<f64>,
     /// See `from`.
-    pub to: [f64; 6],
+    pub to: Vec<f64>,
     /// `clear`, `crosses`, `touches_or_undecided` or `not_decided`.
     pub verdict: &'static str,
     /// Why, in one line.
     pub reason: String,
-    /// For `clear`: the sign of det J on the segment.
+    /// For `clear`: the sign of det on the segment.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub det_sign: Option<f64>,
-    /// For `clear`: a proven lower bound of |det J| on the segment.
+    /// For `clear`: a proven lower bound of |det| on the segment.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub min_abs_det: Option<f64>,
     /// For `crosses`: each proven sign change.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub crossings: Vec<CrossingRecord>,
-    /// Stretches where det J may vanish without a proven sign change.
+    /// Stretches where det may vanish without a proven sign change.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub undecided: Vec<SpanRecord>,
 }
 
-/// A proven sign change of det J on a segment.
+/// A proven sign change of det on a segment.
 #[derive(Clone, Debug, Serialize)]
 pub struct CrossingRecord {
     /// Enclosure [t_lo, t_hi] of the segment parameter (0 at `from`, 1 at `to`).
     pub t: [f64; 2],
     /// The joints over it: joint name → [lo, hi].
     pub joints: JointBoxes,
-    /// The sign of det J before the crossing.
+    /// The sign of det before the crossing.
     pub sign_before: f64,
     /// Whether the enclosure reached the tolerance.
     pub narrowed: bool,
 }
 
-/// A stretch where det J may vanish.
+/// A stretch where det may vanish.
 #[derive(Clone, Debug, Serialize)]
 pub struct SpanRecord {
     /// The parameter's range.
@@ -231,8 +239,8 @@ pub struct SpanRecord {
     pub reason: &'static str,
 }
 
-fn joint_bounds(chain: &Chain6R, b: &[[f64; 2]; 6]) -> JointBoxes {
-    chain.joints.iter().zip(b).map(|(n, x)| (n.clone(), *x)).collect()
+fn joint_bounds(joints: &[String], b: &[[f64; 2]]) -> JointBoxes {
+    joints.iter().zip(b).map(|(n, x)| (n.clone(), *x)).collect()
 }
 
 /// The name of a span's reason in reports and messages.
@@ -256,9 +264,11 @@ pub fn verdict_name(v: &SegmentVerdict) -> &'static str {
 
 impl PathCheckReport {
     /// The report of a check.
-    pub fn of(chain: &Chain6R, found: &ArmPathCheck) -> Self {
+    pub fn of(found: &ArmPathCheck) -> Self {
         let mut counts = PathCounts::default();
-        let spans = |s: &[Span]| -> Vec<SpanRecord> { s.iter().map(|s| SpanRecord { t: s.t, joints: joint_bounds(chain, &s.joints), reason: span_reason(s.reason) }).collect() };
+        let names = &found.joints;
+        let det = found.set.det();
+        let spans = |s: &[Span]| -> Vec<SpanRecord> { s.iter().map(|s| SpanRecord { t: s.t, joints: joint_bounds(names, &s.joints), reason: span_reason(s.reason) }).collect() };
         let w = &found.check.waypoints;
         let segments = found
             .check
@@ -267,8 +277,8 @@ impl PathCheckReport {
             .enumerate()
             .map(|(k, v)| {
                 let mut record = SegmentRecord {
-                    from: w[k],
-                    to: w[k + 1],
+                    from: w[k].clone(),
+                    to: w[k + 1].clone(),
                     verdict: verdict_name(v),
                     reason: String::new(),
                     det_sign: None,
@@ -279,24 +289,24 @@ impl PathCheckReport {
                 match v {
                     SegmentVerdict::Clear { sign, min_abs_det, pieces } => {
                         counts.clear += 1;
-                        record.reason = format!("det J proven {} on the whole segment ({pieces} pieces), |det J| >= {min_abs_det:.3e}", if *sign > 0.0 { "positive" } else { "negative" });
+                        record.reason = format!("{det} proven {} on the whole segment ({pieces} pieces), |{det}| >= {min_abs_det:.3e}", if *sign > 0.0 { "positive" } else { "negative" });
                         record.det_sign = Some(*sign);
                         record.min_abs_det = Some(*min_abs_det);
                     }
                     SegmentVerdict::Crosses { crossings, undecided } => {
                         counts.crosses += 1;
                         let at: Vec<String> = crossings.iter().map(|c| format!("t in [{:.12}, {:.12}]", c.t[0], c.t[1])).collect();
-                        record.reason = format!("det J proven to change sign: {}", at.join(", "));
+                        record.reason = format!("{det} proven to change sign: {}", at.join(", "));
                         record.crossings = crossings
                             .iter()
-                            .map(|c| CrossingRecord { t: c.t, joints: joint_bounds(chain, &c.joints), sign_before: c.sign_before, narrowed: c.narrowed })
+                            .map(|c| CrossingRecord { t: c.t, joints: joint_bounds(names, &c.joints), sign_before: c.sign_before, narrowed: c.narrowed })
                             .collect();
                         record.undecided = spans(undecided);
                     }
                     SegmentVerdict::Undecided { spans: s } => {
                         counts.touches_or_undecided += 1;
                         let at: Vec<String> = s.iter().map(|s| format!("t in [{:.6}, {:.6}] ({})", s.t[0], s.t[1], span_reason(s.reason))).collect();
-                        record.reason = format!("det J may vanish, no sign change proven: {}", at.join(", "));
+                        record.reason = format!("{det} may vanish, no sign change proven: {}", at.join(", "));
                         record.undecided = spans(s);
                     }
                     SegmentVerdict::Stopped(limit) => {
@@ -308,8 +318,10 @@ impl PathCheckReport {
             })
             .collect();
         PathCheckReport {
-            arm: format!("{} -> {} ({})", chain.base, chain.tip, chain.joints.join(", ")),
-            joints: chain.joints.to_vec(),
+            arm: found.arm.clone(),
+            singular_set: found.set.name(),
+            subject: found.subject.clone(),
+            joints: names.clone(),
             tolerance: found.tolerance,
             counts,
             segments,
@@ -317,12 +329,13 @@ impl PathCheckReport {
         }
     }
 
-    /// The one-line summary: the arm and how many segments cross, touch or are clear.
+    /// The one-line summary: the arm (the sub-chain, its point and det Df for a 3R check) and
+    /// how many segments cross, touch or are clear.
     pub fn headline(&self) -> String {
         let c = &self.counts;
         let mut line = format!(
             "{}: {} segments: {} cross a singularity, {} touch or undecided, {} clear",
-            self.arm,
+            if self.singular_set == PathSet::Arm6R.name() { &self.arm } else { &self.subject },
             self.segments.len(),
             c.crosses,
             c.touches_or_undecided,

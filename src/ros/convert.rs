@@ -433,13 +433,15 @@ pub fn ik6_response(chain: &Chain6R, found: &ArmIk6) -> InverseKinematics6Respon
 }
 
 /// The reply to a path check: the verdicts and reasons of `linkspace path-check`.
-pub fn path_check_response(chain: &Chain6R, found: &ArmPathCheck) -> PathCheckResponse {
-    let report = crate::report::six::PathCheckReport::of(chain, found);
+pub fn path_check_response(found: &ArmPathCheck) -> PathCheckResponse {
+    let report = crate::report::six::PathCheckReport::of(found);
     let mut reply = PathCheckResponse {
         ok: true,
         message: report.headline(),
         complete: report.counts.not_decided == 0,
-        joint_names: chain.joints.to_vec(),
+        singular_set: report.singular_set.to_string(),
+        subject: report.subject.clone(),
+        joint_names: found.joints.clone(),
         ..Default::default()
     };
     for (k, v) in found.check.segments.iter().enumerate() {

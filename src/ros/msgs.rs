@@ -336,7 +336,7 @@ mirror! {
 }
 mirror! {
     /// linkspace_msgs/PathCheck request
-    PathCheckRequest { mechanism: String, trajectory: JointTrajectory, tolerance: f64, timeout: f64 }
+    PathCheckRequest { mechanism: String, trajectory: JointTrajectory, tolerance: f64, timeout: f64, singular_set: String }
 }
 mirror! {
     /// linkspace_msgs/PathCheck response
@@ -344,6 +344,8 @@ mirror! {
         ok: bool,
         message: String,
         complete: bool,
+        singular_set: String,
+        subject: String,
         joint_names: Vec<String>,
         verdicts: Vec<String>,
         reasons: Vec<String>,

@@ -1536,24 +1536,40 @@ impl State {
     /// within the request's timeout (at most the node's longest wait).
     fn path_check(&mut self, q: PathCheckRequest) -> PathCheckResponse {
         let refuse = |message: String| PathCheckResponse { ok: false, message, ..Default::default() };
-        let chain = match self.six_joint_arm(&q.mechanism, "path_check") {
-            Ok(c) => c,
+        // The set asked for, and what checks it: the 6R chain, or the arm's 3R positioning structure.
+        let (six, positioning) = match self.mechanism(&q.mechanism) {
+            Ok(k) => {
+                let a = &self.mechanisms[k].loaded.analysis;
+                (a.chain6(), a.positioning_arm())
+            }
             Err(e) => return refuse(e),
         };
+        let name = convert::bounded(&q.mechanism, convert::ECHO_NAME);
+        let set = match (q.singular_set.as_str(), six, positioning) {
+            ("6r", Some(chain), _) | ("", Some(chain), _) => Ok(chain),
+            ("3r", _, Some(arm)) | ("", None, Some(arm)) => Err(arm),
+            ("6r", None, _) | ("", None, None) => return refuse(format!("path_check: '{name}' is not an arm with six revolute joints from base to tip")),
+            ("3r", _, None) => return refuse(format!("path_check: '{name}' has no 3R positioning structure (not a serial arm)")),
+            (other, _, _) => return refuse(format!("singular_set must be \"6r\", \"3r\" or empty, got \"{}\"", convert::bounded(other, convert::ECHO_NAME))),
+        };
+        let joints: Vec<String> = match &set {
+            Ok(chain) => chain.joints.to_vec(),
+            Err(arm) => crate::app::positioning_joints(arm),
+        };
         let t = &q.trajectory;
-        let mut column = [0usize; 6];
-        for (k, joint) in chain.joints.iter().enumerate() {
+        let mut column = vec![0usize; joints.len()];
+        for (k, joint) in joints.iter().enumerate() {
             match t.joint_names.iter().position(|n| n == joint) {
                 Some(i) => column[k] = i,
-                None => return refuse(format!("the trajectory has no joint '{joint}' (the arm's joints: {}; given: {})", chain.joints.join(", "), convert::bounded(&t.joint_names.join(", "), convert::ECHO_MESSAGE))),
+                None => return refuse(format!("the trajectory has no joint '{joint}' (the arm's joints: {}; given: {})", joints.join(", "), convert::bounded(&t.joint_names.join(", "), convert::ECHO_MESSAGE))),
             }
         }
-        let mut waypoints = Vec::with_capacity(t.points.len());
+        let mut waypoints: Vec<Vec<f64>> = Vec::with_capacity(t.points.len());
         for (k, point) in t.points.iter().enumerate() {
             if point.positions.len() != t.joint_names.len() {
                 return refuse(format!("point {k} has {} positions for {} joint names", point.positions.len(), t.joint_names.len()));
             }
-            waypoints.push(column.map(|i| point.positions[i]));
+            waypoints.push(column.iter().map(|&i| point.positions[i]).collect());
         }
         let tolerance = if q.tolerance == 0.0 { 1e-9 } else { q.tolerance };
         if !(q.timeout.is_finite() && q.timeout >= 0.0) {
@@ -1562,9 +1578,16 @@ impl State {
         let timeout = if q.timeout == 0.0 { self.limits.max_wait } else { q.timeout.min(self.limits.max_wait) };
         let cancel = AtomicBool::new(false);
         let control = crate::search::Control { limits: crate::search::Limits { timeout: Some(seconds(timeout)), ..Default::default() }, threads: 1, cancel: &cancel };
-        match crate::app::check_path(&chain, &waypoints, tolerance, &control) {
-            Ok(found) => convert::path_check_response(&chain, &found),
-            Err(e) => refuse(e.to_string()),
+        let found = match set {
+            Ok(chain) => {
+                let six: Vec<[f64; 6]> = waypoints.into_iter().map(|w| <[f64; 6]>::try_from(w).expect("invariant: one value per joint of six")).collect();
+                crate::app::check_path(&chain, &six, tolerance, &control).map_err(|e| e.to_string())
+            }
+            Err(arm) => crate::app::check_path3(&arm, &waypoints, tolerance, &control).map_err(|e| e.to_string()),
+        };
+        match found {
+            Ok(found) => convert::path_check_response(&found),
+            Err(e) => refuse(e),
         }
     }
 
