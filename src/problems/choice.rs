@@ -80,7 +80,7 @@ impl Linkage {
         Self::build_with(mechanism, choice, fixed, traces, true)
     }
 
-    /// As `build`, among the models in joint coordinates only (`--model pose` refused, `auto`
+    /// As `build`, among the models in joint coordinates only (`--model pose` and `distances` refused, `auto`
     /// planar or spatial): the singular-set systems differentiate joint coordinates.
     pub fn build_in_joints(mechanism: &crate::model::Mechanism, choice: ModelChoice, fixed: &[(String, f64)], traces: &[TracedPoint]) -> Result<Self, LinkageError> {
         Self::build_with(mechanism, choice, fixed, traces, false)
