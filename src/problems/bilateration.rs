@@ -276,20 +276,37 @@ impl BilaterationProblem {
             row.squared(r[i][0], -one);
             w.add(row);
         }
-        // The platform triangle's sides: r(Pi, B0) + r(Pj, B0) − 2 x_i·x_j = r(Pi, Pj).
-        for i in 0..3 {
-            for j in i + 1..3 {
+        // The platform triangle's sides d1 = x1 − x0, d2 = x2 − x0 (derived, each component at
+        // most the side's length): |d1|² = r(P0, P1), |d2|² = r(P0, P2), and the third side
+        // |d1 − d2|² = r(P1, P2) as d1·d2 = (r(P0, P1) + r(P0, P2) − r(P1, P2)) / 2.
+        let sides: [[VarId; 3]; 2] = [1, 2].map(|i| {
+            let length = pside(0, i).sqrt().sup();
+            [0, 1, 2].map(|c| {
+                let dom = (w.system.vars[x[i][c]].domain - w.system.vars[x[0][c]].domain).intersection(interval(-length, length));
+                let d = w.system.add_var(format!("d{i}{}", c + 1), VarRole::Derived, dom);
                 let mut row = Row::new();
-                row.squared(r[i][0], one);
-                row.squared(r[j][0], one);
-                for k in 0..3 {
-                    row.product(x[i][k], x[j][k], -two);
-                }
-                row.constant -= pside(i, j);
+                row.var(d, one);
+                row.var(x[i][c], -one);
+                row.var(x[0][c], one);
                 w.add(row);
+                d
+            })
+        });
+        for (i, side) in sides.iter().enumerate() {
+            let mut row = Row::new();
+            for &d in side {
+                row.product(d, d, one);
             }
+            row.constant -= pside(0, i + 1);
+            w.add(row);
         }
-        // The platform triangle's normal n = (x1 − x0) × (x2 − x0), in the base triangle's frame.
+        let mut row = Row::new();
+        for c in 0..3 {
+            row.product(sides[0][c], sides[1][c], one);
+        }
+        row.constant -= (pside(0, 1) + pside(0, 2) - pside(1, 2)) / two;
+        w.add(row);
+        // The platform triangle's normal n = d1 × d2, in the base triangle's frame.
         let (qa, qb) = (sub(&top[1], &top[0]), sub(&top[2], &top[0]));
         let m_normal = cross(&qa, &qb);
         let m2 = dot(&m_normal, &m_normal);
@@ -299,13 +316,8 @@ impl BilaterationProblem {
             let (p, q) = ((c + 1) % 3, (c + 2) % 3);
             let mut row = Row::new();
             row.var(normal[c], one);
-            // −[(x1p − x0p)(x2q − x0q) − (x1q − x0q)(x2p − x0p)]
-            for (sign, (u, v)) in [(-one, (p, q)), (one, (q, p))] {
-                row.product(x[1][u], x[2][v], sign);
-                row.product(x[1][u], x[0][v], -sign);
-                row.product(x[0][u], x[2][v], -sign);
-                row.product(x[0][u], x[0][v], sign);
-            }
+            row.product(sides[0][p], sides[1][q], -one);
+            row.product(sides[0][q], sides[1][p], one);
             w.add(row);
         }
         // The other legs, by bilateration from the platform triangle.
