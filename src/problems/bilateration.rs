@@ -277,8 +277,7 @@ impl BilaterationProblem {
             w.add(row);
         }
         // The platform triangle's sides d1 = x1 − x0, d2 = x2 − x0 (derived, each component at
-        // most the side's length): |d1|² = r(P0, P1), |d2|² = r(P0, P2), and the third side
-        // |d1 − d2|² = r(P1, P2) as d1·d2 = (r(P0, P1) + r(P0, P2) − r(P1, P2)) / 2.
+        // most the side's length).
         let sides: [[VarId; 3]; 2] = [1, 2].map(|i| {
             let length = pside(0, i).sqrt().sup();
             [0, 1, 2].map(|c| {
@@ -292,20 +291,19 @@ impl BilaterationProblem {
                 d
             })
         });
-        for (i, side) in sides.iter().enumerate() {
-            let mut row = Row::new();
-            for &d in side {
-                row.product(d, d, one);
+        // The sides' rows on the frame points: r(Pi, B0) + r(Pj, B0) − 2 x_i·x_j = r(Pi, Pj).
+        for i in 0..3 {
+            for j in i + 1..3 {
+                let mut row = Row::new();
+                row.squared(r[i][0], one);
+                row.squared(r[j][0], one);
+                for k in 0..3 {
+                    row.product(x[i][k], x[j][k], -two);
+                }
+                row.constant -= pside(i, j);
+                w.add(row);
             }
-            row.constant -= pside(0, i + 1);
-            w.add(row);
         }
-        let mut row = Row::new();
-        for c in 0..3 {
-            row.product(sides[0][c], sides[1][c], one);
-        }
-        row.constant -= (pside(0, 1) + pside(0, 2) - pside(1, 2)) / two;
-        w.add(row);
         // The platform triangle's normal n = d1 × d2, in the base triangle's frame.
         let (qa, qb) = (sub(&top[1], &top[0]), sub(&top[2], &top[0]));
         let m_normal = cross(&qa, &qb);
