@@ -276,10 +276,10 @@ impl BilaterationProblem {
         let x = coordinates;
         let pside = |i: usize, j: usize| dot(&sub(&top[i], &top[j]), &sub(&top[i], &top[j]));
         // Tetrahedra B0 B1 B2 Pi (Cayley–Menger): |x_i|² = r(Pi, B0).
-        for i in 0..3 {
+        for (i, xi) in x.iter().enumerate() {
             let mut row = Row::new();
-            for k in 0..3 {
-                row.product(x[i][k], x[i][k], one);
+            for &v in xi {
+                row.product(v, v, one);
             }
             row.squared(r[i][0], -one);
             w.add(row);
@@ -305,8 +305,8 @@ impl BilaterationProblem {
                 let mut row = Row::new();
                 row.squared(r[i][0], one);
                 row.squared(r[j][0], one);
-                for k in 0..3 {
-                    row.product(x[i][k], x[j][k], -two);
+                for (&u, &v) in x[i].iter().zip(&x[j]) {
+                    row.product(u, v, -two);
                 }
                 row.constant -= pside(i, j);
                 w.add(row);
@@ -318,10 +318,10 @@ impl BilaterationProblem {
         let m2 = dot(&m_normal, &m_normal);
         let m_len = m2.sqrt().sup();
         let normal = ["1", "2", "3"].map(|a| w.system.add_var(format!("n{a}"), VarRole::Derived, interval(-m_len, m_len)));
-        for c in 0..3 {
+        for (c, &nc) in normal.iter().enumerate() {
             let (p, q) = ((c + 1) % 3, (c + 2) % 3);
             let mut row = Row::new();
-            row.var(normal[c], one);
+            row.var(nc, one);
             row.product(sides[0][p], sides[1][q], -one);
             row.product(sides[0][q], sides[1][p], one);
             w.add(row);

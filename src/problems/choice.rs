@@ -71,7 +71,7 @@ pub enum Linkage {
     /// The pose builder's system, and why it was chosen.
     Pose(PoseProblem, String),
     /// The distance builder's system, and why it was chosen.
-    Distances(BilaterationProblem, String),
+    Distances(Box<BilaterationProblem>, String),
 }
 
 impl Linkage {
@@ -95,7 +95,7 @@ impl Linkage {
             ModelChoice::Pose | ModelChoice::Distances if !pose => Err(LinkageError::NotJointModel),
             ModelChoice::Distances => match traces.first() {
                 Some((_, _, r)) => Err(LinkageError::TraceOnPose(r.clone())),
-                None => Ok(Self::Distances(BilaterationProblem::new(mechanism, fixed)?, "forced by --model distances".into())),
+                None => Ok(Self::Distances(Box::new(BilaterationProblem::new(mechanism, fixed)?), "forced by --model distances".into())),
             },
             ModelChoice::Pose => match traces.first() {
                 Some((_, _, r)) => Err(LinkageError::TraceOnPose(r.clone())),
