@@ -337,6 +337,7 @@ enum ModelArg {
     Planar,
     Spatial,
     Pose,
+    Distances,
 }
 
 impl From<ModelArg> for ModelChoice {
@@ -346,6 +347,7 @@ impl From<ModelArg> for ModelChoice {
             ModelArg::Planar => ModelChoice::Planar,
             ModelArg::Spatial => ModelChoice::Spatial,
             ModelArg::Pose => ModelChoice::Pose,
+            ModelArg::Distances => ModelChoice::Distances,
         }
     }
 }
@@ -370,8 +372,10 @@ struct SolveArgs {
     trace: Vec<String>,
     /// Which builder: planar (one angle per rigid group), spatial (any loop of revolute,
     /// prismatic, spherical, universal, cylindrical and fixed joints), pose (a platform on six
-    /// legs, every leg fixed: its position and rotation), or auto: planar when the mechanism is
-    /// planar, else pose for a platform with every leg fixed and no traced point, else spatial.
+    /// legs, every leg fixed: its position and rotation), distances (the same platforms: squared
+    /// base-to-platform distances and heights, seed 004's style), or auto: planar when the
+    /// mechanism is planar, else pose for a platform with every leg fixed and no traced point,
+    /// else spatial.
     #[arg(long, value_enum, default_value_t = ModelArg::Auto)]
     model: ModelArg,
     /// Shrink by interval propagation only (no LP): for comparisons.

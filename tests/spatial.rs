@@ -581,6 +581,45 @@ fn stewart_pose_model_certifies_assemblies_near_a_singularity_once() {
     stewart_pose_reference_case("stewart_40_near_singular.urdf", "stewart_40_near_singular_fk.json", 0);
 }
 
+/// One case of a Stewart reference through `solve --model distances` at default settings: every
+/// box certified, one per real assembly, each holding exactly one reference pose in its joint
+/// values (position, roll, pitch, yaw).
+fn stewart_distance_reference_case(platform: &str, reference_file: &str, index: usize) {
+    let refs = reference(reference_file);
+    let m = urdf::parse(&urdf_text(platform)).expect("parses");
+    let case = &refs["cases"][index];
+    let name = case["name"].as_str().expect("name");
+    let fixed = fixed_from(case, "leg_lengths");
+    let job = SolveJob::build(&m, ModelChoice::Distances, &fixed, &[], SolverSettings { threads: 1, ..Default::default() }).expect("builds");
+    assert_eq!(job.problem().model(), Model::Distances);
+    assert!(job.problem().system().vars.iter().any(|v| v.name.starts_with("r(P")), "squared distances are the unknowns");
+    let r = job.run(&AtomicBool::new(false), &mut |_| {});
+    assert_eq!(r.status, Status::Complete, "{name}");
+    let count = case["real_solutions"].as_u64().expect("count") as usize;
+    assert!(r.boxes.iter().all(|b| b.status == BoxStatus::Unique), "{name}: every box certified: {:?}", r.boxes.iter().map(|b| b.status).collect::<Vec<_>>());
+    assert_eq!(r.boxes.len(), count, "{name}: one box per real assembly");
+    let f = |v: &serde_json::Value| v.as_f64().expect("number");
+    let mut held = vec![0; r.boxes.len()];
+    for s in case["solutions"].as_array().expect("solutions") {
+        let (pos, rpy) = (&s["platform_position"], &s["platform_rpy"]);
+        let want = [("x", f(&pos[0]), false), ("y", f(&pos[1]), false), ("z", f(&pos[2]), false), ("roll", f(&rpy[0]), true), ("pitch", f(&rpy[1]), true), ("yaw", f(&rpy[2]), true)];
+        let holding: Vec<usize> = (0..r.boxes.len())
+            .filter(|&k| {
+                let joints: BTreeMap<&str, (f64, f64)> = r.joint_names.iter().map(|n| n.as_str()).zip(r.boxes[k].joints.iter().map(|j| (j[0], j[1]))).collect();
+                want.iter().all(|(joint, v, angle)| holds(joints[format!("platform_pose.{joint}").as_str()], *v, *angle, 1e-9))
+            })
+            .collect();
+        assert_eq!(holding.len(), 1, "{name}: assembly at {pos}, rpy {rpy} in {} certified boxes", holding.len());
+        held[holding[0]] += 1;
+    }
+    assert!(held.iter().all(|&h| h == 1), "{name}: a certified box without a reference assembly: {held:?}");
+}
+
+#[test]
+fn stewart_distance_model_certifies_each_assembly_once_from_pose() {
+    stewart_distance_reference_case("stewart_6_6.urdf", "stewart_6_6_fk.json", 0);
+}
+
 #[test]
 fn a_platform_with_every_leg_fixed_gets_the_pose_model_by_default() {
     let refs = reference("stewart_6_6_fk.json");
@@ -595,6 +634,9 @@ fn a_platform_with_every_leg_fixed_gets_the_pose_model_by_default() {
     let rssr = urdf::parse(&urdf_text("rssr.urdf")).expect("parses");
     let err = Linkage::build(&rssr, ModelChoice::Pose, &[], &[]).err().map(|e| e.to_string()).unwrap_or_default();
     assert!(err.contains("--model pose") && err.contains("not a parallel platform"), "{err}");
+    let err = Linkage::build(&rssr, ModelChoice::Distances, &[], &[]).err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(err.contains("not a parallel platform"), "{err}");
+    assert!(matches!(Linkage::build_in_joints(&m, ModelChoice::Distances, &fixed, &[]), Err(LinkageError::NotJointModel)));
     // The redundant rows narrow boxes but change no answer.
     let p = PoseProblem::with_rows(&m, &fixed, PoseRows::Redundant).expect("builds");
     assert!(!p.is_square());

@@ -66,7 +66,7 @@ impl Analysis for LinkageAnalysis {
         match self.problem {
             Linkage::Planar(_) => MechanismKind::PlanarLinkage,
             Linkage::Spatial(..) => MechanismKind::SpatialLinkage,
-            Linkage::Pose(..) => MechanismKind::ParallelPlatform,
+            Linkage::Pose(..) | Linkage::Distances(..) => MechanismKind::ParallelPlatform,
         }
     }
 
@@ -79,6 +79,7 @@ impl Analysis for LinkageAnalysis {
             Linkage::Planar(_) => "a planar linkage: its configuration space and singular sets (C-space, input, output) are analysed; cusps and nodes of the type-II image are not (`linkspace loop-singularities --kind image`), nor is inverse kinematics".to_string(),
             Linkage::Spatial(_, why) => format!("a spatial linkage ({why}): its configuration space and singular sets (C-space, input, output; actuated and output joints are tree joints) are analysed; inverse kinematics is not"),
             Linkage::Pose(_, why) => format!("a parallel platform ({why}): its assembly modes are solved in pose coordinates, its singular sets in the spatial model's joint coordinates; inverse kinematics is not analysed"),
+            Linkage::Distances(_, why) => format!("a parallel platform ({why}): its assembly modes are solved in squared distances and heights, its singular sets in the spatial model's joint coordinates; inverse kinematics is not analysed"),
         }
     }
 
@@ -379,7 +380,7 @@ impl SolveJob {
         let t0 = Instant::now();
         let e = solver.enclose(cancel, progress);
         let e = match &self.problem {
-            Linkage::Pose(..) => settle_pose(&solver, e, cancel, self.settings.timeout.map(|t| t.saturating_sub(t0.elapsed()))),
+            Linkage::Pose(..) | Linkage::Distances(..) => settle_pose(&solver, e, cancel, self.settings.timeout.map(|t| t.saturating_sub(t0.elapsed()))),
             _ => e,
         };
         let (labels, clusters) = components(&e.solutions);
@@ -467,7 +468,7 @@ fn settle_pose(solver: &Solver<'_>, mut e: Enclosure, cancel: &AtomicBool, timeo
 fn traced(problem: &Linkage, b: &IntervalBox) -> Vec<TracedBounds> {
     match problem {
         Linkage::Planar(p) => p.traces.iter().map(|t| TracedBounds { x: bounds(b.dims[t.x]), y: bounds(b.dims[t.y]), z: None }).collect(),
-        Linkage::Pose(..) => Vec::new(),
+        Linkage::Pose(..) | Linkage::Distances(..) => Vec::new(),
         Linkage::Spatial(p, _) => p
             .traces
             .iter()

@@ -1,11 +1,12 @@
 //! Which builder a closed-loop mechanism gets: the planar one (one angle per rigid group) when it
 //! accepts the mechanism; else the pose one for a platform on six legs, every leg fixed and no
-//! point traced; else the spatial one (`--model auto`); or the one the user forces.
+//! point traced; else the spatial one (`--model auto`); or the one the user forces (among them
+//! the distance builder, `--model distances`, for the same platforms).
 //! One choice for the CLI's `solve` and the node's linkage analysis, so both say the same thing.
 //! The singular-set systems differentiate joint coordinates: they take the planar or the
 //! spatial builder (`Linkage::build_in_joints`).
 
-use super::{LinkageError, LinkageProblem, PoseProblem, SpatialProblem};
+use super::{BilaterationProblem, LinkageError, LinkageProblem, PoseProblem, SpatialProblem};
 use crate::search::{SolveError, Solver, SolverSettings};
 
 /// `--model`: which builder.
@@ -21,6 +22,9 @@ pub enum ModelChoice {
     Spatial,
     /// The pose builder (a platform on six legs, each fixed), or its refusal.
     Pose,
+    /// The distance builder (the same platforms, squared distances and signed heights), or its
+    /// refusal.
+    Distances,
 }
 
 /// The builder a linkage was built with.
@@ -32,6 +36,8 @@ pub enum Model {
     Spatial,
     /// A platform's position and rotation, leg rows linear in derived products.
     Pose,
+    /// A platform's base-to-platform squared distances and heights (seed 004's style).
+    Distances,
 }
 
 impl Model {
@@ -41,6 +47,7 @@ impl Model {
             Model::Planar => "planar",
             Model::Spatial => "spatial",
             Model::Pose => "pose",
+            Model::Distances => "distances",
         }
     }
 }
@@ -63,6 +70,8 @@ pub enum Linkage {
     Spatial(SpatialProblem, String),
     /// The pose builder's system, and why it was chosen.
     Pose(PoseProblem, String),
+    /// The distance builder's system, and why it was chosen.
+    Distances(Box<BilaterationProblem>, String),
 }
 
 impl Linkage {
@@ -71,7 +80,7 @@ impl Linkage {
         Self::build_with(mechanism, choice, fixed, traces, true)
     }
 
-    /// As `build`, among the models in joint coordinates only (`--model pose` refused, `auto`
+    /// As `build`, among the models in joint coordinates only (`--model pose` and `distances` refused, `auto`
     /// planar or spatial): the singular-set systems differentiate joint coordinates.
     pub fn build_in_joints(mechanism: &crate::model::Mechanism, choice: ModelChoice, fixed: &[(String, f64)], traces: &[TracedPoint]) -> Result<Self, LinkageError> {
         Self::build_with(mechanism, choice, fixed, traces, false)
@@ -83,7 +92,11 @@ impl Linkage {
         let spatial = |reason: String| -> Result<Self, LinkageError> { Ok(Self::Spatial(SpatialProblem::new(mechanism, fixed, traces)?, reason)) };
         match choice {
             ModelChoice::Spatial => spatial("forced by --model spatial".into()),
-            ModelChoice::Pose if !pose => Err(LinkageError::NotJointModel),
+            ModelChoice::Pose | ModelChoice::Distances if !pose => Err(LinkageError::NotJointModel),
+            ModelChoice::Distances => match traces.first() {
+                Some((_, _, r)) => Err(LinkageError::TraceOnPose(r.clone())),
+                None => Ok(Self::Distances(Box::new(BilaterationProblem::new(mechanism, fixed)?), "forced by --model distances".into())),
+            },
             ModelChoice::Pose => match traces.first() {
                 Some((_, _, r)) => Err(LinkageError::TraceOnPose(r.clone())),
                 None => Ok(Self::Pose(PoseProblem::new(mechanism, fixed)?, "forced by --model pose".into())),
@@ -112,14 +125,14 @@ impl Linkage {
     pub fn model_reason(&self) -> &str {
         match self {
             Self::Planar(_) => PLANAR_REASON,
-            Self::Spatial(_, why) | Self::Pose(_, why) => why,
+            Self::Spatial(_, why) | Self::Pose(_, why) | Self::Distances(_, why) => why,
         }
     }
 
     /// What the spatial builder simplified (legs between ball joints reduced to distances).
     pub fn reductions(&self) -> &[String] {
         match self {
-            Self::Planar(_) | Self::Pose(..) => &[],
+            Self::Planar(_) | Self::Pose(..) | Self::Distances(..) => &[],
             Self::Spatial(p, _) => &p.reductions,
         }
     }
@@ -129,7 +142,7 @@ impl Linkage {
         match self {
             Self::Planar(_) => "planar_linkage",
             Self::Spatial(..) => "spatial_linkage",
-            Self::Pose(..) => "parallel_platform",
+            Self::Pose(..) | Self::Distances(..) => "parallel_platform",
         }
     }
 
@@ -139,6 +152,7 @@ impl Linkage {
             Self::Planar(p) => &p.system,
             Self::Spatial(p, _) => &p.system,
             Self::Pose(p, _) => &p.system,
+            Self::Distances(p, _) => &p.system,
         }
     }
 
@@ -148,6 +162,7 @@ impl Linkage {
             Self::Planar(p) => p.solver(settings),
             Self::Spatial(p, _) => p.solver(settings),
             Self::Pose(p, _) => p.solver(settings),
+            Self::Distances(p, _) => p.solver(settings),
         }
     }
 
@@ -157,6 +172,7 @@ impl Linkage {
             Self::Planar(p) => &p.free_joints,
             Self::Spatial(p, _) => &p.free_joints,
             Self::Pose(p, _) => &p.free_joints,
+            Self::Distances(p, _) => &p.free_joints,
         }
     }
 
@@ -165,7 +181,7 @@ impl Linkage {
         match self {
             Self::Planar(p) => p.traces.iter().map(|t| t.name.clone()).collect(),
             Self::Spatial(p, _) => p.traces.iter().map(|t| t.name.clone()).collect(),
-            Self::Pose(..) => Vec::new(),
+            Self::Pose(..) | Self::Distances(..) => Vec::new(),
         }
     }
 }

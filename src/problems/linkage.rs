@@ -107,14 +107,14 @@ pub enum LinkageError {
     /// A tree has no loop to close: every joint value is a configuration.
     #[error("the mechanism has no <loop> closure: every joint value is a configuration, there is nothing to enclose (serial chains: see `singularities`)")]
     NoLoops,
-    /// `--model pose` on a mechanism that is not a platform on six fixed legs.
-    #[error("--model pose: {0}")]
+    /// `--model pose` or `distances` on a mechanism that is not a platform on six fixed legs.
+    #[error("--model pose or distances: {0}")]
     Platform(#[from] super::PlatformError),
-    /// A traced point with `--model pose`, which places only the platform.
-    #[error("--trace {0}: the pose model places the platform only; trace with --model spatial")]
+    /// A traced point with `--model pose` or `distances`, which place only the platform.
+    #[error("--trace {0}: the pose and distance models place the platform only; trace with --model spatial")]
     TraceOnPose(String),
-    /// The pose model where joint coordinates are needed (singular sets).
-    #[error("the pose model has no joint coordinates to differentiate; singular sets take --model planar, spatial or auto")]
+    /// The pose or distance model where joint coordinates are needed (singular sets).
+    #[error("the pose and distance models have no joint coordinates to differentiate; singular sets take --model planar, spatial or auto")]
     NotJointModel,
 }
 

@@ -2,6 +2,7 @@
 //! out. Builders never solve.
 
 pub(crate) mod angles;
+pub(crate) mod bilateration;
 pub(crate) mod cayley_menger;
 pub(crate) mod choice;
 pub(crate) mod coordinates;
@@ -12,6 +13,7 @@ pub(crate) mod singular;
 pub(crate) mod spatial;
 pub(crate) mod stated;
 
+pub use bilateration::BilaterationProblem;
 pub use cayley_menger::{cayley_menger_determinant, BuildOptions, CayleyMenger, DistanceError, DistanceProblem, DistanceSolverError, Formulation, Orientation};
 pub use choice::{Linkage, Model, ModelChoice, TracedPoint};
 pub use coordinates::{Placed, PlacedError};

@@ -124,6 +124,60 @@ fn norm2(v: &IVec3) -> Interval {
     v[0].sqr() + v[1].sqr() + v[2].sqr()
 }
 
+/// A platform on six legs, each fixed: what the pose and the distance builders read.
+pub(crate) struct SixLegs {
+    /// Index of the platform link.
+    pub platform: usize,
+    /// Name of the floating joint carrying the platform.
+    pub floating: String,
+    /// The legs, in file order.
+    pub legs: Vec<PoseLeg>,
+}
+
+/// Reads the six legs of `m`'s platform with their values from `fixed` (as for `solve --fix`:
+/// the prismatic joint's travel, metres); `model` names the builder in refusals.
+pub(crate) fn six_legs(m: &Mechanism, fixed: &[(String, f64)], model: &str) -> Result<SixLegs, PlatformError> {
+    let (platform, read) = read_legs(m)?;
+    if read.len() != 6 {
+        return Err(PlatformError::Unsupported(format!("{} legs: {model} takes six", read.len())));
+    }
+    let floating = m.joints.iter().find(|j| j.kind == JointKind::Floating && j.child == platform).map(|j| j.name.clone()).unwrap_or_default();
+    let mut legs = Vec::new();
+    for leg in &read {
+        let joint = &m.joints[leg.joint];
+        // The last value given counts, as for the other builders.
+        let value = fixed.iter().rev().find(|(n, _)| *n == leg.name).map(|&(_, v)| v).ok_or_else(|| PlatformError::NotFixed(leg.name.clone()))?;
+        if !value.is_finite() {
+            return Err(PlatformError::NotFinite(leg.name.clone()));
+        }
+        if let JointKind::Prismatic { limits: (lower, upper) } = joint.kind {
+            if value < lower || value > upper {
+                return Err(PlatformError::OutsideLimits { leg: leg.name.clone(), value, lower, upper });
+            }
+        }
+        // The rod's ball in the cylinder frame: o.t + o.R·(q·axis + on_rod) = u + q·d.
+        let rot = match joint.exact_rotation {
+            Some(r) => r.map(|row| row.map(point)),
+            None => st::rpy(joint.rpy),
+        };
+        let u = {
+            let on_rod = st::apply(&rot, &st::translation(&leg.on_rod));
+            let o = st::translation(&joint.origin.translation.vector);
+            [0, 1, 2].map(|i| o[i] + on_rod[i])
+        };
+        let d = st::apply(&rot, &st::axis(&joint.axis));
+        let q = stated(value);
+        let top_in_cylinder: IVec3 = [0, 1, 2].map(|i| u[i] + q * d[i]);
+        legs.push(PoseLeg { name: leg.name.clone(), base: st::translation(&leg.base), top: st::translation(&leg.on_platform), squared: norm2(&top_in_cylinder) });
+    }
+    for (name, _) in fixed {
+        if !legs.iter().any(|l| l.name == *name) {
+            return Err(PlatformError::UnknownLeg(name.clone()));
+        }
+    }
+    Ok(SixLegs { platform, floating, legs })
+}
+
 impl PoseProblem {
     /// Reads the platform of `m` with every leg fixed by `fixed` (leg name, its value as for
     /// `solve --fix`: the prismatic joint's travel, metres), the square system alone.
@@ -133,45 +187,7 @@ impl PoseProblem {
 
     /// As `new`, with the rows `rows` says.
     pub fn with_rows(m: &Mechanism, fixed: &[(String, f64)], rows: PoseRows) -> Result<Self, PlatformError> {
-        let (platform, read) = read_legs(m)?;
-        if read.len() != 6 {
-            return Err(PlatformError::Unsupported(format!("{} legs: the pose model takes six", read.len())));
-        }
-        let floating = m.joints.iter().find(|j| j.kind == JointKind::Floating && j.child == platform).map(|j| j.name.clone()).unwrap_or_default();
-        let mut legs = Vec::new();
-        for leg in &read {
-            let joint = &m.joints[leg.joint];
-            // The last value given counts, as for the other builders.
-            let value = fixed.iter().rev().find(|(n, _)| *n == leg.name).map(|&(_, v)| v).ok_or_else(|| PlatformError::NotFixed(leg.name.clone()))?;
-            if !value.is_finite() {
-                return Err(PlatformError::NotFinite(leg.name.clone()));
-            }
-            if let JointKind::Prismatic { limits: (lower, upper) } = joint.kind {
-                if value < lower || value > upper {
-                    return Err(PlatformError::OutsideLimits { leg: leg.name.clone(), value, lower, upper });
-                }
-            }
-            // The rod's ball in the cylinder frame: o.t + o.R·(q·axis + on_rod) = u + q·d.
-            let rot = match joint.exact_rotation {
-                Some(r) => r.map(|row| row.map(point)),
-                None => st::rpy(joint.rpy),
-            };
-            let u = {
-                let on_rod = st::apply(&rot, &st::translation(&leg.on_rod));
-                let o = st::translation(&joint.origin.translation.vector);
-                [0, 1, 2].map(|i| o[i] + on_rod[i])
-            };
-            let d = st::apply(&rot, &st::axis(&joint.axis));
-            let q = stated(value);
-            let top_in_cylinder: IVec3 = [0, 1, 2].map(|i| u[i] + q * d[i]);
-            legs.push(PoseLeg { name: leg.name.clone(), base: st::translation(&leg.base), top: st::translation(&leg.on_platform), squared: norm2(&top_in_cylinder) });
-        }
-        for (name, _) in fixed {
-            if !legs.iter().any(|l| l.name == *name) {
-                return Err(PlatformError::UnknownLeg(name.clone()));
-            }
-        }
-
+        let SixLegs { platform, floating, legs } = six_legs(m, fixed, "the pose model")?;
         let mut w = Rows { system: EquationSystem::default(), square: Vec::new(), products: BTreeMap::new() };
         // t lies within reach of every base ball: |t − b_i| ≤ L_i + |p_i|.
         let mut tdom = [Interval::ENTIRE; 3];
@@ -278,45 +294,57 @@ impl PoseProblem {
         self.r.map(|row| row.map(|x| b.dims[x]))
     }
 
-    /// The floating joint's values over the box: position (metres) and roll, pitch, yaw
-    /// (radians, URDF `Rz(yaw)·Ry(pitch)·Rx(roll)` with pitch in [−π/2, π/2]), outward rounded;
-    /// roll and yaw are the whole turn where the box reaches pitch ±π/2.
+    /// The floating joint's values over the box (`joint_values_of`).
     pub fn joint_values(&self, b: &IntervalBox) -> BTreeMap<String, (f64, f64)> {
-        let r = self.rotation(b);
-        let cos_pitch = (r[0][0].sqr() + r[1][0].sqr()).sqrt();
-        let pitch = angle_interval(cos_pitch, -r[2][0]);
-        let pi = std::f64::consts::PI;
-        let turn = interval(-pi, pi) + interval(-4e-15, 4e-15);
-        let (roll, yaw) = if cos_pitch.inf() > 0.0 { (angle_interval(r[2][2], r[2][1]), angle_interval(r[0][0], r[1][0])) } else { (turn, turn) };
-        let values = [b.dims[self.t[0]], b.dims[self.t[1]], b.dims[self.t[2]], roll, pitch, yaw];
-        self.free_joints.iter().zip(values).map(|(n, x)| (n.clone(), (x.inf(), x.sup()))).collect()
+        joint_values_of(&self.free_joints, self.t.map(|v| b.dims[v]), &self.rotation(b))
     }
 
-    /// The platform's pose at the box midpoint: the nearest rotation to the midpoint of `R`,
-    /// the midpoint of `t`, and the largest misfit of a leg's squared length there.
+    /// The platform's pose at the box midpoint (`pose_of`).
     pub fn pose(&self, b: &IntervalBox) -> super::Pose {
-        let r = self.rotation(b);
-        let mid = Matrix3::from_fn(|i, j| r[i][j].mid());
-        let rot = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&mid));
-        let t = Vector3::new(b.dims[self.t[0]].mid(), b.dims[self.t[1]].mid(), b.dims[self.t[2]].mid());
-        let leg_residual = self
-            .legs
-            .iter()
-            .map(|l| {
-                let p = Vector3::new(l.top[0].mid(), l.top[1].mid(), l.top[2].mid());
-                let base = Vector3::new(l.base[0].mid(), l.base[1].mid(), l.base[2].mid());
-                ((rot * p + t - base).norm_squared() - l.squared.mid()).abs()
-            })
-            .fold(0.0, f64::max);
-        let (roll, pitch, yaw) = rot.euler_angles();
-        super::Pose { position: [t.x, t.y, t.z], quaternion: [rot.w, rot.i, rot.j, rot.k], rpy: [roll, pitch, yaw], leg_residual }
+        pose_of(&self.legs, self.t.map(|v| b.dims[v]), &self.rotation(b))
     }
 
     /// The platform link's pose over the box, as the spatial model reports link poses.
     pub fn link_pose(&self, b: &IntervalBox) -> super::LinkPose {
-        let r = self.rotation(b);
-        let pose = self.pose(b);
-        let width = r.iter().flatten().map(|x| x.wid()).fold(0.0, f64::max);
-        super::LinkPose { position: Some(self.t.map(|v| [b.dims[v].inf(), b.dims[v].sup()])), quaternion: Some(pose.quaternion), rotation_width: Some(width) }
+        link_pose_of(&self.legs, self.t.map(|v| b.dims[v]), &self.rotation(b))
     }
+}
+
+/// The floating joint's values for a platform at position `t` with rotation `r` (enclosures):
+/// position (metres) and roll, pitch, yaw (radians, URDF `Rz(yaw)·Ry(pitch)·Rx(roll)` with pitch
+/// in [−π/2, π/2]), outward rounded; roll and yaw are the whole turn where `r` reaches pitch ±π/2.
+/// `free_joints` names them in that order.
+pub(crate) fn joint_values_of(free_joints: &[String], t: [Interval; 3], r: &[[Interval; 3]; 3]) -> BTreeMap<String, (f64, f64)> {
+    let cos_pitch = (r[0][0].sqr() + r[1][0].sqr()).sqrt();
+    let pitch = angle_interval(cos_pitch, -r[2][0]);
+    let pi = std::f64::consts::PI;
+    let turn = interval(-pi, pi) + interval(-4e-15, 4e-15);
+    let (roll, yaw) = if cos_pitch.inf() > 0.0 { (angle_interval(r[2][2], r[2][1]), angle_interval(r[0][0], r[1][0])) } else { (turn, turn) };
+    let values = [t[0], t[1], t[2], roll, pitch, yaw];
+    free_joints.iter().zip(values).map(|(n, x)| (n.clone(), (x.inf(), x.sup()))).collect()
+}
+
+/// The platform's pose at the midpoint of the enclosures `t`, `r`: the nearest rotation to the
+/// midpoint of `r`, the midpoint of `t`, and the largest misfit of a leg's squared length there.
+pub(crate) fn pose_of(legs: &[PoseLeg], t: [Interval; 3], r: &[[Interval; 3]; 3]) -> super::Pose {
+    let mid = Matrix3::from_fn(|i, j| r[i][j].mid());
+    let rot = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&mid));
+    let t = Vector3::new(t[0].mid(), t[1].mid(), t[2].mid());
+    let leg_residual = legs
+        .iter()
+        .map(|l| {
+            let p = Vector3::new(l.top[0].mid(), l.top[1].mid(), l.top[2].mid());
+            let base = Vector3::new(l.base[0].mid(), l.base[1].mid(), l.base[2].mid());
+            ((rot * p + t - base).norm_squared() - l.squared.mid()).abs()
+        })
+        .fold(0.0, f64::max);
+    let (roll, pitch, yaw) = rot.euler_angles();
+    super::Pose { position: [t.x, t.y, t.z], quaternion: [rot.w, rot.i, rot.j, rot.k], rpy: [roll, pitch, yaw], leg_residual }
+}
+
+/// The platform link's pose for the enclosures `t`, `r`, as the spatial model reports link poses.
+pub(crate) fn link_pose_of(legs: &[PoseLeg], t: [Interval; 3], r: &[[Interval; 3]; 3]) -> super::LinkPose {
+    let pose = pose_of(legs, t, r);
+    let width = r.iter().flatten().map(|x| x.wid()).fold(0.0, f64::max);
+    super::LinkPose { position: Some(t.map(|x| [x.inf(), x.sup()])), quaternion: Some(pose.quaternion), rotation_width: Some(width) }
 }

@@ -415,6 +415,7 @@ impl Coordinates for Linkage {
             Linkage::Planar(p) => Coordinates::system(p),
             Linkage::Spatial(p, _) => Coordinates::system(p),
             Linkage::Pose(p, _) => &p.system,
+            Linkage::Distances(p, _) => &p.system,
         }
     }
 
@@ -423,6 +424,7 @@ impl Coordinates for Linkage {
             Linkage::Planar(p) => Coordinates::name(p),
             Linkage::Spatial(p, _) => Coordinates::name(p),
             Linkage::Pose(p, _) => &p.name,
+            Linkage::Distances(p, _) => &p.name,
         }
     }
 
@@ -431,6 +433,7 @@ impl Coordinates for Linkage {
             Linkage::Planar(p) => p.model(),
             Linkage::Spatial(p, _) => p.model(),
             Linkage::Pose(..) => Model::Pose,
+            Linkage::Distances(..) => Model::Distances,
         }
     }
 
@@ -439,6 +442,7 @@ impl Coordinates for Linkage {
             Linkage::Planar(p) => Coordinates::fixed_joints(p),
             Linkage::Spatial(p, _) => Coordinates::fixed_joints(p),
             Linkage::Pose(p, _) => &p.fixed,
+            Linkage::Distances(p, _) => &p.fixed,
         }
     }
 
@@ -447,6 +451,7 @@ impl Coordinates for Linkage {
             Linkage::Planar(p) => p.joint_values(b),
             Linkage::Spatial(p, _) => p.joint_values(b),
             Linkage::Pose(p, _) => p.joint_values(b),
+            Linkage::Distances(p, _) => p.joint_values(b),
         }
     }
 
@@ -456,7 +461,7 @@ impl Coordinates for Linkage {
             Linkage::Spatial(p, _) => p.extended_solver(system, settings),
             // The pose model's own pipeline on its own system; no other system extends it.
             Linkage::Pose(p, _) if std::ptr::eq(system, &p.system) => p.solver(settings),
-            Linkage::Pose(..) => Solver::new(system, settings),
+            Linkage::Pose(..) | Linkage::Distances(..) => Solver::new(system, settings),
         }
     }
 
@@ -464,7 +469,7 @@ impl Coordinates for Linkage {
         match self {
             Linkage::Planar(p) => p.augment(kind, actuated, output),
             Linkage::Spatial(p, _) => p.augment(kind, actuated, output),
-            Linkage::Pose(..) => Err(SingularError::Linkage(LinkageError::NotJointModel)),
+            Linkage::Pose(..) | Linkage::Distances(..) => Err(SingularError::Linkage(LinkageError::NotJointModel)),
         }
     }
 
@@ -472,7 +477,7 @@ impl Coordinates for Linkage {
         match self {
             Linkage::Planar(p) => p.rows_faithful(b),
             Linkage::Spatial(p, _) => p.rows_faithful(b),
-            Linkage::Pose(..) => true,
+            Linkage::Pose(..) | Linkage::Distances(..) => true,
         }
     }
 
@@ -481,7 +486,7 @@ impl Coordinates for Linkage {
             Linkage::Planar(p) => p.rate_matrix(kind, actuated, output),
             Linkage::Spatial(p, _) => p.rate_matrix(kind, actuated, output),
             // Singular sets are built in joint coordinates (`Linkage::build_in_joints`).
-            Linkage::Pose(..) => None,
+            Linkage::Pose(..) | Linkage::Distances(..) => None,
         }
     }
 }

@@ -148,6 +148,7 @@ fn box_record(problem: &Linkage, result: &BoxSetResult, b: &ResultBox, rigid_lin
         Linkage::Planar(p) => (p.link_angles_of(&original(), moves).into_iter().map(|(k, (lo, hi))| (k, [lo, hi])).collect(), None),
         Linkage::Spatial(p, _) => (BTreeMap::new(), Some(p.link_poses_of(&original(), moves).into_iter().map(|(k, pose)| (k, LinkPoseRecord(pose))).collect())),
         Linkage::Pose(p, _) => (BTreeMap::new(), Some(BTreeMap::from([(p.platform.clone(), LinkPoseRecord(p.link_pose(&original())))]))),
+        Linkage::Distances(p, _) => (BTreeMap::new(), Some(BTreeMap::from([(p.platform.clone(), LinkPoseRecord(p.link_pose(&original())))]))),
     };
     BoxRecord {
         joints: result.joint_names.iter().cloned().zip(b.joints.iter().copied()).collect(),
