@@ -459,8 +459,8 @@ mod path_check {
     }
 }
 
-/// Every real solution of poses of a general 6R (`tests/data/ik6_general_6r.urdf`, up to 16)
-/// and of the CRX fixture, from `scripts/dev/ik6_reference.py` (monodromy and parameter
+/// Every real solution of poses of a general 6R (`tests/data/ik6_general_6r.urdf`, up to 16),
+/// of the CRX fixture, and of the IRB 140-style and Doosan-style fixtures, from `scripts/dev/ik6_reference.py` (monodromy and parameter
 /// homotopy, refined at 60 digits, two seeds; no interval code): the certified solutions are
 /// exactly the reference's, one per box, nothing undecided.
 mod homotopy_reference {
@@ -557,21 +557,26 @@ mod homotopy_reference {
         }
     }
 
-    /// Per fixture: the first pose and the first with the most solutions (6 for the general
-    /// 6R, 16 for the CRX); a few seconds.
+    /// Every pose of the default file: 30 per fixture, the most solutions 6 for the general 6R
+    /// and 16 for the CRX; a few seconds in release.
     #[test]
     fn certified_solutions_are_the_homotopy_references() {
-        let found = check("ik6_reference.json", |i, first_most| i == 0 || i == first_most);
+        let found = check("ik6_reference.json", |_, _| true);
         let most: Vec<usize> = found.iter().map(|(_, hist, _)| *hist.keys().last().expect("poses")).collect();
         assert_eq!(most, [6, 16]);
         summary(&found);
     }
 
-    /// Every pose of the default file (30 per fixture; about a minute in release).
+    /// The IRB 140-style arm (spherical wrist, joint 4's frame on axis 3) and the Doosan-style
+    /// arm (offset wrist): 30 poses each, up to 8 solutions (`tests/data/ik6_reference_vendors.json`,
+    /// the same generator).
     #[test]
-    #[ignore = "long: every pose of the default reference"]
-    fn certified_solutions_are_the_homotopy_references_on_every_pose() {
-        summary(&check("ik6_reference.json", |_, _| true));
+    fn vendor_style_arms_match_the_homotopy_references() {
+        let found = check("ik6_reference_vendors.json", |_, _| true);
+        let names: Vec<&str> = found.iter().map(|(name, _, _)| name.as_str()).collect();
+        assert_eq!(names, ["irb140", "doosan"]);
+        assert!(found.iter().all(|(_, hist, _)| hist.values().sum::<usize>() == 30 && hist.keys().any(|&n| n >= 4)));
+        summary(&found);
     }
 
     /// 1,000 poses per fixture (`tests/data/ik6_reference_1000.json`, compact). `IK6_REFERENCE`

@@ -70,6 +70,8 @@ SEEDS = (20250101, 4242)
 FIXTURES = {
     "general_6r": "tests/data/ik6_general_6r.urdf",
     "crx": "tests/data/fanuc_crx10ial_style.urdf",
+    "irb140": "tests/data/abb_irb140_style.urdf",
+    "doosan": "tests/data/doosan_style_6r.urdf",
 }
 
 # ----------------------------------------------------------------------------------------------
