@@ -124,3 +124,48 @@ fn loop_singularities_kind_motion_writes_the_verdict_and_the_certificate() {
     assert!(!r["steps"].as_array().expect("steps").is_empty());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The double butterfly driven by joint 6, from an assembly at θ6 = −0.01 (four decimals) on a
+/// branch where θ6 turns back at two turning points: motions towards them stop just before the
+/// turning points that the independent continuation reference
+/// (`closed_loop_singularities::trace`, (θ7, θ6) = (joint7, joint6)) finds on that branch, and a
+/// motion between them is clear, with no reference turning point inside its boxes.
+#[test]
+fn double_butterfly_motions_of_joint6_stop_at_the_reference_turning_points_and_clear_between() {
+    let (_, stationary) = super::closed_loop_singularities::trace::all(&super::closed_loop_singularities::butterfly_starts());
+    let reference: Vec<(f64, f64)> = stationary.iter().map(|q| (q[6], q[5])).collect();
+    let m = urdf::parse(&urdf_text("double_butterfly.urdf")).expect("fixture parses");
+    // joint7, joint2, joint1, joint5, joint6, joint3, joint4, loop15, loop13, loop24
+    let assembly = vec![2.087, -0.6555, 2.0986, 1.4214, -0.01, 2.3761, 2.164, -2.1088, -1.164, 0.7225];
+    let cancel = AtomicBool::new(false);
+    let control = Control { limits: Default::default(), threads: 1, cancel: &cancel };
+    let run = |from: f64, to: f64| {
+        let request = MotionRequest { actuated: "joint6".into(), from, to, assembly: assembly.clone(), max_step: 0.05, min_step: 1e-6, name_turning_point: true };
+        check_input_motion(&m, &[], &request, &control).expect("checks")
+    };
+    // No reference turning point lies in a proven step's box.
+    let assert_no_reference_inside = |found: &InputMotionCheck| {
+        for s in &found.steps {
+            for &(r7, r6) in &reference {
+                assert!(!(s.input[0] <= r6 && r6 <= s.input[1] && holds(s.joints["joint7"], r7)), "turning point ({r7}, {r6}) inside step {:?}", s.input);
+            }
+        }
+    };
+    for (from, to) in [(-0.3, 0.2), (-0.5, -2.0)] {
+        let found = run(from, to);
+        let MotionVerdict::Undecided { from: stop, near, .. } = &found.verdict else { panic!("{from} -> {to}: {:?}", found.verdict) };
+        let last = found.steps.last().expect("steps");
+        let (r7, r6) = *reference
+            .iter()
+            .min_by(|a, b| (gap(a.1, *stop) + gap(a.0, 0.5 * (last.joints["joint7"][0] + last.joints["joint7"][1]))).total_cmp(&(gap(b.1, *stop) + gap(b.0, 0.5 * (last.joints["joint7"][0] + last.joints["joint7"][1])))))
+            .expect("reference points");
+        assert!((stop - from) * (r6 - stop) >= 0.0 && (stop - r6).abs() < 1e-3, "{from} -> {to}: stopped at {stop}, reference turning point ({r7}, {r6})");
+        assert!(gap(0.5 * (last.joints["joint7"][0] + last.joints["joint7"][1]), r7) < 0.05, "joint7 {:?} against {r7}", last.joints["joint7"]);
+        let near = near.as_ref().expect("named");
+        assert!(gap(0.5 * (near["joint6"][0] + near["joint6"][1]), r6) < 1e-5 && gap(0.5 * (near["joint7"][0] + near["joint7"][1]), r7) < 1e-5, "{near:?}");
+        assert_no_reference_inside(&found);
+    }
+    let found = run(-1.2, 0.0);
+    assert_eq!(found.verdict, MotionVerdict::Clear);
+    assert_no_reference_inside(&found);
+}

@@ -51,15 +51,16 @@ pub enum MotionError {
         /// rows (equations)
         rows: usize,
     },
-    /// Newton from the given assembly found no configuration of the loop at the start value.
-    #[error("no configuration near the given assembly at {joint} = {value} (Newton from it does not converge: residual {residual:e})")]
+    /// No configuration of the loop is proven near the given assembly, or its branch does not
+    /// reach the start value.
+    #[error("the assembly (at {joint} = {value}): {why}")]
     NoAssembly {
         /// the actuated joint
         joint: String,
-        /// the start value
+        /// its value in the assembly
         value: f64,
-        /// the last residual
-        residual: f64,
+        /// what failed
+        why: String,
     },
 }
 
@@ -72,8 +73,9 @@ pub struct MotionRequest {
     pub from: f64,
     /// Its end value.
     pub to: f64,
-    /// An approximate configuration at the start: the value of every free joint of the loop,
-    /// in `motion_joints` order.
+    /// An approximate configuration of the loop: the value of every free joint, in
+    /// `motion_joints` order. When its actuated value is not `from`, its branch is followed to
+    /// `from` by the same proven steps first.
     pub assembly: Vec<f64>,
     /// The largest step of the input.
     pub max_step: f64,
@@ -127,7 +129,7 @@ pub struct InputMotionCheck {
     pub request: MotionRequest,
     /// The joints of the assembly, in order.
     pub joints: Vec<String>,
-    /// The configuration at the start (Newton from the assembly), enclosed.
+    /// The configuration at `from` on the assembly's branch, enclosed.
     pub start: BTreeMap<String, [f64; 2]>,
     /// The proven steps, in order of the motion.
     pub steps: Vec<MotionStep>,
@@ -384,25 +386,26 @@ pub fn check_input_motion(m: &Mechanism, fixed: &[(String, f64)], request: &Moti
             x0[z] = x0[x] * x0[y];
         }
     }
-    let (x0, residual) = square.newton(x0.iter().map(|v| if v.is_finite() { *v } else { 0.0 }).collect(), r.from);
+    // The assembly's own input value: Newton there projects the assembly onto the loop's
+    // configurations without moving along the curve.
+    let place_of_input = joints.iter().position(|j| *j == r.actuated).expect("invariant: the actuated joint is free");
+    let a_asm = r.assembly[place_of_input];
+    let no_assembly = |why: String| MotionError::NoAssembly { joint: r.actuated.clone(), value: a_asm, why };
+    let (x0, residual) = square.newton(x0.iter().map(|v| if v.is_finite() { *v } else { 0.0 }).collect(), a_asm);
     if !(residual < 1e-9) {
-        return Err(MotionError::NoAssembly { joint: r.actuated.clone(), value: r.from, residual });
+        return Err(no_assembly(format!("Newton from it does not converge: residual {residual:e}")));
     }
-
-    // The start: the configuration at `from`, proven unique in a small box about the polished
-    // point.
-    let inflation = Inflation { rounds: 5, own: 0.1, widest: 0.0, widest_of: &[], absolute: 1e-12, ulps: 8.0 };
+    let polished = problem.joint_values(&IntervalBox::new(x0.iter().map(|&v| point(v)).collect()));
+    let moved = joints.iter().zip(&r.assembly).map(|(j, &q)| polished.get(j).map_or(f64::INFINITY, |&(lo, hi)| wrap_f64(0.5 * (lo + hi) - q).abs())).fold(0.0, f64::max);
+    if !(moved <= ASSEMBLY_SLACK) {
+        return Err(no_assembly(format!("Newton from it ends {moved:.3} away in some joint (more than {ASSEMBLY_SLACK}): give the assembly more accurately")));
+    }
+    // The configuration at the assembly's value, proven unique in a small box about the
+    // polished point.
     let point_box: Vec<Interval> = x0.iter().map(|&v| point(v)).collect();
-    let Some(start) = krawczyk::inflate(&point_box, &inflation, |x| square.image(x, point(r.from))).filter(|k| square.on_input(k, point(r.from))) else {
-        return Err(MotionError::NoAssembly { joint: r.actuated.clone(), value: r.from, residual });
+    let Some(at_assembly) = krawczyk::inflate(&point_box, &INFLATION, |x| square.image(x, point(a_asm))).filter(|k| square.on_input(k, point(a_asm))) else {
+        return Err(no_assembly("no box about it is proven to hold exactly one configuration (a singular configuration?)".into()));
     };
-    let start_joints = bounds(problem.joint_values(&IntervalBox::new(start.clone())));
-
-    let direction = if r.to >= r.from { 1.0 } else { -1.0 };
-    let mut a = r.from;
-    let mut enclosure = start;
-    let mut h = r.max_step;
-    let mut steps = Vec::new();
     let stopped = || -> Option<Limit> {
         if control.cancel.load(Ordering::Relaxed) {
             Some(Limit::Cancelled)
@@ -412,27 +415,75 @@ pub fn check_input_motion(m: &Mechanism, fixed: &[(String, f64)], request: &Moti
             None
         }
     };
+    // The branch of the assembly carried to `from` by the same tube, so the motion starts on it.
+    let start = if a_asm == r.from {
+        at_assembly
+    } else {
+        let lead = follow(&square, r, at_assembly, a_asm, r.from, &stopped);
+        if lead.verdict != MotionVerdict::Clear {
+            let reached = match lead.verdict {
+                MotionVerdict::Undecided { from, .. } | MotionVerdict::Stopped { from, .. } => from,
+                MotionVerdict::Clear => r.from,
+            };
+            return Err(no_assembly(format!("its branch is proven only up to {} = {reached}, short of the start {}", r.actuated, r.from)));
+        }
+        lead.enclosure
+    };
+    let start_joints = bounds(problem.joint_values(&IntervalBox::new(start.clone())));
+    let Followed { steps, verdict, enclosure } = follow(&square, r, start, r.from, r.to, &stopped);
+    let steps = steps.into_iter().map(|(a, k)| MotionStep { input: a, joints: bounds(problem.joint_values(&IntervalBox::new(k))) }).collect();
+    let verdict = match verdict {
+        MotionVerdict::Undecided { from, reason, .. } if r.name_turning_point => {
+            let here = problem.joint_values(&IntervalBox::new(enclosure.clone()));
+            let near = nearest_turning_point(m, fixed, &r.actuated, &here, control, t0);
+            MotionVerdict::Undecided { from, reason, near }
+        }
+        v => v,
+    };
+    Ok(InputMotionCheck { mechanism: problem.name.clone(), request: r.clone(), joints, start: start_joints, steps, verdict, seconds: t0.elapsed().as_secs_f64() })
+}
+
+/// How `krawczyk::inflate` grows a trial box: a tenth of each component's width a round.
+const INFLATION: Inflation<'static> = Inflation { rounds: 5, own: 0.1, widest: 0.0, widest_of: &[], absolute: 1e-12, ulps: 8.0 };
+
+/// How far (radians or metres, in every joint) Newton may move the given assembly.
+const ASSEMBLY_SLACK: f64 = 0.1;
+
+/// What a tube following gives.
+struct Followed {
+    /// Per proven step: the input's range and the box.
+    steps: Vec<([f64; 2], Vec<Interval>)>,
+    verdict: MotionVerdict,
+    /// The configuration at the last proven input value, enclosed.
+    enclosure: Vec<Interval>,
+}
+
+/// Follows the one configuration in `enclosure` at input `from` to input `to` (module doc).
+fn follow(square: &Square, r: &MotionRequest, mut enclosure: Vec<Interval>, from: f64, to: f64, stopped: &dyn Fn() -> Option<Limit>) -> Followed {
+    let direction = if to >= from { 1.0 } else { -1.0 };
+    let mut a = from;
+    let mut h = r.max_step;
+    let mut steps = Vec::new();
     let verdict = loop {
-        if a == r.to {
+        if a == to {
             break MotionVerdict::Clear;
         }
         if let Some(limit) = stopped() {
             break MotionVerdict::Stopped { from: a, limit };
         }
-        let a1 = if (r.to - a).abs() <= h { r.to } else { a + direction * h };
+        let a1 = if (to - a).abs() <= h { to } else { a + direction * h };
         let range = interval(a.min(a1), a.max(a1));
         let centre: Vec<f64> = enclosure.iter().map(|d| d.mid()).collect();
         let (predicted, res) = square.newton(centre.clone(), a1);
         let predicted = if res < 1e-9 { predicted } else { centre };
         // The trial holds the enclosure at `a` (continuity) and the predicted point at `a1`.
         let trial: Vec<Interval> = enclosure.iter().zip(&predicted).map(|(e, &p)| e.convex_hull(point(p))).collect();
-        let proven = krawczyk::inflate(&trial, &inflation, |x| square.image(x, range)).filter(|k| square.on_input(k, range));
+        let proven = krawczyk::inflate(&trial, &INFLATION, |x| square.image(x, range)).filter(|k| square.on_input(k, range));
         match proven {
             Some(k) => {
                 // The one configuration at `a1` in `k`, enclosed tightly for the next trial.
-                let at_end = krawczyk::tighten(k.clone(), 1e-13, |x| square.step(x, point(a1)));
-                steps.push(MotionStep { input: [range.inf(), range.sup()], joints: bounds(problem.joint_values(&IntervalBox::new(k))) });
-                enclosure = at_end;
+                enclosure = krawczyk::tighten(k.clone(), 1e-13, |x| square.step(x, point(a1)));
+                steps.push(([range.inf(), range.sup()], k));
                 a = a1;
                 h = (2.0 * h).min(r.max_step);
             }
@@ -446,15 +497,7 @@ pub fn check_input_motion(m: &Mechanism, fixed: &[(String, f64)], request: &Moti
             }
         }
     };
-    let verdict = match verdict {
-        MotionVerdict::Undecided { from, reason, .. } if r.name_turning_point => {
-            let here = problem.joint_values(&IntervalBox::new(enclosure.clone()));
-            let near = nearest_turning_point(m, fixed, &r.actuated, &here, control, t0);
-            MotionVerdict::Undecided { from, reason, near }
-        }
-        v => v,
-    };
-    Ok(InputMotionCheck { mechanism: problem.name.clone(), request: r.clone(), joints, start: start_joints, steps, verdict, seconds: t0.elapsed().as_secs_f64() })
+    Followed { steps, verdict, enclosure }
 }
 
 /// How far (largest joint gap, wrapped for angles) a certified turning point may lie from the
