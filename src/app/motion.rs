@@ -11,6 +11,11 @@
 //! counts only when `cos(a − K − Δ) > 0` is proven on its enclosure, so its configuration has
 //! the input value `a` itself.
 //!
+//! The start: Newton polishes the assembly at its own input value (refused when it moves a joint
+//! by more than `ASSEMBLY_SLACK`), one Krawczyk proof boxes that configuration, and when the
+//! assembly's input value is not `from` the same steps carry its branch to `from` first (refused
+//! unless all proven), so the motion starts on the assembly's branch, not on a neighbour's.
+//!
 //! Continuity: step `k + 1`'s trial box holds the enclosure of step `k`'s configuration at the
 //! shared input value, and uniqueness there makes the configuration of step `k + 1` at that
 //! value the same: the boxes follow one branch. A regular point of the input map is exactly where
