@@ -34,6 +34,7 @@ pub mod distances;
 pub mod image;
 pub(crate) mod kernel;
 pub mod manip3r;
+pub mod motion;
 pub mod singular;
 pub mod six;
 pub mod solve;

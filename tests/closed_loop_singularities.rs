@@ -326,7 +326,7 @@ mod butterfly {
 /// point of θ6, polished by Newton on the augmented system (loops, det of the passive Jacobian).
 /// Branches are started from points of the sheet grid until every grid point lies on a traced
 /// branch, so no branch the grid touches is missed.
-mod trace {
+pub(super) mod trace {
     use nalgebra::{DMatrix, DVector};
     use std::f64::consts::PI;
 
@@ -488,7 +488,7 @@ mod trace {
 }
 
 /// Starting points for `trace`: zeros of h along θ7 on rows of θ6, every sheet, lifted.
-fn butterfly_starts() -> Vec<Vec<f64>> {
+pub(super) fn butterfly_starts() -> Vec<Vec<f64>> {
     let mut starts = Vec::new();
     let n = 1000;
     let step = 2.0 * PI / n as f64;

@@ -31,6 +31,8 @@ mod certified_distances;
 mod spatial;
 /// Singular sets of planar closed-loop linkages against closed forms, grids and Newton.
 mod closed_loop_singularities;
+/// Input motions of 1-dof loops checked by tube following against closed forms.
+mod input_motion;
 /// Singular sets of spatial linkages: RSSR and spherical four-bar singular points against their
 /// closed-form input–output relations.
 mod spatial_singularities;

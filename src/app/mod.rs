@@ -15,6 +15,7 @@ pub(crate) mod distances;
 pub(crate) mod linkage;
 pub(crate) mod loops;
 mod merge;
+pub(crate) mod motion;
 pub(crate) mod path;
 mod platform;
 pub(crate) mod six;
@@ -25,6 +26,7 @@ pub use arm::{collisions, inverse_kinematics, singularities, Arm, ArmCollisions,
 pub use distances::{DistancesJob, DistancesRequest};
 pub use linkage::{describe_freedom, LinkageAnalysis, SolveJob};
 pub use loops::{all_kinds, analyse_image, image_points, Actuation, ImageAnalysisError, ImageSearch, SingularSets};
+pub use motion::{check_input_motion, motion_joints, InputMotionCheck, MotionError, MotionRequest, MotionStep, MotionVerdict};
 pub use platform::PlatformAnalysis;
 pub use path::{check_path, check_path3, positioning_joints, ArmPathCheck, PathSet};
 pub use six::{arm_cuspidality, arm_cuspidality_of, chain6, inverse_kinematics6, ArmCuspidality, ArmIk6, ArmVerdictLine};

@@ -7,9 +7,9 @@ use anyhow::{bail, Context, Result};
 use linkspace::model::urdf;
 use linkspace::problems::{Output, SingularKind};
 use linkspace::problems::Model;
-use linkspace::app::{all_kinds, analyse_image, image_points, Actuation, ImageSearch, SingularSets};
+use linkspace::app::{check_input_motion, motion_joints, MotionRequest, all_kinds, analyse_image, image_points, Actuation, ImageSearch, SingularSets};
 use linkspace::report::singular::SingularReport;
-use linkspace::search::SolverSettings;
+use linkspace::search::{Control, Limits, SolverSettings};
 use std::io::Write;
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
@@ -31,6 +31,9 @@ pub(crate) enum Kind {
     Cusps,
     /// 2-dof mechanisms: the nodes of the type-II image alone (no cover, cusps or regions).
     Nodes,
+    /// 1-dof planar loops: a motion of the actuated joint (`--from`, `--to`) from an assembly
+    /// (`--assembly`) checked against the input (type II) singularities by tube following.
+    Motion,
 }
 
 #[derive(clap::Args)]
@@ -60,6 +63,22 @@ pub(crate) struct LoopSingularitiesArgs {
     /// `--kind image`: cells per actuator axis of the raster that finds the regions.
     #[arg(long, default_value_t = 128)]
     grid: usize,
+    /// `--kind motion`: the actuated joint's start value (radians or metres).
+    #[arg(long, allow_hyphen_values = true)]
+    from: Option<f64>,
+    /// `--kind motion`: its end value.
+    #[arg(long, allow_hyphen_values = true)]
+    to: Option<f64>,
+    /// `--kind motion`: an approximate configuration at the start, one value per free joint in
+    /// file order (a wrong count names them).
+    #[arg(long, value_name = "Q1,Q2,...", allow_hyphen_values = true)]
+    assembly: Option<String>,
+    /// `--kind motion`: the largest step of the input.
+    #[arg(long, default_value_t = 0.05)]
+    max_step: f64,
+    /// `--kind motion`: steps are halved down to this before the motion is left undecided.
+    #[arg(long, default_value_t = 1e-6)]
+    min_step: f64,
 }
 
 /// `LINK@X,Y` or `J1,J2`.
@@ -102,6 +121,7 @@ pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
         Kind::Image => return run_image(&args, &mechanism, &fixed, &actuated, &settings),
         Kind::Cusps => return run_points(&args, &mechanism, &fixed, &actuated, ImageSearch::Cusps, &settings),
         Kind::Nodes => return run_points(&args, &mechanism, &fixed, &actuated, ImageSearch::Nodes, &settings),
+        Kind::Motion => return run_motion(&args, &mechanism, &fixed, &actuated, &settings),
         _ => {}
     }
     let kinds: Vec<SingularKind> = match args.kind {
@@ -109,7 +129,7 @@ pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
         Kind::Input => vec![SingularKind::Input],
         Kind::Output => vec![SingularKind::Output],
         Kind::All => all_kinds(&actuated),
-        Kind::Image | Kind::Cusps | Kind::Nodes => unreachable!("handled above"),
+        Kind::Image | Kind::Cusps | Kind::Nodes | Kind::Motion => unreachable!("handled above"),
     };
     // The orchestration the node runs as well: every problem built first, one timeout for all.
     let sets = SingularSets::new(&mechanism, &fixed, &kinds, &actuated, output).with_context(|| format!("building {}", args.urdf.display()))?;
@@ -229,6 +249,27 @@ fn run_points(args: &LoopSingularitiesArgs, mechanism: &linkspace::model::Mechan
     }
     if let Some(path) = &args.json {
         super::write_file(path, serde_json::to_string_pretty(&linkspace::report::image::ImagePointsJson(&r))?)?;
+    }
+    Ok(())
+}
+
+/// An input motion checked by tube following; one summary and one JSON report.
+fn run_motion(args: &LoopSingularitiesArgs, mechanism: &linkspace::model::Mechanism, fixed: &[(String, f64)], actuated: &[String], settings: &SolverSettings) -> Result<()> {
+    let [joint] = actuated else { bail!("--kind motion: one actuated joint (--actuated J), got {}", actuated.len()) };
+    let (Some(from), Some(to), Some(assembly)) = (args.from, args.to, args.assembly.as_deref()) else {
+        bail!("--kind motion needs --from A --to B --assembly Q1,Q2,... (the free joints: {})", motion_joints(mechanism, fixed).map(|j| j.join(", ")).unwrap_or_default());
+    };
+    let assembly = assembly.split(',').map(|v| v.trim().parse::<f64>().with_context(|| format!("--assembly: '{v}' is not a number"))).collect::<Result<Vec<f64>>>()?;
+    let request = MotionRequest { actuated: joint.clone(), from, to, assembly, max_step: args.max_step, min_step: args.min_step, name_turning_point: true };
+    let cancel = AtomicBool::new(false);
+    let control = Control { limits: Limits { timeout: settings.timeout, ..Limits::default() }, threads: 1, cancel: &cancel };
+    let found = check_input_motion(mechanism, fixed, &request, &control).with_context(|| format!("checking {}", args.urdf.display()))?;
+    let r = linkspace::report::motion::MotionReport::of(&found);
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{}: {} from {} to {}: {} ({} steps, {:.3} s)", r.singular_set, r.actuated, r.from, r.to, r.verdict, r.steps.len(), r.seconds).ok();
+    writeln!(out, "  {}", r.reason).ok();
+    if let Some(path) = &args.json {
+        super::write_file(path, serde_json::to_string_pretty(&r)?)?;
     }
     Ok(())
 }
