@@ -580,7 +580,8 @@ mod homotopy_reference {
     }
 
     /// 1,000 poses per fixture (`tests/data/ik6_reference_1000.json`, compact). `IK6_REFERENCE`
-    /// names another file of `tests/data` (say a checkpoint of the generator) and `IK6_POSES`
+    /// names another file of `tests/data` (`ik6_reference_irb140_1000.json`: the IRB 140-style
+    /// arm, or a checkpoint of the generator) and `IK6_POSES`
     /// (`a..b`) a range of poses, to check part of a file.
     #[test]
     #[ignore = "long: 1,000 poses per fixture"]
