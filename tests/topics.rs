@@ -1129,11 +1129,13 @@ fn reply_delivery_benchmark() {
 /// box set of about 2 MB (the four-bar's free curve at sigma 1e-3, 14,336 boxes) every 50 ms with
 /// nobody subscribed; unpatched RustDDS kept every sample of such a TransientLocal writer and
 /// grew by tens of MB/s. Resident memory (VmRSS from /proc) is sampled every second: what is
-/// retained is the floor of a window (its minimum), and that must stay within 10% of the first
-/// window's floor over 15 s more (LINKSPACE_RSS_SECONDS=60 for a full
-/// minute). Samples in flight are live memory too: on a loaded machine a few of
-/// them (2 MB each) overlap now and then, so the peak is bounded separately, at 1.5 times the
-/// first window's peak. Unbounded retention fails both by far. No Python needed.
+/// retained is the floor of a window (its minimum). Samples in flight are live memory too: on a
+/// loaded machine (the rest of the suite running beside the node) a few of them (2 MB each) stay
+/// queued for seconds at a time, so the floor of the last ten seconds may stand above the first
+/// window's by up to 10% plus four samples (8 MiB) over 15 s more (LINKSPACE_RSS_SECONDS=60 for a
+/// full minute), and the peak is bounded separately, at 1.5 times the first window's peak.
+/// Unbounded retention grows by more than that every second and fails both by far. No Python
+/// needed.
 #[test]
 fn memory_stays_flat_when_nobody_subscribes() {
     if std::env::var("LINKSPACE_SKIP_ROS").is_ok_and(|v| v == "1") {
@@ -1160,10 +1162,11 @@ fn memory_stays_flat_when_nobody_subscribes() {
     let rest = sample(seconds);
     let floor_peak = |w: &[u64]| (*w.iter().min().expect("samples"), *w.iter().max().expect("samples"));
     let (start_floor, start_peak) = floor_peak(&first);
-    let (end_floor, _) = floor_peak(&rest[rest.len().saturating_sub(5)..]);
+    let (end_floor, _) = floor_peak(&rest[rest.len().saturating_sub(10)..]);
     let (_, rest_peak) = floor_peak(&rest);
     eprintln!("--republish 0.05, no subscriber, 5+{seconds} s: VmRSS floor {start_floor} -> {end_floor} KiB, peak {start_peak} -> {rest_peak} KiB ({first:?} {rest:?})");
-    assert!(end_floor as f64 <= 1.10 * start_floor as f64, "retained memory grew from {start_floor} KiB to {end_floor} KiB in {seconds} s: {first:?} {rest:?}");
+    const IN_FLIGHT_KIB: f64 = 4.0 * 2048.0;
+    assert!(end_floor as f64 <= 1.10 * start_floor as f64 + IN_FLIGHT_KIB, "retained memory grew from {start_floor} KiB to {end_floor} KiB in {seconds} s: {first:?} {rest:?}");
     assert!(rest_peak as f64 <= 1.5 * start_peak as f64, "peak memory grew from {start_peak} KiB to {rest_peak} KiB in {seconds} s: {first:?} {rest:?}");
 }
 
