@@ -12,9 +12,7 @@
 //! the segment) may hold a zero without a proven sign change: they are reported as such.
 //! No IO.
 
-use crate::search::{Control, Limit};
-use std::sync::atomic::Ordering;
-use std::time::Instant;
+use crate::search::{Budget, Control, Limit};
 use thiserror::Error;
 
 /// Pieces narrower than this (in the segment's parameter) are no longer cut while covering it.
@@ -137,16 +135,8 @@ pub fn check(det: &dyn SignProof, waypoints: &[Vec<f64>], tolerance: f64, contro
     if !(tolerance > 0.0 && tolerance.is_finite()) {
         return Err(BadPath(format!("the tolerance must be a positive number of radians, got {tolerance}")));
     }
-    let start = Instant::now();
-    let stop = || -> Option<Limit> {
-        if control.cancel.load(Ordering::Relaxed) {
-            Some(Limit::Cancelled)
-        } else if control.limits.timeout.is_some_and(|t| start.elapsed() >= t) {
-            Some(Limit::Time)
-        } else {
-            None
-        }
-    };
+    let budget = Budget::start(control.limits, control.cancel);
+    let stop = || budget.interrupted();
     let mut segments = Vec::new();
     for w in waypoints.windows(2) {
         let verdict = match stop() {

@@ -29,13 +29,11 @@ use crate::interval::{interval, point, trig, Interval, IntervalBox};
 use crate::model::Mechanism;
 use crate::problems::linkage::JointCoordinate;
 use crate::problems::{Coordinates, LinkageError, LinkageProblem, Output, SingularError, SingularKind};
-use crate::search::{Control, Limit, SolverSettings};
+use crate::search::{Budget, Control, Limit, SolverSettings};
 use crate::singular::BoxKind;
 use crate::system::{EquationKind, Monomial, VarId};
 use nalgebra::{DMatrix, DVector};
 use std::collections::BTreeMap;
-use std::sync::atomic::Ordering;
-use std::time::Instant;
 use thiserror::Error;
 
 /// What cannot be checked.
@@ -299,7 +297,7 @@ fn wrap_f64(x: f64) -> f64 {
 /// planar loop `m` with joints `fixed` (module doc). A limit of `control` (timeout, cancel)
 /// stops it with what is proven so far.
 pub fn check_input_motion(m: &Mechanism, fixed: &[(String, f64)], request: &MotionRequest, control: &Control) -> Result<InputMotionCheck, MotionError> {
-    let t0 = Instant::now();
+    let budget = Budget::start(control.limits, control.cancel);
     let r = request;
     if !(r.from.is_finite() && r.to.is_finite()) {
         return Err(MotionError::BadRequest(format!("the input's start and end must be finite numbers, got {} and {}", r.from, r.to)));
@@ -411,15 +409,7 @@ pub fn check_input_motion(m: &Mechanism, fixed: &[(String, f64)], request: &Moti
     let Some(at_assembly) = krawczyk::inflate(&point_box, &INFLATION, |x| square.image(x, point(a_asm))).filter(|k| square.on_input(k, point(a_asm))) else {
         return Err(no_assembly("no box about it is proven to hold exactly one configuration (a singular configuration?)".into()));
     };
-    let stopped = || -> Option<Limit> {
-        if control.cancel.load(Ordering::Relaxed) {
-            Some(Limit::Cancelled)
-        } else if control.limits.timeout.is_some_and(|t| t0.elapsed() >= t) {
-            Some(Limit::Time)
-        } else {
-            None
-        }
-    };
+    let stopped = || budget.interrupted();
     // The branch of the assembly carried to `from` by the same tube, so the motion starts on it.
     let start = if a_asm == r.from {
         at_assembly
@@ -440,12 +430,12 @@ pub fn check_input_motion(m: &Mechanism, fixed: &[(String, f64)], request: &Moti
     let verdict = match verdict {
         MotionVerdict::Undecided { from, reason, .. } if r.name_turning_point => {
             let here = problem.joint_values(&IntervalBox::new(enclosure.clone()));
-            let near = nearest_turning_point(m, fixed, &r.actuated, &here, control, t0);
+            let near = nearest_turning_point(m, fixed, &r.actuated, &here, control, &budget);
             MotionVerdict::Undecided { from, reason, near }
         }
         v => v,
     };
-    Ok(InputMotionCheck { mechanism: problem.name.clone(), request: r.clone(), joints, start: start_joints, steps, verdict, seconds: t0.elapsed().as_secs_f64() })
+    Ok(InputMotionCheck { mechanism: problem.name.clone(), request: r.clone(), joints, start: start_joints, steps, verdict, seconds: budget.elapsed().as_secs_f64() })
 }
 
 /// How `krawczyk::inflate` grows a trial box: a tenth of each component's width a round.
@@ -511,9 +501,9 @@ const NEAR: f64 = 0.05;
 
 /// The certified turning point of `actuated` (`singular::points`) nearest to `here`, when one
 /// lies within `NEAR` in every joint.
-fn nearest_turning_point(m: &Mechanism, fixed: &[(String, f64)], actuated: &str, here: &BTreeMap<String, (f64, f64)>, control: &Control, t0: Instant) -> Option<BTreeMap<String, [f64; 2]>> {
+fn nearest_turning_point(m: &Mechanism, fixed: &[(String, f64)], actuated: &str, here: &BTreeMap<String, (f64, f64)>, control: &Control, budget: &Budget) -> Option<BTreeMap<String, [f64; 2]>> {
     let sets = crate::app::SingularSets::new(m, fixed, &[SingularKind::Input], &[actuated.to_string()], None::<Output>).map_err(|_: SingularError| ()).ok()?;
-    let settings = SolverSettings { timeout: control.limits.timeout.map(|t| t.saturating_sub(t0.elapsed())), ..SolverSettings::default() };
+    let settings = SolverSettings { timeout: control.limits.timeout.map(|t| t.saturating_sub(budget.elapsed())), ..SolverSettings::default() };
     let solved = sets.solve(&settings, control.cancel).ok()?;
     let (p, set) = (sets.problems.first()?, solved.first()?);
     let mut best: Option<(f64, BTreeMap<String, [f64; 2]>)> = None;
