@@ -486,10 +486,13 @@ mod homotopy_reference {
         lo - slack <= x && x <= hi + slack
     }
 
+    /// Per fixture: its name, the histogram of solution counts, and (pose, seconds) per pose.
+    type Checked = (String, std::collections::BTreeMap<usize, usize>, Vec<(usize, f64)>);
+
     /// Checks the poses of every fixture of `file` that `pick` selects (from the pose's index and
     /// the index of the fixture's first pose with the most solutions); returns per fixture the
     /// histogram of solution counts and the solver's times (seconds).
-    fn check(file: &str, pick: impl Fn(usize, usize) -> bool) -> Vec<(String, std::collections::BTreeMap<usize, usize>, Vec<f64>)> {
+    fn check(file: &str, pick: impl Fn(usize, usize) -> bool) -> Vec<Checked> {
         let refs = reference(file);
         // Solutions are written with 17 significant digits, or 9 in a compact file.
         let slack = if refs.get("compact").and_then(Value::as_bool) == Some(true) { 2e-8 } else { 1e-9 };
@@ -529,7 +532,7 @@ mod homotopy_reference {
                 let expected: Vec<[f64; 6]> = p["solutions"].as_array().expect("solutions").iter().map(six).collect();
                 let t = Instant::now();
                 let sol = ik::solve(&chain, &PoseTarget::around(&pose, 1e-12).expect("finite"), 1e-10, &control()).expect("solves");
-                times.push(t.elapsed().as_secs_f64());
+                times.push((i, t.elapsed().as_secs_f64()));
                 assert_eq!(sol.status, Status::Complete, "{name} pose {i}");
                 assert!(sol.clusters.is_empty(), "{name} pose {i}: undecided {:?}", sol.clusters);
                 let inside = |u: &[linkspace::Interval; 6], a: &[f64; 6]| (0..6).all(|k| holds(u[k].inf(), u[k].sup(), a[k], slack));
@@ -549,11 +552,23 @@ mod homotopy_reference {
         out
     }
 
-    fn summary(found: &[(String, std::collections::BTreeMap<usize, usize>, Vec<f64>)]) {
+    /// Per fixture: the counts, the median and maximum time, and the slowest poses (index: ms).
+    fn summary(found: &[Checked]) {
         for (name, hist, times) in found {
             let mut t = times.clone();
-            t.sort_by(f64::total_cmp);
-            println!("{name}: {} poses, counts {hist:?}, median {:.1} ms, max {:.1} ms", t.len(), 1e3 * t[t.len() / 2], 1e3 * t[t.len() - 1]);
+            t.sort_by(|a, b| a.1.total_cmp(&b.1));
+            let slowest: Vec<String> = t.iter().rev().take(8).map(|(i, s)| format!("{i}: {:.0}", 1e3 * s)).collect();
+            let over = |limit: f64| t.iter().filter(|p| p.1 > limit).count();
+            println!(
+                "{name}: {} poses, counts {hist:?}, median {:.1} ms, max {:.1} ms; over 50 / 100 / 250 ms: {} / {} / {}; slowest (pose: ms) {}",
+                t.len(),
+                1e3 * t[t.len() / 2].1,
+                1e3 * t[t.len() - 1].1,
+                over(0.05),
+                over(0.1),
+                over(0.25),
+                slowest.join(", ")
+            );
         }
     }
 

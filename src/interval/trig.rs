@@ -1,4 +1,4 @@
-//! Sound interval sine and cosine.
+//! Sound interval sine and cosine, and the angle of a direction known up to a box.
 //!
 //! inari is built without its `gmp` feature, so it has no elementary functions; these are ours.
 //!
@@ -105,6 +105,51 @@ pub fn cos(x: Interval) -> Interval {
     hull(&[lo.cos(), hi.cos()], max, min)
 }
 
+/// An interval `φ` such that every angle `θ` whose direction `(cos θ, sin θ)` is a positive
+/// multiple of some `(c, s)` in the box `c × s` is `φ` modulo a turn; `None` when the box holds
+/// the origin (any angle) or is not finite.
+///
+/// A box without the origin lies in an open half-plane through it, so its directions span less
+/// than a half turn, and the extreme ones are those of corners: the corners' angles, taken
+/// relative to the centre's, bound them. `atan2` (glibc: within 2 ulps) is widened by 1e-14,
+/// over 10 ulps of any angle up to a turn.
+///
+/// # Examples
+/// ```
+/// use linkspace::interval::trig::angle;
+/// use linkspace::interval::interval;
+/// // Directions just left of (−1, 0): the angle straddles ±π, returned about π.
+/// let phi = angle(interval(-1.0, -0.9), interval(-0.01, 0.01)).expect("no origin");
+/// assert!(phi.contains(std::f64::consts::PI) && phi.wid() < 0.03);
+/// assert!(angle(interval(-1.0, 1.0), interval(0.0, 0.1)).is_none());
+/// ```
+pub fn angle(c: Interval, s: Interval) -> Option<Interval> {
+    if c.is_empty() || s.is_empty() || c.contains(0.0) && s.contains(0.0) {
+        return None;
+    }
+    let (c0, c1, s0, s1) = (c.inf(), c.sup(), s.inf(), s.sup());
+    if ![c0, c1, s0, s1].iter().all(|x| x.is_finite()) {
+        return None;
+    }
+    let centre = (0.5 * (s0 + s1)).atan2(0.5 * (c0 + c1));
+    let relative = |y: f64, x: f64| {
+        let d = y.atan2(x) - centre;
+        // Within a half turn of the centre's angle: bring it to (−π, π].
+        if d > std::f64::consts::PI {
+            d - std::f64::consts::TAU
+        } else if d <= -std::f64::consts::PI {
+            d + std::f64::consts::TAU
+        } else {
+            d
+        }
+    };
+    let corners = [relative(s0, c0), relative(s0, c1), relative(s1, c0), relative(s1, c1)];
+    let lo = corners.iter().cloned().fold(f64::INFINITY, f64::min);
+    let hi = corners.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    const SLACK: f64 = 1e-14;
+    Some(crate::interval::interval(centre + lo - SLACK, centre + hi + SLACK))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -124,6 +169,23 @@ mod tests {
     }
 
     proptest! {
+        /// Random boxes without the origin and points in them: the point's angle is in the
+        /// enclosure modulo a turn.
+        #[test]
+        fn angles_of_boxes_hold_every_sampled_direction(c0 in -2.0f64..2.0, wc in 0.0f64..1.0, s0 in -2.0f64..2.0, ws in 0.0f64..1.0, tc in 0.0f64..=1.0, ts in 0.0f64..=1.0, scale in 0.1f64..10.0) {
+            let (c, s) = (interval(c0, c0 + wc), interval(s0, s0 + ws));
+            let (x, y) = (c0 + tc * wc, s0 + ts * ws);
+            match angle(c, s) {
+                None => prop_assert!(c.contains(0.0) && s.contains(0.0)),
+                Some(phi) => {
+                    let theta = (scale * y).atan2(scale * x);
+                    let turns = ((phi.mid() - theta) / std::f64::consts::TAU).round();
+                    prop_assert!(phi.contains(theta + turns * std::f64::consts::TAU), "{phi:?} misses {theta} of ({x}, {y})");
+                    prop_assert!(phi.wid() < std::f64::consts::PI + 1e-9);
+                }
+            }
+        }
+
         #[test]
         fn enclosures_hold_every_sampled_point(lo in -20.0f64..20.0, w in 0.0f64..4.0, t in 0.0f64..=1.0) {
             let x = interval(lo, lo + w);
