@@ -15,6 +15,7 @@ use linkspace::app::{self, Arm, PathSet};
 use linkspace::joint_path::SegmentVerdict;
 use linkspace::manip3r::LoadOptions;
 use linkspace::model::{urdf, JointKind, Mechanism};
+use crate::util::SplitMix;
 use linkspace::search::{Control, Limits};
 use nalgebra::{Isometry3, Point3, Unit, UnitQuaternion, Vector3};
 use std::sync::atomic::AtomicBool;
@@ -23,23 +24,6 @@ static NEVER: AtomicBool = AtomicBool::new(false);
 
 fn control() -> Control<'static> {
     Control { limits: Limits::default(), threads: 1, cancel: &NEVER }
-}
-
-/// splitmix64: a fixed sequence, the same on every run.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    fn within(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
 }
 
 /// The analysed point's `det Df` in `f64`, from the parsed file (see the module doc).
@@ -123,12 +107,12 @@ const ARMS: [&str; 6] = [
 /// the two speak of one determinant.
 #[test]
 fn the_reference_is_the_library_det_df() {
-    let mut rng = Rng(7);
+    let mut rng = SplitMix(7);
     for file in ARMS {
         let (arm, reference) = load(file);
         let n = reference.joints.len();
         for _ in 0..50 {
-            let q: Vec<f64> = (0..n).map(|_| rng.within(-3.0, 3.0)).collect();
+            let q: Vec<f64> = (0..n).map(|_| rng.uniform(-3.0, 3.0)).collect();
             let want = reference.det(&q);
             let got = arm.chain.jets([linkspace::interval::point(q[1]), linkspace::interval::point(q[2])], 1).det().value();
             assert!(got.inf() - 1e-9 * (1.0 + want.abs()) <= want && want <= got.sup() + 1e-9 * (1.0 + want.abs()), "{file} at {q:?}: {want} vs {got:?}");
@@ -138,10 +122,10 @@ fn the_reference_is_the_library_det_df() {
 
 /// A segment of `reference` crossing `det Df = 0` once, transversally, at a known parameter:
 /// (from, to, t*), or None when the random line found none fit for the test.
-fn crossing_segment(reference: &Reference, rng: &mut Rng) -> Option<(Vec<f64>, Vec<f64>, f64)> {
+fn crossing_segment(reference: &Reference, rng: &mut SplitMix) -> Option<(Vec<f64>, Vec<f64>, f64)> {
     let n = reference.joints.len();
-    let q: Vec<f64> = (0..n).map(|_| rng.within(-3.0, 3.0)).collect();
-    let v: Vec<f64> = (0..n).map(|_| rng.within(-1.0, 1.0)).collect();
+    let q: Vec<f64> = (0..n).map(|_| rng.uniform(-3.0, 3.0)).collect();
+    let v: Vec<f64> = (0..n).map(|_| rng.uniform(-1.0, 1.0)).collect();
     let f = |s: f64| reference.det(&q.iter().zip(&v).map(|(a, b)| a + s * b).collect::<Vec<f64>>());
     // The first sign change along s ∈ [0, 2], then bisection to the last bit.
     let steps = 400;
@@ -159,7 +143,7 @@ fn crossing_segment(reference: &Reference, rng: &mut Rng) -> Option<(Vec<f64>, V
         }
     }
     let root = 0.5 * (lo + hi);
-    let (before, after) = (rng.within(0.05, 0.3), rng.within(0.05, 0.3));
+    let (before, after) = (rng.uniform(0.05, 0.3), rng.uniform(0.05, 0.3));
     let (a, b) = (root - before, root + after);
     let x: Vec<f64> = q.iter().zip(&v).map(|(q, v)| q + a * v).collect();
     let y: Vec<f64> = q.iter().zip(&v).map(|(q, v)| q + b * v).collect();
@@ -180,7 +164,7 @@ fn crossing_segment(reference: &Reference, rng: &mut Rng) -> Option<(Vec<f64>, V
 
 #[test]
 fn segments_through_a_singular_point_cross_there() {
-    let mut rng = Rng(2024);
+    let mut rng = SplitMix(2024);
     for file in ARMS {
         let (arm, reference) = load(file);
         let mut tried = 0;
@@ -210,15 +194,15 @@ fn segments_through_a_singular_point_cross_there() {
 
 #[test]
 fn segments_away_from_the_singular_set_are_clear() {
-    let mut rng = Rng(99);
+    let mut rng = SplitMix(99);
     for file in ARMS {
         let (arm, reference) = load(file);
         let n = reference.joints.len();
         let (mut tried, mut checked) = (0, 0);
         while checked < 12 && tried < 400 {
             tried += 1;
-            let x: Vec<f64> = (0..n).map(|_| rng.within(-3.0, 3.0)).collect();
-            let y: Vec<f64> = x.iter().map(|v| v + rng.within(-0.5, 0.5)).collect();
+            let x: Vec<f64> = (0..n).map(|_| rng.uniform(-3.0, 3.0)).collect();
+            let y: Vec<f64> = x.iter().map(|v| v + rng.uniform(-0.5, 0.5)).collect();
             let samples = 4000;
             let h = 1.0 / samples as f64;
             let values: Vec<f64> = (0..=samples).map(|i| reference.det(&lerp(&x, &y, i as f64 * h))).collect();

@@ -22,6 +22,7 @@
 //! rounded to nearest.
 
 use astro_float::{BigFloat, Consts, Radix, RoundingMode};
+use crate::util::SplitMix;
 use linkspace::model::urdf;
 use linkspace::problems::LinkageProblem;
 use linkspace::search::{SolverSettings, Status};
@@ -307,23 +308,19 @@ impl Mech {
 
 // ---------- the generator ----------
 
-/// splitmix64: a fixed, dependency-free stream per seed; `flips` says whether this mechanism's
-/// frames may be flipped (else they may sit at z offsets instead, see `random_origin`).
-struct Rng(u64, bool);
+/// A splitmix64 stream (`util::SplitMix`) and whether this mechanism's frames may be flipped
+/// (else they may sit at z offsets instead, see `random_origin`).
+struct Rng(SplitMix, bool);
 
 impl Rng {
     fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        self.0.next_u64()
     }
     fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
+        self.0.unit()
     }
     fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.unit()
+        self.0.uniform(lo, hi)
     }
     fn chance(&mut self, p: f64) -> bool {
         self.unit() < p
@@ -438,7 +435,7 @@ fn revolute(rng: &mut Rng, name: &str, parent: usize, child: usize, origin: Orig
 }
 
 fn generate(seed: u64) -> Mech {
-    let mut rng = Rng(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ 0x5EED, false);
+    let mut rng = Rng(SplitMix(seed.wrapping_mul(0x2545_F491_4F6C_DD1D) ^ 0x5EED), false);
     rng.1 = rng.chance(0.6);
     let family = [Family::FourBar, Family::SliderCrank, Family::WattSixBar][(seed % 3) as usize];
     // Most cases assemble by construction; a fifth are stretched and may not.
@@ -549,7 +546,7 @@ fn generate(seed: u64) -> Mech {
 
 /// Half the cranks pivot at the ground origin, the others somewhere log-uniform.
 fn rng_length_or_zero(seed: u64) -> f64 {
-    let mut r = Rng(seed ^ 0xC0FFEE, false);
+    let mut r = Rng(SplitMix(seed ^ 0xC0FFEE), false);
     if r.chance(0.5) {
         0.0
     } else {
@@ -793,7 +790,7 @@ fn miss(reported: &[Reported], a: &Assembly) -> f64 {
 fn sensitivity(m: &Mech, base: &[Assembly]) -> f64 {
     let mut worst = 0f64;
     for draw in 0..4 {
-        PERTURB.with(|p| *p.borrow_mut() = Some(Rng(draw, false)));
+        PERTURB.with(|p| *p.borrow_mut() = Some(Rng(SplitMix(draw), false)));
         let moved = reference(m);
         PERTURB.with(|p| *p.borrow_mut() = None);
         for (a, b) in base.iter().zip(&moved) {

@@ -33,3 +33,26 @@ pub fn solve(p: &LinkageProblem, sigma: f64) -> Run {
 pub fn covered(boxes: &[IntervalBox], x: &[f64], slack: f64) -> bool {
     boxes.iter().any(|b| b.dims.iter().zip(x).all(|(d, &v)| d.inf() - slack <= v && v <= d.sup() + slack))
 }
+
+/// splitmix64: a fixed, dependency-free stream per seed, the same on every run.
+pub struct SplitMix(pub u64);
+
+impl SplitMix {
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in [0, 1).
+    pub fn unit(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Uniform in [lo, hi).
+    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.unit()
+    }
+}
