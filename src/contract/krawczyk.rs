@@ -117,7 +117,6 @@ pub fn image<D: Dim>(b: &OVector<Interval, D>, m: &OVector<f64, D>, fm: &OVector
 where
     DefaultAllocator: Allocator<D> + Allocator<D, D>,
 {
-    let n = b.nrows();
     let mid = jac.map(|x| x.mid());
     if !mid.iter().all(|v| v.is_finite()) {
         return None;
@@ -126,6 +125,19 @@ where
     if !y.iter().all(|v| v.is_finite()) {
         return None;
     }
+    image_preconditioned(b, m, fm, jac, &y)
+}
+
+/// Krawczyk's image with the preconditioner `y`, for `R` equations in `C` unknowns:
+/// `K = m − Y·F(m) + (I − Y·J(b))(b − m)` holds every zero in `b` of `Y·F`, so every zero of
+/// `F`, whatever `y` is. `image` takes `(mid J)⁻¹`; a system with more equations than unknowns
+/// takes a left pseudo-inverse, and then only `K ∩ b` (emptiness, narrowing) means anything.
+/// `None` when the image is not finite.
+pub fn image_preconditioned<R: Dim, C: Dim>(b: &OVector<Interval, C>, m: &OVector<f64, C>, fm: &OVector<Interval, R>, jac: &OMatrix<Interval, R, C>, y: &OMatrix<f64, C, R>) -> Option<OVector<Interval, C>>
+where
+    DefaultAllocator: Allocator<R> + Allocator<C> + Allocator<R, C> + Allocator<C, R>,
+{
+    let (rows, n) = (fm.nrows(), b.nrows());
     let jac = jac.map(Iv::from);
     let fm = fm.map(Iv::from);
     let dx = b.zip_map(m, |b, m| Iv::from(b).sub(Iv { lo: m, hi: m }));
@@ -135,13 +147,13 @@ where
     let mut k = b.clone();
     for i in 0..n {
         let mut acc = Iv { lo: m[i], hi: m[i] };
-        for l in 0..n {
+        for l in 0..rows {
             acc = acc.sub(fm[l].scale(y[(i, l)]));
         }
         for j in 0..n {
             // (I − Y J)_{ij}
             let mut e = if i == j { Iv { lo: 1.0, hi: 1.0 } } else { Iv::ZERO };
-            for l in 0..n {
+            for l in 0..rows {
                 let jlj = jac[(l, j)];
                 if jlj != Iv::ZERO {
                     e = e.sub(jlj.scale(y[(i, l)]));

@@ -17,7 +17,10 @@
 //! the caller bounds the work (`budget`, `stop`) and gets back the pairs not yet decided.
 
 use super::ik::{Axis4Sides, Half, INVARIANTS};
+use crate::contract::krawczyk;
 use crate::interval::fast::Iv;
+use crate::interval::{interval, Interval};
+use nalgebra::SVector;
 
 /// A box of one side's two joints, its enclosure of the invariants, and its children.
 #[derive(Clone, Copy, Debug)]
@@ -201,10 +204,10 @@ const SETTLED: f64 = 1e-7;
 ///   (measured on a general 6R: a miss of about 3e-3, a smallest singular value of 1e-3 to
 ///   1e-2, thousands of pairs along it), the combination along the smallest keeps the miss
 ///   while its slope over the pair nearly vanishes, and excludes what no single row can;
-/// - Krawczyk's operator with the pseudo-inverse `C` of that Jacobian (the five rows have
-///   rank at most four: both sides' axis 4 has a unit direction), `K = m − C·h(m) +
-///   (I − C·J(X))(X − m)`, which holds every zero of `C·h` in `X`, so every zero of `h`; near a
-///   solution it narrows the pair to a few ulps in a few rounds.
+/// - Krawczyk's operator (`krawczyk::image_preconditioned`) with the pseudo-inverse `C` of
+///   that Jacobian (the five rows have rank at most four: both sides' axis 4 has a unit
+///   direction), which holds every zero of `h` in `X`; near a solution it narrows the pair to
+///   a few ulps in a few rounds.
 fn contract_leaf(sides: &Axis4Sides, (l, r): &Pair) -> Option<Pair> {
     // Unknowns (θ₂, θ₃, θ₆, θ₅) as in `ik::invariants`, whose Jacobian columns these are.
     let mut x = [l[0], l[1], r[0], r[1]];
@@ -238,19 +241,18 @@ fn contract_leaf(sides: &Axis4Sides, (l, r): &Pair) -> Option<Pair> {
         let Ok(c) = svd.pseudo_inverse(1e-12 * jm.norm()) else {
             return Some(pair_of(&x));
         };
+        let jac = nalgebra::SMatrix::<Interval, INVARIANTS, 4>::from_fn(|i, j| cols[j][i].to());
+        let image = krawczyk::image_preconditioned(&SVector::from(x.map(|v| interval(v[0], v[1]))), &SVector::from(m), &SVector::from(h.map(Iv::to)), &jac, &c);
+        let Some(k) = image else {
+            return Some(pair_of(&x));
+        };
         let mut next = x;
-        for k in 0..4 {
-            let mut acc = Iv { lo: m[k], hi: m[k] }.sub((0..INVARIANTS).fold(Iv::ZERO, |a, i| a.add(h[i].scale(c[(k, i)]))));
-            for j in 0..4 {
-                let cj = (0..INVARIANTS).fold(Iv::ZERO, |a, i| a.add(cols[j][i].scale(c[(k, i)])));
-                let e = if j == k { Iv { lo: 1.0, hi: 1.0 }.sub(cj) } else { Iv::ZERO.sub(cj) };
-                acc = acc.add(e.mul(dx[j]));
-            }
-            let (lo, hi) = (x[k][0].max(acc.lo), x[k][1].min(acc.hi));
+        for j in 0..4 {
+            let (lo, hi) = (x[j][0].max(k[j].inf()), x[j][1].min(k[j].sup()));
             if !(lo <= hi) {
                 return None;
             }
-            next[k] = [lo, hi];
+            next[j] = [lo, hi];
         }
         let shrunk = (0..4).any(|k| next[k][1] - next[k][0] < 0.9 * (x[k][1] - x[k][0]));
         x = next;
