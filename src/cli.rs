@@ -10,17 +10,17 @@ mod ranks;
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use linkspace::model::urdf;
-use linkspace::problems::TracedPoint;
-use linkspace::problems::ModelChoice;
+use linkspace::formulate::TracedPoint;
+use linkspace::formulate::ModelChoice;
 use linkspace::LpBackend;
 use linkspace::app::{self, Arm, IkPoint};
-use linkspace::manip3r::{self, collision};
-use linkspace::manip6r::PoseInput;
+use linkspace::analyses::arm3r::{self, collision};
+use linkspace::analyses::arm6r::PoseInput;
 use linkspace::app::Bounds;
-use linkspace::problems::Coordinates;
-use linkspace::report;
-use linkspace::search::Control;
-use linkspace::search::{BoxStatus, Limits, Progress, SolverSettings};
+use linkspace::formulate::Coordinates;
+use linkspace::edges::report;
+use linkspace::kernel::search::Control;
+use linkspace::kernel::search::{BoxStatus, Limits, Progress, SolverSettings};
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
@@ -116,7 +116,7 @@ pub(crate) struct ChainArgs {
 
 impl ChainArgs {
     /// The options, with every flag parsed (one clear line on bad input).
-    pub(crate) fn options(&self) -> Result<manip3r::LoadOptions> {
+    pub(crate) fn options(&self) -> Result<arm3r::LoadOptions> {
         let tip_point = match &self.tip_point {
             None => None,
             Some(text) => {
@@ -135,9 +135,9 @@ impl ChainArgs {
                 Ok((j.to_string(), v))
             })
             .collect::<Result<Vec<_>>>()?;
-        let spec = manip3r::ChainSpec { base: self.base.clone(), tip: self.tip.clone(), tip_point, locks, length_tolerance: 0.0 };
+        let spec = arm3r::ChainSpec { base: self.base.clone(), tip: self.tip.clone(), tip_point, locks, length_tolerance: 0.0 };
         let snap_tolerance = self.snap_tolerance.unwrap_or(linkspace::model::rounding::ANGLE_TOLERANCE);
-        Ok(manip3r::LoadOptions { spec, exact_geometry: self.exact_geometry, snap_tolerance, ignore_limits: self.ignore_limits })
+        Ok(arm3r::LoadOptions { spec, exact_geometry: self.exact_geometry, snap_tolerance, ignore_limits: self.ignore_limits })
     }
 }
 
@@ -399,7 +399,7 @@ pub fn run() -> Result<()> {
     #[cfg(feature = "mpi")]
     let ranks = ranks::join()?;
     #[cfg(feature = "mpi")]
-    if ranks.is_some() && linkspace::search::rank_and_size().1 > 1 && matches!(cli.command, Command::Serve(_)) {
+    if ranks.is_some() && linkspace::kernel::search::rank_and_size().1 > 1 && matches!(cli.command, Command::Serve(_)) {
         bail!("serve runs in one process: start it without mpirun");
     }
     match cli.command {
@@ -637,7 +637,7 @@ pub(crate) fn seconds_arg(t: Option<f64>) -> Result<Option<Duration>> {
 }
 
 fn singularities(args: SingularitiesArgs) -> Result<()> {
-    manip3r::check_precision(args.precision)?;
+    arm3r::check_precision(args.precision)?;
     let limits = args.limits.limits(SINGULARITIES_MAX_BOXES)?;
     if args.kind == SingularitiesKind::Cusps && args.nodes {
         bail!("--kind cusps searches no nodes: drop --nodes, or give --kind nodes");
@@ -674,7 +674,7 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
         "{}: {} cusps, {node_text}, {} internal-motion lines, {}{undecided} undecided, status {}{}, {:.3} s",
         report.robot,
         report.cusps.len(),
-        linkspace::manip3r::line_count(&found.run.cusps.bands),
+        linkspace::analyses::arm3r::line_count(&found.run.cusps.bands),
         match report.internal_motions.iter().filter(|m| m.near_degenerate.is_some()).count() {
             0 => String::new(),
             n => format!("{n} near-degenerate strips (undecided), "),
@@ -685,7 +685,7 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
     )
     .ok();
     let mid = |b: &[f64; 2]| 0.5 * (b[0] + b[1]);
-    let fmt = |j: &manip3r::Joints| j.iter().map(|(n, b)| format!("{n}={:.6}", mid(b))).collect::<Vec<_>>().join(" ");
+    let fmt = |j: &arm3r::Joints| j.iter().map(|(n, b)| format!("{n}={:.6}", mid(b))).collect::<Vec<_>>().join(" ");
     if let Some(why) = &report.not_searched {
         writeln!(out, "  not searched: {why}").ok();
     }
@@ -750,7 +750,7 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
 
 /// The whole-arm verdict of a six-joint arm whose 3R verdict is a sub-chain's (or whose wrist
 /// is spherical), as its report section; `None` for other arms or `--arm-budget 0`.
-fn whole_arm(args: &SingularitiesArgs, mechanism: &linkspace::Mechanism, options: &manip3r::LoadOptions, arm: &Arm, control: &Control) -> Result<Option<report::six::ArmCuspidalityReport>> {
+fn whole_arm(args: &SingularitiesArgs, mechanism: &linkspace::Mechanism, options: &arm3r::LoadOptions, arm: &Arm, control: &Control) -> Result<Option<report::six::ArmCuspidalityReport>> {
     if !(args.arm_budget.is_finite() && args.arm_budget >= 0.0) {
         bail!("--arm-budget must be a number of seconds >= 0, got {}", args.arm_budget);
     }
@@ -870,7 +870,7 @@ fn path_check(args: PathCheckArgs) -> Result<()> {
 }
 
 fn collisions(args: CollisionsArgs) -> Result<()> {
-    manip3r::check_precision(args.precision)?;
+    arm3r::check_precision(args.precision)?;
     let limits = args.limits.limits(collision::DEFAULT_MAX_BOXES)?;
     let options = args.chain.options()?;
     let mechanism = load_mechanism(&args.urdf)?;
@@ -911,7 +911,7 @@ fn collisions(args: CollisionsArgs) -> Result<()> {
 
 fn ik(args: IkArgs) -> Result<()> {
     let point = parse_ik_point(&args.point)?;
-    manip3r::check_precision(args.precision)?;
+    arm3r::check_precision(args.precision)?;
     let arm = load_arm(&args.urdf, args.uncertainty, &args.chain)?;
     let cancel = AtomicBool::new(false);
     let control = Control { limits: args.limits.limits(200_000)?, threads: args.limits.threads(), cancel: &cancel };

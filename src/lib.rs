@@ -1,10 +1,10 @@
 //! linkspace: every configuration a mechanism can take, with guarantees.
 //!
-//! A mechanism (from URDF, `model`) becomes a system of equations (`problems`), which the
+//! A mechanism (from URDF, `model`) becomes a system of equations (`formulate`), which the
 //! branch-and-prune kernel (`search`) covers with interval boxes that provably enclose every
 //! solution, shrinking boxes with sound contractors (`contract`). What a front end runs on a
 //! loaded mechanism (configuration spaces, singularities, inverse kinematics) is `analysis`;
-//! the 3R manipulator analyses of seed 003 are `manip3r`; JSON reports are `report`.
+//! the 3R manipulator analyses of seed 003 are `arm3r`; JSON reports are `report`.
 //! See ARCHITECTURE.md for the map.
 //!
 //! # Examples
@@ -12,7 +12,7 @@
 //! Both assembly modes of the bundled four-bar with its crank at 0.5 rad:
 //!
 //! ```
-//! use linkspace::{model::urdf, problems::LinkageProblem, SolverSettings, Status};
+//! use linkspace::{model::urdf, formulate::LinkageProblem, SolverSettings, Status};
 //! use std::sync::atomic::AtomicBool;
 //!
 //! let mechanism = urdf::parse(include_str!("../urdf/four_bar.urdf")).unwrap();
@@ -20,32 +20,21 @@
 //! let settings = SolverSettings { sigma: 1e-6, ..Default::default() };
 //! let found = problem.solver(settings).unwrap().enclose(&AtomicBool::new(false), &mut |_| {});
 //! assert_eq!(found.status, Status::Complete);
-//! assert_eq!(linkspace::interval::components(&found.solutions).1, 2);
+//! assert_eq!(linkspace::kernel::interval::components(&found.solutions).1, 2);
 //! ```
 
 #![warn(missing_docs)]
 
+pub mod analyses;
 pub mod app;
-pub mod contract;
-pub mod distances;
-pub mod interval;
-pub mod joint_path;
-mod lp;
-pub mod manip3r;
-pub mod manip6r;
+pub mod edges;
+pub mod formulate;
+pub mod kernel;
 pub mod model;
-#[cfg(feature = "ros")]
-pub mod ros;
-pub mod problems;
-pub mod report;
-pub mod search;
-pub mod singular;
-pub mod sweep;
-pub mod system;
 
 pub use app::{load, Analysis, AnalysisError};
-pub use interval::{Interval, IntervalBox};
-pub use lp::{LpBackend, LpCounters};
+pub use kernel::interval::{Interval, IntervalBox};
+pub use kernel::lp::{LpBackend, LpCounters};
+pub use kernel::search::{Limit, Limits, Progress, Solver, SolverSettings, Status};
+pub use kernel::system::EquationSystem;
 pub use model::{Mechanism, ModelError};
-pub use search::{Limit, Limits, Progress, Solver, SolverSettings, Status};
-pub use system::EquationSystem;

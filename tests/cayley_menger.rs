@@ -4,14 +4,14 @@
 //! compared with lines found by Newton's method on a coordinate formulation (point + direction),
 //! and each is measured against the four centres.
 
-use linkspace::contract::FaceBounds;
-use linkspace::interval::{components, point};
+use linkspace::kernel::contract::FaceBounds;
+use linkspace::kernel::interval::{components, point};
 use linkspace::model::urdf;
-use linkspace::problems::{BuildOptions, CayleyMenger, DistanceProblem, Formulation};
-use linkspace::distances::file as distance_file;
-use linkspace::problems::PlatformProblem;
-use linkspace::report::distances::{report, DistancesReport};
-use linkspace::search::{Enclosure, SolverSettings, Status};
+use linkspace::formulate::{BuildOptions, CayleyMenger, DistanceProblem, Formulation};
+use linkspace::analyses::distances::file as distance_file;
+use linkspace::formulate::PlatformProblem;
+use linkspace::edges::report::distances::{report, DistancesReport};
+use linkspace::kernel::search::{Enclosure, SolverSettings, Status};
 use linkspace::IntervalBox;
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
@@ -65,7 +65,7 @@ pub fn four_spheres(orient: bool) -> DistanceProblem {
     }
     p.lines.push((t, u));
     if orient {
-        p.orientations.push(linkspace::problems::Orientation { a: t, b: u, toward: 1 });
+        p.orientations.push(linkspace::formulate::Orientation { a: t, b: u, toward: 1 });
     }
     p
 }

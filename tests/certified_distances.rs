@@ -4,11 +4,11 @@
 //! (a lower bound on the set of lines: every line found must be proven, none lost), and each
 //! proven line is measured against the four spheres in coordinates (no spurious one).
 
-use linkspace::contract::FaceBounds;
-use linkspace::distances::{solve, Certified, Choice};
-use linkspace::interval::point;
-use linkspace::problems::DistanceProblem;
-use linkspace::search::SolverSettings;
+use linkspace::kernel::contract::FaceBounds;
+use linkspace::analyses::distances::{solve, Certified, Choice};
+use linkspace::kernel::interval::point;
+use linkspace::formulate::DistanceProblem;
+use linkspace::kernel::search::SolverSettings;
 use nalgebra::{Matrix6, Vector3, Vector6};
 use std::sync::atomic::AtomicBool;
 
@@ -34,7 +34,7 @@ fn spheres(c: [[f64; 3]; 4], r: [f64; 4]) -> DistanceProblem {
     for k in 1..4 {
         p.add_point_line(k, t, u, point(r[k]) * point(r[k])).unwrap();
     }
-    p.orientations.push(linkspace::problems::Orientation { a: t, b: u, toward: 1 });
+    p.orientations.push(linkspace::formulate::Orientation { a: t, b: u, toward: 1 });
     p.lines.push((t, u));
     p
 }
@@ -193,17 +193,17 @@ fn distinct_placements_count_the_proven_ones_at_coarse_sigma() {
     // configuration b came out as 6 at sigma 0.1; from the certified roots, all 16.
     let m = linkspace::model::urdf::parse(&std::fs::read_to_string("urdf/octahedral.urdf").unwrap()).unwrap();
     let fixed: Vec<(String, f64)> = ["leg15", "leg16", "leg26", "leg24", "leg34", "leg35"].iter().map(|l| (l.to_string(), 4.75)).collect();
-    let platform = linkspace::problems::PlatformProblem::new(&m, &fixed).unwrap();
+    let platform = linkspace::formulate::PlatformProblem::new(&m, &fixed).unwrap();
     for sigma in [0.01, 0.1] {
         let settings = SolverSettings { sigma, rho: 0.9, ..Default::default() };
         let out = solve(&platform.distances, Choice::Auto, false, FaceBounds::Corners, settings.clone(), &AtomicBool::new(false)).unwrap();
-        let rep = linkspace::report::distances::report_certified(&out, Some(&platform), Default::default(), FaceBounds::Corners, &settings);
+        let rep = linkspace::edges::report::distances::report_certified(&out, Some(&platform), Default::default(), FaceBounds::Corners, &settings);
         assert_eq!((rep.proven, rep.placements), (16, 16), "sigma {sigma}");
     }
     // The four spheres: 12 proven lines, 12 distinct lines, at sigma 0.1 too.
     let settings = SolverSettings { sigma: 0.1, rho: 0.9, ..Default::default() };
     let out = solve(&four_spheres(true), Choice::Auto, false, FaceBounds::Corners, settings.clone(), &AtomicBool::new(false)).unwrap();
-    let rep = linkspace::report::distances::report_certified(&out, None, Default::default(), FaceBounds::Corners, &settings);
+    let rep = linkspace::edges::report::distances::report_certified(&out, None, Default::default(), FaceBounds::Corners, &settings);
     assert_eq!((rep.proven, rep.placements), (12, 12));
 }
 

@@ -1,14 +1,14 @@
-//! Singular sets of planar closed-loop linkages (`problems::singular`) against
+//! Singular sets of planar closed-loop linkages (`formulate::singular`) against
 //! references of our own that never call the solver: closed forms for four-bars, a sheet-wise
 //! grid plus Newton for the double butterfly's turning points of θ6, a dense actuator grid for
 //! the five-bar's type-II curves.
 
 use super::util::urdf_text;
 use linkspace::model::urdf;
-use linkspace::problems::{CuspFormulation, CuspProblem};
-use linkspace::problems::{Output, SingularKind, SingularProblem};
-use linkspace::singular::{BoxKind, SingularSet};
-use linkspace::search::{SolverSettings, Status};
+use linkspace::formulate::{CuspFormulation, CuspProblem};
+use linkspace::formulate::{Output, SingularKind, SingularProblem};
+use linkspace::analyses::loop_singular::{BoxKind, SingularSet};
+use linkspace::kernel::search::{SolverSettings, Status};
 use std::f64::consts::PI;
 use std::process::Command;
 use std::sync::atomic::AtomicBool;
@@ -871,7 +871,7 @@ fn five_bar_equal_rods_cusp_roots_are_the_folded_circles() {
     assert_eq!(cusps.proven(), 0);
     assert!(!cusps.points.is_empty());
     // Each record says why it is undecided: a curve of roots is never proven.
-    for r in linkspace::singular::image::cusp_records(&p, &cusps) {
+    for r in linkspace::analyses::loop_singular::image::cusp_records(&p, &cusps) {
         assert!(!r.unique && r.reason.as_deref().is_some_and(|why| why.contains("without a Krawczyk proof") || why.contains("μ may vanish")), "{r:?}");
     }
     let mut hit = [false; 2];
@@ -1086,7 +1086,7 @@ fn three_rpr_whole_image_is_complete_and_matches_independent_counts() {
         assert_eq!(n, 1, "cusp {c:?} holds {n} reference cusps");
     }
     let alone = linkspace::app::image_points(&m, &fixed, &actuated, linkspace::app::ImageSearch::Cusps, &settings, &AtomicBool::new(false)).expect("runs");
-    let records = |cusps: &[linkspace::singular::image::ImageCusp]| cusps.iter().map(|c| (c.workspace.clone(), c.unique, c.reason.clone())).collect::<Vec<_>>();
+    let records = |cusps: &[linkspace::analyses::loop_singular::image::ImageCusp]| cusps.iter().map(|c| (c.workspace.clone(), c.unique, c.reason.clone())).collect::<Vec<_>>();
     assert_eq!(records(&image.cusps), records(&alone.cusps));
     let mut checked = std::collections::BTreeSet::new();
     for r in &image.regions.regions {
@@ -1113,7 +1113,7 @@ fn three_rpr_whole_image_is_complete_and_matches_independent_counts() {
 #[test]
 #[ignore = "diagnostics (minutes)"]
 fn diag_three_rpr_cusp_charts() {
-    use linkspace::system::VarRole;
+    use linkspace::kernel::system::VarRole;
     let env = |k: &str, d: &str| std::env::var(k).unwrap_or_else(|_| d.to_string());
     let m = urdf::parse(&urdf_text("three_rpr.urdf")).expect("parses");
     let actuated = vec!["rho1".to_string(), "rho2".to_string()];

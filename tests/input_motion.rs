@@ -7,7 +7,7 @@
 use super::util::urdf_text;
 use linkspace::app::{check_input_motion, InputMotionCheck, MotionRequest, MotionVerdict};
 use linkspace::model::urdf;
-use linkspace::search::Control;
+use linkspace::kernel::search::Control;
 use std::f64::consts::PI;
 use std::process::Command;
 use std::sync::atomic::AtomicBool;

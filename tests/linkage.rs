@@ -4,7 +4,7 @@
 //! rigid double butterfly, and a pseudo-arclength continuation of the mobile one.
 
 use crate::util::{covered, problem, solve};
-use linkspace::interval::components;
+use linkspace::kernel::interval::components;
 use linkspace::Status;
 use nalgebra::{DMatrix, DVector};
 use std::collections::BTreeMap;
@@ -101,7 +101,7 @@ fn rigid_butterfly_has_exactly_the_six_table_one_solutions() {
     // Regular roots: interval Newton certifies each box to hold exactly one solution.
     assert!(run.unique.iter().all(|&u| u), "uncertified boxes: {:?}", run.unique);
     for b in &run.solutions {
-        assert!(b.dims.iter().zip(&p.system.vars).all(|(d, v)| v.role != linkspace::system::VarRole::Primary || d.wid() <= sigma));
+        assert!(b.dims.iter().zip(&p.system.vars).all(|(d, v)| v.role != linkspace::kernel::system::VarRole::Primary || d.wid() <= sigma));
     }
     let mut hit = vec![false; clusters];
     for row in table_one() {
@@ -282,7 +282,7 @@ proptest::proptest! {
     #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
     #[test]
     fn no_contractor_removes_a_true_configuration(which in 0usize..4, at in 0.0f64..1.0, widths in proptest::collection::vec(1e-6f64..0.6, 14), offsets in proptest::collection::vec(0.0f64..1.0, 14)) {
-        use linkspace::contract::{Contraction, Contractor, LpShrink, Newton, Propagation};
+        use linkspace::kernel::contract::{Contraction, Contractor, LpShrink, Newton, Propagation};
         use linkspace::LpBackend;
         let p = problem("double_butterfly.urdf", &[], &[]);
         let branches = mobile_branches();
@@ -295,7 +295,7 @@ proptest::proptest! {
             // Margins of 1e-9 keep the real point, not just its float image, inside.
             let lo = (x[i] - w * f - 1e-9).max(d.inf());
             let hi = (x[i] + w * (1.0 - f) + 1e-9).min(d.sup());
-            *d = linkspace::interval::interval(lo, hi);
+            *d = linkspace::kernel::interval::interval(lo, hi);
         }
         let inside = |b: &linkspace::IntervalBox| b.dims.iter().zip(&x).all(|(d, &v)| d.inf() - 1e-9 <= v && v <= d.sup() + 1e-9);
         let mut steps: Vec<Box<dyn Contractor>> = vec![Box::new(Propagation::new(&p.system))];
@@ -337,9 +337,9 @@ fn mobile_branches() -> &'static Vec<Vec<Vec<f64>>> {
 /// The parallel driver gives exactly the serial set of boxes, on every bundled problem.
 #[test]
 fn parallel_and_serial_drivers_give_identical_box_sets() {
-    use linkspace::search::SolverSettings;
+    use linkspace::kernel::search::SolverSettings;
     use std::sync::atomic::AtomicBool;
-    let cases: Vec<(linkspace::problems::LinkageProblem, f64)> = vec![
+    let cases: Vec<(linkspace::formulate::LinkageProblem, f64)> = vec![
         (problem("double_butterfly.urdf", &[("joint6", 12f64.atan2(5.0))], &[]), 1e-4),
         (problem("double_butterfly.urdf", &[], &[]), 0.2),
         (problem("four_bar.urdf", &[], &[("coupler", 2.0, 1.0)]), 0.05),
@@ -370,7 +370,7 @@ fn parallel_and_serial_drivers_give_identical_box_sets() {
 #[test]
 fn limits_on_a_joint_away_from_the_ground_bound_the_search() {
     use linkspace::model::urdf;
-    use linkspace::problems::LinkageProblem;
+    use linkspace::formulate::LinkageProblem;
     // The coupler may turn only within [-1, 1] rad relative to the crank: one of the two
     // assembly modes of every crank angle violates it somewhere along the crank's turn.
     let text = crate::util::urdf_text("four_bar.urdf").replacen(

@@ -4,7 +4,7 @@
 //! internal motion only in f) must come out of the certified searches, and must agree with an
 //! independent dense sampling of the singular curve and of its image in plain floating point.
 
-use linkspace::manip3r::{cusps, nodes, Chain3R};
+use linkspace::analyses::arm3r::{cusps, nodes, Chain3R};
 use std::f64::consts::PI;
 use linkspace::model::urdf;
 
@@ -42,7 +42,7 @@ fn loaded_map_equals_the_seed_formulas() {
                 let want = seed_map((d2, d3, d4, r2, r3), t2, t3);
                 let got = c.eval_f64(t2, t3);
                 // And the sound enclosure at the point contains the closed form.
-                let jets = c.jets([linkspace::interval::point(t2), linkspace::interval::point(t3)], 0);
+                let jets = c.jets([linkspace::kernel::interval::point(t2), linkspace::kernel::interval::point(t3)], 0);
                 for k in 0..2 {
                     assert!((got[k] - want[k]).abs() < 1e-12, "case {case} at ({t2}, {t3}): {got:?} vs {want:?}");
                 }
@@ -263,7 +263,7 @@ fn seed_case_c_four_cusps_valid_for_every_corner() {
 /// than the natural enclosure, which is what certifies case c.
 #[test]
 fn uncertain_enclosures_hold_every_sampled_geometry() {
-    use linkspace::interval::{interval, point};
+    use linkspace::kernel::interval::{interval, point};
     let text = std::fs::read_to_string(format!("{}/urdf/orthogonal_3r_c.urdf", env!("CARGO_MANIFEST_DIR"))).expect("fixture");
     let h = 5e-4;
     let uncertain = Chain3R::from_mechanism(&urdf::parse(&text).expect("parses"), h).expect("3R");
@@ -298,7 +298,7 @@ fn uncertain_enclosures_hold_every_sampled_geometry() {
 /// must enclose the sample, and every unique box must map to the point.
 #[test]
 fn inverse_kinematics_recovers_sampled_configurations() {
-    use linkspace::manip3r::ik;
+    use linkspace::analyses::arm3r::ik;
     let c = chain("e");
     for k in 0..12 {
         let t = [-2.9 + 0.5 * k as f64, 3.0 - 0.47 * k as f64];
@@ -342,7 +342,7 @@ fn non_orthogonal_chains_match_plain_forward_kinematics() {
         }
         let p = pose.translation.vector;
         let want = [p.x * p.x + p.y * p.y, p.z];
-        let got = c.jets([linkspace::interval::point(q[1]), linkspace::interval::point(q[2])], 0);
+        let got = c.jets([linkspace::kernel::interval::point(q[1]), linkspace::kernel::interval::point(q[2])], 0);
         assert!(got.rho.value().inf() - 1e-12 <= want[0] && want[0] <= got.rho.value().sup() + 1e-12, "{k}: {want:?} vs {:?}", got.rho.value());
         assert!(got.z.value().inf() - 1e-12 <= want[1] && want[1] <= got.z.value().sup() + 1e-12);
     }
@@ -397,7 +397,7 @@ fn brute_distance(p: [[f64; 3]; 2], q: [[f64; 3]; 2]) -> f64 {
 /// square, and the colliding area is bracketed by an independent grid estimate.
 #[test]
 fn collision_boxes_agree_with_sampling() {
-    use linkspace::manip3r::collision::{classify, CollisionSettings, Scene};
+    use linkspace::analyses::arm3r::collision::{classify, CollisionSettings, Scene};
     let text = std::fs::read_to_string(format!("{}/urdf/orthogonal_3r_a_column.urdf", env!("CARGO_MANIFEST_DIR"))).expect("bundled URDF");
     let scene = Scene::from_mechanism(&urdf::parse(&text).expect("parses")).expect("a scene");
     let names: Vec<&str> = scene.capsules().iter().map(|c| c.name.as_str()).collect();
@@ -447,7 +447,7 @@ fn collision_boxes_agree_with_sampling() {
     }
     let s = &set;
     let total = s.colliding_area + s.free_area + s.undecided_area;
-    let square = (2.0 * linkspace::manip3r::PI_UP).powi(2);
+    let square = (2.0 * linkspace::analyses::arm3r::PI_UP).powi(2);
     assert!((total - square).abs() < 1e-9 * square, "boxes tile the square: {total} vs {square}");
     // Non-trivial: the forearm meets the column on a few per cent of joint space, the upper arm
     // never (its segment stays 0.447 from the axis, more than 0.3 + 0.1).
@@ -467,8 +467,8 @@ fn collision_boxes_agree_with_sampling() {
 /// Bad collision input gives the documented errors, never a panic.
 #[test]
 fn collision_scenes_refuse_what_they_cannot_model() {
-    use linkspace::manip3r::collision::Scene;
-    use linkspace::manip3r::Manip3rError;
+    use linkspace::analyses::arm3r::collision::Scene;
+    use linkspace::analyses::arm3r::Manip3rError;
     let text = std::fs::read_to_string(format!("{}/urdf/orthogonal_3r_a_column.urdf", env!("CARGO_MANIFEST_DIR"))).expect("bundled URDF");
     let scene = |xml: &str| Scene::from_mechanism(&urdf::parse(xml).expect("parses"));
     let bare = std::fs::read_to_string(format!("{}/urdf/orthogonal_3r_a.urdf", env!("CARGO_MANIFEST_DIR"))).expect("bundled URDF");
@@ -502,9 +502,9 @@ fn bits(boxes: impl IntoIterator<Item = [linkspace::Interval; 2]>) -> Vec<[u64; 
 /// f internal-motion strips and nodes).
 #[test]
 fn two_threads_give_the_results_of_one() {
-    use linkspace::manip3r::singularities;
-    use linkspace::search::Control;
-    use linkspace::search::{Limits, Status};
+    use linkspace::analyses::arm3r::singularities;
+    use linkspace::kernel::search::Control;
+    use linkspace::kernel::search::{Limits, Status};
     use std::sync::atomic::AtomicBool;
     for case in ["e", "f"] {
         let c = chain(case);
@@ -528,9 +528,9 @@ fn two_threads_give_the_results_of_one() {
 /// silently dropped.
 #[test]
 fn a_cancelled_singularity_run_says_so_and_keeps_its_undecided_cells() {
-    use linkspace::manip3r::{cusps::Reason, singularities};
-    use linkspace::search::Control;
-    use linkspace::search::{Limit, Limits, Status};
+    use linkspace::analyses::arm3r::{cusps::Reason, singularities};
+    use linkspace::kernel::search::Control;
+    use linkspace::kernel::search::{Limit, Limits, Status};
     use std::sync::atomic::{AtomicBool, Ordering};
     let c = chain("e");
     // Raised before: nothing is decided, the start box and the start pair are pending.
@@ -567,7 +567,7 @@ fn a_cancelled_singularity_run_says_so_and_keeps_its_undecided_cells() {
 /// kinematics written here with nalgebra, and every Newton solution lies in a reported box.
 #[test]
 fn random_tip_points_on_the_last_link_give_the_ik_of_that_point() {
-    use linkspace::manip3r::{ik, ChainSpec, LoadOptions};
+    use linkspace::analyses::arm3r::{ik, ChainSpec, LoadOptions};
     use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
     struct Rng(u64);
     impl Rng {
@@ -603,7 +603,7 @@ fn random_tip_points_on_the_last_link_give_the_ik_of_that_point() {
         );
         let m = urdf::parse(&xml).expect("parses");
         let spec = ChainSpec { tip_point: Some(("tool".into(), point)), ..Default::default() };
-        let p = linkspace::manip3r::prepare(&m, &LoadOptions { spec, exact_geometry: true, ignore_limits: true, ..Default::default() }).expect("a 3R chain");
+        let p = linkspace::analyses::arm3r::prepare(&m, &LoadOptions { spec, exact_geometry: true, ignore_limits: true, ..Default::default() }).expect("a 3R chain");
         let c = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
         // Forward kinematics of the point at θ₁ = 0, from the file's numbers.
         let origin = |o: [f64; 3], rpy: [f64; 3]| Isometry3::from_parts(Translation3::new(o[0], o[1], o[2]), UnitQuaternion::from_euler_angles(rpy[0], rpy[1], rpy[2]));

@@ -12,11 +12,11 @@
 //! and the CRX fixture (six joints, wrist not spherical: the sub-chain's point is on axis 4).
 
 use linkspace::app::{self, Arm, PathSet};
-use linkspace::joint_path::SegmentVerdict;
-use linkspace::manip3r::LoadOptions;
+use linkspace::analyses::joint_path::SegmentVerdict;
+use linkspace::analyses::arm3r::LoadOptions;
 use linkspace::model::{urdf, JointKind, Mechanism};
 use crate::util::SplitMix;
-use linkspace::search::{Control, Limits};
+use linkspace::kernel::search::{Control, Limits};
 use nalgebra::{Isometry3, Point3, Unit, UnitQuaternion, Vector3};
 use std::sync::atomic::AtomicBool;
 
@@ -114,7 +114,7 @@ fn the_reference_is_the_library_det_df() {
         for _ in 0..50 {
             let q: Vec<f64> = (0..n).map(|_| rng.uniform(-3.0, 3.0)).collect();
             let want = reference.det(&q);
-            let got = arm.chain.jets([linkspace::interval::point(q[1]), linkspace::interval::point(q[2])], 1).det().value();
+            let got = arm.chain.jets([linkspace::kernel::interval::point(q[1]), linkspace::kernel::interval::point(q[2])], 1).det().value();
             assert!(got.inf() - 1e-9 * (1.0 + want.abs()) <= want && want <= got.sup() + 1e-9 * (1.0 + want.abs()), "{file} at {q:?}: {want} vs {got:?}");
         }
     }
@@ -235,7 +235,7 @@ fn the_report_names_the_sub_chain_and_its_point() {
     let (x, y) = (vec![0.3, -1.0, 1.2, -0.5, -0.4, 0.7], vec![2.3, -1.0, 1.2, 1.5, 2.4, -2.7]);
     let found = app::check_path3(&arm, &[x.clone(), y.clone()], 1e-9, &control()).expect("checks");
     assert!(matches!(found.check.segments[0], SegmentVerdict::Clear { pieces: 1, .. }), "{:?}", found.check.segments[0]);
-    let report = linkspace::report::six::PathCheckReport::of(&found);
+    let report = linkspace::edges::report::six::PathCheckReport::of(&found);
     assert_eq!(report.singular_set, "3r");
     assert!(report.subject.starts_with("3R sub-chain joints 1-3 (joint_1, joint_2, joint_3) of 'ur5', point link_3@") && report.subject.ends_with(": det Df"), "{}", report.subject);
     assert!(report.headline().starts_with(&report.subject), "{}", report.headline());

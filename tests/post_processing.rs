@@ -3,15 +3,15 @@
 //! deadline already passed does no work and says so, and that nothing is dropped unexamined.
 
 use crate::util::problem;
-use linkspace::interval::interval;
-use linkspace::search::SolverSettings;
+use linkspace::kernel::interval::interval;
+use linkspace::kernel::search::SolverSettings;
 use linkspace::IntervalBox;
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 /// Two lone boxes of sigma's width where the fixed-crank four-bar has no assembly: the
 /// spurious check proves them empty when it has time.
-fn lone_misses(p: &linkspace::problems::LinkageProblem, sigma: f64) -> Vec<IntervalBox> {
+fn lone_misses(p: &linkspace::formulate::LinkageProblem, sigma: f64) -> Vec<IntervalBox> {
     let primaries = p.system.primaries();
     let start = p.system.initial_box();
     [0.1, 0.9]

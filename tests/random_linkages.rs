@@ -24,8 +24,8 @@
 use astro_float::{BigFloat, Consts, Radix, RoundingMode};
 use crate::util::SplitMix;
 use linkspace::model::urdf;
-use linkspace::problems::LinkageProblem;
-use linkspace::search::{SolverSettings, Status};
+use linkspace::formulate::LinkageProblem;
+use linkspace::kernel::search::{SolverSettings, Status};
 use std::cell::RefCell;
 use std::fmt::Write as _;
 use std::ops::{Add, Div, Mul, Neg, Sub};

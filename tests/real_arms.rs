@@ -5,10 +5,10 @@
 //! solutions where the verdict says at most four); the seed's robots written in three
 //! conventions against each other and against Table 1.
 
-use linkspace::manip3r::{self, cusps, ik, ChainSpec, verdict, Chain3R, LoadOptions};
-use linkspace::report::manip3r::Completeness;
+use linkspace::analyses::arm3r::{self, cusps, ik, ChainSpec, verdict, Chain3R, LoadOptions};
+use linkspace::edges::report::manip3r::Completeness;
 use linkspace::model::{urdf, JointKind, Mechanism};
-use linkspace::search::{Control, Incompleteness, Limits, Status};
+use linkspace::kernel::search::{Control, Incompleteness, Limits, Status};
 use nalgebra::{Matrix3, Rotation3, Vector3};
 use std::f64::consts::FRAC_PI_2;
 
@@ -16,8 +16,8 @@ fn text(name: &str) -> String {
     std::fs::read_to_string(format!("{}/urdf/{name}", env!("CARGO_MANIFEST_DIR"))).expect("bundled URDF")
 }
 
-fn prepare(xml: &str, options: &LoadOptions) -> Result<manip3r::Prepared, manip3r::Manip3rError> {
-    manip3r::prepare(&urdf::parse(xml).expect("parses"), options)
+fn prepare(xml: &str, options: &LoadOptions) -> Result<arm3r::Prepared, arm3r::Manip3rError> {
+    arm3r::prepare(&urdf::parse(xml).expect("parses"), options)
 }
 
 fn bounded(cells: u64) -> Control<'static> {
@@ -182,7 +182,7 @@ fn seed_robots_in_three_conventions_agree_with_table_1() {
         for (style, xml) in variants {
             let p = prepare(&xml, &LoadOptions::default()).unwrap_or_else(|e| panic!("{case} {style}: {e}\n{xml}"));
             let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
-            let run = manip3r::singularities(&chain, 1e-4, true, &bounded(5_000_000), &mut |_| {}).expect("runs");
+            let run = arm3r::singularities(&chain, 1e-4, true, &bounded(5_000_000), &mut |_| {}).expect("runs");
             let nodes = run.nodes.as_ref().expect("asked");
             assert!(run.status.is_complete(), "{case} {style}");
             assert_eq!((run.cusps.cusps.len(), nodes.nodes.len(), run.cusps.bands.len()), (n_cusps, n_nodes, n_lines), "{case} {style}");
@@ -218,19 +218,19 @@ fn exact_geometry_on_a_truncated_robot_reports_near_degenerate_strips() {
         let p = prepare(&xml, &LoadOptions { exact_geometry: true, ..Default::default() }).expect("loads");
         assert!(p.snaps.is_empty());
         let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
-        let run = manip3r::singularities(&chain, 1e-4, true, &bounded(300_000), &mut |_| {}).expect("runs");
+        let run = arm3r::singularities(&chain, 1e-4, true, &bounded(300_000), &mut |_| {}).expect("runs");
         let near: Vec<_> = run.cusps.bands.iter().filter(|b| b.near.is_some()).collect();
         assert_eq!((near.len(), run.cusps.bands.len()), (2, 2), "{:?}", run.cusps.bands);
         assert!(run.status.is_complete(), "outside the strips everything is decided");
         let v = verdict::decide(&p.mechanism, &chain, &run, &p.limits, &Control::with_limits(Limits::default()));
         assert_eq!((v.cuspidal, v.certified), (None, false), "{v:?}");
-        let report = linkspace::report::manip3r::SingularityReport::new(&chain, 1e-4, &run.cusps, run.nodes.as_ref(), run.seconds);
+        let report = linkspace::edges::report::manip3r::SingularityReport::new(&chain, 1e-4, &run.cusps, run.nodes.as_ref(), run.seconds);
         assert_eq!(report.completeness, Completeness(Some(Incompleteness::NearDegenerate)));
-        assert!(report.undecided.cusps.len() <= linkspace::report::manip3r::MAX_LISTED);
+        assert!(report.undecided.cusps.len() <= linkspace::edges::report::manip3r::MAX_LISTED);
         // The strips sit where the snapped robot has its internal-motion lines.
         let snapped = prepare(&xml, &LoadOptions::default()).expect("loads");
         let c2 = Chain3R::from_mechanism(&snapped.mechanism, 0.0).expect("3R");
-        let lines = manip3r::bands(&c2, 1e-4);
+        let lines = arm3r::bands(&c2, 1e-4);
         assert!(lines.iter().all(|l| l.near.is_none()) && lines.len() == 2);
         for (l, s) in lines.iter().zip(&near) {
             assert!(s.strip[0] <= l.theta3[0] && l.theta3[1] <= s.strip[1], "{l:?} in {s:?}");
@@ -259,10 +259,10 @@ fn cli_first_line_is_the_verdict_and_bad_flags_are_one_line() {
 fn a_report_with_undecided_boxes_is_never_complete() {
     let p = prepare(&text("kuka_kr16.urdf"), &LoadOptions { ignore_limits: true, ..Default::default() }).expect("kuka");
     let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
-    let run = manip3r::singularities(&chain, 1e-4, false, &bounded(2_000_000), &mut |_| {}).expect("runs");
+    let run = arm3r::singularities(&chain, 1e-4, false, &bounded(2_000_000), &mut |_| {}).expect("runs");
     assert!(run.status.is_complete(), "no limit stops the cusp search on this arm");
     assert!(!run.cusps.undecided.is_empty(), "the crossing branches leave boxes the seed's system cannot decide");
-    let report = linkspace::report::manip3r::SingularityReport::new(&chain, 1e-4, &run.cusps, None, run.seconds);
+    let report = linkspace::edges::report::manip3r::SingularityReport::new(&chain, 1e-4, &run.cusps, None, run.seconds);
     assert_eq!(report.completeness, Completeness(Some(Incompleteness::Undecided)));
     assert_eq!(report.undecided_total[0], run.cusps.undecided.len());
 }
@@ -345,7 +345,7 @@ fn aspects_and_ik_counts_of_the_seed_robots_agree_with_sampling() {
         let file = format!("orthogonal_3r_{name}.urdf");
         let p = prepare(&text(&file), &LoadOptions::default()).expect(&file);
         let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
-        let run = manip3r::singularities(&chain, 1e-4, false, &bounded(2_000_000), &mut |_| {}).expect("runs");
+        let run = arm3r::singularities(&chain, 1e-4, false, &bounded(2_000_000), &mut |_| {}).expect("runs");
         let v = verdict::decide(&p.mechanism, &chain, &run, &p.limits, &Control::with_limits(Limits::default()));
         assert!(v.certified, "{name}: {v:?}");
         assert_eq!((v.aspects, v.max_ik_solutions), (Some(aspects), max_ik), "{name}: {}", v.reason);
@@ -401,7 +401,7 @@ fn aspects_and_ik_counts_of_the_seed_robots_agree_with_sampling() {
 }
 
 /// det Df at (t2, t3) by central differences of the chain's own map in floating point:
-/// independent of `manip3r::branches`.
+/// independent of `arm3r::branches`.
 fn det_fd(chain: &Chain3R, t2: f64, t3: f64) -> f64 {
     let h = 1e-6;
     let [r2p, z2p] = chain.eval_f64(t2 + h, t3);
@@ -418,7 +418,7 @@ fn angle_gap(a: f64, b: f64) -> f64 {
 
 #[test]
 fn singular_branches_of_industrial_arms_match_an_independent_sampling() {
-    use linkspace::manip3r::branches;
+    use linkspace::analyses::arm3r::branches;
     // (file, crossings, theta3 lines are curves of nodes)
     for (file, crossings, lines_of_nodes) in [("puma560.urdf", 4, true), ("kuka_kr16.urdf", 2, false), ("ur5.urdf", 4, true)] {
         let p = prepare(&text(file), &LoadOptions::default()).expect(file);
@@ -521,7 +521,7 @@ fn singular_branches_of_industrial_arms_match_an_independent_sampling() {
 
 #[test]
 fn undecided_cusp_boxes_of_industrial_arms_are_attributed_to_the_crossings() {
-    use linkspace::manip3r::branches;
+    use linkspace::analyses::arm3r::branches;
     for (file, crossings) in [("kuka_kr16.urdf", 2), ("ur5.urdf", 4)] {
         let p = prepare(&text(file), &LoadOptions::default()).expect(file);
         let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
@@ -550,7 +550,7 @@ fn a_cancelled_verdict_names_its_limit_and_claims_nothing_more() {
         let file = format!("orthogonal_3r_{name}.urdf");
         let p = prepare(&text(&file), &LoadOptions::default()).expect(&file);
         let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
-        let run = manip3r::singularities(&chain, 1e-4, false, &bounded(2_000_000), &mut |_| {}).expect("runs");
+        let run = arm3r::singularities(&chain, 1e-4, false, &bounded(2_000_000), &mut |_| {}).expect("runs");
         let v = verdict::decide(&p.mechanism, &chain, &run, &p.limits, &control);
         assert_eq!((v.cuspidal, v.aspects, v.max_ik_solutions), (cuspidal, None, None), "{name}: {v:?}");
         assert!(v.reason.contains("cancelled") || v.reason.contains("stopped by a limit"), "{name}: {}", v.reason);
@@ -569,13 +569,13 @@ fn a_cancelled_verdict_names_its_limit_and_claims_nothing_more() {
 fn the_node_tree_stays_within_the_memory_limit() {
     let p = prepare(&text("orthogonal_3r_e.urdf"), &LoadOptions::default()).expect("e");
     let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
-    let run = |max_memory: usize| manip3r::singularities(&chain, 1e-4, true, &Control::with_limits(Limits { max_cells: 5_000_000, timeout: None, max_memory }), &mut |_| {}).expect("runs");
+    let run = |max_memory: usize| arm3r::singularities(&chain, 1e-4, true, &Control::with_limits(Limits { max_cells: 5_000_000, timeout: None, max_memory }), &mut |_| {}).expect("runs");
     let full = run(256 << 20);
     let full_nodes = full.nodes.expect("asked");
     assert!(full.status.is_complete() && full_nodes.nodes.len() == 2, "{:?}", full.status);
     let small = run(128 << 10);
     let nodes = small.nodes.expect("asked");
-    assert_eq!(nodes.status, Status::Incomplete(linkspace::search::Limit::Memory));
+    assert_eq!(nodes.status, Status::Incomplete(linkspace::kernel::search::Limit::Memory));
     assert!(nodes.cells < full_nodes.cells / 2, "{} tree boxes within 128 KiB (complete run: {})", nodes.cells, full_nodes.cells);
     assert!(!nodes.undecided.is_empty());
     for n in &nodes.nodes {
@@ -598,7 +598,7 @@ fn ik_solutions_are_written_in_the_joints_own_ranges() {
     let mut written = 0;
     for point in [[0.2, 0.3, 0.4], [-0.3, -0.2, 0.5], [0.1, -0.4, 0.2]] {
         let found = inverse_kinematics(&arm, IkPoint::Root(point), 1e-8, &bounded(200_000), &mut |_| {}).expect("valid query");
-        let report = linkspace::report::manip3r::IkReport::of(&arm, &found);
+        let report = linkspace::edges::report::manip3r::IkReport::of(&arm, &found);
         assert!(!report.solutions.is_empty(), "{point:?} is reachable");
         for sol in &report.solutions {
             assert_eq!(sol.joints.len(), 3, "θ₁ is written for a point of the root frame");
@@ -662,7 +662,7 @@ fn an_internal_motion_line_is_reported_by_the_verdict_and_by_ik() {
     let a = Arm::load(&m, &LoadOptions { ignore_limits: true, ..Default::default() }, 0.0).expect("6R with a spherical wrist");
     let request = SingularitiesRequest { precision: 1e-4, nodes: false, search_anyway: false, verdict: true };
     let s = app::singularities(&a, &request, &bounded(200_000), &mut |_| {}).expect("runs");
-    assert_eq!(manip3r::line_count(&s.run.cusps.bands), 1, "the folded line at θ₃ = ±π is one line");
+    assert_eq!(arm3r::line_count(&s.run.cusps.bands), 1, "the folded line at θ₃ = ±π is one line");
     let verdict = s.verdict.expect("asked");
     assert_eq!(verdict.max_ik_solutions, Some(4));
     assert!(verdict.reason.contains("internal-motion line"), "{}", verdict.reason);
@@ -915,7 +915,7 @@ fn ur_arms_are_proven_non_cuspidal() {
         std::fs::remove_file(&json).ok();
         let arm = &report["arm_cuspidality"];
         assert_eq!(arm["verdict"], "non_cuspidal", "{arm}");
-        assert!(arm["proof"].as_str().is_some_and(|p| p.contains("manip6r::three_parallel") && p.contains("arXiv:2202.08686")), "{arm}");
+        assert!(arm["proof"].as_str().is_some_and(|p| p.contains("arm6r::three_parallel") && p.contains("arXiv:2202.08686")), "{arm}");
         assert!(arm.get("witness").is_none());
     }
     let tilted = std::fs::read_to_string(format!("{dir}/urdf/ur5.urdf")).expect("bundled").replacen("<origin rpy=\"0 0 0\" xyz=\"-0.425 0 0\"/>", "<origin rpy=\"0.01 0 0\" xyz=\"-0.425 0 0\"/>", 1);

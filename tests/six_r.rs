@@ -3,9 +3,9 @@
 //! every returned box mapping back to the pose, and UR5 counts against an independent closed
 //! form. The cuspidality witness of the CRX fixture re-checked in `f64`.
 
-use linkspace::manip6r::{ik, Chain6R, CuspidalVerdict, Pose64, PoseTarget};
+use linkspace::analyses::arm6r::{ik, Chain6R, CuspidalVerdict, Pose64, PoseTarget};
 use linkspace::model::{rounding, urdf};
-use linkspace::search::{Control, Limits, Status};
+use linkspace::kernel::search::{Control, Limits, Status};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -155,7 +155,7 @@ fn crx_is_cuspidal_with_a_witness_checked_in_f64() {
     let chain = chain_of(&repo("tests/data/fanuc_crx10ial_style.urdf"));
     let control = Control { limits: Limits { max_cells: 3_000_000, ..Limits::default() }, threads: 1, cancel: never() };
     let t = Instant::now();
-    let outcome = linkspace::manip6r::cuspidal::search(&chain, Duration::from_secs(600), 1, &control);
+    let outcome = linkspace::analyses::arm6r::cuspidal::search(&chain, Duration::from_secs(600), 1, &control);
     let CuspidalVerdict::Cuspidal(w) = outcome.verdict else { panic!("no witness: {:?}", outcome.verdict) };
     // The most solutions seen: at least the witness's two, at most a 6R's sixteen.
     let most = outcome.most.expect("poses were solved");
@@ -183,7 +183,7 @@ fn crx_is_cuspidal_with_a_witness_checked_in_f64() {
 fn ur5_is_never_cuspidal() {
     let chain = chain_of(&repo("urdf/ur5.urdf"));
     let control = Control { limits: Limits { max_cells: 3_000_000, ..Limits::default() }, threads: 1, cancel: never() };
-    let outcome = linkspace::manip6r::cuspidal::search(&chain, Duration::from_secs(20), 1, &control);
+    let outcome = linkspace::analyses::arm6r::cuspidal::search(&chain, Duration::from_secs(20), 1, &control);
     assert!(matches!(outcome.verdict, CuspidalVerdict::Undecided { .. }), "{:?}", outcome.verdict);
     // The most solutions the search certified at one pose: exactly the closed form's count
     // there (the file is the DH table).
@@ -325,7 +325,7 @@ fn ur_family_dh(seed: u64, alpha1: f64) -> String {
 /// of shoulder and wrist, one θ5).
 #[test]
 fn ur_family_solutions_differ_in_the_signs_of_det_j_factors() {
-    use linkspace::manip6r::three_parallel;
+    use linkspace::analyses::arm6r::three_parallel;
     let arms = [repo("urdf/ur5.urdf"), repo("tests/data/ur5_ros_style.urdf"), ur_family_dh(3, QUARTER), ur_family_dh(4, 0.7)];
     let same_angle = |x: f64, y: f64| (x - y).rem_euclid(std::f64::consts::TAU).min((y - x).rem_euclid(std::f64::consts::TAU)) < 1e-6;
     let mut most = 0;
@@ -370,7 +370,7 @@ fn ur_family_solutions_differ_in_the_signs_of_det_j_factors() {
 /// and so are the CRX (axes 2, 3 parallel only) and the spherical-wrist arms.
 #[test]
 fn near_ur_arms_and_other_arms_are_not_recognised() {
-    use linkspace::manip6r::three_parallel;
+    use linkspace::analyses::arm6r::three_parallel;
     let ur5 = repo("urdf/ur5.urdf");
     let tilted = ur5.replacen("<origin rpy=\"0 0 0\" xyz=\"-0.425 0 0\"/>", "<origin rpy=\"0.01 0 0\" xyz=\"-0.425 0 0\"/>", 1);
     assert_ne!(tilted, ur5);
@@ -390,7 +390,7 @@ fn near_ur_arms_and_other_arms_are_not_recognised() {
 /// and back touches at the shared waypoint without a proven sign change.
 mod path_check {
     use super::*;
-    use linkspace::manip6r::{path, SegmentVerdict, SpanReason};
+    use linkspace::analyses::arm6r::{path, SegmentVerdict, SpanReason};
 
     fn ur5() -> Chain6R {
         chain_of(&repo("urdf/ur5.urdf"))
@@ -454,7 +454,7 @@ mod path_check {
         let stopped = Control { limits: Limits { timeout: Some(Duration::ZERO), ..Limits::default() }, threads: 1, cancel: &NEVER };
         let w = [[0.3, -1.0, 1.2, -0.5, 0.4, 0.7], [0.5, -1.2, 1.4, -0.3, 0.6, 0.2]];
         let found = path::check(&ur5(), &w, 1e-9, &stopped).expect("checks");
-        assert!(matches!(found.segments[0], SegmentVerdict::Stopped(linkspace::search::Limit::Time)), "{:?}", found.segments);
+        assert!(matches!(found.segments[0], SegmentVerdict::Stopped(linkspace::kernel::search::Limit::Time)), "{:?}", found.segments);
         assert!(path::check(&ur5(), &w[..1], 1e-9, &control()).is_err());
     }
 }

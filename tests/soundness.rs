@@ -4,8 +4,8 @@
 //! filter and certificate honest.
 
 use linkspace::model::urdf;
-use linkspace::problems::{LinkageError, LinkageProblem};
-use linkspace::search::{SolverSettings, Status};
+use linkspace::formulate::{LinkageError, LinkageProblem};
+use linkspace::kernel::search::{SolverSettings, Status};
 use linkspace::IntervalBox;
 use std::f64::consts::{PI, TAU};
 use std::sync::atomic::AtomicBool;
@@ -159,7 +159,7 @@ fn coefficients_enclose_their_exact_values() {
     let p = build(&xml, &[("crank_joint", 0.305)]).expect("builds");
     let brackets = [(-2.5692295711484094, -2.569229571148409), (0.45043976281389225, 0.4504397628138923)];
     for (lo, hi) in brackets {
-        let holds = |c: linkspace::interval::Interval| (c.inf() <= lo && c.sup() >= hi) || (c.inf() <= -hi && c.sup() >= -lo);
+        let holds = |c: linkspace::kernel::interval::Interval| (c.inf() <= lo && c.sup() >= hi) || (c.inf() <= -hi && c.sup() >= -lo);
         assert!(p.system.equations.iter().any(|e| holds(e.constant)), "no loop constant encloses [{lo}, {hi}]: {:?}", p.system.equations.iter().map(|e| e.constant).collect::<Vec<_>>());
     }
 }

@@ -1,4 +1,4 @@
-//! Test idea: solve spatial linkages from URDF through the spatial builder (`problems::spatial`)
+//! Test idea: solve spatial linkages from URDF through the spatial builder (`formulate::spatial`)
 //! and compare with references that never call the solver: closed forms of the Bennett
 //! linkage's input–output relation, of the RSSR four-bar (a distance, linear in cos φ, sin φ for
 //! a fixed crank) and of the spherical four-bar (an angle between two axes, linear likewise).
@@ -6,13 +6,13 @@
 //! reference set. And the planar fixtures give the same answers through both builders.
 
 use crate::util::{problem, urdf_text};
-use linkspace::interval::components;
+use linkspace::kernel::interval::components;
 use linkspace::model::urdf;
 use linkspace::app::SolveJob;
-use linkspace::problems::Coordinates;
-use linkspace::problems::{Linkage, LinkageError, Model, ModelChoice, PoseProblem, PoseRows, SpatialProblem};
-use linkspace::search::BoxStatus;
-use linkspace::search::{Enclosure, SolverSettings};
+use linkspace::formulate::Coordinates;
+use linkspace::formulate::{Linkage, LinkageError, Model, ModelChoice, PoseProblem, PoseRows, SpatialProblem};
+use linkspace::kernel::search::BoxStatus;
+use linkspace::kernel::search::{Enclosure, SolverSettings};
 use linkspace::{IntervalBox, Status};
 use std::collections::BTreeMap;
 use std::f64::consts::{PI, TAU};
@@ -24,7 +24,7 @@ fn spatial(name: &str, fixed: &[(&str, f64)]) -> SpatialProblem {
     SpatialProblem::new(&m, &fixed, &[]).expect("bundled mechanism builds")
 }
 
-fn enclose(system: &linkspace::search::Solver<'_>) -> Enclosure {
+fn enclose(system: &linkspace::kernel::search::Solver<'_>) -> Enclosure {
     let e = system.enclose(&AtomicBool::new(false), &mut |_| {});
     assert_eq!(e.status, Status::Complete);
     e
@@ -725,14 +725,14 @@ proptest::proptest! {
     #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
     #[test]
     fn no_contractor_removes_a_true_spatial_configuration(which in 0usize..4, at in 0.01f64..0.99, widths in proptest::collection::vec(1e-6f64..0.6, 16), offsets in proptest::collection::vec(0.0f64..1.0, 16)) {
-        use linkspace::contract::{Contraction, Contractor, LpShrink, Newton, Propagation};
+        use linkspace::kernel::contract::{Contraction, Contractor, LpShrink, Newton, Propagation};
         let (p, x, what) = true_point(which, at);
         let mut b = p.system.initial_box();
         for (i, d) in b.dims.iter_mut().enumerate() {
             let (w, f) = (widths[i % 16], offsets[i % 16]);
             let lo = (x[i] - w * f - 1e-9).max(d.inf());
             let hi = (x[i] + w * (1.0 - f) + 1e-9).min(d.sup());
-            *d = linkspace::interval::interval(lo, hi);
+            *d = linkspace::kernel::interval::interval(lo, hi);
         }
         let inside = |b: &IntervalBox| b.dims.iter().zip(&x).all(|(d, &v)| d.inf() - 1e-9 <= v && v <= d.sup() + 1e-9);
         proptest::prop_assert!(inside(&b), "{}: the start box holds the point (domains enclose it)", what);
@@ -747,7 +747,7 @@ proptest::proptest! {
             }
             proptest::prop_assert!(inside(&c), "{} cut the true configuration {}", step.name(), what);
         }
-        proptest::prop_assert!(p.limit_verdict(&b) != linkspace::contract::Inclusion::Outside, "the filters drop {}", what);
+        proptest::prop_assert!(p.limit_verdict(&b) != linkspace::kernel::contract::Inclusion::Outside, "the filters drop {}", what);
     }
 }
 

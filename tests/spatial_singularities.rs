@@ -1,5 +1,5 @@
 //! Singular sets of spatial linkages: the input (type II) and output (type I) singular sets of 1-dof
-//! spatial four-bars, built on the spatial model (`problems::singular::velocity`), against their
+//! spatial four-bars, built on the spatial model (`formulate::singular::velocity`), against their
 //! closed-form input–output relations, which never call the solver.
 //!
 //! Test idea: an RSSR or a spherical four-bar has an input–output relation
@@ -17,11 +17,11 @@
 
 use super::util::urdf_text;
 use linkspace::model::urdf;
-use linkspace::problems::{Coordinates, Output, SingularKind, SingularProblem};
+use linkspace::formulate::{Coordinates, Output, SingularKind, SingularProblem};
 use linkspace::app::SingularSets;
-use linkspace::singular::SingularSet;
-use linkspace::problems::{Linkage, LinkageProblem, Model, SpatialProblem};
-use linkspace::search::{SolverSettings, Status};
+use linkspace::analyses::loop_singular::SingularSet;
+use linkspace::formulate::{Linkage, LinkageProblem, Model, SpatialProblem};
+use linkspace::kernel::search::{SolverSettings, Status};
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 use std::f64::consts::PI;
 use std::sync::atomic::AtomicBool;

@@ -4,7 +4,7 @@
 //! recorded while the sweep goes on).
 //!
 //! - Cuspidality of orthogonal 3R arms (d2 = 1, r2 = 0.5, r3 = 0) over (d3, d4): the dense
-//!   sampling of `manip3r::sample` (marching squares on det Df = 0, cusps where the image turns
+//!   sampling of `arm3r::sample` (marching squares on det Df = 0, cusps where the image turns
 //!   back) counts the cusps; cuspidal iff at least one (Salunkhe et al. 2022 for generic 3R).
 //! - Assembly modes of the 3-RPR over (ρ1, ρ2) at ρ3 = 12: for each platform angle φ the leg
 //!   equations 2 and 3 minus equation 1 are linear in the platform position, so the poses are
@@ -19,7 +19,7 @@
 
 use linkspace::app;
 use linkspace::model::urdf;
-use linkspace::sweep::{self, TaskResult, TaskStatus};
+use linkspace::analyses::sweep::{self, TaskResult, TaskStatus};
 use std::collections::HashSet;
 use std::process::Command;
 use std::sync::atomic::AtomicBool;

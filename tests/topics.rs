@@ -998,7 +998,7 @@ fn large_replies_reach_rclpy_and_a_long_name_blocks_no_one() {
     let _ = std::fs::remove_file(&other_path);
     let r = got["results"].as_array().expect("results");
     for (k, x) in r.iter().enumerate().chain(side["results"].as_array().expect("results").iter().enumerate()) {
-        assert!(x.get("error").is_none(), "step {k}: {}\nnode log:\n{}", linkspace::ros::bounded(&x.to_string(), 2000), linkspace::ros::bounded(&node.log(), 20_000));
+        assert!(x.get("error").is_none(), "step {k}: {}\nnode log:\n{}", linkspace::edges::ros::bounded(&x.to_string(), 2000), linkspace::edges::ros::bounded(&node.log(), 20_000));
     }
     // A Solve answered with all its boxes (about 2 MB), equal to the CLI's.
     let bytes = r[0]["bytes"].as_u64().expect("bytes");
@@ -1012,7 +1012,7 @@ fn large_replies_reach_rclpy_and_a_long_name_blocks_no_one() {
     for k in [1, 2] {
         let m = r[k]["message"].as_str().expect("message");
         assert_eq!(r[k]["ok"], json!(false));
-        assert!(m.len() < 600 && m.contains("more characters)"), "step {k}: {} bytes: {}", m.len(), linkspace::ros::bounded(m, 300));
+        assert!(m.len() < 600 && m.contains("more characters)"), "step {k}: {} bytes: {}", m.len(), linkspace::edges::ros::bounded(m, 300));
         assert!((r[k]["bytes"].as_u64().expect("bytes") as usize) < 1000);
     }
     assert!(r[1]["message"].as_str().expect("message").starts_with("no mechanism named 'mmmm"));
@@ -1052,7 +1052,7 @@ fn replies_of_sixteen_megabytes_reach_rclpy_whole() {
     let got = py(python, domain, "tests/ros_client.py", &["services", "--script", path.to_str().expect("utf-8"), "--timeout", "60"], Duration::from_secs(600));
     let _ = std::fs::remove_file(&path);
     for (k, r) in got["results"].as_array().expect("results").iter().enumerate() {
-        assert!(r.get("error").is_none(), "reply {k}: {r}\nnode log:\n{}", linkspace::ros::bounded(&node.log(), 20_000));
+        assert!(r.get("error").is_none(), "reply {k}: {r}\nnode log:\n{}", linkspace::edges::ros::bounded(&node.log(), 20_000));
         assert_eq!(r["ok"], json!(true), "{r}");
         let bytes = r["bytes"].as_u64().expect("bytes");
         eprintln!("reply {k}: {bytes} bytes after {:.2} s (the run included)", r["seconds"].as_f64().unwrap_or(f64::NAN));
@@ -1087,7 +1087,7 @@ fn reply_history_is_bounded_by_bytes() {
             .expect("results")
             .iter()
             .map(|r| {
-                assert!(r.get("error").is_none() && r["ok"] == json!(true), "{r}\nnode log:\n{}", linkspace::ros::bounded(&node.log(), 20_000));
+                assert!(r.get("error").is_none() && r["ok"] == json!(true), "{r}\nnode log:\n{}", linkspace::edges::ros::bounded(&node.log(), 20_000));
                 r["bytes"].as_u64().expect("bytes")
             })
             .collect()
@@ -1244,7 +1244,7 @@ fn the_solve_action_gives_feedback_honours_cancel_and_returns_the_cli_boxes() {
     assert!(got.get("error").is_none(), "{got}");
     let r = got["results"].as_array().expect("results");
     for (k, x) in r.iter().enumerate() {
-        assert!(x.get("error").is_none(), "goal {k}: {}\nnode log:\n{}", linkspace::ros::bounded(&x.to_string(), 2000), node.log());
+        assert!(x.get("error").is_none(), "goal {k}: {}\nnode log:\n{}", linkspace::edges::ros::bounded(&x.to_string(), 2000), node.log());
         assert_eq!(x["accepted"], json!(true), "goal {k}");
     }
     // action_msgs/GoalStatus: 4 SUCCEEDED, 5 CANCELED, 6 ABORTED.

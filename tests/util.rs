@@ -1,6 +1,6 @@
 use linkspace::model::urdf;
-use linkspace::problems::LinkageProblem;
-use linkspace::search::{SolverSettings, Status};
+use linkspace::formulate::LinkageProblem;
+use linkspace::kernel::search::{SolverSettings, Status};
 use linkspace::IntervalBox;
 use std::sync::atomic::AtomicBool;
 

@@ -1,12 +1,12 @@
 //! Serial arms: the 3R positioning structure of a robot description, and the jobs run on it
 //! (singularities with the cuspidality verdict, inverse kinematics, collision sets).
 //!
-//! An `Arm` is read once (`manip3r::prepare`: rounding policy, chain and point, joint limits);
+//! An `Arm` is read once (`arm3r::prepare`: rounding policy, chain and point, joint limits);
 //! each job takes it with the front end's `Control` and returns what happened as values. The
 //! CLI prints and writes the JSON reports (`report::manip3r`) from these results; the ROS node
 //! converts the same results into its messages.
 
-use crate::manip3r::{
+use crate::analyses::arm3r::{
     self,
     branches::{Attribution, SingularBranches},
     collision::{self, CollisionSet, CollisionSettings, Scene},
@@ -16,9 +16,9 @@ use crate::manip3r::{
     verdict::{self, Verdict},
     Chain3R, LoadOptions, Manip3rError, Prepared, Singularities,
 };
-use crate::manip6r::Chain6R;
+use crate::analyses::arm6r::Chain6R;
 use crate::model::Mechanism;
-use crate::search::{Control, Progress};
+use crate::kernel::search::{Control, Progress};
 use inari::Interval;
 use std::time::Instant;
 
@@ -26,9 +26,9 @@ use super::{
     gap, Analysis, AnalysisError, MechanismKind, BoxSetResult, Classification, IkQuery, IkResult, IkSolution, PreparedRun, ResultBox, Service, SingularPair, SingularPoint,
     SingularityQuery, SingularityResult,
 };
-use crate::interval::bounds;
-use crate::manip3r::{curves::Cover, motion, records::radius};
-use crate::search::{BoxStatus, Limit, Limits, SolveStats as Stats, SolverSettings, Status};
+use crate::kernel::interval::bounds;
+use crate::analyses::arm3r::{curves::Cover, motion, records::radius};
+use crate::kernel::search::{BoxStatus, Limit, Limits, SolveStats as Stats, SolverSettings, Status};
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
@@ -49,7 +49,7 @@ impl Arm {
     /// Reads the arm of `mechanism` as `options` say, every length widened by `uncertainty`
     /// metres (0 for the nominal geometry).
     pub fn load(mechanism: &Mechanism, options: &LoadOptions, uncertainty: f64) -> Result<Self, Manip3rError> {
-        let prepared = manip3r::prepare(mechanism, options)?;
+        let prepared = arm3r::prepare(mechanism, options)?;
         // The chain names its point by the reduced mechanism's link, made up for a joint's origin.
         let chain = Chain3R::from_mechanism(&prepared.mechanism, uncertainty).map_err(|e| match (e, prepared.choice.origin_text()) {
             (Manip3rError::TipDoesNotMove(_), Some(point)) => Manip3rError::TipDoesNotMove(point),
@@ -57,7 +57,7 @@ impl Arm {
             (e, _) => e,
         })?;
         let frame = BaseFrame::of(&prepared.mechanism, &chain);
-        let branches = manip3r::branches::of(&prepared.mechanism, &chain);
+        let branches = arm3r::branches::of(&prepared.mechanism, &chain);
         Ok(Self { prepared, chain, frame, branches })
     }
 }
@@ -104,7 +104,7 @@ pub struct ArmSingularities {
 
 /// Cusps, then nodes, then the verdict, within one `control` (one deadline for all).
 pub fn singularities(arm: &Arm, request: &SingularitiesRequest, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<ArmSingularities, Manip3rError> {
-    manip3r::check_precision(request.precision)?;
+    arm3r::check_precision(request.precision)?;
     let (chain, mechanism) = (&arm.chain, &arm.prepared.mechanism);
     let structural = chain.uncertainty == 0.0 && !request.search_anyway && verdict::parallel_structure(mechanism).is_some();
     // On arms with known singular branches whole branches are curves of nodes: the isolated-node
@@ -112,9 +112,9 @@ pub fn singularities(arm: &Arm, request: &SingularitiesRequest, control: &Contro
     let nodes_searched = request.nodes && arm.branches.is_none();
     let start = Instant::now();
     let mut run = if structural {
-        manip3r::structural_singularities(chain, request.precision)?
+        arm3r::structural_singularities(chain, request.precision)?
     } else {
-        manip3r::singularities(chain, request.precision, nodes_searched, control, progress)?
+        arm3r::singularities(chain, request.precision, nodes_searched, control, progress)?
     };
     // The verdict reads the full-torus run; the limits then filter what is listed.
     let verdict = request.verdict.then(|| {
@@ -184,13 +184,13 @@ pub struct ArmIk {
 pub fn inverse_kinematics(arm: &Arm, point: IkPoint, precision: f64, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<ArmIk, Manip3rError> {
     let start = Instant::now();
     let (mut solutions, target): (_, Option<Target>) = match point {
-        IkPoint::HalfSection { radius, z } => (manip3r::ik::solve_with(&arm.chain, radius, z, precision, control, progress)?, None),
+        IkPoint::HalfSection { radius, z } => (arm3r::ik::solve_with(&arm.chain, radius, z, precision, control, progress)?, None),
         IkPoint::Root(p) => {
             if p.iter().any(|v| !v.is_finite()) {
                 return Err(Manip3rError::BadTarget(p));
             }
             let target = arm.frame.target(p);
-            (manip3r::ik::solve_target(&arm.chain, target.half_section, precision, control, progress)?, Some(target))
+            (arm3r::ik::solve_target(&arm.chain, target.half_section, precision, control, progress)?, Some(target))
         }
     };
     // Solutions outside the file's joint limits are not solutions of the arm; those on a limit
@@ -224,8 +224,8 @@ pub struct ArmCollisions {
 /// Takes the mechanism rather than an `Arm`: collisions need the capsules of the chosen chain,
 /// not its half-section map, which may be degenerate where collisions are still well defined.
 pub fn collisions(mechanism: &Mechanism, options: &LoadOptions, precision: f64, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<ArmCollisions, Manip3rError> {
-    manip3r::check_precision(precision)?;
-    let prepared = manip3r::prepare(mechanism, options)?;
+    arm3r::check_precision(precision)?;
+    let prepared = arm3r::prepare(mechanism, options)?;
     let scene = Scene::from_mechanism(&prepared.mechanism)?;
     let set = collision::classify_with(&scene, &CollisionSettings { precision }, control, progress)?;
     Ok(ArmCollisions { prepared, scene, set })
@@ -305,7 +305,7 @@ impl Analysis for Manip3rAnalysis {
     }
 
     fn singularities(&self, query: &SingularityQuery) -> Result<Box<dyn PreparedRun<SingularityResult>>, AnalysisError> {
-        manip3r::check_precision(query.precision).map_err(|e| AnalysisError::BadRequest(e.to_string()))?;
+        arm3r::check_precision(query.precision).map_err(|e| AnalysisError::BadRequest(e.to_string()))?;
         if query.max_boxes == 0 {
             return Err(AnalysisError::BadRequest("max_boxes must be at least 1".into()));
         }
@@ -316,7 +316,7 @@ impl Analysis for Manip3rAnalysis {
         if query.point.iter().any(|v| !v.is_finite()) {
             return Err(AnalysisError::BadRequest(Manip3rError::BadTarget(query.point).to_string()));
         }
-        manip3r::check_precision(query.precision).map_err(|e| AnalysisError::BadRequest(e.to_string()))?;
+        arm3r::check_precision(query.precision).map_err(|e| AnalysisError::BadRequest(e.to_string()))?;
         if query.max_boxes == 0 {
             return Err(AnalysisError::BadRequest("max_boxes must be at least 1".into()));
         }
@@ -552,8 +552,8 @@ impl PreparedRun<IkResult> for IkRun {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::interval::{point, Bounds};
-    use crate::manip3r::ik;
+    use crate::kernel::interval::{point, Bounds};
+    use crate::analyses::arm3r::ik;
     use crate::app::load;
     use crate::model::{urdf, JointKind};
     use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};

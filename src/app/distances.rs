@@ -2,12 +2,12 @@
 //! a distance file, certified by `distances::solve`. What `linkspace distances` runs (its JSON
 //! writer, `report::distances`, reads the result) and what the node's platform analysis publishes.
 
-use crate::contract::FaceBounds;
-use crate::distances::{choose, solve, Certified, Choice, DistancesError};
+use crate::kernel::contract::FaceBounds;
+use crate::analyses::distances::{choose, solve, Certified, Choice, DistancesError};
 use crate::model::Mechanism;
-use crate::problems::cayley_menger::{DistanceError, DistanceProblem};
-use crate::problems::{LegValues, PlatformError, PlatformProblem};
-use crate::search::SolverSettings;
+use crate::formulate::cayley_menger::{DistanceError, DistanceProblem};
+use crate::formulate::{LegValues, PlatformError, PlatformProblem};
+use crate::kernel::search::SolverSettings;
 use std::sync::atomic::AtomicBool;
 
 /// How to solve: the formulation, the redundant determinants, the trapezoid sides.
@@ -44,7 +44,7 @@ impl DistancesJob {
     /// A problem read from a distance file's text (schema in README), with named distances
     /// `fixed`.
     pub fn file(text: &str, fixed: &[(String, f64)]) -> Result<Self, DistanceError> {
-        Ok(Self { distances: crate::distances::file::parse(text, fixed)?, platform: None, fixed: fixed.to_vec() })
+        Ok(Self { distances: crate::analyses::distances::file::parse(text, fixed)?, platform: None, fixed: fixed.to_vec() })
     }
 
     /// The distance problem.

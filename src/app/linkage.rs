@@ -1,4 +1,4 @@
-//! The linkage analysis: the configuration space of a closed-loop mechanism (`problems::Linkage`:
+//! The linkage analysis: the configuration space of a closed-loop mechanism (`formulate::Linkage`:
 //! the planar builder when it accepts the mechanism, the spatial one otherwise, chosen as
 //! `solve --model auto` does), re-solved on request with other fixed joints or settings. The
 //! result is the same as `linkspace solve --json` for the same input.
@@ -13,17 +13,17 @@ use super::{
     classify, gap, Actuation, Analysis, MechanismKind, AnalysisError, BoxSetResult, Classification, LoopSingularities, PreparedRun, ResultBox, Service, SingularSetResult, SingularityQuery,
     SingularityResult, TracedBounds,
 };
-use crate::interval::{bounds, components, IntervalBox};
+use crate::kernel::interval::{bounds, components, IntervalBox};
 use crate::model::{JointKind, Mechanism};
-use crate::problems::choice::TracedPoint;
-use crate::problems::singular::{Coordinates, SingularProblem};
+use crate::formulate::choice::TracedPoint;
+use crate::formulate::singular::{Coordinates, SingularProblem};
 use super::loops::{all_kinds, SingularSets};
-use crate::singular::{BoxKind, SingularSet};
-use crate::problems::{Linkage, LinkageError, ModelChoice};
-use crate::search::{Enclosure, RefinePlan, Refinement, Solver};
+use crate::analyses::loop_singular::{BoxKind, SingularSet};
+use crate::formulate::{Linkage, LinkageError, ModelChoice};
+use crate::kernel::search::{Enclosure, RefinePlan, Refinement, Solver};
 use std::time::{Duration, Instant};
-use crate::search::{BoxStatus, Progress, SolveStats, SolverSettings, Status};
-use crate::system::VarRole;
+use crate::kernel::search::{BoxStatus, Progress, SolveStats, SolverSettings, Status};
+use crate::kernel::system::VarRole;
 use std::sync::atomic::AtomicBool;
 
 /// A closed-loop linkage, as loaded.
@@ -123,7 +123,7 @@ impl Analysis for LinkageAnalysis {
             return Err(AnalysisError::BadRequest("max_boxes must be at least 1".into()));
         }
         let settings = SolverSettings { sigma: query.precision, max_boxes: query.max_boxes, timeout: query.timeout, threads: query.threads.max(1), ..SolverSettings::default() };
-        settings.validate().map_err(crate::search::SolveError::from)?;
+        settings.validate().map_err(crate::kernel::search::SolveError::from)?;
         let actuated = &self.actuation.joints;
         let sets = SingularSets::new(&self.mechanism, &self.fixed, &all_kinds(actuated), actuated, None)?;
         Ok(Box::new(SingularSetsRun { sets, settings, query: query.clone(), actuation: self.actuation.clone(), mechanism: self.mechanism.name.clone() }))
@@ -343,7 +343,7 @@ pub struct SolveJob {
 
 impl SolveJob {
     /// Validates `settings` for `problem`, so that a bad request is answered before any run.
-    pub fn new(problem: Linkage, settings: SolverSettings) -> Result<Self, crate::search::SolveError> {
+    pub fn new(problem: Linkage, settings: SolverSettings) -> Result<Self, crate::kernel::search::SolveError> {
         problem.solver(settings.clone())?;
         Ok(Self { problem, settings })
     }
@@ -357,8 +357,8 @@ impl SolveJob {
 
     /// The model's degrees of freedom, counted and measured at a configuration Newton finds
     /// (`system::freedom`), with its one-line description: what the run will cover.
-    pub fn freedom(&self) -> (crate::system::Freedom, String) {
-        let f = crate::system::freedom(self.problem.system(), 12, 1);
+    pub fn freedom(&self) -> (crate::kernel::system::Freedom, String) {
+        let f = crate::kernel::system::freedom(self.problem.system(), 12, 1);
         (f, describe_freedom(&f, self.settings.sigma))
     }
 
@@ -493,7 +493,7 @@ impl PreparedRun for LinkageRun {
 }
 
 /// `freedom`'s line: the degrees of freedom of the model and what they mean for the run.
-pub fn describe_freedom(f: &crate::system::Freedom, sigma: f64) -> String {
+pub fn describe_freedom(f: &crate::kernel::system::Freedom, sigma: f64) -> String {
     let counted = format!("{} unknowns, {} rows", f.unknowns, f.rows);
     match f.at_point {
         Some(l) if l.dof == 0 => format!("0 degrees of freedom ({counted}; the Jacobian has full rank at a configuration Newton found): isolated assemblies"),

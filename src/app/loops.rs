@@ -4,22 +4,22 @@
 //! both run `SingularSets`, so a topic and a `--json` file of the same URDF and settings hold the
 //! same boxes.
 //!
-//! The model is `problems::Linkage::build_in_joints`'s, as `solve --model auto` chooses among
+//! The model is `formulate::Linkage::build_in_joints`'s, as `solve --model auto` chooses among
 //! the joint-coordinate models: planar when the planar builder accepts the mechanism, spatial
-//! otherwise (`problems::singular::velocity`), with the reason.
+//! otherwise (`formulate::singular::velocity`), with the reason.
 //!
 //! Building every set's problem comes first (`SingularSets::new`), so a bad request (unknown
 //! actuated joint, wrong actuator count) is answered before any search starts; `solve` then runs
 //! the sets in order under one timeout: what the first set leaves of it goes to the next.
 
-use crate::problems::singular::image::{CuspProblem, ImageError, NodeProblem};
-use crate::singular::image::{regions, scaled, ImagePoints, ImageReport, RASTER_BYTES_PER_CELL};
-use crate::singular::SingularSet;
+use crate::formulate::singular::image::{CuspProblem, ImageError, NodeProblem};
+use crate::analyses::loop_singular::image::{regions, scaled, ImagePoints, ImageReport, RASTER_BYTES_PER_CELL};
+use crate::analyses::loop_singular::SingularSet;
 use crate::model::Mechanism;
-use crate::problems::singular::velocity::point_label;
-use crate::problems::singular::{Output, SingularError, SingularKind, SingularProblem};
-use crate::problems::{Linkage, Model, ModelChoice};
-use crate::search::{SolveError, SolverSettings};
+use crate::formulate::singular::velocity::point_label;
+use crate::formulate::singular::{Output, SingularError, SingularKind, SingularProblem};
+use crate::formulate::{Linkage, Model, ModelChoice};
+use crate::kernel::search::{SolveError, SolverSettings};
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
@@ -217,7 +217,7 @@ mod tests {
             assert!(!s.status.is_complete(), "{:?}", p.kind);
             assert_eq!(s.unsearched_charts, p.chart_count());
             assert_eq!(s.boxes.len(), 1);
-            assert_eq!(s.boxes[0].status, crate::singular::BoxKind::Undecided);
+            assert_eq!(s.boxes[0].status, crate::analyses::loop_singular::BoxKind::Undecided);
             for k in 0..p.chart_count() {
                 let chart = p.chart(k).initial_box();
                 assert!(chart.dims.iter().zip(&s.boxes[0].b.dims).all(|(c, b)| c.subset(*b)), "chart {k} of {:?} is not held", p.kind);

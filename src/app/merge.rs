@@ -7,8 +7,8 @@
 //! spread widest), so a merged box gathers neighbours and stays about as thin as the set allows.
 
 use super::{BoxSetResult, ResultBox, TracedBounds};
-use crate::interval::Bounds;
-use crate::search::BoxStatus;
+use crate::kernel::interval::Bounds;
+use crate::kernel::search::BoxStatus;
 use std::collections::BTreeMap;
 
 impl BoxSetResult {
@@ -130,7 +130,7 @@ fn hull(boxes: &[ResultBox], leaf: &[usize]) -> ResultBox {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::search::{SolverSettings, Status};
+    use crate::kernel::search::{SolverSettings, Status};
 
     fn set(n: usize) -> BoxSetResult {
         // Two clusters on a circle of small boxes, and a few undecided boxes.

@@ -33,13 +33,13 @@ pub use six::{arm_cuspidality, arm_cuspidality_of, chain6, inverse_kinematics6, 
 pub use sweep::{check_sweep, run_sweep, sweep_task};
 
 use crate::model::Mechanism;
-use crate::problems::{LinkageError, PlatformError};
-use crate::search::{BoxStatus, Progress, SolveError, SolveStats as Stats, SolverSettings, Status};
+use crate::formulate::{LinkageError, PlatformError};
+use crate::kernel::search::{BoxStatus, Progress, SolveError, SolveStats as Stats, SolverSettings, Status};
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 use thiserror::Error;
 
-pub use crate::interval::Bounds;
+pub use crate::kernel::interval::Bounds;
 
 /// What kind of mechanism an analysis answers for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -122,7 +122,7 @@ pub enum AnalysisError {
     Solve(#[from] SolveError),
     /// The singular sets of a linkage cannot be formulated (bad actuated joints...).
     #[error(transparent)]
-    Singular(#[from] crate::problems::singular::SingularError),
+    Singular(#[from] crate::formulate::singular::SingularError),
     /// Anything else wrong with the request, named.
     #[error("{0}")]
     BadRequest(String),
@@ -373,14 +373,14 @@ pub struct SingularityResult {
     /// The singular sets of a closed-loop mechanism (`None` for 3R chains, whose records are
     /// the cusps, nodes and curves above).
     pub loops: Option<LoopSingularities>,
-    /// 3R chains: the verdict of `linkspace singularities --json` (`manip3r::verdict::decide` on
+    /// 3R chains: the verdict of `linkspace singularities --json` (`arm3r::verdict::decide` on
     /// the full-torus run), its reason naming the analysed sub-chain and point when the verdict
-    /// does not stand for the arm (`manip3r::select::Scope`); `None` for closed-loop mechanisms.
-    pub verdict: Option<crate::manip3r::verdict::Verdict>,
+    /// does not stand for the arm (`arm3r::select::Scope`); `None` for closed-loop mechanisms.
+    pub verdict: Option<crate::analyses::arm3r::verdict::Verdict>,
     /// 3R chains with parallel axes 2 and 3: the certified singular branches, the very
-    /// `"singular_branches"` of `linkspace singularities --json` (`manip3r::branches::of`; joints
+    /// `"singular_branches"` of `linkspace singularities --json` (`arm3r::branches::of`; joints
     /// keyed by the names of `joint_names`, images in `workspace_names`); `None` otherwise.
-    pub branches: Option<crate::manip3r::branches::SingularBranches>,
+    pub branches: Option<crate::analyses::arm3r::branches::SingularBranches>,
     /// Six-joint arms whose 3R verdict is a sub-chain's: the whole arm's cuspidality verdict
     /// (`arm_cuspidality`, as `linkspace singularities --json` gives it); `None` otherwise.
     pub arm_cuspidality: Option<ArmVerdictLine>,
@@ -539,7 +539,7 @@ pub trait Analysis: Send + Sync {
 
     /// The arm's six revolute joints base to tip, when it has exactly six (the 6R services:
     /// `inverse_kinematics6`, `check_path`).
-    fn chain6(&self) -> Option<std::sync::Arc<crate::manip6r::Chain6R>> {
+    fn chain6(&self) -> Option<std::sync::Arc<crate::analyses::arm6r::Chain6R>> {
         None
     }
 

@@ -24,14 +24,14 @@
 //! (a turning point or the end of the branch may be ahead), never claimed to cross.
 //! Output (type I) singularities are not examined. No IO.
 
-use crate::contract::krawczyk::{self, Inflation, Step};
-use crate::interval::{interval, point, trig, Interval, IntervalBox};
+use crate::kernel::contract::krawczyk::{self, Inflation, Step};
+use crate::kernel::interval::{interval, point, trig, Interval, IntervalBox};
 use crate::model::Mechanism;
-use crate::problems::linkage::JointCoordinate;
-use crate::problems::{Coordinates, LinkageError, LinkageProblem, Output, SingularError, SingularKind};
-use crate::search::{Budget, Control, Limit, SolverSettings};
-use crate::singular::BoxKind;
-use crate::system::{EquationKind, Monomial, VarId};
+use crate::formulate::linkage::JointCoordinate;
+use crate::formulate::{Coordinates, LinkageError, LinkageProblem, Output, SingularError, SingularKind};
+use crate::kernel::search::{Budget, Control, Limit, SolverSettings};
+use crate::analyses::loop_singular::BoxKind;
+use crate::kernel::system::{EquationKind, Monomial, VarId};
 use nalgebra::{DMatrix, DVector};
 use std::collections::BTreeMap;
 use thiserror::Error;

@@ -1,11 +1,11 @@
-//! Joint paths checked against a singular set: the 6R arm's (`det J = 0`, `manip6r::path`) or
-//! its 3R positioning structure's (`det Df = 0`, `manip3r::path`), one verdict per segment.
+//! Joint paths checked against a singular set: the 6R arm's (`det J = 0`, `arm6r::path`) or
+//! its 3R positioning structure's (`det Df = 0`, `arm3r::path`), one verdict per segment.
 
 use super::arm::Arm;
-use crate::joint_path::PathCheck;
-use crate::manip3r::{self, Manip3rError};
-use crate::manip6r::{self, Chain6R, Manip6rError};
-use crate::search::Control;
+use crate::analyses::joint_path::PathCheck;
+use crate::analyses::arm3r::{self, Manip3rError};
+use crate::analyses::arm6r::{self, Chain6R, Manip6rError};
+use crate::kernel::search::Control;
 use std::time::Instant;
 
 /// Which singular set a path is checked against.
@@ -60,7 +60,7 @@ pub struct ArmPathCheck {
 /// `tolerance`), or undecided.
 pub fn check_path(chain: &Chain6R, waypoints: &[[f64; 6]], tolerance: f64, control: &Control) -> Result<ArmPathCheck, Manip6rError> {
     let start = Instant::now();
-    let check = manip6r::path::check(chain, waypoints, tolerance, control)?;
+    let check = arm6r::path::check(chain, waypoints, tolerance, control)?;
     let arm = format!("{} -> {} ({})", chain.base, chain.tip, chain.joints.join(", "));
     Ok(ArmPathCheck {
         check,
@@ -93,7 +93,7 @@ pub fn check_path3(arm: &Arm, waypoints: &[Vec<f64>], tolerance: f64, control: &
         (Some(i), Some(j)) => [i, j],
         _ => return Err(Manip3rError::BadPath(format!("joints '{}' and '{}' of the sub-chain are not among the arm's joints ({})", arm.chain.joints[1], arm.chain.joints[2], joints.join(", ")))),
     };
-    let check = manip3r::path::check(&arm.chain, theta, joints.len(), waypoints, tolerance, control)?;
+    let check = arm3r::path::check(&arm.chain, theta, joints.len(), waypoints, tolerance, control)?;
     Ok(ArmPathCheck {
         check,
         set: PathSet::Positioning3R,

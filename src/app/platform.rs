@@ -18,16 +18,16 @@
 //! published `Undecided`, those of settled clusters `Solution`.
 
 use super::{MechanismKind, Analysis, AnalysisError, BoxSetResult, PreparedRun, ResultBox, Service};
-use crate::contract::FaceBounds;
+use crate::kernel::contract::FaceBounds;
 use crate::model::Mechanism;
-use crate::problems::cayley_menger::{BuildOptions, CayleyMenger, DistanceSolverError, Formulation};
+use crate::formulate::cayley_menger::{BuildOptions, CayleyMenger, DistanceSolverError, Formulation};
 use super::distances::{DistancesJob, DistancesRequest};
-use crate::problems::{LegValues, PlatformError};
-use crate::distances::Choice;
-use crate::interval::{bounds, Interval, IntervalBox};
+use crate::formulate::{LegValues, PlatformError};
+use crate::analyses::distances::Choice;
+use crate::kernel::interval::{bounds, Interval, IntervalBox};
 use std::collections::BTreeMap;
-use crate::search::{BoxStatus, Progress, SolverSettings};
-use crate::system::VarRole;
+use crate::kernel::search::{BoxStatus, Progress, SolverSettings};
+use crate::kernel::system::VarRole;
 use std::sync::atomic::AtomicBool;
 
 /// The formulation the node uses: the fastest of `bench-distances` (shared variables, redundant
@@ -199,10 +199,10 @@ mod tests {
     use super::*;
     use crate::app::load;
     use crate::model::urdf;
-    use crate::distances::solve as certified_solve;
-    use crate::problems::PlatformProblem;
-    use crate::report::distances::report_certified;
-    use crate::search::Status;
+    use crate::analyses::distances::solve as certified_solve;
+    use crate::formulate::PlatformProblem;
+    use crate::edges::report::distances::report_certified;
+    use crate::kernel::search::Status;
 
     const OCTAHEDRAL: &str = include_str!("../../urdf/octahedral.urdf");
     const LEGS: [&str; 6] = ["leg15", "leg16", "leg26", "leg24", "leg34", "leg35"];

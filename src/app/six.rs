@@ -1,14 +1,14 @@
 //! Six-revolute arms taken whole: certified inverse kinematics of the tip frame and the
-//! whole-arm cuspidality verdict (`manip6r`), with the 3R jobs' loading options.
+//! whole-arm cuspidality verdict (`arm6r`), with the 3R jobs' loading options.
 
 use super::arm::Arm;
-use crate::manip3r::LoadOptions;
-use crate::manip6r::{cuspidal, ik, three_parallel, Chain6R, CuspidalVerdict, Ik6Solutions, Manip6rError, MostSolutions, PoseInput, SearchOutcome, ThreeParallel};
+use crate::analyses::arm3r::LoadOptions;
+use crate::analyses::arm6r::{cuspidal, ik, three_parallel, Chain6R, CuspidalVerdict, Ik6Solutions, Manip6rError, MostSolutions, PoseInput, SearchOutcome, ThreeParallel};
 use crate::model::{rounding, Mechanism};
-use crate::search::Control;
+use crate::kernel::search::Control;
 use std::time::{Duration, Instant};
 
-/// The arm's six joints as `manip6r` reads them, after the rounding policy of `options`
+/// The arm's six joints as `arm6r` reads them, after the rounding policy of `options`
 /// (`--base`/`--tip` honoured; locks and points do not apply to the whole arm).
 pub fn chain6(m: &Mechanism, options: &LoadOptions) -> Result<Chain6R, Manip6rError> {
     chain6_snapped(m, options).map(|(chain, _)| chain)
@@ -55,7 +55,7 @@ pub enum ArmCuspidality {
     /// The wrist is spherical: the arm is cuspidal iff its 3R positioning structure is, so the
     /// 3R verdict is the arm's.
     PositioningVerdict,
-    /// Proven not cuspidal: the arm is of the UR family (`manip6r::three_parallel`, whose proof
+    /// Proven not cuspidal: the arm is of the UR family (`arm6r::three_parallel`, whose proof
     /// the report cites).
     ThreeParallel {
         /// What the recognition proved.
@@ -64,7 +64,7 @@ pub enum ArmCuspidality {
         /// geometry after them (0 when the file is exactly of the family as written).
         snapped: usize,
     },
-    /// A witness search ran (`manip6r::cuspidal`).
+    /// A witness search ran (`arm6r::cuspidal`).
     Searched {
         /// Cuspidal with a witness, or undecided.
         verdict: CuspidalVerdict,

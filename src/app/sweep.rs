@@ -5,11 +5,11 @@
 //! a failed result, not an error: the sweep goes on.
 
 use super::{singularities, Arm, SingularitiesRequest, SolveJob};
-use crate::manip3r::LoadOptions;
+use crate::analyses::arm3r::LoadOptions;
 use crate::model::Mechanism;
-use crate::problems::ModelChoice;
-use crate::search::{BoxStatus, Control, Limit, Limits, SolverSettings, Status};
-use crate::sweep::{self, Parameter, Plan, Sweep, SweepError, Task, TaskResult, TaskStatus};
+use crate::formulate::ModelChoice;
+use crate::kernel::search::{BoxStatus, Control, Limit, Limits, SolverSettings, Status};
+use crate::analyses::sweep::{self, Parameter, Plan, Sweep, SweepError, Task, TaskResult, TaskStatus};
 use std::collections::HashSet;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;

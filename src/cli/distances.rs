@@ -4,11 +4,11 @@
 use super::parse_fix;
 use anyhow::{Context, Result};
 use linkspace::app::{DistancesJob, DistancesRequest};
-use linkspace::contract::FaceBounds;
-use linkspace::distances::Choice;
+use linkspace::kernel::contract::FaceBounds;
+use linkspace::analyses::distances::Choice;
 use linkspace::model::urdf;
-use linkspace::report::distances::{report_certified, DistancesReport};
-use linkspace::search::SolverSettings;
+use linkspace::edges::report::distances::{report_certified, DistancesReport};
+use linkspace::kernel::search::SolverSettings;
 use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::{Path, PathBuf};

@@ -1,15 +1,15 @@
 //! `linkspace loop-singularities`: certified singular sets of closed-loop linkages,
 //! planar or spatial (the model `solve --model auto` picks), on the polynomial solver through
-//! `singular` (the searches on the systems of `problems::singular`).
+//! `singular` (the searches on the systems of `formulate::singular`).
 
 use super::{parse_fix, LimitArgs};
 use anyhow::{bail, Context, Result};
 use linkspace::model::urdf;
-use linkspace::problems::{Output, SingularKind};
-use linkspace::problems::Model;
+use linkspace::formulate::{Output, SingularKind};
+use linkspace::formulate::Model;
 use linkspace::app::{check_input_motion, motion_joints, MotionRequest, all_kinds, analyse_image, image_points, Actuation, ImageSearch, SingularSets};
-use linkspace::report::singular::SingularReport;
-use linkspace::search::{Control, Limits, SolverSettings};
+use linkspace::edges::report::singular::SingularReport;
+use linkspace::kernel::search::{Control, Limits, SolverSettings};
 use std::io::Write;
 use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
@@ -230,7 +230,7 @@ fn run_image(args: &LoopSingularitiesArgs, mechanism: &linkspace::model::Mechani
     }
     writeln!(out, "  can change assembly mode without crossing a type-II singularity: {} ({})", r.verdict.answer, r.verdict.reason).ok();
     if let Some(path) = &args.json {
-        super::write_file(path, serde_json::to_string_pretty(&linkspace::report::image::ImageJson(&r))?)?;
+        super::write_file(path, serde_json::to_string_pretty(&linkspace::edges::report::image::ImageJson(&r))?)?;
     }
     Ok(())
 }
@@ -248,7 +248,7 @@ fn run_points(args: &LoopSingularitiesArgs, mechanism: &linkspace::model::Mechan
         writeln!(out, "  node{}: {:?}", if n.unique { " (certified)" } else { " (undecided)" }, n.workspace).ok();
     }
     if let Some(path) = &args.json {
-        super::write_file(path, serde_json::to_string_pretty(&linkspace::report::image::ImagePointsJson(&r))?)?;
+        super::write_file(path, serde_json::to_string_pretty(&linkspace::edges::report::image::ImagePointsJson(&r))?)?;
     }
     Ok(())
 }
@@ -264,7 +264,7 @@ fn run_motion(args: &LoopSingularitiesArgs, mechanism: &linkspace::model::Mechan
     let cancel = AtomicBool::new(false);
     let control = Control { limits: Limits { timeout: settings.timeout, ..Limits::default() }, threads: 1, cancel: &cancel };
     let found = check_input_motion(mechanism, fixed, &request, &control).with_context(|| format!("checking {}", args.urdf.display()))?;
-    let r = linkspace::report::motion::MotionReport::of(&found);
+    let r = linkspace::edges::report::motion::MotionReport::of(&found);
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}: {} from {} to {}: {} ({} steps, {:.3} s)", r.singular_set, r.actuated, r.from, r.to, r.verdict, r.steps.len(), r.seconds).ok();
     writeln!(out, "  {}", r.reason).ok();

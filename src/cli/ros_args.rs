@@ -6,7 +6,7 @@
 //! writes (block scalars) reads the same.
 
 use anyhow::{bail, Context, Result};
-use linkspace::ros::Severity;
+use linkspace::edges::ros::Severity;
 use yaml_rust2::{Yaml, YamlLoader};
 
 /// What `--ros-args` asked for (the ROS 2 command-line grammar, the parts a node honours).
@@ -42,7 +42,7 @@ fn severity(level: &str) -> Result<Severity> {
         "warn" | "warning" => Severity::Warn,
         "error" => Severity::Error,
         "fatal" => Severity::Fatal,
-        _ => bail!("--ros-args --log-level '{}': expected debug, info, warn, error or fatal", linkspace::ros::bounded(level, 80)),
+        _ => bail!("--ros-args --log-level '{}': expected debug, info, warn, error or fatal", linkspace::edges::ros::bounded(level, 80)),
     })
 }
 

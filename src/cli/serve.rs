@@ -3,8 +3,8 @@
 use super::ros_args::parse_ros_args;
 use super::{parse_fix, parse_trace};
 use anyhow::{bail, Context, Result};
-use linkspace::ros::{self, NodeLimits, Mapping, Network, ServeConfig, Severity, Source};
-use linkspace::search::SolverSettings;
+use linkspace::edges::ros::{self, NodeLimits, Mapping, Network, ServeConfig, Severity, Source};
+use linkspace::kernel::search::SolverSettings;
 use std::io::Read;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -96,7 +96,7 @@ pub struct ServeArgs {
     republish: f64,
     /// Most MiB of samples each of the node's DDS writers (one per service's replies, one per
     /// topic) keeps for repair and late joiners; the oldest go first, the newest always stays.
-    #[arg(long, value_name = "MIB", default_value_t = linkspace::ros::DEFAULT_MAX_HISTORY_MB)]
+    #[arg(long, value_name = "MIB", default_value_t = linkspace::edges::ros::DEFAULT_MAX_HISTORY_MB)]
     max_history_mb: usize,
     /// Also take the URDF from this topic (std_msgs/String, TransientLocal, as
     /// robot_state_publisher publishes it); each new one replaces the mechanism and is analysed
@@ -170,7 +170,7 @@ pub fn serve(mut args: ServeArgs) -> Result<()> {
     }
     let settings = args.limits.solver_settings(SolverSettings::default().max_boxes, SolverSettings { sigma: args.sigma, rho: args.rho, ..Default::default() })?;
     settings.validate()?;
-    linkspace::manip3r::check_precision(args.precision)?;
+    linkspace::analyses::arm3r::check_precision(args.precision)?;
     let limits = NodeLimits { max_boxes: args.max_request_boxes, max_timeout: args.max_request_timeout, max_wait: args.max_wait, max_runs: args.max_runs, max_markers: args.max_markers, max_set_megabytes: args.max_set_megabytes };
     if limits.max_boxes == 0 || !(limits.max_timeout > 0.0 && limits.max_timeout.is_finite()) || !(limits.max_wait >= 0.0 && limits.max_wait.is_finite()) || limits.max_runs == 0 {
         bail!("--max-request-boxes, --max-request-timeout and --max-runs must be positive, --max-wait at least 0");
@@ -252,7 +252,7 @@ pub fn serve(mut args: ServeArgs) -> Result<()> {
 
 /// A parameter's text as a number, for `-p`, `--params-file`.
 fn param_number<T: std::str::FromStr>(name: &str, value: &str) -> Result<T> {
-    value.trim().parse().map_err(|_| anyhow::anyhow!("parameter {name}: '{}' is not a valid value", linkspace::ros::bounded(value, 80)))
+    value.trim().parse().map_err(|_| anyhow::anyhow!("parameter {name}: '{}' is not a valid value", linkspace::edges::ros::bounded(value, 80)))
 }
 
 /// Applies ROS parameters onto the command-line settings (they win over the flags).
@@ -273,7 +273,7 @@ fn apply_params(args: &mut ServeArgs, params: &[(String, String)]) -> Result<()>
             "use_sim_time" => {}
             other => bail!(
                 "parameter '{}' is not a parameter of this node (robot_description, sigma, rho, precision, max_request_boxes, max_request_timeout, max_wait, max_runs, max_markers, max_set_megabytes, republish)",
-                linkspace::ros::bounded(other, 80)
+                linkspace::edges::ros::bounded(other, 80)
             ),
         }
     }

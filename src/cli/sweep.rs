@@ -10,8 +10,8 @@
 use anyhow::{bail, Context, Result};
 use linkspace::app;
 use linkspace::model::urdf;
-use linkspace::search::Limits;
-use linkspace::sweep::{self, Header, Summary, Sweep, TaskResult, DEFAULT_MAX_TASKS};
+use linkspace::kernel::search::Limits;
+use linkspace::analyses::sweep::{self, Header, Summary, Sweep, TaskResult, DEFAULT_MAX_TASKS};
 use std::collections::HashSet;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -72,7 +72,7 @@ pub(crate) fn run(args: SweepArgs) -> Result<()> {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
         Err(e) => return Err(e).with_context(|| format!("reading {}", jsonl.display())),
     };
-    let (rank, ranks) = linkspace::search::rank_and_size();
+    let (rank, ranks) = linkspace::kernel::search::rank_and_size();
     // Rank 0 reads and rewrites the results; the others learn what is done (or that rank 0
     // refused) from it, so no rank waits for one that stopped.
     let prepared = if rank == 0 { prepare(&out, &jsonl, &existing, args.resume, &header, &tasks) } else { Ok(Vec::new()) };
@@ -227,7 +227,7 @@ fn rank_files(out: &Path) -> Result<Vec<PathBuf>> {
 /// Every rank's bytes, in rank order (this process's alone without MPI).
 fn gather(mine: Vec<u8>) -> Vec<Vec<u8>> {
     #[cfg(feature = "mpi")]
-    if linkspace::search::rank_and_size().1 > 1 {
+    if linkspace::kernel::search::rank_and_size().1 > 1 {
         return super::ranks::all_gather(&mine);
     }
     vec![mine]

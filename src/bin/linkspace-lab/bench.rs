@@ -4,8 +4,8 @@
 
 use anyhow::{Context, Result};
 use linkspace::model::urdf;
-use linkspace::problems::LinkageProblem;
-use linkspace::search::SolverSettings;
+use linkspace::formulate::LinkageProblem;
+use linkspace::kernel::search::SolverSettings;
 use linkspace::LpBackend;
 use std::io::Write;
 use std::sync::atomic::AtomicBool;
@@ -49,7 +49,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
             }
             let median = crate::median(times);
             let e = last.expect("repeat >= 1");
-            let clusters = linkspace::interval::components(&e.solutions).1;
+            let clusters = linkspace::kernel::interval::components(&e.solutions).1;
             let ratio = baseline.map_or("1.00x (baseline)".to_string(), |base: f64| crate::speed_against(base, median));
             writeln!(out, "{name} | {backend:?} | {median:.4} | {} | {} | {clusters} | {} | {ratio}", e.stats.processed, e.solutions.len(), e.stats.lp.solved).ok();
             baseline.get_or_insert(median);

@@ -7,16 +7,16 @@
 //! cuspidality verdict with its aspects and IK counts; no nodes), in the same process.
 
 use anyhow::Result;
-use linkspace::manip3r::{
+use linkspace::analyses::arm3r::{
     self,
     cusps::{self, CuspSettings, Method},
     nodes::{self, NodeSettings},
     Chain3R,
 };
 use linkspace::app;
-use linkspace::manip3r::LoadOptions;
+use linkspace::analyses::arm3r::LoadOptions;
 use linkspace::model::urdf;
-use linkspace::search::{Control, Limits};
+use linkspace::kernel::search::{Control, Limits};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -64,14 +64,14 @@ const IBEX_REFERENCE: &str = "Ibex 2.9.1 ibexsolve -e 1e-4, CPU s of the child (
 
 /// CPU seconds of `f` (this process, every thread) and its value.
 fn cpu<T>(f: impl FnOnce() -> T) -> (f64, T) {
-    let c0 = linkspace::search::process_cpu_seconds();
+    let c0 = linkspace::kernel::search::process_cpu_seconds();
     let r = f();
-    (linkspace::search::process_cpu_seconds() - c0, r)
+    (linkspace::kernel::search::process_cpu_seconds() - c0, r)
 }
 
 pub fn run(args: Bench3rArgs) -> Result<()> {
     crate::check_repeat(args.repeat)?;
-    manip3r::check_precision(args.precision)?;
+    arm3r::check_precision(args.precision)?;
     if let Some(file) = &args.baseline_child {
         return crate::bench_arms::baseline_child(&args, file);
     }

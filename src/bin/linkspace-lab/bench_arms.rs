@@ -10,10 +10,10 @@
 use crate::bench3r::{Bench3rArgs, ROBOTS};
 use crate::median;
 use anyhow::{bail, Context, Result};
-use linkspace::manip3r::{self, ChainSpec, LoadOptions};
-use linkspace::search::Control;
+use linkspace::analyses::arm3r::{self, ChainSpec, LoadOptions};
+use linkspace::kernel::search::Control;
 use linkspace::model::urdf;
-use linkspace::search::{Limits, Status};
+use linkspace::kernel::search::{Limits, Status};
 use std::io::{Read, Write};
 use std::path::Path;
 use std::process::{Command, Stdio};
@@ -191,7 +191,7 @@ fn table(args: &Bench3rArgs, shipped: &Path, lab: &Path, dir: &Path) -> Result<(
 /// shipped path selects (same rounding and chain choice), the full torus, both interval
 /// searches run whatever the structure, nothing attributed afterwards. One JSON line.
 pub fn baseline_child(args: &Bench3rArgs, file: &Path) -> Result<()> {
-    manip3r::check_precision(args.precision)?;
+    arm3r::check_precision(args.precision)?;
     let locks = args
         .lock
         .iter()
@@ -213,7 +213,7 @@ pub fn baseline_child(args: &Bench3rArgs, file: &Path) -> Result<()> {
     let limits = Limits { max_cells: args.max_boxes, timeout: Some(Duration::from_secs_f64(args.timeout.min(1e9))), max_memory: BASELINE_MAX_MEMORY };
     let cancel = AtomicBool::new(false);
     let control = Control { limits, threads: 1, cancel: &cancel };
-    let run = manip3r::singularities(&chain, args.precision, true, &control, &mut |_| {})?;
+    let run = arm3r::singularities(&chain, args.precision, true, &control, &mut |_| {})?;
     let limit = match run.status {
         Status::Complete => None,
         Status::Incomplete(l) => Some(l.name()),

@@ -5,11 +5,11 @@
 
 use anyhow::{Context, Result};
 use crate::plot::{box_panels, layered_panels, lines, Layer, LayeredPanel, Marker, Panel, Scale, Series};
-use linkspace::interval::IntervalBox;
+use linkspace::kernel::interval::IntervalBox;
 use linkspace::LpBackend;
 use linkspace::model::urdf;
-use linkspace::problems::LinkageProblem;
-use linkspace::search::{Collect, Enclosure, SolverSettings, Status};
+use linkspace::formulate::LinkageProblem;
+use linkspace::kernel::search::{Collect, Enclosure, SolverSettings, Status};
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
@@ -289,13 +289,13 @@ const ROBOTS_3R: [(&str, &str); 3] = [
     ("f", include_str!("../../../urdf/orthogonal_3r_f.urdf")),
 ];
 
-/// The singular-curve cover (`manip3r::Cover`, the one the ROS node publishes) on a
+/// The singular-curve cover (`arm3r::Cover`, the one the ROS node publishes) on a
 /// `2^depth` grid, its images, and the certified cusps and nodes marked on both; then the
 /// workspace regions between the images with their number of IK solutions (seed 003's style).
 fn singular_curves(dir: &Path, depth: u32, quick: bool) -> Result<()> {
-    use linkspace::interval::interval;
-    use linkspace::manip3r::{Cover, cusps, nodes, radius, Chain3R};
-    use linkspace::search::Control;
+    use linkspace::kernel::interval::interval;
+    use linkspace::analyses::arm3r::{Cover, cusps, nodes, radius, Chain3R};
+    use linkspace::kernel::search::Control;
     let mut joint_panels = Vec::new();
     let mut work_panels = Vec::new();
     let mut region_panels = Vec::new();
@@ -303,7 +303,7 @@ fn singular_curves(dir: &Path, depth: u32, quick: bool) -> Result<()> {
         let chain = Chain3R::from_mechanism(&urdf::parse(text)?, 0.0)?;
         let found = cusps::search(&chain, &cusps::CuspSettings::default())?;
         let node_search = nodes::search(&chain, &found.cusps, &found.bands, &nodes::NodeSettings::default())?;
-        let cover = Cover::new(&chain, depth, &Control::with_limits(linkspace::search::Limits::default()));
+        let cover = Cover::new(&chain, depth, &Control::with_limits(linkspace::kernel::search::Limits::default()));
         let (mut joint, mut work) = (Vec::new(), Vec::new());
         for &(i, j) in &cover.boxes {
             let ([a, b], [c, d]) = (cover.bounds(i), cover.bounds(j));
@@ -374,12 +374,12 @@ const FOUR_SPHERES: &str = include_str!("../../../urdf/four_spheres.json");
 /// box diagonal, per trapezoid method (seed 004's corners and interval-arithmetic faces, on its
 /// split formulation and on our shared one).
 fn distance_sweeps(dir: &Path, quick: bool) -> Result<()> {
-    use linkspace::contract::FaceBounds;
-    use linkspace::problems::{BuildOptions, CayleyMenger, Formulation};
+    use linkspace::kernel::contract::FaceBounds;
+    use linkspace::formulate::{BuildOptions, CayleyMenger, Formulation};
     let solve = |cm: &CayleyMenger, faces: FaceBounds, settings: SolverSettings| -> Result<Enclosure> { Ok(cm.solver(faces, settings)?.enclose(&AtomicBool::new(false), &mut |_| {})) };
     let legs = ["leg15", "leg16", "leg26", "leg24", "leg34", "leg35"];
     let fixed: Vec<(String, f64)> = legs.iter().map(|l| (l.to_string(), 4.75)).collect();
-    let platform = linkspace::problems::PlatformProblem::new(&urdf::parse(OCTAHEDRAL)?, &fixed)?;
+    let platform = linkspace::formulate::PlatformProblem::new(&urdf::parse(OCTAHEDRAL)?, &fixed)?;
     let sigmas: &[f64] = if quick { &[0.1, 1e-3] } else { &[0.1, 1e-2, 1e-3, 1e-4, 1e-6] };
     let methods = [
         ("split, corners (seed 004)", Formulation::Split, FaceBounds::Corners, false),
@@ -405,7 +405,7 @@ fn distance_sweeps(dir: &Path, quick: bool) -> Result<()> {
     lines(&mut svg, "Octahedral platform b: CPU seconds against worst box diagonal (runs that hit the time limit omitted)", "worst solution-box diagonal", "CPU seconds", &series, Scale::Log, Scale::Log)?;
     write(dir, "speed_accuracy_octahedral.svg", &svg)?;
 
-    let spheres = linkspace::distances::file::parse(FOUR_SPHERES, &[])?;
+    let spheres = linkspace::analyses::distances::file::parse(FOUR_SPHERES, &[])?;
     let sigmas: &[f64] = if quick { &[0.1] } else { &[0.1, 0.03, 0.01, 0.003] };
     let mut series = Vec::new();
     for (label, redundant) in [("shared, Bernstein corners", false), ("shared, Bernstein corners, redundant (C1-C4)", true)] {
@@ -429,8 +429,8 @@ fn distance_sweeps(dir: &Path, quick: bool) -> Result<()> {
 
 /// 3R cusps: CPU seconds against the widest cusp box, Krawczyk against bisection alone.
 fn cusp_sweep(dir: &Path, quick: bool) -> Result<()> {
-    use linkspace::manip3r::{cusps, Chain3R};
-    use linkspace::search::Control;
+    use linkspace::analyses::arm3r::{cusps, Chain3R};
+    use linkspace::kernel::search::Control;
     let precisions: &[f64] = if quick { &[1e-2, 1e-4] } else { &[1e-2, 1e-3, 1e-4, 1e-6, 1e-8] };
     let mut series = Vec::new();
     for (name, text) in ROBOTS_3R.iter().take(2) {
@@ -438,10 +438,10 @@ fn cusp_sweep(dir: &Path, quick: bool) -> Result<()> {
         for (label, method) in [("interval Newton (Krawczyk)", cusps::Method::Krawczyk), ("bisection only", cusps::Method::Bisection)] {
             let mut points = Vec::new();
             for &precision in precisions {
-                let c0 = linkspace::search::process_cpu_seconds();
-                let limits = linkspace::search::Limits { max_cells: cusps::DEFAULT_MAX_BOXES, timeout: Some(Duration::from_secs(20)), ..Default::default() };
+                let c0 = linkspace::kernel::search::process_cpu_seconds();
+                let limits = linkspace::kernel::search::Limits { max_cells: cusps::DEFAULT_MAX_BOXES, timeout: Some(Duration::from_secs(20)), ..Default::default() };
                 let found = cusps::search_with(&chain, &cusps::CuspSettings { precision, method }, &Control::with_limits(limits), &mut |_| {})?;
-                let cpu = linkspace::search::process_cpu_seconds() - c0;
+                let cpu = linkspace::kernel::search::process_cpu_seconds() - c0;
                 if found.status.is_complete() {
                     let widest = found.cusps.iter().map(|c| c.theta[0].wid().hypot(c.theta[1].wid())).fold(0.0, f64::max);
                     points.push((widest, cpu));
@@ -458,7 +458,7 @@ fn cusp_sweep(dir: &Path, quick: bool) -> Result<()> {
 
 /// Robot a beside a column: colliding and undecided boxes of the SIVIA classification.
 fn collision_chart(dir: &Path) -> Result<()> {
-    use linkspace::manip3r::collision::{classify, CollisionSettings, Scene};
+    use linkspace::analyses::arm3r::collision::{classify, CollisionSettings, Scene};
     let scene = Scene::from_mechanism(&urdf::parse(include_str!("../../../urdf/orthogonal_3r_a_column.urdf"))?)?;
     let set = classify(&scene, &CollisionSettings { precision: 1e-2 })?;
     let rect = |t: &[linkspace::Interval; 2]| [t[0].inf(), t[0].sup(), t[1].inf(), t[1].sup()];

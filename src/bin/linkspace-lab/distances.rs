@@ -1,18 +1,18 @@
 //! `linkspace-lab bench-distances`: seed 004's Tables I and II in one run. The seed's
 //! determinants as plain searches (split or shared variables, corner or interval-arithmetic
-//! faces) against the certified pipeline (`linkspace::distances::solve`), each row's CPU time
+//! faces) against the certified pipeline (`linkspace::analyses::distances::solve`), each row's CPU time
 //! against the case's baseline measured in the same run; the seed's own figures (measured on a
 //! Pentium IV 1.8 GHz) are printed beside them as references only.
 
 use anyhow::{bail, Context, Result};
-use linkspace::contract::FaceBounds;
-use linkspace::distances::{solve as certified_solve, Choice};
+use linkspace::kernel::contract::FaceBounds;
+use linkspace::analyses::distances::{solve as certified_solve, Choice};
 use linkspace::model::urdf;
-use linkspace::problems::{BuildOptions, CayleyMenger, DistanceProblem as Problem, Formulation};
-use linkspace::problems::Placed;
-use linkspace::distances::file as distance_file;
-use linkspace::problems::PlatformProblem;
-use linkspace::search::{Enclosure, SolverSettings};
+use linkspace::formulate::{BuildOptions, CayleyMenger, DistanceProblem as Problem, Formulation};
+use linkspace::formulate::Placed;
+use linkspace::analyses::distances::file as distance_file;
+use linkspace::formulate::PlatformProblem;
+use linkspace::kernel::search::{Enclosure, SolverSettings};
 use std::io::Write;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
@@ -58,13 +58,13 @@ struct Measured {
 
 fn measure(p: &Problem, method: Method, redundant: bool, settings: &SolverSettings) -> Result<Measured> {
     let cancel = AtomicBool::new(false);
-    let c0 = linkspace::search::process_cpu_seconds();
+    let c0 = linkspace::kernel::search::process_cpu_seconds();
     let from_search = |e: Enclosure, cpu: f64| Measured {
         cpu,
         complete: e.status == linkspace::Status::Complete,
         processed: e.stats.processed,
         solution_boxes: e.solutions.len(),
-        clusters: linkspace::interval::components(&e.solutions).1,
+        clusters: linkspace::kernel::interval::components(&e.solutions).1,
         verdict: None,
         phases: Vec::new(),
     };
@@ -72,11 +72,11 @@ fn measure(p: &Problem, method: Method, redundant: bool, settings: &SolverSettin
         Method::Search(formulation, faces) => {
             let cm = CayleyMenger::build(p, BuildOptions { formulation, redundant })?;
             let e = cm.solver(faces, settings.clone())?.enclose(&cancel, &mut |_| {});
-            from_search(e, linkspace::search::process_cpu_seconds() - c0)
+            from_search(e, linkspace::kernel::search::process_cpu_seconds() - c0)
         }
         Method::Line => {
             let e = Placed::build_line(p)?.solver(settings.clone())?.enclose(&cancel, &mut |_| {});
-            from_search(e, linkspace::search::process_cpu_seconds() - c0)
+            from_search(e, linkspace::kernel::search::process_cpu_seconds() - c0)
         }
         Method::Settled(choice) => {
             let c = certified_solve(p, choice, redundant, FaceBounds::Corners, settings.clone(), &cancel)?;

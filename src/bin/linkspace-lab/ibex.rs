@@ -9,8 +9,8 @@
 //! peer's model of the same arm would state them.
 
 use anyhow::{Context, Result};
-use linkspace::interval::point;
-use linkspace::manip3r::Chain3R;
+use linkspace::kernel::interval::point;
+use linkspace::analyses::arm3r::Chain3R;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -122,7 +122,7 @@ fn body(coef: &[Bilinear; 4]) -> String {
 /// The Minibex model of the cusp system over θ₂ ∈ [−π, π], θ₃ ∈ `t3`.
 pub fn cusp_model(chain: &Chain3R, t3: [f64; 2]) -> String {
     let b = body(&coefficients(chain));
-    let pi = linkspace::manip3r::PI_UP;
+    let pi = linkspace::analyses::arm3r::PI_UP;
     format!(
         "// {name}: det Df = 0 and the seed's second row (D&G2), written by linkspace-lab bench3r\n\
          function det_df(t2, t3)\n{b}  return d;\nend\n\
@@ -139,7 +139,7 @@ pub fn cusp_model(chain: &Chain3R, t3: [f64; 2]) -> String {
 
 /// The θ₃ ranges of [−π, π] outside `strips` (sorted, possibly touching the ends).
 pub fn outside(strips: &[[f64; 2]]) -> Vec<[f64; 2]> {
-    let pi = linkspace::manip3r::PI_UP;
+    let pi = linkspace::analyses::arm3r::PI_UP;
     let mut out = Vec::new();
     let mut lo = -pi;
     for s in strips {
@@ -243,7 +243,7 @@ mod tests {
 
     #[test]
     fn strips_are_left_out() {
-        let pi = linkspace::manip3r::PI_UP;
+        let pi = linkspace::analyses::arm3r::PI_UP;
         assert_eq!(outside(&[]), vec![[-pi, pi]]);
         assert_eq!(outside(&[[-1.0, -0.5], [0.5, 1.0]]), vec![[-pi, -1.0], [-0.5, 0.5], [1.0, pi]]);
         assert_eq!(outside(&[[-pi, -3.0], [3.0, pi]]), vec![[-3.0, 3.0]]);

@@ -3,11 +3,11 @@
 
 use anyhow::Result;
 use linkspace::model::urdf;
-use linkspace::problems::{CuspFormulation, CuspProblem, NodeProblem};
-use linkspace::singular::image;
+use linkspace::formulate::{CuspFormulation, CuspProblem, NodeProblem};
+use linkspace::analyses::loop_singular::image;
 use linkspace::app::SingularSets;
-use linkspace::problems::{Output, SingularKind, SingularProblem};
-use linkspace::search::SolverSettings;
+use linkspace::formulate::{Output, SingularKind, SingularProblem};
+use linkspace::kernel::search::SolverSettings;
 use std::io::Write;
 use std::sync::atomic::AtomicBool;
 
@@ -66,9 +66,9 @@ pub fn bench(args: BenchArgs) -> Result<()> {
             let mut times = Vec::new();
             let mut last = None;
             for _ in 0..args.repeat {
-                let c0 = linkspace::search::process_cpu_seconds();
+                let c0 = linkspace::kernel::search::process_cpu_seconds();
                 let set = p.solve(&settings, &AtomicBool::new(false))?;
-                times.push(linkspace::search::process_cpu_seconds() - c0);
+                times.push(linkspace::kernel::search::process_cpu_seconds() - c0);
                 last = Some(set);
             }
             times.sort_by(|a, b| a.total_cmp(b));
@@ -114,9 +114,9 @@ fn bench_three_rpr_cusps(out: &mut impl Write, repeat: usize) -> Result<()> {
         let mut what = String::new();
         let mut processed = 0;
         for _ in 0..repeat {
-            let c0 = linkspace::search::process_cpu_seconds();
+            let c0 = linkspace::kernel::search::process_cpu_seconds();
             let c = problem.solve(&p, &settings, &cancel)?;
-            times.push(linkspace::search::process_cpu_seconds() - c0);
+            times.push(linkspace::kernel::search::process_cpu_seconds() - c0);
             processed = c.stats.iter().map(|s| s.processed).sum::<u64>();
             let status = if c.status == linkspace::Status::Complete { "complete" } else { "incomplete" };
             what = format!("{} proven, {} undecided, {status}", c.proven(), c.points.len() - c.proven());
@@ -137,12 +137,12 @@ fn bench_three_rpr_cusps(out: &mut impl Write, repeat: usize) -> Result<()> {
         let mut times = Vec::new();
         let mut what = String::new();
         for _ in 0..repeat {
-            let c0 = linkspace::search::process_cpu_seconds();
+            let c0 = linkspace::kernel::search::process_cpu_seconds();
             if with_cover {
                 p.solve(&image::scaled(&image_settings), &cancel)?;
             }
             let c = problem.solve(&p, &image_settings, &cancel)?;
-            times.push(linkspace::search::process_cpu_seconds() - c0);
+            times.push(linkspace::kernel::search::process_cpu_seconds() - c0);
             what = format!("{} proven, {} undecided", c.proven(), c.points.len() - c.proven());
         }
         times.sort_by(|a, b| a.total_cmp(b));
@@ -168,9 +168,9 @@ fn bench_image(out: &mut impl Write, repeat: usize) -> Result<()> {
         let mut times = Vec::new();
         let mut what = String::new();
         for _ in 0..repeat {
-            let c0 = linkspace::search::process_cpu_seconds();
+            let c0 = linkspace::kernel::search::process_cpu_seconds();
             what = f()?;
-            times.push(linkspace::search::process_cpu_seconds() - c0);
+            times.push(linkspace::kernel::search::process_cpu_seconds() - c0);
         }
         times.sort_by(|a, b| a.total_cmp(b));
         Ok((times[times.len() / 2], what))

@@ -9,9 +9,9 @@
 
 use anyhow::{Context, Result};
 use linkspace::model::urdf;
-use linkspace::problems::LinkageProblem;
-use linkspace::interval::IntervalBox;
-use linkspace::search::{BoxSink, BoxStatus, Progress, SolverSettings};
+use linkspace::formulate::LinkageProblem;
+use linkspace::kernel::interval::IntervalBox;
+use linkspace::kernel::search::{BoxSink, BoxStatus, Progress, SolverSettings};
 use std::ops::ControlFlow;
 use std::io::Write;
 use std::path::PathBuf;

@@ -3,10 +3,10 @@
 //! than the scene needs costs); on the spatial fixtures, the LP shrink against propagation only.
 
 use anyhow::Result;
-use linkspace::interval::components;
+use linkspace::kernel::interval::components;
 use linkspace::model::urdf;
-use linkspace::problems::{LinkageProblem, PoseProblem, SpatialProblem};
-use linkspace::search::{Enclosure, Solver, SolverSettings};
+use linkspace::formulate::{LinkageProblem, PoseProblem, SpatialProblem};
+use linkspace::kernel::search::{Enclosure, Solver, SolverSettings};
 use std::io::Write;
 use std::sync::atomic::AtomicBool;
 

@@ -7,9 +7,9 @@
 //! exists. No timing is asserted anywhere; the figures are reported.
 
 use linkspace::model::urdf;
-use linkspace::problems::LinkageProblem;
-use linkspace::search::{SolverSettings, Status};
-use linkspace::system::{EquationSystem, Monomial};
+use linkspace::formulate::LinkageProblem;
+use linkspace::kernel::search::{SolverSettings, Status};
+use linkspace::kernel::system::{EquationSystem, Monomial};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -130,7 +130,7 @@ fn study(i: &Instance) -> Finding {
         reference_roots: i.roots.len(),
         closest_pair: closest,
         boxes: e.solutions.len(),
-        clusters: linkspace::interval::components(&e.solutions).1,
+        clusters: linkspace::kernel::interval::components(&e.solutions).1,
         certified: e.unique.iter().filter(|&&u| u).count(),
         lost,
         seconds: e.stats.seconds,
@@ -269,7 +269,7 @@ pub fn markdown(findings: &[Finding]) -> String {
 // ---------------------------------------------------------------------------------------------
 // 3R inverse kinematics where methods fail: next to a cusp, at a cusp, on an internal motion.
 
-use linkspace::manip3r::{cusps, ik, Chain3R};
+use linkspace::analyses::arm3r::{cusps, ik, Chain3R};
 
 fn wrap(d: f64) -> f64 {
     (d + PI).rem_euclid(2.0 * PI) - PI
@@ -342,7 +342,7 @@ fn study_ik(name: &str, difficulty: &str, chain: &Chain3R, target: [f64; 2], roo
     let t0 = std::time::Instant::now();
     let sol = ik::solve(chain, target[0].max(0.0).sqrt(), target[1], precision, 2_000_000).expect("invariant: valid query");
     let seconds = t0.elapsed().as_secs_f64();
-    let inside = |b: &[linkspace::interval::Interval; 2], t: [f64; 2]| {
+    let inside = |b: &[linkspace::kernel::interval::Interval; 2], t: [f64; 2]| {
         (0..2).all(|k| (-1..=1).any(|turn| {
             let v = t[k] + 2.0 * PI * f64::from(turn);
             b[k].inf() - 1e-9 <= v && v <= b[k].sup() + 1e-9
@@ -410,7 +410,7 @@ pub fn manip3r_findings() -> Vec<Finding> {
     at_roots.retain(|r| torus_distance(*r, cusp) > 1e-3);
     at_roots.push(cusp);
     out.push(study_ik("3R robot a, IK at a cusp", "a triple root: singular Jacobian, quadratic-free convergence", &a, at, at_roots, None));
-    let bands = linkspace::manip3r::bands(&f, 1e-9);
+    let bands = linkspace::analyses::arm3r::bands(&f, 1e-9);
     let band = bands.first().expect("robot f has internal motions");
     let t3 = 0.5 * (band.theta3[0] + band.theta3[1]);
     let line_point = f.eval_f64(0.0, t3);

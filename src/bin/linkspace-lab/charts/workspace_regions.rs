@@ -1,7 +1,7 @@
 //! Workspace regions of a 3R arm in the half-section (ρ, z) with their number of inverse
 //! kinematic solutions (seed 003's figures).
 //!
-//! The images of the singular-curve cover's boxes (`manip3r::Cover`, enclosed by
+//! The images of the singular-curve cover's boxes (`arm3r::Cover`, enclosed by
 //! `cusps::evaluate`) are rasterised on a grid of the half-plane; a cell they miss holds no
 //! critical value of the map, so the number of solutions is constant on each connected component
 //! of free cells (the map is proper: the torus is compact). One certified `ik::solve` at a
@@ -9,7 +9,7 @@
 //! stops on a limit. What the raster cannot see: a region thinner than the images of the cover
 //! boxes.
 
-use linkspace::manip3r::{ik, Chain3R};
+use linkspace::analyses::arm3r::{ik, Chain3R};
 
 /// A region of free cells and its number of solutions.
 #[derive(Clone, Debug)]
@@ -54,7 +54,7 @@ pub fn regions(chain: &Chain3R, blocked: &[[f64; 4]], x: (f64, f64), z: (f64, f6
         }
     }
     let mut out = Vec::new();
-    let free_regions = linkspace::interval::flood_fill(grid * grid, |c| free[c], |c, next| {
+    let free_regions = linkspace::kernel::interval::flood_fill(grid * grid, |c| free[c], |c, next| {
         let (i, j) = (c / grid, c % grid);
         if i > 0 {
             next.push(c - grid);

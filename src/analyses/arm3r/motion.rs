@@ -1,0 +1,158 @@
+//! Internal motions: the lines θ₃ = const of joint space on which f is constant.
+//!
+//! f forgets θ₂ exactly when the end point lies on the second axis, which depends on θ₃ only:
+//! `a₂ × q(θ₃) = 0` with `q` the end point in the second joint's frame (`Chain3R::off_axis2`).
+//! Every θ₃ where that may hold is enclosed by bisecting [-π, π] into dyadic cells no wider
+//! than the precision and keeping the cells where all three components may vanish.
+//! A run of kept cells is one `Band`: its `theta3` encloses the line(s), and its `strip` adds
+//! one cell on each side, so every point outside the strip is at least one cell away from any
+//! internal motion (the searches decide such points; boxes inside strips are set aside).
+//! The cells are the very intervals the 2-D searches make by bisecting at midpoints, so a
+//! search box is either inside a strip or has no interior point in common with it.
+
+use super::chain::Chain3R;
+use super::drive::{drive, no_progress, Order};
+use crate::kernel::search::Control;
+use crate::kernel::interval::interval;
+use crate::kernel::search::{Limits, Prune, Step};
+use inari::Interval;
+
+/// Upper end of the joint range: the smallest double above π, so [-PI_UP, PI_UP] covers the
+/// whole circle.
+pub const PI_UP: f64 = 3.1415926535897936;
+
+/// The full joint range, as an interval.
+pub fn full_range() -> Interval {
+    interval(-PI_UP, PI_UP)
+}
+
+/// One internal-motion strip (see the module doc).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Band {
+    /// Encloses every θ₃ in the strip where the end point may lie on the second axis.
+    pub theta3: [f64; 2],
+    /// The strip set aside: `theta3` plus one cell on each side (radians).
+    pub strip: [f64; 2],
+    /// `Some(d)` for a near-degenerate strip: the end point may come within `d` metres of the
+    /// second axis there but is nowhere proven on it (a tiny twist, e.g. an angle written
+    /// 1.5707963267948966 and taken as written), so along θ₂ the map may vary by as little as
+    /// 2π·d, under what a search box of the precision resolves. Such a strip is set aside
+    /// *undecided*: no internal motion is claimed, and reports are incomplete. `None`: a true
+    /// band (the point may lie on the axis).
+    pub near: Option<f64>,
+}
+
+impl Band {
+    /// True when the interval `t3` lies inside the strip.
+    pub fn holds(&self, t3: Interval) -> bool {
+        self.strip[0] <= t3.inf() && t3.sup() <= self.strip[1]
+    }
+}
+
+/// How many internal-motion lines the true bands (`near` is `None`) hold: a line at θ₃ = ±π
+/// gives a band at each end of [-π, π], one line on the circle.
+pub fn line_count(bands: &[Band]) -> usize {
+    let lines: Vec<&Band> = bands.iter().filter(|b| b.near.is_none()).collect();
+    let seam = match (lines.first(), lines.last()) {
+        (Some(first), Some(last)) if lines.len() > 1 => first.theta3[0] <= -std::f64::consts::PI && last.theta3[1] >= std::f64::consts::PI,
+        _ => false,
+    };
+    lines.len() - usize::from(seam)
+}
+
+/// The cell no wider than `precision` at the upper (`upper`) or lower end of `cell`, by
+/// repeated midpoint bisection.
+fn fine_end(mut cell: Interval, precision: f64, upper: bool) -> Interval {
+    while cell.wid() > precision {
+        let m = cell.mid();
+        cell = if upper { interval(m, cell.sup()) } else { interval(cell.inf(), m) };
+    }
+    cell
+}
+
+/// True when `t3` overlaps a strip without lying inside it: the searches then cut θ₃ first,
+/// so that the box soon lies inside the strip or away from it.
+pub fn straddles(bands: &[Band], t3: Interval) -> bool {
+    bands.iter().any(|b| t3.inf() < b.strip[1] && b.strip[0] < t3.sup() && !b.holds(t3))
+}
+
+/// The θ₃ walk of `bands`: every leaf cell is reported (marked or not), with its place in the
+/// θ₃ order, since runs of marked cells need their neighbours.
+struct StripPrune<'a> {
+    chain: &'a Chain3R,
+    precision: f64,
+    near: f64,
+}
+
+impl Prune for StripPrune<'_> {
+    type Cell = (Interval, Order);
+    type Found = (Order, (Interval, bool, Option<f64>));
+    type Reason = crate::kernel::search::NoDiscard;
+
+    fn process(&mut self, (t, order): (Interval, Order)) -> Step<Self::Cell, Self::Found, crate::kernel::search::NoDiscard> {
+        let off = self.chain.off_axis2(t);
+        let possible = off.iter().all(|c| c.contains(0.0));
+        // May the point come within `near` of the axis (each component's smallest magnitude)?
+        let close = off.iter().all(|c| c.mig() <= self.near);
+        if t.wid() <= self.precision {
+            Step::Found((order, (t, possible || close, (close && !possible).then_some(self.near))))
+        } else if !close {
+            Step::Found((order, (t, false, None)))
+        } else {
+            let m = t.mid();
+            Step::Split([(interval(t.inf(), m), order.child(0, 2)), (interval(m, t.sup()), order.child(1, 2))].into_iter().collect())
+        }
+    }
+}
+
+/// The internal-motion strips of `chain`, from dyadic cells no wider than `precision`.
+pub fn bands(chain: &Chain3R, precision: f64) -> Vec<Band> {
+    // Near-degenerate: the point within `near` of axis 2, where one turn of θ₂ moves the image
+    // by less than a search box of this precision does (about precision × the arm's length).
+    let near = precision * chain.length_scale() / (2.0 * std::f64::consts::PI);
+    // Cells in order of θ₃, each marked when the end point may lie on axis 2 there, or
+    // (second flag) is proven within `near` of it without being proven on it. The walk always
+    // ends (cells stop at the precision), so it runs without a limit: a partial list of cells
+    // would make strips unsound.
+    let control = Control::with_limits(Limits { max_cells: u64::MAX, timeout: None, max_memory: usize::MAX });
+    let mut run = drive(|| StripPrune { chain, precision, near }, (full_range(), Order::ROOT), &control, &mut no_progress);
+    run.found.sort_by_key(|(order, _)| *order);
+    let cells: Vec<(Interval, bool, Option<f64>)> = run.found.into_iter().map(|(_, cell)| cell).collect();
+    let mut out = Vec::new();
+    let n = cells.len();
+    let mut i = 0;
+    while i < n {
+        if !cells[i].1 {
+            i += 1;
+            continue;
+        }
+        let mut start = i;
+        let mut near_bound: Option<f64> = None;
+        while i < n && cells[i].1 {
+            if let Some(d) = cells[i].2 {
+                near_bound = Some(near_bound.map_or(d, |b: f64| b.max(d)));
+            }
+            i += 1;
+        }
+        // A run holding a cell where the point may lie on the axis is a true band: trimmed to
+        // those cells (close-only cells beside it are within the strip's margin anyway).
+        if let (Some(first), Some(last)) = ((start..i).find(|&k| cells[k].2.is_none()), (start..i).rev().find(|&k| cells[k].2.is_none())) {
+            let end = i;
+            start = first;
+            i = last + 1;
+            let (lo, hi) = (cells[start].0.inf(), cells[i - 1].0.sup());
+            let below = if start > 0 { fine_end(cells[start - 1].0, precision, true).inf() } else { lo };
+            let above = if i < n { fine_end(cells[i].0, precision, false).sup() } else { hi };
+            out.push(Band { theta3: [lo, hi], strip: [below, above], near: None });
+            i = end;
+            continue;
+        }
+        let (lo, hi) = (cells[start].0.inf(), cells[i - 1].0.sup());
+        // One fine cell on each side as margin, cut out of the neighbour by the same midpoint
+        // bisections a search makes, so its outer end is a point every search cuts at too.
+        let below = if start > 0 { fine_end(cells[start - 1].0, precision, true).inf() } else { lo };
+        let above = if i < n { fine_end(cells[i].0, precision, false).sup() } else { hi };
+        out.push(Band { theta3: [lo, hi], strip: [below, above], near: near_bound });
+    }
+    out
+}

@@ -1,0 +1,331 @@
+//! Singularities along a piecewise-linear joint path, each segment decided with a proof, for
+//! any determinant whose sign can be proven on a box of joints (`SignProof`): the 6R arm's
+//! `det J` (`arm6r::path`) and a 3R positioning structure's `det Df` (`arm3r::path`).
+//!
+//! A segment `q(t) = x + t·(y − x)`, t ∈ [0, 1], is cut into pieces until each piece's joint
+//! box is proven regular (the determinant excludes zero on it, with its sign and a lower bound
+//! of its magnitude) or is narrower than `PIECE_WIDTH`. Pieces left unproven form runs. A run
+//! between proven pieces of opposite signs holds a sign change of the determinant (it is
+//! continuous along the segment): a crossing, whose parameter is then narrowed by bisection, a
+//! point's sign certified on a box padded for the rounding of `q(t)`, until the enclosure is
+//! within the tolerance in joint space. Other runs (same sign on both sides, or at an end of
+//! the segment) may hold a zero without a proven sign change: they are reported as such.
+//! No IO.
+
+use crate::kernel::search::{Budget, Control, Limit};
+use thiserror::Error;
+
+/// Pieces narrower than this (in the segment's parameter) are no longer cut while covering it.
+pub const PIECE_WIDTH: f64 = 1.0 / 16384.0;
+/// Pieces examined per segment before the rest of it is left unproven.
+pub const MAX_PIECES: usize = 200_000;
+
+/// A proof that a determinant excludes zero on a box of joints.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Proof {
+    /// The determinant's sign there (±1).
+    pub sign: f64,
+    /// A proven lower bound of its magnitude there.
+    pub min_abs: f64,
+    /// Whether the bound is close enough to the determinant's size that cutting the box further
+    /// would not tighten it much (a loose proof is cut while wider than `PIECE_WIDTH`).
+    pub tight: bool,
+}
+
+/// A determinant of the joints whose sign can be proven on a box of them.
+pub trait SignProof {
+    /// How many joints a waypoint holds.
+    fn joints(&self) -> usize;
+    /// A proof over the box `b` (`[lo, hi]` per joint, `joints()` of them), or None when the
+    /// determinant may vanish there or the enclosure is too loose to tell.
+    fn prove(&self, b: &[[f64; 2]]) -> Option<Proof>;
+}
+
+/// A path that cannot be checked (too few waypoints, a bad number or tolerance).
+#[derive(Debug, Error, PartialEq)]
+#[error("{0}")]
+pub struct BadPath(pub String);
+
+/// What one segment holds.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SegmentVerdict {
+    /// The determinant is proven nonzero on the whole segment.
+    Clear {
+        /// Its sign (±1).
+        sign: f64,
+        /// A proven lower bound of its magnitude on the segment.
+        min_abs_det: f64,
+        /// Pieces proven.
+        pieces: usize,
+    },
+    /// The determinant is proven to change sign (at least once) within each crossing's enclosure.
+    Crosses {
+        /// The crossings, in order along the segment.
+        crossings: Vec<Crossing>,
+        /// Other stretches where the determinant may vanish without a proven sign change.
+        undecided: Vec<Span>,
+    },
+    /// The determinant may vanish on these stretches; no sign change is proven.
+    Undecided {
+        /// The stretches, in order.
+        spans: Vec<Span>,
+    },
+    /// Not decided: a limit stopped the run first.
+    Stopped(Limit),
+}
+
+/// A proven sign change of the determinant.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Crossing {
+    /// Enclosure `[t_lo, t_hi]` of the parameter (some t inside is a zero).
+    pub t: [f64; 2],
+    /// The joints over that enclosure (`[lo, hi]` each, radians), in the waypoints' order.
+    pub joints: Vec<[f64; 2]>,
+    /// The determinant's sign before the crossing (after it, the opposite).
+    pub sign_before: f64,
+    /// Whether the enclosure reached the tolerance (else a point inside could not be given a
+    /// sign: the determinant is too close to zero there).
+    pub narrowed: bool,
+}
+
+/// A stretch `[t_lo, t_hi]` on which the determinant may vanish.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Span {
+    /// The parameter's range.
+    pub t: [f64; 2],
+    /// The joints over it (`[lo, hi]` each, radians), in the waypoints' order.
+    pub joints: Vec<[f64; 2]>,
+    /// Why no sign change is claimed.
+    pub reason: SpanReason,
+}
+
+/// Why a stretch is undecided rather than a crossing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SpanReason {
+    /// The determinant has the same proven sign on both sides: it may touch zero (or cross it
+    /// an even number of times), or the enclosure is too loose there.
+    SameSignBothSides,
+    /// The stretch reaches the segment's start or end, where no sign is proven on the far side.
+    AtEnd,
+    /// The piece budget ran out before the stretch was examined.
+    PieceBudget,
+}
+
+/// The verdicts of a path: one per segment, in order.
+#[derive(Clone, Debug)]
+pub struct PathCheck {
+    /// The waypoints, joints in the determinant's order.
+    pub waypoints: Vec<Vec<f64>>,
+    /// One per segment (waypoint k to k + 1).
+    pub segments: Vec<SegmentVerdict>,
+}
+
+/// Decides each segment of the path through `waypoints` (`det.joints()` values each, radians)
+/// against the zero set of `det`; crossings narrowed until their joint enclosures are within
+/// `tolerance` radians. A limit of `control` (timeout, cancel) leaves the remaining segments
+/// `Stopped`.
+pub fn check(det: &dyn SignProof, waypoints: &[Vec<f64>], tolerance: f64, control: &Control) -> Result<PathCheck, BadPath> {
+    let n = det.joints();
+    if waypoints.len() < 2 {
+        return Err(BadPath(format!("{} waypoint(s): a path needs at least two", waypoints.len())));
+    }
+    if let Some((k, _)) = waypoints.iter().enumerate().find(|(_, w)| w.len() != n || !w.iter().all(|x| x.is_finite())) {
+        return Err(BadPath(format!("waypoint {} is not {} finite numbers", k + 1, number_word(n))));
+    }
+    if !(tolerance > 0.0 && tolerance.is_finite()) {
+        return Err(BadPath(format!("the tolerance must be a positive number of radians, got {tolerance}")));
+    }
+    let budget = Budget::start(control.limits, control.cancel);
+    let stop = || budget.interrupted();
+    let mut segments = Vec::new();
+    for w in waypoints.windows(2) {
+        let verdict = match stop() {
+            Some(limit) => SegmentVerdict::Stopped(limit),
+            None => Segment { det, x: &w[0], y: &w[1] }.decide(tolerance, &stop),
+        };
+        segments.push(verdict);
+    }
+    Ok(PathCheck { waypoints: waypoints.to_vec(), segments })
+}
+
+/// Small counts in words, as messages about six-joint waypoints have always said them.
+fn number_word(n: usize) -> String {
+    match n {
+        3 => "three".into(),
+        6 => "six".into(),
+        _ => n.to_string(),
+    }
+}
+
+struct Segment<'a> {
+    det: &'a dyn SignProof,
+    x: &'a [f64],
+    y: &'a [f64],
+}
+
+/// A piece of the cover: proven (sign, lower bound of |det|) or not.
+#[derive(Clone, Copy, Debug)]
+struct Piece {
+    t0: f64,
+    t1: f64,
+    proof: Option<(f64, f64)>,
+    /// Left unexamined when the budget ran out.
+    skipped: bool,
+}
+
+impl Segment<'_> {
+    fn at(&self, t: f64) -> Vec<f64> {
+        self.x.iter().zip(self.y).map(|(x, y)| x + t * (y - x)).collect()
+    }
+
+    /// A box holding the exact segment points for t ∈ [t0, t1]: the hull of the computed ends,
+    /// padded for the rounding of `at`.
+    fn hull(&self, t0: f64, t1: f64) -> Vec<[f64; 2]> {
+        let (a, b) = (self.at(t0), self.at(t1));
+        (0..self.x.len())
+            .map(|k| {
+                let pad = 4.0 * f64::EPSILON * (1.0 + self.x[k].abs() + self.y[k].abs());
+                [a[k].min(b[k]) - pad, a[k].max(b[k]) + pad]
+            })
+            .collect()
+    }
+
+    fn prove(&self, t0: f64, t1: f64) -> Option<Proof> {
+        self.det.prove(&self.hull(t0, t1))
+    }
+
+    fn decide(&self, tolerance: f64, stop: &dyn Fn() -> Option<Limit>) -> SegmentVerdict {
+        // Cover [0, 1] by pieces, depth first, left to right.
+        let mut pieces: Vec<Piece> = Vec::new();
+        let mut stack = vec![(0.0f64, 1.0f64)];
+        let mut examined = 0;
+        while let Some((t0, t1)) = stack.pop() {
+            if examined >= MAX_PIECES {
+                pieces.push(Piece { t0, t1, proof: None, skipped: true });
+                continue;
+            }
+            if examined % 256 == 0 {
+                if let Some(limit) = stop() {
+                    return SegmentVerdict::Stopped(limit);
+                }
+            }
+            examined += 1;
+            let narrow = t1 - t0 <= PIECE_WIDTH;
+            match self.prove(t0, t1) {
+                Some(p) if p.tight || narrow => pieces.push(Piece { t0, t1, proof: Some((p.sign, p.min_abs)), skipped: false }),
+                _ if narrow => pieces.push(Piece { t0, t1, proof: None, skipped: false }),
+                _ => {
+                    let tm = 0.5 * (t0 + t1);
+                    stack.push((tm, t1));
+                    stack.push((t0, tm));
+                }
+            }
+        }
+        // Runs of unproven pieces, with the proven signs on either side.
+        let mut crossings = Vec::new();
+        let mut spans = Vec::new();
+        let mut i = 0;
+        while i < pieces.len() {
+            if pieces[i].proof.is_some() {
+                i += 1;
+                continue;
+            }
+            let first = i;
+            let mut skipped = false;
+            while i < pieces.len() && pieces[i].proof.is_none() {
+                skipped |= pieces[i].skipped;
+                i += 1;
+            }
+            let (lo, hi) = (pieces[first].t0, pieces[i - 1].t1);
+            let before = first.checked_sub(1).and_then(|k| pieces[k].proof).map(|p| p.0);
+            let after = pieces.get(i).and_then(|p| p.proof).map(|p| p.0);
+            match (before, after) {
+                (Some(a), Some(b)) if a != b => {
+                    if let Some(limit) = stop() {
+                        return SegmentVerdict::Stopped(limit);
+                    }
+                    crossings.push(self.narrow(lo, hi, a, tolerance));
+                }
+                _ => {
+                    let reason = if skipped {
+                        SpanReason::PieceBudget
+                    } else if before.is_none() || after.is_none() {
+                        SpanReason::AtEnd
+                    } else {
+                        SpanReason::SameSignBothSides
+                    };
+                    spans.push(Span { t: [lo, hi], joints: self.hull(lo, hi), reason });
+                }
+            }
+        }
+        if !crossings.is_empty() {
+            return SegmentVerdict::Crosses { crossings, undecided: spans };
+        }
+        if !spans.is_empty() {
+            return SegmentVerdict::Undecided { spans };
+        }
+        // Every piece proven: one sign throughout (the determinant is continuous and never zero).
+        let sign = pieces[0].proof.expect("invariant: all proven").0;
+        let min_abs_det = pieces.iter().filter_map(|p| p.proof).fold(f64::INFINITY, |m, p| m.min(p.1));
+        SegmentVerdict::Clear { sign, min_abs_det, pieces: pieces.len() }
+    }
+
+    /// Bisects the sign change in `[lo, hi]` (sign `before` proven at `lo`, the opposite at
+    /// `hi`) until its joint enclosure is within `tolerance`, or a midpoint's sign cannot be
+    /// proven.
+    fn narrow(&self, mut lo: f64, mut hi: f64, before: f64, tolerance: f64) -> Crossing {
+        let span = self.x.iter().zip(self.y).fold(0.0f64, |m, (x, y)| m.max((y - x).abs()));
+        let mut narrowed = true;
+        while (hi - lo) * span > tolerance {
+            let mid = 0.5 * (lo + hi);
+            if mid <= lo || mid >= hi {
+                break;
+            }
+            match self.prove(mid, mid) {
+                Some(p) if p.sign == before => lo = mid,
+                Some(_) => hi = mid,
+                None => {
+                    narrowed = false;
+                    break;
+                }
+            }
+        }
+        Crossing { t: [lo, hi], joints: self.hull(lo, hi), sign_before: before, narrowed }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::atomic::AtomicBool;
+
+    /// `det = (q₀ − 0.3)·(q₁ + 2)`, proven from its interval value on the box.
+    struct Toy;
+
+    impl SignProof for Toy {
+        fn joints(&self) -> usize {
+            2
+        }
+
+        fn prove(&self, b: &[[f64; 2]]) -> Option<Proof> {
+            let d = crate::kernel::interval::interval(b[0][0], b[0][1]) - crate::kernel::interval::point(0.3);
+            let e = crate::kernel::interval::interval(b[1][0], b[1][1]) + crate::kernel::interval::point(2.0);
+            let v = d * e;
+            (!v.contains(0.0)).then(|| Proof { sign: v.inf().signum(), min_abs: v.mig(), tight: v.mig() >= 0.25 * v.mag() })
+        }
+    }
+
+    #[test]
+    fn a_sign_change_is_a_crossing_and_a_zero_free_segment_is_clear() {
+        let cancel = AtomicBool::new(false);
+        let control = Control { limits: Default::default(), threads: 1, cancel: &cancel };
+        let w = [vec![0.0, 0.0], vec![1.0, 1.0], vec![2.0, 0.5]];
+        let found = check(&Toy, &w, 1e-10, &control).expect("checks");
+        let SegmentVerdict::Crosses { crossings, undecided } = &found.segments[0] else { panic!("{:?}", found.segments[0]) };
+        assert!(undecided.is_empty() && crossings.len() == 1);
+        assert!(crossings[0].t[0] <= 0.3 && 0.3 <= crossings[0].t[1] && crossings[0].narrowed && crossings[0].sign_before == -1.0, "{crossings:?}");
+        let SegmentVerdict::Clear { sign, min_abs_det, .. } = found.segments[1] else { panic!("{:?}", found.segments[1]) };
+        assert!(sign == 1.0 && min_abs_det > 0.0 && min_abs_det <= 0.7 * 2.5);
+        assert_eq!(check(&Toy, &[vec![0.0, 0.0], vec![1.0]], 1e-9, &control).err(), Some(BadPath("waypoint 2 is not 2 finite numbers".into())));
+    }
+}

@@ -1,0 +1,162 @@
+//! What `linkspace solve --json` writes (schema in README): a linkage's configuration-space box
+//! set (`app::BoxSetResult`, as `app::SolveJob` returns it), with what the problem adds per
+//! box: the links' orientations (planar model) or poses (spatial model).
+
+use super::kernel;
+use crate::app::{BoxSetResult, ResultBox, TracedBounds};
+use crate::kernel::interval::{interval, Bounds, IntervalBox};
+use crate::formulate::singular::Coordinates;
+use crate::formulate::spatial::LinkPose;
+use crate::formulate::Linkage;
+use crate::kernel::search::{BoxStatus, SolveStats, SolverSettings, Status};
+use crate::kernel::system::VarRole;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// One reported box, in the user's terms.
+#[derive(Clone, Debug, Serialize)]
+pub struct BoxRecord {
+    /// Free joint values (radians or metres), keyed by joint name.
+    pub joints: BTreeMap<String, Bounds>,
+    /// Every link's world-frame orientation in the plane (radians), keyed by link name.
+    pub link_angles: BTreeMap<String, Bounds>,
+    /// Traced points' world coordinates, keyed by `LINK@X,Y` (or `LINK@X,Y,Z`).
+    pub traces: BTreeMap<String, TracedPoint>,
+    /// Spatial model only: every link's pose in the root frame (position intervals, quaternion
+    /// `[w, x, y, z]` at the box midpoint).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub link_poses: Option<BTreeMap<String, LinkPoseRecord>>,
+    /// The raw box, one entry per system variable (see `variables`).
+    #[serde(rename = "box")]
+    pub box_: Vec<Bounds>,
+    /// Depth in the search tree.
+    pub level: u32,
+    /// Certified by interval Newton to hold exactly one solution (solution boxes only).
+    pub unique: bool,
+}
+
+/// World coordinates of a traced point.
+#[derive(Clone, Debug, Serialize)]
+pub struct TracedPoint {
+    /// x interval
+    pub x: Bounds,
+    /// y interval
+    pub y: Bounds,
+    /// z interval (spatial model only)
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub z: Option<Bounds>,
+}
+
+/// A link's pose over a box.
+#[derive(Clone, Debug, Serialize)]
+pub struct LinkPoseRecord(#[serde(with = "LinkPoseDef")] pub LinkPose);
+
+/// `LinkPose`, field for field.
+#[derive(Serialize)]
+#[serde(remote = "LinkPose")]
+struct LinkPoseDef {
+    position: Option<[[f64; 2]; 3]>,
+    quaternion: Option<[f64; 4]>,
+    rotation_width: Option<f64>,
+}
+
+/// A system variable as listed in the report.
+#[derive(Clone, Debug, Serialize)]
+pub struct VariableInfo {
+    /// Name, e.g. `cos_link7`.
+    pub name: String,
+    /// `primary` or `derived`.
+    #[serde(with = "kernel::VarRoleDef")]
+    pub role: VarRole,
+}
+
+/// The whole result of `linkspace solve`.
+#[derive(Clone, Debug, Serialize)]
+pub struct SolveReport {
+    /// Robot name from the URDF.
+    pub mechanism: String,
+    /// `planar` or `spatial`: the builder that made the system.
+    pub model: String,
+    /// Why that model: what made the mechanism planar or not, or that it was forced.
+    pub model_reason: String,
+    /// What the spatial builder simplified (legs between ball joints reduced to distances).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub reductions: Vec<String>,
+    /// Links joined to their parent by a fixed joint, each with the link it moves with: a box
+    /// lists only the links that move on their own (`Mechanism::rigid_links`).
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub rigid_links: BTreeMap<String, String>,
+    /// Joints whose values were solved for.
+    pub free_joints: Vec<String>,
+    /// Joints fixed with `--fix`.
+    pub fixed_joints: BTreeMap<String, f64>,
+    /// The solver settings.
+    #[serde(with = "kernel::SolverSettingsDef")]
+    pub settings: SolverSettings,
+    /// `complete`, or `incomplete` with the limit.
+    #[serde(flatten, with = "kernel::StatusDef")]
+    pub status: Status,
+    /// The system's variables, in box order.
+    pub variables: Vec<VariableInfo>,
+    /// Solution boxes.
+    pub solutions: Vec<BoxRecord>,
+    /// Connected components of the solution boxes (touching boxes share a component).
+    pub clusters: usize,
+    /// Boxes left undecided by a limit (empty when complete).
+    pub undecided: Vec<BoxRecord>,
+    /// Counters and time.
+    #[serde(with = "kernel::SolveStatsDef")]
+    pub stats: SolveStats,
+}
+
+impl SolveReport {
+    /// The report of `result`, a run of `problem` (`app::SolveJob::run`); `rigid_links` as
+    /// `Mechanism::rigid_links` gives them.
+    pub fn new(problem: &Linkage, result: &BoxSetResult, rigid_links: BTreeMap<String, String>) -> Self {
+        let record = |b: &ResultBox| box_record(problem, result, b, &rigid_links);
+        SolveReport {
+            mechanism: result.mechanism.clone(),
+            model: problem.model().name().to_string(),
+            model_reason: problem.model_reason().to_string(),
+            reductions: problem.reductions().to_vec(),
+            rigid_links: rigid_links.clone(),
+            free_joints: result.joint_names.clone(),
+            fixed_joints: result.fixed_joints.iter().cloned().collect(),
+            settings: result.settings.clone(),
+            status: result.status,
+            variables: result
+                .variables
+                .iter()
+                .enumerate()
+                .map(|(i, name)| VariableInfo { name: name.clone(), role: if result.primaries.contains(&i) { VarRole::Primary } else { VarRole::Derived } })
+                .collect(),
+            solutions: result.boxes.iter().filter(|b| b.status.is_solution()).map(record).collect(),
+            clusters: result.clusters,
+            undecided: result.boxes.iter().filter(|b| b.status == BoxStatus::Undecided).map(record).collect(),
+            stats: result.stats.clone(),
+        }
+    }
+}
+
+/// One box of `result` in the user's terms; the links' orientations and poses are read off the
+/// box by `problem`.
+fn box_record(problem: &Linkage, result: &BoxSetResult, b: &ResultBox, rigid_links: &BTreeMap<String, String>) -> BoxRecord {
+    let moves = |name: &str| !rigid_links.contains_key(name);
+    let original = || IntervalBox { dims: b.bounds.iter().map(|&[lo, hi]| interval(lo, hi)).collect(), level: b.level };
+    let traced = |t: &TracedBounds| TracedPoint { x: t.x, y: t.y, z: t.z };
+    let (link_angles, link_poses) = match problem {
+        Linkage::Planar(p) => (p.link_angles_of(&original(), moves).into_iter().map(|(k, (lo, hi))| (k, [lo, hi])).collect(), None),
+        Linkage::Spatial(p, _) => (BTreeMap::new(), Some(p.link_poses_of(&original(), moves).into_iter().map(|(k, pose)| (k, LinkPoseRecord(pose))).collect())),
+        Linkage::Pose(p, _) => (BTreeMap::new(), Some(BTreeMap::from([(p.platform.clone(), LinkPoseRecord(p.link_pose(&original())))]))),
+        Linkage::Distances(p, _) => (BTreeMap::new(), Some(BTreeMap::from([(p.platform.clone(), LinkPoseRecord(p.link_pose(&original())))]))),
+    };
+    BoxRecord {
+        joints: result.joint_names.iter().cloned().zip(b.joints.iter().copied()).collect(),
+        link_angles,
+        traces: result.traces.iter().cloned().zip(b.traces.iter().map(traced)).collect(),
+        link_poses,
+        box_: b.bounds.clone(),
+        level: b.level,
+        unique: b.status == BoxStatus::Unique,
+    }
+}

@@ -1,0 +1,114 @@
+//! The stated model in interval arithmetic: rotations, translations and axes that enclose the
+//! exact values of the decimals written in a file.
+//!
+//! A parsed decimal is the nearest `f64` to it, so `angles::stated` (one ulp each way) encloses
+//! it; rotations are then products of elementary rotations whose sines and cosines come from the
+//! sound `interval::trig`, in outward-rounded inari arithmetic. Axes arrive normalised in `f64`
+//! (a sum of squares, a square root and a division: under 3 ulps per component, plus half an ulp
+//! for the parse); they are enclosed by 8 ulps relative, and components that are exactly 0 or ±1
+//! stay exact, so axis-aligned models keep point coefficients.
+
+use super::angles::{cos_sin, stated};
+use crate::kernel::interval::{interval, point, Interval};
+use nalgebra::{Rotation3, Vector3};
+
+/// A 3-vector of intervals.
+pub type IVec3 = [Interval; 3];
+/// A 3×3 matrix of intervals, row-major.
+pub type IMat3 = [[Interval; 3]; 3];
+
+/// The identity, exact.
+pub fn identity() -> IMat3 {
+    let (o, z) = (point(1.0), point(0.0));
+    [[o, z, z], [z, o, z], [z, z, o]]
+}
+
+/// `a·b`.
+pub fn mul(a: &IMat3, b: &IMat3) -> IMat3 {
+    let mut out = [[point(0.0); 3]; 3];
+    for (r, row) in out.iter_mut().enumerate() {
+        for (c, x) in row.iter_mut().enumerate() {
+            *x = a[r][0] * b[0][c] + a[r][1] * b[1][c] + a[r][2] * b[2][c];
+        }
+    }
+    out
+}
+
+/// `a·v`.
+pub fn apply(a: &IMat3, v: &IVec3) -> IVec3 {
+    [0, 1, 2].map(|r| a[r][0] * v[0] + a[r][1] * v[1] + a[r][2] * v[2])
+}
+
+/// `aᵀ·v`.
+pub fn apply_transposed(a: &IMat3, v: &IVec3) -> IVec3 {
+    [0, 1, 2].map(|c| a[0][c] * v[0] + a[1][c] * v[1] + a[2][c] * v[2])
+}
+
+/// The URDF rotation `Rz(yaw)·Ry(pitch)·Rx(roll)` of the stated angles.
+pub fn rpy(rpy: [f64; 3]) -> IMat3 {
+    let (cr, sr) = cos_sin(stated(rpy[0]));
+    let (cp, sp) = cos_sin(stated(rpy[1]));
+    let (cy, sy) = cos_sin(stated(rpy[2]));
+    let z = point(0.0);
+    let o = point(1.0);
+    let rx = [[o, z, z], [z, cr, -sr], [z, sr, cr]];
+    let ry = [[cp, z, sp], [z, o, z], [-sp, z, cp]];
+    let rz = [[cy, -sy, z], [sy, cy, z], [z, z, o]];
+    mul(&rz, &mul(&ry, &rx))
+}
+
+/// The stated translation.
+pub fn translation(v: &Vector3<f64>) -> IVec3 {
+    [stated(v.x), stated(v.y), stated(v.z)]
+}
+
+/// An enclosure of the stated unit axis from its `f64` normalisation.
+pub fn axis(v: &Vector3<f64>) -> IVec3 {
+    let c = |x: f64| {
+        if x == 0.0 || x.abs() == 1.0 {
+            point(x)
+        } else {
+            let e = 8.0 * f64::EPSILON * x.abs();
+            interval(x - e, x + e)
+        }
+    };
+    [c(v.x), c(v.y), c(v.z)]
+}
+
+/// The plane basis (e1, e2, normal) as columns: exact for the plane z = 0, else the `f64`
+/// rotation taking z to the normal, widened by 4·2⁻⁵² per entry (nalgebra's construction is
+/// within a few ulps of an exact rotation, which the widened matrix then holds).
+pub fn basis(r: &Rotation3<f64>) -> IMat3 {
+    let m = r.matrix();
+    if *r == Rotation3::identity() {
+        return identity();
+    }
+    let e = 4.0 * f64::EPSILON;
+    let mut out = identity();
+    for (i, row) in out.iter_mut().enumerate() {
+        for (j, x) in row.iter_mut().enumerate() {
+            *x = interval(m[(i, j)] - e, m[(i, j)] + e);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::UnitQuaternion;
+
+    #[test]
+    fn rpy_encloses_nalgebra_and_keeps_zero_exact() {
+        assert_eq!(rpy([0.0; 3]), identity());
+        let (r, p, y) = (0.3, -1.2, 2.5);
+        let m = rpy([r, p, y]);
+        let q = UnitQuaternion::from_euler_angles(r, p, y).to_rotation_matrix();
+        for i in 0..3 {
+            for j in 0..3 {
+                let d = m[i][j];
+                assert!(d.inf() - 1e-15 <= q[(i, j)] && q[(i, j)] <= d.sup() + 1e-15 && d.wid() < 1e-13, "{i}{j} {d:?}");
+            }
+        }
+    }
+}

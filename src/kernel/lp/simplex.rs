@@ -1,0 +1,684 @@
+//! A dense bounded-variable primal simplex for the tiny LPs of `Relaxation::bound`.
+//!
+//! Columns are the `n` variables and one slack per row: `A x − s = 0`, so every constraint is a
+//! variable bound (`l ≤ x ≤ u` from the box, `s_k` bounded by the enforced sides of row `k`).
+//! The tableau is kept condensed: only the `n` nonbasic columns of `B⁻¹ [A | −I]` are stored
+//! (`m × n`, basic values `x_B = −T x_N`), starting from the slack basis (`B = −I`, `T = −A`).
+//! Phase 1 (minimise the sum of infeasibilities, one breakpoint per step) runs once; every
+//! objective `±x_t` then re-optimises from the previous optimal basis, only the cost row changes.
+//! Pricing is Dantzig's rule, switching to Bland's rule after a run of degenerate steps; the
+//! ratio test is Harris' two-pass test. Every phase has an iteration cap, on which the objective
+//! proves nothing.
+//!
+//! The answer is only a proposal: the row duals `y = c_Bᵀ B⁻¹` become the multipliers of
+//! `safe_bound`, which proves what they imply (a lower bound, or a Farkas certificate).
+
+use super::{safe_bound, LpCounters, LpOutcome, Relaxation, Sides};
+use crate::kernel::interval::{interval, Interval};
+use crate::kernel::system::VarId;
+
+/// Primal feasibility tolerance (absolute).
+const TOL_P: f64 = 1e-9;
+/// Optimality tolerance on reduced costs.
+const TOL_D: f64 = 1e-9;
+/// Smallest tableau entry accepted as a pivot.
+const TOL_PIV: f64 = 1e-9;
+/// Consecutive degenerate steps after which pricing falls back to Bland's rule.
+const DEGENERATE_RUN: usize = 12;
+
+/// Where a variable (structural or slack) stands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum State {
+    /// Basic in the given tableau row.
+    Basic(usize),
+    /// Nonbasic at its lower bound, in the given tableau column.
+    Lower(usize),
+    /// Nonbasic at its upper bound, in the given tableau column.
+    Upper(usize),
+    /// Nonbasic free variable held at 0, in the given tableau column.
+    Free(usize),
+}
+
+/// Entries of the largest dense tableau built: 4 Mi (32 MiB of `f64`).
+const MAX_TABLEAU_ENTRIES: usize = 1 << 22;
+
+/// Pivots between two looks at the run's deadline: one LP of a large system (thousands of
+/// columns) takes seconds, and a look costs about as much as one pivot of a small one.
+const PIVOTS_PER_STOP_CHECK: usize = 16;
+
+/// How a phase ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Status {
+    Optimal,
+    /// Phase 1 only: no improving column while some basic variable is out of bounds.
+    Infeasible,
+    Unbounded,
+    /// Iteration cap, or no usable step.
+    Stalled,
+}
+
+/// One step of the ratio test.
+enum Step {
+    /// The entering column moves to its other bound; the basis is unchanged.
+    Flip,
+    /// The basic variable of `row` leaves at its upper (`true`) or lower bound, after `theta`.
+    Pivot {
+        row: usize,
+        theta: f64,
+        at_upper: bool,
+    },
+    Unbounded,
+}
+
+struct Tableau {
+    n: usize,
+    m: usize,
+    /// Nonbasic columns of `B⁻¹ [A | −I]`, row-major `m × n`.
+    t: Vec<f64>,
+    /// The basic variable of each row.
+    head: Vec<usize>,
+    /// The nonbasic variable of each column.
+    nb: Vec<usize>,
+    /// Per variable (`n` structural, then `m` slacks).
+    state: Vec<State>,
+    lo: Vec<f64>,
+    hi: Vec<f64>,
+    val: Vec<f64>,
+    /// Reduced costs of the nonbasic columns.
+    d: Vec<f64>,
+    /// Phase-1 costs of the basic variables.
+    cb: Vec<f64>,
+    /// Rates of change of the basic variables along the entering direction.
+    alpha: Vec<f64>,
+    /// Exact blocking ratio of each row and whether it blocks at its upper bound.
+    exact: Vec<(f64, bool)>,
+    degenerate: usize,
+}
+
+impl Tableau {
+    fn new(rel: &Relaxation, b: &[Interval]) -> Self {
+        let (n, m) = (rel.n, rel.rows.len());
+        let w = n + m;
+        let mut t = vec![0.0; m * n];
+        let (mut lo, mut hi) = (vec![0.0; w], vec![0.0; w]);
+        let mut val = vec![0.0; w];
+        let mut state: Vec<State> = (0..m).map(State::Basic).collect();
+        state.splice(0..0, (0..n).map(State::Lower));
+        for (j, x) in b.iter().enumerate().take(n) {
+            lo[j] = x.inf();
+            hi[j] = x.sup();
+            (state[j], val[j]) = if lo[j].is_finite() {
+                (State::Lower(j), lo[j])
+            } else if hi[j].is_finite() {
+                (State::Upper(j), hi[j])
+            } else {
+                (State::Free(j), 0.0)
+            };
+        }
+        for (k, row) in rel.rows.iter().enumerate() {
+            // Slack basis: B⁻¹ = −I, so the row of s_k is −a_k.
+            let r = &mut t[k * n..(k + 1) * n];
+            let mut s = 0.0;
+            for &(j, a) in &row.coefs {
+                r[j] -= a;
+                s += a * val[j];
+            }
+            val[n + k] = s;
+            let (l, u) = (row.bounds.inf(), row.bounds.sup());
+            (lo[n + k], hi[n + k]) = match row.sides {
+                Sides::Equal => (row.bounds.mid(), row.bounds.mid()),
+                Sides::Upper => (f64::NEG_INFINITY, u),
+                Sides::Lower => (l, f64::INFINITY),
+                Sides::Both => (l, u),
+            };
+        }
+        Tableau {
+            n,
+            m,
+            t,
+            head: (n..w).collect(),
+            nb: (0..n).collect(),
+            state,
+            lo,
+            hi,
+            val,
+            d: vec![0.0; n],
+            cb: vec![0.0; m],
+            alpha: vec![0.0; m],
+            exact: vec![(f64::INFINITY, false); m],
+            degenerate: 0,
+        }
+    }
+
+    fn row(&self, i: usize) -> &[f64] {
+        &self.t[i * self.n..(i + 1) * self.n]
+    }
+
+    /// The tableau row of `v` when it is basic.
+    fn basic_row(&self, v: usize) -> Option<usize> {
+        match self.state[v] {
+            State::Basic(r) => Some(r),
+            _ => None,
+        }
+    }
+
+    /// Recomputes the basic values from the nonbasic ones: `x_B = −T x_N`.
+    fn refresh_values(&mut self) {
+        for i in 0..self.m {
+            let s: f64 = self.row(i).iter().zip(&self.nb).map(|(a, &v)| a * self.val[v]).sum();
+            self.val[self.head[i]] = -s;
+        }
+    }
+
+    /// The entering column and its direction (`+1` increases it), by the current reduced costs.
+    fn entering(&self) -> Option<(usize, f64)> {
+        let bland = self.degenerate >= DEGENERATE_RUN;
+        let mut best: Option<(usize, f64)> = None;
+        let mut best_score = TOL_D;
+        for (c, (&v, &dc)) in self.nb.iter().zip(&self.d).enumerate() {
+            let dir = match self.state[v] {
+                State::Lower(_) if dc < -TOL_D && self.hi[v] > self.lo[v] => 1.0,
+                State::Upper(_) if dc > TOL_D && self.hi[v] > self.lo[v] => -1.0,
+                State::Free(_) if dc.abs() > TOL_D => -dc.signum(),
+                _ => continue,
+            };
+            let better = match best {
+                None => true,
+                Some((bc, _)) if bland => v < self.nb[bc],
+                Some(_) => dc.abs() > best_score,
+            };
+            if better {
+                best_score = dc.abs();
+                best = Some((c, dir));
+            }
+        }
+        best
+    }
+
+    /// The bound basic row `i` runs into when moving at rate `a`, whether it is the upper one,
+    /// and the Harris tolerance to relax it by (feasible variables only). In phase 1, an
+    /// infeasible variable stops where it becomes feasible, and never blocks when moving away.
+    #[inline(always)]
+    fn target(&self, i: usize, a: f64, phase1: bool) -> Option<(f64, bool, f64)> {
+        let p = self.head[i];
+        let (x, l, u) = (self.val[p], self.lo[p], self.hi[p]);
+        if phase1 && x < l - TOL_P {
+            return (a > 0.0).then_some((l, false, 0.0));
+        }
+        if phase1 && x > u + TOL_P {
+            return (a < 0.0).then_some((u, true, 0.0));
+        }
+        if a > 0.0 {
+            u.is_finite().then_some((u, true, TOL_P))
+        } else {
+            l.is_finite().then_some((l, false, -TOL_P))
+        }
+    }
+
+    /// Harris' two-pass ratio test along column `c` in direction `dir`.
+    fn ratio(&mut self, c: usize, dir: f64, phase1: bool) -> Step {
+        let bland = self.degenerate >= DEGENERATE_RUN;
+        let q = self.nb[c];
+        let range = self.hi[q] - self.lo[q];
+        let mut theta_max = if range.is_finite() { range } else { f64::INFINITY };
+        // Pass 1: the largest step keeping every blocking variable within its relaxed bound;
+        // the exact ratios are kept for pass 2 (`∞`: does not block).
+        for i in 0..self.m {
+            let a = -dir * self.t[i * self.n + c];
+            self.alpha[i] = a;
+            self.exact[i] = (f64::INFINITY, false);
+            if a.abs() < TOL_PIV {
+                continue;
+            }
+            if let Some((bound, at_upper, tol)) = self.target(i, a, phase1) {
+                let x = self.val[self.head[i]];
+                theta_max = theta_max.min(((bound + tol - x) / a).max(0.0));
+                self.exact[i] = (((bound - x) / a).max(0.0), at_upper);
+            }
+        }
+        if theta_max == f64::INFINITY {
+            return Step::Unbounded;
+        }
+        if range <= theta_max {
+            return Step::Flip;
+        }
+        // Pass 2: among the rows blocking within that step, the largest pivot (Bland: the
+        // smallest leaving variable).
+        let mut chosen: Option<usize> = None;
+        let mut best = 0.0;
+        for i in 0..self.m {
+            if self.exact[i].0 > theta_max {
+                continue;
+            }
+            let a = self.alpha[i].abs();
+            let better = match chosen {
+                None => true,
+                Some(ci) if bland => self.head[i] < self.head[ci],
+                Some(_) => a > best,
+            };
+            if better {
+                best = a;
+                chosen = Some(i);
+            }
+        }
+        match chosen {
+            Some(row) => Step::Pivot { row, theta: self.exact[row].0, at_upper: self.exact[row].1 },
+            // Only reachable through rounding in the two passes: treat as a flip if possible.
+            None if range.is_finite() => Step::Flip,
+            None => Step::Unbounded,
+        }
+    }
+
+    /// Moves along column `c` as the ratio test says; false when no step was possible.
+    fn apply(&mut self, c: usize, dir: f64, step: Step) -> bool {
+        let q = self.nb[c];
+        let theta = match step {
+            Step::Unbounded => return false,
+            Step::Flip => self.hi[q] - self.lo[q],
+            Step::Pivot { theta, .. } => theta,
+        };
+        for i in 0..self.m {
+            let a = self.alpha[i];
+            if a != 0.0 {
+                self.val[self.head[i]] += a * theta;
+            }
+        }
+        self.degenerate = if theta <= 1e-12 { self.degenerate + 1 } else { 0 };
+        match step {
+            Step::Flip => {
+                (self.state[q], self.val[q]) =
+                    if dir > 0.0 { (State::Upper(c), self.hi[q]) } else { (State::Lower(c), self.lo[q]) };
+            }
+            Step::Pivot { row, at_upper, .. } => {
+                self.val[q] += dir * theta;
+                let p = self.head[row];
+                (self.state[p], self.val[p]) =
+                    if at_upper { (State::Upper(c), self.hi[p]) } else { (State::Lower(c), self.lo[p]) };
+                self.state[q] = State::Basic(row);
+                self.head[row] = q;
+                self.nb[c] = p;
+                self.pivot(row, c);
+            }
+            Step::Unbounded => unreachable!("handled above"),
+        }
+        true
+    }
+
+    /// Condensed-tableau pivot on `(r, c)`: column `c` now holds the leaving variable. The
+    /// reduced costs transform as one more row.
+    fn pivot(&mut self, r: usize, c: usize) {
+        let n = self.n;
+        let (before, rest) = self.t.split_at_mut(r * n);
+        let (prow, after) = rest.split_at_mut(n);
+        let inv = 1.0 / prow[c];
+        prow.iter_mut().for_each(|v| *v *= inv);
+        prow[c] = inv;
+        let eliminate = |row: &mut [f64]| {
+            let f = row[c];
+            if f != 0.0 {
+                row.iter_mut().zip(prow.iter()).for_each(|(v, p)| *v -= f * p);
+                row[c] = -f * inv;
+            }
+        };
+        before.chunks_exact_mut(n).for_each(eliminate);
+        after.chunks_exact_mut(n).for_each(eliminate);
+        eliminate(&mut self.d);
+    }
+
+    /// Phase 1: minimises the sum of infeasibilities from the current basis.
+    fn phase1(&mut self, cap: usize, stop: &dyn Fn() -> bool) -> Status {
+        self.degenerate = 0;
+        for k in 0..cap {
+            if k % PIVOTS_PER_STOP_CHECK == PIVOTS_PER_STOP_CHECK - 1 && stop() {
+                return Status::Stalled;
+            }
+            let mut any = false;
+            for i in 0..self.m {
+                let p = self.head[i];
+                let x = self.val[p];
+                self.cb[i] = if x < self.lo[p] - TOL_P {
+                    -1.0
+                } else if x > self.hi[p] + TOL_P {
+                    1.0
+                } else {
+                    0.0
+                };
+                any |= self.cb[i] != 0.0;
+            }
+            if !any {
+                return Status::Optimal;
+            }
+            // d_N = c_N − T_Nᵀ c_B with c_N = 0.
+            self.d.iter_mut().for_each(|v| *v = 0.0);
+            for i in 0..self.m {
+                let cost = self.cb[i];
+                if cost != 0.0 {
+                    let r = &self.t[i * self.n..(i + 1) * self.n];
+                    self.d.iter_mut().zip(r).for_each(|(v, a)| *v -= cost * a);
+                }
+            }
+            let Some((c, dir)) = self.entering() else { return Status::Infeasible };
+            let step = self.ratio(c, dir, true);
+            if !self.apply(c, dir, step) {
+                return Status::Stalled;
+            }
+        }
+        Status::Stalled
+    }
+
+    /// Widens the working bounds of out-of-bounds basic variables to their values, so the basis
+    /// is feasible for phase 2 (the answers remain mere proposals for `safe_bound`).
+    fn relax_infeasible(&mut self) {
+        for &p in &self.head {
+            self.lo[p] = self.lo[p].min(self.val[p]);
+            self.hi[p] = self.hi[p].max(self.val[p]);
+        }
+    }
+
+    /// Row duals `y = c_Bᵀ B⁻¹` for basic costs `cost(row)`: `B⁻¹` is minus the slack columns
+    /// of the full tableau, unit columns for basic slacks.
+    fn duals_for(&self, cost: impl Fn(usize) -> f64, mu: &mut [f64]) {
+        for (k, y) in mu.iter_mut().enumerate() {
+            *y = match self.state[self.n + k] {
+                State::Basic(i) => -cost(i),
+                State::Lower(c) | State::Upper(c) | State::Free(c) => {
+                    -(0..self.m).map(|i| cost(i) * self.t[i * self.n + c]).sum::<f64>()
+                }
+            };
+        }
+    }
+
+    /// Row duals for the phase-1 costs.
+    fn phase1_duals(&self, mu: &mut [f64]) {
+        self.duals_for(|i| self.cb[i], mu);
+    }
+
+    /// Reduced costs for the objective `sign·x_t`.
+    fn set_objective(&mut self, t: usize, sign: f64) {
+        self.d.iter_mut().for_each(|v| *v = 0.0);
+        match self.state[t] {
+            State::Basic(r) => {
+                let row = &self.t[r * self.n..(r + 1) * self.n];
+                self.d.iter_mut().zip(row).for_each(|(v, a)| *v = -sign * a);
+            }
+            State::Lower(c) | State::Upper(c) | State::Free(c) => self.d[c] = sign,
+        }
+        self.degenerate = 0;
+    }
+
+    /// Phase 2 from a feasible basis for the cost set by `set_objective`.
+    fn phase2(&mut self, cap: usize, stop: &dyn Fn() -> bool) -> Status {
+        for k in 0..cap {
+            if k % PIVOTS_PER_STOP_CHECK == PIVOTS_PER_STOP_CHECK - 1 && stop() {
+                return Status::Stalled;
+            }
+            let Some((c, dir)) = self.entering() else { return Status::Optimal };
+            let step = self.ratio(c, dir, false);
+            if matches!(step, Step::Unbounded) {
+                return Status::Unbounded;
+            }
+            self.apply(c, dir, step);
+        }
+        Status::Stalled
+    }
+
+    /// Row duals for the objective `sign·x_t` at the current basis: only `x_t` has a cost.
+    fn duals(&self, t: usize, sign: f64, mu: &mut [f64]) {
+        match self.basic_row(t) {
+            Some(r) => {
+                for (k, y) in mu.iter_mut().enumerate() {
+                    *y = match self.state[self.n + k] {
+                        State::Basic(_) => 0.0,
+                        State::Lower(c) | State::Upper(c) | State::Free(c) => -sign * self.t[r * self.n + c],
+                    };
+                }
+            }
+            None => mu.iter_mut().for_each(|v| *v = 0.0),
+        }
+    }
+}
+
+/// Verified bounds of each target over the rows and the box `b`: see `Relaxation::bound`.
+pub(super) fn bound(rel: &Relaxation, b: &[Interval], targets: &[VarId], counters: &mut LpCounters, stop: &dyn Fn() -> bool) -> LpOutcome {
+    let unchanged = || LpOutcome::Bounds(targets.iter().map(|&t| b[t]).collect());
+    if b.iter().take(rel.n).any(|x| x.is_empty()) {
+        return LpOutcome::Infeasible; // the box itself holds no point
+    }
+    let well_formed = b.len() >= rel.n
+        && rel.rows.iter().all(|r| !r.bounds.is_empty() && r.coefs.iter().all(|&(j, a)| j < rel.n && a.is_finite()));
+    if !well_formed {
+        counters.unverified += 2 * targets.len() as u64;
+        return unchanged();
+    }
+    // The tableau is dense: past a few million entries it costs more memory and time than
+    // propagation alone would (a loop through a chain of thousands of joints), so the box is
+    // left to the other contractors.
+    if rel.n.saturating_mul(rel.rows.len()) > MAX_TABLEAU_ENTRIES {
+        return unchanged();
+    }
+    let mut tab = Tableau::new(rel, b);
+    let cap = 50 * (tab.n + tab.m + 1);
+    let mut mu = vec![0.0; tab.m];
+    match tab.phase1(cap, stop) {
+        Status::Optimal => {}
+        Status::Infeasible => {
+            tab.phase1_duals(&mut mu);
+            if safe_bound::certified_infeasible(rel, b, &mu) {
+                return LpOutcome::Infeasible;
+            }
+            counters.unverified += 1;
+            tab.relax_infeasible();
+        }
+        Status::Unbounded | Status::Stalled => {
+            counters.unverified += 2 * targets.len() as u64;
+            return unchanged();
+        }
+    }
+
+    let mut current: Vec<Interval> = b.to_vec();
+    let mut result = Vec::with_capacity(targets.len());
+    for &t in targets {
+        for sign in [1.0, -1.0] {
+            if stop() {
+                break;
+            }
+            tab.refresh_values();
+            tab.set_objective(t, sign);
+            counters.solved += 1;
+            if tab.phase2(cap, stop) != Status::Optimal {
+                counters.unverified += 1;
+                continue;
+            }
+            tab.duals(t, sign, &mut mu);
+            let lb = safe_bound::lower_bound(rel, &current, &[(t, sign)], &mu);
+            let x = current[t];
+            let narrowed =
+                if sign > 0.0 { interval(lb.max(x.inf()), x.sup()) } else { interval(x.inf(), (-lb).min(x.sup())) };
+            if narrowed.is_empty() {
+                return LpOutcome::Infeasible;
+            }
+            if narrowed == x {
+                counters.unverified += u64::from(lb == f64::NEG_INFINITY);
+            }
+            current[t] = narrowed;
+        }
+        result.push(current[t]);
+    }
+    LpOutcome::Bounds(result)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kernel::lp::{clarabel_lp, Row};
+    use proptest::prelude::*;
+
+    fn segment() -> Relaxation {
+        // x + y = 1, x − y ∈ [0, 0.5]: on [0,1]², x ∈ [0.5, 0.75], y ∈ [0.25, 0.5].
+        Relaxation {
+            n: 2,
+            rows: vec![
+                Row { coefs: vec![(0, 1.0), (1, 1.0)], bounds: interval(1.0, 1.0), sides: Sides::Equal },
+                Row { coefs: vec![(0, 1.0), (1, -1.0)], bounds: interval(0.0, 0.5), sides: Sides::Both },
+            ],
+        }
+    }
+
+    #[test]
+    fn one_sided_rows_and_fixed_variables() {
+        // x + y ≤ 1 (Upper; the row's lower end 0.5 is not enforced), z = 0.25 fixed,
+        // x − z ≥ 0 (Lower): x ∈ [0.25, 1], y ∈ [0, 0.75] on [0,1]³.
+        let rel = Relaxation {
+            n: 3,
+            rows: vec![
+                Row { coefs: vec![(0, 1.0), (1, 1.0)], bounds: interval(0.5, 1.0), sides: Sides::Upper },
+                Row { coefs: vec![(0, 1.0), (2, -1.0)], bounds: interval(0.0, 1.0), sides: Sides::Lower },
+            ],
+        };
+        let b = [interval(0.0, 1.0), interval(0.0, 1.0), interval(0.25, 0.25)];
+        let mut c = LpCounters::default();
+        let LpOutcome::Bounds(v) = bound(&rel, &b, &[0, 1, 2], &mut c, &|| false) else { panic!("feasible") };
+        assert!((v[0].inf() - 0.25).abs() < 1e-12 && v[0].sup() == 1.0, "{v:?}");
+        assert!(v[1].inf() == 0.0 && (v[1].sup() - 0.75).abs() < 1e-12, "{v:?}");
+        assert_eq!(v[2], interval(0.25, 0.25));
+        assert_eq!(c.unverified, 0);
+    }
+
+    #[test]
+    fn no_rows_and_empty_boxes() {
+        let rel = Relaxation { n: 2, rows: vec![] };
+        let b = [interval(-1.0, 2.0), interval(3.0, 4.0)];
+        let mut c = LpCounters::default();
+        assert_eq!(bound(&rel, &b, &[1, 0], &mut c, &|| false), LpOutcome::Bounds(vec![b[1], b[0]]));
+        assert_eq!(bound(&segment(), &[Interval::EMPTY, b[0]], &[0], &mut c, &|| false), LpOutcome::Infeasible);
+    }
+
+    /// Dyadic numbers `k / 2^s`: sums of their products stay exact in `f64`, so `x0` satisfies
+    /// the equality rows built from it exactly.
+    fn dyadic(range: i32, s: i32) -> impl Strategy<Value = f64> {
+        (-range..=range).prop_map(move |k| f64::from(k) / f64::from(1 << s))
+    }
+
+    #[derive(Debug, Clone)]
+    struct Case {
+        lo: Vec<f64>,
+        width: Vec<f64>,
+        frac: Vec<f64>,
+        eq: Vec<Vec<f64>>,
+        ineq: Vec<(Vec<f64>, f64, f64, u8)>,
+    }
+
+    fn case() -> impl Strategy<Value = Case> {
+        let n = 6;
+        (
+            prop::collection::vec(dyadic(128, 6), n),
+            prop::collection::vec(prop_oneof![1 => Just(0.0), 6 => (1..=192i32).prop_map(|k| f64::from(k) / 64.0)], n),
+            prop::collection::vec((0..=64i32).prop_map(|k| f64::from(k) / 64.0), n),
+            prop::collection::vec(prop::collection::vec(dyadic(16, 3), n), 3),
+            prop::collection::vec(
+                (
+                    prop::collection::vec(dyadic(16, 3), n),
+                    (0..=64i32).prop_map(|k| f64::from(k) / 32.0),
+                    (0..=64i32).prop_map(|k| f64::from(k) / 32.0),
+                    0u8..4,
+                ),
+                0..6,
+            ),
+        )
+            .prop_map(|(lo, width, frac, eq, ineq)| Case { lo, width, frac, eq, ineq })
+    }
+
+    fn dot(a: &[f64], x: &[f64]) -> f64 {
+        a.iter().zip(x).map(|(a, x)| a * x).sum()
+    }
+
+    fn coefs(a: &[f64]) -> Vec<(usize, f64)> {
+        a.iter().copied().enumerate().filter(|&(_, v)| v != 0.0).collect()
+    }
+
+    /// The box, the point `x0` and the rows, the inequality rows' ends shifted by `shift`
+    /// (negative shifts may cut `x0` off).
+    fn build(c: &Case, shift: f64) -> (Vec<Interval>, Vec<f64>, Relaxation) {
+        let b: Vec<Interval> = c.lo.iter().zip(&c.width).map(|(&l, &w)| interval(l, l + w)).collect();
+        let x0: Vec<f64> = b.iter().zip(&c.frac).map(|(x, &f)| x.inf() + f * x.wid()).collect();
+        let mut rows = Vec::new();
+        for a in &c.eq {
+            let v = dot(a, &x0);
+            rows.push(Row { coefs: coefs(a), bounds: interval(v, v), sides: Sides::Equal });
+        }
+        for (a, below, above, s) in &c.ineq {
+            let v = dot(a, &x0);
+            let sides = [Sides::Upper, Sides::Lower, Sides::Both, Sides::Both][usize::from(*s)];
+            rows.push(Row { coefs: coefs(a), bounds: interval(v - below - shift, v + above + shift), sides });
+        }
+        let n = x0.len();
+        (b, x0, Relaxation { n, rows })
+    }
+
+    fn satisfies(rel: &Relaxation, x: &[f64]) -> bool {
+        rel.rows.iter().all(|r| {
+            let v: f64 = r.coefs.iter().map(|&(j, a)| a * x[j]).sum();
+            match r.sides {
+                Sides::Equal | Sides::Both => r.bounds.contains(v),
+                Sides::Upper => v <= r.bounds.sup(),
+                Sides::Lower => v >= r.bounds.inf(),
+            }
+        })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(400))]
+
+        #[test]
+        fn simplex_is_sound_and_as_tight_as_clarabel(c in case()) {
+            let (b, x0, rel) = build(&c, 0.0);
+            prop_assert!(satisfies(&rel, &x0));
+            let targets: Vec<usize> = (0..6).collect();
+            let (mut cs, mut cc) = (LpCounters::default(), LpCounters::default());
+            let s = bound(&rel, &b, &targets, &mut cs, &|| false);
+            let k = clarabel_lp::bound(&rel, &b, &targets, &mut cc, &|| false);
+            let LpOutcome::Bounds(s) = s else { return Err(TestCaseError::fail("simplex: x0 is feasible")) };
+            prop_assert_eq!(cs.unverified, 0);
+            for (j, v) in s.iter().enumerate() {
+                prop_assert!(v.contains(x0[j]), "simplex bound {j} {v:?} misses {}", x0[j]);
+            }
+            let LpOutcome::Bounds(k) = k else { return Err(TestCaseError::fail("clarabel: x0 is feasible")) };
+            for (j, (sv, kv)) in s.iter().zip(&k).enumerate() {
+                prop_assert!(kv.contains(x0[j]));
+                prop_assert!(
+                    sv.inf() >= kv.inf() - 1e-6 && sv.sup() <= kv.sup() + 1e-6,
+                    "target {j}: simplex {sv:?} looser than clarabel {kv:?}"
+                );
+            }
+        }
+
+        #[test]
+        fn perturbed_rows_never_cut_a_feasible_point(c in case(), shift in -1.0f64..0.0) {
+            // Shifted inequality rows may cut x0 off or make the LP infeasible; whenever x0 still
+            // satisfies every row, no answer may exclude it.
+            let (b, x0, rel) = build(&c, shift);
+            let targets: Vec<usize> = (0..6).collect();
+            let mut cs = LpCounters::default();
+            let s = bound(&rel, &b, &targets, &mut cs, &|| false);
+            if satisfies(&rel, &x0) {
+                let LpOutcome::Bounds(s) = s else { return Err(TestCaseError::fail("x0 is feasible")) };
+                for (j, v) in s.iter().enumerate() {
+                    prop_assert!(v.contains(x0[j]));
+                }
+            }
+        }
+
+        #[test]
+        fn an_equality_outside_the_box_is_proven_infeasible(c in case(), far in 1.0f64..10.0) {
+            // Row 0 pushed beyond its range over the box.
+            let (b, _, mut rel) = build(&c, 0.0);
+            let r = &mut rel.rows[0];
+            let range: Interval = r.coefs.iter().fold(interval(0.0, 0.0), |acc, &(j, a)| acc + interval(a, a) * b[j]);
+            prop_assume!(!r.coefs.is_empty());
+            let v = range.sup() + far;
+            r.bounds = interval(v, v);
+            let mut cs = LpCounters::default();
+            prop_assert_eq!(bound(&rel, &b, &[0, 1, 2], &mut cs, &|| false), LpOutcome::Infeasible);
+        }
+    }
+}
