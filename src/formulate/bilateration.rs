@@ -105,6 +105,58 @@ fn area2(a: &IVec3, b: &IVec3, c: &IVec3) -> f64 {
     dot(&n, &n).mid()
 }
 
+/// The frame: the three legs whose smaller triangle (base or platform) is the largest.
+fn choose_frame(legs: &[PoseLeg]) -> Result<[usize; 3], PlatformError> {
+    let mut best: Option<([usize; 3], f64)> = None;
+    for a in 0..6 {
+        for b in a + 1..6 {
+            for c in b + 1..6 {
+                let size = area2(&legs[a].base, &legs[b].base, &legs[c].base).min(area2(&legs[a].top, &legs[b].top, &legs[c].top));
+                if best.is_none_or(|(_, s)| size > s) {
+                    best = Some(([a, b, c], size));
+                }
+            }
+        }
+    }
+    let (frame, size) = best.expect("six legs");
+    if !(size > 0.0) {
+        return Err(PlatformError::Unsupported("no three legs span a triangle on both the base and the platform: the distance model needs one".into()));
+    }
+    Ok(frame)
+}
+
+/// The base triangle's orthonormal frame: `f1` along `e1 = B1 − B0`, `f2` in the plane toward
+/// `e2 = B2 − B0`, `f3 = f1 × f2`, with the lengths trilateration divides by.
+#[derive(Clone, Copy)]
+struct BaseFrame {
+    e2: IVec3,
+    e1_len: Interval,
+    /// `e2·f1`.
+    along: Interval,
+    /// `|e2 − (e2·f1) f1|`.
+    e2_perp_len: Interval,
+    f1: IVec3,
+    f2: IVec3,
+    f3: IVec3,
+}
+
+impl BaseFrame {
+    fn new(base: &[IVec3; 3]) -> Result<Self, PlatformError> {
+        let (e1, e2) = (sub(&base[1], &base[0]), sub(&base[2], &base[0]));
+        let e1_len = dot(&e1, &e1).sqrt();
+        let f1 = scale(e1_len.recip(), &e1);
+        let along = dot(&e2, &f1);
+        let e2_perp = sub(&e2, &scale(along, &f1));
+        let e2_perp_len = dot(&e2_perp, &e2_perp).sqrt();
+        if !(e2_perp_len.inf() > 0.0) {
+            return Err(PlatformError::Unsupported("the frame's base points are collinear".into()));
+        }
+        let f2 = scale(e2_perp_len.recip(), &e2_perp);
+        let f3 = cross(&f1, &f2);
+        Ok(Self { e2, e1_len, along, e2_perp_len, f1, f2, f3 })
+    }
+}
+
 /// A squared distance: the leg's, known, or a variable.
 #[derive(Clone, Copy)]
 enum Squared {
@@ -184,47 +236,10 @@ impl Rows {
         let terms = linear.into_iter().filter(|(_, c)| !(c.inf() == 0.0 && c.sup() == 0.0)).map(|(v, c)| Term { coef: c, mono: Monomial::Linear(v) }).collect();
         self.system.add(Equation::new(terms, row.constant));
     }
-}
 
-impl BilaterationProblem {
-    /// Reads the platform of `m` with every leg fixed by `fixed` (leg name, its value as for
-    /// `solve --fix`: the prismatic joint's travel, metres).
-    pub fn new(m: &Mechanism, fixed: &[(String, f64)]) -> Result<Self, PlatformError> {
-        let SixLegs { platform, floating, legs } = six_legs(m, fixed, "the distance model")?;
-        // The frame: the three legs whose smaller triangle (base or platform) is the largest.
-        let mut best: Option<([usize; 3], f64)> = None;
-        for a in 0..6 {
-            for b in a + 1..6 {
-                for c in b + 1..6 {
-                    let size = area2(&legs[a].base, &legs[b].base, &legs[c].base).min(area2(&legs[a].top, &legs[b].top, &legs[c].top));
-                    if best.is_none_or(|(_, s)| size > s) {
-                        best = Some(([a, b, c], size));
-                    }
-                }
-            }
-        }
-        let (frame, size) = best.expect("six legs");
-        if !(size > 0.0) {
-            return Err(PlatformError::Unsupported("no three legs span a triangle on both the base and the platform: the distance model needs one".into()));
-        }
-        let base = frame.map(|i| legs[i].base);
-        let top = frame.map(|i| legs[i].top);
-        let squared = frame.map(|i| legs[i].squared);
-        // The base triangle's orthonormal frame: f1 along e1, f2 in the plane toward e2, f3 = f1 × f2.
-        let (e1, e2) = (sub(&base[1], &base[0]), sub(&base[2], &base[0]));
-        let e1_len = dot(&e1, &e1).sqrt();
-        let f1 = scale(e1_len.recip(), &e1);
-        let along = dot(&e2, &f1);
-        let e2_perp = sub(&e2, &scale(along, &f1));
-        let e2_perp_len = dot(&e2_perp, &e2_perp).sqrt();
-        if !(e2_perp_len.inf() > 0.0) {
-            return Err(PlatformError::Unsupported("the frame's base points are collinear".into()));
-        }
-        let f2 = scale(e2_perp_len.recip(), &e2_perp);
-        let f3 = cross(&f1, &f2);
-        let (one, two) = (point(1.0), point(2.0));
-
-        let mut w = Rows { system: EquationSystem::default(), products: BTreeMap::new() };
+    /// The primaries of the frame points: squared distances `r(Pi, Bj)` (the leg's own known),
+    /// and signed heights `hi` above the base triangle.
+    fn frame_unknowns(&mut self, squared: &[Interval; 3], base: &[IVec3; 3]) -> ([[Squared; 3]; 3], [VarId; 3]) {
         // Squared distances r(Pi, Bj): Bj's distance to Bi bounds them (triangle inequality).
         let mut r = [[Squared::Known(point(0.0)); 3]; 3];
         for i in 0..3 {
@@ -236,14 +251,22 @@ impl BilaterationProblem {
                 let leg = squared[i].sqrt();
                 let apart = dot(&sub(&base[i], &base[j]), &sub(&base[i], &base[j])).sqrt();
                 let (lo, hi) = ((leg - apart).inf().max(0.0), (leg + apart).sup());
-                r[i][j] = Squared::Unknown(w.system.add_var(format!("r(P{i},B{j})"), VarRole::Primary, interval(lo, hi).sqr()));
+                r[i][j] = Squared::Unknown(self.system.add_var(format!("r(P{i},B{j})"), VarRole::Primary, interval(lo, hi).sqr()));
             }
         }
         // Signed heights above the base triangle: at most the leg's length.
         let h: [VarId; 3] = [0, 1, 2].map(|i| {
             let reach = squared[i].sqrt().sup();
-            w.system.add_var(format!("h{i}"), VarRole::Primary, interval(-reach, reach))
+            self.system.add_var(format!("h{i}"), VarRole::Primary, interval(-reach, reach))
         });
+        (r, h)
+    }
+
+    /// Each frame point's coordinates `ai, bi, hi` along `f1, f2, f3`: `ai`, `bi` derived by
+    /// trilateration rows, `hi` the height itself.
+    fn frame_coordinates(&mut self, r: &[[Squared; 3]; 3], h: &[VarId; 3], bf: &BaseFrame) -> [[VarId; 3]; 3] {
+        let BaseFrame { e2, e1_len, along, e2_perp_len, .. } = *bf;
+        let (one, two) = (point(1.0), point(2.0));
         // In-plane coordinates by trilateration: x·e1 = (r0 − r1 + |e1|²)/2, x·e2 likewise.
         let value = |s: Squared, b: &[Interval]| match s {
             Squared::Known(x) => x,
@@ -251,28 +274,48 @@ impl BilaterationProblem {
         };
         let mut coordinates = [[0; 3]; 3];
         for i in 0..3 {
-            let start = w.system.initial_box();
+            let start = self.system.initial_box();
             let (r0, r1, r2) = (value(r[i][0], &start.dims), value(r[i][1], &start.dims), value(r[i][2], &start.dims));
             let a_dom = (r0 - r1 + e1_len.sqr()) / (two * e1_len);
-            let a = w.system.add_var(format!("a{i}"), VarRole::Derived, a_dom);
+            let a = self.system.add_var(format!("a{i}"), VarRole::Derived, a_dom);
             let mut row = Row::new();
             row.var(a, one);
             row.squared(r[i][0], -(two * e1_len).recip());
             row.squared(r[i][1], (two * e1_len).recip());
             row.constant -= e1_len / two;
-            w.add(row);
+            self.add(row);
             // x·f2 = (x·e2 − (e2·f1)·a) / |e2⊥|.
             let b_dom = ((r0 - r2 + dot(&e2, &e2)) / two - along * a_dom) / e2_perp_len;
-            let b = w.system.add_var(format!("b{i}"), VarRole::Derived, b_dom);
+            let b = self.system.add_var(format!("b{i}"), VarRole::Derived, b_dom);
             let mut row = Row::new();
             row.var(b, e2_perp_len);
             row.squared(r[i][0], -one / two);
             row.squared(r[i][2], one / two);
             row.constant -= dot(&e2, &e2) / two;
             row.var(a, along);
-            w.add(row);
+            self.add(row);
             coordinates[i] = [a, b, h[i]];
         }
+        coordinates
+    }
+}
+
+impl BilaterationProblem {
+    /// Reads the platform of `m` with every leg fixed by `fixed` (leg name, its value as for
+    /// `solve --fix`: the prismatic joint's travel, metres).
+    pub fn new(m: &Mechanism, fixed: &[(String, f64)]) -> Result<Self, PlatformError> {
+        let SixLegs { platform, floating, legs } = six_legs(m, fixed, "the distance model")?;
+        let frame = choose_frame(&legs)?;
+        let base = frame.map(|i| legs[i].base);
+        let top = frame.map(|i| legs[i].top);
+        let squared = frame.map(|i| legs[i].squared);
+        let bf = BaseFrame::new(&base)?;
+        let BaseFrame { f1, f2, f3, .. } = bf;
+        let (one, two) = (point(1.0), point(2.0));
+
+        let mut w = Rows { system: EquationSystem::default(), products: BTreeMap::new() };
+        let (r, h) = w.frame_unknowns(&squared, &base);
+        let coordinates = w.frame_coordinates(&r, &h, &bf);
         let x = coordinates;
         let pside = |i: usize, j: usize| dot(&sub(&top[i], &top[j]), &sub(&top[i], &top[j]));
         // Tetrahedra B0 B1 B2 Pi (Cayley–Menger): |x_i|² = r(Pi, B0).
