@@ -13,16 +13,19 @@
 use super::limits::{process_cpu_seconds, Limit, Limits, Progress, Status};
 use super::settings::{SettingsError, SolverSettings};
 use super::share::Wire;
-use super::{driver, Prune, Sink, Stats, Step, Store, Undecided};
-use crate::kernel::contract::{Contraction, Contractor, Filter, Filtered, Inclusion, LpShrink, Newton, Propagation, Sequence};
+use super::{driver, Store};
+use crate::kernel::contract::{Contraction, Contractor, Filter, Filtered, LpShrink, Newton, Propagation, Sequence};
 use crate::kernel::interval::IntervalBox;
 use crate::kernel::lp::LpCounters;
 use crate::kernel::system::{EquationSystem, SystemError, VarId};
-use smallvec::smallvec;
 use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 use thiserror::Error;
+
+mod prune;
+
+use self::prune::{Boxes, Screen, Shared, SystemPrune};
 
 /// The tag of a reported box.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -612,189 +615,6 @@ impl<'a> Solver<'a> {
     }
 }
 
-/// A filter shared by every run's pipeline.
-struct Shared<'a>(std::sync::Arc<dyn Filter + Send + Sync + 'a>);
-
-impl Filter for Shared<'_> {
-    fn judge(&self, b: &IntervalBox) -> Inclusion {
-        self.0.judge(b)
-    }
-}
-
-/// A filter as the first step of a pipeline: `Empty` for a box it proves `Outside`, else
-/// `Unchanged`.
-struct Screen<F>(F);
-
-impl<F: Filter> Contractor for Screen<F> {
-    fn contract(&mut self, b: &mut IntervalBox) -> Contraction {
-        match self.0.judge(b) {
-            Inclusion::Outside => Contraction::Empty,
-            _ => Contraction::Unchanged,
-        }
-    }
-
-    fn name(&self) -> &'static str {
-        "screen"
-    }
-}
-
-/// The seed's Algorithm 1 on one box: a `Prune` whose cells are boxes of the system.
-struct SystemPrune<'a, 's> {
-    solver: &'s Solver<'a>,
-    contractor: Box<dyn Contractor + Send + 'a>,
-    /// Widths of the primaries in the start box, for volume shares.
-    reference_widths: Vec<f64>,
-    shrink_rounds: u64,
-    certified: u64,
-    /// Per level, the widest diagonal of a box not proven empty, when asked for.
-    diagonals: Option<Vec<f64>>,
-}
-
-impl SystemPrune<'_, '_> {
-    /// Lines 5–9 of the seed's Algorithm 1.
-    fn shrink(&mut self, b: &mut IntervalBox, stop: &dyn Fn() -> bool) -> Shrunk {
-        let sigma = self.solver.settings.sigma;
-        loop {
-            self.shrink_rounds += 1;
-            let before = b.clone();
-            // The whole pipeline runs even when its first step reached sigma: the LP is what
-            // proves most near-miss boxes empty, and a spurious solution box costs more than it.
-            match self.contractor.contract_until(b, stop) {
-                Contraction::Empty => return Shrunk::Empty,
-                Contraction::Proven if self.solver.size(b) <= sigma => {
-                    self.certified += 1;
-                    return Shrunk::Unique;
-                }
-                _ => {}
-            }
-            if self.solver.size(b) <= sigma {
-                if let Some(proven) = self.contractor.certify(b) {
-                    if self.solver.size(&proven) <= sigma {
-                        *b = IntervalBox { level: b.level, ..proven };
-                        self.certified += 1;
-                        return Shrunk::Unique;
-                    }
-                }
-                return Shrunk::Solution;
-            }
-            // The deadline (or a cancel) may have cut the contraction short: what it proved
-            // holds, but the box is not finished.
-            if stop() {
-                return Shrunk::Interrupted;
-            }
-            if self.relative_volume(b, &before) > self.solver.settings.rho {
-                return Shrunk::Stalled;
-            }
-        }
-    }
-
-    /// Volume of `b` over the primaries, relative to `reference`; components of zero width in
-    /// the start box are left out so that fixed values do not make every volume zero.
-    fn relative_volume(&self, b: &IntervalBox, reference: &IntervalBox) -> f64 {
-        self.solver.primaries.iter().filter(|&&i| reference.width(i) > 0.0).map(|&i| b.width(i) / reference.width(i)).product()
-    }
-
-    fn add_counters(&self, out: &mut SolveStats) {
-        out.shrink_rounds += self.shrink_rounds;
-        out.certified += self.certified;
-        let lp = self.contractor.lp_counters();
-        out.lp.solved += lp.solved;
-        out.lp.unverified += lp.unverified;
-    }
-}
-
-/// Why the polynomial search discards a box.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SystemDiscard {
-    /// The contractors proved it empty.
-    Empty,
-}
-
-impl super::Reason for SystemDiscard {
-    fn name(self) -> &'static str {
-        "empty"
-    }
-}
-
-impl Prune for SystemPrune<'_, '_> {
-    type Cell = IntervalBox;
-    type Found = (BoxStatus, IntervalBox);
-    type Reason = SystemDiscard;
-
-    fn process(&mut self, b: IntervalBox) -> Step<IntervalBox, (BoxStatus, IntervalBox), SystemDiscard> {
-        self.process_until(b, &|| false)
-    }
-
-    fn process_until(&mut self, mut b: IntervalBox, stop: &dyn Fn() -> bool) -> Step<IntervalBox, (BoxStatus, IntervalBox), SystemDiscard> {
-        let shrunk = self.shrink(&mut b, stop);
-        if let Some(d) = &mut self.diagonals {
-            if !matches!(shrunk, Shrunk::Empty) {
-                let l = b.level as usize;
-                if d.len() <= l {
-                    d.resize(l + 1, 0.0);
-                }
-                d[l] = d[l].max(b.diagonal(&self.solver.primaries));
-            }
-        }
-        match shrunk {
-            Shrunk::Empty => Step::Discard(SystemDiscard::Empty),
-            Shrunk::Solution => Step::Found((BoxStatus::Solution, b)),
-            Shrunk::Unique => Step::Found((BoxStatus::Unique, b)),
-            Shrunk::Interrupted => Step::Undecided(b, super::INTERRUPTED),
-            Shrunk::Stalled => {
-                let (i, _) = self.solver.widest(&b).expect("invariant: a box wider than sigma has a primary");
-                let (lower, upper) = b.bisect(i);
-                Step::Split(smallvec![lower, upper])
-            }
-        }
-    }
-
-    fn share(&self, b: &IntervalBox) -> f64 {
-        self.solver.primaries.iter().zip(&self.reference_widths).filter(|(_, &w)| w > 0.0).map(|(&i, &w)| b.width(i) / w).product()
-    }
-
-    fn level(&self, b: &IntervalBox) -> u32 {
-        b.level
-    }
-
-    fn bytes(&self, b: &IntervalBox) -> usize {
-        std::mem::size_of::<IntervalBox>() + std::mem::size_of_val(b.dims.as_slice())
-    }
-}
-
-/// Routes the kernel's results to a `BoxSink`.
-struct Boxes<'s>(&'s mut dyn BoxSink);
-
-impl Sink<IntervalBox, (BoxStatus, IntervalBox)> for Boxes<'_> {
-    fn found(&mut self, (status, b): (BoxStatus, IntervalBox)) -> ControlFlow<()> {
-        self.0.emit(status, &b)
-    }
-
-    fn undecided(&mut self, b: IntervalBox, _why: Undecided) -> ControlFlow<()> {
-        self.0.emit(BoxStatus::Undecided, &b)
-    }
-
-    fn progress(&mut self, p: &Progress) {
-        self.0.progress(p)
-    }
-}
-
-impl SolveStats {
-    fn from_kernel(s: &Stats) -> Self {
-        SolveStats {
-            processed: s.processed,
-            empty: s.discarded(SystemDiscard::Empty),
-            bisected: s.split,
-            solutions: s.found,
-            max_level: s.max_level,
-            seconds: s.seconds,
-            cpu_seconds: s.cpu_seconds,
-            ..SolveStats::default()
-        }
-    }
-}
-
-/// What re-examining one box showed.
 /// What `Solver::same_root` proved of two certified boxes that meet.
 enum SharedRoot {
     /// Their common part holds no root: two solutions.
@@ -805,6 +625,7 @@ enum SharedRoot {
     Unknown,
 }
 
+/// What re-examining one box showed.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Probe {
     /// Proven to hold no solution.
@@ -815,135 +636,5 @@ enum Probe {
     NotRun,
 }
 
-enum Shrunk {
-    Empty,
-    Solution,
-    Unique,
-    Stalled,
-    /// The deadline or a cancel came before the box was finished.
-    Interrupted,
-}
-
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::kernel::interval::{interval, point};
-    use crate::kernel::system::{Equation, Monomial, Term, VarRole};
-
-    /// x² + y² = 1, x = y: two solutions at ±(1/√2, 1/√2).
-    fn two_points() -> EquationSystem {
-        let mut s = EquationSystem::default();
-        let x = s.add_var("x", VarRole::Primary, interval(-1.0, 1.0));
-        let y = s.add_var("y", VarRole::Primary, interval(-1.0, 1.0));
-        s.add(Equation::circle(x, y));
-        s.add(Equation::new(
-            vec![Term { coef: point(1.0), mono: Monomial::Linear(x) }, Term { coef: point(-1.0), mono: Monomial::Linear(y) }],
-            point(0.0),
-        ));
-        s
-    }
-
-    #[test]
-    fn two_certificates_of_one_root_count_once() {
-        // Roots (h, h) and (−h, −h), h = 1/√2. Two certified boxes around (h, h) that overlap are
-        // merged into one inside both; two overlapping certified boxes each holding one root stay
-        // two; a certified box disjoint from the rest is left as it is.
-        let s = two_points();
-        let solver = Solver::new(&s, SolverSettings { sigma: 1e-6, ..Default::default() }).expect("valid");
-        let h = std::f64::consts::FRAC_1_SQRT_2;
-        let square = |lo: f64, hi: f64| IntervalBox::new(vec![interval(lo, hi), interval(lo, hi)]);
-        let around_h = [square(h - 1e-3, h + 2e-3), square(h - 2e-3, h + 1e-3)];
-        let (boxes, unique, merged) = solver.merge_shared_certificates(around_h.to_vec(), vec![true, true]);
-        assert_eq!((boxes.len(), merged), (1, 1), "{boxes:?}");
-        assert!(unique[0] && boxes[0].contains(&[h, h]));
-        assert!(boxes[0].dims.iter().all(|d| d.subset(interval(h - 1e-3, h + 1e-3))), "{boxes:?}");
-
-        let both_roots = [square(-0.8, 0.1), square(-0.1, 0.8)];
-        let (boxes, unique, merged) = solver.merge_shared_certificates(both_roots.to_vec(), vec![true, true]);
-        assert_eq!((boxes.len(), merged, unique), (2, 0, vec![true, true]));
-
-        let apart = [square(h - 1e-3, h + 1e-3), square(-h - 1e-3, -h + 1e-3)];
-        let (boxes, _, merged) = solver.merge_shared_certificates(apart.to_vec(), vec![true, true]);
-        assert_eq!((boxes, merged), (apart.to_vec(), 0));
-        // An uncertified box is never merged or dropped: it only encloses.
-        let (boxes, unique, merged) = solver.merge_shared_certificates(around_h.to_vec(), vec![true, false]);
-        assert_eq!((boxes.len(), unique, merged), (2, vec![true, false], 0));
-    }
-
-    #[test]
-    fn refining_proves_a_root_a_coarse_sigma_leaves_unproven() {
-        // x² − y² = 0, x² + y² = 1 on [0, 1]²: one root at (1/√2, 1/√2). Propagation cannot
-        // narrow the whole box (in x² and y² the system is linear, [0, 1]² a fixed point of
-        // HC4), so at sigma 1 it is one solution box, where the Jacobian's range holds singular
-        // matrices and Krawczyk proves nothing.
-        let mut s = EquationSystem::default();
-        let x = s.add_var("x", VarRole::Primary, interval(0.0, 1.0));
-        let y = s.add_var("y", VarRole::Primary, interval(0.0, 1.0));
-        let sq = |v, c| Term { coef: point(c), mono: Monomial::Square(v) };
-        s.add(Equation::new(vec![sq(x, 1.0), sq(y, -1.0)], point(0.0)));
-        s.add(Equation::new(vec![sq(x, 1.0), sq(y, 1.0)], point(-1.0)));
-        let cancel = AtomicBool::new(false);
-        let coarse = Solver::new(&s, SolverSettings { sigma: 1.0, use_lp: false, ..Default::default() }).expect("valid");
-        let mut out = Collect::default();
-        assert_eq!(coarse.run(&cancel, &mut out).0, Status::Complete);
-        let h = std::f64::consts::FRAC_1_SQRT_2;
-        let cluster = out.solutions.clone();
-        assert!(cluster.iter().any(|b| b.contains(&[h, h])), "{cluster:?} {:?}", out.unique);
-        assert!(out.unique.iter().all(|u| !u), "{:?}", out.unique);
-        let all_certified = |_: &[IntervalBox], u: &[bool]| u.iter().all(|u| *u);
-        match coarse.refine(&cluster, &RefinePlan::default(), None, &all_certified, &cancel) {
-            Refinement::Settled(c) => {
-                assert!(!c.solutions.is_empty() && c.unique.iter().all(|u| *u));
-                assert!(c.solutions.iter().any(|b| b.contains(&[h, h])));
-            }
-            other => panic!("not settled: {other:?}"),
-        }
-        // A cluster wider than the plan allows is not tried; a round stopped by its budget
-        // says so, and settles nothing.
-        let narrow = RefinePlan { max_width: 0.1, ..RefinePlan::default() };
-        assert!(matches!(coarse.refine(&cluster, &narrow, None, &all_certified, &cancel), Refinement::TooWide));
-        let starved = RefinePlan { max_boxes: 1, ..RefinePlan::default() };
-        match coarse.refine(&cluster, &starved, None, &all_certified, &cancel) {
-            Refinement::Unsettled(why) => assert!(why.contains("boxes limit"), "{why}"),
-            other => panic!("settled on one box: {other:?}"),
-        }
-    }
-
-    #[test]
-    fn finds_both_isolated_solutions() {
-        let s = two_points();
-        let solver = Solver::new(&s, SolverSettings { sigma: 1e-6, ..Default::default() }).expect("valid");
-        let mut out = Collect::default();
-        let (status, stats) = solver.run(&AtomicBool::new(false), &mut out);
-        assert_eq!(status, Status::Complete);
-        let h = std::f64::consts::FRAC_1_SQRT_2;
-        assert!(out.solutions.iter().any(|b| b.contains(&[h, h])));
-        assert!(out.solutions.iter().any(|b| b.contains(&[-h, -h])));
-        assert!(out.solutions.iter().all(|b| b.width(0) <= 1e-6 && b.width(1) <= 1e-6));
-        assert_eq!(stats.solutions as usize, out.solutions.len());
-    }
-
-    #[test]
-    fn a_limit_reports_every_pending_box() {
-        let s = two_points();
-        let solver = Solver::new(&s, SolverSettings { sigma: 1e-9, max_boxes: 2, ..Default::default() }).expect("valid");
-        let mut out = Collect::default();
-        let (status, _) = solver.run(&AtomicBool::new(false), &mut out);
-        assert_eq!(status, Status::Incomplete(Limit::Boxes));
-        let h = std::f64::consts::FRAC_1_SQRT_2;
-        for p in [[h, h], [-h, -h]] {
-            assert!(out.solutions.iter().chain(&out.undecided).any(|b| b.contains(&p)), "lost {p:?}");
-        }
-    }
-
-    #[test]
-    fn cancellation_stops_at_once() {
-        let s = two_points();
-        let solver = Solver::new(&s, SolverSettings::default()).expect("valid");
-        let mut out = Collect::default();
-        let (status, stats) = solver.run(&AtomicBool::new(true), &mut out);
-        assert_eq!(status, Status::Incomplete(Limit::Cancelled));
-        assert_eq!(stats.processed, 0);
-        assert_eq!(out.undecided.len(), 1);
-    }
-}
+mod tests;
