@@ -15,7 +15,7 @@
 
 use super::{Collision, Compound, Joint, JointKind, Link, LoopClosure, Mechanism, Mimic, ModelError, Shape};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// The deepest element nesting accepted. A URDF needs a handful of levels (robot, link, visual,
 /// geometry, mesh); `urdf_rs` reads nested elements recursively, so a hostile document nested
@@ -79,6 +79,23 @@ pub fn parse(xml: &str) -> Result<Mechanism, ModelError> {
         .map_err(|_| ModelError::Malformed("the URDF parser failed on this document".into()))?
         .map_err(|e| ModelError::Malformed(e.to_string()))?;
 
+    let (index, mut links) = read_links(&robot)?;
+    // Joint and loop names share one namespace.
+    let mut names = HashSet::new();
+    let joints = read_joints(&robot, &index, &mut links, &mut names)?;
+    let root = find_root(&links, &joints)?;
+    let mut loops = Vec::new();
+    for el in robot_el.children().filter(|n| n.has_tag_name("loop")) {
+        loops.push(read_loop(el, &index, &mut names)?);
+    }
+    Ok(Mechanism { name: robot.name.clone(), links, joints, loops, root, transmission_joints: transmission_joints(robot_el) })
+}
+
+/// Link names to indices, in file order.
+type LinkIndex = HashMap<String, usize>;
+
+/// The links, with their collision geometry; none has a parent joint yet.
+fn read_links(robot: &urdf_rs::Robot) -> Result<(LinkIndex, Vec<Link>), ModelError> {
     let mut index = HashMap::new();
     let mut links = Vec::new();
     for l in &robot.links {
@@ -91,47 +108,26 @@ pub fn parse(xml: &str) -> Result<Mechanism, ModelError> {
     if links.is_empty() {
         return Err(ModelError::Malformed("the robot has no links".into()));
     }
-    let find = |element: &str, link: &str| {
-        index.get(link).copied().ok_or_else(|| ModelError::UnknownLink { element: element.into(), link: link.into() })
-    };
+    Ok((index, links))
+}
 
+/// The link named `link`, which `element` refers to.
+fn find(index: &LinkIndex, element: &str, link: &str) -> Result<usize, ModelError> {
+    index.get(link).copied().ok_or_else(|| ModelError::UnknownLink { element: element.into(), link: link.into() })
+}
+
+/// The tree joints, each link's parent joint set on the way (a link with two is refused);
+/// their names go into `names`.
+fn read_joints(robot: &urdf_rs::Robot, index: &LinkIndex, links: &mut [Link], names: &mut HashSet<String>) -> Result<Vec<Joint>, ModelError> {
     let mut joints = Vec::new();
-    let mut names = std::collections::HashSet::new();
     for j in &robot.joints {
         if !names.insert(j.name.clone()) {
             return Err(ModelError::Duplicate(j.name.clone()));
         }
         let element = format!("joint '{}'", j.name);
-        let parent = find(&element, &j.parent.link)?;
-        let child = find(&element, &j.child.link)?;
-        let kind = match j.joint_type {
-            urdf_rs::JointType::Revolute => {
-                let (lo, hi) = (j.limit.lower, j.limit.upper);
-                check_finite(&element, &[lo, hi])?;
-                // urdf_rs fills a missing <limit> with 0..0; no range means no limit to use.
-                let limits = if lo < hi {
-                    Some((lo, hi))
-                } else if lo == hi {
-                    None
-                } else {
-                    return Err(bad(&element, "limit lower is above upper"));
-                };
-                JointKind::Revolute { limits }
-            }
-            urdf_rs::JointType::Continuous => JointKind::Revolute { limits: None },
-            urdf_rs::JointType::Prismatic => {
-                let (lo, hi) = (j.limit.lower, j.limit.upper);
-                check_finite(&element, &[lo, hi])?;
-                if !(lo < hi) {
-                    return Err(bad(&element, "a prismatic joint needs <limit lower < upper> to bound its travel"));
-                }
-                JointKind::Prismatic { limits: (lo, hi) }
-            }
-            urdf_rs::JointType::Fixed => JointKind::Fixed,
-            urdf_rs::JointType::Spherical => JointKind::Spherical,
-            urdf_rs::JointType::Floating => JointKind::Floating,
-            ref other => return Err(ModelError::UnsupportedJoint { joint: j.name.clone(), kind: format!("{other:?}").to_lowercase() }),
-        };
+        let parent = find(index, &element, &j.parent.link)?;
+        let child = find(index, &element, &j.child.link)?;
+        let kind = joint_kind(&element, j)?;
         let origin = pose(&element, j.origin.xyz.0, j.origin.rpy.0)?;
         // As ROS's parser: only joints that move along or about an axis read it; a fixed joint's
         // `<axis xyz="0 0 0"/>` (common in vendor files) is ignored, not refused.
@@ -146,7 +142,44 @@ pub fn parse(xml: &str) -> Result<Mechanism, ModelError> {
         links[child].parent_joint = Some(joints.len());
         joints.push(Joint { name: j.name.clone(), kind, parent, child, origin, rpy: j.origin.rpy.0, axis, mimic, exact_rotation: None });
     }
+    Ok(joints)
+}
 
+/// A joint's motion, with its limits checked.
+fn joint_kind(element: &str, j: &urdf_rs::Joint) -> Result<JointKind, ModelError> {
+    Ok(match j.joint_type {
+        urdf_rs::JointType::Revolute => {
+            let (lo, hi) = (j.limit.lower, j.limit.upper);
+            check_finite(element, &[lo, hi])?;
+            // urdf_rs fills a missing <limit> with 0..0; no range means no limit to use.
+            let limits = if lo < hi {
+                Some((lo, hi))
+            } else if lo == hi {
+                None
+            } else {
+                return Err(bad(element, "limit lower is above upper"));
+            };
+            JointKind::Revolute { limits }
+        }
+        urdf_rs::JointType::Continuous => JointKind::Revolute { limits: None },
+        urdf_rs::JointType::Prismatic => {
+            let (lo, hi) = (j.limit.lower, j.limit.upper);
+            check_finite(element, &[lo, hi])?;
+            if !(lo < hi) {
+                return Err(bad(element, "a prismatic joint needs <limit lower < upper> to bound its travel"));
+            }
+            JointKind::Prismatic { limits: (lo, hi) }
+        }
+        urdf_rs::JointType::Fixed => JointKind::Fixed,
+        urdf_rs::JointType::Spherical => JointKind::Spherical,
+        urdf_rs::JointType::Floating => JointKind::Floating,
+        ref other => return Err(ModelError::UnsupportedJoint { joint: j.name.clone(), kind: format!("{other:?}").to_lowercase() }),
+    })
+}
+
+/// The one root link, the tree checked: one link without a parent joint, and every link
+/// reaching it.
+fn find_root(links: &[Link], joints: &[Joint]) -> Result<usize, ModelError> {
     let roots: Vec<usize> = (0..links.len()).filter(|&i| links[i].parent_joint.is_none()).collect();
     let root = match roots.as_slice() {
         [r] => *r,
@@ -169,66 +202,70 @@ pub fn parse(xml: &str) -> Result<Mechanism, ModelError> {
             return Err(ModelError::NotATree(format!("link '{}' is on a cycle of joints", links[start].name)));
         }
     }
+    Ok(root)
+}
 
-    let mut loops = Vec::new();
-    for el in robot_el.children().filter(|n| n.has_tag_name("loop")) {
-        let name = el.attribute("name").unwrap_or("").to_string();
-        let element = format!("loop '{name}'");
-        if name.is_empty() {
-            return Err(bad("a <loop> element", "it has no name"));
-        }
-        if !names.insert(name.clone()) {
-            return Err(ModelError::Duplicate(name));
-        }
-        let side = |tag: &str| -> Result<(usize, Isometry3<f64>, [f64; 3]), ModelError> {
-            let s = el.children().find(|n| n.has_tag_name(tag)).ok_or_else(|| bad(&element, &format!("missing <{tag} link=\"…\">")))?;
-            let link = s.attribute("link").ok_or_else(|| bad(&element, &format!("<{tag}> has no link attribute")))?;
-            let link = find(&element, link)?;
-            let origin = s.children().find(|n| n.has_tag_name("origin"));
-            let xyz = triple(&element, origin.and_then(|o| o.attribute("xyz")), [0.0; 3])?;
-            let rpy = triple(&element, origin.and_then(|o| o.attribute("rpy")), [0.0; 3])?;
-            Ok((link, pose(&element, xyz, rpy)?, rpy))
-        };
-        let (predecessor, predecessor_origin, predecessor_rpy) = side("predecessor")?;
-        let (successor, successor_origin, successor_rpy) = side("successor")?;
-        let axis = unit_axis(&element, triple(&element, el.children().find(|n| n.has_tag_name("axis")).and_then(|a| a.attribute("xyz")), [1.0, 0.0, 0.0])?)?;
-        let limit = el.children().find(|n| n.has_tag_name("limit"));
-        let number = |attr: &str| -> Result<Option<f64>, ModelError> {
-            match limit.and_then(|l| l.attribute(attr)) {
-                None => Ok(None),
-                Some(t) => t.trim().parse::<f64>().ok().filter(|v| v.is_finite()).map(Some).ok_or_else(|| bad(&element, &format!("limit {attr}='{t}' is not a finite number"))),
-            }
-        };
-        let kind = match el.attribute("type").unwrap_or("revolute") {
-            "revolute" | "continuous" => JointKind::Revolute { limits: number("lower")?.zip(number("upper")?).filter(|(l, u)| l < u) },
-            "prismatic" => match number("lower")?.zip(number("upper")?) {
-                Some((l, u)) if l < u => JointKind::Prismatic { limits: (l, u) },
-                _ => return Err(bad(&element, "a prismatic loop needs <limit lower < upper>")),
-            },
-            "spherical" => JointKind::Spherical,
-            "fixed" => JointKind::Fixed,
-            "universal" => JointKind::Revolute { limits: None },
-            "cylindrical" => match number("lower")?.zip(number("upper")?) {
-                Some((l, u)) if l < u => JointKind::Prismatic { limits: (l, u) },
-                _ => return Err(bad(&element, "a cylindrical loop needs <limit lower < upper> to bound its travel")),
-            },
-            other => return Err(ModelError::UnsupportedJoint { joint: name, kind: other.into() }),
-        };
-        let compound = match el.attribute("type") {
-            Some("universal") => {
-                let a2 = el.children().find(|n| n.has_tag_name("axis2")).ok_or_else(|| bad(&element, "a universal loop needs <axis2 xyz=\"…\"/>, its second axis in the successor's closure frame"))?;
-                let axis2 = unit_axis(&element, triple(&element, a2.attribute("xyz"), [0.0; 3])?)?;
-                Some(Compound::Universal { axis2 })
-            }
-            Some("cylindrical") => Some(Compound::Cylindrical),
-            _ => None,
-        };
-        if predecessor == successor {
-            return Err(bad(&element, "predecessor and successor are the same link"));
-        }
-        loops.push(LoopClosure { name, kind, predecessor, predecessor_origin, predecessor_rpy, successor, successor_origin, successor_rpy, axis, compound });
+/// One `<loop>` element (see the module doc); its name goes into `names`.
+fn read_loop(el: roxmltree::Node<'_, '_>, index: &LinkIndex, names: &mut HashSet<String>) -> Result<LoopClosure, ModelError> {
+    let name = el.attribute("name").unwrap_or("").to_string();
+    let element = format!("loop '{name}'");
+    if name.is_empty() {
+        return Err(bad("a <loop> element", "it has no name"));
     }
+    if !names.insert(name.clone()) {
+        return Err(ModelError::Duplicate(name));
+    }
+    let side = |tag: &str| -> Result<(usize, Isometry3<f64>, [f64; 3]), ModelError> {
+        let s = el.children().find(|n| n.has_tag_name(tag)).ok_or_else(|| bad(&element, &format!("missing <{tag} link=\"…\">")))?;
+        let link = s.attribute("link").ok_or_else(|| bad(&element, &format!("<{tag}> has no link attribute")))?;
+        let link = find(index, &element, link)?;
+        let origin = s.children().find(|n| n.has_tag_name("origin"));
+        let xyz = triple(&element, origin.and_then(|o| o.attribute("xyz")), [0.0; 3])?;
+        let rpy = triple(&element, origin.and_then(|o| o.attribute("rpy")), [0.0; 3])?;
+        Ok((link, pose(&element, xyz, rpy)?, rpy))
+    };
+    let (predecessor, predecessor_origin, predecessor_rpy) = side("predecessor")?;
+    let (successor, successor_origin, successor_rpy) = side("successor")?;
+    let axis = unit_axis(&element, triple(&element, el.children().find(|n| n.has_tag_name("axis")).and_then(|a| a.attribute("xyz")), [1.0, 0.0, 0.0])?)?;
+    let limit = el.children().find(|n| n.has_tag_name("limit"));
+    let number = |attr: &str| -> Result<Option<f64>, ModelError> {
+        match limit.and_then(|l| l.attribute(attr)) {
+            None => Ok(None),
+            Some(t) => t.trim().parse::<f64>().ok().filter(|v| v.is_finite()).map(Some).ok_or_else(|| bad(&element, &format!("limit {attr}='{t}' is not a finite number"))),
+        }
+    };
+    let kind = match el.attribute("type").unwrap_or("revolute") {
+        "revolute" | "continuous" => JointKind::Revolute { limits: number("lower")?.zip(number("upper")?).filter(|(l, u)| l < u) },
+        "prismatic" => match number("lower")?.zip(number("upper")?) {
+            Some((l, u)) if l < u => JointKind::Prismatic { limits: (l, u) },
+            _ => return Err(bad(&element, "a prismatic loop needs <limit lower < upper>")),
+        },
+        "spherical" => JointKind::Spherical,
+        "fixed" => JointKind::Fixed,
+        "universal" => JointKind::Revolute { limits: None },
+        "cylindrical" => match number("lower")?.zip(number("upper")?) {
+            Some((l, u)) if l < u => JointKind::Prismatic { limits: (l, u) },
+            _ => return Err(bad(&element, "a cylindrical loop needs <limit lower < upper> to bound its travel")),
+        },
+        other => return Err(ModelError::UnsupportedJoint { joint: name, kind: other.into() }),
+    };
+    let compound = match el.attribute("type") {
+        Some("universal") => {
+            let a2 = el.children().find(|n| n.has_tag_name("axis2")).ok_or_else(|| bad(&element, "a universal loop needs <axis2 xyz=\"…\"/>, its second axis in the successor's closure frame"))?;
+            let axis2 = unit_axis(&element, triple(&element, a2.attribute("xyz"), [0.0; 3])?)?;
+            Some(Compound::Universal { axis2 })
+        }
+        Some("cylindrical") => Some(Compound::Cylindrical),
+        _ => None,
+    };
+    if predecessor == successor {
+        return Err(bad(&element, "predecessor and successor are the same link"));
+    }
+    Ok(LoopClosure { name, kind, predecessor, predecessor_origin, predecessor_rpy, successor, successor_origin, successor_rpy, axis, compound })
+}
 
+/// The joints named by `<transmission>` elements, each once, in file order.
+fn transmission_joints(robot_el: roxmltree::Node<'_, '_>) -> Vec<String> {
     let mut transmission_joints: Vec<String> = Vec::new();
     for t in robot_el.children().filter(|n| n.has_tag_name("transmission")) {
         for j in t.children().filter(|n| n.has_tag_name("joint")) {
@@ -239,7 +276,7 @@ pub fn parse(xml: &str) -> Result<Mechanism, ModelError> {
             }
         }
     }
-    Ok(Mechanism { name: robot.name.clone(), links, joints, loops, root, transmission_joints })
+    transmission_joints
 }
 
 /// A `<collision>` element, with its sizes checked.
