@@ -33,6 +33,10 @@ use crate::kernel::interval::point;
 use crate::model::{Joint, JointKind, Link, Mechanism};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Unit, Vector3};
 
+mod wrist;
+
+use self::wrist::{nearest_on_first, wrist, Wrist};
+
 /// What the user asked for (all optional).
 #[derive(Clone, Debug, Default)]
 pub struct ChainSpec {
@@ -116,92 +120,20 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec, snap_tolerance: f64) -> Resu
         return Err(Manip3rError::NotSerial(format!("it has {} loop closures", m.loops.len())));
     }
     let tol = if spec.length_tolerance > 0.0 { spec.length_tolerance } else { LENGTH_TOLERANCE };
-    let link = |name: &str, what: &str| m.link(name).ok_or_else(|| Manip3rError::Selection(format!("{what} '{name}' is not a link of the file")));
     let base = match &spec.base {
-        Some(b) => link(b, "--base")?,
+        Some(b) => find_link(m, b, "--base")?,
         None => floating_root(m).unwrap_or(m.root),
     };
-    for (name, value) in &spec.locks {
-        let j = m.joint(name).ok_or_else(|| Manip3rError::Selection(format!("--lock: '{name}' is not a joint of the file")))?;
-        let JointKind::Revolute { limits } = m.joints[j].kind else {
-            return Err(Manip3rError::Selection(format!("--lock: joint '{name}' is not revolute")));
-        };
-        if !value.is_finite() {
-            return Err(Manip3rError::Selection(format!("--lock: the value for '{name}' is not a finite number")));
-        }
-        if let Some((lo, hi)) = limits {
-            if *value < lo || *value > hi {
-                return Err(Manip3rError::Selection(format!("--lock: {name}={value} is outside its limits [{lo}, {hi}]")));
-            }
-        }
-    }
-    let locked = |j: usize| spec.locks.iter().find(|(n, _)| *n == m.joints[j].name).map(|(_, v)| *v);
-    let moving = |j: usize| matches!(m.joints[j].kind, JointKind::Revolute { .. }) && locked(j).is_none();
-    // Joints from base down to `l`, or None when `l` is not below base.
-    let below = |l: usize| -> Option<Vec<usize>> {
-        let full = m.path_to(l);
-        if base == m.root {
-            return Some(full);
-        }
-        if l == base {
-            return Some(Vec::new());
-        }
-        full.iter().position(|&j| m.joints[j].parent == base).map(|k| full[k..].to_vec())
-    };
+    check_locks(m, spec)?;
+    let rq = Request { m, spec, base };
     let tip = match (&spec.tip, &spec.tip_point) {
-        (Some(t), _) => link(t, "--tip")?,
-        (None, Some((l, _))) => link(l, "--tip-point")?,
-        (None, None) => {
-            // The end link of the longest revolute path: the child of a moving revolute joint
-            // with the most moving revolute joints above it (side links on fixed joints lose).
-            // Prismatic joints count as moving here, so that a chain with one is refused by
-            // name below rather than cut short before it.
-            let movable = |j: usize| moving(j) || matches!(m.joints[j].kind, JointKind::Prismatic { .. });
-            let count = |l: usize| below(l).map(|p| p.iter().filter(|&&j| movable(j)).count());
-            let best = (0..m.links.len()).filter_map(count).max().unwrap_or(0);
-            let ends: Vec<usize> = (0..m.links.len())
-                .filter(|&l| m.links[l].parent_joint.is_some_and(&movable) && count(l) == Some(best))
-                .collect();
-            match ends.as_slice() {
-                // Down a single line of fixed joints to its end link (a 3R file's `tool`);
-                // where it branches (tool0 beside flange) the branching link ends the chain.
-                [t] => {
-                    let mut at = *t;
-                    loop {
-                        let kids: Vec<usize> = m.joints.iter().filter(|j| j.parent == at).map(|j| j.child).collect();
-                        match kids.as_slice() {
-                            [c] if matches!(m.joints[m.links[*c].parent_joint.expect("child")].kind, JointKind::Fixed) => at = *c,
-                            _ => break at,
-                        }
-                    }
-                }
-                [] => return Err(Manip3rError::NotThreeR(format!("no revolute joint below link '{}'", m.links[base].name))),
-                many => {
-                    let names: Vec<&str> = many.iter().map(|&l| m.links[l].name.as_str()).collect();
-                    return Err(Manip3rError::Selection(format!("several end links with {best} revolute joints ({}): choose one with --tip", names.join(", "))));
-                }
-            }
-        }
+        (Some(t), _) => find_link(m, t, "--tip")?,
+        (None, Some((l, _))) => find_link(m, l, "--tip-point")?,
+        (None, None) => rq.default_tip()?,
     };
-    let path = below(tip).ok_or_else(|| Manip3rError::Selection(format!("tip '{}' is not below base '{}'", m.links[tip].name, m.links[base].name)))?;
-    for (name, _) in &spec.locks {
-        if !path.iter().any(|&j| m.joints[j].name == *name) {
-            return Err(Manip3rError::Selection(format!("--lock: joint '{name}' is not on the chain from '{}' to '{}'", m.links[base].name, m.links[tip].name)));
-        }
-    }
-    for &j in &path {
-        let joint = &m.joints[j];
-        match joint.kind {
-            JointKind::Revolute { .. } if joint.mimic.is_some() && locked(j).is_none() => {
-                let leader = joint.mimic.as_ref().map_or("", |x| x.joint.as_str());
-                return Err(Manip3rError::NotThreeR(format!("joint '{}' follows '{leader}' through <mimic>, which the 3R analyses do not model yet", joint.name)));
-            }
-            JointKind::Revolute { .. } | JointKind::Fixed => {}
-            JointKind::Prismatic { .. } => return Err(Manip3rError::NotThreeR(format!("joint '{}' is prismatic", joint.name))),
-            JointKind::Spherical | JointKind::Floating => return Err(Manip3rError::NotThreeR(format!("joint '{}' is not revolute", joint.name))),
-        }
-    }
-    let revolute: Vec<usize> = path.iter().copied().filter(|&j| moving(j)).collect();
+    let path = rq.below(tip).ok_or_else(|| Manip3rError::Selection(format!("tip '{}' is not below base '{}'", m.links[tip].name, m.links[base].name)))?;
+    rq.check_path(&path, tip)?;
+    let revolute: Vec<usize> = path.iter().copied().filter(|&j| rq.moving(j)).collect();
     let n = revolute.len();
     let (b, t) = (m.links[base].name.clone(), m.links[tip].name.clone());
     if n < 3 {
@@ -214,22 +146,13 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec, snap_tolerance: f64) -> Resu
     let mut frames = Vec::new(); // (joint, its frame in l3's frame, child's frame in l3's frame)
     for &j in &path[third + 1..] {
         let frame = acc.then(&Pose::from_origin(&m.joints[j], 0.0));
-        acc = match locked(j) {
+        acc = match rq.locked(j) {
             Some(v) => frame.then(&rotation(&m.joints[j], v)),
             None => frame,
         };
         frames.push((j, frame, acc));
     }
-    let axis_line = |f: &Pose, j: usize| -> (V3, V3) { (f.t, apply(&f.r, &axis3(&m.joints[j]))) };
-    let later: Vec<(usize, Pose)> = frames.iter().filter(|(j, _, _)| moving(*j)).map(|(j, f, _)| (*j, *f)).collect();
-    // Upper bound of the largest distance of `p` from the later axes (unit vectors).
-    let miss = |p: &V3| -> f64 {
-        later.iter().map(|(j, f)| {
-            let (o, d) = axis_line(f, *j);
-            let c = cross(&sub(p, &o), &d);
-            dot(&c, &c).sup().max(0.0).sqrt()
-        }).fold(0.0, f64::max)
-    };
+    let later: Vec<(usize, Pose)> = frames.iter().filter(|(j, _, _)| rq.moving(*j)).map(|(j, f, _)| (*j, *f)).collect();
     let names = |js: &[usize]| js.iter().map(|&j| m.joints[j].name.clone()).collect::<Vec<_>>();
     let wrist_joints = names(&revolute[3..]);
     let joints: [String; 3] = [0, 1, 2].map(|k| m.joints[revolute[k]].name.clone());
@@ -249,45 +172,274 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec, snap_tolerance: f64) -> Resu
         scope: Scope { subject: String::new(), stands_for_arm: false, not_answered: None },
     };
     let lock_text = if spec.locks.is_empty() { String::new() } else { format!(" with {} locked", spec.locks.iter().map(|(n, v)| format!("{n}={v}")).collect::<Vec<_>>().join(", ")) };
+    let picked = Picked { rq: &rq, tol, tip, revolute: &revolute, l3, frames: &frames, later: &later, names: (&b, &t), joints: &joints, wrist_joints: &wrist_joints, lock_text: &lock_text };
     // Where the point hangs (None: keep the whole path, the tip's origin being the point).
     let point_in_l3: Option<Attach> = if let Some((pl, xyz)) = &spec.tip_point {
-        let l = link(pl, "--tip-point")?;
+        picked.given_point(pl, xyz, &mut choice)?
+    } else if n == 3 {
+        choice.reason = format!("chain {b} -> {t}{lock_text}: three revolute joints; the point is the origin of '{t}'");
+        None
+    } else if n == 6 {
+        Some(picked.six_joint_point(snap_tolerance, &mut choice))
+    } else {
+        let hint = if n == 7 { format!("lock one with --lock JOINT=VALUE (e.g. --lock {}=0)", m.joints[revolute[2]].name) } else { "cut it with --base/--tip or give --tip-point LINK@X,Y,Z".into() };
+        return Err(Manip3rError::NotThreeR(format!("the chain from '{b}' to '{t}' has {n} revolute joints{lock_text}: {hint}")));
+    };
+    let (links, joints_out) = rq.reduced(&path, third, point_in_l3);
+    let on_path: Vec<usize> = path.iter().copied().filter(|&j| matches!(m.joints[j].kind, JointKind::Revolute { .. })).collect();
+    let numbers: Vec<usize> = revolute[..3].iter().map(|j| 1 + on_path.iter().position(|k| k == j).expect("invariant: on the path")).collect();
+    choice.scope = scope(&m.name, &choice, &numbers, on_path.len(), spec.tip_point.is_some(), &lock_text);
+    Ok((Mechanism { name: m.name.clone(), links, joints: joints_out, loops: Vec::new(), root: 0, transmission_joints: Vec::new() }, choice))
+}
+
+/// The link `name` of `m`, which the option `what` named.
+fn find_link(m: &Mechanism, name: &str, what: &str) -> Result<usize, Manip3rError> {
+    m.link(name).ok_or_else(|| Manip3rError::Selection(format!("{what} '{name}' is not a link of the file")))
+}
+
+/// Every `--lock` names a revolute joint of the file, with a finite value within its limits.
+fn check_locks(m: &Mechanism, spec: &ChainSpec) -> Result<(), Manip3rError> {
+    for (name, value) in &spec.locks {
+        let j = m.joint(name).ok_or_else(|| Manip3rError::Selection(format!("--lock: '{name}' is not a joint of the file")))?;
+        let JointKind::Revolute { limits } = m.joints[j].kind else {
+            return Err(Manip3rError::Selection(format!("--lock: joint '{name}' is not revolute")));
+        };
+        if !value.is_finite() {
+            return Err(Manip3rError::Selection(format!("--lock: the value for '{name}' is not a finite number")));
+        }
+        if let Some((lo, hi)) = limits {
+            if *value < lo || *value > hi {
+                return Err(Manip3rError::Selection(format!("--lock: {name}={value} is outside its limits [{lo}, {hi}]")));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The arm, the request and the base: what every step of `positioning` asks of them.
+struct Request<'a> {
+    m: &'a Mechanism,
+    spec: &'a ChainSpec,
+    base: usize,
+}
+
+impl Request<'_> {
+    /// The value joint `j` is locked at, if any.
+    fn locked(&self, j: usize) -> Option<f64> {
+        self.spec.locks.iter().find(|(n, _)| *n == self.m.joints[j].name).map(|(_, v)| *v)
+    }
+
+    /// A revolute joint that is not locked.
+    fn moving(&self, j: usize) -> bool {
+        matches!(self.m.joints[j].kind, JointKind::Revolute { .. }) && self.locked(j).is_none()
+    }
+
+    /// Joints from base down to `l`, or None when `l` is not below base.
+    fn below(&self, l: usize) -> Option<Vec<usize>> {
+        let m = self.m;
+        let full = m.path_to(l);
+        if self.base == m.root {
+            return Some(full);
+        }
+        if l == self.base {
+            return Some(Vec::new());
+        }
+        full.iter().position(|&j| m.joints[j].parent == self.base).map(|k| full[k..].to_vec())
+    }
+
+    /// The end link of the longest revolute path: the child of a moving revolute joint with the
+    /// most moving revolute joints above it (side links on fixed joints lose). Prismatic joints
+    /// count as moving here, so that a chain with one is refused by name later rather than cut
+    /// short before it.
+    fn default_tip(&self) -> Result<usize, Manip3rError> {
+        let m = self.m;
+        let movable = |j: usize| self.moving(j) || matches!(m.joints[j].kind, JointKind::Prismatic { .. });
+        let count = |l: usize| self.below(l).map(|p| p.iter().filter(|&&j| movable(j)).count());
+        let best = (0..m.links.len()).filter_map(count).max().unwrap_or(0);
+        let ends: Vec<usize> = (0..m.links.len())
+            .filter(|&l| m.links[l].parent_joint.is_some_and(&movable) && count(l) == Some(best))
+            .collect();
+        match ends.as_slice() {
+            // Down a single line of fixed joints to its end link (a 3R file's `tool`);
+            // where it branches (tool0 beside flange) the branching link ends the chain.
+            [t] => {
+                let mut at = *t;
+                Ok(loop {
+                    let kids: Vec<usize> = m.joints.iter().filter(|j| j.parent == at).map(|j| j.child).collect();
+                    match kids.as_slice() {
+                        [c] if matches!(m.joints[m.links[*c].parent_joint.expect("child")].kind, JointKind::Fixed) => at = *c,
+                        _ => break at,
+                    }
+                })
+            }
+            [] => Err(Manip3rError::NotThreeR(format!("no revolute joint below link '{}'", m.links[self.base].name))),
+            many => {
+                let names: Vec<&str> = many.iter().map(|&l| m.links[l].name.as_str()).collect();
+                Err(Manip3rError::Selection(format!("several end links with {best} revolute joints ({}): choose one with --tip", names.join(", "))))
+            }
+        }
+    }
+
+    /// The locks lie on `path` (base to `tip`), and its joints are revolute (not following
+    /// another through `<mimic>`, unless locked) or fixed.
+    fn check_path(&self, path: &[usize], tip: usize) -> Result<(), Manip3rError> {
+        let m = self.m;
+        for (name, _) in &self.spec.locks {
+            if !path.iter().any(|&j| m.joints[j].name == *name) {
+                return Err(Manip3rError::Selection(format!("--lock: joint '{name}' is not on the chain from '{}' to '{}'", m.links[self.base].name, m.links[tip].name)));
+            }
+        }
+        for &j in path {
+            let joint = &m.joints[j];
+            match joint.kind {
+                JointKind::Revolute { .. } if joint.mimic.is_some() && self.locked(j).is_none() => {
+                    let leader = joint.mimic.as_ref().map_or("", |x| x.joint.as_str());
+                    return Err(Manip3rError::NotThreeR(format!("joint '{}' follows '{leader}' through <mimic>, which the 3R analyses do not model yet", joint.name)));
+                }
+                JointKind::Revolute { .. } | JointKind::Fixed => {}
+                JointKind::Prismatic { .. } => return Err(Manip3rError::NotThreeR(format!("joint '{}' is prismatic", joint.name))),
+                JointKind::Spherical | JointKind::Floating => return Err(Manip3rError::NotThreeR(format!("joint '{}' is not revolute", joint.name))),
+            }
+        }
+        Ok(())
+    }
+
+    /// The reduced mechanism's links and joints: base, the links down to joint 3's child (or the
+    /// whole path when the tip's origin is the point), locked joints made fixed, and a virtual
+    /// tip link at the point.
+    fn reduced(&self, path: &[usize], third: usize, point_in_l3: Option<Attach>) -> (Vec<Link>, Vec<Joint>) {
+        let m = self.m;
+        let base = self.base;
+        let keep: Vec<usize> = if matches!(point_in_l3, Some(Attach::UnderJoint3(..))) { path[..=third].to_vec() } else { path.to_vec() };
+        let mut links = vec![Link { name: m.links[base].name.clone(), parent_joint: None, collisions: m.links[base].collisions.clone() }];
+        let mut joints_out: Vec<Joint> = Vec::new();
+        for &j in &keep {
+            let mut joint = m.joints[j].clone();
+            joint.parent = links.len() - 1;
+            joint.child = links.len();
+            if let Some(v) = self.locked(j) {
+                joint.origin *= Isometry3::from_parts(Translation3::identity(), UnitQuaternion::from_axis_angle(&Unit::new_normalize(joint.axis), v));
+                let (r, p, y) = joint.origin.rotation.euler_angles();
+                joint.rpy = [r, p, y];
+                // A quarter turn about a coordinate axis keeps an exact frame exact.
+                joint.exact_rotation = match (joint.exact_rotation, crate::model::rounding::exact_turn(&joint.axis, v)) {
+                    (Some(frame), Some(turn)) => Some(crate::model::rounding::compose(&frame, &turn)),
+                    (frame, _) if v == 0.0 => frame,
+                    _ => None,
+                };
+                joint.kind = JointKind::Fixed;
+                joint.mimic = None;
+            }
+            let child = &m.links[m.joints[j].child];
+            links.push(Link { name: child.name.clone(), parent_joint: Some(joints_out.len()), collisions: child.collisions.clone() });
+            joints_out.push(joint);
+        }
+        if let Some(Attach::UnderJoint3(p, mut name) | Attach::UnderTip(p, mut name)) = point_in_l3 {
+            while m.link(&name).is_some() || m.joint(&name).is_some() {
+                name.push('_');
+            }
+            let mid = p.map(|x| x.mid());
+            let parent = links.len() - 1;
+            joints_out.push(Joint {
+                name: format!("{name}_joint"),
+                kind: JointKind::Fixed,
+                parent,
+                child: links.len(),
+                origin: Isometry3::translation(mid[0], mid[1], mid[2]),
+                rpy: [0.0; 3],
+                axis: Vector3::x(),
+                mimic: None,
+                exact_rotation: Some([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]),
+            });
+            links.push(Link { name, parent_joint: Some(joints_out.len() - 1), collisions: Vec::new() });
+        }
+        (links, joints_out)
+    }
+}
+
+/// The chain picked (base to tip, its revolute joints, the frames after joint 3), with what
+/// choosing the analysed point reads from it.
+struct Picked<'a> {
+    rq: &'a Request<'a>,
+    /// The length tolerance (metres).
+    tol: f64,
+    tip: usize,
+    revolute: &'a [usize],
+    /// Joint 3's child.
+    l3: usize,
+    /// Per joint after joint 3: (joint, its frame in l3's frame, child's frame in l3's frame).
+    frames: &'a [(usize, Pose, Pose)],
+    /// The moving ones among them, with their frames.
+    later: &'a [(usize, Pose)],
+    /// Base and tip link names.
+    names: (&'a str, &'a str),
+    joints: &'a [String; 3],
+    wrist_joints: &'a [String],
+    lock_text: &'a str,
+}
+
+impl Picked<'_> {
+    /// Joint `j`'s axis in l3's frame, as (point, direction), from its frame `f`.
+    fn axis_line(&self, f: &Pose, j: usize) -> (V3, V3) {
+        (f.t, apply(&f.r, &axis3(&self.rq.m.joints[j])))
+    }
+
+    /// Upper bound of the largest distance of `p` from the later axes (unit vectors).
+    fn miss(&self, p: &V3) -> f64 {
+        self.later.iter().map(|(j, f)| {
+            let (o, d) = self.axis_line(f, *j);
+            let c = cross(&sub(p, &o), &d);
+            dot(&c, &c).sup().max(0.0).sqrt()
+        }).fold(0.0, f64::max)
+    }
+
+    /// The point given by `--tip-point` (`pl`, `xyz`), accepted when the later axes pass
+    /// through it; `None` when it is the tip's origin on a 3R chain.
+    fn given_point(&self, pl: &str, xyz: &[f64; 3], choice: &mut Choice) -> Result<Option<Attach>, Manip3rError> {
+        let m = self.rq.m;
+        let (b, t) = self.names;
+        let (n, lock_text, joints) = (self.revolute.len(), self.lock_text, self.joints);
+        let l = find_link(m, pl, "--tip-point")?;
         if !xyz.iter().all(|v| v.is_finite()) {
             return Err(Manip3rError::Selection("--tip-point: coordinates must be finite".into()));
         }
         let local: V3 = xyz.map(point);
-        let in_l3 = if l == l3 {
+        let in_l3 = if l == self.l3 {
             local
-        } else if let Some((_, _, f)) = frames.iter().find(|(j, _, _)| m.joints[*j].child == l) {
+        } else if let Some((_, _, f)) = self.frames.iter().find(|(j, _, _)| m.joints[*j].child == l) {
             add(&apply(&f.r, &local), &f.t)
         } else {
             return Err(Manip3rError::Selection(format!("--tip-point: link '{pl}' is not on the chain after joint '{}' (joints 1-3 must move it)", joints[2])));
         };
-        let mv = miss(&in_l3);
-        if mv > tol {
-            return Err(Manip3rError::Selection(format!("--tip-point: the point is {mv:.3e} m off the axes of {}, which would move it", wrist_joints.join(", "))));
+        let mv = self.miss(&in_l3);
+        if mv > self.tol {
+            return Err(Manip3rError::Selection(format!("--tip-point: the point is {mv:.3e} m off the axes of {}, which would move it", self.wrist_joints.join(", "))));
         }
-        choice.point_link = pl.clone();
+        choice.point_link = pl.to_string();
         choice.point = *xyz;
         choice.wrist_miss = mv;
         choice.reason = format!("chain {b} -> {t}{lock_text}, {n} revolute joints; the point {xyz:?} of link '{pl}' given by --tip-point, moved by {} only", joints.join(", "));
         let name = format!("{pl}@{},{},{}", xyz[0], xyz[1], xyz[2]);
-        if n == 3 && l == tip {
+        Ok(if n == 3 && l == self.tip {
             // The whole path is kept (its links carry collision shapes); the point hangs
             // under the tip at its coordinates there, unless it is the tip's origin.
             (xyz != &[0.0; 3]).then_some(Attach::UnderTip(local, name))
         } else {
             Some(Attach::UnderJoint3(in_l3, name))
-        }
-    } else if n == 3 {
-        choice.reason = format!("chain {b} -> {t}{lock_text}: three revolute joints; the point is the origin of '{t}'");
-        None
-    } else if n == 6 {
-        let axes: [(V3, V3); 3] = [0, 1, 2].map(|k| axis_line(&later[k].1, later[k].0));
+        })
+    }
+
+    /// The point of a six-joint chain: the wrist centre when the wrist is spherical, else a
+    /// point of joint 3's child that joints 4-6 do not move.
+    fn six_joint_point(&self, snap_tolerance: f64, choice: &mut Choice) -> Attach {
+        let m = self.rq.m;
+        let (b, t) = self.names;
+        let (tol, later, lock_text, joints, wrist_joints) = (self.tol, self.later, self.lock_text, self.joints, self.wrist_joints);
+        let axes: [(V3, V3); 3] = [0, 1, 2].map(|k| self.axis_line(&later[k].1, later[k].0));
         // A turn of the snapping tolerance at a wrist frame moves an axis by that angle times
         // the frame's distance from the point: the axes "meet" within that much, and never
         // within less than the length tolerance.
-        let origins: Vec<V3> = frames.iter().take_while(|(j, _, _)| *j != later[2].0).map(|(_, f, _)| f.t).chain([later[2].1.t]).collect();
+        let origins: Vec<V3> = self.frames.iter().take_while(|(j, _, _)| *j != later[2].0).map(|(_, f, _)| f.t).chain([later[2].1.t]).collect();
         let wrist_tol = |c: &V3| {
             let lever: f64 = origins.iter().map(|o| { let d = sub(c, o); dot(&d, &d).sup().max(0.0).sqrt() }).sum();
             tol.max(snap_tolerance * lever)
@@ -295,7 +447,7 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec, snap_tolerance: f64) -> Resu
         match wrist(&axes, &wrist_tol) {
             Wrist::Spherical { centre, miss: mv } => {
                 let x = centre.map(|v| v.mid());
-                choice.point_link = m.links[l3].name.clone();
+                choice.point_link = m.links[self.l3].name.clone();
                 choice.point = x;
                 choice.wrist_miss = mv;
                 choice.spherical_wrist = Some(true);
@@ -303,7 +455,7 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec, snap_tolerance: f64) -> Resu
                     "chain {b} -> {t}{lock_text}: 6 revolute joints with a spherical wrist (axes of {} meet within {mv:.1e} m); joints {} position the wrist centre {:?} in '{}'",
                     wrist_joints.join(", "), joints.join(", "), choice.point, choice.point_link
                 );
-                Some(Attach::UnderJoint3(x.map(point), "wrist_centre".into()))
+                Attach::UnderJoint3(x.map(point), "wrist_centre".into())
             }
             test => {
                 choice.spherical_wrist = matches!(test, Wrist::Apart(_)).then_some(false);
@@ -316,7 +468,7 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec, snap_tolerance: f64) -> Resu
                 // taken when it is off axis 3, else the point of axis 4 nearest axis 5 (where
                 // they meet, when they do), a point of the wrist fixed by the geometry.
                 let (o4, d4) = axes[0];
-                let a3 = axis3(&m.joints[revolute[2]]);
+                let a3 = axis3(&m.joints[self.revolute[2]]);
                 let off_axis3 = |p: &V3| {
                     let c = cross(p, &a3);
                     dot(&c, &c).inf() > tol * tol * dot(&a3, &a3).sup()
@@ -327,7 +479,7 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec, snap_tolerance: f64) -> Resu
                     Some(f) if !off_axis3(&o4) && off_axis3(&f) => (f, format!("the point of the axis of '{}' nearest the axis of '{}'", wrist_joints[0], wrist_joints[1])),
                     _ => (o4, format!("the origin of joint '{}'", wrist_joints[0])),
                 };
-                choice.point_link = m.links[l3].name.clone();
+                choice.point_link = m.links[self.l3].name.clone();
                 choice.point = mid(&p);
                 // A point of joint 4's parent link: joints 4-6 do not move it.
                 choice.wrist_miss = 0.0;
@@ -343,62 +495,10 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec, snap_tolerance: f64) -> Resu
                     _ => None,
                 };
                 let name = if what.starts_with("the origin") { format!("{}_origin", wrist_joints[0]) } else { "wrist_point".into() };
-                Some(Attach::UnderJoint3(p, name))
+                Attach::UnderJoint3(p, name)
             }
         }
-    } else {
-        let hint = if n == 7 { format!("lock one with --lock JOINT=VALUE (e.g. --lock {}=0)", m.joints[revolute[2]].name) } else { "cut it with --base/--tip or give --tip-point LINK@X,Y,Z".into() };
-        return Err(Manip3rError::NotThreeR(format!("the chain from '{b}' to '{t}' has {n} revolute joints{lock_text}: {hint}")));
-    };
-    // The reduced mechanism: base, the links down to joint 3's child (or the whole path when the
-    // tip's origin is the point), and a virtual tip link at the point.
-    let keep: Vec<usize> = if matches!(point_in_l3, Some(Attach::UnderJoint3(..))) { path[..=third].to_vec() } else { path.clone() };
-    let mut links = vec![Link { name: m.links[base].name.clone(), parent_joint: None, collisions: m.links[base].collisions.clone() }];
-    let mut joints_out: Vec<Joint> = Vec::new();
-    for &j in &keep {
-        let mut joint = m.joints[j].clone();
-        joint.parent = links.len() - 1;
-        joint.child = links.len();
-        if let Some(v) = locked(j) {
-            joint.origin *= Isometry3::from_parts(Translation3::identity(), UnitQuaternion::from_axis_angle(&Unit::new_normalize(joint.axis), v));
-            let (r, p, y) = joint.origin.rotation.euler_angles();
-            joint.rpy = [r, p, y];
-            // A quarter turn about a coordinate axis keeps an exact frame exact.
-            joint.exact_rotation = match (joint.exact_rotation, crate::model::rounding::exact_turn(&joint.axis, v)) {
-                (Some(frame), Some(turn)) => Some(crate::model::rounding::compose(&frame, &turn)),
-                (frame, _) if v == 0.0 => frame,
-                _ => None,
-            };
-            joint.kind = JointKind::Fixed;
-            joint.mimic = None;
-        }
-        let child = &m.links[m.joints[j].child];
-        links.push(Link { name: child.name.clone(), parent_joint: Some(joints_out.len()), collisions: child.collisions.clone() });
-        joints_out.push(joint);
     }
-    if let Some(Attach::UnderJoint3(p, mut name) | Attach::UnderTip(p, mut name)) = point_in_l3 {
-        while m.link(&name).is_some() || m.joint(&name).is_some() {
-            name.push('_');
-        }
-        let mid = p.map(|x| x.mid());
-        let parent = links.len() - 1;
-        joints_out.push(Joint {
-            name: format!("{name}_joint"),
-            kind: JointKind::Fixed,
-            parent,
-            child: links.len(),
-            origin: Isometry3::translation(mid[0], mid[1], mid[2]),
-            rpy: [0.0; 3],
-            axis: Vector3::x(),
-            mimic: None,
-            exact_rotation: Some([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]),
-        });
-        links.push(Link { name, parent_joint: Some(joints_out.len() - 1), collisions: Vec::new() });
-    }
-    let on_path: Vec<usize> = path.iter().copied().filter(|&j| matches!(m.joints[j].kind, JointKind::Revolute { .. })).collect();
-    let numbers: Vec<usize> = revolute[..3].iter().map(|j| 1 + on_path.iter().position(|k| k == j).expect("invariant: on the path")).collect();
-    choice.scope = scope(&m.name, &choice, &numbers, on_path.len(), spec.tip_point.is_some(), &lock_text);
-    Ok((Mechanism { name: m.name.clone(), links, joints: joints_out, loops: Vec::new(), root: 0, transmission_joints: Vec::new() }, choice))
 }
 
 /// What a verdict on `choice` is about. `numbers` are the analysed joints' places (from 1) among
@@ -434,100 +534,6 @@ fn floating_root(m: &Mechanism) -> Option<usize> {
         (Some(j), None) if j.kind == JointKind::Floating => Some(j.child),
         _ => None,
     }
-}
-
-/// What the axes of the three wrist joints (at the wrist's zero, which suffices: a common point
-/// of the three lies on axes 4 and 5 and stays put as they turn) were proven to do.
-enum Wrist {
-    /// They pass within `miss` metres (at most the tolerance) of `centre`.
-    Spherical { centre: V3, miss: f64 },
-    /// No point lies within this tolerance (metres) of all three.
-    Apart(f64),
-    /// Neither could be proven.
-    Undecided,
-}
-
-/// The three-valued test of a spherical wrist on the stated geometry, in interval arithmetic.
-/// `tolerance` gives the allowed miss about a candidate point.
-///
-/// Meeting: the point nearest the three lines (least squares, in floating point) is a guess;
-/// the bound on its distance from each axis is what decides. Missing: for a pair of
-/// non-parallel axes, every point within `t` of both has its foot on the first at a parameter
-/// `s` where that foot is within `2t` of the second (a quadratic in `s`, solved in intervals);
-/// the box of those points, widened by `t`, is then proven farther than `t` from the third axis.
-/// Exactly parallel axes more than `2t` apart are apart outright.
-fn wrist(axes: &[(V3, V3); 3], tolerance: &dyn Fn(&V3) -> f64) -> Wrist {
-    let mid = |v: &V3| Vector3::from(v.map(|x| x.mid()));
-    let dist2 = |x: &V3, (o, u): &(V3, V3)| {
-        let c = cross(&sub(x, o), u);
-        dot(&c, &c) / dot(u, u)
-    };
-    // Least squares: sum over the axes of (I - u u^T) x = sum of (I - u u^T) o.
-    let (mut a, mut rhs) = (nalgebra::Matrix3::zeros(), Vector3::zeros());
-    for (o, u) in axes {
-        let (o, u) = (mid(o), mid(u).normalize());
-        let proj = nalgebra::Matrix3::identity() - u * u.transpose();
-        a += proj;
-        rhs += proj * o;
-    }
-    let mut fallback = f64::INFINITY;
-    if let Some(x) = a.try_inverse().map(|inv| inv * rhs) {
-        let centre: V3 = [x[0], x[1], x[2]].map(point);
-        let miss = axes.iter().map(|l| dist2(&centre, l).sup().max(0.0).sqrt()).fold(0.0, f64::max);
-        let t = tolerance(&centre);
-        if miss <= t {
-            return Wrist::Spherical { centre, miss };
-        }
-        fallback = t;
-    }
-    // The tolerance about any point that could be within it is the one about the guess (the
-    // lever barely changes over such distances); without a guess, the length floor.
-    let t = if fallback.is_finite() { fallback } else { tolerance(&axes[0].0) };
-    let ti = point(t);
-    for (i, j, k) in [(0, 1, 2), (1, 2, 0), (0, 2, 1)] {
-        let ((oi, ui), (oj, uj), lk) = (&axes[i], &axes[j], &axes[k]);
-        let b = cross(ui, uj);
-        let bb = dot(&b, &b);
-        let uu = dot(uj, uj);
-        if b.iter().all(|x| x.inf() == 0.0 && x.sup() == 0.0) {
-            // Exactly parallel: the distance of oi from axis j is their distance.
-            if dist2(oi, &(*oj, *uj)).inf() > (point(2.0) * ti).sqr().sup() {
-                return Wrist::Apart(t);
-            }
-            continue;
-        }
-        if bb.inf() <= 0.0 {
-            continue;
-        }
-        // |a + s b|^2 / |uj|^2 <= 4 t^2, with a = (oi - oj) x uj.
-        let av = cross(&sub(oi, oj), uj);
-        let (ab, aa) = (dot(&av, &b), dot(&av, &av));
-        let disc = ab.sqr() - bb * (aa - point(4.0) * ti.sqr() * uu);
-        if disc.sup() < 0.0 {
-            return Wrist::Apart(t);
-        }
-        let root = disc.sqrt();
-        let (lo, hi) = (((-ab) - root) / bb, ((-ab) + root) / bb);
-        let s = crate::kernel::interval::interval(lo.inf(), hi.sup());
-        let widen = crate::kernel::interval::interval(-t, t);
-        let region: V3 = [0, 1, 2].map(|c| oi[c] + s * ui[c] + widen);
-        if dist2(&region, lk).inf() > ti.sqr().sup() {
-            return Wrist::Apart(t);
-        }
-    }
-    Wrist::Undecided
-}
-
-/// The point of the first line nearest the second (floating point); `None` when parallel.
-fn nearest_on_first(p: &[f64; 3], u: &[f64; 3], q: &[f64; 3], v: &[f64; 3]) -> Option<[f64; 3]> {
-    let (p, u, q, v) = (Vector3::from(*p), Vector3::from(*u), Vector3::from(*q), Vector3::from(*v));
-    let w = p - q;
-    let (a, b, c, d, e) = (u.dot(&u), u.dot(&v), v.dot(&v), u.dot(&w), v.dot(&w));
-    let den = a * c - b * b;
-    (den.abs() > 1e-12 * a * c).then(|| {
-        let x = p + u * ((b * e - c * d) / den);
-        [x[0], x[1], x[2]]
-    })
 }
 
 /// Where the analysed point is attached in the reduced mechanism, with its link's name.
