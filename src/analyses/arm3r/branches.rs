@@ -59,6 +59,10 @@ use inari::Interval;
 
 pub use crate::kernel::interval::angle::{arg, wrap};
 
+mod attribution;
+
+pub use self::attribution::Attribution;
+
 fn unit(v: &V3) -> V3 {
     let n = dot(v, v).sqrt();
     [v[0] / n, v[1] / n, v[2] / n]
@@ -287,10 +291,8 @@ pub fn of(m: &Mechanism, chain: &Chain3R) -> Option<SingularBranches> {
         return None;
     }
     let p = Planar::of(m)?;
-    let (l2, l3, e0) = (p.l2, p.l3, p.e0);
-    let d = e0.abs();
-    let (rp, rm) = (l2 + l3, (l2 - l3).abs());
-    let mut complete = true;
+    let mut s = Sketch::new(&p, chain);
+    let (l2, l3) = (p.l2, p.l3);
     let au = arg(p.u[0], p.u[1]);
     let av = arg(p.v[0], p.v[1]);
     let out = match (au, av) {
@@ -300,22 +302,77 @@ pub fn of(m: &Mechanism, chain: &Chain3R) -> Option<SingularBranches> {
     let folded = out.map(|t| wrap(t + Interval::PI));
     let l2_gt_l3 = sign(l2 - l3);
     if l2_gt_l3.is_none() || out.is_none() {
-        complete = false;
+        s.complete = false;
     }
-    let full = super::motion::full_range();
-    let steps = 256;
-    let arc = |k: usize| interval(-std::f64::consts::PI + std::f64::consts::TAU * k as f64 / steps as f64, -std::f64::consts::PI + std::f64::consts::TAU * (k + 1) as f64 / steps as f64);
     let mut branches = Vec::new();
     let mut total = Some(0usize);
     let mut all_crossings = Vec::new();
-    let d_zero = e0.inf() == 0.0 && e0.sup() == 0.0;
-    let d_pos = d.inf() > 0.0;
     for (name, radius, theta3, arg_m) in [
-        ("outstretched", rp, out, au),
-        ("folded", rm, folded, au.zip(l2_gt_l3).map(|(a, sg)| if sg > 0.0 { a } else { a + Interval::PI })),
+        ("outstretched", s.rp, out, au),
+        ("folded", s.rm, folded, au.zip(l2_gt_l3).map(|(a, sg)| if sg > 0.0 { a } else { a + Interval::PI })),
     ] {
+        let branch = s.theta3_line(name, radius, theta3, arg_m, &mut total);
+        all_crossings.extend(branch.crossings.iter().cloned());
+        branches.push(branch);
+    }
+    if let Some(fold) = s.fold_of_g(&all_crossings) {
+        branches.push(fold);
+    }
+    let isolated_nodes = s.isolated_nodes(out, folded, au, l2_gt_l3);
+    let no_cusp_proven = s.complete && s.rm.inf() > 0.0;
+    Some(SingularBranches {
+        argument: format!(
+            "f = g o h with h the planar 2R of joints 2-3 and g two-to-one (mirror about the line L of the plane of motion closest to axis 1), so det Df = det Dg(h) det Dh vanishes exactly on the two theta3 lines (det Dh = 0) and on h^-1(L) (det Dg = 0); off their crossings each is a smooth curve on which f folds (ker Df transverse to it, closed form), so no point of the singular set is a cusp point; at a crossing grad det = 0 (two folds cross, no cusp){}",
+            if no_cusp_proven { "" } else { "; NOT all of this is proven here (an angle, an existence or l2 != l3 undecided)" }
+        ),
+        branches,
+        crossings: total,
+        isolated_nodes,
+        l2: bounds(l2),
+        l3: bounds(l3),
+        d: bounds(s.d),
+        no_cusp_proven,
+    })
+}
+
+/// What `of` derives the branches from: the planar reduction, the chain for joint names and
+/// boxes, the radii of the two θ₃ lines' circles and the fold line's distance, and whether
+/// every step so far was decided (`complete`).
+struct Sketch<'a> {
+    p: &'a Planar,
+    chain: &'a Chain3R,
+    e0: Interval,
+    /// `|e₀|`: the fold line's distance from axis 2.
+    d: Interval,
+    /// `l₂ + l₃` and `|l₂ − l₃|`: the radii of the outstretched and folded circles.
+    rp: Interval,
+    rm: Interval,
+    /// `d = 0` exactly, and `d > 0` proven.
+    d_zero: bool,
+    d_pos: bool,
+    complete: bool,
+}
+
+impl<'a> Sketch<'a> {
+    fn new(p: &'a Planar, chain: &'a Chain3R) -> Self {
+        let (l2, l3, e0) = (p.l2, p.l3, p.e0);
+        let d = e0.abs();
+        let (rp, rm) = (l2 + l3, (l2 - l3).abs());
+        let d_zero = e0.inf() == 0.0 && e0.sup() == 0.0;
+        let d_pos = d.inf() > 0.0;
+        Sketch { p, chain, e0, d, rp, rm, d_zero, d_pos, complete: true }
+    }
+
+    /// The θ₃ line `name` (`theta3`, the circle of `radius` about axis 2 in the plane of
+    /// motion; `arg_m` the angle of its `m`), with its crossings with the fold of g, whose
+    /// count is added to `total` (`None` once a count is not decided).
+    fn theta3_line(&mut self, name: &str, radius: Interval, theta3: Option<Interval>, arg_m: Option<Interval>, total: &mut Option<usize>) -> SingularBranch {
+        let (p, chain, e0, d) = (self.p, self.chain, self.e0, self.d);
+        let full = super::motion::full_range();
+        let steps = 256;
+        let arc = |k: usize| interval(-std::f64::consts::PI + std::f64::consts::TAU * k as f64 / steps as f64, -std::f64::consts::PI + std::f64::consts::TAU * (k + 1) as f64 / steps as f64);
         let circle = arc_pieces(radius, steps, &arc);
-        let (ir, iz) = image(&p, circle);
+        let (ir, iz) = image(p, circle);
         let exists = if d.sup() < radius.inf() {
             Some(true)
         } else if d.inf() > radius.sup() {
@@ -336,21 +393,20 @@ pub fn of(m: &Mechanism, chain: &Chain3R) -> Option<SingularBranches> {
                             let theta = [t2, t3];
                             crossings.push(CrossingRecord { name: format!("{name} x fold_of_g, {label}"), joints: joints(chain, &theta), workspace: workspace(rho, z), theta });
                         }
-                        None => complete = false,
+                        None => self.complete = false,
                     }
                 }
-                total = total.map(|n| n + 2);
+                *total = total.map(|n| n + 2);
             }
             (Some(false), _, _) => {}
             _ => {
-                total = None;
-                complete = false;
+                *total = None;
+                self.complete = false;
             }
         }
-        all_crossings.extend(crossings.iter().cloned());
-        let curve_of_nodes = if d_zero {
+        let curve_of_nodes = if self.d_zero {
             Some(true)
-        } else if d_pos {
+        } else if self.d_pos {
             Some(false)
         } else {
             None
@@ -359,7 +415,7 @@ pub fn of(m: &Mechanism, chain: &Chain3R) -> Option<SingularBranches> {
             Some(t) => format!("{} = {} (enclosure [{:.15}, {:.15}]), {} free: the 2R of joints 2-3 {}", chain.joints[2], pm(t), t.inf(), t.sup(), chain.joints[1], if name == "outstretched" { "outstretched" } else { "folded back" }),
             None => format!("{} = constant (not enclosed)", chain.joints[2]),
         };
-        branches.push(SingularBranch {
+        SingularBranch {
             name: name.into(),
             kind: "theta3_line",
             description,
@@ -381,19 +437,28 @@ pub fn of(m: &Mechanism, chain: &Chain3R) -> Option<SingularBranches> {
                 }
             ),
             theta3,
-        });
-    }
-    // The fold of g.
-    let fold_exists = sign(rp - d);
-    let mut samples = Vec::new();
-    let n = 24;
-    for k in 0..n {
-        let t3 = -std::f64::consts::PI + std::f64::consts::TAU * k as f64 / n as f64;
-        if let Some(t2) = p.fold_theta2(point(t3)) {
-            samples.push(FoldSample { theta3: t3, theta2: t2.map(bounds) });
         }
     }
-    if fold_exists == Some(1.0) {
+
+    /// The fold of g (where the wrist is in the plane through axis 1 parallel to axis 2), with
+    /// every crossing of the θ₃ lines; `None` when it is proven not to exist or not decided.
+    fn fold_of_g(&mut self, all_crossings: &[CrossingRecord]) -> Option<SingularBranch> {
+        let (p, chain, e0, d, rp, rm) = (self.p, self.chain, self.e0, self.d, self.rp, self.rm);
+        let fold_exists = sign(rp - d);
+        let mut samples = Vec::new();
+        let n = 24;
+        for k in 0..n {
+            let t3 = -std::f64::consts::PI + std::f64::consts::TAU * k as f64 / n as f64;
+            if let Some(t2) = p.fold_theta2(point(t3)) {
+                samples.push(FoldSample { theta3: t3, theta2: t2.map(bounds) });
+            }
+        }
+        if fold_exists != Some(1.0) {
+            if fold_exists.is_none() {
+                self.complete = false;
+            }
+            return None;
+        }
         let tau_hi = (rp.sqr() - e0.sqr()).sqrt();
         let tau_lo = if d.sup() < rm.inf() { (rm.sqr() - e0.sqr()).sqrt() } else { point(0.0) };
         let seg = |k: usize, sg: f64| {
@@ -401,7 +466,7 @@ pub fn of(m: &Mechanism, chain: &Chain3R) -> Option<SingularBranches> {
             let hi = tau_lo.inf() + (tau_hi.sup() - tau_lo.inf()) * (k + 1) as f64 / 128.0;
             [-e0, point(sg) * interval(lo, hi.max(lo))]
         };
-        let (ir, iz) = image(&p, (0..128).flat_map(|k| [seg(k, 1.0), seg(k, -1.0)]));
+        let (ir, iz) = image(p, (0..128).flat_map(|k| [seg(k, 1.0), seg(k, -1.0)]));
         let a1t = dot(&p.a1, &p.t);
         let vertical = a1t.abs().inf() == 1.0 && a1t.abs().sup() == 1.0;
         // For a₁ ⟂ d₂ the radius on L is constant: its value at one point of L, tightly.
@@ -411,7 +476,7 @@ pub fn of(m: &Mechanism, chain: &Chain3R) -> Option<SingularBranches> {
         } else {
             format!("a segment of the line where the plane of axis 1 and L cuts P, mapped to (radius, z): radius in [{:.6}, {:.6}], z in [{:.6}, {:.6}]", ir.inf(), ir.sup(), iz.inf(), iz.sup())
         };
-        branches.push(SingularBranch {
+        Some(SingularBranch {
             name: "fold_of_g".into(),
             kind: "curve",
             description: format!(
@@ -430,62 +495,52 @@ pub fn of(m: &Mechanism, chain: &Chain3R) -> Option<SingularBranches> {
             samples,
             image: ImageRecord { description, radius: bounds(ir), z: bounds(iz) },
             curve_of_nodes: Some(true),
-            crossings: all_crossings.clone(),
+            crossings: all_crossings.to_vec(),
             proof: "det Dg = 2 (a1.t) (e0 + w_e) vanishes exactly on the line L (w_e = -e0) of the plane of motion; each point of L inside the open annulus has two h-preimages (elbow up and down), both on this curve, with one image: a curve of nodes".into(),
             theta3: None,
-        });
-    } else if fold_exists.is_none() {
-        complete = false;
+        })
     }
-    // Isolated nodes between the two lines (d > 0): w on the outstretched circle whose mirror
-    // about L is on the folded one.
-    let mut isolated_nodes = Vec::new();
-    if d_pos {
-        if let (Some(t_out), Some(t_fold), Some(a_out), Some(sg)) = (out, folded, au, l2_gt_l3) {
-            let we = (rm.sqr() - rp.sqr() - point(4.0) * e0.sqr()) / (point(4.0) * e0);
-            let a_fold = if sg > 0.0 { a_out } else { a_out + Interval::PI };
-            let inside = (rp - we.abs()).inf() > 0.0;
-            let outside = (we.abs() - rp).inf() > 0.0;
-            if inside {
-                let wt = (rp.sqr() - we.sqr()).sqrt();
-                for sgn in [1.0, -1.0] {
-                    let w = [we, point(sgn) * wt];
-                    let w2 = [point(-2.0) * e0 - we, point(sgn) * wt];
-                    match (arg(w[0], w[1]), arg(w2[0], w2[1])) {
-                        (Some(x), Some(y)) => {
-                            let (rho, z) = p.g(w);
-                            let (rho2, z2) = p.g(w2);
-                            isolated_nodes.push(IsolatedNode {
-                                points: [joints(chain, &[wrap(x - a_out), t_out]), joints(chain, &[wrap(y - a_fold), t_fold])],
-                                workspace: workspace(rho.intersection(rho2), z.intersection(z2)),
-                            });
+
+    /// Isolated nodes between the two lines (d > 0): w on the outstretched circle whose mirror
+    /// about L is on the folded one. `out`, `folded`: the lines' θ₃; `a_out`: the angle of the
+    /// outstretched `m`; `l2_gt_l3`: the sign of `l₂ − l₃`.
+    fn isolated_nodes(&mut self, out: Option<Interval>, folded: Option<Interval>, a_out: Option<Interval>, l2_gt_l3: Option<f64>) -> Vec<IsolatedNode> {
+        let (p, chain, e0, rp, rm) = (self.p, self.chain, self.e0, self.rp, self.rm);
+        let mut isolated_nodes = Vec::new();
+        if self.d_pos {
+            if let (Some(t_out), Some(t_fold), Some(a_out), Some(sg)) = (out, folded, a_out, l2_gt_l3) {
+                let we = (rm.sqr() - rp.sqr() - point(4.0) * e0.sqr()) / (point(4.0) * e0);
+                let a_fold = if sg > 0.0 { a_out } else { a_out + Interval::PI };
+                let inside = (rp - we.abs()).inf() > 0.0;
+                let outside = (we.abs() - rp).inf() > 0.0;
+                if inside {
+                    let wt = (rp.sqr() - we.sqr()).sqrt();
+                    for sgn in [1.0, -1.0] {
+                        let w = [we, point(sgn) * wt];
+                        let w2 = [point(-2.0) * e0 - we, point(sgn) * wt];
+                        match (arg(w[0], w[1]), arg(w2[0], w2[1])) {
+                            (Some(x), Some(y)) => {
+                                let (rho, z) = p.g(w);
+                                let (rho2, z2) = p.g(w2);
+                                isolated_nodes.push(IsolatedNode {
+                                    points: [joints(chain, &[wrap(x - a_out), t_out]), joints(chain, &[wrap(y - a_fold), t_fold])],
+                                    workspace: workspace(rho.intersection(rho2), z.intersection(z2)),
+                                });
+                            }
+                            _ => self.complete = false,
                         }
-                        _ => complete = false,
                     }
+                } else if !outside {
+                    self.complete = false;
                 }
-            } else if !outside {
-                complete = false;
+            } else {
+                self.complete = false;
             }
-        } else {
-            complete = false;
+        } else if !self.d_zero {
+            self.complete = false;
         }
-    } else if !d_zero {
-        complete = false;
+        isolated_nodes
     }
-    let no_cusp_proven = complete && rm.inf() > 0.0;
-    Some(SingularBranches {
-        argument: format!(
-            "f = g o h with h the planar 2R of joints 2-3 and g two-to-one (mirror about the line L of the plane of motion closest to axis 1), so det Df = det Dg(h) det Dh vanishes exactly on the two theta3 lines (det Dh = 0) and on h^-1(L) (det Dg = 0); off their crossings each is a smooth curve on which f folds (ker Df transverse to it, closed form), so no point of the singular set is a cusp point; at a crossing grad det = 0 (two folds cross, no cusp){}",
-            if no_cusp_proven { "" } else { "; NOT all of this is proven here (an angle, an existence or l2 != l3 undecided)" }
-        ),
-        branches,
-        crossings: total,
-        isolated_nodes,
-        l2: bounds(l2),
-        l3: bounds(l3),
-        d: bounds(d),
-        no_cusp_proven,
-    })
 }
 
 fn arc_pieces<'a>(radius: Interval, steps: usize, arc: &'a dyn Fn(usize) -> Interval) -> impl Iterator<Item = [Interval; 2]> + 'a {
@@ -495,181 +550,5 @@ fn arc_pieces<'a>(radius: Interval, steps: usize, arc: &'a dyn Fn(usize) -> Inte
     })
 }
 
-/// Where the undecided boxes of a search lie relative to the branches.
-#[derive(Clone, Debug)]
-pub struct Attribution {
-    /// Boxes attributed.
-    pub boxes: usize,
-    /// Per crossing (by name): boxes within `radius` of it (torus distance, max norm).
-    pub near_crossings: Vec<(String, usize)>,
-    /// The radius used.
-    pub radius: f64,
-    /// The largest distance of a box from the crossing it is attributed to.
-    pub max_distance: f64,
-    /// Per branch: boxes meeting it (interval test) but no crossing neighbourhood.
-    pub on_branch: Vec<(String, usize)>,
-    /// Boxes meeting no branch (det ≠ 0 on them, by the interval tests).
-    pub elsewhere: usize,
-    /// True when the boxes are proven to hold no cusp (`SingularBranches::no_cusp_proven`).
-    pub explained: bool,
-    /// In words.
-    pub text: String,
-}
-
-fn torus_gap(x: Interval, c: f64) -> f64 {
-    // distance from c to the set x + 2πℤ
-    let tau = std::f64::consts::TAU;
-    let mut best = f64::INFINITY;
-    for k in [-1.0, 0.0, 1.0] {
-        let (lo, hi) = (x.inf() + k * tau, x.sup() + k * tau);
-        let g = if c < lo { lo - c } else if c > hi { c - hi } else { 0.0 };
-        best = best.min(g);
-    }
-    best
-}
-
-fn meets_mod_2pi(x: Interval, line: Interval) -> bool {
-    [-1.0, 0.0, 1.0].iter().any(|&k| {
-        let l = line + point(k) * Interval::TAU;
-        x.inf() <= l.sup() && l.inf() <= x.sup()
-    })
-}
-
-impl SingularBranches {
-    /// Every crossing once, in the order first met in the branches' lists, with the indices of
-    /// the branches listing it (ascending). Each crossing lies on two branches and both list it
-    /// (the JSON repeats it); the ROS message lists it once and points at the two branches.
-    pub fn distinct_crossings(&self) -> Vec<(&CrossingRecord, Vec<usize>)> {
-        let mut out: Vec<(&CrossingRecord, Vec<usize>)> = Vec::new();
-        for (i, b) in self.branches.iter().enumerate() {
-            for c in &b.crossings {
-                match out.iter_mut().find(|(x, _)| *x == c) {
-                    Some((_, on)) if on.last() != Some(&i) => on.push(i),
-                    Some(_) => {}
-                    None => out.push((c, vec![i])),
-                }
-            }
-        }
-        out
-    }
-
-    /// Attributes boxes to the crossing they are within `radius` of, else to the branches
-    /// they meet (interval tests), else to none.
-    pub fn attribute(&self, m: &Mechanism, boxes: &[[Interval; 2]], radius: f64) -> Attribution {
-        let planar = Planar::of(m);
-        let crossings: Vec<&CrossingRecord> = self.branches.iter().filter(|b| b.kind == "theta3_line").flat_map(|b| b.crossings.iter()).collect();
-        let mut near = vec![0usize; crossings.len()];
-        let mut on = vec![0usize; self.branches.len()];
-        let (mut elsewhere, mut max_distance) = (0usize, 0.0f64);
-        for b in boxes {
-            let best = crossings
-                .iter()
-                .enumerate()
-                .map(|(k, c)| (k, torus_gap(b[0], c.theta[0].mid()).max(torus_gap(b[1], c.theta[1].mid()))))
-                .min_by(|x, y| x.1.total_cmp(&y.1));
-            if let Some((k, dist)) = best.filter(|x| x.1 <= radius) {
-                near[k] += 1;
-                max_distance = max_distance.max(dist);
-                continue;
-            }
-            let mut any = false;
-            for (k, br) in self.branches.iter().enumerate() {
-                let meets = match br.theta3 {
-                    Some(t3) => meets_mod_2pi(b[1], t3),
-                    None => br.kind != "theta3_line" && planar.as_ref().is_none_or(|p| p.may_meet_fold(*b)),
-                };
-                if meets {
-                    on[k] += 1;
-                    any = true;
-                    break;
-                }
-            }
-            if !any {
-                elsewhere += 1;
-            }
-        }
-        let near_crossings: Vec<(String, usize)> = crossings.iter().zip(&near).filter(|x| *x.1 > 0).map(|(c, &n)| (c.name.clone(), n)).collect();
-        let on_branch: Vec<(String, usize)> = self.branches.iter().zip(&on).filter(|x| *x.1 > 0).map(|(b, &n)| (b.name.clone(), n)).collect();
-        let in_near: usize = near.iter().sum();
-        let mut text = format!("{} undecided boxes: {in_near} within {:.1e} rad of {} crossings (at most {:.1e})", boxes.len(), radius, near_crossings.len(), max_distance);
-        for (name, n) in &near_crossings {
-            text.push_str(&format!("; {n} at {name}"));
-        }
-        for (name, n) in &on_branch {
-            text.push_str(&format!("; {n} on branch {name} away from the crossings"));
-        }
-        if elsewhere > 0 {
-            text.push_str(&format!("; {elsewhere} meeting no branch"));
-        }
-        let explained = self.no_cusp_proven;
-        text.push_str(if explained { "; none holds a cusp (the structural argument: the singular set is the known branches, folds off their crossings, crossings are not cusps)" } else { "; not explained (the structural argument is not complete)" });
-        Attribution { boxes: boxes.len(), near_crossings, radius, max_distance, on_branch, elsewhere, explained, text }
-    }
-
-    /// One CLI line per branch.
-    pub fn lines(&self) -> Vec<String> {
-        let mut out = Vec::new();
-        for b in &self.branches {
-            out.push(format!(
-                "singular branch {} ({}): {}; image: {}; {}; {} crossings",
-                b.name,
-                b.kind,
-                b.description,
-                b.image.description,
-                match b.curve_of_nodes {
-                    Some(true) => "a curve of nodes",
-                    Some(false) => "not a curve of nodes",
-                    None => "curve of nodes: undecided",
-                },
-                b.crossings.len()
-            ));
-            if b.kind == "theta3_line" {
-                for c in &b.crossings {
-                    let mid = |x: &Bounds| 0.5 * (x[0] + x[1]);
-                    out.push(format!(
-                        "    crossing {}: {} -> radius {:.6} z {:.6}",
-                        c.name,
-                        c.joints.iter().map(|(n, x)| format!("{n}={:.6}", mid(x))).collect::<Vec<_>>().join(" "),
-                        mid(&c.workspace.radius),
-                        mid(&c.workspace.z)
-                    ));
-                }
-            }
-        }
-        for n in &self.isolated_nodes {
-            out.push(format!("isolated node between the outstretched and folded lines -> radius {:.6} z {:.6}", 0.5 * (n.workspace.radius[0] + n.workspace.radius[1]), 0.5 * (n.workspace.z[0] + n.workspace.z[1])));
-        }
-        out
-    }
-}
-
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::analyses::arm3r::{prepare, LoadOptions};
-
-    /// The branches of a bundled arm (nominal lengths).
-    fn branches_of(xml: &str) -> SingularBranches {
-        let p = prepare(&crate::model::urdf::parse(xml).expect("parses"), &LoadOptions::default()).expect("a 3R arm");
-        let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
-        of(&p.mechanism, &chain).expect("axes 2 and 3 parallel")
-    }
-
-    #[test]
-    fn distinct_crossings_list_each_crossing_once_with_its_two_branches() {
-        // PUMA and UR5: the fold of g meets both theta3 lines; KUKA: only the outstretched one.
-        for (xml, lines) in [(include_str!("../../../urdf/puma560.urdf"), &[0, 0, 1, 1][..]), (include_str!("../../../urdf/ur5.urdf"), &[0, 0, 1, 1]), (include_str!("../../../urdf/kuka_kr16.urdf"), &[0, 0])] {
-            let b = branches_of(xml);
-            let d = b.distinct_crossings();
-            assert_eq!(Some(d.len()), b.crossings);
-            for (k, (c, on)) in d.iter().enumerate() {
-                // A theta3 line and the fold of g (index 2), each listing the record.
-                assert_eq!(on[..], [lines[k], 2], "{}", c.name);
-                assert!(on.iter().all(|&i| b.branches[i].crossings.contains(c)), "{}", c.name);
-                assert!(d[..k].iter().all(|(x, _)| x != c), "{} listed twice", c.name);
-            }
-            // Every listed crossing is among them.
-            assert!(b.branches.iter().flat_map(|x| &x.crossings).all(|c| d.iter().any(|(x, _)| *x == c)));
-        }
-    }
-}
+mod tests;
