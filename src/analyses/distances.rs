@@ -376,30 +376,7 @@ fn restrict(from: &CayleyMenger, b: &IntervalBox, to: &CayleyMenger) -> Option<I
 fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solver<'_>, all: (&CayleyMenger, &Solver<'_>), threads: usize, out: &mut Certified, cancel: &AtomicBool) {
     let clock = crate::kernel::search::process_cpu_seconds;
     let t0 = clock();
-    // Certified placements from every box midpoint, each once.
-    let mut roots: Vec<Placement> = Vec::new();
-    let mut meets: Vec<Vec<usize>> = Vec::new();
-    if let Some(pl) = placed.filter(|p| p.is_square()) {
-        for b in &out.solutions {
-            let width = cm.unknowns.iter().map(|u| b.width(u.var)).fold(0.0, f64::max);
-            for pts in cm.embed(&b.midpoint(), 1e-7 + 10.0 * width) {
-                let Some(x) = pl.certify_near(&pts) else { continue };
-                if roots.iter().any(|r| r.certified.intersects(&x)) {
-                    continue;
-                }
-                let pts = pl.points(&x.midpoint());
-                let root = Placement::new(pl, x, pts);
-                let hit: Vec<usize> = (0..out.solutions.len()).filter(|&i| root.meets(cm, &out.solutions[i])).collect();
-                if hit.is_empty() {
-                    // Not a solution of the determinant system as solved (an orientation
-                    // choice excludes it): not counted.
-                    continue;
-                }
-                roots.push(root);
-                meets.push(hit);
-            }
-        }
-    }
+    let (mut roots, mut meets) = certified_placements(cm, placed, &out.solutions);
     let t1 = clock();
     out.phases.push(("embedding and certifying placements", t1 - t0));
     // Boxes that meet no certified placement are tested twice, cheapest first:
@@ -517,11 +494,47 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
     }
     out.phases.push(("unmet boxes searched again with every determinant", in_determinants));
     out.phases.push(("unmet boxes searched again in coordinates", in_coordinates));
-    let old_index: Vec<usize> = keep.clone();
+    cluster_kept(out, &keep, &why, roots, meets);
+}
+
+/// Certified placements from every box midpoint of `solutions` (embedded from `cm`'s
+/// distances, certified in coordinates by `placed` when it is square), each once, with the
+/// boxes each meets.
+fn certified_placements(cm: &CayleyMenger, placed: Option<&Placed>, solutions: &[IntervalBox]) -> (Vec<Placement>, Vec<Vec<usize>>) {
+    let mut roots: Vec<Placement> = Vec::new();
+    let mut meets: Vec<Vec<usize>> = Vec::new();
+    if let Some(pl) = placed.filter(|p| p.is_square()) {
+        for b in solutions {
+            let width = cm.unknowns.iter().map(|u| b.width(u.var)).fold(0.0, f64::max);
+            for pts in cm.embed(&b.midpoint(), 1e-7 + 10.0 * width) {
+                let Some(x) = pl.certify_near(&pts) else { continue };
+                if roots.iter().any(|r| r.certified.intersects(&x)) {
+                    continue;
+                }
+                let pts = pl.points(&x.midpoint());
+                let root = Placement::new(pl, x, pts);
+                let hit: Vec<usize> = (0..solutions.len()).filter(|&i| root.meets(cm, &solutions[i])).collect();
+                if hit.is_empty() {
+                    // Not a solution of the determinant system as solved (an orientation
+                    // choice excludes it): not counted.
+                    continue;
+                }
+                roots.push(root);
+                meets.push(hit);
+            }
+        }
+    }
+    (roots, meets)
+}
+
+/// The boxes settling kept (`keep`, indices into `out.solutions`, with why each is undecided),
+/// clustered: touching boxes, and boxes that hold the same certified placement (a root on the
+/// boundary of two clusters' boxes is one solution, counted once). Each placement in `roots`
+/// (meeting the boxes `meets`) is counted in the cluster of the first kept box it meets.
+fn cluster_kept(out: &mut Certified, keep: &[usize], why: &[Option<&'static str>], roots: Vec<Placement>, meets: Vec<Vec<usize>>) {
+    let old_index: Vec<usize> = keep.to_vec();
     out.solutions = keep.iter().map(|&i| out.solutions[i].clone()).collect();
     out.unique = vec![false; out.solutions.len()];
-    // Clusters: touching boxes, and boxes that hold the same certified placement (a root on the
-    // boundary of two clusters' boxes is one solution, counted once).
     let (touch, n0) = components(&out.solutions);
     let pos = |i: usize| old_index.iter().position(|&j| j == i);
     let same_placement = meets.iter().flat_map(|hit| {
@@ -548,3 +561,4 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
     out.cluster = labels;
     out.clusters = clusters;
 }
+
