@@ -17,8 +17,8 @@ use nalgebra::Vector3;
 use std::collections::BTreeMap;
 use std::sync::atomic::AtomicBool;
 
-/// The seed's octahedral manipulator: base side √3, platform side √3/2, legs p1p5, p1p6, p2p6,
-/// p2p4, p3p4, p3p5 with squared lengths `legs` in that order.
+/// The octahedral manipulator of Porta, Thomas, Ros and Torras (2003): base side √3, platform side
+/// √3/2, legs p1p5, p1p6, p2p6, p2p4, p3p4, p3p5 with squared lengths `legs` in that order.
 /// Built by hand, independently of the URDF reader.
 pub fn octahedral(legs: [f64; 6]) -> DistanceProblem {
     let mut p = DistanceProblem::new("octahedral");
@@ -35,7 +35,7 @@ pub fn octahedral(legs: [f64; 6]) -> DistanceProblem {
     for ((a, b), r) in [(0, 4), (0, 5), (1, 5), (1, 3), (2, 3), (2, 4)].into_iter().zip(legs) {
         p.set_known(a, b, point(r)).unwrap();
     }
-    // The seed's Eqs. (6), and its Eq. (7) on request.
+    // Eqs. (6) of Porta et al. (2003), and their Eq. (7) on request.
     p.equations = Some(vec![vec![0, 2, 3, 4, 5], vec![0, 1, 2, 3, 5]]);
     p.redundant = Some(vec![vec![1, 2, 3, 4, 5], vec![0, 1, 3, 4, 5], vec![0, 1, 2, 4, 5], vec![0, 1, 2, 3, 4]]);
     p
@@ -250,7 +250,8 @@ fn configuration_b_tangencies_clusters_and_newton() {
 
 #[test]
 fn corners_prune_more_than_interval_arithmetic_and_redundancy_helps() {
-    // The seed's Table I, qualitatively: interval-arithmetic trapezoids process more boxes.
+    // Table I of Porta et al. (2003), qualitatively: interval-arithmetic trapezoids process more
+    // boxes.
     for legs in [CONFIG_A, CONFIG_B] {
         let cm = CayleyMenger::build(&octahedral(legs), BuildOptions { formulation: Formulation::Split, redundant: false }).unwrap();
         let corners = solve(&cm, FaceBounds::Corners, 0.1, 0.9);
@@ -367,7 +368,8 @@ fn the_bundled_file_is_the_seeds_four_spheres_and_c1_c2_alone_do_not_decide() {
         }
     }
     assert_eq!(file.point_lines, by_hand.point_lines);
-    // C1 and C2 only: five equations in six unknowns (the seed's one-dimensional continuum).
+    // C1 and C2 only: five equations in six unknowns (the one-dimensional continuum of Porta et al.
+    // 2003).
     let mut c12 = four_spheres(true);
     c12.equations = Some(vec![vec![0, 1, 2, 3, 4], vec![0, 1, 2, 3, 5]]);
     let err = CayleyMenger::build(&c12, shared(false)).unwrap_err().to_string();

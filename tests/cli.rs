@@ -557,9 +557,9 @@ fn the_product_lists_no_bench_or_chart() {
     }
 }
 
-/// `linkspace-lab bench3r --arms`: one row per bundled real arm and seed robot, the shipped path
-/// complete with nothing undecided, the baseline reported with its status. Tiny baseline limits
-/// keep it to a few seconds; no timing is asserted.
+/// `linkspace-lab bench3r --arms`: one row per bundled real arm and robot of Benoit et al. (2015),
+/// the shipped path complete with nothing undecided, the baseline reported with its status. Tiny
+/// baseline limits keep it to a few seconds; no timing is asserted.
 #[test]
 fn bench3r_arms_has_a_row_per_robot_and_the_new_path_completes() {
     let (ok, out, err) = run_bin(LAB, &["bench3r", "--arms", "--repeat", "1", "--timeout", "0.5", "--max-boxes", "20000"]);

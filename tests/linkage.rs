@@ -10,7 +10,7 @@ use nalgebra::{DMatrix, DVector};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 
-// ---------- the double butterfly, written out by hand from the seed's three loop equations ----------
+// ---------- the double butterfly, by hand from the three loop equations of Porta et al. (2006) ----------
 
 fn g0() -> f64 {
     3f64.atan2(4.0)

@@ -16,7 +16,8 @@ mod post_processing;
 mod random_linkages;
 /// Instances built to break solvers: branch and prune against Newton–Raphson.
 mod stability;
-/// 3R manipulators from URDF: the seed-003 map, Table 1 counts, dense-sampling references.
+/// 3R manipulators from URDF: the map of Benoit et al. (2015), Table 1 counts, dense-sampling
+/// references.
 mod manip3r;
 /// Real arms' URDFs: chain choice, rounding, limits, the verdict, three conventions.
 mod real_arms;

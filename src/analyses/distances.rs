@@ -6,13 +6,13 @@
 //!   boxes holding exactly one placement (`unique`). Each box it could not prove is searched
 //!   again, deeper (sigma / 16, bounded): the box is replaced by what that search certifies, or
 //!   removed when the search proves it empty, or stays with the reason it is undecided.
-//! - **shared / split** (the seed's determinants, not square or singular where two assembly
-//!   modes share their distances): placements are embedded from each box midpoint, polished by
-//!   Newton in coordinates and certified by Krawczyk on the points system; a certified placement
-//!   is attributed to the cluster whose boxes its distance enclosure meets (the root exists and
-//!   the solver never loses one, so its distances lie in some solution box). Boxes that meet no
-//!   certified placement are searched again with every determinant (the redundant ones settle
-//!   the singular tangent of octahedral b), then in coordinates: removed when proven empty,
+//! - **shared / split** (the determinants of Porta et al. 2003, not square or singular where two
+//!   assembly modes share their distances): placements are embedded from each box midpoint,
+//!   polished by Newton in coordinates and certified by Krawczyk on the points system; a certified
+//!   placement is attributed to the cluster whose boxes its distance enclosure meets (the root
+//!   exists and the solver never loses one, so its distances lie in some solution box). Boxes that
+//!   meet no certified placement are searched again with every determinant (the redundant ones
+//!   settle the singular tangent of octahedral b), then in coordinates: removed when proven empty,
 //!   undecided otherwise.
 //!
 //! A cluster then counts its proven solutions (distinct certified placements) and is undecided
@@ -41,7 +41,7 @@ pub enum Choice {
     Line,
     /// Determinants, one variable per distance.
     Shared,
-    /// Determinants, the seed's split variables.
+    /// Determinants, the split variables of Porta, Thomas, Ros and Torras (2003).
     Split,
 }
 

@@ -1,7 +1,7 @@
 //! Platforms on six fixed legs (general 6-6 Gough–Stewart, or any six legs) as a distance
-//! problem in the seed's style (seed 004): the unknowns are squared distances between base and
-//! platform ball centres and signed heights, the rows Cayley–Menger conditions and bilateration
-//! identities; no pose variable.
+//! problem in the style of Porta, Thomas, Ros and Torras (2003): the unknowns are squared distances
+//! between base and platform ball centres and signed heights, the rows Cayley–Menger conditions and
+//! bilateration identities; no pose variable.
 //!
 //! Three legs `0, 1, 2` form the frame: base ball centres `B0, B1, B2` (a triangle) and platform
 //! ball centres `P0, P1, P2` (a triangle), chosen to make the smaller of the two triangles as
@@ -17,7 +17,7 @@
 //! (`f1` along `e1`, `f2` in the plane, `f3` its normal) are derived by linear rows (`hi` is the
 //! primary itself). The rows:
 //! - per frame point, the Cayley–Menger condition of the tetrahedron `B0 B1 B2 Pi`,
-//!   `Ξ(B0, B1, B2, Pi) = 288 V² = 8 |N|² hi²` (seed Eq. 3), written as
+//!   `Ξ(B0, B1, B2, Pi) = 288 V² = 8 |N|² hi²` (Porta et al. 2003, Eq. 3), written as
 //!   `ai² + bi² + hi² = r(Pi, B0)` (the same polynomial over `8|N|²`);
 //! - the platform triangle's sides, `r(Pi, B0) + r(Pj, B0) − 2 xi·xj = r(Pi, Pj)` from the file;
 //! - the platform triangle's normal `n = d1 × d2` with `d1 = x1 − x0`, `d2 = x2 − x0`;

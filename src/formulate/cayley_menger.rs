@@ -1,4 +1,4 @@
-//! Distance problems as Cayley–Menger systems (seed 004: Porta, Thomas, Ros, Torras 2003).
+//! Distance problems as Cayley–Menger systems (Porta, Thomas, Ros and Torras 2003).
 //!
 //! A `DistanceProblem` names points, the squared distances `r_ij = ‖p_i − p_j‖²` that are known,
 //! ranges for some unknown ones, and point–line distances. `CayleyMenger::build` turns it into
@@ -9,11 +9,11 @@
 //!
 //! Determinants are expanded symbolically once, here, into `Poly`s whose coefficients enclose the
 //! exact ones: no determinant is ever evaluated in floating point on a box.
-//! Two formulations: `Split` is the seed's (each unknown `r_ij` and its twin `r_ji` are separate
-//! variables tied by `r_ij − r_ji = 0`, which makes every determinant multilinear), `Shared`
-//! keeps one variable per distance (degree two per variable; clipped through Bernstein control
-//! points). After a solve, `embed` places the points by trilateration from a solution's distances,
-//! both mirror images included.
+//! Two formulations: `Split` is that of Porta et al. (2003) (each unknown `r_ij` and its twin
+//! `r_ji` are separate variables tied by `r_ij − r_ji = 0`, which makes every determinant
+//! multilinear), `Shared` keeps one variable per distance (degree two per variable; clipped through
+//! Bernstein control points). After a solve, `embed` places the points by trilateration from a
+//! solution's distances, both mirror images included.
 //! Builds only; solving is `solve`'s job.
 
 mod checks;
@@ -144,7 +144,7 @@ pub struct DistanceProblem {
     pub points: Vec<Point>,
     known: BTreeMap<(usize, usize), Interval>,
     ranges: BTreeMap<(usize, usize), Interval>,
-    /// Point–line distance constraints (the seed's Eq. 5).
+    /// Point–line distance constraints (Porta et al. 2003, Eq. 5).
     pub point_lines: Vec<PointLine>,
     /// Orientation choices (symmetry breaking, see `Orientation`).
     pub orientations: Vec<Orientation>,
@@ -257,8 +257,8 @@ impl DistanceProblem {
 /// Which variables stand for the unknown distances.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Formulation {
-    /// The seed's: `r_ij` and `r_ji` are separate variables with `r_ij = r_ji`; every
-    /// determinant is multilinear, so trapezoids come from corner values.
+    /// That of Porta et al. (2003): `r_ij` and `r_ji` are separate variables with `r_ij = r_ji`;
+    /// every determinant is multilinear, so trapezoids come from corner values.
     Split,
     /// One variable per distance; determinants have degree two per variable.
     Shared,
@@ -267,7 +267,7 @@ pub enum Formulation {
 /// How to build the system.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BuildOptions {
-    /// Split (the seed's) or shared variables.
+    /// Split (as in Porta et al. 2003) or shared variables.
     pub formulation: Formulation,
     /// Add the redundant determinants (`DistanceProblem::redundant`).
     pub redundant: bool,
@@ -316,7 +316,7 @@ pub struct CayleyMenger {
 /// expanded symbolically.
 ///
 /// `Ξ(p1, p2) = 2 r12`, `Ξ(p1, p2, p3) = −16 A²`, `Ξ(p1, …, p4) = 288 V²`, and `Ξ = 0` for five
-/// or more points in R³ (the seed's Eqs. 1–4).
+/// or more points in R³ (Porta et al. 2003, Eqs. 1–4).
 ///
 /// # Examples
 ///
@@ -330,7 +330,8 @@ pub struct CayleyMenger {
 /// ```
 ///
 /// # References
-/// K. Menger, "New foundation of Euclidean geometry", Amer. J. Math. 53, 1931; the seed, Sec. II.
+/// K. Menger, "New foundation of Euclidean geometry", Amer. J. Math. 53, 1931; Porta et al. (2003),
+/// Sec. II.
 pub fn cayley_menger_determinant(n: usize, entry: &dyn Fn(usize, usize) -> Poly) -> Result<Poly, DistanceError> {
     if !(2..=6).contains(&n) {
         return Err(DistanceError::DeterminantSize(n.to_string()));
@@ -381,7 +382,7 @@ pub fn collinear(entry: &dyn Fn(usize, usize) -> Poly) -> Poly {
 }
 
 /// Point 0 at squared distance `d2` from the line through points 1 and 2:
-/// `Ξ(p0, p1, p2) + 4 r12 d² = 0` (the seed's Eq. 5).
+/// `Ξ(p0, p1, p2) + 4 r12 d² = 0` (Porta et al. 2003, Eq. 5).
 pub fn point_line(entry: &dyn Fn(usize, usize) -> Poly, d2: Interval) -> Poly {
     collinear(entry).add(&entry(1, 2).scale(point(4.0) * d2))
 }
@@ -536,7 +537,8 @@ impl CayleyMenger {
         Ok(Self { problem: p.clone(), options, system, equations, labels, unknowns })
     }
 
-    /// The seed's `Reduce_Box` over this system's equations, ready for `Solver::with_contractor`.
+    /// The `Reduce_Box` of Porta et al. (2003) over this system's equations, ready for
+    /// `Solver::with_contractor`.
     pub fn contractor(&self, faces: FaceBounds) -> Result<TrapezoidClip, ClipError> {
         TrapezoidClip::new(&self.equations, faces)
     }

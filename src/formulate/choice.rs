@@ -36,7 +36,8 @@ pub enum Model {
     Spatial,
     /// A platform's position and rotation, leg rows linear in derived products.
     Pose,
-    /// A platform's base-to-platform squared distances and heights (seed 004's style).
+    /// A platform's base-to-platform squared distances and heights (in the style of Porta et al.
+    /// 2003).
     Distances,
 }
 

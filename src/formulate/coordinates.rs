@@ -1,8 +1,8 @@
 //! Distance problems in placed coordinates: the "points" formulation.
 //!
-//! The seed's determinants (`cayley_menger`) work on squared distances only; here every point
-//! without given coordinates gets three coordinate variables instead, in the frame the fixed
-//! points define, and every constraint becomes a polynomial equation of degree two:
+//! The determinants of Porta et al. (2003) (`cayley_menger`) work on squared distances only; here
+//! every point without given coordinates gets three coordinate variables instead, in the frame the
+//! fixed points define, and every constraint becomes a polynomial equation of degree two:
 //! - a known squared distance: `‖p_a − p_b‖² − r = 0`;
 //! - a point–line distance `d` of `p` from the line `a b`: with `w = p − a`, `v = b − a`,
 //!   `‖w‖²‖v‖² − (w·v)² = d²‖v‖²` (Lagrange's identity) is of degree four, so `S = ‖w‖²`,

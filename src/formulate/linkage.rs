@@ -1,4 +1,5 @@
-//! Planar linkages: a `Mechanism` whose joint axes are all parallel becomes the seed-000 system.
+//! Planar linkages: a `Mechanism` whose joint axes are all parallel becomes the system of Porta,
+//! Ros and Thomas (2006).
 //!
 //! One angle per rigid group of links (links joined by fixed, prismatic or fixed-by-the-user
 //! joints turn together), as `c = cos φ`, `s = sin φ` with `c² + s² = 1`; the ground's angle is 0.
@@ -6,8 +7,8 @@
 //! the closure point reached through the predecessor equals the one reached through the
 //! successor, which is linear in the `c, s` variables.
 //! Slider travel `d` enters as `d·c`, `d·s`: new variables defined by the bilinear equations
-//! `z = d·c` (the seed's hyperbolic equations).
-//! Traced points (the seed's equation 5) are derived variables defined by linear equations.
+//! `z = d·c` (the hyperbolic equations of Porta et al. 2006).
+//! Traced points (their equation 5) are derived variables defined by linear equations.
 //! Builds only; solving is `search`'s job.
 
 mod build;
@@ -176,7 +177,7 @@ enum Reading {
     Travel(VarId),
 }
 
-/// A point whose world coordinates are traced (seed 000, eq. 5).
+/// A point whose world coordinates are traced (Porta et al. 2006, eq. 5).
 #[derive(Clone, Debug)]
 pub struct Trace {
     /// `LINK@X,Y` as given.

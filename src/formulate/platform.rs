@@ -1,16 +1,16 @@
 //! Parallel platforms from a `Mechanism`: the distance formulation of their forward kinematics
-//! (seed 004, Sec. V-A).
+//! (Porta, Thomas, Ros and Torras 2003, Sec. V-A).
 //!
 //! The mechanism is read as: a ground link (the base); a platform, child of the ground through a
 //! `floating` joint (its pose is what the legs decide); and legs, each a `spherical` joint on the
 //! base, a `prismatic` joint along the leg, and a `<loop type="spherical">` closing the rod onto
 //! the platform. The ball centres are the points; their squared distances within the base and
 //! within the platform are known from the file, the legs' from `--fix` (squared lengths, as in
-//! the seed), and the base–platform pairs without a leg are the unknowns.
+//! Porta et al. 2003), and the base–platform pairs without a leg are the unknowns.
 //! Only the octahedral (3-3) topology is built: three base and three platform points, each on two
-//! legs, six legs in all. For it the seed's Eqs. (6) are two five-point determinants in two
-//! unknowns; `redundant` adds the other four (Eq. 7), which bring in the third unknown.
-//! After a solve, `poses` places the platform by trilateration and reports every pose.
+//! legs, six legs in all. For it the Eqs. (6) of Porta et al. (2003) are two five-point
+//! determinants in two unknowns; `redundant` adds the other four (Eq. 7), which bring in the third
+//! unknown. After a solve, `poses` places the platform by trilateration and reports every pose.
 
 use super::cayley_menger::{CayleyMenger, DistanceError, DistanceProblem};
 use crate::kernel::interval::{point, IntervalBox};
@@ -95,7 +95,8 @@ pub struct PlatformProblem {
     pub base_points: Vec<[f64; 3]>,
     /// Ball centres on the platform, in the platform frame (points p4..p6).
     pub platform_points: Vec<[f64; 3]>,
-    /// The distance problem (points p1..p6) with the seed's equations and redundant ones.
+    /// The distance problem (points p1..p6) with the equations of Porta et al. (2003) and redundant
+    /// ones.
     pub distances: DistanceProblem,
 }
 
@@ -273,8 +274,9 @@ impl PlatformProblem {
         if values == LegValues::Lengths {
             lengths.iter_mut().for_each(|l| *l *= *l);
         }
-        // The three base–platform pairs without a leg; the seed's Eqs. (6) take the first and the
-        // last: Ξ(base ∪ {t1, t3}) and Ξ({b1, b3} ∪ platform), both in exactly those two unknowns.
+        // The three base–platform pairs without a leg; Eqs. (6) of Porta et al. (2003) take the
+        // first and the last: Ξ(base ∪ {t1, t3}) and Ξ({b1, b3} ∪ platform), both in exactly those
+        // two unknowns.
         let mut free: Vec<(usize, usize)> = (0..3).flat_map(|b| (3..6).map(move |t| (b, t))).filter(|&(b, t)| !legs.iter().any(|l| l.base == b && l.top == t)).collect();
         free.sort_unstable();
         let (u1, u3) = (free[0], free[2]);

@@ -3,9 +3,9 @@
 //! An `Equation` is `constant + Σ coef·monomial ∋ 0`, with monomials of degree at most two and
 //! coefficients given as intervals (point intervals for exact models, wider ones for uncertain
 //! geometry).
-//! The seed's planar formulation needs exactly three shapes, which `EquationKind` recognises once
-//! at construction so the LP relaxation can treat them specially: linear equations, circles
-//! `x² + y² = 1`, and bilinear definitions `z = x·y`.
+//! The planar formulation of Porta, Ros and Thomas (2006) needs exactly three shapes, which
+//! `EquationKind` recognises once at construction so the LP relaxation can treat them specially:
+//! linear equations, circles `x² + y² = 1`, and bilinear definitions `z = x·y`.
 //! This module does no IO and knows nothing of mechanisms.
 
 use crate::kernel::interval::{point, Interval, IntervalBox};

@@ -8,8 +8,8 @@
 //! f(θ₂, θ₃) = (ρ, z),   ρ = |p − (a₁·p) a₁|²,   z = a₁·p,
 //! ```
 //!
-//! where `p` is the end point in the first link's frame. ρ is the seed's squared radius,
-//! which is smooth where the radius is not (on the first axis); reports give the radius √ρ.
+//! where `p` is the end point in the first link's frame. ρ is the squared radius of Benoit et al.
+//! (2015), which is smooth where the radius is not (on the first axis); reports give the radius √ρ.
 //! Rodrigues' formula makes `p` affine in `(cos θ₂, sin θ₂, 1) ⊗ (cos θ₃, sin θ₃, 1)` for any
 //! axes and offsets, so the chain is stored as nine interval 3-vectors and evaluated as `Taylor`
 //! jets: no per-robot formula is typed by hand, and non-orthogonal chains work the same way.
@@ -88,8 +88,8 @@ impl Jets {
         self.rho.d(0) * self.z.d(1) - self.rho.d(1) * self.z.d(0)
     }
 
-    /// The seed's system (2), row `k`: `∂f_k/∂θ₂·(−∂det/∂θ₃) + ∂f_k/∂θ₃·∂det/∂θ₂`, that is
-    /// `∇f_k · T` with `T = (−∂det/∂θ₃, ∂det/∂θ₂)` the tangent of the singular curve.
+    /// System (2) of Benoit et al. (2015), row `k`: `∂f_k/∂θ₂·(−∂det/∂θ₃) + ∂f_k/∂θ₃·∂det/∂θ₂`,
+    /// that is `∇f_k · T` with `T = (−∂det/∂θ₃, ∂det/∂θ₂)` the tangent of the singular curve.
     /// Two orders lower than the jets.
     pub fn tangency(&self, k: usize) -> Taylor {
         self.derived().g[k]

@@ -1,5 +1,5 @@
-//! Collision sets of a 3R chain (seed 003, section 6.2): which joint configurations make two
-//! bodies of the robot touch.
+//! Collision sets of a 3R chain (Benoit et al. 2015, section 6.2): which joint configurations make
+//! two bodies of the robot touch.
 //!
 //! # Model
 //! Every body is a capsule: a segment and a radius, the set of points at most the radius from

@@ -29,9 +29,9 @@ pub struct Bench3rArgs {
     #[arg(long, default_value_t = 1e-4)]
     pub precision: f64,
     /// Instead: per bundled real arm (PUMA 560, KR 16, UR5, iiwa 14 with joint_3 locked) and
-    /// seed robot, `linkspace singularities FILE` as it ships against the previous behaviour on
-    /// the same chain (interval cusp and node searches, full torus, bounded), each run as a
-    /// child process: wall time, peak RSS, status, undecided count, ratios.
+    /// robot of Benoit et al. (2015), `linkspace singularities FILE` as it ships against the
+    /// previous behaviour on the same chain (interval cusp and node searches, full torus, bounded),
+    /// each run as a child process: wall time, peak RSS, status, undecided count, ratios.
     #[arg(long)]
     pub arms: bool,
     /// With --arms: the baseline's time limit (seconds, per run).

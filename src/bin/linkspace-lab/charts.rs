@@ -192,7 +192,7 @@ fn butterfly_charts(dir: &Path, quick: bool, want: &dyn Fn(&str) -> bool) -> Res
     write(dir, "speed_accuracy_mobile_diagonal.svg", &svg)?;
     }
 
-    // 2. Configuration-space projections like the seed's Fig. 3, and the traced coupler point.
+    // 2. Configuration-space projections (Porta et al. 2006, Fig. 3) and the traced coupler point.
     if want("cspace") {
     let c2 = mobile.system.var("cos_link2").context("cos_link2")?;
     let c4 = mobile.system.var("cos_link4").context("cos_link4")?;
@@ -291,7 +291,8 @@ const ROBOTS_3R: [(&str, &str); 3] = [
 
 /// The singular-curve cover (`arm3r::Cover`, the one the ROS node publishes) on a
 /// `2^depth` grid, its images, and the certified cusps and nodes marked on both; then the
-/// workspace regions between the images with their number of IK solutions (seed 003's style).
+/// workspace regions between the images with their number of IK solutions (in the style of Benoit
+/// et al. 2015).
 fn singular_curves(dir: &Path, depth: u32, quick: bool) -> Result<()> {
     use linkspace::kernel::interval::interval;
     use linkspace::analyses::arm3r::{Cover, cusps, nodes, radius, Chain3R};
@@ -371,8 +372,8 @@ const OCTAHEDRAL: &str = include_str!("../../../urdf/octahedral.urdf");
 const FOUR_SPHERES: &str = include_str!("../../../urdf/four_spheres.json");
 
 /// Octahedral platform (configuration b) and the four spheres: CPU seconds against the worst
-/// box diagonal, per trapezoid method (seed 004's corners and interval-arithmetic faces, on its
-/// split formulation and on our shared one).
+/// box diagonal, per trapezoid method (the corners and interval-arithmetic faces of Porta et al.
+/// 2003, on their split formulation and on our shared one).
 fn distance_sweeps(dir: &Path, quick: bool) -> Result<()> {
     use linkspace::kernel::contract::FaceBounds;
     use linkspace::formulate::{BuildOptions, CayleyMenger, Formulation};

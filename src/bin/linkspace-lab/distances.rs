@@ -1,8 +1,9 @@
-//! `linkspace-lab bench-distances`: seed 004's Tables I and II in one run. The seed's
-//! determinants as plain searches (split or shared variables, corner or interval-arithmetic
-//! faces) against the certified pipeline (`linkspace::analyses::distances::solve`), each row's CPU time
-//! against the case's baseline measured in the same run; the seed's own figures (measured on a
-//! Pentium IV 1.8 GHz) are printed beside them as references only.
+//! `linkspace-lab bench-distances`: Tables I and II of Porta, Thomas, Ros and Torras (2003) in one
+//! run. Their determinants as plain searches (split or shared variables, corner or
+//! interval-arithmetic faces) against the certified pipeline
+//! (`linkspace::analyses::distances::solve`), each row's CPU time against the case's baseline
+//! measured in the same run; the paper's own figures (measured on a Pentium IV 1.8 GHz) are printed
+//! beside them as references only.
 
 use anyhow::{bail, Context, Result};
 use linkspace::kernel::contract::FaceBounds;
@@ -23,8 +24,9 @@ pub struct BenchArgs {
     /// Runs per case; the median CPU time is reported (the baselines run once).
     #[arg(long, default_value_t = 5)]
     repeat: usize,
-    /// Time limit per baseline run (seconds): octahedral, the seed's split formulation with
-    /// interval-arithmetic faces; four spheres, the seed's split formulation with corners.
+    /// Time limit per baseline run (seconds): octahedral, the split formulation of
+    /// Porta et al. (2003) with interval-arithmetic faces; four spheres, their split formulation
+    /// with corners.
     #[arg(long, default_value_t = 30.0)]
     baseline_timeout: f64,
 }
@@ -93,8 +95,8 @@ fn measure(p: &Problem, method: Method, redundant: bool, settings: &SolverSettin
     })
 }
 
-/// The seed's Tables I and II in one run (see the module's doc): the line formulation for the
-/// spheres, the settled shared determinants for the platforms.
+/// Tables I and II of Porta et al. (2003) in one run (see the module's doc): the line formulation
+/// for the spheres, the settled shared determinants for the platforms.
 pub fn bench(args: BenchArgs) -> Result<()> {
     crate::check_repeat(args.repeat)?;
     if !(args.baseline_timeout > 0.0) {
@@ -147,7 +149,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
             }
         }
     }
-    // Table II: the four spheres, rho 0.99 for the determinants (the seed's C1-C4), the
+    // Table II: the four spheres, rho 0.99 for the determinants (C1-C4 of Porta et al. 2003), the
     // `distances` command's default for the coordinate formulations (0.9) for the line.
     let d = distance_file::parse(FOUR_SPHERES, &[])?;
     for (sigma, seed) in [(0.1, "t 315 s, b_p 7875, n_s 870"), (0.01, "t 385 s, b_p 14579, n_s 813")] {

@@ -1,8 +1,8 @@
 //! Ibex (`ibexsolve`) as a baseline run in the same invocation, when it is on PATH: the 3R cusp
-//! system "D&G2" of docs/peers.md (det Df = 0 and the second row of the seed's system (2),
-//! `∂z/∂θ₂·(−∂D/∂θ₃) + ∂z/∂θ₃·∂D/∂θ₂ = 0`) written in Minibex from the arm's own coefficients,
-//! over the same θ₃ ranges linkspace searches (the internal-motion strips left out), solved at
-//! the same precision; its CPU time is the child's (user + system, from `wait4`).
+//! system "D&G2" of docs/peers.md (det Df = 0 and the second row of the system (2) of Benoit et al.
+//! 2015, `∂z/∂θ₂·(−∂D/∂θ₃) + ∂z/∂θ₃·∂D/∂θ₂ = 0`) written in Minibex from the arm's own
+//! coefficients, over the same θ₃ ranges linkspace searches (the internal-motion strips left out),
+//! solved at the same precision; its CPU time is the child's (user + system, from `wait4`).
 //!
 //! The coefficients are read off the library in `f64` (`Chain3R::perp` and `eval_f64` at nine
 //! sample points, the map being bilinear in (cos θ₂, sin θ₂, 1) ⊗ (cos θ₃, sin θ₃, 1)), as a

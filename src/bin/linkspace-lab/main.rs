@@ -34,7 +34,8 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Time cusp and node searches on the bundled 3R robots against baselines in the same run.
     Bench3r(bench3r::Bench3rArgs),
-    /// Time the seed-004 cases (octahedral platform, four spheres) against baselines in the same run.
+    /// Time the cases of Porta et al. (2003) (octahedral platform, four spheres) against baselines
+    /// in the same run.
     BenchDistances(distances::BenchArgs),
     /// Time singular-set searches of closed-loop linkages against baselines in the same run.
     BenchLoopSingularities(loops::BenchArgs),

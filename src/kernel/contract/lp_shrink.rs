@@ -1,10 +1,11 @@
-//! The seed's box shrink by linear programs (seed 000, Algorithm 2), with verified bounds.
+//! The box shrink by linear programs of Porta, Ros and Thomas (2006, Algorithm 2), with verified
+//! bounds.
 //!
 //! Rows, all valid for every solution in the current box:
 //! - every linear equation, its coefficient uncertainty moved into the row bounds;
-//! - per circle `x² + y² = 1` whose box lies in one quadrant, the seed's chord cut (the arc lies
+//! - per circle `x² + y² = 1` whose box lies in one quadrant, their chord cut (the arc lies
 //!   beyond the chord) with the tangent parallel to it, plus the tangents at the arc's ends;
-//! - per bilinear `z = x·y`, the four McCormick planes: the faces of the seed's tetrahedron.
+//! - per bilinear `z = x·y`, the four McCormick planes: the faces of their tetrahedron.
 //!
 //! Then every primary variable is minimised and maximised (`lp::Relaxation::bound`).
 
@@ -117,8 +118,8 @@ pub fn relax(system: &EquationSystem, b: &[Interval]) -> Option<Relaxation> {
 /// by the edge candidates `(v, ±√(1−v²))` and `(±√(1−v²), v)` for each bound `v` of the box,
 /// kept when they may lie in the box. Along the circle, `w·p` has its only interior minimum at
 /// the antipode of `w`; when that point is outside the box, the smallest `w·p` over the
-/// candidates bounds `w·p` from below on every arc: the seed's chord cut, for boxes in any
-/// position. The tangent at any candidate, `p·x ≤ |p|`, holds on the whole circle.
+/// candidates bounds `w·p` from below on every arc: the chord cut of Porta et al. (2006), for boxes
+/// in any position. The tangent at any candidate, `p·x ≤ |p|`, holds on the whole circle.
 fn circle_cuts(x: VarId, y: VarId, b: &[Interval], rows: &mut Vec<Row>) {
     let (bx, by) = (b[x], b[y]);
     let one = point(1.0);
@@ -169,7 +170,8 @@ fn circle_cuts(x: VarId, y: VarId, b: &[Interval], rows: &mut Vec<Row>) {
     rows.push(Row { coefs: vec![(x, wu), (y, wv)], bounds: interval(d.min(wlen), wlen), sides: Sides::Both });
 }
 
-/// The four McCormick planes of `z = x·y` over `[x]×[y]`, the faces of the seed's tetrahedron.
+/// The four McCormick planes of `z = x·y` over `[x]×[y]`, the faces of the tetrahedron of Porta et
+/// al. (2006).
 ///
 /// From `(x − x₀)(y − y₀)·s ≥ 0` for the corner `(x₀, y₀)` and the matching sign `s`:
 /// `z − y₀·x − x₀·y` lies above (s = +1) or below (s = −1) `−x₀·y₀`.

@@ -1,10 +1,10 @@
 //! Contractors: box-shrinking steps that remove only what they prove holds no solution.
 //!
 //! Owns the `Contractor` trait, its outcome `Contraction`, the combinator `Sequence`, and the
-//! implementations: equation-wise interval propagation (`propagate`), the seed's LP shrink
-//! (`lp_shrink`), the one Krawczyk operator with ε-inflation (`krawczyk`, used by every search)
-//! and its adapter for square systems (`newton`), and trapezoid clipping of
-//! polynomial equations (`trapezoid`, seed 004); `filter` applies non-equation conditions
+//! implementations: equation-wise interval propagation (`propagate`), the LP shrink of Porta et al.
+//! (2006) (`lp_shrink`), the one Krawczyk operator with ε-inflation (`krawczyk`, used by every
+//! search) and its adapter for square systems (`newton`), and trapezoid clipping of
+//! polynomial equations (`trapezoid`, Porta et al. 2003); `filter` applies non-equation conditions
 //! (joint limits) to every box, certified or not.
 //! A contractor does no IO; numerical trouble gives `Unchanged`, never `Empty`.
 

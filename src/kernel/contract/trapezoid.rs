@@ -1,5 +1,5 @@
-//! Trapezoid clipping of polynomial equations `p(x) = 0`: the seed's `Reduce_Box` (Porta, Thomas,
-//! Ros, Torras 2003, Fig. 3).
+//! Trapezoid clipping of polynomial equations `p(x) = 0`: the `Reduce_Box` of Porta, Thomas,
+//! Ros and Torras (2003, Fig. 3).
 //!
 //! For a multilinear `p` over a box, the graph `(x, p(x))` lies in the convex hull of the `2^k`
 //! points `(corner, p(corner))` (Rikun 1997). Projected onto the plane of one variable `x_v` and
@@ -8,7 +8,7 @@
 //! `p = 0` gives a range of `x_v` outside which no root lies: clip `x_v` to it, or empty the box
 //! when the line misses the trapezoid.
 //!
-//! Two ways to get the sides (the seed's Table I compares them):
+//! Two ways to get the sides (Table I of Porta et al. 2003 compares them):
 //! - `FaceBounds::Corners`: the corner values, all `2^k` of them computed at once by a tensor
 //!   transform in `O(k·2^k)`. For a variable of degree two the same transform gives Bernstein
 //!   control points at the two ends and the middle, and the trapezoid becomes the hull of three
@@ -113,7 +113,8 @@ impl Compiled {
     }
 }
 
-/// The seed's `Reduce_Box` over a list of polynomial equations `p = 0`, as a `Contractor`.
+/// The `Reduce_Box` of Porta et al. (2003) over a list of polynomial equations `p = 0`, as a
+/// `Contractor`.
 ///
 /// One call makes one pass over the equations; the driver repeats passes while they pay (rho).
 ///
@@ -141,7 +142,7 @@ impl Compiled {
 #[derive(Clone, Debug)]
 pub struct TrapezoidClip {
     equations: Vec<Compiled>,
-    /// Corners (the seed's method) or interval arithmetic (its comparison).
+    /// Corners (the method of Porta et al. 2003) or interval arithmetic (its comparison).
     pub faces: FaceBounds,
     work: Vec<Iv>,
     local: Vec<Interval>,

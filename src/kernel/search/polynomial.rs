@@ -1,4 +1,5 @@
-//! The kernel's client for equation systems: the seed's Algorithm 1 as a `Prune`.
+//! The kernel's client for equation systems: Algorithm 1 of Porta, Ros and Thomas (2006) as a
+//! `Prune`.
 //!
 //! A cell is an `IntervalBox`. `SystemPrune` shrinks it until it is proven empty, is no wider
 //! than sigma, or one round no longer removes a significant share of its volume (rho), and
@@ -90,7 +91,8 @@ impl BoxSink for Collect {
     }
 }
 
-/// Counters of a run of the polynomial solver (the kernel's `Stats` in the names of seed 000).
+/// Counters of a run of the polynomial solver (the kernel's `Stats` in the names of Porta et al.
+/// 2006).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SolveStats {
     /// Boxes taken from the pool.
@@ -321,7 +323,7 @@ impl<'a> Solver<'a> {
     /// Runs on `threads` worker threads (at least 1), breadth first: the same set of boxes as
     /// `run`, reported level by level. `level_diagonals`, when given, receives per tree level
     /// the widest primary diagonal among that level's boxes after shrinking (those not proven
-    /// empty): the enclosure reached at each iteration (seed 000, section V).
+    /// empty): the enclosure reached at each iteration (Porta et al. 2006, section V).
     pub fn run_parallel(&self, threads: usize, cancel: &AtomicBool, sink: &mut dyn BoxSink, level_diagonals: Option<&mut Vec<f64>>) -> (Status, SolveStats) {
         let start = self.system.initial_box();
         let mut workers: Vec<_> = (0..threads.max(1)).map(|_| self.prune(&start, level_diagonals.is_some())).collect();

@@ -10,7 +10,7 @@ pub struct SolverSettings {
     /// A box whose primary components are all at most this wide is a solution box. Default 1e-3.
     pub sigma: f64,
     /// Keep shrinking a box while one round leaves less than this fraction of its (primary)
-    /// volume; otherwise bisect it. In (0, 1); default 0.95, the seed's value.
+    /// volume; otherwise bisect it. In (0, 1); default 0.95, the value of Porta et al. (2006).
     pub rho: f64,
     /// Stop after processing this many boxes (the run ends `incomplete`). Default 1,000,000.
     pub max_boxes: u64,

@@ -3,11 +3,11 @@
 //!
 //! `Poly` is symbolic (a sum of monomials with interval coefficients), built once by a problem
 //! builder with `add`, `mul` and `scale`, and evaluated over boxes with outward rounding.
-//! The name says what the seed's solver needs: a polynomial whose every variable has exponent at
-//! most one is *multilinear* (`Poly::is_multilinear`), and for those the values on a box lie in
-//! the convex hull of the values at its corners (Rikun 1997), which the trapezoid clipping of
-//! `contract::TrapezoidClip` uses. Exponents up to two are allowed too, for the formulation
-//! that keeps one variable per distance (Bernstein control points instead of corners).
+//! The name says what the solver of Porta et al. (2003) needs: a polynomial whose every variable
+//! has exponent at most one is *multilinear* (`Poly::is_multilinear`), and for those the values on
+//! a box lie in the convex hull of the values at its corners (Rikun 1997), which the trapezoid
+//! clipping of `contract::TrapezoidClip` uses. Exponents up to two are allowed too, for the
+//! formulation that keeps one variable per distance (Bernstein control points instead of corners).
 //! This module does no IO and knows nothing of geometry.
 
 use super::VarId;

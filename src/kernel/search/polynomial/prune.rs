@@ -38,7 +38,7 @@ impl<F: Filter> Contractor for Screen<F> {
     }
 }
 
-/// The seed's Algorithm 1 on one box: a `Prune` whose cells are boxes of the system.
+/// Algorithm 1 of Porta et al. (2006) on one box: a `Prune` whose cells are boxes of the system.
 pub(super) struct SystemPrune<'a, 's> {
     pub(super) solver: &'s Solver<'a>,
     pub(super) contractor: Box<dyn Contractor + Send + 'a>,
@@ -51,7 +51,7 @@ pub(super) struct SystemPrune<'a, 's> {
 }
 
 impl SystemPrune<'_, '_> {
-    /// Lines 5–9 of the seed's Algorithm 1.
+    /// Lines 5–9 of Algorithm 1 of Porta et al. (2006).
     fn shrink(&mut self, b: &mut IntervalBox, stop: &dyn Fn() -> bool) -> Shrunk {
         let sigma = self.solver.settings.sigma;
         loop {
