@@ -554,8 +554,8 @@ fn solve(args: SolveArgs) -> Result<()> {
         solutions.len(),
         result.clusters,
         match result.status {
-            linkspace::Status::Complete => "complete".to_string(),
-            linkspace::Status::Incomplete(l) => format!("incomplete ({l:?} limit, {undecided} boxes undecided)"),
+            linkspace::Status::Finished => "complete".to_string(),
+            linkspace::Status::Stopped(l) => format!("incomplete ({l:?} limit, {undecided} boxes undecided)"),
         },
         stats.processed,
         stats.empty,
@@ -572,7 +572,7 @@ fn solve(args: SolveArgs) -> Result<()> {
     for r in problem.reductions() {
         writeln!(out, "  reduced: {r}").ok();
     }
-    if result.status == linkspace::Status::Complete && solutions.is_empty() {
+    if result.status == linkspace::Status::Finished && solutions.is_empty() {
         // A complete run with no box is a proof, and says something about the input.
         let why = if fixed.is_empty() { "the loops cannot close as written, within the joint limits" } else { "no assembly has the fixed values given" };
         writeln!(out, "  no configuration: every box was proven empty, so {why}").ok();
@@ -679,8 +679,8 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
             0 => String::new(),
             n => format!("{n} near-degenerate strips (undecided), "),
         },
-        report.completeness.status(),
-        report.completeness.0.map_or(String::new(), |l| format!(" ({})", l.name())),
+        report.completeness.word(),
+        report.completeness.reason().map_or(String::new(), |l| format!(" ({})", l.name())),
         report.stats.seconds
     )
     .ok();
@@ -785,7 +785,7 @@ fn ik6(args: Ik6Args) -> Result<()> {
         report.tip,
         report.unique.len(),
         report.clusters.len(),
-        report.completeness.status(),
+        report.completeness.word(),
         report.processed,
         report.seconds
     )
@@ -895,7 +895,7 @@ fn collisions(args: CollisionsArgs) -> Result<()> {
         pct(s.free_area),
         report.undecided.len(),
         pct(s.undecided_area),
-        report.completeness.status(),
+        report.completeness.word(),
         s.seconds
     )
     .ok();
@@ -919,7 +919,7 @@ fn ik(args: IkArgs) -> Result<()> {
     let report = report::manip3r::IkReport::of(&arm, &found);
     let s = &found.solutions;
     let mut out = std::io::stdout().lock();
-    writeln!(out, "{}: {} solutions proven unique, {} clusters undecided, status {}", report.robot, s.unique.len(), s.clusters.len(), report.completeness.status()).ok();
+    writeln!(out, "{}: {} solutions proven unique, {} clusters undecided, status {}", report.robot, s.unique.len(), s.clusters.len(), report.completeness.word()).ok();
     writeln!(out, "  chain: {}", arm.prepared.choice.reason).ok();
     writeln!(out, "  {}", found.limit_effect.text).ok();
     for sol in &report.solutions {

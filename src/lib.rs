@@ -19,7 +19,7 @@
 //! let problem = LinkageProblem::new(&mechanism, &[("crank_joint".into(), 0.5)], &[]).unwrap();
 //! let settings = SolverSettings { sigma: 1e-6, ..Default::default() };
 //! let found = problem.solver(settings).unwrap().enclose(&AtomicBool::new(false), &mut |_| {});
-//! assert_eq!(found.status, Status::Complete);
+//! assert_eq!(found.status, Status::Finished);
 //! assert_eq!(linkspace::kernel::interval::components(&found.solutions).1, 2);
 //! ```
 

@@ -81,7 +81,7 @@ fn same_points(p: &SingularProblem, set: &SingularSet, joint: &str, reference: &
 
 /// `same_points`, with or without requiring certificates, clusters up to `width` wide.
 fn same_points_with(p: &SingularProblem, set: &SingularSet, joint: &str, reference: &[f64], what: &str, certified_only: bool, width: f64) {
-    assert_eq!(set.status, Status::Complete, "{what}");
+    assert_eq!(set.status, Status::Finished, "{what}");
     let got = cluster_values(p, set, joint);
     assert_eq!(got.len(), reference.len(), "{what}: clusters {got:?} against the closed form {reference:?}");
     for (iv, certified) in &got {
@@ -127,7 +127,7 @@ fn check_four_bar(xml: &str, (d, a, b, c): (f64, f64, f64, f64), counts: (usize,
     same_points_with(&p, &set, "rocker_joint", &output_ref, "output singularities (rocker tip)", false, 1e-4);
     // A generic four-bar has no bifurcation: proven by an empty, complete run.
     let (_, set) = run(xml, SingularKind::Cspace, &[], None, 1e-6);
-    assert_eq!((set.status, set.boxes.len()), (Status::Complete, 0), "C-space singularities of a generic four-bar");
+    assert_eq!((set.status, set.boxes.len()), (Status::Finished, 0), "C-space singularities of a generic four-bar");
 }
 
 #[test]
@@ -153,7 +153,7 @@ fn a_folding_parallelogram_has_certified_free_bifurcations() {
     // near the two closed-form configurations, and nowhere else.
     let xml = four_bar(3.0, 1.0, 3.0, 1.0);
     let (p, set) = run(&xml, SingularKind::Cspace, &[], None, 1e-5);
-    assert_eq!(set.status, Status::Complete);
+    assert_eq!(set.status, Status::Finished);
     let got = cluster_values(&p, &set, "crank_joint");
     assert_eq!(got.len(), 2, "{got:?}");
     for r in [0.0, PI] {
@@ -533,7 +533,7 @@ fn double_butterfly_turning_points_of_theta6_match_an_independent_grid_and_newto
         assert!(reference.iter().any(|&(a, b)| angle_gap(a, r7) < 1e-5 && angle_gap(b, r6) < 1e-5), "grid point ({r7}, {r6}) not found by continuation");
     }
     let (p, set) = run(&urdf_text("double_butterfly.urdf"), SingularKind::Input, &["joint6"], None, 1e-4);
-    assert_eq!(set.status, Status::Complete);
+    assert_eq!(set.status, Status::Finished);
     type Turning = ((f64, f64), (f64, f64), bool);
     let got: Vec<Turning> = cluster_values(&p, &set, "joint7")
         .into_iter()
@@ -644,7 +644,7 @@ fn five_bar_type_two_curves_match_a_dense_grid() {
 
     let sigma = 1e-2;
     let (p, set) = run(&urdf_text("five_bar.urdf"), SingularKind::Input, &["crank1_joint", "crank2_joint"], None, sigma);
-    assert_eq!(set.status, Status::Complete);
+    assert_eq!(set.status, Status::Finished);
     let images: Vec<[(f64, f64); 2]> = set.boxes.iter().map(|b| {
         let v = p.actuator_values(&b.b);
         [v[0], v[1]]
@@ -867,7 +867,7 @@ fn five_bar_equal_rods_cusp_roots_are_the_folded_circles() {
     let actuated: Vec<String> = FIVE_BAR_ACTUATORS.iter().map(|s| s.to_string()).collect();
     let p = SingularProblem::new(&m, &[], SingularKind::Input, &actuated, None).expect("builds");
     let cusps = CuspProblem::new(&m, &p).expect("2 dof").solve(&p, &SolverSettings { sigma: 5e-2, ..Default::default() }, &AtomicBool::new(false)).expect("runs");
-    assert_eq!(cusps.status, Status::Complete);
+    assert_eq!(cusps.status, Status::Finished);
     assert_eq!(cusps.proven(), 0);
     assert!(!cusps.points.is_empty());
     // Each record says why it is undecided: a curve of roots is never proven.
@@ -977,7 +977,7 @@ fn three_rpr_cusps_match(formulation: CuspFormulation) {
     let cp = CuspProblem::with_formulation(&m, &p, formulation).expect("2 dof");
     assert_eq!(cp.formulation, formulation);
     let cusps = cp.solve(&p, &SolverSettings { sigma: 1e-3, ..Default::default() }, &AtomicBool::new(false)).expect("runs");
-    assert_eq!(cusps.status, Status::Complete);
+    assert_eq!(cusps.status, Status::Finished);
     let images: Vec<(Vec<(f64, f64)>, bool)> = cusps
         .points
         .iter()

@@ -26,7 +26,7 @@ fn spatial(name: &str, fixed: &[(&str, f64)]) -> SpatialProblem {
 
 fn enclose(system: &linkspace::kernel::search::Solver<'_>) -> Enclosure {
     let e = system.enclose(&AtomicBool::new(false), &mut |_| {});
-    assert_eq!(e.status, Status::Complete);
+    assert_eq!(e.status, Status::Finished);
     e
 }
 
@@ -514,7 +514,7 @@ fn stewart_pose_reference_case(platform: &str, reference_file: &str, index: usiz
     let job = SolveJob::build(&m, ModelChoice::Pose, &fixed, &[], SolverSettings { threads: 1, ..Default::default() }).expect("builds");
     assert_eq!(job.problem().model(), Model::Pose);
     let r = job.run(&AtomicBool::new(false), &mut |_| {});
-    assert_eq!(r.status, Status::Complete, "{name}");
+    assert_eq!(r.status, Status::Finished, "{name}");
     let count = case["real_solutions"].as_u64().expect("count") as usize;
     assert!(r.boxes.iter().all(|b| b.status == BoxStatus::Unique), "{name}: every box certified: {:?}", r.boxes.iter().map(|b| b.status).collect::<Vec<_>>());
     assert_eq!(r.boxes.len(), count, "{name}: one box per real assembly");
@@ -594,7 +594,7 @@ fn stewart_distance_reference_case(platform: &str, reference_file: &str, index: 
     assert_eq!(job.problem().model(), Model::Distances);
     assert!(job.problem().system().vars.iter().any(|v| v.name.starts_with("r(P")), "squared distances are the unknowns");
     let r = job.run(&AtomicBool::new(false), &mut |_| {});
-    assert_eq!(r.status, Status::Complete, "{name}");
+    assert_eq!(r.status, Status::Finished, "{name}");
     let count = case["real_solutions"].as_u64().expect("count") as usize;
     assert!(r.boxes.iter().all(|b| b.status == BoxStatus::Unique), "{name}: every box certified: {:?}", r.boxes.iter().map(|b| b.status).collect::<Vec<_>>());
     assert_eq!(r.boxes.len(), count, "{name}: one box per real assembly");

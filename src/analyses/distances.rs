@@ -131,7 +131,7 @@ impl Certified {
 
     /// True when the search finished and nothing is undecided.
     pub fn complete(&self) -> bool {
-        self.status == Status::Complete && self.undecided_regions() == 0
+        self.status == Status::Finished && self.undecided_regions() == 0
     }
 
     /// Clusters with something unproven (regions that may or may not hold solutions).
@@ -235,7 +235,7 @@ fn deeper(solvers: &[Solver<'_>], b: &IntervalBox, cancel: &AtomicBool, stats: &
             let (status, st) = solver.run_from(p, cancel, &mut found);
             stats.processed += st.processed;
             stats.certified += st.certified;
-            if status != Status::Complete {
+            if status != Status::Finished {
                 return Err("a deeper search hit its box limit");
             }
             for (f, u) in found.solutions.into_iter().zip(found.unique) {
@@ -435,7 +435,7 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
         Some(start) => {
             let mut found = Collect::default();
             let (status, st) = all_solver.run_from(start, cancel, &mut found);
-            ((status == Status::Complete).then_some(found.solutions), st.processed)
+            ((status == Status::Finished).then_some(found.solutions), st.processed)
         }
     });
     let in_determinants = clock() - t;

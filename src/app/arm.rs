@@ -370,7 +370,7 @@ fn box_set(cover: &Cover, mechanism: &str, joints: &[String]) -> BoxSetResult {
     BoxSetResult {
         mechanism: mechanism.to_string(),
         analysis: "singular_curves".into(),
-        status: Status::Complete,
+        status: Status::Finished,
         settings: SolverSettings { sigma: width, max_boxes: cover.stats.processed, timeout: None, ..Default::default() },
         variables: joints.to_vec(),
         primaries: vec![0, 1],
@@ -449,10 +449,10 @@ impl PreparedRun<SingularityResult> for SingularityRun {
             self.cover.boxes.len(),
             self.cover.clusters,
             match status {
-                Status::Complete => "complete".to_string(),
-                Status::Incomplete(Limit::Cancelled) => "incomplete (cancelled)".to_string(),
-                Status::Incomplete(Limit::Boxes) => "incomplete (box limit)".to_string(),
-                Status::Incomplete(limit) => format!("incomplete ({} limit)", limit.name()),
+                Status::Finished => "complete".to_string(),
+                Status::Stopped(Limit::Cancelled) => "incomplete (cancelled)".to_string(),
+                Status::Stopped(Limit::Boxes) => "incomplete (box limit)".to_string(),
+                Status::Stopped(limit) => format!("incomplete ({} limit)", limit.name()),
             }
         );
         // The joint limits' effect is named only when the file has limits.
@@ -505,7 +505,7 @@ fn internal_motions(chain: &Chain3R, bands: &[motion::Band], joints: &[String], 
     BoxSetResult {
         mechanism: chain.name.clone(),
         analysis: "internal_motions".into(),
-        status: Status::Complete,
+        status: Status::Finished,
         settings: SolverSettings { sigma: precision, ..Default::default() },
         variables: joints.to_vec(),
         primaries: vec![1],
@@ -592,7 +592,7 @@ mod tests {
         let a = load(&m, &[], &[]).expect("3R");
         assert_eq!(a.kind(), MechanismKind::Manipulator3R);
         let r = a.singularities(&query()).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
-        assert_eq!(r.status, Status::Complete);
+        assert_eq!(r.status, Status::Finished);
         assert_eq!((r.cusps.iter().filter(|c| c.certified).count(), r.nodes.iter().filter(|n| n.certified).count(), r.undecided()), (4, 2, 0));
         assert_eq!(r.internal_motions.boxes.len(), 0);
         // Every point where det Df changes sign along a fine grid line lies in a cover box.
@@ -684,7 +684,7 @@ mod tests {
             let q = IkQuery { point, precision: 1e-8, max_boxes: 200_000, timeout: None, threads: 1 };
             let l = limited.inverse_kinematics(&q).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
             let f = free.inverse_kinematics(&q).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
-            assert!(l.status.is_complete() && f.status.is_complete());
+            assert!(l.status.finished() && f.status.finished());
             for s in &l.solutions {
                 assert!(f.solutions.iter().any(|t| same(&t.joints, &s.joints)), "{point:?}: {s:?} is not a solution of the free arm");
                 assert!(!outside(&s.joints), "{point:?}: {s:?} is outside the limits");
@@ -742,10 +742,10 @@ mod tests {
         assert!(ik([1.0, 0.0, 0.0], 0.0).contains("precision must be a number in (0, 1)"));
         // A tight box limit ends incomplete, with its pending boxes as clusters.
         let short = a.inverse_kinematics(&IkQuery { point: [1.0, 0.0, 0.2], precision: 1e-9, max_boxes: 5, timeout: None, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
-        assert!(short.status == Status::Incomplete(Limit::Boxes) && short.solutions.iter().any(|s| !s.unique));
+        assert!(short.status == Status::Stopped(Limit::Boxes) && short.solutions.iter().any(|s| !s.unique));
         // A timeout stops it too (the node passes its --max-wait, past which no reply is sent).
         let late = a.inverse_kinematics(&IkQuery { point: [1.0, 0.0, 0.2], precision: 1e-9, max_boxes: 1_000_000, timeout: Some(std::time::Duration::ZERO), threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
-        assert_eq!(late.status, Status::Incomplete(Limit::Time));
+        assert_eq!(late.status, Status::Stopped(Limit::Time));
         // 3R chains take no fixed joints.
         assert!(load(&m, &[("joint2".into(), 0.1)], &[]).err().map(err).unwrap_or_default().contains("takes no fixed joints"));
     }

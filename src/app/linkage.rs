@@ -162,10 +162,10 @@ pub(crate) fn singular_distance(loops: &LoopSingularities, names: &[String], val
         let open: Vec<String> = loops
             .sets
             .iter()
-            .filter(|s| !(s.boxes.status.is_complete() && s.undecided == 0))
+            .filter(|s| !(s.boxes.status.finished() && s.undecided == 0))
             .map(|s| match s.boxes.status {
-                Status::Incomplete(l) => format!("{} ({} limit, {} boxes undecided)", s.kind, l.name(), s.undecided),
-                Status::Complete => format!("{} ({} boxes undecided)", s.kind, s.undecided),
+                Status::Stopped(l) => format!("{} ({} limit, {} boxes undecided)", s.kind, l.name(), s.undecided),
+                Status::Finished => format!("{} ({} boxes undecided)", s.kind, s.undecided),
             })
             .collect();
         return Err(format!("the singular search did not complete ({}), so no bound on the distance to singularities is claimed", open.join(", ")));
@@ -215,7 +215,7 @@ impl PreparedRun<SingularityResult> for SingularSetsRun {
         let solved = self.sets.solve(&self.settings, cancel).expect("invariant: settings validated when prepared");
         let sets: Vec<SingularSetResult> = self.sets.problems.iter().zip(&solved).map(|(p, set)| set_result(p, &self.settings, set)).collect();
         // The run's status: the first limit any set met.
-        let status = solved.iter().map(|s| s.status).find(|s| !s.is_complete()).unwrap_or(Status::Complete);
+        let status = solved.iter().map(|s| s.status).find(|s| !s.finished()).unwrap_or(Status::Finished);
         let processed = solved.iter().flat_map(|s| &s.stats).map(|s| s.processed).sum();
         let joint_names = self.sets.problems.first().map(|p| p.linkage.free_joints().to_vec()).unwrap_or_default();
         let summary = format!(
@@ -227,7 +227,7 @@ impl PreparedRun<SingularityResult> for SingularSetsRun {
         let empty = |analysis: &str| BoxSetResult {
             mechanism: self.mechanism.clone(),
             analysis: analysis.to_string(),
-            status: Status::Complete,
+            status: Status::Finished,
             settings: self.settings.clone(),
             variables: joint_names.clone(),
             primaries: (0..joint_names.len()).collect(),
@@ -306,10 +306,10 @@ fn set_result(p: &SingularProblem<Linkage>, settings: &SolverSettings, set: &Sin
     };
     let n = boxes.len();
     let verdict = match set.status {
-        Status::Complete if n == 0 => format!("none (proven: a complete search left no box; expected {shape})"),
-        Status::Complete if undecided == 0 => format!("{clusters} clusters ({certified_clusters} certified, {} unproven), {n} boxes, complete (expected {shape})", clusters - certified_clusters),
-        Status::Complete => format!("{clusters} clusters ({certified_clusters} certified), {n} boxes, {undecided} undecided (expected {shape})"),
-        Status::Incomplete(l) => format!("incomplete ({} limit): {clusters} clusters ({certified_clusters} certified), {n} boxes, {undecided} undecided (expected {shape})", l.name()),
+        Status::Finished if n == 0 => format!("none (proven: a complete search left no box; expected {shape})"),
+        Status::Finished if undecided == 0 => format!("{clusters} clusters ({certified_clusters} certified, {} unproven), {n} boxes, complete (expected {shape})", clusters - certified_clusters),
+        Status::Finished => format!("{clusters} clusters ({certified_clusters} certified), {n} boxes, {undecided} undecided (expected {shape})"),
+        Status::Stopped(l) => format!("incomplete ({} limit): {clusters} clusters ({certified_clusters} certified), {n} boxes, {undecided} undecided (expected {shape})", l.name()),
     };
     SingularSetResult {
         kind: p.kind.name(),
@@ -600,7 +600,7 @@ mod tests {
         assert!(loops.actuated_source.contains("<transmission>"), "{}", loops.actuated_source);
         let kinds: Vec<&str> = loops.sets.iter().map(|s| s.kind).collect();
         assert_eq!(kinds, vec!["cspace", "input", "output"]);
-        assert!(loops.complete() && r.status == Status::Complete, "{}", r.summary);
+        assert!(loops.complete() && r.status == Status::Finished, "{}", r.summary);
         // Rocker driving: type II where crank and coupler are in line, |B − O2| = a + b or
         // b − a, B = (d, 0) + c(cos θ4, sin θ4): cos θ4 = (l² − d² − c²) / (2 d c).
         let (d, a_, b, c) = (4.0f64, 1.5f64, 4.0f64, 3.5f64);

@@ -424,7 +424,7 @@ impl LoopSingularities {
     /// True when every set ran to its end with nothing undecided: every singular configuration
     /// is then in a solution box of some set.
     pub fn complete(&self) -> bool {
-        self.sets.iter().all(|s| s.boxes.status.is_complete() && s.undecided == 0)
+        self.sets.iter().all(|s| s.boxes.status.finished() && s.undecided == 0)
     }
 }
 
@@ -666,7 +666,7 @@ mod tests {
         BoxSetResult {
             mechanism: "m".into(),
             analysis: "configuration_space".into(),
-            status: Status::Complete,
+            status: Status::Finished,
             settings: SolverSettings { sigma: 0.1, ..Default::default() },
             variables: vec!["a".into(), "b".into()],
             primaries: vec![0, 1],

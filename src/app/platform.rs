@@ -220,7 +220,7 @@ mod tests {
         // The CLI's defaults (`linkspace distances --redundant`).
         let settings = SolverSettings { sigma: 0.01, rho: 0.99, ..Default::default() };
         let r = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
-        assert_eq!(r.status, Status::Complete);
+        assert_eq!(r.status, Status::Finished);
         assert_eq!(r.clusters, 2);
         // The CLI path (`linkspace distances --redundant`), built independently here.
         let p = PlatformProblem::new(&m, &fixed).expect("platform");

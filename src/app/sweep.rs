@@ -40,8 +40,8 @@ pub fn sweep_task(plan: &Plan, base: &Mechanism, task: &Task, limits: &Limits, c
     let control = Control { limits: *limits, threads: 1, cancel };
     let result = |status: Status, verdict: Option<String>, count: Option<u64>, proven: u64, undecided: u64| {
         let (status, limit) = match status {
-            Status::Complete => (TaskStatus::Complete, None),
-            Status::Incomplete(l) => (TaskStatus::Incomplete, Some(l.name().to_string())),
+            Status::Finished => (TaskStatus::Complete, None),
+            Status::Stopped(l) => (TaskStatus::Incomplete, Some(l.name().to_string())),
         };
         TaskResult { index: task.index, values: task.values.clone(), status, limit, verdict, count, proven, undecided, error: None, seconds: start.elapsed().as_secs_f64() }
     };
@@ -69,7 +69,7 @@ pub fn sweep_task(plan: &Plan, base: &Mechanism, task: &Task, limits: &Limits, c
             // verdict past the deadline was cut short, whatever the searches' status.
             let out_of_time = limits.timeout.is_some_and(|t| start.elapsed() >= t);
             let status = match found.run.status {
-                Status::Complete if cuspidal.is_none() && out_of_time => Status::Incomplete(Limit::Time),
+                Status::Finished if cuspidal.is_none() && out_of_time => Status::Stopped(Limit::Time),
                 s => s,
             };
             result(status, Some(verdict.into()), Some(proven), proven, undecided)

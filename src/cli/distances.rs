@@ -122,9 +122,9 @@ fn summarize(rep: &DistancesReport) -> Result<()> {
     let mut out = std::io::stdout().lock();
     let platform = rep.solutions.iter().any(|s| !s.poses.is_empty());
     let status = match rep.status {
-        linkspace::Status::Complete if rep.complete => "complete".to_string(),
-        linkspace::Status::Complete => format!("not complete ({} regions undecided)", rep.undecided_regions),
-        linkspace::Status::Incomplete(l) => format!("incomplete ({l:?} limit, {} boxes undecided)", rep.undecided.len()),
+        linkspace::Status::Finished if rep.complete => "complete".to_string(),
+        linkspace::Status::Finished => format!("not complete ({} regions undecided)", rep.undecided_regions),
+        linkspace::Status::Stopped(l) => format!("incomplete ({l:?} limit, {} boxes undecided)", rep.undecided.len()),
     };
     writeln!(
         out,

@@ -159,8 +159,8 @@ pub(crate) fn run(args: LoopSingularitiesArgs) -> Result<()> {
             s.boxes,
             s.undecided_boxes,
             match r.status {
-                linkspace::Status::Complete => "complete".to_string(),
-                linkspace::Status::Incomplete(l) => format!("incomplete ({l:?} limit)"),
+                linkspace::Status::Finished => "complete".to_string(),
+                linkspace::Status::Stopped(l) => format!("incomplete ({l:?} limit)"),
             },
             match s.unsearched_charts {
                 0 => format!("{} charts", r.charts),

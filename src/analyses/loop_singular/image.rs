@@ -75,17 +75,17 @@ impl CuspProblem {
         }
         let t0 = Instant::now();
         let mut found = Vec::new();
-        let mut status = Status::Complete;
+        let mut status = Status::Finished;
         let mut stats = Vec::new();
         let mut dropped = 0u64;
         for (i, (_, chart)) in self.charts.iter().enumerate() {
             let Some(s) = remaining(settings, t0) else {
-                status = Status::Incomplete(Limit::Time);
+                status = Status::Stopped(Limit::Time);
                 found.push(ChartBox { chart: i, b: chart.initial_box(), kind: BoxKind::Undecided, note: None });
                 continue;
             };
             let e = self.chart_solver(sp, i, s)?.enclose(cancel, &mut |_| {});
-            if e.status != Status::Complete {
+            if e.status != Status::Finished {
                 status = e.status;
             }
             for (b, u) in e.solutions.into_iter().zip(e.unique) {
@@ -101,7 +101,7 @@ impl CuspProblem {
         let tangent = self.tangent[0];
         let cluster = |found: &[ChartBox]| self.cluster(sp, found);
         // Proven: every box certified with μ away from 0, and the cluster one root (`unique`).
-        let proven = |p: &FoundPoint| p.unproven_reason(Status::Complete).is_none();
+        let proven = |p: &FoundPoint| p.unproven_reason(Status::Finished).is_none();
         let accept = |b: &[IntervalBox], u: &[bool]| u.iter().all(|u| *u) && b.iter().all(|b| !b.dims[tangent].contains(0.0));
         let found = refine_points(found, &cluster, &proven, &|i, s| self.chart_solver(sp, i, s), &|i, b| self.other_chart(i, b), &accept, settings, t0, cancel)?;
         let points = cluster(&found);
@@ -150,7 +150,7 @@ fn torus_cusps(map: &LockedLegMap, settings: &SolverSettings, control: &Control,
     in_rounds(settings, t0, |precision| {
         let cusp_settings = cusps::CuspSettings { precision, method: cusps::Method::Krawczyk };
         let round = cusps::search_with(map, &cusp_settings, &control.remaining_since(t0), &mut |_| {}).map_err(|_| SettingsError::Sigma(settings.sigma))?;
-        let settled = round.status != Status::Complete || round.undecided.is_empty() && round.cusps.iter().all(|c| c.unique);
+        let settled = round.status != Status::Finished || round.undecided.is_empty() && round.cusps.iter().all(|c| c.unique);
         Ok((round, settled))
     })
 }
@@ -248,7 +248,7 @@ fn solve_nodes_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel
     let (found, _) = in_rounds(settings, t0, |precision| {
         let node_settings = nodes::NodeSettings { precision };
         let round = nodes::search_with(map, &found_cusps.cusps, &[], &node_settings, &control.remaining_since(t0), &mut |_| {}).map_err(|_| SettingsError::Sigma(settings.sigma))?;
-        let settled = round.status != Status::Complete || round.undecided.is_empty();
+        let settled = round.status != Status::Finished || round.undecided.is_empty();
         Ok((round, settled))
     })?;
     let mut pairs = Vec::new();
@@ -262,7 +262,7 @@ fn solve_nodes_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel
         let kind = match (proven, a == Some(true) && b == Some(true)) {
             (true, true) => BoxKind::Certified,
             (true, false) => BoxKind::Solution,
-            (false, _) if found.status == Status::Complete => BoxKind::Solution,
+            (false, _) if found.status == Status::Finished => BoxKind::Solution,
             (false, _) => BoxKind::Undecided,
         };
         pairs.push(NodePair { joints: [bounds(torus.joint_values(theta[0])), bounds(torus.joint_values(theta[1]))], kind });
@@ -416,8 +416,8 @@ impl FoundPoint {
     fn unproven_alone(&self, status: Status) -> Option<String> {
         if self.kinds.contains(&BoxKind::Undecided) {
             let limit = match status {
-                Status::Incomplete(l) => format!("its {} limit", l.name()),
-                Status::Complete => "a limit".to_string(),
+                Status::Stopped(l) => format!("its {} limit", l.name()),
+                Status::Finished => "a limit".to_string(),
             };
             return Some(format!("the search stopped on {limit} with boxes of this cluster unsearched"));
         }
@@ -462,17 +462,17 @@ impl NodeProblem {
             return solve_nodes_on_torus(torus, settings, cancel);
         }
         let t0 = Instant::now();
-        let mut status = Status::Complete;
+        let mut status = Status::Finished;
         let mut out = NodeSearch { status, pairs: Vec::new(), near_diagonal: Vec::new(), injective: 0, dropped_other_chart: 0, stats: Vec::new(), seconds: 0.0 };
         let config: Vec<VarId> = (0..sp.base_vars).filter(|i| !self.shared.contains(i)).collect();
         for ((k, k2), system, map) in &self.charts {
             let Some(s) = remaining(settings, t0) else {
-                status = Status::Incomplete(Limit::Time);
+                status = Status::Stopped(Limit::Time);
                 out.near_diagonal.push(system.initial_box());
                 continue;
             };
             let e = sp.linkage.extended_solver(system, s)?.enclose(cancel, &mut |_| {});
-            if e.status != Status::Complete {
+            if e.status != Status::Finished {
                 status = e.status;
             }
             let mapped: Vec<VarId> = sp.multipliers.iter().map(|&m| map[m]).collect();
@@ -776,7 +776,7 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
     }
     let images: Vec<Vec<(f64, f64)>> = set.boxes.iter().map(|b| sp.actuator_values(&b.b)).collect();
     let stopped = || budget.interrupted();
-    let unfinished = |limit: Limit| ActuatorRegions { grid, status: Status::Incomplete(limit), blocked_cells: 0, sign: SIGN_OF_F_P, regions: Vec::new(), seconds: t0.elapsed().as_secs_f64() };
+    let unfinished = |limit: Limit| ActuatorRegions { grid, status: Status::Stopped(limit), blocked_cells: 0, sign: SIGN_OF_F_P, regions: Vec::new(), seconds: t0.elapsed().as_secs_f64() };
     let mut blocked = vec![false; grid * grid];
     for (k, im) in images.iter().enumerate() {
         if k % 64 == 0 {
@@ -794,7 +794,7 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
     if let Some(limit) = stopped() {
         return Ok(unfinished(limit));
     }
-    let mut out = ActuatorRegions { grid, status: Status::Complete, blocked_cells: blocked.iter().filter(|b| **b).count(), sign: SIGN_OF_F_P, regions: Vec::new(), seconds: 0.0 };
+    let mut out = ActuatorRegions { grid, status: Status::Finished, blocked_cells: blocked.iter().filter(|b| **b).count(), sign: SIGN_OF_F_P, regions: Vec::new(), seconds: 0.0 };
     let wrap = |x: i64, ax: &Axis| if (0..grid as i64).contains(&x) { Some(x as usize) } else if ax.periodic { Some(x.rem_euclid(grid as i64) as usize) } else { None };
     let free_regions = crate::kernel::interval::flood_fill(grid * grid, |c| !blocked[c], |c, next| {
         let (i, j) = (c / grid, c % grid);
@@ -850,7 +850,7 @@ fn sample_region(m: &Mechanism, sp: &SingularProblem, sample: &[f64], cells: usi
     let e = solver.enclose(cancel, &mut |_| {});
     let certified: Vec<&IntervalBox> = e.solutions.iter().zip(&e.unique).filter(|(_, u)| **u).map(|(b, _)| b).collect();
     let boxes = [certified.len(), e.solutions.len() - certified.len(), e.undecided.len()];
-    let complete = e.status == Status::Complete && boxes[1] == 0 && boxes[2] == 0;
+    let complete = e.status == Status::Finished && boxes[1] == 0 && boxes[2] == 0;
     let configurations = complete.then_some(certified.len());
     let mut signs = Some([0usize, 0]);
     for b in &certified {
@@ -902,7 +902,7 @@ fn sample_region_on_torus(torus: &PlatformTorus, sample: &[f64], cells: usize, s
             _ => signs = None,
         }
     }
-    let complete = found.status == Status::Complete && open == 0;
+    let complete = found.status == Status::Finished && open == 0;
     ActuatorRegion { cells, sample: sample.to_vec(), configurations: complete.then_some(counted), signs: if complete { signs } else { None }, boxes: [counted, 0, open] }
 }
 
@@ -921,13 +921,13 @@ pub fn verdict(cover: &SingularSet, cusps: &PointSearch, nodes: &NodeSearch, reg
         return AssemblyChangeVerdict { answer: "yes", reason: format!("{} certified cusp(s) of the type-II image: a loop around one changes assembly mode without crossing a singularity", cusps.proven()) };
     }
     let mut gaps = Vec::new();
-    if cover.status != Status::Complete {
+    if cover.status != Status::Finished {
         gaps.push("the type-II cover is incomplete".to_string());
     }
-    if cusps.status != Status::Complete || !cusps.points.is_empty() {
+    if cusps.status != Status::Finished || !cusps.points.is_empty() {
         gaps.push(format!("the cusp search is {} with {} unproven cluster(s)", status_word(cusps.status), cusps.points.len()));
     }
-    if nodes.status != Status::Complete || nodes.undecided() > 0 {
+    if nodes.status != Status::Finished || nodes.undecided() > 0 {
         gaps.push(format!("the node search is {} with {} undecided pair(s) or near-diagonal box(es)", status_word(nodes.status), nodes.undecided()));
     }
     if nodes.proven() > 0 {
@@ -940,7 +940,7 @@ pub fn verdict(cover: &SingularSet, cusps: &PointSearch, nodes: &NodeSearch, reg
             Some(_) => {}
         }
     }
-    if let Status::Incomplete(limit) = regions.status {
+    if let Status::Stopped(limit) = regions.status {
         gaps.push(format!("the raster of regions stopped early ({} limit)", limit.name()));
     } else if regions.regions.is_empty() {
         gaps.push("no region found on the grid".to_string());
@@ -959,7 +959,7 @@ pub fn verdict(cover: &SingularSet, cusps: &PointSearch, nodes: &NodeSearch, reg
 }
 
 fn status_word(s: Status) -> &'static str {
-    if s == Status::Complete {
+    if s == Status::Finished {
         "complete"
     } else {
         "incomplete"
@@ -1084,7 +1084,7 @@ pub struct ImagePoints {
 impl ImagePoints {
     /// The report of a cusp search.
     pub fn cusps(sp: &SingularProblem, cusps: &PointSearch) -> Self {
-        let complete = cusps.status == Status::Complete && cusps.points.len() == cusps.proven();
+        let complete = cusps.status == Status::Finished && cusps.points.len() == cusps.proven();
         Self {
             mechanism: sp.linkage.name.clone(),
             actuated: sp.actuated.clone(),
@@ -1100,7 +1100,7 @@ impl ImagePoints {
 
     /// The report of a node search.
     pub fn nodes(sp: &SingularProblem, nodes: &NodeSearch) -> Self {
-        let complete = nodes.status == Status::Complete && nodes.undecided() == 0;
+        let complete = nodes.status == Status::Finished && nodes.undecided() == 0;
         Self {
             mechanism: sp.linkage.name.clone(),
             actuated: sp.actuated.clone(),
@@ -1124,10 +1124,10 @@ impl ImageReport {
         let verdict = verdict(cover, cusps, nodes, &regions);
         // "complete" is the crate's one rule: no limit met and nothing undecided (an unproven
         // cusp or node, a near-diagonal box, a region whose assembly modes are not proven).
-        let complete = [cover.status, cusps.status, nodes.status].iter().all(|s| *s == Status::Complete)
+        let complete = [cover.status, cusps.status, nodes.status].iter().all(|s| *s == Status::Finished)
             && cusps.points.len() == cusps.proven()
             && nodes.undecided() == 0
-            && regions.status == Status::Complete
+            && regions.status == Status::Finished
             && regions.regions.iter().all(|r| r.configurations.is_some() && r.signs.is_some());
         Self {
             mechanism: sp.linkage.name.clone(),
@@ -1160,14 +1160,14 @@ mod tests {
     fn an_unproven_cusp_says_why() {
         let reason = |p: &FoundPoint, s: Status| p.unproven_reason(s).unwrap_or_default();
         let proven = point_of(&[(0.0, 1.0), (0.5, 2.0)], &[BoxKind::Certified; 2], false);
-        assert_eq!(proven.unproven_reason(Status::Complete), None);
+        assert_eq!(proven.unproven_reason(Status::Finished), None);
         let cut = point_of(&[(0.0, 1.0)], &[BoxKind::Undecided], false);
-        assert!(reason(&cut, Status::Incomplete(Limit::Time)).contains("its time limit"), "{}", reason(&cut, Status::Incomplete(Limit::Time)));
+        assert!(reason(&cut, Status::Stopped(Limit::Time)).contains("its time limit"), "{}", reason(&cut, Status::Stopped(Limit::Time)));
         let flat = point_of(&[(0.0, 1.0)], &[BoxKind::Certified], true);
-        assert!(reason(&flat, Status::Complete).contains("μ may vanish"));
+        assert!(reason(&flat, Status::Finished).contains("μ may vanish"));
         let open = point_of(&[(0.0, 1.0), (1.0, 2.0)], &[BoxKind::Certified, BoxKind::Solution], false);
-        assert!(reason(&open, Status::Complete).starts_with("1 of its 2 boxes"), "{}", reason(&open, Status::Complete));
+        assert!(reason(&open, Status::Finished).starts_with("1 of its 2 boxes"), "{}", reason(&open, Status::Finished));
         let two = point_of(&[(0.0, 1.0), (1.5, 2.0)], &[BoxKind::Certified; 2], false);
-        assert!(reason(&two, Status::Complete).contains("possibly more than one cusp"));
+        assert!(reason(&two, Status::Finished).contains("possibly more than one cusp"));
     }
 }

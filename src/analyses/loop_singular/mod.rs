@@ -33,7 +33,7 @@ impl<L: Coordinates> SingularProblem<L> {
     fn solve_charts(&self, settings: &SolverSettings, cancel: &AtomicBool) -> Result<SingularSet, SolveError> {
         let t0 = Instant::now();
         let mut boxes = Vec::new();
-        let mut status = Status::Complete;
+        let mut status = Status::Finished;
         let mut stats = Vec::new();
         let mut dropped_other_chart = 0u64;
         let mut unsearched_charts = 0;
@@ -46,7 +46,7 @@ impl<L: Coordinates> SingularProblem<L> {
                 // each of them (chart j has m_j = 1 within that reach): a mechanism of thousands
                 // of joints has thousands of charts, and a box per chart would cost more to
                 // build and report than the deadline allows.
-                status = Status::Incomplete(if cancelled { Limit::Cancelled } else { Limit::Time });
+                status = Status::Stopped(if cancelled { Limit::Cancelled } else { Limit::Time });
                 boxes.push(SingularBox { chart: k, b: self.augmented.initial_box(), status: BoxKind::Undecided });
                 unsearched_charts = self.chart_count() - k;
                 break;
@@ -55,7 +55,7 @@ impl<L: Coordinates> SingularProblem<L> {
             let s = SolverSettings { timeout: remaining, ..settings.clone() };
             let solver = self.linkage.extended_solver(&chart, s)?;
             let e = solver.enclose(cancel, &mut |_| {});
-            if e.status != Status::Complete {
+            if e.status != Status::Finished {
                 status = e.status;
             }
             for (b, u) in e.solutions.into_iter().zip(e.unique) {

@@ -169,7 +169,7 @@ impl<L: Coordinates> SingularProblem<L> {
             let remaining = left();
             let cancelled = cancel.load(Ordering::Relaxed);
             if cancelled || remaining.is_some_and(|r| r.is_zero()) {
-                status = Status::Incomplete(if cancelled { Limit::Cancelled } else { Limit::Time });
+                status = Status::Stopped(if cancelled { Limit::Cancelled } else { Limit::Time });
                 boxes.extend(leaves.solutions[i..].iter().map(undecided));
                 break;
             }
@@ -183,7 +183,7 @@ impl<L: Coordinates> SingularProblem<L> {
                 let solver = self.linkage.extended_solver(chart, SolverSettings { timeout: left(), threads: 1, ..settings.clone() })?;
                 let mut found = Collect::default();
                 let (s, st) = solver.run_from(start, cancel, &mut found);
-                if s != Status::Complete {
+                if s != Status::Finished {
                     status = s;
                 }
                 add(&mut stats[k], &st);
@@ -312,7 +312,7 @@ mod tests {
             let rates = p.linkage.rate_matrix(kind, &p.actuated, p.output.as_ref()).expect("square rows");
             let fast = p.solve_points(&rates, &settings, &cancel).expect("valid");
             let charts = p.solve_charts(&settings, &cancel).expect("valid");
-            assert!(fast.status.is_complete() && charts.status.is_complete());
+            assert!(fast.status.finished() && charts.status.finished());
             assert_eq!(fast.clusters.len(), 2, "{kind:?} {actuated}");
             assert_eq!(fast.certified_clusters(), 2, "{kind:?} {actuated}");
             assert_eq!(fast.boxes.len(), 2, "{kind:?} {actuated}: one box per point");

@@ -215,11 +215,11 @@ pub fn baseline_child(args: &Bench3rArgs, file: &Path) -> Result<()> {
     let control = Control { limits, threads: 1, cancel: &cancel };
     let run = arm3r::singularities(&chain, args.precision, true, &control, &mut |_| {})?;
     let limit = match run.status {
-        Status::Complete => None,
-        Status::Incomplete(l) => Some(l.name()),
+        Status::Finished => None,
+        Status::Stopped(l) => Some(l.name()),
     };
     let line = serde_json::json!({
-        "status": if run.status.is_complete() { "complete" } else { "incomplete" },
+        "status": if run.status.finished() { "complete" } else { "incomplete" },
         "limit": limit,
         "cusps": run.cusps.cusps.len(),
         "undecided_cusp_boxes": run.cusps.undecided.len(),

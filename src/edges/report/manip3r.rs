@@ -22,7 +22,8 @@ use crate::analyses::arm3r::select::{Choice, Scope};
 use crate::analyses::arm3r::verdict::Verdict;
 use crate::analyses::arm3r::Prepared;
 use crate::model::rounding::Snap;
-use crate::kernel::search::{Incompleteness, Status};
+use super::kernel::CompletenessDef;
+use crate::kernel::outcome::{Completeness, Incompleteness};
 use inari::Interval;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -179,50 +180,6 @@ impl From<&NodeSearch> for NodeStats {
     }
 }
 
-/// Whether a report's answer is complete, written as its `status` (`complete` or `incomplete`)
-/// and, when incomplete, its `limit`: the kernel's limit that stopped a search (`boxes`, `time`,
-/// `memory`, `cancelled`), else `near_degenerate` (strips set aside), else `undecided` (boxes or
-/// pairs left at the precision, cusps without a uniqueness proof). `search::Incompleteness::of`
-/// is the one rule.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Completeness(pub Option<Incompleteness>);
-
-impl Completeness {
-    /// Complete: every cell decided, nothing left open.
-    pub const COMPLETE: Completeness = Completeness(None);
-
-    /// Of a run that left nothing else open: complete exactly when no limit stopped it.
-    pub fn of_run(status: Status) -> Self {
-        Completeness(Incompleteness::of(status, 0, false))
-    }
-
-    /// True when nothing is undecided.
-    pub fn is_complete(self) -> bool {
-        self.0.is_none()
-    }
-
-    /// `complete` or `incomplete`.
-    pub fn status(self) -> &'static str {
-        if self.is_complete() {
-            "complete"
-        } else {
-            "incomplete"
-        }
-    }
-}
-
-impl Serialize for Completeness {
-    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let mut map = serializer.serialize_map(None)?;
-        map.serialize_entry("status", self.status())?;
-        if let Some(why) = self.0 {
-            map.serialize_entry("limit", why.name())?;
-        }
-        map.end()
-    }
-}
-
 /// Counters.
 #[derive(Clone, Debug, Serialize)]
 pub struct SearchCounts {
@@ -246,7 +203,7 @@ pub struct SingularityReport {
     /// Settings.
     pub settings: Settings,
     /// `status` and, when incomplete, `limit` (why).
-    #[serde(flatten)]
+    #[serde(flatten, serialize_with = "CompletenessDef::serialize")]
     pub completeness: Completeness,
     /// Certified cusps.
     pub cusps: Vec<CuspRecord>,
@@ -332,7 +289,7 @@ impl SingularityReport {
         // Counted as `app` counts its uncertified records, for the one rule of `Incompleteness::of`.
         let undecided = cusps.undecided.len() + cusps.cusps.iter().filter(|c| !c.unique).count() + nodes.map_or(0, |n| n.undecided.len());
         let near = cusps.bands.iter().any(|b| b.near.is_some());
-        let completeness = Completeness(Incompleteness::of(status, undecided, near));
+        let completeness = Completeness::of(status, undecided, near);
         let internal_motions = cusps
             .bands
             .iter()
@@ -391,12 +348,12 @@ impl SingularityReport {
     /// only reason for `incomplete` was undecided boxes, they are moved out of `undecided`
     /// (and cusp boxes without a uniqueness proof out of `cusps`) and the report is complete.
     pub fn explain(&mut self, attribution: Attribution) {
-        let moves = attribution.explained && self.completeness == Completeness(Some(Incompleteness::Undecided)) && self.undecided_total[1] == 0 && self.cusps.iter().all(|c| !c.unique);
+        let moves = attribution.explained && self.completeness == Completeness::Incomplete(Incompleteness::Undecided) && self.undecided_total[1] == 0 && self.cusps.iter().all(|c| !c.unique);
         if moves {
             self.undecided.cusps.clear();
             self.undecided_total[0] = 0;
             self.cusps.clear();
-            self.completeness = Completeness::COMPLETE;
+            self.completeness = Completeness::Complete;
         }
         self.explained_undecided = Some(attribution);
     }
@@ -423,7 +380,7 @@ pub struct IkReport {
     pub point: Vec<f64>,
     /// `status` and, when incomplete, `limit`: the limit that stopped the run (`boxes`, `time`,
     /// `memory` or `cancelled`).
-    #[serde(flatten)]
+    #[serde(flatten, serialize_with = "CompletenessDef::serialize")]
     pub completeness: Completeness,
     /// Solutions, unique ones first.
     pub solutions: Vec<IkRecord>,
@@ -508,7 +465,7 @@ pub struct CollisionReport {
     pub pairs: Vec<[String; 2]>,
     /// `status` and, when incomplete, `limit`: the limit that stopped the run (`boxes`, `time`,
     /// `memory` or `cancelled`).
-    #[serde(flatten)]
+    #[serde(flatten, serialize_with = "CompletenessDef::serialize")]
     pub completeness: Completeness,
     /// Boxes where a pair collides everywhere.
     pub colliding: Vec<CollidingRecord>,

@@ -2,12 +2,13 @@
 //! six-joint arms, and of `path-check` (against the 6R arm's or a 3R positioning structure's
 //! singular set), from `app`'s results.
 
-use super::manip3r::Completeness;
+use super::kernel::CompletenessDef;
+use crate::kernel::outcome::Completeness;
 use crate::app::{ArmCuspidality, ArmIk6, ArmPathCheck, PathSet};
 use crate::kernel::interval::Interval;
 use crate::analyses::joint_path::{SegmentVerdict, Span, SpanReason};
 use crate::analyses::arm6r::{Chain6R, CuspidalVerdict, MostSolutions};
-use crate::kernel::search::Incompleteness;
+
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -31,7 +32,7 @@ pub struct Ik6Report {
     /// qz, qw; 16 a 4x4 matrix, row-major.
     pub pose: Vec<f64>,
     /// `status` and, when incomplete, `limit`.
-    #[serde(flatten)]
+    #[serde(flatten, serialize_with = "CompletenessDef::serialize")]
     pub completeness: Completeness,
     /// Boxes each proven to hold exactly one solution.
     pub unique: Vec<JointBoxes>,
@@ -52,7 +53,7 @@ impl Ik6Report {
             tip: chain.tip.clone(),
             joints: chain.joints.to_vec(),
             pose: found.pose.numbers().to_vec(),
-            completeness: Completeness(Incompleteness::of(s.status, s.clusters.len(), false)),
+            completeness: Completeness::of(s.status, s.clusters.len(), false),
             unique: s.unique.iter().map(|b| joints(chain, b)).collect(),
             clusters: s.clusters.iter().map(|c| joints(chain, &c.hull)).collect(),
             processed: s.stats.processed,

@@ -8,7 +8,8 @@ use crate::app::{ArmIk6, ArmPathCheck, Bounds, BoxSetResult, IkResult, ResultBox
 use crate::analyses::arm6r::{Chain6R, SegmentVerdict};
 use crate::analyses::arm3r::branches::SingularBranches;
 use crate::analyses::arm3r::joints_over;
-use crate::kernel::search::{BoxStatus, Incompleteness, SolverSettings, Status};
+use crate::kernel::outcome::{BoxStatus, Completeness, Incompleteness, Status};
+use crate::kernel::search::SolverSettings;
 
 /// A header stamped now (wall clock) in `frame`.
 pub fn header(frame: &str) -> Header {
@@ -45,7 +46,7 @@ pub fn box_set(r: &BoxSetResult, run_id: u64) -> BoxSet {
     // Complete means nothing undecided, as in the CLI's reports: a finished run that left
     // undecided boxes (a platform's cluster without a proof) is incomplete, limit "undecided".
     let undecided = r.boxes.iter().filter(|b| b.status == BoxStatus::Undecided).count();
-    let (status, limit) = match Incompleteness::of(r.status, undecided, false) {
+    let (status, limit) = match Completeness::of(r.status, undecided, false).reason() {
         None => (msgs::SET_COMPLETE, ""),
         Some(why) => (msgs::SET_INCOMPLETE, why.name()),
     };
@@ -184,7 +185,7 @@ fn intervals(b: &[Bounds]) -> Vec<msgs::Interval> {
 pub fn singularity_report(r: &SingularityResult, run_id: u64) -> SingularityReport {
     // Near-degenerate strips travel as undecided internal-motion boxes.
     let near = r.internal_motions.boxes.iter().any(|b| b.status == BoxStatus::Undecided);
-    let limit = Incompleteness::of(r.status, r.undecided(), near);
+    let limit = Completeness::of(r.status, r.undecided(), near).reason();
     SingularityReport {
         header: header(&joint_frame(&r.mechanism)),
         mechanism: r.mechanism.clone(),
@@ -308,7 +309,7 @@ fn crossing_set(r: &SingularityResult, b: Option<&SingularBranches>, run_id: u64
     let set = BoxSetResult {
         mechanism: r.mechanism.clone(),
         analysis: "branch_crossings".into(),
-        status: Status::Complete,
+        status: Status::Finished,
         settings: SolverSettings { sigma: r.query.precision, ..Default::default() },
         variables: r.joint_names.iter().chain(&r.workspace_names).cloned().collect(),
         primaries: (0..r.joint_names.len()).collect(),
@@ -390,13 +391,13 @@ pub fn ik_response(r: &IkResult) -> InverseKinematicsResponse {
     let unique = r.solutions.iter().filter(|s| s.unique).count();
     let clusters = r.solutions.len() - unique;
     let mut message = format!("{unique} solutions proven unique, {clusters} clusters undecided at sigma (each may hold one or several solutions, or a line of them)");
-    if let crate::kernel::search::Status::Incomplete(limit) = r.status {
+    if let crate::kernel::search::Status::Stopped(limit) = r.status {
         message.push_str(&format!("; incomplete ({} limit): the clusters include the boxes left pending", limit.name()));
     }
     InverseKinematicsResponse {
         ok: true,
         message,
-        complete: r.status.is_complete(),
+        complete: r.status.finished(),
         solutions: r
             .solutions
             .iter()
@@ -416,7 +417,7 @@ pub fn ik_response(r: &IkResult) -> InverseKinematicsResponse {
 pub fn ik6_response(chain: &Chain6R, found: &ArmIk6) -> InverseKinematics6Response {
     let s = &found.solutions;
     let mut message = format!("{} solutions proven unique, {} clusters undecided at sigma", s.unique.len(), s.clusters.len());
-    if let crate::kernel::search::Status::Incomplete(limit) = s.status {
+    if let crate::kernel::search::Status::Stopped(limit) = s.status {
         message.push_str(&format!("; incomplete ({} limit): the clusters include the boxes left pending", limit.name()));
     }
     let as_box = |k: usize, b: &[crate::kernel::interval::Interval; 6]| LsBox { intervals: b.iter().map(|x| msgs::Interval { lower: x.inf(), upper: x.sup() }).collect(), status: msgs::BOX_SOLUTION, level: 0, cluster: k as i32 };
@@ -424,7 +425,7 @@ pub fn ik6_response(chain: &Chain6R, found: &ArmIk6) -> InverseKinematics6Respon
     InverseKinematics6Response {
         ok: true,
         message,
-        complete: crate::kernel::search::Incompleteness::of(s.status, s.clusters.len(), false).is_none(),
+        complete: Completeness::of(s.status, s.clusters.len(), false).is_complete(),
         solutions: boxes.iter().enumerate().map(|(k, b)| as_box(k, b)).collect(),
         joint_names: chain.joints.to_vec(),
         unique: (0..boxes.len()).map(|k| k < s.unique.len()).collect(),

@@ -71,10 +71,10 @@ impl Outcome {
     /// (boxes processed, boxes left pending, complete) for the final progress message.
     fn counts(&self) -> (u64, usize, bool) {
         match self {
-            Outcome::BoxSet(r) => (r.stats.processed, r.boxes.iter().filter(|b| b.status == crate::kernel::search::BoxStatus::Undecided).count(), r.status == Status::Complete),
-            Outcome::Singularities(r) => (r.processed, r.undecided(), r.status == Status::Complete),
-            Outcome::InverseKinematics(r) => (r.processed, 0, r.status == Status::Complete),
-            Outcome::InverseKinematics6(Ok(r), _) => (r.solutions.stats.processed, r.solutions.clusters.len(), r.solutions.status == Status::Complete),
+            Outcome::BoxSet(r) => (r.stats.processed, r.boxes.iter().filter(|b| b.status == crate::kernel::search::BoxStatus::Undecided).count(), r.status == Status::Finished),
+            Outcome::Singularities(r) => (r.processed, r.undecided(), r.status == Status::Finished),
+            Outcome::InverseKinematics(r) => (r.processed, 0, r.status == Status::Finished),
+            Outcome::InverseKinematics6(Ok(r), _) => (r.solutions.stats.processed, r.solutions.clusters.len(), r.solutions.status == Status::Finished),
             Outcome::InverseKinematics6(Err(_), _) => (0, 0, false),
         }
     }
@@ -761,7 +761,7 @@ impl State {
         let going = self.runs.values().any(|r| r.mechanism == k && r.generation == generation && matches!(r.kind, RunKind::ConfigurationSpace | RunKind::Singularities { load_time: true }));
         let m = &mut self.mechanisms[k];
         m.message = [&m.cspace_note, &m.singular_note].into_iter().filter(|n| !n.is_empty()).cloned().collect::<Vec<_>>().join("; ");
-        let complete = m.configuration_space.as_ref().is_none_or(|c| c.status == Status::Complete) && m.singularities.as_ref().is_none_or(|s| s.status == Status::Complete);
+        let complete = m.configuration_space.as_ref().is_none_or(|c| c.status == Status::Finished) && m.singularities.as_ref().is_none_or(|s| s.status == Status::Finished);
         m.state = if going {
             RunState::Running
         } else if complete {
@@ -1037,8 +1037,8 @@ impl State {
         };
         let m = &mut self.mechanisms[r.mechanism];
         let status = match result.status {
-            Status::Complete => "complete".to_string(),
-            Status::Incomplete(l) => format!("incomplete ({} limit)", l.name()),
+            Status::Finished => "complete".to_string(),
+            Status::Stopped(l) => format!("incomplete ({} limit)", l.name()),
         };
         let summary = format!("{name}: run {run} ({:?}) {status}: {} boxes, {} clusters, {:.3} s", r.kind, result.boxes.len(), result.clusters, result.stats.seconds);
         match r.kind {
@@ -1080,7 +1080,7 @@ impl State {
                 if let Err(e) = m.topics.solve_result.async_publish(set.clone()).await {
                     eprintln!("linkspace: publishing {}/solve_result: {e:?}", m.prefix);
                 }
-                let cancelled = result.status == Status::Incomplete(Limit::Cancelled);
+                let cancelled = result.status == Status::Stopped(Limit::Cancelled);
                 if let Some(h) = r.goal {
                     let end = if cancelled { GoalEndStatus::Canceled } else { GoalEndStatus::Succeeded };
                     self.goal_result(h, end, SolveActionResult { ok: true, message: format!("run {run}: {status}"), run_id: run, result: set });
@@ -1642,7 +1642,7 @@ impl State {
         if !c.note.is_empty() {
             message.push_str(&format!(" ({})", c.note));
         }
-        if m.configuration_space.as_ref().is_some_and(|cs| cs.status != Status::Complete) {
+        if m.configuration_space.as_ref().is_some_and(|cs| cs.status != Status::Finished) {
             message.push_str("; the configuration space is incomplete (undecided boxes are not classified)");
         }
         ClassifyResponse {

@@ -12,7 +12,8 @@
 
 use super::limits::{process_cpu_seconds, Limit, Limits, Progress, Status};
 use super::settings::{SettingsError, SolverSettings};
-use super::share::Wire;
+
+pub use crate::kernel::outcome::BoxStatus;
 use super::{driver, Prune, Sink, Stats, Step, Store, Undecided};
 use crate::kernel::contract::{Contraction, Contractor, Filter, Filtered, Inclusion, LpShrink, Newton, Propagation, Sequence};
 use crate::kernel::interval::IntervalBox;
@@ -23,37 +24,6 @@ use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 use thiserror::Error;
-
-/// The tag of a reported box.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BoxStatus {
-    /// No wider than sigma and not proven empty.
-    Solution,
-    /// A solution box proven (interval Newton) to hold exactly one solution.
-    Unique,
-    /// Left unprocessed when a limit stopped the run.
-    Undecided,
-}
-
-impl Wire for BoxStatus {
-    fn put(&self, out: &mut Vec<u8>) {
-        (*self as u8).put(out)
-    }
-    fn take(input: &mut &[u8]) -> Self {
-        match u8::take(input) {
-            0 => BoxStatus::Solution,
-            1 => BoxStatus::Unique,
-            _ => BoxStatus::Undecided,
-        }
-    }
-}
-
-impl BoxStatus {
-    /// A solution box, certified or not.
-    pub fn is_solution(self) -> bool {
-        matches!(self, BoxStatus::Solution | BoxStatus::Unique)
-    }
-}
 
 /// Where results go, as they are found.
 pub trait BoxSink {
@@ -425,8 +395,8 @@ impl<'a> Solver<'a> {
             let timed = Solver { system: deeper.system, primaries: deeper.primaries.clone(), units: deeper.units.clone(), settings: SolverSettings { timeout: remaining.or(self.settings.timeout), ..deeper.settings.clone() }, factory: deeper.factory.clone() };
             let mut found = Collect::default();
             match timed.run_from(b.clone(), cancel, &mut found) {
-                (Status::Complete, _) if found.solutions.is_empty() => Probe::Empty,
-                (Status::Incomplete(Limit::Time | Limit::Cancelled), _) => Probe::NotRun,
+                (Status::Finished, _) if found.solutions.is_empty() => Probe::Empty,
+                (Status::Stopped(Limit::Time | Limit::Cancelled), _) => Probe::NotRun,
                 _ => Probe::Kept,
             }
         };
@@ -585,7 +555,7 @@ impl<'a> Solver<'a> {
             let finer = Solver { system: self.system, primaries: self.primaries.clone(), units: self.units.clone(), settings: SolverSettings { sigma, max_boxes: plan.max_boxes, timeout: left, threads: 1, ..self.settings.clone() }, factory: self.factory.clone() };
             let mut found = Collect::default();
             let (status, stats) = finer.run_from(start.clone(), cancel, &mut found);
-            if let Status::Incomplete(limit) = status {
+            if let Status::Stopped(limit) = status {
                 tried.push(format!("sigma {sigma:.1e}: stopped on its {} limit after {} boxes", limit.name(), stats.processed));
                 break;
             }
@@ -885,7 +855,7 @@ mod tests {
         let cancel = AtomicBool::new(false);
         let coarse = Solver::new(&s, SolverSettings { sigma: 1.0, use_lp: false, ..Default::default() }).expect("valid");
         let mut out = Collect::default();
-        assert_eq!(coarse.run(&cancel, &mut out).0, Status::Complete);
+        assert_eq!(coarse.run(&cancel, &mut out).0, Status::Finished);
         let h = std::f64::consts::FRAC_1_SQRT_2;
         let cluster = out.solutions.clone();
         assert!(cluster.iter().any(|b| b.contains(&[h, h])), "{cluster:?} {:?}", out.unique);
@@ -915,7 +885,7 @@ mod tests {
         let solver = Solver::new(&s, SolverSettings { sigma: 1e-6, ..Default::default() }).expect("valid");
         let mut out = Collect::default();
         let (status, stats) = solver.run(&AtomicBool::new(false), &mut out);
-        assert_eq!(status, Status::Complete);
+        assert_eq!(status, Status::Finished);
         let h = std::f64::consts::FRAC_1_SQRT_2;
         assert!(out.solutions.iter().any(|b| b.contains(&[h, h])));
         assert!(out.solutions.iter().any(|b| b.contains(&[-h, -h])));
@@ -929,7 +899,7 @@ mod tests {
         let solver = Solver::new(&s, SolverSettings { sigma: 1e-9, max_boxes: 2, ..Default::default() }).expect("valid");
         let mut out = Collect::default();
         let (status, _) = solver.run(&AtomicBool::new(false), &mut out);
-        assert_eq!(status, Status::Incomplete(Limit::Boxes));
+        assert_eq!(status, Status::Stopped(Limit::Boxes));
         let h = std::f64::consts::FRAC_1_SQRT_2;
         for p in [[h, h], [-h, -h]] {
             assert!(out.solutions.iter().chain(&out.undecided).any(|b| b.contains(&p)), "lost {p:?}");
@@ -942,7 +912,7 @@ mod tests {
         let solver = Solver::new(&s, SolverSettings::default()).expect("valid");
         let mut out = Collect::default();
         let (status, stats) = solver.run(&AtomicBool::new(true), &mut out);
-        assert_eq!(status, Status::Incomplete(Limit::Cancelled));
+        assert_eq!(status, Status::Stopped(Limit::Cancelled));
         assert_eq!(stats.processed, 0);
         assert_eq!(out.undecided.len(), 1);
     }
