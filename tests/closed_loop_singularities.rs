@@ -7,7 +7,8 @@ use super::util::urdf_text;
 use linkspace::model::urdf;
 use linkspace::formulate::{CuspFormulation, CuspProblem};
 use linkspace::formulate::{Output, SingularKind, SingularProblem};
-use linkspace::analyses::loop_singular::{BoxKind, SingularSet};
+use linkspace::analyses::loop_singular::SingularSet;
+use linkspace::kernel::outcome::BoxStatus;
 use linkspace::kernel::search::{SolverSettings, Status};
 use std::f64::consts::PI;
 use std::process::Command;
@@ -551,7 +552,7 @@ fn double_butterfly_turning_points_of_theta6_match_an_independent_grid_and_newto
         assert!(got.iter().any(|(t7, t6, _)| holds_angle(*t7, r7, slack) && holds_angle(*t6, r6, slack)), "reference turning point ({r7}, {r6}) missed");
     }
     // Every box is certified (the ±v symmetry is gone: one chart owns each direction).
-    assert!(set.boxes.iter().all(|b| b.status == BoxKind::Certified));
+    assert!(set.boxes.iter().all(|b| b.status == BoxStatus::Unique));
 }
 
 /// The bundled five-bar: A1 = (0, 0), A2 = (1.5, 0), cranks 2, rods 2.5, both cranks actuated.

@@ -18,7 +18,7 @@ use crate::model::{JointKind, Mechanism};
 use crate::formulate::choice::TracedPoint;
 use crate::formulate::singular::{Coordinates, SingularProblem};
 use super::loops::{all_kinds, SingularSets};
-use crate::analyses::loop_singular::{BoxKind, SingularSet};
+use crate::analyses::loop_singular::SingularSet;
 use crate::formulate::{Linkage, LinkageError, ModelChoice};
 use crate::kernel::search::{Enclosure, RefinePlan, Refinement, Solver};
 use std::time::{Duration, Instant};
@@ -270,23 +270,19 @@ fn set_result(p: &SingularProblem<Linkage>, settings: &SolverSettings, set: &Sin
         .iter()
         .zip(&set.labels)
         .map(|(sb, &label)| {
-            let status = match sb.status {
-                BoxKind::Certified => BoxStatus::Unique,
-                BoxKind::Solution => BoxStatus::Solution,
-                BoxKind::Undecided => BoxStatus::Undecided,
-            };
+            let status = sb.status;
             let values = p.joint_values(&sb.b);
             ResultBox {
                 status,
                 bounds: sb.b.dims.iter().map(|&x| bounds(x)).collect(),
                 joints: names.iter().map(|n| values.get(n).map_or([f64::NAN, f64::NAN], |&(lo, hi)| [lo, hi])).collect(),
                 level: sb.b.level,
-                cluster: (sb.status != BoxKind::Undecided).then_some(label),
+                cluster: (sb.status != BoxStatus::Undecided).then_some(label),
                 traces: vec![],
             }
         })
         .collect();
-    let undecided = set.boxes.iter().filter(|b| b.status == BoxKind::Undecided).count();
+    let undecided = set.boxes.iter().filter(|b| b.status == BoxStatus::Undecided).count();
     let (clusters, certified_clusters) = (set.clusters.len(), set.certified_clusters());
     let mut stats = SolveStats::default();
     for s in &set.stats {

@@ -29,8 +29,9 @@ use crate::kernel::interval::{interval, point, trig, Interval, IntervalBox};
 use crate::model::Mechanism;
 use crate::formulate::linkage::JointCoordinate;
 use crate::formulate::{Coordinates, LinkageError, LinkageProblem, Output, SingularError, SingularKind};
+use crate::kernel::outcome::BoxStatus;
 use crate::kernel::search::{Budget, Control, Limit, SolverSettings};
-use crate::analyses::loop_singular::BoxKind;
+
 use crate::kernel::system::{EquationKind, Monomial, VarId};
 use nalgebra::{DMatrix, DVector};
 use std::collections::BTreeMap;
@@ -507,7 +508,7 @@ fn nearest_turning_point(m: &Mechanism, fixed: &[(String, f64)], actuated: &str,
     let solved = sets.solve(&settings, control.cancel).ok()?;
     let (p, set) = (sets.problems.first()?, solved.first()?);
     let mut best: Option<(f64, BTreeMap<String, [f64; 2]>)> = None;
-    for sb in set.boxes.iter().filter(|b| b.status == BoxKind::Certified) {
+    for sb in set.boxes.iter().filter(|b| b.status == BoxStatus::Unique) {
         let values = p.linkage.joint_values(&sb.b);
         let gap = here
             .iter()

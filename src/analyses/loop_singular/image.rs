@@ -20,7 +20,8 @@
 //!   two image curves closer than the cover's width (or inside a loop smaller than it).
 //! - **undecided** otherwise, with the reason.
 
-use super::{BoxKind, SingularSet};
+use crate::kernel::outcome::BoxStatus;
+use super::{SingularSet};
 use crate::kernel::interval::{components, point, Bounds, Interval, IntervalBox};
 use crate::model::Mechanism;
 use crate::formulate::linkage::LinkageProblem;
@@ -81,7 +82,7 @@ impl CuspProblem {
         for (i, (_, chart)) in self.charts.iter().enumerate() {
             let Some(s) = remaining(settings, t0) else {
                 status = Status::Stopped(Limit::Time);
-                found.push(ChartBox { chart: i, b: chart.initial_box(), kind: BoxKind::Undecided, note: None });
+                found.push(ChartBox { chart: i, b: chart.initial_box(), kind: BoxStatus::Undecided, note: None });
                 continue;
             };
             let e = self.chart_solver(sp, i, s)?.enclose(cancel, &mut |_| {});
@@ -93,9 +94,9 @@ impl CuspProblem {
                     dropped += 1;
                     continue;
                 }
-                found.push(ChartBox { chart: i, b, kind: if u { BoxKind::Certified } else { BoxKind::Solution }, note: None });
+                found.push(ChartBox { chart: i, b, kind: if u { BoxStatus::Unique } else { BoxStatus::Solution }, note: None });
             }
-            found.extend(e.undecided.into_iter().map(|b| ChartBox { chart: i, b, kind: BoxKind::Undecided, note: None }));
+            found.extend(e.undecided.into_iter().map(|b| ChartBox { chart: i, b, kind: BoxStatus::Undecided, note: None }));
             stats.push(e.stats);
         }
         let tangent = self.tangent[0];
@@ -205,11 +206,11 @@ fn solve_cusps_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel
     for c in &found.cusps {
         let (kind, note) = match map.within_travel(c.theta) {
             Some(false) => continue,
-            Some(true) if c.unique => (BoxKind::Certified, None),
-            Some(true) => (BoxKind::Solution, None),
-            None => (BoxKind::Solution, Some("its travels may lie on a slider's limit".to_string())),
+            Some(true) if c.unique => (BoxStatus::Unique, None),
+            Some(true) => (BoxStatus::Solution, None),
+            None => (BoxStatus::Solution, Some("its travels may lie on a slider's limit".to_string())),
         };
-        let refinement = note.into_iter().chain(refined.clone().filter(|_| kind != BoxKind::Certified)).collect();
+        let refinement = note.into_iter().chain(refined.clone().filter(|_| kind != BoxStatus::Unique)).collect();
         points.push(FoundPoint { boxes: vec![torus.pose_box(c.theta)], kinds: vec![kind], degenerate: false, joints: bounds(torus.joint_values(c.theta)), members: vec![0], refinement });
     }
     // Undecided boxes, clustered; those proven outside the travels hold no configuration.
@@ -220,7 +221,7 @@ fn solve_cusps_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel
         for (u, _) in open.iter().zip(&labels).filter(|(_, k)| **k == l) {
             p.boxes.push(torus.pose_box(u.theta));
             p.members.push(0);
-            p.kinds.push(if u.reason == cusps::Reason::Limit { BoxKind::Undecided } else { BoxKind::Solution });
+            p.kinds.push(if u.reason == cusps::Reason::Limit { BoxStatus::Undecided } else { BoxStatus::Solution });
             widen(&mut p.joints, bounds(torus.joint_values(u.theta)));
             let why = "∇det may vanish there: a crossing of the type-II curve rather than a cusp?";
             if u.reason == cusps::Reason::GradDetMayVanish && !p.refinement.iter().any(|r| r == why) {
@@ -260,10 +261,10 @@ fn solve_nodes_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel
             continue;
         }
         let kind = match (proven, a == Some(true) && b == Some(true)) {
-            (true, true) => BoxKind::Certified,
-            (true, false) => BoxKind::Solution,
-            (false, _) if found.status == Status::Finished => BoxKind::Solution,
-            (false, _) => BoxKind::Undecided,
+            (true, true) => BoxStatus::Unique,
+            (true, false) => BoxStatus::Solution,
+            (false, _) if found.status == Status::Finished => BoxStatus::Solution,
+            (false, _) => BoxStatus::Undecided,
         };
         pairs.push(NodePair { joints: [bounds(torus.joint_values(theta[0])), bounds(torus.joint_values(theta[1]))], kind });
     }
@@ -276,7 +277,7 @@ fn solve_nodes_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel
 struct ChartBox {
     chart: usize,
     b: IntervalBox,
-    kind: BoxKind,
+    kind: BoxStatus,
     /// What a refinement tried on it without settling it.
     note: Option<String>,
 }
@@ -341,7 +342,7 @@ fn refine_points<'s>(
                     if other_chart(c, &b) || !originals.iter().any(|o| o.intersects(&b)) {
                         continue;
                     }
-                    added.push(ChartBox { chart: c, b, kind: if u { BoxKind::Certified } else { BoxKind::Solution }, note: None });
+                    added.push(ChartBox { chart: c, b, kind: if u { BoxStatus::Unique } else { BoxStatus::Solution }, note: None });
                 }
             }
         } else if let Some(why) = note {
@@ -381,7 +382,7 @@ pub struct FoundPoint {
     /// The boxes (in the chart system's variables).
     pub boxes: Vec<IntervalBox>,
     /// Their kinds.
-    pub kinds: Vec<BoxKind>,
+    pub kinds: Vec<BoxStatus>,
     /// `μ` may vanish: possibly a corank-two point rather than a cusp.
     pub degenerate: bool,
     /// Free joint values, the hull over the boxes (radians or metres).
@@ -395,13 +396,13 @@ pub struct FoundPoint {
 impl FoundPoint {
     /// Holds a certified box.
     pub fn certified(&self) -> bool {
-        self.kinds.contains(&BoxKind::Certified)
+        self.kinds.contains(&BoxStatus::Unique)
     }
 
     /// Exactly one root proven: every box certified and all overlapping the first (the same
     /// root seen from two charts).
     pub fn unique(&self) -> bool {
-        self.kinds.iter().all(|k| *k == BoxKind::Certified) && self.boxes.iter().all(|b| self.boxes[0].dims.iter().zip(&b.dims).all(|(x, y)| !x.intersection(*y).is_empty()))
+        self.kinds.iter().all(|k| *k == BoxStatus::Unique) && self.boxes.iter().all(|b| self.boxes[0].dims.iter().zip(&b.dims).all(|(x, y)| !x.intersection(*y).is_empty()))
     }
 
     /// Why the cluster is not one proven cusp (`None` when it is): the first of a limit that
@@ -414,7 +415,7 @@ impl FoundPoint {
     }
 
     fn unproven_alone(&self, status: Status) -> Option<String> {
-        if self.kinds.contains(&BoxKind::Undecided) {
+        if self.kinds.contains(&BoxStatus::Undecided) {
             let limit = match status {
                 Status::Stopped(l) => format!("its {} limit", l.name()),
                 Status::Finished => "a limit".to_string(),
@@ -424,7 +425,7 @@ impl FoundPoint {
         if self.degenerate {
             return Some("μ may vanish: possibly a corank-two point of the type-II set rather than a cusp".to_string());
         }
-        let unproven = self.kinds.iter().filter(|k| **k == BoxKind::Solution).count();
+        let unproven = self.kinds.iter().filter(|k| **k == BoxStatus::Solution).count();
         if unproven > 0 {
             return Some(format!("{unproven} of its {} boxes reached sigma without a Krawczyk proof (a multiple root or a curve of roots there?)", self.boxes.len()));
         }
@@ -476,8 +477,8 @@ impl NodeProblem {
                 status = e.status;
             }
             let mapped: Vec<VarId> = sp.multipliers.iter().map(|&m| map[m]).collect();
-            let boxes = e.solutions.into_iter().zip(e.unique).map(|(b, u)| (b, if u { BoxKind::Certified } else { BoxKind::Solution }));
-            for (bx, kind) in boxes.chain(e.undecided.into_iter().map(|b| (b, BoxKind::Undecided))) {
+            let boxes = e.solutions.into_iter().zip(e.unique).map(|(b, u)| (b, if u { BoxStatus::Unique } else { BoxStatus::Solution }));
+            for (bx, kind) in boxes.chain(e.undecided.into_iter().map(|b| (b, BoxStatus::Undecided))) {
                 let d = &bx.dims;
                 if owned_elsewhere(&sp.multipliers, *k, d, None) || owned_elsewhere(&mapped, *k2, d, None) {
                     out.dropped_other_chart += 1;
@@ -494,7 +495,7 @@ impl NodeProblem {
                         let b = IntervalBox::new((0..sp.base_vars).map(|j| d[map[j]]).collect());
                         out.pairs.push(NodePair { joints: [bounds(sp.joint_values(&a)), bounds(sp.joint_values(&b))], kind });
                     }
-                    None if k == k2 && kind != BoxKind::Undecided && injective(&sp.chart(*k), &self.shared, &bx, map) => out.injective += 1,
+                    None if k == k2 && kind != BoxStatus::Undecided && injective(&sp.chart(*k), &self.shared, &bx, map) => out.injective += 1,
                     None => out.near_diagonal.push(bx),
                 }
             }
@@ -530,7 +531,7 @@ pub struct NodePair {
     /// The two points' joint values (radians or metres).
     pub joints: [BTreeMap<String, Bounds>; 2],
     /// Certified (one pair in the doubled box), solution (unproven) or undecided (a limit).
-    pub kind: BoxKind,
+    pub kind: BoxStatus,
 }
 
 /// The result of the node search.
@@ -555,7 +556,7 @@ pub struct NodeSearch {
 impl NodeSearch {
     /// Certified node pairs.
     pub fn proven(&self) -> usize {
-        self.pairs.iter().filter(|p| p.kind == BoxKind::Certified).count()
+        self.pairs.iter().filter(|p| p.kind == BoxStatus::Unique).count()
     }
     /// Unproven pairs plus near-diagonal boxes.
     pub fn undecided(&self) -> usize {
@@ -1052,7 +1053,7 @@ pub fn node_records(sp: &SingularProblem, nodes: &NodeSearch) -> Vec<ImageNode> 
         .map(|p| {
             let (wa, wb) = (actuator_image(sp, &p.joints[0]), actuator_image(sp, &p.joints[1]));
             let workspace = wa.iter().map(|(n, x)| (n.clone(), wb.get(n).map_or(*x, |y| [x[0].max(y[0]), x[1].min(y[1])]))).collect();
-            ImageNode { points: p.joints.clone(), workspace, unique: p.kind == BoxKind::Certified }
+            ImageNode { points: p.joints.clone(), workspace, unique: p.kind == BoxStatus::Unique }
         })
         .collect()
 }
@@ -1151,7 +1152,7 @@ mod tests {
     use super::*;
     use crate::kernel::interval::interval;
 
-    fn point_of(boxes: &[(f64, f64)], kinds: &[BoxKind], degenerate: bool) -> FoundPoint {
+    fn point_of(boxes: &[(f64, f64)], kinds: &[BoxStatus], degenerate: bool) -> FoundPoint {
         let boxes = boxes.iter().map(|&(a, b)| IntervalBox::new(vec![interval(a, b)])).collect();
         FoundPoint { boxes, kinds: kinds.to_vec(), degenerate, ..Default::default() }
     }
@@ -1159,15 +1160,15 @@ mod tests {
     #[test]
     fn an_unproven_cusp_says_why() {
         let reason = |p: &FoundPoint, s: Status| p.unproven_reason(s).unwrap_or_default();
-        let proven = point_of(&[(0.0, 1.0), (0.5, 2.0)], &[BoxKind::Certified; 2], false);
+        let proven = point_of(&[(0.0, 1.0), (0.5, 2.0)], &[BoxStatus::Unique; 2], false);
         assert_eq!(proven.unproven_reason(Status::Finished), None);
-        let cut = point_of(&[(0.0, 1.0)], &[BoxKind::Undecided], false);
+        let cut = point_of(&[(0.0, 1.0)], &[BoxStatus::Undecided], false);
         assert!(reason(&cut, Status::Stopped(Limit::Time)).contains("its time limit"), "{}", reason(&cut, Status::Stopped(Limit::Time)));
-        let flat = point_of(&[(0.0, 1.0)], &[BoxKind::Certified], true);
+        let flat = point_of(&[(0.0, 1.0)], &[BoxStatus::Unique], true);
         assert!(reason(&flat, Status::Finished).contains("μ may vanish"));
-        let open = point_of(&[(0.0, 1.0), (1.0, 2.0)], &[BoxKind::Certified, BoxKind::Solution], false);
+        let open = point_of(&[(0.0, 1.0), (1.0, 2.0)], &[BoxStatus::Unique, BoxStatus::Solution], false);
         assert!(reason(&open, Status::Finished).starts_with("1 of its 2 boxes"), "{}", reason(&open, Status::Finished));
-        let two = point_of(&[(0.0, 1.0), (1.5, 2.0)], &[BoxKind::Certified; 2], false);
+        let two = point_of(&[(0.0, 1.0), (1.5, 2.0)], &[BoxStatus::Unique; 2], false);
         assert!(reason(&two, Status::Finished).contains("possibly more than one cusp"));
     }
 }

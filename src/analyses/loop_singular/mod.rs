@@ -10,6 +10,7 @@
 
 use crate::kernel::interval::{components, IntervalBox};
 use crate::formulate::singular::{Coordinates, SingularProblem};
+use crate::kernel::outcome::BoxStatus;
 use crate::kernel::search::{Limit, SolveError, SolveStats, SolverSettings, Status};
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
@@ -47,7 +48,7 @@ impl<L: Coordinates> SingularProblem<L> {
                 // of joints has thousands of charts, and a box per chart would cost more to
                 // build and report than the deadline allows.
                 status = Status::Stopped(if cancelled { Limit::Cancelled } else { Limit::Time });
-                boxes.push(SingularBox { chart: k, b: self.augmented.initial_box(), status: BoxKind::Undecided });
+                boxes.push(SingularBox { chart: k, b: self.augmented.initial_box(), status: BoxStatus::Undecided });
                 unsearched_charts = self.chart_count() - k;
                 break;
             }
@@ -66,10 +67,10 @@ impl<L: Coordinates> SingularProblem<L> {
                 // A certificate of the augmented system is one of the mechanism only where its
                 // rows are faithful (see `Coordinates::rows_faithful`); elsewhere the box stays.
                 let certified = u && self.linkage.rows_faithful(&b);
-                boxes.push(SingularBox { chart: k, b, status: if certified { BoxKind::Certified } else { BoxKind::Solution } });
+                boxes.push(SingularBox { chart: k, b, status: if certified { BoxStatus::Unique } else { BoxStatus::Solution } });
             }
             for b in e.undecided {
-                boxes.push(SingularBox { chart: k, b, status: BoxKind::Undecided });
+                boxes.push(SingularBox { chart: k, b, status: BoxStatus::Undecided });
             }
             stats.push(e.stats);
         }
@@ -85,9 +86,9 @@ impl<L: Coordinates> SingularProblem<L> {
         for (i, &l) in labels.iter().enumerate() {
             clusters[l].boxes.push(i);
             match boxes[i].status {
-                BoxKind::Certified => clusters[l].certified = true,
-                BoxKind::Undecided => clusters[l].undecided = true,
-                BoxKind::Solution => {}
+                BoxStatus::Unique => clusters[l].certified = true,
+                BoxStatus::Undecided => clusters[l].undecided = true,
+                BoxStatus::Solution => {}
             }
         }
         SingularSet { status, boxes, labels, clusters, stats, dropped_other_chart, unsearched_charts, seconds: t0.elapsed().as_secs_f64() }
@@ -104,16 +105,6 @@ impl<L: Coordinates> SingularProblem<L> {
     }
 }
 
-/// What a reported box is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BoxKind {
-    /// Certified (Krawczyk) to hold exactly one solution of its chart's system.
-    Certified,
-    /// At sigma, not proven empty, no proof of a solution.
-    Solution,
-    /// Left by a limit.
-    Undecided,
-}
 
 /// One box of a singular set, in its chart's variables.
 #[derive(Clone, Debug)]
@@ -123,7 +114,7 @@ pub struct SingularBox {
     /// The box.
     pub b: IntervalBox,
     /// Its status.
-    pub status: BoxKind,
+    pub status: BoxStatus,
 }
 
 /// Boxes whose configuration parts touch.

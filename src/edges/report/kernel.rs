@@ -23,6 +23,11 @@ impl StatusDef {
     }
 }
 
+/// `BoxStatus`, by its name: `unique`, `solution` or `undecided`.
+pub(crate) fn box_status<S: serde::Serializer>(status: &crate::kernel::outcome::BoxStatus, serializer: S) -> Result<S::Ok, S::Error> {
+    serializer.serialize_str(status.name())
+}
+
 /// `Completeness`, flattened into its report: `"status"` (`complete` or `incomplete`) and, when
 /// incomplete, `"limit"`: the limit that stopped a search (`boxes`, `time`, `memory`,
 /// `cancelled`), else `near_degenerate`, else `undecided`.
