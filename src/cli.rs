@@ -522,7 +522,7 @@ fn solve(args: SolveArgs) -> Result<()> {
     let xml = std::fs::read_to_string(&args.urdf).with_context(|| format!("reading {}", args.urdf.display()))?;
     let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", args.urdf.display()))?;
     let named: Vec<TracedPoint> = traces.iter().zip(&args.trace).map(|((l, p), r)| (l.clone(), *p, r.clone())).collect();
-    let job = app::SolveJob::build(&mechanism, args.model.into(), &fixed, &named, settings).with_context(|| format!("building {}", args.urdf.display()))?;
+    let job = app::SolveRun::build(&mechanism, args.model.into(), &fixed, &named, settings).with_context(|| format!("building {}", args.urdf.display()))?;
     let (freedom, freedom_line) = job.freedom();
     if freedom.at_point.is_some_and(|l| l.dof >= 2) {
         // Said before the run: covering a continuum of two or more dimensions takes long.

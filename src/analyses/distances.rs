@@ -96,6 +96,7 @@ pub struct Root {
 }
 
 /// The result of `solve`.
+#[derive(Clone, Debug)]
 pub struct Certified {
     /// The formulation solved: `points`, `shared` or `split`.
     pub formulation: Choice,
@@ -131,7 +132,12 @@ impl Certified {
 
     /// True when the search finished and nothing is undecided.
     pub fn complete(&self) -> bool {
-        self.status == Status::Finished && self.undecided_regions() == 0
+        self.completeness().is_complete()
+    }
+
+    /// The one rule: the limit that stopped the search, else the undecided regions.
+    pub fn completeness(&self) -> crate::kernel::outcome::Completeness {
+        crate::kernel::outcome::Completeness::of(self.status, self.undecided_regions(), false)
     }
 
     /// Clusters with something unproven (regions that may or may not hold solutions).

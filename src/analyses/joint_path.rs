@@ -148,6 +148,28 @@ pub fn check(det: &dyn SignProof, waypoints: &[Vec<f64>], tolerance: f64, contro
     Ok(PathCheck { waypoints: waypoints.to_vec(), segments })
 }
 
+impl PathCheck {
+    /// The one rule: the first limit that stopped a segment, else the segments with a
+    /// stretch left undecided (or a crossing not narrowed to the tolerance).
+    pub fn completeness(&self) -> crate::kernel::outcome::Completeness {
+        use crate::kernel::outcome::{Completeness, Status};
+        let stopped = self.segments.iter().find_map(|s| match s {
+            SegmentVerdict::Stopped(l) => Some(*l),
+            _ => None,
+        });
+        let open = self
+            .segments
+            .iter()
+            .filter(|s| match s {
+                SegmentVerdict::Clear { .. } => false,
+                SegmentVerdict::Crosses { crossings, undecided } => !undecided.is_empty() || crossings.iter().any(|c| !c.narrowed),
+                SegmentVerdict::Undecided { .. } | SegmentVerdict::Stopped(_) => true,
+            })
+            .count();
+        Completeness::of(stopped.map_or(Status::Finished, Status::Stopped), open, false)
+    }
+}
+
 /// Small counts in words, as messages about six-joint waypoints have always said them.
 fn number_word(n: usize) -> String {
     match n {

@@ -199,6 +199,18 @@ pub fn inverse_kinematics(arm: &Arm, point: IkPoint, precision: f64, control: &C
     Ok(ArmIk { point, target, solutions, limit_effect, seconds: start.elapsed().as_secs_f64() })
 }
 
+impl ArmSingularities {
+    /// The one rule over the searches: the limit that stopped one, else near-degenerate strips,
+    /// else undecided boxes and pairs (cusps without a uniqueness proof among them).
+    pub fn completeness(&self) -> crate::kernel::outcome::Completeness {
+        let (cusps, nodes) = (&self.run.cusps, self.run.nodes.as_ref());
+        let status = nodes.map_or(cusps.status, |n| cusps.status.and(n.status));
+        let undecided = cusps.undecided.len() + cusps.cusps.iter().filter(|c| !c.unique).count() + nodes.map_or(0, |n| n.undecided.len());
+        let near = cusps.bands.iter().any(|b| b.near.is_some());
+        crate::kernel::outcome::Completeness::of(status, undecided, near)
+    }
+}
+
 impl ArmIk {
     /// The first joint's angle for a solution box over (θ₂, θ₃), in the joint's range: `None`
     /// for a half-section point (θ₁ is free), the whole turn where the point or the end point

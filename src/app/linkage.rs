@@ -53,7 +53,7 @@ impl LinkageAnalysis {
     }
 
     fn prepare(&self, problem: Linkage, settings: &SolverSettings, analysis: &str) -> Result<Box<dyn PreparedRun>, AnalysisError> {
-        Ok(Box::new(LinkageRun { job: SolveJob::new(problem, settings.clone())?, analysis: analysis.to_string() }))
+        Ok(Box::new(LinkageRun { job: SolveRun::new(problem, settings.clone())?, analysis: analysis.to_string() }))
     }
 }
 
@@ -332,12 +332,12 @@ fn set_result(p: &SingularProblem<Linkage>, settings: &SolverSettings, set: &Sin
 /// A configuration-space run of a closed-loop linkage, built and validated: `linkspace solve`
 /// and the node's `configuration_space` and `solve` all run one.
 #[derive(Clone, Debug)]
-pub struct SolveJob {
+pub struct SolveRun {
     problem: Linkage,
     settings: SolverSettings,
 }
 
-impl SolveJob {
+impl SolveRun {
     /// Validates `settings` for `problem`, so that a bad request is answered before any run.
     pub fn new(problem: Linkage, settings: SolverSettings) -> Result<Self, crate::kernel::search::SolveError> {
         problem.solver(settings.clone())?;
@@ -366,6 +366,11 @@ impl SolveJob {
     /// The settings it runs with.
     pub fn settings(&self) -> &SolverSettings {
         &self.settings
+    }
+
+    /// The same run with other settings of the same resolution (a front end's limits).
+    pub(crate) fn within(self, settings: SolverSettings) -> Self {
+        Self { settings, ..self }
     }
 
     /// Encloses every configuration, within the settings' limits or until `cancel` is raised:
@@ -478,7 +483,7 @@ fn traced(problem: &Linkage, b: &IntervalBox) -> Vec<TracedBounds> {
 
 /// A validated linkage run.
 struct LinkageRun {
-    job: SolveJob,
+    job: SolveRun,
     analysis: String,
 }
 

@@ -10,21 +10,32 @@
 //! No IO and no async here: a front end prepares a run (all validation happens then, so bad
 //! requests are answered at once), moves it to a thread of its own and converts the result.
 
+mod answer;
 pub(crate) mod arm;
 pub(crate) mod distances;
+mod job;
 pub(crate) mod linkage;
 pub(crate) mod loops;
 mod merge;
 pub(crate) mod motion;
 pub(crate) mod path;
+mod prepare;
 mod platform;
 pub(crate) mod six;
 pub(crate) mod sweep;
 
-// One job per question, each with its request and its typed result.
+// The front door: a `Job` in, an `Answer` out.
+pub use answer::{Answer, CollisionsAnswer, DistancesAnswer, Ik6Answer, IkAnswer, LoopAnswer, PathCheckAnswer, SingularitiesAnswer, SolveAnswer};
+pub use job::{ArmOptions, CollisionsJob, DistancesJob, Ik6Job, IkJob, Job, LoopQuestion, LoopSingularitiesJob, MotionSpan, PathCheckJob, SingularitiesJob, SolveJob, SweepTaskJob};
+pub use prepare::{prepare, Input, JobError, Prepared};
+// What front ends name besides the jobs: the outcome vocabulary and the bounds of a run.
+pub use crate::kernel::outcome::{BoxStatus, Completeness, Incompleteness, Limit, Scope, Status};
+pub use crate::kernel::search::{Control, Limits, Progress};
+
+// The analyses' entry points and typed results, which the answers carry.
 pub use arm::{collisions, inverse_kinematics, singularities, Arm, ArmCollisions, ArmIk, ArmSingularities, IkPoint, Manip3rAnalysis, SingularitiesRequest, CURVE_DEPTH};
-pub use distances::{DistancesJob, DistancesRequest};
-pub use linkage::{describe_freedom, LinkageAnalysis, SolveJob};
+pub use distances::{DistancesRun, DistancesRequest};
+pub use linkage::{describe_freedom, LinkageAnalysis, SolveRun};
 pub use loops::{all_kinds, analyse_image, image_points, Actuation, ImageAnalysisError, ImageSearch, SingularSets};
 pub use motion::{check_input_motion, motion_joints, InputMotionCheck, MotionError, MotionRequest, MotionStep, MotionVerdict};
 pub use platform::PlatformAnalysis;
@@ -34,7 +45,7 @@ pub use sweep::{check_sweep, run_sweep, sweep_task};
 
 use crate::model::Mechanism;
 use crate::formulate::{LinkageError, PlatformError};
-use crate::kernel::search::{BoxStatus, Progress, SolveError, SolveStats as Stats, SolverSettings, Status};
+use crate::kernel::search::{SolveError, SolveStats as Stats, SolverSettings};
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 use thiserror::Error;

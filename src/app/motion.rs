@@ -144,6 +144,17 @@ pub struct InputMotionCheck {
 }
 
 impl InputMotionCheck {
+    /// Complete when every step is proven; a limit or a step that could not be proven leaves
+    /// the rest undecided.
+    pub fn completeness(&self) -> crate::kernel::outcome::Completeness {
+        use crate::kernel::outcome::{Completeness, Incompleteness};
+        match self.verdict {
+            MotionVerdict::Clear => Completeness::Complete,
+            MotionVerdict::Undecided { .. } => Completeness::Incomplete(Incompleteness::Undecided),
+            MotionVerdict::Stopped { limit, .. } => Completeness::Incomplete(Incompleteness::Limit(limit)),
+        }
+    }
+
     /// The set checked against, as reports name it.
     pub fn set_name(&self) -> String {
         format!("input singularities of {}, actuated {}", self.mechanism, self.request.actuated)

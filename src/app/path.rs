@@ -18,6 +18,13 @@ pub enum PathSet {
     Positioning3R,
 }
 
+impl ArmPathCheck {
+    /// Whether every segment is decided (`PathCheck::completeness`).
+    pub fn completeness(&self) -> crate::kernel::outcome::Completeness {
+        self.check.completeness()
+    }
+}
+
 impl PathSet {
     /// The set's short name in reports and messages: `6r` or `3r`.
     pub fn name(self) -> &'static str {

@@ -3,7 +3,7 @@
 
 use super::parse_fix;
 use anyhow::{Context, Result};
-use linkspace::app::{DistancesJob, DistancesRequest};
+use linkspace::app::{DistancesRun, DistancesRequest};
 use linkspace::kernel::contract::FaceBounds;
 use linkspace::analyses::distances::Choice;
 use linkspace::model::urdf;
@@ -70,13 +70,13 @@ pub struct DistancesArgs {
 }
 
 /// The distance job of a URDF platform or a distance file (a file starting with '<' is URDF).
-pub fn load(path: &Path, text: &str, fixed: &[(String, f64)]) -> Result<DistancesJob> {
+pub fn load(path: &Path, text: &str, fixed: &[(String, f64)]) -> Result<DistancesRun> {
     let is_urdf = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf")) || text.trim_start().starts_with('<');
     if is_urdf {
         let m = urdf::parse(text).with_context(|| format!("loading {}", path.display()))?;
-        DistancesJob::platform(&m, fixed).with_context(|| format!("building {}", path.display()))
+        DistancesRun::platform(&m, fixed).with_context(|| format!("building {}", path.display()))
     } else {
-        DistancesJob::file(text, fixed).with_context(|| format!("loading {}", path.display()))
+        DistancesRun::file(text, fixed).with_context(|| format!("loading {}", path.display()))
     }
 }
 
@@ -105,7 +105,7 @@ pub fn run(args: DistancesArgs) -> Result<()> {
     let text = std::fs::read_to_string(&args.file).with_context(|| format!("reading {}", args.file.display()))?;
     let job = load(&args.file, &text, &fixed)?;
     let request = DistancesRequest { formulation: job.formulation(choice(args.formulation)), redundant: args.redundant, faces: face_bounds(args.faces) };
-    let rho = args.rho.unwrap_or(DistancesJob::default_rho(request.formulation));
+    let rho = args.rho.unwrap_or(DistancesRun::default_rho(request.formulation));
     let settings = args.limits.solver_settings(SolverSettings::default().max_boxes, SolverSettings { sigma: args.sigma, rho, ..Default::default() })?;
     settings.validate()?;
     let certified = job.run(&request, &settings, &AtomicBool::new(false)).with_context(|| format!("solving {}", args.file.display()))?;

@@ -124,6 +124,12 @@ pub enum Incompleteness {
 }
 
 impl Incompleteness {
+    /// The reason `name` spells, if any (records read back).
+    pub fn from_name(name: &str) -> Option<Self> {
+        let limits = [Limit::Boxes, Limit::Time, Limit::Memory, Limit::Cancelled, Limit::Sink].map(Incompleteness::Limit);
+        limits.into_iter().chain([Incompleteness::NearDegenerate, Incompleteness::Undecided]).find(|r| r.name() == name)
+    }
+
     /// The name used in reports and messages (a limit's own name, `near_degenerate`,
     /// `undecided`).
     pub fn name(self) -> &'static str {

@@ -20,7 +20,7 @@
 //!   two image curves closer than the cover's width (or inside a loop smaller than it).
 //! - **undecided** otherwise, with the reason.
 
-use crate::kernel::outcome::BoxStatus;
+use crate::kernel::outcome::{BoxStatus, Completeness};
 use super::{SingularSet};
 use crate::kernel::interval::{components, point, Bounds, Interval, IntervalBox};
 use crate::model::Mechanism;
@@ -960,11 +960,7 @@ pub fn verdict(cover: &SingularSet, cusps: &PointSearch, nodes: &NodeSearch, reg
 }
 
 fn status_word(s: Status) -> &'static str {
-    if s == Status::Finished {
-        "complete"
-    } else {
-        "incomplete"
-    }
+    Completeness::of_run(s).word()
 }
 
 /// One cusp: the fields of the 3R `CuspRecord`; `workspace` is the image in actuator space.
@@ -1009,8 +1005,8 @@ pub struct ImageReport {
     pub mechanism: String,
     /// Actuated joints (the keys of `workspace`).
     pub actuated: Vec<String>,
-    /// `complete` when every search completed.
-    pub status: &'static str,
+    /// Complete when every search finished with nothing undecided.
+    pub status: Completeness,
     /// Cusps: certified first.
     pub cusps: Vec<ImageCusp>,
     /// Node pairs.
@@ -1068,8 +1064,8 @@ pub struct ImagePoints {
     pub actuated: Vec<String>,
     /// `cusps` or `nodes`.
     pub search: &'static str,
-    /// `complete` when the search completed with every point certified.
-    pub status: &'static str,
+    /// Complete when the search finished with every point certified.
+    pub status: Completeness,
     /// Cusps found (empty for a node search), certified first.
     pub cusps: Vec<ImageCusp>,
     /// Node pairs found (empty for a cusp search).
@@ -1083,14 +1079,19 @@ pub struct ImagePoints {
 }
 
 impl ImagePoints {
+    /// Whether the search finished with every point certified.
+    pub fn completeness(&self) -> Completeness {
+        self.status
+    }
+
     /// The report of a cusp search.
     pub fn cusps(sp: &SingularProblem, cusps: &PointSearch) -> Self {
-        let complete = cusps.status == Status::Finished && cusps.points.len() == cusps.proven();
+        let complete = Completeness::of(cusps.status, cusps.points.len() - cusps.proven(), false);
         Self {
             mechanism: sp.linkage.name.clone(),
             actuated: sp.actuated.clone(),
             search: "cusps",
-            status: if complete { "complete" } else { "incomplete" },
+            status: complete,
             cusps: cusp_records(sp, cusps),
             nodes: Vec::new(),
             counts: Counts { proven: cusps.proven(), undecided: cusps.points.len() - cusps.proven() },
@@ -1101,12 +1102,12 @@ impl ImagePoints {
 
     /// The report of a node search.
     pub fn nodes(sp: &SingularProblem, nodes: &NodeSearch) -> Self {
-        let complete = nodes.status == Status::Finished && nodes.undecided() == 0;
+        let complete = Completeness::of(nodes.status, nodes.undecided(), false);
         Self {
             mechanism: sp.linkage.name.clone(),
             actuated: sp.actuated.clone(),
             search: "nodes",
-            status: if complete { "complete" } else { "incomplete" },
+            status: complete,
             cusps: Vec::new(),
             nodes: node_records(sp, nodes),
             counts: Counts { proven: nodes.proven(), undecided: nodes.undecided() },
@@ -1117,23 +1118,26 @@ impl ImagePoints {
 }
 
 impl ImageReport {
+    /// Whether every search finished with nothing undecided.
+    pub fn completeness(&self) -> Completeness {
+        self.status
+    }
+
     /// The report of the searches.
     pub fn new(sp: &SingularProblem, cover: &SingularSet, cusps: &PointSearch, nodes: &NodeSearch, regions: ActuatorRegions) -> Self {
         let cusp_records = cusp_records(sp, cusps);
         let node_records = node_records(sp, nodes);
         let regions_seconds = regions.seconds;
         let verdict = verdict(cover, cusps, nodes, &regions);
-        // "complete" is the crate's one rule: no limit met and nothing undecided (an unproven
-        // cusp or node, a near-diagonal box, a region whose assembly modes are not proven).
-        let complete = [cover.status, cusps.status, nodes.status].iter().all(|s| *s == Status::Finished)
-            && cusps.points.len() == cusps.proven()
-            && nodes.undecided() == 0
-            && regions.status == Status::Finished
-            && regions.regions.iter().all(|r| r.configurations.is_some() && r.signs.is_some());
+        // The one rule: no limit met and nothing undecided (an unproven cusp or node, a
+        // near-diagonal box, a region whose assembly modes are not proven).
+        let status = cover.status.and(cusps.status).and(nodes.status).and(regions.status);
+        let open_regions = regions.regions.iter().filter(|r| r.configurations.is_none() || r.signs.is_none()).count();
+        let complete = Completeness::of(status, cusps.points.len() - cusps.proven() + nodes.undecided() + open_regions, false);
         Self {
             mechanism: sp.linkage.name.clone(),
             actuated: sp.actuated.clone(),
-            status: if complete { "complete" } else { "incomplete" },
+            status: complete,
             cusps: cusp_records,
             nodes: node_records,
             cusp_counts: Counts { proven: cusps.proven(), undecided: cusps.points.len() - cusps.proven() },

@@ -152,6 +152,11 @@ pub struct SingularSet {
 }
 
 impl SingularSet {
+    /// The one rule: the limit that stopped a search, else the boxes left undecided.
+    pub fn completeness(&self) -> crate::kernel::outcome::Completeness {
+        crate::kernel::outcome::Completeness::of(self.status, self.boxes.iter().filter(|b| b.status == BoxStatus::Undecided).count(), false)
+    }
+
     /// Clusters with a certified box.
     pub fn certified_clusters(&self) -> usize {
         self.clusters.iter().filter(|c| c.certified).count()

@@ -77,7 +77,8 @@ struct CountsDef {
 struct ImageReportDef {
     mechanism: String,
     actuated: Vec<String>,
-    status: &'static str,
+    #[serde(flatten, serialize_with = "super::kernel::CompletenessDef::serialize")]
+    status: crate::kernel::outcome::Completeness,
     #[serde(serialize_with = "cusps")]
     cusps: Vec<ImageCusp>,
     #[serde(serialize_with = "nodes")]
@@ -100,7 +101,8 @@ struct ImagePointsDef {
     mechanism: String,
     actuated: Vec<String>,
     search: &'static str,
-    status: &'static str,
+    #[serde(flatten, serialize_with = "super::kernel::CompletenessDef::serialize")]
+    status: crate::kernel::outcome::Completeness,
     #[serde(serialize_with = "cusps", skip_serializing_if = "Vec::is_empty")]
     cusps: Vec<ImageCusp>,
     #[serde(serialize_with = "nodes", skip_serializing_if = "Vec::is_empty")]
