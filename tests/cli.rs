@@ -374,7 +374,7 @@ fn path_check_names_the_singular_set() {
     assert!(out.starts_with("3R sub-chain joints 1-3 (joint_1, joint_2, joint_3) of 'ur5', point link_3@"), "{out}");
     assert!(out.contains("det Df proven to change sign"), "{out}");
     assert_clear_error(&["path-check", &fixture("orthogonal_3r_b.urdf"), "--singular-set", "6r", "--waypoints", "0,0,0,0,0,0;1,1,1,1,1,1"], "not a 6R chain");
-    assert_clear_error(&["path-check", &ur5, "--singular-set", "6r", "--lock", "joint_6=0", "--waypoints", "0,0,0,0,0,0;1,1,1,1,1,1"], "they apply with --singular-set 3r");
+    assert_clear_error(&["path-check", &ur5, "--singular-set", "6r", "--fix", "joint_6=0", "--waypoints", "0,0,0,0,0,0;1,1,1,1,1,1"], "they apply with --singular-set 3r");
     assert_clear_error(&["path-check", &fixture("orthogonal_3r_b.urdf"), "--waypoints", "0,0,0,0,0,0;1,1,1,1,1,1"], "waypoint 1 has 6 joint values: expected 3");
 }
 

@@ -77,7 +77,7 @@ fn wrist_centre_and_points_are_chosen_and_explained() {
 fn a_seven_joint_arm_needs_a_lock_and_then_is_a_six_joint_arm() {
     let xml = text("iiwa14.urdf");
     let err = prepare(&xml, &LoadOptions::default()).expect_err("7R").to_string();
-    assert!(err.contains("7 revolute joints") && err.contains("--lock"), "{err}");
+    assert!(err.contains("7 revolute joints") && err.contains("--fix"), "{err}");
     let spec = ChainSpec { locks: vec![("joint_3".into(), 0.0)], ..Default::default() };
     let p = prepare(&xml, &LoadOptions { spec, ..Default::default() }).expect("locked");
     assert_eq!(p.choice.joints, ["joint_1", "joint_2", "joint_4"].map(String::from));

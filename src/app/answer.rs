@@ -25,7 +25,7 @@ use super::BoxSetResult;
 #[derive(Clone, Debug)]
 pub enum Answer {
     /// `Job::Solve`.
-    Solve(SolveAnswer),
+    Solve(Box<SolveAnswer>),
     /// `Job::Singularities`.
     Singularities(Box<SingularitiesAnswer>),
     /// `Job::Ik`.
@@ -41,7 +41,7 @@ pub enum Answer {
     /// `Job::LoopSingularities`.
     LoopSingularities(Box<LoopAnswer>),
     /// `Job::SweepTask`.
-    SweepTask(TaskResult),
+    SweepTask(Box<TaskResult>),
 }
 
 /// Every configuration of a linkage, as boxes.
@@ -55,6 +55,30 @@ pub struct SolveAnswer {
     pub freedom: String,
     /// Links merged into one rigid body, each to the body's first link.
     pub rigid_links: BTreeMap<String, String>,
+}
+
+impl SolveAnswer {
+    /// The one rule: the limit that stopped the run, else the boxes left undecided.
+    pub fn completeness(&self) -> Completeness {
+        let undecided = self.result.boxes.iter().filter(|b| b.status == BoxStatus::Undecided).count();
+        Completeness::of(self.result.status, undecided, false)
+    }
+
+    /// The builder's name (`planar`, `spatial`, `pose`, `distances`).
+    pub fn model_name(&self) -> &'static str {
+        use crate::formulate::Coordinates;
+        self.run.problem().model().name()
+    }
+
+    /// Why that builder.
+    pub fn model_reason(&self) -> &str {
+        self.run.problem().model_reason()
+    }
+
+    /// What the builder removed from the model (merged links, dropped variables), one line each.
+    pub fn reductions(&self) -> &[String] {
+        self.run.problem().reductions()
+    }
 }
 
 /// Cusps, nodes, internal motions and the verdicts of an arm.
@@ -172,10 +196,7 @@ impl Answer {
     /// Whether the answer is complete: no limit stopped it and nothing is left undecided.
     pub fn completeness(&self) -> Completeness {
         match self {
-            Answer::Solve(a) => {
-                let undecided = a.result.boxes.iter().filter(|b| b.status == BoxStatus::Undecided).count();
-                Completeness::of(a.result.status, undecided, false)
-            }
+            Answer::Solve(a) => a.completeness(),
             Answer::Singularities(a) => a.found.completeness(),
             Answer::Ik(a) => Completeness::of_run(a.found.solutions.status),
             Answer::Ik6(a) => Completeness::of(a.found.solutions.status, a.found.solutions.clusters.len(), false),

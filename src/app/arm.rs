@@ -200,6 +200,11 @@ pub fn inverse_kinematics(arm: &Arm, point: IkPoint, precision: f64, control: &C
 }
 
 impl ArmSingularities {
+    /// Lines of internal motions the cusp search found.
+    pub fn internal_motion_lines(&self) -> usize {
+        arm3r::line_count(&self.run.cusps.bands)
+    }
+
     /// The one rule over the searches: the limit that stopped one, else near-degenerate strips,
     /// else undecided boxes and pairs (cusps without a uniqueness proof among them).
     pub fn completeness(&self) -> crate::kernel::outcome::Completeness {

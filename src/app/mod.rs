@@ -30,7 +30,17 @@ pub use job::{ArmOptions, CollisionsJob, DistancesJob, Ik6Job, IkJob, Job, LoopQ
 pub use prepare::{prepare, Input, JobError, Prepared};
 // What front ends name besides the jobs: the outcome vocabulary and the bounds of a run.
 pub use crate::kernel::outcome::{BoxStatus, Completeness, Incompleteness, Limit, Scope, Status};
-pub use crate::kernel::search::{Control, Limits, Progress};
+pub use crate::kernel::search::{Control, Limits, Progress, SolverSettings};
+// The options the jobs take and the records the answers carry, named where front ends look.
+pub use crate::analyses::arm3r::{check_precision, ChainSpec, LoadOptions};
+pub use crate::analyses::arm6r::PoseInput;
+pub use crate::analyses::distances::Choice as DistanceFormulation;
+pub use crate::analyses::loop_singular::image::{ImageCusp, ImageNode, ImagePoints, ImageReport};
+pub use crate::formulate::{Model as LinkageModel, ModelChoice, Output, SingularKind, TracedPoint};
+pub use crate::kernel::contract::FaceBounds;
+pub use crate::kernel::lp::LpBackend;
+pub use crate::model::rounding::ANGLE_TOLERANCE as SNAP_TOLERANCE;
+pub use crate::model::Mechanism;
 
 // The analyses' entry points and typed results, which the answers carry.
 pub use arm::{collisions, inverse_kinematics, singularities, Arm, ArmCollisions, ArmIk, ArmSingularities, IkPoint, Manip3rAnalysis, SingularitiesRequest, CURVE_DEPTH};
@@ -43,9 +53,8 @@ pub use path::{check_path, check_path3, positioning_joints, ArmPathCheck, PathSe
 pub use six::{arm_cuspidality, arm_cuspidality_of, chain6, inverse_kinematics6, ArmCuspidality, ArmIk6, ArmVerdictLine};
 pub use sweep::{check_sweep, run_sweep, sweep_task};
 
-use crate::model::Mechanism;
 use crate::formulate::{LinkageError, PlatformError};
-use crate::kernel::search::{SolveError, SolveStats as Stats, SolverSettings};
+use crate::kernel::search::{SolveError, SolveStats as Stats};
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 use thiserror::Error;

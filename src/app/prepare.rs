@@ -293,7 +293,7 @@ impl Prepared {
                 let settings = within(run.settings(), control);
                 let run = run.within(settings);
                 let result = run.run(control.cancel, progress);
-                Answer::Solve(SolveAnswer { run, result, freedom, rigid_links })
+                Answer::Solve(Box::new(SolveAnswer { run, result, freedom, rigid_links }))
             }
             Ready::Singularities { arm, mechanism, job } => {
                 let request = SingularitiesRequest { precision: job.precision, nodes: job.nodes, search_anyway: job.search_anyway, verdict: job.verdict };
@@ -343,7 +343,7 @@ impl Prepared {
                 }))
             }
             Ready::LoopMotion { mechanism, fixed, request } => Answer::LoopSingularities(Box::new(LoopAnswer::Motion(Box::new(motion::check_input_motion(&mechanism, &fixed, &request, control)?)))),
-            Ready::SweepTask { mechanism, job } => Answer::SweepTask(super::sweep::sweep_task(&job.plan, &mechanism, &job.task, &control.limits, control.cancel)),
+            Ready::SweepTask { mechanism, job } => Answer::SweepTask(Box::new(super::sweep::sweep_task(&job.plan, &mechanism, &job.task, &control.limits, control.cancel))),
         })
     }
 }

@@ -122,16 +122,16 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec, snap_tolerance: f64) -> Resu
         None => floating_root(m).unwrap_or(m.root),
     };
     for (name, value) in &spec.locks {
-        let j = m.joint(name).ok_or_else(|| Manip3rError::Selection(format!("--lock: '{name}' is not a joint of the file")))?;
+        let j = m.joint(name).ok_or_else(|| Manip3rError::Selection(format!("--fix: '{name}' is not a joint of the file")))?;
         let JointKind::Revolute { limits } = m.joints[j].kind else {
-            return Err(Manip3rError::Selection(format!("--lock: joint '{name}' is not revolute")));
+            return Err(Manip3rError::Selection(format!("--fix: joint '{name}' is not revolute")));
         };
         if !value.is_finite() {
-            return Err(Manip3rError::Selection(format!("--lock: the value for '{name}' is not a finite number")));
+            return Err(Manip3rError::Selection(format!("--fix: the value for '{name}' is not a finite number")));
         }
         if let Some((lo, hi)) = limits {
             if *value < lo || *value > hi {
-                return Err(Manip3rError::Selection(format!("--lock: {name}={value} is outside its limits [{lo}, {hi}]")));
+                return Err(Manip3rError::Selection(format!("--fix: {name}={value} is outside its limits [{lo}, {hi}]")));
             }
         }
     }
@@ -186,7 +186,7 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec, snap_tolerance: f64) -> Resu
     let path = below(tip).ok_or_else(|| Manip3rError::Selection(format!("tip '{}' is not below base '{}'", m.links[tip].name, m.links[base].name)))?;
     for (name, _) in &spec.locks {
         if !path.iter().any(|&j| m.joints[j].name == *name) {
-            return Err(Manip3rError::Selection(format!("--lock: joint '{name}' is not on the chain from '{}' to '{}'", m.links[base].name, m.links[tip].name)));
+            return Err(Manip3rError::Selection(format!("--fix: joint '{name}' is not on the chain from '{}' to '{}'", m.links[base].name, m.links[tip].name)));
         }
     }
     for &j in &path {
@@ -347,7 +347,7 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec, snap_tolerance: f64) -> Resu
             }
         }
     } else {
-        let hint = if n == 7 { format!("lock one with --lock JOINT=VALUE (e.g. --lock {}=0)", m.joints[revolute[2]].name) } else { "cut it with --base/--tip or give --tip-point LINK@X,Y,Z".into() };
+        let hint = if n == 7 { format!("hold one with --fix JOINT=VALUE (e.g. --fix {}=0)", m.joints[revolute[2]].name) } else { "cut it with --base/--tip or give --tip-point LINK@X,Y,Z".into() };
         return Err(Manip3rError::NotThreeR(format!("the chain from '{b}' to '{t}' has {n} revolute joints{lock_text}: {hint}")));
     };
     // The reduced mechanism: base, the links down to joint 3's child (or the whole path when the

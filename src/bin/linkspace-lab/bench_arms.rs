@@ -129,7 +129,7 @@ fn table(args: &Bench3rArgs, shipped: &Path, lab: &Path, dir: &Path) -> Result<(
     for (name, xml, locks) in robots {
         let file = dir.join(format!("{name}.urdf"));
         std::fs::write(&file, xml).with_context(|| format!("writing {}", file.display()))?;
-        let lock_args: Vec<String> = locks.iter().flat_map(|l| ["--lock".to_string(), l.to_string()]).collect();
+        let lock_args: Vec<String> = locks.iter().flat_map(|l| ["--fix".to_string(), l.to_string()]).collect();
         let json = dir.join(format!("{name}.json"));
         let mut new_args = vec!["singularities".to_string(), file.display().to_string(), "--precision".into(), args.precision.to_string(), "--json".into(), json.display().to_string()];
         new_args.extend(lock_args.iter().cloned());
@@ -201,7 +201,7 @@ pub fn baseline_child(args: &Bench3rArgs, file: &Path) -> Result<()> {
             Ok((joint.to_string(), value))
         })
         .collect::<Result<Vec<_>>>()?;
-    // What `linkspace singularities FILE --lock ... --ignore-limits` reads: the same rounding
+    // What `linkspace singularities FILE --fix ... --ignore-limits` reads: the same rounding
     // and chain choice.
     let options = LoadOptions { spec: ChainSpec { locks, length_tolerance: 0.0, ..Default::default() }, exact_geometry: false, ignore_limits: true, ..Default::default() };
     let xml = std::fs::read_to_string(file).with_context(|| format!("reading {}", file.display()))?;

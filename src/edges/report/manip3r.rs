@@ -6,7 +6,7 @@
 //! the first joint's origin). The 3R analyses' own records (`arm3r`'s verdict, singular
 //! branches, chain choice, joint limits) are written through the remote definitions at the end.
 
-use crate::app::{Arm, ArmCollisions, ArmIk, ArmSingularities, IkPoint};
+use crate::app::{Arm, ArmCollisions, ArmIk, IkPoint, SingularitiesAnswer};
 use crate::analyses::arm3r::branches::{Attribution, CrossingRecord, FoldSample, ImageRecord, IsolatedNode, SingularBranch, SingularBranches};
 use crate::analyses::arm3r::chain::Chain3R;
 use crate::analyses::arm3r::collision::{CollisionSet, Scene};
@@ -19,7 +19,7 @@ use crate::kernel::interval::Bounds;
 use crate::analyses::arm3r::records::{bounds, joints, workspace};
 pub use crate::analyses::arm3r::{Joints, Workspace};
 use crate::analyses::arm3r::select::{Choice, Scope};
-use crate::analyses::arm3r::verdict::Verdict;
+use super::verdicts::{VerdictRecord, Verdicts};
 use crate::analyses::arm3r::Prepared;
 use crate::model::rounding::Snap;
 use super::kernel::CompletenessDef;
@@ -217,9 +217,16 @@ pub struct SingularityReport {
     pub undecided_total: [usize; 2],
     /// Counters.
     pub stats: SearchCounts,
-    /// The first answer: cuspidal or not, aspects, IK solutions, and the argument.
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "some_verdict")]
-    pub verdict: Option<Verdict>,
+    /// The arm's cuspidality verdict, with its scope (`report::verdicts`): the positioning
+    /// structure's when it speaks for the arm, else the whole arm's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub verdict: Option<VerdictRecord>,
+    /// The positioning sub-chain's verdict when it is not the arm's, with its scope.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sub_chain_verdict: Option<VerdictRecord>,
+    /// A six-joint arm's whole-arm cuspidality section (how it was decided).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub arm_cuspidality: Option<super::six::ArmCuspidalityReport>,
     /// How the file was read (`chain`, `rounding`, `joint_limits` in the JSON); `None` for a
     /// report built from searches alone.
     #[serde(flatten)]
@@ -319,6 +326,8 @@ impl SingularityReport {
             undecided_total: [cusps.undecided.len(), nodes.map_or(0, |n| n.undecided.len())],
             stats: SearchCounts { cusps: CuspStats::from(cusps), nodes: nodes.map(NodeStats::from), seconds },
             verdict: None,
+            sub_chain_verdict: None,
+            arm_cuspidality: None,
             reading: None,
             not_searched: None,
             singular_branches: None,
@@ -329,11 +338,19 @@ impl SingularityReport {
 
 impl SingularityReport {
     /// What `linkspace singularities --json` writes of `found`, a run on `arm`.
-    pub fn of(arm: &Arm, found: &ArmSingularities) -> Self {
+    pub fn of(answer: &SingularitiesAnswer) -> Self {
+        let (arm, found) = (&answer.arm, &answer.found);
         let run = &found.run;
         let mut report = SingularityReport::new(&arm.chain, found.request.precision, &run.cusps, run.nodes.as_ref(), found.seconds);
-        report.verdict = found.verdict.clone();
-        report.reading = Some(Reading::of(&arm.prepared, found.limit_effect.clone()));
+        let verdicts = Verdicts::of(answer);
+        report.verdict = verdicts.arm;
+        report.sub_chain_verdict = verdicts.sub_chain;
+        let mut reading = Reading::of(&arm.prepared, found.limit_effect.clone());
+        if let (Some(a), false) = (&verdicts.whole_arm, arm.prepared.choice.scope.stands_for_arm) {
+            reading.chain.scope.not_answered = Some(format!("not the arm's verdict: the whole arm's ({}) is `verdict`", a.arm));
+        }
+        report.arm_cuspidality = verdicts.whole_arm;
+        report.reading = Some(reading);
         if let Some(a) = &found.explained {
             report.explain(a.clone());
         }
@@ -550,17 +567,8 @@ enum ReasonDef {
     Limit,
 }
 
-#[derive(Serialize)]
-#[serde(remote = "Verdict")]
-struct VerdictDef {
-    cuspidal: Option<bool>,
-    aspects: Option<u32>,
-    max_ik_solutions: Option<u32>,
-    certified: bool,
-    reason: String,
-}
 
-some_with!(some_verdict, Verdict, "VerdictDef");
+
 
 /// `select::Choice`, the locked joints as `[name, value]` pairs.
 #[derive(Serialize)]
