@@ -623,7 +623,7 @@ fn path_check(args: PathCheckArgs) -> Result<()> {
         SingularSetArg::SixR => PathSet::Arm6R,
         SingularSetArg::ThreeR => PathSet::Positioning3R,
     });
-    let job = PathCheckJob { arm: args.chain.options()?, waypoints: waypoints(&args)?, set, precision: args.precision };
+    let job = PathCheckJob { arm: args.chain.options()?, waypoints: waypoints(&args)?, joint_names: Vec::new(), set, precision: args.precision };
     execute(&args.urdf, Job::PathCheck(job), &args.limits, args.json.as_deref())
 }
 

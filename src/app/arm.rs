@@ -302,7 +302,13 @@ impl Analysis for Manip3rAnalysis {
     }
 
     fn services(&self) -> Vec<Service> {
-        vec![Service::Singularities, Service::InverseKinematics, Service::Classify]
+        // Every arm read as a 3R positioning structure has a path check (its 3R set); a
+        // six-revolute one answers the 6R questions too.
+        let mut services = vec![Service::Singularities, Service::InverseKinematics, Service::Classify, Service::PathCheck];
+        if self.six.is_some() {
+            services.insert(3, Service::InverseKinematics6);
+        }
+        services
     }
 
     fn limitation(&self) -> String {
@@ -338,14 +344,6 @@ impl Analysis for Manip3rAnalysis {
             return Err(AnalysisError::BadRequest("max_boxes must be at least 1".into()));
         }
         Ok(Box::new(IkRun { arm: self.arm.clone(), query: query.clone() }))
-    }
-
-    fn chain6(&self) -> Option<Arc<Chain6R>> {
-        self.six.clone()
-    }
-
-    fn positioning_arm(&self) -> Option<Arc<Arm>> {
-        Some(self.arm.clone())
     }
 
     fn classify(&self, values: &[f64], _cspace: Option<&BoxSetResult>, _singular: Option<&SingularityResult>) -> Result<Classification, AnalysisError> {

@@ -121,8 +121,11 @@ pub struct Ik6Job {
 pub struct PathCheckJob {
     /// How the arm is read.
     pub arm: ArmOptions,
-    /// The waypoints, each the joint values (radians) of the checked set's joints.
+    /// The waypoints, each the joint values (radians) of `joint_names`.
     pub waypoints: Vec<Vec<f64>>,
+    /// The joints of the waypoints' values, in order (a trajectory's columns, any order, more
+    /// joints allowed); empty: the checked set's joints in their order.
+    pub joint_names: Vec<String>,
     /// The singular set: the six-revolute arm's or its 3R positioning structure's; `None`
     /// picks the six-revolute arm's when the file has one and no sub-chain was chosen.
     pub set: Option<PathSet>,

@@ -101,6 +101,10 @@ pub enum Service {
     InverseKinematics,
     /// Which component of the configuration space a configuration belongs to.
     Classify,
+    /// Certified inverse kinematics of a six-revolute arm's tip pose.
+    InverseKinematics6,
+    /// A joint path checked against the arm's singular sets.
+    PathCheck,
 }
 
 impl Service {
@@ -111,6 +115,8 @@ impl Service {
             Service::Singularities => "singularities",
             Service::InverseKinematics => "inverse_kinematics",
             Service::Classify => "classify",
+            Service::InverseKinematics6 => "inverse_kinematics6",
+            Service::PathCheck => "path_check",
         }
     }
 }
@@ -555,18 +561,6 @@ pub trait Analysis: Send + Sync {
         let _ = singularities;
         let cspace = configuration_space.ok_or(AnalysisError::NotReady { what: "configuration_space" })?;
         Ok(classify(cspace, values, &self.periodic(), None))
-    }
-
-    /// The arm's six revolute joints base to tip, when it has exactly six (the 6R services:
-    /// `inverse_kinematics6`, `check_path`).
-    fn chain6(&self) -> Option<std::sync::Arc<crate::analyses::arm6r::Chain6R>> {
-        None
-    }
-
-    /// The serial arm whose 3R positioning structure the analysis reads (the 3R path check),
-    /// when it is one.
-    fn positioning_arm(&self) -> Option<std::sync::Arc<Arm>> {
-        None
     }
 
     /// The `NotAvailable` error for `service`.

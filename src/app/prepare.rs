@@ -198,6 +198,42 @@ fn six_joint_chain(m: &Mechanism, options: &arm3r::LoadOptions) -> Result<Chain6
     Ok(six::chain6(m, options)?)
 }
 
+/// Waypoints one request may check: a path of more is refused rather than held in memory.
+pub const MAX_WAYPOINTS: usize = 100_000;
+
+/// Joint values beyond this many radians are refused: no joint turns 1,600 times.
+const MAX_JOINT_VALUE: f64 = 1e4;
+
+/// The waypoints' values of `joints`, in that order, taken from the columns `names` (or in
+/// order when `names` is empty).
+fn columns(waypoints: Vec<Vec<f64>>, names: &[String], joints: &[String]) -> Result<Vec<Vec<f64>>, JobError> {
+    if waypoints.len() > MAX_WAYPOINTS {
+        return Err(JobError::Bad(format!("{} waypoints: at most {MAX_WAYPOINTS} are checked in one request", waypoints.len())));
+    }
+    if let Some((k, x)) = waypoints.iter().enumerate().find_map(|(k, w)| w.iter().find(|x| !(x.abs() <= MAX_JOINT_VALUE)).map(|x| (k, *x))) {
+        return Err(JobError::Bad(format!("waypoint {}: joint value {x} is not a number within ±{MAX_JOINT_VALUE} rad", k + 1)));
+    }
+    if names.is_empty() {
+        return match waypoints.iter().enumerate().find(|(_, w)| w.len() != joints.len()) {
+            Some((k, w)) => Err(JobError::Bad(format!("waypoint {} has {} joint values: expected {}", k + 1, w.len(), joints.len()))),
+            None => Ok(waypoints),
+        };
+    }
+    let shown = |v: &[String]| if v.len() > 12 { format!("{}, and {} more", v[..12].join(", "), v.len() - 12) } else { v.join(", ") };
+    let mut column = Vec::with_capacity(joints.len());
+    for joint in joints {
+        match names.iter().position(|n| n == joint) {
+            Some(i) => column.push(i),
+            None => return Err(JobError::Bad(format!("the trajectory has no joint '{joint}' (the arm's joints: {}; given: {})", joints.join(", "), shown(names)))),
+        }
+    }
+    waypoints
+        .into_iter()
+        .enumerate()
+        .map(|(k, w)| if w.len() == names.len() { Ok(column.iter().map(|&i| w[i]).collect()) } else { Err(JobError::Bad(format!("point {k} has {} positions for {} joint names", w.len(), names.len()))) })
+        .collect()
+}
+
 fn prepare_path(m: &Mechanism, j: PathCheckJob) -> Result<Ready, JobError> {
     let sub_chain_chosen = j.arm.spec.tip_point.is_some() || !j.arm.spec.locks.is_empty();
     let set = match j.set {
@@ -205,24 +241,20 @@ fn prepare_path(m: &Mechanism, j: PathCheckJob) -> Result<Ready, JobError> {
         None if !sub_chain_chosen && six::chain6(m, &j.arm).is_ok() => PathSet::Arm6R,
         None => PathSet::Positioning3R,
     };
-    let check_lengths = |n: usize| match j.waypoints.iter().enumerate().find(|(_, w)| w.len() != n) {
-        Some((k, w)) => Err(JobError::Bad(format!("waypoint {} has {} joint values: expected {n}", k + 1, w.len()))),
-        None => Ok(()),
-    };
     match set {
         PathSet::Arm6R => {
             if sub_chain_chosen {
                 return Err(JobError::Bad("--fix and --tip-point choose a 3R sub-chain and its point: they apply with --singular-set 3r".into()));
             }
-            check_lengths(6)?;
             let chain = six_joint_chain(m, &j.arm)?;
-            let waypoints = j.waypoints.iter().map(|w| <[f64; 6]>::try_from(w.as_slice()).expect("invariant: six values checked")).collect();
+            let waypoints = columns(j.waypoints, &j.joint_names, &chain.joints)?;
+            let waypoints = waypoints.iter().map(|w| <[f64; 6]>::try_from(w.as_slice()).expect("invariant: six values checked")).collect();
             Ok(Ready::Path6 { chain: Box::new(chain), waypoints, precision: j.precision })
         }
         PathSet::Positioning3R => {
             let arm = Arm::load(m, &j.arm, 0.0)?;
-            check_lengths(path::positioning_joints(&arm).len())?;
-            Ok(Ready::Path3 { arm: Box::new(arm), waypoints: j.waypoints, precision: j.precision })
+            let waypoints = columns(j.waypoints, &j.joint_names, &path::positioning_joints(&arm))?;
+            Ok(Ready::Path3 { arm: Box::new(arm), waypoints, precision: j.precision })
         }
     }
 }

@@ -143,6 +143,8 @@ pub(crate) struct Loaded {
     pub token: String,
     /// It came from the `robot_description` parameter or topic (see `Source::description`).
     pub description: bool,
+    /// The mechanism as the front door takes it: every job the node runs is prepared on it.
+    pub input: std::sync::Arc<app::Input>,
 }
 
 /// A robot name as one token of a ROS name: letters, digits and single underscores, not
@@ -186,7 +188,7 @@ pub(crate) fn load_one(s: &Source, config: &ServeConfig, used_fixes: &mut [bool]
         }
     }
     let analysis = app::load_urdf(&m, &fixed, &traces).with_context(|| format!("loading {}", s.label))?;
-    Ok(Loaded { analysis, root_link: m.links[m.root].name.clone(), token: name_token(&m.name), description: s.description })
+    Ok(Loaded { analysis, root_link: m.links[m.root].name.clone(), token: name_token(&m.name), description: s.description, input: std::sync::Arc::new(app::Input::Mechanism(m)) })
 }
 
 /// Parses and formulates every mechanism of `config`.

@@ -63,8 +63,8 @@ enum Outcome {
     BoxSet(BoxSetResult),
     Singularities(SingularityResult),
     InverseKinematics(IkResult),
-    /// A 6R arm's inverse kinematics, with the chain its reply names the joints of.
-    InverseKinematics6(Result<crate::app::ArmIk6, String>, Arc<crate::analyses::arm6r::Chain6R>),
+    /// A job run through the front door (`app::prepare`, `Prepared::run`).
+    Answer(Result<crate::app::Answer, String>),
 }
 
 impl Outcome {
@@ -74,14 +74,21 @@ impl Outcome {
             Outcome::BoxSet(r) => (r.stats.processed, r.boxes.iter().filter(|b| b.status == crate::kernel::search::BoxStatus::Undecided).count(), r.status == Status::Finished),
             Outcome::Singularities(r) => (r.processed, r.undecided(), r.status == Status::Finished),
             Outcome::InverseKinematics(r) => (r.processed, 0, r.status == Status::Finished),
-            Outcome::InverseKinematics6(Ok(r), _) => (r.solutions.stats.processed, r.solutions.clusters.len(), r.solutions.status == Status::Finished),
-            Outcome::InverseKinematics6(Err(_), _) => (0, 0, false),
+            Outcome::Answer(Ok(a)) => {
+                let (processed, pending) = match a {
+                    crate::app::Answer::Ik6(a) => (a.found.solutions.stats.processed, a.found.solutions.clusters.len()),
+                    crate::app::Answer::PathCheck(a) => (a.found.check.segments.len() as u64, 0),
+                    _ => (0, 0),
+                };
+                (processed, pending, a.completeness().is_complete())
+            }
+            Outcome::Answer(Err(_)) => (0, 0, false),
         }
     }
 }
 
 /// A run's work, moved to its thread.
-type Job = Box<dyn FnOnce(&AtomicBool, &mut dyn FnMut(&crate::kernel::search::Progress)) -> Outcome + Send>;
+type Work = Box<dyn FnOnce(&AtomicBool, &mut dyn FnMut(&crate::kernel::search::Progress)) -> Outcome + Send>;
 
 /// A decoded service request with the id its reply must carry.
 enum Request {
@@ -129,12 +136,13 @@ enum RunKind {
     Singularities { load_time: bool },
     InverseKinematics,
     InverseKinematics6,
+    PathCheck,
 }
 
 impl RunKind {
     /// Runs started by a request, which count against `NodeLimits::max_runs`.
     fn requested(self) -> bool {
-        matches!(self, RunKind::Solve | RunKind::SolveAction | RunKind::Singularities { load_time: false } | RunKind::InverseKinematics | RunKind::InverseKinematics6)
+        matches!(self, RunKind::Solve | RunKind::SolveAction | RunKind::Singularities { load_time: false } | RunKind::InverseKinematics | RunKind::InverseKinematics6 | RunKind::PathCheck)
     }
 
     /// The `analysis` field of its progress messages.
@@ -145,6 +153,7 @@ impl RunKind {
             RunKind::Singularities { .. } => "singularities",
             RunKind::InverseKinematics => "inverse_kinematics",
             RunKind::InverseKinematics6 => "inverse_kinematics6",
+            RunKind::PathCheck => "path_check",
         }
     }
 }
@@ -875,7 +884,7 @@ impl State {
     }
 
     /// Starts `job` on a thread of its own; returns its run id.
-    fn start(&mut self, mechanism: usize, kind: RunKind, job: Job) -> u64 {
+    fn start(&mut self, mechanism: usize, kind: RunKind, job: Work) -> u64 {
         let run = self.next_run;
         self.next_run += 1;
         let cancel = Arc::new(AtomicBool::new(false));
@@ -1005,18 +1014,30 @@ impl State {
                     self.reply_ik(id, reply.clone());
                 }
             }
-            Outcome::InverseKinematics6(result, chain) => {
-                let reply = match result {
-                    Ok(found) => {
-                        if self.log_level <= Severity::Info {
-                            eprintln!("linkspace: {name}: run {run} (6R inverse kinematics): {} solutions, {} undecided clusters, {:.3} s", found.solutions.unique.len(), found.solutions.clusters.len(), found.seconds);
-                        }
-                        convert::ik6_response(&chain, &found)
-                    }
-                    Err(message) => InverseKinematics6Response { ok: false, message, ..Default::default() },
-                };
+            Outcome::Answer(Err(message)) => {
+                for (id, _) in r.waiters {
+                    self.reply_error(r.kind, id, message.clone());
+                }
+            }
+            Outcome::Answer(Ok(crate::app::Answer::Ik6(a))) => {
+                if self.log_level <= Severity::Info {
+                    let s = &a.found.solutions;
+                    eprintln!("linkspace: {name}: run {run} (6R inverse kinematics): {} solutions, {} undecided clusters, {:.3} s", s.unique.len(), s.clusters.len(), a.found.seconds);
+                }
+                let reply = convert::ik6_response(&a.chain, &a.found);
                 for (id, _) in r.waiters {
                     self.reply_ik6(id, reply.clone());
+                }
+            }
+            Outcome::Answer(Ok(crate::app::Answer::PathCheck(a))) => {
+                let reply = convert::path_check_response(&a.found);
+                for (id, _) in r.waiters {
+                    self.reply_path_check(id, reply.clone());
+                }
+            }
+            Outcome::Answer(Ok(other)) => {
+                for (id, _) in r.waiters {
+                    self.reply_error(r.kind, id, format!("internal error: a {} answer for a {} request", other.name(), r.kind.analysis()));
                 }
             }
         }
@@ -1036,10 +1057,8 @@ impl State {
             }
         };
         let m = &mut self.mechanisms[r.mechanism];
-        let status = match result.status {
-            Status::Finished => "complete".to_string(),
-            Status::Stopped(l) => format!("incomplete ({} limit)", l.name()),
-        };
+        let undecided = result.boxes.iter().filter(|b| b.status == crate::app::BoxStatus::Undecided).count();
+        let status = crate::app::Completeness::of(result.status, undecided, false).text();
         let summary = format!("{name}: run {run} ({:?}) {status}: {} boxes, {} clusters, {:.3} s", r.kind, result.boxes.len(), result.clusters, result.stats.seconds);
         match r.kind {
             RunKind::ConfigurationSpace => {
@@ -1086,7 +1105,7 @@ impl State {
                     self.goal_result(h, end, SolveActionResult { ok: true, message: format!("run {run}: {status}"), run_id: run, result: set });
                 }
             }
-            RunKind::Singularities { .. } | RunKind::InverseKinematics | RunKind::InverseKinematics6 => eprintln!("linkspace: {name}: run {run} returned a box set for a {:?} run", r.kind),
+            RunKind::Singularities { .. } | RunKind::InverseKinematics | RunKind::InverseKinematics6 | RunKind::PathCheck => eprintln!("linkspace: {name}: run {run} returned a box set for a {:?} run", r.kind),
         }
         self.log(LogLevel::Info, summary);
     }
@@ -1176,6 +1195,13 @@ impl State {
             RunKind::Singularities { .. } => self.reply_singularities(id, SingularitiesResponse { ok: false, message, report: convert::no_report() }),
             RunKind::InverseKinematics => self.reply_ik(id, InverseKinematicsResponse { ok: false, message, ..Default::default() }),
             RunKind::InverseKinematics6 => self.reply_ik6(id, InverseKinematics6Response { ok: false, message, ..Default::default() }),
+            RunKind::PathCheck => self.reply_path_check(id, PathCheckResponse { ok: false, message, ..Default::default() }),
+        }
+    }
+
+    fn reply_path_check(&self, id: RmwRequestId, reply: PathCheckResponse) {
+        if let Err(e) = self.servers.path_check.send_response(id, reply) {
+            eprintln!("linkspace: sending a path_check reply: {e:?}");
         }
     }
 
@@ -1236,10 +1262,11 @@ impl State {
                 Ok(Some(a)) => servers.inverse_kinematics6.send_response(id, a),
                 Err(p) => servers.inverse_kinematics6.send_response(id, InverseKinematics6Response { ok: false, message: internal(p), ..Default::default() }),
             },
-            Request::PathCheck(id, q) => {
-                let a = catch_unwind(AssertUnwindSafe(|| self.path_check(q))).unwrap_or_else(|p| PathCheckResponse { ok: false, message: internal(p), ..Default::default() });
-                servers.path_check.send_response(id, a)
-            }
+            Request::PathCheck(id, q) => match catch_unwind(AssertUnwindSafe(|| self.path_check(id, q))) {
+                Ok(None) => Ok(()),
+                Ok(Some(a)) => servers.path_check.send_response(id, a),
+                Err(p) => servers.path_check.send_response(id, PathCheckResponse { ok: false, message: internal(p), ..Default::default() }),
+            },
             Request::List(id) => {
                 let a = catch_unwind(AssertUnwindSafe(|| self.list())).unwrap_or_else(|_| ListMechanismsResponse::default());
                 servers.list.send_response(id, a)
@@ -1274,7 +1301,7 @@ impl State {
     }
 
     /// A Solve request checked and prepared (the mechanism and the run), or why not.
-    fn solve_job(&self, q: &SolveRequest) -> Result<(usize, Job), String> {
+    fn solve_job(&self, q: &SolveRequest) -> Result<(usize, Work), String> {
         let k = self.mechanism(&q.mechanism)?;
         let limits = &self.limits;
         let s = &q.settings;
@@ -1487,23 +1514,39 @@ impl State {
     }
 
     /// The six joints of a loaded arm, or why there are none.
-    fn six_joint_arm(&self, name: &str, service: &str) -> Result<std::sync::Arc<crate::analyses::arm6r::Chain6R>, String> {
-        let k = self.mechanism(name)?;
-        self.mechanisms[k].loaded.analysis.chain6().ok_or_else(|| format!("{service}: '{}' is not an arm with six revolute joints from base to tip", convert::bounded(name, convert::ECHO_NAME)))
+    /// Prepares `job` for mechanism `k` on the event loop (every check that needs no search:
+    /// a bad request is answered at once) and starts its run on a thread of its own, bounded by
+    /// `limits` and the node's threads; the reply waits at most the node's longest wait.
+    fn start_job(&mut self, id: RmwRequestId, k: usize, kind: RunKind, job: crate::app::Job, limits: crate::app::Limits) -> Result<(), String> {
+        let prepared = crate::app::prepare(&self.mechanisms[k].loaded.input, job).map_err(|e| e.to_string())?;
+        if let Some(busy) = self.busy() {
+            return Err(busy);
+        }
+        let threads = self.settings.threads.max(1);
+        let run = self.start(
+            k,
+            kind,
+            Box::new(move |cancel, progress| {
+                let control = crate::app::Control { limits, threads, cancel };
+                Outcome::Answer(prepared.run(&control, progress).map_err(|e| e.to_string()))
+            }),
+        );
+        let deadline = Instant::now() + seconds(self.limits.max_wait);
+        self.runs.get_mut(&run).expect("invariant: just started").waiters.push((id, deadline));
+        Ok(())
     }
 
-    /// Validates and starts a 6R inverse-kinematics run on a thread of its own, as every search
-    /// of the node (a pose takes milliseconds to a few seconds, which the event loop must not
-    /// wait for); `None` when the reply waits for it. Bounded by the request's boxes and the
-    /// node's longest wait, and counted against `--max-runs`.
+    /// Certified inverse kinematics of a six-revolute arm's tip pose, run as every search of
+    /// the node on a thread of its own; `None` when the reply waits for it. Bounded by the
+    /// request's boxes and the node's longest wait, and counted against `--max-runs`.
     fn inverse_kinematics6(&mut self, id: RmwRequestId, q: InverseKinematics6Request) -> Option<InverseKinematics6Response> {
         let refuse = |message: String| Some(InverseKinematics6Response { ok: false, message, ..Default::default() });
-        let chain = match self.six_joint_arm(&q.mechanism, "inverse_kinematics6") {
-            Ok(c) => c,
+        let k = match self.mechanism(&q.mechanism) {
+            Ok(k) => k,
             Err(e) => return refuse(e),
         };
         let (p, o) = (&q.pose.position, &q.pose.orientation);
-        let pose = match crate::analyses::arm6r::PoseInput::from_numbers(&[p.x, p.y, p.z, o.x, o.y, o.z, o.w]) {
+        let pose = match crate::app::PoseInput::from_numbers(&[p.x, p.y, p.z, o.x, o.y, o.z, o.w]) {
             Ok(pose) => pose,
             Err(e) => return refuse(e.to_string()),
         };
@@ -1514,81 +1557,43 @@ impl State {
             Ok(n) => n,
             Err(e) => return refuse(e),
         };
-        if let Some(busy) = self.busy() {
-            return refuse(busy);
-        }
-        let k = self.mechanism(&q.mechanism).expect("invariant: six_joint_arm found it");
-        let (limits, threads, sigma) = (crate::kernel::search::Limits { max_cells: max_boxes, timeout: Some(seconds(self.limits.max_wait)), ..Default::default() }, self.settings.threads.max(1), q.sigma);
-        let run = self.start(
-            k,
-            RunKind::InverseKinematics6,
-            Box::new(move |cancel, _| {
-                let control = crate::kernel::search::Control { limits, threads, cancel };
-                Outcome::InverseKinematics6(crate::app::inverse_kinematics6(&chain, pose, sigma, &control).map_err(|e| e.to_string()), chain)
-            }),
-        );
-        let deadline = Instant::now() + seconds(self.limits.max_wait);
-        self.runs.get_mut(&run).expect("invariant: just started").waiters.push((id, deadline));
-        None
+        let limits = crate::app::Limits { max_cells: max_boxes, timeout: Some(seconds(self.limits.max_wait)), ..Default::default() };
+        let job = crate::app::Job::Ik6(crate::app::Ik6Job { arm: crate::app::LoadOptions::default(), pose, precision: q.sigma });
+        self.start_job(id, k, RunKind::InverseKinematics6, job, limits).err().and_then(|e| refuse(format!("inverse_kinematics6: {e}")))
     }
 
-    /// A joint path's singularities, answered at once (a check takes milliseconds per segment),
-    /// within the request's timeout (at most the node's longest wait).
-    fn path_check(&mut self, q: PathCheckRequest) -> PathCheckResponse {
-        let refuse = |message: String| PathCheckResponse { ok: false, message, ..Default::default() };
-        // The set asked for, and what checks it: the 6R chain, or the arm's 3R positioning structure.
-        let (six, positioning) = match self.mechanism(&q.mechanism) {
-            Ok(k) => {
-                let a = &self.mechanisms[k].loaded.analysis;
-                (a.chain6(), a.positioning_arm())
-            }
+    /// A joint path's singularities, run on a thread of its own as every search of the node,
+    /// within the request's timeout (at most the node's longest wait); `None` when the reply
+    /// waits for it.
+    fn path_check(&mut self, id: RmwRequestId, q: PathCheckRequest) -> Option<PathCheckResponse> {
+        let refuse = |message: String| Some(PathCheckResponse { ok: false, message, ..Default::default() });
+        let k = match self.mechanism(&q.mechanism) {
+            Ok(k) => k,
             Err(e) => return refuse(e),
         };
-        let name = convert::bounded(&q.mechanism, convert::ECHO_NAME);
-        let set = match (q.singular_set.as_str(), six, positioning) {
-            ("6r", Some(chain), _) | ("", Some(chain), _) => Ok(chain),
-            ("3r", _, Some(arm)) | ("", None, Some(arm)) => Err(arm),
-            ("6r", None, _) | ("", None, None) => return refuse(format!("path_check: '{name}' is not an arm with six revolute joints from base to tip")),
-            ("3r", _, None) => return refuse(format!("path_check: '{name}' has no 3R positioning structure (not a serial arm)")),
-            (other, _, _) => return refuse(format!("singular_set must be \"6r\", \"3r\" or empty, got \"{}\"", convert::bounded(other, convert::ECHO_NAME))),
-        };
-        let joints: Vec<String> = match &set {
-            Ok(chain) => chain.joints.to_vec(),
-            Err(arm) => crate::app::positioning_joints(arm),
+        let set = match q.singular_set.as_str() {
+            "6r" => Some(crate::app::PathSet::Arm6R),
+            "3r" => Some(crate::app::PathSet::Positioning3R),
+            "" => None,
+            other => return refuse(format!("singular_set must be \"6r\", \"3r\" or empty, got \"{}\"", convert::bounded(other, convert::ECHO_NAME))),
         };
         let t = &q.trajectory;
-        let mut column = vec![0usize; joints.len()];
-        for (k, joint) in joints.iter().enumerate() {
-            match t.joint_names.iter().position(|n| n == joint) {
-                Some(i) => column[k] = i,
-                None => return refuse(format!("the trajectory has no joint '{joint}' (the arm's joints: {}; given: {})", joints.join(", "), convert::bounded(&t.joint_names.join(", "), convert::ECHO_MESSAGE))),
-            }
-        }
-        let mut waypoints: Vec<Vec<f64>> = Vec::with_capacity(t.points.len());
+        let mut waypoints: Vec<Vec<f64>> = Vec::with_capacity(t.points.len().min(1 << 16));
         for (k, point) in t.points.iter().enumerate() {
             if point.positions.len() != t.joint_names.len() {
                 return refuse(format!("point {k} has {} positions for {} joint names", point.positions.len(), t.joint_names.len()));
             }
-            waypoints.push(column.iter().map(|&i| point.positions[i]).collect());
+            waypoints.push(point.positions.clone());
         }
-        let tolerance = if q.tolerance == 0.0 { 1e-9 } else { q.tolerance };
+        let precision = if q.tolerance == 0.0 { crate::app::Job::default_precision("path-check") } else { q.tolerance };
         if !(q.timeout.is_finite() && q.timeout >= 0.0) {
             return refuse(format!("timeout must be a number of seconds >= 0, got {}", q.timeout));
         }
         let timeout = if q.timeout == 0.0 { self.limits.max_wait } else { q.timeout.min(self.limits.max_wait) };
-        let cancel = AtomicBool::new(false);
-        let control = crate::kernel::search::Control { limits: crate::kernel::search::Limits { timeout: Some(seconds(timeout)), ..Default::default() }, threads: 1, cancel: &cancel };
-        let found = match set {
-            Ok(chain) => {
-                let six: Vec<[f64; 6]> = waypoints.into_iter().map(|w| <[f64; 6]>::try_from(w).expect("invariant: one value per joint of six")).collect();
-                crate::app::check_path(&chain, &six, tolerance, &control).map_err(|e| e.to_string())
-            }
-            Err(arm) => crate::app::check_path3(&arm, &waypoints, tolerance, &control).map_err(|e| e.to_string()),
-        };
-        match found {
-            Ok(found) => convert::path_check_response(&found),
-            Err(e) => refuse(e),
-        }
+        let limits = crate::app::Limits { timeout: Some(seconds(timeout)), ..crate::app::Job::default_limits("path-check") };
+        let job = crate::app::Job::PathCheck(crate::app::PathCheckJob { arm: crate::app::LoadOptions::default(), waypoints, joint_names: t.joint_names.clone(), set, precision });
+        let name = convert::bounded(&q.mechanism, convert::ECHO_NAME);
+        self.start_job(id, k, RunKind::PathCheck, job, limits).err().and_then(|e| refuse(format!("path_check: '{name}': {e}")))
     }
 
     fn classify(&mut self, q: ClassifyRequest) -> ClassifyResponse {
