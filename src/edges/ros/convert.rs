@@ -435,22 +435,24 @@ pub fn ik6_response(chain: &Chain6R, found: &ArmIk6) -> InverseKinematics6Respon
 
 /// The reply to a path check: the verdicts and reasons of `linkspace path-check`.
 pub fn path_check_response(found: &ArmPathCheck) -> PathCheckResponse {
-    let report = crate::edges::report::six::PathCheckReport::of(found);
     let mut reply = PathCheckResponse {
         ok: true,
-        message: report.headline(),
-        complete: report.counts.not_decided == 0,
-        singular_set: report.singular_set.to_string(),
-        subject: report.subject.clone(),
+        message: found.headline(),
+        complete: found.check.counts().not_decided == 0,
+        singular_set: found.set.name().to_string(),
+        subject: found.subject.clone(),
         joint_names: found.joints.clone(),
         ..Default::default()
     };
     for (k, v) in found.check.segments.iter().enumerate() {
-        let record = &report.segments[k];
-        reply.verdicts.push(record.verdict.to_string());
-        reply.reasons.push(record.reason.clone());
-        reply.det_signs.push(record.det_sign.map_or(0, |s| if s > 0.0 { 1 } else { -1 }));
-        reply.min_abs_det.push(record.min_abs_det.unwrap_or(0.0));
+        reply.verdicts.push(v.name().to_string());
+        reply.reasons.push(v.reason(found.set.det()));
+        let (sign, min_abs_det) = match v {
+            SegmentVerdict::Clear { sign, min_abs_det, .. } => (if *sign > 0.0 { 1 } else { -1 }, *min_abs_det),
+            _ => (0, 0.0),
+        };
+        reply.det_signs.push(sign);
+        reply.min_abs_det.push(min_abs_det);
         if let SegmentVerdict::Crosses { crossings, .. } = v {
             for c in crossings {
                 reply.crossing_segments.push(k.min(u32::MAX as usize) as u32);
