@@ -16,7 +16,7 @@ use super::arm::{Arm, ArmCollisions, ArmIk, ArmSingularities};
 use super::distances::{DistancesRequest, DistancesRun};
 use super::linkage::SolveRun;
 use super::loops::SingularSets;
-use super::motion::InputMotionCheck;
+use crate::analyses::input_motion::InputMotionCheck;
 use super::path::ArmPathCheck;
 use super::six::{ArmCuspidality, ArmIk6};
 use super::BoxSetResult;

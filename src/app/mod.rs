@@ -17,7 +17,6 @@ mod job;
 pub(crate) mod linkage;
 pub(crate) mod loops;
 mod merge;
-pub(crate) mod motion;
 pub(crate) mod path;
 mod prepare;
 mod platform;
@@ -47,7 +46,7 @@ pub use arm::{collisions, inverse_kinematics, singularities, Arm, ArmCollisions,
 pub use distances::{DistancesRun, DistancesRequest};
 pub use linkage::{describe_freedom, LinkageAnalysis, SolveRun};
 pub use loops::{all_kinds, analyse_image, image_points, Actuation, ImageAnalysisError, ImageSearch, SingularSets};
-pub use motion::{check_input_motion, motion_joints, InputMotionCheck, MotionError, MotionRequest, MotionStep, MotionVerdict};
+pub use crate::analyses::input_motion::{check_input_motion, motion_joints, InputMotionCheck, MotionError, MotionRequest, MotionStep, MotionVerdict};
 pub use platform::PlatformAnalysis;
 pub use path::{check_path, check_path3, positioning_joints, ArmPathCheck, PathSet};
 pub use six::{arm_cuspidality, arm_cuspidality_of, chain6, inverse_kinematics6, ArmCuspidality, ArmIk6, ArmVerdictLine};

@@ -18,7 +18,7 @@ use super::distances::{DistancesRequest, DistancesRun};
 use super::job::{DistancesJob, Job, LoopQuestion, LoopSingularitiesJob, PathCheckJob, SingularitiesJob, SweepTaskJob};
 use super::linkage::SolveRun;
 use super::loops::{self, Actuation, ImageAnalysisError, ImageSearch, SingularSets};
-use super::motion::{self, MotionError, MotionRequest};
+use crate::analyses::input_motion::{self as motion, MotionError, MotionRequest};
 use super::path::{self, PathSet};
 use super::six;
 use super::AnalysisError;
