@@ -14,7 +14,7 @@ use std::collections::BTreeMap;
 
 use super::arm::{Arm, ArmCollisions, ArmIk, ArmSingularities};
 use super::distances::{DistancesRequest, DistancesRun};
-use super::linkage::SolveRun;
+use super::solve::SolveRun;
 use super::loops::SingularSets;
 use crate::analyses::input_motion::InputMotionCheck;
 use super::path::ArmPathCheck;

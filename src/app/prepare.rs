@@ -16,7 +16,7 @@ use super::answer::{Answer, CollisionsAnswer, DistancesAnswer, Ik6Answer, IkAnsw
 use super::arm::{self, Arm, SingularitiesRequest};
 use super::distances::{DistancesRequest, DistancesRun};
 use super::job::{DistancesJob, Job, LoopQuestion, LoopSingularitiesJob, PathCheckJob, SingularitiesJob, SweepTaskJob};
-use super::linkage::SolveRun;
+use super::solve::SolveRun;
 use super::loops::{self, Actuation, ImageAnalysisError, ImageSearch, SingularSets};
 use crate::analyses::input_motion::{self as motion, MotionError, MotionRequest};
 use super::path::{self, PathSet};

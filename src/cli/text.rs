@@ -226,7 +226,7 @@ fn path_check(out: &mut Out, a: &linkspace::app::PathCheckAnswer) {
 
 fn collisions(out: &mut Out, a: &linkspace::app::CollisionsAnswer) {
     eprintln!("chain: {}", a.found.prepared.choice.reason);
-    let report = report::manip3r::CollisionReport::of(&a.found, a.precision);
+    let report = report::collisions::CollisionReport::of(&a.found, a.precision);
     let s = &report.stats;
     let total = s.colliding_area + s.free_area + s.undecided_area;
     let pct = |x: f64| 100.0 * x / total;

@@ -30,6 +30,7 @@ macro_rules! some_with {
     };
 }
 
+pub mod collisions;
 pub mod distances;
 pub mod image;
 pub(crate) mod kernel;
@@ -53,7 +54,7 @@ pub fn json(answer: &Answer) -> Result<String, serde_json::Error> {
         Answer::Ik(a) => to_string_pretty(&manip3r::IkReport::of(&a.arm, &a.found)),
         Answer::Ik6(a) => to_string_pretty(&six::Ik6Report::of(&a.chain, &a.found)),
         Answer::PathCheck(a) => to_string_pretty(&six::PathCheckReport::of(&a.found)),
-        Answer::Collisions(a) => to_string_pretty(&manip3r::CollisionReport::of(&a.found, a.precision)),
+        Answer::Collisions(a) => to_string_pretty(&collisions::CollisionReport::of(&a.found, a.precision)),
         Answer::Distances(a) => to_string_pretty(&distances::of(a)),
         Answer::LoopSingularities(a) => match a.as_ref() {
             LoopAnswer::Sets { sets, solved, settings, .. } => to_string_pretty(&sets.problems.iter().zip(solved).map(|(p, s)| singular::SingularReport::new(p, settings, s)).collect::<Vec<_>>()),
