@@ -8,3 +8,4 @@ pub(crate) mod lp;
 pub mod outcome;
 pub mod search;
 pub mod system;
+pub mod taylor;

@@ -34,7 +34,6 @@ pub mod nodes;
 pub mod path;
 pub(crate) mod records;
 pub(crate) mod select;
-pub(crate) mod taylor;
 pub mod verdict;
 
 pub use chain::{Chain3R, Jets};

@@ -287,7 +287,7 @@ const CONDITION_CELLS: u64 = (2 << DEPTH) - 1;
 fn flow_derivatives<M: TorusMap + ?Sized>(chain: &M, b: [Interval; 2]) -> ([Interval; 2], [Interval; 2]) {
     let jets = chain.derived(b, 4);
     let t = [-jets.det.d(1), jets.det.d(0)];
-    let along = |h: &super::taylor::Taylor| h.d(0) * t[0] + h.d(1) * t[1];
+    let along = |h: &crate::kernel::taylor::Taylor| h.d(0) * t[0] + h.d(1) * t[1];
     let f2 = [along(&jets.g[0]), along(&jets.g[1])];
     ([f2[0].value(), f2[1].value()], [along(&f2[0]).value(), along(&f2[1]).value()])
 }
