@@ -393,7 +393,7 @@ pub fn run() -> Result<()> {
     #[cfg(feature = "mpi")]
     let ranks = ranks::join()?;
     #[cfg(feature = "mpi")]
-    if ranks.is_some() && linkspace::kernel::search::rank_and_size().1 > 1 && matches!(cli.command, Command::Serve(_)) {
+    if ranks.is_some() && linkspace::app::rank_and_size().1 > 1 && matches!(cli.command, Command::Serve(_)) {
         bail!("serve runs in one process: start it without mpirun");
     }
     match cli.command {

@@ -38,7 +38,9 @@ pub use results::{classify, PreparedRun, AssemblyMode, BoxSetResult, Classificat
 pub(crate) use results::gap;
 // What front ends name besides the jobs: the outcome vocabulary and the bounds of a run.
 pub use crate::kernel::outcome::{BoxStatus, Completeness, Incompleteness, Limit, Scope, Status};
-pub use crate::kernel::search::{Control, Limits, Progress, SolverSettings};
+pub use crate::kernel::search::{Control, Limits, Progress, SolveStats, SolverSettings};
+// How a run is shared among processes (the binary's MPI ranks give the kernel its `Peers`).
+pub use crate::kernel::search::{rank_and_size, share_searches, Peers};
 // The options the jobs take and the records the answers carry, named where front ends look.
 pub use crate::analyses::arm3r::{check_precision, ChainSpec, LoadOptions};
 pub use crate::analyses::arm6r::PoseInput;
@@ -48,7 +50,15 @@ pub use crate::formulate::{Model as LinkageModel, ModelChoice, Output, SingularK
 pub use crate::kernel::contract::FaceBounds;
 pub use crate::kernel::lp::LpBackend;
 pub use crate::model::rounding::ANGLE_TOLERANCE as SNAP_TOLERANCE;
+pub use crate::model::urdf::parse as parse_urdf;
 pub use crate::model::Mechanism;
+pub use crate::kernel::interval::Interval;
+pub use crate::analyses::arm3r::{branches::SingularBranches, joints_over};
+pub use crate::analyses::arm6r::{Chain6R, SegmentVerdict};
+/// A design sweep's spec, tasks and result lines, which the sweep command reads and writes.
+pub mod sweeps {
+    pub use crate::analyses::sweep::{csv, fingerprint, map_svg, parse, read_done, Header, Plan, Summary, Sweep, Task, TaskResult, TaskStatus, DEFAULT_MAX_TASKS};
+}
 
 // The analyses' entry points and typed results, which the answers carry.
 pub use arm::{collisions, inverse_kinematics, singularities, Arm, ArmCollisions, ArmIk, ArmSingularities, IkPoint, SingularitiesRequest};

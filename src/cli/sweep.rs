@@ -9,9 +9,8 @@
 
 use anyhow::{bail, Context, Result};
 use linkspace::app;
-use linkspace::model::urdf;
-use linkspace::kernel::search::Limits;
-use linkspace::analyses::sweep::{self, Header, Summary, Sweep, TaskResult, DEFAULT_MAX_TASKS};
+use linkspace::app::Limits;
+use linkspace::app::sweeps::{self as sweep, Header, Summary, Sweep, TaskResult, DEFAULT_MAX_TASKS};
 use std::collections::HashSet;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -48,7 +47,7 @@ pub(crate) fn run(args: SweepArgs) -> Result<()> {
     let plan = sweep::parse(&text).with_context(|| format!("reading {}", args.spec.display()))?;
     let urdf_path = args.spec.parent().unwrap_or(Path::new(".")).join(&plan.urdf);
     let urdf_text = std::fs::read_to_string(&urdf_path).with_context(|| format!("reading {} (the spec's urdf)", urdf_path.display()))?;
-    let mechanism = urdf::parse(&urdf_text).with_context(|| format!("loading {}", urdf_path.display()))?;
+    let mechanism = app::parse_urdf(&urdf_text).with_context(|| format!("loading {}", urdf_path.display()))?;
     let tasks = plan.tasks(args.max_tasks)?;
     app::check_sweep(&plan, &mechanism, &tasks).with_context(|| format!("checking {} against {}", args.spec.display(), urdf_path.display()))?;
     let limits = limits(&args, &plan)?;
@@ -63,7 +62,7 @@ pub(crate) fn run(args: SweepArgs) -> Result<()> {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
         Err(e) => return Err(e).with_context(|| format!("reading {}", jsonl.display())),
     };
-    let (rank, ranks) = linkspace::kernel::search::rank_and_size();
+    let (rank, ranks) = linkspace::app::rank_and_size();
     // Rank 0 reads and rewrites the results; the others learn what is done (or that rank 0
     // refused) from it, so no rank waits for one that stopped.
     let prepared = if rank == 0 { prepare(&out, &jsonl, &existing, args.resume, &header, &tasks) } else { Ok(Vec::new()) };
@@ -218,7 +217,7 @@ fn rank_files(out: &Path) -> Result<Vec<PathBuf>> {
 /// Every rank's bytes, in rank order (this process's alone without MPI).
 fn gather(mine: Vec<u8>) -> Vec<Vec<u8>> {
     #[cfg(feature = "mpi")]
-    if linkspace::kernel::search::rank_and_size().1 > 1 {
+    if linkspace::app::rank_and_size().1 > 1 {
         return super::ranks::all_gather(&mine);
     }
     vec![mine]

@@ -4,12 +4,8 @@ use super::msgs::{
     self, AssemblyMode, BoxSet, ColorRGBA, CuspRecord, Header, InverseKinematics6Response, InverseKinematicsResponse, JointState, PathCheckResponse, LsBox, Marker, MarkerArray, NodeRecord, Point, Pose, Quaternion, SingularityReport,
     SolveStats, TfMessage, Time, Transform, TransformStamped, Vector3,
 };
-use crate::app::{ArmIk6, ArmPathCheck, Bounds, BoxSetResult, IkResult, ResultBox, SingularityResult};
-use crate::analyses::arm6r::{Chain6R, SegmentVerdict};
-use crate::analyses::arm3r::branches::SingularBranches;
-use crate::analyses::arm3r::joints_over;
+use crate::app::{joints_over, ArmIk6, ArmPathCheck, Bounds, BoxSetResult, Chain6R, IkResult, ResultBox, SegmentVerdict, SingularBranches, SingularityResult, SolverSettings};
 use crate::kernel::outcome::{BoxStatus, Completeness, Incompleteness, Status};
-use crate::kernel::search::SolverSettings;
 
 /// A header stamped now (wall clock) in `frame`.
 pub fn header(frame: &str) -> Header {
@@ -318,7 +314,7 @@ fn crossing_set(r: &SingularityResult, b: Option<&SingularBranches>, run_id: u64
         traces: vec![],
         boxes,
         clusters: n,
-        stats: crate::kernel::search::SolveStats { solutions: n as u64, certified: n as u64, ..Default::default() },
+        stats: crate::app::SolveStats { solutions: n as u64, certified: n as u64, ..Default::default() },
     };
     let mut out = box_set(&set, run_id);
     if b.is_some_and(|b| b.crossings.is_none()) {
@@ -391,7 +387,7 @@ pub fn ik_response(r: &IkResult) -> InverseKinematicsResponse {
     let unique = r.solutions.iter().filter(|s| s.unique).count();
     let clusters = r.solutions.len() - unique;
     let mut message = format!("{unique} solutions proven unique, {clusters} clusters undecided at sigma (each may hold one or several solutions, or a line of them)");
-    if let crate::kernel::search::Status::Stopped(limit) = r.status {
+    if let crate::app::Status::Stopped(limit) = r.status {
         message.push_str(&format!("; incomplete ({} limit): the clusters include the boxes left pending", limit.name()));
     }
     InverseKinematicsResponse {
@@ -417,11 +413,11 @@ pub fn ik_response(r: &IkResult) -> InverseKinematicsResponse {
 pub fn ik6_response(chain: &Chain6R, found: &ArmIk6) -> InverseKinematics6Response {
     let s = &found.solutions;
     let mut message = format!("{} solutions proven unique, {} clusters undecided at sigma", s.unique.len(), s.clusters.len());
-    if let crate::kernel::search::Status::Stopped(limit) = s.status {
+    if let crate::app::Status::Stopped(limit) = s.status {
         message.push_str(&format!("; incomplete ({} limit): the clusters include the boxes left pending", limit.name()));
     }
-    let as_box = |k: usize, b: &[crate::kernel::interval::Interval; 6]| LsBox { intervals: b.iter().map(|x| msgs::Interval { lower: x.inf(), upper: x.sup() }).collect(), status: msgs::BOX_SOLUTION, level: 0, cluster: k as i32 };
-    let boxes: Vec<&[crate::kernel::interval::Interval; 6]> = s.unique.iter().chain(s.clusters.iter().map(|c| &c.hull)).collect();
+    let as_box = |k: usize, b: &[crate::app::Interval; 6]| LsBox { intervals: b.iter().map(|x| msgs::Interval { lower: x.inf(), upper: x.sup() }).collect(), status: msgs::BOX_SOLUTION, level: 0, cluster: k as i32 };
+    let boxes: Vec<&[crate::app::Interval; 6]> = s.unique.iter().chain(s.clusters.iter().map(|c| &c.hull)).collect();
     InverseKinematics6Response {
         ok: true,
         message,
@@ -505,7 +501,7 @@ mod tests {
     use super::*;
 
     fn report_of(xml: &str, nodes: bool) -> SingularityReport {
-        let m = crate::model::urdf::parse(xml).expect("parses");
+        let m = crate::app::parse_urdf(xml).expect("parses");
         let a = crate::app::load(&m, &[], &[]).expect("loads");
         let q = crate::app::SingularityQuery { precision: 1e-4, nodes, max_boxes: 1_000_000, timeout: None, threads: 1 };
         let r = a.singularities(&q).expect("valid").run(&std::sync::atomic::AtomicBool::new(false), &mut |_| {});

@@ -26,7 +26,7 @@ mod setup;
 use super::msgs::{BoxSet, MarkerArray, SingularityReport, SolveGoal, TfMessage};
 use super::{Loaded, NodeLimits, ServeConfig, Severity};
 use crate::app::{BoxSetResult, SingularityResult};
-use crate::kernel::search::SolverSettings;
+use crate::app::SolverSettings;
 use anyhow::{Context as _, Result};
 use goals::SolveAction;
 use publish::Topics;
@@ -45,7 +45,7 @@ use std::time::Duration;
 #[allow(clippy::large_enum_variant)] // one event at a time through a channel: not worth a Box
 enum Event {
     Request(Request),
-    Progress { run: u64, progress: crate::kernel::search::Progress },
+    Progress { run: u64, progress: crate::app::Progress },
     /// A run ended; `Err` when it panicked (its payload, as text).
     Finished { run: u64, result: Result<Outcome, String> },
     Tick,

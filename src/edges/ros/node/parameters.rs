@@ -37,7 +37,7 @@ fn check_parameter(name: &str, value: &ParameterValue) -> Result<(), String> {
     let positive = |v: f64| v.is_finite() && v > 0.0;
     match (name, value) {
         ("robot_description", ParameterValue::String(xml)) if xml.trim().is_empty() => Ok(()),
-        ("robot_description", ParameterValue::String(xml)) => crate::model::urdf::parse(xml).map(|_| ()).map_err(|e| format!("robot_description: {}", convert::bounded(&e.to_string(), convert::ECHO_MESSAGE))),
+        ("robot_description", ParameterValue::String(xml)) => crate::app::parse_urdf(xml).map(|_| ()).map_err(|e| format!("robot_description: {}", convert::bounded(&e.to_string(), convert::ECHO_MESSAGE))),
         ("sigma", ParameterValue::Double(v)) if positive(*v) => Ok(()),
         ("rho", ParameterValue::Double(v)) if *v > 0.0 && *v < 1.0 => Ok(()),
         ("precision", ParameterValue::Double(v)) if *v > 0.0 && *v < 1.0 => Ok(()),

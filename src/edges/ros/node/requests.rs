@@ -13,7 +13,7 @@ use super::{panic_text, seconds};
 use crate::app::{AnalysisError, IkQuery, Service, SingularityQuery};
 use crate::edges::ros::convert;
 use crate::edges::ros::msgs::*;
-use crate::kernel::search::{SolverSettings, Status};
+use crate::app::{SolverSettings, Status};
 use ros2_client::{RmwRequestId, Server};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::atomic::Ordering;

@@ -11,7 +11,7 @@ use super::{panic_text, Event, RunState, Severity};
 use crate::app::{BoxSetResult, IkResult, Service, SingularityQuery, SingularityResult};
 use crate::edges::ros::convert;
 use crate::edges::ros::msgs::{self, BoxSet, SolveActionResult, SolveFeedback, SolveGoal, SolveResponse};
-use crate::kernel::search::{Limit, Status};
+use crate::app::{Limit, Status};
 use ros2_client::action::{ExecutingGoalHandle, GoalEndStatus};
 use ros2_client::log::LogLevel;
 use ros2_client::RmwRequestId;
@@ -34,7 +34,7 @@ impl Outcome {
     /// (boxes processed, boxes left pending, complete) for the final progress message.
     fn counts(&self) -> (u64, usize, bool) {
         match self {
-            Outcome::BoxSet(r) => (r.stats.processed, r.boxes.iter().filter(|b| b.status == crate::kernel::search::BoxStatus::Undecided).count(), r.status == Status::Finished),
+            Outcome::BoxSet(r) => (r.stats.processed, r.boxes.iter().filter(|b| b.status == crate::app::BoxStatus::Undecided).count(), r.status == Status::Finished),
             Outcome::Singularities(r) => (r.processed, r.undecided(), r.status == Status::Finished),
             Outcome::InverseKinematics(r) => (r.processed, 0, r.status == Status::Finished),
             Outcome::Answer(Ok(a)) => {
@@ -51,7 +51,7 @@ impl Outcome {
 }
 
 /// A run's work, moved to its thread.
-pub(super) type Work = Box<dyn FnOnce(&AtomicBool, &mut dyn FnMut(&crate::kernel::search::Progress)) -> Outcome + Send>;
+pub(super) type Work = Box<dyn FnOnce(&AtomicBool, &mut dyn FnMut(&crate::app::Progress)) -> Outcome + Send>;
 
 /// What a run is for, which decides where its result goes.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -187,7 +187,7 @@ impl super::State {
         let events = self.events.clone();
         std::thread::spawn(move || {
             let progress_events = events.clone();
-            let mut progress = move |p: &crate::kernel::search::Progress| {
+            let mut progress = move |p: &crate::app::Progress| {
                 // Progress is lossy by design: a full queue drops a snapshot, not the run.
                 let _ = progress_events.try_send(Event::Progress { run, progress: *p });
             };
@@ -196,7 +196,7 @@ impl super::State {
         });
         run
     }
-    pub(super) fn progress(&self, run: u64, p: crate::kernel::search::Progress, done: bool) {
+    pub(super) fn progress(&self, run: u64, p: crate::app::Progress, done: bool) {
         let Some(r) = self.runs.get(&run) else { return };
         let m = &self.mechanisms[r.mechanism];
         if r.generation != m.generation {
@@ -227,7 +227,7 @@ impl super::State {
         let (processed, pending, complete) = result.as_ref().map_or((0, 0, false), |o| o.counts());
         // What a limit left undecided is still pending.
         let decided = if complete { 1.0 } else { self.runs.get(&run).map_or(0.0, |r| r.decided) };
-        self.progress(run, crate::kernel::search::Progress { processed, pending, decided }, true);
+        self.progress(run, crate::app::Progress { processed, pending, decided }, true);
         let Some(r) = self.runs.remove(&run) else { return };
         self.finished.push_back(run);
         if self.finished.len() > 4096 {
