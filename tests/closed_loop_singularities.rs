@@ -841,7 +841,7 @@ fn five_bar_image_has_no_cusp_no_node_and_four_regions_as_the_references() {
     got.sort();
     want.sort();
     assert_eq!(got, want);
-    assert_eq!(r.verdict.answer, "no", "{}", r.verdict.reason);
+    assert_eq!(r.verdict.answer, Some(false), "{}", r.verdict.reason);
 
     // The cover the regions were cut by holds every reference point of both curves.
     let (p, set) = run(&urdf_text("five_bar_unequal.urdf"), SingularKind::Input, &FIVE_BAR_ACTUATORS, None, 1e-2);
@@ -1079,7 +1079,7 @@ fn three_rpr_whole_image_is_complete_and_matches_independent_counts() {
     assert!(image.status.is_complete(), "{:?} {:?} {:?}", image.cusp_counts, image.node_counts, image.regions.regions.iter().map(|r| r.configurations).collect::<Vec<_>>());
     assert_eq!((image.cusp_counts.proven, image.cusp_counts.undecided), (6, 0));
     assert_eq!(image.node_counts.undecided, 0);
-    assert_eq!(image.verdict.answer, "yes");
+    assert_eq!(image.verdict.answer, Some(true));
     let reference = three_rpr_ref::cusps(17.0);
     for c in &image.cusps {
         let (r1, r2) = (c.workspace["rho1"], c.workspace["rho2"]);

@@ -227,11 +227,11 @@ impl PreparedRun<SingularityResult> for SingularityRun {
             cusps.undecided.len() + node_search.as_ref().map_or(0, |n| n.undecided.len()),
             self.cover.boxes.len(),
             self.cover.clusters,
-            match status {
-                Status::Finished => "complete".to_string(),
-                Status::Stopped(Limit::Cancelled) => "incomplete (cancelled)".to_string(),
-                Status::Stopped(Limit::Boxes) => "incomplete (box limit)".to_string(),
-                Status::Stopped(limit) => format!("incomplete ({} limit)", limit.name()),
+            match status.limit() {
+                None => crate::kernel::outcome::Completeness::Complete.word().to_string(),
+                Some(Limit::Cancelled) => "incomplete (cancelled)".to_string(),
+                Some(Limit::Boxes) => "incomplete (box limit)".to_string(),
+                Some(limit) => format!("incomplete ({} limit)", limit.name()),
             }
         );
         // The joint limits' effect is named only when the file has limits.

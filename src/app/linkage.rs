@@ -21,6 +21,7 @@ use crate::formulate::singular::{Coordinates, SingularProblem};
 use super::loops::{all_kinds, SingularSets};
 use crate::analyses::loop_singular::SingularSet;
 use crate::formulate::{Linkage, LinkageError, ModelChoice};
+use crate::kernel::outcome::Completeness;
 use crate::kernel::search::{BoxStatus, Progress, SolveStats, SolverSettings, Status};
 use crate::kernel::system::VarRole;
 use std::sync::atomic::AtomicBool;
@@ -219,7 +220,7 @@ impl PreparedRun<SingularityResult> for SingularSetsRun {
         let joint_names = self.sets.problems.first().map(|p| p.linkage.free_joints().to_vec()).unwrap_or_default();
         let summary = format!(
             "{}; actuated: {} ({})",
-            sets.iter().map(|s| format!("{}: {}", s.kind, s.verdict)).collect::<Vec<_>>().join("; "),
+            sets.iter().map(|s| format!("{}: {}", s.kind, s.summary)).collect::<Vec<_>>().join("; "),
             if self.actuation.joints.is_empty() { "none".to_string() } else { self.actuation.joints.join(", ") },
             self.actuation.source
         );
@@ -300,9 +301,9 @@ fn set_result(p: &SingularProblem<Linkage>, settings: &SolverSettings, set: &Sin
         _ => "surfaces",
     };
     let n = boxes.len();
-    let verdict = match set.status {
+    let summary = match set.status {
         Status::Finished if n == 0 => format!("none (proven: a complete search left no box; expected {shape})"),
-        Status::Finished if undecided == 0 => format!("{clusters} clusters ({certified_clusters} certified, {} unproven), {n} boxes, complete (expected {shape})", clusters - certified_clusters),
+        Status::Finished if undecided == 0 => format!("{clusters} clusters ({certified_clusters} certified, {} unproven), {n} boxes, {} (expected {shape})", clusters - certified_clusters, Completeness::Complete.word()),
         Status::Finished => format!("{clusters} clusters ({certified_clusters} certified), {n} boxes, {undecided} undecided (expected {shape})"),
         Status::Stopped(l) => format!("incomplete ({} limit): {clusters} clusters ({certified_clusters} certified), {n} boxes, {undecided} undecided (expected {shape})", l.name()),
     };
@@ -324,7 +325,7 @@ fn set_result(p: &SingularProblem<Linkage>, settings: &SolverSettings, set: &Sin
         },
         proven: certified_clusters,
         undecided,
-        verdict,
+        summary,
     }
 }
 
@@ -440,13 +441,13 @@ mod tests {
             }
         }
         let input = &loops.sets[1];
-        assert_eq!((input.proven, input.boxes.clusters, input.undecided), (4, 4, 0), "{}", input.verdict);
+        assert_eq!((input.proven, input.boxes.clusters, input.undecided), (4, 4, 0), "{}", input.summary);
         for q in &dead {
             let holds = input.boxes.boxes.iter().any(|bx| bx.joints[2][0] - 1e-9 <= q[2] && q[2] <= bx.joints[2][1] + 1e-9);
             assert!(holds, "dead centre at rocker {} in no input box", q[2]);
         }
         // No bifurcation, no type-I singularity with every passive joint as output (proven empty).
-        assert_eq!((loops.sets[0].boxes.boxes.len(), loops.sets[2].boxes.boxes.len()), (0, 0), "{} / {}", loops.sets[0].verdict, loops.sets[2].verdict);
+        assert_eq!((loops.sets[0].boxes.boxes.len(), loops.sets[2].boxes.boxes.len()), (0, 0), "{} / {}", loops.sets[0].summary, loops.sets[2].summary);
 
         let settings = SolverSettings { sigma: 1e-2, ..Default::default() };
         let cspace = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});

@@ -70,7 +70,7 @@ pub use loops::{all_kinds, analyse_image, image_points, Actuation, ImageAnalysis
 pub use crate::analyses::input_motion::{check_input_motion, motion_joints, InputMotionCheck, MotionError, MotionRequest, MotionStep, MotionVerdict};
 pub use platform::PlatformAnalysis;
 pub use path::{check_path, check_path3, positioning_joints, ArmPathCheck, PathSet};
-pub use six::{arm_cuspidality, arm_cuspidality_of, chain6, inverse_kinematics6, ArmCuspidality, ArmIk6, ArmVerdictLine};
+pub use six::{arm_cuspidality, arm_cuspidality_of, chain6, inverse_kinematics6, ArmCuspidality, ArmIk6, ArmVerdict, ArmVerdictLine};
 pub use sweep::{check_sweep, run_sweep, sweep_task};
 
 pub use crate::kernel::interval::Bounds;

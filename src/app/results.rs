@@ -286,7 +286,7 @@ pub struct SingularSetResult {
     /// Boxes left undecided by a limit.
     pub undecided: usize,
     /// One line: what was found and what is proven.
-    pub verdict: String,
+    pub summary: String,
 }
 
 impl LoopSingularities {

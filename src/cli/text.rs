@@ -254,7 +254,7 @@ fn collisions(out: &mut Out, a: &linkspace::app::CollisionsAnswer) {
 fn distances(out: &mut Out, rep: &report::distances::DistancesReport) {
     let platform = rep.solutions.iter().any(|s| !s.poses.is_empty());
     let status = match rep.status.limit() {
-        None if rep.complete => "complete".to_string(),
+        None if rep.complete => linkspace::app::Completeness::Complete.word().to_string(),
         None => format!("incomplete ({} regions undecided)", rep.undecided_regions),
         Some(l) => format!("incomplete ({} limit, {} boxes undecided)", l.name(), rep.undecided.len()),
     };
@@ -331,7 +331,7 @@ fn loop_sets(out: &mut Out, a: &LoopAnswer) {
             _ => "surfaces",
         };
         let status = match r.status.limit() {
-            None => "complete".to_string(),
+            None => linkspace::app::Completeness::Complete.word().to_string(),
             Some(l) => format!("incomplete ({} limit)", l.name()),
         };
         let charts = match s.unsearched_charts {
@@ -396,7 +396,7 @@ fn image(out: &mut Out, r: &linkspace::app::ImageReport) {
         writeln!(out, "  region {i}: {} cells, sample {:?}: {count} assembly modes{signs}", g.cells, g.sample).ok();
     }
     image_records(out, &r.cusps, &r.nodes);
-    writeln!(out, "  can change assembly mode without crossing a type-II singularity: {} ({})", r.verdict.answer, r.verdict.reason).ok();
+    writeln!(out, "  can change assembly mode without crossing a type-II singularity: {} ({})", r.verdict.word(), r.verdict.reason).ok();
 }
 
 fn image_points(out: &mut Out, r: &linkspace::app::ImagePoints) {

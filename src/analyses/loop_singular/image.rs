@@ -907,19 +907,31 @@ fn sample_region_on_torus(torus: &PlatformTorus, sample: &[f64], cells: usize, s
     ActuatorRegion { cells, sample: sample.to_vec(), configurations: complete.then_some(counted), signs: if complete { signs } else { None }, boxes: [counted, 0, open] }
 }
 
-/// `yes`, `no` or `undecided`, with the argument.
+/// Can the mechanism change assembly mode without crossing a type-II singularity? `Some(true)`,
+/// `Some(false)` or `None` (undecided), with the argument.
 #[derive(Clone, Debug)]
 pub struct AssemblyChangeVerdict {
-    /// Can the mechanism change assembly mode without crossing a type-II singularity?
-    pub answer: &'static str,
+    /// The answer, `None` while undecided.
+    pub answer: Option<bool>,
     /// Why.
     pub reason: String,
+}
+
+impl AssemblyChangeVerdict {
+    /// `yes`, `no` or `undecided`, as reports write it.
+    pub fn word(&self) -> &'static str {
+        match self.answer {
+            Some(true) => "yes",
+            Some(false) => "no",
+            None => "undecided",
+        }
+    }
 }
 
 /// The verdict from the searches (see the module doc for what each answer rests on).
 pub fn verdict(cover: &SingularSet, cusps: &PointSearch, nodes: &NodeSearch, regions: &ActuatorRegions) -> AssemblyChangeVerdict {
     if cusps.proven() > 0 {
-        return AssemblyChangeVerdict { answer: "yes", reason: format!("{} certified cusp(s) of the type-II image: a loop around one changes assembly mode without crossing a singularity", cusps.proven()) };
+        return AssemblyChangeVerdict { answer: Some(true), reason: format!("{} certified cusp(s) of the type-II image: a loop around one changes assembly mode without crossing a singularity", cusps.proven()) };
     }
     let mut gaps = Vec::new();
     if cover.status != Status::Finished {
@@ -948,14 +960,14 @@ pub fn verdict(cover: &SingularSet, cusps: &PointSearch, nodes: &NodeSearch, reg
     }
     if gaps.is_empty() {
         AssemblyChangeVerdict {
-            answer: "no",
+            answer: Some(false),
             reason: format!(
                 "no cusp and no node (searches complete); over each of the {} regions the grid reaches, at most one configuration with each sign of det F_p, a sign no path off the type-II set can change (regions thinner than the cover are not sampled)",
                 regions.regions.len()
             ),
         }
     } else {
-        AssemblyChangeVerdict { answer: "undecided", reason: gaps.join("; ") }
+        AssemblyChangeVerdict { answer: None, reason: gaps.join("; ") }
     }
 }
 

@@ -38,8 +38,14 @@ struct ActuatorRegionsDef {
 #[derive(Serialize)]
 #[serde(remote = "AssemblyChangeVerdict")]
 struct AssemblyChangeVerdictDef {
-    answer: &'static str,
+    #[serde(serialize_with = "answer_word")]
+    answer: Option<bool>,
     reason: String,
+}
+
+/// `yes`, `no` or `undecided` (`AssemblyChangeVerdict::word`).
+fn answer_word<S: serde::Serializer>(answer: &Option<bool>, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(AssemblyChangeVerdict { answer: *answer, reason: String::new() }.word())
 }
 
 #[derive(Serialize)]

@@ -151,7 +151,7 @@ impl ArmCuspidalityReport {
             ArmCuspidality::Searched { most: Some(m), .. } => Some(MostSolutionsRecord::of(m)),
             _ => None,
         };
-        ArmCuspidalityReport { arm, verdict: line.verdict, reason: line.reason, proof, witness, most_solutions }
+        ArmCuspidalityReport { arm, verdict: line.verdict.name(), reason: line.reason, proof, witness, most_solutions }
     }
 }
 

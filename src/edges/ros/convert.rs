@@ -206,10 +206,10 @@ pub fn singularity_report(r: &SingularityResult, run_id: u64) -> SingularityRepo
         sets: r.loops.iter().flat_map(|l| &l.sets).map(|s| box_set(&s.boxes, run_id)).collect(),
         set_proven: r.loops.iter().flat_map(|l| &l.sets).map(|s| s.proven.min(u32::MAX as usize) as u32).collect(),
         set_undecided: r.loops.iter().flat_map(|l| &l.sets).map(|s| s.undecided.min(u32::MAX as usize) as u32).collect(),
-        set_verdicts: r.loops.iter().flat_map(|l| &l.sets).map(|s| s.verdict.clone()).collect(),
+        set_verdicts: r.loops.iter().flat_map(|l| &l.sets).map(|s| s.summary.clone()).collect(),
         actuated: r.loops.as_ref().map_or_else(Vec::new, |l| l.actuated.clone()),
         actuated_source: r.loops.as_ref().map_or_else(String::new, |l| l.actuated_source.clone()),
-        arm_cuspidality: r.arm_cuspidality.as_ref().map_or_else(String::new, |a| a.verdict.to_string()),
+        arm_cuspidality: r.arm_cuspidality.as_ref().map_or_else(String::new, |a| a.verdict.name().to_string()),
         arm_cuspidality_reason: r.arm_cuspidality.as_ref().map_or_else(String::new, |a| a.reason.clone()),
         ..verdict_and_branches(r, run_id)
     }

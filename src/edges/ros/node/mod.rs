@@ -89,10 +89,8 @@ struct Mechanism {
 enum RunState {
     /// A load-time run goes.
     Running,
-    /// Every load-time result is complete.
-    Complete,
-    /// A load-time result stopped on a limit.
-    Incomplete,
+    /// Every load-time run ended: complete when every result is (the one rule), else why not.
+    Finished(crate::app::Completeness),
     /// A load-time run failed (internal error).
     Failed,
     /// The kind has no load-time analysis.
@@ -103,8 +101,7 @@ impl RunState {
     fn name(self) -> &'static str {
         match self {
             RunState::Running => "running",
-            RunState::Complete => "complete",
-            RunState::Incomplete => "incomplete",
+            RunState::Finished(c) => c.word(),
             RunState::Failed => "failed",
             RunState::Unavailable => "unavailable",
         }

@@ -8,6 +8,7 @@
 
 use super::requests::singularity_reply;
 use super::{panic_text, Event, RunState, Severity};
+use crate::app::Completeness;
 use crate::app::{BoxSetResult, IkResult, Service, SingularityQuery, SingularityResult};
 use crate::edges::ros::convert;
 use crate::edges::ros::msgs::{self, BoxSet, SolveActionResult, SolveFeedback, SolveGoal, SolveResponse};
@@ -168,14 +169,9 @@ impl super::State {
         let going = self.runs.values().any(|r| r.mechanism == k && r.generation == generation && matches!(r.kind, RunKind::ConfigurationSpace | RunKind::Singularities { load_time: true }));
         let m = &mut self.mechanisms[k];
         m.message = [&m.cspace_note, &m.singular_note].into_iter().filter(|n| !n.is_empty()).cloned().collect::<Vec<_>>().join("; ");
-        let complete = m.configuration_space.as_ref().is_none_or(|c| c.status == Status::Finished) && m.singularities.as_ref().is_none_or(|s| s.status == Status::Finished);
-        m.state = if going {
-            RunState::Running
-        } else if complete {
-            RunState::Complete
-        } else {
-            RunState::Incomplete
-        };
+        let cspace = m.configuration_space.as_ref().map_or(Completeness::Complete, |c| Completeness::of(c.status, c.boxes.iter().filter(|b| b.status == crate::app::BoxStatus::Undecided).count(), false));
+        let singular = m.singularities.as_ref().map_or(Completeness::Complete, |s| Completeness::of(s.status, s.undecided(), s.internal_motions.boxes.iter().any(|b| b.status == crate::app::BoxStatus::Undecided)));
+        m.state = if going { RunState::Running } else { RunState::Finished(cspace.and(singular)) };
     }
     /// Starts `job` on a thread of its own; returns its run id.
     pub(super) fn start(&mut self, mechanism: usize, kind: RunKind, job: Work) -> u64 {
