@@ -42,7 +42,8 @@ pub(crate) struct LimitArgs {
     #[arg(long, value_name = "SECONDS")]
     pub(crate) timeout: Option<f64>,
     /// Stop before pending boxes hold more than this many MiB; the run is then reported
-    /// incomplete. Default: the command's (2048; singularities 256; sweep 256 per task).
+    /// incomplete.
+    // Each command's default (its job's) is added to the help in `parse_args`.
     #[arg(long, value_name = "MIB")]
     pub(crate) max_memory: Option<u64>,
     /// Worker threads (1: depth first on one thread; more: breadth first level by level, the
@@ -433,6 +434,17 @@ where
             (true, false) => a.allow_hyphen_values(true),
             (true, true) => a.allow_negative_numbers(true),
             _ => a,
+        })
+    });
+    // The memory bound each command's job takes by default, in its --help.
+    let command = command.mut_subcommands(|s| {
+        let mib = match s.get_name() {
+            "sweep" => sweep::DEFAULT_TASK_MEMORY_MIB,
+            name => (Job::default_limits(name).max_memory >> 20) as u64,
+        };
+        s.mut_arg("max_memory", |a| {
+            let help = a.get_help().map(|h| h.to_string()).unwrap_or_default();
+            a.help(format!("{help} [default: {mib}]"))
         })
     });
     let parsed = command.try_get_matches_from(args).and_then(|m| Cli::from_arg_matches(&m));

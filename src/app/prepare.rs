@@ -187,11 +187,17 @@ pub fn prepare(input: &Input, job: Job) -> Result<Prepared, JobError> {
 /// rather than cut to its first six joints.
 fn six_joint_chain(m: &Mechanism, options: &arm3r::LoadOptions) -> Result<Chain6R, JobError> {
     if options.spec.tip.is_none() {
-        let revolute = |l: usize| m.path_to(l).into_iter().filter(|&j| matches!(m.joints[j].kind, JointKind::Revolute { .. })).count();
+        let held = |j: usize| options.spec.locks.iter().any(|(n, _)| *n == m.joints[j].name);
+        let revolute = |l: usize| m.path_to(l).into_iter().filter(|&j| matches!(m.joints[j].kind, JointKind::Revolute { .. }) && !held(j)).count();
         if let Some((n, tip)) = (0..m.links.len()).map(|l| (revolute(l), l)).max().filter(|(n, _)| *n > 6) {
+            let on_path = m.path_to(tip).into_iter().filter(|&j| matches!(m.joints[j].kind, JointKind::Revolute { .. }) && !held(j)).map(|j| m.joints[j].name.clone()).collect::<Vec<_>>();
             return Err(JobError::Bad(format!(
-                "'{}' has {n} revolute joints from its root to '{}': this question is about six-revolute arms; ask it of a six-joint sub-chain with --tip LINK, or ask the 3R questions (singularities, ik, path-check --singular-set 3r) with joints held by --fix JOINT=VALUE",
-                m.name, m.links[tip].name
+                "'{}' has {n} revolute joints from its root to '{}' ({}): hold {} of them with --fix JOINT=VALUE (e.g. --fix {}=0) so that six remain, or choose a six-joint sub-chain with --tip LINK",
+                m.name,
+                m.links[tip].name,
+                on_path.join(", "),
+                n - 6,
+                on_path.get(2).map_or("JOINT", String::as_str)
             )));
         }
     }

@@ -9,7 +9,8 @@ use crate::kernel::search::Control;
 use std::time::{Duration, Instant};
 
 /// The arm's six joints as `arm6r` reads them, after the rounding policy of `options`
-/// (`--base`/`--tip` honoured; locks and points do not apply to the whole arm).
+/// (`--base`/`--tip` honoured, joints held by `--fix` folded into the fixed transforms; a
+/// point does not apply to the whole arm).
 pub fn chain6(m: &Mechanism, options: &LoadOptions) -> Result<Chain6R, Manip6rError> {
     chain6_snapped(m, options).map(|(chain, _)| chain)
 }
@@ -18,10 +19,10 @@ pub fn chain6(m: &Mechanism, options: &LoadOptions) -> Result<Chain6R, Manip6rEr
 /// base to its tip (the whole-arm proof is about the geometry after them).
 pub fn chain6_snapped(m: &Mechanism, options: &LoadOptions) -> Result<(Chain6R, usize), Manip6rError> {
     if options.exact_geometry || options.snap_tolerance == 0.0 {
-        return Ok((Chain6R::from_mechanism(m, options.spec.base.as_deref(), options.spec.tip.as_deref())?, 0));
+        return Ok((Chain6R::holding(m, options.spec.base.as_deref(), options.spec.tip.as_deref(), &options.spec.locks)?, 0));
     }
     let (rounded, snaps) = rounding::snap(m, options.snap_tolerance);
-    let chain = Chain6R::from_mechanism(&rounded, options.spec.base.as_deref(), options.spec.tip.as_deref())?;
+    let chain = Chain6R::holding(&rounded, options.spec.base.as_deref(), options.spec.tip.as_deref(), &options.spec.locks)?;
     let (Some(base), Some(tip)) = (rounded.link(&chain.base), rounded.link(&chain.tip)) else { return Ok((chain, 0)) };
     let below_base: Vec<usize> = rounded.path_to(base);
     let on_chain: Vec<&str> = rounded.path_to(tip).into_iter().filter(|j| !below_base.contains(j)).map(|j| rounded.joints[j].name.as_str()).collect();

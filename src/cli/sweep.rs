@@ -20,7 +20,7 @@ use std::time::{Duration, Instant};
 /// Seconds a task may take when neither the spec nor the command line says.
 const DEFAULT_TASK_TIMEOUT: f64 = 60.0;
 /// MiB of pending boxes a task may hold when neither says: several tasks run at once.
-const DEFAULT_TASK_MEMORY_MIB: u64 = 256;
+pub(crate) const DEFAULT_TASK_MEMORY_MIB: u64 = 256;
 
 #[derive(clap::Args)]
 pub(crate) struct SweepArgs {
