@@ -870,7 +870,15 @@ fn a_sub_chain_verdict_names_its_sub_chain_and_point() {
     assert_eq!(report["chain"]["spherical_wrist"], false);
     assert!(report["chain"]["scope"]["subject"].as_str().is_some_and(|s| s.contains("link_3@0.54,0,0")));
     assert_eq!(report["arm_cuspidality"]["verdict"], "cuspidal", "{}", report["arm_cuspidality"]);
-    assert_eq!(report["chain"]["scope"]["not_answered"], "not the arm's verdict: the whole arm's is arm_cuspidality");
+    // The top-level verdict is the arm's, with its witness; the sub-chain's sits under its own
+    // key, saying which sub-chain and point it is about.
+    let (arm, sub) = (&report["verdict"], &report["sub_chain_verdict"]);
+    assert_eq!((arm["cuspidal"].clone(), arm["certified"].clone(), arm["scope"]["kind"].clone()), (serde_json::json!(true), serde_json::json!(true), serde_json::json!("mechanism")), "{arm}");
+    assert!(arm["witness"]["from"].is_object() && arm["witness"]["to"].is_object(), "{arm}");
+    assert_eq!((sub["cuspidal"].clone(), sub["scope"]["kind"].clone()), (serde_json::json!(false), serde_json::json!("sub_chain")), "{sub}");
+    assert_eq!(sub["scope"]["joints"], serde_json::json!(["joint_1", "joint_2", "joint_3"]), "{sub}");
+    assert!(sub["scope"]["point"].as_str().is_some_and(|p| p.contains("link_3@0.54,0,0")), "{sub}");
+    assert!(report["chain"]["scope"]["not_answered"].as_str().is_some_and(|s| s.starts_with("not the arm's verdict: the whole arm's") && s.ends_with("is `verdict`")), "{}", report["chain"]);
 }
 
 /// Which bundled arms' verdicts stand for the arm: the spherical wrists' (at their centre), not

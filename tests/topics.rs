@@ -1351,7 +1351,7 @@ fn a_linkage_publishes_its_singular_sets_as_the_cli_finds_them() {
             let have: Vec<[f64; 2]> = (0..names.len()).map(|j| [lo[i * names.len() + j], hi[i * names.len() + j]]).collect();
             assert_eq!(have, want, "{kind} box {i}");
             let status = match b["status"].as_str().expect("status") {
-                "certified" => 2,
+                "unique" => 2,
                 "solution" => 0,
                 _ => 1,
             };

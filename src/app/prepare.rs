@@ -252,7 +252,10 @@ fn prepare_path(m: &Mechanism, j: PathCheckJob) -> Result<Ready, JobError> {
             if sub_chain_chosen {
                 return Err(JobError::Bad("--fix and --tip-point choose a 3R sub-chain and its point: they apply with --singular-set 3r".into()));
             }
-            let chain = six_joint_chain(m, &j.arm)?;
+            let chain = six_joint_chain(m, &j.arm).map_err(|e| match e {
+                JobError::Arm6(e) => JobError::Bad(format!("'{}' is not an arm with six revolute joints from base to tip ({e})", m.name)),
+                e => e,
+            })?;
             let waypoints = columns(j.waypoints, &j.joint_names, &chain.joints)?;
             let waypoints = waypoints.iter().map(|w| <[f64; 6]>::try_from(w.as_slice()).expect("invariant: six values checked")).collect();
             Ok(Ready::Path6 { chain: Box::new(chain), waypoints, precision: j.precision })

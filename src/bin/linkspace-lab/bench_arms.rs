@@ -129,7 +129,7 @@ fn table(args: &Bench3rArgs, shipped: &Path, lab: &Path, dir: &Path) -> Result<(
     for (name, xml, locks) in robots {
         let file = dir.join(format!("{name}.urdf"));
         std::fs::write(&file, xml).with_context(|| format!("writing {}", file.display()))?;
-        let lock_args: Vec<String> = locks.iter().flat_map(|l| ["--fix".to_string(), l.to_string()]).collect();
+        let lock_args: Vec<String> = locks.iter().flat_map(|l| ["--lock".to_string(), l.to_string()]).collect();
         let json = dir.join(format!("{name}.json"));
         let mut new_args = vec!["singularities".to_string(), file.display().to_string(), "--precision".into(), args.precision.to_string(), "--json".into(), json.display().to_string()];
         new_args.extend(lock_args.iter().cloned());
