@@ -7,22 +7,14 @@ mod serve;
 #[cfg(feature = "mpi")]
 mod ranks;
 
+mod text;
+
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
-use linkspace::model::urdf;
-use linkspace::formulate::TracedPoint;
-use linkspace::formulate::ModelChoice;
-use linkspace::LpBackend;
-use linkspace::app::{self, Arm, IkPoint};
-use linkspace::analyses::arm3r::{self, collision};
-use linkspace::analyses::arm6r::PoseInput;
-use linkspace::app::Bounds;
-use linkspace::formulate::Coordinates;
+use linkspace::app::{self, Answer, CollisionsJob, Control, IkJob, IkPoint, Ik6Job, Job, Limits, LpBackend, ModelChoice, PathCheckJob, PathSet, PoseInput, Progress, SingularitiesJob, SolveJob, TracedPoint};
 use linkspace::edges::report;
-use linkspace::kernel::search::Control;
-use linkspace::kernel::search::{BoxStatus, Limits, Progress, SolverSettings};
 use std::io::{IsTerminal, Write};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
@@ -40,19 +32,20 @@ struct Cli {
 /// The bounds every command takes: `#[command(flatten)]` into each command's arguments.
 #[derive(clap::Args, Clone, Debug)]
 pub(crate) struct LimitArgs {
-    /// Stop after processing this many boxes (box pairs for nodes); the run is then reported
-    /// incomplete. Default: the command's (solve, distances, serve 1,000,000; ik 200,000;
-    /// collisions 5,000,000; singularities 5,000,000 per search).
+    /// Stop after processing this many boxes (box pairs for nodes, segment pieces for
+    /// path-check); the run is then reported incomplete. Default: the command's (solve,
+    /// distances, loop-singularities, serve 1,000,000; ik 200,000; collisions 5,000,000;
+    /// singularities 5,000,000 per search; ik6 20,000,000; path-check 10,000,000).
     #[arg(long, value_name = "N")]
-    max_boxes: Option<u64>,
+    pub(crate) max_boxes: Option<u64>,
     /// Stop after this many seconds; the run is then reported incomplete.
     #[arg(long, value_name = "SECONDS")]
-    timeout: Option<f64>,
+    pub(crate) timeout: Option<f64>,
     /// Stop before pending boxes hold more than this many MiB; the run is then reported
     /// incomplete.
-    // The kernel's default; `singularities` sets its own in `parse_args`, and each --help shows it.
-    #[arg(long, value_name = "MIB", default_value_t = (Limits::default().max_memory >> 20) as u64)]
-    max_memory: u64,
+    // Each command's default (its job's) is added to the help in `parse_args`.
+    #[arg(long, value_name = "MIB")]
+    pub(crate) max_memory: Option<u64>,
     /// Worker threads (1: depth first on one thread; more: breadth first level by level, the
     /// same boxes).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=1024))]
@@ -60,28 +53,30 @@ pub(crate) struct LimitArgs {
 }
 
 impl LimitArgs {
-    /// The kernel's limits, with `default_boxes` where `--max-boxes` is not given.
-    pub(crate) fn limits(&self, default_boxes: u64) -> Result<Limits> {
-        let max_cells = self.max_boxes.unwrap_or(default_boxes);
+    /// The kernel's limits, with the job's `default` cells where `--max-boxes` is not given.
+    pub(crate) fn limits(&self, default: Limits) -> Result<Limits> {
+        let max_cells = self.max_boxes.unwrap_or(default.max_cells);
         if max_cells == 0 {
             bail!("--max-boxes must be at least 1");
         }
-        if self.max_memory == 0 {
-            bail!("--max-memory must be at least 1 MiB");
-        }
-        let max_memory = usize::try_from(self.max_memory.saturating_mul(1 << 20)).unwrap_or(usize::MAX);
+        let max_memory = match self.max_memory {
+            Some(0) => bail!("--max-memory must be at least 1 MiB"),
+            Some(mib) => usize::try_from(mib.saturating_mul(1 << 20)).unwrap_or(usize::MAX),
+            None => default.max_memory,
+        };
         Ok(Limits { max_cells, timeout: seconds_arg(self.timeout)?, max_memory })
+    }
+
+    /// Solver settings with these limits over `base` (the node's load-time runs).
+    #[cfg(feature = "ros")]
+    pub(crate) fn solver_settings(&self, base: app::SolverSettings) -> Result<app::SolverSettings> {
+        let l = self.limits(Limits { max_cells: base.max_boxes, timeout: base.timeout, max_memory: base.max_memory })?;
+        Ok(app::SolverSettings { max_boxes: l.max_cells, timeout: l.timeout, max_memory: l.max_memory, threads: self.threads(), ..base })
     }
 
     /// Worker threads asked for (at least 1).
     pub(crate) fn threads(&self) -> usize {
         usize::from(self.threads.max(1))
-    }
-
-    /// Solver settings with these limits (and `default_boxes`) over `base`.
-    pub(crate) fn solver_settings(&self, default_boxes: u64, base: SolverSettings) -> Result<SolverSettings> {
-        let l = self.limits(default_boxes)?;
-        Ok(SolverSettings { max_boxes: l.max_cells, timeout: l.timeout, max_memory: l.max_memory, threads: self.threads(), ..base })
     }
 }
 
@@ -100,7 +95,7 @@ pub(crate) struct ChainArgs {
     #[arg(long, value_name = "LINK@X,Y,Z", allow_hyphen_values = true)]
     tip_point: Option<String>,
     /// Hold a revolute joint at a value (radians), e.g. one joint of a 7R arm. Repeatable.
-    #[arg(long, value_name = "JOINT=VALUE", allow_hyphen_values = true)]
+    #[arg(long = "fix", alias = "lock", value_name = "JOINT=VALUE", allow_hyphen_values = true)]
     lock: Vec<String>,
     /// Take every angle as written: no snapping of near quarter turns (see README).
     #[arg(long, conflicts_with = "snap_tolerance")]
@@ -116,7 +111,7 @@ pub(crate) struct ChainArgs {
 
 impl ChainArgs {
     /// The options, with every flag parsed (one clear line on bad input).
-    pub(crate) fn options(&self) -> Result<arm3r::LoadOptions> {
+    pub(crate) fn options(&self) -> Result<app::LoadOptions> {
         let tip_point = match &self.tip_point {
             None => None,
             Some(text) => {
@@ -130,14 +125,14 @@ impl ChainArgs {
             .lock
             .iter()
             .map(|text| {
-                let (j, v) = text.split_once('=').with_context(|| format!("--lock '{text}': expected JOINT=VALUE"))?;
-                let v: f64 = v.trim().parse().map_err(|_| anyhow::anyhow!("--lock '{text}': '{v}' is not a number"))?;
+                let (j, v) = text.split_once('=').with_context(|| format!("--fix '{text}': expected JOINT=VALUE"))?;
+                let v: f64 = v.trim().parse().map_err(|_| anyhow::anyhow!("--fix '{text}': '{v}' is not a number"))?;
                 Ok((j.to_string(), v))
             })
             .collect::<Result<Vec<_>>>()?;
-        let spec = arm3r::ChainSpec { base: self.base.clone(), tip: self.tip.clone(), tip_point, locks, length_tolerance: 0.0 };
-        let snap_tolerance = self.snap_tolerance.unwrap_or(linkspace::model::rounding::ANGLE_TOLERANCE);
-        Ok(arm3r::LoadOptions { spec, exact_geometry: self.exact_geometry, snap_tolerance, ignore_limits: self.ignore_limits })
+        let spec = app::ChainSpec { base: self.base.clone(), tip: self.tip.clone(), tip_point, locks, length_tolerance: 0.0 };
+        let snap_tolerance = self.snap_tolerance.unwrap_or(app::SNAP_TOLERANCE);
+        Ok(app::LoadOptions { spec, exact_geometry: self.exact_geometry, snap_tolerance, ignore_limits: self.ignore_limits })
     }
 }
 
@@ -293,12 +288,12 @@ struct PathCheckArgs {
     /// The singular set to check against: 6r, the six-revolute arm's (det J = 0); 3r, its 3R
     /// positioning structure's (det Df = 0 of the sub-chain and point `singularities` analyses).
     /// Default: 6r when a chain of six revolute joints is found from base to tip (as ik6 reads
-    /// it) and no --lock or --tip-point is given, else 3r.
+    /// it) and no --fix or --tip-point is given, else 3r.
     #[arg(long, value_enum)]
     singular_set: Option<SingularSetArg>,
     /// Radians: crossings are narrowed until the joints' enclosure is this wide.
-    #[arg(long, default_value_t = 1e-9, allow_hyphen_values = true)]
-    tolerance: f64,
+    #[arg(long, alias = "tolerance", default_value_t = 1e-9, allow_hyphen_values = true)]
+    precision: f64,
     #[command(flatten)]
     limits: LimitArgs,
     /// Write the report as JSON here.
@@ -360,8 +355,8 @@ struct SolveArgs {
     #[arg(long = "fix", value_name = "JOINT=VALUE")]
     fix: Vec<String>,
     /// Solution boxes are at most this wide in every primary variable.
-    #[arg(long, default_value_t = 1e-3)]
-    sigma: f64,
+    #[arg(long, alias = "sigma", default_value_t = 1e-3)]
+    precision: f64,
     /// Keep shrinking a box while a round leaves less than this share of its volume.
     #[arg(long, default_value_t = 0.95)]
     rho: f64,
@@ -399,7 +394,7 @@ pub fn run() -> Result<()> {
     #[cfg(feature = "mpi")]
     let ranks = ranks::join()?;
     #[cfg(feature = "mpi")]
-    if ranks.is_some() && linkspace::kernel::search::rank_and_size().1 > 1 && matches!(cli.command, Command::Serve(_)) {
+    if ranks.is_some() && linkspace::app::rank_and_size().1 > 1 && matches!(cli.command, Command::Serve(_)) {
         bail!("serve runs in one process: start it without mpirun");
     }
     match cli.command {
@@ -419,7 +414,7 @@ pub fn run() -> Result<()> {
 
 /// Parses the command line; on bad input prints one line and exits with clap's usage code (2).
 ///
-/// Values may be negative everywhere (`--sigma -1` means the same as `--sigma=-1`, and
+/// Values may be negative everywhere (`--precision -1` means the same as `--precision=-1`, and
 /// gets the same one-line complaint from the settings' own check). Every other error of clap's
 /// (unknown flag, missing value, unparsable number) is flattened to one line: its multi-line
 /// usage text would bury the message. `--help` and `--version` print as usual.
@@ -429,19 +424,27 @@ where
     T: Into<std::ffi::OsString> + Clone,
 {
     use clap::{CommandFactory, FromArgMatches};
-    // An option's value may start with a hyphen (`--sigma -1e-3`: clap's own test for a
+    // An option's value may start with a hyphen (`--precision -1e-3`: clap's own test for a
     // negative number misses exponents); positionals keep clap's rule, so a flag is never
     // taken for a file name. An option whose value is optional (`--robot-description-topic
     // [TOPIC]`) keeps clap's rule too, or it would swallow the next flag as its value.
-    // `singularities` bounds the pending cells of a flooding search (near-degenerate geometry)
-    // well below the kernel's general default; its --help shows its own.
-    let command = Cli::command().mut_subcommand("singularities", |s| s.mut_arg("max_memory", |a| a.default_value(SINGULARITIES_MAX_MEMORY_MIB)));
-    let command = command.mut_subcommands(|s| {
+    let command = Cli::command().mut_subcommands(|s| {
         s.mut_args(|a| match (a.get_action().takes_values(), a.is_positional()) {
             (true, false) if a.get_num_args().is_some_and(|r| r.min_values() == 0) => a,
             (true, false) => a.allow_hyphen_values(true),
             (true, true) => a.allow_negative_numbers(true),
             _ => a,
+        })
+    });
+    // The memory bound each command's job takes by default, in its --help.
+    let command = command.mut_subcommands(|s| {
+        let mib = match s.get_name() {
+            "sweep" => sweep::DEFAULT_TASK_MEMORY_MIB,
+            name => (Job::default_limits(name).max_memory >> 20) as u64,
+        };
+        s.mut_arg("max_memory", |a| {
+            let help = a.get_help().map(|h| h.to_string()).unwrap_or_default();
+            a.help(format!("{help} [default: {mib}]"))
         })
     });
     let parsed = command.try_get_matches_from(args).and_then(|m| Cli::from_arg_matches(&m));
@@ -514,20 +517,44 @@ fn parse_trace3(s: &str) -> Result<(String, [f64; 3])> {
 }
 
 fn solve(args: SolveArgs) -> Result<()> {
-    let base = SolverSettings { sigma: args.sigma, rho: args.rho, use_lp: !args.no_lp, newton_width: args.newton_width, lp_backend: args.lp.into(), ..SolverSettings::default() };
-    let settings = args.limits.solver_settings(SolverSettings::default().max_boxes, base)?;
-    settings.validate()?;
     let fixed = args.fix.iter().map(|s| parse_fix(s)).collect::<Result<Vec<_>>>()?;
     let traces = args.trace.iter().map(|s| parse_trace3(s)).collect::<Result<Vec<_>>>()?;
-    let xml = std::fs::read_to_string(&args.urdf).with_context(|| format!("reading {}", args.urdf.display()))?;
-    let mechanism = urdf::parse(&xml).with_context(|| format!("loading {}", args.urdf.display()))?;
-    let named: Vec<TracedPoint> = traces.iter().zip(&args.trace).map(|((l, p), r)| (l.clone(), *p, r.clone())).collect();
-    let job = app::SolveJob::build(&mechanism, args.model.into(), &fixed, &named, settings).with_context(|| format!("building {}", args.urdf.display()))?;
-    let (freedom, freedom_line) = job.freedom();
-    if freedom.at_point.is_some_and(|l| l.dof >= 2) {
-        // Said before the run: covering a continuum of two or more dimensions takes long.
-        eprintln!("linkspace: {}: {freedom_line}", mechanism.name);
+    let traces: Vec<TracedPoint> = traces.into_iter().zip(&args.trace).map(|((l, p), r)| (l, p, r.clone())).collect();
+    let job = SolveJob { fixed, traces, model: args.model.into(), precision: args.precision, rho: args.rho, use_lp: !args.no_lp, newton_width: args.newton_width, lp_backend: args.lp.into() };
+    execute(&args.urdf, Job::Solve(job), &args.limits, args.json.as_deref())
+}
+
+/// The one route of every command: read the file, prepare the job (one clear line on bad
+/// input), run it within the limits, print the answer and write its JSON report.
+pub(crate) fn execute(path: &Path, job: Job, limits: &LimitArgs, json: Option<&Path>) -> Result<()> {
+    let answer = answer(path, job, limits)?;
+    text::print(&answer);
+    if let Some(out) = json {
+        write_file(out, report::json(&answer)?)?;
     }
+    Ok(())
+}
+
+/// The answer to `job` about the file at `path`, within `limits`.
+pub(crate) fn answer(path: &Path, job: Job, limits: &LimitArgs) -> Result<Answer> {
+    let name = job.name();
+    let control_limits = limits.limits(Job::default_limits(name))?;
+    let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let input = match job {
+        Job::Distances(_) => app::Input::read(&path.to_string_lossy(), &text),
+        _ => app::Input::urdf(&text),
+    }
+    .with_context(|| format!("loading {}", path.display()))?;
+    let verb = match job {
+        Job::Solve(_) | Job::Distances(_) | Job::LoopSingularities(_) => "building",
+        _ => "loading",
+    };
+    let prepared = app::prepare(&input, job).with_context(|| format!("{verb} {}", path.display()))?;
+    if let Some(notice) = prepared.notice() {
+        eprintln!("linkspace: {notice}");
+    }
+    let cancel = AtomicBool::new(false);
+    let control = Control { limits: control_limits, threads: limits.threads(), cancel: &cancel };
     let show = std::io::stderr().is_terminal();
     let mut progress = |p: &Progress| {
         if show {
@@ -535,67 +562,11 @@ fn solve(args: SolveArgs) -> Result<()> {
             let _ = std::io::stderr().flush();
         }
     };
-    let result = job.run(&AtomicBool::new(false), &mut progress);
+    let answer = prepared.run(&control, &mut progress);
     if show {
         eprintln!();
     }
-    let solutions: Vec<&app::ResultBox> = result.boxes.iter().filter(|b| b.status.is_solution()).collect();
-    let proven = result.boxes.iter().filter(|b| b.status == BoxStatus::Unique).count();
-    let undecided = result.boxes.len() - solutions.len();
-    let stats = &result.stats;
-    // Write through a handle: `println!` panics when the reader of a pipe has gone.
-    let mut out = std::io::stdout().lock();
-    writeln!(
-        out,
-        "{}: {} proven, {} undecided ({} solution boxes in {} clusters), status {}, {} boxes processed ({} empty, {} bisected), {} LPs, {:.3} s",
-        result.mechanism,
-        proven,
-        undecided,
-        solutions.len(),
-        result.clusters,
-        match result.status {
-            linkspace::Status::Complete => "complete".to_string(),
-            linkspace::Status::Incomplete(l) => format!("incomplete ({l:?} limit, {undecided} boxes undecided)"),
-        },
-        stats.processed,
-        stats.empty,
-        stats.bisected,
-        stats.lp.solved,
-        stats.seconds
-    )
-    .ok();
-    // "Proven": a box certified (Krawczyk) to hold exactly one configuration; the other solution
-    // boxes are not refuted at sigma (points of a curve, or roots not yet proven).
-    let problem = job.problem();
-    writeln!(out, "  model: {} ({})", problem.model().name(), problem.model_reason()).ok();
-    writeln!(out, "  freedom: {freedom_line}").ok();
-    for r in problem.reductions() {
-        writeln!(out, "  reduced: {r}").ok();
-    }
-    if result.status == linkspace::Status::Complete && solutions.is_empty() {
-        // A complete run with no box is a proof, and says something about the input.
-        let why = if fixed.is_empty() { "the loops cannot close as written, within the joint limits" } else { "no assembly has the fixed values given" };
-        writeln!(out, "  no configuration: every box was proven empty, so {why}").ok();
-    }
-    if stats.post_processing_cut_short {
-        // Honest about what the limit cost: these boxes were reported without the deeper
-        // search that drops near misses, so the count may include a few spurious ones.
-        writeln!(out, "  the time limit cut the spurious-box check short: some lone boxes were kept unexamined").ok();
-    }
-    if solutions.len() <= 20 {
-        for (k, s) in solutions.iter().enumerate() {
-            // By joint name, as the JSON lists them.
-            let mut joints: Vec<(&String, &Bounds)> = result.joint_names.iter().zip(&s.joints).collect();
-            joints.sort_by(|a, b| a.0.cmp(b.0));
-            let joints: Vec<String> = joints.iter().map(|(n, [lo, hi])| format!("{n}={:.6}", 0.5 * (lo + hi))).collect();
-            writeln!(out, "  #{k}: {}", joints.join(" ")).ok();
-        }
-    }
-    if let Some(path) = args.json {
-        let text = serde_json::to_string_pretty(&report::SolveReport::new(problem, &result, mechanism.rigid_links()))?;
-        write_file(&path, text)?;
-    }
-    Ok(())
+    answer.with_context(|| format!("analysing {}", path.display()))
 }
 
 /// Writes a report; under `mpirun`, only rank 0 writes (every rank holds the same result).
@@ -607,26 +578,6 @@ pub(crate) fn write_file(path: &std::path::Path, contents: impl AsRef<[u8]>) -> 
     std::fs::write(path, contents).with_context(|| format!("writing {}", path.display()))
 }
 
-/// Reads a file's robot description.
-fn load_mechanism(path: &std::path::Path) -> Result<linkspace::Mechanism> {
-    let xml = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    urdf::parse(&xml).with_context(|| format!("loading {}", path.display()))
-}
-
-/// Reads a file as every 3R command does: rounding policy, chain choice, limits.
-fn load_arm(path: &std::path::Path, uncertainty: f64, args: &ChainArgs) -> Result<Arm> {
-    let options = args.options()?;
-    let mechanism = load_mechanism(path)?;
-    Arm::load(&mechanism, &options, uncertainty).with_context(|| format!("loading {}", path.display()))
-}
-
-/// Default `--max-boxes` of `singularities`, per search. `--max-memory` bounds the pending
-/// cells and, separately, the node search's box tree (kept whole until the run ends).
-pub(crate) const SINGULARITIES_MAX_BOXES: u64 = 5_000_000;
-
-/// Default `--max-memory` of `singularities` (MiB of pending cells).
-const SINGULARITIES_MAX_MEMORY_MIB: &str = "256";
-
 /// `--timeout` as a duration: positive and finite, or absent.
 pub(crate) fn seconds_arg(t: Option<f64>) -> Result<Option<Duration>> {
     match t {
@@ -637,130 +588,19 @@ pub(crate) fn seconds_arg(t: Option<f64>) -> Result<Option<Duration>> {
 }
 
 fn singularities(args: SingularitiesArgs) -> Result<()> {
-    arm3r::check_precision(args.precision)?;
-    let limits = args.limits.limits(SINGULARITIES_MAX_BOXES)?;
     if args.kind == SingularitiesKind::Cusps && args.nodes {
         bail!("--kind cusps searches no nodes: drop --nodes, or give --kind nodes");
     }
-    // Read once: the whole-arm section reads the same mechanism.
-    let options = args.chain.options()?;
-    let mechanism = load_mechanism(&args.urdf)?;
-    let arm = Arm::load(&mechanism, &options, args.uncertainty).with_context(|| format!("loading {}", args.urdf.display()))?;
-    let cancel = AtomicBool::new(false);
-    let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };
-    let verdict = args.kind == SingularitiesKind::All;
-    let nodes = args.nodes || args.kind == SingularitiesKind::Nodes;
-    let request = app::SingularitiesRequest { precision: args.precision, nodes, search_anyway: args.search_anyway, verdict };
-    let found = app::singularities(&arm, &request, &control, &mut |_| {})?;
-    let report = report::manip3r::SingularityReport::of(&arm, &found);
-    let (prepared, effect) = (&arm.prepared, &found.limit_effect);
-    let mut out = std::io::stdout().lock();
-    let scope = &prepared.choice.scope;
-    // Searched before printing, so that the sub-chain's verdict can point to the arm's.
-    let arm_section = if verdict { whole_arm(&args, &mechanism, &options, &arm, &control)? } else { None };
-    if let Some(v) = &found.verdict {
-        writeln!(out, "{}", v.headline(scope)).ok();
-    }
-    if let Some(open) = scope.not_answered.as_ref().filter(|_| verdict && !scope.stands_for_arm) {
-        match &arm_section {
-            Some(a) => writeln!(out, "  not the arm's verdict: the whole arm's is the line `arm {}` below", a.arm).ok(),
-            None => writeln!(out, "  {open}").ok(),
-        };
-    }
-    let node_text = report.nodes.as_ref().map_or("nodes not searched".to_string(), |n| format!("{} nodes", n.len()));
-    let undecided = report.undecided_total[0] + report.undecided_total[1];
-    writeln!(
-        out,
-        "{}: {} cusps, {node_text}, {} internal-motion lines, {}{undecided} undecided, status {}{}, {:.3} s",
-        report.robot,
-        report.cusps.len(),
-        linkspace::analyses::arm3r::line_count(&found.run.cusps.bands),
-        match report.internal_motions.iter().filter(|m| m.near_degenerate.is_some()).count() {
-            0 => String::new(),
-            n => format!("{n} near-degenerate strips (undecided), "),
-        },
-        report.completeness.status(),
-        report.completeness.0.map_or(String::new(), |l| format!(" ({})", l.name())),
-        report.stats.seconds
-    )
-    .ok();
-    let mid = |b: &[f64; 2]| 0.5 * (b[0] + b[1]);
-    let fmt = |j: &arm3r::Joints| j.iter().map(|(n, b)| format!("{n}={:.6}", mid(b))).collect::<Vec<_>>().join(" ");
-    if let Some(why) = &report.not_searched {
-        writeln!(out, "  not searched: {why}").ok();
-    }
-    writeln!(out, "  chain: {}", prepared.choice.reason).ok();
-    for line in report.singular_branches.iter().flat_map(|b| b.lines()) {
-        writeln!(out, "  {line}").ok();
-    }
-    if let Some(a) = &report.explained_undecided {
-        writeln!(out, "  undecided cusp boxes: {}", a.text).ok();
-    }
-    let snaps = &prepared.snaps;
-    if prepared.exact_geometry {
-        let why = if prepared.snap_tolerance == 0.0 { "--snap-tolerance 0" } else { "--exact-geometry" };
-        writeln!(out, "  rounding: off ({why}): angles taken as written").ok();
-    } else {
-        writeln!(out, "  rounding: {} values snapped to quarter turns / coordinate axes (tolerance {:e} rad)", snaps.len(), prepared.snap_tolerance).ok();
-        for sn in snaps {
-            if sn.what == "lock" {
-                writeln!(out, "    {} lock: {} -> {}", sn.joint, sn.original[0], sn.snapped[0]).ok();
-            } else {
-                writeln!(out, "    {} {}: {:?} -> {:?}", sn.joint, sn.what, sn.original, sn.snapped).ok();
-            }
-        }
-    }
-    writeln!(out, "  {}", effect.text).ok();
-    for c in &report.cusps {
-        writeln!(out, "  cusp {} -> radius {:.6} z {:.6}", fmt(&c.joints), mid(&c.workspace.radius), mid(&c.workspace.z)).ok();
-    }
-    for n in report.nodes.iter().flatten() {
-        writeln!(out, "  node {} & {} -> radius {:.6} z {:.6}", fmt(&n.points[0]), fmt(&n.points[1]), mid(&n.workspace.radius), mid(&n.workspace.z)).ok();
-    }
-    for m in &report.internal_motions {
-        let kind = if m.near_degenerate.is_some() { "near-degenerate strip (undecided)" } else { "internal motion" };
-        writeln!(out, "  {kind} {}", m.joints.iter().map(|(n, b)| format!("{n} in [{:.6}, {:.6}]", b[0], b[1])).collect::<Vec<_>>().join(", ")).ok();
-    }
-    if let Some(a) = &arm_section {
-        writeln!(out, "arm {}: {} ({})", a.arm, a.verdict, a.reason).ok();
-        if let Some(proof) = &a.proof {
-            writeln!(out, "  proof: {proof}").ok();
-        }
-        if let Some(w) = &a.witness {
-            let fmt = |b: &std::collections::BTreeMap<String, [f64; 2]>| b.iter().map(|(n, x)| format!("{n}={:.6}", 0.5 * (x[0] + x[1]))).collect::<Vec<_>>().join(" ");
-            writeln!(out, "  witness pose translation {:?}; solutions {} and {}; min |det J| on the path {:.3e}", w.pose_translation, fmt(&w.from), fmt(&w.to), w.min_abs_det).ok();
-        }
-        if let Some(m) = &a.most_solutions {
-            writeln!(out, "  at least {} inverse-kinematics solutions at one pose (each certified in its own box; pose translation {:?}, the most the search solved)", m.count, m.pose_translation).ok();
-        }
-    }
-    if let Some(path) = args.json {
-        let mut value = serde_json::to_value(&report)?;
-        if let (Some(a), Some(map)) = (&arm_section, value.as_object_mut()) {
-            map.insert("arm_cuspidality".into(), serde_json::to_value(a)?);
-            // The sub-chain's verdict now points to the arm's, as the text does.
-            if let Some(open) = map.get_mut("chain").and_then(|c| c.get_mut("scope")).and_then(|s| s.get_mut("not_answered")).filter(|o| o.is_string()) {
-                *open = serde_json::Value::String("not the arm's verdict: the whole arm's is arm_cuspidality".into());
-            }
-        }
-        write_file(&path, serde_json::to_string_pretty(&value)?)?;
-    }
-    Ok(())
-}
-
-/// The whole-arm verdict of a six-joint arm whose 3R verdict is a sub-chain's (or whose wrist
-/// is spherical), as its report section; `None` for other arms or `--arm-budget 0`.
-fn whole_arm(args: &SingularitiesArgs, mechanism: &linkspace::Mechanism, options: &arm3r::LoadOptions, arm: &Arm, control: &Control) -> Result<Option<report::six::ArmCuspidalityReport>> {
-    if !(args.arm_budget.is_finite() && args.arm_budget >= 0.0) {
-        bail!("--arm-budget must be a number of seconds >= 0, got {}", args.arm_budget);
-    }
-    if args.arm_budget == 0.0 {
-        return Ok(None);
-    }
-    // Within the run's --timeout too.
-    let budget = control.limits.timeout.map_or(Duration::from_secs_f64(args.arm_budget), |t| t.min(Duration::from_secs_f64(args.arm_budget)));
-    let found = app::arm_cuspidality(mechanism, arm, options, budget, control);
-    Ok(found.map(|(chain, c)| report::six::ArmCuspidalityReport::of(&chain, &c)))
+    let job = SingularitiesJob {
+        arm: args.chain.options()?,
+        uncertainty: args.uncertainty,
+        precision: args.precision,
+        nodes: args.nodes || args.kind == SingularitiesKind::Nodes,
+        verdict: args.kind == SingularitiesKind::All,
+        search_anyway: args.search_anyway,
+        arm_budget: args.arm_budget,
+    };
+    execute(&args.urdf, Job::Singularities(job), &args.limits, args.json.as_deref())
 }
 
 fn ik6(args: Ik6Args) -> Result<()> {
@@ -770,171 +610,43 @@ fn ik6(args: Ik6Args) -> Result<()> {
         .map(|t| t.trim().parse::<f64>().map_err(|_| anyhow::anyhow!("--pose '{}': '{}' is not a number", args.pose, t.trim())))
         .collect::<Result<_>>()?;
     let pose = PoseInput::from_numbers(&values).map_err(|e| anyhow::anyhow!("--pose '{}': {e}", args.pose))?;
-    let options = args.chain.options()?;
-    let mechanism = load_mechanism(&args.urdf)?;
-    let chain = app::chain6(&mechanism, &options).with_context(|| format!("loading {}", args.urdf.display()))?;
-    let cancel = AtomicBool::new(false);
-    let control = Control { limits: args.limits.limits(20_000_000)?, threads: args.limits.threads(), cancel: &cancel };
-    let found = app::inverse_kinematics6(&chain, pose, args.precision, &control)?;
-    let report = report::six::Ik6Report::of(&chain, &found);
-    let mut out = std::io::stdout().lock();
-    writeln!(
-        out,
-        "{} -> {}: {} solutions proven unique, {} clusters undecided, status {}, {} boxes, {:.3} s",
-        report.base,
-        report.tip,
-        report.unique.len(),
-        report.clusters.len(),
-        report.completeness.status(),
-        report.processed,
-        report.seconds
-    )
-    .ok();
-    writeln!(out, "  joint ranges: {}", chain.joints.iter().zip(&chain.ranges).map(|(n, r)| format!("{n} [{:.6}, {:.6}]", r.0, r.1)).collect::<Vec<_>>().join(", ")).ok();
-    for (tag, boxes) in [("unique", &report.unique), ("cluster (may hold solutions)", &report.clusters)] {
-        for b in boxes {
-            // In the file's joint order, each in its own range.
-            let text: Vec<String> = chain.joints.iter().map(|n| (n, b[n])).map(|(n, x)| format!("{n} in [{:.9}, {:.9}]", x[0], x[1])).collect();
-            writeln!(out, "  {} ({tag})", text.join(", ")).ok();
-        }
-    }
-    if let Some(path) = args.json {
-        write_file(&path, serde_json::to_string_pretty(&report)?)?;
-    }
-    Ok(())
+    let job = Ik6Job { arm: args.chain.options()?, pose, precision: args.precision };
+    execute(&args.urdf, Job::Ik6(job), &args.limits, args.json.as_deref())
 }
 
-/// The waypoints of `--waypoints` ("q1;q2;...") or `--waypoints-file` (JSON), `n` values each.
-fn waypoints(args: &PathCheckArgs, n: usize) -> Result<Vec<Vec<f64>>> {
-    let rows: Vec<Vec<f64>> = match (&args.waypoints, &args.waypoints_file) {
+/// The waypoints of `--waypoints` ("q1;q2;...") or `--waypoints-file` (JSON).
+fn waypoints(args: &PathCheckArgs) -> Result<Vec<Vec<f64>>> {
+    match (&args.waypoints, &args.waypoints_file) {
         (Some(text), _) => text
             .split(';')
             .filter(|w| !w.trim().is_empty())
             .map(|w| w.split(',').map(|t| t.trim().parse::<f64>().map_err(|_| anyhow::anyhow!("--waypoints: '{}' is not a number", t.trim()))).collect::<Result<Vec<f64>>>())
-            .collect::<Result<_>>()?,
+            .collect(),
         (None, Some(path)) => {
             let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-            serde_json::from_str(&text).with_context(|| format!("{}: expected a JSON list of lists of numbers", path.display()))?
+            serde_json::from_str(&text).with_context(|| format!("{}: expected a JSON list of lists of numbers", path.display()))
         }
         (None, None) => bail!("give --waypoints or --waypoints-file"),
-    };
-    if let Some((k, r)) = rows.iter().enumerate().find(|(_, r)| r.len() != n) {
-        bail!("waypoint {} has {} joint values: expected {n}", k + 1, r.len());
     }
-    Ok(rows)
 }
 
 fn path_check(args: PathCheckArgs) -> Result<()> {
-    let options = args.chain.options()?;
-    let mechanism = load_mechanism(&args.urdf)?;
-    let sub_chain_chosen = args.chain.tip_point.is_some() || !args.chain.lock.is_empty();
-    let set = match args.singular_set {
-        Some(set) => set,
-        None if !sub_chain_chosen && app::chain6(&mechanism, &options).is_ok() => SingularSetArg::SixR,
-        None => SingularSetArg::ThreeR,
-    };
-    let cancel = AtomicBool::new(false);
-    let control = Control { limits: args.limits.limits(1)?, threads: 1, cancel: &cancel };
-    let found = match set {
-        SingularSetArg::SixR => {
-            if sub_chain_chosen {
-                bail!("--lock and --tip-point choose a 3R sub-chain and its point: they apply with --singular-set 3r");
-            }
-            let points = waypoints(&args, 6)?;
-            let chain = app::chain6(&mechanism, &options).with_context(|| format!("loading {}", args.urdf.display()))?;
-            let points: Vec<[f64; 6]> = points.into_iter().map(|w| <[f64; 6]>::try_from(w).expect("invariant: six values checked")).collect();
-            app::check_path(&chain, &points, args.tolerance, &control)?
-        }
-        SingularSetArg::ThreeR => {
-            let arm = Arm::load(&mechanism, &options, 0.0).with_context(|| format!("loading {}", args.urdf.display()))?;
-            let points = waypoints(&args, app::positioning_joints(&arm).len())?;
-            let found = app::check_path3(&arm, &points, args.tolerance, &control)?;
-            eprintln!("chain: {}", arm.prepared.choice.reason);
-            found
-        }
-    };
-    let report = report::six::PathCheckReport::of(&found);
-    let mut out = std::io::stdout().lock();
-    writeln!(out, "{}", report.headline()).ok();
-    for (k, s) in report.segments.iter().enumerate() {
-        writeln!(out, "  segment {} ({} -> {}): {}: {}", k + 1, k + 1, k + 2, s.verdict, s.reason).ok();
-        for c in &s.crossings {
-            let text: Vec<String> = report.joints.iter().map(|n| format!("{n} in [{:.9}, {:.9}]", c.joints[n][0], c.joints[n][1])).collect();
-            writeln!(out, "    crossing at t in [{:.12}, {:.12}]: {}", c.t[0], c.t[1], text.join(", ")).ok();
-        }
-    }
-    if let Some(path) = args.json {
-        write_file(&path, serde_json::to_string_pretty(&report)?)?;
-    }
-    Ok(())
+    let set = args.singular_set.map(|s| match s {
+        SingularSetArg::SixR => PathSet::Arm6R,
+        SingularSetArg::ThreeR => PathSet::Positioning3R,
+    });
+    let job = PathCheckJob { arm: args.chain.options()?, waypoints: waypoints(&args)?, joint_names: Vec::new(), set, precision: args.precision };
+    execute(&args.urdf, Job::PathCheck(job), &args.limits, args.json.as_deref())
 }
 
 fn collisions(args: CollisionsArgs) -> Result<()> {
-    arm3r::check_precision(args.precision)?;
-    let limits = args.limits.limits(collision::DEFAULT_MAX_BOXES)?;
-    let options = args.chain.options()?;
-    let mechanism = load_mechanism(&args.urdf)?;
-    let cancel = AtomicBool::new(false);
-    let control = Control { limits, threads: args.limits.threads(), cancel: &cancel };
-    let found = app::collisions(&mechanism, &options, args.precision, &control, &mut |_| {}).with_context(|| format!("loading {}", args.urdf.display()))?;
-    eprintln!("chain: {}", found.prepared.choice.reason);
-    let set = &found.set;
-    let report = report::manip3r::CollisionReport::of(&found, args.precision);
-    let s = &report.stats;
-    let total = s.colliding_area + s.free_area + s.undecided_area;
-    let pct = |a: f64| 100.0 * a / total;
-    let mut out = std::io::stdout().lock();
-    writeln!(
-        out,
-        "{}: {} pairs; colliding {} boxes ({:.2} % of joint space), free {} ({:.2} %), undecided {} ({:.2} %), status {}, {:.3} s",
-        report.robot,
-        report.pairs.len(),
-        report.colliding.len(),
-        pct(s.colliding_area),
-        report.free.len(),
-        pct(s.free_area),
-        report.undecided.len(),
-        pct(s.undecided_area),
-        report.completeness.status(),
-        s.seconds
-    )
-    .ok();
-    for (k, p) in report.pairs.iter().enumerate() {
-        let boxes = set.colliding.iter().filter(|c| c.pair == k).count();
-        writeln!(out, "  {} x {}: proven colliding on {boxes} boxes", p[0], p[1]).ok();
-    }
-    if let Some(path) = args.json {
-        write_file(&path, serde_json::to_string_pretty(&report)?)?;
-    }
-    Ok(())
+    let job = CollisionsJob { arm: args.chain.options()?, precision: args.precision };
+    execute(&args.urdf, Job::Collisions(job), &args.limits, args.json.as_deref())
 }
 
 fn ik(args: IkArgs) -> Result<()> {
-    let point = parse_ik_point(&args.point)?;
-    arm3r::check_precision(args.precision)?;
-    let arm = load_arm(&args.urdf, args.uncertainty, &args.chain)?;
-    let cancel = AtomicBool::new(false);
-    let control = Control { limits: args.limits.limits(200_000)?, threads: args.limits.threads(), cancel: &cancel };
-    let found = app::inverse_kinematics(&arm, point, args.precision, &control, &mut |_| {})?;
-    let report = report::manip3r::IkReport::of(&arm, &found);
-    let s = &found.solutions;
-    let mut out = std::io::stdout().lock();
-    writeln!(out, "{}: {} solutions proven unique, {} clusters undecided, status {}", report.robot, s.unique.len(), s.clusters.len(), report.completeness.status()).ok();
-    writeln!(out, "  chain: {}", arm.prepared.choice.reason).ok();
-    writeln!(out, "  {}", found.limit_effect.text).ok();
-    for sol in &report.solutions {
-        let text: Vec<String> = sol.joints.iter().map(|(n, b)| format!("{n} in [{:.9}, {:.9}]", b[0], b[1])).collect();
-        let tag = match (sol.unique, sol.boxes) {
-            (true, _) => "unique".to_string(),
-            (false, 0) => format!("internal-motion line: every {} solves the point; the strip about it is not searched", arm.chain.joints[1]),
-            (false, n) => format!("cluster of {n} boxes (one or more solutions)"),
-        };
-        writeln!(out, "  {} ({tag})", text.join(", ")).ok();
-    }
-    if let Some(path) = args.json {
-        write_file(&path, serde_json::to_string_pretty(&report)?)?;
-    }
-    Ok(())
+    let job = IkJob { arm: args.chain.options()?, uncertainty: args.uncertainty, point: parse_ik_point(&args.point)?, precision: args.precision };
+    execute(&args.urdf, Job::Ik(job), &args.limits, args.json.as_deref())
 }
 
 /// `--point`: `X,Y,Z` in the root frame, or `R,Z` in the first joint's frame.

@@ -1,26 +1,30 @@
 //! linkspace: every configuration a mechanism can take, with guarantees.
 //!
-//! A mechanism (from URDF, `model`) becomes a system of equations (`formulate`), which the
-//! branch-and-prune kernel (`search`) covers with interval boxes that provably enclose every
-//! solution, shrinking boxes with sound contractors (`contract`). What a front end runs on a
-//! loaded mechanism (configuration spaces, singularities, inverse kinematics) is `analysis`;
-//! the 3R manipulator analyses of seed 003 are `arm3r`; JSON reports are `report`.
-//! See ARCHITECTURE.md for the map.
+//! The front door is `app`: a `Job` (one variant per question) is checked against its `Input`
+//! by `app::prepare` and answered by `Prepared::run` within a `Control`, as one `Answer` that
+//! says what is proven (`BoxStatus` per box, `Completeness` per answer, `Scope` per verdict).
+//! Below it, by layer: the analyses (`analyses`, one folder per question), the builders
+//! (`formulate`), mechanisms read from URDF (`model`), and the branch-and-prune kernel
+//! (`kernel`), which covers a system with interval boxes that provably enclose every solution.
+//! What answers become outside is `edges` (JSON reports, the ROS 2 node). See ARCHITECTURE.md.
 //!
 //! # Examples
 //!
-//! Both assembly modes of the bundled four-bar with its crank at 0.5 rad:
+//! Both assembly modes of the bundled four-bar with its crank at 0.5 rad, each proven unique:
 //!
 //! ```
-//! use linkspace::{model::urdf, formulate::LinkageProblem, SolverSettings, Status};
+//! use linkspace::app::{self, Answer, BoxStatus, Completeness, Control, Input, Job, Limits, SolveJob};
 //! use std::sync::atomic::AtomicBool;
 //!
-//! let mechanism = urdf::parse(include_str!("../urdf/four_bar.urdf")).unwrap();
-//! let problem = LinkageProblem::new(&mechanism, &[("crank_joint".into(), 0.5)], &[]).unwrap();
-//! let settings = SolverSettings { sigma: 1e-6, ..Default::default() };
-//! let found = problem.solver(settings).unwrap().enclose(&AtomicBool::new(false), &mut |_| {});
-//! assert_eq!(found.status, Status::Complete);
-//! assert_eq!(linkspace::kernel::interval::components(&found.solutions).1, 2);
+//! let input = Input::urdf(include_str!("../urdf/four_bar.urdf")).unwrap();
+//! let job = Job::Solve(SolveJob { fixed: vec![("crank_joint".into(), 0.5)], precision: 1e-6, ..SolveJob::default() });
+//! let cancel = AtomicBool::new(false);
+//! let control = Control { limits: Limits::default(), threads: 1, cancel: &cancel };
+//! let answer = app::prepare(&input, job).unwrap().run(&control, &mut |_| {}).unwrap();
+//! assert_eq!(answer.completeness(), Completeness::Complete);
+//! let Answer::Solve(solved) = answer else { unreachable!() };
+//! assert_eq!(solved.result.clusters, 2);
+//! assert!(solved.result.boxes.iter().all(|b| b.status == BoxStatus::Unique));
 //! ```
 
 #![warn(missing_docs)]

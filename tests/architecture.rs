@@ -1,7 +1,9 @@
 //! Test idea: the invariants of ARCHITECTURE.md that can be read off the source are checked
-//! here, so the map stays true: the layers of the library's top-level modules (the kernel knows
-//! nothing above it, no module cycle), each foreign crate behind its one module, builders that
-//! never solve, and serde only where results are written.
+//! here, so the map stays true: the layers point down (kernel, model, formulate, analyses, app,
+//! edges), each foreign crate sits behind its one module, builders never solve, serde only where
+//! results are written, the front ends reach the library through the front door alone, one
+//! outcome vocabulary, every question reachable from both front ends, and files and functions of
+//! a readable size.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -28,14 +30,19 @@ fn src() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("src")
 }
 
-/// The library's top-level module of a file under `src/` (`None` for the binaries' files).
-fn top_module(path: &Path) -> Option<String> {
-    let rel = path.strip_prefix(src()).expect("under src");
-    let first = rel.components().next()?.as_os_str().to_str()?.trim_end_matches(".rs").to_string();
-    match first.as_str() {
-        "main" | "cli" | "bin" | "lib" => None,
-        _ => Some(first),
-    }
+/// A file's path under `src/`, with `/` separators.
+fn rel(path: &Path) -> String {
+    path.strip_prefix(src()).expect("under src").to_string_lossy().replace('\\', "/")
+}
+
+/// The library's layers, bottom first: a module may name only the layers below its own.
+const LAYERS: [&str; 6] = ["kernel", "model", "formulate", "analyses", "app", "edges"];
+
+/// The library layer of a file under `src/` (`None` for the binaries' files and `lib.rs`).
+fn layer(path: &Path) -> Option<&'static str> {
+    let r = rel(path);
+    let first = r.split('/').next()?.trim_end_matches(".rs");
+    LAYERS.iter().copied().find(|l| *l == first)
 }
 
 /// The code of a file without comment lines and without its unit-test module (which may use
@@ -58,32 +65,33 @@ fn code_lines(path: &Path) -> Vec<(usize, String)> {
     out
 }
 
-/// The files of the library's top-level module `name` (`src/name.rs` and `src/name/`).
-fn module_files(name: &str) -> Vec<PathBuf> {
-    files(&src()).into_iter().filter(|p| top_module(p).as_deref() == Some(name)).collect()
+/// Every `prefix::a::b` path named in `line` (outside string literals), as `a::b`.
+fn paths_after<'a>(line: &'a str, prefix: &str) -> Vec<&'a str> {
+    let mut found = Vec::new();
+    let mut in_string = false;
+    let bytes = line.as_bytes();
+    for (k, c) in line.char_indices() {
+        if c == '"' && (k == 0 || bytes[k - 1] != b'\\') {
+            in_string = !in_string;
+        } else if !in_string && line[k..].starts_with(prefix) && (k == 0 || !(bytes[k - 1].is_ascii_alphanumeric() || bytes[k - 1] == b'_' || bytes[k - 1] == b':')) {
+            let rest = &line[k + prefix.len()..];
+            let end = rest.find(|c: char| !(c.is_alphanumeric() || c == '_' || c == ':')).unwrap_or(rest.len());
+            found.push(&rest[..end]);
+        }
+    }
+    found
 }
 
-/// Lines of `paths` that name `needle`, as `path:line: text`.
-fn lines_naming(paths: &[PathBuf], needle: &str) -> Vec<String> {
-    paths.iter().flat_map(|p| code_lines(p).into_iter().filter(|(_, l)| l.contains(needle)).map(move |(n, l)| format!("{}:{n}: {}", p.display(), l.trim()))).collect()
-}
-
-/// Which top-level modules each library module names (`crate::x`).
-fn dependencies() -> BTreeMap<String, BTreeSet<String>> {
-    let mut deps: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+/// Which layers each layer names (`crate::x`), with one line naming it as evidence.
+fn dependencies() -> BTreeMap<&'static str, BTreeMap<&'static str, String>> {
+    let mut deps: BTreeMap<&'static str, BTreeMap<&'static str, String>> = BTreeMap::new();
     for path in files(&src()) {
-        let Some(from) = top_module(&path) else { continue };
-        let entry = deps.entry(from.clone()).or_default();
-        for (_, line) in code_lines(&path) {
-            for (k, _) in line.match_indices("crate::") {
-                let before = line[..k].chars().last();
-                if before.is_some_and(|c| c.is_alphanumeric() || c == '_') {
-                    continue;
-                }
-                let name: String = line[k + 7..].chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
-                let is_module = src().join(&name).is_dir() || src().join(format!("{name}.rs")).is_file();
-                if !name.is_empty() && name != from && is_module {
-                    entry.insert(name);
+        let Some(from) = layer(&path) else { continue };
+        for (n, line) in code_lines(&path) {
+            for p in paths_after(&line, "crate::") {
+                let to = p.split("::").next().unwrap_or("");
+                if let Some(to) = LAYERS.iter().copied().find(|l| *l == to && *l != from) {
+                    deps.entry(from).or_default().entry(to).or_insert_with(|| format!("src/{}:{n}: {}", rel(&path), line.trim()));
                 }
             }
         }
@@ -92,54 +100,33 @@ fn dependencies() -> BTreeMap<String, BTreeSet<String>> {
 }
 
 #[test]
-fn the_kernel_knows_nothing_above_it() {
-    let kernel = ["interval", "system", "contract", "lp", "search"];
+fn the_layers_point_down() {
     let deps = dependencies();
-    for m in kernel {
-        let above: Vec<&String> = deps.get(m).into_iter().flatten().filter(|d| !kernel.contains(&d.as_str())).collect();
-        assert!(above.is_empty(), "kernel module `{m}` names {above:?}");
-    }
-}
-
-#[test]
-fn top_level_modules_form_no_cycle() {
-    let deps = dependencies();
-    // Depth-first search for a back edge; the cycle found is named.
-    fn visit(m: &str, deps: &BTreeMap<String, BTreeSet<String>>, path: &mut Vec<String>, done: &mut BTreeSet<String>) -> Option<Vec<String>> {
-        if let Some(at) = path.iter().position(|p| p == m) {
-            return Some(path[at..].to_vec());
-        }
-        if done.contains(m) {
-            return None;
-        }
-        path.push(m.to_string());
-        for d in deps.get(m).into_iter().flatten() {
-            if let Some(cycle) = visit(d, deps, path, done) {
-                return Some(cycle);
+    let rank = |l: &str| LAYERS.iter().position(|x| *x == l).expect("a layer");
+    let mut upward = Vec::new();
+    for (from, tos) in &deps {
+        for (to, evidence) in tos {
+            if rank(to) > rank(from) {
+                upward.push(format!("{from} names {to}: {evidence}"));
             }
         }
-        path.pop();
-        done.insert(m.to_string());
-        None
     }
-    let mut done = BTreeSet::new();
-    for m in deps.keys() {
-        let cycle = visit(m, &deps, &mut Vec::new(), &mut done);
-        assert!(cycle.is_none(), "module cycle: {:?}", cycle.unwrap_or_default());
-    }
+    assert!(upward.is_empty(), "a layer names one above it:\n{}", upward.join("\n"));
+    // The test sees the layers at all: the front door names the analyses.
+    assert!(deps.get("app").is_some_and(|t| t.contains_key("analyses")), "{deps:?}");
 }
 
 /// Lines of library files outside `allowed` (path prefixes under src/) that name `needle`.
 fn uses_outside(needle: &str, allowed: &[&str]) -> Vec<String> {
     let mut found = Vec::new();
     for path in files(&src()) {
-        let rel = path.strip_prefix(src()).expect("under src").to_string_lossy().replace('\\', "/");
-        if allowed.iter().any(|a| rel.starts_with(a)) {
+        let r = rel(&path);
+        if allowed.iter().any(|a| r.starts_with(a)) {
             continue;
         }
         for (n, line) in code_lines(&path) {
             if line.contains(needle) {
-                found.push(format!("src/{rel}:{n}: {}", line.trim()));
+                found.push(format!("src/{r}:{n}: {}", line.trim()));
             }
         }
     }
@@ -148,7 +135,16 @@ fn uses_outside(needle: &str, allowed: &[&str]) -> Vec<String> {
 
 #[test]
 fn each_foreign_crate_is_behind_one_module() {
-    for (krate, home) in [("clarabel::", &["lp/"][..]), ("urdf_rs::", &["model/urdf.rs"][..]), ("roxmltree::", &["model/"][..]), ("ros2_client::", &["ros/"][..]), ("rustdds::", &["ros/"][..]), ("plotters::", &["bin/"][..]), ("yaml_rust2::", &["cli/ros_args.rs"][..]), ("mpi::", &["cli/ranks.rs"][..])] {
+    for (krate, home) in [
+        ("clarabel::", &["kernel/lp/"][..]),
+        ("urdf_rs::", &["model/urdf.rs"][..]),
+        ("roxmltree::", &["model/"][..]),
+        ("ros2_client::", &["edges/ros/"][..]),
+        ("rustdds::", &["edges/ros/"][..]),
+        ("plotters::", &["bin/"][..]),
+        ("yaml_rust2::", &["cli/ros_args.rs"][..]),
+        ("mpi::", &["cli/ranks.rs"][..]),
+    ] {
         let outside = uses_outside(krate, home);
         assert!(outside.is_empty(), "{krate} outside {home:?}:\n{}", outside.join("\n"));
     }
@@ -156,20 +152,204 @@ fn each_foreign_crate_is_behind_one_module() {
 
 #[test]
 fn builders_never_solve() {
-    let problems = module_files("problems");
+    let builders: Vec<PathBuf> = files(&src().join("formulate"));
+    assert!(builders.len() > 5, "the builders are under src/formulate");
     for call in [".enclose(", "search::run", "run_by_level", "drop_spurious("] {
-        let hits = lines_naming(&problems, call);
+        let hits: Vec<String> = builders.iter().flat_map(|p| code_lines(p).into_iter().filter(|(_, l)| l.contains(call)).map(move |(n, l)| format!("src/{}:{n}: {}", rel(p), l.trim()))).collect();
         assert!(hits.is_empty(), "a builder runs a search ({call}):\n{}", hits.join("\n"));
     }
 }
 
-/// Where serde may be named: the JSON writers (`report`), the node (`ros`), the binaries, the
-/// reader of the distance file format, and the sweep's own file formats (its spec and its
-/// result lines, which it reads back to resume).
-const SERDE_HOMES: [&str; 9] = ["report.rs", "report/", "ros/", "main.rs", "cli", "bin/", "distances/file.rs", "sweep/spec.rs", "sweep/records.rs"];
+/// Where serde may be named: the JSON writers (`edges/report`), the node (`edges/ros`), the
+/// binaries, the reader of the distance file format, and the sweep's own file formats (its spec
+/// and its result lines, which it reads back to resume).
+const SERDE_HOMES: [&str; 8] = ["edges/report", "edges/ros/", "main.rs", "cli", "bin/", "analyses/distances/file.rs", "analyses/sweep/spec.rs", "analyses/sweep/records.rs"];
 
 #[test]
 fn only_the_edges_know_serde() {
     let outside = uses_outside("serde", &SERDE_HOMES);
     assert!(outside.is_empty(), "serde outside the edges (library types are plain data; `report` says how they are written, with remote definitions where a type is more than a record):\n{}", outside.join("\n"));
+}
+
+/// What the front ends may name of the library: the front door (`app`, which re-exports the
+/// outcome vocabulary and the options jobs take), the outcome model, and their edge: the JSON
+/// writers for the CLI, the node itself for `serve`.
+#[test]
+fn the_front_ends_use_only_the_front_door() {
+    let cli: Vec<PathBuf> = files(&src()).into_iter().filter(|p| {
+        let r = rel(p);
+        r == "main.rs" || r == "cli.rs" || r.starts_with("cli/")
+    }).collect();
+    let ros: Vec<PathBuf> = files(&src().join("edges/ros"));
+    assert!(cli.len() > 5 && ros.len() > 3, "the front ends are where the map says");
+    let mut wrong = Vec::new();
+    for (files, prefix, allowed) in [
+        (&cli, "linkspace::", &["app", "kernel::outcome", "edges::report", "edges::ros"][..]),
+        (&ros, "crate::", &["app", "kernel::outcome", "edges::ros"][..]),
+    ] {
+        for path in files {
+            for (n, line) in code_lines(path) {
+                for p in paths_after(&line, prefix) {
+                    if !allowed.iter().any(|a| p == *a || p.starts_with(&format!("{a}::"))) {
+                        wrong.push(format!("src/{}:{n}: {prefix}{p}", rel(path)));
+                    }
+                }
+            }
+        }
+    }
+    assert!(wrong.is_empty(), "a front end reaches past the front door:\n{}", wrong.join("\n"));
+}
+
+/// Items of `kind` (`enum`, `struct`) declared in library code, as (file, name, body).
+fn items(kind: &str) -> Vec<(String, String, String)> {
+    let mut out = Vec::new();
+    for path in files(&src()) {
+        if rel(&path).starts_with("bin/") {
+            continue;
+        }
+        let code: Vec<String> = code_lines(&path).into_iter().map(|(_, l)| l).collect();
+        for (k, line) in code.iter().enumerate() {
+            let t = line.trim_start();
+            let t = t.strip_prefix("pub(crate) ").or_else(|| t.strip_prefix("pub(super) ")).or_else(|| t.strip_prefix("pub ")).unwrap_or(t);
+            let Some(rest) = t.strip_prefix(&format!("{kind} ")) else { continue };
+            let name: String = rest.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+            let body: Vec<&str> = code[k..].iter().take_while(|l| !l.starts_with('}') && !l.starts_with("    }")).map(String::as_str).take(60).collect();
+            out.push((rel(&path), name, body.join("\n")));
+        }
+    }
+    out
+}
+
+#[test]
+fn one_outcome_vocabulary() {
+    // One completeness type: no other enum has a `Complete` variant, and only the outcome
+    // module spells the word.
+    let complete: Vec<String> = items("enum")
+        .into_iter()
+        .filter(|(_, _, body)| body.lines().any(|l| matches!(l.trim().trim_end_matches(','), "Complete" | "Incomplete")))
+        .map(|(file, name, _)| format!("{file}: {name}"))
+        .collect();
+    assert_eq!(complete, ["kernel/outcome.rs: Completeness"], "completeness types");
+    let spelled = uses_outside("\"complete\"", &["kernel/outcome.rs", "bin/"]);
+    assert!(spelled.is_empty(), "\"complete\" spelled outside the outcome module:\n{}", spelled.join("\n"));
+    // One box tag: no second enum of unique / solution / undecided, no flags beside box lists.
+    let tags: Vec<String> = items("enum")
+        .into_iter()
+        .filter(|(_, _, body)| body.contains("Undecided") && (body.contains("Unique") || body.contains("Certified")) && body.contains("Solution"))
+        .map(|(file, name, _)| format!("{file}: {name}"))
+        .collect();
+    assert_eq!(tags, ["kernel/outcome.rs: BoxStatus"], "box tags");
+    let flags = uses_outside("unique: Vec<bool>", &["edges/ros/msgs.rs"]);
+    assert!(flags.is_empty(), "a list of flags beside a list of boxes:\n{}", flags.join("\n"));
+    // Verdicts are typed: no verdict held as text outside the edges' records.
+    let text_verdicts: Vec<String> = ["verdict: &'static str", "verdict: String", "answer: &'static str"].iter().flat_map(|n| uses_outside(n, &["edges/", "analyses/sweep/records.rs", "bin/"])).collect();
+    assert!(text_verdicts.is_empty(), "a verdict as text:\n{}", text_verdicts.join("\n"));
+}
+
+/// Every question, the CLI subcommand that asks it and the node's service that asks it
+/// (`None`: asked of the node only through the CLI's answer published at load time, or not
+/// yet a service).
+const QUESTIONS: [(&str, &str, Option<&str>); 9] = [
+    ("Solve", "solve", None),
+    ("Singularities", "singularities", None),
+    ("Ik", "ik", None),
+    ("Ik6", "ik6", Some("inverse_kinematics6")),
+    ("PathCheck", "path-check", Some("path_check")),
+    ("Collisions", "collisions", None),
+    ("Distances", "distances", None),
+    ("LoopSingularities", "loop-singularities", None),
+    ("SweepTask", "sweep", None),
+];
+
+#[test]
+fn every_question_is_reachable_from_the_front_ends() {
+    let job = std::fs::read_to_string(src().join("app/job.rs")).expect("the jobs");
+    let variants: BTreeSet<String> = job
+        .split("pub enum Job {")
+        .nth(1)
+        .and_then(|b| b.split("\n}").next())
+        .expect("the Job enum")
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.starts_with("//"))
+        .filter_map(|l| l.split_once('(').map(|(v, _)| v.to_string()))
+        .collect();
+    let table: BTreeSet<String> = QUESTIONS.iter().map(|(v, _, _)| v.to_string()).collect();
+    assert_eq!(variants, table, "the table lists every Job variant");
+    let read_all = |paths: Vec<PathBuf>| paths.iter().map(|p| std::fs::read_to_string(p).expect("readable")).collect::<Vec<_>>().join("\n");
+    let cli = read_all(files(&src()).into_iter().filter(|p| rel(p) == "cli.rs" || rel(p).starts_with("cli/")).collect());
+    let ros = read_all(files(&src().join("edges/ros")));
+    for (variant, command, service) in QUESTIONS {
+        assert!(cli.contains(&format!("Job::{variant}(")), "the CLI never builds Job::{variant}");
+        let kebab = command.replace('-', "_");
+        assert!(cli.contains(&format!("Command::{}(", kebab.split('_').map(|w| w[..1].to_uppercase() + &w[1..]).collect::<String>())), "no CLI subcommand {command}");
+        if let Some(service) = service {
+            assert!(ros.contains(&format!("Job::{variant}(")), "the node never builds Job::{variant}");
+            assert!(ros.contains(&format!("\"{service}\"")), "the node serves no {service}");
+        }
+    }
+}
+
+/// The longest function of a file: (name, lines), by matching braces from each `fn` line.
+fn longest_function(text: &str) -> Option<(String, usize)> {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut best: Option<(String, usize)> = None;
+    for (k, line) in lines.iter().enumerate() {
+        let t = line.trim_start();
+        let Some(at) = t.find("fn ") else { continue };
+        if !(at == 0 || t[..at].ends_with(' ')) || t.starts_with("//") || !t.contains('(') {
+            continue;
+        }
+        let name: String = t[at + 3..].chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+        let mut depth = 0i64;
+        let mut opened = false;
+        let mut end = k;
+        for (j, l) in lines.iter().enumerate().skip(k) {
+            for c in l.chars() {
+                match c {
+                    '{' => {
+                        depth += 1;
+                        opened = true;
+                    }
+                    '}' => depth -= 1,
+                    ';' if !opened && depth == 0 => break,
+                    _ => {}
+                }
+            }
+            end = j;
+            if opened && depth <= 0 {
+                break;
+            }
+            if !opened && l.trim_end().ends_with(';') {
+                break;
+            }
+        }
+        let length = end - k + 1;
+        if opened && best.as_ref().is_none_or(|(_, n)| length > *n) {
+            best = Some((name, length));
+        }
+    }
+    best
+}
+
+#[test]
+fn files_and_functions_stay_readable() {
+    let mut long = Vec::new();
+    for path in files(&src()) {
+        let text = std::fs::read_to_string(&path).expect("readable");
+        let n = text.lines().count();
+        if n > 700 {
+            long.push(format!("src/{}: {n} lines", rel(&path)));
+        }
+        if let Some((name, length)) = longest_function(&text).filter(|(_, l)| *l > 150) {
+            long.push(format!("src/{}: fn {name} has {length} lines", rel(&path)));
+        }
+    }
+    assert!(long.is_empty(), "over 700 lines per file or 150 per function:\n{}", long.join("\n"));
+}
+
+#[test]
+fn the_function_measure_sees_functions() {
+    let text = "fn a() {\n    let x = 1;\n}\n\nfn b() -> u8 {\n    if true {\n        1\n    } else {\n        2\n    }\n}\n";
+    assert_eq!(longest_function(text), Some(("b".to_string(), 7)));
 }

@@ -87,7 +87,7 @@ fn run_report(p: &PlatformProblem, options: BuildOptions, sigma: f64) -> (Cayley
     let cm = CayleyMenger::build(&p.distances, options).expect("builds");
     let settings = SolverSettings { sigma, rho: 0.9, ..Default::default() };
     let e = solve(&cm, FaceBounds::Corners, sigma, 0.9);
-    assert_eq!(e.status, Status::Complete);
+    assert_eq!(e.status, Status::Finished);
     let r = report(&cm, Some(p), BTreeMap::new(), FaceBounds::Corners, &settings, e.status, e.stats, &e.solutions, &e.undecided);
     (cm, r, e.solutions)
 }
@@ -326,7 +326,7 @@ fn the_twelve_lines_tangent_to_four_spheres() {
     let cm = CayleyMenger::build(&d, shared(false)).unwrap();
     let settings = SolverSettings { sigma: 0.01, rho: 0.99, ..Default::default() };
     let e = solve(&cm, FaceBounds::Corners, 0.01, 0.99);
-    assert_eq!(e.status, Status::Complete);
+    assert_eq!(e.status, Status::Finished);
     let r = report(&cm, None, BTreeMap::new(), FaceBounds::Corners, &settings, e.status, e.stats, &e.solutions, &e.undecided);
     assert_eq!(r.clusters, 12);
     assert_eq!(r.placements, 12);
@@ -386,7 +386,7 @@ fn both_orientations_give_each_line_twice() {
     let centres: Vec<Vector3<f64>> = p.points.iter().filter_map(|q| q.xyz).map(|c| Vector3::new(c[0], c[1], c[2])).collect();
     let cm = CayleyMenger::build(&p, shared(false)).unwrap();
     let e = solve(&cm, FaceBounds::Corners, 0.01, 0.99);
-    assert_eq!(e.status, Status::Complete);
+    assert_eq!(e.status, Status::Finished);
     assert!(components(&e.solutions).1 >= 24);
     for (q, d) in reference_lines(&centres, 1.45) {
         let t = q + d * (centres[0] - q).dot(&d);
@@ -471,7 +471,7 @@ fn parallel_and_serial_drivers_agree_on_distance_problems() {
         for threads in [1, 2] {
             let settings = SolverSettings { sigma, rho, threads, ..Default::default() };
             let e = cm.solver(FaceBounds::Corners, settings).expect("valid").enclose(&AtomicBool::new(false), &mut |_| {});
-            assert_eq!(e.status, Status::Complete);
+            assert_eq!(e.status, Status::Finished);
             let mut boxes: Vec<Vec<(u64, u64)>> = e.solutions.iter().map(|b| b.dims.iter().map(|d| (d.inf().to_bits(), d.sup().to_bits())).collect()).collect();
             boxes.sort();
             sets.push((boxes, e.stats.processed));

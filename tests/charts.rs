@@ -27,7 +27,7 @@ fn loop_singularity_and_workspace_region_charts() {
     // The one region with assembly modes has two (opposite signs of det F_p); the rest none.
     assert!(five.contains("Some(2)") && !five.contains("None") && !five.contains("Some(1)") && !five.contains("Some(3)"), "{five}");
     let work = line(&stdout, "five-bar (rods 2.5, 2) workspace:");
-    assert!(work.contains("status Complete"), "{work}");
+    assert!(work.contains("status Finished"), "{work}");
 
     for robot in ["a", "e", "f"] {
         let l = line(&stdout, &format!("robot {robot} workspace regions:"));

@@ -7,7 +7,8 @@ use super::util::urdf_text;
 use linkspace::model::urdf;
 use linkspace::formulate::{CuspFormulation, CuspProblem};
 use linkspace::formulate::{Output, SingularKind, SingularProblem};
-use linkspace::analyses::loop_singular::{BoxKind, SingularSet};
+use linkspace::analyses::loop_singular::SingularSet;
+use linkspace::kernel::outcome::BoxStatus;
 use linkspace::kernel::search::{SolverSettings, Status};
 use std::f64::consts::PI;
 use std::process::Command;
@@ -81,7 +82,7 @@ fn same_points(p: &SingularProblem, set: &SingularSet, joint: &str, reference: &
 
 /// `same_points`, with or without requiring certificates, clusters up to `width` wide.
 fn same_points_with(p: &SingularProblem, set: &SingularSet, joint: &str, reference: &[f64], what: &str, certified_only: bool, width: f64) {
-    assert_eq!(set.status, Status::Complete, "{what}");
+    assert_eq!(set.status, Status::Finished, "{what}");
     let got = cluster_values(p, set, joint);
     assert_eq!(got.len(), reference.len(), "{what}: clusters {got:?} against the closed form {reference:?}");
     for (iv, certified) in &got {
@@ -127,7 +128,7 @@ fn check_four_bar(xml: &str, (d, a, b, c): (f64, f64, f64, f64), counts: (usize,
     same_points_with(&p, &set, "rocker_joint", &output_ref, "output singularities (rocker tip)", false, 1e-4);
     // A generic four-bar has no bifurcation: proven by an empty, complete run.
     let (_, set) = run(xml, SingularKind::Cspace, &[], None, 1e-6);
-    assert_eq!((set.status, set.boxes.len()), (Status::Complete, 0), "C-space singularities of a generic four-bar");
+    assert_eq!((set.status, set.boxes.len()), (Status::Finished, 0), "C-space singularities of a generic four-bar");
 }
 
 #[test]
@@ -153,7 +154,7 @@ fn a_folding_parallelogram_has_certified_free_bifurcations() {
     // near the two closed-form configurations, and nowhere else.
     let xml = four_bar(3.0, 1.0, 3.0, 1.0);
     let (p, set) = run(&xml, SingularKind::Cspace, &[], None, 1e-5);
-    assert_eq!(set.status, Status::Complete);
+    assert_eq!(set.status, Status::Finished);
     let got = cluster_values(&p, &set, "crank_joint");
     assert_eq!(got.len(), 2, "{got:?}");
     for r in [0.0, PI] {
@@ -533,7 +534,7 @@ fn double_butterfly_turning_points_of_theta6_match_an_independent_grid_and_newto
         assert!(reference.iter().any(|&(a, b)| angle_gap(a, r7) < 1e-5 && angle_gap(b, r6) < 1e-5), "grid point ({r7}, {r6}) not found by continuation");
     }
     let (p, set) = run(&urdf_text("double_butterfly.urdf"), SingularKind::Input, &["joint6"], None, 1e-4);
-    assert_eq!(set.status, Status::Complete);
+    assert_eq!(set.status, Status::Finished);
     type Turning = ((f64, f64), (f64, f64), bool);
     let got: Vec<Turning> = cluster_values(&p, &set, "joint7")
         .into_iter()
@@ -551,7 +552,7 @@ fn double_butterfly_turning_points_of_theta6_match_an_independent_grid_and_newto
         assert!(got.iter().any(|(t7, t6, _)| holds_angle(*t7, r7, slack) && holds_angle(*t6, r6, slack)), "reference turning point ({r7}, {r6}) missed");
     }
     // Every box is certified (the ±v symmetry is gone: one chart owns each direction).
-    assert!(set.boxes.iter().all(|b| b.status == BoxKind::Certified));
+    assert!(set.boxes.iter().all(|b| b.status == BoxStatus::Unique));
 }
 
 /// The bundled five-bar: A1 = (0, 0), A2 = (1.5, 0), cranks 2, rods 2.5, both cranks actuated.
@@ -644,7 +645,7 @@ fn five_bar_type_two_curves_match_a_dense_grid() {
 
     let sigma = 1e-2;
     let (p, set) = run(&urdf_text("five_bar.urdf"), SingularKind::Input, &["crank1_joint", "crank2_joint"], None, sigma);
-    assert_eq!(set.status, Status::Complete);
+    assert_eq!(set.status, Status::Finished);
     let images: Vec<[(f64, f64); 2]> = set.boxes.iter().map(|b| {
         let v = p.actuator_values(&b.b);
         [v[0], v[1]]
@@ -819,11 +820,11 @@ fn five_bar_image_has_no_cusp_no_node_and_four_regions_as_the_references() {
     let actuated: Vec<String> = FIVE_BAR_ACTUATORS.iter().map(|s| s.to_string()).collect();
     let settings = SolverSettings { sigma: 1e-2, ..Default::default() };
     let r = linkspace::app::analyse_image(&m, &[], &actuated, &settings, 64, &AtomicBool::new(false)).expect("analyses");
-    assert_eq!(r.status, "complete");
+    assert!(r.status.is_complete());
     assert_eq!((r.cusp_counts.proven, r.cusp_counts.undecided), (0, 0), "cusps {:?}", r.cusps);
     // The cusp search alone (`--kind cusps`) agrees: none, proven.
     let alone = linkspace::app::image_points(&m, &[], &actuated, linkspace::app::ImageSearch::Cusps, &settings, &AtomicBool::new(false)).expect("runs");
-    assert_eq!((alone.status, alone.counts.proven, alone.counts.undecided, alone.cusps.len()), ("complete", 0, 0, 0));
+    assert_eq!((alone.status.is_complete(), alone.counts.proven, alone.counts.undecided, alone.cusps.len()), (true, 0, 0, 0));
     assert_eq!((r.node_counts.proven, r.node_counts.undecided), (0, 0), "nodes {:?}", r.nodes);
     assert!(r.injective > 0);
     assert_eq!(r.regions.regions.len(), reference_regions.len());
@@ -840,7 +841,7 @@ fn five_bar_image_has_no_cusp_no_node_and_four_regions_as_the_references() {
     got.sort();
     want.sort();
     assert_eq!(got, want);
-    assert_eq!(r.verdict.answer, "no", "{}", r.verdict.reason);
+    assert_eq!(r.verdict.answer, Some(false), "{}", r.verdict.reason);
 
     // The cover the regions were cut by holds every reference point of both curves.
     let (p, set) = run(&urdf_text("five_bar_unequal.urdf"), SingularKind::Input, &FIVE_BAR_ACTUATORS, None, 1e-2);
@@ -867,7 +868,7 @@ fn five_bar_equal_rods_cusp_roots_are_the_folded_circles() {
     let actuated: Vec<String> = FIVE_BAR_ACTUATORS.iter().map(|s| s.to_string()).collect();
     let p = SingularProblem::new(&m, &[], SingularKind::Input, &actuated, None).expect("builds");
     let cusps = CuspProblem::new(&m, &p).expect("2 dof").solve(&p, &SolverSettings { sigma: 5e-2, ..Default::default() }, &AtomicBool::new(false)).expect("runs");
-    assert_eq!(cusps.status, Status::Complete);
+    assert_eq!(cusps.status, Status::Finished);
     assert_eq!(cusps.proven(), 0);
     assert!(!cusps.points.is_empty());
     // Each record says why it is undecided: a curve of roots is never proven.
@@ -977,7 +978,7 @@ fn three_rpr_cusps_match(formulation: CuspFormulation) {
     let cp = CuspProblem::with_formulation(&m, &p, formulation).expect("2 dof");
     assert_eq!(cp.formulation, formulation);
     let cusps = cp.solve(&p, &SolverSettings { sigma: 1e-3, ..Default::default() }, &AtomicBool::new(false)).expect("runs");
-    assert_eq!(cusps.status, Status::Complete);
+    assert_eq!(cusps.status, Status::Finished);
     let images: Vec<(Vec<(f64, f64)>, bool)> = cusps
         .points
         .iter()
@@ -1075,10 +1076,10 @@ fn three_rpr_whole_image_is_complete_and_matches_independent_counts() {
     let (fixed, actuated) = (vec![("rho3".to_string(), 17.0)], vec!["rho1".to_string(), "rho2".to_string()]);
     let settings = SolverSettings { sigma: 5e-2, threads: 1, timeout: Some(std::time::Duration::from_secs(120)), ..Default::default() };
     let image = linkspace::app::analyse_image(&m, &fixed, &actuated, &settings, 128, &AtomicBool::new(false)).expect("analyses");
-    assert_eq!(image.status, "complete", "{:?} {:?} {:?}", image.cusp_counts, image.node_counts, image.regions.regions.iter().map(|r| r.configurations).collect::<Vec<_>>());
+    assert!(image.status.is_complete(), "{:?} {:?} {:?}", image.cusp_counts, image.node_counts, image.regions.regions.iter().map(|r| r.configurations).collect::<Vec<_>>());
     assert_eq!((image.cusp_counts.proven, image.cusp_counts.undecided), (6, 0));
     assert_eq!(image.node_counts.undecided, 0);
-    assert_eq!(image.verdict.answer, "yes");
+    assert_eq!(image.verdict.answer, Some(true));
     let reference = three_rpr_ref::cusps(17.0);
     for c in &image.cusps {
         let (r1, r2) = (c.workspace["rho1"], c.workspace["rho2"]);

@@ -95,7 +95,7 @@ fn rigid_butterfly_has_exactly_the_six_table_one_solutions() {
     let p = problem("double_butterfly.urdf", &[("joint6", t6)], &[]);
     let sigma = 1e-4;
     let run = solve(&p, sigma);
-    assert_eq!(run.status, Status::Complete);
+    assert_eq!(run.status, Status::Finished);
     let (labels, clusters) = components(&run.solutions);
     assert_eq!(clusters, 6, "{} boxes", run.solutions.len());
     // Regular roots: interval Newton certifies each box to hold exactly one solution.
@@ -186,7 +186,7 @@ fn mobile_butterfly_is_four_closed_branches_at_every_sigma() {
         .collect();
     for sigma in [0.5, 0.2, 0.1, 0.05] {
         let run = solve(&p, sigma);
-        assert_eq!(run.status, Status::Complete);
+        assert_eq!(run.status, Status::Finished);
         let (labels, clusters) = components(&run.solutions);
         assert_eq!(clusters, 4, "sigma {sigma}: {clusters} clusters");
         let mut cluster_of_branch = std::collections::BTreeSet::new();
@@ -233,7 +233,7 @@ fn four_bar_matches_the_closed_form_across_the_crank_range() {
         let t2 = -PI + 2.0 * PI * (k as f64 + 0.5) / 12.0;
         let p = problem("four_bar.urdf", &[("crank_joint", t2)], &[("coupler", 2.0, 1.0)]);
         let run = solve(&p, 1e-6);
-        assert_eq!(run.status, Status::Complete);
+        assert_eq!(run.status, Status::Finished);
         assert_eq!(components(&run.solutions).1, 2, "crank {t2}: two assembly modes");
         for (t4, cp) in four_bar_closed_form(t2) {
             let hit = run.solutions.iter().any(|b| {
@@ -254,7 +254,7 @@ fn slider_crank_matches_the_closed_form() {
         let t = -PI + 2.0 * PI * (k as f64 + 0.25) / 12.0;
         let p = problem("slider_crank.urdf", &[("crank_joint", t)], &[]);
         let run = solve(&p, 1e-6);
-        assert_eq!(run.status, Status::Complete);
+        assert_eq!(run.status, Status::Finished);
         // The other root, x = r cos t − √…, is negative: outside the slider's limits [0, 5].
         assert_eq!(components(&run.solutions).1, 1);
         let x = r * t.cos() + (l * l - r * r * t.sin().powi(2)).sqrt();
@@ -268,7 +268,7 @@ fn watt_six_bar_assembles_in_four_modes_for_a_driven_crank() {
     // Two four-bar loops, two assembly modes each.
     let p = problem("watt_six_bar.urdf", &[("crank_joint", 0.7)], &[]);
     let run = solve(&p, 1e-6);
-    assert_eq!(run.status, Status::Complete);
+    assert_eq!(run.status, Status::Finished);
     assert_eq!(components(&run.solutions).1, 4);
     for b in &run.solutions {
         let x = b.midpoint();
@@ -355,7 +355,7 @@ fn parallel_and_serial_drivers_give_identical_box_sets() {
         for threads in [1, 2, 3] {
             let settings = SolverSettings { sigma: *sigma, threads, ..Default::default() };
             let e = p.solver(settings).expect("valid").enclose(&AtomicBool::new(false), &mut |_| {});
-            assert_eq!(e.status, Status::Complete);
+            assert_eq!(e.status, Status::Finished);
             let boxes = e.solutions.iter().zip(&e.unique).map(|(b, &u)| (b.dims.iter().map(|d| (d.inf().to_bits(), d.sup().to_bits())).collect(), u)).collect();
             sets.push((threads, canonical(boxes), e.stats.processed));
         }
@@ -383,7 +383,7 @@ fn limits_on_a_joint_away_from_the_ground_bound_the_search() {
         let t2 = -PI + 2.0 * PI * (k as f64 + 0.5) / 8.0;
         let limited = LinkageProblem::new(&m, &[("crank_joint".into(), t2)], &[]).expect("builds");
         let run = solve(&limited, 1e-6);
-        assert_eq!(run.status, Status::Complete);
+        assert_eq!(run.status, Status::Finished);
         // Reference: the closed-form modes whose coupler angle relative to the crank is within the limits.
         let expected: Vec<f64> = four_bar_closed_form(t2)
             .into_iter()
@@ -446,8 +446,8 @@ fn fixing_every_joint_answers_with_one_box_or_none() {
     let (coupler, rocker) = (PI / 3.0, (2.0 * 3f64.sqrt()).atan2(-0.5));
     let closes = problem("four_bar.urdf", &[("crank_joint", 0.0), ("coupler_joint", coupler), ("rocker_joint", rocker)], &[]);
     let run = solve(&closes, 1e-6);
-    assert_eq!((run.status, run.solutions.len(), run.unique.iter().filter(|&&u| u).count()), (Status::Complete, 1, 0));
+    assert_eq!((run.status, run.solutions.len(), run.unique.iter().filter(|&&u| u).count()), (Status::Finished, 1, 0));
     let off = problem("four_bar.urdf", &[("crank_joint", 0.0), ("coupler_joint", coupler), ("rocker_joint", rocker + 1e-9)], &[]);
     let run = solve(&off, 1e-6);
-    assert_eq!((run.status, run.solutions.len()), (Status::Complete, 0));
+    assert_eq!((run.status, run.solutions.len()), (Status::Finished, 0));
 }

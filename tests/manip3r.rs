@@ -181,12 +181,12 @@ fn table_1_matches_dense_sampling() {
     for ((case, n_cusps, n_nodes), (_, d2, d3, d4, r2, r3)) in want.into_iter().zip(CASES) {
         let c = chain(case);
         let found = cusps::search(&c, &cusps::CuspSettings::default()).expect("valid settings");
-        assert!(found.status.is_complete() && found.undecided.is_empty(), "case {case}: {:?}", found.undecided.first());
+        assert!(found.status.finished() && found.undecided.is_empty(), "case {case}: {:?}", found.undecided.first());
         assert_eq!(found.cusps.len(), n_cusps, "case {case} cusps");
         assert!(found.cusps.iter().all(|c| c.unique && c.theta.iter().all(|t| t.wid() <= 1e-4)));
         assert_eq!(found.bands.is_empty(), case != "f", "internal motion only in f");
         let pairs = nodes::search(&c, &found.cusps, &found.bands, &nodes::NodeSettings::default()).expect("valid settings");
-        assert!(pairs.status.is_complete() && pairs.undecided.is_empty(), "case {case}: {:?}", pairs.undecided.first());
+        assert!(pairs.status.finished() && pairs.undecided.is_empty(), "case {case}: {:?}", pairs.undecided.first());
         assert_eq!(pairs.nodes.len(), n_nodes, "case {case} nodes");
 
         let s = sample((d2, d3, d4, r2, r3), 1200);
@@ -226,7 +226,7 @@ fn internal_motion_lines_of_f_are_reported_as_lines() {
             assert!((f[0] - f0[0]).abs() < 1e-12 && (f[1] - f0[1]).abs() < 1e-12);
         }
     }
-    assert!(found.undecided.is_empty() && found.status.is_complete());
+    assert!(found.undecided.is_empty() && found.status.finished());
 }
 
 /// Case c of Benoit et al. (2015): d2 ∈ [1, 1.001], d3 ∈ [2, 2.001], d4 ∈ [1.5, 1.501], r2 ∈ [1,
@@ -241,7 +241,7 @@ fn seed_case_c_four_cusps_valid_for_every_corner() {
     let found = cusps::search(&uncertain, &cusps::CuspSettings { precision: 1e-4, ..Default::default() }).expect("valid");
     assert_eq!(found.cusps.len(), 4);
     assert!(found.cusps.iter().all(|c| c.unique));
-    assert!(found.status.is_complete() && found.undecided.is_empty(), "{} undecided", found.undecided.len());
+    assert!(found.status.finished() && found.undecided.is_empty(), "{} undecided", found.undecided.len());
     let mut geometries: Vec<[f64; 4]> = (0..16u32).map(|k| [0, 1, 2, 3].map(|i| [1.0, 2.0, 1.0, 1.5][i] + if k >> i & 1 == 1 { 0.001 } else { 0.0 })).collect();
     geometries.push([1.0005, 2.0005, 1.0005, 1.5005]);
     for [d2, d3, r2, d4] in geometries {
@@ -308,7 +308,7 @@ fn inverse_kinematics_recovers_sampled_configurations() {
         let f = c.eval_f64(t[0], t[1]);
         let r = f[0].sqrt();
         let s = ik::solve(&c, r, f[1], 1e-8, 200_000).expect("valid query");
-        assert!(s.status.is_complete());
+        assert!(s.status.finished());
         let inside = |b: &[linkspace::Interval; 2]| (0..2).all(|i| b[i].inf() - 1e-9 <= t[i] && t[i] <= b[i].sup() + 1e-9);
         assert!(s.unique.iter().any(inside) || s.clusters.iter().any(|c| inside(&c.hull)), "sample {t:?} lost: {:?}", s.unique);
         for b in &s.unique {
@@ -351,7 +351,7 @@ fn non_orthogonal_chains_match_plain_forward_kinematics() {
     }
     // The searches run on it as on any chain.
     let found = cusps::search(&c, &cusps::CuspSettings { precision: 1e-3, ..Default::default() }).expect("valid");
-    assert!(found.status.is_complete());
+    assert!(found.status.finished());
 }
 
 /// The collision scene of `urdf/orthogonal_3r_a_column.urdf`, written out by hand from the
@@ -419,7 +419,7 @@ fn collision_boxes_agree_with_sampling() {
         }
     }
     let set = classify(&scene, &CollisionSettings { precision: 0.02 }).expect("valid settings");
-    assert!(set.status.is_complete());
+    assert!(set.status.finished());
     let collides = |t2: f64, t3: f64| -> [bool; 2] {
         let s = column_scene(t2, t3);
         [(0, 1), (0, 2)].map(|(i, j)| brute_distance(s[i].0, s[j].0) <= s[i].1 + s[j].1)
@@ -514,7 +514,7 @@ fn two_threads_give_the_results_of_one() {
         let cancel = AtomicBool::new(false);
         let run = |threads| singularities(&c, 1e-4, true, &Control { limits: Limits::default(), threads, cancel: &cancel }, &mut |_| {}).expect("valid");
         let (one, two) = (run(1), run(2));
-        assert_eq!((one.status, two.status), (Status::Complete, Status::Complete));
+        assert_eq!((one.status, two.status), (Status::Finished, Status::Finished));
         assert_eq!(bits(one.cusps.cusps.iter().map(|c| c.theta)), bits(two.cusps.cusps.iter().map(|c| c.theta)), "case {case} cusps");
         assert_eq!(bits(one.cusps.undecided.iter().map(|u| u.theta)), bits(two.cusps.undecided.iter().map(|u| u.theta)));
         let (n1, n2) = (one.nodes.expect("searched"), two.nodes.expect("searched"));
@@ -539,11 +539,11 @@ fn a_cancelled_singularity_run_says_so_and_keeps_its_undecided_cells() {
     // Raised before: nothing is decided, the start box and the start pair are pending.
     let raised = AtomicBool::new(true);
     let r = singularities(&c, 1e-4, true, &Control { limits: Limits::default(), threads: 1, cancel: &raised }, &mut |_| {}).expect("valid");
-    assert_eq!(r.status, Status::Incomplete(Limit::Cancelled));
-    assert_eq!(r.cusps.status, Status::Incomplete(Limit::Cancelled));
+    assert_eq!(r.status, Status::Stopped(Limit::Cancelled));
+    assert_eq!(r.cusps.status, Status::Stopped(Limit::Cancelled));
     assert!(r.cusps.cusps.is_empty() && r.cusps.undecided.len() == 1 && r.cusps.undecided[0].reason == Reason::Limit);
     let n = r.nodes.expect("searched");
-    assert_eq!((n.status, n.undecided.len()), (Status::Incomplete(Limit::Cancelled), 1));
+    assert_eq!((n.status, n.undecided.len()), (Status::Stopped(Limit::Cancelled), 1));
     // Raised during: by the first progress report of the level-by-level driver.
     let flag = AtomicBool::new(false);
     let mut reports = 0;
@@ -553,7 +553,7 @@ fn a_cancelled_singularity_run_says_so_and_keeps_its_undecided_cells() {
     })
     .expect("valid");
     assert!(reports >= 1);
-    assert_eq!(r.status, Status::Incomplete(Limit::Cancelled));
+    assert_eq!(r.status, Status::Stopped(Limit::Cancelled));
     assert!(r.cusps.stats.processed >= 1 && !r.cusps.undecided.is_empty());
     assert!(r.cusps.undecided.iter().all(|u| u.reason == Reason::Limit));
     // Enclosure: every certified cusp of the complete run is in a pending box.
@@ -662,7 +662,7 @@ fn random_tip_points_on_the_last_link_give_the_ik_of_that_point() {
                 continue;
             }
             let solved = ik::solve(&c, goal[0].sqrt(), goal[1], 1e-9, 400_000).expect("valid query");
-            assert!(solved.status.is_complete() && solved.clusters.is_empty(), "trial {trial}: {:?}", solved.status);
+            assert!(solved.status.finished() && solved.clusters.is_empty(), "trial {trial}: {:?}", solved.status);
             assert_eq!(solved.unique.len(), found.len(), "trial {trial}: point {point:?}, goal {goal:?}: {:?} vs Newton {found:?}", solved.unique);
             for t in &found {
                 let inside = |b: &[linkspace::Interval; 2]| (0..2).all(|k| wrap(t[k] - b[k].mid()).abs() <= b[k].rad() + 1e-7);

@@ -873,7 +873,7 @@ fn check(seed: u64) -> Result<String, String> {
         reported.iter().filter(|b| b.undecided).count(),
         status
     );
-    if status != Status::Complete && problems.is_empty() {
+    if status != Status::Finished && problems.is_empty() {
         return Ok(format!("{summary} (incomplete)"));
     }
     if problems.is_empty() {

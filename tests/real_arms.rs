@@ -6,7 +6,7 @@
 //! three conventions against each other and against Table 1.
 
 use linkspace::analyses::arm3r::{self, cusps, ik, ChainSpec, verdict, Chain3R, LoadOptions};
-use linkspace::edges::report::manip3r::Completeness;
+use linkspace::kernel::outcome::Completeness;
 use linkspace::model::{urdf, JointKind, Mechanism};
 use linkspace::kernel::search::{Control, Incompleteness, Limits, Status};
 use nalgebra::{Matrix3, Rotation3, Vector3};
@@ -44,7 +44,7 @@ fn industrial_arms_are_certified_non_cuspidal_with_four_aspects() {
             let (t2, t3) = (-3.0 + 0.15 * k as f64, 0.9 + 0.01 * k as f64);
             let [rho, z] = chain.eval_f64(t2, t3);
             let s = ik::solve(&chain, rho.sqrt(), z, 1e-8, 100_000).expect("valid query");
-            if s.status == Status::Complete && s.clusters.is_empty() {
+            if s.status == Status::Finished && s.clusters.is_empty() {
                 best = best.max(s.unique.len());
             }
         }
@@ -77,7 +77,7 @@ fn wrist_centre_and_points_are_chosen_and_explained() {
 fn a_seven_joint_arm_needs_a_lock_and_then_is_a_six_joint_arm() {
     let xml = text("iiwa14.urdf");
     let err = prepare(&xml, &LoadOptions::default()).expect_err("7R").to_string();
-    assert!(err.contains("7 revolute joints") && err.contains("--lock"), "{err}");
+    assert!(err.contains("7 revolute joints") && err.contains("--fix"), "{err}");
     let spec = ChainSpec { locks: vec![("joint_3".into(), 0.0)], ..Default::default() };
     let p = prepare(&xml, &LoadOptions { spec, ..Default::default() }).expect("locked");
     assert_eq!(p.choice.joints, ["joint_1", "joint_2", "joint_4"].map(String::from));
@@ -184,7 +184,7 @@ fn seed_robots_in_three_conventions_agree_with_table_1() {
             let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
             let run = arm3r::singularities(&chain, 1e-4, true, &bounded(5_000_000), &mut |_| {}).expect("runs");
             let nodes = run.nodes.as_ref().expect("asked");
-            assert!(run.status.is_complete(), "{case} {style}");
+            assert!(run.status.finished(), "{case} {style}");
             assert_eq!((run.cusps.cusps.len(), nodes.nodes.len(), run.cusps.bands.len()), (n_cusps, n_nodes, n_lines), "{case} {style}");
             assert!(run.cusps.undecided.is_empty() && nodes.undecided.is_empty(), "{case} {style}");
             let v = verdict::decide(&p.mechanism, &chain, &run, &p.limits, &Control::with_limits(Limits::default()));
@@ -221,11 +221,11 @@ fn exact_geometry_on_a_truncated_robot_reports_near_degenerate_strips() {
         let run = arm3r::singularities(&chain, 1e-4, true, &bounded(300_000), &mut |_| {}).expect("runs");
         let near: Vec<_> = run.cusps.bands.iter().filter(|b| b.near.is_some()).collect();
         assert_eq!((near.len(), run.cusps.bands.len()), (2, 2), "{:?}", run.cusps.bands);
-        assert!(run.status.is_complete(), "outside the strips everything is decided");
+        assert!(run.status.finished(), "outside the strips everything is decided");
         let v = verdict::decide(&p.mechanism, &chain, &run, &p.limits, &Control::with_limits(Limits::default()));
         assert_eq!((v.cuspidal, v.certified), (None, false), "{v:?}");
         let report = linkspace::edges::report::manip3r::SingularityReport::new(&chain, 1e-4, &run.cusps, run.nodes.as_ref(), run.seconds);
-        assert_eq!(report.completeness, Completeness(Some(Incompleteness::NearDegenerate)));
+        assert_eq!(report.completeness, Completeness::Incomplete(Incompleteness::NearDegenerate));
         assert!(report.undecided.cusps.len() <= linkspace::edges::report::manip3r::MAX_LISTED);
         // The strips sit where the snapped robot has its internal-motion lines.
         let snapped = prepare(&xml, &LoadOptions::default()).expect("loads");
@@ -260,10 +260,10 @@ fn a_report_with_undecided_boxes_is_never_complete() {
     let p = prepare(&text("kuka_kr16.urdf"), &LoadOptions { ignore_limits: true, ..Default::default() }).expect("kuka");
     let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
     let run = arm3r::singularities(&chain, 1e-4, false, &bounded(2_000_000), &mut |_| {}).expect("runs");
-    assert!(run.status.is_complete(), "no limit stops the cusp search on this arm");
+    assert!(run.status.finished(), "no limit stops the cusp search on this arm");
     assert!(!run.cusps.undecided.is_empty(), "the crossing branches leave boxes the seed's system cannot decide");
     let report = linkspace::edges::report::manip3r::SingularityReport::new(&chain, 1e-4, &run.cusps, None, run.seconds);
-    assert_eq!(report.completeness, Completeness(Some(Incompleteness::Undecided)));
+    assert_eq!(report.completeness, Completeness::Incomplete(Incompleteness::Undecided));
     assert_eq!(report.undecided_total[0], run.cusps.undecided.len());
 }
 
@@ -572,10 +572,10 @@ fn the_node_tree_stays_within_the_memory_limit() {
     let run = |max_memory: usize| arm3r::singularities(&chain, 1e-4, true, &Control::with_limits(Limits { max_cells: 5_000_000, timeout: None, max_memory }), &mut |_| {}).expect("runs");
     let full = run(256 << 20);
     let full_nodes = full.nodes.expect("asked");
-    assert!(full.status.is_complete() && full_nodes.nodes.len() == 2, "{:?}", full.status);
+    assert!(full.status.finished() && full_nodes.nodes.len() == 2, "{:?}", full.status);
     let small = run(128 << 10);
     let nodes = small.nodes.expect("asked");
-    assert_eq!(nodes.status, Status::Incomplete(linkspace::kernel::search::Limit::Memory));
+    assert_eq!(nodes.status, Status::Stopped(linkspace::kernel::search::Limit::Memory));
     assert!(nodes.cells < full_nodes.cells / 2, "{} tree boxes within 128 KiB (complete run: {})", nodes.cells, full_nodes.cells);
     assert!(!nodes.undecided.is_empty());
     for n in &nodes.nodes {
@@ -625,7 +625,7 @@ fn a_floating_root_joint_is_read_as_the_robot_base() {
         assert_eq!(a.eval_f64(t2, t3), b.eval_f64(t2, t3));
     }
     let s = ik::solve(&a, 3.0, 1.0, 1e-8, 100_000).expect("valid query");
-    assert_eq!((s.status, s.unique.len(), s.clusters.len()), (Status::Complete, 2, 0));
+    assert_eq!((s.status, s.unique.len(), s.clusters.len()), (Status::Finished, 2, 0));
 }
 
 /// A lock value is a joint angle like the file's: a half turn written 3.141592653589793 or
@@ -669,7 +669,7 @@ fn an_internal_motion_line_is_reported_by_the_verdict_and_by_ik() {
     let (radius, z) = (0.0707106781186548, 0.0);
     let found = app::inverse_kinematics(&a, IkPoint::HalfSection { radius, z }, 1e-8, &bounded(200_000), &mut |_| {}).expect("valid query");
     let sol = &found.solutions;
-    assert!(sol.status.is_complete(), "{:?}", sol.status);
+    assert!(sol.status.finished(), "{:?}", sol.status);
     let lines: Vec<_> = sol.clusters.iter().filter(|c| c.boxes == 0).collect();
     assert!(!lines.is_empty() && lines.iter().all(|c| c.hull[0].wid() >= std::f64::consts::TAU && (c.hull[1].contains(std::f64::consts::PI) || c.hull[1].contains(-std::f64::consts::PI))), "{:?}", sol.clusters);
     for b in &sol.unique {
@@ -870,7 +870,15 @@ fn a_sub_chain_verdict_names_its_sub_chain_and_point() {
     assert_eq!(report["chain"]["spherical_wrist"], false);
     assert!(report["chain"]["scope"]["subject"].as_str().is_some_and(|s| s.contains("link_3@0.54,0,0")));
     assert_eq!(report["arm_cuspidality"]["verdict"], "cuspidal", "{}", report["arm_cuspidality"]);
-    assert_eq!(report["chain"]["scope"]["not_answered"], "not the arm's verdict: the whole arm's is arm_cuspidality");
+    // The top-level verdict is the arm's, with its witness; the sub-chain's sits under its own
+    // key, saying which sub-chain and point it is about.
+    let (arm, sub) = (&report["verdict"], &report["sub_chain_verdict"]);
+    assert_eq!((arm["cuspidal"].clone(), arm["certified"].clone(), arm["scope"]["kind"].clone()), (serde_json::json!(true), serde_json::json!(true), serde_json::json!("mechanism")), "{arm}");
+    assert!(arm["witness"]["from"].is_object() && arm["witness"]["to"].is_object(), "{arm}");
+    assert_eq!((sub["cuspidal"].clone(), sub["scope"]["kind"].clone()), (serde_json::json!(false), serde_json::json!("sub_chain")), "{sub}");
+    assert_eq!(sub["scope"]["joints"], serde_json::json!(["joint_1", "joint_2", "joint_3"]), "{sub}");
+    assert!(sub["scope"]["point"].as_str().is_some_and(|p| p.contains("link_3@0.54,0,0")), "{sub}");
+    assert!(report["chain"]["scope"]["not_answered"].as_str().is_some_and(|s| s.starts_with("not the arm's verdict: the whole arm's") && s.ends_with("is `verdict`")), "{}", report["chain"]);
 }
 
 /// Which bundled arms' verdicts stand for the arm: the spherical wrists' (at their centre), not

@@ -62,7 +62,7 @@ fn check_pose(chain: &Chain6R, q: &[f64; 6]) -> (usize, Duration) {
     let t = Instant::now();
     let sol = ik::solve(chain, &target, 1e-10, &control()).expect("solves");
     let dt = t.elapsed();
-    assert_eq!(sol.status, Status::Complete, "q = {q:?}");
+    assert_eq!(sol.status, Status::Finished, "q = {q:?}");
     let holds = |b: &[linkspace::Interval; 6]| (0..6).all(|k| b[k].inf() - 1e-7 <= q[k] && q[k] <= b[k].sup() + 1e-7);
     assert!(sol.unique.iter().any(holds) || sol.clusters.iter().any(|c| holds(&c.hull)), "q = {q:?} lost: {:?}", sol.unique);
     for u in &sol.unique {
@@ -287,7 +287,7 @@ fn ur5_against_the_closed_form(poses: usize, seed: u64) {
         let analytic = ur5_closed_form::solve(&t);
         assert!(analytic.iter().any(|a| (0..6).all(|k| (a[k] - q[k]).rem_euclid(std::f64::consts::TAU).min((q[k] - a[k]).rem_euclid(std::f64::consts::TAU)) < 1e-6)), "closed form misses q");
         let sol = ik::solve(&chain, &PoseTarget::around(&pose, 1e-12).expect("finite"), 1e-10, &control()).expect("solves");
-        assert_eq!(sol.status, Status::Complete);
+        assert_eq!(sol.status, Status::Finished);
         assert!(sol.clusters.is_empty());
         assert_eq!(sol.unique.len(), analytic.len(), "q = {q:?}");
         let near = |a: f64, b: f64| (a - b).rem_euclid(std::f64::consts::TAU).min((b - a).rem_euclid(std::f64::consts::TAU)) < 1e-6;
@@ -337,7 +337,7 @@ fn ur_family_solutions_differ_in_the_signs_of_det_j_factors() {
             let q = random_q(&chain, &mut rng);
             let pose = chain.pose(&q);
             let sol = ik::solve(&chain, &PoseTarget::around(&pose, 1e-12).expect("finite"), 1e-10, &control()).expect("solves");
-            assert_eq!(sol.status, Status::Complete);
+            assert_eq!(sol.status, Status::Finished);
             most = most.max(sol.unique.len());
             let mids: Vec<[f64; 6]> = sol.unique.iter().map(|u| u.map(|x| x.mid())).collect();
             let signs: Vec<[bool; 3]> = mids
@@ -533,7 +533,7 @@ mod homotopy_reference {
                 let t = Instant::now();
                 let sol = ik::solve(&chain, &PoseTarget::around(&pose, 1e-12).expect("finite"), 1e-10, &control()).expect("solves");
                 times.push((i, t.elapsed().as_secs_f64()));
-                assert_eq!(sol.status, Status::Complete, "{name} pose {i}");
+                assert_eq!(sol.status, Status::Finished, "{name} pose {i}");
                 assert!(sol.clusters.is_empty(), "{name} pose {i}: undecided {:?}", sol.clusters);
                 let inside = |u: &[linkspace::Interval; 6], a: &[f64; 6]| (0..6).all(|k| holds(u[k].inf(), u[k].sup(), a[k], slack));
                 for a in &expected {

@@ -93,7 +93,7 @@ fn limits_several_turns_away_keep_their_configurations() {
     assert_eq!(inside.len(), 1, "the fixture has one assembly within the limits: {refs:?}");
     for newton_width in [0.0, 0.25] {
         let r = run(&p, 1e-6, newton_width);
-        assert_eq!(r.status, Status::Complete);
+        assert_eq!(r.status, Status::Finished);
         assert!(r.boxes.iter().any(|b| holds_angle(joint(&p, b, "rocker_joint"), inside[0], 1e-9)), "newton width {newton_width}: the rocker at {} is lost", inside[0]);
     }
 }
@@ -108,7 +108,7 @@ fn certified_roots_still_meet_the_loop_limits() {
     let inside: Vec<f64> = loop_values.iter().copied().filter(|v| (0.0..=1.0).contains(v)).collect();
     assert_eq!(inside.len(), 1, "one assembly inside the loop limit: {loop_values:?}");
     let r = run(&p, 1e-6, 0.25);
-    assert_eq!(r.status, Status::Complete);
+    assert_eq!(r.status, Status::Finished);
     for b in &r.boxes {
         let (lo, hi) = joint(&p, b, "loop");
         assert!(hi >= 0.0 && lo <= 1.0, "a box outside the loop limit [0, 1] is reported: loop in [{lo}, {hi}]");
@@ -125,7 +125,7 @@ fn tiny_terms_are_bounded_not_dropped() {
     let xml = four_bar("1000", "1e-12", "1999.9999999999995", "3000", CONTINUOUS, "", "");
     let p = build(&xml, &[("crank_joint", 0.0)]).expect("builds");
     let r = run(&p, 1e-3, 0.25);
-    assert_eq!(r.status, Status::Complete);
+    assert_eq!(r.status, Status::Finished);
     for phi in [PI / 3.0, -PI / 3.0] {
         assert!(r.boxes.iter().any(|b| holds_angle(joint(&p, b, "coupler_joint"), phi, 1e-9)), "the assembly with the coupler at {phi} is lost ({} boxes)", r.boxes.len());
     }
@@ -143,7 +143,7 @@ fn scaled_mechanisms_give_the_same_answers() {
             Err(e) => panic!("scale {scale}: {e}"),
         };
         let r = run(&p, 1e-6, 0.25);
-        assert_eq!(r.status, Status::Complete, "scale {scale}");
+        assert_eq!(r.status, Status::Finished, "scale {scale}");
         for (p4, _) in reference.iter().map(|(p3, p4)| (*p4, p3)) {
             assert!(r.boxes.iter().any(|b| holds_angle(joint(&p, b, "rocker_joint"), p4, 1e-9)), "scale {scale}: rocker at {p4} lost");
         }
@@ -172,7 +172,7 @@ fn large_fixed_values_read_out_soundly_or_are_refused() {
     let p = build(&xml, &[("crank_joint", 1e8)]).expect("builds");
     let t = 1.9426951345040145;
     let r = run(&p, 1e-10, 0.25);
-    assert_eq!(r.status, Status::Complete);
+    assert_eq!(r.status, Status::Finished);
     for (p3, _) in assemblies(1.5, 4.0, 3.5, 4.0, t) {
         let coupler = p3 - t;
         // The closed form in f64 is good to a few 1e-15 here; the old read-out missed by 1.3e-8.
@@ -192,7 +192,7 @@ fn roots_at_the_rest_orientation_are_certified() {
     let xml = four_bar("1", "2", "1", "2", CONTINUOUS, "", "");
     let p = build(&xml, &[("crank_joint", 0.5)]).expect("builds");
     let r = run(&p, 1e-6, 0.25);
-    assert_eq!(r.status, Status::Complete);
+    assert_eq!(r.status, Status::Finished);
     let refs = assemblies(1.0, 2.0, 1.0, 2.0, 0.5);
     assert!(refs.iter().any(|(p3, _)| p3.abs() < 1e-12), "one assembly has the coupler at rest: {refs:?}");
     assert_eq!(r.boxes.len(), 2, "{:?}", r.boxes);

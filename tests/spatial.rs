@@ -8,7 +8,7 @@
 use crate::util::{problem, urdf_text};
 use linkspace::kernel::interval::components;
 use linkspace::model::urdf;
-use linkspace::app::SolveJob;
+use linkspace::app::SolveRun;
 use linkspace::formulate::Coordinates;
 use linkspace::formulate::{Linkage, LinkageError, Model, ModelChoice, PoseProblem, PoseRows, SpatialProblem};
 use linkspace::kernel::search::BoxStatus;
@@ -26,7 +26,7 @@ fn spatial(name: &str, fixed: &[(&str, f64)]) -> SpatialProblem {
 
 fn enclose(system: &linkspace::kernel::search::Solver<'_>) -> Enclosure {
     let e = system.enclose(&AtomicBool::new(false), &mut |_| {});
-    assert_eq!(e.status, Status::Complete);
+    assert_eq!(e.status, Status::Finished);
     e
 }
 
@@ -497,7 +497,7 @@ fn stewart_platform_assemblies_are_all_certified() {
     }
 }
 
-/// One case of a Stewart reference through `solve --model pose` (`app::SolveJob`, what the CLI
+/// One case of a Stewart reference through `solve --model pose` (`app::SolveRun`, what the CLI
 /// and the node run) at default settings: every real assembly in exactly one certified box, every
 /// box certified and holding one of them, the joint values (position, roll, pitch, yaw) enclosing
 /// the reference's.
@@ -511,10 +511,10 @@ fn stewart_pose_reference_case(platform: &str, reference_file: &str, index: usiz
     let case = &refs["cases"][index];
     let name = case["name"].as_str().expect("name");
     let fixed = fixed_from(case, "leg_lengths");
-    let job = SolveJob::build(&m, ModelChoice::Pose, &fixed, &[], SolverSettings { threads: 1, ..Default::default() }).expect("builds");
+    let job = SolveRun::build(&m, ModelChoice::Pose, &fixed, &[], SolverSettings { threads: 1, ..Default::default() }).expect("builds");
     assert_eq!(job.problem().model(), Model::Pose);
     let r = job.run(&AtomicBool::new(false), &mut |_| {});
-    assert_eq!(r.status, Status::Complete, "{name}");
+    assert_eq!(r.status, Status::Finished, "{name}");
     let count = case["real_solutions"].as_u64().expect("count") as usize;
     assert!(r.boxes.iter().all(|b| b.status == BoxStatus::Unique), "{name}: every box certified: {:?}", r.boxes.iter().map(|b| b.status).collect::<Vec<_>>());
     assert_eq!(r.boxes.len(), count, "{name}: one box per real assembly");
@@ -590,11 +590,11 @@ fn stewart_distance_reference_case(platform: &str, reference_file: &str, index: 
     let case = &refs["cases"][index];
     let name = case["name"].as_str().expect("name");
     let fixed = fixed_from(case, "leg_lengths");
-    let job = SolveJob::build(&m, ModelChoice::Distances, &fixed, &[], SolverSettings { threads: 1, ..Default::default() }).expect("builds");
+    let job = SolveRun::build(&m, ModelChoice::Distances, &fixed, &[], SolverSettings { threads: 1, ..Default::default() }).expect("builds");
     assert_eq!(job.problem().model(), Model::Distances);
     assert!(job.problem().system().vars.iter().any(|v| v.name.starts_with("r(P")), "squared distances are the unknowns");
     let r = job.run(&AtomicBool::new(false), &mut |_| {});
-    assert_eq!(r.status, Status::Complete, "{name}");
+    assert_eq!(r.status, Status::Finished, "{name}");
     let count = case["real_solutions"].as_u64().expect("count") as usize;
     assert!(r.boxes.iter().all(|b| b.status == BoxStatus::Unique), "{name}: every box certified: {:?}", r.boxes.iter().map(|b| b.status).collect::<Vec<_>>());
     assert_eq!(r.boxes.len(), count, "{name}: one box per real assembly");

@@ -116,7 +116,7 @@ fn clusters<L: Coordinates>(p: &SingularProblem<L>, set: &SingularSet, joints: [
 
 /// None missed, none extra, each certified: `reference` holds `(crank, rocker)` angles.
 fn same_points<L: Coordinates>(p: &SingularProblem<L>, set: &SingularSet, reference: &[(f64, f64)], what: &str) {
-    assert_eq!(set.status, Status::Complete, "{what}");
+    assert_eq!(set.status, Status::Finished, "{what}");
     let got = clusters(p, set, ["crank_joint", "rocker_joint"]);
     assert_eq!(got.len(), reference.len(), "{what}: clusters {got:?} against the closed form {reference:?}");
     for (hull, certified) in &got {
@@ -156,7 +156,7 @@ fn check(xml: &str, m: &Matrix3<f64>, counts: (usize, usize), what: &str) {
     // C-space search proves there is none.
     assert!(crank_turns.iter().all(|c| rocker_turns.iter().all(|r| (c.0 - r.0).abs() + (c.1 - r.1).abs() > 1e-3)), "{what}: the closed form itself");
     let (_, set) = run(xml, SingularKind::Cspace, &[], None);
-    assert_eq!((set.status, set.boxes.len()), (Status::Complete, 0), "{what}: C-space singularities");
+    assert_eq!((set.status, set.boxes.len()), (Status::Finished, 0), "{what}: C-space singularities");
 }
 
 #[test]
@@ -239,7 +239,7 @@ fn a_folding_parallelogram_through_the_spatial_model_has_its_two_bifurcations() 
     let m = urdf::parse(&super::closed_loop_singularities::four_bar(3.0, 1.0, 3.0, 1.0)).expect("parses");
     let p = SingularProblem::with_linkage(SpatialProblem::new(&m, &[], &[]).expect("spatial"), SingularKind::Cspace, &[], None).expect("builds");
     let set = p.solve(&SolverSettings { sigma: 1e-5, ..Default::default() }, &AtomicBool::new(false)).expect("valid");
-    assert_eq!(set.status, Status::Complete);
+    assert_eq!(set.status, Status::Finished);
     let got = clusters(&p, &set, ["crank_joint", "rocker_joint"]);
     assert_eq!(got.len(), 2, "{got:?}");
     for r in [0.0, PI] {
@@ -268,6 +268,6 @@ fn the_delta_has_no_type_two_singularity_within_its_limits() {
     let separations: Vec<f64> = reference["cases"].as_array().expect("cases").iter().map(|c| c["half_separation"].as_f64().expect("number")).collect();
     assert!(separations.len() == 4 && separations.iter().all(|h| *h > 0.6), "{separations:?}");
     let (_, set) = run(&urdf_text("delta.urdf"), SingularKind::Input, &["actuator1", "actuator2", "actuator3"], None);
-    assert_eq!(set.status, Status::Complete);
+    assert_eq!(set.status, Status::Finished);
     assert!(set.boxes.is_empty() && set.clusters.is_empty(), "{} boxes in {} clusters", set.boxes.len(), set.clusters.len());
 }

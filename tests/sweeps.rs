@@ -79,7 +79,7 @@ fn orthogonal_3r_cuspidality_matches_dense_sampling() {
     assert_eq!(found.len(), 25);
     let (mut kept, mut seen) = (0, HashSet::new());
     for r in &found {
-        assert_eq!((r.status, r.undecided), (TaskStatus::Complete, 0), "{r:?}");
+        assert_eq!((r.status, r.undecided), (TaskStatus::Ran(linkspace::app::Completeness::Complete), 0), "{r:?}");
         let cuspidal = match r.verdict.as_deref() {
             Some("cuspidal") => true,
             Some("non_cuspidal") => false,
@@ -195,7 +195,7 @@ fn three_rpr_assembly_modes_match_an_independent_count() {
     let (mut kept, mut counts) = (0, HashSet::new());
     for r in &found {
         let [r1, r2] = [r.values[0], r.values[1]];
-        assert_eq!((r.status, r.undecided), (TaskStatus::Complete, 0), "{r:?}");
+        assert_eq!((r.status, r.undecided), (TaskStatus::Ran(linkspace::app::Completeness::Complete), 0), "{r:?}");
         let count = r.count.expect("counted") as usize;
         assert_eq!(count as u64, r.proven, "every mode proven: {r:?}");
         let here = poses([r1, r2, 12.0]);

@@ -850,7 +850,7 @@ fn a_3r_manipulator_publishes_its_singularities_and_answers_inverse_kinematics()
 
     let list = r_[0]["mechanisms"].as_array().expect("mechanisms");
     assert_eq!((list[0]["kind"].as_str(), list[0]["state"].as_str()), (Some("manipulator_3r"), Some("complete")));
-    assert_eq!(list[0]["services"], json!(["singularities", "inverse_kinematics", "classify"]));
+    assert_eq!(list[0]["services"], json!(["singularities", "inverse_kinematics", "classify", "path_check"]));
     assert_eq!(list[0]["free_joints"], json!(["joint1", "joint2", "joint3"]));
 
     // Inverse kinematics of (r, 0, z): the CLI's boxes for joints 2 and 3, unique ones and
@@ -1351,7 +1351,7 @@ fn a_linkage_publishes_its_singular_sets_as_the_cli_finds_them() {
             let have: Vec<[f64; 2]> = (0..names.len()).map(|j| [lo[i * names.len() + j], hi[i * names.len() + j]]).collect();
             assert_eq!(have, want, "{kind} box {i}");
             let status = match b["status"].as_str().expect("status") {
-                "certified" => 2,
+                "unique" => 2,
                 "solution" => 0,
                 _ => 1,
             };

@@ -25,7 +25,7 @@ pub fn solve(p: &LinkageProblem, sigma: f64) -> Run {
     let settings = SolverSettings { sigma, ..Default::default() };
     let solver = p.solver(settings).expect("valid settings");
     let e = solver.enclose(&AtomicBool::new(false), &mut |_| {});
-    assert!(e.undecided.is_empty() || e.status != Status::Complete);
+    assert!(e.undecided.is_empty() || e.status != Status::Finished);
     Run { status: e.status, solutions: e.solutions, unique: e.unique }
 }
 

@@ -96,6 +96,7 @@ pub struct Root {
 }
 
 /// The result of `solve`.
+#[derive(Clone, Debug)]
 pub struct Certified {
     /// The formulation solved: `points`, `shared` or `split`.
     pub formulation: Choice,
@@ -131,7 +132,12 @@ impl Certified {
 
     /// True when the search finished and nothing is undecided.
     pub fn complete(&self) -> bool {
-        self.status == Status::Complete && self.undecided_regions() == 0
+        self.completeness().is_complete()
+    }
+
+    /// The one rule: the limit that stopped the search, else the undecided regions.
+    pub fn completeness(&self) -> crate::kernel::outcome::Completeness {
+        crate::kernel::outcome::Completeness::of(self.status, self.undecided_regions(), false)
     }
 
     /// Clusters with something unproven (regions that may or may not hold solutions).
@@ -235,7 +241,7 @@ fn deeper(solvers: &[Solver<'_>], b: &IntervalBox, cancel: &AtomicBool, stats: &
             let (status, st) = solver.run_from(p, cancel, &mut found);
             stats.processed += st.processed;
             stats.certified += st.certified;
-            if status != Status::Complete {
+            if status != Status::Finished {
                 return Err("a deeper search hit its box limit");
             }
             for (f, u) in found.solutions.into_iter().zip(found.unique) {
@@ -412,7 +418,7 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
         Some(start) => {
             let mut found = Collect::default();
             let (status, st) = all_solver.run_from(start, cancel, &mut found);
-            ((status == Status::Complete).then_some(found.solutions), st.processed)
+            ((status == Status::Finished).then_some(found.solutions), st.processed)
         }
     });
     let in_determinants = clock() - t;

@@ -148,6 +148,94 @@ pub fn check(det: &dyn SignProof, waypoints: &[Vec<f64>], tolerance: f64, contro
     Ok(PathCheck { waypoints: waypoints.to_vec(), segments })
 }
 
+/// Segments by verdict.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PathCounts {
+    /// det proven nonzero throughout.
+    pub clear: usize,
+    /// A sign change of det proven.
+    pub crosses: usize,
+    /// det may vanish, no sign change proven.
+    pub touches_or_undecided: usize,
+    /// Not decided (a limit stopped the run).
+    pub not_decided: usize,
+}
+
+impl SpanReason {
+    /// The name used in reports and messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            SpanReason::SameSignBothSides => "same_sign_both_sides",
+            SpanReason::AtEnd => "at_segment_end",
+            SpanReason::PieceBudget => "piece_budget",
+        }
+    }
+}
+
+impl SegmentVerdict {
+    /// The name used in reports and messages.
+    pub fn name(&self) -> &'static str {
+        match self {
+            SegmentVerdict::Clear { .. } => "clear",
+            SegmentVerdict::Crosses { .. } => "crosses",
+            SegmentVerdict::Undecided { .. } => "touches_or_undecided",
+            SegmentVerdict::Stopped(_) => "not_decided",
+        }
+    }
+
+    /// Why, in one line, the determinant named `det`.
+    pub fn reason(&self, det: &str) -> String {
+        match self {
+            SegmentVerdict::Clear { sign, min_abs_det, pieces } => format!("{det} proven {} on the whole segment ({pieces} pieces), |{det}| >= {min_abs_det:.3e}", if *sign > 0.0 { "positive" } else { "negative" }),
+            SegmentVerdict::Crosses { crossings, .. } => {
+                let at: Vec<String> = crossings.iter().map(|c| format!("t in [{:.12}, {:.12}]", c.t[0], c.t[1])).collect();
+                format!("{det} proven to change sign: {}", at.join(", "))
+            }
+            SegmentVerdict::Undecided { spans } => {
+                let at: Vec<String> = spans.iter().map(|s| format!("t in [{:.6}, {:.6}] ({})", s.t[0], s.t[1], s.reason.name())).collect();
+                format!("{det} may vanish, no sign change proven: {}", at.join(", "))
+            }
+            SegmentVerdict::Stopped(limit) => format!("not decided: the run stopped ({}) first", limit.name()),
+        }
+    }
+}
+
+impl PathCheck {
+    /// Segments by verdict.
+    pub fn counts(&self) -> PathCounts {
+        let mut c = PathCounts::default();
+        for s in &self.segments {
+            match s {
+                SegmentVerdict::Clear { .. } => c.clear += 1,
+                SegmentVerdict::Crosses { .. } => c.crosses += 1,
+                SegmentVerdict::Undecided { .. } => c.touches_or_undecided += 1,
+                SegmentVerdict::Stopped(_) => c.not_decided += 1,
+            }
+        }
+        c
+    }
+
+    /// The one rule: the first limit that stopped a segment, else the segments with a
+    /// stretch left undecided (or a crossing not narrowed to the tolerance).
+    pub fn completeness(&self) -> crate::kernel::outcome::Completeness {
+        use crate::kernel::outcome::{Completeness, Status};
+        let stopped = self.segments.iter().find_map(|s| match s {
+            SegmentVerdict::Stopped(l) => Some(*l),
+            _ => None,
+        });
+        let open = self
+            .segments
+            .iter()
+            .filter(|s| match s {
+                SegmentVerdict::Clear { .. } => false,
+                SegmentVerdict::Crosses { crossings, undecided } => !undecided.is_empty() || crossings.iter().any(|c| !c.narrowed),
+                SegmentVerdict::Undecided { .. } | SegmentVerdict::Stopped(_) => true,
+            })
+            .count();
+        Completeness::of(stopped.map_or(Status::Finished, Status::Stopped), open, false)
+    }
+}
+
 /// Small counts in words, as messages about six-joint waypoints have always said them.
 fn number_word(n: usize) -> String {
     match n {

@@ -5,6 +5,7 @@
 pub mod arm3r;
 pub mod arm6r;
 pub mod distances;
+pub mod input_motion;
 pub mod joint_path;
 pub mod loop_singular;
 pub mod sweep;

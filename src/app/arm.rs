@@ -16,21 +16,12 @@ use crate::analyses::arm3r::{
     verdict::{self, Verdict},
     Chain3R, LoadOptions, Manip3rError, Prepared, Singularities,
 };
-use crate::analyses::arm6r::Chain6R;
 use crate::model::Mechanism;
 use crate::kernel::search::{Control, Progress};
 use inari::Interval;
 use std::time::Instant;
 
-use super::{
-    gap, Analysis, AnalysisError, MechanismKind, BoxSetResult, Classification, IkQuery, IkResult, IkSolution, PreparedRun, ResultBox, Service, SingularPair, SingularPoint,
-    SingularityQuery, SingularityResult,
-};
-use crate::kernel::interval::bounds;
-use crate::analyses::arm3r::{curves::Cover, motion, records::radius};
-use crate::kernel::search::{BoxStatus, Limit, Limits, SolveStats as Stats, SolverSettings, Status};
-use std::sync::atomic::AtomicBool;
-use std::sync::Arc;
+
 
 /// A serial arm as the 3R analyses read it.
 #[derive(Clone, Debug)]
@@ -199,6 +190,23 @@ pub fn inverse_kinematics(arm: &Arm, point: IkPoint, precision: f64, control: &C
     Ok(ArmIk { point, target, solutions, limit_effect, seconds: start.elapsed().as_secs_f64() })
 }
 
+impl ArmSingularities {
+    /// Lines of internal motions the cusp search found.
+    pub fn internal_motion_lines(&self) -> usize {
+        arm3r::line_count(&self.run.cusps.bands)
+    }
+
+    /// The one rule over the searches: the limit that stopped one, else near-degenerate strips,
+    /// else undecided boxes and pairs (cusps without a uniqueness proof among them).
+    pub fn completeness(&self) -> crate::kernel::outcome::Completeness {
+        let (cusps, nodes) = (&self.run.cusps, self.run.nodes.as_ref());
+        let status = nodes.map_or(cusps.status, |n| cusps.status.and(n.status));
+        let undecided = cusps.undecided.len() + cusps.cusps.iter().filter(|c| !c.unique).count() + nodes.map_or(0, |n| n.undecided.len());
+        let near = cusps.bands.iter().any(|b| b.near.is_some());
+        crate::kernel::outcome::Completeness::of(status, undecided, near)
+    }
+}
+
 impl ArmIk {
     /// The first joint's angle for a solution box over (θ₂, θ₃), in the joint's range: `None`
     /// for a half-section point (θ₁ is free), the whole turn where the point or the end point
@@ -231,327 +239,12 @@ pub fn collisions(mechanism: &Mechanism, options: &LoadOptions, precision: f64, 
     Ok(ArmCollisions { prepared, scene, set })
 }
 
-// The ROS node's analysis of an arm: the jobs above, plus a cover of the singular curves and
-// the classification of configurations against it.
-
-/// Bisections per axis of the singular-curve cover: 256 × 256 cells of about 0.025 rad, the
-/// grid of the README's charts. Fine enough to show the curves and to separate the regions
-/// between them, coarse enough for a message of a few thousand boxes.
-pub const CURVE_DEPTH: u32 = 8;
-
-/// A serial arm as the node loads it: its 3R positioning structure, read as `linkspace
-/// singularities` reads a file with no options.
-///
-/// An open chain reaches every joint configuration, so there is no configuration space to
-/// solve; the default `configuration_space` and `solve` answer "not available".
-#[derive(Clone, Debug)]
-pub struct Manip3rAnalysis {
-    arm: Arc<Arm>,
-    /// The six revolute joints of the whole arm, when it has exactly six.
-    six: Option<Arc<Chain6R>>,
-    /// Values of the six-joint chain the rounding policy changed (the whole-arm proof is about
-    /// the geometry after them).
-    six_snapped: usize,
-    /// Cover of the singular curves, computed once (it does not depend on any request).
-    cover: Arc<Cover>,
-}
-
-impl Manip3rAnalysis {
-    /// Reads the arm (nominal geometry); errors when the mechanism holds no 3R positioning
-    /// structure or its map is degenerate.
-    pub fn new(mechanism: &Mechanism) -> Result<Self, Manip3rError> {
-        let arm = Arm::load(mechanism, &LoadOptions::default(), 0.0)?;
-        let cover = Arc::new(Cover::new(&arm.chain, CURVE_DEPTH, &Control::with_limits(Limits::default())));
-        let (six, six_snapped) = match super::six::chain6_snapped(mechanism, &LoadOptions::default()) {
-            Ok((chain, snapped)) => (Some(Arc::new(chain)), snapped),
-            Err(_) => (None, 0),
-        };
-        Ok(Self { arm: Arc::new(arm), six, six_snapped, cover })
-    }
-
-    /// The chain's name tokens for records over (θ₂, θ₃).
-    fn record_joints(&self) -> Vec<String> {
-        vec![self.arm.chain.joints[1].clone(), self.arm.chain.joints[2].clone()]
-    }
-}
-
-impl Analysis for Manip3rAnalysis {
-    fn mechanism(&self) -> &str {
-        &self.arm.chain.name
-    }
-
-    fn kind(&self) -> MechanismKind {
-        MechanismKind::Manipulator3R
-    }
-
-    fn services(&self) -> Vec<Service> {
-        vec![Service::Singularities, Service::InverseKinematics, Service::Classify]
-    }
-
-    fn limitation(&self) -> String {
-        "a 3R manipulator: an open chain reaches every joint configuration, so there is no configuration space to solve (singularities, inverse_kinematics and classify are answered)".to_string()
-    }
-
-    fn free_joints(&self) -> Vec<String> {
-        self.arm.chain.joints.to_vec()
-    }
-
-    fn fixed_joints(&self) -> Vec<(String, f64)> {
-        Vec::new()
-    }
-
-    fn periodic(&self) -> Vec<bool> {
-        vec![true; 3]
-    }
-
-    fn singularities(&self, query: &SingularityQuery) -> Result<Box<dyn PreparedRun<SingularityResult>>, AnalysisError> {
-        arm3r::check_precision(query.precision).map_err(|e| AnalysisError::BadRequest(e.to_string()))?;
-        if query.max_boxes == 0 {
-            return Err(AnalysisError::BadRequest("max_boxes must be at least 1".into()));
-        }
-        Ok(Box::new(SingularityRun { arm: self.arm.clone(), six: self.six.clone(), six_snapped: self.six_snapped, cover: self.cover.clone(), query: query.clone(), joints: self.record_joints() }))
-    }
-
-    fn inverse_kinematics(&self, query: &IkQuery) -> Result<Box<dyn PreparedRun<IkResult>>, AnalysisError> {
-        if query.point.iter().any(|v| !v.is_finite()) {
-            return Err(AnalysisError::BadRequest(Manip3rError::BadTarget(query.point).to_string()));
-        }
-        arm3r::check_precision(query.precision).map_err(|e| AnalysisError::BadRequest(e.to_string()))?;
-        if query.max_boxes == 0 {
-            return Err(AnalysisError::BadRequest("max_boxes must be at least 1".into()));
-        }
-        Ok(Box::new(IkRun { arm: self.arm.clone(), query: query.clone() }))
-    }
-
-    fn chain6(&self) -> Option<Arc<Chain6R>> {
-        self.six.clone()
-    }
-
-    fn positioning_arm(&self) -> Option<Arc<Arm>> {
-        Some(self.arm.clone())
-    }
-
-    fn classify(&self, values: &[f64], _cspace: Option<&BoxSetResult>, _singular: Option<&SingularityResult>) -> Result<Classification, AnalysisError> {
-        let c = &self.cover;
-        let (t2, t3) = (values[1], values[2]);
-        let distance = c.boxes.iter().map(|&(i, j)| (gap(t2, c.bounds(i), true).powi(2) + gap(t3, c.bounds(j), true).powi(2)).sqrt()).fold(f64::INFINITY, f64::min);
-        let region = c.cell_of(t2, t3).map(|(i, j)| c.region[i * c.n + j]).filter(|&r| r >= 0);
-        let note = match region {
-            Some(r) => format!(
-                "an open 3R chain: every configuration is reachable. Component {r} of {} is a connected region of cells proven free of singularities (det Df keeps one sign there), so it lies in one aspect; two regions may still belong to one aspect. The singular distance is a lower bound on the distance in (θ2, θ3) to the singular set, which lies in the {} boxes of the {CURVE_DEPTH}-level cover",
-                c.regions,
-                c.boxes.len()
-            ),
-            None => "an open 3R chain: every configuration is reachable. This one lies in a box of the singular-curve cover (det Df may vanish there), so it belongs to no proven region (component -1); the singular distance is 0".to_string(),
-        };
-        Ok(Classification {
-            inside: true,
-            component: region.map(|r| r as usize),
-            components: c.regions,
-            distance: 0.0,
-            singular_distance: Some(if region.is_some() { distance } else { 0.0 }),
-            note,
-        })
-    }
-}
-
-/// The cover as a box set over (θ₂, θ₃).
-fn box_set(cover: &Cover, mechanism: &str, joints: &[String]) -> BoxSetResult {
-    let boxes = cover
-        .boxes
-        .iter()
-        .zip(&cover.cluster)
-        .map(|(&(i, j), &c)| {
-            let b = vec![cover.bounds(i), cover.bounds(j)];
-            ResultBox { status: BoxStatus::Solution, bounds: b.clone(), joints: b, level: 2 * CURVE_DEPTH, cluster: Some(c), traces: vec![] }
-        })
-        .collect();
-    let width = cover.line(1) - cover.line(0);
-    BoxSetResult {
-        mechanism: mechanism.to_string(),
-        analysis: "singular_curves".into(),
-        status: Status::Complete,
-        settings: SolverSettings { sigma: width, max_boxes: cover.stats.processed, timeout: None, ..Default::default() },
-        variables: joints.to_vec(),
-        primaries: vec![0, 1],
-        joint_names: joints.to_vec(),
-        fixed_joints: vec![],
-        traces: vec![],
-        boxes,
-        clusters: cover.clusters,
-        stats: Stats { processed: cover.stats.processed, solutions: cover.boxes.len() as u64, max_level: 2 * CURVE_DEPTH, seconds: cover.seconds, ..Default::default() },
-    }
-}
-
-/// Seconds of the whole-arm cuspidality search in a singularity run (the CLI's default
-/// `--arm-budget`).
-const WHOLE_ARM_BUDGET: std::time::Duration = std::time::Duration::from_secs(2);
-
-/// A validated singularity run.
-struct SingularityRun {
-    arm: Arc<Arm>,
-    six: Option<Arc<Chain6R>>,
-    six_snapped: usize,
-    cover: Arc<Cover>,
-    query: SingularityQuery,
-    joints: Vec<String>,
-}
-
-impl PreparedRun<SingularityResult> for SingularityRun {
-    fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> SingularityResult {
-        let (arm, q) = (&*self.arm, &self.query);
-        let chain = &arm.chain;
-        let limits = Limits { max_cells: q.max_boxes, timeout: q.timeout, ..Limits::default() };
-        let control = Control { limits, threads: q.threads.max(1), cancel };
-        let request = SingularitiesRequest { precision: q.precision, nodes: q.nodes, search_anyway: false, verdict: true };
-        let found_at = Instant::now();
-        let found = singularities(arm, &request, &control, progress).expect("invariant: precision validated when prepared");
-        let (cusps, node_search) = (&found.run.cusps, &found.run.nodes);
-        let two = |t: &[Interval; 2]| vec![bounds(t[0]), bounds(t[1])];
-        let image = |t: [Interval; 2]| {
-            let j = chain.jets(t, 0);
-            [j.rho.value(), j.z.value()]
-        };
-        let workspace = |rho: Interval, z: Interval| vec![bounds(radius(rho)), bounds(z)];
-        let mut cusp_records: Vec<SingularPoint> = cusps.cusps.iter().map(|c| SingularPoint { joints: two(&c.theta), workspace: workspace(c.rho, c.z), certified: c.unique }).collect();
-        cusp_records.extend(cusps.undecided.iter().map(|u| {
-            let [rho, z] = image(u.theta);
-            SingularPoint { joints: two(&u.theta), workspace: workspace(rho, z), certified: false }
-        }));
-        let mut node_records = Vec::new();
-        if let Some(n) = &node_search {
-            node_records.extend(n.nodes.iter().map(|n| SingularPair { joints: [two(&n.theta[0]), two(&n.theta[1])], workspace: workspace(n.rho, n.z), certified: true }));
-            node_records.extend(n.undecided.iter().map(|p| {
-                let (a, b) = (image(p[0]), image(p[1]));
-                SingularPair { joints: [two(&p[0]), two(&p[1])], workspace: workspace(a[0].convex_hull(b[0]), a[1].convex_hull(b[1])), certified: false }
-            }));
-        }
-        let status = found.run.status;
-        // The whole arm's verdict, as `singularities --arm-budget` gives it by default, within
-        // what is left of the run's time.
-        let budget = q.timeout.map_or(WHOLE_ARM_BUDGET, |t| t.saturating_sub(found_at.elapsed()).min(WHOLE_ARM_BUDGET));
-        let arm_cuspidality = self.six.as_deref().and_then(|six| super::six::arm_cuspidality_of(six, self.six_snapped, arm, budget, &control)).map(|c| c.line());
-        let motions = internal_motions(chain, &cusps.bands, &self.joints, q.precision);
-        let processed = cusps.stats.processed + node_search.as_ref().map_or(0, |n| n.stats.processed);
-        let certified_nodes = node_search.as_ref().map_or(0, |n| n.nodes.len());
-        let summary = format!(
-            "{} cusps, {}, {} internal-motion lines, {} undecided, {} cover boxes in {} pieces, {}",
-            cusps.cusps.len(),
-            if found.nodes_searched {
-                format!("{certified_nodes} nodes")
-            } else if q.nodes {
-                "nodes not searched (the singular branches are curves of nodes)".to_string()
-            } else {
-                "nodes not searched".to_string()
-            },
-            motion::line_count(&cusps.bands),
-            cusps.undecided.len() + node_search.as_ref().map_or(0, |n| n.undecided.len()),
-            self.cover.boxes.len(),
-            self.cover.clusters,
-            match status {
-                Status::Complete => "complete".to_string(),
-                Status::Incomplete(Limit::Cancelled) => "incomplete (cancelled)".to_string(),
-                Status::Incomplete(Limit::Boxes) => "incomplete (box limit)".to_string(),
-                Status::Incomplete(limit) => format!("incomplete ({} limit)", limit.name()),
-            }
-        );
-        // The joint limits' effect is named only when the file has limits.
-        let scope = &arm.prepared.choice.scope;
-        let verdict = found.verdict.as_ref().expect("invariant: the node asks for the verdict");
-        let headline = match &scope.not_answered {
-            Some(open) if !scope.stands_for_arm => format!("{}; {open}", verdict.headline(scope)),
-            _ => verdict.headline(scope),
-        };
-        let summary = if arm.prepared.limits.restrict() {
-            format!("{headline}; {}; {}", summary, found.limit_effect.text)
-        } else {
-            format!("{headline}; {}", summary)
-        };
-        SingularityResult {
-            mechanism: chain.name.clone(),
-            status,
-            query: q.clone(),
-            joint_names: self.joints.clone(),
-            workspace_names: vec!["radius".into(), "z".into()],
-            cusps: cusp_records,
-            nodes: node_records,
-            singular_curves: box_set(&self.cover, &chain.name, &self.joints),
-            internal_motions: motions,
-            processed,
-            seconds: found.seconds + self.cover.seconds,
-            summary,
-            loops: None,
-            verdict: Some(verdict.scoped(scope)),
-            branches: arm.branches.clone(),
-            arm_cuspidality,
-        }
-    }
-}
-
-/// The internal-motion lines as a box set: θ₂ over its whole range, θ₃ in each band's
-/// enclosure of the lines (as `MotionRecord` of the CLI report).
-fn internal_motions(chain: &Chain3R, bands: &[motion::Band], joints: &[String], precision: f64) -> BoxSetResult {
-    let full = motion::full_range();
-    let boxes = bands
-        .iter()
-        .enumerate()
-        .map(|(k, b)| {
-            let bx = vec![bounds(full), b.theta3];
-            // A near-degenerate strip (`Band::near`) is not an internal motion: undecided.
-            let status = if b.near.is_some() { BoxStatus::Undecided } else { BoxStatus::Solution };
-            ResultBox { status, bounds: bx.clone(), joints: bx, level: 0, cluster: Some(k), traces: vec![] }
-        })
-        .collect();
-    BoxSetResult {
-        mechanism: chain.name.clone(),
-        analysis: "internal_motions".into(),
-        status: Status::Complete,
-        settings: SolverSettings { sigma: precision, ..Default::default() },
-        variables: joints.to_vec(),
-        primaries: vec![1],
-        joint_names: joints.to_vec(),
-        fixed_joints: vec![],
-        traces: vec![],
-        boxes,
-        clusters: bands.len(),
-        stats: Stats { solutions: bands.len() as u64, ..Default::default() },
-    }
-}
-
-/// A validated inverse-kinematics run.
-struct IkRun {
-    arm: Arc<Arm>,
-    query: IkQuery,
-}
-
-impl PreparedRun<IkResult> for IkRun {
-    fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> IkResult {
-        let arm = &*self.arm;
-        let chain = &arm.chain;
-        let limits = Limits { max_cells: self.query.max_boxes, timeout: self.query.timeout, ..Limits::default() };
-        let control = Control { limits, threads: self.query.threads.max(1), cancel };
-        let found = inverse_kinematics(arm, IkPoint::Root(self.query.point), self.query.precision, &control, progress).expect("invariant: validated when prepared");
-        let target = found.target.expect("invariant: a root-frame point has a target");
-        let three = |b: &[Interval; 2]| vec![bounds(found.theta1(arm, b).expect("invariant: a root-frame point fixes θ₁")), bounds(b[0]), bounds(b[1])];
-        let s = &found.solutions;
-        let mut solutions: Vec<IkSolution> = s.unique.iter().map(|b| IkSolution { joints: three(b), unique: true, boxes: 0 }).collect();
-        solutions.extend(s.clusters.iter().map(|c| IkSolution { joints: three(&c.hull), unique: false, boxes: c.boxes }));
-        IkResult {
-            mechanism: chain.name.clone(),
-            joint_names: chain.joints.to_vec(),
-            point_names: vec!["radius".into(), "z".into()],
-            point_values: vec![bounds(radius(target.half_section[0])), bounds(target.half_section[1])],
-            solutions,
-            status: s.status,
-            processed: s.stats.processed,
-            seconds: found.seconds,
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::app::*;
+    use crate::kernel::interval::bounds;
+    use std::sync::atomic::AtomicBool;
     use crate::kernel::interval::{point, Bounds};
     use crate::analyses::arm3r::ik;
     use crate::app::load;
@@ -592,7 +285,7 @@ mod tests {
         let a = load(&m, &[], &[]).expect("3R");
         assert_eq!(a.kind(), MechanismKind::Manipulator3R);
         let r = a.singularities(&query()).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
-        assert_eq!(r.status, Status::Complete);
+        assert_eq!(r.status, Status::Finished);
         assert_eq!((r.cusps.iter().filter(|c| c.certified).count(), r.nodes.iter().filter(|n| n.certified).count(), r.undecided()), (4, 2, 0));
         assert_eq!(r.internal_motions.boxes.len(), 0);
         // Every point where det Df changes sign along a fine grid line lies in a cover box.
@@ -684,7 +377,7 @@ mod tests {
             let q = IkQuery { point, precision: 1e-8, max_boxes: 200_000, timeout: None, threads: 1 };
             let l = limited.inverse_kinematics(&q).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
             let f = free.inverse_kinematics(&q).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
-            assert!(l.status.is_complete() && f.status.is_complete());
+            assert!(l.status.finished() && f.status.finished());
             for s in &l.solutions {
                 assert!(f.solutions.iter().any(|t| same(&t.joints, &s.joints)), "{point:?}: {s:?} is not a solution of the free arm");
                 assert!(!outside(&s.joints), "{point:?}: {s:?} is outside the limits");
@@ -742,10 +435,10 @@ mod tests {
         assert!(ik([1.0, 0.0, 0.0], 0.0).contains("precision must be a number in (0, 1)"));
         // A tight box limit ends incomplete, with its pending boxes as clusters.
         let short = a.inverse_kinematics(&IkQuery { point: [1.0, 0.0, 0.2], precision: 1e-9, max_boxes: 5, timeout: None, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
-        assert!(short.status == Status::Incomplete(Limit::Boxes) && short.solutions.iter().any(|s| !s.unique));
+        assert!(short.status == Status::Stopped(Limit::Boxes) && short.solutions.iter().any(|s| !s.unique));
         // A timeout stops it too (the node passes its --max-wait, past which no reply is sent).
         let late = a.inverse_kinematics(&IkQuery { point: [1.0, 0.0, 0.2], precision: 1e-9, max_boxes: 1_000_000, timeout: Some(std::time::Duration::ZERO), threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
-        assert_eq!(late.status, Status::Incomplete(Limit::Time));
+        assert_eq!(late.status, Status::Stopped(Limit::Time));
         // 3R chains take no fixed joints.
         assert!(load(&m, &[("joint2".into(), 0.1)], &[]).err().map(err).unwrap_or_default().contains("takes no fixed joints"));
     }

@@ -23,13 +23,13 @@ pub struct DistancesRequest {
 
 /// A loaded distance problem, with the platform it came from when it came from URDF.
 #[derive(Clone, Debug)]
-pub struct DistancesJob {
+pub struct DistancesRun {
     distances: DistanceProblem,
     platform: Option<PlatformProblem>,
     fixed: Vec<(String, f64)>,
 }
 
-impl DistancesJob {
+impl DistancesRun {
     /// The platform of `mechanism` with the squared leg lengths `fixed`.
     pub fn platform(mechanism: &Mechanism, fixed: &[(String, f64)]) -> Result<Self, PlatformError> {
         Self::platform_with(mechanism, fixed, LegValues::Squared)

@@ -11,17 +11,17 @@
 
 use super::{
     classify, gap, Actuation, Analysis, MechanismKind, AnalysisError, BoxSetResult, Classification, LoopSingularities, PreparedRun, ResultBox, Service, SingularSetResult, SingularityQuery,
-    SingularityResult, TracedBounds,
+    SingularityResult,
 };
-use crate::kernel::interval::{bounds, components, IntervalBox};
+use super::solve::SolveRun;
+use crate::kernel::interval::bounds;
 use crate::model::{JointKind, Mechanism};
 use crate::formulate::choice::TracedPoint;
 use crate::formulate::singular::{Coordinates, SingularProblem};
 use super::loops::{all_kinds, SingularSets};
-use crate::analyses::loop_singular::{BoxKind, SingularSet};
+use crate::analyses::loop_singular::SingularSet;
 use crate::formulate::{Linkage, LinkageError, ModelChoice};
-use crate::kernel::search::{Enclosure, RefinePlan, Refinement, Solver};
-use std::time::{Duration, Instant};
+use crate::kernel::outcome::Completeness;
 use crate::kernel::search::{BoxStatus, Progress, SolveStats, SolverSettings, Status};
 use crate::kernel::system::VarRole;
 use std::sync::atomic::AtomicBool;
@@ -53,7 +53,7 @@ impl LinkageAnalysis {
     }
 
     fn prepare(&self, problem: Linkage, settings: &SolverSettings, analysis: &str) -> Result<Box<dyn PreparedRun>, AnalysisError> {
-        Ok(Box::new(LinkageRun { job: SolveJob::new(problem, settings.clone())?, analysis: analysis.to_string() }))
+        Ok(Box::new(LinkageRun { job: SolveRun::new(problem, settings.clone())?, analysis: analysis.to_string() }))
     }
 }
 
@@ -162,10 +162,10 @@ pub(crate) fn singular_distance(loops: &LoopSingularities, names: &[String], val
         let open: Vec<String> = loops
             .sets
             .iter()
-            .filter(|s| !(s.boxes.status.is_complete() && s.undecided == 0))
+            .filter(|s| !(s.boxes.status.finished() && s.undecided == 0))
             .map(|s| match s.boxes.status {
-                Status::Incomplete(l) => format!("{} ({} limit, {} boxes undecided)", s.kind, l.name(), s.undecided),
-                Status::Complete => format!("{} ({} boxes undecided)", s.kind, s.undecided),
+                Status::Stopped(l) => format!("{} ({} limit, {} boxes undecided)", s.kind, l.name(), s.undecided),
+                Status::Finished => format!("{} ({} boxes undecided)", s.kind, s.undecided),
             })
             .collect();
         return Err(format!("the singular search did not complete ({}), so no bound on the distance to singularities is claimed", open.join(", ")));
@@ -215,19 +215,19 @@ impl PreparedRun<SingularityResult> for SingularSetsRun {
         let solved = self.sets.solve(&self.settings, cancel).expect("invariant: settings validated when prepared");
         let sets: Vec<SingularSetResult> = self.sets.problems.iter().zip(&solved).map(|(p, set)| set_result(p, &self.settings, set)).collect();
         // The run's status: the first limit any set met.
-        let status = solved.iter().map(|s| s.status).find(|s| !s.is_complete()).unwrap_or(Status::Complete);
+        let status = solved.iter().map(|s| s.status).find(|s| !s.finished()).unwrap_or(Status::Finished);
         let processed = solved.iter().flat_map(|s| &s.stats).map(|s| s.processed).sum();
         let joint_names = self.sets.problems.first().map(|p| p.linkage.free_joints().to_vec()).unwrap_or_default();
         let summary = format!(
             "{}; actuated: {} ({})",
-            sets.iter().map(|s| format!("{}: {}", s.kind, s.verdict)).collect::<Vec<_>>().join("; "),
+            sets.iter().map(|s| format!("{}: {}", s.kind, s.summary)).collect::<Vec<_>>().join("; "),
             if self.actuation.joints.is_empty() { "none".to_string() } else { self.actuation.joints.join(", ") },
             self.actuation.source
         );
         let empty = |analysis: &str| BoxSetResult {
             mechanism: self.mechanism.clone(),
             analysis: analysis.to_string(),
-            status: Status::Complete,
+            status: Status::Finished,
             settings: self.settings.clone(),
             variables: joint_names.clone(),
             primaries: (0..joint_names.len()).collect(),
@@ -270,23 +270,19 @@ fn set_result(p: &SingularProblem<Linkage>, settings: &SolverSettings, set: &Sin
         .iter()
         .zip(&set.labels)
         .map(|(sb, &label)| {
-            let status = match sb.status {
-                BoxKind::Certified => BoxStatus::Unique,
-                BoxKind::Solution => BoxStatus::Solution,
-                BoxKind::Undecided => BoxStatus::Undecided,
-            };
+            let status = sb.status;
             let values = p.joint_values(&sb.b);
             ResultBox {
                 status,
                 bounds: sb.b.dims.iter().map(|&x| bounds(x)).collect(),
                 joints: names.iter().map(|n| values.get(n).map_or([f64::NAN, f64::NAN], |&(lo, hi)| [lo, hi])).collect(),
                 level: sb.b.level,
-                cluster: (sb.status != BoxKind::Undecided).then_some(label),
+                cluster: (sb.status != BoxStatus::Undecided).then_some(label),
                 traces: vec![],
             }
         })
         .collect();
-    let undecided = set.boxes.iter().filter(|b| b.status == BoxKind::Undecided).count();
+    let undecided = set.boxes.iter().filter(|b| b.status == BoxStatus::Undecided).count();
     let (clusters, certified_clusters) = (set.clusters.len(), set.certified_clusters());
     let mut stats = SolveStats::default();
     for s in &set.stats {
@@ -305,11 +301,11 @@ fn set_result(p: &SingularProblem<Linkage>, settings: &SolverSettings, set: &Sin
         _ => "surfaces",
     };
     let n = boxes.len();
-    let verdict = match set.status {
-        Status::Complete if n == 0 => format!("none (proven: a complete search left no box; expected {shape})"),
-        Status::Complete if undecided == 0 => format!("{clusters} clusters ({certified_clusters} certified, {} unproven), {n} boxes, complete (expected {shape})", clusters - certified_clusters),
-        Status::Complete => format!("{clusters} clusters ({certified_clusters} certified), {n} boxes, {undecided} undecided (expected {shape})"),
-        Status::Incomplete(l) => format!("incomplete ({} limit): {clusters} clusters ({certified_clusters} certified), {n} boxes, {undecided} undecided (expected {shape})", l.name()),
+    let summary = match set.status {
+        Status::Finished if n == 0 => format!("none (proven: a complete search left no box; expected {shape})"),
+        Status::Finished if undecided == 0 => format!("{clusters} clusters ({certified_clusters} certified, {} unproven), {n} boxes, {} (expected {shape})", clusters - certified_clusters, Completeness::Complete.word()),
+        Status::Finished => format!("{clusters} clusters ({certified_clusters} certified), {n} boxes, {undecided} undecided (expected {shape})"),
+        Status::Stopped(l) => format!("incomplete ({} limit): {clusters} clusters ({certified_clusters} certified), {n} boxes, {undecided} undecided (expected {shape})", l.name()),
     };
     SingularSetResult {
         kind: p.kind.name(),
@@ -329,188 +325,19 @@ fn set_result(p: &SingularProblem<Linkage>, settings: &SolverSettings, set: &Sin
         },
         proven: certified_clusters,
         undecided,
-        verdict,
-    }
-}
-
-/// A configuration-space run of a closed-loop linkage, built and validated: `linkspace solve`
-/// and the node's `configuration_space` and `solve` all run one.
-#[derive(Clone, Debug)]
-pub struct SolveJob {
-    problem: Linkage,
-    settings: SolverSettings,
-}
-
-impl SolveJob {
-    /// Validates `settings` for `problem`, so that a bad request is answered before any run.
-    pub fn new(problem: Linkage, settings: SolverSettings) -> Result<Self, crate::kernel::search::SolveError> {
-        problem.solver(settings.clone())?;
-        Ok(Self { problem, settings })
-    }
-
-    /// Builds `mechanism` with `model` (planar, spatial, or auto: planar when the planar builder
-    /// takes it), the `fixed` joint values and the `traces` to follow, and validates `settings`.
-    pub fn build(mechanism: &Mechanism, model: ModelChoice, fixed: &[(String, f64)], traces: &[TracedPoint], settings: SolverSettings) -> Result<Self, AnalysisError> {
-        let problem = Linkage::build(mechanism, model, fixed, traces)?;
-        Ok(Self::new(problem, settings)?)
-    }
-
-    /// The model's degrees of freedom, counted and measured at a configuration Newton finds
-    /// (`system::freedom`), with its one-line description: what the run will cover.
-    pub fn freedom(&self) -> (crate::kernel::system::Freedom, String) {
-        let f = crate::kernel::system::freedom(self.problem.system(), 12, 1);
-        (f, describe_freedom(&f, self.settings.sigma))
-    }
-
-    /// The built problem.
-    pub fn problem(&self) -> &Linkage {
-        &self.problem
-    }
-
-    /// The settings it runs with.
-    pub fn settings(&self) -> &SolverSettings {
-        &self.settings
-    }
-
-    /// Encloses every configuration, within the settings' limits or until `cancel` is raised:
-    /// the box set of analysis `solve`, solution boxes first (in the order found), then the
-    /// undecided ones, each with its joint values and traced points.
-    pub fn run(&self, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> BoxSetResult {
-        let solver = self.problem.solver(self.settings.clone()).expect("invariant: validated when built");
-        let t0 = Instant::now();
-        let e = solver.enclose(cancel, progress);
-        let e = match &self.problem {
-            Linkage::Pose(..) | Linkage::Distances(..) => settle_pose(&solver, e, cancel, self.settings.timeout.map(|t| t.saturating_sub(t0.elapsed()))),
-            _ => e,
-        };
-        let (labels, clusters) = components(&e.solutions);
-        let problem = &self.problem;
-        let joint_names = problem.free_joints().to_vec();
-        let result_box = |b: &IntervalBox, status: BoxStatus, cluster: Option<usize>| {
-            let values = problem.joint_values(b);
-            ResultBox {
-                status,
-                bounds: b.dims.iter().map(|&x| bounds(x)).collect(),
-                joints: joint_names.iter().map(|n| values.get(n).map_or([f64::NAN, f64::NAN], |&(lo, hi)| [lo, hi])).collect(),
-                level: b.level,
-                cluster,
-                traces: traced(problem, b),
-            }
-        };
-        let mut boxes: Vec<ResultBox> =
-            e.solutions.iter().zip(&e.unique).zip(&labels).map(|((b, &unique), &l)| result_box(b, if unique { BoxStatus::Unique } else { BoxStatus::Solution }, Some(l))).collect();
-        boxes.extend(e.undecided.iter().map(|b| result_box(b, BoxStatus::Undecided, None)));
-        let system = problem.system();
-        BoxSetResult {
-            mechanism: problem.name().to_string(),
-            analysis: "solve".to_string(),
-            status: e.status,
-            settings: self.settings.clone(),
-            variables: system.vars.iter().map(|v| v.name.clone()).collect(),
-            primaries: system.vars.iter().enumerate().filter(|(_, v)| v.role == VarRole::Primary).map(|(i, _)| i).collect(),
-            joint_names,
-            fixed_joints: problem.fixed_joints().to_vec(),
-            traces: problem.trace_names(),
-            boxes,
-            clusters,
-            stats: e.stats,
-        }
-    }
-}
-
-/// The pose model's refinement: `RefinePlan::default()`'s rounds and cells, on clusters up to 64
-/// sigmas wide. An assembly near a singularity of the leg Jacobian leaves uncertified boxes along
-/// its near-null direction, the farther the nearer it is (22 to 31 sigmas at sigma 1e-3 for
-/// smallest singular values of 4e-5 to 1.3e-4, README); a cluster of a curve of poses (an
-/// architecturally singular platform) spends the rounds' cells and stays as found.
-fn pose_refine_plan() -> RefinePlan {
-    RefinePlan { max_width: 64.0, ..RefinePlan::default() }
-}
-
-/// The pose model's answer, one certified box per assembly where it can be proven: each
-/// cluster holding an uncertified box (two assemblies close together, say) is searched again at
-/// finer sigmas (`Solver::refine`) and replaced when every box of a completed round is
-/// certified (the round's start box holds the whole cluster, so no root of it is lost; a round
-/// with no box proves the cluster empty); then certified boxes sharing one root are merged
-/// (`Solver::merge_shared_certificates`). What cannot be settled is reported as found.
-/// `timeout`: what is left of the run's.
-fn settle_pose(solver: &Solver<'_>, mut e: Enclosure, cancel: &AtomicBool, timeout: Option<Duration>) -> Enclosure {
-    let t0 = Instant::now();
-    let (labels, n) = components(&e.solutions);
-    let mut solutions = Vec::new();
-    let mut unique = Vec::new();
-    for k in 0..n {
-        let members: Vec<usize> = (0..e.solutions.len()).filter(|&i| labels[i] == k).collect();
-        let boxes: Vec<IntervalBox> = members.iter().map(|&i| e.solutions[i].clone()).collect();
-        if members.iter().any(|&i| !e.unique[i]) {
-            let left = timeout.map(|t| t.saturating_sub(t0.elapsed()));
-            let all_certified = |_: &[IntervalBox], u: &[bool]| u.iter().all(|&x| x);
-            if let Refinement::Settled(found) = solver.refine(&boxes, &pose_refine_plan(), left, &all_certified, cancel) {
-                solutions.extend(found.solutions);
-                unique.extend(found.unique);
-                continue;
-            }
-        }
-        solutions.extend(boxes);
-        unique.extend(members.iter().map(|&i| e.unique[i]));
-    }
-    // Refined clusters may hold boxes that share a certificate with their neighbours.
-    let (solutions, unique, merged) = solver.merge_shared_certificates(solutions, unique);
-    e.stats.certificates_merged += merged;
-    e.stats.solutions = solutions.len() as u64;
-    e.stats.certified = unique.iter().filter(|&&u| u).count() as u64;
-    e.solutions = solutions;
-    e.unique = unique;
-    e
-}
-
-/// World coordinates of the problem's traced points over a box, in `trace_names` order.
-fn traced(problem: &Linkage, b: &IntervalBox) -> Vec<TracedBounds> {
-    match problem {
-        Linkage::Planar(p) => p.traces.iter().map(|t| TracedBounds { x: bounds(b.dims[t.x]), y: bounds(b.dims[t.y]), z: None }).collect(),
-        Linkage::Pose(..) | Linkage::Distances(..) => Vec::new(),
-        Linkage::Spatial(p, _) => p
-            .traces
-            .iter()
-            .map(|t| {
-                let [x, y, z] = t.xyz.map(|v| bounds(b.dims[v]));
-                TracedBounds { x, y, z: Some(z) }
-            })
-            .collect(),
+        summary,
     }
 }
 
 /// A validated linkage run.
 struct LinkageRun {
-    job: SolveJob,
+    job: SolveRun,
     analysis: String,
 }
 
 impl PreparedRun for LinkageRun {
     fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> BoxSetResult {
         BoxSetResult { analysis: self.analysis, ..self.job.run(cancel, progress) }
-    }
-}
-
-/// `freedom`'s line: the degrees of freedom of the model and what they mean for the run.
-pub fn describe_freedom(f: &crate::kernel::system::Freedom, sigma: f64) -> String {
-    let counted = format!("{} unknowns, {} rows", f.unknowns, f.rows);
-    match f.at_point {
-        Some(l) if l.dof == 0 => format!("0 degrees of freedom ({counted}; the Jacobian has full rank at a configuration Newton found): isolated assemblies"),
-        Some(l) if l.dof == 1 && f.counted() <= 0 => format!(
-            "1 degree of freedom at a configuration Newton found ({counted}, rank {}): a curve where the count expects isolated assemblies (an overconstrained linkage that moves, an architecturally singular one, or a singular configuration); boxes on it are not certified",
-            l.rank
-        ),
-        Some(l) if l.dof == 1 => format!("1 degree of freedom ({counted}, rank {} at a configuration Newton found): a curve of configurations", l.rank),
-        Some(l) => format!(
-            "{} degrees of freedom at a configuration Newton found ({counted}, rank {}): a {}-dimensional continuum, whose cover at sigma {sigma:e} takes on the order of {:.0e} boxes; fix {} joints (--fix) for isolated assemblies, or raise --sigma",
-            l.dof,
-            l.rank,
-            l.dof,
-            sigma.powi(-(l.dof.min(30) as i32)),
-            l.dof
-        ),
-        None => format!("{} by count ({counted}); no configuration found by Newton to measure it", f.counted()),
     }
 }
 
@@ -600,7 +427,7 @@ mod tests {
         assert!(loops.actuated_source.contains("<transmission>"), "{}", loops.actuated_source);
         let kinds: Vec<&str> = loops.sets.iter().map(|s| s.kind).collect();
         assert_eq!(kinds, vec!["cspace", "input", "output"]);
-        assert!(loops.complete() && r.status == Status::Complete, "{}", r.summary);
+        assert!(loops.complete() && r.status == Status::Finished, "{}", r.summary);
         // Rocker driving: type II where crank and coupler are in line, |B − O2| = a + b or
         // b − a, B = (d, 0) + c(cos θ4, sin θ4): cos θ4 = (l² − d² − c²) / (2 d c).
         let (d, a_, b, c) = (4.0f64, 1.5f64, 4.0f64, 3.5f64);
@@ -614,13 +441,13 @@ mod tests {
             }
         }
         let input = &loops.sets[1];
-        assert_eq!((input.proven, input.boxes.clusters, input.undecided), (4, 4, 0), "{}", input.verdict);
+        assert_eq!((input.proven, input.boxes.clusters, input.undecided), (4, 4, 0), "{}", input.summary);
         for q in &dead {
             let holds = input.boxes.boxes.iter().any(|bx| bx.joints[2][0] - 1e-9 <= q[2] && q[2] <= bx.joints[2][1] + 1e-9);
             assert!(holds, "dead centre at rocker {} in no input box", q[2]);
         }
         // No bifurcation, no type-I singularity with every passive joint as output (proven empty).
-        assert_eq!((loops.sets[0].boxes.boxes.len(), loops.sets[2].boxes.boxes.len()), (0, 0), "{} / {}", loops.sets[0].verdict, loops.sets[2].verdict);
+        assert_eq!((loops.sets[0].boxes.boxes.len(), loops.sets[2].boxes.boxes.len()), (0, 0), "{} / {}", loops.sets[0].summary, loops.sets[2].summary);
 
         let settings = SolverSettings { sigma: 1e-2, ..Default::default() };
         let cspace = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});

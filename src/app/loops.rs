@@ -214,10 +214,10 @@ mod tests {
         let settings = SolverSettings { timeout: Some(std::time::Duration::ZERO), ..Default::default() };
         let solved = sets.solve(&settings, &AtomicBool::new(false)).expect("valid");
         for (p, s) in sets.problems.iter().zip(&solved) {
-            assert!(!s.status.is_complete(), "{:?}", p.kind);
+            assert!(!s.status.finished(), "{:?}", p.kind);
             assert_eq!(s.unsearched_charts, p.chart_count());
             assert_eq!(s.boxes.len(), 1);
-            assert_eq!(s.boxes[0].status, crate::analyses::loop_singular::BoxKind::Undecided);
+            assert_eq!(s.boxes[0].status, crate::kernel::outcome::BoxStatus::Undecided);
             for k in 0..p.chart_count() {
                 let chart = p.chart(k).initial_box();
                 assert!(chart.dims.iter().zip(&s.boxes[0].b.dims).all(|(c, b)| c.subset(*b)), "chart {k} of {:?} is not held", p.kind);

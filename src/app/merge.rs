@@ -152,7 +152,7 @@ mod tests {
         BoxSetResult {
             mechanism: "circle".into(),
             analysis: "configuration_space".into(),
-            status: Status::Complete,
+            status: Status::Finished,
             settings: SolverSettings::default(),
             variables: vec!["x".into(), "y".into()],
             primaries: vec![0, 1],

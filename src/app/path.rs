@@ -18,6 +18,31 @@ pub enum PathSet {
     Positioning3R,
 }
 
+impl ArmPathCheck {
+    /// The one-line summary: the arm (the sub-chain, its point and det Df for a 3R check) and
+    /// how many segments cross, touch or are clear.
+    pub fn headline(&self) -> String {
+        let c = self.check.counts();
+        let mut line = format!(
+            "{}: {} segments: {} cross a singularity, {} touch or undecided, {} clear",
+            if self.set == PathSet::Arm6R { &self.arm } else { &self.subject },
+            self.check.segments.len(),
+            c.crosses,
+            c.touches_or_undecided,
+            c.clear
+        );
+        if c.not_decided > 0 {
+            line += &format!(", {} not decided (stopped)", c.not_decided);
+        }
+        line
+    }
+
+    /// Whether every segment is decided (`PathCheck::completeness`).
+    pub fn completeness(&self) -> crate::kernel::outcome::Completeness {
+        self.check.completeness()
+    }
+}
+
 impl PathSet {
     /// The set's short name in reports and messages: `6r` or `3r`.
     pub fn name(self) -> &'static str {

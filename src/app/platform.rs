@@ -21,7 +21,7 @@ use super::{MechanismKind, Analysis, AnalysisError, BoxSetResult, PreparedRun, R
 use crate::kernel::contract::FaceBounds;
 use crate::model::Mechanism;
 use crate::formulate::cayley_menger::{BuildOptions, CayleyMenger, DistanceSolverError, Formulation};
-use super::distances::{DistancesJob, DistancesRequest};
+use super::distances::{DistancesRun, DistancesRequest};
 use crate::formulate::{LegValues, PlatformError};
 use crate::analyses::distances::Choice;
 use crate::kernel::interval::{bounds, Interval, IntervalBox};
@@ -47,7 +47,7 @@ pub struct PlatformAnalysis {
 
 /// A validated platform run.
 struct PlatformRun {
-    job: DistancesJob,
+    job: DistancesRun,
     cm: CayleyMenger,
     /// The legs' lengths, metres.
     fixed: Vec<(String, f64)>,
@@ -79,7 +79,7 @@ impl PlatformAnalysis {
 
     /// Everything a run needs, validated (legs, determinants, clipper, settings).
     fn build(mechanism: &Mechanism, fixed: &[(String, f64)], values: LegValues, settings: &SolverSettings, analysis: &str) -> Result<PlatformRun, AnalysisError> {
-        let job = DistancesJob::platform_with(mechanism, fixed, values)?;
+        let job = DistancesRun::platform_with(mechanism, fixed, values)?;
         let cm = CayleyMenger::build(job.problem(), BUILD).map_err(PlatformError::Distance)?;
         // Validate now, so that a bad request is answered before any thread starts.
         match cm.solver(FACES, settings.clone()) {
@@ -220,7 +220,7 @@ mod tests {
         // The CLI's defaults (`linkspace distances --redundant`).
         let settings = SolverSettings { sigma: 0.01, rho: 0.99, ..Default::default() };
         let r = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
-        assert_eq!(r.status, Status::Complete);
+        assert_eq!(r.status, Status::Finished);
         assert_eq!(r.clusters, 2);
         // The CLI path (`linkspace distances --redundant`), built independently here.
         let p = PlatformProblem::new(&m, &fixed).expect("platform");

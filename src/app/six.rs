@@ -9,7 +9,8 @@ use crate::kernel::search::Control;
 use std::time::{Duration, Instant};
 
 /// The arm's six joints as `arm6r` reads them, after the rounding policy of `options`
-/// (`--base`/`--tip` honoured; locks and points do not apply to the whole arm).
+/// (`--base`/`--tip` honoured, joints held by `--fix` folded into the fixed transforms; a
+/// point does not apply to the whole arm).
 pub fn chain6(m: &Mechanism, options: &LoadOptions) -> Result<Chain6R, Manip6rError> {
     chain6_snapped(m, options).map(|(chain, _)| chain)
 }
@@ -18,10 +19,10 @@ pub fn chain6(m: &Mechanism, options: &LoadOptions) -> Result<Chain6R, Manip6rEr
 /// base to its tip (the whole-arm proof is about the geometry after them).
 pub fn chain6_snapped(m: &Mechanism, options: &LoadOptions) -> Result<(Chain6R, usize), Manip6rError> {
     if options.exact_geometry || options.snap_tolerance == 0.0 {
-        return Ok((Chain6R::from_mechanism(m, options.spec.base.as_deref(), options.spec.tip.as_deref())?, 0));
+        return Ok((Chain6R::holding(m, options.spec.base.as_deref(), options.spec.tip.as_deref(), &options.spec.locks)?, 0));
     }
     let (rounded, snaps) = rounding::snap(m, options.snap_tolerance);
-    let chain = Chain6R::from_mechanism(&rounded, options.spec.base.as_deref(), options.spec.tip.as_deref())?;
+    let chain = Chain6R::holding(&rounded, options.spec.base.as_deref(), options.spec.tip.as_deref(), &options.spec.locks)?;
     let (Some(base), Some(tip)) = (rounded.link(&chain.base), rounded.link(&chain.tip)) else { return Ok((chain, 0)) };
     let below_base: Vec<usize> = rounded.path_to(base);
     let on_chain: Vec<&str> = rounded.path_to(tip).into_iter().filter(|j| !below_base.contains(j)).map(|j| rounded.joints[j].name.as_str()).collect();
@@ -119,11 +120,36 @@ pub fn arm_cuspidality_of(chain: &Chain6R, snapped: usize, arm: &Arm, budget: Du
 /// A whole-arm verdict in words: what the JSON's `arm_cuspidality` and the singularity topic say.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ArmVerdictLine {
-    /// `cuspidal`, `non_cuspidal` (proven by a theorem), `undecided`, or
-    /// `as_positioning_structure`.
-    pub verdict: &'static str,
+    /// The verdict.
+    pub verdict: ArmVerdict,
     /// Why, in one line.
     pub reason: String,
+}
+
+/// A whole-arm cuspidality verdict.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ArmVerdict {
+    /// Two solutions of one pose joined by a path free of singularities (a certified witness).
+    Cuspidal,
+    /// Proven not cuspidal (by a theorem the proof states).
+    NonCuspidal,
+    /// Neither found nor proven.
+    Undecided,
+    /// The wrist is spherical: the positioning structure's verdict is the arm's.
+    AsPositioningStructure,
+}
+
+impl ArmVerdict {
+    /// `cuspidal`, `non_cuspidal`, `undecided` or `as_positioning_structure`, as reports and
+    /// messages write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            ArmVerdict::Cuspidal => "cuspidal",
+            ArmVerdict::NonCuspidal => "non_cuspidal",
+            ArmVerdict::Undecided => "undecided",
+            ArmVerdict::AsPositioningStructure => "as_positioning_structure",
+        }
+    }
 }
 
 impl ArmCuspidality {
@@ -131,11 +157,11 @@ impl ArmCuspidality {
     pub fn line(&self) -> ArmVerdictLine {
         match self {
             ArmCuspidality::PositioningVerdict => ArmVerdictLine {
-                verdict: "as_positioning_structure",
+                verdict: ArmVerdict::AsPositioningStructure,
                 reason: "spherical wrist: the arm is cuspidal iff its 3R positioning structure is (the verdict above is the arm's)".into(),
             },
             ArmCuspidality::ThreeParallel { proof, snapped } => ArmVerdictLine {
-                verdict: "non_cuspidal",
+                verdict: ArmVerdict::NonCuspidal,
                 reason: format!(
                     "UR family proven on the {}: axes 2, 3, 4 exactly parallel (distances {:.6} and {:.6}), axis 1 not parallel to them, axis 5 normal to them, axes 5 and 6 meeting at right angles; det J = ±g1·g3·g5 (shoulder, elbow, wrist) and the signs of the three factors tell every pose's solutions apart, so no two lie in one aspect",
                     if *snapped == 0 { "file's geometry as written".to_string() } else { format!("geometry after snapping {snapped} values to quarter turns / coordinate axes") },
@@ -144,11 +170,11 @@ impl ArmCuspidality {
                 ),
             },
             ArmCuspidality::Searched { verdict: CuspidalVerdict::Cuspidal(w), seconds, .. } => ArmVerdictLine {
-                verdict: "cuspidal",
+                verdict: ArmVerdict::Cuspidal,
                 reason: format!("witness found in {seconds:.1} s: two certified solutions of one pose joined by a path on which det J is proven nonzero ({} pieces)", w.pieces),
             },
             ArmCuspidality::Searched { verdict: CuspidalVerdict::Undecided { poses, pairs }, budget, .. } => ArmVerdictLine {
-                verdict: "undecided",
+                verdict: ArmVerdict::Undecided,
                 reason: format!("no witness found within the budget ({budget:.0} s: {poses} poses solved, {pairs} pairs of solutions with one sign of det J tried); non-cuspidality is not proven"),
             },
         }

@@ -4,10 +4,11 @@
 //! A task that cannot run (the edited arm is degenerate, a leg length is out of its limits) is
 //! a failed result, not an error: the sweep goes on.
 
-use super::{singularities, Arm, SingularitiesRequest, SolveJob};
+use super::{singularities, Arm, SingularitiesRequest, SolveRun};
 use crate::analyses::arm3r::LoadOptions;
 use crate::model::Mechanism;
 use crate::formulate::ModelChoice;
+use crate::kernel::outcome::Completeness;
 use crate::kernel::search::{BoxStatus, Control, Limit, Limits, SolverSettings, Status};
 use crate::analyses::sweep::{self, Parameter, Plan, Sweep, SweepError, Task, TaskResult, TaskStatus};
 use std::collections::HashSet;
@@ -39,10 +40,9 @@ pub fn sweep_task(plan: &Plan, base: &Mechanism, task: &Task, limits: &Limits, c
     };
     let control = Control { limits: *limits, threads: 1, cancel };
     let result = |status: Status, verdict: Option<String>, count: Option<u64>, proven: u64, undecided: u64| {
-        let (status, limit) = match status {
-            Status::Complete => (TaskStatus::Complete, None),
-            Status::Incomplete(l) => (TaskStatus::Incomplete, Some(l.name().to_string())),
-        };
+        // The one rule: a finished run with undecided boxes is incomplete too.
+        let completeness = Completeness::of(status, undecided as usize, false);
+        let (status, limit) = (TaskStatus::Ran(completeness), completeness.reason().map(|r| r.name().to_string()));
         TaskResult { index: task.index, values: task.values.clone(), status, limit, verdict, count, proven, undecided, error: None, seconds: start.elapsed().as_secs_f64() }
     };
     match plan.analysis {
@@ -69,14 +69,14 @@ pub fn sweep_task(plan: &Plan, base: &Mechanism, task: &Task, limits: &Limits, c
             // verdict past the deadline was cut short, whatever the searches' status.
             let out_of_time = limits.timeout.is_some_and(|t| start.elapsed() >= t);
             let status = match found.run.status {
-                Status::Complete if cuspidal.is_none() && out_of_time => Status::Incomplete(Limit::Time),
+                Status::Finished if cuspidal.is_none() && out_of_time => Status::Stopped(Limit::Time),
                 s => s,
             };
             result(status, Some(verdict.into()), Some(proven), proven, undecided)
         }
         Sweep::AssemblyModes { sigma } => {
             let settings = SolverSettings { sigma, max_boxes: limits.max_cells, timeout: limits.timeout, max_memory: limits.max_memory, threads: 1, ..SolverSettings::default() };
-            let job = match SolveJob::build(&mechanism, ModelChoice::Auto, &fixed, &[], settings) {
+            let job = match SolveRun::build(&mechanism, ModelChoice::Auto, &fixed, &[], settings) {
                 Ok(j) => j,
                 Err(e) => return failed(e.to_string()),
             };

@@ -6,7 +6,7 @@
 //! prints and writes; the others send stdout and stderr to /dev/null.
 
 use anyhow::{anyhow, Result};
-use linkspace::kernel::search::{share_searches, Peers};
+use linkspace::app::{share_searches, Peers};
 use mpi::datatype::PartitionMut;
 use mpi::topology::{Communicator, SimpleCommunicator};
 use mpi::traits::CommunicatorCollectives;
@@ -44,7 +44,7 @@ pub fn join() -> Result<Option<Ranks>> {
 
 /// Whether this process writes: rank 0, or a process alone.
 pub fn writes() -> bool {
-    linkspace::kernel::search::rank_and_size().0 == 0
+    linkspace::app::rank_and_size().0 == 0
 }
 
 /// Every rank's bytes, in rank order (a collective, on the thread that joined).

@@ -4,7 +4,7 @@ use super::ros_args::parse_ros_args;
 use super::{parse_fix, parse_trace};
 use anyhow::{bail, Context, Result};
 use linkspace::edges::ros::{self, NodeLimits, Mapping, Network, ServeConfig, Severity, Source};
-use linkspace::kernel::search::SolverSettings;
+use linkspace::app::{self, SolverSettings};
 use std::io::Read;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -168,9 +168,9 @@ pub fn serve(mut args: ServeArgs) -> Result<()> {
     if domain > 232 {
         bail!("domain {domain} is out of range: ROS 2 domain ids go from 0 to 232");
     }
-    let settings = args.limits.solver_settings(SolverSettings::default().max_boxes, SolverSettings { sigma: args.sigma, rho: args.rho, ..Default::default() })?;
+    let settings = args.limits.solver_settings(SolverSettings { sigma: args.sigma, rho: args.rho, ..Default::default() })?;
     settings.validate()?;
-    linkspace::analyses::arm3r::check_precision(args.precision)?;
+    app::check_precision(args.precision)?;
     let limits = NodeLimits { max_boxes: args.max_request_boxes, max_timeout: args.max_request_timeout, max_wait: args.max_wait, max_runs: args.max_runs, max_markers: args.max_markers, max_set_megabytes: args.max_set_megabytes };
     if limits.max_boxes == 0 || !(limits.max_timeout > 0.0 && limits.max_timeout.is_finite()) || !(limits.max_wait >= 0.0 && limits.max_wait.is_finite()) || limits.max_runs == 0 {
         bail!("--max-request-boxes, --max-request-timeout and --max-runs must be positive, --max-wait at least 0");

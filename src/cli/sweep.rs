@@ -9,9 +9,8 @@
 
 use anyhow::{bail, Context, Result};
 use linkspace::app;
-use linkspace::model::urdf;
-use linkspace::kernel::search::Limits;
-use linkspace::analyses::sweep::{self, Header, Summary, Sweep, TaskResult, DEFAULT_MAX_TASKS};
+use linkspace::app::Limits;
+use linkspace::app::sweeps::{self as sweep, Header, Summary, Sweep, TaskResult, DEFAULT_MAX_TASKS};
 use std::collections::HashSet;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -21,7 +20,7 @@ use std::time::{Duration, Instant};
 /// Seconds a task may take when neither the spec nor the command line says.
 const DEFAULT_TASK_TIMEOUT: f64 = 60.0;
 /// MiB of pending boxes a task may hold when neither says: several tasks run at once.
-const DEFAULT_TASK_MEMORY_MIB: u64 = 256;
+pub(crate) const DEFAULT_TASK_MEMORY_MIB: u64 = 256;
 
 #[derive(clap::Args)]
 pub(crate) struct SweepArgs {
@@ -31,25 +30,16 @@ pub(crate) struct SweepArgs {
     /// file name without extension, with `-results`, in the current directory.
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
-    /// Tasks run at a time (each on one thread).
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=1024))]
-    threads: u16,
     /// Continue the sweep whose results are in --out: tasks already there are skipped.
     #[arg(long)]
     resume: bool,
     /// Refuse a sweep of more tasks than this.
     #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_TASKS)]
     max_tasks: usize,
-    /// Seconds per task (overrides the spec's limits.timeout; default 60).
-    #[arg(long, value_name = "SECONDS")]
-    timeout: Option<f64>,
-    /// Boxes per task (overrides the spec's limits.max_boxes; default: the analysis's, as for
-    /// singularities and solve).
-    #[arg(long, value_name = "N")]
-    max_boxes: Option<u64>,
-    /// MiB of pending boxes per task (overrides the spec's limits.max_memory; default 256).
-    #[arg(long, value_name = "MIB")]
-    max_memory: Option<u64>,
+    /// Each task's limits (over the spec's `limits`; defaults: 60 s and 256 MiB per task, the
+    /// analysis's boxes), and `--threads`: tasks run at a time, each on one thread.
+    #[command(flatten)]
+    limits: super::LimitArgs,
 }
 
 pub(crate) fn run(args: SweepArgs) -> Result<()> {
@@ -57,7 +47,7 @@ pub(crate) fn run(args: SweepArgs) -> Result<()> {
     let plan = sweep::parse(&text).with_context(|| format!("reading {}", args.spec.display()))?;
     let urdf_path = args.spec.parent().unwrap_or(Path::new(".")).join(&plan.urdf);
     let urdf_text = std::fs::read_to_string(&urdf_path).with_context(|| format!("reading {} (the spec's urdf)", urdf_path.display()))?;
-    let mechanism = urdf::parse(&urdf_text).with_context(|| format!("loading {}", urdf_path.display()))?;
+    let mechanism = app::parse_urdf(&urdf_text).with_context(|| format!("loading {}", urdf_path.display()))?;
     let tasks = plan.tasks(args.max_tasks)?;
     app::check_sweep(&plan, &mechanism, &tasks).with_context(|| format!("checking {} against {}", args.spec.display(), urdf_path.display()))?;
     let limits = limits(&args, &plan)?;
@@ -72,7 +62,7 @@ pub(crate) fn run(args: SweepArgs) -> Result<()> {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
         Err(e) => return Err(e).with_context(|| format!("reading {}", jsonl.display())),
     };
-    let (rank, ranks) = linkspace::kernel::search::rank_and_size();
+    let (rank, ranks) = linkspace::app::rank_and_size();
     // Rank 0 reads and rewrites the results; the others learn what is done (or that rank 0
     // refused) from it, so no rank waits for one that stopped.
     let prepared = if rank == 0 { prepare(&out, &jsonl, &existing, args.resume, &header, &tasks) } else { Ok(Vec::new()) };
@@ -102,7 +92,7 @@ pub(crate) fn run(args: SweepArgs) -> Result<()> {
     let already_done = done.len();
     done.extend(tasks.iter().map(|t| t.index).filter(|i| i % ranks != rank));
     let labels = header.parameters.clone();
-    let threads = usize::from(args.threads.max(1));
+    let threads = args.limits.threads();
     let total = tasks.len();
     let mut results = earlier;
     let mut run_now = 0usize;
@@ -227,7 +217,7 @@ fn rank_files(out: &Path) -> Result<Vec<PathBuf>> {
 /// Every rank's bytes, in rank order (this process's alone without MPI).
 fn gather(mine: Vec<u8>) -> Vec<Vec<u8>> {
     #[cfg(feature = "mpi")]
-    if linkspace::kernel::search::rank_and_size().1 > 1 {
+    if linkspace::app::rank_and_size().1 > 1 {
         return super::ranks::all_gather(&mine);
     }
     vec![mine]
@@ -235,17 +225,17 @@ fn gather(mine: Vec<u8>) -> Vec<Vec<u8>> {
 
 /// Each task's limits: the command line over the spec over the defaults.
 fn limits(args: &SweepArgs, plan: &sweep::Plan) -> Result<Limits> {
-    let timeout = args.timeout.or(plan.limits.timeout).unwrap_or(DEFAULT_TASK_TIMEOUT);
+    let timeout = args.limits.timeout.or(plan.limits.timeout).unwrap_or(DEFAULT_TASK_TIMEOUT);
     let timeout = super::seconds_arg(Some(timeout))?.unwrap_or(Duration::from_secs_f64(DEFAULT_TASK_TIMEOUT));
     let default_boxes = match plan.analysis {
-        Sweep::Cuspidality { .. } => super::SINGULARITIES_MAX_BOXES,
-        Sweep::AssemblyModes { .. } => linkspace::SolverSettings::default().max_boxes,
+        Sweep::Cuspidality { .. } => app::Job::default_limits("singularities").max_cells,
+        Sweep::AssemblyModes { .. } => app::Job::default_limits("solve").max_cells,
     };
-    let max_cells = args.max_boxes.or(plan.limits.max_boxes).unwrap_or(default_boxes);
+    let max_cells = args.limits.max_boxes.or(plan.limits.max_boxes).unwrap_or(default_boxes);
     if max_cells == 0 {
         bail!("--max-boxes must be at least 1");
     }
-    let mib = args.max_memory.or(plan.limits.max_memory_mib).unwrap_or(DEFAULT_TASK_MEMORY_MIB);
+    let mib = args.limits.max_memory.or(plan.limits.max_memory_mib).unwrap_or(DEFAULT_TASK_MEMORY_MIB);
     if mib == 0 {
         bail!("--max-memory must be at least 1 MiB");
     }

@@ -30,6 +30,7 @@ macro_rules! some_with {
     };
 }
 
+pub mod collisions;
 pub mod distances;
 pub mod image;
 pub(crate) mod kernel;
@@ -38,6 +39,30 @@ pub mod motion;
 pub mod singular;
 pub mod six;
 pub mod solve;
+pub mod verdicts;
 
 pub use crate::kernel::interval::Bounds;
+
+use crate::app::{Answer, LoopAnswer};
+use serde_json::to_string_pretty;
+
+/// The JSON report of an answer, as `--json` writes it: the one writer of every question.
+pub fn json(answer: &Answer) -> Result<String, serde_json::Error> {
+    match answer {
+        Answer::Solve(a) => to_string_pretty(&SolveReport::new(a.run.problem(), &a.result, a.rigid_links.clone())),
+        Answer::Singularities(a) => to_string_pretty(&manip3r::SingularityReport::of(a)),
+        Answer::Ik(a) => to_string_pretty(&manip3r::IkReport::of(&a.arm, &a.found)),
+        Answer::Ik6(a) => to_string_pretty(&six::Ik6Report::of(&a.chain, &a.found)),
+        Answer::PathCheck(a) => to_string_pretty(&six::PathCheckReport::of(&a.found)),
+        Answer::Collisions(a) => to_string_pretty(&collisions::CollisionReport::of(&a.found, a.precision)),
+        Answer::Distances(a) => to_string_pretty(&distances::of(a)),
+        Answer::LoopSingularities(a) => match a.as_ref() {
+            LoopAnswer::Sets { sets, solved, settings, .. } => to_string_pretty(&sets.problems.iter().zip(solved).map(|(p, s)| singular::SingularReport::new(p, settings, s)).collect::<Vec<_>>()),
+            LoopAnswer::Image(r) => to_string_pretty(&image::ImageJson(r)),
+            LoopAnswer::Points(r) => to_string_pretty(&image::ImagePointsJson(r)),
+            LoopAnswer::Motion(m) => to_string_pretty(&motion::MotionReport::of(m)),
+        },
+        Answer::SweepTask(t) => to_string_pretty(t),
+    }
+}
 pub use solve::{BoxRecord, SolveReport, TracedPoint, VariableInfo};

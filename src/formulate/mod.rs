@@ -11,6 +11,7 @@ pub(crate) mod platform;
 pub(crate) mod pose;
 pub(crate) mod singular;
 pub(crate) mod spatial;
+pub mod torus;
 pub(crate) mod stated;
 
 pub use bilateration::BilaterationProblem;

@@ -44,6 +44,22 @@ pub fn apply_transposed(a: &IMat3, v: &IVec3) -> IVec3 {
     [0, 1, 2].map(|c| a[0][c] * v[0] + a[1][c] * v[1] + a[2][c] * v[2])
 }
 
+/// The rotation by the stated angle `theta` about the unit `axis` (Rodrigues:
+/// `a aᵀ + cos θ (I − a aᵀ) + sin θ [a]×`), enclosing the exact one for every axis in `axis`.
+pub fn about_axis(axis: &IVec3, theta: f64) -> IMat3 {
+    let (c, s) = cos_sin(stated(theta));
+    let a = axis;
+    let cross = [[point(0.0), -a[2], a[1]], [a[2], point(0.0), -a[0]], [-a[1], a[0], point(0.0)]];
+    let mut r = [[point(0.0); 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            let id = point(if i == j { 1.0 } else { 0.0 });
+            r[i][j] = a[i] * a[j] + c * (id - a[i] * a[j]) + s * cross[i][j];
+        }
+    }
+    r
+}
+
 /// The URDF rotation `Rz(yaw)·Ry(pitch)·Rx(roll)` of the stated angles.
 pub fn rpy(rpy: [f64; 3]) -> IMat3 {
     let (cr, sr) = cos_sin(stated(rpy[0]));

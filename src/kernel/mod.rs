@@ -5,5 +5,7 @@
 pub mod contract;
 pub mod interval;
 pub(crate) mod lp;
+pub mod outcome;
 pub mod search;
 pub mod system;
+pub mod taylor;

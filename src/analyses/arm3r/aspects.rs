@@ -181,7 +181,7 @@ fn count_at(chain: &Chain3R, depth: u32, shift: f64, control: &Control) -> Resul
     let n = 1usize << depth;
     let lines = Lines { n, shift };
     let run = drive(|| LeafPrune { chain, lines: &lines }, Square { i: 0, j: 0, s: n, level: 0 }, control, &mut no_progress);
-    if !run.status.is_complete() {
+    if !run.status.finished() {
         return Err(AspectsUndecided::CoverStopped(n));
     }
     // The first failing grid cell in grid order, whatever the driver's order.
@@ -304,7 +304,7 @@ pub fn max_ik_solutions(chain: &Chain3R, bound: u32, near: &[[f64; 2]], control:
         let counts = crate::kernel::search::map_parallel(batch, threads, |&[t2, t3]| {
             let [rho, z] = chain.eval_f64(t2, t3);
             let s = ik::solve_with(chain, rho.max(0.0).sqrt(), z, 1e-9, &sample, &mut super::drive::no_progress).ok()?;
-            (s.status.is_complete() && s.clusters.is_empty()).then_some(s.unique.len() as u32)
+            (s.status.finished() && s.clusters.is_empty()).then_some(s.unique.len() as u32)
         });
         best = counts.into_iter().flatten().fold(best, u32::max);
         if best >= bound {

@@ -20,7 +20,8 @@
 //! translations, so its derivative along each length is exact, and the mean-value form in the
 //! lengths is intersected with the natural enclosure.
 
-use super::taylor::Taylor;
+pub use crate::formulate::torus::{Derived, Jets};
+use crate::kernel::taylor::Taylor;
 use super::Manip3rError;
 use crate::kernel::interval::{interval, point};
 use crate::model::{Joint, JointKind, Mechanism};
@@ -62,64 +63,6 @@ struct Coefficients {
     along: [[Interval; 3]; 3],
     /// The end point in the second joint's frame: `q(θ₃) = q[0] cos θ₃ + q[1] sin θ₃ + q[2]`.
     q: [V3; 3],
-}
-
-/// The map and its derivatives over a box, as jets.
-#[derive(Clone, Copy, Debug)]
-pub struct Jets {
-    /// ρ, the squared distance from the first axis.
-    pub rho: Taylor,
-    /// z, the coordinate along the first axis.
-    pub z: Taylor,
-}
-
-impl Jets {
-    /// f₁ = ρ (`k` = 0) or f₂ = z (`k` = 1).
-    pub fn f(&self, k: usize) -> Taylor {
-        if k == 0 {
-            self.rho
-        } else {
-            self.z
-        }
-    }
-
-    /// det Df = ∂ρ/∂θ₂ ∂z/∂θ₃ − ∂ρ/∂θ₃ ∂z/∂θ₂, one order lower than the jets.
-    pub fn det(&self) -> Taylor {
-        self.rho.d(0) * self.z.d(1) - self.rho.d(1) * self.z.d(0)
-    }
-
-    /// System (2) of Benoit et al. (2015), row `k`: `∂f_k/∂θ₂·(−∂det/∂θ₃) + ∂f_k/∂θ₃·∂det/∂θ₂`,
-    /// that is `∇f_k · T` with `T = (−∂det/∂θ₃, ∂det/∂θ₂)` the tangent of the singular curve.
-    /// Two orders lower than the jets.
-    pub fn tangency(&self, k: usize) -> Taylor {
-        self.derived().g[k]
-    }
-
-    /// Df, det Df and system (2) at once, each computed once.
-    pub fn derived(&self) -> Derived {
-        let df = [[self.rho.d(0), self.rho.d(1)], [self.z.d(0), self.z.d(1)]];
-        let det = df[0][0] * df[1][1] - df[0][1] * df[1][0];
-        let g = if det.order() >= 1 {
-            let (d0, d1) = (det.d(0), det.d(1));
-            [0, 1].map(|k| df[k][1] * d0 - df[k][0] * d1)
-        } else {
-            [Taylor::constant(Interval::ENTIRE, 0); 2]
-        };
-        Derived { f: [self.rho, self.z], df, det, g }
-    }
-}
-
-/// Quantities derived from `Jets` (orders: f as the jets, Df and det one lower, g two lower).
-#[derive(Clone, Copy, Debug)]
-pub struct Derived {
-    /// (ρ, z)
-    pub f: [Taylor; 2],
-    /// `df[k][i] = ∂fₖ/∂θᵢ`
-    pub df: [[Taylor; 2]; 2],
-    /// det Df
-    pub det: Taylor,
-    /// System (2): `g[k] = ∇fₖ · T`
-    pub g: [Taylor; 2],
 }
 
 pub(super) fn dot(a: &V3, b: &V3) -> Interval {

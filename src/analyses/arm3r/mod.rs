@@ -35,7 +35,6 @@ pub mod nodes;
 pub mod path;
 pub(crate) mod records;
 pub(crate) mod select;
-pub(crate) mod taylor;
 pub mod verdict;
 
 pub use chain::{Chain3R, Jets};
@@ -268,6 +267,6 @@ pub fn structural_singularities(chain: &Chain3R, precision: f64) -> Result<Singu
     let start = Instant::now();
     let bands = motion::bands(chain, precision);
     let seconds = start.elapsed().as_secs_f64();
-    let cusps = CuspSearch { cusps: Vec::new(), undecided: Vec::new(), bands, status: Status::Complete, stats: Default::default(), contracted: 0, seconds };
-    Ok(Singularities { cusps, nodes: None, status: Status::Complete, seconds })
+    let cusps = CuspSearch { cusps: Vec::new(), undecided: Vec::new(), bands, status: Status::Finished, stats: Default::default(), contracted: 0, seconds };
+    Ok(Singularities { cusps, nodes: None, status: Status::Finished, seconds })
 }

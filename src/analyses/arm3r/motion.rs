@@ -26,28 +26,7 @@ pub fn full_range() -> Interval {
     interval(-PI_UP, PI_UP)
 }
 
-/// One internal-motion strip (see the module doc).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Band {
-    /// Encloses every θ₃ in the strip where the end point may lie on the second axis.
-    pub theta3: [f64; 2],
-    /// The strip set aside: `theta3` plus one cell on each side (radians).
-    pub strip: [f64; 2],
-    /// `Some(d)` for a near-degenerate strip: the end point may come within `d` metres of the
-    /// second axis there but is nowhere proven on it (a tiny twist, e.g. an angle written
-    /// 1.5707963267948966 and taken as written), so along θ₂ the map may vary by as little as
-    /// 2π·d, under what a search box of the precision resolves. Such a strip is set aside
-    /// *undecided*: no internal motion is claimed, and reports are incomplete. `None`: a true
-    /// band (the point may lie on the axis).
-    pub near: Option<f64>,
-}
-
-impl Band {
-    /// True when the interval `t3` lies inside the strip.
-    pub fn holds(&self, t3: Interval) -> bool {
-        self.strip[0] <= t3.inf() && t3.sup() <= self.strip[1]
-    }
-}
+pub use crate::formulate::torus::Band;
 
 /// How many internal-motion lines the true bands (`near` is `None`) hold: a line at θ₃ = ±π
 /// gives a band at each end of [-π, π], one line on the circle.

@@ -270,9 +270,9 @@ fn everywhere(b: [Interval; 2], control: &Control, start: Instant, test: impl Fn
     let limits = Limits { max_cells: CONDITION_CELLS, ..control.limits };
     let (status, _) = crate::kernel::search::run(&mut ConditionPrune { test }, Part { b, depth: DEPTH }, Store::DepthFirst, &limits, control.cancel, &mut FirstFailure);
     match status {
-        Status::Complete => Ok(true),
-        Status::Incomplete(Limit::Sink) => Ok(false),
-        Status::Incomplete(limit) => Err(limit),
+        Status::Finished => Ok(true),
+        Status::Stopped(Limit::Sink) => Ok(false),
+        Status::Stopped(limit) => Err(limit),
     }
 }
 
@@ -292,7 +292,7 @@ const CONDITION_CELLS: u64 = (2 << DEPTH) - 1;
 fn flow_derivatives<M: TorusMap + ?Sized>(chain: &M, b: [Interval; 2]) -> ([Interval; 2], [Interval; 2]) {
     let jets = chain.derived(b, 4);
     let t = [-jets.det.d(1), jets.det.d(0)];
-    let along = |h: &super::taylor::Taylor| h.d(0) * t[0] + h.d(1) * t[1];
+    let along = |h: &crate::kernel::taylor::Taylor| h.d(0) * t[0] + h.d(1) * t[1];
     let f2 = [along(&jets.g[0]), along(&jets.g[1])];
     ([f2[0].value(), f2[1].value()], [along(&f2[0]).value(), along(&f2[1]).value()])
 }
@@ -564,11 +564,11 @@ pub fn search_with<M: TorusMap + ?Sized>(chain: &M, cusps: &[Cusp], bands: &[Ban
     let unique: Vec<&Cusp> = cusps.iter().filter(|c| c.unique).collect();
     // A neighbourhood a limit left uncertified only lets fewer pairs go; the limit is reported.
     let mut regions: Vec<[Interval; 2]> = Vec::new();
-    let mut certificates = Status::Complete;
+    let mut certificates = Status::Finished;
     for region in crate::kernel::search::map_parallel(&unique, control.threads, |c| cusp_region(chain, c, control, start)) {
         match region {
             Ok(u) => regions.extend(u),
-            Err(limit) => certificates = certificates.and(Status::Incomplete(limit)),
+            Err(limit) => certificates = certificates.and(Status::Stopped(limit)),
         }
     }
     // One deadline: the pair search gets what the certificates left.
@@ -580,7 +580,7 @@ pub fn search_with<M: TorusMap + ?Sized>(chain: &M, cusps: &[Cusp], bands: &[Ban
     let mut run = drive(|| NodePrune { tree: &tree, _boxes: std::marker::PhantomData }, start_cell, control, progress);
     run.status = certificates.and(run.status);
     if run.undecided.iter().any(|(_, why)| *why == crate::kernel::search::Undecided::Precision(TREE_FULL)) {
-        run.status = run.status.and(Status::Incomplete(Limit::Memory));
+        run.status = run.status.and(Status::Stopped(Limit::Memory));
     }
     // Only the ±π seam (where the range overlaps itself by an ulp) can repeat a node: the first
     // in depth-first order is kept.

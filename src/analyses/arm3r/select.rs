@@ -182,7 +182,7 @@ pub fn positioning(m: &Mechanism, spec: &ChainSpec, snap_tolerance: f64) -> Resu
     } else if n == 6 {
         Some(picked.six_joint_point(snap_tolerance, &mut choice))
     } else {
-        let hint = if n == 7 { format!("lock one with --lock JOINT=VALUE (e.g. --lock {}=0)", m.joints[revolute[2]].name) } else { "cut it with --base/--tip or give --tip-point LINK@X,Y,Z".into() };
+        let hint = if n == 7 { format!("hold one with --fix JOINT=VALUE (e.g. --fix {}=0)", m.joints[revolute[2]].name) } else { "cut it with --base/--tip or give --tip-point LINK@X,Y,Z".into() };
         return Err(Manip3rError::NotThreeR(format!("the chain from '{b}' to '{t}' has {n} revolute joints{lock_text}: {hint}")));
     };
     let (links, joints_out) = rq.reduced(&path, third, point_in_l3);
@@ -197,19 +197,20 @@ fn find_link(m: &Mechanism, name: &str, what: &str) -> Result<usize, Manip3rErro
     m.link(name).ok_or_else(|| Manip3rError::Selection(format!("{what} '{name}' is not a link of the file")))
 }
 
-/// Every `--lock` names a revolute joint of the file, with a finite value within its limits.
+/// Every lock (`ChainSpec::locks`, `--fix`) names a revolute joint of the file, with a finite value
+/// within its limits.
 fn check_locks(m: &Mechanism, spec: &ChainSpec) -> Result<(), Manip3rError> {
     for (name, value) in &spec.locks {
-        let j = m.joint(name).ok_or_else(|| Manip3rError::Selection(format!("--lock: '{name}' is not a joint of the file")))?;
+        let j = m.joint(name).ok_or_else(|| Manip3rError::Selection(format!("--fix: '{name}' is not a joint of the file")))?;
         let JointKind::Revolute { limits } = m.joints[j].kind else {
-            return Err(Manip3rError::Selection(format!("--lock: joint '{name}' is not revolute")));
+            return Err(Manip3rError::Selection(format!("--fix: joint '{name}' is not revolute")));
         };
         if !value.is_finite() {
-            return Err(Manip3rError::Selection(format!("--lock: the value for '{name}' is not a finite number")));
+            return Err(Manip3rError::Selection(format!("--fix: the value for '{name}' is not a finite number")));
         }
         if let Some((lo, hi)) = limits {
             if *value < lo || *value > hi {
-                return Err(Manip3rError::Selection(format!("--lock: {name}={value} is outside its limits [{lo}, {hi}]")));
+                return Err(Manip3rError::Selection(format!("--fix: {name}={value} is outside its limits [{lo}, {hi}]")));
             }
         }
     }
@@ -286,7 +287,7 @@ impl Request<'_> {
         let m = self.m;
         for (name, _) in &self.spec.locks {
             if !path.iter().any(|&j| m.joints[j].name == *name) {
-                return Err(Manip3rError::Selection(format!("--lock: joint '{name}' is not on the chain from '{}' to '{}'", m.links[self.base].name, m.links[tip].name)));
+                return Err(Manip3rError::Selection(format!("--fix: joint '{name}' is not on the chain from '{}' to '{}'", m.links[self.base].name, m.links[tip].name)));
             }
         }
         for &j in path {

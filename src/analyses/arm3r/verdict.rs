@@ -291,9 +291,9 @@ pub fn smooth_singular_set(chain: &Chain3R, min_width: f64, control: &Control) -
     let run = drive(|| SmoothPrune { chain, min_width }, [full, full], control, &mut no_progress);
     let left = run.undecided.len() as u64;
     match run.status {
-        Status::Incomplete(limit) => Smooth::Stopped(limit, left),
-        Status::Complete if left == 0 => Smooth::Proven,
-        Status::Complete => Smooth::Undecided(left),
+        Status::Stopped(limit) => Smooth::Stopped(limit, left),
+        Status::Finished if left == 0 => Smooth::Proven,
+        Status::Finished => Smooth::Undecided(left),
     }
 }
 
@@ -424,13 +424,13 @@ pub fn decide(mechanism: &Mechanism, chain: &Chain3R, run: &Singularities, limit
         };
     }
     let undecided = run.cusps.undecided.len();
-    if !run.cusps.status.is_complete() || undecided > 0 || run.cusps.cusps.iter().any(|c| !c.unique) {
+    if !run.cusps.status.finished() || undecided > 0 || run.cusps.cusps.iter().any(|c| !c.unique) {
         return Verdict {
             cuspidal: None,
             aspects: None,
             max_ik_solutions: None,
             certified: false,
-            reason: format!("no certified cusp, but the cusp search left {undecided} boxes undecided on the full torus ({})", if run.cusps.status.is_complete() { "no limit stopped it" } else { "a limit stopped it" }),
+            reason: format!("no certified cusp, but the cusp search left {undecided} boxes undecided on the full torus ({})", if run.cusps.status.finished() { "no limit stopped it" } else { "a limit stopped it" }),
         };
     }
     // A counted aspect cover proves the smoothness too: each of its leaves has det ≠ 0 or a

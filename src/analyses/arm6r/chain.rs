@@ -276,6 +276,23 @@ impl Chain6R {
     /// revolute path, followed down a single line of fixed joints), which must hold exactly six
     /// revolute joints and otherwise only fixed ones.
     pub fn from_mechanism(m: &Mechanism, base: Option<&str>, tip: Option<&str>) -> Result<Chain6R, Manip6rError> {
+        Self::holding(m, base, tip, &[])
+    }
+
+    /// `from_mechanism` with the revolute joints of `held` held at their values (radians): each
+    /// becomes part of the fixed transform between its neighbours, so a seven-joint arm with one
+    /// joint held is a six-joint arm.
+    pub fn holding(m: &Mechanism, base: Option<&str>, tip: Option<&str>, held: &[(String, f64)]) -> Result<Chain6R, Manip6rError> {
+        for (name, value) in held {
+            let j = m.joint(name).ok_or_else(|| Manip6rError::NotSixR(format!("--fix: '{name}' is not a joint of the file")))?;
+            let JointKind::Revolute { limits } = m.joints[j].kind else {
+                return Err(Manip6rError::NotSixR(format!("--fix: joint '{name}' is not revolute")));
+            };
+            if !value.is_finite() || limits.is_some_and(|(lo, hi)| *value < lo || *value > hi) {
+                return Err(Manip6rError::NotSixR(format!("--fix: {name}={value} is not a finite value within its limits")));
+            }
+        }
+        let held_at = |j: usize| held.iter().find(|(n, _)| *n == m.joints[j].name).map(|(_, v)| *v);
         if !m.loops.is_empty() {
             return Err(Manip6rError::NotSixR("the mechanism has loop closures".into()));
         }
@@ -284,7 +301,7 @@ impl Chain6R {
             Some(b) => find(b)?,
             None => m.root,
         };
-        let revolute = |j: usize| matches!(m.joints[j].kind, JointKind::Revolute { .. });
+        let revolute = |j: usize| matches!(m.joints[j].kind, JointKind::Revolute { .. }) && held_at(j).is_none();
         let below = |l: usize| -> Option<Vec<usize>> {
             let full = m.path_to(l);
             if l == base {
@@ -314,6 +331,9 @@ impl Chain6R {
             }
         };
         let path = below(tip).ok_or_else(|| Manip6rError::NotSixR(format!("'{}' is not below '{}'", m.links[tip].name, m.links[base].name)))?;
+        if let Some((name, _)) = held.iter().find(|(n, _)| !path.iter().any(|&j| m.joints[j].name == *n)) {
+            return Err(Manip6rError::NotSixR(format!("--fix: joint '{name}' is not on the chain from '{}' to '{}'", m.links[base].name, m.links[tip].name)));
+        }
         let mut pre = Vec::new();
         let mut names = Vec::new();
         let mut ranges = Vec::new();
@@ -330,9 +350,10 @@ impl Chain6R {
                 t: stated::translation(&joint.origin.translation.vector),
             };
             acc = acc.then(&origin);
-            match joint.kind {
-                JointKind::Fixed => {}
-                JointKind::Revolute { limits } => {
+            match (joint.kind, held_at(j)) {
+                (JointKind::Fixed, _) => {}
+                (JointKind::Revolute { .. }, Some(value)) => acc = acc.then(&IAffine { r: stated::about_axis(&stated::axis(&joint.axis), value), t: [point(0.0); 3] }),
+                (JointKind::Revolute { limits }, None) => {
                     if joint.mimic.is_some() {
                         return Err(Manip6rError::NotSixR(format!("joint '{}' follows another through <mimic>", joint.name)));
                     }
@@ -477,4 +498,39 @@ pub(crate) fn rotation64(a: &[f64; 3], t: f64) -> Pose64 {
         }
     }
     Pose64 { r, t: [0.0; 3] }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Test idea: a seven-joint arm with one joint held is the six-joint arm whose tip pose at
+    /// the six free values is the seven-joint pose at those values and the held one (forward
+    /// kinematics of the file's joints in f64, written out here without the chain's code), and
+    /// its coefficients enclose the exact held rotation (the pose agrees to rounding).
+    #[test]
+    fn a_held_joint_folds_into_the_fixed_transforms() {
+        let xml = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/urdf/iiwa14.urdf")).expect("bundled");
+        let m = crate::model::urdf::parse(&xml).expect("parses");
+        let held = 0.3;
+        let chain = Chain6R::holding(&m, None, None, &[("joint_3".into(), held)]).expect("six remain");
+        assert_eq!(chain.joints, ["joint_1", "joint_2", "joint_4", "joint_5", "joint_6", "joint_7"].map(String::from));
+        let q6 = [0.4, -0.7, 1.1, 0.2, -0.5, 0.9];
+        let tip = m.link(&chain.tip).expect("tip");
+        let mut free = q6.iter();
+        let mut reference = Pose64::IDENTITY;
+        for j in m.path_to(tip) {
+            let joint = &m.joints[j];
+            let o = joint.origin.translation.vector;
+            reference = reference.then(&Pose64::from_xyz_rpy([o[0], o[1], o[2], joint.rpy[0], joint.rpy[1], joint.rpy[2]]));
+            if let JointKind::Revolute { .. } = joint.kind {
+                let q = if joint.name == "joint_3" { held } else { *free.next().expect("six free values") };
+                reference = reference.then(&rotation64(&[joint.axis[0], joint.axis[1], joint.axis[2]], q));
+            }
+        }
+        assert!(chain.pose(&q6).distance(&reference) < 1e-12, "{:?} vs {reference:?}", chain.pose(&q6));
+        for bad in [("joint_9", 0.0), ("joint_3", f64::NAN), ("joint_3", 10.0)] {
+            assert!(Chain6R::holding(&m, None, None, &[(bad.0.into(), bad.1)]).is_err(), "{bad:?}");
+        }
+    }
 }

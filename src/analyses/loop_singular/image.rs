@@ -20,7 +20,7 @@
 //!   two image curves closer than the cover's width (or inside a loop smaller than it).
 //! - **undecided** otherwise, with the reason.
 
-use super::BoxKind;
+use crate::kernel::outcome::{BoxStatus, Completeness};
 use crate::kernel::interval::{components, point, Bounds, Interval, IntervalBox};
 use crate::formulate::singular::image::{CuspFormulation, CuspProblem, NodeProblem};
 use crate::formulate::singular::SingularProblem;
@@ -78,17 +78,17 @@ impl CuspProblem {
         }
         let t0 = Instant::now();
         let mut found = Vec::new();
-        let mut status = Status::Complete;
+        let mut status = Status::Finished;
         let mut stats = Vec::new();
         let mut dropped = 0u64;
         for (i, (_, chart)) in self.charts.iter().enumerate() {
             let Some(s) = remaining(settings, t0) else {
-                status = Status::Incomplete(Limit::Time);
-                found.push(ChartBox { chart: i, b: chart.initial_box(), kind: BoxKind::Undecided, note: None });
+                status = Status::Stopped(Limit::Time);
+                found.push(ChartBox { chart: i, b: chart.initial_box(), kind: BoxStatus::Undecided, note: None });
                 continue;
             };
             let e = self.chart_solver(sp, i, s)?.enclose(cancel, &mut |_| {});
-            if e.status != Status::Complete {
+            if e.status != Status::Finished {
                 status = e.status;
             }
             for (b, u) in e.solutions.into_iter().zip(e.unique) {
@@ -96,15 +96,15 @@ impl CuspProblem {
                     dropped += 1;
                     continue;
                 }
-                found.push(ChartBox { chart: i, b, kind: if u { BoxKind::Certified } else { BoxKind::Solution }, note: None });
+                found.push(ChartBox { chart: i, b, kind: if u { BoxStatus::Unique } else { BoxStatus::Solution }, note: None });
             }
-            found.extend(e.undecided.into_iter().map(|b| ChartBox { chart: i, b, kind: BoxKind::Undecided, note: None }));
+            found.extend(e.undecided.into_iter().map(|b| ChartBox { chart: i, b, kind: BoxStatus::Undecided, note: None }));
             stats.push(e.stats);
         }
         let tangent = self.tangent[0];
         let cluster = |found: &[ChartBox]| self.cluster(sp, found);
         // Proven: every box certified with μ away from 0, and the cluster one root (`unique`).
-        let proven = |p: &FoundPoint| p.unproven_reason(Status::Complete).is_none();
+        let proven = |p: &FoundPoint| p.unproven_reason(Status::Finished).is_none();
         let accept = |b: &[IntervalBox], u: &[bool]| u.iter().all(|u| *u) && b.iter().all(|b| !b.dims[tangent].contains(0.0));
         let found = refine_points(found, &cluster, &proven, &|i, s| self.chart_solver(sp, i, s), &|i, b| self.other_chart(i, b), &accept, settings, t0, cancel)?;
         let points = cluster(&found);
@@ -153,7 +153,7 @@ fn torus_cusps(map: &LockedLegMap, settings: &SolverSettings, control: &Control,
     in_rounds(settings, t0, |precision| {
         let cusp_settings = cusps::CuspSettings { precision, method: cusps::Method::Krawczyk };
         let round = cusps::search_with(map, &cusp_settings, &control.remaining_since(t0), &mut |_| {}).map_err(|_| SettingsError::Sigma(settings.sigma))?;
-        let settled = round.status != Status::Complete || round.undecided.is_empty() && round.cusps.iter().all(|c| c.unique);
+        let settled = round.status != Status::Finished || round.undecided.is_empty() && round.cusps.iter().all(|c| c.unique);
         Ok((round, settled))
     })
 }
@@ -208,11 +208,11 @@ fn solve_cusps_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel
     for c in &found.cusps {
         let (kind, note) = match map.within_travel(c.theta) {
             Some(false) => continue,
-            Some(true) if c.unique => (BoxKind::Certified, None),
-            Some(true) => (BoxKind::Solution, None),
-            None => (BoxKind::Solution, Some("its travels may lie on a slider's limit".to_string())),
+            Some(true) if c.unique => (BoxStatus::Unique, None),
+            Some(true) => (BoxStatus::Solution, None),
+            None => (BoxStatus::Solution, Some("its travels may lie on a slider's limit".to_string())),
         };
-        let refinement = note.into_iter().chain(refined.clone().filter(|_| kind != BoxKind::Certified)).collect();
+        let refinement = note.into_iter().chain(refined.clone().filter(|_| kind != BoxStatus::Unique)).collect();
         points.push(FoundPoint { boxes: vec![torus.pose_box(c.theta)], kinds: vec![kind], degenerate: false, joints: bounds(torus.joint_values(c.theta)), members: vec![0], refinement });
     }
     // Undecided boxes, clustered; those proven outside the travels hold no configuration.
@@ -223,7 +223,7 @@ fn solve_cusps_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel
         for (u, _) in open.iter().zip(&labels).filter(|(_, k)| **k == l) {
             p.boxes.push(torus.pose_box(u.theta));
             p.members.push(0);
-            p.kinds.push(if u.reason == cusps::Reason::Limit { BoxKind::Undecided } else { BoxKind::Solution });
+            p.kinds.push(if u.reason == cusps::Reason::Limit { BoxStatus::Undecided } else { BoxStatus::Solution });
             widen(&mut p.joints, bounds(torus.joint_values(u.theta)));
             let why = "∇det may vanish there: a crossing of the type-II curve rather than a cusp?";
             if u.reason == cusps::Reason::GradDetMayVanish && !p.refinement.iter().any(|r| r == why) {
@@ -251,7 +251,7 @@ fn solve_nodes_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel
     let (found, _) = in_rounds(settings, t0, |precision| {
         let node_settings = nodes::NodeSettings { precision };
         let round = nodes::search_with(map, &found_cusps.cusps, &[], &node_settings, &control.remaining_since(t0), &mut |_| {}).map_err(|_| SettingsError::Sigma(settings.sigma))?;
-        let settled = round.status != Status::Complete || round.undecided.is_empty();
+        let settled = round.status != Status::Finished || round.undecided.is_empty();
         Ok((round, settled))
     })?;
     let mut pairs = Vec::new();
@@ -263,10 +263,10 @@ fn solve_nodes_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel
             continue;
         }
         let kind = match (proven, a == Some(true) && b == Some(true)) {
-            (true, true) => BoxKind::Certified,
-            (true, false) => BoxKind::Solution,
-            (false, _) if found.status == Status::Complete => BoxKind::Solution,
-            (false, _) => BoxKind::Undecided,
+            (true, true) => BoxStatus::Unique,
+            (true, false) => BoxStatus::Solution,
+            (false, _) if found.status == Status::Finished => BoxStatus::Solution,
+            (false, _) => BoxStatus::Undecided,
         };
         pairs.push(NodePair { joints: [bounds(torus.joint_values(theta[0])), bounds(torus.joint_values(theta[1]))], kind });
     }
@@ -279,7 +279,7 @@ fn solve_nodes_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel
 struct ChartBox {
     chart: usize,
     b: IntervalBox,
-    kind: BoxKind,
+    kind: BoxStatus,
     /// What a refinement tried on it without settling it.
     note: Option<String>,
 }
@@ -344,7 +344,7 @@ fn refine_points<'s>(
                     if other_chart(c, &b) || !originals.iter().any(|o| o.intersects(&b)) {
                         continue;
                     }
-                    added.push(ChartBox { chart: c, b, kind: if u { BoxKind::Certified } else { BoxKind::Solution }, note: None });
+                    added.push(ChartBox { chart: c, b, kind: if u { BoxStatus::Unique } else { BoxStatus::Solution }, note: None });
                 }
             }
         } else if let Some(why) = note {
@@ -384,7 +384,7 @@ pub struct FoundPoint {
     /// The boxes (in the chart system's variables).
     pub boxes: Vec<IntervalBox>,
     /// Their kinds.
-    pub kinds: Vec<BoxKind>,
+    pub kinds: Vec<BoxStatus>,
     /// `μ` may vanish: possibly a corank-two point rather than a cusp.
     pub degenerate: bool,
     /// Free joint values, the hull over the boxes (radians or metres).
@@ -398,13 +398,13 @@ pub struct FoundPoint {
 impl FoundPoint {
     /// Holds a certified box.
     pub fn certified(&self) -> bool {
-        self.kinds.contains(&BoxKind::Certified)
+        self.kinds.contains(&BoxStatus::Unique)
     }
 
     /// Exactly one root proven: every box certified and all overlapping the first (the same
     /// root seen from two charts).
     pub fn unique(&self) -> bool {
-        self.kinds.iter().all(|k| *k == BoxKind::Certified) && self.boxes.iter().all(|b| self.boxes[0].dims.iter().zip(&b.dims).all(|(x, y)| !x.intersection(*y).is_empty()))
+        self.kinds.iter().all(|k| *k == BoxStatus::Unique) && self.boxes.iter().all(|b| self.boxes[0].dims.iter().zip(&b.dims).all(|(x, y)| !x.intersection(*y).is_empty()))
     }
 
     /// Why the cluster is not one proven cusp (`None` when it is): the first of a limit that
@@ -417,17 +417,17 @@ impl FoundPoint {
     }
 
     fn unproven_alone(&self, status: Status) -> Option<String> {
-        if self.kinds.contains(&BoxKind::Undecided) {
+        if self.kinds.contains(&BoxStatus::Undecided) {
             let limit = match status {
-                Status::Incomplete(l) => format!("its {} limit", l.name()),
-                Status::Complete => "a limit".to_string(),
+                Status::Stopped(l) => format!("its {} limit", l.name()),
+                Status::Finished => "a limit".to_string(),
             };
             return Some(format!("the search stopped on {limit} with boxes of this cluster unsearched"));
         }
         if self.degenerate {
             return Some("μ may vanish: possibly a corank-two point of the type-II set rather than a cusp".to_string());
         }
-        let unproven = self.kinds.iter().filter(|k| **k == BoxKind::Solution).count();
+        let unproven = self.kinds.iter().filter(|k| **k == BoxStatus::Solution).count();
         if unproven > 0 {
             return Some(format!("{unproven} of its {} boxes reached sigma without a Krawczyk proof (a multiple root or a curve of roots there?)", self.boxes.len()));
         }
@@ -465,22 +465,22 @@ impl NodeProblem {
             return solve_nodes_on_torus(torus, settings, cancel);
         }
         let t0 = Instant::now();
-        let mut status = Status::Complete;
+        let mut status = Status::Finished;
         let mut out = NodeSearch { status, pairs: Vec::new(), near_diagonal: Vec::new(), injective: 0, dropped_other_chart: 0, stats: Vec::new(), seconds: 0.0 };
         let config: Vec<VarId> = (0..sp.base_vars).filter(|i| !self.shared.contains(i)).collect();
         for ((k, k2), system, map) in &self.charts {
             let Some(s) = remaining(settings, t0) else {
-                status = Status::Incomplete(Limit::Time);
+                status = Status::Stopped(Limit::Time);
                 out.near_diagonal.push(system.initial_box());
                 continue;
             };
             let e = sp.linkage.extended_solver(system, s)?.enclose(cancel, &mut |_| {});
-            if e.status != Status::Complete {
+            if e.status != Status::Finished {
                 status = e.status;
             }
             let mapped: Vec<VarId> = sp.multipliers.iter().map(|&m| map[m]).collect();
-            let boxes = e.solutions.into_iter().zip(e.unique).map(|(b, u)| (b, if u { BoxKind::Certified } else { BoxKind::Solution }));
-            for (bx, kind) in boxes.chain(e.undecided.into_iter().map(|b| (b, BoxKind::Undecided))) {
+            let boxes = e.solutions.into_iter().zip(e.unique).map(|(b, u)| (b, if u { BoxStatus::Unique } else { BoxStatus::Solution }));
+            for (bx, kind) in boxes.chain(e.undecided.into_iter().map(|b| (b, BoxStatus::Undecided))) {
                 let d = &bx.dims;
                 if owned_elsewhere(&sp.multipliers, *k, d, None) || owned_elsewhere(&mapped, *k2, d, None) {
                     out.dropped_other_chart += 1;
@@ -497,7 +497,7 @@ impl NodeProblem {
                         let b = IntervalBox::new((0..sp.base_vars).map(|j| d[map[j]]).collect());
                         out.pairs.push(NodePair { joints: [bounds(sp.joint_values(&a)), bounds(sp.joint_values(&b))], kind });
                     }
-                    None if k == k2 && kind != BoxKind::Undecided && injective(&sp.chart(*k), &self.shared, &bx, map) => out.injective += 1,
+                    None if k == k2 && kind != BoxStatus::Undecided && injective(&sp.chart(*k), &self.shared, &bx, map) => out.injective += 1,
                     None => out.near_diagonal.push(bx),
                 }
             }
@@ -533,7 +533,7 @@ pub struct NodePair {
     /// The two points' joint values (radians or metres).
     pub joints: [BTreeMap<String, Bounds>; 2],
     /// Certified (one pair in the doubled box), solution (unproven) or undecided (a limit).
-    pub kind: BoxKind,
+    pub kind: BoxStatus,
 }
 
 /// The result of the node search.
@@ -558,7 +558,7 @@ pub struct NodeSearch {
 impl NodeSearch {
     /// Certified node pairs.
     pub fn proven(&self) -> usize {
-        self.pairs.iter().filter(|p| p.kind == BoxKind::Certified).count()
+        self.pairs.iter().filter(|p| p.kind == BoxStatus::Unique).count()
     }
     /// Unproven pairs plus near-diagonal boxes.
     pub fn undecided(&self) -> usize {
@@ -670,11 +670,7 @@ pub(super) fn det(m: &[Vec<Interval>]) -> Interval {
 
 /// `complete` or `incomplete`, as the reports spell a status.
 pub(super) fn status_word(s: Status) -> &'static str {
-    if s == Status::Complete {
-        "complete"
-    } else {
-        "incomplete"
-    }
+    Completeness::of_run(s).word()
 }
 
 #[cfg(test)]

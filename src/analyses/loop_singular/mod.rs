@@ -10,6 +10,7 @@
 
 use crate::kernel::interval::{components, IntervalBox};
 use crate::formulate::singular::{Coordinates, SingularProblem};
+use crate::kernel::outcome::BoxStatus;
 use crate::kernel::search::{Limit, SolveError, SolveStats, SolverSettings, Status};
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
@@ -33,7 +34,7 @@ impl<L: Coordinates> SingularProblem<L> {
     fn solve_charts(&self, settings: &SolverSettings, cancel: &AtomicBool) -> Result<SingularSet, SolveError> {
         let t0 = Instant::now();
         let mut boxes = Vec::new();
-        let mut status = Status::Complete;
+        let mut status = Status::Finished;
         let mut stats = Vec::new();
         let mut dropped_other_chart = 0u64;
         let mut unsearched_charts = 0;
@@ -46,8 +47,8 @@ impl<L: Coordinates> SingularProblem<L> {
                 // each of them (chart j has m_j = 1 within that reach): a mechanism of thousands
                 // of joints has thousands of charts, and a box per chart would cost more to
                 // build and report than the deadline allows.
-                status = Status::Incomplete(if cancelled { Limit::Cancelled } else { Limit::Time });
-                boxes.push(SingularBox { chart: k, b: self.augmented.initial_box(), status: BoxKind::Undecided });
+                status = Status::Stopped(if cancelled { Limit::Cancelled } else { Limit::Time });
+                boxes.push(SingularBox { chart: k, b: self.augmented.initial_box(), status: BoxStatus::Undecided });
                 unsearched_charts = self.chart_count() - k;
                 break;
             }
@@ -55,7 +56,7 @@ impl<L: Coordinates> SingularProblem<L> {
             let s = SolverSettings { timeout: remaining, ..settings.clone() };
             let solver = self.linkage.extended_solver(&chart, s)?;
             let e = solver.enclose(cancel, &mut |_| {});
-            if e.status != Status::Complete {
+            if e.status != Status::Finished {
                 status = e.status;
             }
             for (b, u) in e.solutions.into_iter().zip(e.unique) {
@@ -66,10 +67,10 @@ impl<L: Coordinates> SingularProblem<L> {
                 // A certificate of the augmented system is one of the mechanism only where its
                 // rows are faithful (see `Coordinates::rows_faithful`); elsewhere the box stays.
                 let certified = u && self.linkage.rows_faithful(&b);
-                boxes.push(SingularBox { chart: k, b, status: if certified { BoxKind::Certified } else { BoxKind::Solution } });
+                boxes.push(SingularBox { chart: k, b, status: if certified { BoxStatus::Unique } else { BoxStatus::Solution } });
             }
             for b in e.undecided {
-                boxes.push(SingularBox { chart: k, b, status: BoxKind::Undecided });
+                boxes.push(SingularBox { chart: k, b, status: BoxStatus::Undecided });
             }
             stats.push(e.stats);
         }
@@ -85,9 +86,9 @@ impl<L: Coordinates> SingularProblem<L> {
         for (i, &l) in labels.iter().enumerate() {
             clusters[l].boxes.push(i);
             match boxes[i].status {
-                BoxKind::Certified => clusters[l].certified = true,
-                BoxKind::Undecided => clusters[l].undecided = true,
-                BoxKind::Solution => {}
+                BoxStatus::Unique => clusters[l].certified = true,
+                BoxStatus::Undecided => clusters[l].undecided = true,
+                BoxStatus::Solution => {}
             }
         }
         SingularSet { status, boxes, labels, clusters, stats, dropped_other_chart, unsearched_charts, seconds: t0.elapsed().as_secs_f64() }
@@ -104,16 +105,6 @@ impl<L: Coordinates> SingularProblem<L> {
     }
 }
 
-/// What a reported box is.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BoxKind {
-    /// Certified (Krawczyk) to hold exactly one solution of its chart's system.
-    Certified,
-    /// At sigma, not proven empty, no proof of a solution.
-    Solution,
-    /// Left by a limit.
-    Undecided,
-}
 
 /// One box of a singular set, in its chart's variables.
 #[derive(Clone, Debug)]
@@ -123,7 +114,7 @@ pub struct SingularBox {
     /// The box.
     pub b: IntervalBox,
     /// Its status.
-    pub status: BoxKind,
+    pub status: BoxStatus,
 }
 
 /// Boxes whose configuration parts touch.
@@ -161,6 +152,11 @@ pub struct SingularSet {
 }
 
 impl SingularSet {
+    /// The one rule: the limit that stopped a search, else the boxes left undecided.
+    pub fn completeness(&self) -> crate::kernel::outcome::Completeness {
+        crate::kernel::outcome::Completeness::of(self.status, self.boxes.iter().filter(|b| b.status == BoxStatus::Undecided).count(), false)
+    }
+
     /// Clusters with a certified box.
     pub fn certified_clusters(&self) -> usize {
         self.clusters.iter().filter(|c| c.certified).count()

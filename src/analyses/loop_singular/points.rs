@@ -26,7 +26,8 @@
 //! a reported box, certified or not, or in an undecided one: nothing is dropped without one of
 //! those proofs.
 
-use super::{BoxKind, SingularBox, SingularSet};
+use crate::kernel::outcome::BoxStatus;
+use super::{SingularBox, SingularSet};
 use crate::kernel::contract::krawczyk::preconditioned_hull;
 use crate::kernel::contract::{Contractor, Filter, Inclusion, Newton};
 use crate::kernel::interval::fast::Iv;
@@ -163,13 +164,13 @@ impl<L: Coordinates> SingularProblem<L> {
         let mut boxes = Vec::new();
         let mut dropped_other_chart = 0u64;
         let mut charts: Vec<Option<EquationSystem>> = vec![None; self.chart_count()];
-        let undecided = |leaf: &IntervalBox| SingularBox { chart: 0, b: self.with_configuration(self.augmented.initial_box(), leaf), status: BoxKind::Undecided };
+        let undecided = |leaf: &IntervalBox| SingularBox { chart: 0, b: self.with_configuration(self.augmented.initial_box(), leaf), status: BoxStatus::Undecided };
         boxes.extend(leaves.undecided.iter().map(undecided));
         for (i, leaf) in leaves.solutions.iter().enumerate() {
             let remaining = left();
             let cancelled = cancel.load(Ordering::Relaxed);
             if cancelled || remaining.is_some_and(|r| r.is_zero()) {
-                status = Status::Incomplete(if cancelled { Limit::Cancelled } else { Limit::Time });
+                status = Status::Stopped(if cancelled { Limit::Cancelled } else { Limit::Time });
                 boxes.extend(leaves.solutions[i..].iter().map(undecided));
                 break;
             }
@@ -183,7 +184,7 @@ impl<L: Coordinates> SingularProblem<L> {
                 let solver = self.linkage.extended_solver(chart, SolverSettings { timeout: left(), threads: 1, ..settings.clone() })?;
                 let mut found = Collect::default();
                 let (s, st) = solver.run_from(start, cancel, &mut found);
-                if s != Status::Complete {
+                if s != Status::Finished {
                     status = s;
                 }
                 add(&mut stats[k], &st);
@@ -193,9 +194,9 @@ impl<L: Coordinates> SingularProblem<L> {
                         continue;
                     }
                     let certified = u && self.linkage.rows_faithful(&b);
-                    boxes.push(SingularBox { chart: k, b, status: if certified { BoxKind::Certified } else { BoxKind::Solution } });
+                    boxes.push(SingularBox { chart: k, b, status: if certified { BoxStatus::Unique } else { BoxStatus::Solution } });
                 }
-                boxes.extend(found.undecided.into_iter().map(|b| SingularBox { chart: k, b, status: BoxKind::Undecided }));
+                boxes.extend(found.undecided.into_iter().map(|b| SingularBox { chart: k, b, status: BoxStatus::Undecided }));
             }
         }
         // A point on the face between two configuration boxes is found from both (a bisection
@@ -205,7 +206,7 @@ impl<L: Coordinates> SingularProblem<L> {
         for i in 0..boxes.len() {
             for j in i + 1..boxes.len() {
                 let (a, b) = (&boxes[i], &boxes[j]);
-                if !keep[i] || !keep[j] || a.status != BoxKind::Certified || b.status != BoxKind::Certified || a.chart != b.chart {
+                if !keep[i] || !keep[j] || a.status != BoxStatus::Unique || b.status != BoxStatus::Unique || a.chart != b.chart {
                     continue;
                 }
                 let Some(chart) = charts[a.chart].as_ref() else { continue };
@@ -312,7 +313,7 @@ mod tests {
             let rates = p.linkage.rate_matrix(kind, &p.actuated, p.output.as_ref()).expect("square rows");
             let fast = p.solve_points(&rates, &settings, &cancel).expect("valid");
             let charts = p.solve_charts(&settings, &cancel).expect("valid");
-            assert!(fast.status.is_complete() && charts.status.is_complete());
+            assert!(fast.status.finished() && charts.status.finished());
             assert_eq!(fast.clusters.len(), 2, "{kind:?} {actuated}");
             assert_eq!(fast.certified_clusters(), 2, "{kind:?} {actuated}");
             assert_eq!(fast.boxes.len(), 2, "{kind:?} {actuated}: one box per point");

@@ -110,7 +110,7 @@ mod tests {
         let r = |index: usize, x: f64, y: f64, verdict: &str| TaskResult {
             index,
             values: vec![x, y],
-            status: TaskStatus::Complete,
+            status: TaskStatus::Ran(crate::kernel::outcome::Completeness::Complete),
             limit: None,
             verdict: Some(verdict.into()),
             count: None,

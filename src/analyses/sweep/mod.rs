@@ -154,7 +154,7 @@ pub enum Sweep {
         /// radians
         precision: f64,
     },
-    /// The assembly modes of a closed-loop mechanism with its `fix` values (`app::SolveJob`).
+    /// The assembly modes of a closed-loop mechanism with its `fix` values (`app::SolveRun`).
     AssemblyModes {
         /// solution box width
         sigma: f64,

@@ -3,17 +3,16 @@
 //! lets an interrupted sweep resume (same spec, same URDF, tasks keyed by index and values).
 
 use super::{Plan, SweepError, Task};
+use crate::kernel::outcome::{Completeness, Incompleteness};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
-/// How a task ended.
-#[derive(Serialize, Deserialize, Clone, Copy, Debug, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
+/// How a task ended: its analysis ran, complete or not (`limit` says why not), or it could
+/// not run. Written as `complete`, `incomplete` or `failed`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TaskStatus {
-    /// The analysis ran to the end.
-    Complete,
-    /// A limit stopped it (`limit` names it); the counts are what it had.
-    Incomplete,
+    /// The analysis ran; complete by the one rule, or open (`TaskResult::limit` names why).
+    Ran(Completeness),
     /// It could not run (bad geometry, an error); `error` says why.
     Failed,
 }
@@ -22,10 +21,32 @@ impl TaskStatus {
     /// As in the records.
     pub fn name(self) -> &'static str {
         match self {
-            TaskStatus::Complete => "complete",
-            TaskStatus::Incomplete => "incomplete",
+            TaskStatus::Ran(c) => c.word(),
             TaskStatus::Failed => "failed",
         }
+    }
+}
+
+impl Serialize for TaskStatus {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(self.name())
+    }
+}
+
+impl<'de> Deserialize<'de> for TaskStatus {
+    /// The reason of an incomplete task is its record's `limit`, read by `TaskResult::completeness`.
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        let word = String::deserialize(deserializer)?;
+        if word == TaskStatus::Failed.name() {
+            return Ok(TaskStatus::Failed);
+        }
+        if word == Completeness::Complete.word() {
+            return Ok(TaskStatus::Ran(Completeness::Complete));
+        }
+        if word == Completeness::Incomplete(Incompleteness::Undecided).word() {
+            return Ok(TaskStatus::Ran(Completeness::Incomplete(Incompleteness::Undecided)));
+        }
+        Err(serde::de::Error::custom(format!("unknown task status '{word}'")))
     }
 }
 
@@ -38,7 +59,8 @@ pub struct TaskResult {
     pub values: Vec<f64>,
     /// How it ended.
     pub status: TaskStatus,
-    /// The limit that stopped it (`boxes`, `time`, `memory`...).
+    /// Why it is incomplete: the limit that stopped it (`boxes`, `time`, `memory`...), else
+    /// `undecided` (boxes or cusps left without a proof).
     #[serde(default)]
     pub limit: Option<String>,
     /// `cuspidal`, `non_cuspidal` or `undecided` (cuspidality); none for assembly modes.
@@ -59,6 +81,16 @@ pub struct TaskResult {
 }
 
 impl TaskResult {
+    /// Whether the task's answer is complete: its status, with the reason its record names.
+    /// A task that failed decided nothing: it is incomplete, everything in it undecided.
+    pub fn completeness(&self) -> Completeness {
+        match self.status {
+            TaskStatus::Ran(Completeness::Complete) => Completeness::Complete,
+            TaskStatus::Ran(c) => Completeness::Incomplete(self.limit.as_deref().and_then(Incompleteness::from_name).or(c.reason()).unwrap_or(Incompleteness::Undecided)),
+            TaskStatus::Failed => Completeness::Incomplete(Incompleteness::Undecided),
+        }
+    }
+
     /// A task that could not run.
     pub fn failed(task: &Task, error: String, seconds: f64) -> Self {
         Self { index: task.index, values: task.values.clone(), status: TaskStatus::Failed, limit: None, verdict: None, count: None, proven: 0, undecided: 0, error: Some(error), seconds }
@@ -251,7 +283,7 @@ pub(super) fn outcome(r: &TaskResult) -> String {
     match (r.status, &r.verdict, r.count) {
         (TaskStatus::Failed, _, _) => "failed".into(),
         (_, Some(v), _) => v.clone(),
-        (TaskStatus::Complete, None, Some(c)) if r.undecided == 0 => c.to_string(),
+        (TaskStatus::Ran(Completeness::Complete), None, Some(c)) if r.undecided == 0 => c.to_string(),
         _ => "undecided".into(),
     }
 }
@@ -265,7 +297,7 @@ mod tests {
     }
 
     fn result(task: &Task) -> TaskResult {
-        TaskResult { index: task.index, values: task.values.clone(), status: TaskStatus::Complete, limit: None, verdict: None, count: Some(2), proven: 2, undecided: 0, error: None, seconds: 0.5 }
+        TaskResult { index: task.index, values: task.values.clone(), status: TaskStatus::Ran(Completeness::Complete), limit: None, verdict: None, count: Some(2), proven: 2, undecided: 0, error: None, seconds: 0.5 }
     }
 
     #[test]

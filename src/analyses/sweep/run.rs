@@ -69,7 +69,7 @@ mod tests {
     }
 
     fn ok(t: &Task) -> TaskResult {
-        TaskResult { index: t.index, values: t.values.clone(), status: TaskStatus::Complete, limit: None, verdict: None, count: Some(t.index as u64), proven: 0, undecided: 0, error: None, seconds: 0.0 }
+        TaskResult { index: t.index, values: t.values.clone(), status: TaskStatus::Ran(crate::kernel::outcome::Completeness::Complete), limit: None, verdict: None, count: Some(t.index as u64), proven: 0, undecided: 0, error: None, seconds: 0.0 }
     }
 
     #[test]

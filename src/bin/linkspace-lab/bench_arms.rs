@@ -201,7 +201,7 @@ pub fn baseline_child(args: &Bench3rArgs, file: &Path) -> Result<()> {
             Ok((joint.to_string(), value))
         })
         .collect::<Result<Vec<_>>>()?;
-    // What `linkspace singularities FILE --lock ... --ignore-limits` reads: the same rounding
+    // What `linkspace singularities FILE --fix ... --ignore-limits` reads: the same rounding
     // and chain choice.
     let options = LoadOptions { spec: ChainSpec { locks, length_tolerance: 0.0, ..Default::default() }, exact_geometry: false, ignore_limits: true, ..Default::default() };
     let xml = std::fs::read_to_string(file).with_context(|| format!("reading {}", file.display()))?;
@@ -215,11 +215,11 @@ pub fn baseline_child(args: &Bench3rArgs, file: &Path) -> Result<()> {
     let control = Control { limits, threads: 1, cancel: &cancel };
     let run = arm3r::singularities(&chain, args.precision, true, &control, &mut |_| {})?;
     let limit = match run.status {
-        Status::Complete => None,
-        Status::Incomplete(l) => Some(l.name()),
+        Status::Finished => None,
+        Status::Stopped(l) => Some(l.name()),
     };
     let line = serde_json::json!({
-        "status": if run.status.is_complete() { "complete" } else { "incomplete" },
+        "status": if run.status.finished() { "complete" } else { "incomplete" },
         "limit": limit,
         "cusps": run.cusps.cusps.len(),
         "undecided_cusp_boxes": run.cusps.undecided.len(),

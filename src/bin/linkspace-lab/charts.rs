@@ -148,7 +148,7 @@ fn butterfly_charts(dir: &Path, quick: bool, want: &dyn Fn(&str) -> bool) -> Res
 
     // Reference roots for the rigid case: certified boxes at sigma 1e-10.
     let reference = enclose(&rigid, SolverSettings { sigma: 1e-10, ..Default::default() })?;
-    anyhow::ensure!(reference.status == Status::Complete && reference.unique.iter().all(|&u| u), "reference run did not certify every root");
+    anyhow::ensure!(reference.status == Status::Finished && reference.unique.iter().all(|&u| u), "reference run did not certify every root");
 
     // 1. Speed against accuracy.
     if want("speed") {
@@ -161,7 +161,7 @@ fn butterfly_charts(dir: &Path, quick: bool, want: &dyn Fn(&str) -> bool) -> Res
         let (mut a, mut b) = (Vec::new(), Vec::new());
         for &sigma in rigid_sigmas {
             let e = timed(&rigid, SolverSettings { sigma, ..method.settings.clone() }, repeat)?;
-            if e.status == Status::Complete {
+            if e.status == Status::Finished {
                 a.push((worst_diagonal(&rigid, &e.solutions), e.stats.cpu_seconds));
                 b.push((worst_root_distance(&rigid, &e.solutions, &reference.solutions), e.stats.cpu_seconds));
             }
@@ -181,7 +181,7 @@ fn butterfly_charts(dir: &Path, quick: bool, want: &dyn Fn(&str) -> bool) -> Res
         let mut a = Vec::new();
         for &sigma in mobile_sigmas {
             let e = timed(&mobile, SolverSettings { sigma, ..method.settings.clone() }, repeat.min(3))?;
-            if e.status == Status::Complete {
+            if e.status == Status::Finished {
                 a.push((worst_diagonal(&mobile, &e.solutions), e.stats.cpu_seconds));
             }
         }
@@ -396,7 +396,7 @@ fn distance_sweeps(dir: &Path, quick: bool) -> Result<()> {
         for &sigma in sigmas {
             let settings = SolverSettings { sigma, rho: 0.9, timeout: Some(Duration::from_secs(if quick { 5 } else { 20 })), ..Default::default() };
             let e = solve(&cm, faces, settings)?;
-            if e.status == Status::Complete {
+            if e.status == Status::Finished {
                 points.push((e.solutions.iter().map(|b| b.diagonal(&primaries)).fold(0.0, f64::max), e.stats.cpu_seconds));
             }
         }
@@ -416,7 +416,7 @@ fn distance_sweeps(dir: &Path, quick: bool) -> Result<()> {
         for &sigma in sigmas {
             let settings = SolverSettings { sigma, rho: 0.99, timeout: Some(Duration::from_secs(30)), ..Default::default() };
             let e = solve(&cm, FaceBounds::Corners, settings)?;
-            if e.status == Status::Complete {
+            if e.status == Status::Finished {
                 points.push((e.solutions.iter().map(|b| b.diagonal(&primaries)).fold(0.0, f64::max), e.stats.cpu_seconds));
             }
         }
@@ -443,7 +443,7 @@ fn cusp_sweep(dir: &Path, quick: bool) -> Result<()> {
                 let limits = linkspace::kernel::search::Limits { max_cells: cusps::DEFAULT_MAX_BOXES, timeout: Some(Duration::from_secs(20)), ..Default::default() };
                 let found = cusps::search_with(&chain, &cusps::CuspSettings { precision, method }, &Control::with_limits(limits), &mut |_| {})?;
                 let cpu = linkspace::kernel::search::process_cpu_seconds() - c0;
-                if found.status.is_complete() {
+                if found.status.finished() {
                     let widest = found.cusps.iter().map(|c| c.theta[0].wid().hypot(c.theta[1].wid())).fold(0.0, f64::max);
                     points.push((widest, cpu));
                 }

@@ -105,7 +105,7 @@ fn study(i: &Instance) -> Finding {
     let e = i.problem.solver(settings).expect("invariant: study settings are valid").enclose(&AtomicBool::new(false), &mut |_| {});
     // The reference points are rounded to floats; allow that rounding and nothing more.
     let inside = |x: &[f64]| e.solutions.iter().any(|b| b.dims.iter().zip(x).all(|(d, &v)| d.inf() - 1e-9 <= v && v <= d.sup() + 1e-9));
-    let lost = i.roots.iter().filter(|r| !inside(r)).count() + usize::from(e.status != Status::Complete);
+    let lost = i.roots.iter().filter(|r| !inside(r)).count() + usize::from(e.status != Status::Finished);
     let mut converged: Vec<Vec<f64>> = Vec::new();
     let mut distinct: Vec<Vec<f64>> = Vec::new();
     for s in &i.starts {
@@ -349,7 +349,7 @@ fn study_ik(name: &str, difficulty: &str, chain: &Chain3R, target: [f64; 2], roo
         }))
     };
     let covered = |t: [f64; 2]| sol.unique.iter().any(|b| inside(b, t)) || sol.clusters.iter().any(|c| inside(&c.hull, t));
-    let mut lost = roots.iter().filter(|r| !covered(**r)).count() + usize::from(!sol.status.is_complete());
+    let mut lost = roots.iter().filter(|r| !covered(**r)).count() + usize::from(!sol.status.finished());
     if let Some(t3) = line {
         lost += (0..64).filter(|k| !covered([-PI + 2.0 * PI * (*k as f64 + 0.5) / 64.0, t3])).count();
     }

@@ -38,8 +38,14 @@ struct ActuatorRegionsDef {
 #[derive(Serialize)]
 #[serde(remote = "AssemblyChangeVerdict")]
 struct AssemblyChangeVerdictDef {
-    answer: &'static str,
+    #[serde(serialize_with = "answer_word")]
+    answer: Option<bool>,
     reason: String,
+}
+
+/// `yes`, `no` or `undecided` (`AssemblyChangeVerdict::word`).
+fn answer_word<S: serde::Serializer>(answer: &Option<bool>, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(AssemblyChangeVerdict { answer: *answer, reason: String::new() }.word())
 }
 
 #[derive(Serialize)]
@@ -77,7 +83,8 @@ struct CountsDef {
 struct ImageReportDef {
     mechanism: String,
     actuated: Vec<String>,
-    status: &'static str,
+    #[serde(flatten, serialize_with = "super::kernel::CompletenessDef::serialize")]
+    status: crate::kernel::outcome::Completeness,
     #[serde(serialize_with = "cusps")]
     cusps: Vec<ImageCusp>,
     #[serde(serialize_with = "nodes")]
@@ -100,7 +107,8 @@ struct ImagePointsDef {
     mechanism: String,
     actuated: Vec<String>,
     search: &'static str,
-    status: &'static str,
+    #[serde(flatten, serialize_with = "super::kernel::CompletenessDef::serialize")]
+    status: crate::kernel::outcome::Completeness,
     #[serde(serialize_with = "cusps", skip_serializing_if = "Vec::is_empty")]
     cusps: Vec<ImageCusp>,
     #[serde(serialize_with = "nodes", skip_serializing_if = "Vec::is_empty")]

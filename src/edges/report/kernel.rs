@@ -6,29 +6,43 @@
 use crate::kernel::contract::FaceBounds;
 use crate::kernel::lp::{LpBackend, LpCounters};
 use crate::model::rounding::Snap;
-use crate::kernel::search::{Limit, SolveStats, SolverSettings, Status};
+use crate::kernel::outcome::Completeness;
+use crate::kernel::search::{SolveStats, SolverSettings, Status};
 use crate::kernel::system::VarRole;
 use serde::{Serialize, Serializer};
 use std::time::Duration;
 
-/// `Limit`: `boxes`, `time`, `memory`, `cancelled`, `sink`.
-#[derive(Serialize)]
-#[serde(remote = "Limit", rename_all = "snake_case")]
-pub(crate) enum LimitDef {
-    Boxes,
-    Time,
-    Memory,
-    Cancelled,
-    Sink,
+
+/// `Status`, flattened into its report as the completeness of a run that left nothing else
+/// open: `"status": "complete"`, or `"status": "incomplete"` with `"limit"`.
+pub(crate) struct StatusDef;
+
+impl StatusDef {
+    pub(crate) fn serialize<S: serde::Serializer>(status: &Status, serializer: S) -> Result<S::Ok, S::Error> {
+        CompletenessDef::serialize(&Completeness::of_run(*status), serializer)
+    }
 }
 
-/// `Status`, flattened into its report: `"status": "complete"`, or `"status": "incomplete"`
-/// with `"limit"`.
-#[derive(Serialize)]
-#[serde(remote = "Status", rename_all = "snake_case", tag = "status", content = "limit")]
-pub(crate) enum StatusDef {
-    Complete,
-    Incomplete(#[serde(with = "LimitDef")] Limit),
+/// `BoxStatus`, by its name: `unique`, `solution` or `undecided`.
+pub(crate) fn box_status<S: serde::Serializer>(status: &crate::kernel::outcome::BoxStatus, serializer: S) -> Result<S::Ok, S::Error> {
+    serializer.serialize_str(status.name())
+}
+
+/// `Completeness`, flattened into its report: `"status"` (`complete` or `incomplete`) and, when
+/// incomplete, `"limit"`: the limit that stopped a search (`boxes`, `time`, `memory`,
+/// `cancelled`), else `near_degenerate`, else `undecided`.
+pub(crate) struct CompletenessDef;
+
+impl CompletenessDef {
+    pub(crate) fn serialize<S: serde::Serializer>(c: &Completeness, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut map = serializer.serialize_map(None)?;
+        map.serialize_entry("status", c.word())?;
+        if let Some(why) = c.reason() {
+            map.serialize_entry("limit", why.name())?;
+        }
+        map.end()
+    }
 }
 
 /// `LpBackend`, as its variant name.

@@ -6,10 +6,9 @@
 //! the first joint's origin). The 3R analyses' own records (`arm3r`'s verdict, singular
 //! branches, chain choice, joint limits) are written through the remote definitions at the end.
 
-use crate::app::{Arm, ArmCollisions, ArmIk, ArmSingularities, IkPoint};
+use crate::app::{Arm, ArmIk, IkPoint, SingularitiesAnswer};
 use crate::analyses::arm3r::branches::{Attribution, CrossingRecord, FoldSample, ImageRecord, IsolatedNode, SingularBranch, SingularBranches};
 use crate::analyses::arm3r::chain::Chain3R;
-use crate::analyses::arm3r::collision::{CollisionSet, Scene};
 use crate::analyses::arm3r::cusps::{CuspDiscard, CuspSearch, Reason};
 use crate::analyses::arm3r::ik::IkSolutions;
 use crate::analyses::arm3r::limits::{JointLimits, LimitEffect};
@@ -19,13 +18,13 @@ use crate::kernel::interval::Bounds;
 use crate::analyses::arm3r::records::{bounds, joints, workspace};
 pub use crate::analyses::arm3r::{Joints, Workspace};
 use crate::analyses::arm3r::select::{Choice, Scope};
-use crate::analyses::arm3r::verdict::Verdict;
+use super::verdicts::{VerdictRecord, Verdicts};
 use crate::analyses::arm3r::Prepared;
 use crate::model::rounding::Snap;
-use crate::kernel::search::{Incompleteness, Status};
+use super::kernel::CompletenessDef;
+use crate::kernel::outcome::{Completeness, Incompleteness};
 use inari::Interval;
 use serde::Serialize;
-use std::collections::BTreeMap;
 
 /// One cusp.
 #[derive(Clone, Debug, Serialize)]
@@ -179,50 +178,6 @@ impl From<&NodeSearch> for NodeStats {
     }
 }
 
-/// Whether a report's answer is complete, written as its `status` (`complete` or `incomplete`)
-/// and, when incomplete, its `limit`: the kernel's limit that stopped a search (`boxes`, `time`,
-/// `memory`, `cancelled`), else `near_degenerate` (strips set aside), else `undecided` (boxes or
-/// pairs left at the precision, cusps without a uniqueness proof). `search::Incompleteness::of`
-/// is the one rule.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Completeness(pub Option<Incompleteness>);
-
-impl Completeness {
-    /// Complete: every cell decided, nothing left open.
-    pub const COMPLETE: Completeness = Completeness(None);
-
-    /// Of a run that left nothing else open: complete exactly when no limit stopped it.
-    pub fn of_run(status: Status) -> Self {
-        Completeness(Incompleteness::of(status, 0, false))
-    }
-
-    /// True when nothing is undecided.
-    pub fn is_complete(self) -> bool {
-        self.0.is_none()
-    }
-
-    /// `complete` or `incomplete`.
-    pub fn status(self) -> &'static str {
-        if self.is_complete() {
-            "complete"
-        } else {
-            "incomplete"
-        }
-    }
-}
-
-impl Serialize for Completeness {
-    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let mut map = serializer.serialize_map(None)?;
-        map.serialize_entry("status", self.status())?;
-        if let Some(why) = self.0 {
-            map.serialize_entry("limit", why.name())?;
-        }
-        map.end()
-    }
-}
-
 /// Counters.
 #[derive(Clone, Debug, Serialize)]
 pub struct SearchCounts {
@@ -246,7 +201,7 @@ pub struct SingularityReport {
     /// Settings.
     pub settings: Settings,
     /// `status` and, when incomplete, `limit` (why).
-    #[serde(flatten)]
+    #[serde(flatten, serialize_with = "CompletenessDef::serialize")]
     pub completeness: Completeness,
     /// Certified cusps.
     pub cusps: Vec<CuspRecord>,
@@ -260,9 +215,16 @@ pub struct SingularityReport {
     pub undecided_total: [usize; 2],
     /// Counters.
     pub stats: SearchCounts,
-    /// The first answer: cuspidal or not, aspects, IK solutions, and the argument.
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "some_verdict")]
-    pub verdict: Option<Verdict>,
+    /// The arm's cuspidality verdict, with its scope (`report::verdicts`): the positioning
+    /// structure's when it speaks for the arm, else the whole arm's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub verdict: Option<VerdictRecord>,
+    /// The positioning sub-chain's verdict when it is not the arm's, with its scope.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sub_chain_verdict: Option<VerdictRecord>,
+    /// A six-joint arm's whole-arm cuspidality section (how it was decided).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub arm_cuspidality: Option<super::six::ArmCuspidalityReport>,
     /// How the file was read (`chain`, `rounding`, `joint_limits` in the JSON); `None` for a
     /// report built from searches alone.
     #[serde(flatten)]
@@ -332,7 +294,7 @@ impl SingularityReport {
         // Counted as `app` counts its uncertified records, for the one rule of `Incompleteness::of`.
         let undecided = cusps.undecided.len() + cusps.cusps.iter().filter(|c| !c.unique).count() + nodes.map_or(0, |n| n.undecided.len());
         let near = cusps.bands.iter().any(|b| b.near.is_some());
-        let completeness = Completeness(Incompleteness::of(status, undecided, near));
+        let completeness = Completeness::of(status, undecided, near);
         let internal_motions = cusps
             .bands
             .iter()
@@ -362,6 +324,8 @@ impl SingularityReport {
             undecided_total: [cusps.undecided.len(), nodes.map_or(0, |n| n.undecided.len())],
             stats: SearchCounts { cusps: CuspStats::from(cusps), nodes: nodes.map(NodeStats::from), seconds },
             verdict: None,
+            sub_chain_verdict: None,
+            arm_cuspidality: None,
             reading: None,
             not_searched: None,
             singular_branches: None,
@@ -372,11 +336,19 @@ impl SingularityReport {
 
 impl SingularityReport {
     /// What `linkspace singularities --json` writes of `found`, a run on `arm`.
-    pub fn of(arm: &Arm, found: &ArmSingularities) -> Self {
+    pub fn of(answer: &SingularitiesAnswer) -> Self {
+        let (arm, found) = (&answer.arm, &answer.found);
         let run = &found.run;
         let mut report = SingularityReport::new(&arm.chain, found.request.precision, &run.cusps, run.nodes.as_ref(), found.seconds);
-        report.verdict = found.verdict.clone();
-        report.reading = Some(Reading::of(&arm.prepared, found.limit_effect.clone()));
+        let verdicts = Verdicts::of(answer);
+        report.verdict = verdicts.arm;
+        report.sub_chain_verdict = verdicts.sub_chain;
+        let mut reading = Reading::of(&arm.prepared, found.limit_effect.clone());
+        if let (Some(a), false) = (&verdicts.whole_arm, arm.prepared.choice.scope.stands_for_arm) {
+            reading.chain.scope.not_answered = Some(format!("not the arm's verdict: the whole arm's ({}) is `verdict`", a.arm));
+        }
+        report.arm_cuspidality = verdicts.whole_arm;
+        report.reading = Some(reading);
         if let Some(a) = &found.explained {
             report.explain(a.clone());
         }
@@ -391,12 +363,12 @@ impl SingularityReport {
     /// only reason for `incomplete` was undecided boxes, they are moved out of `undecided`
     /// (and cusp boxes without a uniqueness proof out of `cusps`) and the report is complete.
     pub fn explain(&mut self, attribution: Attribution) {
-        let moves = attribution.explained && self.completeness == Completeness(Some(Incompleteness::Undecided)) && self.undecided_total[1] == 0 && self.cusps.iter().all(|c| !c.unique);
+        let moves = attribution.explained && self.completeness == Completeness::Incomplete(Incompleteness::Undecided) && self.undecided_total[1] == 0 && self.cusps.iter().all(|c| !c.unique);
         if moves {
             self.undecided.cusps.clear();
             self.undecided_total[0] = 0;
             self.cusps.clear();
-            self.completeness = Completeness::COMPLETE;
+            self.completeness = Completeness::Complete;
         }
         self.explained_undecided = Some(attribution);
     }
@@ -423,7 +395,7 @@ pub struct IkReport {
     pub point: Vec<f64>,
     /// `status` and, when incomplete, `limit`: the limit that stopped the run (`boxes`, `time`,
     /// `memory` or `cancelled`).
-    #[serde(flatten)]
+    #[serde(flatten, serialize_with = "CompletenessDef::serialize")]
     pub completeness: Completeness,
     /// Solutions, unique ones first.
     pub solutions: Vec<IkRecord>,
@@ -464,115 +436,6 @@ impl IkReport {
     }
 }
 
-/// A capsule of the collision scene.
-#[derive(Clone, Debug, Serialize)]
-pub struct BodyRecord {
-    /// Collision element name (or `link/index`).
-    pub name: String,
-    /// Its link.
-    pub link: String,
-    /// Radius (metres).
-    pub radius: f64,
-    /// Segment end points in the link frame (metres).
-    pub segment: [[f64; 3]; 2],
-}
-
-/// A colliding box.
-#[derive(Clone, Debug, Serialize)]
-pub struct CollidingRecord {
-    /// Joint box.
-    pub joints: Joints,
-    /// The two bodies proven to collide on all of it.
-    pub pair: [String; 2],
-}
-
-/// A free or undecided box.
-#[derive(Clone, Debug, Serialize)]
-pub struct BoxRecord {
-    /// Joint box.
-    pub joints: Joints,
-}
-
-/// What `linkspace collisions --json` writes.
-#[derive(Clone, Debug, Serialize)]
-pub struct CollisionReport {
-    /// Robot name.
-    pub robot: String,
-    /// The three revolute joints, base first.
-    pub joints: [String; 3],
-    /// Precision (radians).
-    pub precision: f64,
-    /// The capsules.
-    pub bodies: Vec<BodyRecord>,
-    /// The pairs checked, by body name.
-    pub pairs: Vec<[String; 2]>,
-    /// `status` and, when incomplete, `limit`: the limit that stopped the run (`boxes`, `time`,
-    /// `memory` or `cancelled`).
-    #[serde(flatten)]
-    pub completeness: Completeness,
-    /// Boxes where a pair collides everywhere.
-    pub colliding: Vec<CollidingRecord>,
-    /// Boxes where no pair collides anywhere.
-    pub free: Vec<BoxRecord>,
-    /// The rest.
-    pub undecided: Vec<BoxRecord>,
-    /// Counters and areas.
-    pub stats: CollisionStats,
-}
-
-/// Counters and areas (rad²) of a classification.
-#[derive(Clone, Copy, Debug, Default, Serialize)]
-pub struct CollisionStats {
-    /// Boxes processed.
-    pub processed: u64,
-    /// Bisections.
-    pub bisected: u64,
-    /// Total area of the colliding boxes.
-    pub colliding_area: f64,
-    /// Total area of the free boxes.
-    pub free_area: f64,
-    /// Total area of the undecided boxes.
-    pub undecided_area: f64,
-    /// Wall-clock seconds.
-    pub seconds: f64,
-}
-
-impl CollisionReport {
-    /// What `linkspace collisions --json` writes of `found`, classified at `precision`.
-    pub fn of(found: &ArmCollisions, precision: f64) -> Self {
-        Self::new(&found.scene, precision, &found.set)
-    }
-
-    /// Builds the report of a classification.
-    pub fn new(scene: &Scene, precision: f64, set: &CollisionSet) -> Self {
-        let capsules = scene.capsules();
-        let name = |k: usize| {
-            let (i, j) = scene.pairs()[k];
-            [capsules[i].name.clone(), capsules[j].name.clone()]
-        };
-        let joints = |theta: &[Interval; 2]| BTreeMap::from([(scene.joints[1].clone(), bounds(theta[0])), (scene.joints[2].clone(), bounds(theta[1]))]);
-        CollisionReport {
-            robot: scene.name.clone(),
-            joints: scene.joints.clone(),
-            precision,
-            bodies: capsules.iter().map(|c| BodyRecord { name: c.name.clone(), link: c.link.clone(), radius: c.radius, segment: c.segment }).collect(),
-            pairs: (0..scene.pairs().len()).map(name).collect(),
-            completeness: Completeness::of_run(set.status),
-            colliding: set.colliding.iter().map(|c| CollidingRecord { joints: joints(&c.theta), pair: name(c.pair) }).collect(),
-            free: set.free.iter().map(|b| BoxRecord { joints: joints(b) }).collect(),
-            undecided: set.undecided.iter().map(|b| BoxRecord { joints: joints(b) }).collect(),
-            stats: CollisionStats {
-                processed: set.stats.processed,
-                bisected: set.stats.split,
-                colliding_area: set.colliding_area,
-                free_area: set.free_area,
-                undecided_area: set.undecided_area,
-                seconds: set.seconds,
-            },
-        }
-    }
-}
-
 // How the 3R analyses' records are written: `arm3r` knows no serde, so each record it
 // contributes to a report is stated here field for field (a field added there and not here
 // fails to compile).
@@ -593,17 +456,8 @@ enum ReasonDef {
     Limit,
 }
 
-#[derive(Serialize)]
-#[serde(remote = "Verdict")]
-struct VerdictDef {
-    cuspidal: Option<bool>,
-    aspects: Option<u32>,
-    max_ik_solutions: Option<u32>,
-    certified: bool,
-    reason: String,
-}
 
-some_with!(some_verdict, Verdict, "VerdictDef");
+
 
 /// `select::Choice`, the locked joints as `[name, value]` pairs.
 #[derive(Serialize)]

@@ -1,10 +1,11 @@
 //! Singular-set reports: what `linkspace loop-singularities --json` writes, built from a
 //! `SingularSet`. Pure data, no IO.
 
+use crate::kernel::outcome::BoxStatus;
 use super::Bounds;
 use crate::kernel::interval::IntervalBox;
 use crate::formulate::singular::{Coordinates, Output, SingularProblem};
-use crate::analyses::loop_singular::{BoxKind, SingularSet};
+use crate::analyses::loop_singular::{SingularSet};
 use crate::kernel::search::{SolveStats, SolverSettings, Status};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -91,9 +92,9 @@ pub struct ClusterRecord {
 pub struct SingularBoxRecord {
     /// Chart index.
     pub chart: usize,
-    /// `certified`, `solution` or `undecided`.
-    #[serde(with = "BoxKindDef")]
-    pub status: BoxKind,
+    /// `unique`, `solution` or `undecided` (`BoxStatus::name`).
+    #[serde(serialize_with = "super::kernel::box_status")]
+    pub status: BoxStatus,
     /// Index into `clusters`.
     pub cluster: usize,
     /// Free joint values.
@@ -102,15 +103,6 @@ pub struct SingularBoxRecord {
     pub actuators: Vec<Bounds>,
     /// The null vector's components (velocity or row multipliers), in the chart's scale.
     pub multipliers: Vec<Bounds>,
-}
-
-/// `BoxKind`: `certified`, `solution` or `undecided`.
-#[derive(Serialize)]
-#[serde(remote = "BoxKind", rename_all = "snake_case")]
-pub(crate) enum BoxKindDef {
-    Certified,
-    Solution,
-    Undecided,
 }
 
 fn hull(a: Bounds, b: (f64, f64)) -> Bounds {
@@ -158,7 +150,7 @@ impl SingularReport {
             clusters: clusters.len(),
             certified_clusters: certified,
             unproven_clusters: clusters.len() - certified,
-            undecided_boxes: set.boxes.iter().filter(|b| b.status == BoxKind::Undecided).count(),
+            undecided_boxes: set.boxes.iter().filter(|b| b.status == BoxStatus::Undecided).count(),
             boxes: boxes.len(),
             dropped_as_other_charts: set.dropped_other_chart,
             unsearched_charts: set.unsearched_charts,

@@ -2,12 +2,13 @@
 //! six-joint arms, and of `path-check` (against the 6R arm's or a 3R positioning structure's
 //! singular set), from `app`'s results.
 
-use super::manip3r::Completeness;
-use crate::app::{ArmCuspidality, ArmIk6, ArmPathCheck, PathSet};
+use super::kernel::CompletenessDef;
+use crate::kernel::outcome::Completeness;
+use crate::app::{ArmCuspidality, ArmIk6, ArmPathCheck};
 use crate::kernel::interval::Interval;
-use crate::analyses::joint_path::{SegmentVerdict, Span, SpanReason};
+use crate::analyses::joint_path::{PathCounts, SegmentVerdict, Span};
 use crate::analyses::arm6r::{Chain6R, CuspidalVerdict, MostSolutions};
-use crate::kernel::search::Incompleteness;
+
 use serde::Serialize;
 use std::collections::BTreeMap;
 
@@ -31,7 +32,7 @@ pub struct Ik6Report {
     /// qz, qw; 16 a 4x4 matrix, row-major.
     pub pose: Vec<f64>,
     /// `status` and, when incomplete, `limit`.
-    #[serde(flatten)]
+    #[serde(flatten, serialize_with = "CompletenessDef::serialize")]
     pub completeness: Completeness,
     /// Boxes each proven to hold exactly one solution.
     pub unique: Vec<JointBoxes>,
@@ -52,7 +53,7 @@ impl Ik6Report {
             tip: chain.tip.clone(),
             joints: chain.joints.to_vec(),
             pose: found.pose.numbers().to_vec(),
-            completeness: Completeness(Incompleteness::of(s.status, s.clusters.len(), false)),
+            completeness: Completeness::of(s.status, s.clusters.len(), false),
             unique: s.unique.iter().map(|b| joints(chain, b)).collect(),
             clusters: s.clusters.iter().map(|c| joints(chain, &c.hull)).collect(),
             processed: s.stats.processed,
@@ -150,7 +151,7 @@ impl ArmCuspidalityReport {
             ArmCuspidality::Searched { most: Some(m), .. } => Some(MostSolutionsRecord::of(m)),
             _ => None,
         };
-        ArmCuspidalityReport { arm, verdict: line.verdict, reason: line.reason, proof, witness, most_solutions }
+        ArmCuspidalityReport { arm, verdict: line.verdict.name(), reason: line.reason, proof, witness, most_solutions }
     }
 }
 
@@ -170,24 +171,24 @@ pub struct PathCheckReport {
     /// Radians: the width crossings were narrowed to (joint space).
     pub tolerance: f64,
     /// Segments by verdict.
+    #[serde(with = "PathCountsDef")]
     pub counts: PathCounts,
     /// One per segment, in order.
     pub segments: Vec<SegmentRecord>,
     /// Wall time (seconds).
     pub seconds: f64,
+    #[serde(skip)]
+    headline: String,
 }
 
-/// Segments by verdict.
-#[derive(Clone, Copy, Debug, Default, Serialize, PartialEq, Eq)]
-pub struct PathCounts {
-    /// det proven nonzero throughout.
-    pub clear: usize,
-    /// A sign change of det proven.
-    pub crosses: usize,
-    /// det may vanish, no sign change proven.
-    pub touches_or_undecided: usize,
-    /// Not decided (a limit stopped the run).
-    pub not_decided: usize,
+/// `joint_path::PathCounts`, field by field.
+#[derive(Serialize)]
+#[serde(remote = "PathCounts")]
+struct PathCountsDef {
+    clear: usize,
+    crosses: usize,
+    touches_or_undecided: usize,
+    not_decided: usize,
 }
 
 /// One segment's verdict.
@@ -243,32 +244,12 @@ fn joint_bounds(joints: &[String], b: &[[f64; 2]]) -> JointBoxes {
     joints.iter().zip(b).map(|(n, x)| (n.clone(), *x)).collect()
 }
 
-/// The name of a span's reason in reports and messages.
-pub fn span_reason(r: SpanReason) -> &'static str {
-    match r {
-        SpanReason::SameSignBothSides => "same_sign_both_sides",
-        SpanReason::AtEnd => "at_segment_end",
-        SpanReason::PieceBudget => "piece_budget",
-    }
-}
-
-/// The name of a segment's verdict in reports and messages.
-pub fn verdict_name(v: &SegmentVerdict) -> &'static str {
-    match v {
-        SegmentVerdict::Clear { .. } => "clear",
-        SegmentVerdict::Crosses { .. } => "crosses",
-        SegmentVerdict::Undecided { .. } => "touches_or_undecided",
-        SegmentVerdict::Stopped(_) => "not_decided",
-    }
-}
-
 impl PathCheckReport {
     /// The report of a check.
     pub fn of(found: &ArmPathCheck) -> Self {
-        let mut counts = PathCounts::default();
         let names = &found.joints;
         let det = found.set.det();
-        let spans = |s: &[Span]| -> Vec<SpanRecord> { s.iter().map(|s| SpanRecord { t: s.t, joints: joint_bounds(names, &s.joints), reason: span_reason(s.reason) }).collect() };
+        let spans = |s: &[Span]| -> Vec<SpanRecord> { s.iter().map(|s| SpanRecord { t: s.t, joints: joint_bounds(names, &s.joints), reason: s.reason.name() }).collect() };
         let w = &found.check.waypoints;
         let segments = found
             .check
@@ -279,40 +260,27 @@ impl PathCheckReport {
                 let mut record = SegmentRecord {
                     from: w[k].clone(),
                     to: w[k + 1].clone(),
-                    verdict: verdict_name(v),
-                    reason: String::new(),
+                    verdict: v.name(),
+                    reason: v.reason(det),
                     det_sign: None,
                     min_abs_det: None,
                     crossings: Vec::new(),
                     undecided: Vec::new(),
                 };
                 match v {
-                    SegmentVerdict::Clear { sign, min_abs_det, pieces } => {
-                        counts.clear += 1;
-                        record.reason = format!("{det} proven {} on the whole segment ({pieces} pieces), |{det}| >= {min_abs_det:.3e}", if *sign > 0.0 { "positive" } else { "negative" });
+                    SegmentVerdict::Clear { sign, min_abs_det, .. } => {
                         record.det_sign = Some(*sign);
                         record.min_abs_det = Some(*min_abs_det);
                     }
                     SegmentVerdict::Crosses { crossings, undecided } => {
-                        counts.crosses += 1;
-                        let at: Vec<String> = crossings.iter().map(|c| format!("t in [{:.12}, {:.12}]", c.t[0], c.t[1])).collect();
-                        record.reason = format!("{det} proven to change sign: {}", at.join(", "));
                         record.crossings = crossings
                             .iter()
                             .map(|c| CrossingRecord { t: c.t, joints: joint_bounds(names, &c.joints), sign_before: c.sign_before, narrowed: c.narrowed })
                             .collect();
                         record.undecided = spans(undecided);
                     }
-                    SegmentVerdict::Undecided { spans: s } => {
-                        counts.touches_or_undecided += 1;
-                        let at: Vec<String> = s.iter().map(|s| format!("t in [{:.6}, {:.6}] ({})", s.t[0], s.t[1], span_reason(s.reason))).collect();
-                        record.reason = format!("{det} may vanish, no sign change proven: {}", at.join(", "));
-                        record.undecided = spans(s);
-                    }
-                    SegmentVerdict::Stopped(limit) => {
-                        counts.not_decided += 1;
-                        record.reason = format!("not decided: the run stopped ({}) first", limit.name());
-                    }
+                    SegmentVerdict::Undecided { spans: s } => record.undecided = spans(s),
+                    SegmentVerdict::Stopped(_) => {}
                 }
                 record
             })
@@ -323,27 +291,15 @@ impl PathCheckReport {
             subject: found.subject.clone(),
             joints: names.clone(),
             tolerance: found.tolerance,
-            counts,
+            counts: found.check.counts(),
             segments,
             seconds: found.seconds,
+            headline: found.headline(),
         }
     }
 
-    /// The one-line summary: the arm (the sub-chain, its point and det Df for a 3R check) and
-    /// how many segments cross, touch or are clear.
+    /// The one-line summary (`ArmPathCheck::headline`).
     pub fn headline(&self) -> String {
-        let c = &self.counts;
-        let mut line = format!(
-            "{}: {} segments: {} cross a singularity, {} touch or undecided, {} clear",
-            if self.singular_set == PathSet::Arm6R.name() { &self.arm } else { &self.subject },
-            self.segments.len(),
-            c.crosses,
-            c.touches_or_undecided,
-            c.clear
-        );
-        if c.not_decided > 0 {
-            line += &format!(", {} not decided (stopped)", c.not_decided);
-        }
-        line
+        self.headline.clone()
     }
 }

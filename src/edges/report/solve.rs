@@ -1,5 +1,5 @@
 //! What `linkspace solve --json` writes (schema in README): a linkage's configuration-space box
-//! set (`app::BoxSetResult`, as `app::SolveJob` returns it), with what the problem adds per
+//! set (`app::BoxSetResult`, as `app::SolveRun` returns it), with what the problem adds per
 //! box: the links' orientations (planar model) or poses (spatial model).
 
 use super::kernel;
@@ -110,7 +110,7 @@ pub struct SolveReport {
 }
 
 impl SolveReport {
-    /// The report of `result`, a run of `problem` (`app::SolveJob::run`); `rigid_links` as
+    /// The report of `result`, a run of `problem` (`app::SolveRun::run`); `rigid_links` as
     /// `Mechanism::rigid_links` gives them.
     pub fn new(problem: &Linkage, result: &BoxSetResult, rigid_links: BTreeMap<String, String>) -> Self {
         let record = |b: &ResultBox| box_record(problem, result, b, &rigid_links);

@@ -4,11 +4,8 @@ use super::msgs::{
     self, AssemblyMode, BoxSet, ColorRGBA, CuspRecord, Header, InverseKinematics6Response, InverseKinematicsResponse, JointState, PathCheckResponse, LsBox, Marker, MarkerArray, NodeRecord, Point, Pose, Quaternion, SingularityReport,
     SolveStats, TfMessage, Time, Transform, TransformStamped, Vector3,
 };
-use crate::app::{ArmIk6, ArmPathCheck, Bounds, BoxSetResult, IkResult, ResultBox, SingularityResult};
-use crate::analyses::arm6r::{Chain6R, SegmentVerdict};
-use crate::analyses::arm3r::branches::SingularBranches;
-use crate::analyses::arm3r::joints_over;
-use crate::kernel::search::{BoxStatus, Incompleteness, SolverSettings, Status};
+use crate::app::{joints_over, ArmIk6, ArmPathCheck, Bounds, BoxSetResult, Chain6R, IkResult, ResultBox, SegmentVerdict, SingularBranches, SingularityResult, SolverSettings};
+use crate::kernel::outcome::{BoxStatus, Completeness, Incompleteness, Status};
 
 /// A header stamped now (wall clock) in `frame`.
 pub fn header(frame: &str) -> Header {
@@ -45,7 +42,7 @@ pub fn box_set(r: &BoxSetResult, run_id: u64) -> BoxSet {
     // Complete means nothing undecided, as in the CLI's reports: a finished run that left
     // undecided boxes (a platform's cluster without a proof) is incomplete, limit "undecided".
     let undecided = r.boxes.iter().filter(|b| b.status == BoxStatus::Undecided).count();
-    let (status, limit) = match Incompleteness::of(r.status, undecided, false) {
+    let (status, limit) = match Completeness::of(r.status, undecided, false).reason() {
         None => (msgs::SET_COMPLETE, ""),
         Some(why) => (msgs::SET_INCOMPLETE, why.name()),
     };
@@ -184,7 +181,7 @@ fn intervals(b: &[Bounds]) -> Vec<msgs::Interval> {
 pub fn singularity_report(r: &SingularityResult, run_id: u64) -> SingularityReport {
     // Near-degenerate strips travel as undecided internal-motion boxes.
     let near = r.internal_motions.boxes.iter().any(|b| b.status == BoxStatus::Undecided);
-    let limit = Incompleteness::of(r.status, r.undecided(), near);
+    let limit = Completeness::of(r.status, r.undecided(), near).reason();
     SingularityReport {
         header: header(&joint_frame(&r.mechanism)),
         mechanism: r.mechanism.clone(),
@@ -209,10 +206,10 @@ pub fn singularity_report(r: &SingularityResult, run_id: u64) -> SingularityRepo
         sets: r.loops.iter().flat_map(|l| &l.sets).map(|s| box_set(&s.boxes, run_id)).collect(),
         set_proven: r.loops.iter().flat_map(|l| &l.sets).map(|s| s.proven.min(u32::MAX as usize) as u32).collect(),
         set_undecided: r.loops.iter().flat_map(|l| &l.sets).map(|s| s.undecided.min(u32::MAX as usize) as u32).collect(),
-        set_verdicts: r.loops.iter().flat_map(|l| &l.sets).map(|s| s.verdict.clone()).collect(),
+        set_verdicts: r.loops.iter().flat_map(|l| &l.sets).map(|s| s.summary.clone()).collect(),
         actuated: r.loops.as_ref().map_or_else(Vec::new, |l| l.actuated.clone()),
         actuated_source: r.loops.as_ref().map_or_else(String::new, |l| l.actuated_source.clone()),
-        arm_cuspidality: r.arm_cuspidality.as_ref().map_or_else(String::new, |a| a.verdict.to_string()),
+        arm_cuspidality: r.arm_cuspidality.as_ref().map_or_else(String::new, |a| a.verdict.name().to_string()),
         arm_cuspidality_reason: r.arm_cuspidality.as_ref().map_or_else(String::new, |a| a.reason.clone()),
         ..verdict_and_branches(r, run_id)
     }
@@ -308,7 +305,7 @@ fn crossing_set(r: &SingularityResult, b: Option<&SingularBranches>, run_id: u64
     let set = BoxSetResult {
         mechanism: r.mechanism.clone(),
         analysis: "branch_crossings".into(),
-        status: Status::Complete,
+        status: Status::Finished,
         settings: SolverSettings { sigma: r.query.precision, ..Default::default() },
         variables: r.joint_names.iter().chain(&r.workspace_names).cloned().collect(),
         primaries: (0..r.joint_names.len()).collect(),
@@ -317,7 +314,7 @@ fn crossing_set(r: &SingularityResult, b: Option<&SingularBranches>, run_id: u64
         traces: vec![],
         boxes,
         clusters: n,
-        stats: crate::kernel::search::SolveStats { solutions: n as u64, certified: n as u64, ..Default::default() },
+        stats: crate::app::SolveStats { solutions: n as u64, certified: n as u64, ..Default::default() },
     };
     let mut out = box_set(&set, run_id);
     if b.is_some_and(|b| b.crossings.is_none()) {
@@ -390,13 +387,13 @@ pub fn ik_response(r: &IkResult) -> InverseKinematicsResponse {
     let unique = r.solutions.iter().filter(|s| s.unique).count();
     let clusters = r.solutions.len() - unique;
     let mut message = format!("{unique} solutions proven unique, {clusters} clusters undecided at sigma (each may hold one or several solutions, or a line of them)");
-    if let crate::kernel::search::Status::Incomplete(limit) = r.status {
+    if let crate::app::Status::Stopped(limit) = r.status {
         message.push_str(&format!("; incomplete ({} limit): the clusters include the boxes left pending", limit.name()));
     }
     InverseKinematicsResponse {
         ok: true,
         message,
-        complete: r.status.is_complete(),
+        complete: r.status.finished(),
         solutions: r
             .solutions
             .iter()
@@ -416,15 +413,15 @@ pub fn ik_response(r: &IkResult) -> InverseKinematicsResponse {
 pub fn ik6_response(chain: &Chain6R, found: &ArmIk6) -> InverseKinematics6Response {
     let s = &found.solutions;
     let mut message = format!("{} solutions proven unique, {} clusters undecided at sigma", s.unique.len(), s.clusters.len());
-    if let crate::kernel::search::Status::Incomplete(limit) = s.status {
+    if let crate::app::Status::Stopped(limit) = s.status {
         message.push_str(&format!("; incomplete ({} limit): the clusters include the boxes left pending", limit.name()));
     }
-    let as_box = |k: usize, b: &[crate::kernel::interval::Interval; 6]| LsBox { intervals: b.iter().map(|x| msgs::Interval { lower: x.inf(), upper: x.sup() }).collect(), status: msgs::BOX_SOLUTION, level: 0, cluster: k as i32 };
-    let boxes: Vec<&[crate::kernel::interval::Interval; 6]> = s.unique.iter().chain(s.clusters.iter().map(|c| &c.hull)).collect();
+    let as_box = |k: usize, b: &[crate::app::Interval; 6]| LsBox { intervals: b.iter().map(|x| msgs::Interval { lower: x.inf(), upper: x.sup() }).collect(), status: msgs::BOX_SOLUTION, level: 0, cluster: k as i32 };
+    let boxes: Vec<&[crate::app::Interval; 6]> = s.unique.iter().chain(s.clusters.iter().map(|c| &c.hull)).collect();
     InverseKinematics6Response {
         ok: true,
         message,
-        complete: crate::kernel::search::Incompleteness::of(s.status, s.clusters.len(), false).is_none(),
+        complete: Completeness::of(s.status, s.clusters.len(), false).is_complete(),
         solutions: boxes.iter().enumerate().map(|(k, b)| as_box(k, b)).collect(),
         joint_names: chain.joints.to_vec(),
         unique: (0..boxes.len()).map(|k| k < s.unique.len()).collect(),
@@ -434,22 +431,24 @@ pub fn ik6_response(chain: &Chain6R, found: &ArmIk6) -> InverseKinematics6Respon
 
 /// The reply to a path check: the verdicts and reasons of `linkspace path-check`.
 pub fn path_check_response(found: &ArmPathCheck) -> PathCheckResponse {
-    let report = crate::edges::report::six::PathCheckReport::of(found);
     let mut reply = PathCheckResponse {
         ok: true,
-        message: report.headline(),
-        complete: report.counts.not_decided == 0,
-        singular_set: report.singular_set.to_string(),
-        subject: report.subject.clone(),
+        message: found.headline(),
+        complete: found.check.counts().not_decided == 0,
+        singular_set: found.set.name().to_string(),
+        subject: found.subject.clone(),
         joint_names: found.joints.clone(),
         ..Default::default()
     };
     for (k, v) in found.check.segments.iter().enumerate() {
-        let record = &report.segments[k];
-        reply.verdicts.push(record.verdict.to_string());
-        reply.reasons.push(record.reason.clone());
-        reply.det_signs.push(record.det_sign.map_or(0, |s| if s > 0.0 { 1 } else { -1 }));
-        reply.min_abs_det.push(record.min_abs_det.unwrap_or(0.0));
+        reply.verdicts.push(v.name().to_string());
+        reply.reasons.push(v.reason(found.set.det()));
+        let (sign, min_abs_det) = match v {
+            SegmentVerdict::Clear { sign, min_abs_det, .. } => (if *sign > 0.0 { 1 } else { -1 }, *min_abs_det),
+            _ => (0, 0.0),
+        };
+        reply.det_signs.push(sign);
+        reply.min_abs_det.push(min_abs_det);
         if let SegmentVerdict::Crosses { crossings, .. } = v {
             for c in crossings {
                 reply.crossing_segments.push(k.min(u32::MAX as usize) as u32);
@@ -502,7 +501,7 @@ mod tests {
     use super::*;
 
     fn report_of(xml: &str, nodes: bool) -> SingularityReport {
-        let m = crate::model::urdf::parse(xml).expect("parses");
+        let m = crate::app::parse_urdf(xml).expect("parses");
         let a = crate::app::load(&m, &[], &[]).expect("loads");
         let q = crate::app::SingularityQuery { precision: 1e-4, nodes, max_boxes: 1_000_000, timeout: None, threads: 1 };
         let r = a.singularities(&q).expect("valid").run(&std::sync::atomic::AtomicBool::new(false), &mut |_| {});

@@ -15,8 +15,8 @@ mod node;
 pub use convert::bounded;
 
 use crate::app::{self, Analysis};
-use crate::model::urdf;
-use crate::kernel::search::SolverSettings;
+
+use crate::app::SolverSettings;
 use anyhow::{bail, Context as _, Result};
 
 /// How service requests and replies are laid out on DDS; it must match the caller's RMW.
@@ -143,6 +143,8 @@ pub(crate) struct Loaded {
     pub token: String,
     /// It came from the `robot_description` parameter or topic (see `Source::description`).
     pub description: bool,
+    /// The mechanism as the front door takes it: every job the node runs is prepared on it.
+    pub input: std::sync::Arc<app::Input>,
 }
 
 /// A robot name as one token of a ROS name: letters, digits and single underscores, not
@@ -166,7 +168,7 @@ pub(crate) fn name_token(name: &str) -> String {
 /// Parses and formulates one URDF with the load-time fixes and traces that name its robot (or
 /// no robot); marks in `used_fixes`, `used_traces` which ones applied.
 pub(crate) fn load_one(s: &Source, config: &ServeConfig, used_fixes: &mut [bool], used_traces: &mut [bool]) -> Result<Loaded> {
-    let m = urdf::parse(&s.xml).with_context(|| format!("loading {}", s.label))?;
+    let m = app::parse_urdf(&s.xml).with_context(|| format!("loading {}", s.label))?;
     let mine = |robot: &Option<String>| robot.as_deref().is_none_or(|r| r == m.name);
     let mut fixed: Vec<(String, f64)> = Vec::new();
     for (k, (robot, joint, value)) in config.fixed.iter().enumerate() {
@@ -186,7 +188,7 @@ pub(crate) fn load_one(s: &Source, config: &ServeConfig, used_fixes: &mut [bool]
         }
     }
     let analysis = app::load_urdf(&m, &fixed, &traces).with_context(|| format!("loading {}", s.label))?;
-    Ok(Loaded { analysis, root_link: m.links[m.root].name.clone(), token: name_token(&m.name), description: s.description })
+    Ok(Loaded { analysis, root_link: m.links[m.root].name.clone(), token: name_token(&m.name), description: s.description, input: std::sync::Arc::new(app::Input::Mechanism(m)) })
 }
 
 /// Parses and formulates every mechanism of `config`.

@@ -70,7 +70,7 @@ const PROGRESS_EVERY: Duration = Duration::from_millis(200);
 /// }
 /// let mut keep = Keep(vec![]);
 /// let (status, stats) = run(&mut Bisect, (0.0, 1.0), Store::DepthFirst, &Limits::default(), &AtomicBool::new(false), &mut keep);
-/// assert_eq!(status, Status::Complete);
+/// assert_eq!(status, Status::Finished);
 /// assert_eq!(keep.0, vec![(0.25, 0.3125)]);
 /// assert_eq!(stats.discarded(Apart), 4);
 /// ```
@@ -84,7 +84,7 @@ pub fn run<P: Prune>(prune: &mut P, start: P::Cell, store: Store, limits: &Limit
     let mut pending_bytes = prune.bytes(&start);
     let key = prune.key(&start);
     pool.restore(start, key);
-    let mut status = Status::Complete;
+    let mut status = Status::Finished;
     let mut last_progress = Instant::now();
     let mut report_pending = true;
 
@@ -92,7 +92,7 @@ pub fn run<P: Prune>(prune: &mut P, start: P::Cell, store: Store, limits: &Limit
         if let Some(limit) = budget.exhausted(stats.processed, pending_bytes) {
             let key = prune.key(&cell);
             pool.restore(cell, key);
-            status = Status::Incomplete(limit);
+            status = Status::Stopped(limit);
             break;
         }
         pending_share -= prune.share(&cell);
@@ -112,12 +112,12 @@ pub fn run<P: Prune>(prune: &mut P, start: P::Cell, store: Store, limits: &Limit
             }));
         });
         if flow.is_break() {
-            status = Status::Incomplete(Limit::Sink);
+            status = Status::Stopped(Limit::Sink);
             report_pending = false;
             break;
         }
         if cut_short {
-            status = Status::Incomplete(budget.interrupted().unwrap_or(Limit::Time));
+            status = Status::Stopped(budget.interrupted().unwrap_or(Limit::Time));
             break;
         }
         // The clock is read every 64 cells only: a cell can cost less than reading it.
@@ -325,13 +325,13 @@ fn walk_levels<C, F, R: Reason>(start: C, budget: &Budget<'_>, sink: &mut impl S
     let mut stats = Stats::default();
     let mut discards = Discards::default();
     let mut level = vec![start];
-    let mut status = Status::Complete;
+    let mut status = Status::Finished;
     let mut report_pending = true;
     let mut pending = Vec::new();
 
     while !level.is_empty() {
         if let Some(limit) = agree(budget.exhausted(stats.processed, 0)) {
-            status = Status::Incomplete(limit);
+            status = Status::Stopped(limit);
             pending = level;
             break;
         }
@@ -351,7 +351,7 @@ fn walk_levels<C, F, R: Reason>(start: C, budget: &Budget<'_>, sink: &mut impl S
                 next.extend(children);
             });
             if flow.is_break() {
-                status = Status::Incomplete(Limit::Sink);
+                status = Status::Stopped(Limit::Sink);
                 report_pending = false;
                 break;
             }
@@ -370,7 +370,7 @@ fn walk_levels<C, F, R: Reason>(start: C, budget: &Budget<'_>, sink: &mut impl S
         };
         sink.progress(&Progress { processed: stats.processed, pending: next.len() + rest.len() + unprocessed.len(), decided: f64::NAN });
         if let Some(limit) = stopped {
-            status = Status::Incomplete(limit);
+            status = Status::Stopped(limit);
             pending = unprocessed;
             pending.extend(rest);
             pending.extend(next);
@@ -597,7 +597,7 @@ mod tests {
         for store in [Store::DepthFirst, Store::BreadthFirst, Store::BestFirst] {
             let mut keep = Keep::default();
             let (status, stats) = run(&mut Roots, (0.0, 3.0, 0), store, &Limits::default(), &AtomicBool::new(false), &mut keep);
-            assert_eq!(status, Status::Complete);
+            assert_eq!(status, Status::Finished);
             // kπ/20 ≤ 3 for k = 0..=19.
             assert_eq!(roots_in(&keep.found), 20, "{store:?}");
             assert_eq!(stats.found as usize, keep.found.len());
@@ -624,7 +624,7 @@ mod tests {
             let mut keep = Keep::default();
             let mut prunes = vec![Roots; workers];
             let (status, _) = run_by_level(&mut prunes, (0.0, 3.0, 0), &Limits::default(), &AtomicBool::new(false), &mut keep);
-            assert_eq!(status, Status::Complete);
+            assert_eq!(status, Status::Finished);
             assert_eq!(keep.found, serial, "{workers} workers");
         }
     }
@@ -653,7 +653,7 @@ mod tests {
             });
             let processed = results[0].1;
             for (status, p, found) in results {
-                assert_eq!((status, p), (Status::Complete, processed));
+                assert_eq!((status, p), (Status::Finished, processed));
                 assert_eq!(found, serial, "{size} processes");
             }
         }
@@ -665,7 +665,7 @@ mod tests {
             (status, stats.processed, keep.found, keep.pending)
         });
         assert_eq!(results[0], results[1]);
-        assert_eq!((results[0].0, results[0].1), (Status::Incomplete(Limit::Boxes), 40));
+        assert_eq!((results[0].0, results[0].1), (Status::Stopped(Limit::Boxes), 40));
     }
 
     #[test]
@@ -678,7 +678,7 @@ mod tests {
             } else {
                 run_by_level(&mut vec![Roots; workers], (0.0, 3.0, 0), &limits, &AtomicBool::new(false), &mut keep)
             };
-            assert_eq!(status, Status::Incomplete(Limit::Boxes));
+            assert_eq!(status, Status::Stopped(Limit::Boxes));
             assert_eq!(stats.processed, 40);
             let mut all = keep.found.clone();
             all.extend(keep.pending.iter().map(|&(a, b, _)| (a, b)));
@@ -691,10 +691,10 @@ mod tests {
         let tiny = Limits { max_memory: 3 * std::mem::size_of::<Cell>(), ..Limits::default() };
         let mut keep = Keep::default();
         let (status, _) = run(&mut Roots, (0.0, 3.0, 0), Store::BreadthFirst, &tiny, &AtomicBool::new(false), &mut keep);
-        assert_eq!(status, Status::Incomplete(Limit::Memory));
+        assert_eq!(status, Status::Stopped(Limit::Memory));
         assert!(!keep.pending.is_empty());
         let mut keep = Keep::default();
         let (status, stats) = run_by_level(&mut [Roots, Roots], (0.0, 3.0, 0), &Limits::default(), &AtomicBool::new(true), &mut keep);
-        assert_eq!((status, stats.processed, keep.pending.len()), (Status::Incomplete(Limit::Cancelled), 0, 1));
+        assert_eq!((status, stats.processed, keep.pending.len()), (Status::Stopped(Limit::Cancelled), 0, 1));
     }
 }

@@ -1,5 +1,6 @@
 //! What bounds a run, how it ended, and how far it got.
 
+pub use crate::kernel::outcome::{Limit, Status};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -21,102 +22,6 @@ pub const DEFAULT_MAX_MEMORY: usize = 2 << 30;
 impl Default for Limits {
     fn default() -> Self {
         Limits { max_cells: 1_000_000, timeout: None, max_memory: DEFAULT_MAX_MEMORY }
-    }
-}
-
-/// Why a run stopped early.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Limit {
-    /// `max_cells` cells were processed.
-    Boxes,
-    /// `timeout` elapsed.
-    Time,
-    /// Pending cells would have held more than `max_memory` bytes.
-    Memory,
-    /// The caller raised the cancel flag.
-    Cancelled,
-    /// The sink asked to stop.
-    Sink,
-}
-
-impl Limit {
-    /// The name used in reports and messages.
-    pub fn name(self) -> &'static str {
-        match self {
-            Limit::Boxes => "boxes",
-            Limit::Time => "time",
-            Limit::Memory => "memory",
-            Limit::Cancelled => "cancelled",
-            Limit::Sink => "sink",
-        }
-    }
-}
-
-/// How a run ended.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Status {
-    /// Every cell was decided: the results enclose everything sought in the start cell.
-    Complete,
-    /// Stopped by a limit; results and undecided cells together enclose everything sought.
-    Incomplete(Limit),
-}
-
-impl Status {
-    /// True for `Complete`.
-    pub fn is_complete(self) -> bool {
-        self == Status::Complete
-    }
-
-    /// The first limit of two runs that make up one answer: complete only if both are.
-    pub fn and(self, other: Status) -> Status {
-        match self {
-            Status::Complete => other,
-            s => s,
-        }
-    }
-}
-
-/// Why a result is incomplete: a limit stopped its run, or the run ended with something it could
-/// not decide. "Complete" means none of these: every cell decided, nothing left open.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Incompleteness {
-    /// A limit stopped the run.
-    Limit(Limit),
-    /// Strips were set aside as near-degenerate (undecided as a whole).
-    NearDegenerate,
-    /// Cells were left undecided at the precision.
-    Undecided,
-}
-
-impl Incompleteness {
-    /// The one rule: the limit that stopped the run, else near-degenerate strips, else undecided
-    /// cells; `None` for a complete result.
-    ///
-    /// # Examples
-    ///
-    /// ```
-    /// use linkspace::kernel::search::{Incompleteness, Limit, Status};
-    /// assert_eq!(Incompleteness::of(Status::Complete, 0, false), None);
-    /// assert_eq!(Incompleteness::of(Status::Complete, 3, false), Some(Incompleteness::Undecided));
-    /// assert_eq!(Incompleteness::of(Status::Incomplete(Limit::Boxes), 3, true), Some(Incompleteness::Limit(Limit::Boxes)));
-    /// ```
-    pub fn of(status: Status, undecided: usize, near_degenerate: bool) -> Option<Self> {
-        match status {
-            Status::Incomplete(l) => Some(Incompleteness::Limit(l)),
-            Status::Complete if near_degenerate => Some(Incompleteness::NearDegenerate),
-            Status::Complete if undecided > 0 => Some(Incompleteness::Undecided),
-            Status::Complete => None,
-        }
-    }
-
-    /// The name used in reports and messages (a limit's own name, `near_degenerate`,
-    /// `undecided`).
-    pub fn name(self) -> &'static str {
-        match self {
-            Incompleteness::Limit(l) => l.name(),
-            Incompleteness::NearDegenerate => "near_degenerate",
-            Incompleteness::Undecided => "undecided",
-        }
     }
 }
 

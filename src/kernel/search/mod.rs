@@ -6,7 +6,7 @@
 //! `Found` carrying its certificate), leave it undecided at precision (with a reason), or split
 //! it. The kernel owns the rest: the order of work (`Store`), `Limits` (cells, time, memory),
 //! cancellation, progress, the `Sink` that receives results as they come, per-reason `Stats`,
-//! and the one `Status { Complete, Incomplete(Limit) }`.
+//! and the one `Status { Finished, Stopped(Limit) }` (`outcome`).
 //! This is ibex's `Solver(System, Ctc, Bsc, CellBuffer)` split, statically dispatched.
 //!
 //! `run` walks the tree on the calling thread in the chosen `Store` order; `run_by_level` walks
@@ -31,9 +31,10 @@ mod store;
 
 pub use control::Control;
 pub use driver::{run, run_by_level, run_shared};
-pub use limits::{process_cpu_seconds, Incompleteness, Limit, Limits, Progress, Status};
+pub use crate::kernel::outcome::{BoxStatus, Completeness, Incompleteness, Limit, Status};
+pub use limits::{process_cpu_seconds, Limits, Progress};
 pub(crate) use limits::Budget;
-pub use polynomial::{contractor_with_newton_on, default_contractor, width_units, BoxSink, BoxStatus, Collect, ContractorFactory, Enclosure, RefinePlan, Refinement, SolveError, SolveStats, Solver};
+pub use polynomial::{contractor_with_newton_on, default_contractor, width_units, BoxSink, Collect, ContractorFactory, Enclosure, RefinePlan, Refinement, SolveError, SolveStats, Solver};
 pub use settings::{SettingsError, SolverSettings};
 pub use share::{rank_and_size, share_searches, Peers, Wire};
 pub(crate) use share::total;

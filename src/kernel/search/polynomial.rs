@@ -13,7 +13,8 @@
 
 use super::limits::{process_cpu_seconds, Limit, Limits, Progress, Status};
 use super::settings::{SettingsError, SolverSettings};
-use super::share::Wire;
+
+pub use crate::kernel::outcome::BoxStatus;
 use super::{driver, Store};
 use crate::kernel::contract::{Contraction, Contractor, Filter, Filtered, LpShrink, Newton, Propagation, Sequence};
 use crate::kernel::interval::IntervalBox;
@@ -27,37 +28,6 @@ use thiserror::Error;
 mod prune;
 
 use self::prune::{Boxes, Screen, Shared, SystemPrune};
-
-/// The tag of a reported box.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BoxStatus {
-    /// No wider than sigma and not proven empty.
-    Solution,
-    /// A solution box proven (interval Newton) to hold exactly one solution.
-    Unique,
-    /// Left unprocessed when a limit stopped the run.
-    Undecided,
-}
-
-impl Wire for BoxStatus {
-    fn put(&self, out: &mut Vec<u8>) {
-        (*self as u8).put(out)
-    }
-    fn take(input: &mut &[u8]) -> Self {
-        match u8::take(input) {
-            0 => BoxStatus::Solution,
-            1 => BoxStatus::Unique,
-            _ => BoxStatus::Undecided,
-        }
-    }
-}
-
-impl BoxStatus {
-    /// A solution box, certified or not.
-    pub fn is_solution(self) -> bool {
-        matches!(self, BoxStatus::Solution | BoxStatus::Unique)
-    }
-}
 
 /// Where results go, as they are found.
 pub trait BoxSink {
@@ -430,8 +400,8 @@ impl<'a> Solver<'a> {
             let timed = Solver { system: deeper.system, primaries: deeper.primaries.clone(), units: deeper.units.clone(), settings: SolverSettings { timeout: remaining.or(self.settings.timeout), ..deeper.settings.clone() }, factory: deeper.factory.clone() };
             let mut found = Collect::default();
             match timed.run_from(b.clone(), cancel, &mut found) {
-                (Status::Complete, _) if found.solutions.is_empty() => Probe::Empty,
-                (Status::Incomplete(Limit::Time | Limit::Cancelled), _) => Probe::NotRun,
+                (Status::Finished, _) if found.solutions.is_empty() => Probe::Empty,
+                (Status::Stopped(Limit::Time | Limit::Cancelled), _) => Probe::NotRun,
                 _ => Probe::Kept,
             }
         };
@@ -590,7 +560,7 @@ impl<'a> Solver<'a> {
             let finer = Solver { system: self.system, primaries: self.primaries.clone(), units: self.units.clone(), settings: SolverSettings { sigma, max_boxes: plan.max_boxes, timeout: left, threads: 1, ..self.settings.clone() }, factory: self.factory.clone() };
             let mut found = Collect::default();
             let (status, stats) = finer.run_from(start.clone(), cancel, &mut found);
-            if let Status::Incomplete(limit) = status {
+            if let Status::Stopped(limit) = status {
                 tried.push(format!("sigma {sigma:.1e}: stopped on its {} limit after {} boxes", limit.name(), stats.processed));
                 break;
             }

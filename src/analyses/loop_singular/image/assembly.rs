@@ -129,7 +129,7 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
     }
     let images: Vec<Vec<(f64, f64)>> = set.boxes.iter().map(|b| sp.actuator_values(&b.b)).collect();
     let stopped = || budget.interrupted();
-    let unfinished = |limit: Limit| ActuatorRegions { grid, status: Status::Incomplete(limit), blocked_cells: 0, sign: SIGN_OF_F_P, regions: Vec::new(), seconds: t0.elapsed().as_secs_f64() };
+    let unfinished = |limit: Limit| ActuatorRegions { grid, status: Status::Stopped(limit), blocked_cells: 0, sign: SIGN_OF_F_P, regions: Vec::new(), seconds: t0.elapsed().as_secs_f64() };
     let mut blocked = vec![false; grid * grid];
     for (k, im) in images.iter().enumerate() {
         if k % 64 == 0 {
@@ -147,7 +147,7 @@ pub fn regions(m: &Mechanism, sp: &SingularProblem, set: &SingularSet, grid: usi
     if let Some(limit) = stopped() {
         return Ok(unfinished(limit));
     }
-    let mut out = ActuatorRegions { grid, status: Status::Complete, blocked_cells: blocked.iter().filter(|b| **b).count(), sign: SIGN_OF_F_P, regions: Vec::new(), seconds: 0.0 };
+    let mut out = ActuatorRegions { grid, status: Status::Finished, blocked_cells: blocked.iter().filter(|b| **b).count(), sign: SIGN_OF_F_P, regions: Vec::new(), seconds: 0.0 };
     let wrap = |x: i64, ax: &Axis| if (0..grid as i64).contains(&x) { Some(x as usize) } else if ax.periodic { Some(x.rem_euclid(grid as i64) as usize) } else { None };
     let free_regions = crate::kernel::interval::flood_fill(grid * grid, |c| !blocked[c], |c, next| {
         let (i, j) = (c / grid, c % grid);
@@ -203,7 +203,7 @@ fn sample_region(m: &Mechanism, sp: &SingularProblem, sample: &[f64], cells: usi
     let e = solver.enclose(cancel, &mut |_| {});
     let certified: Vec<&IntervalBox> = e.solutions.iter().zip(&e.unique).filter(|(_, u)| **u).map(|(b, _)| b).collect();
     let boxes = [certified.len(), e.solutions.len() - certified.len(), e.undecided.len()];
-    let complete = e.status == Status::Complete && boxes[1] == 0 && boxes[2] == 0;
+    let complete = e.status == Status::Finished && boxes[1] == 0 && boxes[2] == 0;
     let configurations = complete.then_some(certified.len());
     let mut signs = Some([0usize, 0]);
     for b in &certified {
@@ -255,32 +255,44 @@ fn sample_region_on_torus(torus: &PlatformTorus, sample: &[f64], cells: usize, s
             _ => signs = None,
         }
     }
-    let complete = found.status == Status::Complete && open == 0;
+    let complete = found.status == Status::Finished && open == 0;
     ActuatorRegion { cells, sample: sample.to_vec(), configurations: complete.then_some(counted), signs: if complete { signs } else { None }, boxes: [counted, 0, open] }
 }
 
-/// `yes`, `no` or `undecided`, with the argument.
+/// Can the mechanism change assembly mode without crossing a type-II singularity? `Some(true)`,
+/// `Some(false)` or `None` (undecided), with the argument.
 #[derive(Clone, Debug)]
 pub struct AssemblyChangeVerdict {
-    /// Can the mechanism change assembly mode without crossing a type-II singularity?
-    pub answer: &'static str,
+    /// The answer, `None` while undecided.
+    pub answer: Option<bool>,
     /// Why.
     pub reason: String,
+}
+
+impl AssemblyChangeVerdict {
+    /// `yes`, `no` or `undecided`, as reports write it.
+    pub fn word(&self) -> &'static str {
+        match self.answer {
+            Some(true) => "yes",
+            Some(false) => "no",
+            None => "undecided",
+        }
+    }
 }
 
 /// The verdict from the searches (see the module doc for what each answer rests on).
 pub fn verdict(cover: &SingularSet, cusps: &PointSearch, nodes: &NodeSearch, regions: &ActuatorRegions) -> AssemblyChangeVerdict {
     if cusps.proven() > 0 {
-        return AssemblyChangeVerdict { answer: "yes", reason: format!("{} certified cusp(s) of the type-II image: a loop around one changes assembly mode without crossing a singularity", cusps.proven()) };
+        return AssemblyChangeVerdict { answer: Some(true), reason: format!("{} certified cusp(s) of the type-II image: a loop around one changes assembly mode without crossing a singularity", cusps.proven()) };
     }
     let mut gaps = Vec::new();
-    if cover.status != Status::Complete {
+    if cover.status != Status::Finished {
         gaps.push("the type-II cover is incomplete".to_string());
     }
-    if cusps.status != Status::Complete || !cusps.points.is_empty() {
+    if cusps.status != Status::Finished || !cusps.points.is_empty() {
         gaps.push(format!("the cusp search is {} with {} unproven cluster(s)", status_word(cusps.status), cusps.points.len()));
     }
-    if nodes.status != Status::Complete || nodes.undecided() > 0 {
+    if nodes.status != Status::Finished || nodes.undecided() > 0 {
         gaps.push(format!("the node search is {} with {} undecided pair(s) or near-diagonal box(es)", status_word(nodes.status), nodes.undecided()));
     }
     if nodes.proven() > 0 {
@@ -293,20 +305,20 @@ pub fn verdict(cover: &SingularSet, cusps: &PointSearch, nodes: &NodeSearch, reg
             Some(_) => {}
         }
     }
-    if let Status::Incomplete(limit) = regions.status {
+    if let Status::Stopped(limit) = regions.status {
         gaps.push(format!("the raster of regions stopped early ({} limit)", limit.name()));
     } else if regions.regions.is_empty() {
         gaps.push("no region found on the grid".to_string());
     }
     if gaps.is_empty() {
         AssemblyChangeVerdict {
-            answer: "no",
+            answer: Some(false),
             reason: format!(
                 "no cusp and no node (searches complete); over each of the {} regions the grid reaches, at most one configuration with each sign of det F_p, a sign no path off the type-II set can change (regions thinner than the cover are not sampled)",
                 regions.regions.len()
             ),
         }
     } else {
-        AssemblyChangeVerdict { answer: "undecided", reason: gaps.join("; ") }
+        AssemblyChangeVerdict { answer: None, reason: gaps.join("; ") }
     }
 }

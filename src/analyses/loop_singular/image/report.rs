@@ -3,10 +3,10 @@
 //! the whole image (`ImageReport`) or one search of it (`ImagePoints`).
 
 use super::{actuator_image, verdict, ActuatorRegions, AssemblyChangeVerdict, NodeSearch, PointSearch};
-use crate::analyses::loop_singular::{BoxKind, SingularSet};
+use crate::analyses::loop_singular::SingularSet;
 use crate::formulate::singular::SingularProblem;
 use crate::kernel::interval::Bounds;
-use crate::kernel::search::Status;
+use crate::kernel::outcome::{BoxStatus, Completeness};
 use std::collections::BTreeMap;
 
 /// One cusp: the fields of the 3R `CuspRecord`; `workspace` is the image in actuator space.
@@ -51,8 +51,8 @@ pub struct ImageReport {
     pub mechanism: String,
     /// Actuated joints (the keys of `workspace`).
     pub actuated: Vec<String>,
-    /// `complete` when every search completed.
-    pub status: &'static str,
+    /// Complete when every search finished with nothing undecided.
+    pub status: Completeness,
     /// Cusps: certified first.
     pub cusps: Vec<ImageCusp>,
     /// Node pairs.
@@ -95,7 +95,7 @@ pub fn node_records(sp: &SingularProblem, nodes: &NodeSearch) -> Vec<ImageNode> 
         .map(|p| {
             let (wa, wb) = (actuator_image(sp, &p.joints[0]), actuator_image(sp, &p.joints[1]));
             let workspace = wa.iter().map(|(n, x)| (n.clone(), wb.get(n).map_or(*x, |y| [x[0].max(y[0]), x[1].min(y[1])]))).collect();
-            ImageNode { points: p.joints.clone(), workspace, unique: p.kind == BoxKind::Certified }
+            ImageNode { points: p.joints.clone(), workspace, unique: p.kind == BoxStatus::Unique }
         })
         .collect()
 }
@@ -110,8 +110,8 @@ pub struct ImagePoints {
     pub actuated: Vec<String>,
     /// `cusps` or `nodes`.
     pub search: &'static str,
-    /// `complete` when the search completed with every point certified.
-    pub status: &'static str,
+    /// Complete when the search finished with every point certified.
+    pub status: Completeness,
     /// Cusps found (empty for a node search), certified first.
     pub cusps: Vec<ImageCusp>,
     /// Node pairs found (empty for a cusp search).
@@ -125,14 +125,19 @@ pub struct ImagePoints {
 }
 
 impl ImagePoints {
+    /// Whether the search finished with every point certified.
+    pub fn completeness(&self) -> Completeness {
+        self.status
+    }
+
     /// The report of a cusp search.
     pub fn cusps(sp: &SingularProblem, cusps: &PointSearch) -> Self {
-        let complete = cusps.status == Status::Complete && cusps.points.len() == cusps.proven();
+        let complete = Completeness::of(cusps.status, cusps.points.len() - cusps.proven(), false);
         Self {
             mechanism: sp.linkage.name.clone(),
             actuated: sp.actuated.clone(),
             search: "cusps",
-            status: if complete { "complete" } else { "incomplete" },
+            status: complete,
             cusps: cusp_records(sp, cusps),
             nodes: Vec::new(),
             counts: Counts { proven: cusps.proven(), undecided: cusps.points.len() - cusps.proven() },
@@ -143,12 +148,12 @@ impl ImagePoints {
 
     /// The report of a node search.
     pub fn nodes(sp: &SingularProblem, nodes: &NodeSearch) -> Self {
-        let complete = nodes.status == Status::Complete && nodes.undecided() == 0;
+        let complete = Completeness::of(nodes.status, nodes.undecided(), false);
         Self {
             mechanism: sp.linkage.name.clone(),
             actuated: sp.actuated.clone(),
             search: "nodes",
-            status: if complete { "complete" } else { "incomplete" },
+            status: complete,
             cusps: Vec::new(),
             nodes: node_records(sp, nodes),
             counts: Counts { proven: nodes.proven(), undecided: nodes.undecided() },
@@ -159,23 +164,26 @@ impl ImagePoints {
 }
 
 impl ImageReport {
+    /// Whether every search finished with nothing undecided.
+    pub fn completeness(&self) -> Completeness {
+        self.status
+    }
+
     /// The report of the searches.
     pub fn new(sp: &SingularProblem, cover: &SingularSet, cusps: &PointSearch, nodes: &NodeSearch, regions: ActuatorRegions) -> Self {
         let cusp_records = cusp_records(sp, cusps);
         let node_records = node_records(sp, nodes);
         let regions_seconds = regions.seconds;
         let verdict = verdict(cover, cusps, nodes, &regions);
-        // "complete" is the crate's one rule: no limit met and nothing undecided (an unproven
-        // cusp or node, a near-diagonal box, a region whose assembly modes are not proven).
-        let complete = [cover.status, cusps.status, nodes.status].iter().all(|s| *s == Status::Complete)
-            && cusps.points.len() == cusps.proven()
-            && nodes.undecided() == 0
-            && regions.status == Status::Complete
-            && regions.regions.iter().all(|r| r.configurations.is_some() && r.signs.is_some());
+        // The one rule: no limit met and nothing undecided (an unproven cusp or node, a
+        // near-diagonal box, a region whose assembly modes are not proven).
+        let status = cover.status.and(cusps.status).and(nodes.status).and(regions.status);
+        let open_regions = regions.regions.iter().filter(|r| r.configurations.is_none() || r.signs.is_none()).count();
+        let complete = Completeness::of(status, cusps.points.len() - cusps.proven() + nodes.undecided() + open_regions, false);
         Self {
             mechanism: sp.linkage.name.clone(),
             actuated: sp.actuated.clone(),
-            status: if complete { "complete" } else { "incomplete" },
+            status: complete,
             cusps: cusp_records,
             nodes: node_records,
             cusp_counts: Counts { proven: cusps.proven(), undecided: cusps.points.len() - cusps.proven() },

@@ -61,7 +61,7 @@ pub fn five_bar(dir: &Path, quick: bool) -> Result<()> {
         report.node_counts.undecided,
         report.regions.regions.len(),
         report.regions.regions.iter().map(|r| r.configurations).collect::<Vec<_>>(),
-        report.verdict.answer
+        report.verdict.word()
     );
     if !quick {
         // The equal-rods five-bar: its cusp system has curves of roots over the two actuator
@@ -169,7 +169,7 @@ fn actuator_panel(p: &SingularProblem, boxes: &[&IntervalBox], r: &ImageReport, 
     LayeredPanel {
         title: format!(
             "{what}: {} cusps ({} undecided), {} nodes ({} undecided), verdict {}",
-            r.cusp_counts.proven, r.cusp_counts.undecided, r.node_counts.proven, r.node_counts.undecided, r.verdict.answer
+            r.cusp_counts.proven, r.cusp_counts.undecided, r.node_counts.proven, r.node_counts.undecided, r.verdict.word()
         ),
         x_label: "θ1 (crank1_joint)".into(),
         y_label: "θ2 (crank2_joint)".into(),

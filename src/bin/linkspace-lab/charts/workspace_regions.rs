@@ -76,7 +76,7 @@ pub fn regions(chain: &Chain3R, blocked: &[[f64; 4]], x: (f64, f64), z: (f64, f6
         let sample = members.iter().map(|&c| centre(c)).min_by(|a, b| ((a.0 - mx).powi(2) + (a.1 - mz).powi(2)).total_cmp(&((b.0 - mx).powi(2) + (b.1 - mz).powi(2)))).expect("a region has a cell");
         let solutions = ik::solve(chain, sample.0.max(0.0), sample.1, 1e-9, 200_000)
             .ok()
-            .filter(|s| s.status.is_complete() && s.clusters.is_empty())
+            .filter(|s| s.status.finished() && s.clusters.is_empty())
             .map(|s| s.unique.len());
         out.push(Region { sample, cells: members.len(), solutions });
     }

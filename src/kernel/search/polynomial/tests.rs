@@ -60,7 +60,7 @@ fn refining_proves_a_root_a_coarse_sigma_leaves_unproven() {
     let cancel = AtomicBool::new(false);
     let coarse = Solver::new(&s, SolverSettings { sigma: 1.0, use_lp: false, ..Default::default() }).expect("valid");
     let mut out = Collect::default();
-    assert_eq!(coarse.run(&cancel, &mut out).0, Status::Complete);
+    assert_eq!(coarse.run(&cancel, &mut out).0, Status::Finished);
     let h = std::f64::consts::FRAC_1_SQRT_2;
     let cluster = out.solutions.clone();
     assert!(cluster.iter().any(|b| b.contains(&[h, h])), "{cluster:?} {:?}", out.unique);
@@ -90,7 +90,7 @@ fn finds_both_isolated_solutions() {
     let solver = Solver::new(&s, SolverSettings { sigma: 1e-6, ..Default::default() }).expect("valid");
     let mut out = Collect::default();
     let (status, stats) = solver.run(&AtomicBool::new(false), &mut out);
-    assert_eq!(status, Status::Complete);
+    assert_eq!(status, Status::Finished);
     let h = std::f64::consts::FRAC_1_SQRT_2;
     assert!(out.solutions.iter().any(|b| b.contains(&[h, h])));
     assert!(out.solutions.iter().any(|b| b.contains(&[-h, -h])));
@@ -104,7 +104,7 @@ fn a_limit_reports_every_pending_box() {
     let solver = Solver::new(&s, SolverSettings { sigma: 1e-9, max_boxes: 2, ..Default::default() }).expect("valid");
     let mut out = Collect::default();
     let (status, _) = solver.run(&AtomicBool::new(false), &mut out);
-    assert_eq!(status, Status::Incomplete(Limit::Boxes));
+    assert_eq!(status, Status::Stopped(Limit::Boxes));
     let h = std::f64::consts::FRAC_1_SQRT_2;
     for p in [[h, h], [-h, -h]] {
         assert!(out.solutions.iter().chain(&out.undecided).any(|b| b.contains(&p)), "lost {p:?}");
@@ -117,7 +117,7 @@ fn cancellation_stops_at_once() {
     let solver = Solver::new(&s, SolverSettings::default()).expect("valid");
     let mut out = Collect::default();
     let (status, stats) = solver.run(&AtomicBool::new(true), &mut out);
-    assert_eq!(status, Status::Incomplete(Limit::Cancelled));
+    assert_eq!(status, Status::Stopped(Limit::Cancelled));
     assert_eq!(stats.processed, 0);
     assert_eq!(out.undecided.len(), 1);
 }

@@ -29,8 +29,9 @@ use crate::kernel::interval::{interval, point, trig, Interval, IntervalBox};
 use crate::model::Mechanism;
 use crate::formulate::linkage::JointCoordinate;
 use crate::formulate::{Coordinates, LinkageError, LinkageProblem, Output, SingularError, SingularKind};
+use crate::kernel::outcome::BoxStatus;
 use crate::kernel::search::{Budget, Control, Limit, SolverSettings};
-use crate::analyses::loop_singular::BoxKind;
+
 use crate::kernel::system::{EquationKind, Monomial, VarId};
 use nalgebra::{DMatrix, DVector};
 use std::collections::BTreeMap;
@@ -143,6 +144,17 @@ pub struct InputMotionCheck {
 }
 
 impl InputMotionCheck {
+    /// Complete when every step is proven; a limit or a step that could not be proven leaves
+    /// the rest undecided.
+    pub fn completeness(&self) -> crate::kernel::outcome::Completeness {
+        use crate::kernel::outcome::{Completeness, Incompleteness};
+        match self.verdict {
+            MotionVerdict::Clear => Completeness::Complete,
+            MotionVerdict::Undecided { .. } => Completeness::Incomplete(Incompleteness::Undecided),
+            MotionVerdict::Stopped { limit, .. } => Completeness::Incomplete(Incompleteness::Limit(limit)),
+        }
+    }
+
     /// The set checked against, as reports name it.
     pub fn set_name(&self) -> String {
         format!("input singularities of {}, actuated {}", self.mechanism, self.request.actuated)
@@ -507,7 +519,7 @@ fn nearest_turning_point(m: &Mechanism, fixed: &[(String, f64)], actuated: &str,
     let solved = sets.solve(&settings, control.cancel).ok()?;
     let (p, set) = (sets.problems.first()?, solved.first()?);
     let mut best: Option<(f64, BTreeMap<String, [f64; 2]>)> = None;
-    for sb in set.boxes.iter().filter(|b| b.status == BoxKind::Certified) {
+    for sb in set.boxes.iter().filter(|b| b.status == BoxStatus::Unique) {
         let values = p.linkage.joint_values(&sb.b);
         let gap = here
             .iter()

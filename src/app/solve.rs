@@ -1,0 +1,188 @@
+//! A configuration-space run of a closed-loop linkage (`SolveRun`): the problem built by the
+//! builder the model names, its settings validated, and its run, whose pose-model answers are
+//! settled to one certified box per assembly where that can be proven.
+
+use super::{AnalysisError, BoxSetResult, ResultBox, TracedBounds};
+use crate::formulate::choice::TracedPoint;
+use crate::formulate::singular::Coordinates;
+use crate::formulate::{Linkage, ModelChoice};
+use crate::kernel::interval::{bounds, components, IntervalBox};
+use crate::kernel::search::{BoxStatus, Enclosure, Progress, RefinePlan, Refinement, Solver, SolverSettings};
+use crate::kernel::system::VarRole;
+use crate::model::Mechanism;
+use std::sync::atomic::AtomicBool;
+use std::time::{Duration, Instant};
+
+/// A configuration-space run of a closed-loop linkage, built and validated: `linkspace solve`
+/// and the node's `configuration_space` and `solve` all run one.
+#[derive(Clone, Debug)]
+pub struct SolveRun {
+    problem: Linkage,
+    settings: SolverSettings,
+}
+
+impl SolveRun {
+    /// Validates `settings` for `problem`, so that a bad request is answered before any run.
+    pub fn new(problem: Linkage, settings: SolverSettings) -> Result<Self, crate::kernel::search::SolveError> {
+        problem.solver(settings.clone())?;
+        Ok(Self { problem, settings })
+    }
+
+    /// Builds `mechanism` with `model` (planar, spatial, or auto: planar when the planar builder
+    /// takes it), the `fixed` joint values and the `traces` to follow, and validates `settings`.
+    pub fn build(mechanism: &Mechanism, model: ModelChoice, fixed: &[(String, f64)], traces: &[TracedPoint], settings: SolverSettings) -> Result<Self, AnalysisError> {
+        let problem = Linkage::build(mechanism, model, fixed, traces)?;
+        Ok(Self::new(problem, settings)?)
+    }
+
+    /// The model's degrees of freedom, counted and measured at a configuration Newton finds
+    /// (`system::freedom`), with its one-line description: what the run will cover.
+    pub fn freedom(&self) -> (crate::kernel::system::Freedom, String) {
+        let f = crate::kernel::system::freedom(self.problem.system(), 12, 1);
+        (f, describe_freedom(&f, self.settings.sigma))
+    }
+
+    /// The built problem.
+    pub fn problem(&self) -> &Linkage {
+        &self.problem
+    }
+
+    /// The settings it runs with.
+    pub fn settings(&self) -> &SolverSettings {
+        &self.settings
+    }
+
+    /// The same run with other settings of the same resolution (a front end's limits).
+    pub(crate) fn within(self, settings: SolverSettings) -> Self {
+        Self { settings, ..self }
+    }
+
+    /// Encloses every configuration, within the settings' limits or until `cancel` is raised:
+    /// the box set of analysis `solve`, solution boxes first (in the order found), then the
+    /// undecided ones, each with its joint values and traced points.
+    pub fn run(&self, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> BoxSetResult {
+        let solver = self.problem.solver(self.settings.clone()).expect("invariant: validated when built");
+        let t0 = Instant::now();
+        let e = solver.enclose(cancel, progress);
+        let e = match &self.problem {
+            Linkage::Pose(..) | Linkage::Distances(..) => settle_pose(&solver, e, cancel, self.settings.timeout.map(|t| t.saturating_sub(t0.elapsed()))),
+            _ => e,
+        };
+        let (labels, clusters) = components(&e.solutions);
+        let problem = &self.problem;
+        let joint_names = problem.free_joints().to_vec();
+        let result_box = |b: &IntervalBox, status: BoxStatus, cluster: Option<usize>| {
+            let values = problem.joint_values(b);
+            ResultBox {
+                status,
+                bounds: b.dims.iter().map(|&x| bounds(x)).collect(),
+                joints: joint_names.iter().map(|n| values.get(n).map_or([f64::NAN, f64::NAN], |&(lo, hi)| [lo, hi])).collect(),
+                level: b.level,
+                cluster,
+                traces: traced(problem, b),
+            }
+        };
+        let mut boxes: Vec<ResultBox> =
+            e.solutions.iter().zip(&e.unique).zip(&labels).map(|((b, &unique), &l)| result_box(b, if unique { BoxStatus::Unique } else { BoxStatus::Solution }, Some(l))).collect();
+        boxes.extend(e.undecided.iter().map(|b| result_box(b, BoxStatus::Undecided, None)));
+        let system = problem.system();
+        BoxSetResult {
+            mechanism: problem.name().to_string(),
+            analysis: "solve".to_string(),
+            status: e.status,
+            settings: self.settings.clone(),
+            variables: system.vars.iter().map(|v| v.name.clone()).collect(),
+            primaries: system.vars.iter().enumerate().filter(|(_, v)| v.role == VarRole::Primary).map(|(i, _)| i).collect(),
+            joint_names,
+            fixed_joints: problem.fixed_joints().to_vec(),
+            traces: problem.trace_names(),
+            boxes,
+            clusters,
+            stats: e.stats,
+        }
+    }
+}
+
+/// The pose model's refinement: `RefinePlan::default()`'s rounds and cells, on clusters up to 64
+/// sigmas wide. An assembly near a singularity of the leg Jacobian leaves uncertified boxes along
+/// its near-null direction, the farther the nearer it is (22 to 31 sigmas at sigma 1e-3 for
+/// smallest singular values of 4e-5 to 1.3e-4, README); a cluster of a curve of poses (an
+/// architecturally singular platform) spends the rounds' cells and stays as found.
+fn pose_refine_plan() -> RefinePlan {
+    RefinePlan { max_width: 64.0, ..RefinePlan::default() }
+}
+
+/// The pose model's answer, one certified box per assembly where it can be proven: each
+/// cluster holding an uncertified box (two assemblies close together, say) is searched again at
+/// finer sigmas (`Solver::refine`) and replaced when every box of a completed round is
+/// certified (the round's start box holds the whole cluster, so no root of it is lost; a round
+/// with no box proves the cluster empty); then certified boxes sharing one root are merged
+/// (`Solver::merge_shared_certificates`). What cannot be settled is reported as found.
+/// `timeout`: what is left of the run's.
+fn settle_pose(solver: &Solver<'_>, mut e: Enclosure, cancel: &AtomicBool, timeout: Option<Duration>) -> Enclosure {
+    let t0 = Instant::now();
+    let (labels, n) = components(&e.solutions);
+    let mut solutions = Vec::new();
+    let mut unique = Vec::new();
+    for k in 0..n {
+        let members: Vec<usize> = (0..e.solutions.len()).filter(|&i| labels[i] == k).collect();
+        let boxes: Vec<IntervalBox> = members.iter().map(|&i| e.solutions[i].clone()).collect();
+        if members.iter().any(|&i| !e.unique[i]) {
+            let left = timeout.map(|t| t.saturating_sub(t0.elapsed()));
+            let all_certified = |_: &[IntervalBox], u: &[bool]| u.iter().all(|&x| x);
+            if let Refinement::Settled(found) = solver.refine(&boxes, &pose_refine_plan(), left, &all_certified, cancel) {
+                solutions.extend(found.solutions);
+                unique.extend(found.unique);
+                continue;
+            }
+        }
+        solutions.extend(boxes);
+        unique.extend(members.iter().map(|&i| e.unique[i]));
+    }
+    // Refined clusters may hold boxes that share a certificate with their neighbours.
+    let (solutions, unique, merged) = solver.merge_shared_certificates(solutions, unique);
+    e.stats.certificates_merged += merged;
+    e.stats.solutions = solutions.len() as u64;
+    e.stats.certified = unique.iter().filter(|&&u| u).count() as u64;
+    e.solutions = solutions;
+    e.unique = unique;
+    e
+}
+
+/// World coordinates of the problem's traced points over a box, in `trace_names` order.
+fn traced(problem: &Linkage, b: &IntervalBox) -> Vec<TracedBounds> {
+    match problem {
+        Linkage::Planar(p) => p.traces.iter().map(|t| TracedBounds { x: bounds(b.dims[t.x]), y: bounds(b.dims[t.y]), z: None }).collect(),
+        Linkage::Pose(..) | Linkage::Distances(..) => Vec::new(),
+        Linkage::Spatial(p, _) => p
+            .traces
+            .iter()
+            .map(|t| {
+                let [x, y, z] = t.xyz.map(|v| bounds(b.dims[v]));
+                TracedBounds { x, y, z: Some(z) }
+            })
+            .collect(),
+    }
+}
+
+/// `freedom`'s line: the degrees of freedom of the model and what they mean for the run.
+pub fn describe_freedom(f: &crate::kernel::system::Freedom, sigma: f64) -> String {
+    let counted = format!("{} unknowns, {} rows", f.unknowns, f.rows);
+    match f.at_point {
+        Some(l) if l.dof == 0 => format!("0 degrees of freedom ({counted}; the Jacobian has full rank at a configuration Newton found): isolated assemblies"),
+        Some(l) if l.dof == 1 && f.counted() <= 0 => format!(
+            "1 degree of freedom at a configuration Newton found ({counted}, rank {}): a curve where the count expects isolated assemblies (an overconstrained linkage that moves, an architecturally singular one, or a singular configuration); boxes on it are not certified",
+            l.rank
+        ),
+        Some(l) if l.dof == 1 => format!("1 degree of freedom ({counted}, rank {} at a configuration Newton found): a curve of configurations", l.rank),
+        Some(l) => format!(
+            "{} degrees of freedom at a configuration Newton found ({counted}, rank {}): a {}-dimensional continuum, whose cover at sigma {sigma:e} takes on the order of {:.0e} boxes; fix {} joints (--fix) for isolated assemblies, or raise --sigma",
+            l.dof,
+            l.rank,
+            l.dof,
+            sigma.powi(-(l.dof.min(30) as i32)),
+            l.dof
+        ),
+        None => format!("{} by count ({counted}); no configuration found by Newton to measure it", f.counted()),
+    }
+}
