@@ -4,7 +4,7 @@
 //! branches, by continuation in `closed_loop_singularities`; the unequal five-bar's empty cusp
 //! and node sets and its verdict), every turning point must land on a branch drawn beside it,
 //! and the 3R workspace regions must carry certified solution counts of the kind of Benoit et al.
-//! (2015): 0, 2 or 4 for these generic arms, with 2 and 4 both present for the cuspidal robot a.
+//! (2019): 0, 2 or 4 for these generic arms, with 2 and 4 both present for the cuspidal robot a.
 
 use std::process::Command;
 

@@ -561,7 +561,7 @@ fn the_product_lists_no_bench_or_chart() {
     }
 }
 
-/// `linkspace-lab bench3r --arms`: one row per bundled real arm and robot of Benoit et al. (2015),
+/// `linkspace-lab bench3r --arms`: one row per bundled real arm and robot of Benoit et al. (2019),
 /// the shipped path complete with nothing undecided, the baseline reported with its status. Tiny
 /// baseline limits keep it to a few seconds; no timing is asserted.
 #[test]

@@ -1,6 +1,6 @@
 //! Test idea: the 3R analysis is checked against things computed without it.
 //! The kinematic map loaded from the bundled URDFs must equal the closed forms f1, f2 of Benoit,
-//! Delanoue, Lagrange and Wenger (2015); the counts of Table 1 (cusps a 4, b 4, d 0, e 4, f 0;
+//! Delanoue, Lagrange and Wenger (2019); the counts of Table 1 (cusps a 4, b 4, d 0, e 4, f 0;
 //! nodes a 0, b 0, d 0, e 2, f 2; internal motion only in f) must come out of the certified
 //! searches, and must agree with an independent dense sampling of the singular curve and of its
 //! image in plain floating point.
@@ -9,7 +9,7 @@ use linkspace::analyses::arm3r::{cusps, nodes, Chain3R};
 use std::f64::consts::PI;
 use linkspace::model::urdf;
 
-/// (case, d2, d3, d4, r2, r3) of Table 1 of Benoit et al. (2015).
+/// (case, d2, d3, d4, r2, r3) of Table 1 of Benoit et al. (2019).
 const CASES: [(&str, f64, f64, f64, f64, f64); 5] = [
     ("a", 1.0, 2.0, 1.5, 1.0, 0.0),
     ("b", 1.0, 2.0, 1.5, 1.0, 0.5),
@@ -23,7 +23,7 @@ fn chain(case: &str) -> Chain3R {
     Chain3R::from_mechanism(&urdf::parse(&text).expect("parses"), 0.0).expect("a 3R chain")
 }
 
-/// The f1 (rho) and f2 (z) of Benoit et al. (2015), with their theta1, theta2 read as theta2,
+/// The f1 (rho) and f2 (z) of Benoit et al. (2019), with their theta1, theta2 read as theta2,
 /// theta3.
 fn seed_map(p: (f64, f64, f64, f64, f64), t2: f64, t3: f64) -> [f64; 2] {
     let (d2, d3, d4, r2, r3) = p;
@@ -56,7 +56,7 @@ fn loaded_map_equals_the_seed_formulas() {
 }
 
 
-/// What dense sampling of the closed form of Benoit et al. (2015) sees: cusps and nodes as
+/// What dense sampling of the closed form of Benoit et al. (2019) sees: cusps and nodes as
 /// workspace points.
 pub struct Sampled {
     /// Joint points where the image of the singular curve turns back.
@@ -229,7 +229,7 @@ fn internal_motion_lines_of_f_are_reported_as_lines() {
     assert!(found.undecided.is_empty() && found.status.finished());
 }
 
-/// Case c of Benoit et al. (2015): d2 ∈ [1, 1.001], d3 ∈ [2, 2.001], d4 ∈ [1.5, 1.501], r2 ∈ [1,
+/// Case c of Benoit et al. (2019): d2 ∈ [1, 1.001], d3 ∈ [2, 2.001], d4 ∈ [1.5, 1.501], r2 ∈ [1,
 /// 1.001] (`urdf/orthogonal_3r_c.urdf`, the centres, with uncertainty 5e-4), at their precision
 /// 1e-4: four cusps each proven unique for every geometry in the box, nothing undecided.
 /// Every cusp of each of the 16 corner geometries (and the centre), solved nominally from its
@@ -355,7 +355,7 @@ fn non_orthogonal_chains_match_plain_forward_kinematics() {
 }
 
 /// The collision scene of `urdf/orthogonal_3r_a_column.urdf`, written out by hand from the
-/// geometry of robot a of Benoit et al. (2015) (not from the library): segments in link 1's frame
+/// geometry of robot a of Benoit et al. (2019) (not from the library): segments in link 1's frame
 /// at (θ₂, θ₃). Joint 2 turns about −y through (1, 0, 0), so a link-2 point (x, y, z) goes to
 /// (1 + x c₂ − z s₂, y, x s₂ + z c₂); joint 3 turns about z of link 2 through (2, 1, 0).
 fn column_scene(t2: f64, t3: f64) -> [([[f64; 3]; 2], f64); 3] {

@@ -9,7 +9,7 @@
 //! enclosure holding the point; random segments on which dense samples plus a Lipschitz margin
 //! keep `|det Df|` away from zero must be reported clear, with the sampled sign and a lower
 //! bound below the sampled least `|det Df|`. Bundled arms: the orthogonal 3R robots of Benoit et
-//! al. (2015), UR5 and the CRX fixture (six joints, wrist not spherical: the sub-chain's point is
+//! al. (2019), UR5 and the CRX fixture (six joints, wrist not spherical: the sub-chain's point is
 //! on axis 4).
 
 use linkspace::app::{self, Arm, PathSet};

@@ -2,7 +2,7 @@
 //! meshes) give the same answers as the hand-cut 3R files, and every answer is checked against
 //! something computed another way: the industrial arms' structural verdict against the
 //! interval cusp search (which must certify no cusp) and against inverse kinematics (four
-//! solutions where the verdict says at most four); the robots of Benoit et al. (2015) written in
+//! solutions where the verdict says at most four); the robots of Benoit et al. (2019) written in
 //! three conventions against each other and against Table 1.
 
 use linkspace::analyses::arm3r::{self, cusps, ik, ChainSpec, verdict, Chain3R, LoadOptions};
@@ -271,7 +271,7 @@ fn a_report_with_undecided_boxes_is_never_complete() {
 /// within 3e-4 of each other for each sign of z) has all four cusps and both nodes certified
 /// at the default precision 1e-4, nothing undecided. The reference is independent of linkspace:
 /// `scripts/dev/orthogonal_3r_singular_points.py` traces det Df = 0 of the closed form of Benoit et
-/// al. (2015) by marching squares, takes image reversals and chord crossings as starts and polishes
+/// al. (2019) by marching squares, takes image reversals and chord crossings as starts and polishes
 /// them by Newton in mpmath at 50 digits
 /// (tests/data/orthogonal_3r_near_boundary_singular_points.json). Each reference point must lie in
 /// a certified box (the box is at most 1e-4 wide), and the counts must match.
@@ -325,7 +325,7 @@ fn near_boundary_cusps_and_nodes_are_all_certified_at_1e_4() {
 }
 
 /// Item 2 of the verdict outside the parallel-axes class: aspects and the largest number of IK
-/// solutions of the robots of Benoit et al. (2015), against plain floating-point computations on
+/// solutions of the robots of Benoit et al. (2019), against plain floating-point computations on
 /// their closed form that share nothing with the proof. Aspects: components of the sign of det Df
 /// on a 720 × 720 grid of the torus (4-neighbours, wrapping), det from the hand-written
 /// derivatives. IK: at each point of a 60 × 60 grid of joint configurations' images, the real

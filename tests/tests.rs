@@ -16,7 +16,7 @@ mod post_processing;
 mod random_linkages;
 /// Instances built to break solvers: branch and prune against Newton–Raphson.
 mod stability;
-/// 3R manipulators from URDF: the map of Benoit et al. (2015), Table 1 counts, dense-sampling
+/// 3R manipulators from URDF: the map of Benoit et al. (2019), Table 1 counts, dense-sampling
 /// references.
 mod manip3r;
 /// Real arms' URDFs: chain choice, rounding, limits, the verdict, three conventions.

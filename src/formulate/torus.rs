@@ -31,8 +31,9 @@ impl Jets {
         self.rho.d(0) * self.z.d(1) - self.rho.d(1) * self.z.d(0)
     }
 
-    /// System (2) of Benoit, Delanoue, Lagrange and Wenger, row `k`: `∂f_k/∂θ₂·(−∂det/∂θ₃) + ∂f_k/∂θ₃·∂det/∂θ₂`, that is
-    /// `∇f_k · T` with `T = (−∂det/∂θ₃, ∂det/∂θ₂)` the tangent of the singular curve.
+    /// System (2) of Benoit, Delanoue, Lagrange and Wenger (2019), row `k`:
+    /// `∂f_k/∂θ₂·(−∂det/∂θ₃) + ∂f_k/∂θ₃·∂det/∂θ₂`, that is `∇f_k · T` with
+    /// `T = (−∂det/∂θ₃, ∂det/∂θ₂)` the tangent of the singular curve.
     /// Two orders lower than the jets.
     pub fn tangency(&self, k: usize) -> Taylor {
         self.derived().g[k]

@@ -45,7 +45,7 @@
 //! the line. On h⁻¹(L) off the θ₃ lines, Dh is invertible and maps the curve's tangent onto
 //! L's direction t̂ while ker Dg = ê: ker Df = Dh⁻¹ ê is transverse to the curve. Both
 //! factors have nonzero gradients on their zero sets there, so ∇det ≠ 0 and the system (2)
-//! of Benoit et al. (2015) (kernel tangent to the curve) has no solution. At a crossing ∇det = 0:
+//! of Benoit et al. (2019) (kernel tangent to the curve) has no solution. At a crossing ∇det = 0:
 //! it is a crossing of two fold curves, not a cusp point. This needs l₂ ≠ l₃ proven (else the
 //! folded line is an internal motion and the argument is not made).
 

@@ -9,7 +9,7 @@
 //! ```
 //!
 //! where `p` is the end point in the first link's frame. ρ is the squared radius of Benoit et al.
-//! (2015), which is smooth where the radius is not (on the first axis); reports give the radius √ρ.
+//! (2019), which is smooth where the radius is not (on the first axis); reports give the radius √ρ.
 //! Rodrigues' formula makes `p` affine in `(cos θ₂, sin θ₂, 1) ⊗ (cos θ₃, sin θ₃, 1)` for any
 //! axes and offsets, so the chain is stored as nine interval 3-vectors and evaluated as `Taylor`
 //! jets: no per-robot formula is typed by hand, and non-orthogonal chains work the same way.

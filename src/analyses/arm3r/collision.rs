@@ -1,4 +1,4 @@
-//! Collision sets of a 3R chain (Benoit et al. 2015, section 6.2): which joint configurations make
+//! Collision sets of a 3R chain (Benoit et al. 2019, section 6.2): which joint configurations make
 //! two bodies of the robot touch.
 //!
 //! # Model

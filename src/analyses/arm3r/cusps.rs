@@ -1,7 +1,7 @@
 //! Cusps: singular points where the kernel of Df is tangent to the singular curve.
 //!
 //! Branch and prune over (θ₂, θ₃) ∈ [-π, π]². A box is discarded when det Df provably does not
-//! vanish on it, or when a row of the system (2) of Benoit et al. (2015), `gₖ = ∇fₖ · T` with
+//! vanish on it, or when a row of the system (2) of Benoit et al. (2019), `gₖ = ∇fₖ · T` with
 //! `T = (−∂det/∂θ₃, ∂det/∂θ₂)`, provably does not vanish (both rows vanish at a cusp).
 //! Otherwise Krawczyk runs on the square system `(det Df, gₖ)`, with `k` a row of Df that is
 //! provably non-zero on the box. Why that system and not (2) itself:

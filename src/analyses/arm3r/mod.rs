@@ -1,5 +1,5 @@
 //! Guaranteed cusps, nodes and internal motions of 3R manipulators, from URDF (Benoit, Delanoue,
-//! Lagrange and Wenger 2015).
+//! Lagrange and Wenger 2019).
 //!
 //! Owns the kinematic map of a serial chain of three revolute joints (`Chain3R`), its sound
 //! evaluation with derivatives over boxes (`taylor`, over `interval::trig`), and the searches built on it:
@@ -14,8 +14,8 @@
 //!
 //! # References
 //! R. Benoit, N. Delanoue, S. Lagrange, P. Wenger, *Guaranteed detection of the singularities
-//! of 3R robotic manipulators* (2015). R. Krawczyk, *Newton-Algorithmen zur Bestimmung von
-//! Nullstellen mit Fehlerschranken*, Computing 4 (1969).
+//! of 3R robotic manipulators*, Mechanical Sciences (2019). R. Krawczyk,
+//! *Newton-Algorithmen zur Bestimmung von Nullstellen mit Fehlerschranken*, Computing 4 (1969).
 
 // The searches and readings a caller drives directly are namespaces of their own (`cusps::search`,
 // `ik::solve`, `collision::classify`, ...); the rest is reached through the list below.
@@ -259,7 +259,7 @@ pub fn prepare(m: &crate::model::Mechanism, options: &LoadOptions) -> Result<Pre
 /// merge at a cusp value, two of them in one aspect), so the cusp list is empty and complete.
 /// The interval search would not say so: where the two singular branches (elbow fold, and the
 /// fold of (ρ, z) where the point crosses the plane of axis 1) cross, ∇det = 0 and every box
-/// there satisfies the system (2) of Benoit et al. (2015) without Krawczyk being able to decide it,
+/// there satisfies the system (2) of Benoit et al. (2019) without Krawczyk being able to decide it,
 /// and branches mapped onto one curve (curves of nodes) flood the node search. Internal-motion
 /// lines are still searched (cheap, and they exist when the point can reach axis 2).
 pub fn structural_singularities(chain: &Chain3R, precision: f64) -> Result<Singularities, Manip3rError> {

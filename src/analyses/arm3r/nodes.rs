@@ -1,5 +1,5 @@
 //! Nodes: pairs of distinct singular points with the same image, the system (3) of Benoit,
-//! Delanoue, Lagrange and Wenger (2015).
+//! Delanoue, Lagrange and Wenger (2019).
 //!
 //! The search runs on pairs of boxes `(P, Q)` of a binary tree over [-π, π]² (unordered, `P = Q`
 //! allowed), starting from the pair (whole range, whole range). A pair is dropped when

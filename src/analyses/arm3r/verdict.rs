@@ -18,7 +18,7 @@
 //!    of L inside the annulus having mirror images on both sides, **4 solutions** at most;
 //!    otherwise 2 and 2. Every comparison is made in interval arithmetic; one that is not
 //!    decided leaves the count `null`.
-//! 2. **A certified cusp** (a regular zero of the system (2) of Benoit et al. 2015, unique in its
+//! 2. **A certified cusp** (a regular zero of the system (2) of Benoit et al. 2019, unique in its
 //!    box) makes any 3R cuspidal: near a cusp value three solutions merge, two of them in one
 //!    aspect. With joint limits, only a cusp strictly inside them counts (the argument is local).
 //! 3. **No cusp**, the cusp search complete with nothing undecided on the full torus, and the

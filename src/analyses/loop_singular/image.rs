@@ -1,7 +1,7 @@
 //! The type-II singular set's image in actuator space, for 2-dof linkages whose actuated joints
 //! are coordinates of their own (revolute joints to the ground, sliders): the searches on the
 //! cusp and node systems of `formulate::singular::image` (whose doc gives the systems), certified
-//! like the 3R ones (Krawczyk, as in Benoit, Delanoue, Lagrange and Wenger 2015), the regions of
+//! like the 3R ones (Krawczyk, as in Benoit, Delanoue, Lagrange and Wenger 2019), the regions of
 //! actuator space the set cuts and the assembly modes over each, the verdict on non-singular
 //! assembly-mode change, and the JSON report (`ImageReport`).
 //!
@@ -238,7 +238,7 @@ fn solve_cusps_on_torus(torus: &PlatformTorus, settings: &SolverSettings, cancel
 }
 
 /// The nodes of the `Torus` formulation: the 3R arms' node search (`arm3r::nodes`, system
-/// (3) of Benoit et al. (2015) over pairs of torus boxes) on the platform's actuator map, at
+/// (3) of Benoit et al. (2019) over pairs of torus boxes) on the platform's actuator map, at
 /// precision sigma and, while pairs stay undecided at the precision, finer (`in_rounds`), with the
 /// certified cusps of `torus_cusps` for its injectivity certificates near cusps. A node one of
 /// whose points lies outside a slider's travel is dropped; one that may lie on a limit stays

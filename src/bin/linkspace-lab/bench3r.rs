@@ -29,7 +29,7 @@ pub struct Bench3rArgs {
     #[arg(long, default_value_t = 1e-4)]
     pub precision: f64,
     /// Instead: per bundled real arm (PUMA 560, KR 16, UR5, iiwa 14 with joint_3 locked) and
-    /// robot of Benoit et al. (2015), `linkspace singularities FILE` as it ships against the
+    /// robot of Benoit et al. (2019), `linkspace singularities FILE` as it ships against the
     /// previous behaviour on the same chain (interval cusp and node searches, full torus, bounded),
     /// each run as a child process: wall time, peak RSS, status, undecided count, ratios.
     #[arg(long)]

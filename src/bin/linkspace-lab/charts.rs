@@ -292,7 +292,7 @@ const ROBOTS_3R: [(&str, &str); 3] = [
 /// The singular-curve cover (`arm3r::Cover`, the one the ROS node publishes) on a
 /// `2^depth` grid, its images, and the certified cusps and nodes marked on both; then the
 /// workspace regions between the images with their number of IK solutions (in the style of Benoit
-/// et al. 2015).
+/// et al. 2019).
 fn singular_curves(dir: &Path, depth: u32, quick: bool) -> Result<()> {
     use linkspace::kernel::interval::interval;
     use linkspace::analyses::arm3r::{Cover, cusps, nodes, radius, Chain3R};

@@ -1,6 +1,6 @@
 //! Ibex (`ibexsolve`) as a baseline run in the same invocation, when it is on PATH: the 3R cusp
 //! system "D&G2" of docs/peers.md (det Df = 0 and the second row of the system (2) of Benoit et al.
-//! 2015, `∂z/∂θ₂·(−∂D/∂θ₃) + ∂z/∂θ₃·∂D/∂θ₂ = 0`) written in Minibex from the arm's own
+//! 2019, `∂z/∂θ₂·(−∂D/∂θ₃) + ∂z/∂θ₃·∂D/∂θ₂ = 0`) written in Minibex from the arm's own
 //! coefficients, over the same θ₃ ranges linkspace searches (the internal-motion strips left out),
 //! solved at the same precision; its CPU time is the child's (user + system, from `wait4`).
 //!

@@ -1,7 +1,7 @@
 //! The cusp and node systems of the type-II singular set's image in actuator space, for 2-dof
 //! linkages whose actuated joints are coordinates of their own (revolute joints to the ground,
 //! sliders). Builds only: `crate::analyses::loop_singular::image` runs the searches on them, certifies cusps and
-//! nodes like the 3R ones (Krawczyk, as in Benoit, Delanoue, Lagrange and Wenger 2015), cuts
+//! nodes like the 3R ones (Krawczyk, as in Benoit, Delanoue, Lagrange and Wenger 2019), cuts
 //! actuator space into regions and gives the verdict on non-singular assembly-mode change.
 //!
 //! ## Cusps

@@ -1,5 +1,5 @@
 //! Workspace regions of a 3R arm in the half-section (ρ, z) with their number of inverse
-//! kinematic solutions (the figures of Benoit, Delanoue, Lagrange and Wenger 2015).
+//! kinematic solutions (the figures of Benoit, Delanoue, Lagrange and Wenger 2019).
 //!
 //! The images of the singular-curve cover's boxes (`arm3r::Cover`, enclosed by
 //! `cusps::evaluate`) are rasterised on a grid of the half-plane; a cell they miss holds no
