@@ -1153,8 +1153,8 @@ fn diag_three_rpr_cusp_charts() {
         let st = SolverSettings { sigma, rho, use_lp, newton_width: nw, scaled_widths, timeout: Some(std::time::Duration::from_secs(secs)), ..Default::default() };
         let e = p.linkage.extended_solver(&chart, st).unwrap().enclose(&AtomicBool::new(false), &mut |_| {});
         if e.stats.processed > 1 {
-            eprintln!("chart ({k},{tau}): {:?} processed {} sols {} uniq {} undecided {} maxlvl {} rounds {} lp {} {:.2}s", e.status, e.stats.processed, e.solutions.len(), e.unique.iter().filter(|u| **u).count(), e.undecided.len(), e.stats.max_level, e.stats.shrink_rounds, e.stats.lp.solved, e.stats.seconds);
-            for (b, u) in e.solutions.iter().zip(&e.unique) {
+            eprintln!("chart ({k},{tau}): {:?} processed {} sols {} uniq {} undecided {} maxlvl {} rounds {} lp {} {:.2}s", e.status, e.stats.processed, e.solutions.len(), e.tags.iter().filter(|t| **t == linkspace::app::BoxStatus::Unique).count(), e.undecided.len(), e.stats.max_level, e.stats.shrink_rounds, e.stats.lp.solved, e.stats.seconds);
+            for (b, u) in e.solutions.iter().zip(e.tags.iter().map(|t| *t == linkspace::app::BoxStatus::Unique)) {
                 eprintln!("   sol {u} {:?}", p.actuator_values(b));
             }
         }

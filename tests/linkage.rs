@@ -356,7 +356,7 @@ fn parallel_and_serial_drivers_give_identical_box_sets() {
             let settings = SolverSettings { sigma: *sigma, threads, ..Default::default() };
             let e = p.solver(settings).expect("valid").enclose(&AtomicBool::new(false), &mut |_| {});
             assert_eq!(e.status, Status::Finished);
-            let boxes = e.solutions.iter().zip(&e.unique).map(|(b, &u)| (b.dims.iter().map(|d| (d.inf().to_bits(), d.sup().to_bits())).collect(), u)).collect();
+            let boxes = e.solutions.iter().zip(&e.tags).map(|(b, &t)| (b.dims.iter().map(|d| (d.inf().to_bits(), d.sup().to_bits())).collect(), t == linkspace::app::BoxStatus::Unique)).collect();
             sets.push((threads, canonical(boxes), e.stats.processed));
         }
         for (threads, set, processed) in &sets[1..] {

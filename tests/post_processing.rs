@@ -38,20 +38,20 @@ fn spurious_check_with_a_passed_deadline_keeps_every_box_and_says_so() {
     let cancel = AtomicBool::new(false);
 
     // With time, both lone boxes are proven empty and dropped: the check has work to skip.
-    let (kept, _, dropped, cut_short) = solver.drop_spurious(boxes.clone(), vec![false; 2], 2, &cancel, None);
+    let (kept, _, dropped, cut_short) = solver.drop_spurious(boxes.clone(), vec![linkspace::app::BoxStatus::Solution; 2], 2, &cancel, None);
     assert_eq!((kept.len(), dropped, cut_short), (0, 2, false));
     let later = Instant::now() + Duration::from_secs(3600);
-    let (kept, _, dropped, cut_short) = solver.drop_spurious(boxes.clone(), vec![false; 2], 2, &cancel, Some(later));
+    let (kept, _, dropped, cut_short) = solver.drop_spurious(boxes.clone(), vec![linkspace::app::BoxStatus::Solution; 2], 2, &cancel, Some(later));
     assert_eq!((kept.len(), dropped, cut_short), (0, 2, false));
 
     // Past the deadline: nothing is searched, nothing is dropped, and the result says so.
     let passed = Instant::now();
-    let (kept, unique, dropped, cut_short) = solver.drop_spurious(boxes.clone(), vec![false; 2], 2, &cancel, Some(passed));
+    let (kept, unique, dropped, cut_short) = solver.drop_spurious(boxes.clone(), vec![linkspace::app::BoxStatus::Solution; 2], 2, &cancel, Some(passed));
     assert_eq!(kept, boxes);
-    assert_eq!((unique, dropped, cut_short), (vec![false, false], 0, true));
+    assert_eq!((unique, dropped, cut_short), (vec![linkspace::app::BoxStatus::Solution, linkspace::app::BoxStatus::Solution], 0, true));
 
     // Cancelled: the same.
-    let (kept, _, dropped, cut_short) = solver.drop_spurious(boxes.clone(), vec![false; 2], 2, &AtomicBool::new(true), None);
+    let (kept, _, dropped, cut_short) = solver.drop_spurious(boxes.clone(), vec![linkspace::app::BoxStatus::Solution; 2], 2, &AtomicBool::new(true), None);
     assert_eq!((kept.len(), dropped, cut_short), (2, 0, true));
 
     // Nothing to examine is not cut short, deadline or not.

@@ -810,7 +810,7 @@ fn solve(m: &Mech) -> Result<(Vec<Reported>, Status, usize), String> {
     let settings = SolverSettings { sigma: SIGMA, max_boxes: 200_000, ..Default::default() };
     let e = problem.solver(settings).map_err(|e| format!("solver: {e}"))?.enclose(&AtomicBool::new(false), &mut |_| {});
     let as_vec = |b| problem.joint_values(b).into_iter().collect::<Vec<_>>();
-    let mut reported: Vec<Reported> = e.solutions.iter().zip(&e.unique).map(|(b, &u)| Reported { joints: as_vec(b), unique: u, undecided: false }).collect();
+    let mut reported: Vec<Reported> = e.solutions.iter().zip(&e.tags).map(|(b, &t)| Reported { joints: as_vec(b), unique: t == linkspace::app::BoxStatus::Unique, undecided: false }).collect();
     reported.extend(e.undecided.iter().map(|b| Reported { joints: as_vec(b), unique: false, undecided: true }));
     Ok((reported, e.status, e.solutions.len()))
 }

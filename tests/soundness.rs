@@ -47,7 +47,7 @@ struct Run {
 fn run(p: &LinkageProblem, sigma: f64, newton_width: f64) -> Run {
     let settings = SolverSettings { sigma, newton_width, ..Default::default() };
     let e = p.solver(settings).expect("valid settings").enclose(&AtomicBool::new(false), &mut |_| {});
-    Run { status: e.status, boxes: e.solutions, unique: e.unique }
+    Run { status: e.status, boxes: e.solutions, unique: e.tags.iter().map(|t| *t == linkspace::app::BoxStatus::Unique).collect() }
 }
 
 /// The two assemblies (coupler angle φ3, rocker angle φ4, world radians) of a four-bar with the

@@ -86,7 +86,7 @@ fn rssr_has_both_assembly_modes_certified_for_a_fixed_crank() {
         let reference = rssr_closed_form(t);
         assert_eq!(reference.len(), 2, "crank {t}: the fixture assembles in two modes");
         assert_eq!(e.solutions.len(), 2, "crank {t}: one box per mode");
-        assert!(e.unique.iter().all(|&u| u), "crank {t}: both modes certified by Krawczyk");
+        assert!(e.tags.iter().all(|&t| t == linkspace::app::BoxStatus::Unique), "crank {t}: both modes certified by Krawczyk");
         for phi in reference {
             assert!(covered(&p, &e.solutions, &[("rocker_joint", phi)], 1e-12), "crank {t}: rocker {phi} in no box");
         }
@@ -192,7 +192,7 @@ fn spherical_four_bar_modes_and_curve_match_the_closed_form() {
         assert!(p.is_square(), "crank {t}: the closing axes give two rows, the system is square");
         let e = solve(&p, 1e-6);
         assert_eq!(components(&e.solutions).1, 2, "crank {t}: two assembly modes");
-        assert_eq!(e.unique.iter().filter(|&&u| u).count(), 2, "crank {t}: both modes certified");
+        assert_eq!(e.tags.iter().filter(|&&t| t == linkspace::app::BoxStatus::Unique).count(), 2, "crank {t}: both modes certified");
         for phi in spherical_closed_form(t) {
             assert!(covered(&p, &e.solutions, &[("rocker_joint", phi)], 1e-12), "crank {t}: rocker {phi} in no box");
         }
@@ -274,7 +274,7 @@ fn same_answers(name: &str, fixed: &[(&str, f64)], sigma: f64) {
     let sp = spatial(name, fixed);
     let se = enclose(&sp.solver(settings).expect("settings"));
     assert_eq!(components(&pe.solutions).1, components(&se.solutions).1, "{name} {fixed:?}: clusters");
-    assert_eq!(pe.unique.iter().filter(|&&u| u).count(), se.unique.iter().filter(|&&u| u).count(), "{name} {fixed:?}: certified assemblies");
+    assert_eq!(pe.tags.iter().filter(|&&t| t == linkspace::app::BoxStatus::Unique).count(), se.tags.iter().filter(|&&t| t == linkspace::app::BoxStatus::Unique).count(), "{name} {fixed:?}: certified assemblies");
     let planar_names: Vec<String> = planar.free_joints.clone();
     assert_eq!(planar_names.iter().collect::<std::collections::BTreeSet<_>>(), sp.free_joints.iter().collect(), "{name}: the same free joints");
     let meets = |a: (f64, f64), b: (f64, f64)| {
@@ -418,7 +418,7 @@ fn delta_forward_kinematics_has_both_assemblies_certified() {
         let e = solve(&p, 1e-7);
         let count = case["real_solutions"].as_u64().expect("count") as usize;
         assert_eq!(components(&e.solutions).1, count, "{name}: assemblies");
-        assert!(e.unique.iter().all(|&u| u), "{name}: every box certified");
+        assert!(e.tags.iter().all(|&t| t == linkspace::app::BoxStatus::Unique), "{name}: every box certified");
         for s in case["solutions"].as_array().expect("solutions") {
             let want: Vec<(&str, f64)> = ["platform_x", "platform_y", "platform_z"].iter().map(|&k| (k, s["joints"][k].as_f64().expect("number"))).collect();
             let found = e.solutions.iter().any(|b| {
@@ -478,7 +478,7 @@ fn stewart_platform_assemblies_are_all_certified() {
     let e = solve(&p, 1e-4);
     let count = case["real_solutions"].as_u64().expect("count") as usize;
     assert_eq!(components(&e.solutions).1, count, "real assemblies");
-    assert!(e.unique.iter().all(|&u| u), "every box certified");
+    assert!(e.tags.iter().all(|&t| t == linkspace::app::BoxStatus::Unique), "every box certified");
     // One certificate per assembly: two certified boxes of one assembly are merged.
     assert_eq!(e.solutions.len(), count, "certified boxes");
     let f = |v: &serde_json::Value| v.as_f64().expect("number");
@@ -767,7 +767,7 @@ fn a_rod_with_welded_frames_is_still_a_distance() {
     assert!(p.is_square());
     let e = solve(&p, 1e-6);
     assert_eq!(e.solutions.len(), 2);
-    assert!(e.unique.iter().all(|&u| u));
+    assert!(e.tags.iter().all(|&t| t == linkspace::app::BoxStatus::Unique));
     for phi in rssr_closed_form(0.6) {
         assert!(covered(&p, &e.solutions, &[("rocker_joint", phi)], 1e-9), "rocker {phi} in no box");
     }
@@ -796,7 +796,7 @@ fn certified_counts(xml: &str, fixed: &[(&str, f64)]) -> (usize, usize, usize) {
     let fixed: Vec<(String, f64)> = fixed.iter().map(|(n, v)| (n.to_string(), *v)).collect();
     let p = SpatialProblem::new(&m, &fixed, &[]).expect("builds");
     let e = solve(&p, 1e-6);
-    (e.unique.iter().filter(|u| **u).count(), e.solutions.len(), e.undecided.len())
+    (e.tags.iter().filter(|t| **t == linkspace::app::BoxStatus::Unique).count(), e.solutions.len(), e.undecided.len())
 }
 
 /// Random rigid placements of the bundled spatial mechanisms (and of the planar four-bar taken

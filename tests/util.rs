@@ -26,7 +26,7 @@ pub fn solve(p: &LinkageProblem, sigma: f64) -> Run {
     let solver = p.solver(settings).expect("valid settings");
     let e = solver.enclose(&AtomicBool::new(false), &mut |_| {});
     assert!(e.undecided.is_empty() || e.status != Status::Finished);
-    Run { status: e.status, solutions: e.solutions, unique: e.unique }
+    Run { status: e.status, solutions: e.solutions, unique: e.tags.iter().map(|t| *t == linkspace::app::BoxStatus::Unique).collect() }
 }
 
 /// Does some box contain `x`, allowing `slack` for the rounding of the reference point itself?

@@ -22,6 +22,7 @@
 
 pub mod file;
 
+use crate::kernel::outcome::BoxStatus;
 use crate::kernel::contract::{Contractor, FaceBounds, Newton};
 use crate::kernel::interval::{components, IntervalBox};
 use inari::Interval;
@@ -110,8 +111,8 @@ pub struct Certified {
     pub stats: SolveStats,
     /// Solution boxes over the solved system's variables.
     pub solutions: Vec<IntervalBox>,
-    /// Per box: proven (Krawczyk) to hold exactly one solution.
-    pub unique: Vec<bool>,
+    /// Per box: `Unique` when proven (Krawczyk) to hold exactly one solution, else `Solution`.
+    pub tags: Vec<BoxStatus>,
     /// Per box: its cluster.
     pub cluster: Vec<usize>,
     /// Per cluster: the verdict.
@@ -193,7 +194,7 @@ fn solve_inner(problem: &DistanceProblem, choice: Choice, redundant: bool, faces
             let solver = placed.solver(settings.clone()).map_err(DistanceSolverError::from)?;
             let e = solver.enclose(cancel, &mut |_| {});
             let solvers = DEEPER.iter().map(|&f| placed.solver(deeper_settings(&settings, f))).collect::<Result<Vec<_>, _>>().map_err(DistanceSolverError::from)?;
-            let mut out = Certified { formulation: choice, cm, placed: None, status: e.status, stats: e.stats, solutions: e.solutions, unique: e.unique, cluster: Vec::new(), clusters: Vec::new(), roots: Vec::new(), undecided: e.undecided, phases: vec![("search", crate::kernel::search::process_cpu_seconds() - c0)] };
+            let mut out = Certified { formulation: choice, cm, placed: None, status: e.status, stats: e.stats, solutions: e.solutions, tags: e.tags, cluster: Vec::new(), clusters: Vec::new(), roots: Vec::new(), undecided: e.undecided, phases: vec![("search", crate::kernel::search::process_cpu_seconds() - c0)] };
             let c1 = crate::kernel::search::process_cpu_seconds();
             settle_points(&placed, &solvers, &mut out, cancel);
             out.phases.push(("deeper searches in coordinates", crate::kernel::search::process_cpu_seconds() - c1));
@@ -209,8 +210,8 @@ fn solve_inner(problem: &DistanceProblem, choice: Choice, redundant: bool, faces
         // settling's first test of a box no certified placement meets (see `settle_determinants`).
         let all = CayleyMenger::build(problem, BuildOptions { formulation: Formulation::Shared, redundant: true })?;
         let all_solver = all.solver(FaceBounds::Corners, deeper_settings(&settings, DEEPER[0]))?;
-        let unique = vec![false; e.solutions.len()];
-        let mut out = Certified { formulation: choice, cm: cm.clone(), placed: None, status: e.status, stats: e.stats, solutions: e.solutions, unique, cluster: Vec::new(), clusters: Vec::new(), roots: Vec::new(), undecided: e.undecided, phases: vec![("search", crate::kernel::search::process_cpu_seconds() - c0)] };
+        let tags = vec![BoxStatus::Solution; e.solutions.len()];
+        let mut out = Certified { formulation: choice, cm: cm.clone(), placed: None, status: e.status, stats: e.stats, solutions: e.solutions, tags, cluster: Vec::new(), clusters: Vec::new(), roots: Vec::new(), undecided: e.undecided, phases: vec![("search", crate::kernel::search::process_cpu_seconds() - c0)] };
         settle_determinants(&cm, placed.as_ref(), &solver, (&all, &all_solver), settings.threads, &mut out, cancel);
         out.placed = placed;
         Ok(out)
@@ -244,7 +245,7 @@ fn deeper(solvers: &[Solver<'_>], b: &IntervalBox, cancel: &AtomicBool, stats: &
             if status != Status::Finished {
                 return Err("a deeper search hit its box limit");
             }
-            for (f, u) in found.solutions.into_iter().zip(found.unique) {
+            for (f, u) in found.solutions.into_iter().zip(found.tags.into_iter().map(|t| t == BoxStatus::Unique)) {
                 if u {
                     proven.push(f);
                 } else {
@@ -265,7 +266,7 @@ fn settle_points(placed: &Placed, solvers: &[Solver<'_>], out: &mut Certified, c
     let mut boxes = Vec::new();
     let mut unique = Vec::new();
     let mut why: Vec<Option<&'static str>> = Vec::new();
-    for (b, u) in std::mem::take(&mut out.solutions).into_iter().zip(std::mem::take(&mut out.unique)) {
+    for (b, u) in std::mem::take(&mut out.solutions).into_iter().zip(std::mem::take(&mut out.tags).into_iter().map(|t| t == BoxStatus::Unique)) {
         if u {
             boxes.push(b);
             unique.push(true);
@@ -327,7 +328,7 @@ fn settle_points(placed: &Placed, solvers: &[Solver<'_>], out: &mut Certified, c
         }
     }
     out.solutions = boxes;
-    out.unique = unique;
+    out.tags = unique.iter().map(|&u| if u { BoxStatus::Unique } else { BoxStatus::Solution }).collect();
     out.cluster = labels;
     out.clusters = clusters;
 }
@@ -540,7 +541,7 @@ fn certified_placements(cm: &CayleyMenger, placed: Option<&Placed>, solutions: &
 fn cluster_kept(out: &mut Certified, keep: &[usize], why: &[Option<&'static str>], roots: Vec<Placement>, meets: Vec<Vec<usize>>) {
     let old_index: Vec<usize> = keep.to_vec();
     out.solutions = keep.iter().map(|&i| out.solutions[i].clone()).collect();
-    out.unique = vec![false; out.solutions.len()];
+    out.tags = vec![BoxStatus::Solution; out.solutions.len()];
     let (touch, n0) = components(&out.solutions);
     let pos = |i: usize| old_index.iter().position(|&j| j == i);
     let same_placement = meets.iter().flat_map(|hit| {

@@ -83,7 +83,7 @@ impl SolveRun {
             }
         };
         let mut boxes: Vec<ResultBox> =
-            e.solutions.iter().zip(&e.unique).zip(&labels).map(|((b, &unique), &l)| result_box(b, if unique { BoxStatus::Unique } else { BoxStatus::Solution }, Some(l))).collect();
+            e.solutions.iter().zip(&e.tags).zip(&labels).map(|((b, &tag), &l)| result_box(b, tag, Some(l))).collect();
         boxes.extend(e.undecided.iter().map(|b| result_box(b, BoxStatus::Undecided, None)));
         let system = problem.system();
         BoxSetResult {
@@ -123,29 +123,29 @@ fn settle_pose(solver: &Solver<'_>, mut e: Enclosure, cancel: &AtomicBool, timeo
     let t0 = Instant::now();
     let (labels, n) = components(&e.solutions);
     let mut solutions = Vec::new();
-    let mut unique = Vec::new();
+    let mut tags = Vec::new();
     for k in 0..n {
         let members: Vec<usize> = (0..e.solutions.len()).filter(|&i| labels[i] == k).collect();
         let boxes: Vec<IntervalBox> = members.iter().map(|&i| e.solutions[i].clone()).collect();
-        if members.iter().any(|&i| !e.unique[i]) {
+        if members.iter().any(|&i| e.tags[i] != BoxStatus::Unique) {
             let left = timeout.map(|t| t.saturating_sub(t0.elapsed()));
-            let all_certified = |_: &[IntervalBox], u: &[bool]| u.iter().all(|&x| x);
+            let all_certified = |_: &[IntervalBox], t: &[BoxStatus]| t.iter().all(|&x| x == BoxStatus::Unique);
             if let Refinement::Settled(found) = solver.refine(&boxes, &pose_refine_plan(), left, &all_certified, cancel) {
                 solutions.extend(found.solutions);
-                unique.extend(found.unique);
+                tags.extend(found.tags);
                 continue;
             }
         }
         solutions.extend(boxes);
-        unique.extend(members.iter().map(|&i| e.unique[i]));
+        tags.extend(members.iter().map(|&i| e.tags[i]));
     }
     // Refined clusters may hold boxes that share a certificate with their neighbours.
-    let (solutions, unique, merged) = solver.merge_shared_certificates(solutions, unique);
+    let (solutions, tags, merged) = solver.merge_shared_certificates(solutions, tags);
     e.stats.certificates_merged += merged;
     e.stats.solutions = solutions.len() as u64;
-    e.stats.certified = unique.iter().filter(|&&u| u).count() as u64;
+    e.stats.certified = tags.iter().filter(|&&t| t == BoxStatus::Unique).count() as u64;
     e.solutions = solutions;
-    e.unique = unique;
+    e.tags = tags;
     e
 }
 

@@ -91,7 +91,7 @@ impl CuspProblem {
             if e.status != Status::Finished {
                 status = e.status;
             }
-            for (b, u) in e.solutions.into_iter().zip(e.unique) {
+            for (b, u) in e.solutions.into_iter().zip(e.tags.into_iter().map(|t| t == BoxStatus::Unique)) {
                 if self.other_chart(i, &b) {
                     dropped += 1;
                     continue;
@@ -105,7 +105,7 @@ impl CuspProblem {
         let cluster = |found: &[ChartBox]| self.cluster(sp, found);
         // Proven: every box certified with μ away from 0, and the cluster one root (`unique`).
         let proven = |p: &FoundPoint| p.unproven_reason(Status::Finished).is_none();
-        let accept = |b: &[IntervalBox], u: &[bool]| u.iter().all(|u| *u) && b.iter().all(|b| !b.dims[tangent].contains(0.0));
+        let accept = |b: &[IntervalBox], t: &[BoxStatus]| t.iter().all(|t| *t == BoxStatus::Unique) && b.iter().all(|b| !b.dims[tangent].contains(0.0));
         let found = refine_points(found, &cluster, &proven, &|i, s| self.chart_solver(sp, i, s), &|i, b| self.other_chart(i, b), &accept, settings, t0, cancel)?;
         let points = cluster(&found);
         Ok(PointSearch { status, points, stats, dropped_other_chart: dropped, seconds: t0.elapsed().as_secs_f64() })
@@ -300,7 +300,7 @@ fn refine_points<'s>(
     proven: &dyn Fn(&FoundPoint) -> bool,
     solver: &dyn Fn(usize, SolverSettings) -> Result<Solver<'s>, SolveError>,
     other_chart: &dyn Fn(usize, &IntervalBox) -> bool,
-    accept: &dyn Fn(&[IntervalBox], &[bool]) -> bool,
+    accept: &dyn Fn(&[IntervalBox], &[BoxStatus]) -> bool,
     settings: &SolverSettings,
     t0: Instant,
     cancel: &AtomicBool,
@@ -340,7 +340,7 @@ fn refine_points<'s>(
                 }
             }
             for (c, originals, out) in results {
-                for (b, u) in out.solutions.into_iter().zip(out.unique) {
+                for (b, u) in out.solutions.into_iter().zip(out.tags.into_iter().map(|t| t == BoxStatus::Unique)) {
                     if other_chart(c, &b) || !originals.iter().any(|o| o.intersects(&b)) {
                         continue;
                     }
@@ -479,7 +479,7 @@ impl NodeProblem {
                 status = e.status;
             }
             let mapped: Vec<VarId> = sp.multipliers.iter().map(|&m| map[m]).collect();
-            let boxes = e.solutions.into_iter().zip(e.unique).map(|(b, u)| (b, if u { BoxStatus::Unique } else { BoxStatus::Solution }));
+            let boxes = e.solutions.into_iter().zip(e.tags);
             for (bx, kind) in boxes.chain(e.undecided.into_iter().map(|b| (b, BoxStatus::Undecided))) {
                 let d = &bx.dims;
                 if owned_elsewhere(&sp.multipliers, *k, d, None) || owned_elsewhere(&mapped, *k2, d, None) {

@@ -59,7 +59,7 @@ impl<L: Coordinates> SingularProblem<L> {
             if e.status != Status::Finished {
                 status = e.status;
             }
-            for (b, u) in e.solutions.into_iter().zip(e.unique) {
+            for (b, u) in e.solutions.into_iter().zip(e.tags.into_iter().map(|t| t == BoxStatus::Unique)) {
                 if self.owned_elsewhere(k, &b) {
                     dropped_other_chart += 1;
                     continue;

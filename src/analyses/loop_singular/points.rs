@@ -188,7 +188,7 @@ impl<L: Coordinates> SingularProblem<L> {
                     status = s;
                 }
                 add(&mut stats[k], &st);
-                for (b, u) in found.solutions.into_iter().zip(found.unique) {
+                for (b, u) in found.solutions.into_iter().zip(found.tags.into_iter().map(|t| t == BoxStatus::Unique)) {
                     if self.owned_elsewhere(k, &b) {
                         dropped_other_chart += 1;
                         continue;

@@ -148,7 +148,7 @@ fn butterfly_charts(dir: &Path, quick: bool, want: &dyn Fn(&str) -> bool) -> Res
 
     // Reference roots for the rigid case: certified boxes at sigma 1e-10.
     let reference = enclose(&rigid, SolverSettings { sigma: 1e-10, ..Default::default() })?;
-    anyhow::ensure!(reference.status == Status::Finished && reference.unique.iter().all(|&u| u), "reference run did not certify every root");
+    anyhow::ensure!(reference.status == Status::Finished && reference.tags.iter().all(|&t| t == linkspace::app::BoxStatus::Unique), "reference run did not certify every root");
 
     // 1. Speed against accuracy.
     if want("speed") {

@@ -47,7 +47,7 @@ fn timed(solver: &Solver<'_>, repeat: usize) -> (f64, Enclosure) {
 }
 
 fn line(out: &mut impl Write, case: &str, run: &str, t: f64, e: &Enclosure, ratio: &str) {
-    let certified = e.unique.iter().filter(|&&u| u).count();
+    let certified = e.tags.iter().filter(|&&t| t == linkspace::app::BoxStatus::Unique).count();
     writeln!(out, "{case} | {run} | {t:.4} | {} | {} | {} ({certified}) | {ratio}", e.stats.processed, e.solutions.len(), components(&e.solutions).1).ok();
 }
 

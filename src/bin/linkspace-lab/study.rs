@@ -131,7 +131,7 @@ fn study(i: &Instance) -> Finding {
         closest_pair: closest,
         boxes: e.solutions.len(),
         clusters: linkspace::kernel::interval::components(&e.solutions).1,
-        certified: e.unique.iter().filter(|&&u| u).count(),
+        certified: e.tags.iter().filter(|&&t| t == linkspace::app::BoxStatus::Unique).count(),
         lost,
         seconds: e.stats.seconds,
         nr_starts: i.starts.len(),

@@ -288,8 +288,8 @@ pub fn report_certified(c: &Certified, platform: Option<&PlatformProblem>, fixed
     let tol = 10.0 * widest.min(settings.sigma).max(1e-6);
     let mut rep = report(&c.cm, platform, fixed, faces, settings, c.status, c.stats.clone(), &[], &[]);
     let records: Vec<DistanceRecord> = match (&c.placed, c.formulation) {
-        (Some(pl), Choice::Points | Choice::Line) => c.solutions.iter().zip(&c.cluster).zip(&c.unique).map(|((b, &l), &u)| placed_record(c, pl, platform, b, l, u)).collect(),
-        _ => c.solutions.iter().zip(&c.cluster).zip(&c.unique).map(|((b, &l), &u)| DistanceRecord { unique: u, ..record(&c.cm, platform, b, l) }).collect(),
+        (Some(pl), Choice::Points | Choice::Line) => c.solutions.iter().zip(&c.cluster).zip(&c.tags).map(|((b, &l), &t)| placed_record(c, pl, platform, b, l, t == crate::kernel::outcome::BoxStatus::Unique)).collect(),
+        _ => c.solutions.iter().zip(&c.cluster).zip(&c.tags).map(|((b, &l), &t)| DistanceRecord { unique: t == crate::kernel::outcome::BoxStatus::Unique, ..record(&c.cm, platform, b, l) }).collect(),
     };
     rep.undecided = match (&c.placed, c.formulation) {
         (Some(pl), Choice::Points | Choice::Line) => c.undecided.iter().map(|b| placed_record(c, pl, platform, b, usize::MAX, false)).collect(),

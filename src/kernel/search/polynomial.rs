@@ -42,8 +42,9 @@ pub trait BoxSink {
 pub struct Collect {
     /// Solution boxes, in the order found.
     pub solutions: Vec<IntervalBox>,
-    /// Per solution box: whether it is certified to hold exactly one solution.
-    pub unique: Vec<bool>,
+    /// Per solution box: `Unique` when it is certified to hold exactly one solution, else
+    /// `Solution`.
+    pub tags: Vec<BoxStatus>,
     /// Boxes left undecided by a limit.
     pub undecided: Vec<IntervalBox>,
 }
@@ -53,7 +54,7 @@ impl BoxSink for Collect {
         match status {
             BoxStatus::Solution | BoxStatus::Unique => {
                 self.solutions.push(b.clone());
-                self.unique.push(status == BoxStatus::Unique);
+                self.tags.push(status);
             }
             BoxStatus::Undecided => self.undecided.push(b.clone()),
         }
@@ -105,8 +106,8 @@ pub struct Enclosure {
     pub stats: SolveStats,
     /// Solution boxes (spurious isolated ones dropped).
     pub solutions: Vec<IntervalBox>,
-    /// Per solution box: certified to hold exactly one solution.
-    pub unique: Vec<bool>,
+    /// Per solution box: `Unique` when certified to hold exactly one solution, else `Solution`.
+    pub tags: Vec<BoxStatus>,
     /// Boxes a limit left undecided.
     pub undecided: Vec<IntervalBox>,
 }
@@ -351,8 +352,8 @@ impl<'a> Solver<'a> {
         };
         // The time limit covers the whole call, post-processing included.
         let deadline = self.settings.timeout.map(|t| t0 + t);
-        let (solutions, unique, dropped, cut_short) = self.drop_spurious(std::mem::take(&mut sink.collect.solutions), std::mem::take(&mut sink.collect.unique), 2, cancel, deadline);
-        let (solutions, unique, merged) = self.merge_shared_certificates(solutions, unique);
+        let (solutions, tags, dropped, cut_short) = self.drop_spurious(std::mem::take(&mut sink.collect.solutions), std::mem::take(&mut sink.collect.tags), 2, cancel, deadline);
+        let (solutions, tags, merged) = self.merge_shared_certificates(solutions, tags);
         stats.spurious_dropped = dropped;
         stats.certificates_merged = merged;
         stats.post_processing_cut_short = cut_short;
@@ -363,7 +364,7 @@ impl<'a> Solver<'a> {
             // The CPU time of every process of a shared run.
             stats.cpu_seconds = super::share::sum(peers, &[stats.cpu_seconds])[0];
         }
-        Enclosure { status, stats, solutions, unique, undecided: sink.collect.undecided }
+        Enclosure { status, stats, solutions, tags, undecided: sink.collect.undecided }
     }
 
     /// Re-examines solution boxes that sit in clusters of at most `max_cluster` boxes with a
@@ -377,7 +378,7 @@ impl<'a> Solver<'a> {
     /// root survives the deeper search, so only proven-empty boxes go. The search is bounded;
     /// a box it cannot decide stays, and so does every box left when the deadline passes: each
     /// deeper search gets only the time that remains, so the call ends near the deadline.
-    pub fn drop_spurious(&self, boxes: Vec<IntervalBox>, unique: Vec<bool>, max_cluster: usize, cancel: &AtomicBool, deadline: Option<Instant>) -> (Vec<IntervalBox>, Vec<bool>, u64, bool) {
+    pub fn drop_spurious(&self, boxes: Vec<IntervalBox>, tags: Vec<BoxStatus>, max_cluster: usize, cancel: &AtomicBool, deadline: Option<Instant>) -> (Vec<IntervalBox>, Vec<BoxStatus>, u64, bool) {
         let (labels, n) = crate::kernel::interval::components(&boxes);
         let mut sizes = vec![0usize; n];
         for &l in &labels {
@@ -405,7 +406,7 @@ impl<'a> Solver<'a> {
                 _ => Probe::Kept,
             }
         };
-        let candidates: Vec<usize> = (0..boxes.len()).filter(|&i| !unique[i] && sizes[labels[i]] <= max_cluster).collect();
+        let candidates: Vec<usize> = (0..boxes.len()).filter(|&i| tags[i] != BoxStatus::Unique && sizes[labels[i]] <= max_cluster).collect();
         let probes = super::map_parallel(&candidates, self.settings.threads, |&i| probe(&boxes[i]));
         let cut_short = probes.contains(&Probe::NotRun);
         let mut drop = vec![false; boxes.len()];
@@ -413,17 +414,17 @@ impl<'a> Solver<'a> {
             drop[i] = p == Probe::Empty;
         }
         let mut kept = Vec::with_capacity(boxes.len());
-        let mut kept_unique = Vec::with_capacity(boxes.len());
+        let mut kept_tags = Vec::with_capacity(boxes.len());
         let mut dropped = 0;
-        for ((b, u), d) in boxes.into_iter().zip(unique).zip(drop) {
+        for ((b, u), d) in boxes.into_iter().zip(tags).zip(drop) {
             if d {
                 dropped += 1;
             } else {
                 kept.push(b);
-                kept_unique.push(u);
+                kept_tags.push(u);
             }
         }
-        (kept, kept_unique, dropped, cut_short)
+        (kept, kept_tags, dropped, cut_short)
     }
 
     /// Makes each certificate count one solution. Two certified boxes of one run can hold the
@@ -437,8 +438,8 @@ impl<'a> Solver<'a> {
     /// - otherwise B stays a solution box, no longer counted as certified (it may hold A's root).
     ///
     /// Returns the boxes, their flags, and how many boxes were merged away.
-    pub fn merge_shared_certificates(&self, boxes: Vec<IntervalBox>, unique: Vec<bool>) -> (Vec<IntervalBox>, Vec<bool>, u64) {
-        let certified: Vec<usize> = (0..boxes.len()).filter(|&i| unique[i]).collect();
+    pub fn merge_shared_certificates(&self, boxes: Vec<IntervalBox>, tags: Vec<BoxStatus>) -> (Vec<IntervalBox>, Vec<BoxStatus>, u64) {
+        let certified: Vec<usize> = (0..boxes.len()).filter(|&i| tags[i] == BoxStatus::Unique).collect();
         let certified_boxes: Vec<IntervalBox> = certified.iter().map(|&i| boxes[i].clone()).collect();
         let (labels, n) = crate::kernel::interval::components(&certified_boxes);
         let mut sizes = vec![0usize; n];
@@ -446,10 +447,10 @@ impl<'a> Solver<'a> {
             sizes[l] += 1;
         }
         if sizes.iter().all(|&s| s <= 1) {
-            return (boxes, unique, 0);
+            return (boxes, tags, 0);
         }
         let mut boxes = boxes;
-        let mut unique = unique;
+        let mut tags = tags;
         let mut gone = vec![false; boxes.len()];
         let mut contractor = self.contractor();
         let mut merged = 0;
@@ -478,7 +479,7 @@ impl<'a> Solver<'a> {
                             break;
                         }
                         SharedRoot::Unknown => {
-                            unique[i] = false;
+                            tags[i] = BoxStatus::Solution;
                             placed = false;
                             break;
                         }
@@ -490,14 +491,14 @@ impl<'a> Solver<'a> {
             }
         }
         let mut out_boxes = Vec::with_capacity(boxes.len());
-        let mut out_unique = Vec::with_capacity(boxes.len());
-        for ((b, u), g) in boxes.into_iter().zip(unique).zip(gone) {
+        let mut out_tags = Vec::with_capacity(boxes.len());
+        for ((b, u), g) in boxes.into_iter().zip(tags).zip(gone) {
             if !g {
                 out_boxes.push(b);
-                out_unique.push(u);
+                out_tags.push(u);
             }
         }
-        (out_boxes, out_unique, merged)
+        (out_boxes, out_tags, merged)
     }
 
     /// Whether certified boxes `a` and `b`, which meet, hold the same root (see
@@ -530,7 +531,7 @@ impl<'a> Solver<'a> {
     /// A cluster wider than `plan.max_width` sigmas (scaled widths, `width_units`) is not tried:
     /// that is a curve of roots, not an isolated point. The search is this solver's (its
     /// contractors and units) with other limits: nothing is a second implementation.
-    pub fn refine(&self, boxes: &[IntervalBox], plan: &RefinePlan, timeout: Option<std::time::Duration>, settled: &dyn Fn(&[IntervalBox], &[bool]) -> bool, cancel: &AtomicBool) -> Refinement {
+    pub fn refine(&self, boxes: &[IntervalBox], plan: &RefinePlan, timeout: Option<std::time::Duration>, settled: &dyn Fn(&[IntervalBox], &[BoxStatus]) -> bool, cancel: &AtomicBool) -> Refinement {
         let Some(first) = boxes.first() else { return Refinement::Settled(Collect::default()) };
         let mut hull = first.clone();
         for b in &boxes[1..] {
@@ -565,11 +566,11 @@ impl<'a> Solver<'a> {
                 break;
             }
             let deadline = left.map(|l| t0 + l);
-            let (solutions, unique, _, _) = finer.drop_spurious(found.solutions, found.unique, 2, cancel, deadline);
-            if settled(&solutions, &unique) {
-                return Refinement::Settled(Collect { solutions, unique, undecided: Vec::new() });
+            let (solutions, tags, _, _) = finer.drop_spurious(found.solutions, found.tags, 2, cancel, deadline);
+            if settled(&solutions, &tags) {
+                return Refinement::Settled(Collect { solutions, tags, undecided: Vec::new() });
             }
-            tried.push(format!("sigma {sigma:.1e}: {} boxes, {} certified", solutions.len(), unique.iter().filter(|u| **u).count()));
+            tried.push(format!("sigma {sigma:.1e}: {} boxes, {} certified", solutions.len(), tags.iter().filter(|t| **t == BoxStatus::Unique).count()));
         }
         Refinement::Unsettled(format!("re-searched at a finer sigma without settling it ({})", tried.join("; ")))
     }

@@ -201,7 +201,7 @@ fn sample_region(m: &Mechanism, sp: &SingularProblem, sample: &[f64], cells: usi
         return Ok(ActuatorRegion { cells, sample: sample.to_vec(), configurations: None, signs: None, boxes: [0, 0, 0] });
     };
     let e = solver.enclose(cancel, &mut |_| {});
-    let certified: Vec<&IntervalBox> = e.solutions.iter().zip(&e.unique).filter(|(_, u)| **u).map(|(b, _)| b).collect();
+    let certified: Vec<&IntervalBox> = e.solutions.iter().zip(&e.tags).filter(|(_, t)| **t == crate::kernel::outcome::BoxStatus::Unique).map(|(b, _)| b).collect();
     let boxes = [certified.len(), e.solutions.len() - certified.len(), e.undecided.len()];
     let complete = e.status == Status::Finished && boxes[1] == 0 && boxes[2] == 0;
     let configurations = complete.then_some(certified.len());

@@ -28,21 +28,21 @@ fn two_certificates_of_one_root_count_once() {
     let h = std::f64::consts::FRAC_1_SQRT_2;
     let square = |lo: f64, hi: f64| IntervalBox::new(vec![interval(lo, hi), interval(lo, hi)]);
     let around_h = [square(h - 1e-3, h + 2e-3), square(h - 2e-3, h + 1e-3)];
-    let (boxes, unique, merged) = solver.merge_shared_certificates(around_h.to_vec(), vec![true, true]);
+    let (boxes, tags, merged) = solver.merge_shared_certificates(around_h.to_vec(), vec![BoxStatus::Unique, BoxStatus::Unique]);
     assert_eq!((boxes.len(), merged), (1, 1), "{boxes:?}");
-    assert!(unique[0] && boxes[0].contains(&[h, h]));
+    assert!(tags[0] == BoxStatus::Unique && boxes[0].contains(&[h, h]));
     assert!(boxes[0].dims.iter().all(|d| d.subset(interval(h - 1e-3, h + 1e-3))), "{boxes:?}");
 
     let both_roots = [square(-0.8, 0.1), square(-0.1, 0.8)];
-    let (boxes, unique, merged) = solver.merge_shared_certificates(both_roots.to_vec(), vec![true, true]);
-    assert_eq!((boxes.len(), merged, unique), (2, 0, vec![true, true]));
+    let (boxes, tags, merged) = solver.merge_shared_certificates(both_roots.to_vec(), vec![BoxStatus::Unique, BoxStatus::Unique]);
+    assert_eq!((boxes.len(), merged, tags), (2, 0, vec![BoxStatus::Unique, BoxStatus::Unique]));
 
     let apart = [square(h - 1e-3, h + 1e-3), square(-h - 1e-3, -h + 1e-3)];
-    let (boxes, _, merged) = solver.merge_shared_certificates(apart.to_vec(), vec![true, true]);
+    let (boxes, _, merged) = solver.merge_shared_certificates(apart.to_vec(), vec![BoxStatus::Unique, BoxStatus::Unique]);
     assert_eq!((boxes, merged), (apart.to_vec(), 0));
     // An uncertified box is never merged or dropped: it only encloses.
-    let (boxes, unique, merged) = solver.merge_shared_certificates(around_h.to_vec(), vec![true, false]);
-    assert_eq!((boxes.len(), unique, merged), (2, vec![true, false], 0));
+    let (boxes, tags, merged) = solver.merge_shared_certificates(around_h.to_vec(), vec![BoxStatus::Unique, BoxStatus::Solution]);
+    assert_eq!((boxes.len(), tags, merged), (2, vec![BoxStatus::Unique, BoxStatus::Solution], 0));
 }
 
 #[test]
@@ -63,12 +63,12 @@ fn refining_proves_a_root_a_coarse_sigma_leaves_unproven() {
     assert_eq!(coarse.run(&cancel, &mut out).0, Status::Finished);
     let h = std::f64::consts::FRAC_1_SQRT_2;
     let cluster = out.solutions.clone();
-    assert!(cluster.iter().any(|b| b.contains(&[h, h])), "{cluster:?} {:?}", out.unique);
-    assert!(out.unique.iter().all(|u| !u), "{:?}", out.unique);
-    let all_certified = |_: &[IntervalBox], u: &[bool]| u.iter().all(|u| *u);
+    assert!(cluster.iter().any(|b| b.contains(&[h, h])), "{cluster:?} {:?}", out.tags);
+    assert!(out.tags.iter().all(|t| *t != BoxStatus::Unique), "{:?}", out.tags);
+    let all_certified = |_: &[IntervalBox], t: &[BoxStatus]| t.iter().all(|t| *t == BoxStatus::Unique);
     match coarse.refine(&cluster, &RefinePlan::default(), None, &all_certified, &cancel) {
         Refinement::Settled(c) => {
-            assert!(!c.solutions.is_empty() && c.unique.iter().all(|u| *u));
+            assert!(!c.solutions.is_empty() && c.tags.iter().all(|t| *t == BoxStatus::Unique));
             assert!(c.solutions.iter().any(|b| b.contains(&[h, h])));
         }
         other => panic!("not settled: {other:?}"),
