@@ -49,7 +49,7 @@ pub struct ChainSpec {
     /// Revolute joints held at a value (radians).
     pub locks: Vec<(String, f64)>,
     /// Largest distance (metres) by which axes may miss a point that joints 4… must not move.
-    /// 0 means the default, [`LENGTH_TOLERANCE`].
+    /// 0 means the default, `LENGTH_TOLERANCE`.
     pub length_tolerance: f64,
 }
 
