@@ -186,7 +186,8 @@ fn three_rpr_assembly_modes_match_an_independent_count() {
     app::check_sweep(&plan, &mechanism, &tasks).expect("fits");
     let limits = linkspace::Limits { max_cells: 1_000_000, timeout: Some(std::time::Duration::from_secs(30)), max_memory: 256 << 20 };
     let mut found = Vec::new();
-    app::run_sweep::<()>(&plan, &mechanism, &tasks, 2, &HashSet::new(), &limits, &AtomicBool::new(false), |r| {
+    let cancel = AtomicBool::new(false);
+    sweep::run_tasks::<()>(&tasks, 2, &HashSet::new(), |t| app::sweep_task(&plan, &mechanism, t, &limits, &cancel), |r| {
         found.push(r);
         Ok(())
     })

@@ -514,7 +514,7 @@ const NEAR: f64 = 0.05;
 /// The certified turning point of `actuated` (`singular::points`) nearest to `here`, when one
 /// lies within `NEAR` in every joint.
 fn nearest_turning_point(m: &Mechanism, fixed: &[(String, f64)], actuated: &str, here: &BTreeMap<String, (f64, f64)>, control: &Control, budget: &Budget) -> Option<BTreeMap<String, [f64; 2]>> {
-    let sets = crate::app::SingularSets::new(m, fixed, &[SingularKind::Input], &[actuated.to_string()], None::<Output>).map_err(|_: SingularError| ()).ok()?;
+    let sets = crate::analyses::loop_singular::SingularSets::new(m, fixed, &[SingularKind::Input], &[actuated.to_string()], None::<Output>).map_err(|_: SingularError| ()).ok()?;
     let settings = SolverSettings { timeout: control.limits.timeout.map(|t| t.saturating_sub(budget.elapsed())), ..SolverSettings::default() };
     let solved = sets.solve(&settings, control.cancel).ok()?;
     let (p, set) = (sets.problems.first()?, solved.first()?);

@@ -15,7 +15,7 @@ use std::collections::BTreeMap;
 use super::arm::{Arm, ArmCollisions, ArmIk, ArmSingularities};
 use super::distances::{DistancesRequest, DistancesRun};
 use super::solve::SolveRun;
-use super::loops::SingularSets;
+use crate::analyses::loop_singular::SingularSets;
 use crate::analyses::input_motion::InputMotionCheck;
 use super::path::ArmPathCheck;
 use super::six::{ArmCuspidality, ArmIk6};

@@ -57,7 +57,7 @@ pub use crate::analyses::arm3r::{branches::SingularBranches, joints_over};
 pub use crate::analyses::arm6r::{Chain6R, SegmentVerdict};
 /// A design sweep's spec, tasks and result lines, which the sweep command reads and writes.
 pub mod sweeps {
-    pub use crate::analyses::sweep::{csv, fingerprint, map_svg, parse, read_done, Header, Plan, Summary, Sweep, Task, TaskResult, TaskStatus, DEFAULT_MAX_TASKS};
+    pub use crate::analyses::sweep::{csv, fingerprint, map_svg, parse, read_done, run_tasks, Header, Plan, Summary, Sweep, Task, TaskResult, TaskStatus, DEFAULT_MAX_TASKS};
 }
 
 // The analyses' entry points and typed results, which the answers carry.
@@ -66,11 +66,12 @@ pub use arm_analysis::{Manip3rAnalysis, CURVE_DEPTH};
 pub use distances::{DistancesRun, DistancesRequest};
 pub use linkage::LinkageAnalysis;
 pub use solve::{describe_freedom, SolveRun};
-pub use loops::{all_kinds, analyse_image, image_points, Actuation, ImageAnalysisError, ImageSearch, SingularSets};
+pub use crate::analyses::loop_singular::SingularSets;
+pub use loops::{all_kinds, analyse_image, image_points, Actuation, ImageAnalysisError, ImageSearch};
 pub use crate::analyses::input_motion::{check_input_motion, motion_joints, InputMotionCheck, MotionError, MotionRequest, MotionStep, MotionVerdict};
 pub use platform::PlatformAnalysis;
 pub use path::{check_path, check_path3, positioning_joints, ArmPathCheck, PathSet};
 pub use six::{arm_cuspidality, arm_cuspidality_of, chain6, inverse_kinematics6, ArmCuspidality, ArmIk6, ArmVerdict, ArmVerdictLine};
-pub use sweep::{check_sweep, run_sweep, sweep_task};
+pub use sweep::{check_sweep, sweep_task};
 
 pub use crate::kernel::interval::Bounds;

@@ -11,7 +11,7 @@ use crate::formulate::ModelChoice;
 use crate::kernel::outcome::Completeness;
 use crate::kernel::search::{BoxStatus, Control, Limit, Limits, SolverSettings, Status};
 use crate::analyses::sweep::{self, Parameter, Plan, Sweep, SweepError, Task, TaskResult, TaskStatus};
-use std::collections::HashSet;
+
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
@@ -88,18 +88,3 @@ pub fn sweep_task(plan: &Plan, base: &Mechanism, task: &Task, limits: &Limits, c
     }
 }
 
-/// Runs every task of `tasks` not in `already_done` on `threads` threads (one task per thread,
-/// each single-threaded), handing each result to `on_result` as it finishes.
-#[allow(clippy::too_many_arguments)]
-pub fn run_sweep<E>(
-    plan: &Plan,
-    base: &Mechanism,
-    tasks: &[Task],
-    threads: usize,
-    already_done: &HashSet<usize>,
-    limits: &Limits,
-    cancel: &AtomicBool,
-    on_result: impl FnMut(TaskResult) -> Result<(), E>,
-) -> Result<(), E> {
-    sweep::run_tasks(tasks, threads, already_done, |task| sweep_task(plan, base, task, limits, cancel), on_result)
-}

@@ -10,12 +10,14 @@
 
 use crate::kernel::interval::{components, IntervalBox};
 use crate::formulate::singular::{Coordinates, SingularProblem};
+pub use sets::SingularSets;
 use crate::kernel::outcome::BoxStatus;
 use crate::kernel::search::{Limit, SolveError, SolveStats, SolverSettings, Status};
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 pub mod image;
+mod sets;
 mod points;
 
 impl<L: Coordinates> SingularProblem<L> {
