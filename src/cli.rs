@@ -368,7 +368,7 @@ struct SolveArgs {
     /// Which builder: planar (one angle per rigid group), spatial (any loop of revolute,
     /// prismatic, spherical, universal, cylindrical and fixed joints), pose (a platform on six
     /// legs, every leg fixed: its position and rotation), distances (the same platforms: squared
-    /// base-to-platform distances and heights, seed 004's style), or auto: planar when the
+    /// base-to-platform distances and heights, as in Porta, Thomas, Ros and Torras (2003)), or auto: planar when the
     /// mechanism is planar, else pose for a platform with every leg fixed and no traced point,
     /// else spatial.
     #[arg(long, value_enum, default_value_t = ModelArg::Auto)]

@@ -70,6 +70,10 @@ fn bad_input_gives_one_clear_line() {
     assert_clear_error(&["solve", broken.as_str()], "malformed URDF");
     assert_clear_error(&["solve", &fb, "--fix", "nope=1"], "no joint or loop named 'nope'");
     assert_clear_error(&["solve", &fb, "--fix", "crank_joint"], "expected JOINT=VALUE");
+    // A seven-joint arm asked a six-joint question: refused, saying which joint to hold and how.
+    let iiwa = fixture("iiwa14.urdf");
+    assert_clear_error(&["ik6", &iiwa, "--pose", "0.4,0.1,0.6,0,3.14159,0"], "hold 1 of them with --fix JOINT=VALUE (e.g. --fix joint_3=0)");
+    assert_clear_error(&["ik6", &fixture("ur5.urdf"), "--fix", "joint_9=0", "--pose", "0.4,0.1,0.6,0,3.14159,0"], "--fix: 'joint_9' is not a joint of the file");
     assert_clear_error(&["solve", &fb, "--fix", "crank_joint=NaN"], "not a finite number");
     assert_clear_error(&["solve", &sc, "--fix", "slider_joint=9"], "outside its limits");
     assert_clear_error(&["solve", &fb, "--sigma", "0"], "sigma must be a positive");

@@ -236,7 +236,7 @@ fn load_with(mechanism: &Mechanism, fixed: &[(String, f64)], traces: &[(String, 
         }
         Err(e) => e,
     };
-    // An octahedral platform: PlatformProblem reads it (the seed's distance formulation). Other
+    // An octahedral platform: PlatformProblem reads it (the distance formulation of Porta, Thomas, Ros and Torras (2003)). Other
     // mechanisms with spherical loops go to the linkage builders below.
     let spherical = mechanism.loops.iter().any(|l| l.kind == crate::model::JointKind::Spherical);
     let unsupported = |reason: String| -> Box<dyn Analysis> {

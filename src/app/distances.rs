@@ -1,4 +1,4 @@
-//! The distance job (seed 004): a platform read from URDF, or a pure distance problem read from
+//! The distance job (Cayley–Menger determinants, Porta, Thomas, Ros and Torras (2003)): a platform read from URDF, or a pure distance problem read from
 //! a distance file, certified by `distances::solve`. What `linkspace distances` runs (its JSON
 //! writer, `report::distances`, reads the result) and what the node's platform analysis publishes.
 
@@ -15,7 +15,7 @@ use std::sync::atomic::AtomicBool;
 pub struct DistancesRequest {
     /// The formulation; `Auto` lets `distances::choose` pick.
     pub formulation: Choice,
-    /// Add the redundant determinants (platform: the seed's Eq. 7; files: six-point ones).
+    /// Add the redundant determinants (platform: Eq. 7 of Porta, Thomas, Ros and Torras (2003); files: six-point ones).
     pub redundant: bool,
     /// How trapezoid sides are bounded.
     pub faces: FaceBounds,
@@ -71,7 +71,7 @@ impl DistancesRun {
         &self.fixed
     }
 
-    /// The default rho of a formulation: the seed's 0.99 for the determinants; 0.9 in
+    /// The default rho of a formulation: 0.99 for the determinants, as Porta, Thomas, Ros and Torras (2003) use; 0.9 in
     /// coordinates (points, line), where bisecting is cheaper than slow propagation fixpoints.
     pub fn default_rho(formulation: Choice) -> f64 {
         if matches!(formulation, Choice::Points | Choice::Line) {

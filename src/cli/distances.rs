@@ -18,15 +18,15 @@ pub enum Form {
     Line,
     /// One variable per distance (degree two; Bernstein control points).
     Shared,
-    /// The seed's: r_ij and r_ji separate, multilinear (corner values).
+    /// As Porta, Thomas, Ros and Torras (2003): r_ij and r_ji separate, multilinear (corner values).
     Split,
 }
 
 #[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
 pub enum Faces {
-    /// Trapezoid sides from control points (the seed's method).
+    /// Trapezoid sides from control points (the method of Porta, Thomas, Ros and Torras (2003)).
     Corners,
-    /// Trapezoid sides by interval evaluation (the seed's comparison).
+    /// Trapezoid sides by interval evaluation (the comparison Porta, Thomas, Ros and Torras (2003) make).
     Interval,
 }
 
@@ -41,11 +41,11 @@ pub struct DistancesArgs {
     #[arg(long, alias = "sigma", default_value_t = 0.01)]
     precision: f64,
     /// Keep clipping a box while a round leaves less than this share of its volume. Default
-    /// 0.99 (the seed's) for the determinants, 0.9 for the coordinate formulations (points,
+    /// 0.99 (as Porta, Thomas, Ros and Torras (2003)) for the determinants, 0.9 for the coordinate formulations (points,
     /// line), where bisecting is cheaper than slow propagation fixpoints.
     #[arg(long)]
     rho: Option<f64>,
-    /// Add the redundant determinants (platform: the seed's Eq. 7; JSON: six-point ones).
+    /// Add the redundant determinants (platform: Eq. 7 of Porta, Thomas, Ros and Torras (2003); JSON: six-point ones).
     #[arg(long)]
     redundant: bool,
     /// Variables for the unknown distances.

@@ -16,7 +16,7 @@
 //! `run_shared` is `run_by_level` with each level shared among processes (`share`: MPI ranks
 //! through the binary's `Peers`), reporting what one process reports.
 //!
-//! `polynomial` is the kernel's client for `EquationSystem`s (the seed-000 solver and the
+//! `polynomial` is the kernel's client for `EquationSystem`s (the solver of Porta, Ros and Thomas (2006) and the
 //! trapezoid distance solver): `Solver`, `SolverSettings`, `BoxSink`.
 //!
 //! Does no IO and knows nothing of mechanisms, URDF or ROS.
