@@ -526,7 +526,7 @@ pub(super) fn butterfly_starts() -> Vec<Vec<f64>> {
 #[test]
 fn double_butterfly_turning_points_of_theta6_match_an_independent_grid_and_newton() {
     let (branches, stationary) = trace::all(&butterfly_starts());
-    assert_eq!(branches, 4, "the butterfly's curve has 4 branches (seed 000)");
+    assert_eq!(branches, 4, "the butterfly's curve has 4 branches (Porta, Ros and Thomas 2006)");
     let reference: Vec<(f64, f64)> = stationary.iter().map(|q| (q[6], q[5])).collect();
     // The grid-and-Newton reference on the sheets finds a subset (it skips cells at the sheets'
     // folds): every point it finds is one of the continuation's.

@@ -261,7 +261,7 @@ fn a_report_with_undecided_boxes_is_never_complete() {
     let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
     let run = arm3r::singularities(&chain, 1e-4, false, &bounded(2_000_000), &mut |_| {}).expect("runs");
     assert!(run.status.finished(), "no limit stops the cusp search on this arm");
-    assert!(!run.cusps.undecided.is_empty(), "the crossing branches leave boxes the seed's system cannot decide");
+    assert!(!run.cusps.undecided.is_empty(), "the crossing branches leave boxes the system of Benoit, Delanoue, Lagrange and Wenger 2019 cannot decide");
     let report = linkspace::edges::report::manip3r::SingularityReport::new(&chain, 1e-4, &run.cusps, None, run.seconds);
     assert_eq!(report.completeness, Completeness::Incomplete(Incompleteness::Undecided));
     assert_eq!(report.undecided_total[0], run.cusps.undecided.len());

@@ -60,7 +60,7 @@ pub const ROBOTS: [(&str, &str, f64, f64); 5] = [
 ];
 
 /// Where the stored Ibex figures come from and how they were run.
-const IBEX_REFERENCE: &str = "Ibex 2.9.1 ibexsolve -e 1e-4, CPU s of the child (user + system), median of 3, recorded 2026-11-25 on 2 shared vCPUs (docs/peers.md), not run here: cusps on D&G2 (det Df = 0 and the seed's second row; its extra roots are not cusps), robot f with the internal-motion lines excluded as linkspace excludes them (without the exclusion: 59 s and 186,320 unknown boxes); nodes with the separation (t2 - u2)^2 + (t3 - u3)^2 >= 1e-2, which linkspace's node search does not need (a different problem)";
+const IBEX_REFERENCE: &str = "Ibex 2.9.1 ibexsolve -e 1e-4, CPU s of the child (user + system), median of 3, recorded 2026-11-25 on 2 shared vCPUs (docs/peers.md), not run here: cusps on D&G2 (det Df = 0 and the second row of Benoit, Delanoue, Lagrange and Wenger 2019; its extra roots are not cusps), robot f with the internal-motion lines excluded as linkspace excludes them (without the exclusion: 59 s and 186,320 unknown boxes); nodes with the separation (t2 - u2)^2 + (t3 - u3)^2 >= 1e-2, which linkspace's node search does not need (a different problem)";
 
 /// CPU seconds of `f` (this process, every thread) and its value.
 fn cpu<T>(f: impl FnOnce() -> T) -> (f64, T) {

@@ -207,7 +207,7 @@ fn butterfly_charts(dir: &Path, quick: bool, want: &dyn Fn(&str) -> bool) -> Res
         coupler.push(Panel { title, rects: e.solutions.iter().map(|b| [b.dims[t.x].inf(), b.dims[t.x].sup(), b.dims[t.y].inf(), b.dims[t.y].sup()]).collect(), marks: vec![] });
     }
     let mut svg = String::new();
-    box_panels(&mut svg, "Mobile double butterfly: solution boxes on cos θ2 × cos θ4 (seed 000, Fig. 3)", "cos θ2", "cos θ4", &panels, (-1.05, 1.05), (-1.05, 1.05))?;
+    box_panels(&mut svg, "Mobile double butterfly: solution boxes on cos θ2 × cos θ4 (Porta, Ros and Thomas 2006, Fig. 3)", "cos θ2", "cos θ4", &panels, (-1.05, 1.05), (-1.05, 1.05))?;
     write(dir, "butterfly_fig3.svg", &svg)?;
     let (xr, yr) = bounds(&coupler);
     let mut svg = String::new();
@@ -239,7 +239,7 @@ fn butterfly_charts(dir: &Path, quick: bool, want: &dyn Fn(&str) -> bool) -> Res
         series.push(Series { label: label.into(), points: levels.iter().enumerate().map(|(k, &d)| (k as f64, d)).collect() });
     }
     let mut svg = String::new();
-    lines(&mut svg, "Convergence: widest box diagonal after each tree level (seed 000, section V)", "tree level", "widest diagonal", &series, Scale::Linear, Scale::Log)?;
+    lines(&mut svg, "Convergence: widest box diagonal after each tree level (Porta, Ros and Thomas 2006, section V)", "tree level", "widest diagonal", &series, Scale::Linear, Scale::Log)?;
     write(dir, "convergence.svg", &svg)?;
     }
     // 4. Stability: two roots merging at the rocker limit of the four-bar.
@@ -383,7 +383,7 @@ fn distance_sweeps(dir: &Path, quick: bool) -> Result<()> {
     let platform = linkspace::formulate::PlatformProblem::new(&urdf::parse(OCTAHEDRAL)?, &fixed)?;
     let sigmas: &[f64] = if quick { &[0.1, 1e-3] } else { &[0.1, 1e-2, 1e-3, 1e-4, 1e-6] };
     let methods = [
-        ("split, corners (seed 004)", Formulation::Split, FaceBounds::Corners, false),
+        ("split, corners (Porta, Thomas, Ros and Torras 2003)", Formulation::Split, FaceBounds::Corners, false),
         ("split, interval-arithmetic faces", Formulation::Split, FaceBounds::IntervalArithmetic, false),
         ("shared, Bernstein corners", Formulation::Shared, FaceBounds::Corners, false),
         ("shared, Bernstein corners, redundant equations", Formulation::Shared, FaceBounds::Corners, true),

@@ -140,7 +140,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
             row(&mut out, &case, "split, interval faces, search only (baseline)", &baseline, None, &format!("t {} s, b_p {}, n_s {}", s.3, s.4, s.5));
             let base = Some((baseline.cpu, baseline.complete));
             for (label, method, seed) in [
-                ("split, corners, search only (the seed's)", Method::Search(Formulation::Split, FaceBounds::Corners), format!("t {} s, b_p {}, n_s {}", s.0, s.1, s.2)),
+                ("split, corners, search only (Porta, Thomas, Ros and Torras 2003)", Method::Search(Formulation::Split, FaceBounds::Corners), format!("t {} s, b_p {}, n_s {}", s.0, s.1, s.2)),
                 ("shared, Bernstein, search only (no settling)", Method::Search(Formulation::Shared, FaceBounds::Corners), String::new()),
                 ("shared, Bernstein, settled (certified; the default)", Method::Settled(Choice::Auto), String::new()),
             ] {
@@ -157,7 +157,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         let cm_settings = SolverSettings { sigma, rho: 0.99, ..Default::default() };
         let line_settings = SolverSettings { sigma, rho: 0.9, ..Default::default() };
         let baseline = run(&d, Method::Search(Formulation::Split, FaceBounds::Corners), true, &SolverSettings { timeout: baseline_limit, ..cm_settings.clone() }, 1)?;
-        row(&mut out, &case, "split, corners, C1-C4, search only (the seed's; baseline)", &baseline, None, seed);
+        row(&mut out, &case, "split, corners, C1-C4, search only (Porta, Thomas, Ros and Torras 2003; baseline)", &baseline, None, seed);
         let base = Some((baseline.cpu, baseline.complete));
         for (label, method, settings) in [
             ("shared, Bernstein, C1-C4, search only (no settling)", Method::Search(Formulation::Shared, FaceBounds::Corners), &cm_settings),

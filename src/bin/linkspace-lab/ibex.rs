@@ -124,7 +124,7 @@ pub fn cusp_model(chain: &Chain3R, t3: [f64; 2]) -> String {
     let b = body(&coefficients(chain));
     let pi = linkspace::analyses::arm3r::PI_UP;
     format!(
-        "// {name}: det Df = 0 and the seed's second row (D&G2), written by linkspace-lab bench3r\n\
+        "// {name}: det Df = 0 and the second row of Benoit, Delanoue, Lagrange and Wenger 2019 (D&G2), written by linkspace-lab bench3r\n\
          function det_df(t2, t3)\n{b}  return d;\nend\n\
          function g2(t2, t3)\n{b}  return z_2*(-d_3) + z_3*d_2;\nend\n\
          Variables\n  t2 in [{lo2:.17e}, {hi2:.17e}];\n  t3 in [{lo3:.17e}, {hi3:.17e}];\n\
