@@ -32,10 +32,10 @@ struct Cli {
 /// The bounds every command takes: `#[command(flatten)]` into each command's arguments.
 #[derive(clap::Args, Clone, Debug)]
 pub(crate) struct LimitArgs {
-    /// Stop after processing this many boxes (box pairs for nodes, segment pieces for
-    /// path-check); the run is then reported incomplete. Default: the command's (solve,
-    /// distances, loop-singularities, serve 1,000,000; ik 200,000; collisions 5,000,000;
-    /// singularities 5,000,000 per search; ik6 20,000,000; path-check 10,000,000).
+    /// Stop after processing this many boxes (box pairs for nodes); the run is then reported
+    /// incomplete. Default: the command's (solve, distances, loop-singularities, serve
+    /// 1,000,000; ik 200,000; collisions 5,000,000; singularities 5,000,000 per search; ik6
+    /// 20,000,000). A path check is bounded by --timeout and its pieces per segment, not boxes.
     #[arg(long, value_name = "N")]
     pub(crate) max_boxes: Option<u64>,
     /// Stop after this many seconds; the run is then reported incomplete.
