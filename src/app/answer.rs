@@ -8,7 +8,7 @@ use crate::analyses::distances::Certified;
 use crate::analyses::loop_singular::image::{ImagePoints, ImageReport};
 use crate::analyses::loop_singular::SingularSet;
 use crate::analyses::sweep::TaskResult;
-use crate::kernel::outcome::{BoxStatus, Completeness, Incompleteness, Scope};
+use crate::kernel::outcome::{Completeness, Incompleteness, Scope};
 use crate::kernel::search::SolverSettings;
 use std::collections::BTreeMap;
 
@@ -60,8 +60,7 @@ pub struct SolveAnswer {
 impl SolveAnswer {
     /// The one rule: the limit that stopped the run, else the boxes left undecided.
     pub fn completeness(&self) -> Completeness {
-        let undecided = self.result.boxes.iter().filter(|b| b.status == BoxStatus::Undecided).count();
-        Completeness::of(self.result.status, undecided, false)
+        self.result.completeness()
     }
 
     /// The builder's name (`planar`, `spatial`, `pose`, `distances`).

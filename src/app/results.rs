@@ -77,6 +77,13 @@ pub struct AssemblyMode {
 }
 
 impl BoxSetResult {
+    /// The one rule: the limit that stopped the run, else the boxes left undecided (a
+    /// platform's cluster without a proof leaves a finished run incomplete).
+    pub fn completeness(&self) -> crate::kernel::outcome::Completeness {
+        let undecided = self.boxes.iter().filter(|b| b.status == BoxStatus::Undecided).count();
+        crate::kernel::outcome::Completeness::of(self.status, undecided, false)
+    }
+
     /// The isolated solutions: clusters whose hull is at most `4·sigma` wide in every primary
     /// variable. A curve of solutions spans far more than that.
     pub fn assembly_modes(&self) -> Vec<AssemblyMode> {
@@ -303,6 +310,13 @@ impl LoopSingularities {
 }
 
 impl SingularityResult {
+    /// The one rule over the searches: a limit, else near-degenerate strips (which travel as
+    /// undecided internal-motion boxes), else undecided records.
+    pub fn completeness(&self) -> crate::kernel::outcome::Completeness {
+        let near = self.internal_motions.boxes.iter().any(|b| b.status == BoxStatus::Undecided);
+        crate::kernel::outcome::Completeness::of(self.status, self.undecided(), near)
+    }
+
     /// Undecided records (cusp boxes and node pairs, boxes of a linkage's singular sets).
     pub fn undecided(&self) -> usize {
         self.cusps.iter().filter(|c| !c.certified).count() + self.nodes.iter().filter(|n| !n.certified).count() + self.loops.as_ref().map_or(0, |l| l.undecided())

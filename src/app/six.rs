@@ -140,6 +140,16 @@ pub enum ArmVerdict {
 }
 
 impl ArmVerdict {
+    /// `Some(true)` cuspidal, `Some(false)` proven not, `None` undecided (or left to the
+    /// positioning structure's verdict).
+    pub fn cuspidal(self) -> Option<bool> {
+        match self {
+            ArmVerdict::Cuspidal => Some(true),
+            ArmVerdict::NonCuspidal => Some(false),
+            ArmVerdict::Undecided | ArmVerdict::AsPositioningStructure => None,
+        }
+    }
+
     /// `cuspidal`, `non_cuspidal`, `undecided` or `as_positioning_structure`, as reports and
     /// messages write it.
     pub fn name(self) -> &'static str {

@@ -62,11 +62,7 @@ impl VerdictRecord {
     }
 
     fn whole_arm(c: &ArmCuspidality, report: &ArmCuspidalityReport) -> Self {
-        let cuspidal = match c {
-            ArmCuspidality::ThreeParallel { .. } => Some(false),
-            ArmCuspidality::Searched { verdict: crate::analyses::arm6r::CuspidalVerdict::Cuspidal(_), .. } => Some(true),
-            ArmCuspidality::Searched { .. } | ArmCuspidality::PositioningVerdict => None,
-        };
+        let cuspidal = c.line().verdict.cuspidal();
         VerdictRecord {
             cuspidal,
             aspects: None,

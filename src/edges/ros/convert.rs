@@ -39,10 +39,8 @@ pub fn box_set(r: &BoxSetResult, run_id: u64) -> BoxSet {
         joint_lower.extend(b.joints.iter().map(|x| x[0]));
         joint_upper.extend(b.joints.iter().map(|x| x[1]));
     }
-    // Complete means nothing undecided, as in the CLI's reports: a finished run that left
-    // undecided boxes (a platform's cluster without a proof) is incomplete, limit "undecided".
-    let undecided = r.boxes.iter().filter(|b| b.status == BoxStatus::Undecided).count();
-    let (status, limit) = match Completeness::of(r.status, undecided, false).reason() {
+    // Complete means nothing undecided, as in the CLI's reports.
+    let (status, limit) = match r.completeness().reason() {
         None => (msgs::SET_COMPLETE, ""),
         Some(why) => (msgs::SET_INCOMPLETE, why.name()),
     };
@@ -179,9 +177,7 @@ fn intervals(b: &[Bounds]) -> Vec<msgs::Interval> {
 
 /// A singularity result as a `linkspace_msgs/SingularityReport`, records in the result's order.
 pub fn singularity_report(r: &SingularityResult, run_id: u64) -> SingularityReport {
-    // Near-degenerate strips travel as undecided internal-motion boxes.
-    let near = r.internal_motions.boxes.iter().any(|b| b.status == BoxStatus::Undecided);
-    let limit = Completeness::of(r.status, r.undecided(), near).reason();
+    let limit = r.completeness().reason();
     SingularityReport {
         header: header(&joint_frame(&r.mechanism)),
         mechanism: r.mechanism.clone(),

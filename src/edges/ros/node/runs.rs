@@ -169,8 +169,8 @@ impl super::State {
         let going = self.runs.values().any(|r| r.mechanism == k && r.generation == generation && matches!(r.kind, RunKind::ConfigurationSpace | RunKind::Singularities { load_time: true }));
         let m = &mut self.mechanisms[k];
         m.message = [&m.cspace_note, &m.singular_note].into_iter().filter(|n| !n.is_empty()).cloned().collect::<Vec<_>>().join("; ");
-        let cspace = m.configuration_space.as_ref().map_or(Completeness::Complete, |c| Completeness::of(c.status, c.boxes.iter().filter(|b| b.status == crate::app::BoxStatus::Undecided).count(), false));
-        let singular = m.singularities.as_ref().map_or(Completeness::Complete, |s| Completeness::of(s.status, s.undecided(), s.internal_motions.boxes.iter().any(|b| b.status == crate::app::BoxStatus::Undecided)));
+        let cspace = m.configuration_space.as_ref().map_or(Completeness::Complete, |c| c.completeness());
+        let singular = m.singularities.as_ref().map_or(Completeness::Complete, |s| s.completeness());
         m.state = if going { RunState::Running } else { RunState::Finished(cspace.and(singular)) };
     }
     /// Starts `job` on a thread of its own; returns its run id.
@@ -315,8 +315,7 @@ impl super::State {
             }
         };
         let m = &mut self.mechanisms[r.mechanism];
-        let undecided = result.boxes.iter().filter(|b| b.status == crate::app::BoxStatus::Undecided).count();
-        let status = crate::app::Completeness::of(result.status, undecided, false).text();
+        let status = result.completeness().text();
         let summary = format!("{name}: run {run} ({:?}) {status}: {} boxes, {} clusters, {:.3} s", r.kind, result.boxes.len(), result.clusters, result.stats.seconds);
         match r.kind {
             RunKind::ConfigurationSpace => {
