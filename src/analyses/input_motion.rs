@@ -11,9 +11,14 @@
 //! counts only when `cos(a − K − Δ) > 0` is proven on its enclosure, so its configuration has
 //! the input value `a` itself.
 //!
-//! The start: Newton polishes the assembly at its own input value (refused when it moves a joint
-//! by more than `ASSEMBLY_SLACK`), one Krawczyk proof boxes that configuration, and when the
-//! assembly's input value is not `from` the same steps carry its branch to `from` first (refused
+//! The start: the assembly is read as the builder reads joint values
+//! (`LinkageProblem::point_from_joints`: each group angle along the tree joints from the
+//! ground, values any number of turns out), Newton polishes it at its own input value, and
+//! every given joint value, the loops' included, is checked against the polished point's
+//! reading modulo 2π: a start more than `ASSEMBLY_SLACK` off in some joint is off the mechanism
+//! and refused, naming that joint and the distance. One Krawczyk proof boxes that configuration,
+//! and when the assembly's input value is not `from` (modulo 2π for a revolute input, taken the
+//! representative nearest `from`) the same steps carry its branch to `from` first (refused
 //! unless all proven), so the motion starts on the assembly's branch, not on a neighbour's.
 //!
 //! Continuity: step `k + 1`'s trial box holds the enclosure of step `k`'s configuration at the
@@ -78,8 +83,8 @@ pub struct MotionRequest {
     /// Its end value.
     pub to: f64,
     /// An approximate configuration of the loop: the value of every free joint, in
-    /// `motion_joints` order. When its actuated value is not `from`, its branch is followed to
-    /// `from` by the same proven steps first.
+    /// `motion_joints` order (angles modulo 2π). When its actuated value is not `from`, its
+    /// branch is followed to `from` by the same proven steps first.
     pub assembly: Vec<f64>,
     /// The largest step of the input.
     pub max_step: f64,
@@ -360,8 +365,14 @@ pub fn check_input_motion(m: &Mechanism, fixed: &[(String, f64)], request: &Moti
     // `ASSEMBLY_SLACK` in some joint is not on the mechanism.
     let (x0, residual) = square.newton(read.clone(), a_asm);
     if !(residual < 1e-9) {
+        // Where a loop joint disagrees with its tree joints, that names the joint that is off.
         let before = off(&read);
-        return Err(no_assembly(format!("off the mechanism: Newton from it does not converge (residual {residual:.1e}); {}", before.describe("the value the tree joints give it"))));
+        let why = if before.distance > ASSEMBLY_SLACK {
+            format!("off the mechanism: {} (Newton from it does not converge: residual {residual:.1e})", before.describe("the value the tree joints give it"))
+        } else {
+            format!("off the mechanism: its loops do not close near it (Newton from it does not converge: residual {residual:.1e})")
+        };
+        return Err(no_assembly(why));
     }
     let moved = off(&x0);
     if !(moved.distance <= ASSEMBLY_SLACK) {
