@@ -46,7 +46,7 @@ pub use crate::analyses::arm3r::{check_precision, ChainSpec, LoadOptions};
 pub use crate::analyses::arm6r::PoseInput;
 pub use crate::analyses::distances::Choice as DistanceFormulation;
 pub use crate::analyses::loop_singular::image::{ImageCusp, ImageNode, ImagePoints, ImageReport};
-pub use crate::formulate::{Model as LinkageModel, ModelChoice, Output, SingularKind, TracedPoint};
+pub use crate::formulate::{LegValues, Model as LinkageModel, ModelChoice, Output, SingularKind, TracedPoint};
 pub use crate::kernel::contract::FaceBounds;
 pub use crate::kernel::lp::LpBackend;
 pub use crate::model::rounding::ANGLE_TOLERANCE as SNAP_TOLERANCE;

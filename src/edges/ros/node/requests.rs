@@ -199,7 +199,7 @@ impl super::State {
             // The error may quote the request (a joint name): bounded.
             Err(e) => return Err(convert::bounded(&e.to_string(), convert::ECHO_MESSAGE)),
         };
-        Ok((k, Box::new(move |c, p| Outcome::BoxSet(prepared.run(c, p)))))
+        Ok((k, Box::new(move |c, p| prepared.run(c, p).map(Outcome::BoxSet).map_err(|e| e.to_string()))))
     }
     fn cancel(&mut self, q: CancelRequest) -> CancelResponse {
         match self.runs.get(&q.run_id) {
@@ -265,7 +265,7 @@ impl super::State {
         if let Some(busy) = self.busy() {
             return refuse(busy);
         }
-        let run = self.start(k, RunKind::Singularities { load_time: false }, Box::new(move |c, p| Outcome::Singularities(prepared.run(c, p))));
+        let run = self.start(k, RunKind::Singularities { load_time: false }, Box::new(move |c, p| prepared.run(c, p).map(Outcome::Singularities).map_err(|e| e.to_string())));
         // The searches stop at `timeout`; the margin covers building the report.
         let deadline = Instant::now() + seconds(timeout + 10.0);
         self.runs.get_mut(&run).expect("invariant: just started").waiters.push((id, deadline));
@@ -303,7 +303,7 @@ impl super::State {
         if let Some(busy) = self.busy() {
             return refuse(busy);
         }
-        let run = self.start(k, RunKind::InverseKinematics, Box::new(move |c, p| Outcome::InverseKinematics(prepared.run(c, p))));
+        let run = self.start(k, RunKind::InverseKinematics, Box::new(move |c, p| prepared.run(c, p).map(Outcome::InverseKinematics).map_err(|e| e.to_string())));
         // Bounded by boxes and by the node's longest wait, after which its reply could not be sent.
         let deadline = Instant::now() + seconds(self.limits.max_wait);
         self.runs.get_mut(&run).expect("invariant: just started").waiters.push((id, deadline));
@@ -323,7 +323,7 @@ impl super::State {
             kind,
             Box::new(move |cancel, progress| {
                 let control = crate::app::Control { limits, threads, cancel };
-                Outcome::Answer(prepared.run(&control, progress).map_err(|e| e.to_string()))
+                Ok(Outcome::Answer(prepared.run(&control, progress).map_err(|e| e.to_string())))
             }),
         );
         let deadline = Instant::now() + seconds(self.limits.max_wait);

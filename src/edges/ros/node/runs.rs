@@ -51,8 +51,8 @@ impl Outcome {
     }
 }
 
-/// A run's work, moved to its thread.
-pub(super) type Work = Box<dyn FnOnce(&AtomicBool, &mut dyn FnMut(&crate::app::Progress)) -> Outcome + Send>;
+/// A run's work, moved to its thread: its outcome, or why it failed (in one line).
+pub(super) type Work = Box<dyn FnOnce(&AtomicBool, &mut dyn FnMut(&crate::app::Progress)) -> Result<Outcome, String> + Send>;
 
 /// What a run is for, which decides where its result goes.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -114,14 +114,14 @@ impl super::State {
         let mut started = false;
         match cspace {
             Ok(prepared) => {
-                self.start(k, RunKind::ConfigurationSpace, Box::new(move |c, p| Outcome::BoxSet(prepared.run(c, p))));
+                self.start(k, RunKind::ConfigurationSpace, Box::new(move |c, p| prepared.run(c, p).map(Outcome::BoxSet).map_err(|e| e.to_string())));
                 started = true;
             }
             Err(e) => self.log(LogLevel::Warn, format!("{}: no configuration space: {e}", self.mechanisms[k].loaded.analysis.mechanism())),
         }
         match singular {
             Ok(prepared) => {
-                let run = self.start(k, RunKind::Singularities { load_time: true }, Box::new(move |c, p| Outcome::Singularities(prepared.run(c, p))));
+                let run = self.start(k, RunKind::Singularities { load_time: true }, Box::new(move |c, p| prepared.run(c, p).map(Outcome::Singularities).map_err(|e| e.to_string())));
                 self.mechanisms[k].singularity_run = Some(run);
                 started = true;
             }
@@ -187,7 +187,10 @@ impl super::State {
                 // Progress is lossy by design: a full queue drops a snapshot, not the run.
                 let _ = progress_events.try_send(Event::Progress { run, progress: *p });
             };
-            let result = catch_unwind(AssertUnwindSafe(|| job(&cancel, &mut progress))).map_err(|p| panic_text(p.as_ref()));
+            let result = match catch_unwind(AssertUnwindSafe(|| job(&cancel, &mut progress))) {
+                Ok(result) => result,
+                Err(p) => Err(format!("internal error: {}", panic_text(p.as_ref()))),
+            };
             let _ = events.send_blocking(Event::Finished { run, result });
         });
         run
@@ -241,8 +244,8 @@ impl super::State {
         }
         let outcome = match result {
             Ok(outcome) => outcome,
-            Err(panic) => {
-                let message = format!("run {run} of '{name}' failed: internal error: {panic}");
+            Err(why) => {
+                let message = format!("run {run} of '{name}' failed: {why}");
                 eprintln!("linkspace: {message}");
                 let m = &mut self.mechanisms[r.mechanism];
                 if matches!(r.kind, RunKind::ConfigurationSpace | RunKind::Singularities { load_time: true }) {
