@@ -61,4 +61,8 @@ if [ "$(cat "$VENV/.linkspace-msgs" 2>/dev/null)" != "$MSG_HASH" ]; then
   "$VENV/bin/python" -c "import linkspace_msgs.msg, linkspace_msgs.srv, tf2_msgs.msg" >&2
   echo "$MSG_HASH" > "$VENV/.linkspace-msgs"
 fi
+# The venv and its build trees hold copies of the interface packages: a colcon workspace
+# around this clone must not find them (colcon skips a folder holding COLCON_IGNORE).
+touch "$VENV/COLCON_IGNORE"
+mkdir -p "$VENV.msgs-build" && touch "$VENV.msgs-build/COLCON_IGNORE"
 echo "$VENV/bin/python"
