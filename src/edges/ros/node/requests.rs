@@ -67,31 +67,31 @@ impl super::State {
 
     pub(super) fn reply_path_check(&self, id: RmwRequestId, reply: PathCheckResponse) {
         if let Err(e) = self.servers.path_check.send_response(id, reply) {
-            eprintln!("linkspace: sending a path_check reply: {e:?}");
+            say!("linkspace: sending a path_check reply: {e:?}");
         }
     }
 
     pub(super) fn reply_singularities(&self, id: RmwRequestId, reply: SingularitiesResponse) {
         if let Err(e) = self.servers.singularities.send_response(id, reply) {
-            eprintln!("linkspace: sending a singularities reply: {e:?}");
+            say!("linkspace: sending a singularities reply: {e:?}");
         }
     }
 
     pub(super) fn reply_ik(&self, id: RmwRequestId, reply: InverseKinematicsResponse) {
         if let Err(e) = self.servers.inverse_kinematics.send_response(id, reply) {
-            eprintln!("linkspace: sending an inverse_kinematics reply: {e:?}");
+            say!("linkspace: sending an inverse_kinematics reply: {e:?}");
         }
     }
 
     pub(super) fn reply_ik6(&self, id: RmwRequestId, reply: InverseKinematics6Response) {
         if let Err(e) = self.servers.inverse_kinematics6.send_response(id, reply) {
-            eprintln!("linkspace: sending an inverse_kinematics6 reply: {e:?}");
+            say!("linkspace: sending an inverse_kinematics6 reply: {e:?}");
         }
     }
 
     pub(super) fn reply_solve(&self, id: RmwRequestId, reply: SolveResponse) {
         if let Err(e) = self.servers.solve.send_response(id, reply) {
-            eprintln!("linkspace: sending a solve reply: {e:?}");
+            say!("linkspace: sending a solve reply: {e:?}");
         }
     }
     /// Handles one request under `catch_unwind`: a bug answers with an error and the node goes on.
@@ -138,7 +138,7 @@ impl super::State {
             }
         };
         if let Err(e) = sent {
-            eprintln!("linkspace: sending a reply: {e:?}");
+            say!("linkspace: sending a reply: {e:?}");
         }
     }
     fn mechanism(&self, name: &str) -> Result<usize, String> {
@@ -403,6 +403,9 @@ impl super::State {
         }
         if q.joint_names.len() != q.joint_values.len() {
             return refuse(format!("{} joint names but {} values", q.joint_names.len(), q.joint_values.len()));
+        }
+        if let Some((i, name)) = q.joint_names.iter().enumerate().find(|(i, n)| q.joint_names[..*i].contains(n)) {
+            return refuse(format!("joint '{}' is given twice (joint_names[{i}])", convert::bounded(name, convert::ECHO_NAME)));
         }
         let free = a.free_joints();
         let mut values = vec![f64::NAN; free.len()];
