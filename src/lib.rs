@@ -28,6 +28,9 @@
 //! ```
 
 #![warn(missing_docs)]
+// What is public is what the crate root reaches: an item public inside a private module says
+// `pub(crate)`. (The library's alone: a binary or a test has no public items.)
+#![warn(unreachable_pub)]
 
 pub mod analyses;
 pub mod app;

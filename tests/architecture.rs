@@ -248,7 +248,10 @@ fn one_outcome_vocabulary() {
 
 /// Every question, the CLI subcommand that asks it, and the node's service that asks it with
 /// where the node's `Job` is built (`None`: no node service asks it).
-const QUESTIONS: [(&str, &str, Option<(&str, &str)>); 9] = [
+/// The node's service of a question, and the file (or folder) where the node's job is built.
+type NodeRoute = Option<(&'static str, &'static str)>;
+
+const QUESTIONS: [(&str, &str, NodeRoute); 9] = [
     ("Solve", "solve", Some(("solve", "app/linkage.rs"))),
     ("Singularities", "singularities", Some(("singularities", "app/arm_analysis.rs"))),
     ("Ik", "ik", Some(("inverse_kinematics", "app/arm_analysis.rs"))),

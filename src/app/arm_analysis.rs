@@ -106,7 +106,7 @@ impl Analysis for Manip3rAnalysis {
         });
         let limits = Limits { max_cells: query.max_boxes, timeout: query.timeout, ..Limits::default() };
         let (cover, query_, joints) = (self.cover.clone(), query.clone(), self.record_joints());
-        JobRun::new(&self.input, job, limits, query.threads, move |answer| match answer {
+        JobRun::prepare(&self.input, job, limits, query.threads, move |answer| match answer {
             Answer::Singularities(a) => Ok(singularity_result(&a, &cover, query_, joints)),
             other => Err(unexpected(&other, "singularities")),
         })
@@ -123,7 +123,7 @@ impl Analysis for Manip3rAnalysis {
         }
         let job = Job::Ik(IkJob { arm: LoadOptions::default(), uncertainty: 0.0, point: IkPoint::Root(query.point), precision: query.precision });
         let limits = Limits { max_cells: query.max_boxes, timeout: query.timeout, ..Limits::default() };
-        JobRun::new(&self.input, job, limits, query.threads, move |answer| match answer {
+        JobRun::prepare(&self.input, job, limits, query.threads, move |answer| match answer {
             Answer::Ik(a) => Ok(ik_result(&a)),
             other => Err(unexpected(&other, "inverse_kinematics")),
         })
@@ -257,7 +257,7 @@ fn singularity_result(answer: &SingularitiesAnswer, cover: &Cover, q: Singularit
         workspace_names: vec!["radius".into(), "z".into()],
         cusps: cusp_records,
         nodes: node_records,
-        singular_curves: box_set(&cover, &chain.name, &joints),
+        singular_curves: box_set(cover, &chain.name, &joints),
         internal_motions: motions,
         processed,
         seconds: found.seconds + cover.seconds,

@@ -64,7 +64,7 @@ impl LinkageAnalysis {
     fn solve_run(&self, fixed: &[(String, f64)], settings: &SolverSettings, analysis: &'static str) -> Result<Box<dyn PreparedRun>, JobError> {
         let s = settings;
         let job = Job::Solve(SolveJob { fixed: fixed.to_vec(), traces: self.traces.clone(), model: ModelChoice::Auto, precision: s.sigma, rho: s.rho, use_lp: s.use_lp, newton_width: s.newton_width, lp_backend: s.lp_backend });
-        JobRun::new(&self.input, job, limits_of(s), s.threads, move |answer| match answer {
+        JobRun::prepare(&self.input, job, limits_of(s), s.threads, move |answer| match answer {
             Answer::Solve(solved) => Ok(BoxSetResult { analysis: analysis.to_string(), ..solved.result }),
             other => Err(unexpected(&other, analysis)),
         })
@@ -145,7 +145,7 @@ impl Analysis for LinkageAnalysis {
         });
         let limits = Limits { max_cells: query.max_boxes, timeout: query.timeout, ..Limits::default() };
         let (query, actuation) = (query.clone(), self.actuation.clone());
-        JobRun::new(&self.input, job, limits, query.threads, move |answer| singularity_result(answer, query, actuation))
+        JobRun::prepare(&self.input, job, limits, query.threads, move |answer| singularity_result(answer, query, actuation))
     }
 
     /// The configuration-space classification, plus a lower bound on the distance to the nearest

@@ -80,7 +80,7 @@ impl PlatformAnalysis {
             LegValues::Squared => lengths(fixed),
             LegValues::Lengths => fixed.to_vec(),
         };
-        JobRun::new(&self.input, job, limits_of(settings), settings.threads, move |answer| match answer {
+        JobRun::prepare(&self.input, job, limits_of(settings), settings.threads, move |answer| match answer {
             Answer::Distances(d) => Ok(box_set(&d, lengths, analysis)),
             other => Err(unexpected(&other, analysis)),
         })

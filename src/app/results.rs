@@ -204,7 +204,7 @@ pub(crate) struct JobRun<T> {
 
 impl<T: 'static> JobRun<T> {
     /// Prepares `job` on `input`; `read` turns its answer into the node's result.
-    pub(crate) fn new(input: &Input, job: Job, limits: Limits, threads: usize, read: impl FnOnce(Answer) -> Result<T, JobError> + Send + 'static) -> Result<Box<dyn PreparedRun<T>>, JobError> {
+    pub(crate) fn prepare(input: &Input, job: Job, limits: Limits, threads: usize, read: impl FnOnce(Answer) -> Result<T, JobError> + Send + 'static) -> Result<Box<dyn PreparedRun<T>>, JobError> {
         let prepared = prepare(input, job)?;
         Ok(Box::new(JobRun { prepared, limits, threads: threads.max(1), read: Box::new(read) }))
     }
