@@ -161,7 +161,8 @@ impl NativeAnswer {
     /// A solve answer's boxes as arrays, solution boxes first (the report's `solutions`, then
     /// its `undecided`): `columns` (free joints), `lo` and `hi` (n × columns), `variables`
     /// with `variables_lo` and `variables_hi` (n × variables, the raw boxes), `tags`,
-    /// `clusters` (-1 for undecided boxes) and `levels`. `None` for other answers.
+    /// `clusters` (-1 for undecided boxes), `cluster_count`, `levels` and `mechanism`. `None`
+    /// for other answers.
     fn solve_boxes<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         let Answer::Solve(a) = &self.answer else { return Ok(None) };
         let r = &a.result;
@@ -172,6 +173,8 @@ impl NativeAnswer {
         };
         let (nj, nv) = (r.joint_names.len(), r.variables.len());
         let d = PyDict::new(py);
+        d.set_item("mechanism", &r.mechanism)?;
+        d.set_item("cluster_count", r.clusters)?;
         d.set_item("columns", &r.joint_names)?;
         d.set_item("lo", array(true, 0, nj)?)?;
         d.set_item("hi", array(true, 1, nj)?)?;
