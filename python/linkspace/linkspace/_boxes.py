@@ -84,8 +84,7 @@ class BoxSet:
 
     def __getitem__(self, rows: int | slice | npt.ArrayLike) -> BoxSet:
         """The boxes picked by an index, a slice or a boolean mask (e.g. ``boxes[boxes.tags == "unique"]``)."""
-        index = np.arange(len(self))[rows]
-        index = np.atleast_1d(index)
+        index = np.atleast_1d(np.arange(len(self))[rows if isinstance(rows, (int, slice)) else np.asarray(rows)])
         return BoxSet(self.columns, self.lo[index], self.hi[index], self.tags[index], self.clusters[index], self.cluster_count)
 
     def midpoints(self) -> FloatArray:
@@ -119,7 +118,8 @@ class BoxSet:
     def contains(self, point: npt.ArrayLike) -> npt.NDArray[np.bool_]:
         """For each box, whether it holds ``point`` (one value per column)."""
         p = np.asarray(point, dtype=np.float64).reshape(1, -1)
-        return np.all((self.lo <= p) & (p <= self.hi), axis=1)
+        inside: npt.NDArray[np.bool_] = np.all((self.lo <= p) & (p <= self.hi), axis=1)
+        return inside
 
     def plot(self, x: str | None = None, y: str | None = None, ax: Any = None, color_by: str = "tag", **patch: Any) -> Any:
         """Draws the boxes' projections on columns ``x`` and ``y`` (the first two by default) as

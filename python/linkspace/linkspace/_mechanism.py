@@ -16,7 +16,7 @@ import sys
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any, Union
+from typing import Any, TypeVar, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -88,7 +88,7 @@ def _progress_callback(progress: ProgressArg) -> Callable[[float, int, int], Non
         return None
     if progress is True:
         try:
-            from tqdm.auto import tqdm
+            from tqdm.auto import tqdm  # type: ignore[import-untyped, import-not-found, unused-ignore]
         except ImportError:
 
             def line(decided: float, processed: int, pending: int) -> None:
@@ -372,7 +372,10 @@ class Mechanism:
         return _as(DistancesResult, self._run("distances", given, progress))
 
 
-def _as(cls: type[Any], r: Result) -> Any:
+R = TypeVar("R", bound=Result)
+
+
+def _as(cls: type[R], r: Result) -> R:
     if not isinstance(r, cls):
         raise TypeError(f"expected a {cls.__name__}, the library answered {type(r).__name__}")
     return r
@@ -399,6 +402,7 @@ def _pose(pose: npt.ArrayLike | None, xyz: Sequence[float] | None, rpy: Sequence
         if xyz is not None or rpy is not None or quaternion is not None:
             raise TypeError("give pose, or xyz with rpy or quaternion, not both")
         return _floats(pose)
-    if xyz is None or (rpy is None) == (quaternion is None):
+    rotation = rpy if rpy is not None else quaternion
+    if xyz is None or rotation is None or (rpy is not None and quaternion is not None):
         raise TypeError("ik6 needs pose, or xyz with one of rpy and quaternion")
-    return np.concatenate([_floats(xyz), _floats(rpy if rpy is not None else quaternion)])
+    return np.concatenate([_floats(xyz), _floats(rotation)])

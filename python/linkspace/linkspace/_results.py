@@ -93,7 +93,8 @@ class Verdict:
 
 class Result:
     """An answer: ``question`` (the CLI's subcommand), ``completeness``, ``notice`` (what the CLI
-    prints before such a run, if anything), the report (``to_dict()``, ``to_json()``)."""
+    prints before such a run, if anything), ``seconds`` (the library's time for the job), the
+    report (``to_dict()``, ``to_json()``)."""
 
     question: str
 
@@ -103,6 +104,8 @@ class Result:
         word, reason = native.completeness()
         self.completeness = Completeness(word == "complete", reason)
         self.notice: str | None = native.notice
+        #: Seconds the library took (preparing and running the job), without the binding.
+        self.seconds: float = native.seconds
 
     @cached_property
     def _text(self) -> str:

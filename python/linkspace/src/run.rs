@@ -14,7 +14,7 @@ use pyo3::types::PyDict;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Condvar, Mutex};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// How often the calling thread looks for Ctrl-C and progress while a run runs.
 const POLL: Duration = Duration::from_millis(50);
@@ -62,6 +62,7 @@ pub(crate) fn run(py: Python<'_>, input: &Input, source: &str, job: Job, bounds:
         Job::Solve(_) | Job::Distances(_) | Job::LoopSingularities(_) => "building",
         _ => "loading",
     };
+    let start = Instant::now();
     let prepared = py.detach(|| catch_unwind(AssertUnwindSafe(|| app::prepare(input, job)))).map_err(|p| internal(py, panic_text(p.as_ref())))?;
     let prepared = prepared.map_err(|e| job_error(py, verb, source, &e))?;
     let notice = prepared.notice().map(str::to_string);
@@ -78,12 +79,13 @@ pub(crate) fn run(py: Python<'_>, input: &Input, source: &str, job: Job, bounds:
                 }
             };
             let answer = catch_unwind(AssertUnwindSafe(|| prepared.run(&control, &mut report)));
+            let ran = start.elapsed();
             // Raised even when the run panicked, so the caller never waits forever.
             if let Ok(mut g) = shared.lock() {
                 g.done = true;
             }
             wake.notify_all();
-            answer
+            answer.map(|a| (a, ran))
         });
         let worker = match worker {
             Ok(w) => w,
@@ -112,15 +114,16 @@ pub(crate) fn run(py: Python<'_>, input: &Input, source: &str, job: Job, bounds:
             }
         }
         match worker.join() {
-            Ok(Ok(answer)) => Ok(answer),
+            Ok(Ok((answer, ran))) => Ok((answer, ran)),
             Ok(Err(p)) | Err(p) => Err(internal(py, panic_text(p.as_ref()))),
         }
     })?;
     if let Some(e) = raised {
         return Err(e);
     }
-    let answer = outcome.map_err(|e| job_error(py, "analysing", source, &e))?;
-    Ok(NativeAnswer { answer, notice })
+    let (answer, ran) = outcome;
+    let answer = answer.map_err(|e| job_error(py, "analysing", source, &e))?;
+    Ok(NativeAnswer { answer, notice, seconds: ran.as_secs_f64() })
 }
 
 /// An answer of the library, held for the Python result object built from it.
@@ -128,6 +131,7 @@ pub(crate) fn run(py: Python<'_>, input: &Input, source: &str, job: Job, bounds:
 pub struct NativeAnswer {
     answer: Answer,
     notice: Option<String>,
+    seconds: f64,
 }
 
 #[pymethods]
@@ -143,6 +147,13 @@ impl NativeAnswer {
     #[getter]
     fn notice(&self) -> Option<&str> {
         self.notice.as_deref()
+    }
+
+    /// Seconds from the start of `app::prepare` to the end of `Prepared::run`, on the worker
+    /// thread: the library's time, which the binding's overhead is measured against.
+    #[getter]
+    fn seconds(&self) -> f64 {
+        self.seconds
     }
 
     /// The JSON report, as the CLI's `--json` writes it (`edges::report::json`).

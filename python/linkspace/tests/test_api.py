@@ -121,6 +121,9 @@ def test_the_stubs_pass_mypy_strict() -> None:
     example = ROOT / "python/linkspace/examples/typed_usage.py"
     p = subprocess.run([mypy, "--strict", "--no-incremental", str(example)], capture_output=True, text=True, cwd=ROOT)
     assert p.returncode == 0, p.stdout + p.stderr
+    # The package's own annotations and its extension's stub, from the source tree.
+    p = subprocess.run([mypy, "--strict", "--no-incremental", "linkspace"], capture_output=True, text=True, cwd=ROOT / "python/linkspace")
+    assert p.returncode == 0, p.stdout + p.stderr
     # A wrong use is caught: a string for a precision.
     bad = Path(example.parent / "_wrong_use.py")
     bad.write_text("import linkspace\nlinkspace.load('x.urdf').solve(precision='fine')\n")

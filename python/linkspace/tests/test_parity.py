@@ -23,7 +23,7 @@ OCTAHEDRAL = {"leg15": 4.25, "leg16": 5.75, "leg26": 4.25, "leg24": 5.75, "leg34
 
 # (file, method, positional argument, keyword arguments, the CLI's arguments after the file).
 CASES: list[tuple[str, str, Any, dict[str, Any], list[str]]] = (
-    [(f"{n}.urdf", "solve", None, {"max_boxes": 1000}, ["--max-boxes", "1000"]) for n in LINKAGES]
+    [(f"{n}.urdf", "solve", None, {"max_boxes": 300}, ["--max-boxes", "300"]) for n in LINKAGES]
     + [
         ("double_butterfly.urdf", "solve", {"joint6": 1.1760052070951352}, {"precision": 1e-4}, ["--fix", "joint6=1.1760052070951352", "--precision", "1e-4"]),
         ("four_bar.urdf", "solve", {"crank_joint": 0.7}, {"trace": ["coupler@2,1"]}, ["--fix", "crank_joint=0.7", "--trace", "coupler@2,1"]),
@@ -49,7 +49,7 @@ CASES: list[tuple[str, str, Any, dict[str, Any], list[str]]] = (
         ("orthogonal_3r_a.urdf", "collisions", None, {}, []),
         ("octahedral.urdf", "distances", OCTAHEDRAL, {}, [a for k, v in OCTAHEDRAL.items() for a in ("--fix", f"{k}={v}")]),
         ("four_spheres.json", "distances", None, {}, []),
-        ("four_spheres.json", "distances", None, {"formulation": "shared", "max_boxes": 2000}, ["--formulation", "shared", "--max-boxes", "2000"]),
+        ("four_spheres.json", "distances", None, {"formulation": "shared", "max_boxes": 200}, ["--formulation", "shared", "--max-boxes", "200"]),
         ("four_bar.urdf", "loop_singularities", None, {}, []),
         ("slider_crank.urdf", "loop_singularities", None, {"kind": "input", "actuated": ["crank"]}, ["--kind", "input", "--actuated", "crank"]),
         ("five_bar.urdf", "loop_singularities", None, {"kind": "cusps", "max_boxes": 2000}, ["--kind", "cusps", "--max-boxes", "2000"]),
