@@ -294,7 +294,7 @@ fn prepare_distances(input: &Input, j: DistancesJob) -> Result<Ready, JobError> 
     // Checked before the file is read: rho's default depends on the formulation.
     SolverSettings { sigma: j.precision, rho: j.rho.unwrap_or(0.99), ..SolverSettings::default() }.validate()?;
     let run = match input {
-        Input::Mechanism(m) => DistancesRun::platform(m, &j.fixed)?,
+        Input::Mechanism(m) => DistancesRun::platform_with(m, &j.fixed, j.legs)?,
         Input::DistanceFile(text) => DistancesRun::file(text, &j.fixed)?,
     };
     let request = DistancesRequest { formulation: run.formulation(j.formulation), redundant: j.redundant, faces: j.faces };

@@ -500,7 +500,7 @@ mod tests {
         let m = crate::app::parse_urdf(xml).expect("parses");
         let a = crate::app::load(&m, &[], &[]).expect("loads");
         let q = crate::app::SingularityQuery { precision: 1e-4, nodes, max_boxes: 1_000_000, timeout: None, threads: 1 };
-        let r = a.singularities(&q).expect("valid").run(&std::sync::atomic::AtomicBool::new(false), &mut |_| {});
+        let r = a.singularities(&q).expect("valid").run(&std::sync::atomic::AtomicBool::new(false), &mut |_| {}).expect("runs");
         singularity_report(&r, 7)
     }
 
