@@ -4,7 +4,7 @@
 //! signatures repeat) and the same one-line complaints.
 
 use crate::input_error;
-use linkspace::app::{self, ChainSpec, CollisionsJob, DistanceFormulation, DistancesJob, FaceBounds, Ik6Job, IkJob, IkPoint, Input, Job, Limits, LoadOptions, LoopQuestion, LoopSingularitiesJob, LpBackend, ModelChoice, MotionSpan, Output, PathCheckJob, PathSet, PoseInput, SingularKind, SingularitiesJob, SolveJob};
+use linkspace::app::{self, ChainSpec, CollisionsJob, DistanceFormulation, DistancesJob, FaceBounds, Ik6Job, IkJob, IkPoint, Input, Job, LegValues, Limits, LoadOptions, LoopQuestion, LoopSingularitiesJob, LpBackend, ModelChoice, MotionSpan, Output, PathCheckJob, PathSet, PoseInput, SingularKind, SingularitiesJob, SolveJob};
 use numpy::{PyReadonlyArray2, PyReadonlyArrayDyn};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
@@ -262,7 +262,8 @@ fn distances(o: &Opts<'_, '_>, precision: f64) -> PyResult<Job> {
         _ => DistanceFormulation::Auto,
     };
     let faces = if o.choice("faces", &["corners", "interval"], "corners")? == "corners" { FaceBounds::Corners } else { FaceBounds::IntervalArithmetic };
-    Ok(Job::Distances(DistancesJob { fixed: o.fixes("fix")?, precision, rho: o.f64("rho")?, redundant: o.flag("redundant")?, formulation, faces }))
+    // Squared leg lengths, as `linkspace distances --fix` takes them.
+    Ok(Job::Distances(DistancesJob { fixed: o.fixes("fix")?, legs: LegValues::Squared, precision, rho: o.f64("rho")?, redundant: o.flag("redundant")?, formulation, faces }))
 }
 
 /// `--output LINK@X,Y` or joints `J1,J2`.
