@@ -10,7 +10,7 @@ guarantees: branch-and-prune over interval boxes, from URDF, in process.
 ``load`` reads a file (or URDF text) into a :class:`Mechanism`, which has one method per
 question of the CLI (``solve``, ``singularities``, ``ik``, ``ik6``, ``path_check``,
 ``collisions``, ``loop_singularities``, ``distances``) with the CLI's options as keyword
-arguments. Results are typed objects with numpy box sets (:class:`BoxSet`), verdicts
+arguments; ``sweep`` runs a design sweep. Results are typed objects with numpy box sets (:class:`BoxSet`), verdicts
 (:class:`Verdict`) and ``to_dict()``, equal to the CLI's ``--json`` report of the same run.
 """
 
@@ -18,13 +18,14 @@ from ._boxes import BoxSet
 from ._errors import AnalysisError, Error, InputError, InternalError, UnsupportedError
 from ._mechanism import Joint, Loop, Mechanism, Progress, defaults, load
 from ._native import __version__
+from ._sweep import SweepResult, sweep
 from ._results import (
     CollisionsResult, Completeness, DistancesResult, Ik6Result, IkResult, LoopSingularitiesResult, Node, PathCheckResult, Result, Scope,
     Segment, SingularitiesResult, SingularSet, SolveResult, Verdict,
 )
 
 __all__ = [
-    "load", "defaults", "Mechanism", "Joint", "Loop", "Progress", "BoxSet", "Completeness", "Scope", "Verdict", "Result", "SolveResult",
+    "load", "defaults", "sweep", "SweepResult", "Mechanism", "Joint", "Loop", "Progress", "BoxSet", "Completeness", "Scope", "Verdict", "Result", "SolveResult",
     "SingularitiesResult", "Node", "IkResult", "Ik6Result", "PathCheckResult", "Segment", "CollisionsResult", "DistancesResult",
     "SingularSet", "LoopSingularitiesResult", "Error", "InputError", "UnsupportedError", "AnalysisError", "InternalError", "__version__",
 ]

@@ -56,36 +56,28 @@ struct Shared {
     done: bool,
 }
 
-/// Prepares `job` against `input` and runs it within `bounds`; see the module's comment.
-pub(crate) fn run(py: Python<'_>, input: &Input, source: &str, job: Job, bounds: RunBounds, progress: Option<Bound<'_, PyAny>>) -> PyResult<NativeAnswer> {
-    let verb = match job {
-        Job::Solve(_) | Job::Distances(_) | Job::LoopSingularities(_) => "building",
-        _ => "loading",
-    };
-    let start = Instant::now();
-    let prepared = py.detach(|| catch_unwind(AssertUnwindSafe(|| app::prepare(input, job)))).map_err(|p| internal(py, panic_text(p.as_ref())))?;
-    let prepared = prepared.map_err(|e| job_error(py, verb, source, &e))?;
-    let notice = prepared.notice().map(str::to_string);
+/// `work(cancel, report)` on a worker thread with the GIL released, while this thread wakes
+/// every `POLL` to look for Ctrl-C (which raises `cancel`) and to pass what `work` last
+/// reported to `progress`; see the module's comment. A panic in `work` is `InternalError`.
+pub(crate) fn supervise<T: Send>(py: Python<'_>, progress: Option<&Bound<'_, PyAny>>, work: impl FnOnce(&AtomicBool, &(dyn Fn(Progress) + Sync)) -> T + Send) -> PyResult<T> {
     let cancel = AtomicBool::new(false);
     let shared = Mutex::new(Shared::default());
     let wake = Condvar::new();
     let mut raised: Option<PyErr> = None;
     let outcome = std::thread::scope(|s| {
         let worker = std::thread::Builder::new().name("linkspace-run".into()).stack_size(STACK).spawn_scoped(s, || {
-            let control = Control { limits: bounds.limits, threads: bounds.threads, cancel: &cancel };
-            let mut report = |p: &Progress| {
+            let report = |p: Progress| {
                 if let Ok(mut g) = shared.lock() {
-                    g.progress = Some(*p);
+                    g.progress = Some(p);
                 }
             };
-            let answer = catch_unwind(AssertUnwindSafe(|| prepared.run(&control, &mut report)));
-            let ran = start.elapsed();
-            // Raised even when the run panicked, so the caller never waits forever.
+            let out = catch_unwind(AssertUnwindSafe(|| work(&cancel, &report)));
+            // Raised even when the work panicked, so the caller never waits forever.
             if let Ok(mut g) = shared.lock() {
                 g.done = true;
             }
             wake.notify_all();
-            answer.map(|a| (a, ran))
+            out
         });
         let worker = match worker {
             Ok(w) => w,
@@ -106,7 +98,7 @@ pub(crate) fn run(py: Python<'_>, input: &Input, source: &str, job: Job, bounds:
                     raised = Some(e);
                 }
             }
-            if let (Some(p), Some(callback), None) = (latest, &progress, &raised) {
+            if let (Some(p), Some(callback), None) = (latest, progress, &raised) {
                 if let Err(e) = callback.call1((p.decided, p.processed, p.pending)) {
                     cancel.store(true, Ordering::Relaxed);
                     raised = Some(e);
@@ -114,14 +106,31 @@ pub(crate) fn run(py: Python<'_>, input: &Input, source: &str, job: Job, bounds:
             }
         }
         match worker.join() {
-            Ok(Ok((answer, ran))) => Ok((answer, ran)),
+            Ok(Ok(out)) => Ok(out),
             Ok(Err(p)) | Err(p) => Err(internal(py, panic_text(p.as_ref()))),
         }
     })?;
-    if let Some(e) = raised {
-        return Err(e);
+    match raised {
+        Some(e) => Err(e),
+        None => Ok(outcome),
     }
-    let (answer, ran) = outcome;
+}
+
+/// Prepares `job` against `input` and runs it within `bounds`, supervised.
+pub(crate) fn run(py: Python<'_>, input: &Input, source: &str, job: Job, bounds: RunBounds, progress: Option<Bound<'_, PyAny>>) -> PyResult<NativeAnswer> {
+    let verb = match job {
+        Job::Solve(_) | Job::Distances(_) | Job::LoopSingularities(_) => "building",
+        _ => "loading",
+    };
+    let start = Instant::now();
+    let prepared = py.detach(|| catch_unwind(AssertUnwindSafe(|| app::prepare(input, job)))).map_err(|p| internal(py, panic_text(p.as_ref())))?;
+    let prepared = prepared.map_err(|e| job_error(py, verb, source, &e))?;
+    let notice = prepared.notice().map(str::to_string);
+    let (answer, ran) = supervise(py, progress.as_ref(), |cancel, report| {
+        let control = Control { limits: bounds.limits, threads: bounds.threads, cancel };
+        let answer = prepared.run(&control, &mut |p: &Progress| report(*p));
+        (answer, start.elapsed())
+    })?;
     let answer = answer.map_err(|e| job_error(py, "analysing", source, &e))?;
     Ok(NativeAnswer { answer, notice, seconds: ran.as_secs_f64() })
 }
