@@ -59,7 +59,7 @@ def test_max_boxes_and_max_memory_are_the_cli_limits() -> None:
     assert r.completeness.reason == "boxes" and r.to_dict()["stats"]["processed"] == 200
     assert r.to_dict()["settings"]["max_boxes"] == 200
     # Breadth first (two threads), the pending boxes of a fine cover outgrow one MiB quickly.
-    r = m.solve(precision=LONG_PRECISION, max_memory=1, max_boxes=10_000_000, timeout=30, threads=2)
+    r = m.solve(precision=LONG_PRECISION, max_memory=1, max_boxes=10_000_000, timeout=120, threads=2)
     assert r.to_dict()["settings"]["max_memory"] == 1 << 20
     assert r.completeness.reason == "memory"
 
@@ -91,9 +91,10 @@ def test_the_gil_is_released_while_a_search_runs() -> None:
     finally:
         stop.set()
         t.join()
-    # Held by the run, the GIL would let the counter tick a few times at most (once per switch
-    # interval of 5 ms at the very best); released, it ticks about once per millisecond.
-    assert elapsed >= 0.9 and ticks > 200, (elapsed, ticks)
+    # Held by the run (one call into the extension for the whole second), the GIL would let the
+    # counter tick once or twice; released, it ticks about once per millisecond, fewer on a
+    # loaded machine but still dozens.
+    assert elapsed >= 0.9 and ticks > 20, (elapsed, ticks)
 
 
 def test_progress_is_reported_and_a_failing_callback_stops_the_run() -> None:
