@@ -83,34 +83,49 @@ def defaults(question: str) -> dict[str, float]:
     return dict(_native.defaults(question))
 
 
-def _progress_callback(progress: ProgressArg) -> Callable[[float, int, int], None] | None:
-    if progress is None or progress is False:
-        return None
-    if progress is True:
-        try:
-            from tqdm.auto import tqdm  # type: ignore[import-untyped, import-not-found, unused-ignore]
-        except ImportError:
+class _Reporter:
+    """``progress=`` as the extension calls it: ``(decided, processed, pending)``, on the calling
+    thread; ``close()`` ends a bar or the stderr line once the run is over."""
 
-            def line(decided: float, processed: int, pending: int) -> None:
-                sys.stderr.write(f"\r{100.0 * decided:5.1f}% decided, {processed} boxes processed, {pending} pending   ")
-                sys.stderr.flush()
+    def __init__(self, progress: ProgressArg) -> None:
+        self._bar: Any = None
+        self._line = False
+        self._callback: Callable[[Progress], object] | None = None
+        if progress is True:
+            try:
+                from tqdm.auto import tqdm  # type: ignore[import-untyped, import-not-found, unused-ignore]
+            except ImportError:
+                self._line = True
+            else:
+                self._bar = tqdm(total=1000, unit="‰", leave=False)
+        elif callable(progress):
+            self._callback = progress
 
-            return line
-        bar = tqdm(total=1000, unit="‰", leave=False)
-
-        def tick(decided: float, processed: int, pending: int) -> None:
+    def __call__(self, decided: float, processed: int, pending: int) -> None:
+        if self._callback is not None:
+            self._callback(Progress(decided, processed, pending))
+        elif self._bar is not None:
             if not math.isnan(decided):
-                bar.n = int(1000 * decided)
-            bar.set_postfix(processed=processed, pending=pending, refresh=False)
-            bar.refresh()
+                self._bar.n = int(1000 * decided)
+            self._bar.set_postfix(processed=processed, pending=pending, refresh=False)
+            self._bar.refresh()
+        elif self._line:
+            sys.stderr.write(f"\r{100.0 * decided:5.1f}% decided, {processed} boxes processed, {pending} pending   ")
+            sys.stderr.flush()
 
-        return tick
-    callback = progress
+    def active(self) -> bool:
+        return self._callback is not None or self._bar is not None or self._line
 
-    def call(decided: float, processed: int, pending: int) -> None:
-        callback(Progress(decided, processed, pending))
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+        elif self._line:
+            sys.stderr.write("\n")
 
-    return call
+
+def _progress_callback(progress: ProgressArg) -> _Reporter | None:
+    reporter = _Reporter(progress)
+    return reporter if reporter.active() else None
 
 
 def _tip_point(tip_point: str | tuple[str, Sequence[float]] | None) -> str | None:
@@ -220,7 +235,12 @@ class Mechanism:
 
     def _run(self, question: str, given: dict[str, Any], progress: ProgressArg) -> Result:
         options = {k: (v if v is not None else self._options.get(k)) for k, v in given.items()}
-        return result_of(self._native.run(question, options, _progress_callback(progress)))
+        reporter = _progress_callback(progress)
+        try:
+            return result_of(self._native.run(question, options, reporter))
+        finally:
+            if reporter is not None:
+                reporter.close()
 
     # The questions. Each keyword argument is the CLI flag of the same name; `None` takes its
     # default. The chain options of the arm questions and the limits are described once, in

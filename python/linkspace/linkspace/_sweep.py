@@ -51,6 +51,11 @@ def sweep(spec: Union[str, "os.PathLike[str]"], out: Union[str, "os.PathLike[str
     continues such a sweep). ``progress`` sees the share of tasks done. Ctrl-C stops the sweep
     and raises ``KeyboardInterrupt``."""
     options = dict(max_tasks=max_tasks, max_boxes=max_boxes, timeout=timeout, max_memory=max_memory, threads=threads)
-    rows, summary, csv, map_svg = _native.sweep(os.fspath(spec), None if out is None else os.fspath(out), options, _progress_callback(progress))
+    reporter = _progress_callback(progress)
+    try:
+        rows, summary, csv, map_svg = _native.sweep(os.fspath(spec), None if out is None else os.fspath(out), options, reporter)
+    finally:
+        if reporter is not None:
+            reporter.close()
     parsed = json.loads(summary)
     return SweepResult([json.loads(r) for r in rows], parsed, csv, map_svg, None if out is None else Path(out), tuple(parsed["parameters"]))

@@ -125,3 +125,14 @@ def test_threads_give_the_same_boxes() -> None:
         return sorted(tuple(row) for row in np.hstack([r.boxes.lo, r.boxes.hi]).tolist())
 
     assert len(one.boxes) == 6 and rows(one) == rows(two)
+
+
+def test_progress_true_draws_the_clis_line_without_tqdm(capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
+    import sys
+
+    monkeypatch.setitem(sys.modules, "tqdm", None)  # as if tqdm were not installed
+    monkeypatch.setitem(sys.modules, "tqdm.auto", None)
+    r = linkspace.load(LONG).solve(precision=LONG_PRECISION, timeout=0.5, progress=True)
+    err = capsys.readouterr().err
+    assert r.completeness.reason == "time"
+    assert "% decided," in err and "boxes processed" in err and err.endswith("\n")
