@@ -169,3 +169,30 @@ fn double_butterfly_motions_of_joint6_stop_at_the_reference_turning_points_and_c
     assert_eq!(found.verdict, MotionVerdict::Clear);
     assert_no_reference_inside(&found);
 }
+
+/// The start is read as the builder reads joint values (`LinkageProblem::point_from_joints`):
+/// the closed-form configuration, its angles any number of turns out, is a point of the loop's
+/// system (every row vanishes, the loop joint's value unused) whose joint readings are the
+/// closed form's modulo 2π.
+#[test]
+fn closed_form_configurations_any_turns_out_are_points_of_the_loop() {
+    let p = super::util::problem("four_bar.urdf", &[], &[]);
+    assert_eq!(p.free_joints, JOINTS);
+    // Inside the rocker's range [1.4996, 2.4747].
+    for (k, t4) in [1.6, 1.8, 2.2, 2.4].into_iter().enumerate() {
+        for side in [1.0, -1.0] {
+            let q = configuration(t4, side);
+            let turns = [[0.0; 4], [3.0, -2.0, 1.0, 5.0], [-1.0, 4.0, -3.0, 0.0]][k % 3];
+            let given: Vec<f64> = q.iter().zip(turns).map(|(v, n)| v + n * 2.0 * PI).collect();
+            let x = p.point_from_joints(&given).expect("four values");
+            for e in &p.system.equations {
+                assert!(e.residual(&x).abs() < 1e-12, "t4 {t4}, side {side}: residual {}", e.residual(&x));
+            }
+            let read = p.joint_values(&linkspace::IntervalBox::new(x.iter().map(|&v| linkspace::kernel::interval::point(v)).collect()));
+            for (name, v) in JOINTS.iter().zip(q) {
+                let (lo, hi) = read[*name];
+                assert!(gap(0.5 * (lo + hi), v) < 1e-12, "t4 {t4}, side {side}: {name} reads [{lo}, {hi}], closed form {v}");
+            }
+        }
+    }
+}

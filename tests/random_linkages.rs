@@ -544,6 +544,24 @@ fn generate(seed: u64) -> Mech {
     Mech { family, links, joints, loops, fix: text(fix_value) }
 }
 
+/// A generated mechanism as other modules take it: its URDF, its family and `crank_joint`'s
+/// value.
+pub(crate) struct Sample {
+    pub urdf: String,
+    pub family: &'static str,
+    pub crank: f64,
+}
+
+pub(crate) fn sample(seed: u64) -> Sample {
+    let m = generate(seed);
+    let family = match m.family {
+        Family::FourBar => "four-bar",
+        Family::SliderCrank => "slider-crank",
+        Family::WattSixBar => "Watt six-bar",
+    };
+    Sample { urdf: m.urdf(), family, crank: m.fix.parse().expect("number") }
+}
+
 /// Half the cranks pivot at the ground origin, the others somewhere log-uniform.
 fn rng_length_or_zero(seed: u64) -> f64 {
     let mut r = Rng(SplitMix(seed ^ 0xC0FFEE), false);

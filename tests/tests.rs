@@ -34,6 +34,9 @@ mod spatial;
 mod closed_loop_singularities;
 /// Input motions of 1-dof loops checked by tube following against closed forms.
 mod input_motion;
+/// Every assembly `solve --fix` certifies starts the input-motion check: random and bundled
+/// loops, typed back at 6 and 17 digits and whole turns away; starts off the mechanism refused.
+mod motion_starts;
 /// Singular sets of spatial linkages: RSSR and spherical four-bar singular points against their
 /// closed-form input–output relations.
 mod spatial_singularities;

@@ -11,9 +11,14 @@
 //! counts only when `cos(a − K − Δ) > 0` is proven on its enclosure, so its configuration has
 //! the input value `a` itself.
 //!
-//! The start: Newton polishes the assembly at its own input value (refused when it moves a joint
-//! by more than `ASSEMBLY_SLACK`), one Krawczyk proof boxes that configuration, and when the
-//! assembly's input value is not `from` the same steps carry its branch to `from` first (refused
+//! The start: the assembly is read as the builder reads joint values
+//! (`LinkageProblem::point_from_joints`: each group angle along the tree joints from the
+//! ground, values any number of turns out), Newton polishes it at its own input value, and
+//! every given joint value, the loops' included, is checked against the polished point's
+//! reading modulo 2π: a start more than `ASSEMBLY_SLACK` off in some joint is off the mechanism
+//! and refused, naming that joint and the distance. One Krawczyk proof boxes that configuration,
+//! and when the assembly's input value is not `from` (modulo 2π for a revolute input, taken the
+//! representative nearest `from`) the same steps carry its branch to `from` first (refused
 //! unless all proven), so the motion starts on the assembly's branch, not on a neighbour's.
 //!
 //! Continuity: step `k + 1`'s trial box holds the enclosure of step `k`'s configuration at the
@@ -32,7 +37,7 @@ use crate::formulate::{Coordinates, LinkageError, LinkageProblem, Output, Singul
 use crate::kernel::outcome::BoxStatus;
 use crate::kernel::search::{Budget, Control, Limit, SolverSettings};
 
-use crate::kernel::system::{EquationKind, Monomial, VarId};
+use crate::kernel::system::{Monomial, VarId};
 use nalgebra::{DMatrix, DVector};
 use std::collections::BTreeMap;
 use thiserror::Error;
@@ -78,8 +83,8 @@ pub struct MotionRequest {
     /// Its end value.
     pub to: f64,
     /// An approximate configuration of the loop: the value of every free joint, in
-    /// `motion_joints` order. When its actuated value is not `from`, its branch is followed to
-    /// `from` by the same proven steps first.
+    /// `motion_joints` order (angles modulo 2π). When its actuated value is not `from`, its
+    /// branch is followed to `from` by the same proven steps first.
     pub assembly: Vec<f64>,
     /// The largest step of the input.
     pub max_step: f64,
@@ -330,90 +335,48 @@ pub fn check_input_motion(m: &Mechanism, fixed: &[(String, f64)], request: &Moti
     let Some(actuated) = coordinate(&r.actuated) else {
         return Err(MotionError::BadRequest(format!("'{}' is not a free joint of the loop ({})", r.actuated, joints.join(", "))));
     };
-    // A box at every group's rest angle (c = 1, s = 0), travels 0: each joint reads its offset
-    // there, enclosed.
-    let mut rest = vec![point(0.0); vars];
-    let mut groups: Vec<(VarId, VarId)> = Vec::new();
-    for name in &joints {
-        if let Some(JointCoordinate::Angles { plus, minus }) = coordinate(name) {
-            for g in [plus, minus].into_iter().flatten() {
-                if !groups.contains(&g) {
-                    groups.push(g);
-                    rest[g.0] = point(1.0);
-                }
-            }
-        }
-    }
-    let offsets = problem.joint_values(&IntervalBox::new(rest));
-    let offset_of = |name: &str| -> Interval {
-        let (lo, hi) = offsets.get(name).copied().unwrap_or((f64::NAN, f64::NAN));
-        interval(lo, hi)
-    };
     let input = match actuated {
         JointCoordinate::Travel(d) => Input::Travel(d),
         JointCoordinate::Angles { plus, minus } => {
-            let offset = offset_of(&r.actuated);
-            if !(offset.wid() < 1e-6) {
-                return Err(MotionError::BadRequest(format!("the offset of '{}' cannot be enclosed tightly (it lies at ±π)", r.actuated)));
-            }
+            let offset = problem.joint_offset(&r.actuated).expect("invariant: a free revolute joint has an offset");
             Input::Angle { plus, minus, offset }
         }
     };
     let square = Square { problem: &problem, input };
 
-    // Group angles from the assembly: each revolute joint reads φ₊ − φ₋ + K (mod 2π), linear in
-    // the angles; least squares on the wrapped residuals.
-    let mut psi = vec![0.0; groups.len()];
-    let mut x0 = vec![f64::NAN; vars];
-    let place = |g: &Option<(VarId, VarId)>| g.and_then(|g| groups.iter().position(|h| *h == g));
-    for _ in 0..6 {
-        let mut rows_j: Vec<(Option<usize>, Option<usize>, f64)> = Vec::new();
-        for (name, &q) in joints.iter().zip(&r.assembly) {
-            match coordinate(name) {
-                Some(JointCoordinate::Angles { plus, minus }) => {
-                    let (p, n) = (place(&plus), place(&minus));
-                    let at = p.map_or(0.0, |i| psi[i]) - n.map_or(0.0, |i| psi[i]) + offset_of(name).mid();
-                    rows_j.push((p, n, wrap_f64(at - q)));
-                }
-                Some(JointCoordinate::Travel(d)) => x0[d] = q,
-                None => {}
-            }
-        }
-        if groups.is_empty() {
-            break;
-        }
-        let a = DMatrix::from_fn(rows_j.len(), groups.len(), |i, k| {
-            let (p, n, _) = rows_j[i];
-            (if p == Some(k) { 1.0 } else { 0.0 }) - if n == Some(k) { 1.0 } else { 0.0 }
-        });
-        let res = DVector::from_fn(rows_j.len(), |i, _| rows_j[i].2);
-        let Ok(d) = a.svd(true, true).solve(&res, 1e-12) else { break };
-        for (p, d) in psi.iter_mut().zip(d.iter()) {
-            *p -= d;
-        }
-    }
-    for (g, p) in groups.iter().zip(&psi) {
-        x0[g.0] = p.cos();
-        x0[g.1] = p.sin();
-    }
-    for e in &problem.system.equations {
-        if let EquationKind::Bilinear { z, x, y } = e.kind {
-            x0[z] = x0[x] * x0[y];
-        }
-    }
-    // The assembly's own input value: Newton there projects the assembly onto the loop's
-    // configurations without moving along the curve.
+    // The assembly read as the builder reads joint values: group angles along the tree joints,
+    // loop joints left to the polish and checked against it below.
+    let Some(read) = problem.point_from_joints(&r.assembly) else {
+        return Err(MotionError::BadRequest(format!("the assembly's angles must lie within ±{:e} rad to be reduced modulo 2π", crate::formulate::angles::MAX_REDUCIBLE)));
+    };
     let place_of_input = joints.iter().position(|j| *j == r.actuated).expect("invariant: the actuated joint is free");
-    let a_asm = r.assembly[place_of_input];
-    let no_assembly = |why: String| MotionError::NoAssembly { joint: r.actuated.clone(), value: a_asm, why };
-    let (x0, residual) = square.newton(x0.iter().map(|v| if v.is_finite() { *v } else { 0.0 }).collect(), a_asm);
+    let given = r.assembly[place_of_input];
+    let no_assembly = |why: String| MotionError::NoAssembly { joint: r.actuated.clone(), value: given, why };
+    // The input row reads a revolute input through its sine and cosine: the assembly's value
+    // taken the whole turns nearest `from`, so a value given turns away needs no lead.
+    let a_asm = match square.input {
+        Input::Angle { .. } => r.from + wrap_f64(given - r.from),
+        Input::Travel(_) => given,
+    };
+    let a_asm = if (a_asm - r.from).abs() <= SAME_INPUT * r.from.abs().max(1.0) { r.from } else { a_asm };
+    let off = |x: &[f64]| worst_gap(&problem, x, &joints, &r.assembly);
+    // Newton at the assembly's own input value projects it onto the loop's configurations
+    // without moving along the curve; it only polishes: a start it moves by more than
+    // `ASSEMBLY_SLACK` in some joint is not on the mechanism.
+    let (x0, residual) = square.newton(read.clone(), a_asm);
     if !(residual < 1e-9) {
-        return Err(no_assembly(format!("Newton from it does not converge: residual {residual:e}")));
+        // Where a loop joint disagrees with its tree joints, that names the joint that is off.
+        let before = off(&read);
+        let why = if before.distance > ASSEMBLY_SLACK {
+            format!("off the mechanism: {} (Newton from it does not converge: residual {residual:.1e})", before.describe("the value the tree joints give it"))
+        } else {
+            format!("off the mechanism: its loops do not close near it (Newton from it does not converge: residual {residual:.1e})")
+        };
+        return Err(no_assembly(why));
     }
-    let polished = problem.joint_values(&IntervalBox::new(x0.iter().map(|&v| point(v)).collect()));
-    let moved = joints.iter().zip(&r.assembly).map(|(j, &q)| polished.get(j).map_or(f64::INFINITY, |&(lo, hi)| wrap_f64(0.5 * (lo + hi) - q).abs())).fold(0.0, f64::max);
-    if !(moved <= ASSEMBLY_SLACK) {
-        return Err(no_assembly(format!("Newton from it ends {moved:.3} away in some joint (more than {ASSEMBLY_SLACK}): give the assembly more accurately")));
+    let moved = off(&x0);
+    if !(moved.distance <= ASSEMBLY_SLACK) {
+        return Err(no_assembly(format!("off the mechanism: {}; a start within {ASSEMBLY_SLACK} of a configuration in every joint is needed", moved.describe("its value in the configuration Newton finds from it at this input"))));
     }
     // The configuration at the assembly's value, proven unique in a small box about the
     // polished point.
@@ -455,6 +418,42 @@ const INFLATION: Inflation<'static> = Inflation { rounds: 5, own: 0.1, widest: 0
 
 /// How far (radians or metres, in every joint) Newton may move the given assembly.
 const ASSEMBLY_SLACK: f64 = 0.1;
+
+/// An assembly's input value this close to `from` (relative, at least absolute) is taken as
+/// `from`: the difference of a value given whole turns away, reduced.
+const SAME_INPUT: f64 = 1e-12;
+
+/// The joint of an assembly farthest from a point's readings (angles modulo 2π).
+struct Gap {
+    joint: String,
+    distance: f64,
+    given: f64,
+    there: f64,
+}
+
+impl Gap {
+    fn describe(&self, whose: &str) -> String {
+        format!("{} = {} is {:.3} from {:.6}, {whose}", self.joint, self.given, self.distance, self.there)
+    }
+}
+
+/// The joint whose given value lies farthest from its reading at `x`.
+fn worst_gap(problem: &LinkageProblem, x: &[f64], joints: &[String], given: &[f64]) -> Gap {
+    let read = problem.joint_values(&IntervalBox::new(x.iter().map(|&v| point(v)).collect()));
+    let mut worst = Gap { joint: String::new(), distance: -1.0, given: f64::NAN, there: f64::NAN };
+    for (j, &q) in joints.iter().zip(given) {
+        let there = read.get(j).map_or(f64::NAN, |&(lo, hi)| 0.5 * (lo + hi));
+        let d = match problem.joint_coordinate(j) {
+            Some(JointCoordinate::Angles { .. }) => wrap_f64(there - q).abs(),
+            _ => (there - q).abs(),
+        };
+        let d = if d.is_nan() { f64::INFINITY } else { d };
+        if d > worst.distance {
+            worst = Gap { joint: j.clone(), distance: d, given: q, there };
+        }
+    }
+    worst
+}
 
 /// What a tube following gives.
 struct Followed {

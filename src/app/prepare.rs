@@ -227,7 +227,7 @@ fn six_joint_chain(m: &Mechanism, options: &arm3r::LoadOptions) -> Result<Chain6
 }
 
 /// Waypoints one request may check: a path of more is refused rather than held in memory.
-pub const MAX_WAYPOINTS: usize = 100_000;
+pub(crate) const MAX_WAYPOINTS: usize = 100_000;
 
 /// Joint values beyond this many radians are refused: no joint turns 1,600 times.
 const MAX_JOINT_VALUE: f64 = 1e4;

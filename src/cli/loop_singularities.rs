@@ -63,7 +63,8 @@ pub(crate) struct LoopSingularitiesArgs {
     #[arg(long, allow_hyphen_values = true)]
     to: Option<f64>,
     /// `--kind motion`: an approximate configuration at the start, one value per free joint in
-    /// file order (a wrong count names them).
+    /// file order (angles modulo 2π; a wrong count names them): the values `solve --fix J=A`
+    /// prints for an assembly, with A for J, are one.
     #[arg(long, value_name = "Q1,Q2,...", allow_hyphen_values = true)]
     assembly: Option<String>,
     /// `--kind motion`: the largest step of the input.

@@ -207,6 +207,8 @@ pub struct LinkageProblem {
     /// Per link: (name, group angle, offset to the group angle, rest yaw in the plane).
     links: Vec<(String, Angle, Interval, Interval)>,
     readings: Vec<(String, Reading)>,
+    /// How many of `readings` (the first) are the tree's joints; the rest are the loops'.
+    tree_readings: usize,
     /// Revolute readings with limits: (index into `readings`, lower, upper), enclosing the stated limits.
     limits: Vec<(usize, Interval, Interval)>,
 }
@@ -317,7 +319,69 @@ impl LinkageProblem {
                 x[*v] = *travels.get(name)?;
             }
         }
-        // Derived variables: products, then traces (each defined by one equation).
+        self.fill_derived(&mut x)?;
+        Some(x)
+    }
+
+    /// A point of the system's variables at the free joints' values `values` (`free_joints`
+    /// order, radians or metres), read the way the readings define them: each group's angle
+    /// follows from the tree joints on its path from the ground (any number of turns: each
+    /// value is reduced modulo 2π, the sum wrapped once), travels are taken as given, products
+    /// and traced points come from their equations. The loops' joint values are not used:
+    /// closing the loops is left to a polish, and the caller checks them against the readings of
+    /// the point it ends at, modulo 2π. `None` when the count is wrong or a revolute value is
+    /// beyond `angles::MAX_REDUCIBLE`.
+    pub fn point_from_joints(&self, values: &[f64]) -> Option<Vec<f64>> {
+        if values.len() != self.readings.len() {
+            return None;
+        }
+        let mut x = vec![f64::NAN; self.system.vars.len()];
+        let mut known: BTreeMap<VarId, f64> = BTreeMap::new();
+        // The group angle of `link` when known (the ground's is 0), plus the link's offset.
+        let link_angle = |known: &BTreeMap<VarId, f64>, link: usize| match self.links[link].1 {
+            Angle::Ground => Some(self.links[link].2.mid()),
+            Angle::Free { c, .. } => known.get(&c).map(|psi| psi + self.links[link].2.mid()),
+        };
+        // Repeated passes: the tree joints need not be listed parents first.
+        loop {
+            let mut progress = false;
+            for ((_, r), &q) in self.readings[..self.tree_readings].iter().zip(values) {
+                let Reading::Revolute { a, b, sign, offset } = *r else { continue };
+                // q = sign·(φ_b − φ_a) + offset, so φ_b − φ_a = sign·(q − offset).
+                let turn = sign * (angles::reduce(point(q))?.mid() - offset.mid());
+                let (to, angle) = match (link_angle(&known, a), link_angle(&known, b)) {
+                    (Some(pa), None) => (self.links[b].1, pa + turn - self.links[b].2.mid()),
+                    (None, Some(pb)) => (self.links[a].1, pb - turn - self.links[a].2.mid()),
+                    _ => continue,
+                };
+                if let Angle::Free { c, .. } = to {
+                    known.insert(c, angle);
+                    progress = true;
+                }
+            }
+            if !progress {
+                break;
+            }
+        }
+        for (_, angle, ..) in &self.links {
+            if let Angle::Free { c, s } = *angle {
+                let psi = known.get(&c).map_or(0.0, |&p| wrap_f64(p));
+                x[c] = psi.cos();
+                x[s] = psi.sin();
+            }
+        }
+        for ((_, r), &q) in self.readings.iter().zip(values) {
+            if let Reading::Travel(v) = *r {
+                x[v] = q;
+            }
+        }
+        self.fill_derived(&mut x)?;
+        Some(x)
+    }
+
+    /// The derived variables of `x` from its primaries: products, then traces (each defined by
+    /// one equation).
+    fn fill_derived(&self, x: &mut [f64]) -> Option<()> {
         for e in &self.system.equations {
             if let crate::kernel::system::EquationKind::Bilinear { z, x: a, y: c } = e.kind {
                 x[z] = x[a] * x[c];
@@ -328,10 +392,10 @@ impl LinkageProblem {
                 let e = self.system.equations.iter().find(|e| e.terms.iter().any(|k| k.mono == Monomial::Linear(v)))?;
                 let coef = e.terms.iter().find(|k| k.mono == Monomial::Linear(v))?.coef.mid();
                 x[v] = 0.0;
-                x[v] = -e.residual(&x) / coef;
+                x[v] = -e.residual(x) / coef;
             }
         }
-        Some(x)
+        Some(())
     }
 }
 
@@ -367,6 +431,16 @@ impl LinkageProblem {
         })
     }
 
+    /// The constant `K` of the revolute joint `name`'s reading `θ = φ_plus − φ_minus + K`
+    /// (`joint_coordinate`), enclosed and not wrapped (so tight even where `K` lies at ±π);
+    /// `None` for a slider or a joint that is not free.
+    pub fn joint_offset(&self, name: &str) -> Option<Interval> {
+        let (_, r) = self.readings.iter().find(|(n, _)| n == name)?;
+        let Reading::Revolute { a, b, sign, offset } = *r else { return None };
+        let d = self.links[b].2 - self.links[a].2;
+        Some(if sign > 0.0 { d } else { -d } + offset)
+    }
+
     /// A solver for `system`, which must extend this problem's system (the same variables
     /// first, in order, then its own): the default pipeline plus this problem's joint-limit
     /// filter, which reads only the shared variables. Used by augmented systems (singular sets).
@@ -380,6 +454,11 @@ impl LinkageProblem {
             Box::new(Filtered { inner: default_contractor(system, settings), filters: vec![Box::new(move |b: &IntervalBox| self.limit_verdict(b))] })
         })))
     }
+}
+
+/// `x` shifted by whole turns into [−π, π].
+fn wrap_f64(x: f64) -> f64 {
+    x - std::f64::consts::TAU * (x / std::f64::consts::TAU).round()
 }
 
 fn bounds(x: Interval) -> (f64, f64) {

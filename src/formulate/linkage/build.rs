@@ -223,6 +223,7 @@ impl LinkageProblem {
         b.weld_loops(&fixed_loop)?;
         b.add_angles();
         let travel = b.add_travels(&fixed_tree);
+        let tree_readings = b.readings.len();
         // One vector equation per loop: the closure point through the predecessor minus the one
         // through the successor, both from the last link their tree paths share.
         let mut loop_equations: Vec<(String, Vec<usize>)> = Vec::new();
@@ -241,7 +242,7 @@ impl LinkageProblem {
             })
             .collect();
         let fixed_joints = fixed.to_vec();
-        Ok(Self { system: b.system, name: m.name.clone(), free_joints: b.free_joints, fixed_joints, traces: trace_out, links, readings: b.readings, limits: b.limits })
+        Ok(Self { system: b.system, name: m.name.clone(), free_joints: b.free_joints, fixed_joints, traces: trace_out, links, readings: b.readings, tree_readings, limits: b.limits })
     }
 }
 
