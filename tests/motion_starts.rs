@@ -33,7 +33,7 @@ type Assembly = BTreeMap<String, (f64, f64)>;
 /// exactly one configuration. `None` when the run did not finish.
 fn certified(m: &Mechanism, joint: &str, value: f64) -> Option<Vec<Assembly>> {
     let a = app::load(m, &[(joint.to_string(), value)], &[]).expect("loads");
-    let r = a.configuration_space(&SolverSettings::default()).expect("valid settings").run(&AtomicBool::new(false), &mut |_| {});
+    let r = a.configuration_space(&SolverSettings::default()).expect("valid settings").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
     if r.status != Status::Finished {
         return None;
     }

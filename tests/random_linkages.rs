@@ -547,9 +547,9 @@ fn generate(seed: u64) -> Mech {
 /// A generated mechanism as other modules take it: its URDF, its family and `crank_joint`'s
 /// value.
 pub(crate) struct Sample {
-    pub urdf: String,
-    pub family: &'static str,
-    pub crank: f64,
+    pub(crate) urdf: String,
+    pub(crate) family: &'static str,
+    pub(crate) crank: f64,
 }
 
 pub(crate) fn sample(seed: u64) -> Sample {

@@ -437,16 +437,18 @@ impl Gap {
     }
 }
 
-/// The joint whose given value lies farthest from its reading at `x`.
+/// The joint whose given value lies farthest from its reading at `x` (angles modulo 2π).
 fn worst_gap(problem: &LinkageProblem, x: &[f64], joints: &[String], given: &[f64]) -> Gap {
     let read = problem.joint_values(&IntervalBox::new(x.iter().map(|&v| point(v)).collect()));
     let mut worst = Gap { joint: String::new(), distance: -1.0, given: f64::NAN, there: f64::NAN };
     for (j, &q) in joints.iter().zip(given) {
         let there = read.get(j).map_or(f64::NAN, |&(lo, hi)| 0.5 * (lo + hi));
-        let d = match problem.joint_coordinate(j) {
-            Some(JointCoordinate::Angles { .. }) => wrap_f64(there - q).abs(),
-            _ => (there - q).abs(),
+        // An angle's reading, the whole turns nearest the value given (as the message shows it).
+        let there = match problem.joint_coordinate(j) {
+            Some(JointCoordinate::Angles { .. }) => q + wrap_f64(there - q),
+            _ => there,
         };
+        let d = (there - q).abs();
         let d = if d.is_nan() { f64::INFINITY } else { d };
         if d > worst.distance {
             worst = Gap { joint: j.clone(), distance: d, given: q, there };
