@@ -173,7 +173,7 @@ fn only_the_edges_know_serde() {
 
 /// What the front ends may name of the library: the front door (`app`, which re-exports the
 /// outcome vocabulary and the options jobs take), the outcome model, and their edge: the JSON
-/// writers for the CLI, the node itself for `serve`.
+/// writers for the CLI and the Python package, the node itself for `serve`.
 #[test]
 fn the_front_ends_use_only_the_front_door() {
     let cli: Vec<PathBuf> = files(&src()).into_iter().filter(|p| {
@@ -181,22 +181,27 @@ fn the_front_ends_use_only_the_front_door() {
         r == "main.rs" || r == "cli.rs" || r.starts_with("cli/")
     }).collect();
     let ros: Vec<PathBuf> = files(&src().join("edges/ros"));
-    assert!(cli.len() > 5 && ros.len() > 3, "the front ends are where the map says");
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let python: Vec<PathBuf> = files(&repo.join("python/linkspace/src"));
+    assert!(cli.len() > 5 && ros.len() > 3 && python.len() >= 3, "the front ends are where the map says");
     let mut wrong = Vec::new();
     for (files, prefix, allowed) in [
         (&cli, "linkspace::", &["app", "kernel::outcome", "edges::report", "edges::ros"][..]),
         (&ros, "crate::", &["app", "kernel::outcome", "edges::ros"][..]),
+        (&python, "linkspace::", &["app", "edges::report"][..]),
     ] {
         for path in files {
             for (n, line) in code_lines(path) {
                 for p in paths_after(&line, prefix) {
                     if !allowed.iter().any(|a| p == *a || p.starts_with(&format!("{a}::"))) {
-                        wrong.push(format!("src/{}:{n}: {prefix}{p}", rel(path)));
+                        wrong.push(format!("{}:{n}: {prefix}{p}", path.strip_prefix(repo).unwrap_or(path).display()));
                     }
                 }
             }
         }
     }
+    // The check sees the binding's names at all: it names the front door.
+    assert!(python.iter().any(|p| code_lines(p).iter().any(|(_, l)| l.contains("linkspace::app::"))), "the Python package names app");
     assert!(wrong.is_empty(), "a front end reaches past the front door:\n{}", wrong.join("\n"));
 }
 

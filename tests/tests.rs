@@ -54,3 +54,6 @@ mod six_r;
 /// Joint paths against a 3R positioning structure's singular set: crossings through singular
 /// points and clear segments from an `f64` forward-kinematics reference.
 mod path_check_3r;
+/// The Python package: its pytest suite (answers equal the CLI's, references, Ctrl-C, limits,
+/// errors, types), in a venv made by scripts/python_env.sh.
+mod python;

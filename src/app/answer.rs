@@ -200,7 +200,9 @@ impl Answer {
             Answer::Ik(a) => Completeness::of_run(a.found.solutions.status),
             Answer::Ik6(a) => Completeness::of(a.found.solutions.status, a.found.solutions.clusters.len(), false),
             Answer::PathCheck(a) => a.found.completeness(),
-            Answer::Collisions(a) => Completeness::of_run(a.found.set.status),
+            // Boxes at the precision neither proven colliding nor free leave it open, as its
+            // report says.
+            Answer::Collisions(a) => Completeness::of(a.found.set.status, a.found.set.undecided.len(), false),
             Answer::Distances(a) => a.certified.completeness(),
             Answer::LoopSingularities(a) => match a.as_ref() {
                 LoopAnswer::Sets { solved, .. } => solved.iter().map(SingularSet::completeness).fold(Completeness::Complete, Completeness::and),

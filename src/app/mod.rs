@@ -13,6 +13,7 @@
 
 mod analysis;
 mod answer;
+mod info;
 pub(crate) mod arm;
 mod arm_analysis;
 pub(crate) mod distances;
@@ -32,6 +33,8 @@ pub(crate) mod sweep;
 pub use answer::{Answer, CollisionsAnswer, DistancesAnswer, Ik6Answer, IkAnswer, LoopAnswer, PathCheckAnswer, SingularitiesAnswer, SolveAnswer};
 pub use job::{ArmOptions, CollisionsJob, DistancesJob, Ik6Job, IkJob, Job, LoopQuestion, LoopSingularitiesJob, MotionSpan, PathCheckJob, SingularitiesJob, SolveJob, SweepTaskJob};
 pub use prepare::{prepare, Input, JobError, Prepared};
+// What a front end shows of a mechanism before asking it anything.
+pub use info::{describe, JointInfo, LoopInfo, MechanismInfo};
 
 // The node's view of a loaded mechanism and the shapes its messages are made from.
 pub use analysis::{load, load_urdf, Analysis, AnalysisError, MechanismKind, Service, Unsupported};

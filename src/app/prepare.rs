@@ -108,6 +108,27 @@ pub enum JobError {
     Bad(String),
 }
 
+impl JobError {
+    /// True when the mechanism lies outside what the question's analysis takes (not a serial
+    /// chain, not planar, no collision geometry, ...), rather than the request being wrong for
+    /// it: front ends that sort their errors (the Python package's `UnsupportedError`) ask this.
+    pub fn is_unsupported(&self) -> bool {
+        fn linkage(e: &LinkageError) -> bool {
+            matches!(e, LinkageError::NonPlanar(_) | LinkageError::Mimic { .. } | LinkageError::UnderConstrained(_) | LinkageError::Unsupported(_) | LinkageError::NoLoops)
+        }
+        match self {
+            JobError::Arm(e) => matches!(e, Manip3rError::NotSerial(_) | Manip3rError::NotThreeR(_) | Manip3rError::Selection(_) | Manip3rError::NoCollisionGeometry(_) | Manip3rError::UnsupportedShape { .. } | Manip3rError::BaseBodyOffAxis(_)),
+            JobError::Arm6(e) => matches!(e, Manip6rError::NotSixR(_)),
+            JobError::Linkage(e) => linkage(e),
+            JobError::Platform(e) => matches!(e, PlatformError::NotAPlatform(_) | PlatformError::Unsupported(_)),
+            JobError::Singular(SingularError::Linkage(e)) | JobError::Motion(MotionError::Linkage(e)) => linkage(e),
+            JobError::Motion(e) => matches!(e, MotionError::NotOneDof { .. }),
+            JobError::Analysis(e) => matches!(e, AnalysisError::NotAvailable { .. }),
+            _ => false,
+        }
+    }
+}
+
 /// A job checked against its input, holding what its run needs.
 #[derive(Clone, Debug)]
 pub struct Prepared {
