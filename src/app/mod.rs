@@ -29,7 +29,7 @@ pub(crate) mod sweep;
 
 // The front door: a `Job` in, an `Answer` out.
 pub use answer::{Answer, CollisionsAnswer, DistancesAnswer, Ik6Answer, IkAnswer, LoopAnswer, PathCheckAnswer, SingularitiesAnswer, SolveAnswer};
-pub use job::{ArmOptions, CollisionsJob, DistancesJob, Ik6Job, IkJob, Job, LoopQuestion, LoopSingularitiesJob, MotionSpan, PathCheckJob, SingularitiesJob, SolveJob, SweepTaskJob};
+pub use job::{ArmOptions, CollisionsJob, DistancesJob, Ik6Job, IkJob, Job, LoopQuestion, LoopSingularitiesJob, MotionSpan, PathCheckJob, SingularitiesJob, SolveJob, SweepTaskJob, IK6_DEFAULT_TIMEOUT};
 pub use prepare::{prepare, Input, JobError, Prepared};
 
 // The node's view of a loaded mechanism and the shapes its messages are made from.

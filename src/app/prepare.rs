@@ -339,12 +339,14 @@ impl Prepared {
             }
             Ready::Singularities { arm, mechanism, job } => {
                 let request = SingularitiesRequest { precision: job.precision, nodes: job.nodes, search_anyway: job.search_anyway, verdict: job.verdict };
+                let t0 = std::time::Instant::now();
                 let found = arm::singularities(&arm, &request, control, progress)?;
                 let whole_arm = if job.verdict && job.arm_budget > 0.0 {
-                    // Within the run's timeout too.
+                    // Within what the 3R searches left of the run's timeout too.
+                    let left = control.remaining_since(t0);
                     let budget = std::time::Duration::from_secs_f64(job.arm_budget);
-                    let budget = control.limits.timeout.map_or(budget, |t| t.min(budget));
-                    six::arm_cuspidality(&mechanism, &arm, &job.arm, budget, control)
+                    let budget = left.limits.timeout.map_or(budget, |t| t.min(budget));
+                    six::arm_cuspidality(&mechanism, &arm, &job.arm, budget, &left)
                 } else {
                     None
                 };

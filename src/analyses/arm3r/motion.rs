@@ -14,7 +14,7 @@ use super::chain::Chain3R;
 use super::drive::{drive, no_progress, Order};
 use crate::kernel::search::Control;
 use crate::kernel::interval::interval;
-use crate::kernel::search::{Limits, Prune, Step};
+use crate::kernel::search::{Limits, Prune, Status, Step};
 use inari::Interval;
 
 /// Upper end of the joint range: the smallest double above π, so [-PI_UP, PI_UP] covers the
@@ -84,17 +84,33 @@ impl Prune for StripPrune<'_> {
     }
 }
 
-/// The internal-motion strips of `chain`, from dyadic cells no wider than `precision`.
+/// Cells the walk of `bands_within` takes at most. A walk about the true lines of an exact arm
+/// takes a few hundred (a line's cells are split only within the precision of it); an uncertain
+/// arm, whose point may lie on the axis over a whole stretch of θ₃, would split that stretch
+/// down to the precision (0.05 rad at 1e-10: 5·10⁸ cells), where coarser cells say as much.
+pub const BAND_CELLS: u64 = 1 << 22;
+
+/// The internal-motion strips of `chain`, from dyadic cells no wider than `precision`, with no
+/// limit but `BAND_CELLS`.
 pub fn bands(chain: &Chain3R, precision: f64) -> Vec<Band> {
+    bands_within(chain, precision, &Control::with_limits(Limits { timeout: None, ..Limits::default() })).0
+}
+
+/// The internal-motion strips of `chain`, from dyadic cells no wider than `precision`, found
+/// within `control`'s time and cancel flag (and `BAND_CELLS`), with how the walk ended.
+pub fn bands_within(chain: &Chain3R, precision: f64, control: &Control) -> (Vec<Band>, Status) {
     // Near-degenerate: the point within `near` of axis 2, where one turn of θ₂ moves the image
     // by less than a search box of this precision does (about precision × the arm's length).
     let near = precision * chain.length_scale() / (2.0 * std::f64::consts::PI);
     // Cells in order of θ₃, each marked when the end point may lie on axis 2 there, or
-    // (second flag) is proven within `near` of it without being proven on it. The walk always
-    // ends (cells stop at the precision), so it runs without a limit: a partial list of cells
-    // would make strips unsound.
-    let control = Control::with_limits(Limits { max_cells: u64::MAX, timeout: None, max_memory: usize::MAX });
+    // (second flag) is proven within `near` of it without being proven on it. A cell a limit
+    // left unwalked is marked as one where the point may lie on the axis: a partial list of
+    // cells would make strips unsound, while a wider strip is only set aside (and the limit
+    // makes the answer incomplete).
+    let limits = Limits { max_cells: BAND_CELLS, max_memory: usize::MAX, ..control.limits };
+    let control = Control { limits, threads: 1, ..*control };
     let mut run = drive(|| StripPrune { chain, precision, near }, (full_range(), Order::ROOT), &control, &mut no_progress);
+    run.found.extend(run.undecided.drain(..).map(|((t, order), _)| (order, (t, true, None))));
     run.found.sort_by_key(|(order, _)| *order);
     let cells: Vec<(Interval, bool, Option<f64>)> = run.found.into_iter().map(|(_, cell)| cell).collect();
     let mut out = Vec::new();
@@ -133,5 +149,5 @@ pub fn bands(chain: &Chain3R, precision: f64) -> Vec<Band> {
         let above = if i < n { fine_end(cells[i].0, precision, false).sup() } else { hi };
         out.push(Band { theta3: [lo, hi], strip: [below, above], near: near_bound });
     }
-    out
+    (out, run.status)
 }

@@ -144,7 +144,10 @@ fn box_record(problem: &Linkage, result: &BoxSetResult, b: &ResultBox, rigid_lin
     let moves = |name: &str| !rigid_links.contains_key(name);
     let original = || IntervalBox { dims: b.bounds.iter().map(|&[lo, hi]| interval(lo, hi)).collect(), level: b.level };
     let traced = |t: &TracedBounds| TracedPoint { x: t.x, y: t.y, z: t.z };
+    // A box the run's deadline left unread (joints NaN) is not read out here either.
+    let unread = b.joints.iter().any(|j| j[0].is_nan());
     let (link_angles, link_poses) = match problem {
+        _ if unread => (BTreeMap::new(), None),
         Linkage::Planar(p) => (p.link_angles_of(&original(), moves).into_iter().map(|(k, (lo, hi))| (k, [lo, hi])).collect(), None),
         Linkage::Spatial(p, _) => (BTreeMap::new(), Some(p.link_poses_of(&original(), moves).into_iter().map(|(k, pose)| (k, LinkPoseRecord(pose))).collect())),
         Linkage::Pose(p, _) => (BTreeMap::new(), Some(BTreeMap::from([(p.platform.clone(), LinkPoseRecord(p.link_pose(&original())))]))),
