@@ -88,7 +88,7 @@ impl Prune for StripPrune<'_> {
 /// takes a few hundred (a line's cells are split only within the precision of it); an uncertain
 /// arm, whose point may lie on the axis over a whole stretch of θ₃, would split that stretch
 /// down to the precision (0.05 rad at 1e-10: 5·10⁸ cells), where coarser cells say as much.
-pub const BAND_CELLS: u64 = 1 << 22;
+pub const BAND_CELLS: u64 = 1 << 20;
 
 /// The internal-motion strips of `chain`, from dyadic cells no wider than `precision`, with no
 /// limit but `BAND_CELLS`.
