@@ -19,6 +19,13 @@ exec 9>"$VENV.lock"
 flock 9
 
 hash_of() { cat "$@" | sha256sum | cut -d' ' -f1; }
+# The venv and its build trees hold copies of interface packages: a colcon workspace around
+# this clone must not find them (colcon skips a folder holding COLCON_IGNORE), even while
+# they are being made.
+hide_from_colcon() {
+  mkdir -p "$VENV" "$VENV.msgs-build"
+  touch "$VENV/COLCON_IGNORE" "$VENV.msgs-build/COLCON_IGNORE"
+}
 REQ_HASH=$(hash_of "$ROOT/scripts/ros-requirements.txt")
 # The interface packages built here: linkspace_msgs, and tf2_msgs' TFMessage (no wheel on PyPI).
 MSG_HASH=$(cd "$ROOT" && find msgs ros/tf2_msgs -type f | LC_ALL=C sort | xargs cat | sha256sum | cut -d' ' -f1)
@@ -31,6 +38,7 @@ if [ "$(cat "$VENV/.linkspace-req" 2>/dev/null)" != "$REQ_HASH $SCRIPT_HASH" ]; 
   esac
   rm -rf "$VENV"
   "$PY" -m venv "$VENV"
+  hide_from_colcon
   "$VENV/bin/pip" install -q --disable-pip-version-check -r "$ROOT/scripts/ros-requirements.txt" >&2
   # The wheels were built in a manylinux image; their exported CMake targets name that image's
   # Python paths. Point them at this interpreter's, or rosidl's Python generator fails.
@@ -61,4 +69,5 @@ if [ "$(cat "$VENV/.linkspace-msgs" 2>/dev/null)" != "$MSG_HASH" ]; then
   "$VENV/bin/python" -c "import linkspace_msgs.msg, linkspace_msgs.srv, tf2_msgs.msg" >&2
   echo "$MSG_HASH" > "$VENV/.linkspace-msgs"
 fi
+hide_from_colcon
 echo "$VENV/bin/python"

@@ -246,18 +246,19 @@ fn one_outcome_vocabulary() {
     assert!(text_verdicts.is_empty(), "a verdict as text:\n{}", text_verdicts.join("\n"));
 }
 
-/// Every question, the CLI subcommand that asks it and the node's service that asks it
-/// (`None`: asked of the node only through the CLI's answer published at load time, or not
-/// yet a service).
-const QUESTIONS: [(&str, &str, Option<&str>); 9] = [
-    ("Solve", "solve", None),
-    ("Singularities", "singularities", None),
-    ("Ik", "ik", None),
-    ("Ik6", "ik6", Some("inverse_kinematics6")),
-    ("PathCheck", "path-check", Some("path_check")),
+/// Every question, the CLI subcommand that asks it, and the node's service that asks it with
+/// where the node's `Job` is built (`None`: no node service asks it).
+const QUESTIONS: [(&str, &str, Option<(&str, &str)>); 9] = [
+    ("Solve", "solve", Some(("solve", "app/linkage.rs"))),
+    ("Singularities", "singularities", Some(("singularities", "app/arm_analysis.rs"))),
+    ("Ik", "ik", Some(("inverse_kinematics", "app/arm_analysis.rs"))),
+    ("Ik6", "ik6", Some(("inverse_kinematics6", "edges/ros"))),
+    ("PathCheck", "path-check", Some(("path_check", "edges/ros"))),
     ("Collisions", "collisions", None),
-    ("Distances", "distances", None),
-    ("LoopSingularities", "loop-singularities", None),
+    // A platform's configuration space and Solve requests.
+    ("Distances", "distances", Some(("solve", "app/platform.rs"))),
+    // A linkage's singular sets.
+    ("LoopSingularities", "loop-singularities", Some(("singularities", "app/linkage.rs"))),
     ("SweepTask", "sweep", None),
 ];
 
@@ -279,12 +280,17 @@ fn every_question_is_reachable_from_the_front_ends() {
     let read_all = |paths: Vec<PathBuf>| paths.iter().map(|p| std::fs::read_to_string(p).expect("readable")).collect::<Vec<_>>().join("\n");
     let cli = read_all(files(&src()).into_iter().filter(|p| rel(p) == "cli.rs" || rel(p).starts_with("cli/")).collect());
     let ros = read_all(files(&src().join("edges/ros")));
-    for (variant, command, service) in QUESTIONS {
+    // The node's queries on a loaded mechanism become jobs in its `Analysis`, and every one of
+    // them runs through the front door (`JobRun` prepares it).
+    let results = std::fs::read_to_string(src().join("app/results.rs")).expect("readable");
+    assert!(results.contains("prepare(input, job)"), "the node's runs are prepared by the front door");
+    for (variant, command, node) in QUESTIONS {
         assert!(cli.contains(&format!("Job::{variant}(")), "the CLI never builds Job::{variant}");
         let kebab = command.replace('-', "_");
         assert!(cli.contains(&format!("Command::{}(", kebab.split('_').map(|w| w[..1].to_uppercase() + &w[1..]).collect::<String>())), "no CLI subcommand {command}");
-        if let Some(service) = service {
-            assert!(ros.contains(&format!("Job::{variant}(")), "the node never builds Job::{variant}");
+        if let Some((service, builder)) = node {
+            let built = if builder.ends_with(".rs") { std::fs::read_to_string(src().join(builder)).expect("readable") } else { read_all(files(&src().join(builder))) };
+            assert!(built.contains(&format!("Job::{variant}(")), "{builder} never builds Job::{variant} for the node");
             assert!(ros.contains(&format!("\"{service}\"")), "the node serves no {service}");
         }
     }
@@ -352,4 +358,36 @@ fn files_and_functions_stay_readable() {
 fn the_function_measure_sees_functions() {
     let text = "fn a() {\n    let x = 1;\n}\n\nfn b() -> u8 {\n    if true {\n        1\n    } else {\n        2\n    }\n}\n";
     assert_eq!(longest_function(text), Some(("b".to_string(), 7)));
+}
+
+/// The ROS packages a colcon workspace holding this clone finds, by colcon's rule: every
+/// `package.xml` in a folder tree, except below a folder that holds `COLCON_IGNORE`.
+fn colcon_packages(dir: &Path, found: &mut Vec<String>) {
+    if dir.join("COLCON_IGNORE").exists() {
+        return;
+    }
+    if dir.join("package.xml").exists() {
+        found.push(dir.strip_prefix(env!("CARGO_MANIFEST_DIR")).map_or_else(|_| dir.display().to_string(), |p| p.display().to_string()));
+        return;
+    }
+    let Ok(entries) = std::fs::read_dir(dir) else { return };
+    let mut dirs: Vec<PathBuf> = entries.flatten().map(|e| e.path()).filter(|p| p.is_dir() && !p.is_symlink()).collect();
+    dirs.sort();
+    for d in dirs {
+        colcon_packages(&d, found);
+    }
+}
+
+#[test]
+fn a_colcon_workspace_finds_only_the_two_ros_packages() {
+    // The venv that scripts/ros_env.sh makes (under target/) holds copies of interface
+    // packages, `ros/tf2_msgs` only the TFMessage the venv lacks, `vendor/` a DDS interop tree:
+    // a workspace building this clone must see none of them, or `colcon build` meets duplicate
+    // packages and a partial tf2_msgs that shadows the distribution's.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut found = Vec::new();
+    colcon_packages(root, &mut found);
+    assert_eq!(found, ["msgs", "ros/linkspace_bringup"], "packages a colcon workspace finds");
+    let script = std::fs::read_to_string(root.join("scripts/ros_env.sh")).expect("readable");
+    assert!(script.contains("touch \"$VENV/COLCON_IGNORE\""), "the ROS venv is hidden from colcon");
 }

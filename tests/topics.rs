@@ -1647,3 +1647,55 @@ fn three_joint_arms_answer_path_check_against_det_df() {
     assert_eq!(r[2]["ok"], json!(false));
     assert!(r[2]["message"].as_str().expect("message").contains("singular_set must be \"6r\", \"3r\" or empty"), "{}", r[2]);
 }
+
+/// Sends `signal` (a `kill` name: INT, TERM) to `child` and waits at most `timeout` for it to
+/// end; its exit status, or `None` if it did not end.
+fn signal_and_wait(child: &mut Child, signal: &str, timeout: Duration) -> Option<std::process::ExitStatus> {
+    let sent = Command::new("kill").args([&format!("-{signal}"), &child.id().to_string()]).status().expect("kill runs");
+    assert!(sent.success(), "kill -{signal}");
+    let end = Instant::now() + timeout;
+    while Instant::now() < end {
+        if let Some(status) = child.try_wait().expect("wait") {
+            return Some(status);
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    None
+}
+
+/// Test idea: SIGINT (Ctrl-C under `ros2 launch`) and SIGTERM stop the node cleanly, exit
+/// status 0, saying so; and a node whose stderr pipe has closed (its launcher gone) keeps
+/// running and still stops cleanly. Before, either signal killed the node (status -2 or -15,
+/// "process has died" in launch) and a log line to a closed stderr ended it with status 101.
+#[test]
+fn sigint_and_sigterm_stop_the_node_cleanly_even_with_its_stderr_closed() {
+    let four_bar = format!("{ROOT}/urdf/four_bar.urdf");
+    for (domain, signal) in [(64, "INT"), (65, "TERM")] {
+        let mut node = Node::start(domain, &[&four_bar]);
+        node.wait_for(&["four_bar: published configuration_space"], Duration::from_secs(60));
+        let status = signal_and_wait(&mut node.child, signal, Duration::from_secs(20)).unwrap_or_else(|| panic!("SIG{signal} did not stop the node:\n{}", node.log()));
+        assert_eq!(status.code(), Some(0), "SIG{signal}: {status:?}\n{}", node.log());
+        std::thread::sleep(Duration::from_millis(100));
+        assert!(node.log().contains("stopping"), "SIG{signal}: the node says it stops:\n{}", node.log());
+    }
+    // Its stderr read up to the ready line, then closed.
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_linkspace"));
+    cmd.arg("serve").args(["--domain", "66", "--network", "loopback", &four_bar]);
+    let mut child = cmd.stdin(Stdio::null()).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().expect("starts");
+    let mut stderr = child.stderr.take().expect("piped");
+    let mut seen = String::new();
+    let mut buf = [0u8; 4096];
+    while !seen.contains("published configuration_space") {
+        let n = stderr.read(&mut buf).expect("reads");
+        assert!(n > 0, "the node ended:\n{seen}");
+        seen.push_str(&String::from_utf8_lossy(&buf[..n]));
+    }
+    drop(stderr);
+    std::thread::sleep(Duration::from_millis(500));
+    assert!(child.try_wait().expect("wait").is_none(), "the node ended when its stderr closed");
+    let status = signal_and_wait(&mut child, "TERM", Duration::from_secs(20));
+    if status.is_none() {
+        let _ = child.kill();
+    }
+    assert_eq!(status.and_then(|s| s.code()), Some(0), "a node with its stderr closed stops cleanly: {status:?}");
+}

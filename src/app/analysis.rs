@@ -10,6 +10,7 @@ use super::loops::Actuation;
 use super::platform::PlatformAnalysis;
 use super::results::{classify, BoxSetResult, Classification, IkQuery, IkResult, PreparedRun, SingularityQuery, SingularityResult};
 use crate::formulate::{LinkageError, PlatformError};
+use super::JobError;
 use crate::kernel::search::{SolveError, SolverSettings};
 use crate::model::Mechanism;
 use thiserror::Error;
@@ -116,8 +117,10 @@ pub enum AnalysisError {
 
 /// What the node can do with one loaded mechanism.
 ///
-/// Every query has a default that answers `NotAvailable`, so a new kind of mechanism
-/// implements only what its math backs.
+/// Every run a query starts is a `Job` prepared by the front door (`app::prepare`) on the
+/// mechanism and answered by `Prepared::run`; the analysis says which job a query is and how
+/// its `Answer` reads as the node's result. Every query has a default that answers
+/// `NotAvailable`, so a new kind of mechanism implements only what its math backs.
 pub trait Analysis: Send + Sync {
     /// Robot name.
     fn mechanism(&self) -> &str;
@@ -135,27 +138,27 @@ pub trait Analysis: Send + Sync {
     fn periodic(&self) -> Vec<bool>;
 
     /// The run made at load time (the configuration space), with `settings`.
-    fn configuration_space(&self, settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, AnalysisError> {
+    fn configuration_space(&self, settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, JobError> {
         let _ = settings;
-        Err(self.not_available(Service::Solve))
+        Err(self.not_available(Service::Solve).into())
     }
 
     /// A new run with other fixed joints (they replace the load-time ones) and settings.
-    fn solve(&self, fixed: &[(String, f64)], settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, AnalysisError> {
+    fn solve(&self, fixed: &[(String, f64)], settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, JobError> {
         let _ = (fixed, settings);
-        Err(self.not_available(Service::Solve))
+        Err(self.not_available(Service::Solve).into())
     }
 
     /// The singularity run (singular curves, cusps, nodes).
-    fn singularities(&self, query: &SingularityQuery) -> Result<Box<dyn PreparedRun<SingularityResult>>, AnalysisError> {
+    fn singularities(&self, query: &SingularityQuery) -> Result<Box<dyn PreparedRun<SingularityResult>>, JobError> {
         let _ = query;
-        Err(self.not_available(Service::Singularities))
+        Err(self.not_available(Service::Singularities).into())
     }
 
     /// Certified inverse kinematics of a workspace point.
-    fn inverse_kinematics(&self, query: &IkQuery) -> Result<Box<dyn PreparedRun<IkResult>>, AnalysisError> {
+    fn inverse_kinematics(&self, query: &IkQuery) -> Result<Box<dyn PreparedRun<IkResult>>, JobError> {
         let _ = query;
-        Err(self.not_available(Service::InverseKinematics))
+        Err(self.not_available(Service::InverseKinematics).into())
     }
 
     /// Classifies a configuration, a value per free joint in `free_joints` order, against the

@@ -284,7 +284,7 @@ mod tests {
         let m = urdf::parse(E).expect("bundled");
         let a = load(&m, &[], &[]).expect("3R");
         assert_eq!(a.kind(), MechanismKind::Manipulator3R);
-        let r = a.singularities(&query()).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let r = a.singularities(&query()).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
         assert_eq!(r.status, Status::Finished);
         assert_eq!((r.cusps.iter().filter(|c| c.certified).count(), r.nodes.iter().filter(|n| n.certified).count(), r.undecided()), (4, 2, 0));
         assert_eq!(r.internal_motions.boxes.len(), 0);
@@ -317,7 +317,7 @@ mod tests {
         let a = load(&m, &[], &[]).expect("3R");
         let chain = Chain3R::from_mechanism(&m, 0.0).expect("3R");
         // A cusp's own configuration is singular: distance 0, no region.
-        let r = a.singularities(&query()).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let r = a.singularities(&query()).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
         let c = &r.cusps[0].joints;
         let at_cusp = a.classify(&[0.3, 0.5 * (c[0][0] + c[0][1]), 0.5 * (c[1][0] + c[1][1])], None, Some(&r)).expect("3R classifies");
         assert_eq!((at_cusp.component, at_cusp.singular_distance), (None, Some(0.0)));
@@ -375,8 +375,8 @@ mod tests {
         let mut dropped = 0;
         for point in [[0.5, 0.0, 0.3], [0.4, 0.2, 0.6], [0.3, -0.3, 0.9], [0.6, 0.1, 0.2], [0.2, 0.2, 0.2]] {
             let q = IkQuery { point, precision: 1e-8, max_boxes: 200_000, timeout: None, threads: 1 };
-            let l = limited.inverse_kinematics(&q).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
-            let f = free.inverse_kinematics(&q).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+            let l = limited.inverse_kinematics(&q).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
+            let f = free.inverse_kinematics(&q).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
             assert!(l.status.finished() && f.status.finished());
             for s in &l.solutions {
                 assert!(f.solutions.iter().any(|t| same(&t.joints, &s.joints)), "{point:?}: {s:?} is not a solution of the free arm");
@@ -388,9 +388,9 @@ mod tests {
             }
         }
         assert!(dropped > 0, "no point lost a solution to the limits");
-        let r = limited.singularities(&SingularityQuery { nodes: false, ..query() }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let r = limited.singularities(&SingularityQuery { nodes: false, ..query() }).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
         assert!(r.summary.contains("results outside dropped"), "{}", r.summary);
-        let r = free.singularities(&SingularityQuery { nodes: false, ..query() }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let r = free.singularities(&SingularityQuery { nodes: false, ..query() }).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
         assert!(!r.summary.contains("results outside dropped"), "{}", r.summary);
     }
 
@@ -403,7 +403,7 @@ mod tests {
         let reference = ik::solve(&chain, r, z, 1e-8, 200_000).expect("valid");
         // The same (ρ, z) seen from a point turned by 0.7 rad about the first axis.
         let p = [r * 0.7f64.cos(), r * 0.7f64.sin(), z];
-        let got = a.inverse_kinematics(&IkQuery { point: p, precision: 1e-8, max_boxes: 200_000, timeout: None, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let got = a.inverse_kinematics(&IkQuery { point: p, precision: 1e-8, max_boxes: 200_000, timeout: None, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
         assert_eq!(got.joint_names, vec!["joint1", "joint2", "joint3"]);
         assert_eq!(got.solutions.iter().filter(|s| s.unique).count(), reference.unique.len());
         assert!(reference.unique.len() >= 2);
@@ -415,7 +415,7 @@ mod tests {
             assert!(s.joints[0][1] - s.joints[0][0] < 1e-6, "θ1 enclosed tightly: {:?}", s.joints[0]);
         }
         // On the point (r, 0, z) the boxes are the CLI's, bit for bit.
-        let got = a.inverse_kinematics(&IkQuery { point: [r, 0.0, z], precision: 1e-8, max_boxes: 200_000, timeout: None, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let got = a.inverse_kinematics(&IkQuery { point: [r, 0.0, z], precision: 1e-8, max_boxes: 200_000, timeout: None, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
         for (s, u) in got.solutions.iter().zip(&reference.unique) {
             assert_eq!(s.joints[1..], [bounds(u[0]), bounds(u[1])]);
         }
@@ -425,21 +425,21 @@ mod tests {
     fn robot_f_reports_its_internal_motions_and_bad_queries_are_refused() {
         let m = urdf::parse(F).expect("bundled");
         let a = load(&m, &[], &[]).expect("3R");
-        let r = a.singularities(&SingularityQuery { nodes: false, ..query() }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let r = a.singularities(&SingularityQuery { nodes: false, ..query() }).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
         assert_eq!(r.internal_motions.boxes.len(), 2);
         assert!(r.nodes.is_empty());
-        let err = |e: AnalysisError| e.to_string();
+        let err = |e: crate::app::JobError| e.to_string();
         assert!(err(a.singularities(&SingularityQuery { precision: 2.0, ..query() }).err().expect("refused")).contains("precision must be a number in (0, 1), got 2"));
         let ik = |point: [f64; 3], precision: f64| a.inverse_kinematics(&IkQuery { point, precision, max_boxes: 1000, timeout: None, threads: 1 }).err().map(err).unwrap_or_default();
         assert!(ik([f64::NAN, 0.0, 0.0], 1e-6).contains("is not finite"));
         assert!(ik([1.0, 0.0, 0.0], 0.0).contains("precision must be a number in (0, 1)"));
         // A tight box limit ends incomplete, with its pending boxes as clusters.
-        let short = a.inverse_kinematics(&IkQuery { point: [1.0, 0.0, 0.2], precision: 1e-9, max_boxes: 5, timeout: None, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let short = a.inverse_kinematics(&IkQuery { point: [1.0, 0.0, 0.2], precision: 1e-9, max_boxes: 5, timeout: None, threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
         assert!(short.status == Status::Stopped(Limit::Boxes) && short.solutions.iter().any(|s| !s.unique));
         // A timeout stops it too (the node passes its --max-wait, past which no reply is sent).
-        let late = a.inverse_kinematics(&IkQuery { point: [1.0, 0.0, 0.2], precision: 1e-9, max_boxes: 1_000_000, timeout: Some(std::time::Duration::ZERO), threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let late = a.inverse_kinematics(&IkQuery { point: [1.0, 0.0, 0.2], precision: 1e-9, max_boxes: 1_000_000, timeout: Some(std::time::Duration::ZERO), threads: 1 }).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
         assert_eq!(late.status, Status::Stopped(Limit::Time));
         // 3R chains take no fixed joints.
-        assert!(load(&m, &[("joint2".into(), 0.1)], &[]).err().map(err).unwrap_or_default().contains("takes no fixed joints"));
+        assert!(load(&m, &[("joint2".into(), 0.1)], &[]).err().map(|e| e.to_string()).unwrap_or_default().contains("takes no fixed joints"));
     }
 }

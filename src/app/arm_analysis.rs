@@ -2,17 +2,18 @@
 //! the node's query types, plus a cover of the singular curves and the classification of
 //! configurations against it.
 
-use super::arm::{inverse_kinematics, singularities, Arm, IkPoint, SingularitiesRequest};
-use super::{gap, Analysis, AnalysisError, BoxSetResult, Classification, IkQuery, IkResult, IkSolution, MechanismKind, PreparedRun, ResultBox, Service, SingularPair, SingularPoint, SingularityQuery, SingularityResult};
+use super::arm::{Arm, IkPoint};
+use super::results::{unexpected, JobRun};
+use super::{
+    gap, Analysis, AnalysisError, Answer, BoxSetResult, Classification, IkAnswer, IkJob, IkQuery, IkResult, IkSolution, Input, Job, JobError, MechanismKind, PreparedRun, ResultBox, Service,
+    SingularPair, SingularPoint, SingularitiesAnswer, SingularitiesJob, SingularityQuery, SingularityResult,
+};
 use crate::analyses::arm3r::{self, curves::Cover, motion, records::radius, Chain3R, LoadOptions, Manip3rError};
-use crate::analyses::arm6r::Chain6R;
 use crate::kernel::interval::bounds;
-use crate::kernel::search::{BoxStatus, Control, Limit, Limits, Progress, SolveStats as Stats, SolverSettings, Status};
+use crate::kernel::search::{BoxStatus, Control, Limit, Limits, SolveStats as Stats, SolverSettings, Status};
 use crate::model::Mechanism;
 use inari::Interval;
-use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
-use std::time::Instant;
 
 
 /// Bisections per axis of the singular-curve cover: 256 × 256 cells of about 0.025 rad, the
@@ -28,13 +29,12 @@ pub const CURVE_DEPTH: u32 = 8;
 #[derive(Clone, Debug)]
 pub struct Manip3rAnalysis {
     arm: Arc<Arm>,
-    /// The six revolute joints of the whole arm, when it has exactly six.
-    six: Option<Arc<Chain6R>>,
-    /// Values of the six-joint chain the rounding policy changed (the whole-arm proof is about
-    /// the geometry after them).
-    six_snapped: usize,
+    /// Whether the whole arm is a chain of six revolute joints (it answers the 6R questions).
+    six: bool,
     /// Cover of the singular curves, computed once (it does not depend on any request).
     cover: Arc<Cover>,
+    /// The mechanism as the front door takes it: every run is a `Job` prepared on it.
+    input: Arc<Input>,
 }
 
 impl Manip3rAnalysis {
@@ -43,11 +43,8 @@ impl Manip3rAnalysis {
     pub fn new(mechanism: &Mechanism) -> Result<Self, Manip3rError> {
         let arm = Arm::load(mechanism, &LoadOptions::default(), 0.0)?;
         let cover = Arc::new(Cover::new(&arm.chain, CURVE_DEPTH, &Control::with_limits(Limits::default())));
-        let (six, six_snapped) = match super::six::chain6_snapped(mechanism, &LoadOptions::default()) {
-            Ok((chain, snapped)) => (Some(Arc::new(chain)), snapped),
-            Err(_) => (None, 0),
-        };
-        Ok(Self { arm: Arc::new(arm), six, six_snapped, cover })
+        let six = super::six::chain6_snapped(mechanism, &LoadOptions::default()).is_ok();
+        Ok(Self { arm: Arc::new(arm), six, cover, input: Arc::new(Input::Mechanism(mechanism.clone())) })
     }
 
     /// The chain's name tokens for records over (θ₂, θ₃).
@@ -69,7 +66,7 @@ impl Analysis for Manip3rAnalysis {
         // Every arm read as a 3R positioning structure has a path check (its 3R set); a
         // six-revolute one answers the 6R questions too.
         let mut services = vec![Service::Singularities, Service::InverseKinematics, Service::Classify, Service::PathCheck];
-        if self.six.is_some() {
+        if self.six {
             services.insert(3, Service::InverseKinematics6);
         }
         services
@@ -91,23 +88,45 @@ impl Analysis for Manip3rAnalysis {
         vec![true; 3]
     }
 
-    fn singularities(&self, query: &SingularityQuery) -> Result<Box<dyn PreparedRun<SingularityResult>>, AnalysisError> {
+    /// `linkspace singularities`' job with its defaults (the verdict, and the whole-arm
+    /// verdict within `WHOLE_ARM_BUDGET`), read with the singular-curve cover.
+    fn singularities(&self, query: &SingularityQuery) -> Result<Box<dyn PreparedRun<SingularityResult>>, JobError> {
         arm3r::check_precision(query.precision).map_err(|e| AnalysisError::BadRequest(e.to_string()))?;
         if query.max_boxes == 0 {
-            return Err(AnalysisError::BadRequest("max_boxes must be at least 1".into()));
+            return Err(AnalysisError::BadRequest("max_boxes must be at least 1".into()).into());
         }
-        Ok(Box::new(SingularityRun { arm: self.arm.clone(), six: self.six.clone(), six_snapped: self.six_snapped, cover: self.cover.clone(), query: query.clone(), joints: self.record_joints() }))
+        let job = Job::Singularities(SingularitiesJob {
+            arm: LoadOptions::default(),
+            uncertainty: 0.0,
+            precision: query.precision,
+            nodes: query.nodes,
+            verdict: true,
+            search_anyway: false,
+            arm_budget: WHOLE_ARM_BUDGET.as_secs_f64(),
+        });
+        let limits = Limits { max_cells: query.max_boxes, timeout: query.timeout, ..Limits::default() };
+        let (cover, query_, joints) = (self.cover.clone(), query.clone(), self.record_joints());
+        JobRun::new(&self.input, job, limits, query.threads, move |answer| match answer {
+            Answer::Singularities(a) => Ok(singularity_result(&a, &cover, query_, joints)),
+            other => Err(unexpected(&other, "singularities")),
+        })
     }
 
-    fn inverse_kinematics(&self, query: &IkQuery) -> Result<Box<dyn PreparedRun<IkResult>>, AnalysisError> {
+    /// `linkspace ik`'s job for a point in the root frame.
+    fn inverse_kinematics(&self, query: &IkQuery) -> Result<Box<dyn PreparedRun<IkResult>>, JobError> {
         if query.point.iter().any(|v| !v.is_finite()) {
-            return Err(AnalysisError::BadRequest(Manip3rError::BadTarget(query.point).to_string()));
+            return Err(AnalysisError::BadRequest(Manip3rError::BadTarget(query.point).to_string()).into());
         }
         arm3r::check_precision(query.precision).map_err(|e| AnalysisError::BadRequest(e.to_string()))?;
         if query.max_boxes == 0 {
-            return Err(AnalysisError::BadRequest("max_boxes must be at least 1".into()));
+            return Err(AnalysisError::BadRequest("max_boxes must be at least 1".into()).into());
         }
-        Ok(Box::new(IkRun { arm: self.arm.clone(), query: query.clone() }))
+        let job = Job::Ik(IkJob { arm: LoadOptions::default(), uncertainty: 0.0, point: IkPoint::Root(query.point), precision: query.precision });
+        let limits = Limits { max_cells: query.max_boxes, timeout: query.timeout, ..Limits::default() };
+        JobRun::new(&self.input, job, limits, query.threads, move |answer| match answer {
+            Answer::Ik(a) => Ok(ik_result(&a)),
+            other => Err(unexpected(&other, "inverse_kinematics")),
+        })
     }
 
     fn classify(&self, values: &[f64], _cspace: Option<&BoxSetResult>, _singular: Option<&SingularityResult>) -> Result<Classification, AnalysisError> {
@@ -166,104 +185,87 @@ fn box_set(cover: &Cover, mechanism: &str, joints: &[String]) -> BoxSetResult {
 /// `--arm-budget`).
 const WHOLE_ARM_BUDGET: std::time::Duration = std::time::Duration::from_secs(2);
 
-/// A validated singularity run.
-struct SingularityRun {
-    arm: Arc<Arm>,
-    six: Option<Arc<Chain6R>>,
-    six_snapped: usize,
-    cover: Arc<Cover>,
-    query: SingularityQuery,
-    joints: Vec<String>,
-}
-
-impl PreparedRun<SingularityResult> for SingularityRun {
-    fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> SingularityResult {
-        let (arm, q) = (&*self.arm, &self.query);
-        let chain = &arm.chain;
-        let limits = Limits { max_cells: q.max_boxes, timeout: q.timeout, ..Limits::default() };
-        let control = Control { limits, threads: q.threads.max(1), cancel };
-        let request = SingularitiesRequest { precision: q.precision, nodes: q.nodes, search_anyway: false, verdict: true };
-        let found_at = Instant::now();
-        let found = singularities(arm, &request, &control, progress).expect("invariant: precision validated when prepared");
-        let (cusps, node_search) = (&found.run.cusps, &found.run.nodes);
-        let two = |t: &[Interval; 2]| vec![bounds(t[0]), bounds(t[1])];
-        let image = |t: [Interval; 2]| {
-            let j = chain.jets(t, 0);
-            [j.rho.value(), j.z.value()]
-        };
-        let workspace = |rho: Interval, z: Interval| vec![bounds(radius(rho)), bounds(z)];
-        let mut cusp_records: Vec<SingularPoint> = cusps.cusps.iter().map(|c| SingularPoint { joints: two(&c.theta), workspace: workspace(c.rho, c.z), certified: c.unique }).collect();
-        cusp_records.extend(cusps.undecided.iter().map(|u| {
-            let [rho, z] = image(u.theta);
-            SingularPoint { joints: two(&u.theta), workspace: workspace(rho, z), certified: false }
+/// The node's view of an arm's singularity answer: its records over (θ₂, θ₃) and their
+/// images, the singular-curve `cover`, the summary line and the verdicts.
+fn singularity_result(answer: &SingularitiesAnswer, cover: &Cover, q: SingularityQuery, joints: Vec<String>) -> SingularityResult {
+    let (arm, found) = (&answer.arm, &answer.found);
+    let chain = &arm.chain;
+    let (cusps, node_search) = (&found.run.cusps, &found.run.nodes);
+    let two = |t: &[Interval; 2]| vec![bounds(t[0]), bounds(t[1])];
+    let image = |t: [Interval; 2]| {
+        let j = chain.jets(t, 0);
+        [j.rho.value(), j.z.value()]
+    };
+    let workspace = |rho: Interval, z: Interval| vec![bounds(radius(rho)), bounds(z)];
+    let mut cusp_records: Vec<SingularPoint> = cusps.cusps.iter().map(|c| SingularPoint { joints: two(&c.theta), workspace: workspace(c.rho, c.z), certified: c.unique }).collect();
+    cusp_records.extend(cusps.undecided.iter().map(|u| {
+        let [rho, z] = image(u.theta);
+        SingularPoint { joints: two(&u.theta), workspace: workspace(rho, z), certified: false }
+    }));
+    let mut node_records = Vec::new();
+    if let Some(n) = &node_search {
+        node_records.extend(n.nodes.iter().map(|n| SingularPair { joints: [two(&n.theta[0]), two(&n.theta[1])], workspace: workspace(n.rho, n.z), certified: true }));
+        node_records.extend(n.undecided.iter().map(|p| {
+            let (a, b) = (image(p[0]), image(p[1]));
+            SingularPair { joints: [two(&p[0]), two(&p[1])], workspace: workspace(a[0].convex_hull(b[0]), a[1].convex_hull(b[1])), certified: false }
         }));
-        let mut node_records = Vec::new();
-        if let Some(n) = &node_search {
-            node_records.extend(n.nodes.iter().map(|n| SingularPair { joints: [two(&n.theta[0]), two(&n.theta[1])], workspace: workspace(n.rho, n.z), certified: true }));
-            node_records.extend(n.undecided.iter().map(|p| {
-                let (a, b) = (image(p[0]), image(p[1]));
-                SingularPair { joints: [two(&p[0]), two(&p[1])], workspace: workspace(a[0].convex_hull(b[0]), a[1].convex_hull(b[1])), certified: false }
-            }));
-        }
-        let status = found.run.status;
-        // The whole arm's verdict, as `singularities --arm-budget` gives it by default, within
-        // what is left of the run's time.
-        let budget = q.timeout.map_or(WHOLE_ARM_BUDGET, |t| t.saturating_sub(found_at.elapsed()).min(WHOLE_ARM_BUDGET));
-        let arm_cuspidality = self.six.as_deref().and_then(|six| super::six::arm_cuspidality_of(six, self.six_snapped, arm, budget, &control)).map(|c| c.line());
-        let motions = internal_motions(chain, &cusps.bands, &self.joints, q.precision);
-        let processed = cusps.stats.processed + node_search.as_ref().map_or(0, |n| n.stats.processed);
-        let certified_nodes = node_search.as_ref().map_or(0, |n| n.nodes.len());
-        let summary = format!(
-            "{} cusps, {}, {} internal-motion lines, {} undecided, {} cover boxes in {} pieces, {}",
-            cusps.cusps.len(),
-            if found.nodes_searched {
-                format!("{certified_nodes} nodes")
-            } else if q.nodes {
-                "nodes not searched (the singular branches are curves of nodes)".to_string()
-            } else {
-                "nodes not searched".to_string()
-            },
-            motion::line_count(&cusps.bands),
-            cusps.undecided.len() + node_search.as_ref().map_or(0, |n| n.undecided.len()),
-            self.cover.boxes.len(),
-            self.cover.clusters,
-            match status.limit() {
-                None => crate::kernel::outcome::Completeness::Complete.word().to_string(),
-                Some(Limit::Cancelled) => "incomplete (cancelled)".to_string(),
-                Some(Limit::Boxes) => "incomplete (box limit)".to_string(),
-                Some(limit) => format!("incomplete ({} limit)", limit.name()),
-            }
-        );
-        // The joint limits' effect is named only when the file has limits.
-        let scope = &arm.prepared.choice.scope;
-        let verdict = found.verdict.as_ref().expect("invariant: the node asks for the verdict");
-        let headline = match &scope.not_answered {
-            Some(open) if !scope.stands_for_arm => format!("{}; {open}", verdict.headline(scope)),
-            _ => verdict.headline(scope),
-        };
-        let summary = if arm.prepared.limits.restrict() {
-            format!("{headline}; {}; {}", summary, found.limit_effect.text)
+    }
+    let status = found.run.status;
+    // The whole arm's verdict, as `singularities --arm-budget` gives it by default.
+    let arm_cuspidality = answer.whole_arm.as_ref().map(|(_, c)| c.line());
+    let motions = internal_motions(chain, &cusps.bands, &joints, q.precision);
+    let processed = cusps.stats.processed + node_search.as_ref().map_or(0, |n| n.stats.processed);
+    let certified_nodes = node_search.as_ref().map_or(0, |n| n.nodes.len());
+    let summary = format!(
+        "{} cusps, {}, {} internal-motion lines, {} undecided, {} cover boxes in {} pieces, {}",
+        cusps.cusps.len(),
+        if found.nodes_searched {
+            format!("{certified_nodes} nodes")
+        } else if q.nodes {
+            "nodes not searched (the singular branches are curves of nodes)".to_string()
         } else {
-            format!("{headline}; {}", summary)
-        };
-        SingularityResult {
-            mechanism: chain.name.clone(),
-            status,
-            query: q.clone(),
-            joint_names: self.joints.clone(),
-            workspace_names: vec!["radius".into(), "z".into()],
-            cusps: cusp_records,
-            nodes: node_records,
-            singular_curves: box_set(&self.cover, &chain.name, &self.joints),
-            internal_motions: motions,
-            processed,
-            seconds: found.seconds + self.cover.seconds,
-            summary,
-            loops: None,
-            verdict: Some(verdict.scoped(scope)),
-            branches: arm.branches.clone(),
-            arm_cuspidality,
+            "nodes not searched".to_string()
+        },
+        motion::line_count(&cusps.bands),
+        cusps.undecided.len() + node_search.as_ref().map_or(0, |n| n.undecided.len()),
+        cover.boxes.len(),
+        cover.clusters,
+        match status.limit() {
+            None => crate::kernel::outcome::Completeness::Complete.word().to_string(),
+            Some(Limit::Cancelled) => "incomplete (cancelled)".to_string(),
+            Some(Limit::Boxes) => "incomplete (box limit)".to_string(),
+            Some(limit) => format!("incomplete ({} limit)", limit.name()),
         }
+    );
+    // The joint limits' effect is named only when the file has limits.
+    let scope = &arm.prepared.choice.scope;
+    let verdict = found.verdict.as_ref().expect("invariant: the node asks for the verdict");
+    let headline = match &scope.not_answered {
+        Some(open) if !scope.stands_for_arm => format!("{}; {open}", verdict.headline(scope)),
+        _ => verdict.headline(scope),
+    };
+    let summary = if arm.prepared.limits.restrict() {
+        format!("{headline}; {}; {}", summary, found.limit_effect.text)
+    } else {
+        format!("{headline}; {}", summary)
+    };
+    SingularityResult {
+        mechanism: chain.name.clone(),
+        status,
+        query: q.clone(),
+        joint_names: joints.clone(),
+        workspace_names: vec!["radius".into(), "z".into()],
+        cusps: cusp_records,
+        nodes: node_records,
+        singular_curves: box_set(&cover, &chain.name, &joints),
+        internal_motions: motions,
+        processed,
+        seconds: found.seconds + cover.seconds,
+        summary,
+        loops: None,
+        verdict: Some(verdict.scoped(scope)),
+        branches: arm.branches.clone(),
+        arm_cuspidality,
     }
 }
 
@@ -297,33 +299,23 @@ fn internal_motions(chain: &Chain3R, bands: &[motion::Band], joints: &[String], 
     }
 }
 
-/// A validated inverse-kinematics run.
-struct IkRun {
-    arm: Arc<Arm>,
-    query: IkQuery,
-}
-
-impl PreparedRun<IkResult> for IkRun {
-    fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> IkResult {
-        let arm = &*self.arm;
-        let chain = &arm.chain;
-        let limits = Limits { max_cells: self.query.max_boxes, timeout: self.query.timeout, ..Limits::default() };
-        let control = Control { limits, threads: self.query.threads.max(1), cancel };
-        let found = inverse_kinematics(arm, IkPoint::Root(self.query.point), self.query.precision, &control, progress).expect("invariant: validated when prepared");
-        let target = found.target.expect("invariant: a root-frame point has a target");
-        let three = |b: &[Interval; 2]| vec![bounds(found.theta1(arm, b).expect("invariant: a root-frame point fixes θ₁")), bounds(b[0]), bounds(b[1])];
-        let s = &found.solutions;
-        let mut solutions: Vec<IkSolution> = s.unique.iter().map(|b| IkSolution { joints: three(b), unique: true, boxes: 0 }).collect();
-        solutions.extend(s.clusters.iter().map(|c| IkSolution { joints: three(&c.hull), unique: false, boxes: c.boxes }));
-        IkResult {
-            mechanism: chain.name.clone(),
-            joint_names: chain.joints.to_vec(),
-            point_names: vec!["radius".into(), "z".into()],
-            point_values: vec![bounds(radius(target.half_section[0])), bounds(target.half_section[1])],
-            solutions,
-            status: s.status,
-            processed: s.stats.processed,
-            seconds: found.seconds,
-        }
+/// The node's view of an arm's inverse-kinematics answer for a point in the root frame.
+fn ik_result(answer: &IkAnswer) -> IkResult {
+    let (arm, found) = (&answer.arm, &answer.found);
+    let chain = &arm.chain;
+    let target = found.target.expect("invariant: a root-frame point has a target");
+    let three = |b: &[Interval; 2]| vec![bounds(found.theta1(arm, b).expect("invariant: a root-frame point fixes θ₁")), bounds(b[0]), bounds(b[1])];
+    let s = &found.solutions;
+    let mut solutions: Vec<IkSolution> = s.unique.iter().map(|b| IkSolution { joints: three(b), unique: true, boxes: 0 }).collect();
+    solutions.extend(s.clusters.iter().map(|c| IkSolution { joints: three(&c.hull), unique: false, boxes: c.boxes }));
+    IkResult {
+        mechanism: chain.name.clone(),
+        joint_names: chain.joints.to_vec(),
+        point_names: vec!["radius".into(), "z".into()],
+        point_values: vec![bounds(radius(target.half_section[0])), bounds(target.half_section[1])],
+        solutions,
+        status: s.status,
+        processed: s.stats.processed,
+        seconds: found.seconds,
     }
 }

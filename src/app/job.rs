@@ -8,7 +8,7 @@ use crate::analyses::arm3r::LoadOptions;
 use crate::analyses::arm6r::PoseInput;
 use crate::analyses::distances::Choice;
 use crate::analyses::sweep::{Plan, Task};
-use crate::formulate::{ModelChoice, Output, SingularKind, TracedPoint};
+use crate::formulate::{LegValues, ModelChoice, Output, SingularKind, TracedPoint};
 use crate::kernel::contract::FaceBounds;
 use crate::kernel::lp::LpBackend;
 use crate::kernel::search::Limits;
@@ -153,6 +153,10 @@ pub struct CollisionsJob {
 pub struct DistancesJob {
     /// Squared lengths of legs (platform) or of named distances (distance file).
     pub fixed: Vec<(String, f64)>,
+    /// How a platform's `fixed` legs are given: squared lengths (as `linkspace distances
+    /// --fix` takes them) or lengths (as the node's Solve requests, REP 103). A length is squared
+    /// as an interval, so the problem solved is exactly the one with that length.
+    pub legs: LegValues,
     /// Largest width of a solution box in every unknown squared distance.
     pub precision: f64,
     /// `None`: the formulation's default (0.99 for the determinants, 0.9 for coordinates).

@@ -9,23 +9,20 @@
 //! `--json`), and `classify` with a lower bound on the joint-space distance to the nearest
 //! singular configuration once those sets are complete.
 
+use super::results::{limits_of, unexpected, JobRun};
 use super::{
-    classify, gap, Actuation, Analysis, MechanismKind, AnalysisError, BoxSetResult, Classification, LoopSingularities, PreparedRun, ResultBox, Service, SingularSetResult, SingularityQuery,
-    SingularityResult,
+    classify, gap, Actuation, Analysis, Answer, AnalysisError, BoxSetResult, Classification, Input, Job, JobError, LoopAnswer, LoopQuestion, LoopSingularities, LoopSingularitiesJob, MechanismKind,
+    PreparedRun, ResultBox, Service, SingularSetResult, SingularityQuery, SingularityResult, SolveJob,
 };
-use super::solve::SolveRun;
 use crate::kernel::interval::bounds;
 use crate::model::{JointKind, Mechanism};
 use crate::formulate::choice::TracedPoint;
 use crate::formulate::singular::{Coordinates, SingularProblem};
-use super::loops::all_kinds;
-use crate::analyses::loop_singular::SingularSets;
 use crate::analyses::loop_singular::SingularSet;
 use crate::formulate::{Linkage, LinkageError, ModelChoice};
 use crate::kernel::outcome::Completeness;
-use crate::kernel::search::{BoxStatus, Progress, SolveStats, SolverSettings, Status};
+use crate::kernel::search::{BoxStatus, Limits, SolveStats, SolverSettings, Status};
 use crate::kernel::system::VarRole;
-use std::sync::atomic::AtomicBool;
 
 /// A closed-loop linkage, as loaded.
 #[derive(Clone, Debug)]
@@ -37,6 +34,8 @@ pub struct LinkageAnalysis {
     problem: Linkage,
     /// Actuated joints of the input singular set.
     actuation: Actuation,
+    /// The mechanism as the front door takes it: every run is a `Job` prepared on it.
+    input: std::sync::Arc<Input>,
 }
 
 impl LinkageAnalysis {
@@ -45,7 +44,14 @@ impl LinkageAnalysis {
     pub fn new(mechanism: &Mechanism, fixed: &[(String, f64)], traces: &[(String, f64, f64)]) -> Result<Self, LinkageError> {
         let traces: Vec<TracedPoint> = traces.iter().map(|(l, x, y)| (l.clone(), [*x, *y, 0.0], format!("{l}@{x},{y}"))).collect();
         let problem = Linkage::build(mechanism, ModelChoice::Auto, fixed, &traces)?;
-        Ok(Self { mechanism: mechanism.clone(), fixed: fixed.to_vec(), traces, problem, actuation: Actuation { joints: Vec::new(), source: "none given".to_string() } })
+        Ok(Self {
+            mechanism: mechanism.clone(),
+            fixed: fixed.to_vec(),
+            traces,
+            problem,
+            actuation: Actuation { joints: Vec::new(), source: "none given".to_string() },
+            input: std::sync::Arc::new(Input::Mechanism(mechanism.clone())),
+        })
     }
 
     /// The same analysis with these actuated joints (for the input singular set).
@@ -53,8 +59,15 @@ impl LinkageAnalysis {
         Self { actuation, ..self }
     }
 
-    fn prepare(&self, problem: Linkage, settings: &SolverSettings, analysis: &str) -> Result<Box<dyn PreparedRun>, AnalysisError> {
-        Ok(Box::new(LinkageRun { job: SolveRun::new(problem, settings.clone())?, analysis: analysis.to_string() }))
+    /// A `solve` job of the node: `fixed` joints (the load-time ones, or a request's), the
+    /// load-time traced points, `settings`; its box set named `analysis`.
+    fn solve_run(&self, fixed: &[(String, f64)], settings: &SolverSettings, analysis: &'static str) -> Result<Box<dyn PreparedRun>, JobError> {
+        let s = settings;
+        let job = Job::Solve(SolveJob { fixed: fixed.to_vec(), traces: self.traces.clone(), model: ModelChoice::Auto, precision: s.sigma, rho: s.rho, use_lp: s.use_lp, newton_width: s.newton_width, lp_backend: s.lp_backend });
+        JobRun::new(&self.input, job, limits_of(s), s.threads, move |answer| match answer {
+            Answer::Solve(solved) => Ok(BoxSetResult { analysis: analysis.to_string(), ..solved.result }),
+            other => Err(unexpected(&other, analysis)),
+        })
     }
 }
 
@@ -104,30 +117,35 @@ impl Analysis for LinkageAnalysis {
         self.problem.free_joints().iter().map(|n| !matches!(kind(n), Some(JointKind::Prismatic { .. }))).collect()
     }
 
-    fn configuration_space(&self, settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, AnalysisError> {
-        self.prepare(self.problem.clone(), settings, "configuration_space")
+    fn configuration_space(&self, settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, JobError> {
+        self.solve_run(&self.fixed, settings, "configuration_space")
     }
 
-    fn solve(&self, fixed: &[(String, f64)], settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, AnalysisError> {
-        let problem = Linkage::build(&self.mechanism, ModelChoice::Auto, fixed, &self.traces)?;
-        self.prepare(problem, settings, "solve")
+    fn solve(&self, fixed: &[(String, f64)], settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, JobError> {
+        self.solve_run(fixed, settings, "solve")
     }
 
-    /// The singular sets with the load-time fixed joints: `precision` is the solver's sigma (the
-    /// largest width of a box in the configuration and null-vector variables), `max_boxes` the
-    /// limit per chart, `timeout` for all sets; `nodes` does not apply (no image is analysed).
-    fn singularities(&self, query: &SingularityQuery) -> Result<Box<dyn PreparedRun<SingularityResult>>, AnalysisError> {
+    /// The singular sets with the load-time fixed joints (`loop-singularities`' job): `precision`
+    /// is the solver's sigma (the largest width of a box in the configuration and null-vector
+    /// variables), `max_boxes` the limit per chart, `timeout` for all sets; `nodes` does not
+    /// apply (no image is analysed).
+    fn singularities(&self, query: &SingularityQuery) -> Result<Box<dyn PreparedRun<SingularityResult>>, JobError> {
         if !(query.precision > 0.0 && query.precision < 1.0) {
-            return Err(AnalysisError::BadRequest(format!("precision must be a number in (0, 1), got {}", query.precision)));
+            return Err(AnalysisError::BadRequest(format!("precision must be a number in (0, 1), got {}", query.precision)).into());
         }
         if query.max_boxes == 0 {
-            return Err(AnalysisError::BadRequest("max_boxes must be at least 1".into()));
+            return Err(AnalysisError::BadRequest("max_boxes must be at least 1".into()).into());
         }
-        let settings = SolverSettings { sigma: query.precision, max_boxes: query.max_boxes, timeout: query.timeout, threads: query.threads.max(1), ..SolverSettings::default() };
-        settings.validate().map_err(crate::kernel::search::SolveError::from)?;
-        let actuated = &self.actuation.joints;
-        let sets = SingularSets::new(&self.mechanism, &self.fixed, &all_kinds(actuated), actuated, None)?;
-        Ok(Box::new(SingularSetsRun { sets, settings, query: query.clone(), actuation: self.actuation.clone(), mechanism: self.mechanism.name.clone() }))
+        let job = Job::LoopSingularities(LoopSingularitiesJob {
+            question: LoopQuestion::Sets(Vec::new()),
+            fixed: self.fixed.clone(),
+            actuated: Some(self.actuation.joints.clone()),
+            output: None,
+            precision: query.precision,
+        });
+        let limits = Limits { max_cells: query.max_boxes, timeout: query.timeout, ..Limits::default() };
+        let (query, actuation) = (query.clone(), self.actuation.clone());
+        JobRun::new(&self.input, job, limits, query.threads, move |answer| singularity_result(answer, query, actuation))
     }
 
     /// The configuration-space classification, plus a lower bound on the distance to the nearest
@@ -201,64 +219,55 @@ fn kind_meaning(kind: &str) -> &'static str {
     }
 }
 
-/// A validated run of a linkage's singular sets.
-struct SingularSetsRun {
-    sets: SingularSets,
-    settings: SolverSettings,
-    query: SingularityQuery,
-    actuation: Actuation,
-    mechanism: String,
-}
-
-impl PreparedRun<SingularityResult> for SingularSetsRun {
-    fn run(self: Box<Self>, cancel: &AtomicBool, _progress: &mut dyn FnMut(&Progress)) -> SingularityResult {
-        let t0 = std::time::Instant::now();
-        let solved = self.sets.solve(&self.settings, cancel).expect("invariant: settings validated when prepared");
-        let sets: Vec<SingularSetResult> = self.sets.problems.iter().zip(&solved).map(|(p, set)| set_result(p, &self.settings, set)).collect();
-        // The run's status: the first limit any set met.
-        let status = solved.iter().map(|s| s.status).find(|s| !s.finished()).unwrap_or(Status::Finished);
-        let processed = solved.iter().flat_map(|s| &s.stats).map(|s| s.processed).sum();
-        let joint_names = self.sets.problems.first().map(|p| p.linkage.free_joints().to_vec()).unwrap_or_default();
-        let summary = format!(
-            "{}; actuated: {} ({})",
-            sets.iter().map(|s| format!("{}: {}", s.kind, s.summary)).collect::<Vec<_>>().join("; "),
-            if self.actuation.joints.is_empty() { "none".to_string() } else { self.actuation.joints.join(", ") },
-            self.actuation.source
-        );
-        let empty = |analysis: &str| BoxSetResult {
-            mechanism: self.mechanism.clone(),
-            analysis: analysis.to_string(),
-            status: Status::Finished,
-            settings: self.settings.clone(),
-            variables: joint_names.clone(),
-            primaries: (0..joint_names.len()).collect(),
-            joint_names: joint_names.clone(),
-            fixed_joints: vec![],
-            traces: vec![],
-            boxes: vec![],
-            clusters: 0,
-            stats: SolveStats::default(),
-        };
-        SingularityResult {
-            mechanism: self.mechanism.clone(),
-            status,
-            query: self.query.clone(),
-            joint_names: joint_names.clone(),
-            workspace_names: vec![],
-            cusps: vec![],
-            nodes: vec![],
-            // The 3R records have no counterpart here: the sets are in `loops`.
-            singular_curves: empty("singular_curves"),
-            internal_motions: empty("internal_motions"),
-            processed,
-            seconds: t0.elapsed().as_secs_f64(),
-            summary,
-            loops: Some(LoopSingularities { actuated: self.actuation.joints.clone(), actuated_source: self.actuation.source.clone(), sets }),
-            verdict: None,
-            branches: None,
-            arm_cuspidality: None,
-        }
-    }
+/// The node's view of a linkage's singular sets: one box set per set, with its summary.
+fn singularity_result(answer: Answer, query: SingularityQuery, actuation: Actuation) -> Result<SingularityResult, JobError> {
+    let Answer::LoopSingularities(found) = answer else { return Err(unexpected(&answer, "singularities")) };
+    let LoopAnswer::Sets { mechanism, sets: problems, solved, settings } = *found else { return Err(JobError::Bad("internal error: not the singular sets".into())) };
+    let sets: Vec<SingularSetResult> = problems.problems.iter().zip(&solved).map(|(p, set)| set_result(p, &settings, set)).collect();
+    // The run's status: the first limit any set met.
+    let status = solved.iter().map(|s| s.status).find(|s| !s.finished()).unwrap_or(Status::Finished);
+    let processed = solved.iter().flat_map(|s| &s.stats).map(|s| s.processed).sum();
+    let seconds = solved.iter().map(|s| s.seconds).sum();
+    let joint_names = problems.problems.first().map(|p| p.linkage.free_joints().to_vec()).unwrap_or_default();
+    let summary = format!(
+        "{}; actuated: {} ({})",
+        sets.iter().map(|s| format!("{}: {}", s.kind, s.summary)).collect::<Vec<_>>().join("; "),
+        if actuation.joints.is_empty() { "none".to_string() } else { actuation.joints.join(", ") },
+        actuation.source
+    );
+    let empty = |analysis: &str| BoxSetResult {
+        mechanism: mechanism.clone(),
+        analysis: analysis.to_string(),
+        status: Status::Finished,
+        settings: settings.clone(),
+        variables: joint_names.clone(),
+        primaries: (0..joint_names.len()).collect(),
+        joint_names: joint_names.clone(),
+        fixed_joints: vec![],
+        traces: vec![],
+        boxes: vec![],
+        clusters: 0,
+        stats: SolveStats::default(),
+    };
+    Ok(SingularityResult {
+        mechanism: mechanism.clone(),
+        status,
+        query,
+        joint_names: joint_names.clone(),
+        workspace_names: vec![],
+        cusps: vec![],
+        nodes: vec![],
+        // The 3R records have no counterpart here: the sets are in `loops`.
+        singular_curves: empty("singular_curves"),
+        internal_motions: empty("internal_motions"),
+        processed,
+        seconds,
+        summary,
+        loops: Some(LoopSingularities { actuated: actuation.joints.clone(), actuated_source: actuation.source.clone(), sets }),
+        verdict: None,
+        branches: None,
+        arm_cuspidality: None,
+    })
 }
 
 /// One solved set as a box set: the boxes, joint values and counts of `loop-singularities
@@ -330,21 +339,10 @@ fn set_result(p: &SingularProblem<Linkage>, settings: &SolverSettings, set: &Sin
     }
 }
 
-/// A validated linkage run.
-struct LinkageRun {
-    job: SolveRun,
-    analysis: String,
-}
-
-impl PreparedRun for LinkageRun {
-    fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> BoxSetResult {
-        BoxSetResult { analysis: self.analysis, ..self.job.run(cancel, progress) }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::sync::atomic::AtomicBool;
     use crate::app::{classify, load};
     use crate::model::urdf;
     use std::f64::consts::{PI, TAU};
@@ -357,7 +355,7 @@ mod tests {
         let a = load(&m, &[("crank_joint".into(), 0.5)], &[("coupler".into(), 2.0, 1.0)]).expect("planar");
         assert_eq!(a.kind(), MechanismKind::PlanarLinkage);
         let settings = SolverSettings { sigma: 1e-5, ..Default::default() };
-        let r = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let r = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
         assert_eq!(r.clusters, 2);
         let modes = r.assembly_modes();
         assert_eq!(modes.len(), 2);
@@ -378,11 +376,11 @@ mod tests {
         assert_eq!(a.kind(), MechanismKind::SpatialLinkage);
         assert!(a.limitation().contains("not planar"), "{}", a.limitation());
         let settings = SolverSettings { sigma: 1e-6, ..Default::default() };
-        let r = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let r = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
         // The RSSR's two assembly modes, each proven.
         assert_eq!((r.clusters, r.assembly_modes().len()), (2, 2));
         assert!(r.boxes.iter().all(|b| b.status == BoxStatus::Unique), "{:?}", r.boxes.iter().map(|b| b.status).collect::<Vec<_>>());
-        let again = a.solve(&[("crank_joint".into(), 0.2)], &settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let again = a.solve(&[("crank_joint".into(), 0.2)], &settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
         assert_eq!((again.analysis.as_str(), again.clusters), ("solve", 2));
     }
 
@@ -422,7 +420,7 @@ mod tests {
         let a = crate::app::load_urdf(&m, &[], &[]).expect("planar");
         assert_eq!(a.services(), vec![Service::Solve, Service::Singularities, Service::Classify]);
         let query = SingularityQuery { precision: 1e-6, nodes: false, max_boxes: 1_000_000, timeout: None, threads: 1 };
-        let r = a.singularities(&query).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let r = a.singularities(&query).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
         let loops = r.loops.as_ref().expect("a linkage's sets");
         assert_eq!(loops.actuated, vec!["rocker_joint".to_string()]);
         assert!(loops.actuated_source.contains("<transmission>"), "{}", loops.actuated_source);
@@ -451,7 +449,7 @@ mod tests {
         assert_eq!((loops.sets[0].boxes.boxes.len(), loops.sets[2].boxes.boxes.len()), (0, 0), "{} / {}", loops.sets[0].summary, loops.sets[2].summary);
 
         let settings = SolverSettings { sigma: 1e-2, ..Default::default() };
-        let cspace = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let cspace = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
         // Configurations on the curve, near and far from the dead centres: the bound is never
         // above the true distance (the set being exactly the four dead centres), and close to it.
         let mut checked = 0;
@@ -473,7 +471,7 @@ mod tests {
         }
         assert!(checked >= 40, "{checked} configurations checked");
         // Without a complete singular search there is no bound, and the note says why.
-        let short = a.singularities(&SingularityQuery { max_boxes: 3, ..query }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let short = a.singularities(&SingularityQuery { max_boxes: 3, ..query }).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
         let cl = a.classify(&dead[0], Some(&cspace), Some(&short)).expect("classifies");
         assert_eq!(cl.singular_distance, None);
         assert!(cl.note.contains("did not complete"), "{}", cl.note);
@@ -489,13 +487,13 @@ mod tests {
         let a = crate::app::load_urdf(&m, &[], &[]).expect("spatial");
         assert_eq!(a.kind(), MechanismKind::SpatialLinkage);
         let query = SingularityQuery { precision: 1e-6, nodes: false, max_boxes: 1_000_000, timeout: None, threads: 1 };
-        let r = a.singularities(&query).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let r = a.singularities(&query).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
         let loops = r.loops.as_ref().expect("a linkage's sets");
         assert_eq!(loops.actuated, vec!["crank_joint".to_string()]);
         let got: Vec<(&str, usize, usize)> = loops.sets.iter().map(|s| (s.kind, s.boxes.clusters, s.proven)).collect();
         assert_eq!(got, vec![("cspace", 0, 0), ("input", 0, 0), ("output", 4, 4)], "{}", r.summary);
         assert!(loops.complete(), "{}", r.summary);
-        let cspace = a.configuration_space(&SolverSettings { sigma: 1e-3, ..Default::default() }).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let cspace = a.configuration_space(&SolverSettings { sigma: 1e-3, ..Default::default() }).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
         let names = a.free_joints();
         let values: Vec<f64> = names.iter().map(|n| if n == "crank_joint" { 0.0 } else { 0.645167 }).collect();
         let c = a.classify(&values, Some(&cspace), Some(&r)).expect("classifies");
@@ -508,7 +506,7 @@ mod tests {
     fn bad_requests_fail_before_any_run() {
         let m = urdf::parse(FOUR_BAR).expect("bundled");
         let a = load(&m, &[], &[]).expect("planar");
-        let err = |e: Result<Box<dyn PreparedRun>, AnalysisError>| e.err().map(|e| e.to_string()).unwrap_or_default();
+        let err = |e: Result<Box<dyn PreparedRun>, JobError>| e.err().map(|e| e.to_string()).unwrap_or_default();
         assert!(err(a.solve(&[("nope".into(), 1.0)], &SolverSettings::default())).contains("no joint or loop named 'nope'"));
         assert!(err(a.solve(&[("crank_joint".into(), f64::NAN)], &SolverSettings::default())).contains("not a finite number"));
         assert!(err(a.solve(&[], &SolverSettings { sigma: f64::NAN, ..Default::default() })).contains("sigma"));

@@ -1,14 +1,15 @@
-//! Analyses of a loaded mechanism, as a front end (the ROS node) runs them: one trait, one
-//! implementation per kind of mechanism, and the plain-data results they return.
+//! The front door: a `Job` (one variant per question) is checked against an `Input` by
+//! `prepare` and answered by `Prepared::run` within a `Control`, as one `Answer`. Every front
+//! end (the CLI, the ROS node, the Python package) translates its requests into jobs and its
+//! answers into its own output, and names nothing below this module.
 //!
-//! `load` picks the analysis that fits a `Mechanism`: `Manip3rAnalysis` (a serial chain of
-//! three revolute joints: singularities, inverse kinematics), `LinkageAnalysis` (planar or spatial
-//! closed-loop linkages: the configuration space) or `Unsupported`, which answers every query
-//! with `AnalysisError::NotAvailable`. Another kind of mechanism slots in as a further
-//! `Analysis` implementation and one more arm in `load`.
+//! The node keeps one `Analysis` per loaded mechanism (`load` picks it: `Manip3rAnalysis`,
+//! `LinkageAnalysis`, `PlatformAnalysis` or `Unsupported`): what the mechanism is, which
+//! services it answers, which `Job` each query is with the mechanism's load-time options, and how
+//! the `Answer` reads as the plain-data shapes of the node's messages (`results`).
 //!
 //! No IO and no async here: a front end prepares a run (all validation happens then, so bad
-//! requests are answered at once), moves it to a thread of its own and converts the result.
+//! requests are answered at once), moves it to a thread of its own and converts the answer.
 
 mod analysis;
 mod answer;
@@ -46,7 +47,7 @@ pub use crate::analyses::arm3r::{check_precision, ChainSpec, LoadOptions};
 pub use crate::analyses::arm6r::PoseInput;
 pub use crate::analyses::distances::Choice as DistanceFormulation;
 pub use crate::analyses::loop_singular::image::{ImageCusp, ImageNode, ImagePoints, ImageReport};
-pub use crate::formulate::{Model as LinkageModel, ModelChoice, Output, SingularKind, TracedPoint};
+pub use crate::formulate::{LegValues, Model as LinkageModel, ModelChoice, Output, SingularKind, TracedPoint};
 pub use crate::kernel::contract::FaceBounds;
 pub use crate::kernel::lp::LpBackend;
 pub use crate::model::rounding::ANGLE_TOLERANCE as SNAP_TOLERANCE;

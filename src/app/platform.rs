@@ -17,18 +17,19 @@
 //! the cluster it was attributed to; the solution boxes of a cluster left undecided are
 //! published `Undecided`, those of settled clusters `Solution`.
 
-use super::{MechanismKind, Analysis, AnalysisError, BoxSetResult, PreparedRun, ResultBox, Service};
+use super::results::{limits_of, unexpected, JobRun};
+use super::{Analysis, AnalysisError, Answer, BoxSetResult, DistancesAnswer, DistancesJob, Input, Job, JobError, MechanismKind, PreparedRun, ResultBox, Service};
+use std::sync::Arc;
 use crate::kernel::contract::FaceBounds;
 use crate::model::Mechanism;
-use crate::formulate::cayley_menger::{BuildOptions, CayleyMenger, DistanceSolverError, Formulation};
-use super::distances::{DistancesRun, DistancesRequest};
+use crate::formulate::cayley_menger::{BuildOptions, CayleyMenger, Formulation};
+use super::distances::DistancesRun;
 use crate::formulate::{LegValues, PlatformError};
 use crate::analyses::distances::Choice;
 use crate::kernel::interval::{bounds, Interval, IntervalBox};
 use std::collections::BTreeMap;
-use crate::kernel::search::{BoxStatus, Progress, SolverSettings};
+use crate::kernel::search::{BoxStatus, SolverSettings};
 use crate::kernel::system::VarRole;
-use std::sync::atomic::AtomicBool;
 
 /// The formulation the node uses: the fastest of `bench-distances` (shared variables, redundant
 /// determinants, Bernstein corners).
@@ -43,16 +44,8 @@ pub struct PlatformAnalysis {
     squared: Vec<(String, f64)>,
     /// The unknown distances `d(a,b)` of the load-time problem (they do not depend on the legs).
     unknowns: Vec<String>,
-}
-
-/// A validated platform run.
-struct PlatformRun {
-    job: DistancesRun,
-    cm: CayleyMenger,
-    /// The legs' lengths, metres.
-    fixed: Vec<(String, f64)>,
-    settings: SolverSettings,
-    analysis: String,
+    /// The mechanism as the front door takes it: every run is a `Job` prepared on it.
+    input: Arc<Input>,
 }
 
 /// The name of the distance whose square is the unknown `r(a,b)`.
@@ -73,25 +66,24 @@ fn distance_bounds(x: Interval) -> [f64; 2] {
 impl PlatformAnalysis {
     /// Reads the platform of `mechanism` with the squared leg lengths `fixed`.
     pub fn new(mechanism: &Mechanism, fixed: &[(String, f64)]) -> Result<Self, AnalysisError> {
-        let run = Self::build(mechanism, fixed, LegValues::Squared, &SolverSettings::default(), "")?;
-        Ok(Self { mechanism: mechanism.clone(), squared: fixed.to_vec(), unknowns: run.cm.unknowns.iter().map(|u| distance_name(&run.cm, u.a, u.b)).collect() })
+        let run = DistancesRun::platform_with(mechanism, fixed, LegValues::Squared)?;
+        let cm = CayleyMenger::build(run.problem(), BUILD).map_err(PlatformError::Distance)?;
+        let unknowns = cm.unknowns.iter().map(|u| distance_name(&cm, u.a, u.b)).collect();
+        Ok(Self { mechanism: mechanism.clone(), squared: fixed.to_vec(), unknowns, input: Arc::new(Input::Mechanism(mechanism.clone())) })
     }
 
-    /// Everything a run needs, validated (legs, determinants, clipper, settings).
-    fn build(mechanism: &Mechanism, fixed: &[(String, f64)], values: LegValues, settings: &SolverSettings, analysis: &str) -> Result<PlatformRun, AnalysisError> {
-        let job = DistancesRun::platform_with(mechanism, fixed, values)?;
-        let cm = CayleyMenger::build(job.problem(), BUILD).map_err(PlatformError::Distance)?;
-        // Validate now, so that a bad request is answered before any thread starts.
-        match cm.solver(FACES, settings.clone()) {
-            Ok(_) => {}
-            Err(DistanceSolverError::Solve(e)) => return Err(e.into()),
-            Err(e) => return Err(AnalysisError::BadRequest(e.to_string())),
-        }
-        let fixed = match values {
+    /// The node's `distances` job: the legs `fixed` as `legs` says, `settings`; its box set
+    /// named `analysis`, over the distances in metres.
+    fn distances_run(&self, fixed: &[(String, f64)], legs: LegValues, settings: &SolverSettings, analysis: &'static str) -> Result<Box<dyn PreparedRun>, JobError> {
+        let job = Job::Distances(DistancesJob { fixed: fixed.to_vec(), legs, precision: settings.sigma, rho: Some(settings.rho), redundant: BUILD.redundant, formulation: Choice::Shared, faces: FACES });
+        let lengths = match legs {
             LegValues::Squared => lengths(fixed),
             LegValues::Lengths => fixed.to_vec(),
         };
-        Ok(PlatformRun { job, cm, fixed, settings: settings.clone(), analysis: analysis.to_string() })
+        JobRun::new(&self.input, job, limits_of(settings), settings.threads, move |answer| match answer {
+            Answer::Distances(d) => Ok(box_set(&d, lengths, analysis)),
+            other => Err(unexpected(&other, analysis)),
+        })
     }
 }
 
@@ -125,78 +117,76 @@ impl Analysis for PlatformAnalysis {
         vec![false; self.unknowns.len()]
     }
 
-    fn configuration_space(&self, settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, AnalysisError> {
-        Ok(Box::new(Self::build(&self.mechanism, &self.squared, LegValues::Squared, settings, "configuration_space")?))
+    fn configuration_space(&self, settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, JobError> {
+        self.distances_run(&self.squared, LegValues::Squared, settings, "configuration_space")
     }
 
-    fn solve(&self, fixed: &[(String, f64)], settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, AnalysisError> {
+    fn solve(&self, fixed: &[(String, f64)], settings: &SolverSettings) -> Result<Box<dyn PreparedRun>, JobError> {
         // A request's legs are lengths (REP 103).
-        Ok(Box::new(Self::build(&self.mechanism, fixed, LegValues::Lengths, settings, "solve")?))
+        self.distances_run(fixed, LegValues::Lengths, settings, "solve")
     }
 }
 
-impl PreparedRun for PlatformRun {
-    fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> BoxSetResult {
-        let _ = progress;
-        // The CLI's job, so the published boxes are exactly those of `distances --json`.
-        let request = DistancesRequest { formulation: Choice::Shared, redundant: BUILD.redundant, faces: FACES };
-        let c = self.job.run(&request, &self.settings, cancel).expect("invariant: validated when prepared");
-        let joint_names: Vec<String> = self.cm.unknowns.iter().map(|u| distance_name(&self.cm, u.a, u.b)).collect();
-        // The boxes and distances of `distances --json` for the same run, read off it directly.
-        let convert = |b: &IntervalBox, status: BoxStatus, cluster: Option<usize>| {
-            let squared: BTreeMap<String, Interval> = c.cm.unknown_intervals(b).into_iter().collect();
-            ResultBox {
-                status,
-                bounds: b.dims.iter().map(|&x| bounds(x)).collect(),
-                joints: self.cm.unknowns.iter().map(|u| squared.get(&u.name).map_or([f64::NAN, f64::NAN], |&x| distance_bounds(x))).collect(),
-                level: b.level,
-                cluster,
-                traces: Vec::new(),
-            }
-        };
-        let settled = |k: usize| c.clusters.get(k).is_some_and(|v| v.undecided.is_none());
-        let mut boxes: Vec<ResultBox> = c.solutions.iter().zip(&c.cluster).map(|(b, &k)| convert(b, if settled(k) { BoxStatus::Solution } else { BoxStatus::Undecided }, Some(k))).collect();
-        // Certified placements: the distances of a placement and of its mirror image are one
-        // box (the mirror image is the same solution of the distance system).
-        if let Some(pl) = &c.placed {
-            let mut seen: Vec<Vec<[f64; 2]>> = Vec::new();
-            for root in &c.roots {
-                let squared: Vec<Interval> = c.cm.unknowns.iter().map(|u| pl.distance_over(u.a, u.b, &root.certified)).collect();
-                let d: Vec<[f64; 2]> = squared.iter().map(|&x| bounds(x)).collect();
-                let joints: Vec<[f64; 2]> = squared.iter().map(|&x| distance_bounds(x)).collect();
-                let overlaps = |e: &Vec<[f64; 2]>| e.iter().zip(&d).all(|(a, b)| a[0] <= b[1] && b[0] <= a[1]);
-                if seen.iter().any(overlaps) {
-                    continue;
-                }
-                seen.push(d.clone());
-                let mut bounds = vec![[f64::NAN, f64::NAN]; self.cm.system.vars.len()];
-                for (u, x) in c.cm.unknowns.iter().zip(&d) {
-                    bounds[u.var] = *x;
-                }
-                boxes.push(ResultBox { status: BoxStatus::Unique, bounds, joints, level: 0, cluster: Some(root.cluster), traces: Vec::new() });
-            }
-        }
-        boxes.extend(c.undecided.iter().map(|b| convert(b, BoxStatus::Undecided, None)));
-        BoxSetResult {
-            mechanism: c.cm.problem.name.clone(),
-            analysis: self.analysis,
-            status: c.status,
-            settings: self.settings,
-            variables: c.cm.system.vars.iter().map(|v| v.name.clone()).collect(),
-            primaries: self.cm.system.vars.iter().enumerate().filter(|(_, v)| v.role == VarRole::Primary).map(|(i, _)| i).collect(),
-            joint_names,
-            fixed_joints: self.fixed,
+/// The answer of `distances` (the CLI's job, so the published boxes are exactly those of
+/// `distances --json`) as the node's box set over the distances; `fixed` are the legs' lengths.
+fn box_set(answer: &DistancesAnswer, fixed: Vec<(String, f64)>, analysis: &str) -> BoxSetResult {
+    let c = &answer.certified;
+    let joint_names: Vec<String> = c.cm.unknowns.iter().map(|u| distance_name(&c.cm, u.a, u.b)).collect();
+    // The boxes and distances of `distances --json` for the same run, read off it directly.
+    let convert = |b: &IntervalBox, status: BoxStatus, cluster: Option<usize>| {
+        let squared: BTreeMap<String, Interval> = c.cm.unknown_intervals(b).into_iter().collect();
+        ResultBox {
+            status,
+            bounds: b.dims.iter().map(|&x| bounds(x)).collect(),
+            joints: c.cm.unknowns.iter().map(|u| squared.get(&u.name).map_or([f64::NAN, f64::NAN], |&x| distance_bounds(x))).collect(),
+            level: b.level,
+            cluster,
             traces: Vec::new(),
-            boxes,
-            clusters: c.clusters.len(),
-            stats: c.stats,
         }
+    };
+    let settled = |k: usize| c.clusters.get(k).is_some_and(|v| v.undecided.is_none());
+    let mut boxes: Vec<ResultBox> = c.solutions.iter().zip(&c.cluster).map(|(b, &k)| convert(b, if settled(k) { BoxStatus::Solution } else { BoxStatus::Undecided }, Some(k))).collect();
+    // Certified placements: the distances of a placement and of its mirror image are one
+    // box (the mirror image is the same solution of the distance system).
+    if let Some(pl) = &c.placed {
+        let mut seen: Vec<Vec<[f64; 2]>> = Vec::new();
+        for root in &c.roots {
+            let squared: Vec<Interval> = c.cm.unknowns.iter().map(|u| pl.distance_over(u.a, u.b, &root.certified)).collect();
+            let d: Vec<[f64; 2]> = squared.iter().map(|&x| bounds(x)).collect();
+            let joints: Vec<[f64; 2]> = squared.iter().map(|&x| distance_bounds(x)).collect();
+            let overlaps = |e: &Vec<[f64; 2]>| e.iter().zip(&d).all(|(a, b)| a[0] <= b[1] && b[0] <= a[1]);
+            if seen.iter().any(overlaps) {
+                continue;
+            }
+            seen.push(d.clone());
+            let mut bounds = vec![[f64::NAN, f64::NAN]; c.cm.system.vars.len()];
+            for (u, x) in c.cm.unknowns.iter().zip(&d) {
+                bounds[u.var] = *x;
+            }
+            boxes.push(ResultBox { status: BoxStatus::Unique, bounds, joints, level: 0, cluster: Some(root.cluster), traces: Vec::new() });
+        }
+    }
+    boxes.extend(c.undecided.iter().map(|b| convert(b, BoxStatus::Undecided, None)));
+    BoxSetResult {
+        mechanism: c.cm.problem.name.clone(),
+        analysis: analysis.to_string(),
+        status: c.status,
+        settings: answer.settings.clone(),
+        variables: c.cm.system.vars.iter().map(|v| v.name.clone()).collect(),
+        primaries: c.cm.system.vars.iter().enumerate().filter(|(_, v)| v.role == VarRole::Primary).map(|(i, _)| i).collect(),
+        joint_names,
+        fixed_joints: fixed,
+        traces: Vec::new(),
+        boxes,
+        clusters: c.clusters.len(),
+        stats: c.stats.clone(),
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::sync::atomic::AtomicBool;
     use crate::app::load;
     use crate::model::urdf;
     use crate::analyses::distances::solve as certified_solve;
@@ -219,7 +209,7 @@ mod tests {
         assert_eq!(a.kind(), MechanismKind::ParallelPlatform);
         // The CLI's defaults (`linkspace distances --redundant`).
         let settings = SolverSettings { sigma: 0.01, rho: 0.99, ..Default::default() };
-        let r = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let r = a.configuration_space(&settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
         assert_eq!(r.status, Status::Finished);
         assert_eq!(r.clusters, 2);
         // The CLI path (`linkspace distances --redundant`), built independently here.
@@ -255,7 +245,7 @@ mod tests {
         }
         // Re-solving with other legs, given as lengths (metres): configuration b.
         let b: Vec<(String, f64)> = LEGS.iter().map(|l| (l.to_string(), f64::sqrt(4.75))).collect();
-        let rb = a.solve(&b, &settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {});
+        let rb = a.solve(&b, &settings).expect("valid").run(&AtomicBool::new(false), &mut |_| {}).expect("runs");
         assert_eq!(rb.analysis, "solve");
         assert_eq!(rb.fixed_joints, b);
         assert!(rb.clusters > 0);

@@ -206,7 +206,7 @@ fn six_joint_chain(m: &Mechanism, options: &arm3r::LoadOptions) -> Result<Chain6
 }
 
 /// Waypoints one request may check: a path of more is refused rather than held in memory.
-pub const MAX_WAYPOINTS: usize = 100_000;
+pub(crate) const MAX_WAYPOINTS: usize = 100_000;
 
 /// Joint values beyond this many radians are refused: no joint turns 1,600 times.
 const MAX_JOINT_VALUE: f64 = 1e4;
@@ -273,7 +273,7 @@ fn prepare_distances(input: &Input, j: DistancesJob) -> Result<Ready, JobError> 
     // Checked before the file is read: rho's default depends on the formulation.
     SolverSettings { sigma: j.precision, rho: j.rho.unwrap_or(0.99), ..SolverSettings::default() }.validate()?;
     let run = match input {
-        Input::Mechanism(m) => DistancesRun::platform(m, &j.fixed)?,
+        Input::Mechanism(m) => DistancesRun::platform_with(m, &j.fixed, j.legs)?,
         Input::DistanceFile(text) => DistancesRun::file(text, &j.fixed)?,
     };
     let request = DistancesRequest { formulation: run.formulation(j.formulation), redundant: j.redundant, faces: j.faces };

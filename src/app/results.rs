@@ -5,7 +5,8 @@
 use super::six::ArmVerdictLine;
 use crate::kernel::interval::Bounds;
 use crate::kernel::outcome::{BoxStatus, Status};
-use crate::kernel::search::{Progress, SolveStats as Stats, SolverSettings};
+use super::{prepare, Answer, Input, Job, JobError, Prepared};
+use crate::kernel::search::{Control, Limits, Progress, SolveStats as Stats, SolverSettings};
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
@@ -180,11 +181,50 @@ pub fn classify(result: &BoxSetResult, values: &[f64], periodic: &[bool], singul
     }
 }
 
-/// A run that has been validated and only needs a thread: `run` cannot fail. `T` is what it
-/// returns: a box set (configuration space, solve), a `SingularityResult` or an `IkResult`.
+/// A node query that has been validated and only needs a thread. `T` is what it returns: a box
+/// set (configuration space, solve), a `SingularityResult` or an `IkResult`.
 pub trait PreparedRun<T = BoxSetResult>: Send {
-    /// Runs to the end (or to a limit, or until `cancel` is raised), reporting progress.
-    fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> T;
+    /// Runs to the end (or to a limit, or until `cancel` is raised), reporting progress. An
+    /// error is one only the analysis itself could find mid-run (`Prepared::run`).
+    fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> Result<T, JobError>;
+}
+
+/// How an `Answer` reads as the node's result.
+type Reader<T> = Box<dyn FnOnce(Answer) -> Result<T, JobError> + Send>;
+
+/// A node query answered through the front door: the `Job` it became, prepared on the
+/// mechanism (so every check is done before a thread starts), the bounds of its run, and how its
+/// `Answer` reads as the node's result. Every run of the node is one of these.
+pub(crate) struct JobRun<T> {
+    prepared: Prepared,
+    limits: Limits,
+    threads: usize,
+    read: Reader<T>,
+}
+
+impl<T: 'static> JobRun<T> {
+    /// Prepares `job` on `input`; `read` turns its answer into the node's result.
+    pub(crate) fn new(input: &Input, job: Job, limits: Limits, threads: usize, read: impl FnOnce(Answer) -> Result<T, JobError> + Send + 'static) -> Result<Box<dyn PreparedRun<T>>, JobError> {
+        let prepared = prepare(input, job)?;
+        Ok(Box::new(JobRun { prepared, limits, threads: threads.max(1), read: Box::new(read) }))
+    }
+}
+
+impl<T> PreparedRun<T> for JobRun<T> {
+    fn run(self: Box<Self>, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> Result<T, JobError> {
+        let control = Control { limits: self.limits, threads: self.threads, cancel };
+        (self.read)(self.prepared.run(&control, progress)?)
+    }
+}
+
+/// The error for an answer of another job than the one asked (never expected).
+pub(crate) fn unexpected(answer: &Answer, asked: &str) -> JobError {
+    JobError::Bad(format!("internal error: a {} answer to a {asked} query", answer.name()))
+}
+
+/// The bounds of a node run given as solver settings.
+pub(crate) fn limits_of(settings: &SolverSettings) -> Limits {
+    Limits { max_cells: settings.max_boxes, timeout: settings.timeout, max_memory: settings.max_memory }
 }
 
 /// What a singularity run is asked for.

@@ -3,7 +3,7 @@
 
 use super::parse_fix;
 use anyhow::Result;
-use linkspace::app::{DistanceFormulation, DistancesJob, FaceBounds, Job};
+use linkspace::app::{DistanceFormulation, DistancesJob, FaceBounds, Job, LegValues};
 use std::path::PathBuf;
 
 #[derive(Clone, Copy, PartialEq, clap::ValueEnum)]
@@ -81,6 +81,6 @@ fn face_bounds(f: Faces) -> FaceBounds {
 
 pub fn run(args: DistancesArgs) -> Result<()> {
     let fixed = args.fix.iter().map(|s| parse_fix(s)).collect::<Result<Vec<_>>>()?;
-    let job = DistancesJob { fixed, precision: args.precision, rho: args.rho, redundant: args.redundant, formulation: choice(args.formulation), faces: face_bounds(args.faces) };
+    let job = DistancesJob { fixed, legs: LegValues::Squared, precision: args.precision, rho: args.rho, redundant: args.redundant, formulation: choice(args.formulation), faces: face_bounds(args.faces) };
     super::execute(&args.file, Job::Distances(job), &args.limits, args.json.as_deref())
 }

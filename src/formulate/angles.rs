@@ -12,7 +12,7 @@ use crate::kernel::interval::{interval, point, Interval};
 use crate::kernel::interval::trig;
 
 /// Largest `|value|` (radians) that `reduce` accepts: 2²⁶ turns, where `k·TAU_A` stops being exact.
-pub const MAX_REDUCIBLE: f64 = 4.0e8;
+pub(crate) const MAX_REDUCIBLE: f64 = 4.0e8;
 
 /// fl(2π) with its low 27 mantissa bits cleared: 26 significant bits.
 const TAU_A: f64 = 6.283185243606567;
@@ -22,7 +22,7 @@ const TAU_B: f64 = 6.357301884918343e-8;
 const TAU_C: (f64, f64) = (2.449293598294706e-16, 2.4492935982947064e-16);
 
 /// 2π as an interval.
-pub fn tau() -> Interval {
+pub(crate) fn tau() -> Interval {
     Interval::TAU
 }
 
@@ -35,7 +35,7 @@ fn minus_turns(x: Interval, k: f64) -> Interval {
 
 /// An interval enclosing `x − 2πk` for the integer `k` that brings `x`'s midpoint nearest 0, or
 /// `None` when `x` is too large (beyond `MAX_REDUCIBLE`) to reduce accurately.
-pub fn reduce(x: Interval) -> Option<Interval> {
+pub(crate) fn reduce(x: Interval) -> Option<Interval> {
     if x.is_empty() || !(x.mag() <= MAX_REDUCIBLE) {
         return None;
     }
@@ -45,7 +45,7 @@ pub fn reduce(x: Interval) -> Option<Interval> {
 
 /// The decimal a parsed `f64` stands for lies within half an ulp of it (parsing rounds to
 /// nearest): `[prev(x), next(x)]` encloses it. Zero stays exact (a written zero is zero).
-pub fn stated(x: f64) -> Interval {
+pub(crate) fn stated(x: f64) -> Interval {
     if x == 0.0 {
         point(0.0)
     } else {
@@ -54,7 +54,7 @@ pub fn stated(x: f64) -> Interval {
 }
 
 /// `(cos x, sin x)` enclosed; exact at the point 0, so axis-aligned models keep point coefficients.
-pub fn cos_sin(x: Interval) -> (Interval, Interval) {
+pub(crate) fn cos_sin(x: Interval) -> (Interval, Interval) {
     if x.inf() == 0.0 && x.sup() == 0.0 {
         return (point(1.0), point(0.0));
     }
@@ -68,7 +68,7 @@ const TURN_MARGIN: f64 = 4.0e-15;
 /// The angles `atan2(s, c)` over the box `[c]×[s]`, as one connected interval (it may exceed
 /// (−π, π] to stay connected; the whole circle when the box holds the origin): the proven
 /// `interval::angle::arg`. Empty for an empty box.
-pub fn angle_interval(c: Interval, s: Interval) -> Interval {
+pub(crate) fn angle_interval(c: Interval, s: Interval) -> Interval {
     let pi = std::f64::consts::PI;
     if c.is_empty() || s.is_empty() {
         return Interval::EMPTY;
@@ -78,7 +78,7 @@ pub fn angle_interval(c: Interval, s: Interval) -> Interval {
 
 /// The same set of angles, shifted by a whole number of turns so that its midpoint lies in
 /// (−π, π]; wider than a turn gives [−π, π] (outward).
-pub fn wrap(x: Interval) -> Interval {
+pub(crate) fn wrap(x: Interval) -> Interval {
     let pi = std::f64::consts::PI;
     if x.is_empty() || !(x.wid() < std::f64::consts::TAU) {
         return interval(-pi, pi) + interval(-TURN_MARGIN, TURN_MARGIN);
@@ -94,7 +94,7 @@ pub fn wrap(x: Interval) -> Interval {
 /// `lower`, `upper` enclose the stated limits. `Outside` means no angle of `r` is congruent to a
 /// value within the limits; `Inside` that every one is. Limits too large to reduce accurately
 /// give `Straddles` unless they span a whole turn.
-pub fn against_limits(r: Interval, lower: Interval, upper: Interval) -> Inclusion {
+pub(crate) fn against_limits(r: Interval, lower: Interval, upper: Interval) -> Inclusion {
     let span = upper - lower;
     if span.inf() >= tau().sup() {
         return Inclusion::Inside;

@@ -21,7 +21,7 @@ mod embed;
 
 use self::checks::{check_tetrahedra, check_triangles, has_triangle, has_unknown};
 pub(crate) use self::checks::bound_smoothing;
-pub use self::embed::embed;
+pub(crate) use self::embed::embed;
 use crate::kernel::contract::{ClipError, FaceBounds, TrapezoidClip};
 use crate::kernel::search::{SolveError, Solver, SolverSettings};
 use crate::kernel::interval::{interval, point, Interval, IntervalBox};
@@ -377,13 +377,13 @@ pub fn cayley_menger_determinant(n: usize, entry: &dyn Fn(usize, usize) -> Poly)
 }
 
 /// Three points are collinear: `Ξ(p1, p2, p3) = 0` (zero area).
-pub fn collinear(entry: &dyn Fn(usize, usize) -> Poly) -> Poly {
+pub(crate) fn collinear(entry: &dyn Fn(usize, usize) -> Poly) -> Poly {
     cayley_menger_determinant(3, entry).expect("invariant: 3 points")
 }
 
 /// Point 0 at squared distance `d2` from the line through points 1 and 2:
 /// `Ξ(p0, p1, p2) + 4 r12 d² = 0` (Porta et al. 2003, Eq. 5).
-pub fn point_line(entry: &dyn Fn(usize, usize) -> Poly, d2: Interval) -> Poly {
+pub(crate) fn point_line(entry: &dyn Fn(usize, usize) -> Poly, d2: Interval) -> Poly {
     collinear(entry).add(&entry(1, 2).scale(point(4.0) * d2))
 }
 
@@ -605,7 +605,7 @@ impl CayleyMenger {
 }
 
 /// All `k`-subsets of `0..n`, in lexicographic order.
-pub fn combinations(n: usize, k: usize) -> Vec<Vec<usize>> {
+pub(crate) fn combinations(n: usize, k: usize) -> Vec<Vec<usize>> {
     let mut out = Vec::new();
     let mut cur = Vec::with_capacity(k);
     fn rec(start: usize, n: usize, k: usize, cur: &mut Vec<usize>, out: &mut Vec<Vec<usize>>) {

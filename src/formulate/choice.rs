@@ -54,10 +54,10 @@ impl Model {
 }
 
 /// Why a mechanism the planar builder accepts is solved with it.
-pub const PLANAR_REASON: &str = "every revolute axis is parallel and every slider lies in the plane: one angle per rigid group";
+pub(crate) const PLANAR_REASON: &str = "every revolute axis is parallel and every slider lies in the plane: one angle per rigid group";
 
 /// Why a platform is solved in pose coordinates.
-pub const POSE_REASON: &str = "a platform on six legs, every leg fixed: its pose (position, rotation) is the unknown, the legs linear rows";
+pub(crate) const POSE_REASON: &str = "a platform on six legs, every leg fixed: its pose (position, rotation) is the unknown, the legs linear rows";
 
 /// A traced point: link, coordinates in the link's frame, and its name as given (`LINK@X,Y[,Z]`).
 pub type TracedPoint = (String, [f64; 3], String);

@@ -13,18 +13,18 @@ use crate::kernel::interval::{interval, point, Interval};
 use nalgebra::{Rotation3, Vector3};
 
 /// A 3-vector of intervals.
-pub type IVec3 = [Interval; 3];
+pub(crate) type IVec3 = [Interval; 3];
 /// A 3×3 matrix of intervals, row-major.
-pub type IMat3 = [[Interval; 3]; 3];
+pub(crate) type IMat3 = [[Interval; 3]; 3];
 
 /// The identity, exact.
-pub fn identity() -> IMat3 {
+pub(crate) fn identity() -> IMat3 {
     let (o, z) = (point(1.0), point(0.0));
     [[o, z, z], [z, o, z], [z, z, o]]
 }
 
 /// `a·b`.
-pub fn mul(a: &IMat3, b: &IMat3) -> IMat3 {
+pub(crate) fn mul(a: &IMat3, b: &IMat3) -> IMat3 {
     let mut out = [[point(0.0); 3]; 3];
     for (r, row) in out.iter_mut().enumerate() {
         for (c, x) in row.iter_mut().enumerate() {
@@ -35,18 +35,18 @@ pub fn mul(a: &IMat3, b: &IMat3) -> IMat3 {
 }
 
 /// `a·v`.
-pub fn apply(a: &IMat3, v: &IVec3) -> IVec3 {
+pub(crate) fn apply(a: &IMat3, v: &IVec3) -> IVec3 {
     [0, 1, 2].map(|r| a[r][0] * v[0] + a[r][1] * v[1] + a[r][2] * v[2])
 }
 
 /// `aᵀ·v`.
-pub fn apply_transposed(a: &IMat3, v: &IVec3) -> IVec3 {
+pub(crate) fn apply_transposed(a: &IMat3, v: &IVec3) -> IVec3 {
     [0, 1, 2].map(|c| a[0][c] * v[0] + a[1][c] * v[1] + a[2][c] * v[2])
 }
 
 /// The rotation by the stated angle `theta` about the unit `axis` (Rodrigues:
 /// `a aᵀ + cos θ (I − a aᵀ) + sin θ [a]×`), enclosing the exact one for every axis in `axis`.
-pub fn about_axis(axis: &IVec3, theta: f64) -> IMat3 {
+pub(crate) fn about_axis(axis: &IVec3, theta: f64) -> IMat3 {
     let (c, s) = cos_sin(stated(theta));
     let a = axis;
     let cross = [[point(0.0), -a[2], a[1]], [a[2], point(0.0), -a[0]], [-a[1], a[0], point(0.0)]];
@@ -61,7 +61,7 @@ pub fn about_axis(axis: &IVec3, theta: f64) -> IMat3 {
 }
 
 /// The URDF rotation `Rz(yaw)·Ry(pitch)·Rx(roll)` of the stated angles.
-pub fn rpy(rpy: [f64; 3]) -> IMat3 {
+pub(crate) fn rpy(rpy: [f64; 3]) -> IMat3 {
     let (cr, sr) = cos_sin(stated(rpy[0]));
     let (cp, sp) = cos_sin(stated(rpy[1]));
     let (cy, sy) = cos_sin(stated(rpy[2]));
@@ -74,12 +74,12 @@ pub fn rpy(rpy: [f64; 3]) -> IMat3 {
 }
 
 /// The stated translation.
-pub fn translation(v: &Vector3<f64>) -> IVec3 {
+pub(crate) fn translation(v: &Vector3<f64>) -> IVec3 {
     [stated(v.x), stated(v.y), stated(v.z)]
 }
 
 /// An enclosure of the stated unit axis from its `f64` normalisation.
-pub fn axis(v: &Vector3<f64>) -> IVec3 {
+pub(crate) fn axis(v: &Vector3<f64>) -> IVec3 {
     let c = |x: f64| {
         if x == 0.0 || x.abs() == 1.0 {
             point(x)
@@ -94,7 +94,7 @@ pub fn axis(v: &Vector3<f64>) -> IVec3 {
 /// The plane basis (e1, e2, normal) as columns: exact for the plane z = 0, else the `f64`
 /// rotation taking z to the normal, widened by 4·2⁻⁵² per entry (nalgebra's construction is
 /// within a few ulps of an exact rotation, which the widened matrix then holds).
-pub fn basis(r: &Rotation3<f64>) -> IMat3 {
+pub(crate) fn basis(r: &Rotation3<f64>) -> IMat3 {
     let m = r.matrix();
     if *r == Rotation3::identity() {
         return identity();

@@ -61,7 +61,7 @@ impl Cell {
 /// Why the aspects were not counted (on the last grid tried); `Display` is the sentence reports
 /// show.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum AspectsUndecided {
+pub(crate) enum AspectsUndecided {
     /// A limit stopped the cover of the singular curves.
     #[error("the singular-curve cover ({0} x {0}) was stopped by a limit")]
     CoverStopped(usize),
@@ -79,7 +79,7 @@ pub enum AspectsUndecided {
 }
 
 /// The number of aspects on the full torus, or why it is not proven.
-pub fn count(chain: &Chain3R, control: &Control) -> Result<u32, AspectsUndecided> {
+pub(crate) fn count(chain: &Chain3R, control: &Control) -> Result<u32, AspectsUndecided> {
     let mut why = AspectsUndecided::EdgeSigns(0);
     for (depth, shift) in GRIDS {
         match count_at(chain, depth, shift, control) {
@@ -277,7 +277,7 @@ impl Pieces {
 /// (θ₂, θ₃) grid points, coarse grids first; their images are the points solved. Each inverse
 /// kinematics run has `control`'s cell budget; its timeout and cancel flag bound them all.
 /// Returns the best certified count seen and whether it reaches `bound`.
-pub fn max_ik_solutions(chain: &Chain3R, bound: u32, near: &[[f64; 2]], control: &Control) -> (u32, bool) {
+pub(crate) fn max_ik_solutions(chain: &Chain3R, bound: u32, near: &[[f64; 2]], control: &Control) -> (u32, bool) {
     // Each sample's IK is a tiny search on one thread; the samples are taken a batch at a time,
     // one per thread, with what the batches before left of the timeout. A batch that reaches
     // the bound ends the walk: no sample can exceed it (the bound is a theorem's), so the

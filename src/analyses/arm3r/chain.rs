@@ -20,7 +20,8 @@
 //! translations, so its derivative along each length is exact, and the mean-value form in the
 //! lengths is intersected with the natural enclosure.
 
-pub use crate::formulate::torus::{Derived, Jets};
+pub(crate) use crate::formulate::torus::Derived;
+pub use crate::formulate::torus::Jets;
 use crate::kernel::taylor::Taylor;
 use super::Manip3rError;
 use crate::kernel::interval::{interval, point};

@@ -48,7 +48,7 @@ pub struct Cover {
 
 /// A quadtree cell: grid cell (i, j) and side s (cells).
 #[derive(Clone, Copy, Debug)]
-pub struct QuadCell {
+pub(crate) struct QuadCell {
     i: usize,
     j: usize,
     s: usize,
@@ -63,7 +63,7 @@ struct CoverPrune<'a> {
 
 /// Why the singular-curve cover discards a cell.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum CoverDiscard {
+pub(crate) enum CoverDiscard {
     /// det Df ≠ 0 on it.
     Regular,
 }

@@ -22,7 +22,7 @@ use inari::Interval;
 pub const PI_UP: f64 = 3.1415926535897936;
 
 /// The full joint range, as an interval.
-pub fn full_range() -> Interval {
+pub(crate) fn full_range() -> Interval {
     interval(-PI_UP, PI_UP)
 }
 
@@ -51,7 +51,7 @@ fn fine_end(mut cell: Interval, precision: f64, upper: bool) -> Interval {
 
 /// True when `t3` overlaps a strip without lying inside it: the searches then cut θ₃ first,
 /// so that the box soon lies inside the strip or away from it.
-pub fn straddles(bands: &[Band], t3: Interval) -> bool {
+pub(crate) fn straddles(bands: &[Band], t3: Interval) -> bool {
     bands.iter().any(|b| t3.inf() < b.strip[1] && b.strip[0] < t3.sup() && !b.holds(t3))
 }
 

@@ -7,7 +7,7 @@ use inari::Interval;
 use std::collections::BTreeMap;
 
 pub(crate) use crate::kernel::interval::bounds;
-pub use crate::kernel::interval::Bounds;
+pub(crate) use crate::kernel::interval::Bounds;
 
 /// Joint intervals keyed by joint name (the second and third joints).
 pub type Joints = BTreeMap<String, Bounds>;

@@ -55,7 +55,7 @@ pub struct ChainSpec {
 
 /// Default for `ChainSpec::length_tolerance`: a micrometre, far below any machined offset and
 /// far above what a 1e-5 rad rounding of an orientation moves an axis over a metre-sized arm.
-pub const LENGTH_TOLERANCE: f64 = 1e-6;
+pub(crate) const LENGTH_TOLERANCE: f64 = 1e-6;
 
 /// What was chosen, for the report.
 #[derive(Clone, Debug)]
@@ -115,7 +115,7 @@ pub struct Scope {
 
 /// The reduced mechanism and what was chosen. `snap_tolerance` is the rounding policy's (radians):
 /// wrist axes that a turn of it could make meet are judged to meet.
-pub fn positioning(m: &Mechanism, spec: &ChainSpec, snap_tolerance: f64) -> Result<(Mechanism, Choice), Manip3rError> {
+pub(crate) fn positioning(m: &Mechanism, spec: &ChainSpec, snap_tolerance: f64) -> Result<(Mechanism, Choice), Manip3rError> {
     if !m.loops.is_empty() {
         return Err(Manip3rError::NotSerial(format!("it has {} loop closures", m.loops.len())));
     }

@@ -8,18 +8,18 @@ use crate::app::{joints_over, ArmIk6, ArmPathCheck, Bounds, BoxSetResult, Chain6
 use crate::kernel::outcome::{BoxStatus, Completeness, Incompleteness, Status};
 
 /// A header stamped now (wall clock) in `frame`.
-pub fn header(frame: &str) -> Header {
+pub(crate) fn header(frame: &str) -> Header {
     let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap_or_default();
     Header { stamp: Time { sec: now.as_secs().min(i32::MAX as u64) as i32, nanosec: now.subsec_nanos() }, frame_id: frame.to_string() }
 }
 
 /// The wire form of the settings (`timeout` 0 for none).
-pub fn settings(s: &SolverSettings) -> msgs::Settings {
+pub(crate) fn settings(s: &SolverSettings) -> msgs::Settings {
     msgs::Settings { sigma: s.sigma, rho: s.rho, max_boxes: s.max_boxes, timeout: s.timeout.map_or(0.0, |t| t.as_secs_f64()) }
 }
 
 /// The wire value of a box's status (`Box.SOLUTION`, `Box.UNIQUE`, `Box.UNDECIDED`).
-pub fn box_status(s: BoxStatus) -> u8 {
+pub(crate) fn box_status(s: BoxStatus) -> u8 {
     match s {
         BoxStatus::Solution => msgs::BOX_SOLUTION,
         BoxStatus::Unique => msgs::BOX_UNIQUE,
@@ -29,7 +29,7 @@ pub fn box_status(s: BoxStatus) -> u8 {
 
 /// A result as a `linkspace_msgs/BoxSet`, boxes in the result's order, in frame
 /// `<robot>/joint_space`.
-pub fn box_set(r: &BoxSetResult, run_id: u64) -> BoxSet {
+pub(crate) fn box_set(r: &BoxSetResult, run_id: u64) -> BoxSet {
     let n = r.boxes.len();
     let (mut lower, mut upper) = (Vec::with_capacity(n * r.variables.len()), Vec::with_capacity(n * r.variables.len()));
     let (mut joint_lower, mut joint_upper) = (Vec::with_capacity(n * r.joint_names.len()), Vec::with_capacity(n * r.joint_names.len()));
@@ -114,7 +114,7 @@ fn cube(frame: &str, ns: &str, id: i32, centre: [f64; 3], size: [f64; 3], color:
 ///   curve), in the world frame `world_frame`.
 ///
 /// At most `cap` boxes are drawn per namespace (the box-set topic always carries all of them).
-pub fn markers(r: &BoxSetResult, world_frame: &str, cap: usize) -> MarkerArray {
+pub(crate) fn markers(r: &BoxSetResult, world_frame: &str, cap: usize) -> MarkerArray {
     let mut markers = vec![Marker { header: header(world_frame), action: msgs::marker::DELETEALL, ..Default::default() }];
     let joint_frame = joint_frame(&r.mechanism);
     let axes = r.joint_names.len().min(3);
@@ -145,7 +145,7 @@ pub fn markers(r: &BoxSetResult, world_frame: &str, cap: usize) -> MarkerArray {
 /// index, count and cluster, and the same stamp). The names cover the free joints (loop joints
 /// included) and the fixed ones; values in REP-103 units (radians and metres), as the analyses
 /// give joint space.
-pub fn assembly_modes(r: &BoxSetResult, run_id: u64, root_link: &str) -> Vec<(JointState, AssemblyMode)> {
+pub(crate) fn assembly_modes(r: &BoxSetResult, run_id: u64, root_link: &str) -> Vec<(JointState, AssemblyMode)> {
     let modes = r.assembly_modes();
     let n = modes.len();
     let h = header(root_link);
@@ -176,7 +176,7 @@ fn intervals(b: &[Bounds]) -> Vec<msgs::Interval> {
 }
 
 /// A singularity result as a `linkspace_msgs/SingularityReport`, records in the result's order.
-pub fn singularity_report(r: &SingularityResult, run_id: u64) -> SingularityReport {
+pub(crate) fn singularity_report(r: &SingularityResult, run_id: u64) -> SingularityReport {
     let limit = r.completeness().reason();
     SingularityReport {
         header: header(&joint_frame(&r.mechanism)),
@@ -213,12 +213,12 @@ pub fn singularity_report(r: &SingularityResult, run_id: u64) -> SingularityRepo
 
 /// An empty report (a refusal's, or a mechanism without the analysis) with the verdict
 /// fields at their unknown values (`cuspidal` UNKNOWN, counts -1), not the wire defaults.
-pub fn no_report() -> SingularityReport {
+pub(crate) fn no_report() -> SingularityReport {
     SingularityReport { cuspidal: msgs::UNKNOWN, aspects: -1, max_ik_solutions: -1, ..Default::default() }
 }
 
 /// `SingularityReport.YES`, `NO` or `UNKNOWN`.
-pub fn tri_state(x: Option<bool>) -> i8 {
+pub(crate) fn tri_state(x: Option<bool>) -> i8 {
     match x {
         Some(true) => msgs::YES,
         Some(false) => msgs::NO,
@@ -230,7 +230,7 @@ pub fn tri_state(x: Option<bool>) -> i8 {
 /// `verdict` and `singular_branches` of `linkspace singularities --json`. Without a verdict (a
 /// closed-loop mechanism) every field is unknown and the reason says why; without branches
 /// (axes 2 and 3 not parallel) they are empty.
-pub fn verdict_and_branches(r: &SingularityResult, run_id: u64) -> SingularityReport {
+pub(crate) fn verdict_and_branches(r: &SingularityResult, run_id: u64) -> SingularityReport {
     let count = |x: Option<u32>| x.map_or(-1, |v| v.min(i32::MAX as u32) as i32);
     let mut m = match &r.verdict {
         Some(v) => SingularityReport {
@@ -332,7 +332,7 @@ fn sphere(frame: &str, ns: &str, id: i32, centre: [f64; 3], size: f64, color: Co
 /// of each pair); for a linkage, `singular_set:<kind>` (one cube per box over its first three
 /// free joints, red for cspace, purple for input, brown for output; grey when undecided). At
 /// most `cap` markers per namespace.
-pub fn singularity_markers(r: &SingularityResult, cap: usize) -> MarkerArray {
+pub(crate) fn singularity_markers(r: &SingularityResult, cap: usize) -> MarkerArray {
     let frame = joint_frame(&r.mechanism);
     let mut markers = vec![Marker { header: header(&frame), action: msgs::marker::DELETEALL, ..Default::default() }];
     let mut id = 0;
@@ -379,7 +379,7 @@ pub fn singularity_markers(r: &SingularityResult, cap: usize) -> MarkerArray {
 }
 
 /// The reply to an inverse-kinematics request.
-pub fn ik_response(r: &IkResult) -> InverseKinematicsResponse {
+pub(crate) fn ik_response(r: &IkResult) -> InverseKinematicsResponse {
     let unique = r.solutions.iter().filter(|s| s.unique).count();
     let clusters = r.solutions.len() - unique;
     let mut message = format!("{unique} solutions proven unique, {clusters} clusters undecided at sigma (each may hold one or several solutions, or a line of them)");
@@ -406,7 +406,7 @@ pub fn ik_response(r: &IkResult) -> InverseKinematicsResponse {
 }
 
 /// The reply to a 6R inverse-kinematics request: the boxes of `linkspace ik6`.
-pub fn ik6_response(chain: &Chain6R, found: &ArmIk6) -> InverseKinematics6Response {
+pub(crate) fn ik6_response(chain: &Chain6R, found: &ArmIk6) -> InverseKinematics6Response {
     let s = &found.solutions;
     let mut message = format!("{} solutions proven unique, {} clusters undecided at sigma", s.unique.len(), s.clusters.len());
     if let crate::app::Status::Stopped(limit) = s.status {
@@ -426,7 +426,7 @@ pub fn ik6_response(chain: &Chain6R, found: &ArmIk6) -> InverseKinematics6Respon
 }
 
 /// The reply to a path check: the verdicts and reasons of `linkspace path-check`.
-pub fn path_check_response(found: &ArmPathCheck) -> PathCheckResponse {
+pub(crate) fn path_check_response(found: &ArmPathCheck) -> PathCheckResponse {
     let mut reply = PathCheckResponse {
         ok: true,
         message: found.headline(),
@@ -468,18 +468,18 @@ pub fn bounded(s: &str, max: usize) -> String {
 }
 
 /// Longest name (mechanism, joint) echoed from a request into a reply.
-pub const ECHO_NAME: usize = 120;
+pub(crate) const ECHO_NAME: usize = 120;
 /// Longest message built from request data (an analysis error quoting it).
-pub const ECHO_MESSAGE: usize = 2000;
+pub(crate) const ECHO_MESSAGE: usize = 2000;
 
 /// The frame of joint-space markers and box sets of `mechanism`.
-pub fn joint_frame(mechanism: &str) -> String {
+pub(crate) fn joint_frame(mechanism: &str) -> String {
     format!("{mechanism}/joint_space")
 }
 
 /// `/tf_static`: the joint-space frame of each mechanism (child) as an identity transform from
 /// its root link (parent), so that RViz draws the joint-space markers without a hand-made one.
-pub fn static_transforms(frames: &[(String, String)]) -> TfMessage {
+pub(crate) fn static_transforms(frames: &[(String, String)]) -> TfMessage {
     TfMessage {
         transforms: frames
             .iter()
@@ -500,7 +500,7 @@ mod tests {
         let m = crate::app::parse_urdf(xml).expect("parses");
         let a = crate::app::load(&m, &[], &[]).expect("loads");
         let q = crate::app::SingularityQuery { precision: 1e-4, nodes, max_boxes: 1_000_000, timeout: None, threads: 1 };
-        let r = a.singularities(&q).expect("valid").run(&std::sync::atomic::AtomicBool::new(false), &mut |_| {});
+        let r = a.singularities(&q).expect("valid").run(&std::sync::atomic::AtomicBool::new(false), &mut |_| {}).expect("runs");
         singularity_report(&r, 7)
     }
 

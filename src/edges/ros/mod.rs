@@ -8,6 +8,15 @@
 //! Files: `msgs` mirrors `msgs/` (the wire types), `convert` turns results into messages,
 //! `node` is the event loop with the publishers and service servers.
 
+/// A line on stderr that never panics (`eprintln!` does when stderr is closed): a node whose
+/// launcher went away and took its stderr pipe keeps serving instead of dying at its next line.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
 mod convert;
 pub mod msgs;
 mod node;

@@ -13,7 +13,7 @@ use nalgebra::Vector3;
 /// kept too when both fit the fourth point's distance within `tol` (squared-distance units): at a
 /// tangency of the determinant curves two configurations share the solved distances.
 /// Returns no embedding when some point cannot be reached.
-pub fn embed(p: &DistanceProblem, r: &[Vec<Option<f64>>], tol: f64) -> Vec<Vec<[f64; 3]>> {
+pub(crate) fn embed(p: &DistanceProblem, r: &[Vec<Option<f64>>], tol: f64) -> Vec<Vec<[f64; 3]>> {
     let n = p.points.len();
     let mut start: Vec<Option<Vector3<f64>>> = p.points.iter().map(|q| q.xyz.map(|c| Vector3::new(c[0], c[1], c[2]))).collect();
     if start.iter().flatten().count() < 3 {

@@ -131,7 +131,7 @@ impl LockedLegMap {
 
     /// `Some(true)` when both actuated travels over `theta` lie within their limits,
     /// `Some(false)` when one lies wholly outside (no configuration there), `None` otherwise.
-    pub fn within_travel(&self, theta: [Interval; 2]) -> Option<bool> {
+    pub(crate) fn within_travel(&self, theta: [Interval; 2]) -> Option<bool> {
         let e = self.ends(theta, 0);
         let mut inside = true;
         for (l, e) in self.legs.iter().zip(e) {
@@ -160,7 +160,7 @@ pub(crate) struct PlatformTorus {
 impl PlatformTorus {
     /// The torus of `m` with `fixed` and `actuated`, or `None` when `m` is not a planar platform
     /// on three R-P-R legs with one locked (see `recognise`).
-    pub fn new(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String]) -> Option<Self> {
+    pub(crate) fn new(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String]) -> Option<Self> {
         let p = PoseCusps::new(m, fixed, actuated)?;
         let index = |slider: &str| actuated.iter().position(|a| a == slider);
         let order = [index(&p.map.legs[0].slider)?, index(&p.map.legs[1].slider)?];
@@ -171,7 +171,7 @@ impl PlatformTorus {
     /// A box of the pose systems over `theta`: the angles' cosines and sines, the legs'
     /// `X_i, Y_i` and `h_i` set to their enclosures (the rest as a chart's initial box), which
     /// is all `PoseReadout::joint_values` and the clustering by pose read.
-    pub fn pose_box(&self, theta: [Interval; 2]) -> IntervalBox {
+    pub(crate) fn pose_box(&self, theta: [Interval; 2]) -> IntervalBox {
         let map = &self.map;
         let mut b = self.template.clone();
         let [cl, sl, c, s] = map.trig;
@@ -190,12 +190,12 @@ impl PlatformTorus {
 
     /// For each component of the map (`h_a`, `h_b`, in leg order), its slider's index in
     /// `actuated`.
-    pub fn actuated_order(&self) -> [usize; 2] {
+    pub(crate) fn actuated_order(&self) -> [usize; 2] {
         self.actuated
     }
 
     /// Free joint values over the torus box `theta` (radians or metres), outward rounded.
-    pub fn joint_values(&self, theta: [Interval; 2]) -> BTreeMap<String, (f64, f64)> {
+    pub(crate) fn joint_values(&self, theta: [Interval; 2]) -> BTreeMap<String, (f64, f64)> {
         self.readout.joint_values(&self.pose_box(theta))
     }
 }
@@ -228,7 +228,7 @@ impl PoseReadout {
 
     /// Free joint values over a box (radians or metres), outward rounded; an angle whose
     /// vectors may vanish reads `[−4, 4]` (every angle the readings use).
-    pub fn joint_values(&self, b: &IntervalBox) -> BTreeMap<String, (f64, f64)> {
+    pub(crate) fn joint_values(&self, b: &IntervalBox) -> BTreeMap<String, (f64, f64)> {
         let d = &b.dims;
         self.readings
             .iter()
@@ -362,7 +362,7 @@ fn linear(b: &mut Builder, name: String, terms: &[(Interval, VarId)], constant: 
 impl PoseCusps {
     /// The pose cusp systems of `m` with `fixed` and `actuated`, or `None` when `m` is not a
     /// planar platform on three R-P-R legs (see `recognise`).
-    pub fn new(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String]) -> Option<Self> {
+    pub(crate) fn new(m: &Mechanism, fixed: &[(String, f64)], actuated: &[String]) -> Option<Self> {
         let Platform { legs, locked, length, mut readings } = recognise(m, fixed, actuated)?;
         let mut b = Builder::new(EquationSystem::default());
         let unit = interval(-1.0, 1.0);

@@ -74,7 +74,7 @@ const NEGLIGIBLE_RANGE: f64 = 1e-10;
 
 /// Builds the linear relaxation of `system` over box `b`; `None` when a row is already proven
 /// unsatisfiable on `b`.
-pub fn relax(system: &EquationSystem, b: &[Interval]) -> Option<Relaxation> {
+pub(crate) fn relax(system: &EquationSystem, b: &[Interval]) -> Option<Relaxation> {
     let mut rows = Vec::new();
     for e in &system.equations {
         match e.kind {

@@ -61,7 +61,7 @@ impl Contractor for Propagation<'_> {
 /// Narrows `b` by one equation; returns false when the equation is proven unsatisfiable in `b`.
 ///
 /// `partial` is scratch space for suffix sums, kept by the caller to avoid allocation.
-pub fn project(e: &Equation, b: &mut [Interval], partial: &mut Vec<Interval>) -> bool {
+pub(crate) fn project(e: &Equation, b: &mut [Interval], partial: &mut Vec<Interval>) -> bool {
     let n = e.terms.len();
     // suffix[k] = Σ_{j≥k} cⱼ mⱼ over the box as it is now.
     partial.clear();

@@ -11,7 +11,7 @@ use inari::Interval;
 
 /// A closed interval `[lo, hi]` with outward-rounded arithmetic (see the module doc).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Iv {
+pub(crate) struct Iv {
     /// Lower bound.
     pub lo: f64,
     /// Upper bound.
@@ -20,11 +20,11 @@ pub struct Iv {
 
 impl Iv {
     /// [0, 0]
-    pub const ZERO: Iv = Iv { lo: 0.0, hi: 0.0 };
+    pub(crate) const ZERO: Iv = Iv { lo: 0.0, hi: 0.0 };
 
     /// From an inari interval (empty becomes NaN bounds, which every operation keeps).
     #[inline(always)]
-    pub fn from(x: Interval) -> Iv {
+    pub(crate) fn from(x: Interval) -> Iv {
         if x.is_empty() {
             Iv { lo: f64::NAN, hi: f64::NAN }
         } else {
@@ -34,31 +34,31 @@ impl Iv {
 
     /// Back to an inari interval.
     #[inline(always)]
-    pub fn to(self) -> Interval {
+    pub(crate) fn to(self) -> Interval {
         crate::kernel::interval::interval(self.lo, self.hi)
     }
 
     /// Sum.
     #[inline(always)]
-    pub fn add(self, o: Iv) -> Iv {
+    pub(crate) fn add(self, o: Iv) -> Iv {
         Iv { lo: (self.lo + o.lo).next_down(), hi: (self.hi + o.hi).next_up() }
     }
 
     /// Difference.
     #[inline(always)]
-    pub fn sub(self, o: Iv) -> Iv {
+    pub(crate) fn sub(self, o: Iv) -> Iv {
         Iv { lo: (self.lo - o.hi).next_down(), hi: (self.hi - o.lo).next_up() }
     }
 
     /// Negation (exact).
     #[inline(always)]
-    pub fn neg(self) -> Iv {
+    pub(crate) fn neg(self) -> Iv {
         Iv { lo: -self.hi, hi: -self.lo }
     }
 
     /// `y · self` for a finite double `y`.
     #[inline(always)]
-    pub fn scale(self, y: f64) -> Iv {
+    pub(crate) fn scale(self, y: f64) -> Iv {
         if y == 0.0 {
             // Exactly zero, even for unbounded `self` (where y·∞ would be NaN).
             return Iv::ZERO;
@@ -73,7 +73,7 @@ impl Iv {
 
     /// Product.
     #[inline(always)]
-    pub fn mul(self, o: Iv) -> Iv {
+    pub(crate) fn mul(self, o: Iv) -> Iv {
         let (a, b, c, d) = (self.lo * o.lo, self.lo * o.hi, self.hi * o.lo, self.hi * o.hi);
         // A product 0·∞ (NaN) stands for 0, which min and max then ignore rightly, as the other
         // products bound the set; a NaN operand (empty) makes every product NaN.

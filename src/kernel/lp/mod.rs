@@ -20,7 +20,7 @@ use crate::kernel::system::VarId;
 
 /// One linear row `Σ coef·x ∈ bounds`, valid for every solution in the current box.
 #[derive(Clone, Debug)]
-pub struct Row {
+pub(crate) struct Row {
     /// Sparse coefficients (exact floats: the row *is* this linear form).
     pub coefs: Vec<(VarId, f64)>,
     /// Enclosure of the row's value over all solutions in the box; both ends finite.
@@ -31,7 +31,7 @@ pub struct Row {
 
 /// The sides of a row handed to the LP solver.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Sides {
+pub(crate) enum Sides {
     /// `lo = hi`: an equality.
     Equal,
     /// Only `a·x ≤ hi`.
@@ -44,7 +44,7 @@ pub enum Sides {
 
 /// Rows over `n` variables.
 #[derive(Clone, Debug, Default)]
-pub struct Relaxation {
+pub(crate) struct Relaxation {
     /// Number of variables (the box dimension).
     pub n: usize,
     /// The rows.
@@ -53,7 +53,7 @@ pub struct Relaxation {
 
 /// What bounding a set of variables proved.
 #[derive(Clone, Debug, PartialEq)]
-pub enum LpOutcome {
+pub(crate) enum LpOutcome {
     /// No point of the box satisfies the rows: proven by a verified certificate or bound.
     Infeasible,
     /// Verified enclosures for the requested variables, in request order (each within the box).
@@ -88,7 +88,7 @@ impl Relaxation {
     ///
     /// `stop` is asked before each LP; once it says yes, the remaining bounds are left as they
     /// are (one LP per side of each target: a large system's relaxation can take minutes).
-    pub fn bound_with(
+    pub(crate) fn bound_with(
         &self,
         backend: LpBackend,
         b: &[Interval],

@@ -31,7 +31,7 @@ fn enclosure(rel: &Relaxation, b: &[Interval], q: &[(usize, f64)], mu: &[f64]) -
 
 /// A verified lower bound of `q·x` over the points of box `b` that satisfy every row, from the
 /// multipliers `mu` (one per row). Returns `-∞` when nothing useful follows.
-pub fn lower_bound(rel: &Relaxation, b: &[Interval], q: &[(usize, f64)], mu: &[f64]) -> f64 {
+pub(crate) fn lower_bound(rel: &Relaxation, b: &[Interval], q: &[(usize, f64)], mu: &[f64]) -> f64 {
     let e = enclosure(rel, b, q, mu);
     if e.is_empty() {
         f64::NEG_INFINITY
@@ -41,7 +41,7 @@ pub fn lower_bound(rel: &Relaxation, b: &[Interval], q: &[(usize, f64)], mu: &[f
 }
 
 /// True when the multipliers `mu` prove that no point of `b` satisfies every row.
-pub fn certified_infeasible(rel: &Relaxation, b: &[Interval], mu: &[f64]) -> bool {
+pub(crate) fn certified_infeasible(rel: &Relaxation, b: &[Interval], mu: &[f64]) -> bool {
     let e = enclosure(rel, b, &[], mu);
     !e.is_empty() && !e.contains(0.0)
 }

@@ -1,6 +1,6 @@
 //! What bounds a run, how it ended, and how far it got.
 
-pub use crate::kernel::outcome::{Limit, Status};
+pub(crate) use crate::kernel::outcome::{Limit, Status};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -17,7 +17,7 @@ pub struct Limits {
 }
 
 /// The default memory bound on pending cells: 2 GiB.
-pub const DEFAULT_MAX_MEMORY: usize = 2 << 30;
+pub(crate) const DEFAULT_MAX_MEMORY: usize = 2 << 30;
 
 impl Default for Limits {
     fn default() -> Self {

@@ -14,7 +14,7 @@
 use super::limits::{process_cpu_seconds, Limit, Limits, Progress, Status};
 use super::settings::{SettingsError, SolverSettings};
 
-pub use crate::kernel::outcome::BoxStatus;
+pub(crate) use crate::kernel::outcome::BoxStatus;
 use super::{driver, Store};
 use crate::kernel::contract::{Contraction, Contractor, Filter, Filtered, LpShrink, Newton, Propagation, Sequence};
 use crate::kernel::interval::IntervalBox;

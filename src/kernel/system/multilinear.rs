@@ -16,7 +16,7 @@ use std::collections::BTreeMap;
 
 /// A monomial: `(variable, exponent)` pairs sorted by variable, every exponent at least one; the
 /// empty monomial is the constant 1.
-pub type Powers = Vec<(VarId, u8)>;
+pub(crate) type Powers = Vec<(VarId, u8)>;
 
 /// `Σ coef · monomial`, with interval coefficients.
 ///

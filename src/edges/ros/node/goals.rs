@@ -48,7 +48,7 @@ pub(super) fn forward_goals(ex: &smol::LocalExecutor<'_>, action: &Arc<SolveActi
                         break;
                     }
                 }
-                Err(e) => eprintln!("linkspace: dropped an undecodable Solve goal: {e:?}"),
+                Err(e) => say!("linkspace: dropped an undecodable Solve goal: {e:?}"),
             }
         }
     })
@@ -62,7 +62,7 @@ pub(super) fn forward_goals(ex: &smol::LocalExecutor<'_>, action: &Arc<SolveActi
                         break;
                     }
                 }
-                Err(e) => eprintln!("linkspace: dropped an undecodable Solve cancel request: {e:?}"),
+                Err(e) => say!("linkspace: dropped an undecodable Solve cancel request: {e:?}"),
             }
         }
     })
@@ -82,7 +82,7 @@ impl super::State {
         };
         let executing = match executing {
             Ok(x) => x,
-            Err(e) => return eprintln!("linkspace: a Solve goal could not be started: {e:?}"),
+            Err(e) => return say!("linkspace: a Solve goal could not be started: {e:?}"),
         };
         match prepared {
             Err(message) => self.goal_result(executing, GoalEndStatus::Aborted, SolveActionResult { ok: false, message, ..Default::default() }),
@@ -104,7 +104,7 @@ impl super::State {
                 Err(GoalError::NoSuchGoal)
             };
             if let Err(e) = futures::future::select(Box::pin(send), Box::pin(give_up)).await.factor_first().0 {
-                eprintln!("linkspace: sending a Solve action result: {e:?}");
+                say!("linkspace: sending a Solve action result: {e:?}");
             }
         })
         .detach();
@@ -123,7 +123,7 @@ impl super::State {
             }
         }
         if let Err(e) = self.action.respond_to_cancel_requests(&c, cancelling.into_iter()).await {
-            eprintln!("linkspace: answering a Solve action cancel: {e:?}");
+            say!("linkspace: answering a Solve action cancel: {e:?}");
         }
     }
 }

@@ -38,6 +38,7 @@ use runs::{Outcome, Run};
 use std::collections::{BTreeMap, VecDeque};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::rc::Rc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
@@ -155,7 +156,10 @@ struct State {
 /// → event loop, each step a function of its own (`setup`, `parameters`, `goals`, `publish`).
 pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
     let context = setup::join_domain(&config)?;
-    let node_name = NodeName::new(&config.namespace, &config.node_name).with_context(|| format!("node name {}/{}", config.namespace, config.node_name))?;
+    // ros2-client's own wording of a bad name is not fit to show; say what a ROS name allows.
+    let node_name = NodeName::new(&config.namespace, &config.node_name).map_err(|_| {
+        anyhow::anyhow!("node name {}/{}: a ROS node name is letters, digits and underscores, not starting with a digit, in a namespace of such tokens separated by '/'", config.namespace, config.node_name)
+    })?;
     // Bounded: a flood of requests waits in DDS (and is eventually refused) instead of
     // growing this queue.
     let (tx, rx) = smol::channel::bounded::<Event>(256);
@@ -216,16 +220,45 @@ pub(crate) fn run(config: ServeConfig, loaded: Vec<Loaded>) -> Result<()> {
         ),
     );
 
+    catch_stop_signals();
     event_loop(&ex, &rx, &mut state);
+    state.stop();
+    // Dropping the node and then the context (in that order, as declared in reverse) ends the
+    // DDS participant, which tells the other participants it is gone.
+    drop(state);
+    drop(ex);
     Ok(())
+}
+
+/// Raised by SIGINT or SIGTERM (Ctrl-C under `ros2 launch`, `kill`, a service manager): the
+/// event loop ends at its next tick and the node leaves the graph, exit status 0.
+static STOP: AtomicBool = AtomicBool::new(false);
+
+extern "C" fn on_stop_signal(_signal: libc::c_int) {
+    // Only an atomic store: all a signal handler may safely do.
+    STOP.store(true, Ordering::SeqCst);
+}
+
+/// SIGINT and SIGTERM raise `STOP` instead of killing the process.
+fn catch_stop_signals() {
+    let handler = on_stop_signal as extern "C" fn(libc::c_int) as libc::sighandler_t;
+    // SAFETY: the handler only stores to an atomic, which is async-signal-safe.
+    unsafe {
+        libc::signal(libc::SIGINT, handler);
+        libc::signal(libc::SIGTERM, handler);
+    }
 }
 
 /// Handles the events one at a time, in the order they arrive; the tasks spawned on `ex`
 /// (spinner, request streams, timers) run while it waits. `state` holds a sender, so the
-/// channel never closes: the loop runs until the process is stopped.
+/// channel never closes: the loop runs until SIGINT or SIGTERM, seen at the next event (a tick
+/// comes every 50 ms).
 fn event_loop(ex: &smol::LocalExecutor<'_>, rx: &smol::channel::Receiver<Event>, state: &mut State) {
     smol::block_on(ex.run(async {
         while let Ok(event) = rx.recv().await {
+            if STOP.load(Ordering::SeqCst) {
+                break;
+            }
             state.handle(event).await;
         }
     }));
@@ -248,13 +281,22 @@ fn severity(level: LogLevel) -> Severity {
 }
 
 impl State {
+    /// Ends every run (their threads stop at their next cancel check; their results are not
+    /// awaited) and says so.
+    fn stop(&mut self) {
+        for r in self.runs.values() {
+            r.cancel.store(true, Ordering::Relaxed);
+        }
+        self.log(LogLevel::Info, format!("stopping: {} runs cancelled", self.runs.len()));
+    }
+
     /// Logs a line on stderr and, unless `--disable-rosout-logs`, on `/rosout`, if `level` is
     /// at least the node's `--log-level`.
     fn log(&self, level: LogLevel, message: String) {
         if severity(level) < self.log_level {
             return;
         }
-        eprintln!("linkspace: {message}");
+        say!("linkspace: {message}");
         if self.rosout {
             rosout!(self.node, level, "{}", message);
         }

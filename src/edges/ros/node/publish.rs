@@ -83,7 +83,7 @@ impl super::State {
     pub(super) fn publish_static_transforms(&self) {
         let frames: Vec<(String, String)> = self.mechanisms.iter().map(|m| (m.loaded.root_link.clone(), convert::joint_frame(m.loaded.analysis.mechanism()))).collect();
         if let Err(e) = self.tf_static.publish(convert::static_transforms(&frames)) {
-            eprintln!("linkspace: publishing /tf_static: {e:?}");
+            say!("linkspace: publishing /tf_static: {e:?}");
         }
     }
     /// Publishes the latched markers of mechanism `k` (`combined_markers`).
@@ -91,7 +91,7 @@ impl super::State {
         let m = &self.mechanisms[k];
         if let Some(markers) = combined_markers(m) {
             if let Err(e) = m.topics.markers.async_publish(markers).await {
-                eprintln!("linkspace: publishing {}/markers: {e:?}", m.prefix);
+                say!("linkspace: publishing {}/markers: {e:?}", m.prefix);
             }
         }
     }
@@ -101,7 +101,7 @@ impl super::State {
         let m = &self.mechanisms[k];
         let report = SingularityReport { header: convert::header(&convert::joint_frame(m.loaded.analysis.mechanism())), mechanism: m.loaded.analysis.mechanism().to_string(), ok: false, message: reason, ..convert::no_report() };
         if let Err(e) = m.topics.singularities.publish(report) {
-            eprintln!("linkspace: publishing {}/singularities: {e:?}", m.prefix);
+            say!("linkspace: publishing {}/singularities: {e:?}", m.prefix);
         }
     }
     /// Publishes every latest configuration space (and its markers) again, stamped now: for
@@ -113,13 +113,13 @@ impl super::State {
             if let Some((set, _)) = &mut m.published {
                 set.header = convert::header(&set.header.frame_id);
                 if let Err(e) = m.topics.configuration_space.async_publish(set.clone()).await {
-                    eprintln!("linkspace: publishing {}/configuration_space: {e:?}", m.prefix);
+                    say!("linkspace: publishing {}/configuration_space: {e:?}", m.prefix);
                 }
             }
             if let Some((report, _)) = &mut m.published_singularities {
                 report.header = convert::header(&report.header.frame_id);
                 if let Err(e) = m.topics.singularities.async_publish(report.clone()).await {
-                    eprintln!("linkspace: publishing {}/singularities: {e:?}", m.prefix);
+                    say!("linkspace: publishing {}/singularities: {e:?}", m.prefix);
                 }
             }
             self.publish_markers(k).await;

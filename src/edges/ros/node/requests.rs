@@ -67,31 +67,31 @@ impl super::State {
 
     pub(super) fn reply_path_check(&self, id: RmwRequestId, reply: PathCheckResponse) {
         if let Err(e) = self.servers.path_check.send_response(id, reply) {
-            eprintln!("linkspace: sending a path_check reply: {e:?}");
+            say!("linkspace: sending a path_check reply: {e:?}");
         }
     }
 
     pub(super) fn reply_singularities(&self, id: RmwRequestId, reply: SingularitiesResponse) {
         if let Err(e) = self.servers.singularities.send_response(id, reply) {
-            eprintln!("linkspace: sending a singularities reply: {e:?}");
+            say!("linkspace: sending a singularities reply: {e:?}");
         }
     }
 
     pub(super) fn reply_ik(&self, id: RmwRequestId, reply: InverseKinematicsResponse) {
         if let Err(e) = self.servers.inverse_kinematics.send_response(id, reply) {
-            eprintln!("linkspace: sending an inverse_kinematics reply: {e:?}");
+            say!("linkspace: sending an inverse_kinematics reply: {e:?}");
         }
     }
 
     pub(super) fn reply_ik6(&self, id: RmwRequestId, reply: InverseKinematics6Response) {
         if let Err(e) = self.servers.inverse_kinematics6.send_response(id, reply) {
-            eprintln!("linkspace: sending an inverse_kinematics6 reply: {e:?}");
+            say!("linkspace: sending an inverse_kinematics6 reply: {e:?}");
         }
     }
 
     pub(super) fn reply_solve(&self, id: RmwRequestId, reply: SolveResponse) {
         if let Err(e) = self.servers.solve.send_response(id, reply) {
-            eprintln!("linkspace: sending a solve reply: {e:?}");
+            say!("linkspace: sending a solve reply: {e:?}");
         }
     }
     /// Handles one request under `catch_unwind`: a bug answers with an error and the node goes on.
@@ -138,7 +138,7 @@ impl super::State {
             }
         };
         if let Err(e) = sent {
-            eprintln!("linkspace: sending a reply: {e:?}");
+            say!("linkspace: sending a reply: {e:?}");
         }
     }
     fn mechanism(&self, name: &str) -> Result<usize, String> {
@@ -199,7 +199,7 @@ impl super::State {
             // The error may quote the request (a joint name): bounded.
             Err(e) => return Err(convert::bounded(&e.to_string(), convert::ECHO_MESSAGE)),
         };
-        Ok((k, Box::new(move |c, p| Outcome::BoxSet(prepared.run(c, p)))))
+        Ok((k, Box::new(move |c, p| prepared.run(c, p).map(Outcome::BoxSet).map_err(|e| e.to_string()))))
     }
     fn cancel(&mut self, q: CancelRequest) -> CancelResponse {
         match self.runs.get(&q.run_id) {
@@ -265,7 +265,7 @@ impl super::State {
         if let Some(busy) = self.busy() {
             return refuse(busy);
         }
-        let run = self.start(k, RunKind::Singularities { load_time: false }, Box::new(move |c, p| Outcome::Singularities(prepared.run(c, p))));
+        let run = self.start(k, RunKind::Singularities { load_time: false }, Box::new(move |c, p| prepared.run(c, p).map(Outcome::Singularities).map_err(|e| e.to_string())));
         // The searches stop at `timeout`; the margin covers building the report.
         let deadline = Instant::now() + seconds(timeout + 10.0);
         self.runs.get_mut(&run).expect("invariant: just started").waiters.push((id, deadline));
@@ -303,7 +303,7 @@ impl super::State {
         if let Some(busy) = self.busy() {
             return refuse(busy);
         }
-        let run = self.start(k, RunKind::InverseKinematics, Box::new(move |c, p| Outcome::InverseKinematics(prepared.run(c, p))));
+        let run = self.start(k, RunKind::InverseKinematics, Box::new(move |c, p| prepared.run(c, p).map(Outcome::InverseKinematics).map_err(|e| e.to_string())));
         // Bounded by boxes and by the node's longest wait, after which its reply could not be sent.
         let deadline = Instant::now() + seconds(self.limits.max_wait);
         self.runs.get_mut(&run).expect("invariant: just started").waiters.push((id, deadline));
@@ -323,7 +323,7 @@ impl super::State {
             kind,
             Box::new(move |cancel, progress| {
                 let control = crate::app::Control { limits, threads, cancel };
-                Outcome::Answer(prepared.run(&control, progress).map_err(|e| e.to_string()))
+                Ok(Outcome::Answer(prepared.run(&control, progress).map_err(|e| e.to_string())))
             }),
         );
         let deadline = Instant::now() + seconds(self.limits.max_wait);
@@ -403,6 +403,9 @@ impl super::State {
         }
         if q.joint_names.len() != q.joint_values.len() {
             return refuse(format!("{} joint names but {} values", q.joint_names.len(), q.joint_values.len()));
+        }
+        if let Some((i, name)) = q.joint_names.iter().enumerate().find(|(i, n)| q.joint_names[..*i].contains(n)) {
+            return refuse(format!("joint '{}' is given twice (joint_names[{i}])", convert::bounded(name, convert::ECHO_NAME)));
         }
         let free = a.free_joints();
         let mut values = vec![f64::NAN; free.len()];

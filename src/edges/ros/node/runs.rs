@@ -51,8 +51,8 @@ impl Outcome {
     }
 }
 
-/// A run's work, moved to its thread.
-pub(super) type Work = Box<dyn FnOnce(&AtomicBool, &mut dyn FnMut(&crate::app::Progress)) -> Outcome + Send>;
+/// A run's work, moved to its thread: its outcome, or why it failed (in one line).
+pub(super) type Work = Box<dyn FnOnce(&AtomicBool, &mut dyn FnMut(&crate::app::Progress)) -> Result<Outcome, String> + Send>;
 
 /// What a run is for, which decides where its result goes.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -114,14 +114,19 @@ impl super::State {
         let mut started = false;
         match cspace {
             Ok(prepared) => {
-                self.start(k, RunKind::ConfigurationSpace, Box::new(move |c, p| Outcome::BoxSet(prepared.run(c, p))));
+                self.start(k, RunKind::ConfigurationSpace, Box::new(move |c, p| prepared.run(c, p).map(Outcome::BoxSet).map_err(|e| e.to_string())));
                 started = true;
             }
-            Err(e) => self.log(LogLevel::Warn, format!("{}: no configuration space: {e}", self.mechanisms[k].loaded.analysis.mechanism())),
+            // An open chain has no configuration space to solve: that is not worth a warning.
+            Err(e) => {
+                let a = &self.mechanisms[k].loaded.analysis;
+                let level = if a.services().contains(&Service::Solve) { LogLevel::Warn } else { LogLevel::Debug };
+                self.log(level, format!("{}: no configuration space: {e}", a.mechanism()))
+            }
         }
         match singular {
             Ok(prepared) => {
-                let run = self.start(k, RunKind::Singularities { load_time: true }, Box::new(move |c, p| Outcome::Singularities(prepared.run(c, p))));
+                let run = self.start(k, RunKind::Singularities { load_time: true }, Box::new(move |c, p| prepared.run(c, p).map(Outcome::Singularities).map_err(|e| e.to_string())));
                 self.mechanisms[k].singularity_run = Some(run);
                 started = true;
             }
@@ -187,7 +192,10 @@ impl super::State {
                 // Progress is lossy by design: a full queue drops a snapshot, not the run.
                 let _ = progress_events.try_send(Event::Progress { run, progress: *p });
             };
-            let result = catch_unwind(AssertUnwindSafe(|| job(&cancel, &mut progress))).map_err(|p| panic_text(p.as_ref()));
+            let result = match catch_unwind(AssertUnwindSafe(|| job(&cancel, &mut progress))) {
+                Ok(result) => result,
+                Err(p) => Err(format!("internal error: {}", panic_text(p.as_ref()))),
+            };
             let _ = events.send_blocking(Event::Finished { run, result });
         });
         run
@@ -216,7 +224,7 @@ impl super::State {
             .detach();
         }
         if let Err(e) = m.topics.progress.publish(msg) {
-            eprintln!("linkspace: publishing {}/progress: {e:?}", m.prefix);
+            say!("linkspace: publishing {}/progress: {e:?}", m.prefix);
         }
     }
     pub(super) async fn finished(&mut self, run: u64, result: Result<Outcome, String>) {
@@ -241,9 +249,9 @@ impl super::State {
         }
         let outcome = match result {
             Ok(outcome) => outcome,
-            Err(panic) => {
-                let message = format!("run {run} of '{name}' failed: internal error: {panic}");
-                eprintln!("linkspace: {message}");
+            Err(why) => {
+                let message = format!("run {run} of '{name}' failed: {why}");
+                say!("linkspace: {message}");
                 let m = &mut self.mechanisms[r.mechanism];
                 if matches!(r.kind, RunKind::ConfigurationSpace | RunKind::Singularities { load_time: true }) {
                     m.state = RunState::Failed;
@@ -266,7 +274,7 @@ impl super::State {
             Outcome::Singularities(result) => self.finished_singularities(run, r, result).await,
             Outcome::InverseKinematics(result) => {
                 if self.log_level <= Severity::Info {
-                    eprintln!("linkspace: {name}: run {run} (inverse kinematics): {} solutions, {} boxes, {:.3} s", result.solutions.len(), result.processed, result.seconds);
+                    say!("linkspace: {name}: run {run} (inverse kinematics): {} solutions, {} boxes, {:.3} s", result.solutions.len(), result.processed, result.seconds);
                 }
                 let reply = convert::ik_response(&result);
                 for (id, _) in r.waiters {
@@ -281,7 +289,7 @@ impl super::State {
             Outcome::Answer(Ok(crate::app::Answer::Ik6(a))) => {
                 if self.log_level <= Severity::Info {
                     let s = &a.found.solutions;
-                    eprintln!("linkspace: {name}: run {run} (6R inverse kinematics): {} solutions, {} undecided clusters, {:.3} s", s.unique.len(), s.clusters.len(), a.found.seconds);
+                    say!("linkspace: {name}: run {run} (6R inverse kinematics): {} solutions, {} undecided clusters, {:.3} s", s.unique.len(), s.clusters.len(), a.found.seconds);
                 }
                 let reply = convert::ik6_response(&a.chain, &a.found);
                 for (id, _) in r.waiters {
@@ -322,39 +330,39 @@ impl super::State {
                 m.cspace_note = format!("run {run}: {status}, {} boxes in {} clusters", result.boxes.len(), result.clusters);
                 let markers = convert::markers(&result, &m.loaded.root_link, self.limits.max_markers);
                 if let Err(e) = m.topics.configuration_space.async_publish(set.clone()).await {
-                    eprintln!("linkspace: publishing {}/configuration_space: {e:?}", m.prefix);
+                    say!("linkspace: publishing {}/configuration_space: {e:?}", m.prefix);
                 }
                 m.published = Some((set, markers));
                 for (js, mode) in convert::assembly_modes(&result, run, &m.loaded.root_link) {
                     if let Err(e) = m.topics.assembly_modes.async_publish(js).await {
-                        eprintln!("linkspace: publishing {}/assembly_modes: {e:?}", m.prefix);
+                        say!("linkspace: publishing {}/assembly_modes: {e:?}", m.prefix);
                     }
                     if let Err(e) = m.topics.assembly_mode.async_publish(mode).await {
-                        eprintln!("linkspace: publishing {}/assembly_mode: {e:?}", m.prefix);
+                        say!("linkspace: publishing {}/assembly_mode: {e:?}", m.prefix);
                     }
                 }
                 m.configuration_space = Some(Arc::new(result));
                 self.publish_markers(r.mechanism).await;
                 self.settle(r.mechanism);
                 if self.log_level <= Severity::Info {
-                    eprintln!("linkspace: {name}: published configuration_space");
+                    say!("linkspace: {name}: published configuration_space");
                 }
             }
             RunKind::Solve => {
                 if let Err(e) = m.topics.solve_result.async_publish(set.clone()).await {
-                    eprintln!("linkspace: publishing {}/solve_result: {e:?}", m.prefix);
+                    say!("linkspace: publishing {}/solve_result: {e:?}", m.prefix);
                 }
                 let message = format!("run {run}: {status}");
                 for (id, _) in r.waiters {
                     self.reply_solve(id, SolveResponse { ok: true, message: message.clone(), run_id: run, done: true, result: set.clone() });
                 }
                 if self.log_level <= Severity::Info {
-                    eprintln!("linkspace: {name}: published solve_result of run {run}");
+                    say!("linkspace: {name}: published solve_result of run {run}");
                 }
             }
             RunKind::SolveAction => {
                 if let Err(e) = m.topics.solve_result.async_publish(set.clone()).await {
-                    eprintln!("linkspace: publishing {}/solve_result: {e:?}", m.prefix);
+                    say!("linkspace: publishing {}/solve_result: {e:?}", m.prefix);
                 }
                 let cancelled = result.status == Status::Stopped(Limit::Cancelled);
                 if let Some(h) = r.goal {
@@ -362,7 +370,7 @@ impl super::State {
                     self.goal_result(h, end, SolveActionResult { ok: true, message: format!("run {run}: {status}"), run_id: run, result: set });
                 }
             }
-            RunKind::Singularities { .. } | RunKind::InverseKinematics | RunKind::InverseKinematics6 | RunKind::PathCheck => eprintln!("linkspace: {name}: run {run} returned a box set for a {:?} run", r.kind),
+            RunKind::Singularities { .. } | RunKind::InverseKinematics | RunKind::InverseKinematics6 | RunKind::PathCheck => say!("linkspace: {name}: run {run} returned a box set for a {:?} run", r.kind),
         }
         self.log(LogLevel::Info, summary);
     }
@@ -371,13 +379,13 @@ impl super::State {
         let m = &mut self.mechanisms[r.mechanism];
         let name = m.loaded.analysis.mechanism().to_string();
         if self.log_level <= Severity::Info {
-            eprintln!("linkspace: {name}: run {run} (singularities, precision {}): {}, {:.3} s", result.query.precision, result.summary, result.seconds);
+            say!("linkspace: {name}: run {run} (singularities, precision {}): {}, {:.3} s", result.query.precision, result.summary, result.seconds);
         }
         if r.kind == (RunKind::Singularities { load_time: true }) {
             m.singular_note = format!("run {run}: {}", result.summary);
             let markers = convert::singularity_markers(&result, self.limits.max_markers);
             if let Err(e) = m.topics.singularities.async_publish(report.clone()).await {
-                eprintln!("linkspace: publishing {}/singularities: {e:?}", m.prefix);
+                say!("linkspace: publishing {}/singularities: {e:?}", m.prefix);
             }
             m.published_singularities = Some((report.clone(), markers));
             m.singularities = Some(Arc::new(result));
@@ -385,7 +393,7 @@ impl super::State {
             self.publish_markers(r.mechanism).await;
             self.settle(r.mechanism);
             if self.log_level <= Severity::Info {
-                eprintln!("linkspace: {name}: published singularities");
+                say!("linkspace: {name}: published singularities");
             }
         }
         let reply = singularity_reply(&report);

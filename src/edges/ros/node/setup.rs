@@ -91,7 +91,7 @@ pub(super) fn spawn_spinner(node: &mut Node, ex: &smol::LocalExecutor<'_>) -> Re
     let spinner = node.spinner().context("starting the node's spinner")?;
     ex.spawn(async move {
         if let Err(e) = spinner.spin().await {
-            eprintln!("linkspace: spinner stopped: {e:?}");
+            say!("linkspace: spinner stopped: {e:?}");
         }
     })
     .detach();
@@ -118,7 +118,7 @@ pub(super) fn subscribe_robot_description(node: &mut Node, ex: &smol::LocalExecu
                         break;
                     }
                 }
-                Err(e) => eprintln!("linkspace: dropped an undecodable robot_description: {e:?}"),
+                Err(e) => say!("linkspace: dropped an undecodable robot_description: {e:?}"),
             }
         }
     })
@@ -183,7 +183,7 @@ fn forward<Q: Message + Clone + 'static, A: Message + 'static>(
                 }
                 // A sample that does not decode (wrong type or mapping) is dropped here: there
                 // is no request id to answer it with.
-                Err(e) => eprintln!("linkspace: dropped an undecodable request: {e:?}"),
+                Err(e) => say!("linkspace: dropped an undecodable request: {e:?}"),
             }
         }
     })

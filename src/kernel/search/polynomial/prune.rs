@@ -105,7 +105,7 @@ impl SystemPrune<'_, '_> {
 
 /// Why the polynomial search discards a box.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SystemDiscard {
+pub(crate) enum SystemDiscard {
     /// The contractors proved it empty.
     Empty,
 }
