@@ -88,7 +88,7 @@ impl Prune for StripPrune<'_> {
 /// takes a few hundred (a line's cells are split only within the precision of it); an uncertain
 /// arm, whose point may lie on the axis over a whole stretch of θ₃, would split that stretch
 /// down to the precision (0.05 rad at 1e-10: 5·10⁸ cells), where coarser cells say as much.
-pub const BAND_CELLS: u64 = 1 << 20;
+pub(crate) const BAND_CELLS: u64 = 1 << 20;
 
 /// The internal-motion strips of `chain`, from dyadic cells no wider than `precision`, with no
 /// limit but `BAND_CELLS`.
@@ -98,7 +98,7 @@ pub fn bands(chain: &Chain3R, precision: f64) -> Vec<Band> {
 
 /// The internal-motion strips of `chain`, from dyadic cells no wider than `precision`, found
 /// within `control`'s time and cancel flag (and `BAND_CELLS`), with how the walk ended.
-pub fn bands_within(chain: &Chain3R, precision: f64, control: &Control) -> (Vec<Band>, Status) {
+pub(crate) fn bands_within(chain: &Chain3R, precision: f64, control: &Control) -> (Vec<Band>, Status) {
     // Near-degenerate: the point within `near` of axis 2, where one turn of θ₂ moves the image
     // by less than a search box of this precision does (about precision × the arm's length).
     let near = precision * chain.length_scale() / (2.0 * std::f64::consts::PI);
