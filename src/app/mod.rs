@@ -66,7 +66,7 @@ pub use arm::{collisions, inverse_kinematics, singularities, Arm, ArmCollisions,
 pub use arm_analysis::{Manip3rAnalysis, CURVE_DEPTH};
 pub use distances::{DistancesRun, DistancesRequest};
 pub use linkage::LinkageAnalysis;
-pub use solve::{describe_freedom, SolveRun};
+pub use solve::{describe_freedom, LinkReadout, SolveRun};
 pub use crate::analyses::loop_singular::SingularSets;
 pub use loops::{all_kinds, analyse_image, image_points, Actuation, ImageAnalysisError, ImageSearch};
 pub use crate::analyses::input_motion::{check_input_motion, motion_joints, InputMotionCheck, MotionError, MotionRequest, MotionStep, MotionVerdict};

@@ -334,8 +334,8 @@ impl Prepared {
             Ready::Solve { run, freedom, rigid_links } => {
                 let settings = within(run.settings(), control);
                 let run = run.within(settings);
-                let result = run.run(control.cancel, progress);
-                Answer::Solve(Box::new(SolveAnswer { run, result, freedom, rigid_links }))
+                let (result, links) = run.run_reading(control.cancel, progress, Some(&rigid_links));
+                Answer::Solve(Box::new(SolveAnswer { run, result, links, freedom, rigid_links }))
             }
             Ready::Singularities { arm, mechanism, job } => {
                 let request = SingularitiesRequest { precision: job.precision, nodes: job.nodes, search_anyway: job.search_anyway, verdict: job.verdict };

@@ -10,6 +10,8 @@ use crate::kernel::interval::{bounds, components, IntervalBox};
 use crate::kernel::search::{BoxStatus, Enclosure, Limit, Progress, RefinePlan, Refinement, Solver, SolverSettings, Status};
 use crate::kernel::system::VarRole;
 use crate::model::Mechanism;
+use crate::formulate::spatial::LinkPose;
+use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -66,6 +68,14 @@ impl SolveRun {
     /// values out the rest. Boxes the deadline (or a cancel) leaves unread keep their bounds
     /// and status with joints `[NaN, NaN]`; the run then says which limit stopped it.
     pub fn run(&self, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress)) -> BoxSetResult {
+        self.run_reading(cancel, progress, None).0
+    }
+
+    /// `run`, each box also read out in its links' terms within the same deadline when
+    /// `rigid_links` is given (`Mechanism::rigid_links`: those links are not read): the links'
+    /// orientations (planar model) or poses (spatial and pose models), one per box in
+    /// `BoxSetResult::boxes` order, `LinkReadout::Unread` for a box left unread.
+    pub fn run_reading(&self, cancel: &AtomicBool, progress: &mut dyn FnMut(&Progress), rigid_links: Option<&BTreeMap<String, String>>) -> (BoxSetResult, Vec<LinkReadout>) {
         let t0 = Instant::now();
         let deadline = self.settings.timeout.map(|t| t0 + t);
         let searches_end = self.settings.timeout.map(|t| t0 + t.mul_f64(SEARCH_SHARE));
@@ -81,9 +91,13 @@ impl SolveRun {
         // Asked before each box: reading one out is cheap, reading a million is not.
         let stopped = || if cancel.load(Ordering::Relaxed) { Some(Limit::Cancelled) } else { deadline.filter(|&d| Instant::now() >= d).map(|_| Limit::Time) };
         let mut unread: Option<Limit> = None;
+        let mut links = Vec::new();
         let mut result_box = |b: &IntervalBox, status: BoxStatus, cluster: Option<usize>| {
             unread = unread.or_else(stopped);
             let values = if unread.is_none() { problem.joint_values(b) } else { Default::default() };
+            if let Some(rigid) = rigid_links {
+                links.push(if unread.is_none() { read_links(problem, b, rigid) } else { LinkReadout::Unread });
+            }
             ResultBox {
                 status,
                 bounds: b.dims.iter().map(|&x| bounds(x)).collect(),
@@ -104,7 +118,7 @@ impl SolveRun {
             (s, _) => s,
         };
         let system = problem.system();
-        BoxSetResult {
+        let result = BoxSetResult {
             mechanism: problem.name().to_string(),
             analysis: "solve".to_string(),
             status,
@@ -117,14 +131,37 @@ impl SolveRun {
             boxes,
             clusters,
             stats,
-        }
+        };
+        (result, links)
+    }
+}
+
+/// What a box says of the mechanism's links, in the model's terms.
+#[derive(Clone, Debug)]
+pub enum LinkReadout {
+    /// Planar model: each link's world-frame orientation (radians).
+    Angles(BTreeMap<String, (f64, f64)>),
+    /// Spatial and pose models: each link's (the platform's) pose in the root frame.
+    Poses(BTreeMap<String, LinkPose>),
+    /// Not read: the run's deadline (or a cancel) came first.
+    Unread,
+}
+
+/// The links of `b` that move on their own (not in `rigid`), read out.
+fn read_links(problem: &Linkage, b: &IntervalBox, rigid: &BTreeMap<String, String>) -> LinkReadout {
+    let moves = |name: &str| !rigid.contains_key(name);
+    match problem {
+        Linkage::Planar(p) => LinkReadout::Angles(p.link_angles_of(b, moves)),
+        Linkage::Spatial(p, _) => LinkReadout::Poses(p.link_poses_of(b, moves)),
+        Linkage::Pose(p, _) => LinkReadout::Poses(BTreeMap::from([(p.platform.clone(), p.link_pose(b))])),
+        Linkage::Distances(p, _) => LinkReadout::Poses(BTreeMap::from([(p.platform.clone(), p.link_pose(b))])),
     }
 }
 
 /// The share of a run's timeout its searches take; the rest is for reading the boxes out. The
-/// read-outs are an enclosure of each joint's angle per box, a few microseconds a joint: a
-/// tenth of the time covers those of the box sets a search makes in the other nine tenths
-/// (a curve at sigma 1e-12, 26,000 boxes in 3 s; 400 boxes of 600 joints each).
+/// read-outs are an enclosure of each joint's (and link's) angle per box, a microsecond or two
+/// each: a tenth of the time covers most of those of the box sets a search makes in the other
+/// nine tenths (a curve at sigma 1e-12, 26,000 boxes in 3 s; 300 boxes of 600 joints each).
 const SEARCH_SHARE: f64 = 0.9;
 
 /// The pose model's refinement: `RefinePlan::default()`'s rounds and cells, on clusters up to 64

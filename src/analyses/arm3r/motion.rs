@@ -61,6 +61,8 @@ struct StripPrune<'a> {
     chain: &'a Chain3R,
     precision: f64,
     near: f64,
+    /// The chain's lengths are uncertain (`Chain3R::uncertainty`).
+    uncertain: bool,
 }
 
 impl Prune for StripPrune<'_> {
@@ -77,6 +79,12 @@ impl Prune for StripPrune<'_> {
             Step::Found((order, (t, possible || close, (close && !possible).then_some(self.near))))
         } else if !close {
             Step::Found((order, (t, false, None)))
+        } else if self.uncertain && possible && [t.inf(), t.sup()].iter().all(|&e| self.chain.off_axis2(interval(e, e)).iter().all(|c| c.contains(0.0))) {
+            // An uncertain arm's point may lie on the axis over a whole stretch of θ₃: a cell
+            // where it may at both ends (and in between) lies inside that stretch's band, and
+            // its halves would say the same down to the precision. Kept whole: the band's ends
+            // are still found cell by cell, and a marked cell only ever widens a strip.
+            Step::Found((order, (t, true, None)))
         } else {
             let m = t.mid();
             Step::Split([(interval(t.inf(), m), order.child(0, 2)), (interval(m, t.sup()), order.child(1, 2))].into_iter().collect())
@@ -85,9 +93,10 @@ impl Prune for StripPrune<'_> {
 }
 
 /// Cells the walk of `bands_within` takes at most. A walk about the true lines of an exact arm
-/// takes a few hundred (a line's cells are split only within the precision of it); an uncertain
-/// arm, whose point may lie on the axis over a whole stretch of θ₃, would split that stretch
-/// down to the precision (0.05 rad at 1e-10: 5·10⁸ cells), where coarser cells say as much.
+/// takes a few hundred (a line's cells are split only within the precision of it), and so does
+/// an uncertain arm's, whose point may lie on the axis over a whole stretch of θ₃ (cells inside
+/// it are kept whole: split, that stretch would go down to the precision, 5·10⁸ cells for
+/// 0.05 rad at 1e-10). A bound for what no walk should need.
 pub(crate) const BAND_CELLS: u64 = 1 << 20;
 
 /// The internal-motion strips of `chain`, from dyadic cells no wider than `precision`, with no
@@ -109,7 +118,7 @@ pub(crate) fn bands_within(chain: &Chain3R, precision: f64, control: &Control) -
     // makes the answer incomplete).
     let limits = Limits { max_cells: BAND_CELLS, max_memory: usize::MAX, ..control.limits };
     let control = Control { limits, threads: 1, ..*control };
-    let mut run = drive(|| StripPrune { chain, precision, near }, (full_range(), Order::ROOT), &control, &mut no_progress);
+    let mut run = drive(|| StripPrune { chain, precision, near, uncertain: chain.uncertainty > 0.0 }, (full_range(), Order::ROOT), &control, &mut no_progress);
     run.found.extend(run.undecided.drain(..).map(|((t, order), _)| (order, (t, true, None))));
     run.found.sort_by_key(|(order, _)| *order);
     let cells: Vec<(Interval, bool, Option<f64>)> = run.found.into_iter().map(|(_, cell)| cell).collect();

@@ -24,6 +24,16 @@ fn div_positive(a: Iv, b: Iv) -> Iv {
     Iv { lo: (a.lo / b.hi).next_down().max(0.0), hi: (a.hi / b.lo).next_up() }
 }
 
+/// `a · b`, two products for nonnegative bounds (every product in `atan_unit`), else `Iv::mul`.
+#[inline(always)]
+fn mul_nonnegative(a: Iv, b: Iv) -> Iv {
+    if a.lo >= 0.0 && b.lo >= 0.0 {
+        Iv { lo: (a.lo * b.lo).next_down().max(0.0), hi: (a.hi * b.hi).next_up() }
+    } else {
+        a.mul(b)
+    }
+}
+
 /// `√a` for `0 ≤ a`, outward.
 #[inline(always)]
 fn sqrt_positive(a: Iv) -> Iv {
@@ -45,21 +55,21 @@ fn atan_unit(t: Iv) -> Iv {
     let one = Iv { lo: 1.0, hi: 1.0 };
     let mut u = t;
     for _ in 0..3 {
-        u = div_positive(u, one.add(sqrt_positive(one.add(u.mul(u)))));
+        u = div_positive(u, one.add(sqrt_positive(one.add(mul_nonnegative(u, u)))));
     }
     // atan u = u·Σ (−u²)ᵏ/(2k+1): Horner over k = 8 down to 0, then the remainder of an
     // alternating series with decreasing terms, between the next term and 0.
-    let u2 = u.mul(u);
+    let u2 = mul_nonnegative(u, u);
     let mut sum = odd_reciprocal(8);
     for k in (0..8).rev() {
-        sum = odd_reciprocal(k).sub(u2.mul(sum));
+        sum = odd_reciprocal(k).sub(mul_nonnegative(u2, sum));
     }
     let mut next = u.hi;
     for _ in 0..18 {
         next = (next * u.hi).next_up();
     }
     let rest = (next / 19.0).next_up();
-    u.mul(sum).add(Iv { lo: -rest, hi: 0.0 }).scale(8.0)
+    mul_nonnegative(u, sum).add(Iv { lo: -rest, hi: 0.0 }).scale(8.0)
 }
 
 /// The angle of the nonzero point `(x, y)`: in [0, π] for `y ≥ 0` (π on the negative axis);
