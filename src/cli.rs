@@ -32,13 +32,15 @@ struct Cli {
 /// The bounds every command takes: `#[command(flatten)]` into each command's arguments.
 #[derive(clap::Args, Clone, Debug)]
 pub(crate) struct LimitArgs {
-    /// Stop after processing this many boxes (box pairs for nodes); the run is then reported
-    /// incomplete. Default: the command's (solve, distances, loop-singularities, serve
-    /// 1,000,000; ik 200,000; collisions 5,000,000; singularities 5,000,000 per search; ik6
-    /// 20,000,000). A path check is bounded by --timeout and its pieces per segment, not boxes.
+    /// Stop after processing this many boxes (box pairs for nodes; pieces of segments for a
+    /// path check); the run is then reported incomplete. Default: the command's (solve,
+    /// distances, loop-singularities, serve 1,000,000; ik 200,000; collisions 5,000,000;
+    /// singularities 5,000,000 per search; ik6 20,000,000; path-check 10,000,000).
     #[arg(long, value_name = "N")]
     pub(crate) max_boxes: Option<u64>,
-    /// Stop after this many seconds; the run is then reported incomplete.
+    /// Stop after this many seconds, counted from the start of the command (reading the file
+    /// included), with every answer's post-processing and report inside them; the run is then
+    /// reported incomplete. Default: none (ik6: 60).
     #[arg(long, value_name = "SECONDS")]
     pub(crate) timeout: Option<f64>,
     /// Stop before pending boxes hold more than this many MiB; the run is then reported
@@ -64,7 +66,7 @@ impl LimitArgs {
             Some(mib) => usize::try_from(mib.saturating_mul(1 << 20)).unwrap_or(usize::MAX),
             None => default.max_memory,
         };
-        Ok(Limits { max_cells, timeout: seconds_arg(self.timeout)?, max_memory })
+        Ok(Limits { max_cells, timeout: seconds_arg(self.timeout)?.or(default.timeout), max_memory })
     }
 
     /// Solver settings with these limits over `base` (the node's load-time runs).
@@ -537,6 +539,8 @@ pub(crate) fn execute(path: &Path, job: Job, limits: &LimitArgs, json: Option<&P
 
 /// The answer to `job` about the file at `path`, within `limits`.
 pub(crate) fn answer(path: &Path, job: Job, limits: &LimitArgs) -> Result<Answer> {
+    // `--timeout` counts from here: reading and building a large mechanism are part of the run.
+    let start = std::time::Instant::now();
     let name = job.name();
     let control_limits = limits.limits(Job::default_limits(name))?;
     let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
@@ -554,7 +558,7 @@ pub(crate) fn answer(path: &Path, job: Job, limits: &LimitArgs) -> Result<Answer
         eprintln!("linkspace: {notice}");
     }
     let cancel = AtomicBool::new(false);
-    let control = Control { limits: control_limits, threads: limits.threads(), cancel: &cancel };
+    let control = Control { limits: control_limits, threads: limits.threads(), cancel: &cancel }.remaining_since(start);
     let show = std::io::stderr().is_terminal();
     let mut progress = |p: &Progress| {
         if show {

@@ -58,3 +58,28 @@ fn spurious_check_with_a_passed_deadline_keeps_every_box_and_says_so() {
     let (kept, _, dropped, cut_short) = solver.drop_spurious(Vec::new(), Vec::new(), 2, &cancel, Some(passed));
     assert_eq!((kept.len(), dropped, cut_short), (0, 0, false));
 }
+
+/// Reading boxes out (their joint values, an angle enclosure per joint) is inside the run's
+/// deadline too: a run whose deadline has passed, or that is cancelled, when its boxes are read
+/// out reports every box (bounds and status) with its joints unread (NaN), and names the limit.
+#[test]
+fn read_outs_past_the_deadline_keep_every_box_and_name_the_limit() {
+    use linkspace::app::{BoxStatus, Limit, ModelChoice, SolveRun, Status};
+    let m = linkspace::model::urdf::parse(&crate::util::urdf_text("four_bar.urdf")).expect("fixture");
+    let run = |timeout: Option<Duration>, cancel: bool| {
+        let settings = SolverSettings { sigma: 0.05, timeout, ..Default::default() };
+        SolveRun::build(&m, ModelChoice::Auto, &[], &[], settings).expect("builds").run(&AtomicBool::new(cancel), &mut |_| {})
+    };
+    let read = run(None, false);
+    assert!(read.status.finished() && !read.boxes.is_empty());
+    assert!(read.boxes.iter().all(|b| b.joints.iter().all(|j| j[0].is_finite() && j[1].is_finite())), "with time every box is read out");
+    for (timeout, cancel, limit) in [(Some(Duration::ZERO), false, Limit::Time), (None, true, Limit::Cancelled)] {
+        let cut = run(timeout, cancel);
+        assert_eq!(cut.status, Status::Stopped(limit));
+        assert!(cut.stats.post_processing_cut_short);
+        // The search stopped at once: its start box, undecided and unread, stands for the rest.
+        assert_eq!(cut.boxes.len(), 1);
+        assert_eq!(cut.boxes[0].status, BoxStatus::Undecided);
+        assert!(cut.boxes[0].joints.iter().all(|j| j[0].is_nan() && j[1].is_nan()), "{:?}", cut.boxes[0].joints);
+    }
+}

@@ -12,6 +12,8 @@ mod soundness;
 mod cli;
 /// What runs after branch and prune keeps the run's limits and says when it was cut short.
 mod post_processing;
+/// Every command stopped by `--timeout` ends, names the time limit and drops nothing.
+mod deadlines;
 /// Random four-bars, slider-cranks and six-bars against a high-precision reference.
 mod random_linkages;
 /// Instances built to break solvers: branch and prune against Newton–Raphson.

@@ -28,7 +28,8 @@ use crate::kernel::interval::{components, IntervalBox};
 use inari::Interval;
 use crate::formulate::cayley_menger::{BuildOptions, CayleyMenger, DistanceError, DistanceProblem, DistanceSolverError, Formulation};
 use crate::formulate::coordinates::{Placed, PlacedError};
-use crate::kernel::search::{Collect, SolveStats, Solver, SolverSettings, Status};
+use crate::kernel::search::{Collect, Limit, SolveStats, Solver, SolverSettings, Status};
+use std::time::Instant;
 use std::sync::atomic::AtomicBool;
 
 /// Which formulation to solve.
@@ -166,16 +167,33 @@ pub fn choose(problem: &DistanceProblem) -> Choice {
 }
 
 /// `stats.seconds` and `stats.cpu_seconds` cover the whole call: build, search and settling.
+/// So does the timeout: the search takes `SEARCH_SHARE` of it, and the settling's deeper
+/// searches share what is left up to it (a box they do not reach stays unproven, and the answer
+/// names the limit).
 pub fn solve(problem: &DistanceProblem, choice: Choice, redundant: bool, faces: FaceBounds, settings: SolverSettings, cancel: &AtomicBool) -> Result<Certified, DistancesError> {
     let t0 = std::time::Instant::now();
     let c0 = crate::kernel::search::process_cpu_seconds();
-    let mut out = solve_inner(problem, choice, redundant, faces, settings, cancel)?;
+    let deadlines = Deadlines { search: settings.timeout.map(|t| t0 + t.mul_f64(SEARCH_SHARE)), settling: settings.timeout.map(|t| t0 + t) };
+    let mut out = solve_inner(problem, choice, redundant, faces, settings, cancel, deadlines)?;
+    if out.stats.post_processing_cut_short && out.status.finished() {
+        out.status = Status::Stopped(if cancel.load(std::sync::atomic::Ordering::Relaxed) { Limit::Cancelled } else { Limit::Time });
+    }
     out.stats.seconds = t0.elapsed().as_secs_f64();
     out.stats.cpu_seconds = crate::kernel::search::process_cpu_seconds() - c0;
     Ok(out)
 }
 
-fn solve_inner(problem: &DistanceProblem, choice: Choice, redundant: bool, faces: FaceBounds, settings: SolverSettings, cancel: &AtomicBool) -> Result<Certified, DistancesError> {
+/// The share of the timeout the search takes; the settling of its boxes has the rest.
+const SEARCH_SHARE: f64 = 0.9;
+
+/// When the search, and then the settling, must end.
+#[derive(Clone, Copy)]
+struct Deadlines {
+    search: Option<Instant>,
+    settling: Option<Instant>,
+}
+
+fn solve_inner(problem: &DistanceProblem, choice: Choice, redundant: bool, faces: FaceBounds, settings: SolverSettings, cancel: &AtomicBool, deadlines: Deadlines) -> Result<Certified, DistancesError> {
     let c0 = crate::kernel::search::process_cpu_seconds();
     let choice = if choice == Choice::Auto { choose(problem) } else { choice };
     let formulation = if choice == Choice::Split { Formulation::Split } else { Formulation::Shared };
@@ -191,9 +209,9 @@ fn solve_inner(problem: &DistanceProblem, choice: Choice, redundant: bool, faces
     if matches!(choice, Choice::Points | Choice::Line) {
         let placed = placed.expect("built above");
         let mut out = {
-            let solver = placed.solver(settings.clone()).map_err(DistanceSolverError::from)?;
+            let solver = placed.solver(settings.clone()).map_err(DistanceSolverError::from)?.until(deadlines.search);
             let e = solver.enclose(cancel, &mut |_| {});
-            let solvers = DEEPER.iter().map(|&f| placed.solver(deeper_settings(&settings, f))).collect::<Result<Vec<_>, _>>().map_err(DistanceSolverError::from)?;
+            let solvers = DEEPER.iter().map(|&f| placed.solver(deeper_settings(&settings, f)).map(|s| s.until(deadlines.settling))).collect::<Result<Vec<_>, _>>().map_err(DistanceSolverError::from)?;
             let mut out = Certified { formulation: choice, cm, placed: None, status: e.status, stats: e.stats, solutions: e.solutions, tags: e.tags, cluster: Vec::new(), clusters: Vec::new(), roots: Vec::new(), undecided: e.undecided, phases: vec![("search", crate::kernel::search::process_cpu_seconds() - c0)] };
             let c1 = crate::kernel::search::process_cpu_seconds();
             settle_points(&placed, &solvers, &mut out, cancel);
@@ -203,16 +221,16 @@ fn solve_inner(problem: &DistanceProblem, choice: Choice, redundant: bool, faces
         out.placed = Some(placed);
         Ok(out)
     } else {
-        let solver = cm.solver(faces, settings.clone())?;
+        let solver = cm.solver(faces, settings.clone())?.until(deadlines.search);
         let e = solver.enclose(cancel, &mut |_| {});
-        let solver = cm.solver(faces, deeper_settings(&settings, DEEPER[0]))?;
+        let solver = cm.solver(faces, deeper_settings(&settings, DEEPER[0]))?.until(deadlines.settling);
         // Every determinant, shared variables and control points (whatever was solved): the
         // settling's first test of a box no certified placement meets (see `settle_determinants`).
         let all = CayleyMenger::build(problem, BuildOptions { formulation: Formulation::Shared, redundant: true })?;
-        let all_solver = all.solver(FaceBounds::Corners, deeper_settings(&settings, DEEPER[0]))?;
+        let all_solver = all.solver(FaceBounds::Corners, deeper_settings(&settings, DEEPER[0]))?.until(deadlines.settling);
         let tags = vec![BoxStatus::Solution; e.solutions.len()];
         let mut out = Certified { formulation: choice, cm: cm.clone(), placed: None, status: e.status, stats: e.stats, solutions: e.solutions, tags, cluster: Vec::new(), clusters: Vec::new(), roots: Vec::new(), undecided: e.undecided, phases: vec![("search", crate::kernel::search::process_cpu_seconds() - c0)] };
-        settle_determinants(&cm, placed.as_ref(), &solver, (&all, &all_solver), settings.threads, &mut out, cancel);
+        settle_determinants(&cm, placed.as_ref(), &solver, (&all, &all_solver), settings.threads, &mut out, (cancel, deadlines.settling));
         out.placed = placed;
         Ok(out)
     }
@@ -224,10 +242,14 @@ fn solve_inner(problem: &DistanceProblem, choice: Choice, redundant: bool, faces
 const DEEPER: [f64; 3] = [1.0 / 16.0, 1.0 / 256.0, 1.0 / 4096.0];
 
 /// A deeper search's settings: sigma times `fraction`, at most 4000 boxes per search, one thread
-/// (the searches are small), and the run's time limit.
+/// (the searches are small), and the run's time limit (its solvers also end by the run's
+/// deadline, `Solver::until`).
 fn deeper_settings(s: &SolverSettings, fraction: f64) -> SolverSettings {
     SolverSettings { sigma: s.sigma * fraction, max_boxes: 4_000, threads: 1, ..s.clone() }
 }
+
+/// Why a box is left unproven when the run's deadline (or a cancel) stopped its deeper search.
+const CUT_SHORT: &str = "the run's time limit (or a cancel) came before a deeper search of it finished";
 
 /// Bounded deeper searches of one box, by `solvers` in turn on what the previous one left
 /// unproven: `Ok(certified boxes)` when every box found is proven unique (none: the box held no
@@ -242,8 +264,13 @@ fn deeper(solvers: &[Solver<'_>], b: &IntervalBox, cancel: &AtomicBool, stats: &
             let (status, st) = solver.run_from(p, cancel, &mut found);
             stats.processed += st.processed;
             stats.certified += st.certified;
-            if status != Status::Finished {
-                return Err("a deeper search hit its box limit");
+            match status {
+                Status::Finished => {}
+                Status::Stopped(Limit::Time | Limit::Cancelled) => {
+                    stats.post_processing_cut_short = true;
+                    return Err(CUT_SHORT);
+                }
+                Status::Stopped(_) => return Err("a deeper search hit its box limit"),
             }
             for (f, u) in found.solutions.into_iter().zip(found.tags.into_iter().map(|t| t == BoxStatus::Unique)) {
                 if u {
@@ -380,10 +407,12 @@ fn restrict(from: &CayleyMenger, b: &IntervalBox, to: &CayleyMenger) -> Option<I
 /// Settles the boxes of a determinant search. `all` is the system of every determinant (the
 /// redundant ones too) in shared variables, with its solver at sigma / 16. The re-searches of
 /// unmet boxes run on `threads` threads.
-fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solver<'_>, all: (&CayleyMenger, &Solver<'_>), threads: usize, out: &mut Certified, cancel: &AtomicBool) {
+fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solver<'_>, all: (&CayleyMenger, &Solver<'_>), threads: usize, out: &mut Certified, (cancel, deadline): (&AtomicBool, Option<Instant>)) {
     let clock = crate::kernel::search::process_cpu_seconds;
     let t0 = clock();
-    let (mut roots, mut meets) = certified_placements(cm, placed, &out.solutions);
+    let stopped = || cancel.load(std::sync::atomic::Ordering::Relaxed) || deadline.is_some_and(|d| Instant::now() >= d);
+    let (mut roots, mut meets, cut) = certified_placements(cm, placed, &out.solutions, &stopped);
+    out.stats.post_processing_cut_short |= cut;
     let t1 = clock();
     out.phases.push(("embedding and certifying placements", t1 - t0));
     // Boxes that meet no certified placement are tested twice, cheapest first:
@@ -401,7 +430,7 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
     let with_r = placed.filter(|p| p.is_square()).and_then(|_| Placed::build_with(&cm.problem, &pairs).ok());
     let s = solver.settings();
     let coordinate_solvers: Vec<Solver<'_>> = match &with_r {
-        Some(pr) => [1.0, 1.0 / 16.0].iter().filter_map(|&f| Solver::new(&pr.system, SolverSettings { sigma: s.sigma.min(1e-3) * f, ..s.clone() }).ok()).collect(),
+        Some(pr) => [1.0, 1.0 / 16.0].iter().filter_map(|&f| Solver::new(&pr.system, SolverSettings { sigma: s.sigma.min(1e-3) * f, ..s.clone() }).ok().map(|s| s.until(deadline))).collect(),
         None => Vec::new(),
     };
     // The searches of different boxes are independent, so they run on the run's threads, in
@@ -477,6 +506,7 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
         };
         out.stats.processed += stats.processed;
         out.stats.certified += stats.certified;
+        out.stats.post_processing_cut_short |= stats.post_processing_cut_short;
         match verdict {
             Ok(found) if found.is_empty() => {}
             Ok(found) => {
@@ -506,12 +536,16 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
 
 /// Certified placements from every box midpoint of `solutions` (embedded from `cm`'s
 /// distances, certified in coordinates by `placed` when it is square), each once, with the
-/// boxes each meets.
-fn certified_placements(cm: &CayleyMenger, placed: Option<&Placed>, solutions: &[IntervalBox]) -> (Vec<Placement>, Vec<Vec<usize>>) {
+/// boxes each meets, and whether `stopped` ended the walk before the last box (the boxes
+/// after it then meet only the placements found before, and are searched again as unmet).
+fn certified_placements(cm: &CayleyMenger, placed: Option<&Placed>, solutions: &[IntervalBox], stopped: &dyn Fn() -> bool) -> (Vec<Placement>, Vec<Vec<usize>>, bool) {
     let mut roots: Vec<Placement> = Vec::new();
     let mut meets: Vec<Vec<usize>> = Vec::new();
     if let Some(pl) = placed.filter(|p| p.is_square()) {
         for b in solutions {
+            if stopped() {
+                return (roots, meets, true);
+            }
             let width = cm.unknowns.iter().map(|u| b.width(u.var)).fold(0.0, f64::max);
             for pts in cm.embed(&b.midpoint(), 1e-7 + 10.0 * width) {
                 let Some(x) = pl.certify_near(&pts) else { continue };
@@ -531,7 +565,7 @@ fn certified_placements(cm: &CayleyMenger, placed: Option<&Placed>, solutions: &
             }
         }
     }
-    (roots, meets)
+    (roots, meets, false)
 }
 
 /// The boxes settling kept (`keep`, indices into `out.solutions`, with why each is undecided),

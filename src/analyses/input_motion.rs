@@ -138,7 +138,8 @@ pub struct InputMotionCheck {
     pub request: MotionRequest,
     /// The joints of the assembly, in order.
     pub joints: Vec<String>,
-    /// The configuration at `from` on the assembly's branch, enclosed.
+    /// The configuration at `from` on the assembly's branch, enclosed (at the assembly's own
+    /// input value when a limit stopped the run before it reached `from`).
     pub start: BTreeMap<String, [f64; 2]>,
     /// The proven steps, in order of the motion.
     pub steps: Vec<MotionStep>,
@@ -389,7 +390,13 @@ pub fn check_input_motion(m: &Mechanism, fixed: &[(String, f64)], request: &Moti
     let start = if a_asm == r.from {
         at_assembly
     } else {
-        let lead = follow(&square, r, at_assembly, a_asm, r.from, &stopped);
+        let lead = follow(&square, r, at_assembly.clone(), a_asm, r.from, &stopped, &mut |_, _| {});
+        if let MotionVerdict::Stopped { limit, .. } = lead.verdict {
+            // A limit is an answer: nothing of the motion proven, its start not reached.
+            let start = bounds(problem.joint_values(&IntervalBox::new(at_assembly)));
+            let verdict = MotionVerdict::Stopped { from: r.from, limit };
+            return Ok(InputMotionCheck { mechanism: problem.name.clone(), request: r.clone(), joints, start, steps: Vec::new(), verdict, seconds: budget.elapsed().as_secs_f64() });
+        }
         if lead.verdict != MotionVerdict::Clear {
             let reached = match lead.verdict {
                 MotionVerdict::Undecided { from, .. } | MotionVerdict::Stopped { from, .. } => from,
@@ -400,8 +407,10 @@ pub fn check_input_motion(m: &Mechanism, fixed: &[(String, f64)], request: &Moti
         lead.enclosure
     };
     let start_joints = bounds(problem.joint_values(&IntervalBox::new(start.clone())));
-    let Followed { steps, verdict, enclosure } = follow(&square, r, start, r.from, r.to, &stopped);
-    let steps = steps.into_iter().map(|(a, k)| MotionStep { input: a, joints: bounds(problem.joint_values(&IntervalBox::new(k))) }).collect();
+    // Each proven step is read out as it is taken, so the deadline the walk asks before each
+    // step bounds its read-outs too.
+    let mut steps = Vec::new();
+    let Followed { verdict, enclosure } = follow(&square, r, start, r.from, r.to, &stopped, &mut |a, k| steps.push(MotionStep { input: a, joints: bounds(problem.joint_values(&IntervalBox::new(k.to_vec()))) }));
     let verdict = match verdict {
         MotionVerdict::Undecided { from, reason, .. } if r.name_turning_point => {
             let here = problem.joint_values(&IntervalBox::new(enclosure.clone()));
@@ -457,21 +466,19 @@ fn worst_gap(problem: &LinkageProblem, x: &[f64], joints: &[String], given: &[f6
     worst
 }
 
-/// What a tube following gives.
+/// What a tube following gives (its steps went to its `step` callback).
 struct Followed {
-    /// Per proven step: the input's range and the box.
-    steps: Vec<([f64; 2], Vec<Interval>)>,
     verdict: MotionVerdict,
     /// The configuration at the last proven input value, enclosed.
     enclosure: Vec<Interval>,
 }
 
-/// Follows the one configuration in `enclosure` at input `from` to input `to` (module doc).
-fn follow(square: &Square, r: &MotionRequest, mut enclosure: Vec<Interval>, from: f64, to: f64, stopped: &dyn Fn() -> Option<Limit>) -> Followed {
+/// Follows the one configuration in `enclosure` at input `from` to input `to` (module doc),
+/// handing each proven step (the input's range and the box) to `step`.
+fn follow(square: &Square, r: &MotionRequest, mut enclosure: Vec<Interval>, from: f64, to: f64, stopped: &dyn Fn() -> Option<Limit>, step: &mut dyn FnMut([f64; 2], &[Interval])) -> Followed {
     let direction = if to >= from { 1.0 } else { -1.0 };
     let mut a = from;
     let mut h = r.max_step;
-    let mut steps = Vec::new();
     let verdict = loop {
         if a == to {
             break MotionVerdict::Clear;
@@ -491,7 +498,7 @@ fn follow(square: &Square, r: &MotionRequest, mut enclosure: Vec<Interval>, from
             Some(k) => {
                 // The one configuration at `a1` in `k`, enclosed tightly for the next trial.
                 enclosure = krawczyk::tighten(k.clone(), 1e-13, |x| square.step(x, point(a1)));
-                steps.push(([range.inf(), range.sup()], k));
+                step([range.inf(), range.sup()], &k);
                 a = a1;
                 h = (2.0 * h).min(r.max_step);
             }
@@ -505,7 +512,7 @@ fn follow(square: &Square, r: &MotionRequest, mut enclosure: Vec<Interval>, from
             }
         }
     };
-    Followed { steps, verdict, enclosure }
+    Followed { verdict, enclosure }
 }
 
 /// How far (largest joint gap, wrapped for angles) a certified turning point may lie from the

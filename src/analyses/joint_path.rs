@@ -13,6 +13,7 @@
 //! No IO.
 
 use crate::kernel::search::{Budget, Control, Limit};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use thiserror::Error;
 
 /// Pieces narrower than this (in the segment's parameter) are no longer cut while covering it.
@@ -32,8 +33,9 @@ pub struct Proof {
     pub tight: bool,
 }
 
-/// A determinant of the joints whose sign can be proven on a box of them.
-pub trait SignProof {
+/// A determinant of the joints whose sign can be proven on a box of them (shared by the threads
+/// that decide segments side by side).
+pub trait SignProof: Sync {
     /// How many joints a waypoint holds.
     fn joints(&self) -> usize;
     /// A proof over the box `b` (`[lo, hi]` per joint, `joints()` of them), or None when the
@@ -122,8 +124,11 @@ pub struct PathCheck {
 
 /// Decides each segment of the path through `waypoints` (`det.joints()` values each, radians)
 /// against the zero set of `det`; crossings narrowed until their joint enclosures are within
-/// `tolerance` radians. A limit of `control` (timeout, cancel) leaves the remaining segments
-/// `Stopped`.
+/// `tolerance` radians. `control` bounds the whole path: its timeout and cancel flag, its cells
+/// (pieces examined, over every segment), its memory (bytes the pieces and pending stretches of
+/// the segments being decided hold) and its threads (segments decided side by side, each on
+/// one thread: the same verdicts for any count). A limit leaves the segment it stops, and
+/// those not started, `Stopped`.
 pub fn check(det: &dyn SignProof, waypoints: &[Vec<f64>], tolerance: f64, control: &Control) -> Result<PathCheck, BadPath> {
     let n = det.joints();
     if waypoints.len() < 2 {
@@ -136,15 +141,29 @@ pub fn check(det: &dyn SignProof, waypoints: &[Vec<f64>], tolerance: f64, contro
         return Err(BadPath(format!("the tolerance must be a positive number of radians, got {tolerance}")));
     }
     let budget = Budget::start(control.limits, control.cancel);
-    let stop = || budget.interrupted();
-    let mut segments = Vec::new();
-    for w in waypoints.windows(2) {
-        let verdict = match stop() {
-            Some(limit) => SegmentVerdict::Stopped(limit),
-            None => Segment { det, x: &w[0], y: &w[1] }.decide(tolerance, &stop),
-        };
-        segments.push(verdict);
-    }
+    let work = Work { pieces: AtomicU64::new(0), bytes: AtomicUsize::new(0) };
+    // The first limit met stops every segment: those being decided and those not started.
+    let first = std::sync::OnceLock::new();
+    let stop = || {
+        if let Some(&limit) = first.get() {
+            return Some(limit);
+        }
+        let limit = budget.interrupted().or_else(|| {
+            if work.pieces.load(Ordering::Relaxed) > control.limits.max_cells {
+                Some(Limit::Boxes)
+            } else if work.bytes.load(Ordering::Relaxed) > control.limits.max_memory {
+                Some(Limit::Memory)
+            } else {
+                None
+            }
+        })?;
+        Some(*first.get_or_init(|| limit))
+    };
+    let pairs: Vec<&[Vec<f64>]> = waypoints.windows(2).collect();
+    let segments = crate::kernel::search::map_parallel(&pairs, control.threads, |w| match stop() {
+        Some(limit) => SegmentVerdict::Stopped(limit),
+        None => Segment { det, x: &w[0], y: &w[1] }.decide(tolerance, &stop, &work),
+    });
     Ok(PathCheck { waypoints: waypoints.to_vec(), segments })
 }
 
@@ -195,7 +214,7 @@ impl SegmentVerdict {
                 let at: Vec<String> = spans.iter().map(|s| format!("t in [{:.6}, {:.6}] ({})", s.t[0], s.t[1], s.reason.name())).collect();
                 format!("{det} may vanish, no sign change proven: {}", at.join(", "))
             }
-            SegmentVerdict::Stopped(limit) => format!("not decided: the run stopped ({}) first", limit.name()),
+            SegmentVerdict::Stopped(limit) => format!("not decided: the run stopped on its {} limit first", limit.name()),
         }
     }
 }
@@ -245,6 +264,17 @@ fn number_word(n: usize) -> String {
     }
 }
 
+/// What the segments being decided use, counted against `Control::limits`.
+struct Work {
+    /// Pieces examined, over every segment.
+    pieces: AtomicU64,
+    /// Bytes the segments being decided hold in pieces and pending stretches.
+    bytes: AtomicUsize,
+}
+
+/// Pieces examined between two updates of the memory held.
+const CHECK_EVERY: usize = 256;
+
 struct Segment<'a> {
     det: &'a dyn SignProof,
     x: &'a [f64],
@@ -282,7 +312,15 @@ impl Segment<'_> {
         self.det.prove(&self.hull(t0, t1))
     }
 
-    fn decide(&self, tolerance: f64, stop: &dyn Fn() -> Option<Limit>) -> SegmentVerdict {
+    fn decide(&self, tolerance: f64, stop: &(dyn Fn() -> Option<Limit> + Sync), work: &Work) -> SegmentVerdict {
+        // What this segment holds, as last added to `work.bytes` (given back when it ends).
+        let mut held = 0usize;
+        let verdict = self.cover(tolerance, stop, work, &mut held);
+        work.bytes.fetch_sub(held, Ordering::Relaxed);
+        verdict
+    }
+
+    fn cover(&self, tolerance: f64, stop: &(dyn Fn() -> Option<Limit> + Sync), work: &Work, held: &mut usize) -> SegmentVerdict {
         // Cover [0, 1] by pieces, depth first, left to right.
         let mut pieces: Vec<Piece> = Vec::new();
         let mut stack = vec![(0.0f64, 1.0f64)];
@@ -292,10 +330,20 @@ impl Segment<'_> {
                 pieces.push(Piece { t0, t1, proof: None, skipped: true });
                 continue;
             }
-            if examined % 256 == 0 {
-                if let Some(limit) = stop() {
-                    return SegmentVerdict::Stopped(limit);
+            if examined % CHECK_EVERY == 0 {
+                let now = pieces.capacity() * std::mem::size_of::<Piece>() + stack.capacity() * std::mem::size_of::<(f64, f64)>();
+                if now >= *held {
+                    work.bytes.fetch_add(now - *held, Ordering::Relaxed);
+                } else {
+                    work.bytes.fetch_sub(*held - now, Ordering::Relaxed);
                 }
+                *held = now;
+            }
+            // Every piece counts against the box limit, asked before each, so that one thread
+            // stops at the same piece whatever the clock says.
+            work.pieces.fetch_add(1, Ordering::Relaxed);
+            if let Some(limit) = stop() {
+                return SegmentVerdict::Stopped(limit);
             }
             examined += 1;
             let narrow = t1 - t0 <= PIECE_WIDTH;
@@ -415,5 +463,28 @@ mod tests {
         let SegmentVerdict::Clear { sign, min_abs_det, .. } = found.segments[1] else { panic!("{:?}", found.segments[1]) };
         assert!(sign == 1.0 && min_abs_det > 0.0 && min_abs_det <= 0.7 * 2.5);
         assert_eq!(check(&Toy, &[vec![0.0, 0.0], vec![1.0]], 1e-9, &control).err(), Some(BadPath("waypoint 2 is not 2 finite numbers".into())));
+    }
+
+    /// Every limit of the control stops the path, the segment it falls in and those after:
+    /// along q₀ = 0.3 the toy determinant vanishes on the whole first segment, which is cut
+    /// down to `PIECE_WIDTH` (16,384 pieces, half a megabyte).
+    #[test]
+    fn every_limit_of_the_control_stops_the_path() {
+        use crate::kernel::search::Limits;
+        let cancel = AtomicBool::new(false);
+        let w = [vec![0.3, 0.0], vec![0.3, 1.0], vec![1.0, 1.0], vec![0.0, 0.5]];
+        let with = |limits: Limits, threads: usize| check(&Toy, &w, 1e-10, &Control { limits, threads, cancel: &cancel }).expect("checks").segments;
+        let free = with(Limits::default(), 1);
+        assert!(matches!(free[0], SegmentVerdict::Undecided { .. }) && matches!(free[2], SegmentVerdict::Crosses { .. }), "{free:?}");
+        assert_eq!(with(Limits::default(), 3), free, "the verdicts of one thread");
+        for (limits, limit) in [(Limits { max_memory: 1000, ..Limits::default() }, Limit::Memory), (Limits { max_cells: 100, ..Limits::default() }, Limit::Boxes)] {
+            for threads in [1, 2] {
+                let stopped = with(limits, threads);
+                assert_eq!(stopped[0], SegmentVerdict::Stopped(limit), "{limit:?}, {threads} threads");
+                assert!(stopped.iter().filter(|s| **s == SegmentVerdict::Stopped(limit)).count() >= if threads == 1 { 3 } else { 1 }, "{stopped:?}");
+            }
+        }
+        let stopped = with(Limits { max_cells: 100, ..Limits::default() }, 1);
+        assert!(stopped.iter().all(|s| *s == SegmentVerdict::Stopped(Limit::Boxes)), "{stopped:?}");
     }
 }

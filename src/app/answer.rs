@@ -14,7 +14,7 @@ use std::collections::BTreeMap;
 
 use super::arm::{Arm, ArmCollisions, ArmIk, ArmSingularities};
 use super::distances::{DistancesRequest, DistancesRun};
-use super::solve::SolveRun;
+use super::solve::{LinkReadout, SolveRun};
 use crate::analyses::loop_singular::SingularSets;
 use crate::analyses::input_motion::InputMotionCheck;
 use super::path::ArmPathCheck;
@@ -51,6 +51,8 @@ pub struct SolveAnswer {
     pub run: SolveRun,
     /// The boxes.
     pub result: BoxSetResult,
+    /// Per box of `result`, its links read out (within the run's deadline, as its joints).
+    pub links: Vec<LinkReadout>,
     /// The model's degrees of freedom, in one line.
     pub freedom: String,
     /// Links merged into one rigid body, each to the body's first link.

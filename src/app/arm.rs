@@ -103,7 +103,7 @@ pub fn singularities(arm: &Arm, request: &SingularitiesRequest, control: &Contro
     let nodes_searched = request.nodes && arm.branches.is_none();
     let start = Instant::now();
     let mut run = if structural {
-        arm3r::structural_singularities(chain, request.precision)?
+        arm3r::structural_singularities(chain, request.precision, control)?
     } else {
         arm3r::singularities(chain, request.precision, nodes_searched, control, progress)?
     };

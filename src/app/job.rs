@@ -14,6 +14,12 @@ use crate::kernel::lp::LpBackend;
 use crate::kernel::search::Limits;
 
 use super::arm::IkPoint;
+
+/// `ik6`'s timeout when none is given. A pose whose solutions form a continuum (a wrist
+/// singularity: joints 4 and 6 aligned, only their sum or difference fixed) is covered by boxes
+/// along the whole curve and never completes: at the home pose of a Motoman GP7-like arm the
+/// 20,000,000-box default ran past 600 s and 579 MB. Regular poses take well under a second.
+pub const IK6_DEFAULT_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(60);
 use super::path::PathSet;
 
 /// One question, with everything it needs but the mechanism and the bounds of the run.
@@ -237,14 +243,14 @@ impl Job {
     }
 
     /// The bounds a run of this job takes when the front end sets none: the kernel's, with the
-    /// job's own box budget (`singularities`' per search) and, for the singularity searches,
-    /// a tighter memory bound on pending cells.
+    /// job's own box budget (`singularities`' per search), for the singularity searches a
+    /// tighter memory bound on pending cells, and for `ik6` a timeout (`IK6_DEFAULT_TIMEOUT`).
     pub fn default_limits(name: &str) -> Limits {
         let base = Limits::default();
         match name {
             "singularities" => Limits { max_cells: 5_000_000, max_memory: 256 << 20, ..base },
             "ik" => Limits { max_cells: 200_000, ..base },
-            "ik6" => Limits { max_cells: 20_000_000, ..base },
+            "ik6" => Limits { max_cells: 20_000_000, timeout: Some(IK6_DEFAULT_TIMEOUT), ..base },
             "collisions" => Limits { max_cells: crate::analyses::arm3r::collision::DEFAULT_MAX_BOXES, ..base },
             // Segments of a joint path, each checked whole.
             "path-check" => Limits { max_cells: 10_000_000, ..base },

@@ -31,7 +31,7 @@ pub(crate) mod sweep;
 
 // The front door: a `Job` in, an `Answer` out.
 pub use answer::{Answer, CollisionsAnswer, DistancesAnswer, Ik6Answer, IkAnswer, LoopAnswer, PathCheckAnswer, SingularitiesAnswer, SolveAnswer};
-pub use job::{ArmOptions, CollisionsJob, DistancesJob, Ik6Job, IkJob, Job, LoopQuestion, LoopSingularitiesJob, MotionSpan, PathCheckJob, SingularitiesJob, SolveJob, SweepTaskJob};
+pub use job::{ArmOptions, CollisionsJob, DistancesJob, Ik6Job, IkJob, Job, LoopQuestion, LoopSingularitiesJob, MotionSpan, PathCheckJob, SingularitiesJob, SolveJob, SweepTaskJob, IK6_DEFAULT_TIMEOUT};
 pub use prepare::{prepare, Input, JobError, Prepared};
 // What a front end shows of a mechanism before asking it anything.
 pub use info::{describe, JointInfo, LoopInfo, MechanismInfo};
@@ -69,7 +69,7 @@ pub use arm::{collisions, inverse_kinematics, singularities, Arm, ArmCollisions,
 pub use arm_analysis::{Manip3rAnalysis, CURVE_DEPTH};
 pub use distances::{DistancesRun, DistancesRequest};
 pub use linkage::LinkageAnalysis;
-pub use solve::{describe_freedom, SolveRun};
+pub use solve::{describe_freedom, LinkReadout, SolveRun};
 pub use crate::analyses::loop_singular::SingularSets;
 pub use loops::{all_kinds, analyse_image, image_points, Actuation, ImageAnalysisError, ImageSearch};
 pub use crate::analyses::input_motion::{check_input_motion, motion_joints, InputMotionCheck, MotionError, MotionRequest, MotionStep, MotionVerdict};

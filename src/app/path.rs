@@ -32,7 +32,8 @@ impl ArmPathCheck {
             c.clear
         );
         if c.not_decided > 0 {
-            line += &format!(", {} not decided (stopped)", c.not_decided);
+            let limit = self.completeness().reason().map_or("a", |r| r.name());
+            line += &format!(", {} not decided (stopped on the {limit} limit)", c.not_decided);
         }
         line
     }

@@ -355,17 +355,19 @@ impl Prepared {
             Ready::Solve { run, freedom, rigid_links } => {
                 let settings = within(run.settings(), control);
                 let run = run.within(settings);
-                let result = run.run(control.cancel, progress);
-                Answer::Solve(Box::new(SolveAnswer { run, result, freedom, rigid_links }))
+                let (result, links) = run.run_reading(control.cancel, progress, Some(&rigid_links));
+                Answer::Solve(Box::new(SolveAnswer { run, result, links, freedom, rigid_links }))
             }
             Ready::Singularities { arm, mechanism, job } => {
                 let request = SingularitiesRequest { precision: job.precision, nodes: job.nodes, search_anyway: job.search_anyway, verdict: job.verdict };
+                let t0 = std::time::Instant::now();
                 let found = arm::singularities(&arm, &request, control, progress)?;
                 let whole_arm = if job.verdict && job.arm_budget > 0.0 {
-                    // Within the run's timeout too.
+                    // Within what the 3R searches left of the run's timeout too.
+                    let left = control.remaining_since(t0);
                     let budget = std::time::Duration::from_secs_f64(job.arm_budget);
-                    let budget = control.limits.timeout.map_or(budget, |t| t.min(budget));
-                    six::arm_cuspidality(&mechanism, &arm, &job.arm, budget, control)
+                    let budget = left.limits.timeout.map_or(budget, |t| t.min(budget));
+                    six::arm_cuspidality(&mechanism, &arm, &job.arm, budget, &left)
                 } else {
                     None
                 };

@@ -71,9 +71,12 @@ fn solve(out: &mut Out, a: &linkspace::app::SolveAnswer) {
         writeln!(out, "  no configuration: every box was proven empty, so {why}").ok();
     }
     if stats.post_processing_cut_short {
-        // What the limit cost: these boxes were reported without the deeper search that drops
-        // near misses, so the count may include a few spurious ones.
-        writeln!(out, "  the time limit cut the spurious-box check short: some lone boxes were kept unexamined").ok();
+        // What the limit cost: boxes reported without the deeper search that drops near misses
+        // (the count may include a few spurious ones), or without their joint values.
+        let limit = result.status.limit().map_or("time", |l| l.name());
+        let unread = result.boxes.iter().filter(|b| b.joints.iter().any(|j| j[0].is_nan())).count();
+        let unread = if unread > 0 { format!("; {unread} boxes were not read out (their joints are NaN, null in the JSON)") } else { String::new() };
+        writeln!(out, "  the {limit} limit cut the post-processing short: some lone boxes may be kept without the spurious-box check{unread}").ok();
     }
     if solutions.len() <= 20 {
         for (k, s) in solutions.iter().enumerate() {
@@ -109,12 +112,11 @@ fn singularities(out: &mut Out, a: &linkspace::app::SingularitiesAnswer) {
     };
     writeln!(
         out,
-        "{}: {} cusps, {node_text}, {} internal-motion lines, {strips}{undecided} undecided, status {}{}, {:.3} s",
+        "{}: {} cusps, {node_text}, {} internal-motion lines, {strips}{undecided} undecided, status {}, {:.3} s",
         report.robot,
         report.cusps.len(),
         found.internal_motion_lines(),
-        report.completeness.word(),
-        report.completeness.reason().map_or(String::new(), |l| format!(" ({})", l.name())),
+        report.completeness.text(),
         report.stats.seconds
     )
     .ok();
@@ -170,7 +172,7 @@ fn singularities(out: &mut Out, a: &linkspace::app::SingularitiesAnswer) {
 fn ik(out: &mut Out, a: &linkspace::app::IkAnswer) {
     let report = report::manip3r::IkReport::of(&a.arm, &a.found);
     let s = &a.found.solutions;
-    writeln!(out, "{}: {} solutions proven unique, {} clusters undecided, status {}", report.robot, s.unique.len(), s.clusters.len(), report.completeness.word()).ok();
+    writeln!(out, "{}: {} solutions proven unique, {} clusters undecided, status {}", report.robot, s.unique.len(), s.clusters.len(), report.completeness.text()).ok();
     writeln!(out, "  chain: {}", a.arm.prepared.choice.reason).ok();
     writeln!(out, "  {}", a.found.limit_effect.text).ok();
     for sol in &report.solutions {
@@ -194,7 +196,7 @@ fn ik6(out: &mut Out, a: &linkspace::app::Ik6Answer) {
         report.tip,
         report.unique.len(),
         report.clusters.len(),
-        report.completeness.word(),
+        report.completeness.text(),
         report.processed,
         report.seconds
     )
@@ -241,7 +243,7 @@ fn collisions(out: &mut Out, a: &linkspace::app::CollisionsAnswer) {
         pct(s.free_area),
         report.undecided.len(),
         pct(s.undecided_area),
-        report.completeness.word(),
+        report.completeness.text(),
         s.seconds
     )
     .ok();
@@ -382,7 +384,7 @@ fn image(out: &mut Out, r: &linkspace::app::ImageReport) {
         r.node_counts.undecided,
         r.injective,
         r.regions.regions.len(),
-        r.status.word(),
+        r.status.text(),
         r.seconds.iter().sum::<f64>(),
         r.seconds[0],
         r.seconds[1],
@@ -400,7 +402,7 @@ fn image(out: &mut Out, r: &linkspace::app::ImageReport) {
 }
 
 fn image_points(out: &mut Out, r: &linkspace::app::ImagePoints) {
-    writeln!(out, "{} type-II image {}: {} proven, {} undecided; status {}; {:.3} s", r.mechanism, r.search, r.counts.proven, r.counts.undecided, r.status.word(), r.seconds).ok();
+    writeln!(out, "{} type-II image {}: {} proven, {} undecided; status {}; {:.3} s", r.mechanism, r.search, r.counts.proven, r.counts.undecided, r.status.text(), r.seconds).ok();
     image_records(out, &r.cusps, &r.nodes);
 }
 

@@ -49,7 +49,7 @@ use serde_json::to_string_pretty;
 /// The JSON report of an answer, as `--json` writes it: the one writer of every question.
 pub fn json(answer: &Answer) -> Result<String, serde_json::Error> {
     match answer {
-        Answer::Solve(a) => to_string_pretty(&SolveReport::new(a.run.problem(), &a.result, a.rigid_links.clone())),
+        Answer::Solve(a) => to_string_pretty(&SolveReport::new(a.run.problem(), &a.result, &a.links, a.rigid_links.clone())),
         Answer::Singularities(a) => to_string_pretty(&manip3r::SingularityReport::of(a)),
         Answer::Ik(a) => to_string_pretty(&manip3r::IkReport::of(&a.arm, &a.found)),
         Answer::Ik6(a) => to_string_pretty(&six::Ik6Report::of(&a.chain, &a.found)),

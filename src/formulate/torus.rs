@@ -4,6 +4,7 @@
 //! chain's `(ρ, z)` in `(θ₂, θ₃)` is one such map (`analyses::arm3r`), a planar platform's
 //! actuator map with one leg locked another (`formulate::singular::pose`).
 
+use crate::kernel::search::{Control, Status};
 use crate::kernel::taylor::Taylor;
 use inari::Interval;
 
@@ -107,8 +108,11 @@ pub trait TorusMap: Sync {
     }
 
     /// Strips `θ₂ ∈ [−π, π]`, `θ₃ ∈ band` on which `det Df` vanishes identically (internal
-    /// motions), which the searches set aside; none unless the map has them.
-    fn bands(&self, _precision: f64) -> Vec<Band> {
-        Vec::new()
+    /// motions), which the searches set aside; none unless the map has them. Found within
+    /// `control` (its time and cancel flag), with how that walk ended: a limit leaves the
+    /// stretches it did not reach inside strips, so the strips stay sound and the searches'
+    /// answer is incomplete.
+    fn bands(&self, _precision: f64, _control: &Control) -> (Vec<Band>, Status) {
+        (Vec::new(), Status::Finished)
     }
 }

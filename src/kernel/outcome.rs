@@ -200,10 +200,12 @@ impl Completeness {
         }
     }
 
-    /// `complete`, or `incomplete (REASON)`: the text front ends print.
+    /// `complete`, or `incomplete (REASON)`: the text front ends print. A limit is named as
+    /// a limit (`incomplete (time limit)`), so a reader knows what to raise.
     pub fn text(self) -> String {
         match self {
             Completeness::Complete => self.word().to_string(),
+            Completeness::Incomplete(Incompleteness::Limit(l)) => format!("{} ({} limit)", self.word(), l.name()),
             Completeness::Incomplete(why) => format!("{} ({})", self.word(), why.name()),
         }
     }
@@ -252,7 +254,7 @@ mod tests {
     fn a_limit_outranks_what_is_undecided() {
         let c = Completeness::of(Status::Stopped(Limit::Time), 2, true);
         assert_eq!(c.reason(), Some(Incompleteness::Limit(Limit::Time)));
-        assert_eq!(c.text(), "incomplete (time)");
+        assert_eq!(c.text(), "incomplete (time limit)");
         assert_eq!(Completeness::of(Status::Finished, 0, true).text(), "incomplete (near_degenerate)");
         assert!(Completeness::of_run(Status::Finished).is_complete());
         assert_eq!(Completeness::Complete.and(c), c);

@@ -440,9 +440,11 @@ pub fn search_with<M: TorusMap + ?Sized>(chain: &M, settings: &CuspSettings, con
     super::check_precision(settings.precision)?;
     let t0 = Instant::now();
     let eps = settings.precision;
-    let bands = chain.bands(eps);
+    let (bands, walk) = chain.bands(eps, control);
     let start = CuspCell { theta: [motion::full_range(), motion::full_range()], order: Order::ROOT, level: 0 };
-    let Outcome { status, stats, found, undecided: pending, workers } = drive_shared(|| CuspPrune { chain, bands: &bands, eps, method: settings.method, contracted: 0 }, start, control, progress);
+    let Outcome { status, stats, found, undecided: pending, workers } = drive_shared(|| CuspPrune { chain, bands: &bands, eps, method: settings.method, contracted: 0 }, start, &control.remaining_since(t0), progress);
+    // A walk for the strips cut short leaves the answer incomplete, whatever the search did.
+    let status = walk.and(status);
     // Each process counted the boxes it decided.
     let contracted = search::total(&[workers.iter().map(|p| p.contracted).sum::<u64>() as f64])[0] as u64;
     drop(workers);

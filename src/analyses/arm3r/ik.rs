@@ -182,9 +182,11 @@ pub fn solve_target<M: TorusMap + ?Sized>(chain: &M, target: [Interval; 2], prec
     // A point that may be the image of an internal-motion line is solved by the whole line:
     // found before searching, a strip about the line is set aside (a search there would go
     // down to the precision all along the line) and reported as one cluster of 0 boxes.
-    let aside = line_strips(chain, target, precision);
+    let t0 = std::time::Instant::now();
+    let (aside, walk) = line_strips(chain, target, precision, control);
     let start = IkCell { b: [motion::full_range(), motion::full_range()], order: Order::ROOT, level: 0 };
-    let mut run = drive_shared(|| IkPrune { chain, target, precision, aside: &aside }, start, control, progress);
+    let mut run = drive_shared(|| IkPrune { chain, target, precision, aside: &aside }, start, &control.remaining_since(t0), progress);
+    run.status = walk.and(run.status);
     run.found.sort_by_key(|(order, _)| *order);
     let mut unique: Vec<[Interval; 2]> = Vec::new();
     for (_, k) in run.found {
@@ -207,10 +209,12 @@ pub fn solve_target<M: TorusMap + ?Sized>(chain: &M, target: [Interval; 2], prec
 const LINE_MARGIN: f64 = 1.0 / 1024.0;
 
 /// The θ₃ strips about the internal-motion lines whose image may be the target (the image of
-/// a line is one point: f at any θ₂ over the band's θ₃ encloses it).
-fn line_strips<M: TorusMap + ?Sized>(chain: &M, target: [Interval; 2], precision: f64) -> Vec<Interval> {
+/// a line is one point: f at any θ₂ over the band's θ₃ encloses it), found within `control`,
+/// with how the walk for them ended.
+fn line_strips<M: TorusMap + ?Sized>(chain: &M, target: [Interval; 2], precision: f64, control: &Control) -> (Vec<Interval>, Status) {
     let mut out: Vec<Interval> = Vec::new();
-    for band in chain.bands(precision).iter().filter(|b| b.near.is_none()) {
+    let (bands, walk) = chain.bands(precision, control);
+    for band in bands.iter().filter(|b| b.near.is_none()) {
         let t3 = crate::kernel::interval::interval(band.theta3[0], band.theta3[1]);
         let image = chain.derived([point(0.0), t3], 0);
         if (0..2).all(|k| !image.f[k].value().disjoint(target[k])) {
@@ -220,7 +224,7 @@ fn line_strips<M: TorusMap + ?Sized>(chain: &M, target: [Interval; 2], precision
             out.push(crate::kernel::interval::interval(lo, hi));
         }
     }
-    out
+    (out, walk)
 }
 
 /// Groups boxes that touch on the torus, listed by their first box.

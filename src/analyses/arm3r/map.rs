@@ -7,6 +7,7 @@
 pub use crate::formulate::torus::TorusMap;
 use super::chain::{Chain3R, Derived, Jets};
 use super::motion::{self, Band};
+use crate::kernel::search::{Control, Status};
 use inari::Interval;
 
 impl TorusMap for Chain3R {
@@ -22,7 +23,7 @@ impl TorusMap for Chain3R {
         self.uncertainty
     }
 
-    fn bands(&self, precision: f64) -> Vec<Band> {
-        motion::bands(self, precision)
+    fn bands(&self, precision: f64, control: &Control) -> (Vec<Band>, Status) {
+        motion::bands_within(self, precision, control)
     }
 }

@@ -262,11 +262,11 @@ pub fn prepare(m: &crate::model::Mechanism, options: &LoadOptions) -> Result<Pre
 /// there satisfies the system (2) of Benoit et al. (2019) without Krawczyk being able to decide it,
 /// and branches mapped onto one curve (curves of nodes) flood the node search. Internal-motion
 /// lines are still searched (cheap, and they exist when the point can reach axis 2).
-pub fn structural_singularities(chain: &Chain3R, precision: f64) -> Result<Singularities, Manip3rError> {
+pub fn structural_singularities(chain: &Chain3R, precision: f64, control: &Control) -> Result<Singularities, Manip3rError> {
     check_precision(precision)?;
     let start = Instant::now();
-    let bands = motion::bands(chain, precision);
+    let (bands, status) = motion::bands_within(chain, precision, control);
     let seconds = start.elapsed().as_secs_f64();
-    let cusps = CuspSearch { cusps: Vec::new(), undecided: Vec::new(), bands, status: Status::Finished, stats: Default::default(), contracted: 0, seconds };
-    Ok(Singularities { cusps, nodes: None, status: Status::Finished, seconds })
+    let cusps = CuspSearch { cusps: Vec::new(), undecided: Vec::new(), bands, status, stats: Default::default(), contracted: 0, seconds };
+    Ok(Singularities { cusps, nodes: None, status, seconds })
 }

@@ -14,7 +14,7 @@ use super::chain::Chain3R;
 use super::drive::{drive, no_progress, Order};
 use crate::kernel::search::Control;
 use crate::kernel::interval::interval;
-use crate::kernel::search::{Limits, Prune, Step};
+use crate::kernel::search::{Limits, Prune, Status, Step};
 use inari::Interval;
 
 /// Upper end of the joint range: the smallest double above π, so [-PI_UP, PI_UP] covers the
@@ -61,6 +61,8 @@ struct StripPrune<'a> {
     chain: &'a Chain3R,
     precision: f64,
     near: f64,
+    /// The chain's lengths are uncertain (`Chain3R::uncertainty`).
+    uncertain: bool,
 }
 
 impl Prune for StripPrune<'_> {
@@ -77,6 +79,12 @@ impl Prune for StripPrune<'_> {
             Step::Found((order, (t, possible || close, (close && !possible).then_some(self.near))))
         } else if !close {
             Step::Found((order, (t, false, None)))
+        } else if self.uncertain && possible && [t.inf(), t.sup()].iter().all(|&e| self.chain.off_axis2(interval(e, e)).iter().all(|c| c.contains(0.0))) {
+            // An uncertain arm's point may lie on the axis over a whole stretch of θ₃: a cell
+            // where it may at both ends (and in between) lies inside that stretch's band, and
+            // its halves would say the same down to the precision. Kept whole: the band's ends
+            // are still found cell by cell, and a marked cell only ever widens a strip.
+            Step::Found((order, (t, true, None)))
         } else {
             let m = t.mid();
             Step::Split([(interval(t.inf(), m), order.child(0, 2)), (interval(m, t.sup()), order.child(1, 2))].into_iter().collect())
@@ -84,17 +92,34 @@ impl Prune for StripPrune<'_> {
     }
 }
 
-/// The internal-motion strips of `chain`, from dyadic cells no wider than `precision`.
+/// Cells the walk of `bands_within` takes at most. A walk about the true lines of an exact arm
+/// takes a few hundred (a line's cells are split only within the precision of it), and so does
+/// an uncertain arm's, whose point may lie on the axis over a whole stretch of θ₃ (cells inside
+/// it are kept whole: split, that stretch would go down to the precision, 5·10⁸ cells for
+/// 0.05 rad at 1e-10). A bound for what no walk should need.
+pub(crate) const BAND_CELLS: u64 = 1 << 20;
+
+/// The internal-motion strips of `chain`, from dyadic cells no wider than `precision`, with no
+/// limit but `BAND_CELLS`.
 pub fn bands(chain: &Chain3R, precision: f64) -> Vec<Band> {
+    bands_within(chain, precision, &Control::with_limits(Limits { timeout: None, ..Limits::default() })).0
+}
+
+/// The internal-motion strips of `chain`, from dyadic cells no wider than `precision`, found
+/// within `control`'s time and cancel flag (and `BAND_CELLS`), with how the walk ended.
+pub(crate) fn bands_within(chain: &Chain3R, precision: f64, control: &Control) -> (Vec<Band>, Status) {
     // Near-degenerate: the point within `near` of axis 2, where one turn of θ₂ moves the image
     // by less than a search box of this precision does (about precision × the arm's length).
     let near = precision * chain.length_scale() / (2.0 * std::f64::consts::PI);
     // Cells in order of θ₃, each marked when the end point may lie on axis 2 there, or
-    // (second flag) is proven within `near` of it without being proven on it. The walk always
-    // ends (cells stop at the precision), so it runs without a limit: a partial list of cells
-    // would make strips unsound.
-    let control = Control::with_limits(Limits { max_cells: u64::MAX, timeout: None, max_memory: usize::MAX });
-    let mut run = drive(|| StripPrune { chain, precision, near }, (full_range(), Order::ROOT), &control, &mut no_progress);
+    // (second flag) is proven within `near` of it without being proven on it. A cell a limit
+    // left unwalked is marked as one where the point may lie on the axis: a partial list of
+    // cells would make strips unsound, while a wider strip is only set aside (and the limit
+    // makes the answer incomplete).
+    let limits = Limits { max_cells: BAND_CELLS, max_memory: usize::MAX, ..control.limits };
+    let control = Control { limits, threads: 1, ..*control };
+    let mut run = drive(|| StripPrune { chain, precision, near, uncertain: chain.uncertainty > 0.0 }, (full_range(), Order::ROOT), &control, &mut no_progress);
+    run.found.extend(run.undecided.drain(..).map(|((t, order), _)| (order, (t, true, None))));
     run.found.sort_by_key(|(order, _)| *order);
     let cells: Vec<(Interval, bool, Option<f64>)> = run.found.into_iter().map(|(_, cell)| cell).collect();
     let mut out = Vec::new();
@@ -133,5 +158,5 @@ pub fn bands(chain: &Chain3R, precision: f64) -> Vec<Band> {
         let above = if i < n { fine_end(cells[i].0, precision, false).sup() } else { hi };
         out.push(Band { theta3: [lo, hi], strip: [below, above], near: near_bound });
     }
-    out
+    (out, run.status)
 }

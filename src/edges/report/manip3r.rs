@@ -617,7 +617,7 @@ mod tests {
     fn the_reading_keeps_its_place_in_the_json_and_is_absent_without_one() {
         let p = prepare(&crate::model::urdf::parse(include_str!("../../../urdf/puma560.urdf")).expect("parses"), &LoadOptions::default()).expect("3R");
         let chain = Chain3R::from_mechanism(&p.mechanism, 0.0).expect("3R");
-        let run = structural_singularities(&chain, 1e-4).expect("precision");
+        let run = structural_singularities(&chain, 1e-4, &crate::kernel::search::Control::with_limits(Default::default())).expect("precision");
         let mut r = SingularityReport::new(&chain, 1e-4, &run.cusps, None, 0.0);
         r.not_searched = Some("structural".into());
         let bare = keys(&r);

@@ -29,6 +29,10 @@ pub struct MotionReport {
     pub start: JointBoxes,
     /// `clear`, `undecided` or `not_decided` (a limit stopped it).
     pub verdict: &'static str,
+    /// `complete` (clear), or `incomplete` with `limit`: the limit that stopped the check, or
+    /// `undecided`.
+    #[serde(flatten, serialize_with = "super::kernel::CompletenessDef::serialize")]
+    pub status: crate::kernel::outcome::Completeness,
     /// Why, in one line.
     pub reason: String,
     /// The input value up to which every step is proven (`to` when clear).
@@ -66,7 +70,7 @@ impl MotionReport {
                 });
                 ("undecided", format!("undecided from {} = {from} on: {reason}{named}", r.actuated), *from, near.clone())
             }
-            MotionVerdict::Stopped { from, limit } => ("not_decided", format!("proven up to {} = {from}; the run stopped ({}) first", r.actuated, limit.name()), *from, None),
+            MotionVerdict::Stopped { from, limit } => ("not_decided", format!("proven up to {} = {from}; the run stopped on its {} limit first", r.actuated, limit.name()), *from, None),
         };
         MotionReport {
             mechanism: found.mechanism.clone(),
@@ -78,6 +82,7 @@ impl MotionReport {
             assembly: r.assembly.clone(),
             start: found.start.clone(),
             verdict,
+            status: found.completeness(),
             reason,
             proven_to,
             near_turning_point: near,

@@ -170,6 +170,10 @@ pub struct PathCheckReport {
     pub joints: Vec<String>,
     /// Radians: the width crossings were narrowed to (joint space).
     pub tolerance: f64,
+    /// `complete` (every segment clear or crossing, narrowed), or `incomplete` with `limit`:
+    /// the limit that stopped a segment, else `undecided`.
+    #[serde(flatten, serialize_with = "super::kernel::CompletenessDef::serialize")]
+    pub status: crate::kernel::outcome::Completeness,
     /// Segments by verdict.
     #[serde(with = "PathCountsDef")]
     pub counts: PathCounts,
@@ -291,6 +295,7 @@ impl PathCheckReport {
             subject: found.subject.clone(),
             joints: names.clone(),
             tolerance: found.tolerance,
+            status: found.completeness(),
             counts: found.check.counts(),
             segments,
             seconds: found.seconds,

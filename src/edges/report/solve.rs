@@ -3,8 +3,8 @@
 //! box: the links' orientations (planar model) or poses (spatial model).
 
 use super::kernel;
-use crate::app::{BoxSetResult, ResultBox, TracedBounds};
-use crate::kernel::interval::{interval, Bounds, IntervalBox};
+use crate::app::{BoxSetResult, LinkReadout, ResultBox, TracedBounds};
+use crate::kernel::interval::Bounds;
 use crate::formulate::singular::Coordinates;
 use crate::formulate::spatial::LinkPose;
 use crate::formulate::Linkage;
@@ -110,10 +110,13 @@ pub struct SolveReport {
 }
 
 impl SolveReport {
-    /// The report of `result`, a run of `problem` (`app::SolveRun::run`); `rigid_links` as
+    /// The report of `result`, a run of `problem` (`app::SolveRun::run_reading`) with its
+    /// boxes' `links` read out (one per box, in order); `rigid_links` as
     /// `Mechanism::rigid_links` gives them.
-    pub fn new(problem: &Linkage, result: &BoxSetResult, rigid_links: BTreeMap<String, String>) -> Self {
-        let record = |b: &ResultBox| box_record(problem, result, b, &rigid_links);
+    pub fn new(problem: &Linkage, result: &BoxSetResult, links: &[LinkReadout], rigid_links: BTreeMap<String, String>) -> Self {
+        let unread = LinkReadout::Unread;
+        let link = |i: usize| links.get(i).unwrap_or(&unread);
+        let record = |(i, b): (usize, &ResultBox)| box_record(result, b, link(i));
         SolveReport {
             mechanism: result.mechanism.clone(),
             model: problem.model().name().to_string(),
@@ -130,25 +133,21 @@ impl SolveReport {
                 .enumerate()
                 .map(|(i, name)| VariableInfo { name: name.clone(), role: if result.primaries.contains(&i) { VarRole::Primary } else { VarRole::Derived } })
                 .collect(),
-            solutions: result.boxes.iter().filter(|b| b.status.is_solution()).map(record).collect(),
+            solutions: result.boxes.iter().enumerate().filter(|(_, b)| b.status.is_solution()).map(record).collect(),
             clusters: result.clusters,
-            undecided: result.boxes.iter().filter(|b| b.status == BoxStatus::Undecided).map(record).collect(),
+            undecided: result.boxes.iter().enumerate().filter(|(_, b)| b.status == BoxStatus::Undecided).map(record).collect(),
             stats: result.stats.clone(),
         }
     }
 }
 
-/// One box of `result` in the user's terms; the links' orientations and poses are read off the
-/// box by `problem`.
-fn box_record(problem: &Linkage, result: &BoxSetResult, b: &ResultBox, rigid_links: &BTreeMap<String, String>) -> BoxRecord {
-    let moves = |name: &str| !rigid_links.contains_key(name);
-    let original = || IntervalBox { dims: b.bounds.iter().map(|&[lo, hi]| interval(lo, hi)).collect(), level: b.level };
+/// One box of `result` in the user's terms, with its links as the run read them out.
+fn box_record(result: &BoxSetResult, b: &ResultBox, links: &LinkReadout) -> BoxRecord {
     let traced = |t: &TracedBounds| TracedPoint { x: t.x, y: t.y, z: t.z };
-    let (link_angles, link_poses) = match problem {
-        Linkage::Planar(p) => (p.link_angles_of(&original(), moves).into_iter().map(|(k, (lo, hi))| (k, [lo, hi])).collect(), None),
-        Linkage::Spatial(p, _) => (BTreeMap::new(), Some(p.link_poses_of(&original(), moves).into_iter().map(|(k, pose)| (k, LinkPoseRecord(pose))).collect())),
-        Linkage::Pose(p, _) => (BTreeMap::new(), Some(BTreeMap::from([(p.platform.clone(), LinkPoseRecord(p.link_pose(&original())))]))),
-        Linkage::Distances(p, _) => (BTreeMap::new(), Some(BTreeMap::from([(p.platform.clone(), LinkPoseRecord(p.link_pose(&original())))]))),
+    let (link_angles, link_poses) = match links {
+        LinkReadout::Angles(a) => (a.iter().map(|(k, &(lo, hi))| (k.clone(), [lo, hi])).collect(), None),
+        LinkReadout::Poses(p) => (BTreeMap::new(), Some(p.iter().map(|(k, pose)| (k.clone(), LinkPoseRecord(pose.clone()))).collect())),
+        LinkReadout::Unread => (BTreeMap::new(), None),
     };
     BoxRecord {
         joints: result.joint_names.iter().cloned().zip(b.joints.iter().copied()).collect(),

@@ -4,43 +4,88 @@
 //! # Why the enclosure is proven
 //!
 //! inari is built without its `gmp` feature, so it has no `atan2`; and the platform's
-//! `f64::atan2` documents no error bound. `arg` therefore uses inari's correctly rounded field
-//! operations and square root only. At each corner of the box (exact `f64` coordinates) the
-//! angle is reduced to `atan t` with `t ∈ [0, 1]`; three halvings
+//! `f64::atan2` documents no error bound. `arg` therefore uses correctly rounded field
+//! operations and square root only, each result moved one ulp outward (`fast::Iv`: IEEE 754
+//! rounds to nearest, within half an ulp). At each corner of the box (exact `f64` coordinates)
+//! the angle is reduced to `atan t` with `t ∈ [0, 1]`; three halvings
 //! `atan t = 2·atan(t / (1 + √(1 + t²)))` bring `t` below tan(π/32) < 0.1, and there the
 //! alternating series `u − u³/3 + … + u¹⁷/17` is within `u¹⁹/19` (< 10⁻²⁰) of atan u, on the
 //! low side. Every step is an interval operation and π comes from inari's enclosing constants,
-//! so each corner's angle is enclosed within a few ulps, with no assumption on any library.
+//! so each corner's angle is enclosed within some ten ulps, with no assumption on any library.
+//! (Inline `f64` steps rather than inari's calls: the angles are what every box's joint values
+//! are read from, a few per joint, for boxes by the hundred thousand.)
 
-use super::{interval, point, Interval};
+use super::fast::Iv;
+use super::{point, Interval};
 
-/// atan over `t ⊂ [0, 1]`.
-fn atan_unit(t: Interval) -> Interval {
-    let one = point(1.0);
+/// `a / b` for `0 ≤ a` and `0 < b` (bounds), outward.
+#[inline(always)]
+fn div_positive(a: Iv, b: Iv) -> Iv {
+    Iv { lo: (a.lo / b.hi).next_down().max(0.0), hi: (a.hi / b.lo).next_up() }
+}
+
+/// `a · b`, two products for nonnegative bounds (every product in `atan_unit`), else `Iv::mul`.
+#[inline(always)]
+fn mul_nonnegative(a: Iv, b: Iv) -> Iv {
+    if a.lo >= 0.0 && b.lo >= 0.0 {
+        Iv { lo: (a.lo * b.lo).next_down().max(0.0), hi: (a.hi * b.hi).next_up() }
+    } else {
+        a.mul(b)
+    }
+}
+
+/// `√a` for `0 ≤ a`, outward.
+#[inline(always)]
+fn sqrt_positive(a: Iv) -> Iv {
+    Iv { lo: a.lo.sqrt().next_down().max(0.0), hi: a.hi.sqrt().next_up() }
+}
+
+/// `1 / (2k + 1)`, outward.
+#[inline(always)]
+fn odd_reciprocal(k: u32) -> Iv {
+    let x = 1.0 / f64::from(2 * k + 1);
+    Iv { lo: x.next_down(), hi: x.next_up() }
+}
+
+/// atan over `t ⊂ [0, 1]` (bounds).
+fn atan_unit(t: Iv) -> Iv {
+    if t.hi == 0.0 {
+        return Iv::ZERO;
+    }
+    let one = Iv { lo: 1.0, hi: 1.0 };
     let mut u = t;
     for _ in 0..3 {
-        u = u / (one + (one + u.sqr()).sqrt());
+        u = div_positive(u, one.add(sqrt_positive(one.add(mul_nonnegative(u, u)))));
     }
     // atan u = u·Σ (−u²)ᵏ/(2k+1): Horner over k = 8 down to 0, then the remainder of an
     // alternating series with decreasing terms, between the next term and 0.
-    let u2 = u.sqr();
-    let mut sum = one / point(17.0);
+    let u2 = mul_nonnegative(u, u);
+    let mut sum = odd_reciprocal(8);
     for k in (0..8).rev() {
-        sum = one / point(f64::from(2 * k + 1)) - u2 * sum;
+        sum = odd_reciprocal(k).sub(mul_nonnegative(u2, sum));
     }
-    let mut next = u;
+    let mut next = u.hi;
     for _ in 0..18 {
-        next *= u;
+        next = (next * u.hi).next_up();
     }
-    let rest = (next / point(19.0)).sup();
-    point(8.0) * (u * sum + interval(-rest, 0.0))
+    let rest = (next / 19.0).next_up();
+    mul_nonnegative(u, sum).add(Iv { lo: -rest, hi: 0.0 }).scale(8.0)
 }
 
 /// The angle of the nonzero point `(x, y)`: in [0, π] for `y ≥ 0` (π on the negative axis);
 /// for `y < 0` in (−π, 0), or in (π, 2π) when `past_pi`.
 fn corner_angle(x: f64, y: f64, past_pi: bool) -> Interval {
     let (ax, ay) = (x.abs(), y.abs());
-    let in_quadrant = if ay <= ax { atan_unit(point(ay) / point(ax)) } else { Interval::FRAC_PI_2 - atan_unit(point(ax) / point(ay)) };
+    // The ratio of two exact doubles, at most 1, enclosed by its rounding moved outward (an
+    // underflow to 0 too: next_up(0) is the least positive double).
+    let ratio = |a: f64, b: f64| {
+        if a == 0.0 {
+            return Iv::ZERO;
+        }
+        let r = a / b;
+        Iv { lo: r.next_down().max(0.0), hi: r.next_up().min(1.0) }
+    };
+    let in_quadrant = if ay <= ax { atan_unit(ratio(ay, ax)).to() } else { Interval::FRAC_PI_2 - atan_unit(ratio(ax, ay)).to() };
     let upper = if x < 0.0 { Interval::PI - in_quadrant } else { in_quadrant };
     match (y < 0.0, past_pi) {
         (false, _) => upper,
@@ -79,6 +124,7 @@ pub fn wrap(x: Interval) -> Interval {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::kernel::interval::interval;
     use crate::kernel::interval::trig::{cos, sin};
     use proptest::prelude::*;
 
@@ -128,7 +174,8 @@ mod tests {
         let cases = [((1.0, 0.0), point(0.0)), ((0.0, 2.0), Interval::FRAC_PI_2), ((-3.0, 0.0), pi), ((1.0, 1.0), Interval::FRAC_PI_4), ((-1.0, -1.0), -(pi - Interval::FRAC_PI_4)), ((0.0, -1.0), -Interval::FRAC_PI_2)];
         for ((x, y), want) in cases {
             let a = arg(point(x), point(y)).expect("away from 0");
-            assert!(!a.disjoint(want) && a.wid() < 4e-15, "({x}, {y}): {a:?}");
+            // Each operation moves its result one ulp outward: some ten ulps of π in all.
+            assert!(!a.disjoint(want) && a.wid() < 1e-14, "({x}, {y}): {a:?}");
         }
         assert_eq!(arg(point(2.0), point(0.0)), Some(point(0.0)));
         // π/4 = 4·atan(1/5) − atan(1/239) exercises the series away from exact cases.

@@ -166,6 +166,9 @@ pub struct Solver<'a> {
     /// Per variable, the unit its width is measured in (`width_units`).
     units: Vec<f64>,
     factory: Option<std::sync::Arc<ContractorFactory<'a>>>,
+    /// When every run of this solver must end, whenever it starts (`until`): the phases of
+    /// one job share one deadline.
+    deadline: Option<Instant>,
 }
 
 /// The default pipeline: propagation, then interval Newton on small boxes of square systems,
@@ -220,7 +223,15 @@ impl<'a> Solver<'a> {
         settings.validate()?;
         system.validate()?;
         let units = width_units(system, &settings);
-        Ok(Self { system, primaries: system.primaries(), units, settings, factory: None })
+        Ok(Self { system, primaries: system.primaries(), units, settings, factory: None, deadline: None })
+    }
+
+    /// The same solver whose every run, and every re-examination after one, also ends by
+    /// `deadline` (the earlier of it and each run's own timeout): the searches of one job, run
+    /// one after the other, share the job's deadline instead of each taking its full timeout.
+    pub fn until(mut self, deadline: Option<Instant>) -> Self {
+        self.deadline = earliest(self.deadline, deadline);
+        self
     }
 
     /// Replaces the default shrink pipeline (`default_contractor`) with `factory`'s, e.g. to add
@@ -260,9 +271,15 @@ impl<'a> Solver<'a> {
         &self.settings
     }
 
-    /// The kernel's limits for these settings.
+    /// The kernel's limits for these settings, for a run starting now: its timeout cut to what
+    /// is left before the deadline (`until`).
     fn limits(&self) -> Limits {
-        Limits { max_cells: self.settings.max_boxes, timeout: self.settings.timeout, max_memory: self.settings.max_memory }
+        let left = self.deadline.map(|d| d.saturating_duration_since(Instant::now()));
+        let timeout = match (self.settings.timeout, left) {
+            (Some(t), Some(l)) => Some(t.min(l)),
+            (t, l) => t.or(l),
+        };
+        Limits { max_cells: self.settings.max_boxes, timeout, max_memory: self.settings.max_memory }
     }
 
     /// A `Prune` over boxes of this system, measuring volumes against `reference`.
@@ -351,7 +368,7 @@ impl<'a> Solver<'a> {
             self.run(cancel, &mut sink)
         };
         // The time limit covers the whole call, post-processing included.
-        let deadline = self.settings.timeout.map(|t| t0 + t);
+        let deadline = earliest(self.settings.timeout.map(|t| t0 + t), self.deadline);
         let (solutions, tags, dropped, cut_short) = self.drop_spurious(std::mem::take(&mut sink.collect.solutions), std::mem::take(&mut sink.collect.tags), 2, cancel, deadline);
         let (solutions, tags, merged) = self.merge_shared_certificates(solutions, tags);
         stats.spurious_dropped = dropped;
@@ -390,6 +407,7 @@ impl<'a> Solver<'a> {
             units: self.units.clone(),
             settings: SolverSettings { sigma: self.settings.sigma / 16.0, max_boxes: 4_000, ..self.settings.clone() },
             factory: self.factory.clone(),
+            deadline: self.deadline,
         };
         // Each probe is an independent deterministic run: spread them over the workers. A probe
         // gets only the time left before the deadline; none starts after it (or a cancel).
@@ -398,7 +416,7 @@ impl<'a> Solver<'a> {
             if cancel.load(Ordering::Relaxed) || remaining.is_some_and(|r| r.is_zero()) {
                 return Probe::NotRun;
             }
-            let timed = Solver { system: deeper.system, primaries: deeper.primaries.clone(), units: deeper.units.clone(), settings: SolverSettings { timeout: remaining.or(self.settings.timeout), ..deeper.settings.clone() }, factory: deeper.factory.clone() };
+            let timed = Solver { system: deeper.system, primaries: deeper.primaries.clone(), units: deeper.units.clone(), settings: SolverSettings { timeout: remaining.or(self.settings.timeout), ..deeper.settings.clone() }, factory: deeper.factory.clone(), deadline: deeper.deadline };
             let mut found = Collect::default();
             match timed.run_from(b.clone(), cancel, &mut found) {
                 (Status::Finished, _) if found.solutions.is_empty() => Probe::Empty,
@@ -558,7 +576,7 @@ impl<'a> Solver<'a> {
                 tried.push(format!("sigma {sigma:.1e}: no time left"));
                 break;
             }
-            let finer = Solver { system: self.system, primaries: self.primaries.clone(), units: self.units.clone(), settings: SolverSettings { sigma, max_boxes: plan.max_boxes, timeout: left, threads: 1, ..self.settings.clone() }, factory: self.factory.clone() };
+            let finer = Solver { system: self.system, primaries: self.primaries.clone(), units: self.units.clone(), settings: SolverSettings { sigma, max_boxes: plan.max_boxes, timeout: left, threads: 1, ..self.settings.clone() }, factory: self.factory.clone(), deadline: self.deadline };
             let mut found = Collect::default();
             let (status, stats) = finer.run_from(start.clone(), cancel, &mut found);
             if let Status::Stopped(limit) = status {
@@ -585,6 +603,14 @@ impl<'a> Solver<'a> {
 
     fn size(&self, b: &IntervalBox) -> f64 {
         self.widest(b).map_or(0.0, |(_, w)| w)
+    }
+}
+
+/// The earlier of two optional deadlines (none: no deadline).
+fn earliest(a: Option<Instant>, b: Option<Instant>) -> Option<Instant> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
     }
 }
 
