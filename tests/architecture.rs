@@ -270,6 +270,10 @@ const QUESTIONS: [(&str, &str, NodeRoute); 9] = [
     ("SweepTask", "sweep", None),
 ];
 
+/// Questions whose `Job` the front ends build through one function of `app` (the call, and the
+/// file that builds the job): a sweep's tasks, each a failed row rather than an error.
+const CLI_THROUGH: [(&str, &str, &str); 1] = [("SweepTask", "answer_task(", "app/sweep.rs")];
+
 #[test]
 fn every_question_is_reachable_from_the_front_ends() {
     let job = std::fs::read_to_string(src().join("app/job.rs")).expect("the jobs");
@@ -293,7 +297,14 @@ fn every_question_is_reachable_from_the_front_ends() {
     let results = std::fs::read_to_string(src().join("app/results.rs")).expect("readable");
     assert!(results.contains("prepare(input, job)"), "the node's runs are prepared by the front door");
     for (variant, command, node) in QUESTIONS {
-        assert!(cli.contains(&format!("Job::{variant}(")), "the CLI never builds Job::{variant}");
+        match CLI_THROUGH.iter().find(|(v, _, _)| *v == variant) {
+            Some((_, call, builder)) => {
+                assert!(cli.contains(call), "the CLI never calls {call}");
+                let built = std::fs::read_to_string(src().join(builder)).expect("readable");
+                assert!(built.contains(&format!("Job::{variant}(")), "{builder} never builds Job::{variant}");
+            }
+            None => assert!(cli.contains(&format!("Job::{variant}(")), "the CLI never builds Job::{variant}"),
+        }
         let kebab = command.replace('-', "_");
         assert!(cli.contains(&format!("Command::{}(", kebab.split('_').map(|w| w[..1].to_uppercase() + &w[1..]).collect::<String>())), "no CLI subcommand {command}");
         if let Some((service, builder)) = node {

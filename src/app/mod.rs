@@ -62,6 +62,7 @@ pub use crate::analyses::arm6r::{Chain6R, SegmentVerdict};
 /// A design sweep's spec, tasks and result lines, which the sweep command reads and writes.
 pub mod sweeps {
     pub use crate::analyses::sweep::{csv, fingerprint, map_svg, parse, read_done, run_tasks, Header, Plan, Summary, Sweep, Task, TaskResult, TaskStatus, DEFAULT_MAX_TASKS};
+    pub use super::sweep::answer_task;
 }
 
 // The analyses' entry points and typed results, which the answers carry.

@@ -88,3 +88,16 @@ pub fn sweep_task(plan: &Plan, base: &Mechanism, task: &Task, limits: &Limits, c
     }
 }
 
+/// One task through the front door, as every front end runs a sweep's tasks: `Job::SweepTask`
+/// on the base mechanism `input`, within the task's `limits` on one thread. A task that cannot
+/// be prepared or run is a failed row, not an error, so one bad grid point does not stop a sweep.
+pub fn answer_task(input: &super::Input, plan: &Plan, task: &Task, limits: &Limits, cancel: &AtomicBool) -> TaskResult {
+    let start = Instant::now();
+    let job = super::Job::SweepTask(super::SweepTaskJob { plan: plan.clone(), task: task.clone() });
+    let control = Control { limits: *limits, threads: 1, cancel };
+    match super::prepare(input, job).and_then(|p| p.run(&control, &mut |_| {})) {
+        Ok(super::Answer::SweepTask(r)) => *r,
+        Ok(other) => TaskResult::failed(task, format!("internal error: a {} answer to a sweep task", other.name()), start.elapsed().as_secs_f64()),
+        Err(e) => TaskResult::failed(task, e.to_string(), start.elapsed().as_secs_f64()),
+    }
+}

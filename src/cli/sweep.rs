@@ -102,7 +102,7 @@ pub(crate) fn run(args: SweepArgs) -> Result<()> {
     }
     let cancel = AtomicBool::new(false);
     let input = app::Input::Mechanism(mechanism.clone());
-    let run_one = |task: &sweep::Task| task_result(&input, &plan, task, &limits, &cancel);
+    let run_one = |task: &sweep::Task| sweep::answer_task(&input, &plan, task, &limits, &cancel);
     sweep::run_tasks(&tasks, threads, &done, run_one, |r: TaskResult| -> Result<()> {
         writeln!(file, "{}", serde_json::to_string(&r)?).and_then(|_| file.flush()).with_context(|| format!("writing {}", my_file.display()))?;
         run_now += 1;
@@ -223,19 +223,6 @@ fn gather(mine: Vec<u8>) -> Vec<Vec<u8>> {
         return super::ranks::all_gather(&mine);
     }
     vec![mine]
-}
-
-/// One task through the front door: `Job::SweepTask` on the base mechanism, within the task's
-/// limits on one thread; a task that cannot be prepared or run is a failed row, not an error.
-fn task_result(input: &app::Input, plan: &sweep::Plan, task: &sweep::Task, limits: &Limits, cancel: &AtomicBool) -> TaskResult {
-    let start = Instant::now();
-    let job = app::Job::SweepTask(app::SweepTaskJob { plan: plan.clone(), task: task.clone() });
-    let control = app::Control { limits: *limits, threads: 1, cancel };
-    match app::prepare(input, job).and_then(|p| p.run(&control, &mut |_| {})) {
-        Ok(app::Answer::SweepTask(r)) => *r,
-        Ok(other) => TaskResult::failed(task, format!("internal error: a {} answer to a sweep task", other.name()), start.elapsed().as_secs_f64()),
-        Err(e) => TaskResult::failed(task, e.to_string(), start.elapsed().as_secs_f64()),
-    }
 }
 
 /// Each task's limits: the command line over the spec over the defaults.

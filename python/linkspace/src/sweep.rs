@@ -13,7 +13,6 @@ use pyo3::types::PyDict;
 use std::collections::HashSet;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
 /// Seconds and MiB a task may take when neither the spec nor the call says (the CLI's).
@@ -50,19 +49,6 @@ fn limits(py: Python<'_>, options: &Bound<'_, PyDict>, plan: &sweeps::Plan) -> P
         return Err(input_error(py, "--max-memory must be at least 1 MiB".into()));
     }
     Ok(Limits { max_cells, timeout: Some(Duration::from_secs_f64(timeout.min(1e9))), max_memory: usize::try_from(mib.saturating_mul(1 << 20)).unwrap_or(usize::MAX) })
-}
-
-/// One task through the front door, as the CLI's `task_result`: a task that cannot be prepared
-/// or run is a failed row, not an error.
-fn task_result(input: &app::Input, plan: &sweeps::Plan, task: &sweeps::Task, limits: &Limits, cancel: &AtomicBool) -> TaskResult {
-    let start = Instant::now();
-    let job = app::Job::SweepTask(app::SweepTaskJob { plan: plan.clone(), task: task.clone() });
-    let control = app::Control { limits: *limits, threads: 1, cancel };
-    match app::prepare(input, job).and_then(|p| p.run(&control, &mut |_| {})) {
-        Ok(app::Answer::SweepTask(r)) => *r,
-        Ok(other) => TaskResult::failed(task, format!("internal error: a {} answer to a sweep task", other.name()), start.elapsed().as_secs_f64()),
-        Err(e) => TaskResult::failed(task, e.to_string(), start.elapsed().as_secs_f64()),
-    }
 }
 
 fn io_error(py: Python<'_>, what: &str, path: &Path, e: &dyn std::fmt::Display) -> PyErr {
@@ -104,7 +90,7 @@ pub(crate) fn sweep(py: Python<'_>, spec: PathBuf, out: Option<PathBuf>, options
     let total = tasks.len();
     let ran = supervise(py, progress.as_ref(), |cancel, report| -> Result<Vec<TaskResult>, String> {
         let mut results = Vec::with_capacity(total);
-        sweeps::run_tasks(&tasks, threads, &HashSet::new(), |t| task_result(&input, &plan, t, &limits, cancel), |r: TaskResult| -> Result<(), String> {
+        sweeps::run_tasks(&tasks, threads, &HashSet::new(), |t| sweeps::answer_task(&input, &plan, t, &limits, cancel), |r: TaskResult| -> Result<(), String> {
             if let Some((f, path)) = file.as_mut() {
                 let line = serde_json::to_string(&r).map_err(|e| e.to_string())?;
                 writeln!(f, "{line}").and_then(|_| f.flush()).map_err(|e| format!("writing {}: {e}", path.display()))?;
