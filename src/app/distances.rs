@@ -30,11 +30,6 @@ pub struct DistancesRun {
 }
 
 impl DistancesRun {
-    /// The platform of `mechanism` with the squared leg lengths `fixed`.
-    pub fn platform(mechanism: &Mechanism, fixed: &[(String, f64)]) -> Result<Self, PlatformError> {
-        Self::platform_with(mechanism, fixed, LegValues::Squared)
-    }
-
     /// The platform of `mechanism` with its legs `fixed` given as `values` say.
     pub fn platform_with(mechanism: &Mechanism, fixed: &[(String, f64)], values: LegValues) -> Result<Self, PlatformError> {
         let p = PlatformProblem::with_legs(mechanism, fixed, values)?;
