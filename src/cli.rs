@@ -7,7 +7,6 @@ mod serve;
 #[cfg(feature = "mpi")]
 mod ranks;
 
-mod text;
 
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
@@ -113,7 +112,7 @@ pub(crate) struct ChainArgs {
 
 impl ChainArgs {
     /// The options, with every flag parsed (one clear line on bad input).
-    pub(crate) fn options(&self) -> Result<app::LoadOptions> {
+    pub(crate) fn options(&self) -> Result<app::ArmOptions> {
         let tip_point = match &self.tip_point {
             None => None,
             Some(text) => {
@@ -134,7 +133,7 @@ impl ChainArgs {
             .collect::<Result<Vec<_>>>()?;
         let spec = app::ChainSpec { base: self.base.clone(), tip: self.tip.clone(), tip_point, locks, length_tolerance: 0.0 };
         let snap_tolerance = self.snap_tolerance.unwrap_or(app::SNAP_TOLERANCE);
-        Ok(app::LoadOptions { spec, exact_geometry: self.exact_geometry, snap_tolerance, ignore_limits: self.ignore_limits })
+        Ok(app::ArmOptions { spec, exact_geometry: self.exact_geometry, snap_tolerance, ignore_limits: self.ignore_limits })
     }
 }
 
@@ -530,7 +529,8 @@ fn solve(args: SolveArgs) -> Result<()> {
 /// input), run it within the limits, print the answer and write its JSON report.
 pub(crate) fn execute(path: &Path, job: Job, limits: &LimitArgs, json: Option<&Path>) -> Result<()> {
     let answer = answer(path, job, limits)?;
-    text::print(&answer);
+    // A closed pipe ends the printing quietly (`println!` would panic).
+    std::io::stdout().lock().write_all(report::text(&answer).as_bytes()).ok();
     if let Some(out) = json {
         write_file(out, report::json(&answer)?)?;
     }

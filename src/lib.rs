@@ -3,10 +3,12 @@
 //! The front door is `app`: a `Job` (one variant per question) is checked against its `Input`
 //! by `app::prepare` and answered by `Prepared::run` within a `Control`, as one `Answer` that
 //! says what is proven (`BoxStatus` per box, `Completeness` per answer, `Scope` per verdict).
-//! Below it, by layer: the analyses (`analyses`, one folder per question), the builders
-//! (`formulate`), mechanisms read from URDF (`model`), and the branch-and-prune kernel
-//! (`kernel`), which covers a system with interval boxes that provably enclose every solution.
-//! What answers become outside is `edges` (JSON reports, the ROS 2 node). See ARCHITECTURE.md.
+//! What answers become outside is `edges`: JSON reports and the text the CLI prints
+//! (`edges::report`), the ROS 2 node (`edges::ros`). Below the front door, private (public only
+//! with the `internals` feature, for the project's own lab and tests): the analyses (one folder
+//! per question), the builders, mechanisms read from URDF, and the branch-and-prune kernel,
+//! which covers a system with interval boxes that provably enclose every solution. See
+//! ARCHITECTURE.md and docs/manual/library.md.
 //!
 //! # Examples
 //!
@@ -31,17 +33,25 @@
 // What is public is what the crate root reaches: an item public inside a private module says
 // `pub(crate)`. (The library's alone: a binary or a test has no public items.)
 #![warn(unreachable_pub)]
+// Without `internals` the layers below `app` are private, and what only the lab and the tests
+// reach of them is neither reachable nor used by the product: that is by design, not dead code.
+#![cfg_attr(not(feature = "internals"), allow(unreachable_pub, dead_code, unused_imports))]
 
-pub mod analyses;
+/// A layer below the front door: private to the crate, public with the `internals` feature
+/// (the project's own lab, tests and benchmarks; not a stable interface).
+macro_rules! layer {
+    ($name:ident) => {
+        #[cfg(feature = "internals")]
+        pub mod $name;
+        #[cfg(not(feature = "internals"))]
+        mod $name;
+    };
+}
+
 pub mod app;
 pub mod edges;
-pub mod formulate;
-pub mod kernel;
-pub mod model;
 
-pub use app::{load, Analysis, AnalysisError};
-pub use kernel::interval::{Interval, IntervalBox};
-pub use kernel::lp::{LpBackend, LpCounters};
-pub use kernel::search::{Limit, Limits, Progress, Solver, SolverSettings, Status};
-pub use kernel::system::EquationSystem;
-pub use model::{Mechanism, ModelError};
+layer!(analyses);
+layer!(formulate);
+layer!(kernel);
+layer!(model);

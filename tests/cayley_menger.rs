@@ -12,7 +12,7 @@ use linkspace::analyses::distances::file as distance_file;
 use linkspace::formulate::PlatformProblem;
 use linkspace::edges::report::distances::{report, DistancesReport};
 use linkspace::kernel::search::{Enclosure, SolverSettings, Status};
-use linkspace::IntervalBox;
+use linkspace::kernel::interval::IntervalBox;
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
 use std::sync::atomic::AtomicBool;

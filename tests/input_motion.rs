@@ -188,7 +188,7 @@ fn closed_form_configurations_any_turns_out_are_points_of_the_loop() {
             for e in &p.system.equations {
                 assert!(e.residual(&x).abs() < 1e-12, "t4 {t4}, side {side}: residual {}", e.residual(&x));
             }
-            let read = p.joint_values(&linkspace::IntervalBox::new(x.iter().map(|&v| linkspace::kernel::interval::point(v)).collect()));
+            let read = p.joint_values(&linkspace::kernel::interval::IntervalBox::new(x.iter().map(|&v| linkspace::kernel::interval::point(v)).collect()));
             for (name, v) in JOINTS.iter().zip(q) {
                 let (lo, hi) = read[*name];
                 assert!(gap(0.5 * (lo + hi), v) < 1e-12, "t4 {t4}, side {side}: {name} reads [{lo}, {hi}], closed form {v}");

@@ -5,7 +5,7 @@
 
 use crate::util::{covered, problem, solve};
 use linkspace::kernel::interval::components;
-use linkspace::Status;
+use linkspace::app::Status;
 use nalgebra::{DMatrix, DVector};
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
@@ -239,7 +239,7 @@ fn four_bar_matches_the_closed_form_across_the_crank_range() {
             let hit = run.solutions.iter().any(|b| {
                 let rocker = p.link_angles(b)["rocker"];
                 let tp = p.traces.iter().find(|t| t.name == "coupler@2,1").expect("traced");
-                let near = |v: f64, x: linkspace::Interval| x.inf() - 1e-9 <= v && v <= x.sup() + 1e-9;
+                let near = |v: f64, x: linkspace::kernel::interval::Interval| x.inf() - 1e-9 <= v && v <= x.sup() + 1e-9;
                 rocker.0 - 1e-9 <= t4 && t4 <= rocker.1 + 1e-9 && near(cp[0], b.dims[tp.x]) && near(cp[1], b.dims[tp.y])
             });
             assert!(hit, "crank {t2}: rocker {t4} / coupler point {cp:?} in no box");
@@ -283,7 +283,7 @@ proptest::proptest! {
     #[test]
     fn no_contractor_removes_a_true_configuration(which in 0usize..4, at in 0.0f64..1.0, widths in proptest::collection::vec(1e-6f64..0.6, 14), offsets in proptest::collection::vec(0.0f64..1.0, 14)) {
         use linkspace::kernel::contract::{Contraction, Contractor, LpShrink, Newton, Propagation};
-        use linkspace::LpBackend;
+        use linkspace::app::LpBackend;
         let p = problem("double_butterfly.urdf", &[], &[]);
         let branches = mobile_branches();
         let branch = &branches[which % branches.len()];
@@ -297,7 +297,7 @@ proptest::proptest! {
             let hi = (x[i] + w * (1.0 - f) + 1e-9).min(d.sup());
             *d = linkspace::kernel::interval::interval(lo, hi);
         }
-        let inside = |b: &linkspace::IntervalBox| b.dims.iter().zip(&x).all(|(d, &v)| d.inf() - 1e-9 <= v && v <= d.sup() + 1e-9);
+        let inside = |b: &linkspace::kernel::interval::IntervalBox| b.dims.iter().zip(&x).all(|(d, &v)| d.inf() - 1e-9 <= v && v <= d.sup() + 1e-9);
         let mut steps: Vec<Box<dyn Contractor>> = vec![Box::new(Propagation::new(&p.system))];
         for backend in [LpBackend::Simplex, LpBackend::Clarabel] {
             let mut lp = LpShrink::new(&p.system);

@@ -285,7 +285,7 @@ fn uncertain_enclosures_hold_every_sampled_geometry() {
         tighter += (over.g[0].value().wid() < uncertain.jets(b, 3).derived().g[0].value().wid()) as usize;
         let c = geometry(k);
         let at = c.derived([point(lo[0] + 0.6 * w), point(lo[1] + 0.3 * w)], 3);
-        let inside = |outer: linkspace::Interval, inner: linkspace::Interval| outer.inf() <= inner.inf() && inner.sup() <= outer.sup();
+        let inside = |outer: linkspace::kernel::interval::Interval, inner: linkspace::kernel::interval::Interval| outer.inf() <= inner.inf() && inner.sup() <= outer.sup();
         for a in 0..2 {
             assert!(inside(over.f[a].value(), at.f[a].value()) && inside(over.g[a].value(), at.g[a].value()), "box {k}, row {a}");
             for i in 0..2 {
@@ -309,7 +309,7 @@ fn inverse_kinematics_recovers_sampled_configurations() {
         let r = f[0].sqrt();
         let s = ik::solve(&c, r, f[1], 1e-8, 200_000).expect("valid query");
         assert!(s.status.finished());
-        let inside = |b: &[linkspace::Interval; 2]| (0..2).all(|i| b[i].inf() - 1e-9 <= t[i] && t[i] <= b[i].sup() + 1e-9);
+        let inside = |b: &[linkspace::kernel::interval::Interval; 2]| (0..2).all(|i| b[i].inf() - 1e-9 <= t[i] && t[i] <= b[i].sup() + 1e-9);
         assert!(s.unique.iter().any(inside) || s.clusters.iter().any(|c| inside(&c.hull)), "sample {t:?} lost: {:?}", s.unique);
         for b in &s.unique {
             let g = c.eval_f64(b[0].mid(), b[1].mid());
@@ -428,7 +428,7 @@ fn collision_boxes_agree_with_sampling() {
         let s = column_scene(t2, t3);
         [(0usize, 1usize), (0, 2)].iter().map(|&(i, j)| (brute_distance(s[i].0, s[j].0) - s[i].1 - s[j].1).abs()).fold(f64::INFINITY, f64::min)
     };
-    let samples = |b: &[linkspace::Interval; 2]| {
+    let samples = |b: &[linkspace::kernel::interval::Interval; 2]| {
         let mut v = Vec::new();
         for u in [0.0, 0.37, 1.0] {
             for w in [0.0, 0.61, 1.0] {
@@ -496,7 +496,7 @@ fn collision_scenes_refuse_what_they_cannot_model() {
 }
 
 /// Every interval of a list of boxes, as bits: identical results, not merely close ones.
-fn bits(boxes: impl IntoIterator<Item = [linkspace::Interval; 2]>) -> Vec<[u64; 4]> {
+fn bits(boxes: impl IntoIterator<Item = [linkspace::kernel::interval::Interval; 2]>) -> Vec<[u64; 4]> {
     boxes.into_iter().map(|b| [b[0].inf().to_bits(), b[0].sup().to_bits(), b[1].inf().to_bits(), b[1].sup().to_bits()]).collect()
 }
 
@@ -665,7 +665,7 @@ fn random_tip_points_on_the_last_link_give_the_ik_of_that_point() {
             assert!(solved.status.finished() && solved.clusters.is_empty(), "trial {trial}: {:?}", solved.status);
             assert_eq!(solved.unique.len(), found.len(), "trial {trial}: point {point:?}, goal {goal:?}: {:?} vs Newton {found:?}", solved.unique);
             for t in &found {
-                let inside = |b: &[linkspace::Interval; 2]| (0..2).all(|k| wrap(t[k] - b[k].mid()).abs() <= b[k].rad() + 1e-7);
+                let inside = |b: &[linkspace::kernel::interval::Interval; 2]| (0..2).all(|k| wrap(t[k] - b[k].mid()).abs() <= b[k].rad() + 1e-7);
                 assert!(solved.unique.iter().any(inside), "trial {trial}: Newton solution {t:?} not in {:?}", solved.unique);
             }
             compared += 1;

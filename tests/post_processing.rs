@@ -5,7 +5,7 @@
 use crate::util::problem;
 use linkspace::kernel::interval::interval;
 use linkspace::kernel::search::SolverSettings;
-use linkspace::IntervalBox;
+use linkspace::kernel::interval::IntervalBox;
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 

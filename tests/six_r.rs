@@ -63,7 +63,7 @@ fn check_pose(chain: &Chain6R, q: &[f64; 6]) -> (usize, Duration) {
     let sol = ik::solve(chain, &target, 1e-10, &control()).expect("solves");
     let dt = t.elapsed();
     assert_eq!(sol.status, Status::Finished, "q = {q:?}");
-    let holds = |b: &[linkspace::Interval; 6]| (0..6).all(|k| b[k].inf() - 1e-7 <= q[k] && q[k] <= b[k].sup() + 1e-7);
+    let holds = |b: &[linkspace::kernel::interval::Interval; 6]| (0..6).all(|k| b[k].inf() - 1e-7 <= q[k] && q[k] <= b[k].sup() + 1e-7);
     assert!(sol.unique.iter().any(holds) || sol.clusters.iter().any(|c| holds(&c.hull)), "q = {q:?} lost: {:?}", sol.unique);
     for u in &sol.unique {
         let m = u.map(|x| x.mid());
@@ -535,7 +535,7 @@ mod homotopy_reference {
                 times.push((i, t.elapsed().as_secs_f64()));
                 assert_eq!(sol.status, Status::Finished, "{name} pose {i}");
                 assert!(sol.clusters.is_empty(), "{name} pose {i}: undecided {:?}", sol.clusters);
-                let inside = |u: &[linkspace::Interval; 6], a: &[f64; 6]| (0..6).all(|k| holds(u[k].inf(), u[k].sup(), a[k], slack));
+                let inside = |u: &[linkspace::kernel::interval::Interval; 6], a: &[f64; 6]| (0..6).all(|k| holds(u[k].inf(), u[k].sup(), a[k], slack));
                 for a in &expected {
                     let n = sol.unique.iter().filter(|u| inside(u, a)).count();
                     assert_eq!(n, 1, "{name} pose {i}: reference solution {a:?} in {n} certified boxes of {:?}", sol.unique);

@@ -6,7 +6,7 @@
 use linkspace::model::urdf;
 use linkspace::formulate::{LinkageError, LinkageProblem};
 use linkspace::kernel::search::{SolverSettings, Status};
-use linkspace::IntervalBox;
+use linkspace::kernel::interval::IntervalBox;
 use std::f64::consts::{PI, TAU};
 use std::sync::atomic::AtomicBool;
 

@@ -183,8 +183,8 @@ fn three_rpr_assembly_modes_match_an_independent_count() {
     let plan = sweep::parse(&spec).expect("valid");
     let mechanism = urdf::parse(&std::fs::read_to_string(repo("urdf/three_rpr.urdf")).expect("bundled")).expect("parses");
     let tasks = plan.tasks(100).expect("small");
-    app::check_sweep(&plan, &mechanism, &tasks).expect("fits");
-    let limits = linkspace::Limits { max_cells: 1_000_000, timeout: Some(std::time::Duration::from_secs(30)), max_memory: 256 << 20 };
+    app::sweeps::check_sweep(&plan, &mechanism, &tasks).expect("fits");
+    let limits = linkspace::app::Limits { max_cells: 1_000_000, timeout: Some(std::time::Duration::from_secs(30)), max_memory: 256 << 20 };
     let mut found = Vec::new();
     let cancel = AtomicBool::new(false);
     sweep::run_tasks::<()>(&tasks, 2, &HashSet::new(), |t| app::sweep_task(&plan, &mechanism, t, &limits, &cancel), |r| {

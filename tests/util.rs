@@ -1,7 +1,7 @@
 use linkspace::model::urdf;
 use linkspace::formulate::LinkageProblem;
 use linkspace::kernel::search::{SolverSettings, Status};
-use linkspace::IntervalBox;
+use linkspace::kernel::interval::IntervalBox;
 use std::sync::atomic::AtomicBool;
 
 pub fn urdf_text(name: &str) -> String {

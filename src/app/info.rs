@@ -1,6 +1,6 @@
 //! What a front end shows of a loaded mechanism before asking it anything: its links, joints
 //! (type, limits, axis, mimic) and loop closures, as plain data with the types spelled as URDF
-//! spells them. The node's view (kind, services, why not more) is `load_urdf`'s.
+//! spells them, and what the node answers for it.
 
 use crate::model::{JointKind, Mechanism};
 
@@ -17,6 +17,16 @@ pub struct MechanismInfo {
     pub loops: Vec<LoopInfo>,
     /// Joints of the file's `<transmission>` elements: the actuated joints by default.
     pub actuated: Vec<String>,
+    /// What the node makes of it, loaded as it is (no fixed joints, no traced points):
+    /// `manipulator_3r`, `planar_linkage`, `spatial_linkage`, `parallel_platform` or
+    /// `unsupported`.
+    pub kind: &'static str,
+    /// The node's services it answers (`solve`, `singularities`, …).
+    pub services: Vec<&'static str>,
+    /// The joints a configuration of it names.
+    pub free_joints: Vec<String>,
+    /// What it is outside of (empty when nothing); for `unsupported`, the reason.
+    pub limitation: String,
 }
 
 /// A tree joint.
@@ -66,7 +76,7 @@ fn kind_and_limits(kind: JointKind) -> (&'static str, Option<(f64, f64)>) {
     }
 }
 
-/// The links, joints and loops of `m`.
+/// The links, joints and loops of `m`, and what the node answers for it.
 pub fn describe(m: &Mechanism) -> MechanismInfo {
     let link = |i: usize| m.links.get(i).map_or_else(String::new, |l| l.name.clone());
     let joints = m
@@ -78,7 +88,11 @@ pub fn describe(m: &Mechanism) -> MechanismInfo {
         })
         .collect();
     let loops = m.loops.iter().map(|l| LoopInfo { name: l.name.clone(), kind: l.type_name(), predecessor: link(l.predecessor), successor: link(l.successor), limits: kind_and_limits(l.kind).1 }).collect();
-    MechanismInfo { name: m.name.clone(), links: m.links.iter().map(|l| l.name.clone()).collect(), joints, loops, actuated: m.transmission_joints.clone() }
+    let (kind, services, free_joints, limitation) = match super::analysis::load_urdf(m, &[], &[]) {
+        Ok(a) => (a.kind().name(), a.services().iter().map(|s| s.name()).collect(), a.free_joints(), a.limitation()),
+        Err(e) => ("unsupported", Vec::new(), Vec::new(), e.to_string()),
+    };
+    MechanismInfo { name: m.name.clone(), links: m.links.iter().map(|l| l.name.clone()).collect(), joints, loops, actuated: m.transmission_joints.clone(), kind, services, free_joints, limitation }
 }
 
 #[cfg(test)]
@@ -96,3 +110,4 @@ mod tests {
         assert_eq!(info.links[0], info.joints[0].parent);
     }
 }
+

@@ -29,54 +29,70 @@ mod platform;
 pub(crate) mod six;
 pub(crate) mod sweep;
 
+/// Items the front ends inside the crate (the node) and the lab and tests (feature `internals`)
+/// name, which a program using linkspace does not: public with `internals`, else crate-wide.
+macro_rules! internal_use {
+    ($($path:tt)*) => {
+        #[cfg(feature = "internals")]
+        pub use $($path)*;
+        #[cfg(not(feature = "internals"))]
+        pub(crate) use $($path)*;
+    };
+}
+
 // The front door: a `Job` in, an `Answer` out.
 pub use answer::{Answer, CollisionsAnswer, DistancesAnswer, Ik6Answer, IkAnswer, LoopAnswer, PathCheckAnswer, SingularitiesAnswer, SolveAnswer};
-pub use job::{ArmOptions, CollisionsJob, DistancesJob, Ik6Job, IkJob, Job, LoopQuestion, LoopSingularitiesJob, MotionSpan, PathCheckJob, SingularitiesJob, SolveJob, SweepTaskJob, IK6_DEFAULT_TIMEOUT};
+pub use job::{ArmOptions, CollisionsJob, DistancesJob, Ik6Job, IkJob, Job, LoopQuestion, LoopSingularitiesJob, MotionSpan, PathCheckJob, SingularitiesJob, SolveJob, SweepTaskJob};
+internal_use!(job::IK6_DEFAULT_TIMEOUT);
 pub use prepare::{prepare, Input, JobError, Prepared};
 // What a front end shows of a mechanism before asking it anything.
 pub use info::{describe, JointInfo, LoopInfo, MechanismInfo};
-
-// The node's view of a loaded mechanism and the shapes its messages are made from.
-pub use analysis::{load, load_urdf, Analysis, AnalysisError, MechanismKind, Service, Unsupported};
-pub use results::{classify, PreparedRun, AssemblyMode, BoxSetResult, Classification, IkQuery, IkResult, IkSolution, LoopSingularities, ResultBox, SingularPair, SingularPoint, SingularSetResult, SingularityQuery, SingularityResult, TracedBounds};
-pub(crate) use results::gap;
-// What front ends name besides the jobs: the outcome vocabulary and the bounds of a run.
+// The outcome vocabulary and the bounds of a run.
 pub use crate::kernel::outcome::{BoxStatus, Completeness, Incompleteness, Limit, Scope, Status};
-pub use crate::kernel::search::{Control, Limits, Progress, SolveStats, SolverSettings};
+pub use crate::kernel::search::{Control, Limits, Progress, SolverSettings};
 // How a run is shared among processes (the binary's MPI ranks give the kernel its `Peers`).
 pub use crate::kernel::search::{rank_and_size, share_searches, Peers};
-// The options the jobs take and the records the answers carry, named where front ends look.
-pub use crate::analyses::arm3r::{check_precision, ChainSpec, LoadOptions};
+// The options the jobs take.
+pub use crate::analyses::arm3r::{check_precision, ChainSpec};
 pub use crate::analyses::arm6r::PoseInput;
 pub use crate::analyses::distances::Choice as DistanceFormulation;
-pub use crate::analyses::loop_singular::image::{ImageCusp, ImageNode, ImagePoints, ImageReport};
 pub use crate::formulate::{LegValues, Model as LinkageModel, ModelChoice, Output, SingularKind, TracedPoint};
 pub use crate::kernel::contract::FaceBounds;
 pub use crate::kernel::lp::LpBackend;
 pub use crate::model::rounding::ANGLE_TOLERANCE as SNAP_TOLERANCE;
-pub use crate::model::urdf::parse as parse_urdf;
+pub use arm::IkPoint;
+pub use path::PathSet;
+// Mechanisms as read, and the records answers carry that front ends name.
 pub use crate::model::Mechanism;
-pub use crate::kernel::interval::Interval;
-pub use crate::analyses::arm3r::{branches::SingularBranches, joints_over};
-pub use crate::analyses::arm6r::{Chain6R, SegmentVerdict};
+pub use crate::analyses::input_motion::{motion_joints, InputMotionCheck};
+pub use crate::analyses::loop_singular::image::{ImagePoints, ImageReport};
+internal_use!(crate::analyses::loop_singular::image::{ImageCusp, ImageNode});
+internal_use!(results::ResultBox);
+internal_use!(crate::model::urdf::parse as parse_urdf);
 /// A design sweep's spec, tasks and result lines, which the sweep command reads and writes.
 pub mod sweeps {
-    pub use crate::analyses::sweep::{csv, fingerprint, map_svg, parse, read_done, run_tasks, Header, Plan, Summary, Sweep, Task, TaskResult, TaskStatus, DEFAULT_MAX_TASKS};
-    pub use super::sweep::answer_task;
+    pub use crate::analyses::sweep::{csv, map_svg, parse, read_done, run_tasks, Header, Plan, Summary, Sweep, Task, TaskResult, TaskStatus, DEFAULT_MAX_TASKS};
+    pub use super::sweep::{answer_task, check_sweep};
 }
 
+// The node's view of a loaded mechanism and the shapes its messages are made from.
+internal_use!(analysis::{load, load_urdf, Analysis, AnalysisError, MechanismKind, Service, Unsupported});
+internal_use!(results::{classify, PreparedRun, AssemblyMode, BoxSetResult, Classification, IkQuery, IkResult, IkSolution, LoopSingularities, SingularPair, SingularPoint, SingularSetResult, SingularityQuery, SingularityResult, TracedBounds});
+pub(crate) use results::gap;
 // The analyses' entry points and typed results, which the answers carry.
-pub use arm::{collisions, inverse_kinematics, singularities, Arm, ArmCollisions, ArmIk, ArmSingularities, IkPoint, SingularitiesRequest};
-pub use arm_analysis::{Manip3rAnalysis, CURVE_DEPTH};
-pub use distances::{DistancesRun, DistancesRequest};
-pub use linkage::LinkageAnalysis;
-pub use solve::{describe_freedom, LinkReadout, SolveRun};
-pub use crate::analyses::loop_singular::SingularSets;
-pub use loops::{all_kinds, analyse_image, image_points, Actuation, ImageAnalysisError, ImageSearch};
-pub use crate::analyses::input_motion::{check_input_motion, motion_joints, InputMotionCheck, MotionError, MotionRequest, MotionStep, MotionVerdict};
-pub use platform::PlatformAnalysis;
-pub use path::{check_path, check_path3, positioning_joints, ArmPathCheck, PathSet};
-pub use six::{arm_cuspidality, arm_cuspidality_of, chain6, inverse_kinematics6, ArmCuspidality, ArmIk6, ArmVerdict, ArmVerdictLine};
-pub use sweep::{check_sweep, sweep_task};
-
-pub use crate::kernel::interval::Bounds;
+internal_use!(crate::kernel::search::SolveStats);
+internal_use!(crate::analyses::arm3r::{branches::SingularBranches, joints_over, LoadOptions});
+internal_use!(crate::analyses::arm6r::{Chain6R, SegmentVerdict});
+internal_use!(crate::kernel::interval::{Bounds, Interval});
+internal_use!(arm::{collisions, inverse_kinematics, singularities, Arm, ArmCollisions, ArmIk, ArmSingularities, SingularitiesRequest});
+internal_use!(arm_analysis::{Manip3rAnalysis, CURVE_DEPTH});
+internal_use!(distances::{DistancesRun, DistancesRequest});
+internal_use!(linkage::LinkageAnalysis);
+internal_use!(solve::{describe_freedom, LinkReadout, SolveRun});
+internal_use!(crate::analyses::loop_singular::SingularSets);
+internal_use!(loops::{all_kinds, analyse_image, image_points, Actuation, ImageAnalysisError, ImageSearch});
+internal_use!(crate::analyses::input_motion::{check_input_motion, MotionError, MotionRequest, MotionStep, MotionVerdict});
+internal_use!(platform::PlatformAnalysis);
+internal_use!(path::{check_path, check_path3, positioning_joints, ArmPathCheck});
+internal_use!(six::{arm_cuspidality, arm_cuspidality_of, chain6, inverse_kinematics6, ArmCuspidality, ArmIk6, ArmVerdict, ArmVerdictLine});
+internal_use!(sweep::sweep_task);

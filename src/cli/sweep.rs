@@ -47,9 +47,10 @@ pub(crate) fn run(args: SweepArgs) -> Result<()> {
     let plan = sweep::parse(&text).with_context(|| format!("reading {}", args.spec.display()))?;
     let urdf_path = args.spec.parent().unwrap_or(Path::new(".")).join(&plan.urdf);
     let urdf_text = std::fs::read_to_string(&urdf_path).with_context(|| format!("reading {} (the spec's urdf)", urdf_path.display()))?;
-    let mechanism = app::parse_urdf(&urdf_text).with_context(|| format!("loading {}", urdf_path.display()))?;
+    let input = app::Input::urdf(&urdf_text).with_context(|| format!("loading {}", urdf_path.display()))?;
+    let mechanism = input.mechanism()?;
     let tasks = plan.tasks(args.max_tasks)?;
-    app::check_sweep(&plan, &mechanism, &tasks).with_context(|| format!("checking {} against {}", args.spec.display(), urdf_path.display()))?;
+    app::sweeps::check_sweep(&plan, mechanism, &tasks).with_context(|| format!("checking {} against {}", args.spec.display(), urdf_path.display()))?;
     let limits = limits(&args, &plan)?;
 
     let out = args.out.clone().unwrap_or_else(|| PathBuf::from(format!("{}-results", args.spec.file_stem().map_or("sweep".into(), |s| s.to_string_lossy()))));
@@ -101,7 +102,6 @@ pub(crate) fn run(args: SweepArgs) -> Result<()> {
         eprintln!("resuming: {already_done} of {total} tasks already done");
     }
     let cancel = AtomicBool::new(false);
-    let input = app::Input::Mechanism(mechanism.clone());
     let run_one = |task: &sweep::Task| sweep::answer_task(&input, &plan, task, &limits, &cancel);
     sweep::run_tasks(&tasks, threads, &done, run_one, |r: TaskResult| -> Result<()> {
         writeln!(file, "{}", serde_json::to_string(&r)?).and_then(|_| file.flush()).with_context(|| format!("writing {}", my_file.display()))?;

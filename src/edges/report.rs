@@ -30,18 +30,23 @@ macro_rules! some_with {
     };
 }
 
-pub mod collisions;
-pub mod distances;
-pub mod image;
-pub(crate) mod kernel;
-pub mod manip3r;
-pub mod motion;
-pub mod singular;
-pub mod six;
-pub mod solve;
-pub mod verdicts;
+use crate::kernel::interval::Bounds;
 
-pub use crate::kernel::interval::Bounds;
+layer!(collisions);
+layer!(distances);
+layer!(image);
+mod kernel;
+layer!(manip3r);
+layer!(motion);
+layer!(singular);
+layer!(six);
+layer!(solve);
+mod text;
+layer!(verdicts);
+
+pub use text::text;
+use distances::DistancesReport;
+use solve::SolveReport;
 
 use crate::app::{Answer, LoopAnswer};
 use serde_json::to_string_pretty;
@@ -55,7 +60,7 @@ pub fn json(answer: &Answer) -> Result<String, serde_json::Error> {
         Answer::Ik6(a) => to_string_pretty(&six::Ik6Report::of(&a.chain, &a.found)),
         Answer::PathCheck(a) => to_string_pretty(&six::PathCheckReport::of(&a.found)),
         Answer::Collisions(a) => to_string_pretty(&collisions::CollisionReport::of(&a.found, a.precision)),
-        Answer::Distances(a) => to_string_pretty(&distances::of(a)),
+        Answer::Distances(a) => to_string_pretty(&DistancesReport::of(a)),
         Answer::LoopSingularities(a) => match a.as_ref() {
             LoopAnswer::Sets { sets, solved, settings, .. } => to_string_pretty(&sets.problems.iter().zip(solved).map(|(p, s)| singular::SingularReport::new(p, settings, s)).collect::<Vec<_>>()),
             LoopAnswer::Image(r) => to_string_pretty(&image::ImageJson(r)),
@@ -65,4 +70,3 @@ pub fn json(answer: &Answer) -> Result<String, serde_json::Error> {
         Answer::SweepTask(t) => to_string_pretty(t),
     }
 }
-pub use solve::{BoxRecord, SolveReport, TracedPoint, VariableInfo};

@@ -91,7 +91,7 @@ impl Model {
         Ok(Some(d))
     }
 
-    /// The node's view of the mechanism (`app::load_urdf`, what its `MechanismInfo` says): kind,
+    /// The node's view of the mechanism (`app::describe`): kind,
     /// services, free joints and, when it is outside every analysis, why.
     fn analysis<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
@@ -102,11 +102,8 @@ impl Model {
             d.set_item("limitation", "a distance file: only distances reads it")?;
             return Ok(d);
         };
-        let view = run::guarded(py, || app::load_urdf(m, &[], &[]).map(|a| (a.kind().name(), a.services().iter().map(|s| s.name()).collect::<Vec<_>>(), a.free_joints(), a.limitation())))?;
-        let (kind, services, free, limitation) = match view {
-            Ok(v) => v,
-            Err(e) => ("unsupported", Vec::new(), Vec::new(), e.to_string()),
-        };
+        let q = run::guarded(py, || app::describe(m))?;
+        let (kind, services, free, limitation) = (q.kind, q.services, q.free_joints, q.limitation);
         d.set_item("kind", kind)?;
         d.set_item("services", services)?;
         d.set_item("free_joints", free)?;

@@ -4,7 +4,7 @@
 //! signatures repeat) and the same one-line complaints.
 
 use crate::input_error;
-use linkspace::app::{self, ChainSpec, CollisionsJob, DistanceFormulation, DistancesJob, FaceBounds, Ik6Job, IkJob, IkPoint, Input, Job, LegValues, Limits, LoadOptions, LoopQuestion, LoopSingularitiesJob, LpBackend, ModelChoice, MotionSpan, Output, PathCheckJob, PathSet, PoseInput, SingularKind, SingularitiesJob, SolveJob};
+use linkspace::app::{self, ChainSpec, CollisionsJob, DistanceFormulation, DistancesJob, FaceBounds, Ik6Job, IkJob, IkPoint, Input, Job, LegValues, Limits, ArmOptions, LoopQuestion, LoopSingularitiesJob, LpBackend, ModelChoice, MotionSpan, Output, PathCheckJob, PathSet, PoseInput, SingularKind, SingularitiesJob, SolveJob};
 use numpy::{PyReadonlyArray2, PyReadonlyArrayDyn};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
@@ -142,7 +142,7 @@ fn bounds(o: &Opts<'_, '_>, name: &str) -> PyResult<RunBounds> {
 }
 
 /// `ChainArgs::options`: how an arm's file becomes the analysed chain.
-fn chain(o: &Opts<'_, '_>) -> PyResult<LoadOptions> {
+fn chain(o: &Opts<'_, '_>) -> PyResult<ArmOptions> {
     let tip_point = match o.string("tip_point")? {
         None => None,
         Some(text) => {
@@ -159,7 +159,7 @@ fn chain(o: &Opts<'_, '_>) -> PyResult<LoadOptions> {
         return Err(input_error(o.py, "the argument '--exact-geometry' cannot be used with '--snap-tolerance <RAD>'".into()));
     }
     let spec = ChainSpec { base: o.string("base")?, tip: o.string("tip")?, tip_point, locks: o.fixes("fix")?, length_tolerance: 0.0 };
-    Ok(LoadOptions { spec, exact_geometry, snap_tolerance: snap_tolerance.unwrap_or(app::SNAP_TOLERANCE), ignore_limits: o.flag("ignore_limits")? })
+    Ok(ArmOptions { spec, exact_geometry, snap_tolerance: snap_tolerance.unwrap_or(app::SNAP_TOLERANCE), ignore_limits: o.flag("ignore_limits")? })
 }
 
 /// `--trace LINK@X,Y[,Z]`: the link, the point (z = 0 for two numbers) and the name as written.

@@ -63,9 +63,10 @@ pub(crate) fn sweep(py: Python<'_>, spec: PathBuf, out: Option<PathBuf>, options
     let plan = sweeps::parse(&text).map_err(|e| input_error(py, format!("reading {}: {e}", spec.display())))?;
     let urdf_path = spec.parent().unwrap_or(Path::new(".")).join(&plan.urdf);
     let urdf_text = std::fs::read_to_string(&urdf_path).map_err(|e| input_error(py, format!("reading {} (the spec's urdf): {e}", urdf_path.display())))?;
-    let mechanism = app::parse_urdf(&urdf_text).map_err(|e| input_error(py, format!("loading {}: {e}", urdf_path.display())))?;
+    let input = app::Input::urdf(&urdf_text).map_err(|e| input_error(py, format!("loading {}: {e}", urdf_path.display())))?;
+    let mechanism = input.mechanism().map_err(|e| input_error(py, e.to_string()))?;
     let tasks = plan.tasks(get::<usize>(options, "max_tasks")?.unwrap_or(DEFAULT_MAX_TASKS)).map_err(|e| input_error(py, e.to_string()))?;
-    app::check_sweep(&plan, &mechanism, &tasks).map_err(|e| input_error(py, format!("checking {} against {}: {e}", spec.display(), urdf_path.display())))?;
+    app::sweeps::check_sweep(&plan, mechanism, &tasks).map_err(|e| input_error(py, format!("checking {} against {}: {e}", spec.display(), urdf_path.display())))?;
     let limits = limits(py, options, &plan)?;
     let threads = get::<usize>(options, "threads")?.unwrap_or(1);
     if !(1..=1024).contains(&threads) {
@@ -85,7 +86,6 @@ pub(crate) fn sweep(py: Python<'_>, spec: PathBuf, out: Option<PathBuf>, options
             Some((f, jsonl))
         }
     };
-    let input = app::Input::Mechanism(mechanism.clone());
     let start = Instant::now();
     let total = tasks.len();
     let ran = supervise(py, progress.as_ref(), |cancel, report| -> Result<Vec<TaskResult>, String> {

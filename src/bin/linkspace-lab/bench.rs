@@ -6,7 +6,7 @@ use anyhow::{Context, Result};
 use linkspace::model::urdf;
 use linkspace::formulate::LinkageProblem;
 use linkspace::kernel::search::SolverSettings;
-use linkspace::LpBackend;
+use linkspace::app::LpBackend;
 use std::io::Write;
 use std::sync::atomic::AtomicBool;
 

@@ -6,7 +6,7 @@
 use anyhow::{Context, Result};
 use crate::plot::{box_panels, layered_panels, lines, Layer, LayeredPanel, Marker, Panel, Scale, Series};
 use linkspace::kernel::interval::IntervalBox;
-use linkspace::LpBackend;
+use linkspace::app::LpBackend;
 use linkspace::model::urdf;
 use linkspace::formulate::LinkageProblem;
 use linkspace::kernel::search::{Collect, Enclosure, SolverSettings, Status};
@@ -313,7 +313,7 @@ fn singular_curves(dir: &Path, depth: u32, quick: bool) -> Result<()> {
             let r = radius(e.f[0]);
             work.push([r.inf(), r.sup(), e.f[1].inf(), e.f[1].sup()]);
         }
-        let mid = |i: linkspace::Interval| i.mid();
+        let mid = |i: linkspace::kernel::interval::Interval| i.mid();
         let mut jmarks: Vec<(f64, f64)> = found.cusps.iter().map(|c| (mid(c.theta[0]), mid(c.theta[1]))).collect();
         let cusp_marks: Vec<(f64, f64)> = found.cusps.iter().map(|c| (mid(radius(c.rho)), mid(c.z))).collect();
         let mut node_marks = Vec::new();
@@ -462,7 +462,7 @@ fn collision_chart(dir: &Path) -> Result<()> {
     use linkspace::analyses::arm3r::collision::{classify, CollisionSettings, Scene};
     let scene = Scene::from_mechanism(&urdf::parse(include_str!("../../../urdf/orthogonal_3r_a_column.urdf"))?)?;
     let set = classify(&scene, &CollisionSettings { precision: 1e-2 })?;
-    let rect = |t: &[linkspace::Interval; 2]| [t[0].inf(), t[0].sup(), t[1].inf(), t[1].sup()];
+    let rect = |t: &[linkspace::kernel::interval::Interval; 2]| [t[0].inf(), t[0].sup(), t[1].inf(), t[1].sup()];
     let pct = |a: f64| 100.0 * a / (4.0 * std::f64::consts::PI * std::f64::consts::PI);
     let panels = [
         Panel { title: format!("colliding: {:.2} % of joint space", pct(set.colliding_area)), rects: set.colliding.iter().map(|c| rect(&c.theta)).collect(), marks: vec![] },

@@ -63,7 +63,7 @@ fn measure(p: &Problem, method: Method, redundant: bool, settings: &SolverSettin
     let c0 = linkspace::kernel::search::process_cpu_seconds();
     let from_search = |e: Enclosure, cpu: f64| Measured {
         cpu,
-        complete: e.status == linkspace::Status::Finished,
+        complete: e.status == linkspace::app::Status::Finished,
         processed: e.stats.processed,
         solution_boxes: e.solutions.len(),
         clusters: linkspace::kernel::interval::components(&e.solutions).1,
@@ -84,7 +84,7 @@ fn measure(p: &Problem, method: Method, redundant: bool, settings: &SolverSettin
             let c = certified_solve(p, choice, redundant, FaceBounds::Corners, settings.clone(), &cancel)?;
             Measured {
                 cpu: c.stats.cpu_seconds,
-                complete: c.status == linkspace::Status::Finished,
+                complete: c.status == linkspace::app::Status::Finished,
                 processed: c.stats.processed,
                 solution_boxes: c.solutions.len(),
                 clusters: c.clusters.len(),

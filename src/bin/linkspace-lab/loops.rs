@@ -76,7 +76,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
             let set = last.expect("repeat >= 1");
             let processed: u64 = set.stats.iter().map(|s| s.processed).sum();
             let ratio = medians.first().map_or("1.00x (baseline)".to_string(), |base: &f64| crate::speed_against(*base, median));
-            let status = if set.status == linkspace::Status::Finished { "" } else { " (incomplete)" };
+            let status = if set.status == linkspace::app::Status::Finished { "" } else { " (incomplete)" };
             writeln!(out, "{name} | {} | {median:.4}{status} | {processed} | {} | {} ({}) | {ratio}", if use_lp { "propagation + LP" } else { "propagation" }, set.boxes.len(), set.clusters.len(), set.certified_clusters()).ok();
             medians.push(median);
         }
@@ -118,7 +118,7 @@ fn bench_three_rpr_cusps(out: &mut impl Write, repeat: usize) -> Result<()> {
             let c = problem.solve(&p, &settings, &cancel)?;
             times.push(linkspace::kernel::search::process_cpu_seconds() - c0);
             processed = c.stats.iter().map(|s| s.processed).sum::<u64>();
-            let status = if c.status == linkspace::Status::Finished { "complete" } else { "incomplete" };
+            let status = if c.status == linkspace::app::Status::Finished { "complete" } else { "incomplete" };
             what = format!("{} proven, {} undecided, {status}", c.proven(), c.points.len() - c.proven());
         }
         times.sort_by(|a, b| a.total_cmp(b));

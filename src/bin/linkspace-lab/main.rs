@@ -1,6 +1,6 @@
 //! `linkspace-lab`: the benches, the charts and the stability study behind the README's
 //! figures, kept out of the `linkspace` product binary. A client of the library's public API
-//! only; each figure is one command (`cargo run --release --bin linkspace-lab -- bench`).
+//! only; each figure is one command (`cargo lab bench`).
 
 mod bench;
 mod bench3r;

@@ -90,7 +90,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         let base = SolverSettings { sigma, use_lp: false, max_boxes: 2_000_000, ..SolverSettings::default() };
         let (tb, eb) = timed(&p.solver(base.clone())?, args.repeat);
         let (tl, el) = timed(&p.solver(SolverSettings { use_lp: true, ..base })?, args.repeat);
-        line(&mut out, name, &format!("propagation only (baseline){}", if eb.status == linkspace::Status::Finished { "" } else { ", incomplete" }), tb, &eb, "1.00x");
+        line(&mut out, name, &format!("propagation only (baseline){}", if eb.status == linkspace::app::Status::Finished { "" } else { ", incomplete" }), tb, &eb, "1.00x");
         let speed = crate::speed_against(tb, tl);
         line(&mut out, name, "LP shrink", tl, &el, &format!("{speed}, {:.2}x fewer boxes", eb.stats.processed as f64 / el.stats.processed.max(1) as f64));
     }
@@ -104,7 +104,7 @@ pub fn bench(args: BenchArgs) -> Result<()> {
         let (tl, el) = timed(&p.solver(lp.clone())?, 1);
         let base = SolverSettings { use_lp: false, timeout: Some(std::time::Duration::from_secs_f64(2.0 * tl.max(1.0))), ..lp };
         let (tb, eb) = timed(&p.solver(base)?, 1);
-        let done = |e: &Enclosure| if e.status == linkspace::Status::Finished { "" } else { ", incomplete" };
+        let done = |e: &Enclosure| if e.status == linkspace::app::Status::Finished { "" } else { ", incomplete" };
         line(&mut out, name, &format!("propagation only (baseline){}", done(&eb)), tb, &eb, "1.00x");
         line(&mut out, name, &format!("LP shrink{}", done(&el)), tl, &el, &format!("{:.2}x the baseline's time", tl / tb.max(1e-9)));
         // The same assemblies in pose coordinates (`solve --model pose`, the search alone).

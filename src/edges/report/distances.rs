@@ -274,9 +274,11 @@ pub fn report(cm: &CayleyMenger, platform: Option<&PlatformProblem>, fixed: BTre
     }
 }
 
-/// The report of a distances answer.
-pub fn of(a: &crate::app::DistancesAnswer) -> DistancesReport {
-    report_certified(&a.certified, a.run.platform_problem(), a.run.fixed().iter().cloned().collect(), a.request.faces, &a.settings)
+impl DistancesReport {
+    /// The report of a distances answer.
+    pub fn of(a: &crate::app::DistancesAnswer) -> DistancesReport {
+        report_certified(&a.certified, a.run.platform_problem(), a.run.fixed().iter().cloned().collect(), a.request.faces, &a.settings)
+    }
 }
 
 /// The report of a certified run (`distances::solve`): boxes with their `unique` flags, clusters

@@ -18,7 +18,7 @@ macro_rules! say {
 }
 
 mod convert;
-pub mod msgs;
+pub(crate) mod msgs;
 mod node;
 
 pub use convert::bounded;

@@ -11,8 +11,10 @@
 use ros2_client::Message;
 use serde::{Deserialize, Serialize};
 
-/// The fields of a mirrored struct: (name, Rust type as written).
-pub trait Mirror {
+/// The fields of a mirrored struct: (name, Rust type as written), which the layout test at the
+/// bottom reads.
+#[cfg_attr(not(test), allow(dead_code))]
+pub(crate) trait Mirror {
     /// In declaration (= wire) order.
     const FIELDS: &'static [(&'static str, &'static str)];
 }
@@ -21,9 +23,9 @@ macro_rules! mirror {
     ($(#[$meta:meta])* $name:ident { $($(#[$fmeta:meta])* $field:ident : $ty:ty),* $(,)? }) => {
         $(#[$meta])*
         #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-        pub struct $name {
+        pub(crate) struct $name {
             // Fields are documented in msgs/, the source of truth.
-            $($(#[$fmeta])* #[allow(missing_docs)] pub $field: $ty,)*
+            $($(#[$fmeta])* #[allow(missing_docs)] pub(crate) $field: $ty,)*
         }
         impl Message for $name {}
         impl Mirror for $name {
@@ -126,15 +128,15 @@ mirror! {
 }
 
 /// `visualization_msgs/Marker` type and action constants used here.
-pub mod marker {
+pub(crate) mod marker {
     /// CUBE
-    pub const CUBE: i32 = 1;
+    pub(crate) const CUBE: i32 = 1;
     /// SPHERE
-    pub const SPHERE: i32 = 2;
+    pub(crate) const SPHERE: i32 = 2;
     /// ADD
-    pub const ADD: i32 = 0;
+    pub(crate) const ADD: i32 = 0;
     /// DELETEALL
-    pub const DELETEALL: i32 = 3;
+    pub(crate) const DELETEALL: i32 = 3;
 }
 
 // ---- linkspace_msgs/msg ----
@@ -148,11 +150,11 @@ mirror! {
     LsBox { intervals: Vec<Interval>, status: u8, level: u32, cluster: i32 }
 }
 /// `Box.SOLUTION`
-pub const BOX_SOLUTION: u8 = 0;
+pub(crate) const BOX_SOLUTION: u8 = 0;
 /// `Box.UNDECIDED`
-pub const BOX_UNDECIDED: u8 = 1;
+pub(crate) const BOX_UNDECIDED: u8 = 1;
 /// `Box.UNIQUE`
-pub const BOX_UNIQUE: u8 = 2;
+pub(crate) const BOX_UNIQUE: u8 = 2;
 
 mirror! {
     /// linkspace_msgs/Settings
@@ -190,9 +192,9 @@ mirror! {
     }
 }
 /// `BoxSet.COMPLETE`
-pub const SET_COMPLETE: u8 = 0;
+pub(crate) const SET_COMPLETE: u8 = 0;
 /// `BoxSet.INCOMPLETE`
-pub const SET_INCOMPLETE: u8 = 1;
+pub(crate) const SET_INCOMPLETE: u8 = 1;
 
 mirror! {
     /// linkspace_msgs/CuspRecord
@@ -249,11 +251,11 @@ mirror! {
     }
 }
 /// `SingularityReport.YES` (a tri-state field: cuspidal, branch_curve_of_nodes)
-pub const YES: i8 = 1;
+pub(crate) const YES: i8 = 1;
 /// `SingularityReport.NO`
-pub const NO: i8 = 0;
+pub(crate) const NO: i8 = 0;
 /// `SingularityReport.UNKNOWN`
-pub const UNKNOWN: i8 = -1;
+pub(crate) const UNKNOWN: i8 = -1;
 mirror! {
     /// linkspace_msgs/Progress
     Progress { header: Header, mechanism: String, analysis: String, run_id: u64, processed: u64, pending: u64, decided: f64, done: bool }

@@ -4,6 +4,8 @@ use std::cmp::Ordering;
 use std::collections::{BinaryHeap, VecDeque};
 
 /// How the serial driver orders pending cells.
+// The orders' usual names (ibex's buffers, textbooks), though each ends in `First`.
+#[allow(clippy::enum_variant_names)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Store {
     /// A stack: the first child of a split is explored first (small memory, deterministic).

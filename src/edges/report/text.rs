@@ -1,29 +1,35 @@
 //! The one text renderer of an `Answer`: what each command prints on stdout. Reads the answer
-//! and its JSON records (`edges::report`), never the analyses.
+//! and its JSON records (the sibling modules), never the analyses.
 
-use linkspace::app::{Answer, BoxStatus, LoopAnswer, ResultBox};
-use linkspace::edges::report;
+use crate::app::{Answer, BoxStatus, LoopAnswer, ResultBox};
+use crate::edges::report;
 use std::collections::BTreeMap;
 use std::io::Write;
 
-type Out<'a> = std::io::StdoutLock<'a>;
+type Out = Vec<u8>;
 
-/// Prints `answer`; a closed pipe ends the printing quietly (`println!` would panic).
-pub(crate) fn print(answer: &Answer) {
-    let mut out = std::io::stdout().lock();
+/// The text of `answer`, as the CLI prints it: a summary line per result and the first boxes
+/// of each kind, never the whole set (that is `json`'s).
+pub fn text(answer: &Answer) -> String {
+    let mut out = Vec::new();
+    render(&mut out, answer);
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+fn render(out: &mut Out, answer: &Answer) {
     match answer {
-        Answer::Solve(a) => solve(&mut out, a),
-        Answer::Singularities(a) => singularities(&mut out, a),
-        Answer::Ik(a) => ik(&mut out, a),
-        Answer::Ik6(a) => ik6(&mut out, a),
-        Answer::PathCheck(a) => path_check(&mut out, a),
-        Answer::Collisions(a) => collisions(&mut out, a),
-        Answer::Distances(a) => distances(&mut out, &report::distances::of(a)),
+        Answer::Solve(a) => solve(out, a),
+        Answer::Singularities(a) => singularities(out, a),
+        Answer::Ik(a) => ik(out, a),
+        Answer::Ik6(a) => ik6(out, a),
+        Answer::PathCheck(a) => path_check(out, a),
+        Answer::Collisions(a) => collisions(out, a),
+        Answer::Distances(a) => distances(out, &report::distances::DistancesReport::of(a)),
         Answer::LoopSingularities(a) => match a.as_ref() {
-            LoopAnswer::Sets { .. } => loop_sets(&mut out, a),
-            LoopAnswer::Image(r) => image(&mut out, r),
-            LoopAnswer::Points(r) => image_points(&mut out, r),
-            LoopAnswer::Motion(m) => motion(&mut out, m),
+            LoopAnswer::Sets { .. } => loop_sets(out, a),
+            LoopAnswer::Image(r) => image(out, r),
+            LoopAnswer::Points(r) => image_points(out, r),
+            LoopAnswer::Motion(m) => motion(out, m),
         },
         Answer::SweepTask(t) => {
             writeln!(out, "task {}: {}", t.index, t.status.name()).ok();
@@ -35,7 +41,7 @@ fn mid(b: &[f64; 2]) -> f64 {
     0.5 * (b[0] + b[1])
 }
 
-fn solve(out: &mut Out, a: &linkspace::app::SolveAnswer) {
+fn solve(out: &mut Out, a: &crate::app::SolveAnswer) {
     let result = &a.result;
     let solutions: Vec<&ResultBox> = result.boxes.iter().filter(|b| b.status.is_solution()).collect();
     let proven = result.boxes.iter().filter(|b| b.status == BoxStatus::Unique).count();
@@ -89,7 +95,7 @@ fn solve(out: &mut Out, a: &linkspace::app::SolveAnswer) {
     }
 }
 
-fn singularities(out: &mut Out, a: &linkspace::app::SingularitiesAnswer) {
+fn singularities(out: &mut Out, a: &crate::app::SingularitiesAnswer) {
     let report = report::manip3r::SingularityReport::of(a);
     let (arm, found) = (&a.arm, &a.found);
     let prepared = &arm.prepared;
@@ -169,7 +175,7 @@ fn singularities(out: &mut Out, a: &linkspace::app::SingularitiesAnswer) {
     }
 }
 
-fn ik(out: &mut Out, a: &linkspace::app::IkAnswer) {
+fn ik(out: &mut Out, a: &crate::app::IkAnswer) {
     let report = report::manip3r::IkReport::of(&a.arm, &a.found);
     let s = &a.found.solutions;
     writeln!(out, "{}: {} solutions proven unique, {} clusters undecided, status {}", report.robot, s.unique.len(), s.clusters.len(), report.completeness.text()).ok();
@@ -186,7 +192,7 @@ fn ik(out: &mut Out, a: &linkspace::app::IkAnswer) {
     }
 }
 
-fn ik6(out: &mut Out, a: &linkspace::app::Ik6Answer) {
+fn ik6(out: &mut Out, a: &crate::app::Ik6Answer) {
     let report = report::six::Ik6Report::of(&a.chain, &a.found);
     let chain = &a.chain;
     writeln!(
@@ -211,7 +217,7 @@ fn ik6(out: &mut Out, a: &linkspace::app::Ik6Answer) {
     }
 }
 
-fn path_check(out: &mut Out, a: &linkspace::app::PathCheckAnswer) {
+fn path_check(out: &mut Out, a: &crate::app::PathCheckAnswer) {
     if let Some(chain) = &a.chain {
         eprintln!("chain: {chain}");
     }
@@ -226,7 +232,7 @@ fn path_check(out: &mut Out, a: &linkspace::app::PathCheckAnswer) {
     }
 }
 
-fn collisions(out: &mut Out, a: &linkspace::app::CollisionsAnswer) {
+fn collisions(out: &mut Out, a: &crate::app::CollisionsAnswer) {
     eprintln!("chain: {}", a.found.prepared.choice.reason);
     let report = report::collisions::CollisionReport::of(&a.found, a.precision);
     let s = &report.stats;
@@ -256,7 +262,7 @@ fn collisions(out: &mut Out, a: &linkspace::app::CollisionsAnswer) {
 fn distances(out: &mut Out, rep: &report::distances::DistancesReport) {
     let platform = rep.solutions.iter().any(|s| !s.poses.is_empty());
     let status = match rep.status.limit() {
-        None if rep.complete => linkspace::app::Completeness::Complete.word().to_string(),
+        None if rep.complete => crate::app::Completeness::Complete.word().to_string(),
         None => format!("incomplete ({} regions undecided)", rep.undecided_regions),
         Some(l) => format!("incomplete ({} limit, {} boxes undecided)", l.name(), rep.undecided.len()),
     };
@@ -320,7 +326,7 @@ fn distances(out: &mut Out, rep: &report::distances::DistancesReport) {
 
 fn loop_sets(out: &mut Out, a: &LoopAnswer) {
     let LoopAnswer::Sets { mechanism, sets, solved, settings } = a else { return };
-    if sets.model == linkspace::app::LinkageModel::Spatial {
+    if sets.model == crate::app::LinkageModel::Spatial {
         writeln!(out, "{mechanism}: spatial model ({})", sets.model_reason).ok();
     }
     for (p, set) in sets.problems.iter().zip(solved) {
@@ -333,7 +339,7 @@ fn loop_sets(out: &mut Out, a: &LoopAnswer) {
             _ => "surfaces",
         };
         let status = match r.status.limit() {
-            None => linkspace::app::Completeness::Complete.word().to_string(),
+            None => crate::app::Completeness::Complete.word().to_string(),
             Some(l) => format!("incomplete ({} limit)", l.name()),
         };
         let charts = match s.unsearched_charts {
@@ -362,7 +368,7 @@ fn loop_sets(out: &mut Out, a: &LoopAnswer) {
     }
 }
 
-fn image_records(out: &mut Out, cusps: &[linkspace::app::ImageCusp], nodes: &[linkspace::app::ImageNode]) {
+fn image_records(out: &mut Out, cusps: &[crate::app::ImageCusp], nodes: &[crate::app::ImageNode]) {
     let tag = |unique: bool| if unique { " (certified)" } else { " (undecided)" };
     for c in cusps.iter().take(20) {
         let why = c.reason.as_ref().map_or(String::new(), |r| format!(" ({r})"));
@@ -373,7 +379,7 @@ fn image_records(out: &mut Out, cusps: &[linkspace::app::ImageCusp], nodes: &[li
     }
 }
 
-fn image(out: &mut Out, r: &linkspace::app::ImageReport) {
+fn image(out: &mut Out, r: &crate::app::ImageReport) {
     writeln!(
         out,
         "{} type-II image: cusps {} proven, {} undecided; nodes {} proven, {} undecided ({} diagonal boxes injective); {} regions; status {}; {:.3} s (cover {:.3}, cusps {:.3}, nodes {:.3}, regions {:.3})",
@@ -401,12 +407,12 @@ fn image(out: &mut Out, r: &linkspace::app::ImageReport) {
     writeln!(out, "  can change assembly mode without crossing a type-II singularity: {} ({})", r.verdict.word(), r.verdict.reason).ok();
 }
 
-fn image_points(out: &mut Out, r: &linkspace::app::ImagePoints) {
+fn image_points(out: &mut Out, r: &crate::app::ImagePoints) {
     writeln!(out, "{} type-II image {}: {} proven, {} undecided; status {}; {:.3} s", r.mechanism, r.search, r.counts.proven, r.counts.undecided, r.status.text(), r.seconds).ok();
     image_records(out, &r.cusps, &r.nodes);
 }
 
-fn motion(out: &mut Out, m: &linkspace::app::InputMotionCheck) {
+fn motion(out: &mut Out, m: &crate::app::InputMotionCheck) {
     let r = report::motion::MotionReport::of(m);
     writeln!(out, "{}: {} from {} to {}: {} ({} steps, {:.3} s)", r.singular_set, r.actuated, r.from, r.to, r.verdict, r.steps.len(), r.seconds).ok();
     writeln!(out, "  {}", r.reason).ok();
