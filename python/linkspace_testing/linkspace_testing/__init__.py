@@ -134,9 +134,10 @@ def assert_matches_golden(new, golden, tol=1e-9):
     assert not problems, "box set differs from the golden set:\n" + "\n".join(problems)
 
 
-def wait_for_box_set(topic, timeout=60.0, node_name="linkspace_testing"):
+def wait_for_box_set(topic, timeout=60.0, node_name="linkspace_testing", check=None):
     """The latest BoxSet on a latched `topic` (Reliable, TransientLocal), as plain data; waits up
-    to `timeout` seconds for the first and a short settle for a newer one. Needs rclpy."""
+    to `timeout` seconds for the first and a short settle for a newer one. `check`, if given,
+    is called while waiting and may raise (e.g. when the publisher has exited). Needs rclpy."""
     import rclpy
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
     from linkspace_msgs.msg import BoxSet
@@ -152,6 +153,8 @@ def wait_for_box_set(topic, timeout=60.0, node_name="linkspace_testing"):
         end = time.monotonic() + timeout
         while not got and time.monotonic() < end:
             rclpy.spin_once(node, timeout_sec=0.05)
+            if check is not None:
+                check()
         settle = time.monotonic() + 0.3
         while got and time.monotonic() < settle:
             rclpy.spin_once(node, timeout_sec=0.05)
@@ -183,21 +186,28 @@ class LinkspaceNode:
         for line in self.proc.stderr:
             self.log.append(line.rstrip("\n"))
 
+    def _check_running(self):
+        if self.proc.poll() is not None:
+            raise RuntimeError("linkspace serve exited:\n" + "\n".join(self.log))
+
     def wait_for_log(self, needle, timeout=60.0):
+        """Waits for a line of the node's log (lines below `--log-level` never come)."""
         end = time.monotonic() + timeout
         while time.monotonic() < end:
             if any(needle in l for l in self.log):
                 return
-            if self.proc.poll() is not None:
-                raise RuntimeError("linkspace serve exited:\n" + "\n".join(self.log))
+            self._check_running()
             time.sleep(0.05)
         raise TimeoutError(f"linkspace serve did not log {needle!r} within {timeout} s:\n" + "\n".join(self.log))
 
     def box_set(self, mechanism, topic="configuration_space", timeout=60.0):
-        """The mechanism's latest box set (after its load-time analysis is published)."""
-        if topic == "configuration_space":
-            self.wait_for_log(f"{mechanism}: published configuration_space", timeout)
-        return wait_for_box_set(f"{self.namespace}/{mechanism}/{topic}", timeout)
+        """The mechanism's latest box set on `~/<mechanism>/<topic>`, waited for on the topic
+        alone (latched: the node publishes a box set there when its run ends), whatever the
+        node's log level."""
+        try:
+            return wait_for_box_set(f"{self.namespace}/{mechanism}/{topic}", timeout, check=self._check_running)
+        except TimeoutError as e:
+            raise TimeoutError(f"{e}; node log:\n" + "\n".join(self.log)) from None
 
     def stop(self):
         if self.proc.poll() is None:
