@@ -1106,6 +1106,50 @@ fn reply_history_is_bounded_by_bytes() {
     assert!(node.alive(), "the node died:\n{}", node.log());
 }
 
+/// Test idea: the node's request history is bounded by bytes too. A service's request reader
+/// keeps what it received in RustDDS's topic cache, read or not, up to its depth (256) by count.
+/// With `--max-history-mb 4`, 64 Classify requests of 1 MB (a mechanism name of a million
+/// characters, refused with a short reply) leave the node's resident memory (VmRSS) within the
+/// budget plus 16 MB of the level after the first one. Before the reader's byte bound every
+/// request stayed (320 such requests: 190 MB).
+#[test]
+fn request_history_is_bounded_by_bytes() {
+    let Some(python) = python() else { return };
+    let domain = 67;
+    let four_bar = format!("{ROOT}/urdf/four_bar.urdf");
+    let budget_mib: u64 = 4;
+    let mut node = Node::start(domain, &[&four_bar, "--sigma", "1e-2", "--max-history-mb", &budget_mib.to_string()]);
+    node.wait_for(&["four_bar: published configuration_space", "four_bar: published singularities"], Duration::from_secs(120));
+    let name = "m".repeat(1 << 20);
+    let classify = call("classify", "Classify", json!({"mechanism": name, "joint_names": ["crank_joint"], "joint_values": [0.1]}));
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let run = |n: usize, tag: &str| -> usize {
+        let mut step = classify.clone();
+        step["repeat"] = json!(n);
+        let path = dir.join(format!("requests-{tag}-{}.json", std::process::id()));
+        std::fs::write(&path, serde_json::to_string(&[step]).expect("json")).expect("script written");
+        let got = py(python, domain, "tests/ros_client.py", &["services", "--script", path.to_str().expect("utf-8"), "--timeout", "60"], Duration::from_secs(600));
+        let _ = std::fs::remove_file(&path);
+        let results = got["results"].as_array().expect("results");
+        for r in results {
+            let refused = r["ok"] == json!(false) && r["message"].as_str().is_some_and(|m| m.starts_with("no mechanism named 'mmmm"));
+            assert!(r.get("error").is_none() && refused, "{}\nnode log:\n{}", linkspace::edges::ros::bounded(&r.to_string(), 2000), linkspace::edges::ros::bounded(&node.log(), 20_000));
+        }
+        results.len()
+    };
+    // The level after one request: the allocator's and DDS's working memory included.
+    run(1, "first");
+    std::thread::sleep(Duration::from_secs(1));
+    let before = node.memory_kib("VmRSS:");
+    let n = run(64, "many");
+    assert_eq!(n, 64);
+    std::thread::sleep(Duration::from_secs(2));
+    let after = node.memory_kib("VmRSS:");
+    eprintln!("VmRSS {before} KiB after one request, {after} KiB after {n} more of 1 MiB, budget {budget_mib} MiB");
+    assert!(after <= before + (budget_mib + 16) * 1024, "VmRSS grew from {before} to {after} KiB over {n} requests of 1 MiB");
+    assert!(node.alive(), "the node died:\n{}", node.log());
+}
+
 /// Benchmark, not a test (ignored): `cargo test --release --test integration
 /// topics::reply_delivery_benchmark -- --ignored --nocapture` runs scripts/bench_replies.py on
 /// this build: delivery times of Solve replies of 1, 4, 16 and 32 MB, ten tries each, from the
