@@ -1309,12 +1309,14 @@ fn the_solve_action_gives_feedback_honours_cancel_and_returns_the_cli_boxes() {
 
 
 /// Test idea: the regression-test helper users asked for (python/linkspace_testing, installed
-/// with pip into the ROS venv) works as documented: its example test starts the node through
-/// the pytest fixture, waits for the four-bar's box set and finds it matches the stored golden
-/// set by containment; the same example fails, naming the roots, against a golden set with one
-/// certified box moved by 0.05.
+/// with pip into the ROS venv) works as documented: its own suite passes (curves compared by
+/// enclosure across sigmas against the closed-form four-bar curve, another mechanism and a
+/// missing branch caught, certified roots by containment, `box_set` under `--log-level warn`);
+/// its example test starts the node through the pytest fixture, waits for the four-bar's box set
+/// and finds it matches the stored golden set by containment; the same example fails, naming the
+/// roots, against a golden set with one certified box moved by 0.05.
 #[test]
-fn the_regression_test_helper_passes_its_example_and_catches_a_perturbed_golden_set() {
+fn the_regression_test_helper_passes_its_suite_and_example_and_catches_a_perturbed_golden_set() {
     let Some(python) = python() else { return };
     let domain = 52;
     let package = format!("{ROOT}/python/linkspace_testing");
@@ -1322,16 +1324,19 @@ fn the_regression_test_helper_passes_its_example_and_catches_a_perturbed_golden_
     pip.args(["-m", "pip", "install", "-q", "--disable-pip-version-check", &package]);
     let (ok, _, err) = run_with_timeout(pip, Duration::from_secs(300));
     assert!(ok, "pip install python/linkspace_testing failed:\n{err}");
-    let pytest = |golden_dir: Option<&str>| {
+    let pytest = |dir: &str, golden_dir: Option<&str>| {
         let mut cmd = Command::new(python);
-        cmd.args(["-m", "pytest", "-q", "-p", "no:cacheprovider", &format!("{package}/examples")]).env("LINKSPACE_BIN", env!("CARGO_BIN_EXE_linkspace"));
+        cmd.args(["-m", "pytest", "-q", "-p", "no:cacheprovider", &format!("{package}/{dir}")]).env("LINKSPACE_BIN", env!("CARGO_BIN_EXE_linkspace"));
         ros_env(&mut cmd, domain);
         if let Some(d) = golden_dir {
             cmd.env("LINKSPACE_GOLDEN_DIR", d);
         }
-        run_with_timeout(cmd, Duration::from_secs(180))
+        run_with_timeout(cmd, Duration::from_secs(300))
     };
-    let (ok, out, err) = pytest(None);
+    let (ok, out, err) = pytest("tests", None);
+    let summary = out.lines().rev().find(|l| l.contains(" passed")).unwrap_or_default();
+    assert!(ok && summary.contains("6 passed") && !summary.contains("skipped"), "the plugin's suite should pass:\n{out}\n{err}");
+    let (ok, out, err) = pytest("examples", None);
     assert!(ok && out.contains("1 passed"), "the example should pass:\n{out}\n{err}");
 
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("golden-perturbed-{}", std::process::id()));
@@ -1343,7 +1348,7 @@ fn the_regression_test_helper_passes_its_example_and_catches_a_perturbed_golden_
         golden[key][0] = json!(x + 0.05);
     }
     std::fs::write(dir.join(name), serde_json::to_string(&golden).expect("json")).expect("perturbed golden");
-    let (ok, out, err) = pytest(Some(dir.to_str().expect("utf-8")));
+    let (ok, out, err) = pytest("examples", Some(dir.to_str().expect("utf-8")));
     let _ = std::fs::remove_dir_all(&dir);
     assert!(!ok && out.contains("1 failed") && out.contains("lie in no box"), "the example should fail against the perturbed set:\n{out}\n{err}");
 }
