@@ -1773,9 +1773,7 @@ mod tests {
       fragments_in_submessage: 1,
       fragment_size: frag_size,
       data_size,
-      serialized_payload: Bytes::copy_from_slice(
-        &whole[(k as usize - 1) * 256..k as usize * 256],
-      ),
+      serialized_payload: Bytes::copy_from_slice(&whole[(k as usize - 1) * 256..k as usize * 256]),
       ..Default::default()
     };
     let flags = BitFlags::<DATAFRAG_Flags>::empty();
@@ -1795,7 +1793,10 @@ mod tests {
       .should_ignore_change(SequenceNumber::new(1)));
     // The writer sends the first fragment again: nothing waits for the second.
     reader.handle_datafrag_msg(&fragment(1), flags, &mr_state);
-    assert!(!partial(&reader), "a resent fragment of a received sample is dropped");
+    assert!(
+      !partial(&reader),
+      "a resent fragment of a received sample is dropped"
+    );
   }
 
   #[test]

@@ -234,7 +234,11 @@ impl TopicCache {
     let mut excess = (self.bytes + incoming).saturating_sub(self.max_bytes);
     let keep_newest = usize::from(incoming == 0);
     let mut count = 0;
-    for cc in self.changes.values().take(self.changes.len().saturating_sub(keep_newest)) {
+    for cc in self
+      .changes
+      .values()
+      .take(self.changes.len().saturating_sub(keep_newest))
+    {
       if excess == 0 {
         break;
       }
@@ -910,7 +914,13 @@ mod tests {
     assert_eq!(kept(&unbounded), (1..=100).collect::<Vec<_>>());
     // With it, the newest that fit in the budget: each sample is its 1000 bytes
     // plus the 4-byte encapsulation header.
-    let per_sample = unbounded.changes.values().next().unwrap().data_value.payload_size();
+    let per_sample = unbounded
+      .changes
+      .values()
+      .next()
+      .unwrap()
+      .data_value
+      .payload_size();
     let fit = (budget / per_sample) as i64;
     assert_eq!(kept(&bounded), (101 - fit..=100).collect::<Vec<_>>());
     assert_eq!(bounded.bytes, fit as usize * per_sample);
