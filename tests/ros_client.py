@@ -144,7 +144,8 @@ def make_request(kind, fields):
 
 
 def services(args):
-    """Runs the calls of a script: a JSON list of {"service", "type", "request"[, "brief"]} or
+    """Runs the calls of a script: a JSON list of {"service", "type", "request"[, "brief",
+    "repeat"]} ("repeat": n makes the call n times in turn, each with its own result) or
     {"subscribe": name} (a fresh subscriber to a latched topic, collected after a settle) or
     {"sleep": seconds} or {"cancel_during": call step, "progress": topic} (the call is sent, the
     first Progress of a run not yet done on that topic gives the run id, Cancel is called with
@@ -183,20 +184,26 @@ def services(args):
             # (about 3 s): give the match a moment.
             spin_until(node, lambda: False, 0.5)
             warmed.add(name)
-        t = time.monotonic()
-        future = client.call_async(req)
-        spin_until(node, future.done, step.get("timeout", args.timeout))
-        if not future.done():
-            results.append({"service": name, "error": "no reply"})
-            continue
-        seconds = time.monotonic() - t
-        # "brief": only ok, message and the size (a reply of megabytes, read as JSON, is slow).
-        reply = to_plain(future.result()) if not step.get("brief") else {"ok": future.result().ok, "message": future.result().message}
-        reply["service"] = name
-        reply["seconds"] = seconds
-        reply["bytes"] = len(serialize_message(future.result()))
-        results.append(reply)
+        for _ in range(step.get("repeat", 1)):
+            results.append(call(node, client, req, step, args.timeout))
     print(json.dumps({"results": results}))
+
+
+def call(node, client, req, step, timeout):
+    """One service call of a script step and its result."""
+    name = step["service"]
+    t = time.monotonic()
+    future = client.call_async(req)
+    spin_until(node, future.done, step.get("timeout", timeout))
+    if not future.done():
+        return {"service": name, "error": "no reply"}
+    seconds = time.monotonic() - t
+    # "brief": only ok, message and the size (a reply of megabytes, read as JSON, is slow).
+    reply = to_plain(future.result()) if not step.get("brief") else {"ok": future.result().ok, "message": future.result().message}
+    reply["service"] = name
+    reply["seconds"] = seconds
+    reply["bytes"] = len(serialize_message(future.result()))
+    return reply
 
 
 def cancel_during(node, step, timeout):

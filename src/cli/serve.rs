@@ -95,7 +95,8 @@ pub struct ServeArgs {
     #[arg(long, default_value_t = 0.0)]
     republish: f64,
     /// Most MiB of samples each of the node's DDS writers (one per service's replies, one per
-    /// topic) keeps for repair and late joiners; the oldest go first, the newest always stays.
+    /// topic) keeps for repair and late joiners, and each topic it reads (one per service's
+    /// requests) keeps once received; the oldest go first, the newest always stays.
     #[arg(long, value_name = "MIB", default_value_t = linkspace::edges::ros::DEFAULT_MAX_HISTORY_MB)]
     max_history_mb: usize,
     /// Also take the URDF from this topic (std_msgs/String, TransientLocal, as

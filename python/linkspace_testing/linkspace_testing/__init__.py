@@ -1,17 +1,19 @@
 """Topic-based regression tests against the linkspace ROS 2 node.
 
 Start `linkspace serve` on a URDF, wait for a `linkspace_msgs/BoxSet` on a latched topic, and
-compare it with a stored golden set by containment: every certified root of the golden set
-(the centre of a box proven to hold exactly one solution, `Box.UNIQUE`; of every solution box
-when the set has no certified one, e.g. a curve) lies in a box of the new set, within a
-tolerance, and vice versa. Box sets are compared as plain dicts (`box_set_to_plain`), so a
-golden set is a JSON file (`save_golden`, `load_golden`).
+compare it with a stored golden set, each side against the other (`compare_by_containment`):
+certified roots (the centres of boxes proven to hold exactly one solution, `Box.UNIQUE`) by
+containment, every one in a box of the other set within a tolerance; the solution boxes of a
+positive-dimensional set (a curve, which has no certified box) by enclosure, every one meeting
+the other set's boxes once those are widened by the other set's sigma plus the tolerance, so
+that runs at different resolutions of the same curve agree. Box sets are compared as plain
+dicts (`box_set_to_plain`), so a golden set is a JSON file (`save_golden`, `load_golden`).
 
 The pytest fixtures are in `linkspace_testing.plugin` (registered as a pytest plugin when the
 package is installed): `linkspace_node` starts nodes and stops them after the test.
 """
+import bisect
 import json
-import math
 import os
 import shutil
 import subprocess
@@ -20,7 +22,7 @@ import time
 
 BOX_SOLUTION, BOX_UNDECIDED, BOX_UNIQUE = 0, 1, 2
 
-__all__ = ["LinkspaceNode", "box_set_to_plain", "roots", "compare_by_containment", "assert_matches_golden",
+__all__ = ["LinkspaceNode", "box_set_to_plain", "kind", "roots", "compare_by_containment", "assert_matches_golden",
            "load_golden", "save_golden", "wait_for_box_set"]
 
 
@@ -50,39 +52,80 @@ def load_golden(path):
         return json.load(f)
 
 
-def _boxes(s):
+def _boxes(s, statuses=None):
     d = s["dim"]
-    return [(s["lower"][k * d:(k + 1) * d], s["upper"][k * d:(k + 1) * d]) for k in range(len(s["box_status"]))]
+    return [(s["lower"][k * d:(k + 1) * d], s["upper"][k * d:(k + 1) * d])
+            for k, st in enumerate(s["box_status"]) if statuses is None or st in statuses]
+
+
+def _sigma(s):
+    """The resolution of a set: its `sigma` (the run's settings), else its widest box."""
+    if s.get("sigma"):
+        return float(s["sigma"])
+    return max((h - l for lo, up in _boxes(s) for l, h in zip(lo, up)), default=0.0)
+
+
+def kind(s):
+    """"certified" when the set has boxes proven to hold exactly one solution (`Box.UNIQUE`),
+    else "solution" (a positive-dimensional set, e.g. a curve, covered by solution boxes)."""
+    return "certified" if BOX_UNIQUE in s["box_status"] else "solution"
 
 
 def roots(s):
     """(points, kind): the centres of the certified boxes, or of every solution box if none is."""
-    boxes = _boxes(s)
-    unique = [b for b, st in zip(boxes, s["box_status"]) if st == BOX_UNIQUE]
-    chosen, kind = (unique, "certified") if unique else (
-        [b for b, st in zip(boxes, s["box_status"]) if st in (BOX_SOLUTION, BOX_UNIQUE)], "solution")
-    return [[0.5 * (lo + hi) for lo, hi in zip(l, u)] for l, u in chosen], kind
+    chosen = _boxes(s, (BOX_UNIQUE,) if kind(s) == "certified" else (BOX_SOLUTION, BOX_UNIQUE))
+    return [[0.5 * (lo + hi) for lo, hi in zip(l, u)] for l, u in chosen], kind(s)
 
 
-def _covered(point, boxes, tol):
-    return any(all(lo - tol <= x <= hi + tol for x, lo, hi in zip(point, l, u)) for l, u in boxes)
+class _Index:
+    """Boxes sorted by their lower bound in the first variable, for the ones near a query."""
+
+    def __init__(self, boxes):
+        self.boxes = sorted(boxes, key=lambda b: b[0][0])
+        self.keys = [b[0][0] for b in self.boxes]
+        self.width = max((b[1][0] - b[0][0] for b in self.boxes), default=0.0)
+
+    def meets(self, lower, upper, r):
+        """Whether the box [lower, upper] meets one of the boxes widened by r on every side."""
+        first = bisect.bisect_left(self.keys, lower[0] - r - self.width)
+        last = bisect.bisect_right(self.keys, upper[0] + r)
+        return any(all(l - r <= hi and lo <= h + r for lo, hi, l, h in zip(lower, upper, bl, bu))
+                   for bl, bu in self.boxes[first:last])
+
+
+def _first(s, lower, upper):
+    return {n: [lo, hi] for n, lo, hi in zip(s["variable_names"], lower, upper)}
 
 
 def compare_by_containment(new, golden, tol=1e-9):
-    """What differs between two box sets, as a list of lines (empty when they agree): variable
-    names, the golden roots not in a box of the new set, and the new roots not in a box of the
-    golden set, each box widened by `tol`."""
-    problems = []
+    """What differs between two box sets, as a list of lines (empty when they agree).
+
+    Each side is checked against the other, by its kind (`kind`):
+    - certified roots (centres of `Box.UNIQUE` boxes) must lie in a box of the other set
+      widened by `tol` (containment);
+    - solution boxes of a positive-dimensional set (a curve: no certified box) must each meet
+      the union of the other set's boxes widened by the other set's sigma plus `tol`
+      (enclosure): both sets enclose the same solutions at their own resolutions, so a box of
+      one lies within the other's resolution of the other's cover, whatever the two sigmas.
+    Variable names must agree."""
     if new["variable_names"] != golden["variable_names"]:
         return [f"variables differ: {new['variable_names']} against golden {golden['variable_names']}"]
-    for a, b, name in ((golden, new, "golden"), (new, golden, "new")):
-        points, kind = roots(a)
-        boxes = _boxes(b)
-        missing = [p for p in points if not _covered(p, boxes, tol)]
-        if missing:
-            other = "new" if name == "golden" else "golden"
-            problems.append(f"{len(missing)} of {len(points)} {kind} roots of the {name} set lie in no box of the {other} set "
-                            f"(tolerance {tol}); first: {dict(zip(a['variable_names'], missing[0]))}")
+    problems = []
+    for a, b, name, other in ((golden, new, "golden", "new"), (new, golden, "new", "golden")):
+        index = _Index(_boxes(b))
+        if kind(a) == "certified":
+            points, _ = roots(a)
+            missing = [p for p in points if not index.meets(p, p, tol)]
+            if missing:
+                problems.append(f"{len(missing)} of {len(points)} certified roots of the {name} set lie in no box of the {other} set "
+                                f"(tolerance {tol}); first: {dict(zip(a['variable_names'], missing[0]))}")
+        else:
+            r = _sigma(b) + tol
+            boxes = _boxes(a, (BOX_SOLUTION,))
+            missing = [(l, u) for l, u in boxes if not index.meets(l, u, r)]
+            if missing:
+                problems.append(f"{len(missing)} of {len(boxes)} solution boxes of the {name} set meet no box of the {other} set "
+                                f"widened by {r:g} (its sigma {_sigma(b):g} plus tolerance {tol:g}); first: {_first(a, *missing[0])}")
     return problems
 
 
@@ -91,9 +134,10 @@ def assert_matches_golden(new, golden, tol=1e-9):
     assert not problems, "box set differs from the golden set:\n" + "\n".join(problems)
 
 
-def wait_for_box_set(topic, timeout=60.0, node_name="linkspace_testing"):
+def wait_for_box_set(topic, timeout=60.0, node_name="linkspace_testing", check=None):
     """The latest BoxSet on a latched `topic` (Reliable, TransientLocal), as plain data; waits up
-    to `timeout` seconds for the first and a short settle for a newer one. Needs rclpy."""
+    to `timeout` seconds for the first and a short settle for a newer one. `check`, if given,
+    is called while waiting and may raise (e.g. when the publisher has exited). Needs rclpy."""
     import rclpy
     from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
     from linkspace_msgs.msg import BoxSet
@@ -109,6 +153,8 @@ def wait_for_box_set(topic, timeout=60.0, node_name="linkspace_testing"):
         end = time.monotonic() + timeout
         while not got and time.monotonic() < end:
             rclpy.spin_once(node, timeout_sec=0.05)
+            if check is not None:
+                check()
         settle = time.monotonic() + 0.3
         while got and time.monotonic() < settle:
             rclpy.spin_once(node, timeout_sec=0.05)
@@ -140,21 +186,28 @@ class LinkspaceNode:
         for line in self.proc.stderr:
             self.log.append(line.rstrip("\n"))
 
+    def _check_running(self):
+        if self.proc.poll() is not None:
+            raise RuntimeError("linkspace serve exited:\n" + "\n".join(self.log))
+
     def wait_for_log(self, needle, timeout=60.0):
+        """Waits for a line of the node's log (lines below `--log-level` never come)."""
         end = time.monotonic() + timeout
         while time.monotonic() < end:
             if any(needle in l for l in self.log):
                 return
-            if self.proc.poll() is not None:
-                raise RuntimeError("linkspace serve exited:\n" + "\n".join(self.log))
+            self._check_running()
             time.sleep(0.05)
         raise TimeoutError(f"linkspace serve did not log {needle!r} within {timeout} s:\n" + "\n".join(self.log))
 
     def box_set(self, mechanism, topic="configuration_space", timeout=60.0):
-        """The mechanism's latest box set (after its load-time analysis is published)."""
-        if topic == "configuration_space":
-            self.wait_for_log(f"{mechanism}: published configuration_space", timeout)
-        return wait_for_box_set(f"{self.namespace}/{mechanism}/{topic}", timeout)
+        """The mechanism's latest box set on `~/<mechanism>/<topic>`, waited for on the topic
+        alone (latched: the node publishes a box set there when its run ends), whatever the
+        node's log level."""
+        try:
+            return wait_for_box_set(f"{self.namespace}/{mechanism}/{topic}", timeout, check=self._check_running)
+        except TimeoutError as e:
+            raise TimeoutError(f"{e}; node log:\n" + "\n".join(self.log)) from None
 
     def stop(self):
         if self.proc.poll() is None:

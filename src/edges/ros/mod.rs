@@ -133,7 +133,8 @@ pub struct ServeConfig {
     /// Publish the configuration spaces again at this period (none: only when they change).
     pub republish: Option<std::time::Duration>,
     /// Most bytes of samples each DDS writer of the node (a service's replies, a topic) keeps
-    /// for repair and late joiners; the oldest go first, the newest always stays.
+    /// for repair and late joiners, and each topic the node reads (a service's requests) keeps
+    /// once received; the oldest go first, the newest always stays.
     pub max_history_bytes: usize,
     /// Take URDFs from this topic (std_msgs/String, TransientLocal), e.g. `/robot_description`.
     pub robot_description_topic: Option<String>,

@@ -23,9 +23,11 @@ use std::time::Duration;
 /// Joins the DDS domain (only on loopback with `--network loopback`) and creates the ROS 2
 /// context on it.
 pub(super) fn join_domain(config: &ServeConfig) -> Result<Context> {
-    // The service reply writers keep 256 samples (service_qos): with replies of megabytes the
-    // byte bound is what holds their memory.
-    let mut builder = DomainParticipantBuilder::new(config.domain).writer_history_max_bytes(config.max_history_bytes);
+    // The service reply writers and request readers keep 256 samples (service_qos): with
+    // replies or requests of megabytes the byte bounds are what hold their memory.
+    let mut builder = DomainParticipantBuilder::new(config.domain)
+        .writer_history_max_bytes(config.max_history_bytes)
+        .reader_history_max_bytes(config.max_history_bytes);
     if config.network == Network::Loopback {
         // RustDDS then announces and sends only on 127.0.0.1, and finds same-host participants
         // by unicast to the well-known discovery ports on loopback.
@@ -58,7 +60,8 @@ pub(super) fn mechanisms(node: &mut Node, base: &str, loaded: Vec<Loaded>) -> Re
 
 /// Reliable and volatile like rclpy's service default, but deeper than its keep-last 10: a
 /// burst of requests (or of replies to one client) must not overwrite unacknowledged ones.
-/// The node's participant bounds each writer's history by bytes too (`max_history_bytes`).
+/// The node's participant bounds each writer's history and each reader's topic cache by bytes
+/// too (`max_history_bytes`).
 pub(super) fn service_qos() -> QosProfile {
     QosProfile::publisher_default()
         .reliability_reliable(WhenFull::Wait(Duration::from_secs(1)))

@@ -81,8 +81,9 @@ pub struct DomainParticipantBuilder {
   socket_receive_buffer_size: usize,
   socket_send_buffer_size: usize,
 
-  // linkspace patch: see `writer_history_max_bytes`.
+  // linkspace patch: see `writer_history_max_bytes`, `reader_history_max_bytes`.
   writer_history_max_bytes: Option<usize>,
+  reader_history_max_bytes: Option<usize>,
 
   #[cfg(feature = "security")]
   security_plugins: Option<SecurityPlugins>,
@@ -99,6 +100,7 @@ impl DomainParticipantBuilder {
       socket_receive_buffer_size: Self::DEFAULT_SOCKET_RECEIVE_BUFFER_SIZE,
       socket_send_buffer_size: Self::DEFAULT_SOCKET_SEND_BUFFER_SIZE,
       writer_history_max_bytes: None,
+      reader_history_max_bytes: None,
       #[cfg(feature = "security")]
       security_plugins: None,
       #[cfg(feature = "security")]
@@ -174,6 +176,16 @@ impl DomainParticipantBuilder {
   /// bound (only History depth and ResourceLimits count samples).
   pub fn writer_history_max_bytes(mut self, bytes: usize) -> Self {
     self.writer_history_max_bytes = Some(bytes);
+    self
+  }
+
+  /// linkspace patch: the most payload bytes the topic cache of each topic
+  /// with a user-defined DataReader of this participant keeps (the samples
+  /// received, read or not); the oldest samples go first, the newest is always
+  /// kept. Default: no byte bound (only History depth and ResourceLimits count
+  /// samples, at least 64 per topic).
+  pub fn reader_history_max_bytes(mut self, bytes: usize) -> Self {
+    self.reader_history_max_bytes = Some(bytes);
     self
   }
 
@@ -361,9 +373,11 @@ impl DomainParticipantBuilder {
       discovery_sample_sender,
     )?;
 
-    // linkspace patch: the byte bound of the writers' histories.
+    // linkspace patch: the byte bounds of the writers' histories and the readers'
+    // topic caches.
     let mut dp = dp;
     dp.writer_history_max_bytes = self.writer_history_max_bytes;
+    dp.reader_history_max_bytes = self.reader_history_max_bytes;
 
     // outer DP wrapper
     let dp = DomainParticipant {
@@ -545,6 +559,11 @@ impl DomainParticipant {
   /// linkspace patch: DomainParticipantBuilder::writer_history_max_bytes.
   pub(crate) fn writer_history_max_bytes(&self) -> Option<usize> {
     self.dpi.lock().unwrap().writer_history_max_bytes
+  }
+
+  /// linkspace patch: DomainParticipantBuilder::reader_history_max_bytes.
+  pub(crate) fn reader_history_max_bytes(&self) -> Option<usize> {
+    self.dpi.lock().unwrap().reader_history_max_bytes
   }
 
   /// # Examples
@@ -980,8 +999,10 @@ pub(crate) struct DomainParticipantDisc {
   discovery_join_handle: std::sync::mpsc::Receiver<JoinHandle<()>>,
   // This allows deterministic generation of EntityIds for DataReader, DataWriter, etc.
   entity_id_generator: atomic::AtomicU32,
-  // linkspace patch: DomainParticipantBuilder::writer_history_max_bytes.
+  // linkspace patch: DomainParticipantBuilder::writer_history_max_bytes and
+  // reader_history_max_bytes.
   writer_history_max_bytes: Option<usize>,
+  reader_history_max_bytes: Option<usize>,
 }
 
 impl DomainParticipantDisc {
@@ -1028,6 +1049,7 @@ impl DomainParticipantDisc {
       discovery_join_handle,
       entity_id_generator: atomic::AtomicU32::new(0),
       writer_history_max_bytes: None,
+      reader_history_max_bytes: None,
     })
   }
 

@@ -1170,7 +1170,14 @@ impl InnerSubscriber {
     };
     // Update topic cache with DataReader's Qos
     match topic_cache_handle.lock() {
-      Ok(mut tc) => tc.update_keep_limits(&qos),
+      Ok(mut tc) => {
+        tc.update_keep_limits(&qos);
+        // linkspace patch: the participant's byte bound on the topic caches of
+        // user-defined readers.
+        if entity_id.entity_kind.is_user_defined() {
+          tc.set_max_bytes(dp.reader_history_max_bytes());
+        }
+      }
       Err(e) => return create_error_poisoned!("Cannot lock topic cache. Error: {}", e),
     };
 

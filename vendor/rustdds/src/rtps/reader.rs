@@ -593,6 +593,21 @@ impl Reader {
     let receive_timestamp = Timestamp::now();
     //trace!("DATAFRAG received topic={:?}", self.topic_name);
 
+    // linkspace patch: fragments of a sample already received (a writer's repair
+    // sent again, or a duplicate) are dropped here. Fed to the assembler they
+    // opened a new assembly buffer of the whole sample's size that never
+    // completed and stayed until a later fragment of some other sample ran the
+    // 10 s garbage collection: a megabyte per resent request, held after the
+    // traffic stopped. `process_received_data` drops such samples anyway.
+    if !self.like_stateless && self.my_guid.entity_id != EntityId::SPDP_BUILTIN_PARTICIPANT_READER {
+      if let Some(writer_proxy) = self.matched_writer(writer_guid) {
+        if writer_proxy.should_ignore_change(seq_num) {
+          trace!("handle_datafrag_msg already have this seq={seq_num:?}");
+          return;
+        }
+      }
+    }
+
     // check if this submessage is expired already
     // TODO: Maybe this check is in the wrong place altogether? It should be
     // done when Datareader fetches data for the application.
@@ -1487,6 +1502,8 @@ impl fmt::Debug for Reader {
 mod tests {
   use std::sync::RwLock;
 
+  use bytes::Bytes;
+
   use crate::{
     dds::{qos::policy::Reliability, statusevents::sync_status_channel, typedesc::TypeDesc},
     polling::{new_shared_timer, wake_channel, LoopWaker},
@@ -1687,6 +1704,98 @@ mod tests {
     assert_eq!(
       cc_from_cache, &cc_locally_built,
       "The content of the cache change in the topic cache not as expected"
+    );
+  }
+
+  // linkspace patch: fragments of a sample already received open no assembly.
+  #[test]
+  fn fragments_of_a_received_sample_open_no_assembly_buffer() {
+    let dds_cache = Arc::new(RwLock::new(DDSCache::new()));
+    let topic_name = "test_name";
+    let qos_policy = QosPolicies::qos_none();
+    let topic_cache_handle = dds_cache.write().unwrap().add_new_topic(
+      topic_name.to_string(),
+      TypeDesc::new("test_type".to_string()),
+      &qos_policy,
+    );
+    let (notification_sender, _notification_receiver) =
+      crate::mio_source::notification_channel(100);
+    let (_notification_event_source, notification_event_sender) =
+      mio_source::make_poll_channel().unwrap();
+    let (status_sender, _status_receiver) = sync_status_channel::<DataReaderStatus>(4).unwrap();
+    let (participant_status_sender, _participant_status_receiver) =
+      sync_status_channel(16).unwrap();
+    let (_reader_command_sender, reader_command_receiver) =
+      wake_channel::<ReaderCommand>(10, &LoopWaker::new());
+    let reader_guid = GUID::dummy_test_guid(EntityKind::READER_NO_KEY_USER_DEFINED);
+    let reader_ing = ReaderIngredients {
+      guid: reader_guid,
+      notification_sender,
+      status_sender,
+      topic_name: topic_name.to_string(),
+      topic_cache_handle,
+      like_stateless: false,
+      qos_policy,
+      data_reader_command_receiver: reader_command_receiver,
+      data_reader_waker: Arc::new(Mutex::new(None)),
+      poll_event_sender: notification_event_sender,
+      security_plugins: None,
+      discovery_notify: None,
+    };
+    let mut reader = Reader::new(
+      reader_ing,
+      Rc::new(UDPSender::new(0).unwrap()),
+      new_shared_timer(),
+      participant_status_sender,
+    );
+    let writer_guid = GUID::dummy_test_guid(EntityKind::WRITER_NO_KEY_USER_DEFINED);
+    let mr_state = MessageReceiverState {
+      source_guid_prefix: writer_guid.prefix,
+      ..Default::default()
+    };
+    reader.matched_writer_add(
+      writer_guid,
+      EntityId::UNKNOWN,
+      mr_state.unicast_reply_locator_list.to_vec(),
+      mr_state.multicast_reply_locator_list.to_vec(),
+      &QosPolicies::qos_none(),
+    );
+
+    // A sample of two fragments: a CDR_LE encapsulation header, then zeros.
+    let (frag_size, data_size) = (256u16, 512u32);
+    let mut whole = vec![0u8; data_size as usize];
+    whole[1] = 1;
+    let fragment = |k: u32| DataFrag {
+      reader_id: reader_guid.entity_id,
+      writer_id: writer_guid.entity_id,
+      writer_sn: SequenceNumber::new(1),
+      fragment_starting_num: FragmentNumber::new(k),
+      fragments_in_submessage: 1,
+      fragment_size: frag_size,
+      data_size,
+      serialized_payload: Bytes::copy_from_slice(&whole[(k as usize - 1) * 256..k as usize * 256]),
+      ..Default::default()
+    };
+    let flags = BitFlags::<DATAFRAG_Flags>::empty();
+    let partial = |reader: &Reader| {
+      reader
+        .fragment_assemblers
+        .get(&writer_guid)
+        .is_some_and(|fa| fa.is_partially_received(SequenceNumber::new(1)))
+    };
+    reader.handle_datafrag_msg(&fragment(1), flags, &mr_state);
+    assert!(partial(&reader), "the first fragment opens an assembly");
+    reader.handle_datafrag_msg(&fragment(2), flags, &mr_state);
+    assert!(!partial(&reader), "the sample is complete");
+    assert!(reader
+      .matched_writer(writer_guid)
+      .unwrap()
+      .should_ignore_change(SequenceNumber::new(1)));
+    // The writer sends the first fragment again: nothing waits for the second.
+    reader.handle_datafrag_msg(&fragment(1), flags, &mr_state);
+    assert!(
+      !partial(&reader),
+      "a resent fragment of a received sample is dropped"
     );
   }
 

@@ -145,6 +145,11 @@ pub(crate) struct TopicCache {
   // would need 2^32 receives within it.
   last_added_instant: Timestamp,
 
+  // linkspace patch: payload bytes of the samples in `changes`, and the most
+  // the cache retains (see `set_max_bytes`; usize::MAX: no byte bound).
+  bytes: usize,
+  max_bytes: usize,
+
   // sequence_numbers is an index to "changes" by GUID and SN
   sequence_numbers: BTreeMap<GUID, BTreeMap<SequenceNumber, Timestamp>>,
 
@@ -168,6 +173,8 @@ impl TopicCache {
       changes: BTreeMap::new(),
       changes_reallocated_up_to: Timestamp::ZERO,
       last_added_instant: Timestamp::ZERO,
+      bytes: 0,
+      max_bytes: usize::MAX,
       sequence_numbers: BTreeMap::new(),
       received_reliably_before: BTreeMap::new(),
     };
@@ -209,6 +216,36 @@ impl TopicCache {
     // actual update. This is will only ever increase cache size.
     self.min_keep_samples = max(min_keep_samples, self.min_keep_samples);
     self.max_keep_samples = max(max_keep_samples, self.max_keep_samples);
+  }
+
+  /// linkspace patch: the most payload bytes this cache retains (None: no byte
+  /// bound, the default). Over it, the oldest samples go first, read or not, as
+  /// KeepLast drops samples beyond its depth; the newest always stays. A
+  /// KeepLast(256) service request reader otherwise held 256 requests, hundreds
+  /// of MB when requests are megabytes.
+  pub fn set_max_bytes(&mut self, max_bytes: Option<usize>) {
+    self.max_bytes = max_bytes.unwrap_or(usize::MAX);
+  }
+
+  // linkspace patch: how many of the oldest samples must go for the rest and an
+  // `incoming` sample of that many bytes to fit in `max_bytes`. Without one
+  // (`incoming` 0) the newest always stays.
+  fn over_bytes_count(&self, incoming: usize) -> usize {
+    let mut excess = (self.bytes + incoming).saturating_sub(self.max_bytes);
+    let keep_newest = usize::from(incoming == 0);
+    let mut count = 0;
+    for cc in self
+      .changes
+      .values()
+      .take(self.changes.len().saturating_sub(keep_newest))
+    {
+      if excess == 0 {
+        break;
+      }
+      excess = excess.saturating_sub(cc.data_value.payload_size());
+      count += 1;
+    }
+    count
   }
 
   // Returns true if the "reliably_received_before"-marker was actually moved
@@ -275,14 +312,19 @@ impl TopicCache {
 
   // Over MAX_WITHHELD_BYTES_PER_TOPIC, give up on missing samples, oldest first,
   // and hand over the samples after them. Returns true if anything was given up.
-  fn give_up_withheld_over_limit(&mut self) -> bool {
-    // Under the sample count limit nothing is retained just for being withheld.
-    if self.changes.len() <= self.max_keep_samples as usize {
+  fn give_up_withheld_over_limit(&mut self, incoming: usize) -> bool {
+    // Under the sample count limit (and the byte bound, linkspace patch) nothing
+    // is retained just for being withheld.
+    if self.changes.len() <= self.max_keep_samples as usize
+      && self.bytes + incoming <= self.max_bytes
+    {
       return false;
     }
+    // linkspace patch: withheld samples too stay within the byte bound.
+    let limit = MAX_WITHHELD_BYTES_PER_TOPIC.min(self.max_bytes);
     let mut gave_up = false;
     while let Some((oldest, writer, first_present)) = self.oldest_withheld_change() {
-      if self.withheld_bytes(oldest) <= MAX_WITHHELD_BYTES_PER_TOPIC {
+      if self.withheld_bytes(oldest) <= limit {
         break;
       }
       debug!(
@@ -335,9 +377,11 @@ impl TopicCache {
       1
     };
     let gc_triggered = modulus <= 1 || semi_random_number.is_multiple_of(modulus);
-    if gc_triggered {
+    // linkspace patch: and whenever the new sample would take the cache over its
+    // byte bound, making room for it.
+    if gc_triggered || self.bytes + payload_size > self.max_bytes {
       debug!("Garbage collecting topic {}", self.topic_name);
-      self.remove_changes_before(Timestamp::ZERO);
+      self.collect(Timestamp::ZERO, payload_size);
       // remove limit is so low that it has no effect.
       // We actually only remove to keep cache size between min and max limits.
     }
@@ -369,10 +413,12 @@ impl TopicCache {
       self.last_added_instant = key;
 
       self.insert_sn(key, &cache_change);
+      self.bytes += cache_change.data_value.payload_size(); // linkspace patch
       self.changes.insert(key, cache_change).inspect(|old_cc| {
         // Should be unreachable now that keys are strictly monotonic, but keep the
         // guard rather than silently overwriting if the invariant is ever broken.
         error!("DDSHistoryCache already contained element with key {key:?} !!!");
+        self.bytes -= old_cc.data_value.payload_size();
         self.remove_sn(old_cc);
       })
     }
@@ -487,6 +533,12 @@ impl TopicCache {
   /// If we are over `self.max_keep_samples`, then remove the oldest samples
   /// until `max_keep_samples` is reached, regardless of `remove_before`.
   pub fn remove_changes_before(&mut self, remove_before: Timestamp) {
+    self.collect(remove_before, 0);
+  }
+
+  // `remove_changes_before`, making room for an `incoming` sample of that many
+  // payload bytes within the byte bound (linkspace patch).
+  fn collect(&mut self, remove_before: Timestamp, incoming: usize) {
     // TODO: Currently, TopicCache does not know about Keys is Samples/CacheChanges,
     // because they are opaque binary blobs at this point. Therefore, we cannot
     // distinguish between instances, so cannot observe max instance counts.
@@ -496,7 +548,10 @@ impl TopicCache {
 
     // We must remove at least enough to stay within max limit,
     // must_remove_count = sample_count - max_keep_samples
-    let must_remove_count = sample_count.saturating_sub(self.max_keep_samples as usize);
+    // (linkspace patch: and within the byte bound).
+    let must_remove_count = sample_count
+      .saturating_sub(self.max_keep_samples as usize)
+      .max(self.over_bytes_count(incoming));
     // Saturating sub takes care that this does not underflow below zero.
 
     let may_remove_count = match self.min_keep_samples {
@@ -516,7 +571,7 @@ impl TopicCache {
     // when they exceed MAX_WITHHELD_BYTES_PER_TOPIC and we give up on the missing
     // sample. Samples released by giving up are not evicted in the same pass, so
     // the Reader gets a chance to take them.
-    if !self.give_up_withheld_over_limit() {
+    if !self.give_up_withheld_over_limit(incoming) {
       let oldest_withheld = self.oldest_withheld_change().map(|(ts, _, _)| ts);
 
       let oldest_timestamp_to_retain_opt: Option<Timestamp> = self
@@ -547,7 +602,10 @@ impl TopicCache {
       let to_remove = std::mem::replace(&mut self.changes, to_retain);
 
       // update also SequenceNumber map
-      to_remove.values().for_each(|r| self.remove_sn(r));
+      to_remove.values().for_each(|r| {
+        self.bytes -= r.data_value.payload_size(); // linkspace patch
+        self.remove_sn(r)
+      });
     }
 
     // Now, reallocate old cache changes
@@ -802,6 +860,100 @@ mod tests {
       SequenceNumber::new(201)
     );
     assert!(topic_cache.changes.len() <= topic_cache.max_keep_samples as usize + 1);
+  }
+
+  // linkspace patch: the byte bound (`set_max_bytes`).
+  fn keep_last_256_topic_cache() -> TopicCache {
+    TopicCache::new(
+      "rq/solveRequest".to_string(),
+      TypeDesc::new("Solve_Request".to_string()),
+      &QosPolicyBuilder::new()
+        .history(History::KeepLast { depth: 256 })
+        .build(),
+    )
+  }
+
+  fn add_in_order(topic_cache: &mut TopicCache, writer: GUID, sn: i64, size: usize) {
+    topic_cache.add_change(
+      &Timestamp::now(),
+      CacheChange::new(
+        writer,
+        SequenceNumber::new(sn),
+        WriteOptions::default(),
+        DDSData::new(SerializedPayload::new(
+          RepresentationIdentifier::CDR_LE,
+          vec![0; size],
+        )),
+      ),
+    );
+    topic_cache.mark_reliably_received_before(writer, SequenceNumber::new(sn + 1));
+  }
+
+  fn kept(topic_cache: &TopicCache) -> Vec<i64> {
+    topic_cache
+      .changes
+      .values()
+      .map(|cc| i64::from(cc.sequence_number))
+      .collect()
+  }
+
+  #[test]
+  fn byte_budget_bounds_a_deep_topic_cache() {
+    let writer = user_writer();
+    let budget = 10_000;
+    let mut unbounded = keep_last_256_topic_cache();
+    let mut bounded = keep_last_256_topic_cache();
+    bounded.set_max_bytes(Some(budget));
+    for sn in 1..=100 {
+      add_in_order(&mut unbounded, writer, sn, 1000);
+      add_in_order(&mut bounded, writer, sn, 1000);
+    }
+    unbounded.remove_changes_before(Timestamp::ZERO);
+    bounded.remove_changes_before(Timestamp::ZERO);
+    // Without the bound the depth (256) keeps all 100.
+    assert_eq!(kept(&unbounded), (1..=100).collect::<Vec<_>>());
+    // With it, the newest that fit in the budget: each sample is its 1000 bytes
+    // plus the 4-byte encapsulation header.
+    let per_sample = unbounded
+      .changes
+      .values()
+      .next()
+      .unwrap()
+      .data_value
+      .payload_size();
+    let fit = (budget / per_sample) as i64;
+    assert_eq!(kept(&bounded), (101 - fit..=100).collect::<Vec<_>>());
+    assert_eq!(bounded.bytes, fit as usize * per_sample);
+    // The tally follows the removals.
+    assert_eq!(unbounded.bytes, 100 * per_sample);
+
+    // A sample larger than the whole budget stays, alone, as the newest.
+    add_in_order(&mut bounded, writer, 101, 3 * budget);
+    assert_eq!(kept(&bounded), [101]);
+    add_in_order(&mut bounded, writer, 102, 10);
+    assert_eq!(kept(&bounded), [102]);
+  }
+
+  #[test]
+  fn byte_budget_bounds_withheld_samples_too() {
+    let writer = user_writer();
+    let mut unbounded = keep_last_256_topic_cache();
+    let mut bounded = keep_last_256_topic_cache();
+    bounded.set_max_bytes(Some(10_000));
+    for sn in 2..=30 {
+      add_after_missing_first(&mut unbounded, writer, sn, 1000);
+      add_after_missing_first(&mut bounded, writer, sn, 1000);
+    }
+    unbounded.remove_changes_before(Timestamp::ZERO);
+    bounded.remove_changes_before(Timestamp::ZERO);
+    // Under the depth and MAX_WITHHELD_BYTES_PER_TOPIC, all 29 wait for sample 1.
+    assert_eq!(unbounded.changes.len(), 29);
+    assert_eq!(unbounded.reliable_before(writer), SequenceNumber::new(1));
+    // Over the byte budget, sample 1 is given up and the rest handed over, then
+    // collected to the budget.
+    assert_eq!(bounded.reliable_before(writer), SequenceNumber::new(31));
+    assert!(bounded.bytes <= 10_000, "{} bytes kept", bounded.bytes);
+    assert_eq!(kept(&bounded).last(), Some(&30));
   }
 
   #[test]
