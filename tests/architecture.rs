@@ -493,7 +493,7 @@ const PUBLIC_NAMES: &[&str] = &[
     "app::PoseInput", "app::Prepared", "app::Progress", "app::SNAP_TOLERANCE", "app::Scope",
     "app::SingularKind", "app::SingularitiesAnswer", "app::SingularitiesJob", "app::SolveAnswer",
     "app::SolveJob", "app::SolverSettings", "app::Status", "app::SweepTaskJob", "app::TracedPoint",
-    "app::check_precision", "app::describe", "app::motion_joints", "app::prepare",
+    "app::Questions", "app::check_precision", "app::describe", "app::motion_joints", "app::prepare", "app::questions",
     "app::rank_and_size", "app::share_searches", "app::sweeps",
     "app::sweeps::DEFAULT_MAX_TASKS", "app::sweeps::Header", "app::sweeps::Plan",
     "app::sweeps::Summary", "app::sweeps::Sweep", "app::sweeps::Task", "app::sweeps::TaskResult",

@@ -1,6 +1,6 @@
 //! What a front end shows of a loaded mechanism before asking it anything: its links, joints
 //! (type, limits, axis, mimic) and loop closures, as plain data with the types spelled as URDF
-//! spells them, and what the node answers for it.
+//! spells them; and what the node answers for it (`questions`).
 
 use crate::model::{JointKind, Mechanism};
 
@@ -17,7 +17,11 @@ pub struct MechanismInfo {
     pub loops: Vec<LoopInfo>,
     /// Joints of the file's `<transmission>` elements: the actuated joints by default.
     pub actuated: Vec<String>,
-    /// What the node makes of it, loaded as it is (no fixed joints, no traced points):
+}
+
+/// What the node makes of a mechanism loaded as it is (no fixed joints, no traced points).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Questions {
     /// `manipulator_3r`, `planar_linkage`, `spatial_linkage`, `parallel_platform` or
     /// `unsupported`.
     pub kind: &'static str,
@@ -76,7 +80,7 @@ fn kind_and_limits(kind: JointKind) -> (&'static str, Option<(f64, f64)>) {
     }
 }
 
-/// The links, joints and loops of `m`, and what the node answers for it.
+/// The links, joints and loops of `m`: read off the file, no analysis built.
 pub fn describe(m: &Mechanism) -> MechanismInfo {
     let link = |i: usize| m.links.get(i).map_or_else(String::new, |l| l.name.clone());
     let joints = m
@@ -88,11 +92,16 @@ pub fn describe(m: &Mechanism) -> MechanismInfo {
         })
         .collect();
     let loops = m.loops.iter().map(|l| LoopInfo { name: l.name.clone(), kind: l.type_name(), predecessor: link(l.predecessor), successor: link(l.successor), limits: kind_and_limits(l.kind).1 }).collect();
-    let (kind, services, free_joints, limitation) = match super::analysis::load_urdf(m, &[], &[]) {
-        Ok(a) => (a.kind().name(), a.services().iter().map(|s| s.name()).collect(), a.free_joints(), a.limitation()),
-        Err(e) => ("unsupported", Vec::new(), Vec::new(), e.to_string()),
-    };
-    MechanismInfo { name: m.name.clone(), links: m.links.iter().map(|l| l.name.clone()).collect(), joints, loops, actuated: m.transmission_joints.clone(), kind, services, free_joints, limitation }
+    MechanismInfo { name: m.name.clone(), links: m.links.iter().map(|l| l.name.clone()).collect(), joints, loops, actuated: m.transmission_joints.clone() }
+}
+
+/// What the node answers for `m` (`Questions`): the node's own choice of analysis, built once
+/// here and dropped.
+pub fn questions(m: &Mechanism) -> Questions {
+    match super::analysis::load_urdf(m, &[], &[]) {
+        Ok(a) => Questions { kind: a.kind().name(), services: a.services().iter().map(|s| s.name()).collect(), free_joints: a.free_joints(), limitation: a.limitation() },
+        Err(e) => Questions { kind: "unsupported", services: Vec::new(), free_joints: Vec::new(), limitation: e.to_string() },
+    }
 }
 
 #[cfg(test)]
@@ -110,4 +119,3 @@ mod tests {
         assert_eq!(info.links[0], info.joints[0].parent);
     }
 }
-

@@ -46,7 +46,7 @@ pub use job::{ArmOptions, CollisionsJob, DistancesJob, Ik6Job, IkJob, Job, LoopQ
 internal_use!(job::IK6_DEFAULT_TIMEOUT);
 pub use prepare::{prepare, Input, JobError, Prepared};
 // What a front end shows of a mechanism before asking it anything.
-pub use info::{describe, JointInfo, LoopInfo, MechanismInfo};
+pub use info::{describe, questions, JointInfo, LoopInfo, MechanismInfo, Questions};
 // The outcome vocabulary and the bounds of a run.
 pub use crate::kernel::outcome::{BoxStatus, Completeness, Incompleteness, Limit, Scope, Status};
 pub use crate::kernel::search::{Control, Limits, Progress, SolverSettings};

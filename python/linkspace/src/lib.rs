@@ -91,7 +91,7 @@ impl Model {
         Ok(Some(d))
     }
 
-    /// The node's view of the mechanism (`app::describe`): kind,
+    /// The node's view of the mechanism (`app::questions`): kind,
     /// services, free joints and, when it is outside every analysis, why.
     fn analysis<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
@@ -102,12 +102,11 @@ impl Model {
             d.set_item("limitation", "a distance file: only distances reads it")?;
             return Ok(d);
         };
-        let q = run::guarded(py, || app::describe(m))?;
-        let (kind, services, free, limitation) = (q.kind, q.services, q.free_joints, q.limitation);
-        d.set_item("kind", kind)?;
-        d.set_item("services", services)?;
-        d.set_item("free_joints", free)?;
-        d.set_item("limitation", limitation)?;
+        let q = run::guarded(py, || app::questions(m))?;
+        d.set_item("kind", q.kind)?;
+        d.set_item("services", q.services)?;
+        d.set_item("free_joints", q.free_joints)?;
+        d.set_item("limitation", q.limitation)?;
         Ok(d)
     }
 

@@ -4,16 +4,16 @@
 use crate::app::{Answer, BoxStatus, LoopAnswer, ResultBox};
 use crate::edges::report;
 use std::collections::BTreeMap;
-use std::io::Write;
+use std::fmt::Write;
 
-type Out = Vec<u8>;
+type Out = String;
 
 /// The text of `answer`, as the CLI prints it: a summary line per result and the first boxes
 /// of each kind, never the whole set (that is `json`'s).
 pub fn text(answer: &Answer) -> String {
-    let mut out = Vec::new();
+    let mut out = String::new();
     render(&mut out, answer);
-    String::from_utf8_lossy(&out).into_owned()
+    out
 }
 
 fn render(out: &mut Out, answer: &Answer) {
