@@ -124,7 +124,7 @@ impl Compiled {
 /// use linkspace::kernel::contract::{Contraction, Contractor, FaceBounds, TrapezoidClip};
 /// use linkspace::kernel::interval::{interval, point};
 /// use linkspace::kernel::system::Poly;
-/// use linkspace::IntervalBox;
+/// use linkspace::kernel::interval::IntervalBox;
 /// // x·y − 1 = 0 on [0.5, 4] × [0.5, 1]: x ≥ 1 follows.
 /// let p = Poly::var(0).mul(&Poly::var(1)).add(&Poly::constant(point(-1.0)));
 /// let mut clip = TrapezoidClip::new(&[p], FaceBounds::Corners).unwrap();
