@@ -846,3 +846,48 @@ fn placement_in_space_does_not_change_the_certified_answers() {
     let off = ground("rocker_joint", &ground("crank_joint", &xml));
     assert_eq!(certified_counts(&off, &[("crank_joint", 0.4)]), certified_counts(&xml, &[("crank_joint", 0.4)]));
 }
+
+/// However a file roots a six-legged platform — a world link above its base, a mounting plate
+/// between the base and the legs, a tool flange on the platform, all by fixed joints, at random
+/// placements written to a few decimals — the builder picks the pose model and certifies the
+/// same assemblies as for the bundled file.
+#[test]
+fn fixed_joints_around_a_platform_change_neither_the_model_nor_the_assemblies() {
+    let refs = reference("stewart_6_6_fk.json");
+    let case = &refs["cases"][0];
+    let fixed = fixed_from(case, "leg_lengths");
+    let count = case["real_solutions"].as_u64().expect("count") as usize;
+    let xml = urdf_text("stewart_6_6.urdf");
+    let mut state = 0x9e37_79b9_7f4a_7c15u64;
+    let mut uniform = |lo: f64, hi: f64| {
+        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        lo + (hi - lo) * ((state >> 11) as f64 / (1u64 << 53) as f64)
+    };
+    let mut variants = vec![("as bundled".to_string(), xml.clone())];
+    for k in 0..3 {
+        let xyz = format!("{:.3} {:.3} {:.3}", uniform(-2.0, 2.0), uniform(-2.0, 2.0), uniform(-2.0, 2.0));
+        let digits = 2 + k;
+        let rpy = format!("{:.digits$} {:.digits$} {:.digits$}", uniform(-PI, PI), uniform(-1.5, 1.5), uniform(-PI, PI));
+        variants.push((format!("under a world link at xyz {xyz}, rpy {rpy}"), placed(&xml, &xyz, &rpy)));
+    }
+    // The legs hang from a plate fixed to the base; the platform carries a flange.
+    let extra = "<link name=\"plate\"/>\n  <joint name=\"plate_mount\" type=\"fixed\"><parent link=\"base\"/><child link=\"plate\"/></joint>\n  <link name=\"flange\"/>\n  <joint name=\"flange_mount\" type=\"fixed\"><parent link=\"platform\"/><child link=\"flange\"/><origin xyz=\"0 0 0.05\" rpy=\"0 0 1.5708\"/></joint>\n  ";
+    let at = xml.find("<link name=\"base\">").expect("base link");
+    let mut plated = format!("{}{extra}{}", &xml[..at], &xml[at..]);
+    for leg in 1..=6 {
+        let joint = format!("<joint name=\"leg{leg}_base\" type=\"spherical\">\n    <parent link=\"base\"/>");
+        assert!(plated.contains(&joint), "leg {leg}'s base joint");
+        plated = plated.replace(&joint, &format!("<joint name=\"leg{leg}_base\" type=\"spherical\">\n    <parent link=\"plate\"/>"));
+    }
+    variants.push(("with a mounting plate and a flange".to_string(), plated.clone()));
+    variants.push(("with a plate and a flange, under a world link".to_string(), placed(&plated, "0.1 -0.25 1.3", "0.01 -0.7 2.5")));
+    for (what, text) in variants {
+        let m = urdf::parse(&text).expect("parses");
+        let job = SolveRun::build(&m, ModelChoice::Auto, &fixed, &[], SolverSettings { threads: 1, ..Default::default() }).expect("builds");
+        assert_eq!(job.problem().model(), Model::Pose, "{what}");
+        let r = job.run(&AtomicBool::new(false), &mut |_| {});
+        assert_eq!(r.status, Status::Finished, "{what}");
+        let unique = r.boxes.iter().filter(|b| b.status == BoxStatus::Unique).count();
+        assert_eq!((unique, r.boxes.len()), (count, count), "{what}: one certified box per real assembly");
+    }
+}

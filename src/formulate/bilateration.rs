@@ -41,7 +41,7 @@
 
 use super::platform::PlatformError;
 use super::pose::{joint_values_of, link_pose_of, pose_of, six_legs, PoseLeg, SixLegs};
-use super::stated::IVec3;
+use super::stated::{IMat3, IVec3};
 use crate::kernel::interval::{interval, point, Interval, IntervalBox};
 use crate::model::Mechanism;
 use crate::kernel::search::{SolveError, Solver, SolverSettings};
@@ -74,6 +74,8 @@ pub struct BilaterationProblem {
     frame_axes: [IVec3; 3],
     /// Rows of `[q1 − q0, q2 − q0, m]⁻¹` (platform frame).
     platform_inverse: [IVec3; 3],
+    /// The base's frame in the root frame, when fixed joints hold it below the root.
+    base_in_root: Option<(IMat3, IVec3)>,
 }
 
 fn sub(a: &IVec3, b: &IVec3) -> IVec3 {
@@ -304,7 +306,7 @@ impl BilaterationProblem {
     /// Reads the platform of `m` with every leg fixed by `fixed` (leg name, its value as for
     /// `solve --fix`: the prismatic joint's travel, metres).
     pub fn new(m: &Mechanism, fixed: &[(String, f64)]) -> Result<Self, PlatformError> {
-        let SixLegs { platform, floating, legs } = six_legs(m, fixed, "the distance model")?;
+        let SixLegs { platform, floating, legs, base_in_root } = six_legs(m, fixed, "the distance model")?;
         let frame = choose_frame(&legs)?;
         let base = frame.map(|i| legs[i].base);
         let top = frame.map(|i| legs[i].top);
@@ -412,6 +414,7 @@ impl BilaterationProblem {
             normal,
             frame_axes: [f1, f2, f3],
             platform_inverse,
+            base_in_root,
         })
     }
 
@@ -448,6 +451,6 @@ impl BilaterationProblem {
     /// The platform link's pose over the box, as the spatial model reports link poses.
     pub fn link_pose(&self, b: &IntervalBox) -> super::LinkPose {
         let (t, r) = self.placement(b);
-        link_pose_of(&self.legs, t, &r)
+        link_pose_of(&self.legs, t, &r, self.base_in_root.as_ref())
     }
 }

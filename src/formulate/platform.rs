@@ -121,7 +121,9 @@ pub(crate) struct RawLeg {
     pub joint: usize,
     /// Index of the spherical loop closing the leg on the platform.
     pub closure: usize,
-    /// Base ball centre, in the base frame (the ball joint's origin).
+    /// The link the ball joint hangs from: the base, or a link fixed to it (a mounting plate).
+    pub mount: usize,
+    /// Base ball centre, in the mount's frame (the ball joint's origin).
     pub base: Vector3<f64>,
     /// The rod's ball centre in the rod frame.
     pub on_rod: Vector3<f64>,
@@ -131,14 +133,25 @@ pub(crate) struct RawLeg {
     pub squared_range: (f64, f64),
 }
 
-/// The platform link (child of the base through a floating joint) and its legs, in file order:
-/// what both platform builders read.
-pub(crate) fn read_legs(m: &Mechanism) -> Result<(usize, Vec<RawLeg>), PlatformError> {
-    let floating: Vec<usize> = (0..m.joints.len()).filter(|&j| m.joints[j].kind == JointKind::Floating && m.joints[j].parent == m.root).collect();
-    let platform = match floating.as_slice() {
-        [j] => m.joints[*j].child,
+/// The base, the platform link (child of the base through a floating joint) and its legs, in
+/// file order: what the platform builders read.
+///
+/// The base is the link the platform's floating joint hangs from: the root, or a link held to
+/// the root by fixed joints only (a `world` link above the base, at any placement, changes
+/// nothing: the platform's pose and the ball centres are read in the base's frame).
+pub(crate) fn read_legs(m: &Mechanism) -> Result<(usize, usize, Vec<RawLeg>), PlatformError> {
+    let held = |link: usize| m.path_to(link).into_iter().all(|j| m.joints[j].kind == JointKind::Fixed);
+    let floating: Vec<usize> = (0..m.joints.len()).filter(|&j| m.joints[j].kind == JointKind::Floating && held(m.joints[j].parent)).collect();
+    let (base, platform) = match floating.as_slice() {
+        [j] => (m.joints[*j].parent, m.joints[*j].child),
         [] => return Err(PlatformError::NotAPlatform("no link hangs from the base by a floating joint (the platform)".into())),
         _ => return Err(PlatformError::NotAPlatform("more than one floating link".into())),
+    };
+    // A leg may hang from the base or from a link fixed below it.
+    let above_base = m.path_to(base);
+    let mounted = |link: usize| {
+        let path = m.path_to(link);
+        path.starts_with(&above_base) && path[above_base.len()..].iter().all(|&j| m.joints[j].kind == JointKind::Fixed)
     };
     let mut legs = Vec::new();
     for (index, joint) in m.joints.iter().enumerate() {
@@ -147,10 +160,10 @@ pub(crate) fn read_legs(m: &Mechanism) -> Result<(usize, Vec<RawLeg>), PlatformE
         // Below: the cylinder, on a ball joint of the base.
         let cylinder = joint.parent;
         let ball = match m.links[cylinder].parent_joint {
-            Some(b) if m.joints[b].kind == JointKind::Spherical && m.joints[b].parent == m.root => b,
+            Some(b) if m.joints[b].kind == JointKind::Spherical && mounted(m.joints[b].parent) => b,
             _ => return Err(PlatformError::NotAPlatform(format!("{element}: its cylinder must hang from the base by a spherical joint"))),
         };
-        let base = m.joints[ball].origin.translation.vector;
+        let ball_centre = m.joints[ball].origin.translation.vector;
         // Above: the rod, closed onto the platform by a spherical loop.
         let rod = joint.child;
         let index_of_closure = m.loops.iter().position(|l| l.kind == JointKind::Spherical && (l.predecessor == rod && l.successor == platform || l.successor == rod && l.predecessor == platform));
@@ -172,9 +185,9 @@ pub(crate) fn read_legs(m: &Mechanism) -> Result<(usize, Vec<RawLeg>), PlatformE
         let offset = at0.dot(&dir);
         let (lo, hi) = (offset + limits.0, offset + limits.1);
         let squared_range = if lo <= 0.0 && hi >= 0.0 { (0.0, (lo * lo).max(hi * hi)) } else { ((lo * lo).min(hi * hi), (lo * lo).max(hi * hi)) };
-        legs.push(RawLeg { name: joint.name.clone(), joint: index, closure: closure_index, base, on_rod, on_platform, squared_range });
+        legs.push(RawLeg { name: joint.name.clone(), joint: index, closure: closure_index, mount: m.joints[ball].parent, base: ball_centre, on_rod, on_platform, squared_range });
     }
-    Ok((platform, legs))
+    Ok((base, platform, legs))
 }
 
 fn same(a: &Vector3<f64>, b: &Vector3<f64>) -> bool {
@@ -191,7 +204,10 @@ impl PlatformProblem {
     /// enters the distance problem as the interval square `[l]²`, so the problem solved is
     /// exactly the one with that length.
     pub fn with_legs(m: &Mechanism, fixed: &[(String, f64)], values: LegValues) -> Result<Self, PlatformError> {
-        let (platform, read) = read_legs(m)?;
+        let (base, platform, read) = read_legs(m)?;
+        if let Some(leg) = read.iter().find(|l| l.mount != base) {
+            return Err(PlatformError::Unsupported(format!("leg '{}' hangs from '{}', a link fixed to the base: the distance formulation reads every ball centre in the base's frame", leg.name, m.links[leg.mount].name)));
+        }
         let mut base_points: Vec<Vector3<f64>> = Vec::new();
         let mut platform_points: Vec<Vector3<f64>> = Vec::new();
         let mut legs = Vec::new();

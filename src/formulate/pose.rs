@@ -21,7 +21,7 @@
 
 use super::angles::{angle_interval, stated};
 use super::platform::{read_legs, PlatformError};
-use super::stated::{self as st, IVec3};
+use super::stated::{self as st, IMat3, IVec3};
 use crate::kernel::interval::{interval, point, Interval, IntervalBox};
 use crate::model::{JointKind, Mechanism};
 use crate::kernel::search::{contractor_with_newton_on, SolveError, Solver, SolverSettings};
@@ -76,6 +76,8 @@ pub struct PoseProblem {
     pub r: [[VarId; 3]; 3],
     /// Free joints, as reported: the floating joint's position and roll, pitch, yaw.
     pub free_joints: Vec<String>,
+    /// The base's frame in the root frame, when fixed joints hold it below the root.
+    base_in_root: Option<(IMat3, IVec3)>,
 }
 
 /// Linear forms and products, written into a system.
@@ -132,12 +134,15 @@ pub(crate) struct SixLegs {
     pub floating: String,
     /// The legs, in file order.
     pub legs: Vec<PoseLeg>,
+    /// The base's frame in the root frame when a fixed joint holds the base below the root
+    /// (poses are solved in the base's frame and reported in the root's).
+    pub base_in_root: Option<(IMat3, IVec3)>,
 }
 
 /// Reads the six legs of `m`'s platform with their values from `fixed` (as for `solve --fix`:
 /// the prismatic joint's travel, metres); `model` names the builder in refusals.
 pub(crate) fn six_legs(m: &Mechanism, fixed: &[(String, f64)], model: &str) -> Result<SixLegs, PlatformError> {
-    let (platform, read) = read_legs(m)?;
+    let (base, platform, read) = read_legs(m)?;
     if read.len() != 6 {
         return Err(PlatformError::Unsupported(format!("{} legs: {model} takes six", read.len())));
     }
@@ -168,14 +173,24 @@ pub(crate) fn six_legs(m: &Mechanism, fixed: &[(String, f64)], model: &str) -> R
         let d = st::apply(&rot, &st::axis(&joint.axis));
         let q = stated(value);
         let top_in_cylinder: IVec3 = [0, 1, 2].map(|i| u[i] + q * d[i]);
-        legs.push(PoseLeg { name: leg.name.clone(), base: st::translation(&leg.base), top: st::translation(&leg.on_platform), squared: norm2(&top_in_cylinder) });
+        // A ball on a link fixed below the base: its centre carried into the base's frame.
+        let centre = st::translation(&leg.base);
+        let in_base = if leg.mount == base {
+            centre
+        } else {
+            let (r, p) = st::placement(m, base, leg.mount);
+            let turned = st::apply(&r, &centre);
+            [0, 1, 2].map(|i| p[i] + turned[i])
+        };
+        legs.push(PoseLeg { name: leg.name.clone(), base: in_base, top: st::translation(&leg.on_platform), squared: norm2(&top_in_cylinder) });
     }
     for (name, _) in fixed {
         if !legs.iter().any(|l| l.name == *name) {
             return Err(PlatformError::UnknownLeg(name.clone()));
         }
     }
-    Ok(SixLegs { platform, floating, legs })
+    let base_in_root = (base != m.root).then(|| st::placement(m, m.root, base));
+    Ok(SixLegs { platform, floating, legs, base_in_root })
 }
 
 impl PoseProblem {
@@ -187,7 +202,7 @@ impl PoseProblem {
 
     /// As `new`, with the rows `rows` says.
     pub fn with_rows(m: &Mechanism, fixed: &[(String, f64)], rows: PoseRows) -> Result<Self, PlatformError> {
-        let SixLegs { platform, floating, legs } = six_legs(m, fixed, "the pose model")?;
+        let SixLegs { platform, floating, legs, base_in_root } = six_legs(m, fixed, "the pose model")?;
         let mut w = Rows { system: EquationSystem::default(), square: Vec::new(), products: BTreeMap::new() };
         // t lies within reach of every base ball: |t − b_i| ≤ L_i + |p_i|.
         let mut tdom = [Interval::ENTIRE; 3];
@@ -274,7 +289,7 @@ impl PoseProblem {
         }
         let square = EquationSystem { vars: w.system.vars.clone(), equations: w.square };
         let free_joints = ["x", "y", "z", "roll", "pitch", "yaw"].iter().map(|p| format!("{floating}.{p}")).collect();
-        Ok(Self { name: m.name.clone(), platform: m.links[platform].name.clone(), floating, legs, fixed: fixed.to_vec(), system: w.system, square, t, r, free_joints })
+        Ok(Self { name: m.name.clone(), platform: m.links[platform].name.clone(), floating, legs, fixed: fixed.to_vec(), system: w.system, square, t, r, free_joints, base_in_root })
     }
 
     /// Whether the square rows alone are the system (no redundant rows).
@@ -306,7 +321,7 @@ impl PoseProblem {
 
     /// The platform link's pose over the box, as the spatial model reports link poses.
     pub fn link_pose(&self, b: &IntervalBox) -> super::LinkPose {
-        link_pose_of(&self.legs, self.t.map(|v| b.dims[v]), &self.rotation(b))
+        link_pose_of(&self.legs, self.t.map(|v| b.dims[v]), &self.rotation(b), self.base_in_root.as_ref())
     }
 }
 
@@ -343,7 +358,17 @@ pub(crate) fn pose_of(legs: &[PoseLeg], t: [Interval; 3], r: &[[Interval; 3]; 3]
 }
 
 /// The platform link's pose for the enclosures `t`, `r`, as the spatial model reports link poses.
-pub(crate) fn link_pose_of(legs: &[PoseLeg], t: [Interval; 3], r: &[[Interval; 3]; 3]) -> super::LinkPose {
+///
+/// `base_in_root` places the base's frame, in which `t` and `r` are solved, in the root frame.
+pub(crate) fn link_pose_of(legs: &[PoseLeg], t: [Interval; 3], r: &[[Interval; 3]; 3], base_in_root: Option<&(IMat3, IVec3)>) -> super::LinkPose {
+    let (t, r) = match base_in_root {
+        None => (t, *r),
+        Some((rotation, origin)) => {
+            let moved = st::apply(rotation, &t);
+            ([0, 1, 2].map(|i| origin[i] + moved[i]), st::mul(rotation, r))
+        }
+    };
+    let r = &r;
     let pose = pose_of(legs, t, r);
     let width = r.iter().flatten().map(|x| x.wid()).fold(0.0, f64::max);
     super::LinkPose { position: Some(t.map(|x| [x.inf(), x.sup()])), quaternion: Some(pose.quaternion), rotation_width: Some(width) }
