@@ -262,7 +262,7 @@ const QUESTIONS: [(&str, &str, NodeRoute); 9] = [
     ("Ik", "ik", Some(("inverse_kinematics", "app/arm_analysis.rs"))),
     ("Ik6", "ik6", Some(("inverse_kinematics6", "edges/ros"))),
     ("PathCheck", "path-check", Some(("path_check", "edges/ros"))),
-    ("Collisions", "collisions", None),
+    ("Collisions", "collisions", Some(("collisions", "edges/ros"))),
     // A platform's configuration space and Solve requests.
     ("Distances", "distances", Some(("solve", "app/platform.rs"))),
     // A linkage's singular sets.
@@ -501,7 +501,7 @@ const PUBLIC_NAMES: &[&str] = &[
     "app::sweeps::csv", "app::sweeps::map_svg", "app::sweeps::parse", "app::sweeps::read_done",
     "app::sweeps::run_tasks",
     "edges::report", "edges::ros",
-    "edges::report::json", "edges::report::text",
+    "edges::report::json", "edges::report::json_line", "edges::report::text",
     "edges::ros::DEFAULT_MAX_HISTORY_MB", "edges::ros::Mapping", "edges::ros::Network",
     "edges::ros::NodeLimits", "edges::ros::ServeConfig", "edges::ros::ServeError",
     "edges::ros::Severity", "edges::ros::Source", "edges::ros::bounded", "edges::ros::serve",

@@ -11,6 +11,7 @@
 //! (loudly) on a machine without PyPI.
 
 use serde_json::{json, Value};
+use std::collections::BTreeSet;
 use std::io::Read;
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
@@ -1601,12 +1602,18 @@ fn six_joint_arms_answer_inverse_kinematics6_and_path_check() {
     let ik6 = |q: [f64; 4]| {
         call("inverse_kinematics6", "InverseKinematics6", json!({"mechanism": "ur5", "pose": {"position": position, "orientation": {"x": q[0], "y": q[1], "z": q[2], "w": q[3]}}, "sigma": 1e-9}))
     };
+    let ik6_many = |qs: &[[f64; 4]]| {
+        let poses: Vec<Value> = qs.iter().map(|q| json!({"position": position, "orientation": {"x": q[0], "y": q[1], "z": q[2], "w": q[3]}})).collect();
+        call("inverse_kinematics6", "InverseKinematics6", json!({"mechanism": "ur5", "poses": poses, "sigma": 1e-9}))
+    };
     let script = json!([
         ik6(quaternion),
         call("path_check", "PathCheck", json!({"mechanism": "ur5", "trajectory": {"joint_names": reversed, "points": [point(&a), point(&b)]}})),
         call("path_check", "PathCheck", json!({"mechanism": "ur5", "trajectory": {"joint_names": &reversed[1..], "points": [{"positions": vec![0.0; 5]}, {"positions": vec![0.1; 5]}]}})),
         ik6([0.0; 4]),
         {"subscribe": "/linkspace/fanuc_crx10ial/singularities", "type": "SingularityReport"},
+        ik6_many(&[quaternion, quaternion.map(|x| 2.0 * x)]),
+        ik6_many(&[quaternion, [0.0; 4]]),
     ]);
     let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("services-6r-{}.json", std::process::id()));
     std::fs::write(&path, serde_json::to_string(&script).expect("json")).expect("script written");
@@ -1654,6 +1661,18 @@ fn six_joint_arms_answer_inverse_kinematics6_and_path_check() {
     // The whole-arm verdict on the topic, as the CLI's.
     let report = &r[4]["received"][0];
     assert_eq!(report["arm_cuspidality"], crx_ref["arm_cuspidality"]["verdict"], "{}", report["arm_cuspidality_reason"]);
+
+    // Many poses in one request: an answer per pose, in order, each the single pose's boxes (the
+    // quaternion's scale does not matter); a bad pose is refused by its index.
+    assert_eq!((r[5]["ok"].clone(), r[5]["complete"].clone(), r[5]["joint_names"].clone()), (json!(true), json!(true), json!(joints)), "{}", r[5]);
+    let results = r[5]["results"].as_array().expect("results");
+    assert_eq!(results.len(), 2);
+    for one in results {
+        assert_eq!((one["ok"].clone(), one["complete"].clone(), one["unique"].clone()), (json!(true), json!(true), r[0]["unique"].clone()), "{one}");
+        assert_eq!(one["solutions"], r[0]["solutions"]);
+    }
+    assert_eq!(r[6]["ok"], json!(false));
+    assert!(r[6]["message"].as_str().expect("message").contains("poses[1]: the quaternion is zero"), "{}", r[6]);
 }
 
 /// path_check on a 3R arm checks its positioning structure's det Df (the default for an arm
@@ -1747,4 +1766,68 @@ fn sigint_and_sigterm_stop_the_node_cleanly_even_with_its_stderr_closed() {
         let _ = child.kill();
     }
     assert_eq!(status.and_then(|s| s.code()), Some(0), "a node with its stderr closed stops cleanly: {status:?}");
+}
+
+/// The collision set over rclpy: the boxes `linkspace collisions` finds, listed for an arm
+/// with collision bodies only, and refusals in one line.
+#[test]
+fn an_arm_with_collision_bodies_answers_collisions_as_the_cli() {
+    let Some(python) = python() else { return };
+    let domain = 44;
+    let (column, bare) = (format!("{ROOT}/urdf/orthogonal_3r_a_column.urdf"), format!("{ROOT}/urdf/orthogonal_3r_a.urdf"));
+    let mut node = Node::start(domain, &[&column, &bare]);
+    node.wait_for(&["orthogonal_3r_a_column: published singularities", "orthogonal_3r_a: published singularities"], Duration::from_secs(120));
+    let reference = cli_json("collisions", &[&column, "--precision", "0.05"]);
+    let ask = |mechanism: &str, precision: f64, max_boxes: u64| call("collisions", "Collisions", json!({"mechanism": mechanism, "precision": precision, "max_boxes": max_boxes}));
+    let script = json!([
+        call("list_mechanisms", "ListMechanisms", json!({})),
+        ask("orthogonal_3r_a_column", 0.05, 0),
+        ask("orthogonal_3r_a", 0.05, 0),
+        ask("orthogonal_3r_a_column", 2.0, 0),
+        ask("orthogonal_3r_a_column", 0.05, 20),
+    ]);
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("services-collisions-{}.json", std::process::id()));
+    std::fs::write(&path, serde_json::to_string(&script).expect("json")).expect("script written");
+    let got = py(python, domain, "tests/ros_client.py", &["services", "--script", path.to_str().expect("utf-8")], Duration::from_secs(120));
+    let _ = std::fs::remove_file(&path);
+    let r = got["results"].as_array().expect("results");
+    for (k, x) in r.iter().enumerate() {
+        assert!(x.get("error").is_none(), "step {k}: {x}\nnode log:\n{}", node.log());
+    }
+    let list = r[0]["mechanisms"].as_array().expect("mechanisms");
+    let services = |name: &str| list.iter().find(|m| m["name"] == name).map(|m| m["services"].clone()).expect("listed");
+    assert_eq!(services("orthogonal_3r_a_column"), json!(["singularities", "inverse_kinematics", "classify", "path_check", "collisions"]));
+    assert_eq!(services("orthogonal_3r_a"), json!(["singularities", "inverse_kinematics", "classify", "path_check"]));
+
+    // The CLI's boxes, each kind as a set (the order of a parallel search is not fixed).
+    let reply = &r[1];
+    assert_eq!(reply["ok"], json!(true), "{reply}");
+    assert_eq!(reply["joint_names"], json!(["joint2", "joint3"]));
+    let as_set = |boxes: &Value| -> BTreeSet<String> { boxes.as_array().expect("boxes").iter().map(|b| format!("{:?}", intervals(&b["intervals"]))).collect() };
+    let cli_set = |kind: &str| -> BTreeSet<String> {
+        reference[kind].as_array().expect("records").iter().map(|b| format!("{:?}", vec![bounds(&b["joints"]["joint2"]), bounds(&b["joints"]["joint3"])])).collect()
+    };
+    for kind in ["colliding", "free", "undecided"] {
+        assert_eq!(as_set(&reply[kind]), cli_set(kind), "{kind} boxes");
+    }
+    // Each colliding box names the pair the CLI proves there.
+    let names = reply["body_names"].as_array().expect("bodies");
+    let pair = |k: usize| {
+        let p = reply["colliding_pairs"][k].as_u64().expect("pair") as usize;
+        let name = |side: &str| names[reply[side][p].as_u64().expect("index") as usize].clone();
+        json!([name("pair_first"), name("pair_second")])
+    };
+    let cli_pairs: BTreeSet<String> = reference["colliding"].as_array().expect("records").iter().map(|c| format!("{:?} {}", vec![bounds(&c["joints"]["joint2"]), bounds(&c["joints"]["joint3"])], c["pair"])).collect();
+    let node_pairs: BTreeSet<String> = (0..reply["colliding"].as_array().expect("boxes").len()).map(|k| format!("{:?} {}", intervals(&reply["colliding"][k]["intervals"]), pair(k))).collect();
+    assert_eq!(node_pairs, cli_pairs);
+    assert_eq!(reply["complete"], json!(false), "boundary boxes stay undecided at 0.05");
+    assert!(reply["message"].as_str().expect("message").contains("incomplete (undecided)"), "{reply}");
+    // Refusals: no bodies (with why), a precision outside (0, 1); a box limit ends it
+    // incomplete, naming the limit.
+    assert_eq!(r[2]["ok"], json!(false));
+    assert!(r[2]["message"].as_str().expect("message").contains("no collision geometry"), "{}", r[2]);
+    assert_eq!(r[3]["ok"], json!(false));
+    assert!(r[3]["message"].as_str().expect("message").contains("precision must be a number in (0, 1)"), "{}", r[3]);
+    assert_eq!((r[4]["ok"].clone(), r[4]["complete"].clone()), (json!(true), json!(false)), "{}", r[4]);
+    assert!(r[4]["message"].as_str().expect("message").contains("boxes limit"), "{}", r[4]);
 }

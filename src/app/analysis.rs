@@ -59,6 +59,8 @@ pub enum Service {
     InverseKinematics6,
     /// A joint path checked against the arm's singular sets.
     PathCheck,
+    /// Where the arm's collision bodies meet.
+    Collisions,
 }
 
 impl Service {
@@ -71,6 +73,7 @@ impl Service {
             Service::Classify => "classify",
             Service::InverseKinematics6 => "inverse_kinematics6",
             Service::PathCheck => "path_check",
+            Service::Collisions => "collisions",
         }
     }
 }

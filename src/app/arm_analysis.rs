@@ -8,7 +8,7 @@ use super::{
     gap, Analysis, AnalysisError, Answer, BoxSetResult, Classification, IkAnswer, IkJob, IkQuery, IkResult, IkSolution, Input, Job, JobError, MechanismKind, PreparedRun, ResultBox, Service,
     SingularPair, SingularPoint, SingularitiesAnswer, SingularitiesJob, SingularityQuery, SingularityResult,
 };
-use crate::analyses::arm3r::{self, curves::Cover, motion, records::radius, Chain3R, LoadOptions, Manip3rError};
+use crate::analyses::arm3r::{self, collision::Scene, curves::Cover, motion, records::radius, Chain3R, LoadOptions, Manip3rError};
 use crate::kernel::interval::bounds;
 use crate::kernel::search::{BoxStatus, Control, Limit, Limits, SolveStats as Stats, SolverSettings, Status};
 use crate::model::Mechanism;
@@ -31,6 +31,9 @@ pub struct Manip3rAnalysis {
     arm: Arc<Arm>,
     /// Whether the whole arm is a chain of six revolute joints (it answers the 6R questions).
     six: bool,
+    /// Why the arm has no collision analysis (its links carry no collision body it reads), or
+    /// `None` when it has one.
+    no_bodies: Option<String>,
     /// Cover of the singular curves, computed once (it does not depend on any request).
     cover: Arc<Cover>,
     /// The mechanism as the front door takes it: every run is a `Job` prepared on it.
@@ -44,7 +47,8 @@ impl Manip3rAnalysis {
         let arm = Arm::load(mechanism, &LoadOptions::default(), 0.0)?;
         let cover = Arc::new(Cover::new(&arm.chain, CURVE_DEPTH, &Control::with_limits(Limits::default())));
         let six = super::six::chain6_snapped(mechanism, &LoadOptions::default()).is_ok();
-        Ok(Self { arm: Arc::new(arm), six, cover, input: Arc::new(Input::Mechanism(mechanism.clone())) })
+        let no_bodies = Scene::from_mechanism(&arm.prepared.mechanism).err().map(|e| e.to_string());
+        Ok(Self { arm: Arc::new(arm), six, no_bodies, cover, input: Arc::new(Input::Mechanism(mechanism.clone())) })
     }
 
     /// The chain's name tokens for records over (θ₂, θ₃).
@@ -69,11 +73,18 @@ impl Analysis for Manip3rAnalysis {
         if self.six {
             services.insert(3, Service::InverseKinematics6);
         }
+        if self.no_bodies.is_none() {
+            services.push(Service::Collisions);
+        }
         services
     }
 
     fn limitation(&self) -> String {
-        "a 3R manipulator: an open chain reaches every joint configuration, so there is no configuration space to solve (singularities, inverse_kinematics and classify are answered)".to_string()
+        let mut text = "a 3R manipulator: an open chain reaches every joint configuration, so there is no configuration space to solve".to_string();
+        if let Some(why) = &self.no_bodies {
+            text.push_str(&format!("; no collisions: {why}"));
+        }
+        text
     }
 
     fn free_joints(&self) -> Vec<String> {

@@ -1,10 +1,10 @@
 //! From the analysis layer's plain results to wire types: box sets, markers, joint states.
 
 use super::msgs::{
-    self, AssemblyMode, BoxSet, ColorRGBA, CuspRecord, Header, InverseKinematics6Response, InverseKinematicsResponse, JointState, PathCheckResponse, LsBox, Marker, MarkerArray, NodeRecord, Point, Pose, Quaternion, SingularityReport,
+    self, AssemblyMode, BoxSet, CollisionsResponse, ColorRGBA, CuspRecord, Header, Ik6Solutions, InverseKinematics6Response, InverseKinematicsResponse, JointState, PathCheckResponse, LsBox, Marker, MarkerArray, NodeRecord, Point, Pose, Quaternion, SingularityReport,
     SolveStats, TfMessage, Time, Transform, TransformStamped, Vector3,
 };
-use crate::app::{joints_over, ArmIk6, ArmPathCheck, Bounds, BoxSetResult, Chain6R, IkResult, ResultBox, SegmentVerdict, SingularBranches, SingularityResult, SolverSettings};
+use crate::app::{joints_over, ArmCollisions, ArmIk6, ArmPathCheck, Bounds, BoxSetResult, Chain6R, IkResult, ResultBox, SegmentVerdict, SingularBranches, SingularityResult, SolverSettings};
 use crate::kernel::outcome::{BoxStatus, Completeness, Incompleteness, Status};
 
 /// A header stamped now (wall clock) in `frame`.
@@ -407,6 +407,46 @@ pub(crate) fn ik_response(r: &IkResult) -> InverseKinematicsResponse {
 
 /// The reply to a 6R inverse-kinematics request: the boxes of `linkspace ik6`.
 pub(crate) fn ik6_response(chain: &Chain6R, found: &ArmIk6) -> InverseKinematics6Response {
+    let one = ik6_solutions(found);
+    InverseKinematics6Response {
+        ok: true,
+        message: one.message,
+        complete: one.complete,
+        solutions: one.solutions,
+        joint_names: chain.joints.to_vec(),
+        unique: one.unique,
+        processed: one.processed,
+        results: Vec::new(),
+    }
+}
+
+/// The reply to a 6R inverse-kinematics request with many poses: each pose's answer (or why it
+/// failed) in order.
+pub(crate) fn ik6_many_response(answers: &[Result<crate::app::Answer, String>]) -> InverseKinematics6Response {
+    let mut reply = InverseKinematics6Response { ok: true, ..Default::default() };
+    let (mut complete, mut failed) = (0, 0);
+    for answer in answers {
+        let one = match answer {
+            Ok(crate::app::Answer::Ik6(a)) => {
+                if reply.joint_names.is_empty() {
+                    reply.joint_names = a.chain.joints.to_vec();
+                }
+                ik6_solutions(&a.found)
+            }
+            Ok(other) => Ik6Solutions { ok: false, message: format!("internal error: a {} answer for a pose", other.name()), ..Default::default() },
+            Err(message) => Ik6Solutions { ok: false, message: message.clone(), ..Default::default() },
+        };
+        complete += usize::from(one.complete);
+        failed += usize::from(!one.ok);
+        reply.results.push(one);
+    }
+    reply.complete = complete == answers.len();
+    reply.message = format!("{} poses: {complete} complete, {} incomplete, {failed} failed", answers.len(), answers.len() - complete - failed);
+    reply
+}
+
+/// One pose's boxes and counts.
+fn ik6_solutions(found: &ArmIk6) -> Ik6Solutions {
     let s = &found.solutions;
     let mut message = format!("{} solutions proven unique, {} clusters undecided at sigma", s.unique.len(), s.clusters.len());
     if let crate::app::Status::Stopped(limit) = s.status {
@@ -414,12 +454,11 @@ pub(crate) fn ik6_response(chain: &Chain6R, found: &ArmIk6) -> InverseKinematics
     }
     let as_box = |k: usize, b: &[crate::app::Interval; 6]| LsBox { intervals: b.iter().map(|x| msgs::Interval { lower: x.inf(), upper: x.sup() }).collect(), status: msgs::BOX_SOLUTION, level: 0, cluster: k as i32 };
     let boxes: Vec<&[crate::app::Interval; 6]> = s.unique.iter().chain(s.clusters.iter().map(|c| &c.hull)).collect();
-    InverseKinematics6Response {
+    Ik6Solutions {
         ok: true,
         message,
         complete: Completeness::of(s.status, s.clusters.len(), false).is_complete(),
         solutions: boxes.iter().enumerate().map(|(k, b)| as_box(k, b)).collect(),
-        joint_names: chain.joints.to_vec(),
         unique: (0..boxes.len()).map(|k| k < s.unique.len()).collect(),
         processed: s.stats.processed,
     }
@@ -454,6 +493,43 @@ pub(crate) fn path_check_response(found: &ArmPathCheck) -> PathCheckResponse {
         }
     }
     reply
+}
+
+/// The reply to a collisions request: the boxes of `linkspace collisions`, over the sub-chain's
+/// second and third joints.
+pub(crate) fn collisions_response(found: &ArmCollisions) -> CollisionsResponse {
+    let (scene, set) = (&found.scene, &found.set);
+    let completeness = Completeness::of(set.status, set.undecided.len(), false);
+    let total = set.colliding_area + set.free_area + set.undecided_area;
+    let share = |area: f64| if total > 0.0 { 100.0 * area / total } else { 0.0 };
+    let message = format!(
+        "{}: {} pairs; colliding {} boxes ({:.2} % of joint space), free {} ({:.2} %), undecided {} ({:.2} %), {}",
+        scene.name,
+        scene.pairs().len(),
+        set.colliding.len(),
+        share(set.colliding_area),
+        set.free.len(),
+        share(set.free_area),
+        set.undecided.len(),
+        share(set.undecided_area),
+        completeness.text()
+    );
+    let as_box = |theta: &[crate::app::Interval; 2], status: u8| LsBox { intervals: theta.iter().map(|x| msgs::Interval { lower: x.inf(), upper: x.sup() }).collect(), status, level: 0, cluster: -1 };
+    let index = |k: usize| k.min(u32::MAX as usize) as u32;
+    CollisionsResponse {
+        ok: true,
+        message,
+        complete: completeness.is_complete(),
+        joint_names: vec![scene.joints[1].clone(), scene.joints[2].clone()],
+        body_names: scene.capsules().iter().map(|c| c.name.clone()).collect(),
+        pair_first: scene.pairs().iter().map(|&(i, _)| index(i)).collect(),
+        pair_second: scene.pairs().iter().map(|&(_, j)| index(j)).collect(),
+        colliding: set.colliding.iter().map(|c| as_box(&c.theta, msgs::BOX_SOLUTION)).collect(),
+        colliding_pairs: set.colliding.iter().map(|c| index(c.pair)).collect(),
+        free: set.free.iter().map(|b| as_box(b, msgs::BOX_SOLUTION)).collect(),
+        undecided: set.undecided.iter().map(|b| as_box(b, msgs::BOX_UNDECIDED)).collect(),
+        processed: set.stats.processed,
+    }
 }
 
 /// At most `max` characters of `s` (a string from a request echoed into a reply or a log), with

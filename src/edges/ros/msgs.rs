@@ -322,7 +322,7 @@ mirror! {
 }
 mirror! {
     /// linkspace_msgs/InverseKinematics6 request
-    InverseKinematics6Request { mechanism: String, pose: Pose, sigma: f64, max_boxes: u64 }
+    InverseKinematics6Request { mechanism: String, pose: Pose, sigma: f64, max_boxes: u64, poses: Vec<Pose> }
 }
 mirror! {
     /// linkspace_msgs/InverseKinematics6 response
@@ -334,7 +334,12 @@ mirror! {
         joint_names: Vec<String>,
         unique: Vec<bool>,
         processed: u64,
+        results: Vec<Ik6Solutions>,
     }
+}
+mirror! {
+    /// linkspace_msgs/Ik6Solutions
+    Ik6Solutions { ok: bool, message: String, complete: bool, solutions: Vec<LsBox>, unique: Vec<bool>, processed: u64 }
 }
 mirror! {
     /// linkspace_msgs/PathCheck request
@@ -356,6 +361,27 @@ mirror! {
         crossing_segments: Vec<u32>,
         crossing_t: Vec<Interval>,
         crossing_joints: Vec<Interval>,
+    }
+}
+mirror! {
+    /// linkspace_msgs/Collisions request
+    CollisionsRequest { mechanism: String, precision: f64, max_boxes: u64 }
+}
+mirror! {
+    /// linkspace_msgs/Collisions response
+    CollisionsResponse {
+        ok: bool,
+        message: String,
+        complete: bool,
+        joint_names: Vec<String>,
+        body_names: Vec<String>,
+        pair_first: Vec<u32>,
+        pair_second: Vec<u32>,
+        colliding: Vec<LsBox>,
+        colliding_pairs: Vec<u32>,
+        free: Vec<LsBox>,
+        undecided: Vec<LsBox>,
+        processed: u64,
     }
 }
 mirror! {
@@ -500,6 +526,7 @@ mod tests {
             ("Progress", mirrored::<Progress>()),
             ("MechanismInfo", mirrored::<MechanismInfo>()),
             ("AssemblyMode", mirrored::<AssemblyMode>()),
+            ("Ik6Solutions", mirrored::<Ik6Solutions>()),
         ];
         type Fields = Vec<(String, String)>;
         let srvs: Vec<(&str, Fields, Fields)> = vec![
@@ -510,6 +537,7 @@ mod tests {
             ("Classify", mirrored::<ClassifyRequest>(), mirrored::<ClassifyResponse>()),
             ("InverseKinematics6", mirrored::<InverseKinematics6Request>(), mirrored::<InverseKinematics6Response>()),
             ("PathCheck", mirrored::<PathCheckRequest>(), mirrored::<PathCheckResponse>()),
+            ("Collisions", mirrored::<CollisionsRequest>(), mirrored::<CollisionsResponse>()),
             ("ListMechanisms", mirrored::<ListMechanismsRequest>(), mirrored::<ListMechanismsResponse>()),
         ];
         for (name, mirror) in &msgs {

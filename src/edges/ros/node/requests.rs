@@ -1,6 +1,6 @@
 //! The service requests: their decoded form (`Request`), the servers that answer them, and one
 //! handler per service (solve, cancel, singularities, inverse_kinematics, classify,
-//! inverse_kinematics6, path_check, list_mechanisms).
+//! inverse_kinematics6, path_check, collisions, list_mechanisms).
 //!
 //! A handler checks the request on the event loop and either answers at once (a refusal with
 //! its reason, or an answer the node already holds) or starts a run and returns `None`: the
@@ -19,6 +19,9 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::atomic::Ordering;
 use std::time::Instant;
 
+/// Poses one InverseKinematics6 request may carry (its reply holds an answer per pose).
+const MAX_POSES: usize = 1000;
+
 /// A decoded service request with the id its reply must carry.
 pub(super) enum Request {
     Solve(RmwRequestId, SolveRequest),
@@ -28,6 +31,7 @@ pub(super) enum Request {
     Classify(RmwRequestId, ClassifyRequest),
     InverseKinematics6(RmwRequestId, InverseKinematics6Request),
     PathCheck(RmwRequestId, PathCheckRequest),
+    Collisions(RmwRequestId, CollisionsRequest),
     List(RmwRequestId),
 }
 
@@ -40,6 +44,7 @@ pub(super) struct Servers {
     pub(super) classify: Server<ClassifyRequest, ClassifyResponse>,
     pub(super) inverse_kinematics6: Server<InverseKinematics6Request, InverseKinematics6Response>,
     pub(super) path_check: Server<PathCheckRequest, PathCheckResponse>,
+    pub(super) collisions: Server<CollisionsRequest, CollisionsResponse>,
     pub(super) list: Server<ListMechanismsRequest, ListMechanismsResponse>,
 }
 
@@ -62,6 +67,13 @@ impl super::State {
             RunKind::InverseKinematics => self.reply_ik(id, InverseKinematicsResponse { ok: false, message, ..Default::default() }),
             RunKind::InverseKinematics6 => self.reply_ik6(id, InverseKinematics6Response { ok: false, message, ..Default::default() }),
             RunKind::PathCheck => self.reply_path_check(id, PathCheckResponse { ok: false, message, ..Default::default() }),
+            RunKind::Collisions => self.reply_collisions(id, CollisionsResponse { ok: false, message, ..Default::default() }),
+        }
+    }
+
+    pub(super) fn reply_collisions(&self, id: RmwRequestId, reply: CollisionsResponse) {
+        if let Err(e) = self.servers.collisions.send_response(id, reply) {
+            say!("linkspace: sending a collisions reply: {e:?}");
         }
     }
 
@@ -131,6 +143,11 @@ impl super::State {
                 Ok(None) => Ok(()),
                 Ok(Some(a)) => servers.path_check.send_response(id, a),
                 Err(p) => servers.path_check.send_response(id, PathCheckResponse { ok: false, message: internal(p), ..Default::default() }),
+            },
+            Request::Collisions(id, q) => match catch_unwind(AssertUnwindSafe(|| self.collisions(id, q))) {
+                Ok(None) => Ok(()),
+                Ok(Some(a)) => servers.collisions.send_response(id, a),
+                Err(p) => servers.collisions.send_response(id, CollisionsResponse { ok: false, message: internal(p), ..Default::default() }),
             },
             Request::List(id) => {
                 let a = catch_unwind(AssertUnwindSafe(|| self.list())).unwrap_or_else(|_| ListMechanismsResponse::default());
@@ -330,20 +347,52 @@ impl super::State {
         self.runs.get_mut(&run).expect("invariant: just started").waiters.push((id, deadline));
         Ok(())
     }
-    /// Certified inverse kinematics of a six-revolute arm's tip pose, run as every search of
-    /// the node on a thread of its own; `None` when the reply waits for it. Bounded by the
-    /// request's boxes and the node's longest wait, and counted against `--max-runs`.
+    /// As `start_job` for several jobs answered in turn on one thread, all within `limits`
+    /// counted from the start (a job left without time answers incomplete, naming the limit).
+    /// Every job is prepared before the first runs.
+    fn start_jobs(&mut self, id: RmwRequestId, k: usize, kind: RunKind, jobs: Vec<crate::app::Job>, limits: crate::app::Limits) -> Result<(), String> {
+        let input = &self.mechanisms[k].loaded.input;
+        let prepared = jobs.into_iter().enumerate().map(|(i, job)| crate::app::prepare(input, job).map_err(|e| format!("[{i}]: {e}"))).collect::<Result<Vec<_>, _>>()?;
+        if let Some(busy) = self.busy() {
+            return Err(busy);
+        }
+        let threads = self.settings.threads.max(1);
+        let run = self.start(
+            k,
+            kind,
+            Box::new(move |cancel, progress| {
+                let start = Instant::now();
+                let answers = prepared.into_iter().map(|p| p.run(&crate::app::Control { limits, threads, cancel }.remaining_since(start), progress).map_err(|e| e.to_string())).collect();
+                Ok(Outcome::Answers(answers))
+            }),
+        );
+        let deadline = Instant::now() + seconds(self.limits.max_wait);
+        self.runs.get_mut(&run).expect("invariant: just started").waiters.push((id, deadline));
+        Ok(())
+    }
+    /// Certified inverse kinematics of a six-revolute arm's tip pose (or of each of `poses`), run
+    /// as every search of the node on a thread of its own; `None` when the reply waits for it.
+    /// Bounded by the request's boxes and the node's longest wait, and counted against
+    /// `--max-runs`.
     fn inverse_kinematics6(&mut self, id: RmwRequestId, q: InverseKinematics6Request) -> Option<InverseKinematics6Response> {
         let refuse = |message: String| Some(InverseKinematics6Response { ok: false, message, ..Default::default() });
         let k = match self.mechanism(&q.mechanism) {
             Ok(k) => k,
             Err(e) => return refuse(e),
         };
-        let (p, o) = (&q.pose.position, &q.pose.orientation);
-        let pose = match crate::app::PoseInput::from_numbers(&[p.x, p.y, p.z, o.x, o.y, o.z, o.w]) {
-            Ok(pose) => pose,
-            Err(e) => return refuse(e.to_string()),
-        };
+        if q.poses.len() > MAX_POSES {
+            return refuse(format!("{} poses: at most {MAX_POSES} in one request", q.poses.len()));
+        }
+        let many = !q.poses.is_empty();
+        let mut poses = Vec::with_capacity(q.poses.len().max(1));
+        for (i, pose) in if many { q.poses.iter() } else { std::slice::from_ref(&q.pose).iter() }.enumerate() {
+            let (p, o) = (&pose.position, &pose.orientation);
+            match crate::app::PoseInput::from_numbers(&[p.x, p.y, p.z, o.x, o.y, o.z, o.w]) {
+                Ok(pose) => poses.push(pose),
+                Err(e) if many => return refuse(format!("poses[{i}]: {e}")),
+                Err(e) => return refuse(e.to_string()),
+            }
+        }
         if !(q.sigma.is_finite() && q.sigma > 0.0 && q.sigma < 1.0) {
             return refuse(format!("sigma must be a number in (0, 1), got {}", q.sigma));
         }
@@ -352,8 +401,9 @@ impl super::State {
             Err(e) => return refuse(e),
         };
         let limits = crate::app::Limits { max_cells: max_boxes, timeout: Some(seconds(self.limits.max_wait)), ..Default::default() };
-        let job = crate::app::Job::Ik6(crate::app::Ik6Job { arm: crate::app::LoadOptions::default(), pose, precision: q.sigma });
-        self.start_job(id, k, RunKind::InverseKinematics6, job, limits).err().and_then(|e| refuse(format!("inverse_kinematics6: {e}")))
+        let job = |pose| crate::app::Job::Ik6(crate::app::Ik6Job { arm: crate::app::LoadOptions::default(), pose, precision: q.sigma });
+        let started = if many { self.start_jobs(id, k, RunKind::InverseKinematics6, poses.into_iter().map(job).collect(), limits) } else { self.start_job(id, k, RunKind::InverseKinematics6, job(poses[0]), limits) };
+        started.err().and_then(|e| refuse(format!("inverse_kinematics6: {e}")))
     }
 
     /// A joint path's singularities, run on a thread of its own as every search of the node,
@@ -388,6 +438,30 @@ impl super::State {
         let job = crate::app::Job::PathCheck(crate::app::PathCheckJob { arm: crate::app::LoadOptions::default(), waypoints, joint_names: t.joint_names.clone(), set, precision });
         let name = convert::bounded(&q.mechanism, convert::ECHO_NAME);
         self.start_job(id, k, RunKind::PathCheck, job, limits).err().and_then(|e| refuse(format!("path_check: '{name}': {e}")))
+    }
+
+    /// Where an arm's collision bodies meet, run on a thread of its own as every search of the
+    /// node; `None` when the reply waits for it. Bounded by the request's boxes and the node's
+    /// longest wait.
+    fn collisions(&mut self, id: RmwRequestId, q: CollisionsRequest) -> Option<CollisionsResponse> {
+        let refuse = |message: String| Some(CollisionsResponse { ok: false, message, ..Default::default() });
+        let k = match self.mechanism(&q.mechanism) {
+            Ok(k) => k,
+            Err(e) => return refuse(e),
+        };
+        let a = &self.mechanisms[k].loaded.analysis;
+        if !a.services().contains(&Service::Collisions) {
+            return refuse(a.not_available(Service::Collisions).to_string());
+        }
+        let precision = if q.precision == 0.0 { crate::app::Job::default_precision("collisions") } else { q.precision };
+        let max_boxes = match self.box_limit(q.max_boxes) {
+            Ok(n) => n,
+            Err(e) => return refuse(e),
+        };
+        let limits = crate::app::Limits { max_cells: max_boxes, timeout: Some(seconds(self.limits.max_wait)), ..crate::app::Job::default_limits("collisions") };
+        let job = crate::app::Job::Collisions(crate::app::CollisionsJob { arm: crate::app::LoadOptions::default(), precision });
+        let name = convert::bounded(&q.mechanism, convert::ECHO_NAME);
+        self.start_job(id, k, RunKind::Collisions, job, limits).err().and_then(|e| refuse(format!("collisions: '{name}': {e}")))
     }
 
     fn classify(&mut self, q: ClassifyRequest) -> ClassifyResponse {

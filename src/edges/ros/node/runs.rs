@@ -29,6 +29,8 @@ pub(super) enum Outcome {
     InverseKinematics(IkResult),
     /// A job run through the front door (`app::prepare`, `Prepared::run`).
     Answer(Result<crate::app::Answer, String>),
+    /// Several jobs run in turn, each answer (or why it failed) in order.
+    Answers(Vec<Result<crate::app::Answer, String>>),
 }
 
 impl Outcome {
@@ -38,17 +40,22 @@ impl Outcome {
             Outcome::BoxSet(r) => (r.stats.processed, r.boxes.iter().filter(|b| b.status == crate::app::BoxStatus::Undecided).count(), r.status == Status::Finished),
             Outcome::Singularities(r) => (r.processed, r.undecided(), r.status == Status::Finished),
             Outcome::InverseKinematics(r) => (r.processed, 0, r.status == Status::Finished),
-            Outcome::Answer(Ok(a)) => {
-                let (processed, pending) = match a {
-                    crate::app::Answer::Ik6(a) => (a.found.solutions.stats.processed, a.found.solutions.clusters.len()),
-                    crate::app::Answer::PathCheck(a) => (a.found.check.segments.len() as u64, 0),
-                    _ => (0, 0),
-                };
-                (processed, pending, a.completeness().is_complete())
-            }
-            Outcome::Answer(Err(_)) => (0, 0, false),
+            Outcome::Answer(a) => answer_counts(a),
+            Outcome::Answers(all) => all.iter().map(answer_counts).fold((0, 0, true), |(p, q, c), (p1, q1, c1)| (p + p1, q + q1, c && c1)),
         }
     }
+}
+
+/// `Outcome::counts` of one front-door answer.
+fn answer_counts(answer: &Result<crate::app::Answer, String>) -> (u64, usize, bool) {
+    let Ok(a) = answer else { return (0, 0, false) };
+    let (processed, pending) = match a {
+        crate::app::Answer::Ik6(a) => (a.found.solutions.stats.processed, a.found.solutions.clusters.len()),
+        crate::app::Answer::PathCheck(a) => (a.found.check.segments.len() as u64, 0),
+        crate::app::Answer::Collisions(a) => (a.found.set.stats.processed, a.found.set.undecided.len()),
+        _ => (0, 0),
+    };
+    (processed, pending, a.completeness().is_complete())
 }
 
 /// A run's work, moved to its thread: its outcome, or why it failed (in one line).
@@ -67,12 +74,13 @@ pub(super) enum RunKind {
     InverseKinematics,
     InverseKinematics6,
     PathCheck,
+    Collisions,
 }
 
 impl RunKind {
     /// Runs started by a request, which count against `NodeLimits::max_runs`.
     pub(super) fn requested(self) -> bool {
-        matches!(self, RunKind::Solve | RunKind::SolveAction | RunKind::Singularities { load_time: false } | RunKind::InverseKinematics | RunKind::InverseKinematics6 | RunKind::PathCheck)
+        matches!(self, RunKind::Solve | RunKind::SolveAction | RunKind::Singularities { load_time: false } | RunKind::InverseKinematics | RunKind::InverseKinematics6 | RunKind::PathCheck | RunKind::Collisions)
     }
 
     /// The `analysis` field of its progress messages.
@@ -84,6 +92,7 @@ impl RunKind {
             RunKind::InverseKinematics => "inverse_kinematics",
             RunKind::InverseKinematics6 => "inverse_kinematics6",
             RunKind::PathCheck => "path_check",
+            RunKind::Collisions => "collisions",
         }
     }
 }
@@ -302,6 +311,21 @@ impl super::State {
                     self.reply_path_check(id, reply.clone());
                 }
             }
+            Outcome::Answer(Ok(crate::app::Answer::Collisions(a))) => {
+                let reply = convert::collisions_response(&a.found);
+                for (id, _) in r.waiters {
+                    self.reply_collisions(id, reply.clone());
+                }
+            }
+            Outcome::Answers(answers) => {
+                let reply = convert::ik6_many_response(&answers);
+                if self.log_level <= Severity::Info {
+                    say!("linkspace: {name}: run {run} (6R inverse kinematics): {}", reply.message);
+                }
+                for (id, _) in r.waiters {
+                    self.reply_ik6(id, reply.clone());
+                }
+            }
             Outcome::Answer(Ok(other)) => {
                 for (id, _) in r.waiters {
                     self.reply_error(r.kind, id, format!("internal error: a {} answer for a {} request", other.name(), r.kind.analysis()));
@@ -370,7 +394,7 @@ impl super::State {
                     self.goal_result(h, end, SolveActionResult { ok: true, message: format!("run {run}: {status}"), run_id: run, result: set });
                 }
             }
-            RunKind::Singularities { .. } | RunKind::InverseKinematics | RunKind::InverseKinematics6 | RunKind::PathCheck => say!("linkspace: {name}: run {run} returned a box set for a {:?} run", r.kind),
+            RunKind::Singularities { .. } | RunKind::InverseKinematics | RunKind::InverseKinematics6 | RunKind::PathCheck | RunKind::Collisions => say!("linkspace: {name}: run {run} returned a box set for a {:?} run", r.kind),
         }
         self.log(LogLevel::Info, summary);
     }

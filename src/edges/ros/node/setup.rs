@@ -85,6 +85,7 @@ pub(super) fn servers(node: &mut Node, mapping: ServiceMapping, base: &str) -> R
         classify: server(node, mapping, base, "classify", "Classify")?,
         inverse_kinematics6: server(node, mapping, base, "inverse_kinematics6", "InverseKinematics6")?,
         path_check: server(node, mapping, base, "path_check", "PathCheck")?,
+        collisions: server(node, mapping, base, "collisions", "Collisions")?,
         list: server(node, mapping, base, "list_mechanisms", "ListMechanisms")?,
     }))
 }
@@ -202,6 +203,7 @@ pub(super) fn forward_requests(ex: &smol::LocalExecutor<'_>, servers: &Rc<Server
     forward(ex, servers.clone(), |s| &s.classify, Request::Classify, tx.clone());
     forward(ex, servers.clone(), |s| &s.inverse_kinematics6, Request::InverseKinematics6, tx.clone());
     forward(ex, servers.clone(), |s| &s.path_check, Request::PathCheck, tx.clone());
+    forward(ex, servers.clone(), |s| &s.collisions, Request::Collisions, tx.clone());
     forward(ex, servers.clone(), |s| &s.list, |id, _| Request::List(id), tx.clone());
 }
 
