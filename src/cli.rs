@@ -10,7 +10,7 @@ mod ranks;
 
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
-use linkspace::app::{self, Answer, CollisionsJob, Control, IkJob, IkPoint, Ik6Job, Job, Limits, LpBackend, ModelChoice, PathCheckJob, PathSet, PoseInput, Progress, SingularitiesJob, SolveJob, TracedPoint};
+use linkspace::app::{self, Answer, CollisionsJob, Control, IkJob, IkPoint, Job, Limits, LpBackend, ModelChoice, PathCheckJob, PathSet, Progress, SingularitiesJob, SolveJob, TracedPoint};
 use linkspace::edges::report;
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
@@ -18,6 +18,7 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 pub(crate) mod distances;
+mod ik6;
 mod loop_singularities;
 mod sweep;
 
@@ -146,7 +147,7 @@ enum Command {
     /// Every joint solution of an arm's 3R positioning structure for a point (X,Y,Z or R,Z).
     Ik(IkArgs),
     /// Every joint solution of a six-revolute arm for a pose of its tip frame, each certified.
-    Ik6(Ik6Args),
+    Ik6(ik6::Ik6Args),
     /// Where an arm's joint path (straight segments between waypoints) meets a singularity of
     /// the six-revolute arm (det J = 0) or of its 3R positioning structure (det Df = 0): each
     /// segment clear, crossing, or touching/undecided, with proofs.
@@ -242,28 +243,6 @@ struct IkArgs {
     /// Turn every length of the URDF into an interval of this half-width (metres).
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     uncertainty: f64,
-    #[command(flatten)]
-    limits: LimitArgs,
-    /// Write the report as JSON here.
-    #[arg(long, value_name = "FILE")]
-    json: Option<PathBuf>,
-}
-
-#[derive(clap::Args)]
-struct Ik6Args {
-    /// URDF file of an arm with six revolute joints from base to tip (fixed joints merged).
-    urdf: PathBuf,
-    #[command(flatten)]
-    chain: ChainArgs,
-    /// The tip frame's pose in the base frame (metres, radians), comma-separated; the count of
-    /// numbers names the form: 6 = X,Y,Z,ROLL,PITCH,YAW (URDF convention, Rz·Ry·Rx); 7 =
-    /// X,Y,Z,QX,QY,QZ,QW (a quaternion, normalised; zero refused); 16 = a 4x4 homogeneous
-    /// transform, row-major (rotation block orthonormal and last row 0,0,0,1 to within 1e-6).
-    #[arg(long, value_name = "6|7|16 NUMBERS", allow_hyphen_values = true)]
-    pose: String,
-    /// Largest width (radians) of reported boxes, in (0, 1).
-    #[arg(long, default_value_t = 1e-9, allow_hyphen_values = true)]
-    precision: f64,
     #[command(flatten)]
     limits: LimitArgs,
     /// Write the report as JSON here.
@@ -402,7 +381,7 @@ pub fn run() -> Result<()> {
         Command::Solve(args) => solve(args),
         Command::Singularities(args) => singularities(args),
         Command::Ik(args) => ik(args),
-        Command::Ik6(args) => ik6(args),
+        Command::Ik6(args) => ik6::run(args),
         Command::PathCheck(args) => path_check(args),
         Command::Distances(args) => distances::run(args),
         #[cfg(feature = "ros")]
@@ -541,19 +520,29 @@ pub(crate) fn execute(path: &Path, job: Job, limits: &LimitArgs, json: Option<&P
 pub(crate) fn answer(path: &Path, job: Job, limits: &LimitArgs) -> Result<Answer> {
     // `--timeout` counts from here: reading and building a large mechanism are part of the run.
     let start = std::time::Instant::now();
-    let name = job.name();
-    let control_limits = limits.limits(Job::default_limits(name))?;
+    let control_limits = limits.limits(Job::default_limits(job.name()))?;
+    let input = read_input(path, &job)?;
+    run_job(path, &input, job, control_limits, limits, start)
+}
+
+/// The file at `path` as `job` reads it (a distance file or a URDF).
+pub(crate) fn read_input(path: &Path, job: &Job) -> Result<app::Input> {
     let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let input = match job {
+    match job {
         Job::Distances(_) => app::Input::read(&path.to_string_lossy(), &text),
         _ => app::Input::urdf(&text),
     }
-    .with_context(|| format!("loading {}", path.display()))?;
+    .with_context(|| format!("loading {}", path.display()))
+}
+
+/// Prepares `job` on `input` (read from `path`) and runs it within `control_limits`, counted
+/// from `start`, on the threads of `limits`.
+pub(crate) fn run_job(path: &Path, input: &app::Input, job: Job, control_limits: Limits, limits: &LimitArgs, start: std::time::Instant) -> Result<Answer> {
     let verb = match job {
         Job::Solve(_) | Job::Distances(_) | Job::LoopSingularities(_) => "building",
         _ => "loading",
     };
-    let prepared = app::prepare(&input, job).with_context(|| format!("{verb} {}", path.display()))?;
+    let prepared = app::prepare(input, job).with_context(|| format!("{verb} {}", path.display()))?;
     if let Some(notice) = prepared.notice() {
         eprintln!("linkspace: {notice}");
     }
@@ -605,17 +594,6 @@ fn singularities(args: SingularitiesArgs) -> Result<()> {
         arm_budget: args.arm_budget,
     };
     execute(&args.urdf, Job::Singularities(job), &args.limits, args.json.as_deref())
-}
-
-fn ik6(args: Ik6Args) -> Result<()> {
-    let values: Vec<f64> = args
-        .pose
-        .split(',')
-        .map(|t| t.trim().parse::<f64>().map_err(|_| anyhow::anyhow!("--pose '{}': '{}' is not a number", args.pose, t.trim())))
-        .collect::<Result<_>>()?;
-    let pose = PoseInput::from_numbers(&values).map_err(|e| anyhow::anyhow!("--pose '{}': {e}", args.pose))?;
-    let job = Ik6Job { arm: args.chain.options()?, pose, precision: args.precision };
-    execute(&args.urdf, Job::Ik6(job), &args.limits, args.json.as_deref())
 }
 
 /// The waypoints of `--waypoints` ("q1;q2;...") or `--waypoints-file` (JSON).

@@ -304,6 +304,45 @@ fn ik6_solves_a_pose_of_a_six_joint_arm() {
     assert!(out.contains("joint_1 in [0.729757621, 0.729757621]"), "{out}");
 }
 
+/// `ik6 --poses`: every pose of a file answered in the file's order, each line of the JSON
+/// Lines report the report `--pose` writes for that pose; a bad line is refused before anything
+/// is solved, naming its line.
+#[test]
+fn ik6_answers_a_file_of_poses_in_order() {
+    let crx = format!("{}/tests/data/fanuc_crx10ial_style.urdf", env!("CARGO_MANIFEST_DIR"));
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"));
+    let poses = ["0.5,0.2,0.6,0.3,0.2,0.1", "0.4,-0.1,0.5,0,1.2,0", "0.5,0.2,0.6,0.28714435005478384,0.21204102212359124,0.06854159710096422,1.9666948865127118"];
+    let file = dir.join(format!("ik6-poses-{}.txt", std::process::id()));
+    std::fs::write(&file, format!("# x, y, z and a rotation\n{}\n\n{}\n{}\n", poses[0], poses[1], poses[2])).expect("written");
+    let jsonl = dir.join(format!("ik6-poses-{}.jsonl", std::process::id()));
+    let (ok, out, err) = run(&["ik6", &crx, "--poses", file.to_str().expect("utf-8"), "--json", jsonl.to_str().expect("utf-8")]);
+    assert!(ok, "{err}");
+    let headers: Vec<&str> = out.lines().filter(|l| l.starts_with("pose ")).collect();
+    assert_eq!(headers.len(), 3, "{out}");
+    assert!(headers[0].starts_with("pose 0 (line 2): base_link -> tool0: 12 solutions proven unique"), "{out}");
+    assert!(headers[2].starts_with("pose 2 (line 5): "), "{out}");
+    let lines: Vec<serde_json::Value> = std::fs::read_to_string(&jsonl).expect("written").lines().map(|l| serde_json::from_str(l).expect("one JSON object per line")).collect();
+    assert_eq!(lines.len(), 3);
+    for (k, pose) in poses.iter().enumerate() {
+        let one = dir.join(format!("ik6-pose-{k}-{}.json", std::process::id()));
+        let (ok, _, err) = run(&["ik6", &crx, "--pose", pose, "--json", one.to_str().expect("utf-8")]);
+        assert!(ok, "{err}");
+        let alone: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&one).expect("written")).expect("json");
+        for key in ["pose", "joints", "unique", "clusters", "status"] {
+            assert_eq!(lines[k][key], alone[key], "pose {k}: {key}");
+        }
+    }
+    let bad = dir.join(format!("ik6-poses-bad-{}.txt", std::process::id()));
+    std::fs::write(&bad, format!("{}\n1,2,3,4,5\n", poses[0])).expect("written");
+    assert_clear_error(&["ik6", &crx, "--poses", bad.to_str().expect("utf-8")], "line 2: '1,2,3,4,5': bad pose: 5 numbers");
+    std::fs::write(&bad, "# nothing\n\n").expect("written");
+    assert_clear_error(&["ik6", &crx, "--poses", bad.to_str().expect("utf-8")], "no pose in the file");
+    assert_clear_error(&["ik6", &crx, "--poses", file.to_str().expect("utf-8"), "--pose", poses[0]], "cannot be used with");
+    for f in [file, jsonl, bad] {
+        let _ = std::fs::remove_file(f);
+    }
+}
+
 /// `ik6 --pose` in its three forms: the pose above as a quaternion (scaled by 2, normalised by
 /// the solver) and as a 4x4 matrix printed to 9 decimals (computed here from the rpy angles in
 /// Python's double precision) gives the same twelve configurations; a non-rigid matrix and a zero

@@ -49,24 +49,40 @@ use distances::DistancesReport;
 use solve::SolveReport;
 
 use crate::app::{Answer, LoopAnswer};
-use serde_json::to_string_pretty;
 
 /// The JSON report of an answer, as `--json` writes it: the one writer of every question.
 pub fn json(answer: &Answer) -> Result<String, serde_json::Error> {
+    encode(answer, true)
+}
+
+/// The same report on one line, for streams of answers (JSON Lines: `ik6 --poses --json`
+/// writes one per pose).
+pub fn json_line(answer: &Answer) -> Result<String, serde_json::Error> {
+    encode(answer, false)
+}
+
+fn encode(answer: &Answer, pretty: bool) -> Result<String, serde_json::Error> {
+    fn put<T: serde::Serialize + ?Sized>(pretty: bool, value: &T) -> Result<String, serde_json::Error> {
+        if pretty {
+            serde_json::to_string_pretty(value)
+        } else {
+            serde_json::to_string(value)
+        }
+    }
     match answer {
-        Answer::Solve(a) => to_string_pretty(&SolveReport::new(a.run.problem(), &a.result, &a.links, a.rigid_links.clone())),
-        Answer::Singularities(a) => to_string_pretty(&manip3r::SingularityReport::of(a)),
-        Answer::Ik(a) => to_string_pretty(&manip3r::IkReport::of(&a.arm, &a.found)),
-        Answer::Ik6(a) => to_string_pretty(&six::Ik6Report::of(&a.chain, &a.found)),
-        Answer::PathCheck(a) => to_string_pretty(&six::PathCheckReport::of(&a.found)),
-        Answer::Collisions(a) => to_string_pretty(&collisions::CollisionReport::of(&a.found, a.precision)),
-        Answer::Distances(a) => to_string_pretty(&DistancesReport::of(a)),
+        Answer::Solve(a) => put(pretty, &SolveReport::new(a.run.problem(), &a.result, &a.links, a.rigid_links.clone())),
+        Answer::Singularities(a) => put(pretty, &manip3r::SingularityReport::of(a)),
+        Answer::Ik(a) => put(pretty, &manip3r::IkReport::of(&a.arm, &a.found)),
+        Answer::Ik6(a) => put(pretty, &six::Ik6Report::of(&a.chain, &a.found)),
+        Answer::PathCheck(a) => put(pretty, &six::PathCheckReport::of(&a.found)),
+        Answer::Collisions(a) => put(pretty, &collisions::CollisionReport::of(&a.found, a.precision)),
+        Answer::Distances(a) => put(pretty, &DistancesReport::of(a)),
         Answer::LoopSingularities(a) => match a.as_ref() {
-            LoopAnswer::Sets { sets, solved, settings, .. } => to_string_pretty(&sets.problems.iter().zip(solved).map(|(p, s)| singular::SingularReport::new(p, settings, s)).collect::<Vec<_>>()),
-            LoopAnswer::Image(r) => to_string_pretty(&image::ImageJson(r)),
-            LoopAnswer::Points(r) => to_string_pretty(&image::ImagePointsJson(r)),
-            LoopAnswer::Motion(m) => to_string_pretty(&motion::MotionReport::of(m)),
+            LoopAnswer::Sets { sets, solved, settings, .. } => put(pretty, &sets.problems.iter().zip(solved).map(|(p, s)| singular::SingularReport::new(p, settings, s)).collect::<Vec<_>>()),
+            LoopAnswer::Image(r) => put(pretty, &image::ImageJson(r)),
+            LoopAnswer::Points(r) => put(pretty, &image::ImagePointsJson(r)),
+            LoopAnswer::Motion(m) => put(pretty, &motion::MotionReport::of(m)),
         },
-        Answer::SweepTask(t) => to_string_pretty(t),
+        Answer::SweepTask(t) => put(pretty, t),
     }
 }

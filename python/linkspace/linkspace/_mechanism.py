@@ -323,6 +323,39 @@ class Mechanism:
         given = dict(pose=numbers, precision=precision, **_chain(base, tip, None, fix, exact_geometry, snap_tolerance, ignore_limits), **_limits(max_boxes, timeout, max_memory, threads))
         return _as(Ik6Result, self._run("ik6", given, progress))
 
+    def ik6_many(
+        self, poses: npt.ArrayLike | Sequence[npt.ArrayLike], *, precision: float | None = None,
+        base: str | None = None, tip: str | None = None, fix: Mapping[str, float] | None = None,
+        exact_geometry: bool | None = None, snap_tolerance: float | None = None, ignore_limits: bool | None = None,
+        max_boxes: int | None = None, timeout: float | None = None, max_memory: int | None = None, threads: int | None = None, progress: ProgressArg = None,
+    ) -> list[Ik6Result]:
+        """:meth:`ik6` at every pose of ``poses``, in order (``linkspace ik6 --poses``): an
+        (N, 4, 4) array of transforms, an (N, 6) or (N, 7) array, or a sequence of anything
+        :meth:`ik6` takes as ``pose``. The mechanism is read once; every pose's form is checked
+        before the first is solved (an :class:`InputError` names the pose), and the limits
+        bound each pose's answer."""
+        if isinstance(poses, np.ndarray) and poses.ndim < 2:
+            raise InputError(f"ik6_many takes a list of poses (an array of {poses.ndim} dimensions is one pose at most: call ik6)")
+        items = list(poses)  # type: ignore[arg-type]
+        numbers = []
+        for k, pose in enumerate(items):
+            try:
+                flat = _floats(pose)
+            except (TypeError, ValueError) as e:
+                raise InputError(f"ik6_many: pose {k}: {e}") from None
+            if flat.size not in (6, 7, 16):
+                raise InputError(f"ik6_many: pose {k} has {flat.size} numbers: give 6 (xyz + rpy), 7 (xyz + quaternion) or a 4x4 transform")
+            numbers.append(flat)
+        chain = _chain(base, tip, None, fix, exact_geometry, snap_tolerance, ignore_limits)
+        limits = _limits(max_boxes, timeout, max_memory, threads)
+        results = []
+        for k, flat in enumerate(numbers):
+            try:
+                results.append(_as(Ik6Result, self._run("ik6", dict(pose=flat, precision=precision, **chain, **limits), progress)))
+            except InputError as e:
+                raise type(e)(f"ik6_many: pose {k}: {e}") from None
+        return results
+
     def path_check(
         self, waypoints: npt.ArrayLike, *, joint_names: Sequence[str] | None = None, singular_set: str | None = None, precision: float | None = None,
         base: str | None = None, tip: str | None = None, tip_point: str | tuple[str, Sequence[float]] | None = None, fix: Mapping[str, float] | None = None,

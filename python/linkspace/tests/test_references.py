@@ -123,6 +123,32 @@ def test_ik6_solutions_reach_the_pose_by_forward_kinematics() -> None:
         assert np.abs(np.sort(again.midpoints(), axis=0) - np.sort(unique.midpoints(), axis=0)).max() < 1e-7
 
 
+def test_ik6_many_answers_each_pose_in_order_as_ik6_does() -> None:
+    path = urdf("ur5.urdf")
+    m = linkspace.load(path)
+    configurations = [
+        {"joint_1": 0.3, "joint_2": -1.1, "joint_3": 1.4, "joint_4": -0.6, "joint_5": 1.2, "joint_6": 0.4},
+        {"joint_1": -0.8, "joint_2": -0.5, "joint_3": 0.9, "joint_4": 0.2, "joint_5": -1.0, "joint_6": 1.1},
+        {"joint_1": 1.5, "joint_2": -2.0, "joint_3": -1.2, "joint_4": 0.7, "joint_5": 0.5, "joint_6": -0.3},
+    ]
+    poses = np.stack([forward_kinematics(path, "tool0", q) for q in configurations])
+    many = m.ik6_many(poses)
+    assert len(many) == len(configurations)
+    for q0, pose, r in zip(configurations, poses, many):
+        one = m.ik6(pose).solutions.with_tag("unique")
+        unique = r.solutions.with_tag("unique")
+        assert r.completeness.complete and len(unique) == len(one)
+        assert np.array_equal(np.sort(unique.midpoints(), axis=0), np.sort(one.midpoints(), axis=0))
+        # Each answer holds the configuration its pose was made from: the order is the poses'.
+        assert any(all(angle_in(q0[c], unique.lo[k, i], unique.hi[k, i], 1e-7) for i, c in enumerate(unique.columns)) for k in range(len(unique)))
+    # A list of 6-number poses works the same; a bad pose is named before anything is solved.
+    assert len(m.ik6_many([[0.3, 0.2, 0.4, 0.0, 0.0, 0.0]])) == 1
+    with pytest.raises(linkspace.InputError, match="pose 1 has 5 numbers"):
+        m.ik6_many([[0.3, 0.2, 0.4, 0.0, 0.0, 0.0], [1, 2, 3, 4, 5]])
+    with pytest.raises(linkspace.InputError, match="a list of poses"):
+        m.ik6_many(np.zeros(7))
+
+
 def test_path_verdicts_agree_with_the_sign_of_det_df() -> None:
     m = linkspace.load(urdf("orthogonal_3r_a.urdf"))
     grid = np.linspace(-3.0, 3.0, 13)
