@@ -1672,7 +1672,7 @@ fn six_joint_arms_answer_inverse_kinematics6_and_path_check() {
         assert_eq!(one["solutions"], r[0]["solutions"]);
     }
     assert_eq!(r[6]["ok"], json!(false));
-    assert!(r[6]["message"].as_str().expect("message").contains("poses[1]: the quaternion is zero"), "{}", r[6]);
+    assert!(r[6]["message"].as_str().expect("message").contains("inverse_kinematics6: poses[1]: bad pose: the quaternion is zero"), "{}", r[6]);
 }
 
 /// path_check on a 3R arm checks its positioning structure's det Df (the default for an arm

@@ -75,6 +75,9 @@ pub enum ArmCuspidality {
         budget: f64,
         /// Wall time spent.
         seconds: f64,
+        /// The chain's near-degenerate pairs of axes (`Chain6R::near_degeneracies`): a verdict
+        /// about the geometry as written, which a tiny change may turn.
+        near: Vec<String>,
     },
 }
 
@@ -114,7 +117,7 @@ pub fn arm_cuspidality_of(chain: &Chain6R, snapped: usize, arm: &Arm, budget: Du
     let start = Instant::now();
     let SearchOutcome { verdict, most } = cuspidal::search(chain, budget, 1, control);
     let seconds = start.elapsed().as_secs_f64();
-    Some(ArmCuspidality::Searched { verdict, most, budget: budget.as_secs_f64(), seconds })
+    Some(ArmCuspidality::Searched { verdict, most, budget: budget.as_secs_f64(), seconds, near: chain.near_degeneracies() })
 }
 
 /// A whole-arm verdict in words: what the JSON's `arm_cuspidality` and the singularity topic say.
@@ -179,14 +182,26 @@ impl ArmCuspidality {
                     proof.l3.mid()
                 ),
             },
-            ArmCuspidality::Searched { verdict: CuspidalVerdict::Cuspidal(w), seconds, .. } => ArmVerdictLine {
+            ArmCuspidality::Searched { verdict: CuspidalVerdict::Cuspidal(w), seconds, near, .. } => ArmVerdictLine {
                 verdict: ArmVerdict::Cuspidal,
-                reason: format!("witness found in {seconds:.1} s: two certified solutions of one pose joined by a path on which det J is proven nonzero ({} pieces)", w.pieces),
+                reason: format!("witness found in {seconds:.1} s: two certified solutions of one pose joined by a path on which det J is proven nonzero ({} pieces){}", w.pieces, near_words(near, "the witness is for the geometry as written")),
             },
-            ArmCuspidality::Searched { verdict: CuspidalVerdict::Undecided { poses, pairs }, budget, .. } => ArmVerdictLine {
+            ArmCuspidality::Searched { verdict: CuspidalVerdict::Undecided { poses, pairs }, budget, near, .. } => ArmVerdictLine {
                 verdict: ArmVerdict::Undecided,
-                reason: format!("no witness found within the budget ({budget:.0} s: {poses} poses solved, {pairs} pairs of solutions with one sign of det J tried); non-cuspidality is not proven"),
+                reason: format!(
+                    "no witness found within the budget ({budget:.0} s: {poses} poses solved, {pairs} pairs of solutions with one sign of det J tried; --arm-budget gives more); non-cuspidality is not proven{}",
+                    near_words(near, "a tiny change of it may turn the verdict")
+                ),
             },
         }
+    }
+}
+
+/// What a whole-arm verdict adds for near-degenerate geometry, as the 3R verdicts word it.
+fn near_words(near: &[String], consequence: &str) -> String {
+    if near.is_empty() {
+        String::new()
+    } else {
+        format!("; near-degenerate geometry: {} ({consequence})", near.join("; "))
     }
 }

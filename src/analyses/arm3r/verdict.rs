@@ -200,10 +200,18 @@ pub fn near_degeneracies(mechanism: &Mechanism, joints: &[String; 3]) -> Vec<Str
     let Some(Geometry { a1, o2, d2, o3, d3, .. }) = geometry(mechanism) else {
         return Vec::new();
     };
+    let pairs = [([point(0.0); 3], a1, o2, d2), (o2, d2, o3, d3)].into_iter().enumerate().map(|(k, (oa, da, ob, db))| (format!("axes of {} and {}", joints[k], joints[k + 1]), oa, da, ob, db));
+    near_axis_pairs(pairs)
+}
+
+/// The near-degeneracies of pairs of axes, each given as (its words, a point and a direction of
+/// the one axis, a point and a direction of the other, in one frame): axes nearly parallel,
+/// perpendicular or meeting without being exactly so, each a phrase with an upper bound of its
+/// measure.
+pub fn near_axis_pairs(pairs: impl IntoIterator<Item = (String, [Interval; 3], [Interval; 3], [Interval; 3], [Interval; 3])>) -> Vec<String> {
     let exact_zero = |x: Interval| x.inf() == 0.0 && x.sup() == 0.0;
     let mut found = Vec::new();
-    for (k, (oa, da, ob, db)) in [([point(0.0); 3], a1, o2, d2), (o2, d2, o3, d3)].into_iter().enumerate() {
-        let names = format!("axes of {} and {}", joints[k], joints[k + 1]);
+    for (names, oa, da, ob, db) in pairs {
         let norms = (dot(&da, &da) * dot(&db, &db)).sqrt();
         let c = cross(&da, &db);
         let sin = (dot(&c, &c).sqrt() / norms).sup();

@@ -272,6 +272,17 @@ pub struct Chain6R {
 }
 
 impl Chain6R {
+    /// The near-degeneracies of consecutive axes (nearly parallel, perpendicular or meeting
+    /// without being exactly so), in the words the 3R verdicts use: each pair measured in the
+    /// frame of its first joint, where it does not depend on the joint angles.
+    pub fn near_degeneracies(&self) -> Vec<String> {
+        let pairs = (0..5).map(|k| {
+            let next = stated::apply(&self.pre[k + 1].r, &self.axes[k + 1]);
+            (format!("axes of {} and {}", self.joints[k], self.joints[k + 1]), [point(0.0); 3], self.axes[k], self.pre[k + 1].t, next)
+        });
+        crate::analyses::arm3r::verdict::near_axis_pairs(pairs)
+    }
+
     /// The chain from `base` (default: the root) to `tip` (default: the end link of the
     /// revolute path, followed down a single line of fixed joints), which must hold exactly six
     /// revolute joints and otherwise only fixed ones.
@@ -503,6 +514,23 @@ pub(crate) fn rotation64(a: &[f64; 3], t: f64) -> Pose64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The UR5 as written: axes 1 and 2 are 3.2e-10 rad off perpendicular (its π/2 is written
+    /// to nine decimals), and turning joint 3's frame by 4e-3 rad about x makes axes 2 and 3 nearly
+    /// parallel; an exactly perpendicular or parallel pair is not named.
+    #[test]
+    fn near_degenerate_axes_are_named_with_their_bound() {
+        let xml = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/urdf/ur5.urdf")).expect("bundled");
+        let near = |xml: &str| Chain6R::from_mechanism(&crate::model::urdf::parse(xml).expect("parses"), None, None).expect("six joints").near_degeneracies();
+        let as_written = near(&xml);
+        assert!(as_written.iter().any(|n| n.starts_with("axes of joint_1 and joint_2 within") && n.ends_with("rad of perpendicular")), "{as_written:?}");
+        assert!(!as_written.iter().any(|n| n.contains("joint_2 and joint_3")), "{as_written:?}");
+        let joint3 = xml.find("<joint name=\"joint_3\"").expect("joint_3");
+        let origin = joint3 + xml[joint3..].find("rpy=\"0 0 0\"").expect("joint_3's rpy");
+        let tilted = format!("{}rpy=\"0.004 0 0\"{}", &xml[..origin], &xml[origin + "rpy=\"0 0 0\"".len()..]);
+        let found = near(&tilted);
+        assert!(found.iter().any(|n| n == "axes of joint_2 and joint_3 within 4.0e-3 rad of parallel"), "{found:?}");
+    }
 
     /// Test idea: a seven-joint arm with one joint held is the six-joint arm whose tip pose at
     /// the six free values is the seven-joint pose at those values and the held one (forward

@@ -349,10 +349,10 @@ impl super::State {
     }
     /// As `start_job` for several jobs answered in turn on one thread, all within `limits`
     /// counted from the start (a job left without time answers incomplete, naming the limit).
-    /// Every job is prepared before the first runs.
-    fn start_jobs(&mut self, id: RmwRequestId, k: usize, kind: RunKind, jobs: Vec<crate::app::Job>, limits: crate::app::Limits) -> Result<(), String> {
+    /// Every job is prepared before the first runs; a refusal names the job as `items[i]`.
+    fn start_jobs(&mut self, id: RmwRequestId, k: usize, kind: RunKind, jobs: Vec<crate::app::Job>, limits: crate::app::Limits, items: &str) -> Result<(), String> {
         let input = &self.mechanisms[k].loaded.input;
-        let prepared = jobs.into_iter().enumerate().map(|(i, job)| crate::app::prepare(input, job).map_err(|e| format!("[{i}]: {e}"))).collect::<Result<Vec<_>, _>>()?;
+        let prepared = jobs.into_iter().enumerate().map(|(i, job)| crate::app::prepare(input, job).map_err(|e| format!("{items}[{i}]: {e}"))).collect::<Result<Vec<_>, _>>()?;
         if let Some(busy) = self.busy() {
             return Err(busy);
         }
@@ -402,7 +402,7 @@ impl super::State {
         };
         let limits = crate::app::Limits { max_cells: max_boxes, timeout: Some(seconds(self.limits.max_wait)), ..Default::default() };
         let job = |pose| crate::app::Job::Ik6(crate::app::Ik6Job { arm: crate::app::LoadOptions::default(), pose, precision: q.sigma });
-        let started = if many { self.start_jobs(id, k, RunKind::InverseKinematics6, poses.into_iter().map(job).collect(), limits) } else { self.start_job(id, k, RunKind::InverseKinematics6, job(poses[0]), limits) };
+        let started = if many { self.start_jobs(id, k, RunKind::InverseKinematics6, poses.into_iter().map(job).collect(), limits, "poses") } else { self.start_job(id, k, RunKind::InverseKinematics6, job(poses[0]), limits) };
         started.err().and_then(|e| refuse(format!("inverse_kinematics6: {e}")))
     }
 
