@@ -75,7 +75,7 @@ pub struct BilaterationProblem {
     /// Rows of `[q1 − q0, q2 − q0, m]⁻¹` (platform frame).
     platform_inverse: [IVec3; 3],
     /// The base's frame in the root frame, when fixed joints hold it below the root.
-    base_in_root: Option<(IMat3, IVec3)>,
+    base_in_root: Option<Box<(IMat3, IVec3)>>,
 }
 
 fn sub(a: &IVec3, b: &IVec3) -> IVec3 {
@@ -414,7 +414,7 @@ impl BilaterationProblem {
             normal,
             frame_axes: [f1, f2, f3],
             platform_inverse,
-            base_in_root,
+            base_in_root: base_in_root.map(Box::new),
         })
     }
 
@@ -451,6 +451,6 @@ impl BilaterationProblem {
     /// The platform link's pose over the box, as the spatial model reports link poses.
     pub fn link_pose(&self, b: &IntervalBox) -> super::LinkPose {
         let (t, r) = self.placement(b);
-        link_pose_of(&self.legs, t, &r, self.base_in_root.as_ref())
+        link_pose_of(&self.legs, t, &r, self.base_in_root.as_deref())
     }
 }

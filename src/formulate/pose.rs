@@ -77,7 +77,7 @@ pub struct PoseProblem {
     /// Free joints, as reported: the floating joint's position and roll, pitch, yaw.
     pub free_joints: Vec<String>,
     /// The base's frame in the root frame, when fixed joints hold it below the root.
-    base_in_root: Option<(IMat3, IVec3)>,
+    base_in_root: Option<Box<(IMat3, IVec3)>>,
 }
 
 /// Linear forms and products, written into a system.
@@ -289,7 +289,7 @@ impl PoseProblem {
         }
         let square = EquationSystem { vars: w.system.vars.clone(), equations: w.square };
         let free_joints = ["x", "y", "z", "roll", "pitch", "yaw"].iter().map(|p| format!("{floating}.{p}")).collect();
-        Ok(Self { name: m.name.clone(), platform: m.links[platform].name.clone(), floating, legs, fixed: fixed.to_vec(), system: w.system, square, t, r, free_joints, base_in_root })
+        Ok(Self { name: m.name.clone(), platform: m.links[platform].name.clone(), floating, legs, fixed: fixed.to_vec(), system: w.system, square, t, r, free_joints, base_in_root: base_in_root.map(Box::new) })
     }
 
     /// Whether the square rows alone are the system (no redundant rows).
@@ -321,7 +321,7 @@ impl PoseProblem {
 
     /// The platform link's pose over the box, as the spatial model reports link poses.
     pub fn link_pose(&self, b: &IntervalBox) -> super::LinkPose {
-        link_pose_of(&self.legs, self.t.map(|v| b.dims[v]), &self.rotation(b), self.base_in_root.as_ref())
+        link_pose_of(&self.legs, self.t.map(|v| b.dims[v]), &self.rotation(b), self.base_in_root.as_deref())
     }
 }
 

@@ -109,6 +109,25 @@ pub(crate) fn basis(r: &Rotation3<f64>) -> IMat3 {
     out
 }
 
+/// The frame of `link` in the frame of its ancestor `from` (the root, or a link on its path)
+/// through the joints between them, each at its origin (its stated rotation and translation):
+/// the placement of a link held to `from` by fixed joints.
+pub(crate) fn placement(m: &crate::model::Mechanism, from: usize, link: usize) -> (IMat3, IVec3) {
+    let above = if from == m.root { 0 } else { m.path_to(from).len() };
+    let (mut r, mut p) = (identity(), [point(0.0); 3]);
+    for j in m.path_to(link).into_iter().skip(above) {
+        let joint = &m.joints[j];
+        let rot = match joint.exact_rotation {
+            Some(e) => e.map(|row| row.map(point)),
+            None => rpy(joint.rpy),
+        };
+        let step = apply(&r, &translation(&joint.origin.translation.vector));
+        p = [0, 1, 2].map(|i| p[i] + step[i]);
+        r = mul(&r, &rot);
+    }
+    (r, p)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -127,23 +146,4 @@ mod tests {
             }
         }
     }
-}
-
-/// The frame of `link` in the frame of its ancestor `from` (the root, or a link on its path)
-/// through the joints between them, each at its origin (its stated rotation and translation):
-/// the placement of a link held to `from` by fixed joints.
-pub(crate) fn placement(m: &crate::model::Mechanism, from: usize, link: usize) -> (IMat3, IVec3) {
-    let above = if from == m.root { 0 } else { m.path_to(from).len() };
-    let (mut r, mut p) = (identity(), [point(0.0); 3]);
-    for j in m.path_to(link).into_iter().skip(above) {
-        let joint = &m.joints[j];
-        let rot = match joint.exact_rotation {
-            Some(e) => e.map(|row| row.map(point)),
-            None => rpy(joint.rpy),
-        };
-        let step = apply(&r, &translation(&joint.origin.translation.vector));
-        p = [0, 1, 2].map(|i| p[i] + step[i]);
-        r = mul(&r, &rot);
-    }
-    (r, p)
 }
