@@ -19,6 +19,7 @@ use std::time::Duration;
 
 pub(crate) mod distances;
 mod ik6;
+mod self_motion;
 mod loop_singularities;
 mod sweep;
 
@@ -148,6 +149,8 @@ enum Command {
     Ik(IkArgs),
     /// Every joint solution of a six-revolute arm for a pose of its tip frame, each certified.
     Ik6(ik6::Ik6Args),
+    /// Every configuration of a seven-revolute arm at a pose of its tip (its self-motion set), as certified boxes along curves.
+    SelfMotion(self_motion::SelfMotionArgs),
     /// Where an arm's joint path (straight segments between waypoints) meets a singularity of
     /// the six-revolute arm (det J = 0) or of its 3R positioning structure (det Df = 0): each
     /// segment clear, crossing, or touching/undecided, with proofs.
@@ -382,6 +385,7 @@ pub fn run() -> Result<()> {
         Command::Singularities(args) => singularities(args),
         Command::Ik(args) => ik(args),
         Command::Ik6(args) => ik6::run(args),
+        Command::SelfMotion(args) => self_motion::run(args),
         Command::PathCheck(args) => path_check(args),
         Command::Distances(args) => distances::run(args),
         #[cfg(feature = "ros")]

@@ -256,12 +256,13 @@ fn one_outcome_vocabulary() {
 /// The node's service of a question, and the file (or folder) where the node's job is built.
 type NodeRoute = Option<(&'static str, &'static str)>;
 
-const QUESTIONS: [(&str, &str, NodeRoute); 9] = [
+const QUESTIONS: [(&str, &str, NodeRoute); 10] = [
     ("Solve", "solve", Some(("solve", "app/linkage.rs"))),
     ("Singularities", "singularities", Some(("singularities", "app/arm_analysis.rs"))),
     ("Ik", "ik", Some(("inverse_kinematics", "app/arm_analysis.rs"))),
     ("Ik6", "ik6", Some(("inverse_kinematics6", "edges/ros"))),
     ("PathCheck", "path-check", Some(("path_check", "edges/ros"))),
+    ("SelfMotion", "self-motion", None),
     ("Collisions", "collisions", Some(("collisions", "edges/ros"))),
     // A platform's configuration space and Solve requests.
     ("Distances", "distances", Some(("solve", "app/platform.rs"))),
@@ -491,7 +492,7 @@ const PUBLIC_NAMES: &[&str] = &[
     "app::LpBackend", "app::Mechanism", "app::MechanismInfo", "app::ModelChoice", "app::MotionSpan",
     "app::Output", "app::PathCheckAnswer", "app::PathCheckJob", "app::PathSet", "app::Peers",
     "app::PoseInput", "app::Prepared", "app::Progress", "app::SNAP_TOLERANCE", "app::Scope",
-    "app::SingularKind", "app::SingularitiesAnswer", "app::SingularitiesJob", "app::SolveAnswer",
+    "app::SingularKind", "app::SingularitiesAnswer", "app::SelfMotionJob", "app::SingularitiesJob", "app::SolveAnswer",
     "app::SolveJob", "app::SolverSettings", "app::Status", "app::SweepTaskJob", "app::TracedPoint",
     "app::Questions", "app::check_precision", "app::describe", "app::motion_joints", "app::prepare", "app::questions",
     "app::rank_and_size", "app::share_searches", "app::sweeps",

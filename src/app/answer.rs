@@ -18,7 +18,7 @@ use super::solve::{LinkReadout, SolveRun};
 use crate::analyses::loop_singular::SingularSets;
 use crate::analyses::input_motion::InputMotionCheck;
 use super::path::ArmPathCheck;
-use super::six::{ArmCuspidality, ArmIk6};
+use super::six::{ArmCuspidality, ArmIk6, ArmSelfMotion};
 use super::BoxSetResult;
 
 /// The answer to one `Job`.
@@ -32,6 +32,8 @@ pub enum Answer {
     Ik(Box<IkAnswer>),
     /// `Job::Ik6`.
     Ik6(Box<Ik6Answer>),
+    /// `Job::SelfMotion`.
+    SelfMotion(Box<ArmSelfMotion>),
     /// `Job::PathCheck`.
     PathCheck(Box<PathCheckAnswer>),
     /// `Job::Collisions`.
@@ -186,6 +188,7 @@ impl Answer {
             Answer::Singularities(_) => "singularities",
             Answer::Ik(_) => "ik",
             Answer::Ik6(_) => "ik6",
+            Answer::SelfMotion(_) => "self-motion",
             Answer::PathCheck(_) => "path-check",
             Answer::Collisions(_) => "collisions",
             Answer::Distances(_) => "distances",
@@ -201,6 +204,8 @@ impl Answer {
             Answer::Singularities(a) => a.found.completeness(),
             Answer::Ik(a) => Completeness::of_run(a.found.solutions.status),
             Answer::Ik6(a) => Completeness::of(a.found.solutions.status, a.found.solutions.clusters.len(), false),
+            // Complete when every cell was searched and every box certified as a piece of arc.
+            Answer::SelfMotion(a) => Completeness::of(a.set.status, a.set.boxes.len() - a.set.certified(), false),
             Answer::PathCheck(a) => a.found.completeness(),
             // Boxes at the precision neither proven colliding nor free leave it open, as its
             // report says.

@@ -34,6 +34,9 @@ pub enum Job {
     Ik(IkJob),
     /// Every solution of a six-revolute arm for a pose of its tip (`linkspace ik6`).
     Ik6(Ik6Job),
+    /// Every configuration of a seven-revolute arm at a pose of its tip, a union of curves
+    /// (`linkspace self-motion`).
+    SelfMotion(SelfMotionJob),
     /// Where a joint path meets a singularity (`linkspace path-check`).
     PathCheck(PathCheckJob),
     /// Where an arm's collision capsules meet (`linkspace collisions`).
@@ -119,6 +122,23 @@ pub struct Ik6Job {
     /// The tip frame's pose in the base frame.
     pub pose: PoseInput,
     /// Largest width (radians) of reported boxes, in (0, 1).
+    pub precision: f64,
+}
+
+/// `Job::SelfMotion`.
+#[derive(Clone, Debug)]
+pub struct SelfMotionJob {
+    /// How the arm is read (base and tip; the rounding policy).
+    pub arm: ArmOptions,
+    /// The tip frame's pose in the base frame.
+    pub pose: PoseInput,
+    /// The joint whose range is cut into cells (default: the third revolute joint).
+    pub parameter: Option<String>,
+    /// The part of the parameter's range searched (default: its limits, at most a turn).
+    pub range: Option<(f64, f64)>,
+    /// Width (radians) of the parameter's cells, in (0, 1].
+    pub cell: f64,
+    /// Largest width (radians) of the other joints' boxes, in (0, 1).
     pub precision: f64,
 }
 
@@ -234,6 +254,7 @@ impl Job {
             Job::Singularities(_) => "singularities",
             Job::Ik(_) => "ik",
             Job::Ik6(_) => "ik6",
+            Job::SelfMotion(_) => "self-motion",
             Job::PathCheck(_) => "path-check",
             Job::Collisions(_) => "collisions",
             Job::Distances(_) => "distances",
@@ -250,7 +271,7 @@ impl Job {
         match name {
             "singularities" => Limits { max_cells: 5_000_000, max_memory: 256 << 20, ..base },
             "ik" => Limits { max_cells: 200_000, ..base },
-            "ik6" => Limits { max_cells: 20_000_000, timeout: Some(IK6_DEFAULT_TIMEOUT), ..base },
+            "ik6" | "self-motion" => Limits { max_cells: 20_000_000, timeout: Some(IK6_DEFAULT_TIMEOUT), ..base },
             "collisions" => Limits { max_cells: crate::analyses::arm3r::collision::DEFAULT_MAX_BOXES, ..base },
             // Segments of a joint path, each checked whole.
             "path-check" => Limits { max_cells: 10_000_000, ..base },
@@ -267,6 +288,7 @@ impl Job {
             "ik" => 1e-6,
             "ik6" | "path-check" => 1e-9,
             "collisions" => 1e-2,
+            "self-motion" => 0.1,
             _ => 1e-3,
         }
     }

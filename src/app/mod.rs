@@ -42,7 +42,7 @@ macro_rules! internal_use {
 
 // The front door: a `Job` in, an `Answer` out.
 pub use answer::{Answer, CollisionsAnswer, DistancesAnswer, Ik6Answer, IkAnswer, LoopAnswer, PathCheckAnswer, SingularitiesAnswer, SolveAnswer};
-pub use job::{ArmOptions, CollisionsJob, DistancesJob, Ik6Job, IkJob, Job, LoopQuestion, LoopSingularitiesJob, MotionSpan, PathCheckJob, SingularitiesJob, SolveJob, SweepTaskJob};
+pub use job::{ArmOptions, CollisionsJob, DistancesJob, Ik6Job, IkJob, Job, LoopQuestion, LoopSingularitiesJob, MotionSpan, PathCheckJob, SelfMotionJob, SingularitiesJob, SolveJob, SweepTaskJob};
 internal_use!(job::IK6_DEFAULT_TIMEOUT);
 pub use prepare::{prepare, Input, JobError, Prepared};
 // What a front end shows of a mechanism before asking it anything.
@@ -94,5 +94,5 @@ internal_use!(loops::{all_kinds, analyse_image, image_points, Actuation, ImageAn
 internal_use!(crate::analyses::input_motion::{check_input_motion, MotionError, MotionRequest, MotionStep, MotionVerdict});
 internal_use!(platform::PlatformAnalysis);
 internal_use!(path::{check_path, check_path3, positioning_joints, ArmPathCheck});
-internal_use!(six::{arm_cuspidality, arm_cuspidality_of, chain6, inverse_kinematics6, ArmCuspidality, ArmIk6, ArmVerdict, ArmVerdictLine});
+internal_use!(six::{arm_cuspidality, arm_cuspidality_of, chain6, inverse_kinematics6, self_motion, ArmCuspidality, ArmIk6, ArmSelfMotion, ArmVerdict, ArmVerdictLine});
 internal_use!(sweep::sweep_task);

@@ -142,6 +142,7 @@ enum Ready {
     Singularities { arm: Box<Arm>, mechanism: Box<Mechanism>, job: Box<SingularitiesJob> },
     Ik { arm: Box<Arm>, point: arm::IkPoint, precision: f64 },
     Ik6 { chain: Box<Chain6R>, pose: crate::analyses::arm6r::PoseInput, precision: f64 },
+    SelfMotion { mechanism: Box<Mechanism>, job: Box<super::SelfMotionJob> },
     Path6 { chain: Box<Chain6R>, waypoints: Vec<[f64; 6]>, precision: f64 },
     Path3 { arm: Box<Arm>, waypoints: Vec<Vec<f64>>, precision: f64 },
     Collisions { mechanism: Box<Mechanism>, options: Box<arm3r::LoadOptions>, precision: f64 },
@@ -192,6 +193,16 @@ pub fn prepare(input: &Input, job: Job) -> Result<Prepared, JobError> {
             let chain = six_joint_chain(m, &j.arm)?;
             j.pose.target()?;
             Ready::Ik6 { chain: Box::new(chain), pose: j.pose, precision: j.precision }
+        }
+        Job::SelfMotion(j) => {
+            j.pose.target()?;
+            if let Some((joint, _)) = j.arm.spec.locks.first() {
+                return Err(JobError::Bad(format!("--fix {joint}: self-motion holds no joint (its parameter joint is cut into cells; choose it with --parameter)")));
+            }
+            if !(j.precision > 0.0 && j.precision < 1.0) {
+                return Err(JobError::Bad(format!("precision must be a number in (0, 1), got {}", j.precision)));
+            }
+            Ready::SelfMotion { mechanism: Box::new(input.mechanism()?.clone()), job: Box::new(j) }
         }
         Job::PathCheck(j) => prepare_path(input.mechanism()?, j)?,
         Job::Collisions(j) => {
@@ -381,6 +392,7 @@ impl Prepared {
                 let found = six::inverse_kinematics6(&chain, pose, precision, control)?;
                 Answer::Ik6(Box::new(Ik6Answer { chain: *chain, found }))
             }
+            Ready::SelfMotion { mechanism, job } => Answer::SelfMotion(Box::new(six::self_motion(&mechanism, &job.arm, &job, control)?)),
             Ready::Path6 { chain, waypoints, precision } => Answer::PathCheck(Box::new(PathCheckAnswer { found: path::check_path(&chain, &waypoints, precision, control)?, chain: None })),
             Ready::Path3 { arm, waypoints, precision } => {
                 let found = path::check_path3(&arm, &waypoints, precision, control)?;

@@ -3,6 +3,7 @@
 
 use super::arm::Arm;
 use crate::analyses::arm3r::LoadOptions;
+use crate::analyses::arm6r::self_motion::{self, SelfMotionSet};
 use crate::analyses::arm6r::{cuspidal, ik, three_parallel, Chain6R, CuspidalVerdict, Ik6Solutions, Manip6rError, MostSolutions, PoseInput, SearchOutcome, ThreeParallel};
 use crate::model::{rounding, Mechanism};
 use crate::kernel::search::Control;
@@ -48,6 +49,39 @@ pub fn inverse_kinematics6(chain: &Chain6R, pose: PoseInput, precision: f64, con
     let target = pose.target()?;
     let solutions = ik::solve(chain, &target, precision, control)?;
     Ok(ArmIk6 { pose, solutions, seconds: start.elapsed().as_secs_f64() })
+}
+
+/// What `self-motion` found.
+#[derive(Clone, Debug)]
+pub struct ArmSelfMotion {
+    /// The pose asked for, as written.
+    pub pose: PoseInput,
+    /// The cover of the set.
+    pub set: SelfMotionSet,
+    /// Wall time.
+    pub seconds: f64,
+}
+
+/// Every configuration of the seven-revolute arm of `m` (read as `options` say: base, tip, the
+/// rounding policy) at the job's tip pose, its parameter joint (default: the third) cut into
+/// cells and the other joints' boxes as the job says, within `control`.
+pub fn self_motion(m: &Mechanism, options: &LoadOptions, job: &super::SelfMotionJob, control: &Control) -> Result<ArmSelfMotion, Manip6rError> {
+    let (pose, cell, precision) = (job.pose, job.cell, job.precision);
+    let start = Instant::now();
+    let target = pose.target()?;
+    let rounded;
+    let m = if options.exact_geometry || options.snap_tolerance == 0.0 {
+        m
+    } else {
+        rounded = rounding::snap(m, options.snap_tolerance).0;
+        &rounded
+    };
+    let parameter = match &job.parameter {
+        Some(p) => p.clone(),
+        None => self_motion::default_parameter(m)?,
+    };
+    let set = self_motion::cover(m, options.spec.base.as_deref(), options.spec.tip.as_deref(), &parameter, job.range, &target, cell, precision, control)?;
+    Ok(ArmSelfMotion { pose, set, seconds: start.elapsed().as_secs_f64() })
 }
 
 /// The whole-arm cuspidality verdict of a six-joint arm.

@@ -38,7 +38,7 @@ pub(crate) struct Ik6Args {
 }
 
 /// The pose of `text` (what `--pose` or one line of `--poses` holds); `what` names it in errors.
-fn parse_pose(text: &str, what: &str) -> Result<PoseInput> {
+pub(crate) fn parse_pose(text: &str, what: &str) -> Result<PoseInput> {
     let values: Vec<f64> = text
         .split(',')
         .map(|t| t.trim().parse::<f64>().map_err(|_| anyhow::anyhow!("{what} '{}': '{}' is not a number", text.trim(), t.trim())))

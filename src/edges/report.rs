@@ -38,6 +38,7 @@ layer!(image);
 mod kernel;
 layer!(manip3r);
 layer!(motion);
+layer!(self_motion);
 layer!(singular);
 layer!(six);
 layer!(solve);
@@ -74,6 +75,7 @@ fn encode(answer: &Answer, pretty: bool) -> Result<String, serde_json::Error> {
         Answer::Singularities(a) => put(pretty, &manip3r::SingularityReport::of(a)),
         Answer::Ik(a) => put(pretty, &manip3r::IkReport::of(&a.arm, &a.found)),
         Answer::Ik6(a) => put(pretty, &six::Ik6Report::of(&a.chain, &a.found)),
+        Answer::SelfMotion(a) => put(pretty, &self_motion::SelfMotionReport::of(a)),
         Answer::PathCheck(a) => put(pretty, &six::PathCheckReport::of(&a.found)),
         Answer::Collisions(a) => put(pretty, &collisions::CollisionReport::of(&a.found, a.precision)),
         Answer::Distances(a) => put(pretty, &DistancesReport::of(a)),

@@ -47,7 +47,13 @@ pub(crate) fn apply_transposed(a: &IMat3, v: &IVec3) -> IVec3 {
 /// The rotation by the stated angle `theta` about the unit `axis` (Rodrigues:
 /// `a aᵀ + cos θ (I − a aᵀ) + sin θ [a]×`), enclosing the exact one for every axis in `axis`.
 pub(crate) fn about_axis(axis: &IVec3, theta: f64) -> IMat3 {
-    let (c, s) = cos_sin(stated(theta));
+    about_axis_over(axis, stated(theta))
+}
+
+/// The rotation about the unit `axis` by every angle in `theta`: each entry encloses its value
+/// over the whole range (a joint held over an interval).
+pub(crate) fn about_axis_over(axis: &IVec3, theta: Interval) -> IMat3 {
+    let (c, s) = cos_sin(theta);
     let a = axis;
     let cross = [[point(0.0), -a[2], a[1]], [a[2], point(0.0), -a[0]], [-a[1], a[0], point(0.0)]];
     let mut r = [[point(0.0); 3]; 3];

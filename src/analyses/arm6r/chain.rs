@@ -303,6 +303,14 @@ impl Chain6R {
                 return Err(Manip6rError::NotSixR(format!("--fix: {name}={value} is not a finite value within its limits")));
             }
         }
+        let held: Vec<(String, Interval)> = held.iter().map(|(n, v)| (n.clone(), crate::formulate::angles::stated(*v))).collect();
+        Self::holding_over(m, base, tip, &held)
+    }
+
+    /// As `holding`, each held joint over a range of angles: the chain's coefficients enclose
+    /// their values over every angle of it, so a box certified on this chain holds exactly one
+    /// solution for every held angle in the range (the parametric form of Krawczyk's test).
+    pub(crate) fn holding_over(m: &Mechanism, base: Option<&str>, tip: Option<&str>, held: &[(String, Interval)]) -> Result<Chain6R, Manip6rError> {
         let held_at = |j: usize| held.iter().find(|(n, _)| *n == m.joints[j].name).map(|(_, v)| *v);
         if !m.loops.is_empty() {
             return Err(Manip6rError::NotSixR("the mechanism has loop closures".into()));
@@ -363,7 +371,7 @@ impl Chain6R {
             acc = acc.then(&origin);
             match (joint.kind, held_at(j)) {
                 (JointKind::Fixed, _) => {}
-                (JointKind::Revolute { .. }, Some(value)) => acc = acc.then(&IAffine { r: stated::about_axis(&stated::axis(&joint.axis), value), t: [point(0.0); 3] }),
+                (JointKind::Revolute { .. }, Some(range)) => acc = acc.then(&IAffine { r: stated::about_axis_over(&stated::axis(&joint.axis), range), t: [point(0.0); 3] }),
                 (JointKind::Revolute { limits }, None) => {
                     if joint.mimic.is_some() {
                         return Err(Manip6rError::NotSixR(format!("joint '{}' follows another through <mimic>", joint.name)));

@@ -168,6 +168,9 @@ struct Ik6Prune<'a> {
     splits: &'a [Split],
     sides: &'a Axis4Sides,
     precision: f64,
+    /// Cells this narrow that Krawczyk cannot decide are tried once more, inflated
+    /// (`INFLATE_WIDTH`, or wider for a chain whose coefficients span a range: `solve_over`).
+    inflate: f64,
 }
 
 /// The twelve residuals `L − R` (rotation row-major, then translation).
@@ -511,7 +514,7 @@ impl Ik6Prune<'_> {
                 K::Failed => {}
             }
         }
-        if width(&nb) <= INFLATE_WIDTH {
+        if width(&nb) <= self.inflate {
             // A solution on or near the cell's faces: Krawczyk cannot put its image inside the
             // cell; a box about the cell's centre, a few times wider, may prove it (ε-inflation).
             // The cell claims the solution when its box meets the cell; neighbours claiming the
@@ -587,13 +590,25 @@ pub fn solve(chain: &Chain6R, target: &PoseTarget, precision: f64, control: &Con
 
 /// As `solve`, reporting progress.
 pub fn solve_with(chain: &Chain6R, target: &PoseTarget, precision: f64, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<Ik6Solutions, Manip6rError> {
+    solve_inflating(chain, target, precision, INFLATE_WIDTH, control, progress)
+}
+
+/// As `solve`, for a chain whose coefficients span a range (a joint held over an interval,
+/// `Chain6R::holding_over`): its solutions are then pieces of curve about `extent` wide, which
+/// contraction cannot narrow further, so cells up to `extent` wide that Krawczyk cannot decide
+/// are tried once more, inflated about their centre.
+pub fn solve_over(chain: &Chain6R, target: &PoseTarget, precision: f64, extent: f64, control: &Control) -> Result<Ik6Solutions, Manip6rError> {
+    solve_inflating(chain, target, precision, extent.max(INFLATE_WIDTH), control, &mut no_progress)
+}
+
+fn solve_inflating(chain: &Chain6R, target: &PoseTarget, precision: f64, inflate: f64, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<Ik6Solutions, Manip6rError> {
     if !(precision > 0.0 && precision < 1.0) {
         return Err(Manip6rError::BadPrecision(precision));
     }
     let splits: Vec<Split> = (0..SPLITS).map(|f| chain.split(&target.0, f)).collect();
     let start = Ik6Cell { b: chain.ranges.map(|(lo, hi)| [lo, hi]), level: 0, aligned: false };
     let sides = Axis4Sides::new(&splits[0]);
-    let mut run = drive(|| Ik6Prune { splits: &splits, sides: &sides, precision }, start, control, progress);
+    let mut run = drive(|| Ik6Prune { splits: &splits, sides: &sides, precision, inflate }, start, control, progress);
     run.found.sort_by(|a, b| a.0.iter().map(|x| x.inf()).partial_cmp(b.0.iter().map(|x| x.inf())).unwrap_or(std::cmp::Ordering::Equal));
     let mut kept: Vec<([Interval; 6], [Interval; 6])> = Vec::new();
     let inside = |k: &[Interval; 6], r: &[Interval; 6]| (0..6).all(|d| k[d].subset(r[d]));
@@ -648,7 +663,7 @@ mod tests {
                 let target = PoseTarget::around(&c.pose(&q), 1e-12).expect("finite");
                 let splits = vec![c.split(&target.0, 0)];
                 let sides = Axis4Sides::new(&splits[0]);
-                let prune = Ik6Prune { splits: &splits, sides: &sides, precision: 1e-10 };
+                let prune = Ik6Prune { splits: &splits, sides: &sides, precision: 1e-10, inflate: INFLATE_WIDTH };
                 let mut b = c.ranges.map(|(lo, hi)| [lo, hi]);
                 for k in INNER {
                     b[k] = [q[k] - 0.004, q[k] + 0.006];

@@ -13,6 +13,7 @@ pub mod three_parallel;
 pub(crate) mod jacobian;
 pub mod path;
 pub mod pose;
+pub mod self_motion;
 
 pub use chain::{Chain6R, Pose64};
 pub use cuspidal::{CuspidalVerdict, MostSolutions, SearchOutcome, Witness};

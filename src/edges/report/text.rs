@@ -24,6 +24,7 @@ fn render(out: &mut Out, answer: &Answer) {
         Answer::Ik6(a) => ik6(out, a),
         Answer::PathCheck(a) => path_check(out, a),
         Answer::Collisions(a) => collisions(out, a),
+        Answer::SelfMotion(a) => self_motion(out, a),
         Answer::Distances(a) => distances(out, &report::distances::DistancesReport::of(a)),
         Answer::LoopSingularities(a) => match a.as_ref() {
             LoopAnswer::Sets { .. } => loop_sets(out, a),
@@ -214,6 +215,30 @@ fn ik6(out: &mut Out, a: &crate::app::Ik6Answer) {
             let text: Vec<String> = chain.joints.iter().map(|n| (n, b[n])).map(|(n, x)| format!("{n} in [{:.9}, {:.9}]", x[0], x[1])).collect();
             writeln!(out, "  {} ({tag})", text.join(", ")).ok();
         }
+    }
+}
+
+fn self_motion(out: &mut Out, a: &crate::app::ArmSelfMotion) {
+    let report = report::self_motion::SelfMotionReport::of(a);
+    writeln!(
+        out,
+        "{}: {} boxes in {} clusters, {} certified pieces of arc, {} cells of {:.4} rad over [{:.6}, {:.6}] ({} searched), status {}, {:.3} s",
+        report.parameter,
+        report.boxes.len(),
+        report.clusters.len(),
+        report.certified,
+        report.cells,
+        report.cell,
+        report.range[0],
+        report.range[1],
+        report.cells_searched,
+        report.completeness.text(),
+        report.seconds
+    )
+    .ok();
+    for (k, c) in report.clusters.iter().enumerate() {
+        let ranges: Vec<String> = report.joints.iter().map(|n| format!("{n} [{:.6}, {:.6}]", c.ranges[n][0], c.ranges[n][1])).collect();
+        writeln!(out, "  cluster {k}: {} boxes ({} certified): {}", c.boxes, c.certified, ranges.join(", ")).ok();
     }
 }
 
