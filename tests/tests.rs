@@ -23,6 +23,8 @@ mod stability;
 mod manip3r;
 /// Real arms' URDFs: chain choice, rounding, limits, the verdict, three conventions.
 mod real_arms;
+/// Seven-revolute arms' self-motion sets against Newton's method on forward kinematics.
+mod self_motion;
 /// `linkspace sweep`: verdicts and counts over design grids against references without the solver.
 mod sweeps;
 /// Distance problems through Cayley–Menger determinants: octahedral platform, four spheres.

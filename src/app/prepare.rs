@@ -225,7 +225,7 @@ fn six_joint_chain(m: &Mechanism, options: &arm3r::LoadOptions) -> Result<Chain6
         if let Some((n, tip)) = (0..m.links.len()).map(|l| (revolute(l), l)).max().filter(|(n, _)| *n > 6) {
             let on_path = m.path_to(tip).into_iter().filter(|&j| matches!(m.joints[j].kind, JointKind::Revolute { .. }) && !held(j)).map(|j| m.joints[j].name.clone()).collect::<Vec<_>>();
             return Err(JobError::Bad(format!(
-                "'{}' has {n} revolute joints from its root to '{}' ({}): hold {} of them with --fix JOINT=VALUE (e.g. --fix {}=0) so that six remain, or choose a six-joint sub-chain with --tip LINK",
+                "'{}' has {n} revolute joints from its root to '{}' ({}): hold {} of them with --fix JOINT=VALUE (e.g. --fix {}=0) so that six remain, or choose a six-joint sub-chain with --tip LINK (of a seven-joint arm, `linkspace self-motion` gives every configuration at a pose)",
                 m.name,
                 m.links[tip].name,
                 on_path.join(", "),

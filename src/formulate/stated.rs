@@ -44,14 +44,10 @@ pub(crate) fn apply_transposed(a: &IMat3, v: &IVec3) -> IVec3 {
     [0, 1, 2].map(|c| a[0][c] * v[0] + a[1][c] * v[1] + a[2][c] * v[2])
 }
 
-/// The rotation by the stated angle `theta` about the unit `axis` (Rodrigues:
-/// `a aᵀ + cos θ (I − a aᵀ) + sin θ [a]×`), enclosing the exact one for every axis in `axis`.
-pub(crate) fn about_axis(axis: &IVec3, theta: f64) -> IMat3 {
-    about_axis_over(axis, stated(theta))
-}
-
-/// The rotation about the unit `axis` by every angle in `theta`: each entry encloses its value
-/// over the whole range (a joint held over an interval).
+/// The rotation about the unit `axis` by every angle in `theta` (Rodrigues:
+/// `a aᵀ + cos θ (I − a aᵀ) + sin θ [a]×`), enclosing the exact one for every axis in `axis`:
+/// for a stated angle (`angles::stated`) the file's, for a range each entry over all of it (a
+/// joint held over an interval).
 pub(crate) fn about_axis_over(axis: &IVec3, theta: Interval) -> IMat3 {
     let (c, s) = cos_sin(theta);
     let a = axis;

@@ -21,11 +21,11 @@ from ._native import __version__
 from ._sweep import SweepResult, sweep
 from ._results import (
     CollisionsResult, Completeness, DistancesResult, Ik6Result, IkResult, LoopSingularitiesResult, Node, PathCheckResult, Result, Scope,
-    Segment, SingularitiesResult, SingularSet, SolveResult, Verdict,
+    Segment, SelfMotionResult, SingularitiesResult, SingularSet, SolveResult, Verdict,
 )
 
 __all__ = [
     "load", "defaults", "sweep", "SweepResult", "Mechanism", "Joint", "Loop", "Progress", "BoxSet", "Completeness", "Scope", "Verdict", "Result", "SolveResult",
-    "SingularitiesResult", "Node", "IkResult", "Ik6Result", "PathCheckResult", "Segment", "CollisionsResult", "DistancesResult",
+    "SingularitiesResult", "Node", "IkResult", "Ik6Result", "SelfMotionResult", "PathCheckResult", "Segment", "CollisionsResult", "DistancesResult",
     "SingularSet", "LoopSingularitiesResult", "Error", "InputError", "UnsupportedError", "AnalysisError", "InternalError", "__version__",
 ]

@@ -23,7 +23,7 @@ import numpy.typing as npt
 
 from . import _native
 from ._errors import InputError
-from ._results import CollisionsResult, DistancesResult, Ik6Result, IkResult, LoopSingularitiesResult, PathCheckResult, Result, SingularitiesResult, SolveResult, result_of
+from ._results import CollisionsResult, DistancesResult, Ik6Result, IkResult, LoopSingularitiesResult, PathCheckResult, Result, SelfMotionResult, SingularitiesResult, SolveResult, result_of
 
 __all__ = ["load", "defaults", "Mechanism", "Joint", "Loop", "Progress"]
 
@@ -355,6 +355,24 @@ class Mechanism:
             except InputError as e:
                 raise type(e)(f"ik6_many: pose {k}: {e}") from None
         return results
+
+    def self_motion(
+        self, pose: npt.ArrayLike | None = None, *, xyz: Sequence[float] | None = None, rpy: Sequence[float] | None = None, quaternion: Sequence[float] | None = None,
+        parameter: str | None = None, range: Sequence[float] | None = None, cell: float | None = None, precision: float | None = None,
+        base: str | None = None, tip: str | None = None,
+        exact_geometry: bool | None = None, snap_tolerance: float | None = None, ignore_limits: bool | None = None,
+        max_boxes: int | None = None, timeout: float | None = None, max_memory: int | None = None, threads: int | None = None, progress: ProgressArg = None,
+    ) -> SelfMotionResult:
+        """Every configuration of a seven-revolute arm at a pose of its tip, a union of curves
+        (``linkspace self-motion``): ``pose`` as for :meth:`ik6`; ``parameter`` the joint whose
+        range (or ``range=(lo, hi)`` of it) is cut into cells ``cell`` wide (0.002 rad), the
+        curves' parameter (default: the third joint); ``precision`` (0.1 rad) bounds the boxes
+        that are not certified. Limits as for :meth:`ik6`; ``threads`` search cells side by side.
+        """
+        numbers = _pose(pose, xyz, rpy, quaternion)
+        given = dict(pose=numbers, parameter=parameter, range=_floats(range) if range is not None else None, cell=cell, precision=precision,
+                     **_chain(base, tip, None, None, exact_geometry, snap_tolerance, ignore_limits), **_limits(max_boxes, timeout, max_memory, threads))
+        return _as(SelfMotionResult, self._run("self-motion", given, progress))
 
     def path_check(
         self, waypoints: npt.ArrayLike, *, joint_names: Sequence[str] | None = None, singular_set: str | None = None, precision: float | None = None,

@@ -309,6 +309,26 @@ class Ik6Result(Result):
         return f"<Ik6Result {self._report['base']} -> {self._report['tip']}: {len(self.solutions.with_tag('unique'))} unique solutions, {len(self.solutions.undecided)} undecided, {self.completeness}>"
 
 
+class SelfMotionResult(Result):
+    """The self-motion set of a seven-revolute arm at a pose (``Mechanism.self_motion``):
+    ``boxes`` over the seven joints, tagged ``unique`` (a certified piece of arc: exactly one
+    configuration for every parameter angle of its cell), ``solution`` (may hold configurations)
+    or ``undecided`` (a cell left unsearched), each with its cluster (touching boxes)."""
+
+    @cached_property
+    def boxes(self) -> BoxSet:
+        r = self._report
+        return BoxSet.from_records(r["boxes"], r["joints"], lambda b: b["tag"], cluster=lambda b: b["cluster"], cluster_count=len(r["clusters"]))
+
+    @property
+    def parameter(self) -> str:
+        return str(self._report["parameter"])
+
+    def __repr__(self) -> str:
+        r = self._report
+        return f"<SelfMotionResult {r['parameter']}: {len(r['boxes'])} boxes in {len(r['clusters'])} clusters, {r['certified']} certified, {self.completeness}>"
+
+
 @dataclass(frozen=True)
 class Segment:
     """One segment of a joint path: ``value`` is ``"clear"``, ``"crosses"``,
@@ -441,7 +461,7 @@ class LoopSingularitiesResult(Result):
 
 
 _CLASSES: dict[str, type[Result]] = {
-    "solve": SolveResult, "singularities": SingularitiesResult, "ik": IkResult, "ik6": Ik6Result, "path-check": PathCheckResult,
+    "solve": SolveResult, "singularities": SingularitiesResult, "ik": IkResult, "ik6": Ik6Result, "self-motion": SelfMotionResult, "path-check": PathCheckResult,
     "collisions": CollisionsResult, "distances": DistancesResult, "loop-singularities": LoopSingularitiesResult,
 }
 

@@ -4,7 +4,7 @@
 //! signatures repeat) and the same one-line complaints.
 
 use crate::input_error;
-use linkspace::app::{self, ChainSpec, CollisionsJob, DistanceFormulation, DistancesJob, FaceBounds, Ik6Job, IkJob, IkPoint, Input, Job, LegValues, Limits, ArmOptions, LoopQuestion, LoopSingularitiesJob, LpBackend, ModelChoice, MotionSpan, Output, PathCheckJob, PathSet, PoseInput, SingularKind, SingularitiesJob, SolveJob};
+use linkspace::app::{self, ChainSpec, CollisionsJob, DistanceFormulation, DistancesJob, FaceBounds, Ik6Job, SelfMotionJob, IkJob, IkPoint, Input, Job, LegValues, Limits, ArmOptions, LoopQuestion, LoopSingularitiesJob, LpBackend, ModelChoice, MotionSpan, Output, PathCheckJob, PathSet, PoseInput, SingularKind, SingularitiesJob, SolveJob};
 use numpy::{PyReadonlyArray2, PyReadonlyArrayDyn};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
@@ -106,6 +106,7 @@ pub(crate) fn job(py: Python<'_>, name: &str, input: &Input, options: &Bound<'_,
         "singularities" => singularities(&o, precision)?,
         "ik" => Job::Ik(IkJob { arm: chain(&o)?, uncertainty: o.f64_or("uncertainty", 0.0)?, point: ik_point(&o)?, precision }),
         "ik6" => ik6(&o, precision)?,
+        "self-motion" => self_motion(&o, precision)?,
         "path-check" => path_check(&o, precision)?,
         "collisions" => Job::Collisions(CollisionsJob { arm: chain(&o)?, precision }),
         "distances" => distances(&o, precision)?,
@@ -234,6 +235,18 @@ fn ik6(o: &Opts<'_, '_>, precision: f64) -> PyResult<Job> {
     let values = o.numbers("pose")?.ok_or_else(|| PyTypeError::new_err("ik6: a pose is needed"))?;
     let pose = PoseInput::from_numbers(&values).map_err(|e| input_error(o.py, format!("--pose {values:?}: {e}")))?;
     Ok(Job::Ik6(Ik6Job { arm: chain(o)?, pose, precision }))
+}
+
+fn self_motion(o: &Opts<'_, '_>, precision: f64) -> PyResult<Job> {
+    let values = o.numbers("pose")?.ok_or_else(|| PyTypeError::new_err("self_motion: a pose is needed"))?;
+    let pose = PoseInput::from_numbers(&values).map_err(|e| input_error(o.py, format!("--pose {values:?}: {e}")))?;
+    let range = match o.numbers("range")?.as_deref() {
+        None => None,
+        Some([lo, hi]) => Some((*lo, *hi)),
+        Some(other) => return Err(input_error(o.py, format!("--range {other:?}: expected two numbers (lo, hi)"))),
+    };
+    let cell = o.f64_or("cell", 0.002)?;
+    Ok(Job::SelfMotion(SelfMotionJob { arm: chain(o)?, pose, parameter: o.string("parameter")?, range, cell, precision }))
 }
 
 fn path_check(o: &Opts<'_, '_>, precision: f64) -> PyResult<Job> {

@@ -149,6 +149,18 @@ def test_ik6_many_answers_each_pose_in_order_as_ik6_does() -> None:
         m.ik6_many(np.zeros(7))
 
 
+def test_self_motion_boxes_hold_the_configuration_the_pose_was_made_from() -> None:
+    path = urdf("iiwa14.urdf")
+    q0 = {"joint_1": 0.3, "joint_2": 0.5, "joint_3": 0.2, "joint_4": -1.2, "joint_5": 0.4, "joint_6": 0.8, "joint_7": -0.3}
+    pose = forward_kinematics(path, "tool0", q0)
+    r = linkspace.load(path).self_motion(pose, parameter="joint_3", range=(0.1, 0.3), exact_geometry=True)
+    boxes = r.boxes
+    assert r.parameter == "joint_3" and len(boxes.with_tag("unique")) > 0
+    assert r.to_dict()["cells_searched"] == r.to_dict()["cells"]
+    holding = [k for k in range(len(boxes)) if all(boxes.lo[k, i] - 1e-9 <= q0[c] <= boxes.hi[k, i] + 1e-9 for i, c in enumerate(boxes.columns))]
+    assert holding, "no box holds the configuration the pose was made from"
+
+
 def test_path_verdicts_agree_with_the_sign_of_det_df() -> None:
     m = linkspace.load(urdf("orthogonal_3r_a.urdf"))
     grid = np.linspace(-3.0, 3.0, 13)

@@ -71,15 +71,16 @@ impl SelfMotionReport {
     /// The report of a run.
     pub fn of(found: &ArmSelfMotion) -> Self {
         let set = &found.set;
-        let named = |b: &[crate::kernel::interval::Interval]| -> JointRanges { set.joints.iter().zip(b).map(|(n, x)| (n.clone(), [x.inf(), x.sup()])).collect() };
+        let named = |b: &[crate::kernel::interval::Interval]| -> JointRanges { set.joints.iter().zip(b).map(|(n, x)| (n.clone(), [x.inf() + 0.0, x.sup() + 0.0])).collect() };
         let mut clusters: Vec<ClusterRecord> = (0..set.clusters).map(|_| ClusterRecord { boxes: 0, certified: 0, ranges: JointRanges::new() }).collect();
         for b in &set.boxes {
             let c = &mut clusters[b.cluster];
             c.boxes += 1;
             c.certified += usize::from(b.tag == BoxStatus::Unique);
             for (n, x) in set.joints.iter().zip(&b.joints) {
-                let r = c.ranges.entry(n.clone()).or_insert([x.inf(), x.sup()]);
-                *r = [r[0].min(x.inf()), r[1].max(x.sup())];
+                // + 0.0: an interval's bound may be −0, which reads oddly.
+                let r = c.ranges.entry(n.clone()).or_insert([x.inf() + 0.0, x.sup() + 0.0]);
+                *r = [r[0].min(x.inf() + 0.0), r[1].max(x.sup() + 0.0)];
             }
         }
         SelfMotionReport {
