@@ -262,7 +262,7 @@ const QUESTIONS: [(&str, &str, NodeRoute); 10] = [
     ("Ik", "ik", Some(("inverse_kinematics", "app/arm_analysis.rs"))),
     ("Ik6", "ik6", Some(("inverse_kinematics6", "edges/ros"))),
     ("PathCheck", "path-check", Some(("path_check", "edges/ros"))),
-    ("SelfMotion", "self-motion", None),
+    ("SelfMotion", "self-motion", Some(("self_motion", "edges/ros"))),
     ("Collisions", "collisions", Some(("collisions", "edges/ros"))),
     // A platform's configuration space and Solve requests.
     ("Distances", "distances", Some(("solve", "app/platform.rs"))),

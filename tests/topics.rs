@@ -1831,3 +1831,55 @@ fn an_arm_with_collision_bodies_answers_collisions_as_the_cli() {
     assert_eq!((r[4]["ok"].clone(), r[4]["complete"].clone()), (json!(true), json!(false)), "{}", r[4]);
     assert!(r[4]["message"].as_str().expect("message").contains("boxes limit"), "{}", r[4]);
 }
+
+/// A seven-joint arm is listed with its self-motion sets and answers them as the CLI does.
+#[test]
+fn a_seven_joint_arm_answers_self_motion_as_the_cli() {
+    let Some(python) = python() else { return };
+    let domain = 58;
+    let iiwa = format!("{ROOT}/urdf/iiwa14.urdf");
+    // No load-time run to wait for: the client waits for the service.
+    let node = Node::start(domain, &[&iiwa]);
+    // The pose of (0.3, 0.5, 0.2, -1.2, 0.4, 0.8, -0.3), as a quaternion both sides read alike.
+    let m = [
+        [-0.7046693449477761, -0.596490311367875, 0.38424005873298434, 0.5916102118239036],
+        [-0.30927920399833303, 0.7456041523856864, 0.5902718203670058, 0.31993425847528145],
+        [-0.6385824052266311, 0.2971089974899393, -0.7098864383445381, 0.5911640897600512],
+    ];
+    let r = nalgebra::Rotation3::from_matrix(&nalgebra::Matrix3::from_fn(|i, j| m[i][j]));
+    let q = nalgebra::UnitQuaternion::from_rotation_matrix(&r);
+    let pose = [m[0][3], m[1][3], m[2][3], q.i, q.j, q.k, q.w];
+    let text: Vec<String> = pose.iter().map(|x| format!("{x:?}")).collect();
+    let reference = cli_json("self-motion", &[&iiwa, "--pose", &text.join(","), "--range", "0.1,0.3"]);
+    let ask = |orientation: [f64; 4]| {
+        let request = json!({"mechanism": "iiwa14", "pose": {"position": [pose[0], pose[1], pose[2]], "orientation": {"x": orientation[0], "y": orientation[1], "z": orientation[2], "w": orientation[3]}}, "range_lower": 0.1, "range_upper": 0.3});
+        call("self_motion", "SelfMotion", request)
+    };
+    let script = json!([call("list_mechanisms", "ListMechanisms", json!({})), ask([pose[3], pose[4], pose[5], pose[6]]), ask([0.0; 4])]);
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("services-7r-{}.json", std::process::id()));
+    std::fs::write(&path, serde_json::to_string(&script).expect("json")).expect("script written");
+    let got = py(python, domain, "tests/ros_client.py", &["services", "--script", path.to_str().expect("utf-8")], Duration::from_secs(120));
+    let _ = std::fs::remove_file(&path);
+    let r = got["results"].as_array().expect("results");
+    for (k, x) in r.iter().enumerate() {
+        assert!(x.get("error").is_none(), "step {k}: {x}\nnode log:\n{}", node.log());
+    }
+    let listed = &r[0]["mechanisms"][0];
+    assert_eq!((listed["kind"].clone(), listed["services"].clone()), (json!("manipulator_7r"), json!(["self_motion"])), "{listed}");
+    let reply = &r[1];
+    assert_eq!((reply["ok"].clone(), reply["parameter"].clone()), (json!(true), json!("joint_3")), "{reply}");
+    let joints: Vec<String> = reference["joints"].as_array().expect("joints").iter().map(|n| n.as_str().expect("name").to_string()).collect();
+    assert_eq!(reply["joint_names"], json!(joints));
+    let tag = |status: &Value| match status.as_u64() {
+        Some(2) => "unique",
+        Some(0) => "solution",
+        _ => "undecided",
+    };
+    let node_boxes: BTreeSet<String> = reply["boxes"].as_array().expect("boxes").iter().map(|b| format!("{:?} {}", intervals(&b["intervals"]), tag(&b["status"]))).collect();
+    let cli_boxes: BTreeSet<String> = reference["boxes"].as_array().expect("boxes").iter().map(|b| format!("{:?} {}", joints.iter().map(|n| bounds(&b["joints"][n])).collect::<Vec<_>>(), b["tag"].as_str().expect("tag"))).collect();
+    assert!(!cli_boxes.is_empty());
+    assert_eq!(node_boxes, cli_boxes, "the node's boxes are the CLI's");
+    assert_eq!(reply["certified"].as_u64(), reference["certified"].as_u64());
+    assert_eq!(r[2]["ok"], json!(false));
+    assert!(r[2]["message"].as_str().expect("message").contains("the quaternion is zero"), "{}", r[2]);
+}

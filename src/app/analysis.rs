@@ -20,6 +20,8 @@ use thiserror::Error;
 pub enum MechanismKind {
     /// A serial arm, analysed through its 3R positioning structure.
     Manipulator3R,
+    /// A serial arm of seven revolute joints, analysed through its self-motion sets.
+    Manipulator7R,
     /// A closed-loop linkage on the planar builder.
     PlanarLinkage,
     /// A closed-loop linkage on the spatial builder.
@@ -35,6 +37,7 @@ impl MechanismKind {
     pub fn name(self) -> &'static str {
         match self {
             MechanismKind::Manipulator3R => "manipulator_3r",
+            MechanismKind::Manipulator7R => "manipulator_7r",
             MechanismKind::PlanarLinkage => "planar_linkage",
             MechanismKind::SpatialLinkage => "spatial_linkage",
             MechanismKind::ParallelPlatform => "parallel_platform",
@@ -61,6 +64,8 @@ pub enum Service {
     PathCheck,
     /// Where the arm's collision bodies meet.
     Collisions,
+    /// Every configuration of a seven-revolute arm at a tip pose.
+    SelfMotion,
 }
 
 impl Service {
@@ -74,6 +79,7 @@ impl Service {
             Service::InverseKinematics6 => "inverse_kinematics6",
             Service::PathCheck => "path_check",
             Service::Collisions => "collisions",
+            Service::SelfMotion => "self_motion",
         }
     }
 }
@@ -211,6 +217,38 @@ impl Analysis for Unsupported {
     }
 }
 
+/// A serial arm of seven revolute joints: the node answers its self-motion sets (the 3R and 6R
+/// questions need a joint held, which the node's analyses do not take).
+#[derive(Clone, Debug)]
+pub struct SevenJointArm {
+    name: String,
+    joints: Vec<String>,
+}
+
+impl Analysis for SevenJointArm {
+    fn mechanism(&self) -> &str {
+        &self.name
+    }
+    fn kind(&self) -> MechanismKind {
+        MechanismKind::Manipulator7R
+    }
+    fn services(&self) -> Vec<Service> {
+        vec![Service::SelfMotion]
+    }
+    fn limitation(&self) -> String {
+        "a seven-revolute arm: self_motion is answered; its 3R positioning structure and the 6R questions need a joint held (linkspace singularities or ik6 with --fix JOINT=VALUE)".to_string()
+    }
+    fn free_joints(&self) -> Vec<String> {
+        self.joints.clone()
+    }
+    fn fixed_joints(&self) -> Vec<(String, f64)> {
+        Vec::new()
+    }
+    fn periodic(&self) -> Vec<bool> {
+        vec![true; self.joints.len()]
+    }
+}
+
 /// `load` for a mechanism read from URDF: a linkage's actuated joints come from its
 /// `<transmission>` elements (`Actuation::from_transmissions`, the default of `linkspace
 /// loop-singularities` as well).
@@ -242,6 +280,13 @@ fn load_with(mechanism: &Mechanism, fixed: &[(String, f64)], traces: &[(String, 
         }
         Err(e) => e,
     };
+    if mechanism.loops.is_empty() && crate::analyses::arm6r::self_motion::default_parameter(mechanism).is_ok() {
+        if let Some((joint, _)) = fixed.first() {
+            return Err(AnalysisError::BadRequest(format!("--fix {joint}: '{}' is a seven-revolute arm, whose analysis takes no fixed joints", mechanism.name)));
+        }
+        let joints = mechanism.joints.iter().filter(|j| matches!(j.kind, crate::model::JointKind::Revolute { .. })).map(|j| j.name.clone()).collect();
+        return Ok(Box::new(SevenJointArm { name: mechanism.name.clone(), joints }));
+    }
     // An octahedral platform: PlatformProblem reads it (the distance formulation of Porta, Thomas, Ros and Torras (2003)). Other
     // mechanisms with spherical loops go to the linkage builders below.
     let spherical = mechanism.loops.iter().any(|l| l.kind == crate::model::JointKind::Spherical);

@@ -37,7 +37,8 @@ def test_load_reads_the_joints_loops_and_links_as_the_file_states_them() -> None
     four = linkspace.load(urdf("four_bar.urdf"))
     assert [(lp.name, lp.type, lp.predecessor, lp.successor) for lp in four.loops] == [("loop_coupler_rocker", "revolute", "coupler", "rocker")]
     assert four.kind == "planar_linkage" and four.free_joints
-    assert linkspace.load(urdf("iiwa14.urdf")).kind == "unsupported" and linkspace.load(urdf("iiwa14.urdf")).limitation
+    iiwa = linkspace.load(urdf("iiwa14.urdf"))
+    assert iiwa.kind == "manipulator_7r" and iiwa.services == ["self_motion"] and "--fix" in iiwa.limitation
     assert linkspace.load(urdf("four_spheres.json")).kind == "distance_problem"
 
 

@@ -71,6 +71,15 @@ impl SelfMotionSet {
     }
 }
 
+/// What one cell's search found: its boxes over the seven joints with their tags, how it ended,
+/// its counters, and whether it ran (a cell a limit kept from starting is kept whole).
+struct CellCover {
+    boxes: Vec<(Vec<Interval>, BoxStatus)>,
+    status: Status,
+    stats: Stats,
+    searched: bool,
+}
+
 /// The revolute joints of `m` from `base` (default: the root) to `tip` (default: the end of the
 /// revolute path), base first.
 fn revolute_path(m: &Mechanism, base: Option<&str>, tip: &str) -> Vec<String> {
@@ -133,7 +142,7 @@ pub fn cover(m: &Mechanism, base: Option<&str>, tip: Option<&str>, parameter: &s
     // one): its boxes, or the limit that kept it from starting, with its counters. A cell not
     // started is kept whole, undecided.
     let cells: Vec<usize> = (0..count).collect();
-    let run_cell = |&k: &usize| -> Result<(Vec<(Vec<Interval>, BoxStatus)>, Status, Stats, bool), Manip6rError> {
+    let run_cell = |&k: &usize| -> Result<CellCover, Manip6rError> {
         let span = interval(edge(k), edge(k + 1));
         let chain = if k == 0 { first.clone() } else { Chain6R::holding_over(m, base, tip, &[(parameter.to_string(), span)])? };
         let stopped = if control.cancel.load(std::sync::atomic::Ordering::Relaxed) {
@@ -143,22 +152,22 @@ pub fn cover(m: &Mechanism, base: Option<&str>, tip: Option<&str>, parameter: &s
         };
         if let Some(limit) = stopped {
             let whole = chain.ranges.map(|(lo, hi)| interval(lo, hi));
-            return Ok((vec![(with_parameter(&whole, span), BoxStatus::Undecided)], Status::Stopped(limit), Stats::default(), false));
+            return Ok(CellCover { boxes: vec![(with_parameter(&whole, span), BoxStatus::Undecided)], status: Status::Stopped(limit), stats: Stats::default(), searched: false });
         }
         let cell_control = Control { threads: 1, ..*control }.remaining_since(start);
         let found = ik::solve_over(&chain, target, precision, INFLATE_CELLS * span.wid(), &cell_control)?;
         let mut boxes: Vec<(Vec<Interval>, BoxStatus)> = found.unique.iter().map(|b| (with_parameter(b, span), BoxStatus::Unique)).collect();
         boxes.extend(found.clusters.iter().map(|c| (with_parameter(&c.hull, span), BoxStatus::Solution)));
-        Ok((boxes, found.status, found.stats, true))
+        Ok(CellCover { boxes, status: found.status, stats: found.stats, searched: true })
     };
     let (mut boxes, mut stats, mut status, mut searched) = (Vec::new(), Stats::default(), Status::Finished, 0);
     for cell in crate::kernel::search::map_parallel(&cells, control.threads.max(1), run_cell) {
-        let (found, cell_status, cell_stats, ran) = cell?;
-        boxes.extend(found);
-        status = status.and(cell_status);
-        stats.processed += cell_stats.processed;
-        stats.split += cell_stats.split;
-        searched += usize::from(ran);
+        let cell = cell?;
+        boxes.extend(cell.boxes);
+        status = status.and(cell.status);
+        stats.processed += cell.stats.processed;
+        stats.split += cell.stats.split;
+        searched += usize::from(cell.searched);
     }
     let as_boxes: Vec<IntervalBox> = boxes.iter().map(|(b, _)| IntervalBox::new(b.clone())).collect();
     let (labels, clusters) = components(&as_boxes);

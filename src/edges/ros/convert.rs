@@ -1,7 +1,7 @@
 //! From the analysis layer's plain results to wire types: box sets, markers, joint states.
 
 use super::msgs::{
-    self, AssemblyMode, BoxSet, CollisionsResponse, ColorRGBA, CuspRecord, Header, Ik6Solutions, InverseKinematics6Response, InverseKinematicsResponse, JointState, PathCheckResponse, LsBox, Marker, MarkerArray, NodeRecord, Point, Pose, Quaternion, SingularityReport,
+    self, AssemblyMode, BoxSet, CollisionsResponse, SelfMotionResponse, ColorRGBA, CuspRecord, Header, Ik6Solutions, InverseKinematics6Response, InverseKinematicsResponse, JointState, PathCheckResponse, LsBox, Marker, MarkerArray, NodeRecord, Point, Pose, Quaternion, SingularityReport,
     SolveStats, TfMessage, Time, Transform, TransformStamped, Vector3,
 };
 use crate::app::{joints_over, ArmCollisions, ArmIk6, ArmPathCheck, Bounds, BoxSetResult, Chain6R, IkResult, ResultBox, SegmentVerdict, SingularBranches, SingularityResult, SolverSettings};
@@ -529,6 +529,28 @@ pub(crate) fn collisions_response(found: &ArmCollisions) -> CollisionsResponse {
         free: set.free.iter().map(|b| as_box(b, msgs::BOX_SOLUTION)).collect(),
         undecided: set.undecided.iter().map(|b| as_box(b, msgs::BOX_UNDECIDED)).collect(),
         processed: set.stats.processed,
+    }
+}
+
+/// The reply to a self-motion request: the boxes of `linkspace self-motion`, over the seven
+/// joints, each with its tag and cluster.
+pub(crate) fn self_motion_response(found: &crate::app::ArmSelfMotion) -> SelfMotionResponse {
+    let set = &found.set;
+    let certified = set.certified();
+    let completeness = Completeness::of(set.status, set.boxes.len() - certified, false);
+    SelfMotionResponse {
+        ok: true,
+        message: format!("{}: {} boxes in {} clusters, {certified} certified pieces of arc, {} of {} cells searched, {}", set.joints[set.parameter], set.boxes.len(), set.clusters, set.cells.0, set.cells.1, completeness.text()),
+        complete: completeness.is_complete(),
+        joint_names: set.joints.clone(),
+        parameter: set.joints[set.parameter].clone(),
+        boxes: set
+            .boxes
+            .iter()
+            .map(|b| LsBox { intervals: b.joints.iter().map(|x| msgs::Interval { lower: x.inf(), upper: x.sup() }).collect(), status: box_status(b.tag), level: 0, cluster: b.cluster.min(i32::MAX as usize) as i32 })
+            .collect(),
+        clusters: set.clusters.min(u32::MAX as usize) as u32,
+        certified: certified.min(u32::MAX as usize) as u32,
     }
 }
 

@@ -385,6 +385,14 @@ mirror! {
     }
 }
 mirror! {
+    /// linkspace_msgs/SelfMotion request
+    SelfMotionRequest { mechanism: String, pose: Pose, parameter: String, range_lower: f64, range_upper: f64, cell: f64, precision: f64, max_boxes: u64 }
+}
+mirror! {
+    /// linkspace_msgs/SelfMotion response
+    SelfMotionResponse { ok: bool, message: String, complete: bool, joint_names: Vec<String>, parameter: String, boxes: Vec<LsBox>, clusters: u32, certified: u32 }
+}
+mirror! {
     /// linkspace_msgs/Classify request
     ClassifyRequest { mechanism: String, joint_names: Vec<String>, joint_values: Vec<f64> }
 }
@@ -538,6 +546,7 @@ mod tests {
             ("InverseKinematics6", mirrored::<InverseKinematics6Request>(), mirrored::<InverseKinematics6Response>()),
             ("PathCheck", mirrored::<PathCheckRequest>(), mirrored::<PathCheckResponse>()),
             ("Collisions", mirrored::<CollisionsRequest>(), mirrored::<CollisionsResponse>()),
+            ("SelfMotion", mirrored::<SelfMotionRequest>(), mirrored::<SelfMotionResponse>()),
             ("ListMechanisms", mirrored::<ListMechanismsRequest>(), mirrored::<ListMechanismsResponse>()),
         ];
         for (name, mirror) in &msgs {

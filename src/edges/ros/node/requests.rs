@@ -1,6 +1,6 @@
 //! The service requests: their decoded form (`Request`), the servers that answer them, and one
 //! handler per service (solve, cancel, singularities, inverse_kinematics, classify,
-//! inverse_kinematics6, path_check, collisions, list_mechanisms).
+//! inverse_kinematics6, path_check, collisions, self_motion, list_mechanisms).
 //!
 //! A handler checks the request on the event loop and either answers at once (a refusal with
 //! its reason, or an answer the node already holds) or starts a run and returns `None`: the
@@ -32,6 +32,7 @@ pub(super) enum Request {
     InverseKinematics6(RmwRequestId, InverseKinematics6Request),
     PathCheck(RmwRequestId, PathCheckRequest),
     Collisions(RmwRequestId, CollisionsRequest),
+    SelfMotion(RmwRequestId, SelfMotionRequest),
     List(RmwRequestId),
 }
 
@@ -45,6 +46,7 @@ pub(super) struct Servers {
     pub(super) inverse_kinematics6: Server<InverseKinematics6Request, InverseKinematics6Response>,
     pub(super) path_check: Server<PathCheckRequest, PathCheckResponse>,
     pub(super) collisions: Server<CollisionsRequest, CollisionsResponse>,
+    pub(super) self_motion: Server<SelfMotionRequest, SelfMotionResponse>,
     pub(super) list: Server<ListMechanismsRequest, ListMechanismsResponse>,
 }
 
@@ -68,6 +70,13 @@ impl super::State {
             RunKind::InverseKinematics6 => self.reply_ik6(id, InverseKinematics6Response { ok: false, message, ..Default::default() }),
             RunKind::PathCheck => self.reply_path_check(id, PathCheckResponse { ok: false, message, ..Default::default() }),
             RunKind::Collisions => self.reply_collisions(id, CollisionsResponse { ok: false, message, ..Default::default() }),
+            RunKind::SelfMotion => self.reply_self_motion(id, SelfMotionResponse { ok: false, message, ..Default::default() }),
+        }
+    }
+
+    pub(super) fn reply_self_motion(&self, id: RmwRequestId, reply: SelfMotionResponse) {
+        if let Err(e) = self.servers.self_motion.send_response(id, reply) {
+            say!("linkspace: sending a self_motion reply: {e:?}");
         }
     }
 
@@ -148,6 +157,11 @@ impl super::State {
                 Ok(None) => Ok(()),
                 Ok(Some(a)) => servers.collisions.send_response(id, a),
                 Err(p) => servers.collisions.send_response(id, CollisionsResponse { ok: false, message: internal(p), ..Default::default() }),
+            },
+            Request::SelfMotion(id, q) => match catch_unwind(AssertUnwindSafe(|| self.self_motion(id, q))) {
+                Ok(None) => Ok(()),
+                Ok(Some(a)) => servers.self_motion.send_response(id, a),
+                Err(p) => servers.self_motion.send_response(id, SelfMotionResponse { ok: false, message: internal(p), ..Default::default() }),
             },
             Request::List(id) => {
                 let a = catch_unwind(AssertUnwindSafe(|| self.list())).unwrap_or_else(|_| ListMechanismsResponse::default());
@@ -462,6 +476,37 @@ impl super::State {
         let job = crate::app::Job::Collisions(crate::app::CollisionsJob { arm: crate::app::LoadOptions::default(), precision });
         let name = convert::bounded(&q.mechanism, convert::ECHO_NAME);
         self.start_job(id, k, RunKind::Collisions, job, limits).err().and_then(|e| refuse(format!("collisions: '{name}': {e}")))
+    }
+
+    /// The self-motion set of a seven-revolute arm at a pose, run on a thread of its own as every
+    /// search of the node; `None` when the reply waits for it. Bounded by the request's boxes per
+    /// cell and the node's longest wait (cells not started by then are answered undecided).
+    fn self_motion(&mut self, id: RmwRequestId, q: SelfMotionRequest) -> Option<SelfMotionResponse> {
+        let refuse = |message: String| Some(SelfMotionResponse { ok: false, message, ..Default::default() });
+        let k = match self.mechanism(&q.mechanism) {
+            Ok(k) => k,
+            Err(e) => return refuse(e),
+        };
+        let a = &self.mechanisms[k].loaded.analysis;
+        if !a.services().contains(&Service::SelfMotion) {
+            return refuse(a.not_available(Service::SelfMotion).to_string());
+        }
+        let (p, o) = (&q.pose.position, &q.pose.orientation);
+        let pose = match crate::app::PoseInput::from_numbers(&[p.x, p.y, p.z, o.x, o.y, o.z, o.w]) {
+            Ok(pose) => pose,
+            Err(e) => return refuse(e.to_string()),
+        };
+        let max_boxes = match self.box_limit(q.max_boxes) {
+            Ok(n) => n,
+            Err(e) => return refuse(e),
+        };
+        let or = |x: f64, default: f64| if x == 0.0 { default } else { x };
+        let range = (q.range_lower != 0.0 || q.range_upper != 0.0).then_some((q.range_lower, q.range_upper));
+        let parameter = (!q.parameter.is_empty()).then(|| q.parameter.clone());
+        let job = crate::app::SelfMotionJob { arm: crate::app::LoadOptions::default(), pose, parameter, range, cell: or(q.cell, 0.002), precision: or(q.precision, crate::app::Job::default_precision("self-motion")) };
+        let limits = crate::app::Limits { max_cells: max_boxes, timeout: Some(seconds(self.limits.max_wait)), ..crate::app::Job::default_limits("self-motion") };
+        let name = convert::bounded(&q.mechanism, convert::ECHO_NAME);
+        self.start_job(id, k, RunKind::SelfMotion, crate::app::Job::SelfMotion(job), limits).err().and_then(|e| refuse(format!("self_motion: '{name}': {e}")))
     }
 
     fn classify(&mut self, q: ClassifyRequest) -> ClassifyResponse {

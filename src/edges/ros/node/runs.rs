@@ -53,6 +53,7 @@ fn answer_counts(answer: &Result<crate::app::Answer, String>) -> (u64, usize, bo
         crate::app::Answer::Ik6(a) => (a.found.solutions.stats.processed, a.found.solutions.clusters.len()),
         crate::app::Answer::PathCheck(a) => (a.found.check.segments.len() as u64, 0),
         crate::app::Answer::Collisions(a) => (a.found.set.stats.processed, a.found.set.undecided.len()),
+        crate::app::Answer::SelfMotion(a) => (a.set.stats.processed, a.set.boxes.len() - a.set.certified()),
         _ => (0, 0),
     };
     (processed, pending, a.completeness().is_complete())
@@ -75,12 +76,13 @@ pub(super) enum RunKind {
     InverseKinematics6,
     PathCheck,
     Collisions,
+    SelfMotion,
 }
 
 impl RunKind {
     /// Runs started by a request, which count against `NodeLimits::max_runs`.
     pub(super) fn requested(self) -> bool {
-        matches!(self, RunKind::Solve | RunKind::SolveAction | RunKind::Singularities { load_time: false } | RunKind::InverseKinematics | RunKind::InverseKinematics6 | RunKind::PathCheck | RunKind::Collisions)
+        matches!(self, RunKind::Solve | RunKind::SolveAction | RunKind::Singularities { load_time: false } | RunKind::InverseKinematics | RunKind::InverseKinematics6 | RunKind::PathCheck | RunKind::Collisions | RunKind::SelfMotion)
     }
 
     /// The `analysis` field of its progress messages.
@@ -93,6 +95,7 @@ impl RunKind {
             RunKind::InverseKinematics6 => "inverse_kinematics6",
             RunKind::PathCheck => "path_check",
             RunKind::Collisions => "collisions",
+            RunKind::SelfMotion => "self_motion",
         }
     }
 }
@@ -317,6 +320,12 @@ impl super::State {
                     self.reply_collisions(id, reply.clone());
                 }
             }
+            Outcome::Answer(Ok(crate::app::Answer::SelfMotion(a))) => {
+                let reply = convert::self_motion_response(&a);
+                for (id, _) in r.waiters {
+                    self.reply_self_motion(id, reply.clone());
+                }
+            }
             Outcome::Answers(answers) => {
                 let reply = convert::ik6_many_response(&answers);
                 if self.log_level <= Severity::Info {
@@ -394,7 +403,7 @@ impl super::State {
                     self.goal_result(h, end, SolveActionResult { ok: true, message: format!("run {run}: {status}"), run_id: run, result: set });
                 }
             }
-            RunKind::Singularities { .. } | RunKind::InverseKinematics | RunKind::InverseKinematics6 | RunKind::PathCheck | RunKind::Collisions => say!("linkspace: {name}: run {run} returned a box set for a {:?} run", r.kind),
+            RunKind::Singularities { .. } | RunKind::InverseKinematics | RunKind::InverseKinematics6 | RunKind::PathCheck | RunKind::Collisions | RunKind::SelfMotion => say!("linkspace: {name}: run {run} returned a box set for a {:?} run", r.kind),
         }
         self.log(LogLevel::Info, summary);
     }

@@ -86,6 +86,7 @@ pub(super) fn servers(node: &mut Node, mapping: ServiceMapping, base: &str) -> R
         inverse_kinematics6: server(node, mapping, base, "inverse_kinematics6", "InverseKinematics6")?,
         path_check: server(node, mapping, base, "path_check", "PathCheck")?,
         collisions: server(node, mapping, base, "collisions", "Collisions")?,
+        self_motion: server(node, mapping, base, "self_motion", "SelfMotion")?,
         list: server(node, mapping, base, "list_mechanisms", "ListMechanisms")?,
     }))
 }
@@ -204,6 +205,7 @@ pub(super) fn forward_requests(ex: &smol::LocalExecutor<'_>, servers: &Rc<Server
     forward(ex, servers.clone(), |s| &s.inverse_kinematics6, Request::InverseKinematics6, tx.clone());
     forward(ex, servers.clone(), |s| &s.path_check, Request::PathCheck, tx.clone());
     forward(ex, servers.clone(), |s| &s.collisions, Request::Collisions, tx.clone());
+    forward(ex, servers.clone(), |s| &s.self_motion, Request::SelfMotion, tx.clone());
     forward(ex, servers.clone(), |s| &s.list, |id, _| Request::List(id), tx.clone());
 }
 
