@@ -220,7 +220,7 @@ impl Analysis for Unsupported {
 /// A serial arm of seven revolute joints: the node answers its self-motion sets (the 3R and 6R
 /// questions need a joint held, which the node's analyses do not take).
 #[derive(Clone, Debug)]
-pub struct SevenJointArm {
+pub(crate) struct SevenJointArm {
     name: String,
     joints: Vec<String>,
 }
