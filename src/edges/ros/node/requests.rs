@@ -178,6 +178,15 @@ impl super::State {
             format!("no mechanism named '{}' is loaded (loaded: {})", convert::bounded(name, convert::ECHO_NAME), names.join(", "))
         })
     }
+    /// The index of mechanism `name` when its analysis answers `service`; otherwise why not.
+    fn serving(&self, name: &str, service: Service) -> Result<usize, String> {
+        let k = self.mechanism(name)?;
+        let a = &self.mechanisms[k].loaded.analysis;
+        if !a.services().contains(&service) {
+            return Err(a.not_available(service).to_string());
+        }
+        Ok(k)
+    }
     /// Validates and starts a run; `None` when the reply waits for the run.
     fn solve(&mut self, id: RmwRequestId, q: SolveRequest) -> Option<SolveResponse> {
         let (k, job) = match self.solve_job(&q) {
@@ -345,18 +354,24 @@ impl super::State {
     /// `limits` and the node's threads; the reply waits at most the node's longest wait.
     fn start_job(&mut self, id: RmwRequestId, k: usize, kind: RunKind, job: crate::app::Job, limits: crate::app::Limits) -> Result<(), String> {
         let prepared = crate::app::prepare(&self.mechanisms[k].loaded.input, job).map_err(|e| e.to_string())?;
-        if let Some(busy) = self.busy() {
-            return Err(busy);
-        }
         let threads = self.settings.threads.max(1);
-        let run = self.start(
+        self.launch(
+            id,
             k,
             kind,
             Box::new(move |cancel, progress| {
                 let control = crate::app::Control { limits, threads, cancel };
                 Ok(Outcome::Answer(prepared.run(&control, progress).map_err(|e| e.to_string())))
             }),
-        );
+        )
+    }
+    /// Starts `work` for mechanism `k` unless the node is busy, the reply `id` waiting for it at
+    /// most the node's longest wait.
+    fn launch(&mut self, id: RmwRequestId, k: usize, kind: RunKind, work: Work) -> Result<(), String> {
+        if let Some(busy) = self.busy() {
+            return Err(busy);
+        }
+        let run = self.start(k, kind, work);
         let deadline = Instant::now() + seconds(self.limits.max_wait);
         self.runs.get_mut(&run).expect("invariant: just started").waiters.push((id, deadline));
         Ok(())
@@ -367,11 +382,9 @@ impl super::State {
     fn start_jobs(&mut self, id: RmwRequestId, k: usize, kind: RunKind, jobs: Vec<crate::app::Job>, limits: crate::app::Limits, items: &str) -> Result<(), String> {
         let input = &self.mechanisms[k].loaded.input;
         let prepared = jobs.into_iter().enumerate().map(|(i, job)| crate::app::prepare(input, job).map_err(|e| format!("{items}[{i}]: {e}"))).collect::<Result<Vec<_>, _>>()?;
-        if let Some(busy) = self.busy() {
-            return Err(busy);
-        }
         let threads = self.settings.threads.max(1);
-        let run = self.start(
+        self.launch(
+            id,
             k,
             kind,
             Box::new(move |cancel, progress| {
@@ -379,10 +392,7 @@ impl super::State {
                 let answers = prepared.into_iter().map(|p| p.run(&crate::app::Control { limits, threads, cancel }.remaining_since(start), progress).map_err(|e| e.to_string())).collect();
                 Ok(Outcome::Answers(answers))
             }),
-        );
-        let deadline = Instant::now() + seconds(self.limits.max_wait);
-        self.runs.get_mut(&run).expect("invariant: just started").waiters.push((id, deadline));
-        Ok(())
+        )
     }
     /// Certified inverse kinematics of a six-revolute arm's tip pose (or of each of `poses`), run
     /// as every search of the node on a thread of its own; `None` when the reply waits for it.
@@ -400,11 +410,10 @@ impl super::State {
         let many = !q.poses.is_empty();
         let mut poses = Vec::with_capacity(q.poses.len().max(1));
         for (i, pose) in if many { q.poses.iter() } else { std::slice::from_ref(&q.pose).iter() }.enumerate() {
-            let (p, o) = (&pose.position, &pose.orientation);
-            match crate::app::PoseInput::from_numbers(&[p.x, p.y, p.z, o.x, o.y, o.z, o.w]) {
+            match pose_input(pose) {
                 Ok(pose) => poses.push(pose),
                 Err(e) if many => return refuse(format!("poses[{i}]: {e}")),
-                Err(e) => return refuse(e.to_string()),
+                Err(e) => return refuse(e),
             }
         }
         if !(q.sigma.is_finite() && q.sigma > 0.0 && q.sigma < 1.0) {
@@ -459,14 +468,10 @@ impl super::State {
     /// longest wait.
     fn collisions(&mut self, id: RmwRequestId, q: CollisionsRequest) -> Option<CollisionsResponse> {
         let refuse = |message: String| Some(CollisionsResponse { ok: false, message, ..Default::default() });
-        let k = match self.mechanism(&q.mechanism) {
+        let k = match self.serving(&q.mechanism, Service::Collisions) {
             Ok(k) => k,
             Err(e) => return refuse(e),
         };
-        let a = &self.mechanisms[k].loaded.analysis;
-        if !a.services().contains(&Service::Collisions) {
-            return refuse(a.not_available(Service::Collisions).to_string());
-        }
         let precision = if q.precision == 0.0 { crate::app::Job::default_precision("collisions") } else { q.precision };
         let max_boxes = match self.box_limit(q.max_boxes) {
             Ok(n) => n,
@@ -483,18 +488,13 @@ impl super::State {
     /// cell and the node's longest wait (cells not started by then are answered undecided).
     fn self_motion(&mut self, id: RmwRequestId, q: SelfMotionRequest) -> Option<SelfMotionResponse> {
         let refuse = |message: String| Some(SelfMotionResponse { ok: false, message, ..Default::default() });
-        let k = match self.mechanism(&q.mechanism) {
+        let k = match self.serving(&q.mechanism, Service::SelfMotion) {
             Ok(k) => k,
             Err(e) => return refuse(e),
         };
-        let a = &self.mechanisms[k].loaded.analysis;
-        if !a.services().contains(&Service::SelfMotion) {
-            return refuse(a.not_available(Service::SelfMotion).to_string());
-        }
-        let (p, o) = (&q.pose.position, &q.pose.orientation);
-        let pose = match crate::app::PoseInput::from_numbers(&[p.x, p.y, p.z, o.x, o.y, o.z, o.w]) {
+        let pose = match pose_input(&q.pose) {
             Ok(pose) => pose,
-            Err(e) => return refuse(e.to_string()),
+            Err(e) => return refuse(e),
         };
         let max_boxes = match self.box_limit(q.max_boxes) {
             Ok(n) => n,
@@ -511,15 +511,12 @@ impl super::State {
 
     fn classify(&mut self, q: ClassifyRequest) -> ClassifyResponse {
         let refuse = |message: String| ClassifyResponse { ok: false, message, component: -1, ..Default::default() };
-        let k = match self.mechanism(&q.mechanism) {
+        let k = match self.serving(&q.mechanism, Service::Classify) {
             Ok(k) => k,
             Err(e) => return refuse(e),
         };
         let m = &self.mechanisms[k];
         let a = &m.loaded.analysis;
-        if !a.services().contains(&Service::Classify) {
-            return refuse(a.not_available(Service::Classify).to_string());
-        }
         if q.joint_names.len() != q.joint_values.len() {
             return refuse(format!("{} joint names but {} values", q.joint_names.len(), q.joint_values.len()));
         }
@@ -601,4 +598,10 @@ impl super::State {
                 .collect(),
         }
     }
+}
+
+/// A request's pose as the front door takes it (the quaternion normalised, zero refused).
+fn pose_input(pose: &Pose) -> Result<crate::app::PoseInput, String> {
+    let (p, o) = (&pose.position, &pose.orientation);
+    crate::app::PoseInput::from_numbers(&[p.x, p.y, p.z, o.x, o.y, o.z, o.w]).map_err(|e| e.to_string())
 }
