@@ -358,6 +358,16 @@ fn topics_carry_the_solver_result_to_late_rclpy_subscribers() {
 }
 
 /// One service call for the script of `ros_client.py services`.
+/// Runs a script of service calls (`tests/ros_client.py services`) written to a file named
+/// after `name`, and returns what the client printed.
+fn services(python: &str, domain: u16, name: &str, script: impl AsRef<[u8]>, timeout: Duration) -> Value {
+    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("{name}-{}.json", std::process::id()));
+    std::fs::write(&path, script).expect("script written");
+    let got = py(python, domain, "tests/ros_client.py", &["services", "--script", path.to_str().expect("utf-8")], timeout);
+    let _ = std::fs::remove_file(&path);
+    got
+}
+
 fn call(service: &str, kind: &str, request: Value) -> Value {
     json!({"service": format!("/linkspace/{service}"), "type": kind, "request": request})
 }
@@ -421,10 +431,7 @@ fn services_answer_good_requests_and_refuse_bad_ones_with_reasons() {
     ]);
     // serde_json writes NaN as null; the script file carries it as the string "NaN".
     let text = serde_json::to_string(&script).expect("json").replace("null", "\"NaN\"");
-    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("services-{}.json", std::process::id()));
-    std::fs::write(&path, text).expect("script written");
-    let got = py(python, domain, "tests/ros_client.py", &["services", "--script", path.to_str().expect("utf-8")], Duration::from_secs(240));
-    let _ = std::fs::remove_file(&path);
+    let got = services(python, domain, "services", text, Duration::from_secs(240));
     let r = got["results"].as_array().expect("results");
     for (k, x) in r.iter().enumerate() {
         assert!(x.get("error").is_none(), "step {k}: {x}\nnode log:\n{}", node.log());
@@ -835,10 +842,7 @@ fn a_3r_manipulator_publishes_its_singularities_and_answers_inverse_kinematics()
         call("solve", "Solve", json!({"mechanism": "orthogonal_3r_e", "settings": settings(1e-3, 1000, 1.0)})),
     ]);
     let text = serde_json::to_string(&script).expect("json").replace("null", "\"NaN\"");
-    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("services-3r-{}.json", std::process::id()));
-    std::fs::write(&path, text).expect("script written");
-    let got = py(python, domain, "tests/ros_client.py", &["services", "--script", path.to_str().expect("utf-8")], Duration::from_secs(180));
-    let _ = std::fs::remove_file(&path);
+    let got = services(python, domain, "services-3r", text, Duration::from_secs(180));
     let r_ = got["results"].as_array().expect("results");
     for (k, x) in r_.iter().enumerate() {
         assert!(x.get("error").is_none(), "step {k}: {x}\nnode log:\n{}", node.log());
@@ -936,10 +940,7 @@ fn a_singularity_run_shows_progress_and_is_cancelled_from_rclpy() {
     node.wait_for(&["orthogonal_3r_near_boundary: published singularities"], Duration::from_secs(120));
     let request = json!({"mechanism": "orthogonal_3r_near_boundary", "precision": 1e-4, "nodes": true, "max_boxes": 0, "timeout": 0.0});
     let script = json!([{"cancel_during": call("singularities", "Singularities", request), "progress": "/linkspace/orthogonal_3r_near_boundary/progress"}]);
-    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("cancel-3r-{}.json", std::process::id()));
-    std::fs::write(&path, serde_json::to_string(&script).expect("json")).expect("script written");
-    let got = py(python, domain, "tests/ros_client.py", &["services", "--script", path.to_str().expect("utf-8")], Duration::from_secs(120));
-    let _ = std::fs::remove_file(&path);
+    let got = services(python, domain, "cancel-3r", serde_json::to_string(&script).expect("json"), Duration::from_secs(120));
     let step = &got["results"][0];
     assert!(step.get("error").is_none(), "{step}\nnode log:\n{}", node.log());
     let progress = &step["progress"];
@@ -1615,10 +1616,7 @@ fn six_joint_arms_answer_inverse_kinematics6_and_path_check() {
         ik6_many(&[quaternion, quaternion.map(|x| 2.0 * x)]),
         ik6_many(&[quaternion, [0.0; 4]]),
     ]);
-    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("services-6r-{}.json", std::process::id()));
-    std::fs::write(&path, serde_json::to_string(&script).expect("json")).expect("script written");
-    let got = py(python, domain, "tests/ros_client.py", &["services", "--script", path.to_str().expect("utf-8")], Duration::from_secs(180));
-    let _ = std::fs::remove_file(&path);
+    let got = services(python, domain, "services-6r", serde_json::to_string(&script).expect("json"), Duration::from_secs(180));
     let r = got["results"].as_array().expect("results");
     for (k, x) in r.iter().enumerate() {
         assert!(x.get("error").is_none(), "step {k}: {x}\nnode log:\n{}", node.log());
@@ -1694,10 +1692,7 @@ fn three_joint_arms_answer_path_check_against_det_df() {
         call("path_check", "PathCheck", json!({"mechanism": "orthogonal_3r_b", "trajectory": trajectory, "singular_set": "6r"})),
         call("path_check", "PathCheck", json!({"mechanism": "orthogonal_3r_b", "trajectory": trajectory, "singular_set": "4r"})),
     ]);
-    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("services-3r-path-{}.json", std::process::id()));
-    std::fs::write(&path, serde_json::to_string(&script).expect("json")).expect("script written");
-    let got = py(python, domain, "tests/ros_client.py", &["services", "--script", path.to_str().expect("utf-8")], Duration::from_secs(180));
-    let _ = std::fs::remove_file(&path);
+    let got = services(python, domain, "services-3r-path", serde_json::to_string(&script).expect("json"), Duration::from_secs(180));
     let r = got["results"].as_array().expect("results");
     for (k, x) in r.iter().enumerate() {
         assert!(x.get("error").is_none(), "step {k}: {x}\nnode log:\n{}", node.log());
@@ -1786,10 +1781,7 @@ fn an_arm_with_collision_bodies_answers_collisions_as_the_cli() {
         ask("orthogonal_3r_a_column", 2.0, 0),
         ask("orthogonal_3r_a_column", 0.05, 20),
     ]);
-    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("services-collisions-{}.json", std::process::id()));
-    std::fs::write(&path, serde_json::to_string(&script).expect("json")).expect("script written");
-    let got = py(python, domain, "tests/ros_client.py", &["services", "--script", path.to_str().expect("utf-8")], Duration::from_secs(120));
-    let _ = std::fs::remove_file(&path);
+    let got = services(python, domain, "services-collisions", serde_json::to_string(&script).expect("json"), Duration::from_secs(120));
     let r = got["results"].as_array().expect("results");
     for (k, x) in r.iter().enumerate() {
         assert!(x.get("error").is_none(), "step {k}: {x}\nnode log:\n{}", node.log());
@@ -1856,10 +1848,7 @@ fn a_seven_joint_arm_answers_self_motion_as_the_cli() {
         call("self_motion", "SelfMotion", request)
     };
     let script = json!([call("list_mechanisms", "ListMechanisms", json!({})), ask([pose[3], pose[4], pose[5], pose[6]]), ask([0.0; 4])]);
-    let path = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("services-7r-{}.json", std::process::id()));
-    std::fs::write(&path, serde_json::to_string(&script).expect("json")).expect("script written");
-    let got = py(python, domain, "tests/ros_client.py", &["services", "--script", path.to_str().expect("utf-8")], Duration::from_secs(120));
-    let _ = std::fs::remove_file(&path);
+    let got = services(python, domain, "services-7r", serde_json::to_string(&script).expect("json"), Duration::from_secs(120));
     let r = got["results"].as_array().expect("results");
     for (k, x) in r.iter().enumerate() {
         assert!(x.get("error").is_none(), "step {k}: {x}\nnode log:\n{}", node.log());
