@@ -204,12 +204,9 @@ impl Answer {
             Answer::Singularities(a) => a.found.completeness(),
             Answer::Ik(a) => Completeness::of_run(a.found.solutions.status),
             Answer::Ik6(a) => Completeness::of(a.found.solutions.status, a.found.solutions.clusters.len(), false),
-            // Complete when every cell was searched and every box certified as a piece of arc.
-            Answer::SelfMotion(a) => Completeness::of(a.set.status, a.set.boxes.len() - a.set.certified(), false),
+            Answer::SelfMotion(a) => a.set.completeness(),
             Answer::PathCheck(a) => a.found.completeness(),
-            // Boxes at the precision neither proven colliding nor free leave it open, as its
-            // report says.
-            Answer::Collisions(a) => Completeness::of(a.found.set.status, a.found.set.undecided.len(), false),
+            Answer::Collisions(a) => a.found.set.completeness(),
             Answer::Distances(a) => a.certified.completeness(),
             Answer::LoopSingularities(a) => match a.as_ref() {
                 LoopAnswer::Sets { solved, .. } => solved.iter().map(SingularSet::completeness).fold(Completeness::Complete, Completeness::and),

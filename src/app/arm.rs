@@ -227,6 +227,28 @@ pub struct ArmCollisions {
     pub set: CollisionSet,
 }
 
+impl ArmCollisions {
+    /// The classification in one line, as the CLI prints it (before its time) and the node's reply
+    /// says it: the pairs, and the boxes of each kind with their share of the joint space.
+    pub fn headline(&self) -> String {
+        let (scene, set) = (&self.scene, &self.set);
+        let total = set.colliding_area + set.free_area + set.undecided_area;
+        let share = |area: f64| if total > 0.0 { 100.0 * area / total } else { 0.0 };
+        format!(
+            "{}: {} pairs; colliding {} boxes ({:.2} % of joint space), free {} ({:.2} %), undecided {} ({:.2} %), status {}",
+            scene.name,
+            scene.pairs().len(),
+            set.colliding.len(),
+            share(set.colliding_area),
+            set.free.len(),
+            share(set.free_area),
+            set.undecided.len(),
+            share(set.undecided_area),
+            set.completeness().text()
+        )
+    }
+}
+
 /// The collision set of the arm of `mechanism` (read as `options` say), within `control`.
 ///
 /// Takes the mechanism rather than an `Arm`: collisions need the capsules of the chosen chain,

@@ -62,6 +62,26 @@ pub struct ArmSelfMotion {
     pub seconds: f64,
 }
 
+impl ArmSelfMotion {
+    /// The run in one line, as the CLI prints it (before its time) and the node's reply says it.
+    pub fn headline(&self) -> String {
+        let set = &self.set;
+        format!(
+            "{}: {} boxes in {} clusters, {} certified pieces of arc, {} cells of {:.4} rad over [{:.6}, {:.6}] ({} searched), status {}",
+            set.joints[set.parameter],
+            set.boxes.len(),
+            set.clusters,
+            set.certified(),
+            set.cells.1,
+            set.cell,
+            set.range.0 + 0.0,
+            set.range.1 + 0.0,
+            set.cells.0,
+            set.completeness().text()
+        )
+    }
+}
+
 /// Every configuration of the seven-revolute arm of `m` (read as `options` say: base, tip, the
 /// rounding policy) at the job's tip pose, its parameter joint (default: the third) cut into
 /// cells and the other joints' boxes as the job says, within `control`.

@@ -71,7 +71,8 @@ fn read_poses(path: &Path) -> Result<Vec<(usize, PoseInput)>> {
 pub(crate) fn run(args: Ik6Args) -> Result<()> {
     let arm = args.chain.options()?;
     let job = |pose: PoseInput| Job::Ik6(Ik6Job { arm: arm.clone(), pose, precision: args.precision });
-    let (Some(file), None) = (&args.poses, &args.pose) else {
+    // clap holds exactly one of --pose and --poses.
+    let Some(file) = &args.poses else {
         let pose = parse_pose(args.pose.as_deref().unwrap_or_default(), "--pose")?;
         return super::execute(&args.urdf, job(pose), &args.limits, args.json.as_deref());
     };

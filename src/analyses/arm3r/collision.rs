@@ -355,6 +355,14 @@ pub struct CollisionSet {
     pub seconds: f64,
 }
 
+impl CollisionSet {
+    /// Complete when no limit stopped the run and no box is undecided: boxes at the precision
+    /// neither proven colliding nor free leave the classification open.
+    pub fn completeness(&self) -> crate::kernel::outcome::Completeness {
+        crate::kernel::outcome::Completeness::of(self.status, self.undecided.len(), false)
+    }
+}
+
 /// What the two tests prove for one pair over a box.
 enum Verdict {
     Colliding,

@@ -69,6 +69,11 @@ impl SelfMotionSet {
     pub fn certified(&self) -> usize {
         self.boxes.iter().filter(|b| b.tag == BoxStatus::Unique).count()
     }
+
+    /// Complete when every cell was searched and every box certified.
+    pub fn completeness(&self) -> crate::kernel::outcome::Completeness {
+        crate::kernel::outcome::Completeness::of(self.status, self.boxes.len() - self.certified(), false)
+    }
 }
 
 /// What one cell's search found: its boxes over the seven joints with their tags, how it ended,
@@ -144,16 +149,17 @@ pub fn cover(m: &Mechanism, base: Option<&str>, tip: Option<&str>, parameter: &s
     let cells: Vec<usize> = (0..count).collect();
     let run_cell = |&k: &usize| -> Result<CellCover, Manip6rError> {
         let span = interval(edge(k), edge(k + 1));
-        let chain = if k == 0 { first.clone() } else { Chain6R::holding_over(m, base, tip, &[(parameter.to_string(), span)])? };
         let stopped = if control.cancel.load(std::sync::atomic::Ordering::Relaxed) {
             Some(Limit::Cancelled)
         } else {
             control.limits.timeout.filter(|&t| start.elapsed() >= t).map(|_| Limit::Time)
         };
         if let Some(limit) = stopped {
-            let whole = chain.ranges.map(|(lo, hi)| interval(lo, hi));
+            // The other joints' ranges do not depend on the cell.
+            let whole = first.ranges.map(|(lo, hi)| interval(lo, hi));
             return Ok(CellCover { boxes: vec![(with_parameter(&whole, span), BoxStatus::Undecided)], status: Status::Stopped(limit), stats: Stats::default(), searched: false });
         }
+        let chain = Chain6R::holding_over(m, base, tip, &[(parameter.to_string(), span)])?;
         let cell_control = Control { threads: 1, ..*control }.remaining_since(start);
         let found = ik::solve_over(&chain, target, precision, INFLATE_CELLS * span.wid(), &cell_control)?;
         let mut boxes: Vec<(Vec<Interval>, BoxStatus)> = found.unique.iter().map(|b| (with_parameter(b, span), BoxStatus::Unique)).collect();

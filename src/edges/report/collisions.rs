@@ -103,8 +103,7 @@ impl CollisionReport {
             precision,
             bodies: capsules.iter().map(|c| BodyRecord { name: c.name.clone(), link: c.link.clone(), radius: c.radius, segment: c.segment }).collect(),
             pairs: (0..scene.pairs().len()).map(name).collect(),
-            // Boxes at the precision neither proven colliding nor free leave the answer open.
-            completeness: Completeness::of(set.status, set.undecided.len(), false),
+            completeness: set.completeness(),
             colliding: set.colliding.iter().map(|c| CollidingRecord { joints: joints(&c.theta), pair: name(c.pair) }).collect(),
             free: set.free.iter().map(|b| BoxRecord { joints: joints(b) }).collect(),
             undecided: set.undecided.iter().map(|b| BoxRecord { joints: joints(b) }).collect(),

@@ -91,7 +91,7 @@ impl SelfMotionReport {
             cells_searched: set.cells.0,
             cells: set.cells.1,
             pose: found.pose.numbers().to_vec(),
-            completeness: Completeness::of(set.status, set.boxes.len() - set.certified(), false),
+            completeness: set.completeness(),
             certified: set.certified(),
             clusters,
             boxes: set.boxes.iter().map(|b| MotionBoxRecord { joints: named(&b.joints), tag: b.tag.name(), cluster: b.cluster }).collect(),

@@ -220,22 +220,7 @@ fn ik6(out: &mut Out, a: &crate::app::Ik6Answer) {
 
 fn self_motion(out: &mut Out, a: &crate::app::ArmSelfMotion) {
     let report = report::self_motion::SelfMotionReport::of(a);
-    writeln!(
-        out,
-        "{}: {} boxes in {} clusters, {} certified pieces of arc, {} cells of {:.4} rad over [{:.6}, {:.6}] ({} searched), status {}, {:.3} s",
-        report.parameter,
-        report.boxes.len(),
-        report.clusters.len(),
-        report.certified,
-        report.cells,
-        report.cell,
-        report.range[0],
-        report.range[1],
-        report.cells_searched,
-        report.completeness.text(),
-        report.seconds
-    )
-    .ok();
+    writeln!(out, "{}, {:.3} s", a.headline(), a.seconds).ok();
     for (k, c) in report.clusters.iter().enumerate() {
         let ranges: Vec<String> = report.joints.iter().map(|n| format!("{n} [{:.6}, {:.6}]", c.ranges[n][0], c.ranges[n][1])).collect();
         writeln!(out, "  cluster {k}: {} boxes ({} certified): {}", c.boxes, c.certified, ranges.join(", ")).ok();
@@ -260,24 +245,7 @@ fn path_check(out: &mut Out, a: &crate::app::PathCheckAnswer) {
 fn collisions(out: &mut Out, a: &crate::app::CollisionsAnswer) {
     eprintln!("chain: {}", a.found.prepared.choice.reason);
     let report = report::collisions::CollisionReport::of(&a.found, a.precision);
-    let s = &report.stats;
-    let total = s.colliding_area + s.free_area + s.undecided_area;
-    let pct = |x: f64| 100.0 * x / total;
-    writeln!(
-        out,
-        "{}: {} pairs; colliding {} boxes ({:.2} % of joint space), free {} ({:.2} %), undecided {} ({:.2} %), status {}, {:.3} s",
-        report.robot,
-        report.pairs.len(),
-        report.colliding.len(),
-        pct(s.colliding_area),
-        report.free.len(),
-        pct(s.free_area),
-        report.undecided.len(),
-        pct(s.undecided_area),
-        report.completeness.text(),
-        s.seconds
-    )
-    .ok();
+    writeln!(out, "{}, {:.3} s", a.found.headline(), a.found.set.seconds).ok();
     for (k, p) in report.pairs.iter().enumerate() {
         let boxes = a.found.set.colliding.iter().filter(|c| c.pair == k).count();
         writeln!(out, "  {} x {}: proven colliding on {boxes} boxes", p[0], p[1]).ok();

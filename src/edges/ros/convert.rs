@@ -499,27 +499,13 @@ pub(crate) fn path_check_response(found: &ArmPathCheck) -> PathCheckResponse {
 /// second and third joints.
 pub(crate) fn collisions_response(found: &ArmCollisions) -> CollisionsResponse {
     let (scene, set) = (&found.scene, &found.set);
-    let completeness = Completeness::of(set.status, set.undecided.len(), false);
-    let total = set.colliding_area + set.free_area + set.undecided_area;
-    let share = |area: f64| if total > 0.0 { 100.0 * area / total } else { 0.0 };
-    let message = format!(
-        "{}: {} pairs; colliding {} boxes ({:.2} % of joint space), free {} ({:.2} %), undecided {} ({:.2} %), {}",
-        scene.name,
-        scene.pairs().len(),
-        set.colliding.len(),
-        share(set.colliding_area),
-        set.free.len(),
-        share(set.free_area),
-        set.undecided.len(),
-        share(set.undecided_area),
-        completeness.text()
-    );
+    let message = found.headline();
     let as_box = |theta: &[crate::app::Interval; 2], status: u8| LsBox { intervals: theta.iter().map(|x| msgs::Interval { lower: x.inf(), upper: x.sup() }).collect(), status, level: 0, cluster: -1 };
     let index = |k: usize| k.min(u32::MAX as usize) as u32;
     CollisionsResponse {
         ok: true,
         message,
-        complete: completeness.is_complete(),
+        complete: set.completeness().is_complete(),
         joint_names: vec![scene.joints[1].clone(), scene.joints[2].clone()],
         body_names: scene.capsules().iter().map(|c| c.name.clone()).collect(),
         pair_first: scene.pairs().iter().map(|&(i, _)| index(i)).collect(),
@@ -537,11 +523,10 @@ pub(crate) fn collisions_response(found: &ArmCollisions) -> CollisionsResponse {
 pub(crate) fn self_motion_response(found: &crate::app::ArmSelfMotion) -> SelfMotionResponse {
     let set = &found.set;
     let certified = set.certified();
-    let completeness = Completeness::of(set.status, set.boxes.len() - certified, false);
     SelfMotionResponse {
         ok: true,
-        message: format!("{}: {} boxes in {} clusters, {certified} certified pieces of arc, {} of {} cells searched, {}", set.joints[set.parameter], set.boxes.len(), set.clusters, set.cells.0, set.cells.1, completeness.text()),
-        complete: completeness.is_complete(),
+        message: found.headline(),
+        complete: set.completeness().is_complete(),
         joint_names: set.joints.clone(),
         parameter: set.joints[set.parameter].clone(),
         boxes: set
