@@ -515,7 +515,7 @@ pub(crate) fn execute(path: &Path, job: Job, limits: &LimitArgs, json: Option<&P
     // A closed pipe ends the printing quietly (`println!` would panic).
     std::io::stdout().lock().write_all(report::text(&answer).as_bytes()).ok();
     if let Some(out) = json {
-        write_file(out, report::json(&answer)?)?;
+        write_json(out, &answer)?;
     }
     Ok(())
 }
@@ -573,6 +573,18 @@ pub(crate) fn write_file(path: &std::path::Path, contents: impl AsRef<[u8]>) -> 
         return Ok(());
     }
     std::fs::write(path, contents).with_context(|| format!("writing {}", path.display()))
+}
+
+/// Writes `answer`'s JSON report to `path` as it is encoded (rank 0 of a shared run alone:
+/// the others skip the encoding too).
+pub(crate) fn write_json(path: &std::path::Path, answer: &Answer) -> Result<()> {
+    #[cfg(feature = "mpi")]
+    if !ranks::writes() {
+        return Ok(());
+    }
+    let file = std::fs::File::create(path).with_context(|| format!("writing {}", path.display()))?;
+    let mut out = std::io::BufWriter::new(file);
+    report::json(answer, &mut out).map_err(anyhow::Error::from).and_then(|()| out.flush().map_err(anyhow::Error::from)).with_context(|| format!("writing {}", path.display()))
 }
 
 /// `--timeout` as a duration: positive and finite, or absent.

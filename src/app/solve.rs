@@ -6,8 +6,8 @@ use super::{AnalysisError, BoxSetResult, ResultBox, TracedBounds};
 use crate::formulate::choice::TracedPoint;
 use crate::formulate::singular::Coordinates;
 use crate::formulate::{Linkage, ModelChoice};
-use crate::kernel::interval::{bounds, components, IntervalBox};
-use crate::kernel::search::{BoxStatus, Enclosure, Limit, Progress, RefinePlan, Refinement, Solver, SolverSettings, Status};
+use crate::kernel::interval::{bounds, IntervalBox};
+use crate::kernel::search::{components_shared, map_shared, BoxStatus, Enclosure, Limit, Progress, RefinePlan, Refinement, Solver, SolverSettings, Status, Wire};
 use crate::kernel::system::VarRole;
 use crate::model::Mechanism;
 use crate::formulate::spatial::LinkPose;
@@ -82,34 +82,51 @@ impl SolveRun {
         let solver = self.problem.solver(self.settings.clone()).expect("invariant: validated when built").until(searches_end);
         let e = solver.enclose(cancel, progress);
         let e = match &self.problem {
-            Linkage::Pose(..) | Linkage::Distances(..) => settle_pose(&solver, e, cancel, searches_end.map(|d| d.saturating_duration_since(Instant::now()))),
+            Linkage::Pose(..) | Linkage::Distances(..) => settle_pose(&solver, e, self.settings.threads, cancel, searches_end.map(|d| d.saturating_duration_since(Instant::now()))),
             _ => e,
         };
-        let (labels, clusters) = components(&e.solutions);
+        let threads = self.settings.threads;
+        let (labels, clusters) = components_shared(&e.solutions, threads);
         let problem = &self.problem;
         let joint_names = problem.free_joints().to_vec();
         // Asked before each box: reading one out is cheap, reading a million is not.
         let stopped = || if cancel.load(Ordering::Relaxed) { Some(Limit::Cancelled) } else { deadline.filter(|&d| Instant::now() >= d).map(|_| Limit::Time) };
-        let mut unread: Option<Limit> = None;
+        let all: Vec<&IntervalBox> = e.solutions.iter().chain(&e.undecided).collect();
+        // Every process reads its share of the boxes out, on its threads.
+        let readings = map_shared(&all, threads, |&b| match stopped() {
+            Some(limit) => Reading::Unread(limit),
+            None => {
+                let values = problem.joint_values(b);
+                let joints = joint_names.iter().map(|n| values.get(n).map_or([f64::NAN, f64::NAN], |&(lo, hi)| [lo, hi])).collect();
+                Reading::Read(joints, rigid_links.map(|rigid| read_links(problem, b, rigid)))
+            }
+        });
+        let unread = readings.iter().find_map(|r| match r {
+            Reading::Unread(limit) => Some(*limit),
+            Reading::Read(..) => None,
+        });
+        let statuses = e.tags.iter().copied().zip(labels.iter().map(|&l| Some(l))).chain(e.undecided.iter().map(|_| (BoxStatus::Undecided, None)));
         let mut links = Vec::new();
-        let mut result_box = |b: &IntervalBox, status: BoxStatus, cluster: Option<usize>| {
-            unread = unread.or_else(stopped);
-            let values = if unread.is_none() { problem.joint_values(b) } else { Default::default() };
-            if let Some(rigid) = rigid_links {
-                links.push(if unread.is_none() { read_links(problem, b, rigid) } else { LinkReadout::Unread });
-            }
-            ResultBox {
-                status,
-                bounds: b.dims.iter().map(|&x| bounds(x)).collect(),
-                joints: joint_names.iter().map(|n| values.get(n).map_or([f64::NAN, f64::NAN], |&(lo, hi)| [lo, hi])).collect(),
-                level: b.level,
-                cluster,
-                traces: traced(problem, b),
-            }
-        };
-        let mut boxes: Vec<ResultBox> =
-            e.solutions.iter().zip(&e.tags).zip(&labels).map(|((b, &tag), &l)| result_box(b, tag, Some(l))).collect();
-        boxes.extend(e.undecided.iter().map(|b| result_box(b, BoxStatus::Undecided, None)));
+        let boxes: Vec<ResultBox> = all
+            .iter()
+            .zip(statuses)
+            .zip(readings)
+            .map(|((b, (status, cluster)), reading)| {
+                let joints = match reading {
+                    Reading::Read(joints, read) => {
+                        links.extend(read);
+                        joints
+                    }
+                    Reading::Unread(_) => {
+                        if rigid_links.is_some() {
+                            links.push(LinkReadout::Unread);
+                        }
+                        vec![[f64::NAN, f64::NAN]; joint_names.len()]
+                    }
+                };
+                ResultBox { status, bounds: b.dims.iter().map(|&x| bounds(x)).collect(), joints, level: b.level, cluster, traces: traced(problem, b) }
+            })
+            .collect();
         let mut stats = e.stats;
         stats.post_processing_cut_short |= unread.is_some();
         // Every box is still enclosed; what is missing is named by the limit that stopped it.
@@ -133,6 +150,69 @@ impl SolveRun {
             stats,
         };
         (result, links)
+    }
+}
+
+/// One box read out: its joints' values (in `free_joints` order) and, when asked, its links;
+/// or left unread by the limit that came first.
+enum Reading {
+    Read(Vec<[f64; 2]>, Option<LinkReadout>),
+    Unread(Limit),
+}
+
+impl Wire for Reading {
+    fn put(&self, out: &mut Vec<u8>) {
+        match self {
+            Reading::Read(joints, links) => {
+                0u8.put(out);
+                joints.put(out);
+                links.put(out);
+            }
+            Reading::Unread(limit) => {
+                1u8.put(out);
+                limit.put(out);
+            }
+        }
+    }
+    fn take(input: &mut &[u8]) -> Self {
+        match u8::take(input) {
+            0 => Reading::Read(Wire::take(input), Wire::take(input)),
+            _ => Reading::Unread(Wire::take(input)),
+        }
+    }
+}
+
+impl Wire for LinkReadout {
+    fn put(&self, out: &mut Vec<u8>) {
+        match self {
+            LinkReadout::Angles(angles) => {
+                0u8.put(out);
+                angles.put(out);
+            }
+            LinkReadout::Poses(poses) => {
+                1u8.put(out);
+                poses.put(out);
+            }
+            LinkReadout::Unread => 2u8.put(out),
+        }
+    }
+    fn take(input: &mut &[u8]) -> Self {
+        match u8::take(input) {
+            0 => LinkReadout::Angles(Wire::take(input)),
+            1 => LinkReadout::Poses(Wire::take(input)),
+            _ => LinkReadout::Unread,
+        }
+    }
+}
+
+impl Wire for LinkPose {
+    fn put(&self, out: &mut Vec<u8>) {
+        self.position.put(out);
+        self.quaternion.put(out);
+        self.rotation_width.put(out);
+    }
+    fn take(input: &mut &[u8]) -> Self {
+        LinkPose { position: Wire::take(input), quaternion: Wire::take(input), rotation_width: Wire::take(input) }
     }
 }
 
@@ -180,9 +260,9 @@ fn pose_refine_plan() -> RefinePlan {
 /// with no box proves the cluster empty); then certified boxes sharing one root are merged
 /// (`Solver::merge_shared_certificates`). What cannot be settled is reported as found.
 /// `timeout`: what is left of the run's.
-fn settle_pose(solver: &Solver<'_>, mut e: Enclosure, cancel: &AtomicBool, timeout: Option<Duration>) -> Enclosure {
+fn settle_pose(solver: &Solver<'_>, mut e: Enclosure, threads: usize, cancel: &AtomicBool, timeout: Option<Duration>) -> Enclosure {
     let t0 = Instant::now();
-    let (labels, n) = components(&e.solutions);
+    let (labels, n) = components_shared(&e.solutions, threads);
     let mut solutions = Vec::new();
     let mut tags = Vec::new();
     for k in 0..n {

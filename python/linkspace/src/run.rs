@@ -167,8 +167,13 @@ impl NativeAnswer {
 
     /// The JSON report, as the CLI's `--json` writes it (`edges::report::json`).
     fn json(&self, py: Python<'_>) -> PyResult<String> {
-        let text = py.detach(|| catch_unwind(AssertUnwindSafe(|| report::json(&self.answer)))).map_err(|p| internal(py, panic_text(p.as_ref())))?;
-        text.map_err(|e| internal(py, format!("writing the report: {e}")))
+        let written = py.detach(|| {
+            catch_unwind(AssertUnwindSafe(|| {
+                let mut text = Vec::new();
+                report::json(&self.answer, &mut text).map(|()| String::from_utf8(text).expect("invariant: serde_json writes UTF-8"))
+            }))
+        });
+        written.map_err(|p| internal(py, panic_text(p.as_ref())))?.map_err(|e| internal(py, format!("writing the report: {e}")))
     }
 
     /// `(word, reason)`: `complete` and `None`, or `incomplete` and why (a limit's name,

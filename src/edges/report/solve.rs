@@ -13,22 +13,23 @@ use crate::kernel::system::VarRole;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
-/// One reported box, in the user's terms.
+/// One reported box, in the user's terms; made as it is written (`Records`), its names
+/// borrowed from the result.
 #[derive(Clone, Debug, Serialize)]
-pub struct BoxRecord {
+pub struct BoxRecord<'a> {
     /// Free joint values (radians or metres), keyed by joint name.
-    pub joints: BTreeMap<String, Bounds>,
+    pub joints: BTreeMap<&'a str, Bounds>,
     /// Every link's world-frame orientation in the plane (radians), keyed by link name.
-    pub link_angles: BTreeMap<String, Bounds>,
+    pub link_angles: BTreeMap<&'a str, Bounds>,
     /// Traced points' world coordinates, keyed by `LINK@X,Y` (or `LINK@X,Y,Z`).
-    pub traces: BTreeMap<String, TracedPoint>,
+    pub traces: BTreeMap<&'a str, TracedPoint>,
     /// Spatial model only: every link's pose in the root frame (position intervals, quaternion
     /// `[w, x, y, z]` at the box midpoint).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub link_poses: Option<BTreeMap<String, LinkPoseRecord>>,
+    pub link_poses: Option<BTreeMap<&'a str, LinkPoseRecord<'a>>>,
     /// The raw box, one entry per system variable (see `variables`).
     #[serde(rename = "box")]
-    pub box_: Vec<Bounds>,
+    pub box_: &'a [Bounds],
     /// Depth in the search tree.
     pub level: u32,
     /// Certified by interval Newton to hold exactly one solution (solution boxes only).
@@ -49,7 +50,7 @@ pub struct TracedPoint {
 
 /// A link's pose over a box.
 #[derive(Clone, Debug, Serialize)]
-pub struct LinkPoseRecord(#[serde(with = "LinkPoseDef")] pub LinkPose);
+pub struct LinkPoseRecord<'a>(#[serde(with = "LinkPoseDef")] pub &'a LinkPose);
 
 /// `LinkPose`, field for field.
 #[derive(Serialize)]
@@ -72,7 +73,7 @@ pub struct VariableInfo {
 
 /// The whole result of `linkspace solve`.
 #[derive(Clone, Debug, Serialize)]
-pub struct SolveReport {
+pub struct SolveReport<'a> {
     /// Robot name from the URDF.
     pub mechanism: String,
     /// `planar` or `spatial`: the builder that made the system.
@@ -99,24 +100,21 @@ pub struct SolveReport {
     /// The system's variables, in box order.
     pub variables: Vec<VariableInfo>,
     /// Solution boxes.
-    pub solutions: Vec<BoxRecord>,
+    pub solutions: Records<'a>,
     /// Connected components of the solution boxes (touching boxes share a component).
     pub clusters: usize,
     /// Boxes left undecided by a limit (empty when complete).
-    pub undecided: Vec<BoxRecord>,
+    pub undecided: Records<'a>,
     /// Counters and time.
     #[serde(with = "kernel::SolveStatsDef")]
     pub stats: SolveStats,
 }
 
-impl SolveReport {
+impl<'a> SolveReport<'a> {
     /// The report of `result`, a run of `problem` (`app::SolveRun::run_reading`) with its
     /// boxes' `links` read out (one per box, in order); `rigid_links` as
     /// `Mechanism::rigid_links` gives them.
-    pub fn new(problem: &Linkage, result: &BoxSetResult, links: &[LinkReadout], rigid_links: BTreeMap<String, String>) -> Self {
-        let unread = LinkReadout::Unread;
-        let link = |i: usize| links.get(i).unwrap_or(&unread);
-        let record = |(i, b): (usize, &ResultBox)| box_record(result, b, link(i));
+    pub fn new(problem: &Linkage, result: &'a BoxSetResult, links: &'a [LinkReadout], rigid_links: BTreeMap<String, String>) -> Self {
         SolveReport {
             mechanism: result.mechanism.clone(),
             model: problem.model().name().to_string(),
@@ -133,28 +131,45 @@ impl SolveReport {
                 .enumerate()
                 .map(|(i, name)| VariableInfo { name: name.clone(), role: if result.primaries.contains(&i) { VarRole::Primary } else { VarRole::Derived } })
                 .collect(),
-            solutions: result.boxes.iter().enumerate().filter(|(_, b)| b.status.is_solution()).map(record).collect(),
+            solutions: Records { result, links, solutions: true },
             clusters: result.clusters,
-            undecided: result.boxes.iter().enumerate().filter(|(_, b)| b.status == BoxStatus::Undecided).map(record).collect(),
+            undecided: Records { result, links, solutions: false },
             stats: result.stats.clone(),
         }
     }
 }
 
+/// The solution boxes (or the undecided ones) of a result, each made into its `BoxRecord`
+/// only as it is written: a report of a million boxes holds one record at a time.
+#[derive(Clone, Copy, Debug)]
+pub struct Records<'a> {
+    result: &'a BoxSetResult,
+    links: &'a [LinkReadout],
+    solutions: bool,
+}
+
+impl Serialize for Records<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let unread = LinkReadout::Unread;
+        let kept = |b: &ResultBox| if self.solutions { b.status.is_solution() } else { b.status == BoxStatus::Undecided };
+        s.collect_seq(self.result.boxes.iter().enumerate().filter(|(_, b)| kept(b)).map(|(i, b)| box_record(self.result, b, self.links.get(i).unwrap_or(&unread))))
+    }
+}
+
 /// One box of `result` in the user's terms, with its links as the run read them out.
-fn box_record(result: &BoxSetResult, b: &ResultBox, links: &LinkReadout) -> BoxRecord {
+fn box_record<'a>(result: &'a BoxSetResult, b: &'a ResultBox, links: &'a LinkReadout) -> BoxRecord<'a> {
     let traced = |t: &TracedBounds| TracedPoint { x: t.x, y: t.y, z: t.z };
     let (link_angles, link_poses) = match links {
-        LinkReadout::Angles(a) => (a.iter().map(|(k, &(lo, hi))| (k.clone(), [lo, hi])).collect(), None),
-        LinkReadout::Poses(p) => (BTreeMap::new(), Some(p.iter().map(|(k, pose)| (k.clone(), LinkPoseRecord(pose.clone()))).collect())),
+        LinkReadout::Angles(a) => (a.iter().map(|(k, &(lo, hi))| (k.as_str(), [lo, hi])).collect(), None),
+        LinkReadout::Poses(p) => (BTreeMap::new(), Some(p.iter().map(|(k, pose)| (k.as_str(), LinkPoseRecord(pose))).collect())),
         LinkReadout::Unread => (BTreeMap::new(), None),
     };
     BoxRecord {
-        joints: result.joint_names.iter().cloned().zip(b.joints.iter().copied()).collect(),
+        joints: result.joint_names.iter().map(String::as_str).zip(b.joints.iter().copied()).collect(),
         link_angles,
-        traces: result.traces.iter().cloned().zip(b.traces.iter().map(traced)).collect(),
+        traces: result.traces.iter().map(String::as_str).zip(b.traces.iter().map(traced)).collect(),
         link_poses,
-        box_: b.bounds.clone(),
+        box_: &b.bounds,
         level: b.level,
         unique: b.status == BoxStatus::Unique,
     }

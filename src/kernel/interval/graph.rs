@@ -136,11 +136,17 @@ pub fn touching_pairs(live: &[usize], dims: usize, side: impl Fn(usize, usize) -
 
 /// The sweep of `touching_pairs`: `touch(i, j)` for each pair that shares a point, except the
 /// pairs `skip` rules out before their full comparison; returns how many were compared in full.
-fn sweep(live: &[usize], dims: usize, side: impl Fn(usize, usize) -> Interval, mut skip: impl FnMut(usize, usize) -> bool, mut touch: impl FnMut(usize, usize)) -> u64 {
-    let mut compared = 0u64;
+fn sweep(live: &[usize], dims: usize, side: impl Fn(usize, usize) -> Interval, skip: impl FnMut(usize, usize) -> bool, touch: impl FnMut(usize, usize)) -> u64 {
     if dims == 0 || live.len() < 2 {
-        return compared;
+        return 0;
     }
+    let (d, order) = sweep_order(live, dims, &side);
+    sweep_slice(&order, 0..order.len(), d, dims, &side, skip, touch)
+}
+
+/// The coordinate to sweep along, the one on which the fewest pairs overlap, and the `live`
+/// boxes in order of their lower bound on it.
+fn sweep_order(live: &[usize], dims: usize, side: &impl Fn(usize, usize) -> Interval) -> (usize, Vec<usize>) {
     let by_inf = |d: usize| {
         let mut order = live.to_vec();
         order.sort_by(|&a, &b| side(a, d).inf().total_cmp(&side(b, d).inf()));
@@ -159,15 +165,22 @@ fn sweep(live: &[usize], dims: usize, side: impl Fn(usize, usize) -> Interval, m
             })
             .sum()
     };
-    let (d, order) = (0..dims)
+    (0..dims)
         .map(|d| {
             let order = by_inf(d);
             (overlapping(&order, d), d, order)
         })
         .min_by_key(|(pairs, d, _)| (*pairs, *d))
         .map(|(_, d, order)| (d, order))
-        .expect("invariant: dims > 0");
-    for (k, &i) in order.iter().enumerate() {
+        .expect("invariant: dims > 0")
+}
+
+/// The sweep from the boxes at positions `from` of `order` (sorted along coordinate `d`): each
+/// compared with the later ones that overlap it there.
+fn sweep_slice(order: &[usize], from: std::ops::Range<usize>, d: usize, dims: usize, side: &impl Fn(usize, usize) -> Interval, mut skip: impl FnMut(usize, usize) -> bool, mut touch: impl FnMut(usize, usize)) -> u64 {
+    let mut compared = 0u64;
+    for k in from {
+        let i = order[k];
         let sup = side(i, d).sup();
         for &j in &order[k + 1..] {
             if side(j, d).inf() > sup {
@@ -213,27 +226,62 @@ impl Joined {
 
 /// `components` with the number of box pairs compared in full (see `super::components_counted`).
 pub(super) fn box_components(boxes: &[IntervalBox]) -> (Vec<usize>, usize, u64) {
-    let n = boxes.len();
-    // A void box shares no point with anything: it is its own component.
-    let live: Vec<usize> = (0..n).filter(|&i| !boxes[i].is_void()).collect();
-    let dims = live.first().map_or(0, |&i| boxes[i].len());
-    let mut pairs = Vec::new();
-    let compared = if dims == 0 {
-        // Boxes over no variable are all the one point of a zero-dimensional space.
-        pairs.extend(live.windows(2).map(|w| (w[0], w[1])));
-        0
-    } else {
-        // A pair already joined through others adds nothing to the components: skipping it
-        // keeps many mutually overlapping boxes (a limit's undecided boxes of a large system)
-        // from costing n² full comparisons of thousands of coordinates.
-        let joined = std::cell::RefCell::new(Joined::new(n));
-        sweep(&live, dims, |i, d| boxes[i].dims[d], |i, j| joined.borrow_mut().same(i, j), |i, j| {
+    let sweep = BoxSweep::new(boxes);
+    let (pairs, compared) = sweep.slice(0, 1);
+    let (labels, count) = sweep.components([pairs]);
+    (labels, count, compared)
+}
+
+/// The sweep that labels the components of a box set, cut into slices that threads or
+/// processes can run apart: the components are those of every slice's pairs together.
+///
+/// Each slice sweeps a contiguous run of the sweep order against everything after it, with a
+/// union–find of its own: a pair it has already joined through others adds nothing to the
+/// components, and skipping it keeps many mutually overlapping boxes (a limit's undecided boxes
+/// of a large system) from costing n² full comparisons of thousands of coordinates. Whatever
+/// the slices, the labels are the same (a component's label is its smallest member's rank).
+pub(crate) struct BoxSweep<'a> {
+    boxes: &'a [IntervalBox],
+    live: Vec<usize>,
+    dims: usize,
+    axis: usize,
+    order: Vec<usize>,
+}
+
+impl<'a> BoxSweep<'a> {
+    /// The sweep of `boxes`, its axis chosen and its order sorted.
+    pub(crate) fn new(boxes: &'a [IntervalBox]) -> Self {
+        // A void box shares no point with anything: it is its own component.
+        let live: Vec<usize> = (0..boxes.len()).filter(|&i| !boxes[i].is_void()).collect();
+        let dims = live.first().map_or(0, |&i| boxes[i].len());
+        let (axis, order) = if dims == 0 || live.len() < 2 { (0, live.clone()) } else { sweep_order(&live, dims, &|i, d| boxes[i].dims[d]) };
+        BoxSweep { boxes, live, dims, axis, order }
+    }
+
+    /// The joining pairs found by slice `part` of `parts`, and the pairs compared in full.
+    pub(crate) fn slice(&self, part: usize, parts: usize) -> (Vec<(usize, usize)>, u64) {
+        let n = self.order.len();
+        let from = part * n / parts..(part + 1) * n / parts;
+        let mut pairs = Vec::new();
+        if self.dims == 0 {
+            // Boxes over no variable are all the one point of a zero-dimensional space.
+            pairs.extend(self.live[from.start..from.end.min(n.saturating_sub(1))].iter().map(|&i| (i, self.live[self.live.len() - 1])));
+            return (pairs, 0);
+        }
+        let boxes = self.boxes;
+        let joined = std::cell::RefCell::new(Joined::new(boxes.len()));
+        let compared = sweep_slice(&self.order, from, self.axis, self.dims, &|i, d| boxes[i].dims[d], |i, j| joined.borrow_mut().same(i, j), |i, j| {
             joined.borrow_mut().join(i, j);
             pairs.push((i, j));
-        })
-    };
-    let (labels, count) = labels(n, &components_of_edges(n, pairs));
-    (labels, count, compared)
+        });
+        (pairs, compared)
+    }
+
+    /// Each box's component from every slice's pairs (`usize::MAX` for none), and their number.
+    pub(crate) fn components(&self, pairs: impl IntoIterator<Item = Vec<(usize, usize)>>) -> (Vec<usize>, usize) {
+        let n = self.boxes.len();
+        labels(n, &components_of_edges(n, pairs.into_iter().flatten()))
+    }
 }
 
 #[cfg(test)]

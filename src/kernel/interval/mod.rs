@@ -9,6 +9,7 @@ pub(crate) mod fast;
 mod graph;
 pub mod trig;
 
+pub(crate) use graph::BoxSweep;
 pub use graph::{components_by, components_of_edges, flood_fill, labels, merge_touching, touching_pairs};
 
 pub use inari::Interval;

@@ -37,7 +37,7 @@ pub(crate) use limits::Budget;
 pub use polynomial::{contractor_with_newton_on, default_contractor, width_units, BoxSink, Collect, ContractorFactory, Enclosure, RefinePlan, Refinement, SolveError, SolveStats, Solver};
 pub use settings::{SettingsError, SolverSettings};
 pub use share::{rank_and_size, share_searches, Peers, Wire};
-pub(crate) use share::total;
+pub(crate) use share::{components_shared, map_shared, total};
 pub use store::Store;
 
 use smallvec::SmallVec;

@@ -15,7 +15,7 @@ use super::limits::{process_cpu_seconds, Limit, Limits, Progress, Status};
 use super::settings::{SettingsError, SolverSettings};
 
 pub(crate) use crate::kernel::outcome::BoxStatus;
-use super::{driver, Store};
+use super::{driver, Store, Wire};
 use crate::kernel::contract::{Contraction, Contractor, Filter, Filtered, LpShrink, Newton, Propagation, Sequence};
 use crate::kernel::interval::IntervalBox;
 use crate::kernel::lp::LpCounters;
@@ -395,8 +395,18 @@ impl<'a> Solver<'a> {
     /// root survives the deeper search, so only proven-empty boxes go. The search is bounded;
     /// a box it cannot decide stays, and so does every box left when the deadline passes: each
     /// deeper search gets only the time that remains, so the call ends near the deadline.
+    ///
+    /// Shared like the search (`share::map_shared`): called on the thread that shares this
+    /// process's searches, every process runs its share of the probes and of the labelling.
     pub fn drop_spurious(&self, boxes: Vec<IntervalBox>, tags: Vec<BoxStatus>, max_cluster: usize, cancel: &AtomicBool, deadline: Option<Instant>) -> (Vec<IntervalBox>, Vec<BoxStatus>, u64, bool) {
-        let (labels, n) = crate::kernel::interval::components(&boxes);
+        self.drop_spurious_on(boxes, tags, max_cluster, cancel, deadline, true)
+    }
+
+    /// `drop_spurious`, shared with the other processes or (`shared` false: where the processes'
+    /// paths may part, on their clocks) within this one.
+    fn drop_spurious_on(&self, boxes: Vec<IntervalBox>, tags: Vec<BoxStatus>, max_cluster: usize, cancel: &AtomicBool, deadline: Option<Instant>, shared: bool) -> (Vec<IntervalBox>, Vec<BoxStatus>, u64, bool) {
+        let threads = self.settings.threads;
+        let (labels, n) = if shared { super::components_shared(&boxes, threads) } else { crate::kernel::interval::components(&boxes) };
         let mut sizes = vec![0usize; n];
         for &l in &labels {
             sizes[l] += 1;
@@ -425,7 +435,7 @@ impl<'a> Solver<'a> {
             }
         };
         let candidates: Vec<usize> = (0..boxes.len()).filter(|&i| tags[i] != BoxStatus::Unique && sizes[labels[i]] <= max_cluster).collect();
-        let probes = super::map_parallel(&candidates, self.settings.threads, |&i| probe(&boxes[i]));
+        let probes = if shared { super::map_shared(&candidates, threads, |&i| probe(&boxes[i])) } else { super::map_parallel(&candidates, threads, |&i| probe(&boxes[i])) };
         let cut_short = probes.contains(&Probe::NotRun);
         let mut drop = vec![false; boxes.len()];
         for (&i, p) in candidates.iter().zip(probes) {
@@ -459,7 +469,7 @@ impl<'a> Solver<'a> {
     pub fn merge_shared_certificates(&self, boxes: Vec<IntervalBox>, tags: Vec<BoxStatus>) -> (Vec<IntervalBox>, Vec<BoxStatus>, u64) {
         let certified: Vec<usize> = (0..boxes.len()).filter(|&i| tags[i] == BoxStatus::Unique).collect();
         let certified_boxes: Vec<IntervalBox> = certified.iter().map(|&i| boxes[i].clone()).collect();
-        let (labels, n) = crate::kernel::interval::components(&certified_boxes);
+        let (labels, n) = super::components_shared(&certified_boxes, self.settings.threads);
         let mut sizes = vec![0usize; n];
         for &l in &labels {
             sizes[l] += 1;
@@ -584,7 +594,7 @@ impl<'a> Solver<'a> {
                 break;
             }
             let deadline = left.map(|l| t0 + l);
-            let (solutions, tags, _, _) = finer.drop_spurious(found.solutions, found.tags, 2, cancel, deadline);
+            let (solutions, tags, _, _) = finer.drop_spurious_on(found.solutions, found.tags, 2, cancel, deadline, false);
             if settled(&solutions, &tags) {
                 return Refinement::Settled(Collect { solutions, tags, undecided: Vec::new() });
             }
@@ -633,6 +643,15 @@ enum Probe {
     Kept,
     /// Not (or not fully) re-examined: the deadline or a cancel came first.
     NotRun,
+}
+
+impl Wire for Probe {
+    fn put(&self, out: &mut Vec<u8>) {
+        (*self as u8).put(out)
+    }
+    fn take(input: &mut &[u8]) -> Self {
+        [Probe::Empty, Probe::Kept, Probe::NotRun][usize::from(u8::take(input))]
+    }
 }
 
 #[cfg(test)]

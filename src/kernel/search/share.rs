@@ -15,7 +15,7 @@
 //! processes could not agree on which of them meets which collective first.
 
 use super::{Limit, Reason, Step};
-use crate::kernel::interval::{Interval, IntervalBox};
+use crate::kernel::interval::{BoxSweep, Interval, IntervalBox};
 use smallvec::SmallVec;
 use std::sync::{Mutex, OnceLock};
 use std::thread::ThreadId;
@@ -61,6 +61,54 @@ pub(crate) fn peers() -> Option<&'static dyn Peers> {
 /// thread.
 pub fn rank_and_size() -> (usize, usize) {
     PEERS.get().map_or((0, 1), |i| (i.rank, i.size))
+}
+
+/// `f` of every item, in item order, on every process: each of the processes sharing this
+/// thread's searches computes every `size`-th item (its rank's), on up to `threads` threads,
+/// and every process receives every result. A process alone maps them all on its threads.
+///
+/// The work after a search (re-examining isolated boxes, labelling components, reading boxes
+/// out) is shared this way, so that it shrinks with the ranks as the search does. `f` must be
+/// a function of the item and of what every process holds alike; a result that reads a clock
+/// (a deadline) differs between processes only in what the gathered vector then says alike.
+pub(crate) fn map_shared<T: Sync, R: Send + Wire>(items: &[T], threads: usize, f: impl Fn(&T) -> R + Sync) -> Vec<R> {
+    map_shared_with(peers(), items, threads, f)
+}
+
+fn map_shared_with<T: Sync, R: Send + Wire>(peers: Option<&dyn Peers>, items: &[T], threads: usize, f: impl Fn(&T) -> R + Sync) -> Vec<R> {
+    let Some(peers) = peers else { return super::map_parallel(items, threads, f) };
+    let (rank, size) = (peers.rank(), peers.size());
+    // Dealt round robin: neighbouring items (boxes of one cluster) cost alike.
+    let mine: Vec<&T> = items.iter().skip(rank).step_by(size).collect();
+    // On threads of their own even when there is one: a search `f` starts there runs wholly
+    // in this process (`peers` is the installing thread's), never a collective the other
+    // processes, mapping other items, would not join.
+    let done = std::thread::scope(|s| s.spawn(|| super::map_parallel(&mine, threads, |item| f(item))).join().expect("invariant: parallel jobs do not panic"));
+    let mut out = Vec::new();
+    done.put(&mut out);
+    drop(done);
+    let mut theirs: Vec<std::vec::IntoIter<R>> = peers.all_gather(&out).iter().map(|bytes| Vec::<R>::take(&mut bytes.as_slice()).into_iter()).collect();
+    (0..items.len()).map(|i| theirs[i % size].next().expect("invariant: every rank maps its share")).collect()
+}
+
+/// The connected components of `boxes` (as `interval::components`: the same labels), their
+/// sweep shared like `map_shared`: slices of the sweep order on every process and thread.
+pub(crate) fn components_shared(boxes: &[IntervalBox], threads: usize) -> (Vec<usize>, usize) {
+    components_shared_with(peers(), boxes, threads)
+}
+
+fn components_shared_with(peers: Option<&dyn Peers>, boxes: &[IntervalBox], threads: usize) -> (Vec<usize>, usize) {
+    let sweep = BoxSweep::new(boxes);
+    let workers = threads.max(1) * peers.map_or(1, |p| p.size());
+    // Below a few thousand boxes the sweep takes less than a gather.
+    if workers == 1 || boxes.len() < 4096 {
+        return sweep.components([sweep.slice(0, 1).0]);
+    }
+    // A few slices per worker even out the slices' costs (boxes crowd where a curve runs
+    // along the sweep's axis).
+    let parts: Vec<usize> = (0..4 * workers).collect();
+    let pairs = map_shared_with(peers, &parts, threads, |&k| sweep.slice(k, parts.len()).0);
+    sweep.components(pairs)
 }
 
 /// A value as bytes, for another process running the same program.
@@ -136,6 +184,45 @@ impl Wire for IntervalBox {
     }
     fn take(input: &mut &[u8]) -> Self {
         IntervalBox { dims: Wire::take(input), level: Wire::take(input) }
+    }
+}
+
+impl Wire for String {
+    fn put(&self, out: &mut Vec<u8>) {
+        self.len().put(out);
+        out.extend_from_slice(self.as_bytes());
+    }
+    fn take(input: &mut &[u8]) -> Self {
+        let n = usize::take(input);
+        let (s, rest) = input.split_at(n);
+        *input = rest;
+        String::from_utf8(s.to_vec()).expect("invariant: peers send UTF-8")
+    }
+}
+
+impl<K: Wire + Ord, V: Wire> Wire for std::collections::BTreeMap<K, V> {
+    fn put(&self, out: &mut Vec<u8>) {
+        self.len().put(out);
+        for (k, v) in self {
+            k.put(out);
+            v.put(out);
+        }
+    }
+    fn take(input: &mut &[u8]) -> Self {
+        let n = usize::take(input);
+        (0..n).map(|_| (K::take(input), V::take(input))).collect()
+    }
+}
+
+/// The limits in the order processes agree on them (`agree`), which is also their code.
+const LIMITS: [Limit; 5] = [Limit::Cancelled, Limit::Time, Limit::Memory, Limit::Boxes, Limit::Sink];
+
+impl Wire for Limit {
+    fn put(&self, out: &mut Vec<u8>) {
+        (LIMITS.iter().position(|l| l == self).expect("invariant: every limit is listed") as u8).put(out)
+    }
+    fn take(input: &mut &[u8]) -> Self {
+        LIMITS[usize::from(u8::take(input))]
     }
 }
 
@@ -282,9 +369,8 @@ pub(crate) fn take_decision<C: Wire, F: Wire>(input: &mut &[u8]) -> Decision<C, 
 /// The limit the processes stop on together: the first they name, in `Limit` order, when any
 /// of them names one (each reads its own clock and cancel flag).
 pub(crate) fn agree(peers: &dyn Peers, mine: Option<Limit>) -> Option<Limit> {
-    const ORDER: [Limit; 5] = [Limit::Cancelled, Limit::Time, Limit::Memory, Limit::Boxes, Limit::Sink];
-    let code = mine.map_or(0u8, |l| 1 + ORDER.iter().position(|&o| o == l).expect("invariant: every limit is listed") as u8);
-    peers.all_gather(&[code]).iter().filter_map(|b| b.first().copied()).filter(|&c| c > 0).min().map(|c| ORDER[usize::from(c - 1)])
+    let code = mine.map_or(0u8, |l| 1 + LIMITS.iter().position(|&o| o == l).expect("invariant: every limit is listed") as u8);
+    peers.all_gather(&[code]).iter().filter_map(|b| b.first().copied()).filter(|&c| c > 0).min().map(|c| LIMITS[usize::from(c - 1)])
 }
 
 /// The sum over the processes of each one's `values` (all of one length).
@@ -383,6 +469,49 @@ pub(crate) mod tests {
         let (_, _, s) = take_decision::<IntervalBox, (u8, IntervalBox)>(&mut input);
         assert!(matches!(s, Step::Discard(Named("empty"))));
         assert!(input.is_empty());
+    }
+
+    #[test]
+    fn shared_maps_and_components_are_the_one_process_ones() {
+        // Boxes along a broken circle: four arcs, a few lone boxes, and boxes crowding where
+        // the arcs run along the sweep's axis.
+        let mut boxes = Vec::new();
+        for k in 0..6000 {
+            let t = k as f64 * std::f64::consts::TAU / 6000.0;
+            if k % 1500 < 1490 {
+                let (c, s) = (t.cos(), t.sin());
+                boxes.push(IntervalBox { dims: vec![inari::interval!(c - 1e-3, c + 1e-3).unwrap(), inari::interval!(s - 1e-3, s + 1e-3).unwrap()], level: 0 });
+            }
+        }
+        for k in 0..7 {
+            let x = 3.0 + k as f64;
+            boxes.push(IntervalBox { dims: vec![inari::interval!(x, x + 0.1).unwrap(), inari::interval!(0.0, 0.1).unwrap()], level: 0 });
+        }
+        let alone = crate::kernel::interval::components(&boxes);
+        assert_eq!(alone.1, 4 + 7);
+        for (ranks, threads) in [(1, 1), (1, 2), (2, 1), (3, 2)] {
+            let group = ThreadPeers::group(ranks);
+            let got: Vec<_> = std::thread::scope(|s| {
+                let handles: Vec<_> = group
+                    .iter()
+                    .map(|p| {
+                        let boxes = &boxes;
+                        s.spawn(move || {
+                            let peers: Option<&dyn Peers> = if ranks > 1 { Some(p) } else { None };
+                            let squares = map_shared_with(peers, &(0..1001usize).collect::<Vec<_>>(), threads, |&i| (i * i, p.rank));
+                            (squares, components_shared_with(peers, boxes, threads))
+                        })
+                    })
+                    .collect();
+                handles.into_iter().map(|h| h.join().unwrap()).collect()
+            });
+            for (squares, components) in got {
+                assert_eq!(squares.iter().map(|&(v, _)| v).collect::<Vec<_>>(), (0..1001usize).map(|i| i * i).collect::<Vec<_>>());
+                // Each item was mapped by the rank it was dealt to: the work was shared.
+                assert!(squares.iter().enumerate().all(|(i, &(_, by))| by == i % ranks), "{ranks} ranks");
+                assert!(components == alone, "{ranks} ranks of {threads} threads label the components as one process");
+            }
+        }
     }
 
     #[test]
