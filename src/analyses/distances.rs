@@ -443,7 +443,8 @@ fn settle_determinants(cm: &CayleyMenger, placed: Option<&Placed>, solver: &Solv
     let covered_by = |found: &[IntervalBox], roots: &[Placement]| found.iter().all(|f| roots.iter().any(|r| r.meets(all_cm, f)));
     let t = clock();
     let unmet: Vec<usize> = (0..out.solutions.len()).filter(|&i| !covered[i]).collect();
-    let firsts: Vec<(Option<Vec<IntervalBox>>, u64)> = crate::kernel::search::map_parallel(&unmet, threads, |&i| match restrict(cm, &out.solutions[i], all_cm) {
+    // The first pass is shared with the other processes of a shared run, as the search was.
+    let firsts: Vec<(Option<Vec<IntervalBox>>, u64)> = crate::kernel::search::map_shared(&unmet, threads, |&i| match restrict(cm, &out.solutions[i], all_cm) {
         None => (Some(Vec::new()), 0),
         Some(start) => {
             let mut found = Collect::default();

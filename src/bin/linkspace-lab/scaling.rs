@@ -1,16 +1,25 @@
 //! `linkspace-lab scaling URDF`: the search tree of one planar solve recorded level by level,
-//! and the time it predicts for N MPI ranks sharing that search (`mpirun -np N linkspace
+//! and the time it predicts for N MPI ranks sharing the whole run (`mpirun -np N linkspace
 //! solve ...`), up to 1024.
 //!
-//! The model is the shared driver's (`search::run_shared`): per level, the cells are dealt in
-//! chunks round robin, so the slowest rank decides `ceil(chunks / N)` chunks; then one gather
-//! (`latency` per doubling of N); then every rank decodes every decision (`decode` per cell:
-//! the part that does not shrink with N). A cell costs the run's CPU time over its cells.
+//! The search is modelled as the shared driver runs it (`search::run_shared`): per level, the
+//! cells are dealt in chunks round robin, so the slowest rank decides `ceil(chunks / N)`
+//! chunks; then one gather (`latency` per doubling of N); then every rank decodes every
+//! decision (`decode` per cell: the part that does not shrink with N). A cell costs the
+//! search's CPU time over its cells.
+//!
+//! What follows the search (re-examining isolated boxes, labelling the components, reading the
+//! boxes out) is measured: the whole run (`app::SolveRun`) on one thread and on two, in this
+//! process, gives its serial part `s` and its shared part `p` (`post(1) = s + p`,
+//! `post(2) = s + p / 2`); on N ranks it takes `s + p / N`, plus three gathers and
+//! `decode` per box for each of them (every rank receives every result).
 
 use anyhow::{Context, Result};
 use linkspace::model::urdf;
 use linkspace::formulate::LinkageProblem;
 use linkspace::kernel::interval::IntervalBox;
+use linkspace::app::SolveRun;
+use linkspace::formulate::ModelChoice;
 use linkspace::kernel::search::{BoxSink, BoxStatus, Progress, SolverSettings};
 use std::ops::ControlFlow;
 use std::io::Write;
@@ -84,15 +93,32 @@ pub fn run(args: ScalingArgs) -> Result<()> {
         Some(t2) => ((t2 - predict(&levels, cell, args.latency, 0.0, 2)) / cells as f64).max(0.0),
         None => args.decode,
     };
+    // The whole run on one thread and on two: what follows the search, and its serial part.
+    let post = |threads: usize| -> Result<(f64, usize)> {
+        let run = SolveRun::build(&m, ModelChoice::Auto, &[], &[], SolverSettings { sigma: args.sigma, threads, ..SolverSettings::default() })?;
+        let t0 = std::time::Instant::now();
+        let result = run.run(&AtomicBool::new(false), &mut |_| {});
+        let search = if threads == 1 { stats.seconds } else { predict(&levels, cell, args.latency, 0.0, threads) };
+        Ok(((t0.elapsed().as_secs_f64() - search).max(0.0), result.boxes.len()))
+    };
+    let (post1, boxes) = post(1)?;
+    let (post2, _) = post(2)?;
+    let shared = (2.0 * (post1 - post2)).clamp(0.0, post1);
+    let serial = post1 - shared;
+    let whole = |n: usize| {
+        let gathers = if n > 1 { 3.0 * args.latency * (n as f64).log2().ceil() + 3.0 * decode * boxes as f64 } else { 0.0 };
+        predict(&levels, cell, args.latency, decode, n) + serial + shared / n as f64 + gathers
+    };
     let mut out = std::io::stdout().lock();
     writeln!(out, "{}: sigma {}, {} levels, {cells} cells, {:.1} µs CPU per cell; latency {:.1} µs per doubling, decode {:.2} µs per cell{}", m.name, args.sigma, levels.len(), cell * 1e6, args.latency * 1e6, decode * 1e6, if args.two_ranks.is_some() { " (fitted to --two-ranks)" } else { "" })?;
-    writeln!(out, "| ranks | predicted search | speed-up | efficiency |")?;
-    writeln!(out, "|---|---|---|---|")?;
-    let one = predict(&levels, cell, args.latency, decode, 1);
+    writeln!(out, "after the search: {post1:.3} s on one thread, {post2:.3} s on two (measured): {serial:.3} s serial, {shared:.3} s shared; {boxes} boxes")?;
+    writeln!(out, "| ranks | predicted search | search efficiency | predicted whole run | speed-up | efficiency |")?;
+    writeln!(out, "|---|---|---|---|---|---|")?;
+    let (one, one_whole) = (predict(&levels, cell, args.latency, decode, 1), whole(1));
     for k in 0..=10 {
         let n = 1usize << k;
-        let t = predict(&levels, cell, args.latency, decode, n);
-        writeln!(out, "| {n} | {t:.3} s | {:.1}x | {:.0} % |", one / t, 100.0 * one / t / n as f64)?;
+        let (t, w) = (predict(&levels, cell, args.latency, decode, n), whole(n));
+        writeln!(out, "| {n} | {t:.3} s | {:.0} % | {w:.3} s | {:.1}x | {:.0} % |", 100.0 * one / t / n as f64, one_whole / w, 100.0 * one_whole / w / n as f64)?;
     }
     Ok(())
 }
