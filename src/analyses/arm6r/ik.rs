@@ -45,6 +45,7 @@ use crate::formulate::{angles::stated, stated as st};
 use crate::kernel::search::{Control, Progress, Prune, Stats, Status, Step};
 use super::invariant_pairs;
 
+mod closed_form;
 mod invariants;
 mod square;
 
@@ -89,6 +90,28 @@ pub struct Ik6Solutions {
     pub status: Status,
     /// The kernel's counters; discards by reason.
     pub stats: Stats,
+    /// Which method answered.
+    pub method: Ik6Method,
+}
+
+/// Which method answered an inverse-kinematics query.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Ik6Method {
+    /// The closed form of a recognised geometry (`closed_form`: a spherical wrist), every
+    /// candidate certified by Krawczyk; its counters are the candidates.
+    ClosedForm,
+    /// The branch-and-prune search.
+    Search,
+}
+
+impl Ik6Method {
+    /// `closed_form` or `search`, as reports write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Ik6Method::ClosedForm => "closed_form",
+            Ik6Method::Search => "search",
+        }
+    }
 }
 
 /// Touching undecided boxes, reported as one.
@@ -515,9 +538,27 @@ pub fn solve(chain: &Chain6R, target: &PoseTarget, precision: f64, control: &Con
     solve_with(chain, target, precision, control, &mut no_progress)
 }
 
-/// As `solve`, reporting progress.
+/// As `solve`, reporting progress. A recognised geometry is solved in closed form
+/// (`closed_form`); a pose it cannot decide, and every other arm, is searched.
 pub fn solve_with(chain: &Chain6R, target: &PoseTarget, precision: f64, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<Ik6Solutions, Manip6rError> {
+    if !(precision > 0.0 && precision < 1.0) {
+        return Err(Manip6rError::BadPrecision(precision));
+    }
+    if let Some(wrist) = closed_form::recognise(chain) {
+        let start = std::time::Instant::now();
+        if let closed_form::ClosedForm::Solved(unique) = closed_form::solve(chain, &wrist, target, precision) {
+            let n = unique.len() as u64;
+            let stats = Stats { processed: n, found: n, seconds: start.elapsed().as_secs_f64(), ..Stats::default() };
+            return Ok(Ik6Solutions { unique, clusters: Vec::new(), status: Status::Finished, stats, method: Ik6Method::ClosedForm });
+        }
+    }
     solve_inflating(chain, target, precision, INFLATE_WIDTH, control, progress)
+}
+
+/// As `solve`, by the search alone whatever the geometry: the reference the closed form is
+/// checked and measured against.
+pub fn search(chain: &Chain6R, target: &PoseTarget, precision: f64, control: &Control) -> Result<Ik6Solutions, Manip6rError> {
+    solve_inflating(chain, target, precision, INFLATE_WIDTH, control, &mut no_progress)
 }
 
 /// As `solve`, for a chain whose coefficients span a range (a joint held over an interval,
@@ -557,7 +598,7 @@ fn solve_inflating(chain: &Chain6R, target: &PoseTarget, precision: f64, inflate
             Ik6Cluster { hull, boxes: members.len() }
         })
         .collect();
-    Ok(Ik6Solutions { unique, clusters, status: run.status, stats: run.stats })
+    Ok(Ik6Solutions { unique, clusters, status: run.status, stats: run.stats, method: Ik6Method::Search })
 }
 
 /// Whether two boxes meet, a continuous joint's angles compared modulo a turn.

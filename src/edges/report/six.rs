@@ -38,8 +38,11 @@ pub struct Ik6Report {
     pub unique: Vec<JointBoxes>,
     /// Hulls of undecided boxes (near singular poses): each may hold solutions.
     pub clusters: Vec<JointBoxes>,
-    /// Boxes processed.
+    /// Boxes processed (for the closed form: candidates certified).
     pub processed: u64,
+    /// Which method answered: `closed_form` (a recognised geometry, every candidate certified)
+    /// or `search` (branch and prune).
+    pub method: &'static str,
     /// Wall time (seconds).
     pub seconds: f64,
 }
@@ -57,6 +60,7 @@ impl Ik6Report {
             unique: s.unique.iter().map(|b| joints(chain, b)).collect(),
             clusters: s.clusters.iter().map(|c| joints(chain, &c.hull)).collect(),
             processed: s.stats.processed,
+            method: s.method.name(),
             seconds: found.seconds,
         }
     }
