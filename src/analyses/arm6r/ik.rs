@@ -35,7 +35,7 @@
 // Matrix and joint indices read as the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
-use super::chain::{add, cos_sin, cross, mm, mul, mv, Affine, Chain6R, IAffine, Side, M, V};
+use super::chain::{add, cos_sin, cross, mul, mv, Affine, Chain6R, IAffine, Side, V};
 use super::{Manip6rError, Pose64};
 use crate::kernel::contract::krawczyk::{self, Step as K};
 use crate::kernel::interval::fast::Iv;
@@ -46,6 +46,7 @@ use crate::kernel::search::{Control, Progress, Prune, Stats, Status, Step};
 use super::invariant_pairs;
 
 mod closed_form;
+pub use self::closed_form::Degeneracy;
 mod invariants;
 mod square;
 
@@ -102,6 +103,8 @@ pub enum Ik6Method {
     ClosedForm,
     /// The branch-and-prune search.
     Search,
+    /// The search, the geometry recognised but the pose left by the closed form (why).
+    SearchAfter(Degeneracy),
 }
 
 impl Ik6Method {
@@ -109,7 +112,15 @@ impl Ik6Method {
     pub fn name(self) -> &'static str {
         match self {
             Ik6Method::ClosedForm => "closed_form",
-            Ik6Method::Search => "search",
+            Ik6Method::Search | Ik6Method::SearchAfter(_) => "search",
+        }
+    }
+
+    /// Why the closed form of a recognised geometry left the pose to the search.
+    pub fn declined(self) -> Option<Degeneracy> {
+        match self {
+            Ik6Method::SearchAfter(why) => Some(why),
+            _ => None,
         }
     }
 }
@@ -544,15 +555,21 @@ pub fn solve_with(chain: &Chain6R, target: &PoseTarget, precision: f64, control:
     if !(precision > 0.0 && precision < 1.0) {
         return Err(Manip6rError::BadPrecision(precision));
     }
-    if let Some(wrist) = closed_form::recognise(chain) {
-        let start = std::time::Instant::now();
-        if let closed_form::ClosedForm::Solved(unique) = closed_form::solve(chain, &wrist, target, precision) {
+    let Some(wrist) = closed_form::recognise(chain) else {
+        return solve_inflating(chain, target, precision, INFLATE_WIDTH, control, progress);
+    };
+    let start = std::time::Instant::now();
+    match closed_form::solve(chain, &wrist, target, precision) {
+        closed_form::ClosedForm::Solved(unique) => {
             let n = unique.len() as u64;
             let stats = Stats { processed: n, found: n, seconds: start.elapsed().as_secs_f64(), ..Stats::default() };
-            return Ok(Ik6Solutions { unique, clusters: Vec::new(), status: Status::Finished, stats, method: Ik6Method::ClosedForm });
+            Ok(Ik6Solutions { unique, clusters: Vec::new(), status: Status::Finished, stats, method: Ik6Method::ClosedForm })
+        }
+        closed_form::ClosedForm::Degenerate(why) => {
+            let found = solve_inflating(chain, target, precision, INFLATE_WIDTH, control, progress)?;
+            Ok(Ik6Solutions { method: Ik6Method::SearchAfter(why), ..found })
         }
     }
-    solve_inflating(chain, target, precision, INFLATE_WIDTH, control, progress)
 }
 
 /// As `solve`, by the search alone whatever the geometry: the reference the closed form is

@@ -43,6 +43,10 @@ pub struct Ik6Report {
     /// Which method answered: `closed_form` (a recognised geometry, every candidate certified)
     /// or `search` (branch and prune).
     pub method: &'static str,
+    /// For a geometry the closed form applies to, why it left this pose to the search (a
+    /// discriminant holding 0 near a singular pose, an angle at a joint limit, ...).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub closed_form_declined: Option<&'static str>,
     /// Wall time (seconds).
     pub seconds: f64,
 }
@@ -61,6 +65,7 @@ impl Ik6Report {
             clusters: s.clusters.iter().map(|c| joints(chain, &c.hull)).collect(),
             processed: s.stats.processed,
             method: s.method.name(),
+            closed_form_declined: s.method.declined().map(|d| d.name()),
             seconds: found.seconds,
         }
     }

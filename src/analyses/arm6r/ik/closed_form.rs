@@ -93,7 +93,7 @@ fn rotation(a: &V3, c: Interval, s: Interval) -> M3 {
 
 /// Why the closed form leaves a pose to the search.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Degeneracy {
+pub enum Degeneracy {
     /// A discriminant's enclosure holds 0: two roots may coincide (a singular pose, or near one).
     Discriminant,
     /// A turn's vectors lie on its axis as far as the enclosures tell: the turn is not determined.
@@ -104,6 +104,19 @@ pub(crate) enum Degeneracy {
     Uncertified,
     /// Two certified boxes overlap: they may hold one solution.
     Overlap,
+}
+
+impl Degeneracy {
+    /// As reports write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Degeneracy::Discriminant => "discriminant_holds_zero",
+            Degeneracy::Direction => "turn_undetermined",
+            Degeneracy::Limit => "angle_at_joint_limit",
+            Degeneracy::Uncertified => "candidate_not_certified",
+            Degeneracy::Overlap => "certified_boxes_overlap",
+        }
+    }
 }
 
 /// What `solve` found.
@@ -341,4 +354,93 @@ fn solve_or_degenerate(chain: &Chain6R, wrist: &SphericalWrist, target: &PoseTar
     }
     found.sort_by(|a, b| a.iter().map(|x| x.inf()).partial_cmp(b.iter().map(|x| x.inf())).unwrap_or(std::cmp::Ordering::Equal));
     Ok(found)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analyses::arm6r::cuspidal::Rng;
+    use crate::analyses::arm6r::three_parallel::tests::chain;
+
+    /// `x` widened by a few ulps: an enclosure of data computed in `f64`.
+    fn near(x: f64) -> Interval {
+        let r = 4.0 * f64::EPSILON * (1.0 + x.abs());
+        interval(x - r, x + r)
+    }
+
+    /// Whether `phi` holds `theta` modulo a turn.
+    fn holds_angle(phi: Interval, theta: f64) -> bool {
+        let turns = ((phi.mid() - theta) / std::f64::consts::TAU).round();
+        phi.contains(theta + turns * std::f64::consts::TAU)
+    }
+
+    fn unit(rng: &mut Rng) -> [f64; 3] {
+        let v = [rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0)];
+        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        v.map(|x| x / n)
+    }
+
+    /// Random `a, b` and a root θ: `c = a cos θ + b sin θ`; two enclosures, one holding θ, the
+    /// other the mirrored root `2·atan2(b, a) − θ`. Beyond `ρ` none; at `ρ` (a double root, as
+    /// computed) the discriminant holds 0.
+    #[test]
+    fn cos_sin_roots_enclose_both_roots_and_count_them() {
+        let mut rng = Rng(1985);
+        for _ in 0..2000 {
+            let (a, b, theta) = (rng.uniform(-2.0, 2.0), rng.uniform(-2.0, 2.0), rng.uniform(-3.1, 3.1));
+            let c = a * theta.cos() + b * theta.sin();
+            let other = 2.0 * b.atan2(a) - theta;
+            let rho = (a * a + b * b).sqrt();
+            match cos_sin_roots(near(a), near(b), near(c)) {
+                Ok(roots) => {
+                    assert_eq!(roots.len(), 2, "{a} {b} {c}");
+                    assert!(roots.iter().any(|&r| holds_angle(r, theta)) && roots.iter().any(|&r| holds_angle(r, other)), "{a} {b} {theta}: {roots:?}");
+                    assert!(roots.iter().all(|r| r.wid() < 1e-6));
+                }
+                // Only where the two roots nearly coincide.
+                Err(why) => assert!(why == Degeneracy::Discriminant && (rho - c.abs()) < 1e-9 * rho, "{a} {b} {theta}: {why:?}"),
+            }
+            assert_eq!(cos_sin_roots(near(a), near(b), near(1.001 * rho + 1e-6)).map(|r| r.len()), Ok(0));
+        }
+        assert_eq!(cos_sin_roots(point(3.0), point(4.0), point(5.0)), Err(Degeneracy::Discriminant));
+        assert_eq!(cos_sin_roots(point(0.0), point(0.0), interval(-1e-9, 1e-9)), Err(Degeneracy::Discriminant));
+    }
+
+    /// Random axes, vectors and turns: `turn` encloses the turn carrying `from` onto `R(a, θ)·from`;
+    /// a vector along the axis leaves it undetermined.
+    #[test]
+    fn turn_encloses_the_turn_between_two_vectors() {
+        let mut rng = Rng(2022);
+        for _ in 0..2000 {
+            let (a, from, theta) = (unit(&mut rng), [rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0)], rng.uniform(-3.1, 3.1));
+            let r = crate::analyses::arm6r::chain::rotation64(&a, theta).r;
+            let to: [f64; 3] = [0, 1, 2].map(|i| (0..3).map(|j| r[i][j] * from[j]).sum());
+            let phi = turn(&a.map(near), &from.map(near), &to.map(near)).expect("a vector off the axis");
+            assert!(holds_angle(phi, theta) && phi.wid() < 1e-6, "{a:?} {from:?} {theta}: {phi:?}");
+            let along = a.map(|x| near(0.3 * x));
+            assert_eq!(turn(&a.map(near), &along, &along), Err(Degeneracy::Direction));
+        }
+    }
+
+    #[test]
+    fn copies_within_the_range_and_at_its_limits() {
+        let x = interval(0.5, 0.5 + 1e-12);
+        assert_eq!(copies(x, (-3.2, 3.2)).map(|c| c.len()), Ok(1));
+        assert_eq!(copies(x, (-6.1, 6.1)).map(|c| c.len()), Ok(2));
+        assert_eq!(copies(x, (0.6, 1.0)).map(|c| c.len()), Ok(0));
+        assert_eq!(copies(x, (0.5 + 1e-13, 1.0)), Err(Degeneracy::Limit));
+    }
+
+    /// The bundled spherical-wrist arms are recognised (after the rounding policy); the UR5
+    /// (offset wrist) and a general 6R are not.
+    #[test]
+    fn spherical_wrists_are_recognised() {
+        let file = |f: &str| std::fs::read_to_string(format!("{}/{f}", env!("CARGO_MANIFEST_DIR"))).expect("bundled");
+        for f in ["urdf/puma560.urdf", "urdf/kuka_kr16.urdf", "urdf/staubli_tx90.urdf", "tests/data/abb_irb140_style.urdf"] {
+            assert!(recognise(&chain(&file(f))).is_some(), "{f}");
+        }
+        for f in ["urdf/ur5.urdf", "tests/data/ik6_general_6r.urdf", "tests/data/fanuc_crx10ial_style.urdf", "tests/data/doosan_style_6r.urdf"] {
+            assert!(recognise(&chain(&file(f))).is_none(), "{f}");
+        }
+    }
 }
