@@ -47,6 +47,8 @@ use smallvec::SmallVec;
 
 type V3 = [Interval; 3];
 type M3 = [[Interval; 3]; 3];
+/// Joints 4, 5, 6 of one wrist branch (modulo a turn).
+type WristAngles = (Interval, Interval, Interval);
 
 fn dot(a: &V3, b: &V3) -> Interval {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
@@ -285,7 +287,7 @@ fn branches(chain: &Chain6R, wrist: &SphericalWrist, g: &IAffine) -> Result<Smal
 
 /// Joints 4, 5, 6 from `M = R₄·Pre₅.r·R₅·Pre₆.r·R₆`: `a₄·M a₆ = e₄·R₅ d₆` (joint 5,
 /// subproblem 4), then `R₄(Pre₅.r R₅ d₆) = M a₆` and `R₆(Mᵀa₄) = Pre₆.rᵀ R₅ᵀ e₄` (subproblem 1).
-fn wrist_branches(chain: &Chain6R, wrist: &SphericalWrist, m: &M3) -> Result<SmallVec<[(Interval, Interval, Interval); 2]>, Degeneracy> {
+fn wrist_branches(chain: &Chain6R, wrist: &SphericalWrist, m: &M3) -> Result<SmallVec<[WristAngles; 2]>, Degeneracy> {
     let (a, pre) = (&chain.axes, &chain.pre);
     let (e4, d6, a5) = (&wrist.e4, &wrist.d6, &a[4]);
     let ma6 = stated::apply(m, &a[5]);
