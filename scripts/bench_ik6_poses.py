@@ -12,7 +12,8 @@ singular configuration lie 1e-7 rad from those of the arm as written. Checks tha
 answer's unique boxes are the batch answer's for that pose, and that q lies in one of them. Prints per arm the solver's own time per pose (median and mean of the
 reports' `seconds`) and the time outside it per pose (start, reading the URDF, building the chain,
 writing): the batch's wall time less the solver's, over the poses, and the median for one
-process per pose.
+process per pose, and how many poses each method answered (`closed` the closed form of a
+recognised geometry, such as the spherical wrists of the PUMA and KR16, `search` the search).
 
     python3 scripts/bench_ik6_poses.py --linkspace target/release/linkspace --poses 200 --singles 20
 """
@@ -118,7 +119,7 @@ def main():
     ap.add_argument("--arms", default=",".join(ARMS))
     args = ap.parse_args()
     rng = random.Random(args.seed)
-    print(f"{'arm':10} {'poses':>5} {'solver ms/pose':>15} {'mean':>8} {'outside the solver, ms/pose: batch':>36} {'single':>8}")
+    print(f"{'arm':10} {'poses':>5} {'solver us/pose':>15} {'mean':>8} {'max':>8} {'outside the solver, ms/pose: batch':>36} {'single':>8}  methods")
     for name in args.arms.split(","):
         rel, tip = ARMS[name]
         path = os.path.join(ROOT, rel)
@@ -149,7 +150,9 @@ def main():
         solver = statistics.median(a["seconds"] for a in answers)
         mean = statistics.fmean(a["seconds"] for a in answers)
         single = statistics.median(singles)
-        print(f"{name:10} {len(poses):5} {1e3 * solver:15.2f} {1e3 * mean:8.2f} {1e3 * batch:36.3f} {1e3 * single:8.3f}   ({len(complete)} complete)")
+        worst = max(a["seconds"] for a in answers)
+        methods = {m: sum(a.get("method") == m for a in answers) for m in ("closed_form", "search")}
+        print(f"{name:10} {len(poses):5} {1e6 * solver:15.1f} {1e6 * mean:8.1f} {1e6 * worst:8.0f} {1e3 * batch:36.3f} {1e3 * single:8.3f}  closed {methods['closed_form']}, search {methods['search']} ({len(complete)} complete)")
 
 
 if __name__ == "__main__":

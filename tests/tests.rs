@@ -55,6 +55,8 @@ mod topics;
 /// Six-revolute arms whole: certified IK against forward kinematics and a closed form, and
 /// the whole-arm cuspidality witness re-checked in `f64`.
 mod six_r;
+/// Spherical-wrist arms in closed form against the search and forward kinematics.
+mod spherical_wrist;
 /// Joint paths against a 3R positioning structure's singular set: crossings through singular
 /// points and clear segments from an `f64` forward-kinematics reference.
 mod path_check_3r;

@@ -305,6 +305,12 @@ class Ik6Result(Result):
     def joints(self) -> list[str]:
         return list(self._report["joints"])
 
+    @property
+    def method(self) -> str:
+        """Which method answered: ``"closed_form"`` (a recognised geometry such as a spherical
+        wrist, every candidate certified) or ``"search"`` (branch and prune)."""
+        return str(self._report["method"])
+
     def __repr__(self) -> str:
         return f"<Ik6Result {self._report['base']} -> {self._report['tip']}: {len(self.solutions.with_tag('unique'))} unique solutions, {len(self.solutions.undecided)} undecided, {self.completeness}>"
 

@@ -35,7 +35,7 @@
 // Matrix and joint indices read as the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
-use super::chain::{add, cos_sin, cross, mm, mul, mv, Affine, Chain6R, IAffine, Side, M, V};
+use super::chain::{add, cos_sin, cross, mul, mv, Affine, Chain6R, IAffine, Side, V};
 use super::{Manip6rError, Pose64};
 use crate::kernel::contract::krawczyk::{self, Step as K};
 use crate::kernel::interval::fast::Iv;
@@ -45,7 +45,10 @@ use crate::formulate::{angles::stated, stated as st};
 use crate::kernel::search::{Control, Progress, Prune, Stats, Status, Step};
 use super::invariant_pairs;
 
+mod closed_form;
+pub use self::closed_form::Degeneracy;
 mod invariants;
+mod square;
 
 use self::invariants::{first_phase, invariants, INNER};
 pub(super) use self::invariants::{Axis4Sides, Half};
@@ -88,6 +91,38 @@ pub struct Ik6Solutions {
     pub status: Status,
     /// The kernel's counters; discards by reason.
     pub stats: Stats,
+    /// Which method answered.
+    pub method: Ik6Method,
+}
+
+/// Which method answered an inverse-kinematics query.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Ik6Method {
+    /// The closed form of a recognised geometry (`closed_form`: a spherical wrist), every
+    /// candidate certified by Krawczyk; its counters are the candidates.
+    ClosedForm,
+    /// The branch-and-prune search.
+    Search,
+    /// The search, the geometry recognised but the pose left by the closed form (why).
+    SearchAfter(Degeneracy),
+}
+
+impl Ik6Method {
+    /// `closed_form` or `search`, as reports write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Ik6Method::ClosedForm => "closed_form",
+            Ik6Method::Search | Ik6Method::SearchAfter(_) => "search",
+        }
+    }
+
+    /// Why the closed form of a recognised geometry left the pose to the search.
+    pub fn declined(self) -> Option<Degeneracy> {
+        match self {
+            Ik6Method::SearchAfter(why) => Some(why),
+            _ => None,
+        }
+    }
 }
 
 /// Touching undecided boxes, reported as one.
@@ -190,20 +225,6 @@ fn excludes_zero(x: Iv) -> bool {
     x.lo > 0.0 || x.hi < 0.0
 }
 
-fn transpose(m: &M) -> M {
-    [0, 1, 2].map(|i| [0, 1, 2].map(|j| m[j][i]))
-}
-
-fn skew(w: &V) -> M {
-    let z = Iv::ZERO;
-    [[z, w[2].neg(), w[1]], [w[2], z, w[0].neg()], [w[1].neg(), w[0], z]]
-}
-
-/// `vee` of the skew part of `x`, `(x₃₂ − x₂₃, x₁₃ − x₃₁, x₂₁ − x₁₂)/2`.
-fn vee_skew(x: &M) -> V {
-    [x[2][1].sub(x[1][2]), x[0][2].sub(x[2][0]), x[1][0].sub(x[0][1])].map(|v| v.scale(0.5))
-}
-
 #[inline(always)]
 fn sub3(a: &V, b: &V) -> V {
     [a[0].sub(b[0]), a[1].sub(b[1]), a[2].sub(b[2])]
@@ -273,66 +294,6 @@ fn equations(split: &Split, b: &[[f64; 2]; 6], m: &[f64; 6], jac: &mut [[Iv; 6];
         }
     }
     Some(out)
-}
-
-impl Ik6Prune<'_> {
-    /// Both sides' frames over the box `b`.
-    #[inline]
-    fn frames(&self, b: &[[f64; 2]; 6]) -> ([Affine; 7], [Affine; 7]) {
-        frames_of(&self.splits[0], b)
-    }
-
-    /// The twist of each joint over the box: (direction, point) in the base frame, and on
-    /// which side it acts (the left side's value or the right's).
-    #[inline]
-    fn twists(&self, fl: &[Affine; 7], fr: &[Affine; 7]) -> [(V, V, bool); 6] {
-        let (left, right) = (&self.splits[0].0, &self.splits[0].1);
-        let l = |k| {
-            let (w, p) = left.axis(fl, k);
-            (w, p, true)
-        };
-        let r = |k| {
-            let (w, p) = right.axis(fr, k);
-            (w, p, false)
-        };
-        [l(0), l(1), l(2), r(2), r(1), r(0)]
-    }
-
-    /// One Krawczyk step on the square system of the module doc over `b`, and whether the
-    /// trace condition holds on the result (checked only for `Unique`).
-    fn newton(&self, b: &[Interval; 6]) -> K<[Interval; 6]> {
-        let bb = b.map(|x| [x.inf(), x.sup()]);
-        let m = mid(&bb);
-        let (fl, fr) = self.frames(&bb);
-        let (ml, mr) = self.frames(&m.map(|x| [x, x]));
-        let (l, r) = (fl[3], fr[3]);
-        let e = mm(&l.r, &transpose(&r.r));
-        let em = mm(&ml[3].r, &transpose(&mr[3].r));
-        let pm = sub3(&ml[3].t, &mr[3].t);
-        let wm = vee_skew(&em);
-        let fm: [Interval; 6] = [pm[0], pm[1], pm[2], wm[0], wm[1], wm[2]].map(Iv::to);
-        let mut jac = [[point(0.0); 6]; 6];
-        for (v, (w, p, on_left)) in self.twists(&fl, &fr).iter().enumerate() {
-            let (pos, rot) = if *on_left {
-                (cross(w, &sub3(&l.t, p)), vee_skew(&mm(&skew(w), &e)))
-            } else {
-                (cross(w, &sub3(&r.t, p)), vee_skew(&mm(&e, &skew(w))))
-            };
-            for i in 0..3 {
-                jac[i][v] = pos[i].to();
-                jac[i + 3][v] = rot[i].to();
-            }
-        }
-        krawczyk::step_array(b, &m, &fm, &jac)
-    }
-
-    /// Whether `trace(R_L R_Rᵀ) > −1` on the box: a zero of the square system there solves all
-    /// twelve equations.
-    fn not_a_half_turn(&self, b: &[Interval; 6]) -> bool {
-        let (fl, fr) = self.frames(&b.map(|x| [x.inf(), x.sup()]));
-        let e = mm(&fl[3].r, &transpose(&fr[3].r));
-        e[0][0].add(e[1][1]).add(e[2][2]).lo > -1.0
-    }
 }
 
 /// `(c, s)`, a positive multiple of `(cos θ, sin θ)` for the turn `θ` about the unit axis `a`
@@ -495,11 +456,11 @@ impl Ik6Prune<'_> {
         }
         if width(&b) <= KRAWCZYK_WIDTH {
             let bi = b.map(|x| interval(x[0], x[1]));
-            match self.newton(&bi) {
+            match square::newton(&self.splits[0], &bi) {
                 K::Empty => return Step::Discard(Ik6Discard::KrawczykEmpty),
                 K::Unique(k) => {
-                    let k = krawczyk::tighten(k, self.precision, |k| self.newton(k));
-                    if self.not_a_half_turn(&k) {
+                    let k = krawczyk::tighten(k, self.precision, |k| square::newton(&self.splits[0], k));
+                    if square::not_a_half_turn(&self.splits[0], &k) {
                         return Step::Found((k, bi));
                     }
                 }
@@ -522,13 +483,13 @@ impl Ik6Prune<'_> {
             let c = mid(&nb);
             let r = (4.0 * width(&nb)).max(1e-9);
             let wide = c.map(|x| interval(x - r, x + r));
-            if let K::Unique(k) = self.newton(&wide) {
-                let k = krawczyk::tighten(k, self.precision, |k| self.newton(k));
+            if let K::Unique(k) = square::newton(&self.splits[0], &wide) {
+                let k = krawczyk::tighten(k, self.precision, |k| square::newton(&self.splits[0], k));
                 let meets = (0..6).all(|v| k[v].sup() >= cell.b[v][0] && k[v].inf() <= cell.b[v][1]);
                 if !meets {
                     return Step::Discard(Ik6Discard::ClaimedElsewhere);
                 }
-                if self.not_a_half_turn(&k) {
+                if square::not_a_half_turn(&self.splits[0], &k) {
                     return Step::Found((k, wide));
                 }
             }
@@ -588,9 +549,33 @@ pub fn solve(chain: &Chain6R, target: &PoseTarget, precision: f64, control: &Con
     solve_with(chain, target, precision, control, &mut no_progress)
 }
 
-/// As `solve`, reporting progress.
+/// As `solve`, reporting progress. A recognised geometry is solved in closed form
+/// (`closed_form`); a pose it cannot decide, and every other arm, is searched.
 pub fn solve_with(chain: &Chain6R, target: &PoseTarget, precision: f64, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<Ik6Solutions, Manip6rError> {
-    solve_inflating(chain, target, precision, INFLATE_WIDTH, control, progress)
+    if !(precision > 0.0 && precision < 1.0) {
+        return Err(Manip6rError::BadPrecision(precision));
+    }
+    let Some(wrist) = closed_form::recognise(chain) else {
+        return solve_inflating(chain, target, precision, INFLATE_WIDTH, control, progress);
+    };
+    let start = std::time::Instant::now();
+    match closed_form::solve(chain, &wrist, target, precision) {
+        closed_form::ClosedForm::Solved(unique) => {
+            let n = unique.len() as u64;
+            let stats = Stats { processed: n, found: n, seconds: start.elapsed().as_secs_f64(), ..Stats::default() };
+            Ok(Ik6Solutions { unique, clusters: Vec::new(), status: Status::Finished, stats, method: Ik6Method::ClosedForm })
+        }
+        closed_form::ClosedForm::Degenerate(why) => {
+            let found = solve_inflating(chain, target, precision, INFLATE_WIDTH, control, progress)?;
+            Ok(Ik6Solutions { method: Ik6Method::SearchAfter(why), ..found })
+        }
+    }
+}
+
+/// As `solve`, by the search alone whatever the geometry: the reference the closed form is
+/// checked and measured against.
+pub fn search(chain: &Chain6R, target: &PoseTarget, precision: f64, control: &Control) -> Result<Ik6Solutions, Manip6rError> {
+    solve_inflating(chain, target, precision, INFLATE_WIDTH, control, &mut no_progress)
 }
 
 /// As `solve`, for a chain whose coefficients span a range (a joint held over an interval,
@@ -630,7 +615,7 @@ fn solve_inflating(chain: &Chain6R, target: &PoseTarget, precision: f64, inflate
             Ik6Cluster { hull, boxes: members.len() }
         })
         .collect();
-    Ok(Ik6Solutions { unique, clusters, status: run.status, stats: run.stats })
+    Ok(Ik6Solutions { unique, clusters, status: run.status, stats: run.stats, method: Ik6Method::Search })
 }
 
 /// Whether two boxes meet, a continuous joint's angles compared modulo a turn.

@@ -38,8 +38,15 @@ pub struct Ik6Report {
     pub unique: Vec<JointBoxes>,
     /// Hulls of undecided boxes (near singular poses): each may hold solutions.
     pub clusters: Vec<JointBoxes>,
-    /// Boxes processed.
+    /// Boxes processed (for the closed form: candidates certified).
     pub processed: u64,
+    /// Which method answered: `closed_form` (a recognised geometry, every candidate certified)
+    /// or `search` (branch and prune).
+    pub method: &'static str,
+    /// For a geometry the closed form applies to, why it left this pose to the search (a
+    /// discriminant holding 0 near a singular pose, an angle at a joint limit, ...).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub closed_form_declined: Option<&'static str>,
     /// Wall time (seconds).
     pub seconds: f64,
 }
@@ -57,6 +64,8 @@ impl Ik6Report {
             unique: s.unique.iter().map(|b| joints(chain, b)).collect(),
             clusters: s.clusters.iter().map(|c| joints(chain, &c.hull)).collect(),
             processed: s.stats.processed,
+            method: s.method.name(),
+            closed_form_declined: s.method.declined().map(|d| d.name()),
             seconds: found.seconds,
         }
     }

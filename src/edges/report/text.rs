@@ -198,13 +198,14 @@ fn ik6(out: &mut Out, a: &crate::app::Ik6Answer) {
     let chain = &a.chain;
     writeln!(
         out,
-        "{} -> {}: {} solutions proven unique, {} clusters undecided, status {}, {} boxes, {:.3} s",
+        "{} -> {}: {} solutions proven unique, {} clusters undecided, status {}, {} boxes ({}), {:.3} s",
         report.base,
         report.tip,
         report.unique.len(),
         report.clusters.len(),
         report.completeness.text(),
         report.processed,
+        report.method.replace('_', " "),
         report.seconds
     )
     .ok();

@@ -1,0 +1,452 @@
+//! Closed-form certified inverse kinematics of arms with a spherical wrist whose axes 2 and 3
+//! are parallel (PUMA, KUKA KR, Stäubli TX, ABB IRB, Motoman: any offsets along or between
+//! the axes, any angle between axes 1 and 2 but parallel).
+//!
+//! # Recognition
+//!
+//! `recognise` proves on the chain's interval coefficients (after the rounding policy, when
+//! one applied) that axes 4, 5, 6 meet in one point `W`, taken as the origin of joint 4's,
+//! 5's or 6's frame, and that axes 2 and 3 are parallel: exact zeros of cross products where
+//! a relation must hold exactly, strict signs where axes must not be parallel (4 and 5, 5 and
+//! 6, 1 and 2). Coefficients that only *contain* a meeting (a decimal quarter turn taken as
+//! written) prove nothing, and the search answers.
+//!
+//! # The decomposition (Pieper 1968; the subproblems of Paden 1985, as in Elias & Wen 2022)
+//!
+//! `W` is fixed by joints 1–3 and, from the target, known: `W = G·w₆` with `G = target·Post⁻¹`.
+//! In joint 1's frame let `P` be `W`, `u` axis 2's direction. Joints 2 and 3 turn about lines
+//! along `u`, so `u·W` (in link 1) is a constant `h`: joint 1 solves `(R₁u)·P = h`, an equation
+//! `a cos θ + b sin θ = c` (subproblem 4, up to two roots). Joint 1 placed, the distance from
+//! axis 2's origin to `W` depends on joint 3 alone: the same form again (subproblem 3). Joint 2
+//! turns the one vector onto the other (subproblem 1). Then `M = R₀₄ᵀ·G.r =
+//! R₄·Pre₅·R₅·Pre₆·R₆`: `a₄·M a₆` depends on joint 5 alone (subproblem 4), joints 4 and 6 are
+//! each a turn carrying one known vector onto another (subproblem 1).
+//!
+//! Every step is interval arithmetic on enclosures of exact quantities, so each returns
+//! enclosures of all its exact roots for every value the coefficients enclose; its branch count
+//! is proven by its discriminant's sign. Every exact solution within the joint ranges therefore
+//! lies in one of the candidate boxes (each branch's angles, each copy in the range), and each
+//! candidate holds one. A candidate is certified by the search's own Krawczyk test on a box
+//! about it (`square`): exactly one solution there, so the candidate's. Certified boxes proven
+//! pairwise disjoint hold distinct solutions: the answer is complete and each box unique.
+//!
+//! Anything the enclosures cannot decide is a `Degeneracy` (a discriminant holding 0, a turn's
+//! vector on its axis as at a singular pose, an angle meeting a joint limit, a candidate not
+//! certified, two boxes overlapping): then the search answers the whole pose, so nothing is
+//! lost near singular poses.
+
+// Matrix and joint indices read as the formulas they implement.
+#![allow(clippy::needless_range_loop)]
+
+use super::{square, PoseTarget, Split};
+use crate::analyses::arm6r::chain::{Chain6R, IAffine};
+use crate::formulate::stated;
+use crate::kernel::contract::krawczyk::{self, Step as K};
+use crate::kernel::interval::{interval, point, strict_sign, trig, Interval};
+use smallvec::SmallVec;
+
+type V3 = [Interval; 3];
+type M3 = [[Interval; 3]; 3];
+/// Joints 4, 5, 6 of one wrist branch (modulo a turn).
+type WristAngles = (Interval, Interval, Interval);
+
+fn dot(a: &V3, b: &V3) -> Interval {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross(a: &V3, b: &V3) -> V3 {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
+fn add(a: &V3, b: &V3) -> V3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+fn sub(a: &V3, b: &V3) -> V3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn exact_zero(v: &V3) -> bool {
+    v.iter().all(|x| x.inf() == 0.0 && x.sup() == 0.0)
+}
+
+fn nonzero(v: &V3) -> bool {
+    v.iter().any(|x| strict_sign(*x).is_some())
+}
+
+/// `R(a, θ)·v` for the unit axis `a`, from enclosures of `cos θ`, `sin θ`:
+/// `(a·v)a + cos θ (v − (a·v)a) + sin θ (a × v)` (Rodrigues).
+fn rotate(a: &V3, c: Interval, s: Interval, v: &V3) -> V3 {
+    let along = dot(a, v);
+    let w = cross(a, v);
+    [0, 1, 2].map(|i| along * a[i] + c * (v[i] - along * a[i]) + s * w[i])
+}
+
+/// The matrix of `R(a, θ)`: `aaᵀ + cos θ (I − aaᵀ) + sin θ [a]×`.
+fn rotation(a: &V3, c: Interval, s: Interval) -> M3 {
+    let e = |j: usize| {
+        let mut v = [point(0.0); 3];
+        v[j] = point(1.0);
+        rotate(a, c, s, &v)
+    };
+    let cols = [e(0), e(1), e(2)];
+    [0, 1, 2].map(|i| [0, 1, 2].map(|j| cols[j][i]))
+}
+
+/// Why the closed form leaves a pose to the search.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Degeneracy {
+    /// A discriminant's enclosure holds 0: two roots may coincide (a singular pose, or near one).
+    Discriminant,
+    /// A turn's vectors lie on its axis as far as the enclosures tell: the turn is not determined.
+    Direction,
+    /// An angle's enclosure meets a joint limit without lying within the range.
+    Limit,
+    /// Krawczyk did not prove a candidate the only solution about it.
+    Uncertified,
+    /// Two certified boxes overlap: they may hold one solution.
+    Overlap,
+}
+
+impl Degeneracy {
+    /// As reports write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Degeneracy::Discriminant => "discriminant_holds_zero",
+            Degeneracy::Direction => "turn_undetermined",
+            Degeneracy::Limit => "angle_at_joint_limit",
+            Degeneracy::Uncertified => "candidate_not_certified",
+            Degeneracy::Overlap => "certified_boxes_overlap",
+        }
+    }
+}
+
+/// What `solve` found.
+#[derive(Clone, Debug)]
+pub(crate) enum ClosedForm {
+    /// Every solution within the joint ranges, each in its own certified box.
+    Solved(Vec<[Interval; 6]>),
+    /// A step the enclosures could not decide: the search must answer.
+    Degenerate(Degeneracy),
+}
+
+/// What `recognise` proved (module doc): the wrist centre and the constants of the position
+/// equations, each an enclosure of the exact value.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct SphericalWrist {
+    /// `W` in joint 6's frame (on axis 6, so the same before and after its turn).
+    w6: V3,
+    /// `W` in joint 3's frame after its turn (`Pre₄·w₄`).
+    v: V3,
+    /// Axis 2's direction in joint 1's frame after its turn.
+    u: V3,
+    /// `u·W` in link 1, the same at every angle of joints 2 and 3.
+    h: Interval,
+    /// `|Pre₃.t + Pre₃.r R₃(θ₃) v|² = k₃ + α₃ cos θ₃ + β₃ sin θ₃`.
+    k3: Interval,
+    alpha3: Interval,
+    beta3: Interval,
+    /// Axis 4 in joint 5's frame, and axis 6 in joint 5's frame.
+    e4: V3,
+    d6: V3,
+}
+
+/// Proves the conditions of the module doc on `chain`'s coefficients, or `None` when one is not
+/// proven (it may be false, or hold only up to rounding the enclosures cannot exclude).
+///
+/// Each relation is between consecutive axes, tested in the frame of the first of the two after
+/// its turn, where it holds at every angle.
+pub(crate) fn recognise(chain: &Chain6R) -> Option<SphericalWrist> {
+    let a = &chain.axes;
+    let pre = &chain.pre;
+    // Axis k+1 in joint k's frame (after its turn): direction.
+    let next = |k: usize| stated::apply(&pre[k + 1].r, &a[k + 1]);
+    let (d5, d6) = (next(3), next(4));
+    if !(nonzero(&cross(&a[3], &d5)) && nonzero(&cross(&a[4], &d6))) {
+        return None;
+    }
+    // W as the origin of joint 4's, 5's or 6's frame, written in joint 4's frame, in joint 5's,
+    // and relative to joint 6's origin in joint 5's frame; each must lie on the axis there.
+    let (p5, p6) = (pre[4].t, pre[5].t);
+    let zero = [point(0.0); 3];
+    let w5_of_4 = stated::apply_transposed(&pre[4].r, &p5).map(|x| -x);
+    let candidates = [(zero, w5_of_4, sub(&w5_of_4, &p6)), (p5, zero, p6.map(|x| -x)), (add(&p5, &stated::apply(&pre[4].r, &p6)), p6, zero)];
+    let on_axes = |(w4, w5, rel6): &(V3, V3, V3)| exact_zero(&cross(w4, &a[3])) && exact_zero(&cross(w5, &a[4])) && exact_zero(&cross(rel6, &d6));
+    let (w4, _, rel6) = candidates.into_iter().find(on_axes)?;
+    // Axes 2 and 3 parallel, axis 1 not parallel to them.
+    let u = next(0);
+    if !(exact_zero(&cross(&a[1], &next(1))) && nonzero(&cross(&a[0], &u))) {
+        return None;
+    }
+    let v = add(&stated::apply(&pre[3].r, &w4), &pre[3].t);
+    // u·X = u·Pre₂.t + a₂·Pre₃.t + (Pre₃.rᵀa₂)·v: joint 2 turns about a₂, and Pre₃.rᵀa₂ = ±a₃
+    // is fixed by joint 3's turn.
+    let h = dot(&u, &pre[1].t) + dot(&a[1], &pre[2].t) + dot(&stated::apply_transposed(&pre[2].r, &a[1]), &v);
+    // |t + R₃v|² with t = Pre₃.rᵀPre₃.t, R₃v by Rodrigues.
+    let t = stated::apply_transposed(&pre[2].r, &pre[2].t);
+    let (at, av) = (dot(&a[2], &t), dot(&a[2], &v));
+    let two = point(2.0);
+    Some(SphericalWrist {
+        w6: stated::apply_transposed(&pre[5].r, &rel6),
+        v,
+        u,
+        h,
+        k3: dot(&pre[2].t, &pre[2].t) + dot(&v, &v) + two * at * av,
+        alpha3: two * (dot(&t, &v) - at * av),
+        beta3: two * dot(&t, &cross(&a[2], &v)),
+        e4: stated::apply_transposed(&pre[4].r, &a[3]),
+        d6,
+    })
+}
+
+/// Up to two roots θ (modulo a turn) of `a cos θ + b sin θ = c` for every value of the
+/// coefficients' enclosures (subproblems 3 and 4 of Paden 1985 reduce to it): with
+/// `ρ² = a² + b²` and `D = ρ² − c²`, none when `D < 0`, two when `D > 0`,
+/// `(cos θ, sin θ) = ((ac ± b√D)/ρ², (bc ∓ a√D)/ρ²)`; a `D` holding 0 is `Discriminant`.
+pub(crate) fn cos_sin_roots(a: Interval, b: Interval, c: Interval) -> Result<SmallVec<[Interval; 2]>, Degeneracy> {
+    let r2 = a.sqr() + b.sqr();
+    let d = r2 - c.sqr();
+    let mut out = SmallVec::new();
+    if d.sup() < 0.0 {
+        return Ok(out);
+    }
+    if !(d.inf() > 0.0 && r2.inf() > 0.0) {
+        return Err(Degeneracy::Discriminant);
+    }
+    let root = d.sqrt();
+    for sign in [1.0, -1.0] {
+        let sr = point(sign) * root;
+        let (cos, sin) = ((a * c + b * sr) / r2, (b * c - a * sr) / r2);
+        out.push(trig::angle(cos, sin).ok_or(Degeneracy::Direction)?);
+    }
+    Ok(out)
+}
+
+/// The turn θ (modulo a turn) about the unit axis `a` carrying `from` onto `to`, for vectors
+/// known to be so carried (subproblem 1): `(from·to − (a·from)(a·to), (a × from)·to)` is a
+/// positive multiple of `(cos θ, sin θ)`; `Direction` when that box holds the origin.
+pub(crate) fn turn(a: &V3, from: &V3, to: &V3) -> Result<Interval, Degeneracy> {
+    let c = dot(from, to) - dot(a, from) * dot(a, to);
+    trig::angle(c, dot(&cross(a, from), to)).ok_or(Degeneracy::Direction)
+}
+
+/// The copies of `phi` (modulo a turn) within `[lo, hi]`; `Limit` when one meets a limit
+/// without lying within.
+fn copies(phi: Interval, (lo, hi): (f64, f64)) -> Result<SmallVec<[Interval; 2]>, Degeneracy> {
+    let tau = std::f64::consts::TAU;
+    let (first, last) = (((lo - phi.sup()) / tau).floor(), ((hi - phi.inf()) / tau).ceil());
+    let mut out = SmallVec::new();
+    let mut k = first;
+    while k <= last {
+        let x = phi + Interval::TAU * point(k);
+        if x.inf() >= lo && x.sup() <= hi {
+            out.push(x);
+        } else if !(x.sup() < lo || x.inf() > hi) {
+            return Err(Degeneracy::Limit);
+        }
+        k += 1.0;
+    }
+    Ok(out)
+}
+
+fn cos_sin(x: Interval) -> (Interval, Interval) {
+    (trig::cos(x), trig::sin(x))
+}
+
+/// Every solution's angles modulo a turn (module doc), at most eight.
+fn branches(chain: &Chain6R, wrist: &SphericalWrist, g: &IAffine) -> Result<SmallVec<[[Interval; 6]; 8]>, Degeneracy> {
+    let (a, pre) = (&chain.axes, &chain.pre);
+    let wrist_centre = add(&stated::apply(&g.r, &wrist.w6), &g.t);
+    let p = stated::apply_transposed(&pre[0].r, &sub(&wrist_centre, &pre[0].t));
+    let u = &wrist.u;
+    // (R₁u)·P = (a₁·u)(a₁·P) + cos θ₁ (u·P − (a₁·u)(a₁·P)) + sin θ₁ (a₁ × u)·P.
+    let (ua, pa) = (dot(&a[0], u), dot(&a[0], &p));
+    let mut out = SmallVec::new();
+    for t1 in cos_sin_roots(dot(u, &p) - ua * pa, dot(&cross(&a[0], u), &p), wrist.h - ua * pa)? {
+        let (c1, s1) = cos_sin(t1);
+        let z = sub(&rotate(&a[0], c1, -s1, &p), &pre[1].t);
+        for t3 in cos_sin_roots(wrist.alpha3, wrist.beta3, dot(&z, &z) - wrist.k3)? {
+            let (c3, s3) = cos_sin(t3);
+            let y = add(&pre[2].t, &stated::apply(&pre[2].r, &rotate(&a[2], c3, s3, &wrist.v)));
+            let t2 = turn(&a[1], &y, &stated::apply_transposed(&pre[1].r, &z))?;
+            let (c2, s2) = cos_sin(t2);
+            let mut r = stated::mul(&pre[0].r, &rotation(&a[0], c1, s1));
+            for (k, (c, s)) in [(1, (c2, s2)), (2, (c3, s3))] {
+                r = stated::mul(&stated::mul(&r, &pre[k].r), &rotation(&a[k], c, s));
+            }
+            r = stated::mul(&r, &pre[3].r);
+            // M = R₀₄ᵀ·G.r = R₄·Pre₅.r·R₅·Pre₆.r·R₆.
+            let m = stated::mul(&[0, 1, 2].map(|i| [0, 1, 2].map(|j| r[j][i])), &g.r);
+            for (t4, t5, t6) in wrist_branches(chain, wrist, &m)? {
+                out.push([t1, t2, t3, t4, t5, t6]);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Joints 4, 5, 6 from `M = R₄·Pre₅.r·R₅·Pre₆.r·R₆`: `a₄·M a₆ = e₄·R₅ d₆` (joint 5,
+/// subproblem 4), then `R₄(Pre₅.r R₅ d₆) = M a₆` and `R₆(Mᵀa₄) = Pre₆.rᵀ R₅ᵀ e₄` (subproblem 1).
+fn wrist_branches(chain: &Chain6R, wrist: &SphericalWrist, m: &M3) -> Result<SmallVec<[WristAngles; 2]>, Degeneracy> {
+    let (a, pre) = (&chain.axes, &chain.pre);
+    let (e4, d6, a5) = (&wrist.e4, &wrist.d6, &a[4]);
+    let ma6 = stated::apply(m, &a[5]);
+    let mta4 = stated::apply_transposed(m, &a[3]);
+    let k = dot(e4, a5) * dot(a5, d6);
+    let mut out = SmallVec::new();
+    for t5 in cos_sin_roots(dot(e4, d6) - k, dot(e4, &cross(a5, d6)), dot(&a[3], &ma6) - k)? {
+        let (c5, s5) = cos_sin(t5);
+        let t4 = turn(&a[3], &stated::apply(&pre[4].r, &rotate(a5, c5, s5, d6)), &ma6)?;
+        let t6 = turn(&a[5], &mta4, &stated::apply_transposed(&pre[5].r, &rotate(a5, c5, -s5, e4)))?;
+        out.push((t4, t5, t6));
+    }
+    Ok(out)
+}
+
+/// A box about the candidate `c` on which Krawczyk proves exactly one solution, tightened to
+/// `precision`: a few radii are tried, from just wider than the candidate (the residual at its
+/// centre is about its width times the Jacobian's condition) to a micro-radian.
+///
+/// The square system's zeros include every solution of the twelve equations, and the candidate
+/// holds one (module doc), so one zero in the box is that solution: the search's test of the
+/// trace (`square::not_a_half_turn`), which proves a zero it found blind is a solution, is not
+/// needed here.
+fn certify(split: &Split, c: &[Interval; 6], precision: f64) -> Option<[Interval; 6]> {
+    let w = c.iter().map(|x| x.wid()).fold(0.0, f64::max);
+    for r in [(16.0 * w).max(1e-12), (1e3 * w).max(1e-9), (1e5 * w).max(1e-6)] {
+        let region = c.map(|x| interval(x.inf() - r, x.sup() + r));
+        if let K::Unique(k) = square::newton(split, &region) {
+            return Some(krawczyk::tighten(k, precision, |k| square::newton(split, k)));
+        }
+    }
+    None
+}
+
+/// Every solution of `pose(θ) = target` with each θₖ in `chain.ranges[k]`, each in a box
+/// certified unique and tightened to `precision`, or why the search must answer.
+pub(crate) fn solve(chain: &Chain6R, wrist: &SphericalWrist, target: &PoseTarget, precision: f64) -> ClosedForm {
+    match solve_or_degenerate(chain, wrist, target, precision) {
+        Ok(found) => ClosedForm::Solved(found),
+        Err(why) => ClosedForm::Degenerate(why),
+    }
+}
+
+fn solve_or_degenerate(chain: &Chain6R, wrist: &SphericalWrist, target: &PoseTarget, precision: f64) -> Result<Vec<[Interval; 6]>, Degeneracy> {
+    let g = target.0.then(&chain.post.inverse());
+    let mut candidates: Vec<[Interval; 6]> = Vec::new();
+    for b in branches(chain, wrist, &g)? {
+        let mut boxes: Vec<[Interval; 6]> = vec![b];
+        for k in 0..6 {
+            let each = copies(b[k], chain.ranges[k])?;
+            boxes = boxes.iter().flat_map(|x| each.iter().map(move |&y| {
+                let mut x = *x;
+                x[k] = y;
+                x
+            })).collect();
+        }
+        candidates.extend(boxes);
+    }
+    if candidates.is_empty() {
+        return Ok(candidates);
+    }
+    let split = chain.split(&target.0, 0);
+    let mut found = Vec::with_capacity(candidates.len());
+    for c in &candidates {
+        found.push(certify(&split, c, precision).ok_or(Degeneracy::Uncertified)?);
+    }
+    let overlap = |x: &[Interval; 6], y: &[Interval; 6]| (0..6).all(|d| !x[d].disjoint(y[d]));
+    if (0..found.len()).any(|i| (0..i).any(|j| overlap(&found[i], &found[j]))) {
+        return Err(Degeneracy::Overlap);
+    }
+    found.sort_by(|a, b| a.iter().map(|x| x.inf()).partial_cmp(b.iter().map(|x| x.inf())).unwrap_or(std::cmp::Ordering::Equal));
+    Ok(found)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analyses::arm6r::cuspidal::Rng;
+    use crate::analyses::arm6r::three_parallel::tests::chain;
+
+    /// `x` widened by a few ulps: an enclosure of data computed in `f64`.
+    fn near(x: f64) -> Interval {
+        let r = 4.0 * f64::EPSILON * (1.0 + x.abs());
+        interval(x - r, x + r)
+    }
+
+    /// Whether `phi` holds `theta` modulo a turn.
+    fn holds_angle(phi: Interval, theta: f64) -> bool {
+        let turns = ((phi.mid() - theta) / std::f64::consts::TAU).round();
+        phi.contains(theta + turns * std::f64::consts::TAU)
+    }
+
+    fn unit(rng: &mut Rng) -> [f64; 3] {
+        let v = [rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0)];
+        let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        v.map(|x| x / n)
+    }
+
+    /// Random `a, b` and a root θ: `c = a cos θ + b sin θ`; two enclosures, one holding θ, the
+    /// other the mirrored root `2·atan2(b, a) − θ`. Beyond `ρ` none; at `ρ` (a double root, as
+    /// computed) the discriminant holds 0.
+    #[test]
+    fn cos_sin_roots_enclose_both_roots_and_count_them() {
+        let mut rng = Rng(1985);
+        for _ in 0..2000 {
+            let (a, b, theta) = (rng.uniform(-2.0, 2.0), rng.uniform(-2.0, 2.0), rng.uniform(-3.1, 3.1));
+            let c = a * theta.cos() + b * theta.sin();
+            let other = 2.0 * b.atan2(a) - theta;
+            let rho = (a * a + b * b).sqrt();
+            match cos_sin_roots(near(a), near(b), near(c)) {
+                Ok(roots) => {
+                    assert_eq!(roots.len(), 2, "{a} {b} {c}");
+                    assert!(roots.iter().any(|&r| holds_angle(r, theta)) && roots.iter().any(|&r| holds_angle(r, other)), "{a} {b} {theta}: {roots:?}");
+                    assert!(roots.iter().all(|r| r.wid() < 1e-6));
+                }
+                // Only where the two roots nearly coincide.
+                Err(why) => assert!(why == Degeneracy::Discriminant && (rho - c.abs()) < 1e-9 * rho, "{a} {b} {theta}: {why:?}"),
+            }
+            assert_eq!(cos_sin_roots(near(a), near(b), near(1.001 * rho + 1e-6)).map(|r| r.len()), Ok(0));
+        }
+        assert_eq!(cos_sin_roots(point(3.0), point(4.0), point(5.0)), Err(Degeneracy::Discriminant));
+        assert_eq!(cos_sin_roots(point(0.0), point(0.0), interval(-1e-9, 1e-9)), Err(Degeneracy::Discriminant));
+    }
+
+    /// Random axes, vectors and turns: `turn` encloses the turn carrying `from` onto `R(a, θ)·from`;
+    /// a vector along the axis leaves it undetermined.
+    #[test]
+    fn turn_encloses_the_turn_between_two_vectors() {
+        let mut rng = Rng(2022);
+        for _ in 0..2000 {
+            let (a, from, theta) = (unit(&mut rng), [rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0), rng.uniform(-1.0, 1.0)], rng.uniform(-3.1, 3.1));
+            let r = crate::analyses::arm6r::chain::rotation64(&a, theta).r;
+            let to: [f64; 3] = [0, 1, 2].map(|i| (0..3).map(|j| r[i][j] * from[j]).sum());
+            let phi = turn(&a.map(near), &from.map(near), &to.map(near)).expect("a vector off the axis");
+            assert!(holds_angle(phi, theta) && phi.wid() < 1e-6, "{a:?} {from:?} {theta}: {phi:?}");
+            let along = a.map(|x| near(0.3 * x));
+            assert_eq!(turn(&a.map(near), &along, &along), Err(Degeneracy::Direction));
+        }
+    }
+
+    #[test]
+    fn copies_within_the_range_and_at_its_limits() {
+        let x = interval(0.5, 0.5 + 1e-12);
+        assert_eq!(copies(x, (-3.2, 3.2)).map(|c| c.len()), Ok(1));
+        assert_eq!(copies(x, (-6.1, 6.1)).map(|c| c.len()), Ok(2));
+        assert_eq!(copies(x, (0.6, 1.0)).map(|c| c.len()), Ok(0));
+        assert_eq!(copies(x, (0.5 + 1e-13, 1.0)), Err(Degeneracy::Limit));
+    }
+
+    /// The bundled spherical-wrist arms are recognised (after the rounding policy); the UR5
+    /// (offset wrist) and a general 6R are not.
+    #[test]
+    fn spherical_wrists_are_recognised() {
+        let file = |f: &str| std::fs::read_to_string(format!("{}/{f}", env!("CARGO_MANIFEST_DIR"))).expect("bundled");
+        for f in ["urdf/puma560.urdf", "urdf/kuka_kr16.urdf", "urdf/staubli_tx90.urdf", "tests/data/abb_irb140_style.urdf"] {
+            assert!(recognise(&chain(&file(f))).is_some(), "{f}");
+        }
+        for f in ["urdf/ur5.urdf", "tests/data/ik6_general_6r.urdf", "tests/data/fanuc_crx10ial_style.urdf", "tests/data/doosan_style_6r.urdf"] {
+            assert!(recognise(&chain(&file(f))).is_none(), "{f}");
+        }
+    }
+}
