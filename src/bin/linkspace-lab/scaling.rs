@@ -11,8 +11,8 @@
 //! What follows the search (re-examining isolated boxes, labelling the components, reading the
 //! boxes out) is measured: the whole run (`app::SolveRun`) on one thread and on two, in this
 //! process, gives its serial part `s` and its shared part `p` (`post(1) = s + p`,
-//! `post(2) = s + p / 2`); on N ranks it takes `s + p / N`, plus three gathers and
-//! `decode` per box for each of them (every rank receives every result).
+//! `post(2) = s + p / 2`); on N ranks it takes `s + p / N`, plus three gathers of `gather`
+//! seconds per box each (every rank receives every result).
 
 use anyhow::{Context, Result};
 use linkspace::model::urdf;
@@ -40,6 +40,11 @@ pub struct ScalingArgs {
     /// fitted to `--two-ranks` when that is given.
     #[arg(long, default_value_t = 2e-6)]
     decode: f64,
+    /// Seconds every rank spends per box to receive one shared result of the post-processing
+    /// (a probe's verdict, a slice's pairs, a box's read-out); three such gathers follow a
+    /// search.
+    #[arg(long, default_value_t = 1e-6)]
+    gather: f64,
     /// The measured search seconds (`stats.seconds`) of this solve on 2 ranks of one thread:
     /// fits `--decode`.
     #[arg(long, value_name = "SECONDS")]
@@ -98,15 +103,15 @@ pub fn run(args: ScalingArgs) -> Result<()> {
         let run = SolveRun::build(&m, ModelChoice::Auto, &[], &[], SolverSettings { sigma: args.sigma, threads, ..SolverSettings::default() })?;
         let t0 = std::time::Instant::now();
         let result = run.run(&AtomicBool::new(false), &mut |_| {});
-        let search = if threads == 1 { stats.seconds } else { predict(&levels, cell, args.latency, 0.0, threads) };
-        Ok(((t0.elapsed().as_secs_f64() - search).max(0.0), result.boxes.len()))
+        // `stats.seconds`: the search with its re-examination of isolated boxes.
+        Ok(((t0.elapsed().as_secs_f64() - result.stats.seconds).max(0.0), result.boxes.len()))
     };
     let (post1, boxes) = post(1)?;
     let (post2, _) = post(2)?;
     let shared = (2.0 * (post1 - post2)).clamp(0.0, post1);
     let serial = post1 - shared;
     let whole = |n: usize| {
-        let gathers = if n > 1 { 3.0 * args.latency * (n as f64).log2().ceil() + 3.0 * decode * boxes as f64 } else { 0.0 };
+        let gathers = if n > 1 { 3.0 * args.latency * (n as f64).log2().ceil() + 3.0 * args.gather * boxes as f64 } else { 0.0 };
         predict(&levels, cell, args.latency, decode, n) + serial + shared / n as f64 + gathers
     };
     let mut out = std::io::stdout().lock();
