@@ -568,23 +568,24 @@ pub(crate) fn run_job(path: &Path, input: &app::Input, job: Job, control_limits:
 
 /// Writes a report; under `mpirun`, only rank 0 writes (every rank holds the same result).
 pub(crate) fn write_file(path: &std::path::Path, contents: impl AsRef<[u8]>) -> Result<()> {
-    #[cfg(feature = "mpi")]
-    if !ranks::writes() {
-        return Ok(());
-    }
-    std::fs::write(path, contents).with_context(|| format!("writing {}", path.display()))
+    write_with(path, |out| Ok(out.write_all(contents.as_ref())?))
 }
 
 /// Writes `answer`'s JSON report to `path` as it is encoded (rank 0 of a shared run alone:
 /// the others skip the encoding too).
 pub(crate) fn write_json(path: &std::path::Path, answer: &Answer) -> Result<()> {
+    write_with(path, |out| Ok(report::json(answer, out)?))
+}
+
+/// Creates the file at `path` and lets `write` fill it, buffered; under `mpirun`, on rank 0
+/// only, so the other ranks neither encode nor write.
+fn write_with(path: &std::path::Path, write: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> Result<()>) -> Result<()> {
     #[cfg(feature = "mpi")]
     if !ranks::writes() {
         return Ok(());
     }
-    let file = std::fs::File::create(path).with_context(|| format!("writing {}", path.display()))?;
-    let mut out = std::io::BufWriter::new(file);
-    report::json(answer, &mut out).map_err(anyhow::Error::from).and_then(|()| out.flush().map_err(anyhow::Error::from)).with_context(|| format!("writing {}", path.display()))
+    let mut out = std::io::BufWriter::new(std::fs::File::create(path).with_context(|| format!("writing {}", path.display()))?);
+    write(&mut out).and_then(|()| Ok(out.flush()?)).with_context(|| format!("writing {}", path.display()))
 }
 
 /// `--timeout` as a duration: positive and finite, or absent.

@@ -187,16 +187,25 @@ impl Wire for IntervalBox {
     }
 }
 
+/// Text as its length and its bytes (`String` and `&'static str`).
+fn put_text(text: &str, out: &mut Vec<u8>) {
+    text.len().put(out);
+    out.extend_from_slice(text.as_bytes());
+}
+
+fn take_text<'a>(input: &mut &'a [u8]) -> &'a str {
+    let n = usize::take(input);
+    let (s, rest) = input.split_at(n);
+    *input = rest;
+    std::str::from_utf8(s).expect("invariant: peers send UTF-8")
+}
+
 impl Wire for String {
     fn put(&self, out: &mut Vec<u8>) {
-        self.len().put(out);
-        out.extend_from_slice(self.as_bytes());
+        put_text(self, out)
     }
     fn take(input: &mut &[u8]) -> Self {
-        let n = usize::take(input);
-        let (s, rest) = input.split_at(n);
-        *input = rest;
-        String::from_utf8(s.to_vec()).expect("invariant: peers send UTF-8")
+        take_text(input).to_owned()
     }
 }
 
@@ -285,14 +294,10 @@ impl<A: Wire, B: Wire, C: Wire> Wire for (A, B, C) {
 
 impl Wire for &'static str {
     fn put(&self, out: &mut Vec<u8>) {
-        self.len().put(out);
-        out.extend_from_slice(self.as_bytes());
+        put_text(self, out)
     }
     fn take(input: &mut &[u8]) -> Self {
-        let n = usize::take(input);
-        let (s, rest) = input.split_at(n);
-        *input = rest;
-        intern(std::str::from_utf8(s).expect("invariant: peers send UTF-8"))
+        intern(take_text(input))
     }
 }
 
