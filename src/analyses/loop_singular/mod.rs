@@ -8,11 +8,11 @@
 //! to hold only directions owned by another chart (the first index of largest |m|) is dropped,
 //! because that chart finds them; the rest are merged by their configuration parts.
 
-use crate::kernel::interval::{components, IntervalBox};
+use crate::kernel::interval::IntervalBox;
 use crate::formulate::singular::{Coordinates, SingularProblem};
 pub use sets::SingularSets;
 use crate::kernel::outcome::BoxStatus;
-use crate::kernel::search::{Limit, SolveError, SolveStats, SolverSettings, Status};
+use crate::kernel::search::{components_shared, Limit, SolveError, SolveStats, SolverSettings, Status};
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
@@ -76,14 +76,15 @@ impl<L: Coordinates> SingularProblem<L> {
             }
             stats.push(e.stats);
         }
-        Ok(self.clustered(boxes, status, stats, dropped_other_chart, unsearched_charts, t0))
+        Ok(self.clustered(boxes, status, stats, dropped_other_chart, unsearched_charts, t0, settings.threads))
     }
 
     /// The set from its boxes: clusters by configuration part (the same configuration found in
-    /// two charts, or a curve crossing from one chart to the next, is one cluster).
-    fn clustered(&self, boxes: Vec<SingularBox>, status: Status, stats: Vec<SolveStats>, dropped_other_chart: u64, unsearched_charts: usize, t0: Instant) -> SingularSet {
+    /// two charts, or a curve crossing from one chart to the next, is one cluster), labelled on
+    /// `threads` threads and every process sharing the search.
+    fn clustered(&self, boxes: Vec<SingularBox>, status: Status, stats: Vec<SolveStats>, dropped_other_chart: u64, unsearched_charts: usize, t0: Instant, threads: usize) -> SingularSet {
         let projected: Vec<IntervalBox> = boxes.iter().map(|x| IntervalBox::new(x.b.dims[..self.base_vars].to_vec())).collect();
-        let (labels, n) = components(&projected);
+        let (labels, n) = components_shared(&projected, threads);
         let mut clusters = vec![Cluster::default(); n];
         for (i, &l) in labels.iter().enumerate() {
             clusters[l].boxes.push(i);
