@@ -32,7 +32,7 @@ smallest singular value 8.8e-7, which the rounding moves by 9e-7
 Run: python3 scripts/dev/stewart_close_pair.py   (numpy, mpmath; ~10 s; defaults:
          --urdf urdf/stewart_40.urdf --json tests/data/stewart_40_fk.json --solution 20 --distance 5e-5 --digits 12)
      python3 scripts/dev/stewart_fk.py --urdf urdf/stewart_40.urdf --out tests/data/stewart_40_close_pair_fk.json \
-         --case close_pair=L1,...,L6 --note "..."   (the lengths printed; every assembly, ~8 min)
+         --case close_pair=L1,...,L6 --note "..."   (the lengths printed; every assembly, ~1.5 min)
 """
 import argparse
 import json
