@@ -582,6 +582,31 @@ fn stewart_pose_model_certifies_assemblies_near_a_singularity_once() {
     stewart_pose_reference_case("stewart_40_near_singular.urdf", "stewart_40_near_singular_fk.json", 0);
 }
 
+#[test]
+fn stewart_pose_model_certifies_two_assemblies_5e_5_apart_in_two_boxes() {
+    // stewart_40.urdf at lengths across a fold of the leg map (scripts/dev/stewart_close_pair.py):
+    // 28 real, two of them 5.4e-5 apart (position plus rotation, Frobenius), both with a leg
+    // Jacobian's smallest singular value 8.8e-7.
+    let refs = reference("stewart_40_close_pair_fk.json");
+    let case = &refs["cases"][0];
+    assert_eq!(case["real_solutions"].as_u64(), Some(28));
+    let pose = |s: &serde_json::Value| -> Vec<f64> {
+        let rows = s["platform_rotation_matrix"].as_array().expect("rows").iter().flat_map(|r| r.as_array().expect("row").clone());
+        s["platform_position"].as_array().expect("position").iter().cloned().chain(rows).map(|v| v.as_f64().expect("number")).collect()
+    };
+    let poses: Vec<Vec<f64>> = case["solutions"].as_array().expect("solutions").iter().map(pose).collect();
+    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let distance = |a: &[f64], b: &[f64]| {
+        let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
+        norm(&d[..3]) + norm(&d[3..])
+    };
+    let closest = (0..poses.len()).flat_map(|i| (i + 1..poses.len()).map(move |j| (i, j))).map(|(i, j)| distance(&poses[i], &poses[j])).fold(f64::INFINITY, f64::min);
+    assert!(closest < 1e-4, "the closest pair is {closest:e} apart");
+    let stated = case["closest_real_pair"]["distance_position_plus_rotation_frobenius"].as_f64().expect("distance");
+    assert!((closest - stated).abs() < 1e-9, "{closest:e} against the stated {stated:e}");
+    stewart_pose_reference_case("stewart_40.urdf", "stewart_40_close_pair_fk.json", 0);
+}
+
 /// One case of a Stewart reference through `solve --model distances` at default settings: every
 /// box certified, one per real assembly, each holding exactly one reference pose in its joint
 /// values (position, roll, pitch, yaw).
