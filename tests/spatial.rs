@@ -605,6 +605,13 @@ fn stewart_pose_model_certifies_two_assemblies_5e_5_apart_in_two_boxes() {
     let stated = case["closest_real_pair"]["distance_position_plus_rotation_frobenius"].as_f64().expect("distance");
     assert!((closest - stated).abs() < 1e-9, "{closest:e} against the stated {stated:e}");
     stewart_pose_reference_case("stewart_40.urdf", "stewart_40_close_pair_fk.json", 0);
+    // The diagnosis before the run tells isolated assemblies with a nearly singular Jacobian
+    // from a curve of them.
+    let m = urdf::parse(&urdf_text("stewart_40.urdf")).expect("parses");
+    let job = SolveRun::build(&m, ModelChoice::Pose, &fixed_from(case, "leg_lengths"), &[], SolverSettings { threads: 1, ..Default::default() }).expect("builds");
+    let (freedom, line) = job.freedom();
+    assert_eq!(freedom.at_point.map(|l| (l.dof, l.nearly_singular)), Some((0, true)), "{line}");
+    assert!(line.contains("isolated assemblies, some close together"), "{line}");
 }
 
 /// One case of a Stewart reference through `solve --model distances` at default settings: every

@@ -310,6 +310,7 @@ fn traced(problem: &Linkage, b: &IntervalBox) -> Vec<TracedBounds> {
 pub fn describe_freedom(f: &crate::kernel::system::Freedom, sigma: f64) -> String {
     let counted = format!("{} unknowns, {} rows", f.unknowns, f.rows);
     match f.at_point {
+        Some(l) if l.dof == 0 && l.nearly_singular => format!("0 degrees of freedom ({counted}; the Jacobian is nearly singular at a configuration Newton found, but the configurations do not go on along its near-null direction): isolated assemblies, some close together"),
         Some(l) if l.dof == 0 => format!("0 degrees of freedom ({counted}; the Jacobian has full rank at a configuration Newton found): isolated assemblies"),
         Some(l) if l.dof == 1 && f.counted() <= 0 => format!(
             "1 degree of freedom at a configuration Newton found ({counted}, rank {}): a curve where the count expects isolated assemblies (an overconstrained linkage that moves, an architecturally singular one, or a singular configuration); boxes on it are not certified",

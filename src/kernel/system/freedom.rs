@@ -32,6 +32,9 @@ pub struct LocalFreedom {
     pub dof: usize,
     /// Largest residual at the point.
     pub residual: f64,
+    /// Whether `rank` counts directions of a tiny singular value along which the solutions do
+    /// not go on: an isolated root with a nearly singular Jacobian (roots close together).
+    pub nearly_singular: bool,
 }
 
 impl Freedom {
@@ -105,18 +108,64 @@ pub fn freedom(system: &EquationSystem, starts: usize, seed: u64) -> Freedom {
         });
         if converged && inside {
             let (r, j) = residual_and_jacobian(system, &x, &column, free.len());
-            let sv = j.singular_values();
-            let largest = sv.max().max(1.0);
-            let rank = sv.iter().filter(|&&s| s > 1e-7 * largest).count();
-            let found = LocalFreedom { rank, dof: free.len() - rank, residual: r.amax() };
+            let svd = j.clone().svd(false, true);
+            let largest = svd.singular_values.max().max(1.0);
+            let numerical_rank = svd.singular_values.iter().filter(|&&s| s > 1e-7 * largest).count();
+            let mut rank = numerical_rank;
+            // Where the count expects isolated points, a tiny singular value is a curve only if
+            // the solutions go on along its direction; otherwise the point is an isolated root
+            // with a nearly singular Jacobian (two assemblies close together).
+            if let (true, Some(v_t)) = (j.nrows() >= j.ncols(), svd.v_t.as_ref()) {
+                for (k, &sigma) in svd.singular_values.iter().enumerate() {
+                    if sigma <= 1e-7 * largest && !extends_along(system, &x, &free, &column, &v_t.row(k).transpose()) {
+                        rank += 1;
+                    }
+                }
+                spent += 40.0 * step_cost;
+            }
+            let found = LocalFreedom { rank, dof: free.len() - rank, residual: r.amax(), nearly_singular: rank > numerical_rank };
             // A solution set may have components of several dimensions (isolated assemblies
             // beside a self-motion): the largest seen is what the search will have to cover.
-            if out.at_point.is_none_or(|best| found.dof > best.dof) {
+            // Likewise a nearly singular point among regular ones: the user hears of it.
+            if out.at_point.is_none_or(|best| (found.dof, found.nearly_singular) > (best.dof, best.nearly_singular)) {
                 out.at_point = Some(found);
             }
         }
     }
     out
+}
+
+/// Length of the step along a near-null direction in `extends_along`: far beyond the distance
+/// at which two isolated roots with a nearly singular Jacobian could lie (their least-squares
+/// residual there grows with its square), small against a linkage's dimensions.
+const TANGENT_STEP: f64 = 1e-3;
+
+/// Whether the solution set through `x` goes on along the unit direction `v` (over the free
+/// variables): Gauss–Newton restricted to the hyperplane through `x + h·v` orthogonal to `v`
+/// converges to a solution there. On a curve with tangent `v` it does; at an isolated root
+/// whose Jacobian is nearly singular along `v` the residual there stays of order `h²`.
+fn extends_along(system: &EquationSystem, x: &[f64], free: &[usize], column: &[usize], v: &DVector<f64>) -> bool {
+    let n = free.len();
+    let mut y = x.to_vec();
+    for (k, &i) in free.iter().enumerate() {
+        y[i] += TANGENT_STEP * v[k];
+    }
+    let across = DMatrix::identity(n, n) - v * v.transpose();
+    for _ in 0..20 {
+        let (r, j) = residual_and_jacobian(system, &y, column, n);
+        if r.amax() < 1e-11 {
+            return true;
+        }
+        let Some(step) = (j * &across).svd(true, true).solve(&(-&r), 1e-12).ok() else { return false };
+        let step = &across * step;
+        for (k, &i) in free.iter().enumerate() {
+            y[i] += step[k];
+        }
+        if y.iter().any(|v| !v.is_finite()) {
+            return false;
+        }
+    }
+    false
 }
 
 /// Residuals (coefficient midpoints) and the Jacobian over the free variables at `x`.
@@ -181,6 +230,29 @@ mod tests {
         let f = freedom(&s, 8, 1);
         assert_eq!(f.counted(), -1);
         assert_eq!(f.at_point.map(|l| (l.rank, l.dof)), Some((2, 0)));
+    }
+
+    #[test]
+    fn two_roots_close_together_are_isolated_and_a_singular_curve_is_not() {
+        // A circle written 1e6 times its usual size, and the line x = 1 − 1e-15: two roots 9e-8
+        // apart, where the Jacobian's smallest singular value, about 4e-8, is far below the rank
+        // tolerance (1e-7 of 2e6). The set does not go on along that direction: no freedom.
+        let mut s = EquationSystem::default();
+        let x = s.add_var("x", VarRole::Primary, interval(-1.0, 1.0));
+        let y = s.add_var("y", VarRole::Primary, interval(-1.0, 1.0));
+        let square = |v| Term { coef: point(1e6), mono: Monomial::Square(v) };
+        s.add(Equation::new(vec![square(x), square(y)], point(-1e6)));
+        s.add(Equation::new(vec![Term { coef: point(1.0), mono: Monomial::Linear(x) }], point(-(1.0 - 1e-15))));
+        let f = freedom(&s, 8, 1);
+        assert_eq!(f.counted(), 0);
+        assert_eq!(f.at_point.map(|l| (l.rank, l.dof)), Some((2, 0)));
+        // The circle written twice: a curve where the count (two rows, two unknowns) expects
+        // points, and its tangent is a freedom.
+        let mut s = circle_system(false);
+        s.add(Equation::circle(0, 1));
+        let f = freedom(&s, 8, 1);
+        assert_eq!(f.counted(), 0);
+        assert_eq!(f.at_point.map(|l| (l.rank, l.dof)), Some((1, 1)));
     }
 
     #[test]
