@@ -131,6 +131,24 @@ fn at_and_near_the_wrist_and_elbow_singularities_nothing_is_lost() {
     }
 }
 
+/// Every real solution of 30 poses each of the two UR5 files from `scripts/dev/ik6_reference.py`
+/// (monodromy and parameter homotopy refined at 60 digits, two seeds; no interval code), joints
+/// turning freely: each in exactly one certified box, each box holding one, nothing undecided;
+/// the closed form answers the poses that are not singular.
+#[test]
+fn ur_arms_match_the_homotopy_references() {
+    use super::six_r::homotopy_reference::{check, summary};
+    let found = check("ik6_reference_ur.json", |_, _| true);
+    let names: Vec<&str> = found.iter().map(|(name, _, _, _)| name.as_str()).collect();
+    assert_eq!(names, ["ur5", "ur5_ros"]);
+    summary(&found);
+    for (name, hist, _, closed) in &found {
+        assert_eq!(hist.values().sum::<usize>(), 30, "{name}");
+        assert!(hist.keys().any(|&n| n == 8), "{name}: {hist:?}");
+        assert!(*closed >= 28, "{name}: {closed} of 30 in closed form");
+    }
+}
+
 /// Median microseconds per pose, closed form against the search on the same poses (release
 /// build, one thread, one-turn ranges): a measurement, not a check.
 #[test]
