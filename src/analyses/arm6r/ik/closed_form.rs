@@ -247,9 +247,9 @@ pub(crate) fn turn(a: &V3, from: &V3, to: &V3) -> Result<Interval, Degeneracy> {
     trig::angle(c, dot(&cross(a, from), to)).ok_or(Degeneracy::Direction)
 }
 
-/// The copies of `phi` (modulo a turn) within `[lo, hi]`; `Limit` when one meets a limit
-/// without lying within.
-fn copies(phi: Interval, (lo, hi): (f64, f64)) -> Result<SmallVec<[Interval; 2]>, Degeneracy> {
+/// The copies `phi + 2πk` (modulo a turn) within `[lo, hi]`, each with its `k`; `Limit` when
+/// one meets a limit without lying within.
+fn copies(phi: Interval, (lo, hi): (f64, f64)) -> Result<SmallVec<[(f64, Interval); 2]>, Degeneracy> {
     let tau = std::f64::consts::TAU;
     let (first, last) = (((lo - phi.sup()) / tau).floor(), ((hi - phi.inf()) / tau).ceil());
     let mut out = SmallVec::new();
@@ -257,7 +257,7 @@ fn copies(phi: Interval, (lo, hi): (f64, f64)) -> Result<SmallVec<[Interval; 2]>
     while k <= last {
         let x = phi + Interval::TAU * point(k);
         if x.inf() >= lo && x.sup() <= hi {
-            out.push(x);
+            out.push((k, x));
         } else if !(x.sup() < lo || x.inf() > hi) {
             return Err(Degeneracy::Limit);
         }
@@ -328,15 +328,40 @@ fn wrist_branches(chain: &Chain6R, wrist: &SphericalWrist, m: &M3) -> Result<Sma
 /// holds one (module doc), so one zero in the box is that solution: the search's test of the
 /// trace (`square::not_a_half_turn`), which proves a zero it found blind is a solution, is not
 /// needed here.
-fn certify(split: &Split, c: &[Interval; 6], precision: f64) -> Option<[Interval; 6]> {
+///
+/// Returns the tightened box and the region the certificate holds on.
+fn certify(split: &Split, c: &[Interval; 6], precision: f64) -> Option<([Interval; 6], [Interval; 6])> {
     let w = c.iter().map(|x| x.wid()).fold(0.0, f64::max);
     for r in [(16.0 * w).max(1e-12), (1e3 * w).max(1e-9), (1e5 * w).max(1e-6)] {
         let region = c.map(|x| interval(x.inf() - r, x.sup() + r));
         if let K::Unique(k) = square::newton(split, &region) {
-            return Some(krawczyk::tighten(k, precision, |k| square::newton(split, k)));
+            return Some((krawczyk::tighten(k, precision, |k| square::newton(split, k)), region));
         }
     }
     None
+}
+
+/// The certified box `k` moved by `turns[d]` whole turns in each joint `d`, when it is proven to
+/// lie within `region` moved the same way: the equations are 2π-periodic in every angle, so the
+/// moved region holds exactly one solution, the moved copy of the one in `region`, and it lies
+/// in the moved box. Each end of the moved region is enclosed (`x + 2πt` in interval
+/// arithmetic), and the moved box must lie within the innermost values of both ends; `None`
+/// when rounding leaves that unproven.
+fn moved(k: &[Interval; 6], region: &[Interval; 6], turns: &[f64; 6]) -> Option<[Interval; 6]> {
+    let mut out = *k;
+    for d in 0..6 {
+        if turns[d] == 0.0 {
+            continue;
+        }
+        let by = Interval::TAU * point(turns[d]);
+        let x = k[d] + by;
+        let (lo, hi) = (point(region[d].inf()) + by, point(region[d].sup()) + by);
+        if !(x.inf() >= lo.sup() && x.sup() <= hi.inf()) {
+            return None;
+        }
+        out[d] = x;
+    }
+    Some(out)
 }
 
 /// Every solution of `pose(θ) = target` with each θₖ in `chain.ranges[k]`, each in a box
@@ -350,30 +375,36 @@ pub(crate) fn solve(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget, p
 
 fn solve_or_degenerate(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget, precision: f64) -> Result<Vec<[Interval; 6]>, Degeneracy> {
     let g = target.0.then(&chain.post.inverse());
-    let mut candidates: Vec<[Interval; 6]> = Vec::new();
-    let found = match geometry {
+    let all = match geometry {
         Geometry::SphericalWrist(wrist) => branches(chain, wrist, &g)?,
         Geometry::ParallelAxes(arm) => parallel_axes::branches(chain, arm, &g)?,
     };
-    for b in found {
-        let mut boxes: Vec<[Interval; 6]> = vec![b];
+    let mut split = None;
+    let mut found = Vec::new();
+    for b in all {
+        // Each copy within the ranges: the branch moved by whole turns `t`, joint by joint.
+        let mut moves: Vec<([f64; 6], [Interval; 6])> = vec![([0.0; 6], b)];
         for k in 0..6 {
             let each = copies(b[k], chain.ranges[k])?;
-            boxes = boxes.iter().flat_map(|x| each.iter().map(move |&y| {
-                let mut x = *x;
-                x[k] = y;
-                x
+            moves = moves.iter().flat_map(|(t, x)| each.iter().map(move |&(turns, y)| {
+                let (mut t, mut x) = (*t, *x);
+                (t[k], x[k]) = (turns, y);
+                (t, x)
             })).collect();
         }
-        candidates.extend(boxes);
-    }
-    if candidates.is_empty() {
-        return Ok(candidates);
-    }
-    let split = chain.split(&target.0, 0);
-    let mut found = Vec::with_capacity(candidates.len());
-    for c in &candidates {
-        found.push(certify(&split, c, precision).ok_or(Degeneracy::Uncertified)?);
+        if moves.is_empty() {
+            continue;
+        }
+        // The branch certified once; each copy is its certified box moved (`moved`), or
+        // certified on its own when rounding leaves the move unproven.
+        let split = split.get_or_insert_with(|| chain.split(&target.0, 0));
+        let (k, region) = certify(split, &b, precision).ok_or(Degeneracy::Uncertified)?;
+        for (turns, c) in &moves {
+            match moved(&k, &region, turns) {
+                Some(x) => found.push(x),
+                None => found.push(certify(split, c, precision).ok_or(Degeneracy::Uncertified)?.0),
+            }
+        }
     }
     let overlap = |x: &[Interval; 6], y: &[Interval; 6]| (0..6).all(|d| !x[d].disjoint(y[d]));
     if (0..found.len()).any(|i| (0..i).any(|j| overlap(&found[i], &found[j]))) {
@@ -453,6 +484,7 @@ mod tests {
     fn copies_within_the_range_and_at_its_limits() {
         let x = interval(0.5, 0.5 + 1e-12);
         assert_eq!(copies(x, (-3.2, 3.2)).map(|c| c.len()), Ok(1));
+        assert_eq!(copies(x, (-6.1, 6.1)).map(|c| c.iter().map(|y| y.0).collect::<Vec<_>>()), Ok(vec![-1.0, 0.0]));
         assert_eq!(copies(x, (-6.1, 6.1)).map(|c| c.len()), Ok(2));
         assert_eq!(copies(x, (0.6, 1.0)).map(|c| c.len()), Ok(0));
         assert_eq!(copies(x, (0.5 + 1e-13, 1.0)), Err(Degeneracy::Limit));
