@@ -13,7 +13,8 @@ answer's unique boxes are the batch answer's for that pose, and that q lies in o
 reports' `seconds`) and the time outside it per pose (start, reading the URDF, building the chain,
 writing): the batch's wall time less the solver's, over the poses, and the median for one
 process per pose, and how many poses each method answered (`closed` the closed form of a
-recognised geometry, such as the spherical wrists of the PUMA and KR16, `search` the search).
+recognised geometry, such as the spherical wrists of the PUMA and KR16 or the UR5's parallel
+axes 2, 3, 4, `search` the search).
 
     python3 scripts/bench_ik6_poses.py --linkspace target/release/linkspace --poses 200 --singles 20
 """

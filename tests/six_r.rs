@@ -463,7 +463,7 @@ mod path_check {
 /// of the CRX fixture, and of the IRB 140-style and Doosan-style fixtures, from `scripts/dev/ik6_reference.py` (monodromy and parameter
 /// homotopy, refined at 60 digits, two seeds; no interval code): the certified solutions are
 /// exactly the reference's, one per box, nothing undecided.
-mod homotopy_reference {
+pub(crate) mod homotopy_reference {
     use super::*;
     use serde_json::Value;
 
@@ -486,13 +486,14 @@ mod homotopy_reference {
         lo - slack <= x && x <= hi + slack
     }
 
-    /// Per fixture: its name, the histogram of solution counts, and (pose, seconds) per pose.
-    type Checked = (String, std::collections::BTreeMap<usize, usize>, Vec<(usize, f64)>);
+    /// Per fixture: its name, the histogram of solution counts, (pose, seconds) per pose, and
+    /// how many poses the closed form answered.
+    pub(crate) type Checked = (String, std::collections::BTreeMap<usize, usize>, Vec<(usize, f64)>, usize);
 
     /// Checks the poses of every fixture of `file` that `pick` selects (from the pose's index and
     /// the index of the fixture's first pose with the most solutions); returns per fixture the
     /// histogram of solution counts and the solver's times (seconds).
-    fn check(file: &str, pick: impl Fn(usize, usize) -> bool) -> Vec<Checked> {
+    pub(crate) fn check(file: &str, pick: impl Fn(usize, usize) -> bool) -> Vec<Checked> {
         let refs = reference(file);
         // Solutions are written with 17 significant digits, or 9 in a compact file.
         let slack = if refs.get("compact").and_then(Value::as_bool) == Some(true) { 2e-8 } else { 1e-9 };
@@ -509,7 +510,7 @@ mod homotopy_reference {
                     assert!(!chain.continuous[k] && (chain.ranges[k].0 - r[0]).abs() < 1e-12 && (chain.ranges[k].1 - r[1]).abs() < 1e-12, "{name}: joint {k} {:?} {r:?}", chain.ranges[k]);
                 }
             }
-            let (mut hist, mut times) = (std::collections::BTreeMap::new(), Vec::new());
+            let (mut hist, mut times, mut closed) = (std::collections::BTreeMap::new(), Vec::new(), 0);
             let poses = fixture["poses"].as_array().expect("poses");
             let count = |p: &Value| p["solutions"].as_array().expect("solutions").len();
             let most = poses.iter().map(count).max().expect("poses");
@@ -533,6 +534,7 @@ mod homotopy_reference {
                 let t = Instant::now();
                 let sol = ik::solve(&chain, &PoseTarget::around(&pose, 1e-12).expect("finite"), 1e-10, &control()).expect("solves");
                 times.push((i, t.elapsed().as_secs_f64()));
+                closed += usize::from(sol.method == ik::Ik6Method::ClosedForm);
                 assert_eq!(sol.status, Status::Finished, "{name} pose {i}");
                 assert!(sol.clusters.is_empty(), "{name} pose {i}: undecided {:?}", sol.clusters);
                 let inside = |u: &[linkspace::kernel::interval::Interval; 6], a: &[f64; 6]| (0..6).all(|k| holds(u[k].inf(), u[k].sup(), a[k], slack));
@@ -547,20 +549,20 @@ mod homotopy_reference {
                 assert_eq!(sol.unique.len(), expected.len(), "{name} pose {i}");
                 *hist.entry(expected.len()).or_insert(0) += 1;
             }
-            out.push((name.to_string(), hist, times));
+            out.push((name.to_string(), hist, times, closed));
         }
         out
     }
 
     /// Per fixture: the counts, the median and maximum time, and the slowest poses (index: ms).
-    fn summary(found: &[Checked]) {
-        for (name, hist, times) in found {
+    pub(crate) fn summary(found: &[Checked]) {
+        for (name, hist, times, closed) in found {
             let mut t = times.clone();
             t.sort_by(|a, b| a.1.total_cmp(&b.1));
             let slowest: Vec<String> = t.iter().rev().take(8).map(|(i, s)| format!("{i}: {:.0}", 1e3 * s)).collect();
             let over = |limit: f64| t.iter().filter(|p| p.1 > limit).count();
             println!(
-                "{name}: {} poses, counts {hist:?}, median {:.1} ms, max {:.1} ms; over 50 / 100 / 250 ms: {} / {} / {}; slowest (pose: ms) {}",
+                "{name}: {} poses ({closed} in closed form), counts {hist:?}, median {:.1} ms, max {:.1} ms; over 50 / 100 / 250 ms: {} / {} / {}; slowest (pose: ms) {}",
                 t.len(),
                 1e3 * t[t.len() / 2].1,
                 1e3 * t[t.len() - 1].1,
@@ -577,7 +579,7 @@ mod homotopy_reference {
     #[test]
     fn certified_solutions_are_the_homotopy_references() {
         let found = check("ik6_reference.json", |_, _| true);
-        let most: Vec<usize> = found.iter().map(|(_, hist, _)| *hist.keys().last().expect("poses")).collect();
+        let most: Vec<usize> = found.iter().map(|(_, hist, _, _)| *hist.keys().last().expect("poses")).collect();
         assert_eq!(most, [6, 16]);
         summary(&found);
     }
@@ -588,9 +590,9 @@ mod homotopy_reference {
     #[test]
     fn vendor_style_arms_match_the_homotopy_references() {
         let found = check("ik6_reference_vendors.json", |_, _| true);
-        let names: Vec<&str> = found.iter().map(|(name, _, _)| name.as_str()).collect();
+        let names: Vec<&str> = found.iter().map(|(name, _, _, _)| name.as_str()).collect();
         assert_eq!(names, ["irb140", "doosan"]);
-        assert!(found.iter().all(|(_, hist, _)| hist.values().sum::<usize>() == 30 && hist.keys().any(|&n| n >= 4)));
+        assert!(found.iter().all(|(_, hist, _, _)| hist.values().sum::<usize>() == 30 && hist.keys().any(|&n| n >= 4)));
         summary(&found);
     }
 
@@ -609,7 +611,7 @@ mod homotopy_reference {
         let found = check(&file, |i, _| range.as_ref().is_none_or(|r| r.contains(&i)));
         summary(&found);
         if range.is_none() {
-            assert!(found.iter().all(|(_, hist, _)| hist.values().sum::<usize>() == 1000));
+            assert!(found.iter().all(|(_, hist, _, _)| hist.values().sum::<usize>() == 1000));
         }
     }
 }

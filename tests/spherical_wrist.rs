@@ -14,13 +14,13 @@ use linkspace::model::{rounding, urdf, JointKind, Mechanism};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-fn mechanism(file: &str) -> Mechanism {
+pub(crate) fn mechanism(file: &str) -> Mechanism {
     let xml = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join(file)).expect("bundled file");
     rounding::snap(&urdf::parse(&xml).expect("parses"), rounding::ANGLE_TOLERANCE).0
 }
 
 /// The rotation by `t` about the unit axis `a` (Rodrigues), written out here.
-fn about(a: [f64; 3], t: f64) -> Pose64 {
+pub(crate) fn about(a: [f64; 3], t: f64) -> Pose64 {
     let (s, c) = t.sin_cos();
     let k = [[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]];
     let r = [0, 1, 2].map(|i| [0, 1, 2].map(|j| a[i] * a[j] * (1.0 - c) + if i == j { c } else { 0.0 } + s * k[i][j]));
@@ -28,7 +28,7 @@ fn about(a: [f64; 3], t: f64) -> Pose64 {
 }
 
 /// The tip pose of the chain's joints at `q`, from the mechanism's joints (root to tip).
-fn forward(m: &Mechanism, chain: &Chain6R, q: &[f64; 6]) -> Pose64 {
+pub(crate) fn forward(m: &Mechanism, chain: &Chain6R, q: &[f64; 6]) -> Pose64 {
     let tip = m.link(&chain.tip).expect("tip");
     let mut free = q.iter();
     let mut pose = Pose64::IDENTITY;
@@ -48,29 +48,29 @@ fn forward(m: &Mechanism, chain: &Chain6R, q: &[f64; 6]) -> Pose64 {
     pose
 }
 
-fn control(timeout: Option<Duration>) -> Control<'static> {
+pub(crate) fn control(timeout: Option<Duration>) -> Control<'static> {
     static NEVER: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
     Control { limits: Limits { max_cells: 3_000_000, timeout, ..Limits::default() }, threads: 1, cancel: &NEVER }
 }
 
-fn holds(b: &[Interval; 6], q: &[f64; 6]) -> bool {
+pub(crate) fn holds(b: &[Interval; 6], q: &[f64; 6]) -> bool {
     (0..6).all(|k| b[k].contains(q[k]))
 }
 
-fn meets(a: &[Interval; 6], b: &[Interval; 6]) -> bool {
+pub(crate) fn meets(a: &[Interval; 6], b: &[Interval; 6]) -> bool {
     (0..6).all(|k| !a[k].disjoint(b[k]))
 }
 
-struct Lcg(u64);
+pub(crate) struct Lcg(pub(crate) u64);
 
 impl Lcg {
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+    pub(crate) fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
         self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         lo + (hi - lo) * ((self.0 >> 11) as f64 / (1u64 << 53) as f64)
     }
 }
 
-fn random_q(chain: &Chain6R, rng: &mut Lcg) -> [f64; 6] {
+pub(crate) fn random_q(chain: &Chain6R, rng: &mut Lcg) -> [f64; 6] {
     [0, 1, 2, 3, 4, 5].map(|k| {
         let (lo, hi) = chain.ranges[k];
         rng.uniform(lo.max(-3.1), hi.min(3.1))
@@ -78,7 +78,7 @@ fn random_q(chain: &Chain6R, rng: &mut Lcg) -> [f64; 6] {
 }
 
 /// Both answers at the pose of `q`: closed form (through `ik::solve`) and search alone.
-fn both(m: &Mechanism, chain: &Chain6R, q: &[f64; 6], timeout: Option<Duration>) -> (Ik6Solutions, Ik6Solutions) {
+pub(crate) fn both(m: &Mechanism, chain: &Chain6R, q: &[f64; 6], timeout: Option<Duration>) -> (Ik6Solutions, Ik6Solutions) {
     let target = PoseTarget::around(&forward(m, chain, q), 1e-12).expect("finite");
     let solved = ik::solve(chain, &target, 1e-10, &control(timeout)).expect("solves");
     let searched = ik::search(chain, &target, 1e-10, &control(timeout)).expect("searches");
@@ -87,7 +87,7 @@ fn both(m: &Mechanism, chain: &Chain6R, q: &[f64; 6], timeout: Option<Duration>)
 
 /// The closed form's answer is complete, holds `q` in exactly one box, and pairs one to one
 /// with the search's certified boxes.
-fn agree(name: &str, q: &[f64; 6], solved: &Ik6Solutions, searched: &Ik6Solutions) {
+pub(crate) fn agree(name: &str, q: &[f64; 6], solved: &Ik6Solutions, searched: &Ik6Solutions) {
     assert_eq!(solved.status, Status::Finished, "{name} q {q:?}");
     assert!(solved.clusters.is_empty(), "{name} q {q:?}");
     assert_eq!(solved.unique.iter().filter(|b| holds(b, q)).count(), 1, "{name} q {q:?}: {:?}", solved.unique);

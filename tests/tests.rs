@@ -57,6 +57,9 @@ mod topics;
 mod six_r;
 /// Spherical-wrist arms in closed form against the search and forward kinematics.
 mod spherical_wrist;
+/// Arms with axes 2, 3, 4 parallel (the UR family) in closed form against the search and
+/// forward kinematics.
+mod three_parallel_ik;
 /// Joint paths against a 3R positioning structure's singular set: crossings through singular
 /// points and clear segments from an `f64` forward-kinematics reference.
 mod path_check_3r;

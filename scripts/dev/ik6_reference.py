@@ -72,6 +72,8 @@ FIXTURES = {
     "crx": "tests/data/fanuc_crx10ial_style.urdf",
     "irb140": "tests/data/abb_irb140_style.urdf",
     "doosan": "tests/data/doosan_style_6r.urdf",
+    "ur5": "urdf/ur5.urdf",
+    "ur5_ros": "tests/data/ur5_ros_style.urdf",
 }
 
 # ----------------------------------------------------------------------------------------------

@@ -307,8 +307,9 @@ class Ik6Result(Result):
 
     @property
     def method(self) -> str:
-        """Which method answered: ``"closed_form"`` (a recognised geometry such as a spherical
-        wrist, every candidate certified) or ``"search"`` (branch and prune)."""
+        """Which method answered: ``"closed_form"`` (a recognised geometry: a spherical wrist,
+        or axes 2, 3, 4 parallel as on UR arms; every candidate certified) or ``"search"``
+        (branch and prune)."""
         return str(self._report["method"])
 
     def __repr__(self) -> str:

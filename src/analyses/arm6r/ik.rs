@@ -48,6 +48,7 @@ use super::invariant_pairs;
 mod closed_form;
 pub use self::closed_form::Degeneracy;
 mod invariants;
+mod parallel_axes;
 mod square;
 
 use self::invariants::{first_phase, invariants, INNER};
@@ -98,8 +99,9 @@ pub struct Ik6Solutions {
 /// Which method answered an inverse-kinematics query.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Ik6Method {
-    /// The closed form of a recognised geometry (`closed_form`: a spherical wrist), every
-    /// candidate certified by Krawczyk; its counters are the candidates.
+    /// The closed form of a recognised geometry (`closed_form`: a spherical wrist, or axes
+    /// 2, 3, 4 parallel with axes 5 and 6 meeting), every candidate certified by Krawczyk;
+    /// its counters are the candidates.
     ClosedForm,
     /// The branch-and-prune search.
     Search,
@@ -555,11 +557,11 @@ pub fn solve_with(chain: &Chain6R, target: &PoseTarget, precision: f64, control:
     if !(precision > 0.0 && precision < 1.0) {
         return Err(Manip6rError::BadPrecision(precision));
     }
-    let Some(wrist) = closed_form::recognise(chain) else {
+    let Some(geometry) = closed_form::recognise(chain) else {
         return solve_inflating(chain, target, precision, INFLATE_WIDTH, control, progress);
     };
     let start = std::time::Instant::now();
-    match closed_form::solve(chain, &wrist, target, precision) {
+    match closed_form::solve(chain, &geometry, target, precision) {
         closed_form::ClosedForm::Solved(unique) => {
             let n = unique.len() as u64;
             let stats = Stats { processed: n, found: n, seconds: start.elapsed().as_secs_f64(), ..Stats::default() };

@@ -4,12 +4,14 @@
 //!
 //! # Recognition
 //!
-//! `recognise` proves on the chain's interval coefficients (after the rounding policy, when
-//! one applied) that axes 4, 5, 6 meet in one point `W`, taken as the origin of joint 4's,
+//! `spherical_wrist` proves on the chain's interval coefficients (after the rounding policy,
+//! when one applied) that axes 4, 5, 6 meet in one point `W`, taken as the origin of joint 4's,
 //! 5's or 6's frame, and that axes 2 and 3 are parallel: exact zeros of cross products where
 //! a relation must hold exactly, strict signs where axes must not be parallel (4 and 5, 5 and
 //! 6, 1 and 2). Coefficients that only *contain* a meeting (a decimal quarter turn taken as
-//! written) prove nothing, and the search answers.
+//! written) prove nothing, and the search answers. `recognise` tries this geometry, then the
+//! second one with a closed form, axes 2, 3, 4 parallel (`parallel_axes`), whose branches are
+//! certified here the same way.
 //!
 //! # The decomposition (Pieper 1968; the subproblems of Paden 1985, as in Elias & Wen 2022)
 //!
@@ -38,6 +40,7 @@
 // Matrix and joint indices read as the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
+use super::parallel_axes::{self, ParallelAxes};
 use super::{square, PoseTarget, Split};
 use crate::analyses::arm6r::chain::{Chain6R, IAffine};
 use crate::formulate::stated;
@@ -45,45 +48,45 @@ use crate::kernel::contract::krawczyk::{self, Step as K};
 use crate::kernel::interval::{interval, point, strict_sign, trig, Interval};
 use smallvec::SmallVec;
 
-type V3 = [Interval; 3];
-type M3 = [[Interval; 3]; 3];
+pub(super) type V3 = [Interval; 3];
+pub(super) type M3 = [[Interval; 3]; 3];
 /// Joints 4, 5, 6 of one wrist branch (modulo a turn).
 type WristAngles = (Interval, Interval, Interval);
 
-fn dot(a: &V3, b: &V3) -> Interval {
+pub(super) fn dot(a: &V3, b: &V3) -> Interval {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-fn cross(a: &V3, b: &V3) -> V3 {
+pub(super) fn cross(a: &V3, b: &V3) -> V3 {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
 }
 
-fn add(a: &V3, b: &V3) -> V3 {
+pub(super) fn add(a: &V3, b: &V3) -> V3 {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }
 
-fn sub(a: &V3, b: &V3) -> V3 {
+pub(super) fn sub(a: &V3, b: &V3) -> V3 {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
-fn exact_zero(v: &V3) -> bool {
+pub(super) fn exact_zero(v: &V3) -> bool {
     v.iter().all(|x| x.inf() == 0.0 && x.sup() == 0.0)
 }
 
-fn nonzero(v: &V3) -> bool {
+pub(super) fn nonzero(v: &V3) -> bool {
     v.iter().any(|x| strict_sign(*x).is_some())
 }
 
 /// `R(a, θ)·v` for the unit axis `a`, from enclosures of `cos θ`, `sin θ`:
 /// `(a·v)a + cos θ (v − (a·v)a) + sin θ (a × v)` (Rodrigues).
-fn rotate(a: &V3, c: Interval, s: Interval, v: &V3) -> V3 {
+pub(super) fn rotate(a: &V3, c: Interval, s: Interval, v: &V3) -> V3 {
     let along = dot(a, v);
     let w = cross(a, v);
     [0, 1, 2].map(|i| along * a[i] + c * (v[i] - along * a[i]) + s * w[i])
 }
 
 /// The matrix of `R(a, θ)`: `aaᵀ + cos θ (I − aaᵀ) + sin θ [a]×`.
-fn rotation(a: &V3, c: Interval, s: Interval) -> M3 {
+pub(super) fn rotation(a: &V3, c: Interval, s: Interval) -> M3 {
     let e = |j: usize| {
         let mut v = [point(0.0); 3];
         v[j] = point(1.0);
@@ -151,12 +154,26 @@ pub(crate) struct SphericalWrist {
     d6: V3,
 }
 
+/// A geometry with a closed form: a spherical wrist (this module) or axes 2, 3, 4 parallel
+/// (`parallel_axes`).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Geometry {
+    SphericalWrist(SphericalWrist),
+    ParallelAxes(ParallelAxes),
+}
+
+/// The geometry `chain`'s coefficients prove, if any: a spherical wrist first, then axes 2, 3,
+/// 4 parallel.
+pub(crate) fn recognise(chain: &Chain6R) -> Option<Geometry> {
+    spherical_wrist(chain).map(Geometry::SphericalWrist).or_else(|| parallel_axes::recognise(chain).map(Geometry::ParallelAxes))
+}
+
 /// Proves the conditions of the module doc on `chain`'s coefficients, or `None` when one is not
 /// proven (it may be false, or hold only up to rounding the enclosures cannot exclude).
 ///
 /// Each relation is between consecutive axes, tested in the frame of the first of the two after
 /// its turn, where it holds at every angle.
-pub(crate) fn recognise(chain: &Chain6R) -> Option<SphericalWrist> {
+pub(crate) fn spherical_wrist(chain: &Chain6R) -> Option<SphericalWrist> {
     let a = &chain.axes;
     let pre = &chain.pre;
     // Axis k+1 in joint k's frame (after its turn): direction.
@@ -230,9 +247,9 @@ pub(crate) fn turn(a: &V3, from: &V3, to: &V3) -> Result<Interval, Degeneracy> {
     trig::angle(c, dot(&cross(a, from), to)).ok_or(Degeneracy::Direction)
 }
 
-/// The copies of `phi` (modulo a turn) within `[lo, hi]`; `Limit` when one meets a limit
-/// without lying within.
-fn copies(phi: Interval, (lo, hi): (f64, f64)) -> Result<SmallVec<[Interval; 2]>, Degeneracy> {
+/// The copies `phi + 2πk` (modulo a turn) within `[lo, hi]`, each with its `k`; `Limit` when
+/// one meets a limit without lying within.
+fn copies(phi: Interval, (lo, hi): (f64, f64)) -> Result<SmallVec<[(f64, Interval); 2]>, Degeneracy> {
     let tau = std::f64::consts::TAU;
     let (first, last) = (((lo - phi.sup()) / tau).floor(), ((hi - phi.inf()) / tau).ceil());
     let mut out = SmallVec::new();
@@ -240,7 +257,7 @@ fn copies(phi: Interval, (lo, hi): (f64, f64)) -> Result<SmallVec<[Interval; 2]>
     while k <= last {
         let x = phi + Interval::TAU * point(k);
         if x.inf() >= lo && x.sup() <= hi {
-            out.push(x);
+            out.push((k, x));
         } else if !(x.sup() < lo || x.inf() > hi) {
             return Err(Degeneracy::Limit);
         }
@@ -249,7 +266,7 @@ fn copies(phi: Interval, (lo, hi): (f64, f64)) -> Result<SmallVec<[Interval; 2]>
     Ok(out)
 }
 
-fn cos_sin(x: Interval) -> (Interval, Interval) {
+pub(super) fn cos_sin(x: Interval) -> (Interval, Interval) {
     (trig::cos(x), trig::sin(x))
 }
 
@@ -311,48 +328,83 @@ fn wrist_branches(chain: &Chain6R, wrist: &SphericalWrist, m: &M3) -> Result<Sma
 /// holds one (module doc), so one zero in the box is that solution: the search's test of the
 /// trace (`square::not_a_half_turn`), which proves a zero it found blind is a solution, is not
 /// needed here.
-fn certify(split: &Split, c: &[Interval; 6], precision: f64) -> Option<[Interval; 6]> {
+///
+/// Returns the tightened box and the region the certificate holds on.
+fn certify(split: &Split, c: &[Interval; 6], precision: f64) -> Option<([Interval; 6], [Interval; 6])> {
     let w = c.iter().map(|x| x.wid()).fold(0.0, f64::max);
     for r in [(16.0 * w).max(1e-12), (1e3 * w).max(1e-9), (1e5 * w).max(1e-6)] {
         let region = c.map(|x| interval(x.inf() - r, x.sup() + r));
         if let K::Unique(k) = square::newton(split, &region) {
-            return Some(krawczyk::tighten(k, precision, |k| square::newton(split, k)));
+            return Some((krawczyk::tighten(k, precision, |k| square::newton(split, k)), region));
         }
     }
     None
 }
 
+/// The certified box `k` moved by `turns[d]` whole turns in each joint `d`, when it is proven to
+/// lie within `region` moved the same way: the equations are 2π-periodic in every angle, so the
+/// moved region holds exactly one solution, the moved copy of the one in `region`, and it lies
+/// in the moved box. Each end of the moved region is enclosed (`x + 2πt` in interval
+/// arithmetic), and the moved box must lie within the innermost values of both ends; `None`
+/// when rounding leaves that unproven.
+fn moved(k: &[Interval; 6], region: &[Interval; 6], turns: &[f64; 6]) -> Option<[Interval; 6]> {
+    let mut out = *k;
+    for d in 0..6 {
+        if turns[d] == 0.0 {
+            continue;
+        }
+        let by = Interval::TAU * point(turns[d]);
+        let x = k[d] + by;
+        let (lo, hi) = (point(region[d].inf()) + by, point(region[d].sup()) + by);
+        if !(x.inf() >= lo.sup() && x.sup() <= hi.inf()) {
+            return None;
+        }
+        out[d] = x;
+    }
+    Some(out)
+}
+
 /// Every solution of `pose(θ) = target` with each θₖ in `chain.ranges[k]`, each in a box
 /// certified unique and tightened to `precision`, or why the search must answer.
-pub(crate) fn solve(chain: &Chain6R, wrist: &SphericalWrist, target: &PoseTarget, precision: f64) -> ClosedForm {
-    match solve_or_degenerate(chain, wrist, target, precision) {
+pub(crate) fn solve(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget, precision: f64) -> ClosedForm {
+    match solve_or_degenerate(chain, geometry, target, precision) {
         Ok(found) => ClosedForm::Solved(found),
         Err(why) => ClosedForm::Degenerate(why),
     }
 }
 
-fn solve_or_degenerate(chain: &Chain6R, wrist: &SphericalWrist, target: &PoseTarget, precision: f64) -> Result<Vec<[Interval; 6]>, Degeneracy> {
+fn solve_or_degenerate(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget, precision: f64) -> Result<Vec<[Interval; 6]>, Degeneracy> {
     let g = target.0.then(&chain.post.inverse());
-    let mut candidates: Vec<[Interval; 6]> = Vec::new();
-    for b in branches(chain, wrist, &g)? {
-        let mut boxes: Vec<[Interval; 6]> = vec![b];
+    let all = match geometry {
+        Geometry::SphericalWrist(wrist) => branches(chain, wrist, &g)?,
+        Geometry::ParallelAxes(arm) => parallel_axes::branches(chain, arm, &g)?,
+    };
+    let mut split = None;
+    let mut found = Vec::new();
+    for b in all {
+        // Each copy within the ranges: the branch moved by whole turns `t`, joint by joint.
+        let mut moves: Vec<([f64; 6], [Interval; 6])> = vec![([0.0; 6], b)];
         for k in 0..6 {
             let each = copies(b[k], chain.ranges[k])?;
-            boxes = boxes.iter().flat_map(|x| each.iter().map(move |&y| {
-                let mut x = *x;
-                x[k] = y;
-                x
+            moves = moves.iter().flat_map(|(t, x)| each.iter().map(move |&(turns, y)| {
+                let (mut t, mut x) = (*t, *x);
+                (t[k], x[k]) = (turns, y);
+                (t, x)
             })).collect();
         }
-        candidates.extend(boxes);
-    }
-    if candidates.is_empty() {
-        return Ok(candidates);
-    }
-    let split = chain.split(&target.0, 0);
-    let mut found = Vec::with_capacity(candidates.len());
-    for c in &candidates {
-        found.push(certify(&split, c, precision).ok_or(Degeneracy::Uncertified)?);
+        if moves.is_empty() {
+            continue;
+        }
+        // The branch certified once; each copy is its certified box moved (`moved`), or
+        // certified on its own when rounding leaves the move unproven.
+        let split = split.get_or_insert_with(|| chain.split(&target.0, 0));
+        let (k, region) = certify(split, &b, precision).ok_or(Degeneracy::Uncertified)?;
+        for (turns, c) in &moves {
+            match moved(&k, &region, turns) {
+                Some(x) => found.push(x),
+                None => found.push(certify(split, c, precision).ok_or(Degeneracy::Uncertified)?.0),
+            }
+        }
     }
     let overlap = |x: &[Interval; 6], y: &[Interval; 6]| (0..6).all(|d| !x[d].disjoint(y[d]));
     if (0..found.len()).any(|i| (0..i).any(|j| overlap(&found[i], &found[j]))) {
@@ -432,6 +484,7 @@ mod tests {
     fn copies_within_the_range_and_at_its_limits() {
         let x = interval(0.5, 0.5 + 1e-12);
         assert_eq!(copies(x, (-3.2, 3.2)).map(|c| c.len()), Ok(1));
+        assert_eq!(copies(x, (-6.1, 6.1)).map(|c| c.iter().map(|y| y.0).collect::<Vec<_>>()), Ok(vec![-1.0, 0.0]));
         assert_eq!(copies(x, (-6.1, 6.1)).map(|c| c.len()), Ok(2));
         assert_eq!(copies(x, (0.6, 1.0)).map(|c| c.len()), Ok(0));
         assert_eq!(copies(x, (0.5 + 1e-13, 1.0)), Err(Degeneracy::Limit));
@@ -443,10 +496,13 @@ mod tests {
     fn spherical_wrists_are_recognised() {
         let file = |f: &str| std::fs::read_to_string(format!("{}/{f}", env!("CARGO_MANIFEST_DIR"))).expect("bundled");
         for f in ["urdf/puma560.urdf", "urdf/kuka_kr16.urdf", "urdf/staubli_tx90.urdf", "tests/data/abb_irb140_style.urdf"] {
-            assert!(recognise(&chain(&file(f))).is_some(), "{f}");
+            assert!(matches!(recognise(&chain(&file(f))), Some(Geometry::SphericalWrist(_))), "{f}");
+        }
+        for f in ["urdf/ur5.urdf", "tests/data/ur5_ros_style.urdf"] {
+            assert!(matches!(recognise(&chain(&file(f))), Some(Geometry::ParallelAxes(_))), "{f}");
         }
         for f in ["urdf/ur5.urdf", "tests/data/ik6_general_6r.urdf", "tests/data/fanuc_crx10ial_style.urdf", "tests/data/doosan_style_6r.urdf"] {
-            assert!(recognise(&chain(&file(f))).is_none(), "{f}");
+            assert!(spherical_wrist(&chain(&file(f))).is_none(), "{f}");
         }
     }
 }
