@@ -76,13 +76,15 @@ impl<L: Coordinates> SingularProblem<L> {
             }
             stats.push(e.stats);
         }
-        Ok(self.clustered(boxes, status, stats, dropped_other_chart, unsearched_charts, t0, settings.threads))
+        let mut set = self.clustered(boxes, status, stats, dropped_other_chart, unsearched_charts, settings.threads);
+        set.seconds = t0.elapsed().as_secs_f64();
+        Ok(set)
     }
 
     /// The set from its boxes: clusters by configuration part (the same configuration found in
     /// two charts, or a curve crossing from one chart to the next, is one cluster), labelled on
-    /// `threads` threads and every process sharing the search.
-    fn clustered(&self, boxes: Vec<SingularBox>, status: Status, stats: Vec<SolveStats>, dropped_other_chart: u64, unsearched_charts: usize, t0: Instant, threads: usize) -> SingularSet {
+    /// `threads` threads and every process sharing the search. The caller sets `seconds`.
+    fn clustered(&self, boxes: Vec<SingularBox>, status: Status, stats: Vec<SolveStats>, dropped_other_chart: u64, unsearched_charts: usize, threads: usize) -> SingularSet {
         let projected: Vec<IntervalBox> = boxes.iter().map(|x| IntervalBox::new(x.b.dims[..self.base_vars].to_vec())).collect();
         let (labels, n) = components_shared(&projected, threads);
         let mut clusters = vec![Cluster::default(); n];
@@ -94,7 +96,7 @@ impl<L: Coordinates> SingularProblem<L> {
                 BoxStatus::Solution => {}
             }
         }
-        SingularSet { status, boxes, labels, clusters, stats, dropped_other_chart, unsearched_charts, seconds: t0.elapsed().as_secs_f64() }
+        SingularSet { status, boxes, labels, clusters, stats, dropped_other_chart, unsearched_charts, seconds: 0.0 }
     }
 
     /// True when every direction in `b` (chart `k`, `m_k = 1`) is owned by another chart: some

@@ -222,7 +222,9 @@ impl<L: Coordinates> SingularProblem<L> {
         let boxes: Vec<SingularBox> = boxes.into_iter().zip(keep).filter_map(|(b, k)| k.then_some(b)).collect();
         // The curve's search comes after the charts' counters, so that entry k stays chart k's.
         stats.push(curve_stats);
-        Ok(self.clustered(boxes, status, stats, dropped_other_chart, 0, t0, settings.threads))
+        let mut set = self.clustered(boxes, status, stats, dropped_other_chart, 0, settings.threads);
+        set.seconds = t0.elapsed().as_secs_f64();
+        Ok(set)
     }
 
     /// Where the singular points of the configuration box `leaf` are searched (module doc).
