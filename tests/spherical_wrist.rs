@@ -213,3 +213,22 @@ fn closed_form_and_search_timings() {
         );
     }
 }
+
+/// `--ignore-limits` sets the file's joint limits aside for `ik6` as for every other arm job: a
+/// PUMA configuration with joint 1 beyond its limit (2.7925) is no solution within the limits
+/// and one of the certified solutions without them.
+#[test]
+fn ignoring_the_limits_finds_the_solutions_beyond_them() {
+    let m = mechanism("urdf/puma560.urdf");
+    let within = linkspace::app::chain6(&m, &linkspace::app::ArmOptions::default()).expect("six joints");
+    let torus = linkspace::app::chain6(&m, &linkspace::app::ArmOptions { ignore_limits: true, ..Default::default() }).expect("six joints");
+    assert!(within.ranges[0].1 < 3.0 && torus.ranges[0].1 > 3.0 && torus.continuous.iter().all(|&c| c), "{:?}", torus.ranges);
+    let q = [3.0, -0.6, 0.9, 0.4, 0.8, -0.3];
+    let target = PoseTarget::around(&forward(&m, &within, &q), 1e-12).expect("finite");
+    let limited = ik::solve(&within, &target, 1e-10, &control(None)).expect("solves");
+    let whole = ik::solve(&torus, &target, 1e-10, &control(None)).expect("solves");
+    assert!(limited.status.finished() && whole.status.finished());
+    assert!(!limited.unique.iter().any(|b| holds(b, &q)), "{limited:?}");
+    assert_eq!(whole.unique.iter().filter(|b| holds(b, &q)).count(), 1, "{whole:?}");
+    assert!(whole.unique.len() > limited.unique.len(), "{} against {}", whole.unique.len(), limited.unique.len());
+}

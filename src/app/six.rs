@@ -17,8 +17,14 @@ pub fn chain6(m: &Mechanism, options: &LoadOptions) -> Result<Chain6R, Manip6rEr
 }
 
 /// `chain6`, with how many values the rounding policy changed on the joints from the chain's
-/// base to its tip (the whole-arm proof is about the geometry after them).
+/// base to its tip (the whole-arm proof is about the geometry after them); `--ignore-limits`
+/// sets the file's joint limits aside.
 pub(crate) fn chain6_snapped(m: &Mechanism, options: &LoadOptions) -> Result<(Chain6R, usize), Manip6rError> {
+    let (chain, snapped) = chain6_rounded(m, options)?;
+    Ok((if options.ignore_limits { chain.without_limits() } else { chain }, snapped))
+}
+
+fn chain6_rounded(m: &Mechanism, options: &LoadOptions) -> Result<(Chain6R, usize), Manip6rError> {
     if options.exact_geometry || options.snap_tolerance == 0.0 {
         return Ok((Chain6R::holding(m, options.spec.base.as_deref(), options.spec.tip.as_deref(), &options.spec.locks)?, 0));
     }

@@ -401,6 +401,15 @@ impl Chain6R {
         })
     }
 
+    /// The same chain with the file's joint limits set aside: every joint continuous over
+    /// [−π, π] (outward), so the analysis covers the whole torus.
+    pub fn without_limits(mut self) -> Chain6R {
+        let pi = crate::analyses::arm3r::PI_UP;
+        self.ranges = [(-pi, pi); 6];
+        self.continuous = [true; 6];
+        self
+    }
+
     /// The same chain searched over one turn per joint: each range cut to [−π, π] (a joint
     /// whose limits span more than a turn then covers the whole circle once, and its solutions
     /// are configurations rather than joint vectors).
