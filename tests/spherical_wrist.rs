@@ -232,3 +232,28 @@ fn ignoring_the_limits_finds_the_solutions_beyond_them() {
     assert_eq!(whole.unique.iter().filter(|b| holds(b, &q)).count(), 1, "{whole:?}");
     assert!(whole.unique.len() > limited.unique.len(), "{} against {}", whole.unique.len(), limited.unique.len());
 }
+
+/// The PUMA's elbow is singular where the wrist centre, joint 3's offset `a3 = 0.0203` and its
+/// reach `d4 = 0.4318` line up with the upper arm: joint 3 at `π/2 + atan(a3/d4)`. Near it two
+/// elbow branches nearly meet, so the closed form either certifies them apart or declines and
+/// leaves the pose to the search; either way the generating configuration is kept, and a closed
+/// form answer agrees with the search's.
+#[test]
+fn near_the_elbow_singularity_nothing_is_lost() {
+    let m = mechanism("urdf/puma560.urdf");
+    let chain = Chain6R::from_mechanism(&m, None, None).expect("six joints");
+    let elbow = std::f64::consts::FRAC_PI_2 + (0.0203f64 / 0.4318).atan();
+    let mut rng = Lcg(3);
+    for delta in [1e-2, 1e-4, 1e-6] {
+        let mut q = random_q(&chain, &mut rng);
+        q[2] = elbow + delta;
+        let target = PoseTarget::around(&forward(&m, &chain, &q), 1e-12).expect("finite");
+        let found = ik::solve(&chain, &target, 1e-10, &control(Some(Duration::from_secs(2)))).expect("solves");
+        let lost = !found.unique.iter().any(|b| holds(b, &q)) && !found.clusters.iter().any(|c| holds(&c.hull, &q));
+        assert!(!lost, "delta {delta:e}, q {q:?}: {found:?}");
+        if found.method == Ik6Method::ClosedForm {
+            let searched = ik::search(&chain, &target, 1e-10, &control(Some(Duration::from_secs(5)))).expect("searches");
+            agree("puma560", &q, &found, &searched);
+        }
+    }
+}

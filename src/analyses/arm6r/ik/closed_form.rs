@@ -332,7 +332,10 @@ fn wrist_branches(chain: &Chain6R, wrist: &SphericalWrist, m: &M3) -> Result<Sma
 /// Returns the tightened box and the region the certificate holds on.
 fn certify(split: &Split, c: &[Interval; 6], precision: f64) -> Option<([Interval; 6], [Interval; 6])> {
     let w = c.iter().map(|x| x.wid()).fold(0.0, f64::max);
-    for r in [(16.0 * w).max(1e-12), (1e3 * w).max(1e-9), (1e5 * w).max(1e-6)] {
+    // A wide region leaves room for the Krawczyk image; near an elbow or wrist singularity
+    // the Jacobian's spread over a wide region swells the image past it, so tighter
+    // regions (still holding the enclosure) are tried before wider ones.
+    for r in [(16.0 * w).max(1e-12), (2.0 * w).max(1e-12), (0.5 * w).max(1e-12), (1e3 * w).max(1e-9), (1e5 * w).max(1e-6)] {
         let region = c.map(|x| interval(x.inf() - r, x.sup() + r));
         if let K::Unique(k) = square::newton(split, &region) {
             return Some((krawczyk::tighten(k, precision, |k| square::newton(split, k)), region));
