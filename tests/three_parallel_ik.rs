@@ -123,7 +123,7 @@ fn at_and_near_the_wrist_and_elbow_singularities_nothing_is_lost() {
                 t.elapsed().as_secs_f64()
             );
             if value == 0.0 {
-                assert!(found.method.name() == "search" && found.method.declined().is_some(), "{name}: {:?}", found.method);
+                assert!(found.method != Ik6Method::ClosedForm && found.method.declined().is_some(), "{name}: {:?}", found.method);
             }
             let lost = !found.unique.iter().any(|b| holds(b, &q)) && !found.clusters.iter().any(|c| holds(&c.hull, &q));
             assert!(!lost, "{name} q {q:?}: {found:?}");

@@ -308,8 +308,9 @@ class Ik6Result(Result):
     @property
     def method(self) -> str:
         """Which method answered: ``"closed_form"`` (a recognised geometry: a spherical wrist,
-        or axes 2, 3, 4 parallel as on UR arms; every candidate certified) or ``"search"``
-        (branch and prune)."""
+        or axes 2, 3, 4 parallel as on UR arms; every candidate certified), ``"search"``
+        (branch and prune), or ``"closed_form_and_search"`` (the candidates the closed form
+        certified, and branch and prune on a box about each candidate it could not certify)."""
         return str(self._report["method"])
 
     def __repr__(self) -> str:

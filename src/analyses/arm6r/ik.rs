@@ -47,6 +47,7 @@ use super::invariant_pairs;
 
 mod closed_form;
 pub use self::closed_form::Degeneracy;
+mod fallback;
 mod invariants;
 mod parallel_axes;
 mod square;
@@ -107,6 +108,9 @@ pub enum Ik6Method {
     Search,
     /// The search, the geometry recognised but the pose left by the closed form (why).
     SearchAfter(Degeneracy),
+    /// The closed form's certified candidates, and the search of boxes about the candidates
+    /// it left (why the first was left).
+    ClosedFormAndSearch(Degeneracy),
 }
 
 impl Ik6Method {
@@ -115,13 +119,15 @@ impl Ik6Method {
         match self {
             Ik6Method::ClosedForm => "closed_form",
             Ik6Method::Search | Ik6Method::SearchAfter(_) => "search",
+            Ik6Method::ClosedFormAndSearch(_) => "closed_form_and_search",
         }
     }
 
-    /// Why the closed form of a recognised geometry left the pose to the search.
+    /// Why the closed form of a recognised geometry left the pose, or some of its candidates,
+    /// to the search.
     pub fn declined(self) -> Option<Degeneracy> {
         match self {
-            Ik6Method::SearchAfter(why) => Some(why),
+            Ik6Method::SearchAfter(why) | Ik6Method::ClosedFormAndSearch(why) => Some(why),
             _ => None,
         }
     }
@@ -552,7 +558,8 @@ pub fn solve(chain: &Chain6R, target: &PoseTarget, precision: f64, control: &Con
 }
 
 /// As `solve`, reporting progress. A recognised geometry is solved in closed form
-/// (`closed_form`); a pose it cannot decide, and every other arm, is searched.
+/// (`closed_form`); the candidates it cannot certify are searched in a box about each
+/// (`fallback`); a pose whose branches it cannot enclose, and every other arm, is searched.
 pub fn solve_with(chain: &Chain6R, target: &PoseTarget, precision: f64, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<Ik6Solutions, Manip6rError> {
     if !(precision > 0.0 && precision < 1.0) {
         return Err(Manip6rError::BadPrecision(precision));
@@ -567,6 +574,13 @@ pub fn solve_with(chain: &Chain6R, target: &PoseTarget, precision: f64, control:
             let stats = Stats { processed: n, found: n, seconds: start.elapsed().as_secs_f64(), ..Stats::default() };
             Ok(Ik6Solutions { unique, clusters: Vec::new(), status: Status::Finished, stats, method: Ik6Method::ClosedForm })
         }
+        closed_form::ClosedForm::Partly(partly) => match fallback::finish(chain, target, precision, partly, &control.remaining_since(start), progress) {
+            Ok(found) => Ok(found),
+            Err(why) => {
+                let found = solve_inflating(chain, target, precision, INFLATE_WIDTH, &control.remaining_since(start), progress)?;
+                Ok(Ik6Solutions { method: Ik6Method::SearchAfter(why), ..found })
+            }
+        },
         closed_form::ClosedForm::Degenerate(why) => {
             let found = solve_inflating(chain, target, precision, INFLATE_WIDTH, control, progress)?;
             Ok(Ik6Solutions { method: Ik6Method::SearchAfter(why), ..found })
@@ -592,10 +606,32 @@ fn solve_inflating(chain: &Chain6R, target: &PoseTarget, precision: f64, inflate
     if !(precision > 0.0 && precision < 1.0) {
         return Err(Manip6rError::BadPrecision(precision));
     }
+    let run = search_within(chain, target, precision, inflate, chain.ranges.map(|(lo, hi)| [lo, hi]), control, progress);
+    Ok(answer(chain, run, Ik6Method::Search))
+}
+
+/// What a search of one box reported: certified boxes with the regions their certificates
+/// hold on, and the cells left undecided.
+struct Searched {
+    found: Vec<([Interval; 6], [Interval; 6])>,
+    undecided: Vec<[Interval; 6]>,
+    status: Status,
+    stats: Stats,
+}
+
+/// Every solution of the pose within `start` (a box within the ranges), by the search.
+fn search_within(chain: &Chain6R, target: &PoseTarget, precision: f64, inflate: f64, start: [[f64; 2]; 6], control: &Control, progress: &mut dyn FnMut(&Progress)) -> Searched {
     let splits: Vec<Split> = (0..SPLITS).map(|f| chain.split(&target.0, f)).collect();
-    let start = Ik6Cell { b: chain.ranges.map(|(lo, hi)| [lo, hi]), level: 0, aligned: false };
+    let start = Ik6Cell { b: start, level: 0, aligned: false };
     let sides = Axis4Sides::new(&splits[0]);
-    let mut run = drive(|| Ik6Prune { splits: &splits, sides: &sides, precision, inflate }, start, control, progress);
+    let run = drive(|| Ik6Prune { splits: &splits, sides: &sides, precision, inflate }, start, control, progress);
+    let undecided = run.undecided.iter().map(|(c, _)| c.b.map(|x| interval(x[0], x[1]))).collect();
+    Searched { found: run.found, undecided, status: run.status, stats: run.stats }
+}
+
+/// The answer from what searches (and certificates) found: each solution claimed once, in
+/// the order of the boxes' lower corners, and touching undecided cells as clusters.
+fn answer(chain: &Chain6R, mut run: Searched, method: Ik6Method) -> Ik6Solutions {
     run.found.sort_by(|a, b| a.0.iter().map(|x| x.inf()).partial_cmp(b.0.iter().map(|x| x.inf())).unwrap_or(std::cmp::Ordering::Equal));
     let mut kept: Vec<([Interval; 6], [Interval; 6])> = Vec::new();
     let inside = |k: &[Interval; 6], r: &[Interval; 6]| (0..6).all(|d| k[d].subset(r[d]));
@@ -607,7 +643,7 @@ fn solve_inflating(chain: &Chain6R, target: &PoseTarget, precision: f64, inflate
         }
     }
     let unique: Vec<[Interval; 6]> = kept.into_iter().map(|(k, _)| k).collect();
-    let undecided: Vec<[Interval; 6]> = run.undecided.iter().map(|(c, _)| c.b.map(|x| interval(x[0], x[1]))).collect();
+    let undecided = run.undecided;
     let all: Vec<usize> = (0..undecided.len()).collect();
     let (contacts, _) = touching_pairs(&all, 6, |i, d| undecided[i][d]);
     let clusters = components_of_edges(undecided.len(), contacts)
@@ -617,7 +653,7 @@ fn solve_inflating(chain: &Chain6R, target: &PoseTarget, precision: f64, inflate
             Ik6Cluster { hull, boxes: members.len() }
         })
         .collect();
-    Ok(Ik6Solutions { unique, clusters, status: run.status, stats: run.stats, method: Ik6Method::Search })
+    Ik6Solutions { unique, clusters, status: run.status, stats: run.stats, method }
 }
 
 /// Whether two boxes meet, a continuous joint's angles compared modulo a turn.

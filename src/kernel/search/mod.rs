@@ -174,6 +174,21 @@ pub struct Stats {
 }
 
 impl Stats {
+    /// The counters of one answer made of this run and `other` (run after it): counts and
+    /// seconds summed, the deeper level kept.
+    pub fn add(&mut self, other: &Stats) {
+        self.processed += other.processed;
+        self.split += other.split;
+        self.found += other.found;
+        self.undecided += other.undecided;
+        for (reason, n) in &other.discarded {
+            *self.discarded.entry(reason).or_insert(0) += n;
+        }
+        self.max_level = self.max_level.max(other.max_level);
+        self.seconds += other.seconds;
+        self.cpu_seconds += other.cpu_seconds;
+    }
+
     /// Cells discarded for any reason.
     pub fn discarded_total(&self) -> u64 {
         self.discarded.values().sum()

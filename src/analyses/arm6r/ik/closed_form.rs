@@ -32,10 +32,13 @@
 //! about it (`square`): exactly one solution there, so the candidate's. Certified boxes proven
 //! pairwise disjoint hold distinct solutions: the answer is complete and each box unique.
 //!
-//! Anything the enclosures cannot decide is a `Degeneracy` (a discriminant holding 0, a turn's
-//! vector on its axis as at a singular pose, an angle meeting a joint limit, a candidate not
-//! certified, two boxes overlapping): then the search answers the whole pose, so nothing is
-//! lost near singular poses.
+//! Anything the enclosures cannot decide is a `Degeneracy`. A candidate Krawczyk does not
+//! certify, or a copy meeting a joint limit, still encloses its branch's one solution: the
+//! search answers for a box about it alone (`Partly`), the other candidates keep their
+//! certificates. A discriminant holding 0 or a turn's vector on its axis (at or near a singular
+//! pose) leaves the branches themselves unknown, and two certified boxes overlapping leaves
+//! their count unproven: then the search answers the whole pose. Either way nothing is lost
+//! near singular poses.
 
 // Matrix and joint indices read as the formulas they implement.
 #![allow(clippy::needless_range_loop)]
@@ -129,8 +132,23 @@ impl Degeneracy {
 pub(crate) enum ClosedForm {
     /// Every solution within the joint ranges, each in its own certified box.
     Solved(Vec<[Interval; 6]>),
-    /// A step the enclosures could not decide: the search must answer.
+    /// Some candidates certified, the others left to a search of a box about each.
+    Partly(Partly),
+    /// A step the enclosures could not decide: the search must answer the whole pose.
     Degenerate(Degeneracy),
+}
+
+/// The candidates of a pose the closed form certified, and boxes about those it could not:
+/// every solution within the ranges lies in one of the certified boxes or one of the boxes
+/// to search (within the ranges, pairwise disjoint).
+#[derive(Clone, Debug)]
+pub(crate) struct Partly {
+    /// Certified boxes, each with a region (holding it) where its solution is the only one.
+    pub certified: Vec<([Interval; 6], [Interval; 6])>,
+    /// Boxes the search must answer for, as `[lo, hi]` per joint.
+    pub search: Vec<[[f64; 2]; 6]>,
+    /// Why the first of them was left.
+    pub why: Degeneracy,
 }
 
 /// What `recognise` proved (module doc): the wrist centre and the constants of the position
@@ -247,9 +265,9 @@ pub(crate) fn turn(a: &V3, from: &V3, to: &V3) -> Result<Interval, Degeneracy> {
     trig::angle(c, dot(&cross(a, from), to)).ok_or(Degeneracy::Direction)
 }
 
-/// The copies `phi + 2πk` (modulo a turn) within `[lo, hi]`, each with its `k`; `Limit` when
-/// one meets a limit without lying within.
-fn copies(phi: Interval, (lo, hi): (f64, f64)) -> Result<SmallVec<[(f64, Interval); 2]>, Degeneracy> {
+/// The copies `phi + 2πk` (modulo a turn) meeting `[lo, hi]`, each with its `k` and whether
+/// it meets a limit without lying within (`Limit`: the solution may lie on either side).
+fn copies(phi: Interval, (lo, hi): (f64, f64)) -> SmallVec<[(f64, Interval, Option<Degeneracy>); 2]> {
     let tau = std::f64::consts::TAU;
     let (first, last) = (((lo - phi.sup()) / tau).floor(), ((hi - phi.inf()) / tau).ceil());
     let mut out = SmallVec::new();
@@ -257,13 +275,13 @@ fn copies(phi: Interval, (lo, hi): (f64, f64)) -> Result<SmallVec<[(f64, Interva
     while k <= last {
         let x = phi + Interval::TAU * point(k);
         if x.inf() >= lo && x.sup() <= hi {
-            out.push((k, x));
+            out.push((k, x, None));
         } else if !(x.sup() < lo || x.inf() > hi) {
-            return Err(Degeneracy::Limit);
+            out.push((k, x, Some(Degeneracy::Limit)));
         }
         k += 1.0;
     }
-    Ok(out)
+    out
 }
 
 pub(super) fn cos_sin(x: Interval) -> (Interval, Interval) {
@@ -368,31 +386,64 @@ fn moved(k: &[Interval; 6], region: &[Interval; 6], turns: &[f64; 6]) -> Option<
 }
 
 /// Every solution of `pose(θ) = target` with each θₖ in `chain.ranges[k]`, each in a box
-/// certified unique and tightened to `precision`, or why the search must answer.
+/// certified unique and tightened to `precision`; or those certified and boxes about the
+/// candidates left to the search; or why the search must answer the whole pose.
 pub(crate) fn solve(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget, precision: f64) -> ClosedForm {
     match solve_or_degenerate(chain, geometry, target, precision) {
-        Ok(found) => ClosedForm::Solved(found),
+        Ok(Partly { certified, search, .. }) if search.is_empty() => ClosedForm::Solved(certified.into_iter().map(|(k, _)| k).collect()),
+        Ok(partly) => ClosedForm::Partly(partly),
         Err(why) => ClosedForm::Degenerate(why),
     }
 }
 
-fn solve_or_degenerate(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget, precision: f64) -> Result<Vec<[Interval; 6]>, Degeneracy> {
+/// A box about the candidate `c` within the ranges, for the search: `c` holds its solution
+/// (module doc), and a margin of its width keeps that solution off the box's faces.
+fn search_box(chain: &Chain6R, c: &[Interval; 6]) -> [[f64; 2]; 6] {
+    std::array::from_fn(|d| {
+        let r = c[d].wid().max(1e-9);
+        let (lo, hi) = chain.ranges[d];
+        [(c[d].inf() - r).max(lo), (c[d].sup() + r).min(hi)]
+    })
+}
+
+/// Whether two boxes to search meet.
+fn meet(a: &[[f64; 2]; 6], b: &[[f64; 2]; 6]) -> bool {
+    (0..6).all(|d| a[d][0] <= b[d][1] && b[d][0] <= a[d][1])
+}
+
+/// The boxes merged into the hulls of those that meet, until no two meet.
+fn merged(mut boxes: Vec<[[f64; 2]; 6]>) -> Vec<[[f64; 2]; 6]> {
+    let mut out: Vec<[[f64; 2]; 6]> = Vec::new();
+    while let Some(mut b) = boxes.pop() {
+        while let Some(i) = out.iter().position(|o| meet(o, &b)) {
+            let o = out.swap_remove(i);
+            b = std::array::from_fn(|d| [b[d][0].min(o[d][0]), b[d][1].max(o[d][1])]);
+        }
+        out.push(b);
+    }
+    out
+}
+
+fn solve_or_degenerate(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget, precision: f64) -> Result<Partly, Degeneracy> {
     let g = target.0.then(&chain.post.inverse());
     let all = match geometry {
         Geometry::SphericalWrist(wrist) => branches(chain, wrist, &g)?,
         Geometry::ParallelAxes(arm) => parallel_axes::branches(chain, arm, &g)?,
     };
     let mut split = None;
-    let mut found = Vec::new();
+    let mut found: Vec<([Interval; 6], [Interval; 6])> = Vec::new();
+    let mut left: Vec<([Interval; 6], Degeneracy)> = Vec::new();
+    let leave = |c: &[Interval; 6], w: Degeneracy, left: &mut Vec<([Interval; 6], Degeneracy)>| left.push((*c, w));
     for b in all {
-        // Each copy within the ranges: the branch moved by whole turns `t`, joint by joint.
-        let mut moves: Vec<([f64; 6], [Interval; 6])> = vec![([0.0; 6], b)];
+        // Each copy meeting the ranges: the branch moved by whole turns `t`, joint by joint,
+        // and whether some joint's copy meets a limit.
+        let mut moves: Vec<([f64; 6], [Interval; 6], Option<Degeneracy>)> = vec![([0.0; 6], b, None)];
         for k in 0..6 {
-            let each = copies(b[k], chain.ranges[k])?;
-            moves = moves.iter().flat_map(|(t, x)| each.iter().map(move |&(turns, y)| {
+            let each = copies(b[k], chain.ranges[k]);
+            moves = moves.iter().flat_map(|(t, x, at)| each.iter().map(move |&(turns, y, limit)| {
                 let (mut t, mut x) = (*t, *x);
                 (t[k], x[k]) = (turns, y);
-                (t, x)
+                (t, x, at.or(limit))
             })).collect();
         }
         if moves.is_empty() {
@@ -401,20 +452,95 @@ fn solve_or_degenerate(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget
         // The branch certified once; each copy is its certified box moved (`moved`), or
         // certified on its own when rounding leaves the move unproven.
         let split = split.get_or_insert_with(|| chain.split(&target.0, 0));
-        let (k, region) = certify(split, &b, precision).ok_or(Degeneracy::Uncertified)?;
-        for (turns, c) in &moves {
-            match moved(&k, &region, turns) {
+        let Some((k, region)) = certify(split, &b, precision) else {
+            moves.iter().for_each(|(_, c, _)| leave(c, Degeneracy::Uncertified, &mut left));
+            continue;
+        };
+        for (turns, c, limit) in &moves {
+            if let Some(w) = limit {
+                leave(c, *w, &mut left);
+                continue;
+            }
+            match moved(&k, &region, turns).zip(moved_region(&region, turns)) {
                 Some(x) => found.push(x),
-                None => found.push(certify(split, c, precision).ok_or(Degeneracy::Uncertified)?.0),
+                None => match certify(split, c, precision) {
+                    Some(x) => found.push(x),
+                    None => leave(c, Degeneracy::Uncertified, &mut left),
+                },
             }
         }
     }
-    let overlap = |x: &[Interval; 6], y: &[Interval; 6]| (0..6).all(|d| !x[d].disjoint(y[d]));
-    if (0..found.len()).any(|i| (0..i).any(|j| overlap(&found[i], &found[j]))) {
+    if overlapping(&found) {
         return Err(Degeneracy::Overlap);
     }
-    found.sort_by(|a, b| a.iter().map(|x| x.inf()).partial_cmp(b.iter().map(|x| x.inf())).unwrap_or(std::cmp::Ordering::Equal));
-    Ok(found)
+    if let Some(split) = split.as_ref().filter(|_| !left.is_empty()) {
+        if let Some(all) = polished(chain, split, &found, &left, precision) {
+            (found, left) = (all, Vec::new());
+        }
+    }
+    found.sort_by(|a, b| a.0.iter().map(|x| x.inf()).partial_cmp(b.0.iter().map(|x| x.inf())).unwrap_or(std::cmp::Ordering::Equal));
+    let why = left.first().map_or(Degeneracy::Uncertified, |l| l.1);
+    let search = merged(left.iter().map(|(c, _)| search_box(chain, c)).collect());
+    Ok(Partly { certified: found, search, why })
+}
+
+fn overlapping(found: &[([Interval; 6], [Interval; 6])]) -> bool {
+    let overlap = |x: &[Interval; 6], y: &[Interval; 6]| (0..6).all(|d| !x[d].disjoint(y[d]));
+    (0..found.len()).any(|i| (0..i).any(|j| overlap(&found[i].0, &found[j].0)))
+}
+
+/// Every candidate certified, counting: `found` as certified about their candidates, the
+/// candidates `left` each from a point Newton's method reaches from its centre, certified on
+/// tiny regions about it (near a singularity the candidate's enclosure is wider than any
+/// region Krawczyk can prove). Such a box holds a solution but not necessarily its
+/// candidate's; yet the exact solutions within the ranges are at most the candidates (one
+/// per branch and copy), so as many pairwise disjoint certified boxes within the ranges, each
+/// holding a solution of all twelve equations (`square::not_a_half_turn`), hold them all.
+/// `None` unless every candidate is so certified.
+fn polished(chain: &Chain6R, split: &Split, found: &[([Interval; 6], [Interval; 6])], left: &[([Interval; 6], Degeneracy)], precision: f64) -> Option<Vec<([Interval; 6], [Interval; 6])>> {
+    let mut all = found.to_vec();
+    for (c, _) in left {
+        let mut x = c.map(|v| v.mid());
+        for _ in 0..8 {
+            x = square::image(split, &x.map(point))?.map(|v| v.mid());
+        }
+        // The image of the point is as wide as the data's uncertainty seen through the inverse
+        // Jacobian: a region must be wider than that, and narrow enough that the Jacobian's
+        // spread over it stays small.
+        let spread = square::image(split, &x.map(point))?.iter().map(|v| v.wid()).fold(0.0, f64::max);
+        let proven = [2.0, 8.0, 32.0, 128.0].into_iter().find_map(|f| {
+            let r = (f * spread).max(1e-15);
+            let region = x.map(|v| interval(v - r, v + r));
+            match square::newton(split, &region) {
+                K::Unique(k) => Some((krawczyk::tighten(k, precision, |k| square::newton(split, k)), region)),
+                _ => None,
+            }
+        });
+        let (k, region) = proven?;
+        let within = (0..6).all(|d| k[d].inf() >= chain.ranges[d].0 && k[d].sup() <= chain.ranges[d].1);
+        if !within || !square::not_a_half_turn(split, &k) {
+            return None;
+        }
+        all.push((k, region));
+    }
+    (!overlapping(&all)).then_some(all)
+}
+
+/// `region` moved by `turns[d]` whole turns in each joint, rounded inward: a box within the
+/// moved region, on which the moved solution is still the only one.
+fn moved_region(region: &[Interval; 6], turns: &[f64; 6]) -> Option<[Interval; 6]> {
+    let mut out = *region;
+    for d in 0..6 {
+        if turns[d] != 0.0 {
+            let by = Interval::TAU * point(turns[d]);
+            let (lo, hi) = ((point(region[d].inf()) + by).sup(), (point(region[d].sup()) + by).inf());
+            if lo > hi {
+                return None;
+            }
+            out[d] = interval(lo, hi);
+        }
+    }
+    Some(out)
 }
 
 #[cfg(test)]
@@ -486,11 +612,11 @@ mod tests {
     #[test]
     fn copies_within_the_range_and_at_its_limits() {
         let x = interval(0.5, 0.5 + 1e-12);
-        assert_eq!(copies(x, (-3.2, 3.2)).map(|c| c.len()), Ok(1));
-        assert_eq!(copies(x, (-6.1, 6.1)).map(|c| c.iter().map(|y| y.0).collect::<Vec<_>>()), Ok(vec![-1.0, 0.0]));
-        assert_eq!(copies(x, (-6.1, 6.1)).map(|c| c.len()), Ok(2));
-        assert_eq!(copies(x, (0.6, 1.0)).map(|c| c.len()), Ok(0));
-        assert_eq!(copies(x, (0.5 + 1e-13, 1.0)), Err(Degeneracy::Limit));
+        let inside = |c: SmallVec<[(f64, Interval, Option<Degeneracy>); 2]>| c.iter().map(|y| (y.0, y.2)).collect::<Vec<_>>();
+        assert_eq!(inside(copies(x, (-3.2, 3.2))), vec![(0.0, None)]);
+        assert_eq!(inside(copies(x, (-6.1, 6.1))), vec![(-1.0, None), (0.0, None)]);
+        assert!(copies(x, (0.6, 1.0)).is_empty());
+        assert_eq!(inside(copies(x, (0.5 + 1e-13, 1.0))), vec![(0.0, Some(Degeneracy::Limit))]);
     }
 
     /// The bundled spherical-wrist arms are recognised (after the rounding policy); the UR5

@@ -48,6 +48,18 @@ fn twists(split: &Split, fl: &[Affine; 7], fr: &[Affine; 7]) -> [(V, V, bool); 6
 
 /// One Krawczyk step on the square system of the module doc over `b`.
 pub(super) fn newton(split: &Split, b: &[Interval; 6]) -> K<[Interval; 6]> {
+    let (m, fm, jac) = linearised(split, b);
+    krawczyk::step_array(b, &m, &fm, &jac)
+}
+
+/// Krawczyk's image of `b` (unintersected); on a point box, a Newton step from it.
+pub(super) fn image(split: &Split, b: &[Interval; 6]) -> Option<[Interval; 6]> {
+    let (m, fm, jac) = linearised(split, b);
+    krawczyk::image_array(b, &m, &fm, &jac)
+}
+
+/// The system at the centre of `b` and its Jacobian over `b`.
+fn linearised(split: &Split, b: &[Interval; 6]) -> ([f64; 6], [Interval; 6], [[Interval; 6]; 6]) {
     let bb = b.map(|x| [x.inf(), x.sup()]);
     let m = mid(&bb);
     let (fl, fr) = frames_of(split, &bb);
@@ -70,7 +82,7 @@ pub(super) fn newton(split: &Split, b: &[Interval; 6]) -> K<[Interval; 6]> {
             jac[i + 3][v] = rot[i].to();
         }
     }
-    krawczyk::step_array(b, &m, &fm, &jac)
+    (m, fm, jac)
 }
 
 /// Whether `trace(R_L R_Rᵀ) > −1` on the box: a zero of the square system there solves all

@@ -1,0 +1,40 @@
+//! A pose the closed form answered in part (`closed_form::Partly`): its certified candidates
+//! kept, the search run on the boxes about the candidates it could not certify (near an elbow
+//! or wrist singularity, or a copy meeting a joint limit), each box alone.
+//!
+//! Why this is complete: every solution within the ranges lies in a certified box or in a box
+//! to search (the closed form's enclosures, `closed_form` module doc), and the search finds
+//! every solution in the box it is given. A certified box that also lies in a searched box is
+//! found twice and claimed once (`answer`: a box inside the other's proof region). Two boxes
+//! left overlapping without that proof leave the count unproven: the caller then searches the
+//! whole pose.
+
+use super::closed_form::{Degeneracy, Partly};
+use super::{answer, search_within, Ik6Method, Ik6Solutions, PoseTarget, Searched, INFLATE_WIDTH};
+use crate::analyses::arm6r::chain::Chain6R;
+use crate::kernel::interval::Interval;
+use crate::kernel::search::{Control, Progress, Stats, Status};
+
+/// The answer from `partly` and a search of each of its boxes within `control` (the cells'
+/// budget shared by the searches); `Overlap` when two boxes of the answer overlap.
+pub(super) fn finish(chain: &Chain6R, target: &PoseTarget, precision: f64, partly: Partly, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<Ik6Solutions, Degeneracy> {
+    let start = std::time::Instant::now();
+    let n = partly.certified.len() as u64;
+    let mut all = Searched { found: partly.certified, undecided: Vec::new(), status: Status::Finished, stats: Stats { processed: n, found: n, ..Stats::default() } };
+    for b in partly.search {
+        let left = control.limits.max_cells.saturating_sub(all.stats.processed);
+        let run = search_within(chain, target, precision, INFLATE_WIDTH, b, &control.remaining_since(start).max_cells(left), progress);
+        all.found.extend(run.found);
+        all.undecided.extend(run.undecided);
+        all.status = all.status.and(run.status);
+        all.stats.add(&run.stats);
+    }
+    all.stats.seconds = start.elapsed().as_secs_f64();
+    let found = answer(chain, all, Ik6Method::ClosedFormAndSearch(partly.why));
+    let overlap = |x: &[Interval; 6], y: &[Interval; 6]| (0..6).all(|d| !x[d].disjoint(y[d]));
+    let u = &found.unique;
+    if (0..u.len()).any(|i| (0..i).any(|j| overlap(&u[i], &u[j]))) {
+        return Err(Degeneracy::Overlap);
+    }
+    Ok(found)
+}
