@@ -39,7 +39,7 @@ use super::chain::{add, cos_sin, cross, mul, mv, Affine, Chain6R, IAffine, Side,
 use super::{Manip6rError, Pose64};
 use crate::kernel::contract::krawczyk::{self, Step as K};
 use crate::kernel::interval::fast::Iv;
-use crate::kernel::interval::{components_of_edges, interval, point, touching_pairs, trig, Interval};
+use crate::kernel::interval::{interval, point, trig, Interval};
 use crate::analyses::arm3r::drive::{drive, no_progress};
 use crate::formulate::{angles::stated, stated as st};
 use crate::kernel::search::{Control, Progress, Prune, Stats, Status, Step};
@@ -47,7 +47,9 @@ use super::invariant_pairs;
 
 mod closed_form;
 pub use self::closed_form::Degeneracy;
+mod answer;
 mod fallback;
+use self::answer::{answer, Searched};
 mod invariants;
 mod parallel_axes;
 mod square;
@@ -610,15 +612,6 @@ fn solve_inflating(chain: &Chain6R, target: &PoseTarget, precision: f64, inflate
     Ok(answer(chain, run, Ik6Method::Search))
 }
 
-/// What a search of one box reported: certified boxes with the regions their certificates
-/// hold on, and the cells left undecided.
-struct Searched {
-    found: Vec<([Interval; 6], [Interval; 6])>,
-    undecided: Vec<[Interval; 6]>,
-    status: Status,
-    stats: Stats,
-}
-
 /// Every solution of the pose within `start` (a box within the ranges), by the search.
 fn search_within(chain: &Chain6R, target: &PoseTarget, precision: f64, inflate: f64, start: [[f64; 2]; 6], control: &Control, progress: &mut dyn FnMut(&Progress)) -> Searched {
     let splits: Vec<Split> = (0..SPLITS).map(|f| chain.split(&target.0, f)).collect();
@@ -627,42 +620,6 @@ fn search_within(chain: &Chain6R, target: &PoseTarget, precision: f64, inflate: 
     let run = drive(|| Ik6Prune { splits: &splits, sides: &sides, precision, inflate }, start, control, progress);
     let undecided = run.undecided.iter().map(|(c, _)| c.b.map(|x| interval(x[0], x[1]))).collect();
     Searched { found: run.found, undecided, status: run.status, stats: run.stats }
-}
-
-/// The answer from what searches (and certificates) found: each solution claimed once, in
-/// the order of the boxes' lower corners, and touching undecided cells as clusters.
-fn answer(chain: &Chain6R, mut run: Searched, method: Ik6Method) -> Ik6Solutions {
-    run.found.sort_by(|a, b| a.0.iter().map(|x| x.inf()).partial_cmp(b.0.iter().map(|x| x.inf())).unwrap_or(std::cmp::Ordering::Equal));
-    let mut kept: Vec<([Interval; 6], [Interval; 6])> = Vec::new();
-    let inside = |k: &[Interval; 6], r: &[Interval; 6]| (0..6).all(|d| k[d].subset(r[d]));
-    for (k, region) in run.found {
-        // One solution claimed twice: by neighbours (its box inside the other's proof region,
-        // which holds only one), or at both ends of a continuous joint's range (±π).
-        if !kept.iter().any(|(u, ur)| inside(&k, ur) || inside(u, &region) || same_on_seam(chain, u, &k)) {
-            kept.push((k, region));
-        }
-    }
-    let unique: Vec<[Interval; 6]> = kept.into_iter().map(|(k, _)| k).collect();
-    let undecided = run.undecided;
-    let all: Vec<usize> = (0..undecided.len()).collect();
-    let (contacts, _) = touching_pairs(&all, 6, |i, d| undecided[i][d]);
-    let clusters = components_of_edges(undecided.len(), contacts)
-        .into_iter()
-        .map(|members| {
-            let hull = members.iter().fold(undecided[members[0]], |h, &i| [0, 1, 2, 3, 4, 5].map(|d| h[d].convex_hull(undecided[i][d])));
-            Ik6Cluster { hull, boxes: members.len() }
-        })
-        .collect();
-    Ik6Solutions { unique, clusters, status: run.status, stats: run.stats, method }
-}
-
-/// Whether two boxes meet, a continuous joint's angles compared modulo a turn.
-fn same_on_seam(chain: &Chain6R, a: &[Interval; 6], b: &[Interval; 6]) -> bool {
-    let turn = std::f64::consts::TAU;
-    (0..6).all(|d| {
-        let meet = |s: f64| !(a[d].inf() > b[d].sup() + s + 1e-12 || b[d].inf() + s > a[d].sup() + 1e-12);
-        meet(0.0) || (chain.continuous[d] && (meet(turn) || meet(-turn)))
-    }) && (0..6).any(|d| chain.continuous[d] && a[d].disjoint(b[d]))
 }
 
 #[cfg(test)]

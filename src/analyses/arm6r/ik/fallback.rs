@@ -10,7 +10,8 @@
 //! whole pose.
 
 use super::closed_form::{Degeneracy, Partly};
-use super::{answer, search_within, Ik6Method, Ik6Solutions, PoseTarget, Searched, INFLATE_WIDTH};
+use super::answer::{answer, Searched};
+use super::{search_within, Ik6Method, Ik6Solutions, PoseTarget, INFLATE_WIDTH};
 use crate::analyses::arm6r::chain::Chain6R;
 use crate::kernel::interval::Interval;
 use crate::kernel::search::{Control, Progress, Stats, Status};
