@@ -152,8 +152,8 @@ def main():
         mean = statistics.fmean(a["seconds"] for a in answers)
         single = statistics.median(singles)
         worst = max(a["seconds"] for a in answers)
-        methods = {m: sum(a.get("method") == m for a in answers) for m in ("closed_form", "search")}
-        print(f"{name:10} {len(poses):5} {1e6 * solver:15.1f} {1e6 * mean:8.1f} {1e6 * worst:8.0f} {1e3 * batch:36.3f} {1e3 * single:8.3f}  closed {methods['closed_form']}, search {methods['search']} ({len(complete)} complete)")
+        methods = {m: sum(a.get("method") == m for a in answers) for m in ("closed_form", "closed_form_and_search", "search")}
+        print(f"{name:10} {len(poses):5} {1e6 * solver:15.1f} {1e6 * mean:8.1f} {1e6 * worst:8.0f} {1e3 * batch:36.3f} {1e3 * single:8.3f}  closed {methods['closed_form']}, closed+search {methods['closed_form_and_search']}, search {methods['search']} ({len(complete)} complete)")
 
 
 if __name__ == "__main__":
