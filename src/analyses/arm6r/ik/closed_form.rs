@@ -367,9 +367,10 @@ fn certify(split: &Split, c: &[Interval; 6], precision: f64) -> Option<([Interva
 /// moved region holds exactly one solution, the moved copy of the one in `region`, and it lies
 /// in the moved box. Each end of the moved region is enclosed (`x + 2πt` in interval
 /// arithmetic), and the moved box must lie within the innermost values of both ends; `None`
-/// when rounding leaves that unproven.
-fn moved(k: &[Interval; 6], region: &[Interval; 6], turns: &[f64; 6]) -> Option<[Interval; 6]> {
-    let mut out = *k;
+/// when rounding leaves that unproven. Returned with the moved region rounded inward, on which
+/// the moved solution is still the only one.
+fn moved(k: &[Interval; 6], region: &[Interval; 6], turns: &[f64; 6]) -> Option<([Interval; 6], [Interval; 6])> {
+    let (mut out, mut within) = (*k, *region);
     for d in 0..6 {
         if turns[d] == 0.0 {
             continue;
@@ -381,8 +382,9 @@ fn moved(k: &[Interval; 6], region: &[Interval; 6], turns: &[f64; 6]) -> Option<
             return None;
         }
         out[d] = x;
+        within[d] = interval(lo.sup(), hi.inf());
     }
-    Some(out)
+    Some((out, within))
 }
 
 /// Every solution of `pose(θ) = target` with each θₖ in `chain.ranges[k]`, each in a box
@@ -433,7 +435,6 @@ fn solve_or_degenerate(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget
     let mut split = None;
     let mut found: Vec<([Interval; 6], [Interval; 6])> = Vec::new();
     let mut left: Vec<([Interval; 6], Degeneracy)> = Vec::new();
-    let leave = |c: &[Interval; 6], w: Degeneracy, left: &mut Vec<([Interval; 6], Degeneracy)>| left.push((*c, w));
     for b in all {
         // Each copy meeting the ranges: the branch moved by whole turns `t`, joint by joint,
         // and whether some joint's copy meets a limit.
@@ -453,24 +454,24 @@ fn solve_or_degenerate(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget
         // certified on its own when rounding leaves the move unproven.
         let split = split.get_or_insert_with(|| chain.split(&target.0, 0));
         let Some((k, region)) = certify(split, &b, precision) else {
-            moves.iter().for_each(|(_, c, _)| leave(c, Degeneracy::Uncertified, &mut left));
+            left.extend(moves.iter().map(|(_, c, _)| (*c, Degeneracy::Uncertified)));
             continue;
         };
         for (turns, c, limit) in &moves {
             if let Some(w) = limit {
-                leave(c, *w, &mut left);
+                left.push((*c, *w));
                 continue;
             }
-            match moved(&k, &region, turns).zip(moved_region(&region, turns)) {
+            match moved(&k, &region, turns) {
                 Some(x) => found.push(x),
                 None => match certify(split, c, precision) {
                     Some(x) => found.push(x),
-                    None => leave(c, Degeneracy::Uncertified, &mut left),
+                    None => left.push((*c, Degeneracy::Uncertified)),
                 },
             }
         }
     }
-    if overlapping(&found) {
+    if overlapping(found.iter().map(|f| &f.0)) {
         return Err(Degeneracy::Overlap);
     }
     if let Some(split) = split.as_ref().filter(|_| !left.is_empty()) {
@@ -484,9 +485,10 @@ fn solve_or_degenerate(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget
     Ok(Partly { certified: found, search, why })
 }
 
-fn overlapping(found: &[([Interval; 6], [Interval; 6])]) -> bool {
+/// Whether two of the boxes overlap (then they may hold one solution).
+pub(super) fn overlapping<'a>(boxes: impl Iterator<Item = &'a [Interval; 6]> + Clone) -> bool {
     let overlap = |x: &[Interval; 6], y: &[Interval; 6]| (0..6).all(|d| !x[d].disjoint(y[d]));
-    (0..found.len()).any(|i| (0..i).any(|j| overlap(&found[i].0, &found[j].0)))
+    boxes.clone().enumerate().any(|(i, x)| boxes.clone().take(i).any(|y| overlap(x, y)))
 }
 
 /// Every candidate certified, counting: `found` as certified about their candidates, the
@@ -523,24 +525,7 @@ fn polished(chain: &Chain6R, split: &Split, found: &[([Interval; 6], [Interval; 
         }
         all.push((k, region));
     }
-    (!overlapping(&all)).then_some(all)
-}
-
-/// `region` moved by `turns[d]` whole turns in each joint, rounded inward: a box within the
-/// moved region, on which the moved solution is still the only one.
-fn moved_region(region: &[Interval; 6], turns: &[f64; 6]) -> Option<[Interval; 6]> {
-    let mut out = *region;
-    for d in 0..6 {
-        if turns[d] != 0.0 {
-            let by = Interval::TAU * point(turns[d]);
-            let (lo, hi) = ((point(region[d].inf()) + by).sup(), (point(region[d].sup()) + by).inf());
-            if lo > hi {
-                return None;
-            }
-            out[d] = interval(lo, hi);
-        }
-    }
-    Some(out)
+    (!overlapping(all.iter().map(|f| &f.0))).then_some(all)
 }
 
 #[cfg(test)]

@@ -9,11 +9,10 @@
 //! left overlapping without that proof leave the count unproven: the caller then searches the
 //! whole pose.
 
-use super::closed_form::{Degeneracy, Partly};
+use super::closed_form::{overlapping, Degeneracy, Partly};
 use super::answer::{answer, Searched};
 use super::{search_within, Ik6Method, Ik6Solutions, PoseTarget, INFLATE_WIDTH};
 use crate::analyses::arm6r::chain::Chain6R;
-use crate::kernel::interval::Interval;
 use crate::kernel::search::{Control, Progress, Stats, Status};
 
 /// The answer from `partly` and a search of each of its boxes within `control` (the cells'
@@ -32,9 +31,7 @@ pub(super) fn finish(chain: &Chain6R, target: &PoseTarget, precision: f64, partl
     }
     all.stats.seconds = start.elapsed().as_secs_f64();
     let found = answer(chain, all, Ik6Method::ClosedFormAndSearch(partly.why));
-    let overlap = |x: &[Interval; 6], y: &[Interval; 6]| (0..6).all(|d| !x[d].disjoint(y[d]));
-    let u = &found.unique;
-    if (0..u.len()).any(|i| (0..i).any(|j| overlap(&u[i], &u[j]))) {
+    if overlapping(found.unique.iter()) {
         return Err(Degeneracy::Overlap);
     }
     Ok(found)
