@@ -40,10 +40,12 @@ pub struct Ik6Report {
     pub clusters: Vec<JointBoxes>,
     /// Boxes processed (for the closed form: candidates certified).
     pub processed: u64,
-    /// Which method answered: `closed_form` (a recognised geometry, every candidate certified)
-    /// or `search` (branch and prune).
+    /// Which method answered: `closed_form` (a recognised geometry, every candidate certified),
+    /// `search` (branch and prune), or `closed_form_and_search` (the certified candidates, and
+    /// branch and prune on a box about each candidate left).
     pub method: &'static str,
-    /// For a geometry the closed form applies to, why it left this pose to the search (a
+    /// For a geometry the closed form applies to, why it left this pose, or some of its
+    /// candidates, to the search (a
     /// discriminant holding 0 near a singular pose, an angle at a joint limit, ...).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub closed_form_declined: Option<&'static str>,
