@@ -57,6 +57,9 @@ mod topics;
 mod six_r;
 /// Spherical-wrist arms in closed form against the search and forward kinematics.
 mod spherical_wrist;
+/// Spherical-wrist arms at and near the wrist singularity: a branch answered as a curve,
+/// against forward kinematics.
+mod wrist_singular;
 /// Arms with axes 2, 3, 4 parallel (the UR family) in closed form against the search and
 /// forward kinematics.
 mod three_parallel_ik;

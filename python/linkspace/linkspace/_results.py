@@ -294,12 +294,22 @@ class IkResult(Result):
 class Ik6Result(Result):
     """Every solution of a six-revolute arm for a pose (``Mechanism.ik6``): ``solutions``, the
     boxes each proven to hold exactly one, then the hulls of undecided boxes (near singular
-    poses)."""
+    poses), then the boxes of ``curves``."""
 
     @cached_property
     def solutions(self) -> BoxSet:
         r = self._report
-        return BoxSet.concat([BoxSet.from_records([{"joints": b} for b in r["unique"]], r["joints"], lambda _: "unique"), BoxSet.from_records([{"joints": b} for b in r["clusters"]], r["joints"], lambda _: "undecided")])
+        parts = [BoxSet.from_records([{"joints": b} for b in r["unique"]], r["joints"], lambda _: "unique"), BoxSet.from_records([{"joints": b} for b in r["clusters"]], r["joints"], lambda _: "undecided")]
+        return BoxSet.concat(parts + self.curves)
+
+    @cached_property
+    def curves(self) -> list[BoxSet]:
+        """At a wrist-singular pose, one box set per branch whose wrist is singular: its
+        solutions lie on the curve along which joints 4 and 6 turn together (or, for a pose just
+        off the singularity, at isolated points on it), and these boxes, tagged ``solution``
+        (each may hold solutions), enclose them all within the joint ranges."""
+        r = self._report
+        return [BoxSet.from_records([{"joints": b} for b in c["cover"]], r["joints"], lambda _: "solution") for c in r.get("curves", [])]
 
     @property
     def joints(self) -> list[str]:
@@ -314,7 +324,7 @@ class Ik6Result(Result):
         return str(self._report["method"])
 
     def __repr__(self) -> str:
-        return f"<Ik6Result {self._report['base']} -> {self._report['tip']}: {len(self.solutions.with_tag('unique'))} unique solutions, {len(self.solutions.undecided)} undecided, {self.completeness}>"
+        return f"<Ik6Result {self._report['base']} -> {self._report['tip']}: {len(self.solutions.with_tag('unique'))} unique solutions, {len(self.curves)} wrist-singular curves, {len(self.solutions.undecided)} undecided, {self.completeness}>"
 
 
 class SelfMotionResult(Result):

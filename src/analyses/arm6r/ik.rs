@@ -53,6 +53,7 @@ use self::answer::{answer, Searched};
 mod invariants;
 mod parallel_axes;
 mod square;
+mod wrist_curve;
 
 use self::invariants::{first_phase, invariants, INNER};
 pub(super) use self::invariants::{Axis4Sides, Half};
@@ -91,6 +92,8 @@ pub struct Ik6Solutions {
     pub unique: Vec<[Interval; 6]>,
     /// Hulls of touching undecided boxes: each may hold solutions, none lie elsewhere.
     pub clusters: Vec<Ik6Cluster>,
+    /// At a wrist-singular pose, the solutions of each branch whose wrist is singular.
+    pub curves: Vec<Ik6Curve>,
     /// `Complete` when every box was decided; otherwise the limit that stopped the run.
     pub status: Status,
     /// The kernel's counters; discards by reason.
@@ -132,6 +135,25 @@ impl Ik6Method {
             Ik6Method::SearchAfter(why) | Ik6Method::ClosedFormAndSearch(why) => Some(why),
             _ => None,
         }
+    }
+}
+
+/// Where the solutions of one branch lie at a wrist-singular pose (joint 5 lining axes 4
+/// and 6 up): on the curve along which joints 4 and 6 turn together, or, for a pose just off
+/// the singularity, at isolated points on it, which the pose's enclosure cannot tell apart
+/// (`wrist_curve`). The cover encloses them all within the ranges; its boxes may hold
+/// solutions, none is claimed unique.
+#[derive(Clone, Debug)]
+pub struct Ik6Curve {
+    /// Boxes, joint 4 in pieces at most 1/32 rad wide, joint 6 following it.
+    pub cover: Vec<[Interval; 6]>,
+    /// The cover's hull: the joints' ranges along the curve.
+    pub hull: [Interval; 6],
+}
+
+impl Ik6Curve {
+    fn all(covers: Vec<Vec<[Interval; 6]>>) -> Vec<Ik6Curve> {
+        covers.into_iter().map(|cover| Ik6Curve { hull: closed_form::hull(&cover), cover }).collect()
     }
 }
 
@@ -571,10 +593,10 @@ pub fn solve_with(chain: &Chain6R, target: &PoseTarget, precision: f64, control:
     };
     let start = std::time::Instant::now();
     match closed_form::solve(chain, &geometry, target, precision) {
-        closed_form::ClosedForm::Solved(unique) => {
-            let n = unique.len() as u64;
+        closed_form::ClosedForm::Solved { unique, curves } => {
+            let n = (unique.len() + curves.len()) as u64;
             let stats = Stats { processed: n, found: n, seconds: start.elapsed().as_secs_f64(), ..Stats::default() };
-            Ok(Ik6Solutions { unique, clusters: Vec::new(), status: Status::Finished, stats, method: Ik6Method::ClosedForm })
+            Ok(Ik6Solutions { unique, clusters: Vec::new(), curves: Ik6Curve::all(curves), status: Status::Finished, stats, method: Ik6Method::ClosedForm })
         }
         closed_form::ClosedForm::Partly(partly) => match fallback::finish(chain, target, precision, partly, &control.remaining_since(start), progress) {
             Ok(found) => Ok(found),

@@ -38,6 +38,10 @@ pub struct Ik6Report {
     pub unique: Vec<JointBoxes>,
     /// Hulls of undecided boxes (near singular poses): each may hold solutions.
     pub clusters: Vec<JointBoxes>,
+    /// At a wrist-singular pose, one per branch whose wrist is singular: where its solutions
+    /// lie, on the curve along which joints 4 and 6 turn together (or, just off the
+    /// singularity, at isolated points on it).
+    pub curves: Vec<CurveRecord>,
     /// Boxes processed (for the closed form: candidates certified).
     pub processed: u64,
     /// Which method answered: `closed_form` (a recognised geometry, every candidate certified),
@@ -65,12 +69,25 @@ impl Ik6Report {
             completeness: Completeness::of(s.status, s.clusters.len(), false),
             unique: s.unique.iter().map(|b| joints(chain, b)).collect(),
             clusters: s.clusters.iter().map(|c| joints(chain, &c.hull)).collect(),
+            curves: s.curves.iter().map(|c| CurveRecord { moving: [chain.joints[3].clone(), chain.joints[5].clone()], ranges: joints(chain, &c.hull), cover: c.cover.iter().map(|b| joints(chain, b)).collect() }).collect(),
             processed: s.stats.processed,
             method: s.method.name(),
             closed_form_declined: s.method.declined().map(|d| d.name()),
             seconds: found.seconds,
         }
     }
+}
+
+/// A wrist-singular branch's solutions: enclosed by `cover` (each box may hold solutions).
+#[derive(Clone, Debug, Serialize)]
+pub struct CurveRecord {
+    /// The joints that turn together along the curve (joints 4 and 6).
+    pub moving: [String; 2],
+    /// The joints' ranges along it (the cover's hull).
+    pub ranges: JointBoxes,
+    /// Boxes enclosing the branch's solutions within the joint ranges, joint 4 in pieces at
+    /// most 1/32 rad wide.
+    pub cover: Vec<JointBoxes>,
 }
 
 /// The `arm_cuspidality` field of `singularities --json` for six-joint arms.

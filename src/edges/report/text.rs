@@ -198,10 +198,14 @@ fn ik6(out: &mut Out, a: &crate::app::Ik6Answer) {
     let chain = &a.chain;
     writeln!(
         out,
-        "{} -> {}: {} solutions proven unique, {} clusters undecided, status {}, {} boxes ({}), {:.3} s",
+        "{} -> {}: {} solutions proven unique, {}{} clusters undecided, status {}, {} boxes ({}), {:.3} s",
         report.base,
         report.tip,
         report.unique.len(),
+        match report.curves.len() {
+            0 => String::new(),
+            n => format!("{n} wrist-singular curves, "),
+        },
         report.clusters.len(),
         report.completeness.text(),
         report.processed,
@@ -216,6 +220,10 @@ fn ik6(out: &mut Out, a: &crate::app::Ik6Answer) {
             let text: Vec<String> = chain.joints.iter().map(|n| (n, b[n])).map(|(n, x)| format!("{n} in [{:.9}, {:.9}]", x[0], x[1])).collect();
             writeln!(out, "  {} ({tag})", text.join(", ")).ok();
         }
+    }
+    for c in &report.curves {
+        let text: Vec<String> = chain.joints.iter().map(|n| (n, c.ranges[n])).map(|(n, x)| format!("{n} in [{:.9}, {:.9}]", x[0], x[1])).collect();
+        writeln!(out, "  {} (wrist singular: {} and {} turn together along a curve; {} boxes cover it)", text.join(", "), c.moving[0], c.moving[1], c.cover.len()).ok();
     }
 }
 

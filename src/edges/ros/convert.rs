@@ -449,16 +449,22 @@ pub(crate) fn ik6_many_response(answers: &[Result<crate::app::Answer, String>]) 
 fn ik6_solutions(found: &ArmIk6) -> Ik6Solutions {
     let s = &found.solutions;
     let mut message = format!("{} solutions proven unique, {} clusters undecided at sigma", s.unique.len(), s.clusters.len());
+    if !s.curves.is_empty() {
+        message.push_str(&format!("; {} wrist-singular curves (joints 4 and 6 turn together), each a cluster of boxes after the others", s.curves.len()));
+    }
     if let crate::app::Status::Stopped(limit) = s.status {
         message.push_str(&format!("; incomplete ({} limit): the clusters include the boxes left pending", limit.name()));
     }
     let as_box = |k: usize, b: &[crate::app::Interval; 6]| LsBox { intervals: b.iter().map(|x| msgs::Interval { lower: x.inf(), upper: x.sup() }).collect(), status: msgs::BOX_SOLUTION, level: 0, cluster: k as i32 };
-    let boxes: Vec<&[crate::app::Interval; 6]> = s.unique.iter().chain(s.clusters.iter().map(|c| &c.hull)).collect();
+    // Each unique box and each cluster its own cluster index; then one index per curve.
+    let mut boxes: Vec<(usize, &[crate::app::Interval; 6])> = s.unique.iter().chain(s.clusters.iter().map(|c| &c.hull)).enumerate().collect();
+    let first = boxes.len();
+    boxes.extend(s.curves.iter().enumerate().flat_map(|(k, c)| c.cover.iter().map(move |b| (first + k, b))));
     Ik6Solutions {
         ok: true,
         message,
         complete: Completeness::of(s.status, s.clusters.len(), false).is_complete(),
-        solutions: boxes.iter().enumerate().map(|(k, b)| as_box(k, b)).collect(),
+        solutions: boxes.iter().map(|&(k, b)| as_box(k, b)).collect(),
         unique: (0..boxes.len()).map(|k| k < s.unique.len()).collect(),
         processed: s.stats.processed,
     }

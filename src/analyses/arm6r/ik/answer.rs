@@ -39,7 +39,7 @@ pub(super) fn answer(chain: &Chain6R, mut run: Searched, method: Ik6Method) -> I
             Ik6Cluster { hull, boxes: members.len() }
         })
         .collect();
-    Ik6Solutions { unique, clusters, status: run.status, stats: run.stats, method }
+    Ik6Solutions { unique, clusters, curves: Vec::new(), status: run.status, stats: run.stats, method }
 }
 
 /// Whether two boxes meet, a continuous joint's angles compared modulo a turn.

@@ -44,6 +44,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::parallel_axes::{self, ParallelAxes};
+use super::wrist_curve::{self, SingularWrist};
 use super::{square, PoseTarget, Split};
 use crate::analyses::arm6r::chain::{Chain6R, IAffine};
 use crate::formulate::stated;
@@ -110,7 +111,8 @@ pub enum Degeneracy {
     Limit,
     /// Krawczyk did not prove a candidate the only solution about it.
     Uncertified,
-    /// Two certified boxes overlap: they may hold one solution.
+    /// Two certified boxes overlap, or a wrist-singular branch's cover meets another box: they
+    /// may hold one solution.
     Overlap,
 }
 
@@ -130,8 +132,9 @@ impl Degeneracy {
 /// What `solve` found.
 #[derive(Clone, Debug)]
 pub(crate) enum ClosedForm {
-    /// Every solution within the joint ranges, each in its own certified box.
-    Solved(Vec<[Interval; 6]>),
+    /// Every solution within the joint ranges, each in its own certified box, but those of
+    /// wrist-singular branches, each branch's in its cover (`wrist_curve`).
+    Solved { unique: Vec<[Interval; 6]>, curves: Vec<Vec<[Interval; 6]>> },
     /// Some candidates certified, the others left to a search of a box about each.
     Partly(Partly),
     /// A step the enclosures could not decide: the search must answer the whole pose.
@@ -149,6 +152,8 @@ pub(crate) struct Partly {
     pub search: Vec<[[f64; 2]; 6]>,
     /// Why the first of them was left.
     pub why: Degeneracy,
+    /// The covers of wrist-singular branches (`wrist_curve`), disjoint from the other boxes.
+    pub curves: Vec<Vec<[Interval; 6]>>,
 }
 
 /// What `recognise` proved (module doc): the wrist centre and the constants of the position
@@ -288,15 +293,20 @@ pub(super) fn cos_sin(x: Interval) -> (Interval, Interval) {
     (trig::cos(x), trig::sin(x))
 }
 
-/// Every solution's angles modulo a turn (module doc), at most eight.
-fn branches(chain: &Chain6R, wrist: &SphericalWrist, g: &IAffine) -> Result<SmallVec<[[Interval; 6]; 8]>, Degeneracy> {
+/// Every solution's angles modulo a turn (module doc), at most eight, and the position
+/// branches whose wrist is singular as far as the enclosures tell (`wrist_curve`).
+type Branches = (SmallVec<[[Interval; 6]; 8]>, SmallVec<[SingularWrist; 4]>);
+
+/// Every solution's angles modulo a turn (module doc), at most eight, each position branch
+/// whose joint 5 has a double root set apart (`wrist_curve`).
+fn branches(chain: &Chain6R, wrist: &SphericalWrist, g: &IAffine) -> Result<Branches, Degeneracy> {
     let (a, pre) = (&chain.axes, &chain.pre);
     let wrist_centre = add(&stated::apply(&g.r, &wrist.w6), &g.t);
     let p = stated::apply_transposed(&pre[0].r, &sub(&wrist_centre, &pre[0].t));
     let u = &wrist.u;
     // (R₁u)·P = (a₁·u)(a₁·P) + cos θ₁ (u·P − (a₁·u)(a₁·P)) + sin θ₁ (a₁ × u)·P.
     let (ua, pa) = (dot(&a[0], u), dot(&a[0], &p));
-    let mut out = SmallVec::new();
+    let (mut out, mut singular) = (SmallVec::new(), SmallVec::new());
     for t1 in cos_sin_roots(dot(u, &p) - ua * pa, dot(&cross(&a[0], u), &p), wrist.h - ua * pa)? {
         let (c1, s1) = cos_sin(t1);
         let z = sub(&rotate(&a[0], c1, -s1, &p), &pre[1].t);
@@ -312,12 +322,27 @@ fn branches(chain: &Chain6R, wrist: &SphericalWrist, g: &IAffine) -> Result<Smal
             r = stated::mul(&r, &pre[3].r);
             // M = R₀₄ᵀ·G.r = R₄·Pre₅.r·R₅·Pre₆.r·R₆.
             let m = stated::mul(&[0, 1, 2].map(|i| [0, 1, 2].map(|j| r[j][i])), &g.r);
-            for (t4, t5, t6) in wrist_branches(chain, wrist, &m)? {
-                out.push([t1, t2, t3, t4, t5, t6]);
+            match wrist_branches(chain, wrist, &m) {
+                Ok(wrists) => out.extend(wrists.into_iter().map(|(t4, t5, t6)| [t1, t2, t3, t4, t5, t6])),
+                Err(Degeneracy::Discriminant) => {
+                    let (a5, b5, c5) = joint5_equation(chain, wrist, &m);
+                    if let Some(t5) = wrist_curve::joint5(a5, b5, c5)? {
+                        singular.push(SingularWrist { position: [t1, t2, t3], m, t5 });
+                    }
+                }
+                Err(why) => return Err(why),
             }
         }
     }
-    Ok(out)
+    Ok((out, singular))
+}
+
+/// `A cos θ₅ + B sin θ₅ = C`, joint 5's equation `a₄·M a₆ = e₄·R₅ d₆` written out (Rodrigues).
+fn joint5_equation(chain: &Chain6R, wrist: &SphericalWrist, m: &M3) -> (Interval, Interval, Interval) {
+    let a = &chain.axes;
+    let (e4, d6, a5) = (&wrist.e4, &wrist.d6, &a[4]);
+    let k = dot(e4, a5) * dot(a5, d6);
+    (dot(e4, d6) - k, dot(e4, &cross(a5, d6)), dot(&a[3], &stated::apply(m, &a[5])) - k)
 }
 
 /// Joints 4, 5, 6 from `M = R₄·Pre₅.r·R₅·Pre₆.r·R₆`: `a₄·M a₆ = e₄·R₅ d₆` (joint 5,
@@ -327,9 +352,9 @@ fn wrist_branches(chain: &Chain6R, wrist: &SphericalWrist, m: &M3) -> Result<Sma
     let (e4, d6, a5) = (&wrist.e4, &wrist.d6, &a[4]);
     let ma6 = stated::apply(m, &a[5]);
     let mta4 = stated::apply_transposed(m, &a[3]);
-    let k = dot(e4, a5) * dot(a5, d6);
+    let (a5c, b5c, c5c) = joint5_equation(chain, wrist, m);
     let mut out = SmallVec::new();
-    for t5 in cos_sin_roots(dot(e4, d6) - k, dot(e4, &cross(a5, d6)), dot(&a[3], &ma6) - k)? {
+    for t5 in cos_sin_roots(a5c, b5c, c5c)? {
         let (c5, s5) = cos_sin(t5);
         let t4 = turn(&a[3], &stated::apply(&pre[4].r, &rotate(a5, c5, s5, d6)), &ma6)?;
         let t6 = turn(&a[5], &mta4, &stated::apply_transposed(&pre[5].r, &rotate(a5, c5, -s5, e4)))?;
@@ -392,7 +417,7 @@ fn moved(k: &[Interval; 6], region: &[Interval; 6], turns: &[f64; 6]) -> Option<
 /// candidates left to the search; or why the search must answer the whole pose.
 pub(crate) fn solve(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget, precision: f64) -> ClosedForm {
     match solve_or_degenerate(chain, geometry, target, precision) {
-        Ok(Partly { certified, search, .. }) if search.is_empty() => ClosedForm::Solved(certified.into_iter().map(|(k, _)| k).collect()),
+        Ok(Partly { certified, search, curves, .. }) if search.is_empty() => ClosedForm::Solved { unique: certified.into_iter().map(|(k, _)| k).collect(), curves },
         Ok(partly) => ClosedForm::Partly(partly),
         Err(why) => ClosedForm::Degenerate(why),
     }
@@ -428,9 +453,9 @@ fn merged(mut boxes: Vec<[[f64; 2]; 6]>) -> Vec<[[f64; 2]; 6]> {
 
 fn solve_or_degenerate(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget, precision: f64) -> Result<Partly, Degeneracy> {
     let g = target.0.then(&chain.post.inverse());
-    let all = match geometry {
+    let (all, singular) = match geometry {
         Geometry::SphericalWrist(wrist) => branches(chain, wrist, &g)?,
-        Geometry::ParallelAxes(arm) => parallel_axes::branches(chain, arm, &g)?,
+        Geometry::ParallelAxes(arm) => (parallel_axes::branches(chain, arm, &g)?, SmallVec::new()),
     };
     let mut split = None;
     let mut found: Vec<([Interval; 6], [Interval; 6])> = Vec::new();
@@ -482,13 +507,31 @@ fn solve_or_degenerate(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget
     found.sort_by(|a, b| a.0.iter().map(|x| x.inf()).partial_cmp(b.0.iter().map(|x| x.inf())).unwrap_or(std::cmp::Ordering::Equal));
     let why = left.first().map_or(Degeneracy::Uncertified, |l| l.1);
     let search = merged(left.iter().map(|(c, _)| search_box(chain, c)).collect());
-    Ok(Partly { certified: found, search, why })
+    let curves: Vec<Vec<[Interval; 6]>> = singular.iter().map(|s| wrist_curve::cover(chain, s)).filter(|c| !c.is_empty()).collect();
+    // A box of a cover meeting another box: one solution may be counted in both.
+    let boxes: Vec<[Interval; 6]> = found.iter().map(|f| f.0).chain(search.iter().map(|b| b.map(|x| interval(x[0], x[1])))).collect();
+    let hulls: Vec<[Interval; 6]> = curves.iter().map(|c| hull(c)).collect();
+    let apart = |x: &[[Interval; 6]], hx: &[Interval; 6], y: &[[Interval; 6]]| y.is_empty() || !meets(hx, &hull(y)) || x.iter().all(|a| y.iter().all(|b| !meets(a, b)));
+    for (i, c) in curves.iter().enumerate() {
+        if !apart(c, &hulls[i], &boxes) || !(0..i).all(|j| apart(c, &hulls[i], &curves[j])) {
+            return Err(Degeneracy::Overlap);
+        }
+    }
+    Ok(Partly { certified: found, search, why, curves })
+}
+
+fn meets(x: &[Interval; 6], y: &[Interval; 6]) -> bool {
+    (0..6).all(|d| !x[d].disjoint(y[d]))
+}
+
+/// The hull of boxes (not empty).
+pub(super) fn hull(boxes: &[[Interval; 6]]) -> [Interval; 6] {
+    boxes.iter().fold(boxes[0], |h, b| std::array::from_fn(|d| h[d].convex_hull(b[d])))
 }
 
 /// Whether two of the boxes overlap (then they may hold one solution).
 pub(super) fn overlapping<'a>(boxes: impl Iterator<Item = &'a [Interval; 6]> + Clone) -> bool {
-    let overlap = |x: &[Interval; 6], y: &[Interval; 6]| (0..6).all(|d| !x[d].disjoint(y[d]));
-    boxes.clone().enumerate().any(|(i, x)| boxes.clone().take(i).any(|y| overlap(x, y)))
+    boxes.clone().enumerate().any(|(i, x)| boxes.clone().take(i).any(|y| meets(x, y)))
 }
 
 /// Every candidate certified, counting: `found` as certified about their candidates, the

@@ -11,7 +11,7 @@
 
 use super::closed_form::{overlapping, Degeneracy, Partly};
 use super::answer::{answer, Searched};
-use super::{search_within, Ik6Method, Ik6Solutions, PoseTarget, INFLATE_WIDTH};
+use super::{search_within, Ik6Curve, Ik6Method, Ik6Solutions, PoseTarget, INFLATE_WIDTH};
 use crate::analyses::arm6r::chain::Chain6R;
 use crate::kernel::search::{Control, Progress, Stats, Status};
 
@@ -30,9 +30,10 @@ pub(super) fn finish(chain: &Chain6R, target: &PoseTarget, precision: f64, partl
         all.stats.add(&run.stats);
     }
     all.stats.seconds = start.elapsed().as_secs_f64();
-    let found = answer(chain, all, Ik6Method::ClosedFormAndSearch(partly.why));
+    let mut found = answer(chain, all, Ik6Method::ClosedFormAndSearch(partly.why));
     if overlapping(found.unique.iter()) {
         return Err(Degeneracy::Overlap);
     }
+    found.curves = Ik6Curve::all(partly.curves);
     Ok(found)
 }

@@ -1,0 +1,125 @@
+//! Test idea: at a wrist-singular pose (joint 5 lining axes 4 and 6 up) a spherical-wrist arm's
+//! solutions of the generating branch form a curve on which joints 4 and 6 turn together; the
+//! answer reports that branch as a curve, its cover enclosing the curve, and certifies the
+//! isolated solutions of the other branches. The reference is forward kinematics written in
+//! the tests (no solver code): which of `θ₄ + t, θ₆ ∓ t` keeps the pose is read off it, and every
+//! point of that curve within the limits must lie in the cover. Just off the singularity
+//! (joint 5 at 1e-9) the generating configuration and its wrist flip lie in the answer.
+
+use crate::spherical_wrist::{control, forward, holds, mechanism, meets, random_q, Lcg};
+use linkspace::analyses::arm6r::ik::{self, Ik6Method};
+use linkspace::analyses::arm6r::{Chain6R, Ik6Solutions, Pose64, PoseTarget};
+use linkspace::kernel::interval::Interval;
+use linkspace::kernel::search::Status;
+use std::f64::consts::{PI, TAU};
+use std::time::Duration;
+
+const ARMS: [&str; 3] = ["urdf/puma560.urdf", "urdf/kuka_kr16.urdf", "urdf/staubli_tx90.urdf"];
+
+fn distance(a: &Pose64, b: &Pose64) -> f64 {
+    let r = (0..3).flat_map(|i| (0..3).map(move |j| (i, j))).map(|(i, j)| (a.r[i][j] - b.r[i][j]).abs());
+    r.chain((0..3).map(|i| (a.t[i] - b.t[i]).abs())).fold(0.0, f64::max)
+}
+
+/// The copies of `x` (modulo a turn) within the joint's range.
+fn copies(chain: &Chain6R, k: usize, x: f64) -> Vec<f64> {
+    let (lo, hi) = chain.ranges[k];
+    (-3..=3).map(|n| x + n as f64 * TAU).filter(|y| (lo..=hi).contains(y)).collect()
+}
+
+/// Whether the answer holds `q`: in a unique box, a cluster or a curve's cover.
+fn kept(found: &Ik6Solutions, q: &[f64; 6]) -> bool {
+    found.unique.iter().any(|b| holds(b, q)) || found.clusters.iter().any(|c| holds(&c.hull, q)) || found.curves.iter().flat_map(|c| &c.cover).any(|b| holds(b, q))
+}
+
+fn singular_q(chain: &Chain6R, rng: &mut Lcg, q5: f64) -> [f64; 6] {
+    let mut q = random_q(chain, rng);
+    q[4] = q5;
+    q
+}
+
+/// Joint 5 at 0 on three arms, four poses each: answered in closed form within a second, with
+/// at least one curve; every point of the generating curve within the limits (joint 4 on a
+/// grid of 1e-3 rad, joint 6 following it) lies in a curve's cover; each unique box's centre
+/// has the pose; no unique box meets a curve; and every box the search certifies (2 s) meets
+/// exactly one unique box of the answer or one of its curves.
+#[test]
+fn at_the_wrist_singularity_the_branch_is_answered_as_a_curve() {
+    let mut rng = Lcg(1989);
+    for file in ARMS {
+        let m = mechanism(file);
+        let chain = Chain6R::from_mechanism(&m, None, None).expect("six joints");
+        for _ in 0..4 {
+            let q = singular_q(&chain, &mut rng, 0.0);
+            let pose = forward(&m, &chain, &q);
+            let target = PoseTarget::around(&pose, 4e-15).expect("finite");
+            let found = ik::solve(&chain, &target, 1e-10, &control(Some(Duration::from_secs(5)))).expect("solves");
+            println!("{file} q {q:?}: {:?}, {} unique, {} curves ({} boxes), {:.4} s", found.method, found.unique.len(), found.curves.len(), found.curves.iter().map(|c| c.cover.len()).sum::<usize>(), found.stats.seconds);
+            assert_eq!(found.method, Ik6Method::ClosedForm, "{file} q {q:?}");
+            assert!(found.status == Status::Finished && found.clusters.is_empty() && !found.curves.is_empty(), "{file} q {q:?}: {found:?}");
+            // The generating curve: joints 4 and 6 turned together, the sign read off the pose.
+            let along = |sign: f64, t: f64| {
+                let mut p = q;
+                (p[3], p[5]) = (q[3] + t, q[5] - sign * t);
+                p
+            };
+            let sign = [1.0, -1.0].into_iter().find(|&s| distance(&forward(&m, &chain, &along(s, 0.7)), &pose) < 1e-12).expect("joints 4 and 6 turn together at joint 5 = 0");
+            let mut points = 0;
+            let (lo, hi) = chain.ranges[3];
+            for i in 0..=((hi - lo) / 1e-3) as usize {
+                let t4 = lo + i as f64 * 1e-3;
+                let p = along(sign, t4 - q[3]);
+                for t6 in copies(&chain, 5, p[5]) {
+                    let p = [p[0], p[1], p[2], t4, 0.0, t6];
+                    points += 1;
+                    assert!(found.curves.iter().flat_map(|c| &c.cover).any(|b| holds(b, &p)), "{file}: curve point {p:?} not covered");
+                }
+            }
+            assert!(points > 1000, "{file}: {points} points of the curve within the limits");
+            for b in &found.unique {
+                let centre = b.map(|x| x.mid());
+                assert!(distance(&forward(&m, &chain, &centre), &pose) < 1e-9, "{file}: unique box {b:?}");
+                assert!(!found.curves.iter().flat_map(|c| &c.cover).any(|c| meets(b, c)), "{file}: unique box {b:?} on a curve");
+            }
+            let searched = ik::search(&chain, &target, 1e-10, &control(Some(Duration::from_secs(2)))).expect("searches");
+            for s in &searched.unique {
+                let claims = found.unique.iter().filter(|u| meets(u, s)).count() + usize::from(found.curves.iter().flat_map(|c| &c.cover).any(|c| meets(c, s)));
+                assert_eq!(claims, 1, "{file} q {q:?}: search box {s:?}");
+            }
+        }
+    }
+}
+
+/// Joint 5 at 1e-9: the enclosures cannot tell this pose from a singular one, so the branch is
+/// a curve again; the generating configuration and its wrist flip (joint 4 and 6 a half turn
+/// on, joint 5 negated: the same pose, read off forward kinematics) both lie in the answer.
+/// The cover's boxes are narrow across the curve: joint 5 within 1e-4 of 0 (about the square
+/// root of the enclosures' width, as at a double root).
+#[test]
+fn just_off_the_wrist_singularity_both_wrist_flips_are_kept() {
+    let mut rng = Lcg(2022);
+    for file in ARMS {
+        let m = mechanism(file);
+        let chain = Chain6R::from_mechanism(&m, None, None).expect("six joints");
+        for _ in 0..4 {
+            let q = singular_q(&chain, &mut rng, 1e-9);
+            let pose = forward(&m, &chain, &q);
+            let target = PoseTarget::around(&pose, 4e-15).expect("finite");
+            let found = ik::solve(&chain, &target, 1e-10, &control(Some(Duration::from_secs(5)))).expect("solves");
+            assert!(found.status == Status::Finished && found.method != Ik6Method::Search, "{file} q {q:?}: {found:?}");
+            assert!(kept(&found, &q), "{file} q {q:?}: {found:?}");
+            let flip = [q[0], q[1], q[2], q[3] + PI, -q[4], q[5] + PI];
+            assert!(distance(&forward(&m, &chain, &flip), &pose) < 1e-12, "{file}: the wrist flip keeps the pose");
+            for t4 in copies(&chain, 3, flip[3]) {
+                for t6 in copies(&chain, 5, flip[5]) {
+                    let f = [flip[0], flip[1], flip[2], t4, flip[4], t6];
+                    assert!(kept(&found, &f), "{file} flip {f:?}: {found:?}");
+                }
+            }
+            let across: Vec<Interval> = found.curves.iter().flat_map(|c| &c.cover).map(|b| b[4]).collect();
+            let widest = across.iter().map(|x| x.mag()).fold(0.0, f64::max);
+            println!("{file}: joint 5 within {widest:.1e} of 0 across the curve");
+            assert!(widest < 1e-4, "{file}: joint 5 across the curve {widest:e}");
+        }
+    }
+}
