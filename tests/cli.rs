@@ -826,3 +826,32 @@ fn each_command_shows_its_own_memory_default() {
     }
     assert_clear_error(&["ik", &fixture("puma560.urdf"), "--point", "0.5,0,0.3", "--max-memory", "0"], "--max-memory must be at least 1 MiB");
 }
+
+/// `ik6` at the KR16's home pose (every joint at 0: joint 5 lines axes 4 and 6 up; the pose
+/// written here as the matrix its frames give at 0): the answer is complete in closed form,
+/// one wrist-singular curve whose cover spans joints 4 and 6 over their whole ranges with
+/// joints 1–3 and 5 pinned at 0 and holds the home configuration; the text names the curve.
+#[test]
+fn ik6_answers_a_wrist_singular_pose_with_a_curve() {
+    let kr16 = format!("{}/urdf/kuka_kr16.urdf", env!("CARGO_MANIFEST_DIR"));
+    let path = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("ik6-home-{}.json", std::process::id()));
+    let home = "1,0,0,0.905,0,-1,0,0,0,0,-1,-0.153,0,0,0,1";
+    let (ok, out, err) = run(&["ik6", &kr16, "--pose", home, "--json", path.to_str().expect("utf-8")]);
+    assert!(ok, "{err}");
+    assert!(out.contains("1 singular curves") && out.contains("(wrist singular: joint_4, joint_6 move together along a curve;"), "{out}");
+    let r: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path).expect("written")).expect("json");
+    assert_eq!((r["status"].as_str(), r["method"].as_str()), (Some("complete"), Some("closed_form")), "{r}");
+    let curves = r["curves"].as_array().expect("curves");
+    assert_eq!(curves.len(), 1, "{r}");
+    assert_eq!((&curves[0]["kind"], &curves[0]["moving"]), (&serde_json::json!("wrist_singular"), &serde_json::json!(["joint_4", "joint_6"])));
+    let range = |j: &str| [0, 1].map(|e| curves[0]["ranges"][j][e].as_f64().expect("bound"));
+    for j in ["joint_4", "joint_6"] {
+        assert_eq!(range(j), [-6.1087, 6.1087], "{j}");
+    }
+    for (j, within) in [("joint_1", 1e-12), ("joint_2", 1e-12), ("joint_3", 1e-12), ("joint_5", 1e-6)] {
+        let [lo, hi] = range(j);
+        assert!(lo <= 0.0 && hi >= 0.0 && hi - lo < 2.0 * within, "{j}: [{lo}, {hi}]");
+    }
+    let holds_home = |b: &serde_json::Value| ["joint_1", "joint_2", "joint_3", "joint_4", "joint_5", "joint_6"].iter().all(|j| b[j][0].as_f64().unwrap_or(f64::NAN) <= 0.0 && b[j][1].as_f64().unwrap_or(f64::NAN) >= 0.0);
+    assert!(curves[0]["cover"].as_array().expect("cover").iter().any(holds_home), "{r}");
+}

@@ -82,6 +82,7 @@ fn at_the_wrist_singularity_the_branch_is_answered_as_a_curve() {
                 assert!(!found.curves.iter().flat_map(|c| &c.cover).any(|c| meets(b, c)), "{file}: unique box {b:?} on a curve");
             }
             let searched = ik::search(&chain, &target, 1e-10, &control(Some(Duration::from_secs(2)))).expect("searches");
+            println!("  the search alone: {:?}, {} unique, {} clusters, {:.2} s", searched.status, searched.unique.len(), searched.clusters.len(), searched.stats.seconds);
             for s in &searched.unique {
                 let claims = found.unique.iter().filter(|u| meets(u, s)).count() + usize::from(found.curves.iter().flat_map(|c| &c.cover).any(|c| meets(c, s)));
                 assert_eq!(claims, 1, "{file} q {q:?}: search box {s:?}");
@@ -122,4 +123,118 @@ fn just_off_the_wrist_singularity_both_wrist_flips_are_kept() {
             assert!(widest < 1e-4, "{file}: joint 5 across the curve {widest:e}");
         }
     }
+}
+
+/// The pose of `link`'s frame at `q` (the chain's joints in order, those past `link` unused).
+fn forward_to(m: &linkspace::model::Mechanism, link: &str, q: &[f64; 6]) -> Pose64 {
+    let mut free = q.iter();
+    let mut pose = Pose64::IDENTITY;
+    for j in m.path_to(m.link(link).expect("link")) {
+        let joint = &m.joints[j];
+        let o = joint.origin.translation.vector;
+        let origin = match joint.exact_rotation {
+            Some(r) => Pose64 { r, t: [o[0], o[1], o[2]] },
+            None => Pose64::from_xyz_rpy([o[0], o[1], o[2], joint.rpy[0], joint.rpy[1], joint.rpy[2]]),
+        };
+        pose = pose.then(&origin);
+        if let linkspace::model::JointKind::Revolute { .. } = joint.kind {
+            let n = (joint.axis[0].powi(2) + joint.axis[1].powi(2) + joint.axis[2].powi(2)).sqrt();
+            pose = pose.then(&crate::spherical_wrist::about([joint.axis[0] / n, joint.axis[1] / n, joint.axis[2] / n], *free.next().expect("six joints")));
+        }
+    }
+    pose
+}
+
+/// Joints 4–6 moved by Newton's method (finite differences) until the tip has `pose`'s
+/// rotation, joints 1–3 held; `None` when it does not converge (near a wrist singularity).
+fn wrist_newton(m: &linkspace::model::Mechanism, chain: &Chain6R, q: [f64; 6], pose: &Pose64) -> Option<[f64; 6]> {
+    let error = |q: &[f64; 6]| {
+        let r = forward(m, chain, q).r;
+        // The skew part of Rᵀ_target·R: zero where the rotations agree (near each other).
+        let e = |i: usize, j: usize| (0..3).map(|k| pose.r[k][i] * r[k][j]).sum::<f64>();
+        [e(2, 1) - e(1, 2), e(0, 2) - e(2, 0), e(1, 0) - e(0, 1)]
+    };
+    let mut q = q;
+    for _ in 0..30 {
+        let f = error(&q);
+        if f.iter().all(|x| x.abs() < 1e-14) {
+            return (distance(&forward(m, chain, &q), pose) < 1e-10).then_some(q);
+        }
+        let cols: Vec<[f64; 3]> = (3..6).map(|k| {
+            let mut p = q;
+            p[k] += 1e-7;
+            let g = error(&p);
+            [0, 1, 2].map(|i| (g[i] - f[i]) / 1e-7)
+        }).collect();
+        let a = |i: usize, j: usize| cols[j][i];
+        let det = a(0, 0) * (a(1, 1) * a(2, 2) - a(1, 2) * a(2, 1)) - a(0, 1) * (a(1, 0) * a(2, 2) - a(1, 2) * a(2, 0)) + a(0, 2) * (a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0));
+        if det.abs() < 1e-6 {
+            return None;
+        }
+        // Cramer's rule for the step.
+        for j in 0..3 {
+            let col = |c: usize, i: usize| if c == j { -f[i] } else { a(i, c) };
+            let dj = col(0, 0) * (col(1, 1) * col(2, 2) - col(2, 1) * col(1, 2)) - col(1, 0) * (col(0, 1) * col(2, 2) - col(2, 1) * col(0, 2)) + col(2, 0) * (col(0, 1) * col(1, 2) - col(1, 1) * col(0, 2));
+            q[3 + j] += dj / det;
+        }
+    }
+    None
+}
+
+/// The KR16 with its wrist centre (joint 5's origin) on axis 1, joint 3 found by bisection in
+/// the forward kinematics: joint 1 turns freely. The answer is complete in closed form with a
+/// `Shoulder` curve whose cover spans joint 1's range, and it holds every point of the
+/// reference curve: joint 1 stepped by 0.01 rad over its range from the generating
+/// configuration, joints 4–6 followed by Newton's method on the tip's rotation (every point
+/// checked on the whole pose; those beyond a wrist joint's limits are no solutions).
+#[test]
+fn at_the_shoulder_singularity_joint_1_turns_freely_on_a_curve() {
+    let m = mechanism("urdf/kuka_kr16.urdf");
+    let chain = Chain6R::from_mechanism(&m, None, None).expect("six joints");
+    let radial = |t2: f64, t3: f64| forward_to(&m, "link_5", &[0.0, t2, t3, 0.0, 0.0, 0.0]).t[0];
+    let (lo3, hi3) = chain.ranges[2];
+    let (t2, mut bracket) = [-1.0, -1.5, -2.0, -0.5].into_iter().find_map(|t2| {
+        let grid: Vec<f64> = (0..=400).map(|i| lo3 + (hi3 - lo3) * i as f64 / 400.0).collect();
+        grid.windows(2).find(|w| radial(t2, w[0]).signum() != radial(t2, w[1]).signum()).map(|w| (t2, [w[0], w[1]]))
+    }).expect("the wrist centre crosses axis 1");
+    for _ in 0..200 {
+        let mid = 0.5 * (bracket[0] + bracket[1]);
+        bracket = if radial(t2, mid).signum() == radial(t2, bracket[0]).signum() { [mid, bracket[1]] } else { [bracket[0], mid] };
+    }
+    let q = [0.4, t2, bracket[0], 0.7, 0.9, -0.5];
+    let centre = forward_to(&m, "link_5", &q).t;
+    assert!(centre[0].hypot(centre[1]) < 1e-14, "wrist centre {centre:?}");
+    let pose = forward(&m, &chain, &q);
+    let target = PoseTarget::around(&pose, 4e-15).expect("finite");
+    let found = ik::solve(&chain, &target, 1e-10, &control(Some(Duration::from_secs(5)))).expect("solves");
+    let shoulder: Vec<&[Interval; 6]> = found.curves.iter().filter(|c| c.kind == ik::CurveKind::Shoulder).flat_map(|c| &c.cover).collect();
+    println!("KR16 at the shoulder singularity: {:?}, {} unique, {} curves, {} boxes at the shoulder, {:.4} s", found.method, found.unique.len(), found.curves.len(), shoulder.len(), found.stats.seconds);
+    assert_eq!(found.method, Ik6Method::ClosedForm);
+    assert!(found.status == Status::Finished && found.clusters.is_empty() && !shoulder.is_empty(), "{found:?}");
+    let (lo1, hi1) = chain.ranges[0];
+    let (mut points, mut newton_failed) = (0, 0);
+    for direction in [1.0, -1.0] {
+        let mut p = q;
+        loop {
+            p[0] += direction * 0.01;
+            if !(lo1..=hi1).contains(&p[0]) {
+                break;
+            }
+            let Some(next) = wrist_newton(&m, &chain, p, &pose) else {
+                newton_failed += 1;
+                break;
+            };
+            p = next;
+            // A point beyond a wrist joint's limits is no solution within them.
+            let mut wrapped = p;
+            let within = (3..6).all(|k| copies(&chain, k, p[k]).first().map(|&c| wrapped[k] = c).is_some());
+            if !within {
+                continue;
+            }
+            points += 1;
+            assert!(shoulder.iter().any(|b| holds(b, &wrapped)), "curve point {wrapped:?} not covered");
+        }
+    }
+    println!("  {points} reference points covered ({newton_failed} directions ended by Newton)");
+    assert!(points > 300, "{points} reference points");
 }

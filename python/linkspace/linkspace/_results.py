@@ -304,12 +304,19 @@ class Ik6Result(Result):
 
     @cached_property
     def curves(self) -> list[BoxSet]:
-        """At a wrist-singular pose, one box set per branch whose wrist is singular: its
-        solutions lie on the curve along which joints 4 and 6 turn together (or, for a pose just
-        off the singularity, at isolated points on it), and these boxes, tagged ``solution``
-        (each may hold solutions), enclose them all within the joint ranges."""
+        """At a singular pose, one box set per singular curve (``curve_kinds``): at a wrist
+        singularity a branch's solutions lie on the curve along which joints 4 and 6 turn
+        together, at a shoulder singularity (the wrist centre on axis 1) joint 1 turns freely
+        with the wrist following (or, for a pose just off the singularity, at isolated points on
+        them); the boxes, tagged ``solution`` (each may hold solutions), enclose them all within
+        the joint ranges."""
         r = self._report
         return [BoxSet.from_records([{"joints": b} for b in c["cover"]], r["joints"], lambda _: "solution") for c in r.get("curves", [])]
+
+    @property
+    def curve_kinds(self) -> list[str]:
+        """``"wrist_singular"`` or ``"shoulder_singular"`` for each of ``curves``."""
+        return [str(c["kind"]) for c in self._report.get("curves", [])]
 
     @property
     def joints(self) -> list[str]:
@@ -324,7 +331,7 @@ class Ik6Result(Result):
         return str(self._report["method"])
 
     def __repr__(self) -> str:
-        return f"<Ik6Result {self._report['base']} -> {self._report['tip']}: {len(self.solutions.with_tag('unique'))} unique solutions, {len(self.curves)} wrist-singular curves, {len(self.solutions.undecided)} undecided, {self.completeness}>"
+        return f"<Ik6Result {self._report['base']} -> {self._report['tip']}: {len(self.solutions.with_tag('unique'))} unique solutions, {len(self.curves)} singular curves, {len(self.solutions.undecided)} undecided, {self.completeness}>"
 
 
 class SelfMotionResult(Result):

@@ -179,3 +179,19 @@ def test_path_verdicts_agree_with_the_sign_of_det_df() -> None:
     assert r.segments[0].value == "crosses" and r.segments[0].crossings
     r = m.path_check([[0.0, *clear[0]], [0.0, *clear[1]]])
     assert r.segments[0].clear and r.segments[0].min_abs_det is not None and r.segments[0].min_abs_det > 0
+
+
+def test_ik6_at_a_wrist_singular_pose_returns_the_curve() -> None:
+    # The KR16 at home (every joint at 0) lines axes 4 and 6 up: the matrix its frames give at 0.
+    home = np.array([[1.0, 0.0, 0.0, 0.905], [0.0, -1.0, 0.0, 0.0], [0.0, 0.0, -1.0, -0.153], [0.0, 0.0, 0.0, 1.0]])
+    r = linkspace.load(urdf("kuka_kr16.urdf")).ik6(home)
+    assert r.completeness.complete and r.method == "closed_form" and r.curve_kinds == ["wrist_singular"]
+    cover = r.curves[0]
+    assert len(cover) > 100 and set(cover.tags) == {"solution"}
+    assert cover.contains(np.zeros(6)).any()
+    # Joint 4 over its whole range, joints 1-3 and 5 pinned at 0.
+    i4, i5 = cover.columns.index("joint_4"), cover.columns.index("joint_5")
+    assert cover.lo[:, i4].min() == -6.1087 and cover.hi[:, i4].max() == 6.1087
+    assert np.abs(np.concatenate([cover.lo[:, i5], cover.hi[:, i5]])).max() < 1e-6
+    # The curve's boxes are among the solutions, after the unique ones.
+    assert len(r.solutions.with_tag("solution")) == len(cover)

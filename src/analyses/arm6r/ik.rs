@@ -53,7 +53,8 @@ use self::answer::{answer, Searched};
 mod invariants;
 mod parallel_axes;
 mod square;
-mod wrist_curve;
+mod singular_curves;
+pub use self::singular_curves::{CurveKind, Ik6Curve};
 
 use self::invariants::{first_phase, invariants, INNER};
 pub(super) use self::invariants::{Axis4Sides, Half};
@@ -92,7 +93,7 @@ pub struct Ik6Solutions {
     pub unique: Vec<[Interval; 6]>,
     /// Hulls of touching undecided boxes: each may hold solutions, none lie elsewhere.
     pub clusters: Vec<Ik6Cluster>,
-    /// At a wrist-singular pose, the solutions of each branch whose wrist is singular.
+    /// At a wrist- or shoulder-singular pose, where the singular branches' solutions lie.
     pub curves: Vec<Ik6Curve>,
     /// `Complete` when every box was decided; otherwise the limit that stopped the run.
     pub status: Status,
@@ -135,25 +136,6 @@ impl Ik6Method {
             Ik6Method::SearchAfter(why) | Ik6Method::ClosedFormAndSearch(why) => Some(why),
             _ => None,
         }
-    }
-}
-
-/// Where the solutions of one branch lie at a wrist-singular pose (joint 5 lining axes 4
-/// and 6 up): on the curve along which joints 4 and 6 turn together, or, for a pose just off
-/// the singularity, at isolated points on it, which the pose's enclosure cannot tell apart
-/// (`wrist_curve`). The cover encloses them all within the ranges; its boxes may hold
-/// solutions, none is claimed unique.
-#[derive(Clone, Debug)]
-pub struct Ik6Curve {
-    /// Boxes, joint 4 in pieces at most 1/32 rad wide, joint 6 following it.
-    pub cover: Vec<[Interval; 6]>,
-    /// The cover's hull: the joints' ranges along the curve.
-    pub hull: [Interval; 6],
-}
-
-impl Ik6Curve {
-    fn all(covers: Vec<Vec<[Interval; 6]>>) -> Vec<Ik6Curve> {
-        covers.into_iter().map(|cover| Ik6Curve { hull: closed_form::hull(&cover), cover }).collect()
     }
 }
 

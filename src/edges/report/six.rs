@@ -38,9 +38,8 @@ pub struct Ik6Report {
     pub unique: Vec<JointBoxes>,
     /// Hulls of undecided boxes (near singular poses): each may hold solutions.
     pub clusters: Vec<JointBoxes>,
-    /// At a wrist-singular pose, one per branch whose wrist is singular: where its solutions
-    /// lie, on the curve along which joints 4 and 6 turn together (or, just off the
-    /// singularity, at isolated points on it).
+    /// At a wrist- or shoulder-singular pose: where the singular branches' solutions lie, on
+    /// curves (or, just off the singularity, at isolated points on them).
     pub curves: Vec<CurveRecord>,
     /// Boxes processed (for the closed form: candidates certified).
     pub processed: u64,
@@ -69,7 +68,7 @@ impl Ik6Report {
             completeness: Completeness::of(s.status, s.clusters.len(), false),
             unique: s.unique.iter().map(|b| joints(chain, b)).collect(),
             clusters: s.clusters.iter().map(|c| joints(chain, &c.hull)).collect(),
-            curves: s.curves.iter().map(|c| CurveRecord { moving: [chain.joints[3].clone(), chain.joints[5].clone()], ranges: joints(chain, &c.hull), cover: c.cover.iter().map(|b| joints(chain, b)).collect() }).collect(),
+            curves: s.curves.iter().map(|c| CurveRecord { kind: c.kind.name(), moving: c.kind.moving().iter().map(|&k| chain.joints[k].clone()).collect(), ranges: joints(chain, &c.hull), cover: c.cover.iter().map(|b| joints(chain, b)).collect() }).collect(),
             processed: s.stats.processed,
             method: s.method.name(),
             closed_form_declined: s.method.declined().map(|d| d.name()),
@@ -78,15 +77,19 @@ impl Ik6Report {
     }
 }
 
-/// A wrist-singular branch's solutions: enclosed by `cover` (each box may hold solutions).
+/// A singular branch's solutions: enclosed by `cover` (each box may hold solutions).
 #[derive(Clone, Debug, Serialize)]
 pub struct CurveRecord {
-    /// The joints that turn together along the curve (joints 4 and 6).
-    pub moving: [String; 2],
+    /// `wrist_singular` (joints 4 and 6 turn together, one branch of joints 1–3) or
+    /// `shoulder_singular` (the wrist centre on axis 1: joint 1 turns freely, joints 4–6
+    /// follow; every branch's boxes).
+    pub kind: &'static str,
+    /// The joints that move along the curve.
+    pub moving: Vec<String>,
     /// The joints' ranges along it (the cover's hull).
     pub ranges: JointBoxes,
-    /// Boxes enclosing the branch's solutions within the joint ranges, joint 4 in pieces at
-    /// most 1/32 rad wide.
+    /// Boxes enclosing the solutions within the joint ranges, the curve's parameter (joint 4,
+    /// or joint 1 at the shoulder) in pieces at most 1/32 rad wide.
     pub cover: Vec<JointBoxes>,
 }
 

@@ -204,7 +204,7 @@ fn ik6(out: &mut Out, a: &crate::app::Ik6Answer) {
         report.unique.len(),
         match report.curves.len() {
             0 => String::new(),
-            n => format!("{n} wrist-singular curves, "),
+            n => format!("{n} singular curves, "),
         },
         report.clusters.len(),
         report.completeness.text(),
@@ -223,7 +223,7 @@ fn ik6(out: &mut Out, a: &crate::app::Ik6Answer) {
     }
     for c in &report.curves {
         let text: Vec<String> = chain.joints.iter().map(|n| (n, c.ranges[n])).map(|(n, x)| format!("{n} in [{:.9}, {:.9}]", x[0], x[1])).collect();
-        writeln!(out, "  {} (wrist singular: {} and {} turn together along a curve; {} boxes cover it)", text.join(", "), c.moving[0], c.moving[1], c.cover.len()).ok();
+        writeln!(out, "  {} ({}: {} move together along a curve; {} boxes cover it)", text.join(", "), c.kind.replace('_', " "), c.moving.join(", "), c.cover.len()).ok();
     }
 }
 

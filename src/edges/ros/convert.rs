@@ -450,7 +450,8 @@ fn ik6_solutions(found: &ArmIk6) -> Ik6Solutions {
     let s = &found.solutions;
     let mut message = format!("{} solutions proven unique, {} clusters undecided at sigma", s.unique.len(), s.clusters.len());
     if !s.curves.is_empty() {
-        message.push_str(&format!("; {} wrist-singular curves (joints 4 and 6 turn together), each a cluster of boxes after the others", s.curves.len()));
+        let kinds: Vec<&str> = s.curves.iter().map(|c| c.kind.name()).collect();
+        message.push_str(&format!("; {} singular curves ({}), each a cluster of boxes after the others", s.curves.len(), kinds.join(", ")));
     }
     if let crate::app::Status::Stopped(limit) = s.status {
         message.push_str(&format!("; incomplete ({} limit): the clusters include the boxes left pending", limit.name()));

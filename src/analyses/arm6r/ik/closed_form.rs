@@ -44,8 +44,8 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::parallel_axes::{self, ParallelAxes};
-use super::wrist_curve::{self, SingularWrist};
-use super::{square, PoseTarget, Split};
+use super::singular_curves::{self, SingularWrist};
+use super::{square, CurveKind, PoseTarget, Split};
 use crate::analyses::arm6r::chain::{Chain6R, IAffine};
 use crate::formulate::stated;
 use crate::kernel::contract::krawczyk::{self, Step as K};
@@ -133,8 +133,8 @@ impl Degeneracy {
 #[derive(Clone, Debug)]
 pub(crate) enum ClosedForm {
     /// Every solution within the joint ranges, each in its own certified box, but those of
-    /// wrist-singular branches, each branch's in its cover (`wrist_curve`).
-    Solved { unique: Vec<[Interval; 6]>, curves: Vec<Vec<[Interval; 6]>> },
+    /// wrist-singular branches, each branch's in its cover (`singular_curves`).
+    Solved { unique: Vec<[Interval; 6]>, curves: Vec<(CurveKind, Vec<[Interval; 6]>)> },
     /// Some candidates certified, the others left to a search of a box about each.
     Partly(Partly),
     /// A step the enclosures could not decide: the search must answer the whole pose.
@@ -152,8 +152,8 @@ pub(crate) struct Partly {
     pub search: Vec<[[f64; 2]; 6]>,
     /// Why the first of them was left.
     pub why: Degeneracy,
-    /// The covers of wrist-singular branches (`wrist_curve`), disjoint from the other boxes.
-    pub curves: Vec<Vec<[Interval; 6]>>,
+    /// The covers of singular branches (`singular_curves`), disjoint from the other boxes.
+    pub curves: Vec<(CurveKind, Vec<[Interval; 6]>)>,
 }
 
 /// What `recognise` proved (module doc): the wrist centre and the constants of the position
@@ -293,12 +293,19 @@ pub(super) fn cos_sin(x: Interval) -> (Interval, Interval) {
     (trig::cos(x), trig::sin(x))
 }
 
-/// Every solution's angles modulo a turn (module doc), at most eight, and the position
-/// branches whose wrist is singular as far as the enclosures tell (`wrist_curve`).
-type Branches = (SmallVec<[[Interval; 6]; 8]>, SmallVec<[SingularWrist; 4]>);
+/// Every solution's angles modulo a turn (module doc), at most eight; the position branches
+/// whose joint 5 has a double root (`singular_curves`); at a shoulder-singular pose the boxes over
+/// pieces of joint 1's range (`singular_curves::shoulder`).
+#[derive(Default)]
+pub(super) struct Branches {
+    pub points: SmallVec<[[Interval; 6]; 8]>,
+    pub singular: SmallVec<[SingularWrist; 4]>,
+    pub shoulder: Vec<[Interval; 6]>,
+}
 
-/// Every solution's angles modulo a turn (module doc), at most eight, each position branch
-/// whose joint 5 has a double root set apart (`wrist_curve`).
+/// The branches of the pose `g` (module doc): joint 1's roots, each followed by
+/// `after_joint1`. With the wrist centre on axis 1 as far as the enclosures tell (joint 1's
+/// equation vanishing whole), every angle of joint 1 may solve: the shoulder's cover.
 fn branches(chain: &Chain6R, wrist: &SphericalWrist, g: &IAffine) -> Result<Branches, Degeneracy> {
     let (a, pre) = (&chain.axes, &chain.pre);
     let wrist_centre = add(&stated::apply(&g.r, &wrist.w6), &g.t);
@@ -306,35 +313,52 @@ fn branches(chain: &Chain6R, wrist: &SphericalWrist, g: &IAffine) -> Result<Bran
     let u = &wrist.u;
     // (R₁u)·P = (a₁·u)(a₁·P) + cos θ₁ (u·P − (a₁·u)(a₁·P)) + sin θ₁ (a₁ × u)·P.
     let (ua, pa) = (dot(&a[0], u), dot(&a[0], &p));
-    let (mut out, mut singular) = (SmallVec::new(), SmallVec::new());
-    for t1 in cos_sin_roots(dot(u, &p) - ua * pa, dot(&cross(&a[0], u), &p), wrist.h - ua * pa)? {
-        let (c1, s1) = cos_sin(t1);
-        let z = sub(&rotate(&a[0], c1, -s1, &p), &pre[1].t);
-        for t3 in cos_sin_roots(wrist.alpha3, wrist.beta3, dot(&z, &z) - wrist.k3)? {
-            let (c3, s3) = cos_sin(t3);
-            let y = add(&pre[2].t, &stated::apply(&pre[2].r, &rotate(&a[2], c3, s3, &wrist.v)));
-            let t2 = turn(&a[1], &y, &stated::apply_transposed(&pre[1].r, &z))?;
-            let (c2, s2) = cos_sin(t2);
-            let mut r = stated::mul(&pre[0].r, &rotation(&a[0], c1, s1));
-            for (k, (c, s)) in [(1, (c2, s2)), (2, (c3, s3))] {
-                r = stated::mul(&stated::mul(&r, &pre[k].r), &rotation(&a[k], c, s));
-            }
-            r = stated::mul(&r, &pre[3].r);
-            // M = R₀₄ᵀ·G.r = R₄·Pre₅.r·R₅·Pre₆.r·R₆.
-            let m = stated::mul(&[0, 1, 2].map(|i| [0, 1, 2].map(|j| r[j][i])), &g.r);
-            match wrist_branches(chain, wrist, &m) {
-                Ok(wrists) => out.extend(wrists.into_iter().map(|(t4, t5, t6)| [t1, t2, t3, t4, t5, t6])),
-                Err(Degeneracy::Discriminant) => {
-                    let (a5, b5, c5) = joint5_equation(chain, wrist, &m);
-                    if let Some(t5) = wrist_curve::joint5(a5, b5, c5)? {
-                        singular.push(SingularWrist { position: [t1, t2, t3], m, t5 });
-                    }
-                }
-                Err(why) => return Err(why),
+    let (a1, b1, c1) = (dot(u, &p) - ua * pa, dot(&cross(&a[0], u), &p), wrist.h - ua * pa);
+    let mut found = Branches::default();
+    match cos_sin_roots(a1, b1, c1) {
+        Ok(roots) => {
+            for t1 in roots {
+                after_joint1(chain, wrist, g, &p, t1, &mut found)?;
             }
         }
+        Err(Degeneracy::Discriminant) if [a1, b1, c1].iter().all(|x| x.contains(0.0)) => {
+            found.shoulder = singular_curves::shoulder(chain, |t1, one| after_joint1(chain, wrist, g, &p, t1, one))?;
+        }
+        Err(why) => return Err(why),
     }
-    Ok((out, singular))
+    Ok(found)
+}
+
+/// Joints 3, 2 and the wrist for joint 1 at `t1` (the wrist centre `p` in joint 1's frame
+/// before its turn), into `found`.
+fn after_joint1(chain: &Chain6R, wrist: &SphericalWrist, g: &IAffine, p: &V3, t1: Interval, found: &mut Branches) -> Result<(), Degeneracy> {
+    let (a, pre) = (&chain.axes, &chain.pre);
+    let (c1, s1) = cos_sin(t1);
+    let z = sub(&rotate(&a[0], c1, -s1, p), &pre[1].t);
+    for t3 in cos_sin_roots(wrist.alpha3, wrist.beta3, dot(&z, &z) - wrist.k3)? {
+        let (c3, s3) = cos_sin(t3);
+        let y = add(&pre[2].t, &stated::apply(&pre[2].r, &rotate(&a[2], c3, s3, &wrist.v)));
+        let t2 = turn(&a[1], &y, &stated::apply_transposed(&pre[1].r, &z))?;
+        let (c2, s2) = cos_sin(t2);
+        let mut r = stated::mul(&pre[0].r, &rotation(&a[0], c1, s1));
+        for (k, (c, s)) in [(1, (c2, s2)), (2, (c3, s3))] {
+            r = stated::mul(&stated::mul(&r, &pre[k].r), &rotation(&a[k], c, s));
+        }
+        r = stated::mul(&r, &pre[3].r);
+        // M = R₀₄ᵀ·G.r = R₄·Pre₅.r·R₅·Pre₆.r·R₆.
+        let m = stated::mul(&[0, 1, 2].map(|i| [0, 1, 2].map(|j| r[j][i])), &g.r);
+        match wrist_branches(chain, wrist, &m) {
+            Ok(wrists) => found.points.extend(wrists.into_iter().map(|(t4, t5, t6)| [t1, t2, t3, t4, t5, t6])),
+            Err(Degeneracy::Discriminant) => {
+                let (a5, b5, c5) = joint5_equation(chain, wrist, &m);
+                if let Some(t5) = singular_curves::joint5(a5, b5, c5)? {
+                    found.singular.push(SingularWrist { position: [t1, t2, t3], m, t5 });
+                }
+            }
+            Err(why) => return Err(why),
+        }
+    }
+    Ok(())
 }
 
 /// `A cos θ₅ + B sin θ₅ = C`, joint 5's equation `a₄·M a₆ = e₄·R₅ d₆` written out (Rodrigues).
@@ -453,9 +477,9 @@ fn merged(mut boxes: Vec<[[f64; 2]; 6]>) -> Vec<[[f64; 2]; 6]> {
 
 fn solve_or_degenerate(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget, precision: f64) -> Result<Partly, Degeneracy> {
     let g = target.0.then(&chain.post.inverse());
-    let (all, singular) = match geometry {
+    let Branches { points: all, singular, shoulder } = match geometry {
         Geometry::SphericalWrist(wrist) => branches(chain, wrist, &g)?,
-        Geometry::ParallelAxes(arm) => (parallel_axes::branches(chain, arm, &g)?, SmallVec::new()),
+        Geometry::ParallelAxes(arm) => Branches { points: parallel_axes::branches(chain, arm, &g)?, ..Branches::default() },
     };
     let mut split = None;
     let mut found: Vec<([Interval; 6], [Interval; 6])> = Vec::new();
@@ -507,13 +531,14 @@ fn solve_or_degenerate(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget
     found.sort_by(|a, b| a.0.iter().map(|x| x.inf()).partial_cmp(b.0.iter().map(|x| x.inf())).unwrap_or(std::cmp::Ordering::Equal));
     let why = left.first().map_or(Degeneracy::Uncertified, |l| l.1);
     let search = merged(left.iter().map(|(c, _)| search_box(chain, c)).collect());
-    let curves: Vec<Vec<[Interval; 6]>> = singular.iter().map(|s| wrist_curve::cover(chain, s)).filter(|c| !c.is_empty()).collect();
+    let wrists = singular.iter().map(|s| (CurveKind::Wrist, singular_curves::cover(chain, s)));
+    let curves: Vec<(CurveKind, Vec<[Interval; 6]>)> = wrists.chain([(CurveKind::Shoulder, shoulder)]).filter(|c| !c.1.is_empty()).collect();
     // A box of a cover meeting another box: one solution may be counted in both.
     let boxes: Vec<[Interval; 6]> = found.iter().map(|f| f.0).chain(search.iter().map(|b| b.map(|x| interval(x[0], x[1])))).collect();
-    let hulls: Vec<[Interval; 6]> = curves.iter().map(|c| hull(c)).collect();
+    let hulls: Vec<[Interval; 6]> = curves.iter().map(|c| hull(&c.1)).collect();
     let apart = |x: &[[Interval; 6]], hx: &[Interval; 6], y: &[[Interval; 6]]| y.is_empty() || !meets(hx, &hull(y)) || x.iter().all(|a| y.iter().all(|b| !meets(a, b)));
     for (i, c) in curves.iter().enumerate() {
-        if !apart(c, &hulls[i], &boxes) || !(0..i).all(|j| apart(c, &hulls[i], &curves[j])) {
+        if !apart(&c.1, &hulls[i], &boxes) || !(0..i).all(|j| apart(&c.1, &hulls[i], &curves[j].1)) {
             return Err(Degeneracy::Overlap);
         }
     }

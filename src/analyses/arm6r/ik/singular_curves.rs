@@ -1,22 +1,31 @@
-//! The solutions of one position branch of a spherical-wrist arm at a wrist-singular pose,
-//! where joint 5 lines axes 4 and 6 up and joints 4 and 6 turn together: a curve in the
-//! joint space (Pieper 1968; the subproblem-4 step of Paden 1985 with a double root).
+//! The solutions of a spherical-wrist arm's branches at a singular pose, where they form
+//! curves in the joint space (Pieper 1968; the subproblems of Paden 1985 with a double root
+//! or a vanishing equation): each enclosed by a cover of boxes, none claimed unique.
 //!
-//! With joints 1–3 of the branch enclosed, the wrist's matrix `M = R₄·Pre₅.r·R₅·Pre₆.r·R₆`
-//! is enclosed. Joint 5 solves `A cos θ₅ + B sin θ₅ = C` (`closed_form::joint5_equation`);
-//! when the discriminant `A² + B² − C²` holds 0, `cos(θ₅ − φ) = C/ρ` (with `φ` the angle of
-//! `(A, B)` and `ρ² = A² + B²`) lies within `[C/ρ]` near 1 (or −1), so every root lies within
+//! # The wrist
+//!
+//! Joint 5 lines axes 4 and 6 up, and joints 4 and 6 turn together. With joints 1–3 of the
+//! branch enclosed, the wrist's matrix `M = R₄·Pre₅.r·R₅·Pre₆.r·R₆` is enclosed. Joint 5
+//! solves `A cos θ₅ + B sin θ₅ = C` (`closed_form::joint5_equation`); when the discriminant
+//! `A² + B² − C²` holds 0, `cos(θ₅ − φ) = C/ρ` (with `φ` the angle of `(A, B)` and
+//! `ρ² = A² + B²`) lies within `[C/ρ]` near 1 (or −1), so every root lies within
 //! `φ ± arccos(inf C/ρ)` (or about `φ + π`): `joint5`. Whether the pose is exactly singular
 //! (a curve of solutions) or just off it (two isolated solutions, a wrist flip apart, both
 //! near the curve) the enclosures cannot tell; either way every solution of the branch lies
-//! in the cover `cover` builds.
+//! in the cover `cover` builds: joint 4 in pieces over its whole range; for `θ₄` in a piece and
+//! `θ₅` in its enclosure, `R₆ = Pre₆.rᵀ·R₅ᵀ·Pre₅.rᵀ·R₄ᵀ·M` is enclosed, and `θ₆` is the turn
+//! about axis 6 carrying a vector `x` onto `R₆x` (subproblem 1): every exact solution with
+//! `θ₄` in the piece has its `θ₆` there.
 //!
-//! The cover takes joint 4 in pieces over its whole range: for `θ₄` in a piece and `θ₅` in
-//! its enclosure, `R₆ = Pre₆.rᵀ·R₅ᵀ·Pre₅.rᵀ·R₄ᵀ·M` is enclosed, and `θ₆` is the turn about
-//! axis 6 carrying a vector `x` onto `R₆x` (subproblem 1): every exact solution with `θ₄` in
-//! the piece has its `θ₆` there. Nothing is claimed unique: the boxes may hold solutions.
+//! # The shoulder
+//!
+//! With the wrist centre on axis 1, joint 1's equation `(R₁u)·P = h` holds at every angle:
+//! joint 1 turns freely, joints 2 and 3 stay, the wrist follows. `shoulder` takes joint 1 in
+//! pieces over its whole range and solves the rest of the decomposition for each piece in
+//! interval arithmetic (`closed_form::after_joint1`): every exact solution with joint 1 in the
+//! piece lies in one of the piece's boxes.
 
-use super::closed_form::{cos_sin, rotate, turn, Degeneracy, M3};
+use super::closed_form::{cos_sin, rotate, turn, Branches, Degeneracy, M3};
 use super::copies_in;
 use crate::analyses::arm6r::chain::Chain6R;
 use crate::formulate::stated;
@@ -87,14 +96,8 @@ pub(crate) fn cover(chain: &Chain6R, s: &SingularWrist) -> Vec<[Interval; 6]> {
     let mut x = [point(0.0); 3];
     x[k] = point(1.0);
     let mx = stated::apply(&s.m, &x);
-    let (lo4, hi4) = ranges[3];
-    let n = ((hi4 - lo4) / PIECE).ceil().max(1.0) as usize;
-    // The pieces share their ends, the first starting at the lower limit and the last ending
-    // at the upper one: together they are the whole range.
-    let end = |i: usize| if i == n { hi4 } else { lo4 + (hi4 - lo4) * (i as f64 / n as f64) };
     let mut out = Vec::new();
-    for i in 0..n {
-        let t4 = interval(end(i), end(i + 1));
+    for t4 in pieces(ranges[3]) {
         let (c4, s4) = cos_sin(t4);
         let y4 = stated::apply_transposed(&pre[4].r, &rotate(&a[3], c4, -s4, &mx));
         for f in &fifth {
@@ -114,6 +117,98 @@ pub(crate) fn cover(chain: &Chain6R, s: &SingularWrist) -> Vec<[Interval; 6]> {
         }
     }
     out
+}
+
+/// Boxes enclosing every solution within the ranges at a shoulder-singular pose (module
+/// doc): joint 1 in pieces at most `PIECE` wide, `branches` solving the rest for a piece, each
+/// other angle's copies within its range; a piece whose wrist is singular too has its wrist
+/// covered as at a wrist singularity (`cover`).
+pub(crate) fn shoulder(chain: &Chain6R, mut branches: impl FnMut(Interval, &mut Branches) -> Result<(), Degeneracy>) -> Result<Vec<[Interval; 6]>, Degeneracy> {
+    let mut out = Vec::new();
+    for t1 in pieces(chain.ranges[0]) {
+        let mut found = Branches::default();
+        branches(t1, &mut found)?;
+        for b in found.points {
+            out.extend(copies_within(chain, &b));
+        }
+        // Where the curve meets a wrist singularity, the piece's wrist is covered whole.
+        for s in &found.singular {
+            out.extend(cover(chain, s));
+        }
+    }
+    Ok(out)
+}
+
+/// `[lo, hi]` in pieces at most `PIECE` wide sharing their ends, the first starting at `lo`
+/// and the last ending at `hi`: together the whole range.
+fn pieces((lo, hi): (f64, f64)) -> Vec<Interval> {
+    let n = ((hi - lo) / PIECE).ceil().max(1.0) as usize;
+    let end = |i: usize| if i == n { hi } else { lo + (hi - lo) * (i as f64 / n as f64) };
+    (0..n).map(|i| interval(end(i), end(i + 1))).collect()
+}
+
+/// The copies of the box `b` (angles modulo a turn) within the ranges, each angle's copies
+/// clipped to its range.
+fn copies_within(chain: &Chain6R, b: &[Interval; 6]) -> Vec<[Interval; 6]> {
+    let mut out = vec![*b];
+    for k in 0..6 {
+        let each = copies_in(b[k], chain.ranges[k].0, chain.ranges[k].1);
+        out = out.iter().flat_map(|x| each.iter().map(move |r| {
+            let mut x = *x;
+            x[k] = interval(r[0], r[1]);
+            x
+        })).collect();
+    }
+    out
+}
+
+/// Where the solutions of a singular branch lie: on a curve, or, for a pose just off the
+/// singularity, at isolated points on it, which the pose's enclosure cannot tell apart
+/// (module doc). The cover encloses them all within the ranges; its boxes may hold
+/// solutions, none is claimed unique.
+#[derive(Clone, Debug)]
+pub struct Ik6Curve {
+    /// Which singularity.
+    pub kind: CurveKind,
+    /// Boxes, the curve's parameter (joint 4 at the wrist, joint 1 at the shoulder) in pieces
+    /// at most 1/32 rad wide, the joints that move with it following.
+    pub cover: Vec<[Interval; 6]>,
+    /// The cover's hull: the joints' ranges along the curve.
+    pub hull: [Interval; 6],
+}
+
+/// The singularities whose solutions form curves in closed form.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CurveKind {
+    /// Joint 5 lines axes 4 and 6 up: joints 4 and 6 turn together (one branch of joints 1–3).
+    Wrist,
+    /// The wrist centre on axis 1: joint 1 turns freely, joints 4–6 following (joints 2 and 3
+    /// fixed); the boxes of every branch.
+    Shoulder,
+}
+
+impl CurveKind {
+    /// As reports write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            CurveKind::Wrist => "wrist_singular",
+            CurveKind::Shoulder => "shoulder_singular",
+        }
+    }
+
+    /// The joints (from 0) that move along the curve.
+    pub fn moving(self) -> &'static [usize] {
+        match self {
+            CurveKind::Wrist => &[3, 5],
+            CurveKind::Shoulder => &[0, 3, 4, 5],
+        }
+    }
+}
+
+impl Ik6Curve {
+    pub(super) fn all(covers: Vec<(CurveKind, Vec<[Interval; 6]>)>) -> Vec<Ik6Curve> {
+        covers.into_iter().map(|(kind, cover)| Ik6Curve { kind, hull: super::closed_form::hull(&cover), cover }).collect()
+    }
 }
 
 #[cfg(test)]
