@@ -275,10 +275,11 @@ fn the_walk_for_internal_motion_strips_stops_on_time() {
 }
 
 /// A six-revolute arm in the style of a Motoman GP7 at its home pose, where joints 4 and 6 are
-/// aligned (joint 5 at 0) and the solutions form a curve: stopped on time, the home
-/// configuration inside a reported box; and `ik6` without `--timeout` is bounded too.
+/// aligned (joint 5 at 0) and the solutions form a curve: answered completely within its
+/// timeout, the home configuration inside the curve's cover; and `ik6` without `--timeout` is
+/// bounded too.
 #[test]
-fn a_wrist_singular_pose_stops_on_time() {
+fn a_wrist_singular_pose_is_answered_within_its_timeout() {
     let joint = |name: &str, parent: &str, child: &str, xyz: &str, axis: &str, lo: f64, hi: f64| {
         format!("<joint name='{name}' type='revolute'><origin xyz='{xyz}' rpy='0 0 0'/><parent link='{parent}'/><child link='{child}'/><axis xyz='{axis}'/><limit lower='{lo}' upper='{hi}' effort='0' velocity='1'/></joint>")
     };
@@ -304,15 +305,54 @@ fn a_wrist_singular_pose_stops_on_time() {
     let file = Temp::with("gp7.urdf", &urdf);
     // At home every joint is 0: the tip at x = 0.04 + 0.44 + 0.08, z = 0.33 + 0.445 + 0.04.
     let (out, report) = run_json("ik6", &["ik6", file.path(), "--pose", "0.56,0,0.815,0,0,0", "--timeout", "1"]);
+    assert_eq!(report["status"].as_str(), Some("complete"), "{out}");
+    assert!(out.contains("wrist singular: joint_4_r, joint_6_t move together"), "{out}");
+    let names = ["joint_1_s", "joint_2_l", "joint_3_u", "joint_4_r", "joint_5_b", "joint_6_t"];
+    let held = |b: &serde_json::Value| names.iter().all(|n| b[n][0].as_f64().expect("lo") <= 0.0 && 0.0 <= b[n][1].as_f64().expect("hi"));
+    let curves = report["curves"].as_array().expect("curves");
+    assert!(curves.iter().flat_map(|c| c["cover"].as_array().expect("cover")).any(held), "the home configuration is in no box of a curve: {report}");
+    assert!(linkspace::app::Job::default_limits("ik6").timeout.is_some_and(|t| t <= Duration::from_secs(60)), "ik6 is bounded by default");
+}
+
+/// The tip frame of the bundled UR5 with joint 6's origin moved 0.01 m along the common normal
+/// of axes 5 and 6, so that they no longer meet and no closed form applies, at `q`: each joint
+/// origin `(roll, x, z)` followed by a turn about its z axis (the file's DH-style frames).
+fn skew_wrist_ur5_pose(q: [f64; 6]) -> Vec<f64> {
+    type M = [[f64; 4]; 4];
+    let mul = |a: &M, b: &M| -> M { std::array::from_fn(|i| std::array::from_fn(|j| (0..4).map(|k| a[i][k] * b[k][j]).sum())) };
+    let frame = |roll: f64, x: f64, z: f64, yaw: f64| -> M {
+        // Rx(roll) · Rz(yaw), translated by (x, 0, z).
+        let (cr, sr, cy, sy) = (roll.cos(), roll.sin(), yaw.cos(), yaw.sin());
+        [[cy, -sy, 0.0, x], [cr * sy, cr * cy, -sr, 0.0], [sr * sy, sr * cy, cr, z], [0.0, 0.0, 0.0, 1.0]]
+    };
+    let origins = [(0.0, 0.0, 0.0), (PI / 2.0, 0.0, 0.089159), (0.0, -0.425, 0.0), (0.0, -0.39225, 0.0), (PI / 2.0, 0.0, 0.10915), (-PI / 2.0, 0.01, 0.09465)];
+    let mut t = frame(0.0, 0.0, 0.0, 0.0);
+    for (&(roll, x, z), &qk) in origins.iter().zip(&q) {
+        t = mul(&t, &frame(roll, x, z, qk));
+    }
+    t = mul(&t, &frame(0.0, 0.0, 0.0823, 0.0));
+    t.iter().flatten().copied().collect()
+}
+
+/// That arm with joint 5 at 0, where axis 6 is parallel to axes 2, 3 and 4 and the solutions form
+/// a curve the search must cover on its own: stopped on time, the configuration inside a
+/// reported box.
+#[test]
+fn a_singular_pose_only_the_search_answers_stops_on_time() {
+    let urdf = std::fs::read_to_string(repo("urdf/ur5.urdf")).expect("ur5");
+    let (joint_6, moved) = ("<origin rpy=\"-1.570796327 0 0\" xyz=\"0 0 0.09465\"/>", "<origin rpy=\"-1.570796327 0 0\" xyz=\"0.01 0 0.09465\"/>");
+    assert!(urdf.contains(joint_6), "joint 6's origin as the pose below takes it");
+    let file = Temp::with("ur5_skew_wrist.urdf", &urdf.replace(joint_6, moved));
+    let q = [0.0, -1.0, 1.0, 0.3, 0.0, 0.5];
+    let pose = skew_wrist_ur5_pose(q).iter().map(|v| format!("{v:.15}")).collect::<Vec<_>>().join(",");
+    let (out, report) = run_json("ik6-skew", &["ik6", file.path(), "--pose", &pose, "--timeout", "1"]);
     assert_stopped_on_time("ik6", &report);
     assert!(out.contains("status incomplete (time limit)"), "{out}");
-    let home = [0.0; 6];
-    let names = ["joint_1_s", "joint_2_l", "joint_3_u", "joint_4_r", "joint_5_b", "joint_6_t"];
-    let held = |b: &serde_json::Value| names.iter().zip(home).all(|(n, q)| b[n][0].as_f64().expect("lo") <= q && q <= b[n][1].as_f64().expect("hi"));
+    let names = ["joint_1", "joint_2", "joint_3", "joint_4", "joint_5", "joint_6"];
+    let held = |b: &serde_json::Value| names.iter().zip(q).all(|(n, v)| b[n][0].as_f64().expect("lo") <= v && v <= b[n][1].as_f64().expect("hi"));
     let unique = report["unique"].as_array().expect("unique");
     let clusters = report["clusters"].as_array().expect("clusters");
-    assert!(unique.iter().chain(clusters).any(held), "the home configuration is in no box: {report}");
-    assert!(linkspace::app::Job::default_limits("ik6").timeout.is_some_and(|t| t <= Duration::from_secs(60)), "ik6 is bounded by default");
+    assert!(unique.iter().chain(clusters).any(held), "the configuration is in no box: {report}");
 }
 
 /// The node search of the type-II image names the limit that stopped it, in text and JSON.
