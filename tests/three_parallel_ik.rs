@@ -2,13 +2,15 @@
 //! are answered in closed form, and the answer is the search's. Poses come from the forward
 //! kinematics of `spherical_wrist` (written from the file's joints, no solver code): every
 //! generating joint vector lies in exactly one certified box, every box the search certifies
-//! lies in exactly one closed-form box and the counts agree. At and near the wrist singularity
-//! (joint 5 at 0, 1e-6, 1e-9) and with the elbow outstretched (joint 3 at 0) the closed form
-//! either certifies or leaves the pose to the search, and the generating vector is never lost.
+//! lies in exactly one closed-form box and the counts agree. At the wrist singularity (joint 5
+//! at 0) the closed form answers with a curve; near it (1e-6, 1e-9) and with the elbow
+//! outstretched (joint 3 at 0) it certifies, answers with a curve or leaves the pose to the
+//! search, and the generating vector is never lost.
 
-use super::spherical_wrist::{agree, both, control, forward, holds, mechanism, random_q, Lcg};
+use super::spherical_wrist::{agree, both, control, forward, holds, mechanism, meets, random_q, Lcg};
 use linkspace::analyses::arm6r::ik::{self, Ik6Method};
 use linkspace::analyses::arm6r::{Chain6R, PoseTarget};
+use linkspace::kernel::interval::Interval;
 use linkspace::model::{rounding, urdf, Mechanism};
 use std::time::{Duration, Instant};
 
@@ -97,8 +99,9 @@ fn every_copy_within_two_turns_is_certified() {
 
 /// Joint 5 at 0 (axis 6 along axes 2–4: joints 2, 3, 4 and 6 turn together), 1e-6 and 1e-9,
 /// the pose enclosed within 4e-15; then joint 3 at 0, 1e-6, 1e-9 (the elbow outstretched:
-/// the law of cosines' two roots coincide). At 0 the closed form leaves the pose to the
-/// search; near it, whichever answers holds `q`.
+/// the law of cosines' two roots coincide). With joint 5 at 0 the closed form answers with a
+/// curve; with joint 3 at 0 it leaves the pose to the search; whichever answers holds `q`, and
+/// every box the search certifies meets exactly one of its unique boxes or its curves.
 #[test]
 fn at_and_near_the_wrist_and_elbow_singularities_nothing_is_lost() {
     let mut rng = Lcg(5);
@@ -122,14 +125,23 @@ fn at_and_near_the_wrist_and_elbow_singularities_nothing_is_lost() {
                 found.status,
                 t.elapsed().as_secs_f64()
             );
-            if value == 0.0 {
-                assert!(found.method != Ik6Method::ClosedForm && found.method.declined().is_some(), "{name}: {:?}", found.method);
+            let curves: Vec<&[Interval; 6]> = found.curves.iter().flat_map(|c| &c.cover).collect();
+            match (joint, value) {
+                (4, 0.0) => assert!(found.method == Ik6Method::ClosedForm && found.curves.iter().any(|c| c.kind == ik::CurveKind::WristAligned), "{name}: {:?}", found.method),
+                (2, 0.0) => assert!(found.method != Ik6Method::ClosedForm && found.method.declined().is_some(), "{name}: {:?}", found.method),
+                _ => {}
             }
-            let lost = !found.unique.iter().any(|b| holds(b, &q)) && !found.clusters.iter().any(|c| holds(&c.hull, &q));
+            let lost = !found.unique.iter().any(|b| holds(b, &q)) && !found.clusters.iter().any(|c| holds(&c.hull, &q)) && !curves.iter().any(|b| holds(b, &q));
             assert!(!lost, "{name} q {q:?}: {found:?}");
             if found.method == Ik6Method::ClosedForm {
                 let searched = ik::search(&chain, &target, 1e-10, &control(Some(Duration::from_secs(5)))).expect("searches");
-                agree(name, &q, &found, &searched);
+                if curves.is_empty() {
+                    agree(name, &q, &found, &searched);
+                }
+                for s in &searched.unique {
+                    let claims = found.unique.iter().filter(|u| meets(u, s)).count() + usize::from(curves.iter().any(|c| meets(c, s)));
+                    assert_eq!(claims, 1, "{name} q {q:?}: search box {s:?}");
+                }
             }
         }
     }

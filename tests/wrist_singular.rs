@@ -4,7 +4,9 @@
 //! isolated solutions of the other branches. The reference is forward kinematics written in
 //! the tests (no solver code): which of `θ₄ + t, θ₆ ∓ t` keeps the pose is read off it, and every
 //! point of that curve within the limits must lie in the cover. Just off the singularity
-//! (joint 5 at 1e-9) the generating configuration and its wrist flip lie in the answer.
+//! (joint 5 at 1e-9) the generating configuration and its wrist flip lie in the answer. On a
+//! UR-family arm at joint 5 = 0 axis 6 lines up with axes 2, 3, 4: joint 6 turns freely, joints
+//! 2–4 following, and the reference curve is traced by Gauss–Newton on forward kinematics.
 
 use crate::spherical_wrist::{control, forward, holds, mechanism, meets, random_q, Lcg};
 use linkspace::analyses::arm6r::ik::{self, Ik6Method};
@@ -237,4 +239,96 @@ fn at_the_shoulder_singularity_joint_1_turns_freely_on_a_curve() {
     }
     println!("  {points} reference points covered ({newton_failed} directions ended by Newton)");
     assert!(points > 300, "{points} reference points");
+}
+
+/// `q` with the joints `free` moved by Gauss–Newton's method (finite differences) until the tip
+/// has `pose` (position and rotation), the others held; `None` when it does not converge (at a
+/// fold of the curve, where the elbow stretches out).
+fn pose_newton(m: &linkspace::model::Mechanism, chain: &Chain6R, q: [f64; 6], pose: &Pose64, free: [usize; 3]) -> Option<[f64; 6]> {
+    let error = |q: &[f64; 6]| {
+        let p = forward(m, chain, q);
+        let e = |i: usize, j: usize| (0..3).map(|k| pose.r[k][i] * p.r[k][j]).sum::<f64>();
+        [p.t[0] - pose.t[0], p.t[1] - pose.t[1], p.t[2] - pose.t[2], e(2, 1) - e(1, 2), e(0, 2) - e(2, 0), e(1, 0) - e(0, 1)]
+    };
+    let det3 = |a: &[[f64; 3]; 3]| a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+    let mut q = q;
+    for _ in 0..40 {
+        let f = error(&q);
+        if f.iter().all(|x| x.abs() < 1e-13) {
+            return (distance(&forward(m, chain, &q), pose) < 1e-10).then_some(q);
+        }
+        let cols: Vec<[f64; 6]> = free.iter().map(|&k| {
+            let mut p = q;
+            p[k] += 1e-7;
+            let g = error(&p);
+            std::array::from_fn(|i| (g[i] - f[i]) / 1e-7)
+        }).collect();
+        // The normal equations JᵀJ δ = −Jᵀf, by Cramer's rule.
+        let jtj: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|j| (0..6).map(|r| cols[i][r] * cols[j][r]).sum()));
+        let jtf: [f64; 3] = std::array::from_fn(|i| -(0..6).map(|r| cols[i][r] * f[r]).sum::<f64>());
+        let det = det3(&jtj);
+        if det.abs() < 1e-10 {
+            return None;
+        }
+        for (j, &k) in free.iter().enumerate() {
+            let mut a = jtj;
+            for i in 0..3 {
+                a[i][j] = jtf[i];
+            }
+            q[k] += det3(&a) / det;
+        }
+    }
+    None
+}
+
+const UR_ARMS: [&str; 2] = ["urdf/ur5.urdf", "tests/data/ur5_ros_style.urdf"];
+
+/// Joint 5 at 0 on the UR5 files (axis 6 along axes 2, 3, 4): answered completely in closed
+/// form with a curve on which joints 2, 3, 4 and 6 move; the reference curve is joint 6 stepped
+/// by 0.01 rad over its range from the generating configuration (and from the other elbow),
+/// joints 2–4 followed by Gauss–Newton on the whole pose, joints 1 and 5 held: every point in
+/// the cover. Each unique box's centre has the pose, and none meets the cover.
+#[test]
+fn at_the_aligned_wrist_of_a_ur_arm_joint_6_turns_freely_on_a_curve() {
+    let mut rng = Lcg(2013);
+    for file in UR_ARMS {
+        let m = mechanism(file);
+        let chain = Chain6R::from_mechanism(&m, None, None).expect("six joints");
+        for _ in 0..3 {
+            let q = singular_q(&chain, &mut rng, 0.0);
+            let pose = forward(&m, &chain, &q);
+            let target = PoseTarget::around(&pose, 4e-15).expect("finite");
+            let found = ik::solve(&chain, &target, 1e-10, &control(Some(Duration::from_secs(5)))).expect("solves");
+            let cover: Vec<&[Interval; 6]> = found.curves.iter().filter(|c| c.kind == ik::CurveKind::WristAligned).flat_map(|c| &c.cover).collect();
+            println!("{file} q {q:?}: {:?}, {} unique, {} curves ({} boxes), {:.4} s", found.method, found.unique.len(), found.curves.len(), cover.len(), found.stats.seconds);
+            assert_eq!(found.method, Ik6Method::ClosedForm, "{file} q {q:?}");
+            assert!(found.status == Status::Finished && found.clusters.is_empty() && !cover.is_empty(), "{file} q {q:?}: {found:?}");
+            let (lo, hi) = chain.ranges[5];
+            let mut points = 0;
+            let other_elbow = pose_newton(&m, &chain, [q[0], q[1] + 0.3, -q[2], q[3], q[4], q[5]], &pose, [1, 2, 3]);
+            for start in [Some(q), other_elbow].into_iter().flatten() {
+                for direction in [1.0, -1.0] {
+                    let mut p = start;
+                    while (lo..=hi).contains(&p[5]) {
+                        let Some(next) = pose_newton(&m, &chain, p, &pose, [1, 2, 3]) else { break };
+                        p = next;
+                        // A point beyond a joint's limits is no solution within them.
+                        let mut wrapped = p;
+                        if (1..4).all(|k| copies(&chain, k, p[k]).first().map(|&c| wrapped[k] = c).is_some()) {
+                            points += 1;
+                            assert!(cover.iter().any(|b| holds(b, &wrapped)), "{file}: curve point {wrapped:?} not covered");
+                        }
+                        p[5] += direction * 0.01;
+                    }
+                }
+            }
+            println!("  {points} reference points covered");
+            assert!(points > 300, "{file}: {points} reference points");
+            for b in &found.unique {
+                let centre = b.map(|x| x.mid());
+                assert!(distance(&forward(&m, &chain, &centre), &pose) < 1e-9, "{file}: unique box {b:?}");
+                assert!(!cover.iter().any(|c| meets(b, c)), "{file}: unique box {b:?} on the curve");
+            }
+        }
+    }
 }

@@ -306,9 +306,10 @@ class Ik6Result(Result):
     def curves(self) -> list[BoxSet]:
         """At a singular pose, one box set per singular curve (``curve_kinds``): at a wrist
         singularity a branch's solutions lie on the curve along which joints 4 and 6 turn
-        together, at a shoulder singularity (the wrist centre on axis 1) joint 1 turns freely
-        with the wrist following (or, for a pose just off the singularity, at isolated points on
-        them); the boxes, tagged ``solution`` (each may hold solutions), enclose them all within
+        together (a spherical wrist) or joint 6 turns with joints 2, 3, 4 following (axis 6 along
+        three parallel axes, as on a UR; ``curve_moving`` names the joints), at a shoulder
+        singularity (the wrist centre on axis 1) joint 1 turns freely with the wrist following
+        (or, for a pose just off the singularity, at isolated points on them); the boxes, tagged ``solution`` (each may hold solutions), enclose them all within
         the joint ranges."""
         r = self._report
         return [BoxSet.from_records([{"joints": b} for b in c["cover"]], r["joints"], lambda _: "solution") for c in r.get("curves", [])]
@@ -317,6 +318,11 @@ class Ik6Result(Result):
     def curve_kinds(self) -> list[str]:
         """``"wrist_singular"`` or ``"shoulder_singular"`` for each of ``curves``."""
         return [str(c["kind"]) for c in self._report.get("curves", [])]
+
+    @property
+    def curve_moving(self) -> list[list[str]]:
+        """The joints that move along each of ``curves`` (the others hold their values)."""
+        return [[str(j) for j in c["moving"]] for c in self._report.get("curves", [])]
 
     @property
     def joints(self) -> list[str]:

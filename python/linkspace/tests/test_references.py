@@ -181,11 +181,26 @@ def test_path_verdicts_agree_with_the_sign_of_det_df() -> None:
     assert r.segments[0].clear and r.segments[0].min_abs_det is not None and r.segments[0].min_abs_det > 0
 
 
+def test_ik6_on_a_ur_arm_with_axis_6_along_axes_2_to_4_returns_the_curve() -> None:
+    # The UR5 at (0, -1, 1, 0.3, 0, 0.5): joint 5 at 0 lines axis 6 up with axes 2, 3, 4, and joint 6
+    # turns freely with joints 2-4 following. The pose from the file's frames, written out.
+    pose = np.array([[0.6967067093471655, -0.7173560908995227, 0.0, -0.5939074924334636], [0.0, 0.0, -1.0, -0.19145], [0.7173560908995228, 0.6967067093471654, 0.0, 0.3563615698083504], [0.0, 0.0, 0.0, 1.0]])
+    r = linkspace.load(urdf("ur5.urdf")).ik6(pose)
+    assert r.completeness.complete and r.method == "closed_form" and r.curve_kinds == ["wrist_singular"]
+    assert r.curve_moving == [["joint_2", "joint_3", "joint_4", "joint_6"]]
+    cover = r.curves[0]
+    assert cover.contains(np.array([0.0, -1.0, 1.0, 0.3, 0.0, 0.5])).any()
+    # Joint 6 over its whole range.
+    i6 = cover.columns.index("joint_6")
+    assert cover.lo[:, i6].min() == -6.2832 and cover.hi[:, i6].max() == 6.2832
+
+
 def test_ik6_at_a_wrist_singular_pose_returns_the_curve() -> None:
     # The KR16 at home (every joint at 0) lines axes 4 and 6 up: the matrix its frames give at 0.
     home = np.array([[1.0, 0.0, 0.0, 0.905], [0.0, -1.0, 0.0, 0.0], [0.0, 0.0, -1.0, -0.153], [0.0, 0.0, 0.0, 1.0]])
     r = linkspace.load(urdf("kuka_kr16.urdf")).ik6(home)
     assert r.completeness.complete and r.method == "closed_form" and r.curve_kinds == ["wrist_singular"]
+    assert r.curve_moving == [["joint_4", "joint_6"]]
     cover = r.curves[0]
     assert len(cover) > 100 and set(cover.tags) == {"solution"}
     assert cover.contains(np.zeros(6)).any()

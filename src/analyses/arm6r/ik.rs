@@ -576,7 +576,8 @@ pub fn solve_with(chain: &Chain6R, target: &PoseTarget, precision: f64, control:
     let start = std::time::Instant::now();
     match closed_form::solve(chain, &geometry, target, precision) {
         closed_form::ClosedForm::Solved { unique, curves } => {
-            let n = (unique.len() + curves.len()) as u64;
+            // Every box reported: the certified ones and those of the curves' covers.
+            let n = (unique.len() + curves.iter().map(|c| c.1.len()).sum::<usize>()) as u64;
             let stats = Stats { processed: n, found: n, seconds: start.elapsed().as_secs_f64(), ..Stats::default() };
             Ok(Ik6Solutions { unique, clusters: Vec::new(), curves: Ik6Curve::all(curves), status: Status::Finished, stats, method: Ik6Method::ClosedForm })
         }

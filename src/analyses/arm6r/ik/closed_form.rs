@@ -301,6 +301,8 @@ pub(super) struct Branches {
     pub points: SmallVec<[[Interval; 6]; 8]>,
     pub singular: SmallVec<[SingularWrist; 4]>,
     pub shoulder: Vec<[Interval; 6]>,
+    /// Covers built whole by the geometry's own module (`parallel_axes`).
+    pub covers: Vec<(CurveKind, Vec<[Interval; 6]>)>,
 }
 
 /// The branches of the pose `g` (module doc): joint 1's roots, each followed by
@@ -351,7 +353,7 @@ fn after_joint1(chain: &Chain6R, wrist: &SphericalWrist, g: &IAffine, p: &V3, t1
             Ok(wrists) => found.points.extend(wrists.into_iter().map(|(t4, t5, t6)| [t1, t2, t3, t4, t5, t6])),
             Err(Degeneracy::Discriminant) => {
                 let (a5, b5, c5) = joint5_equation(chain, wrist, &m);
-                if let Some(t5) = singular_curves::joint5(a5, b5, c5)? {
+                if let Some(t5) = singular_curves::double_root(a5, b5, c5)? {
                     found.singular.push(SingularWrist { position: [t1, t2, t3], m, t5 });
                 }
             }
@@ -477,9 +479,9 @@ fn merged(mut boxes: Vec<[[f64; 2]; 6]>) -> Vec<[[f64; 2]; 6]> {
 
 fn solve_or_degenerate(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget, precision: f64) -> Result<Partly, Degeneracy> {
     let g = target.0.then(&chain.post.inverse());
-    let Branches { points: all, singular, shoulder } = match geometry {
+    let Branches { points: all, singular, shoulder, covers } = match geometry {
         Geometry::SphericalWrist(wrist) => branches(chain, wrist, &g)?,
-        Geometry::ParallelAxes(arm) => Branches { points: parallel_axes::branches(chain, arm, &g)?, ..Branches::default() },
+        Geometry::ParallelAxes(arm) => parallel_axes::branches(chain, arm, &g)?,
     };
     let mut split = None;
     let mut found: Vec<([Interval; 6], [Interval; 6])> = Vec::new();
@@ -532,13 +534,11 @@ fn solve_or_degenerate(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget
     let why = left.first().map_or(Degeneracy::Uncertified, |l| l.1);
     let search = merged(left.iter().map(|(c, _)| search_box(chain, c)).collect());
     let wrists = singular.iter().map(|s| (CurveKind::Wrist, singular_curves::cover(chain, s)));
-    let curves: Vec<(CurveKind, Vec<[Interval; 6]>)> = wrists.chain([(CurveKind::Shoulder, shoulder)]).filter(|c| !c.1.is_empty()).collect();
+    let curves: Vec<(CurveKind, Vec<[Interval; 6]>)> = wrists.chain([(CurveKind::Shoulder, shoulder)]).chain(covers).filter(|c| !c.1.is_empty()).collect();
     // A box of a cover meeting another box: one solution may be counted in both.
     let boxes: Vec<[Interval; 6]> = found.iter().map(|f| f.0).chain(search.iter().map(|b| b.map(|x| interval(x[0], x[1])))).collect();
-    let hulls: Vec<[Interval; 6]> = curves.iter().map(|c| hull(&c.1)).collect();
-    let apart = |x: &[[Interval; 6]], hx: &[Interval; 6], y: &[[Interval; 6]]| y.is_empty() || !meets(hx, &hull(y)) || x.iter().all(|a| y.iter().all(|b| !meets(a, b)));
     for (i, c) in curves.iter().enumerate() {
-        if !apart(&c.1, &hulls[i], &boxes) || !(0..i).all(|j| apart(&c.1, &hulls[i], &curves[j].1)) {
+        if any_meet(&c.1, &boxes) || curves[..i].iter().any(|other| any_meet(&c.1, &other.1)) {
             return Err(Degeneracy::Overlap);
         }
     }
@@ -547,6 +547,28 @@ fn solve_or_degenerate(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget
 
 fn meets(x: &[Interval; 6], y: &[Interval; 6]) -> bool {
     (0..6).all(|d| !x[d].disjoint(y[d]))
+}
+
+/// Whether some box of `x` meets some box of `y`: a sweep along the dimension in which `y`'s
+/// boxes are narrowest against their spread (a cover's parameter, or a joint fixed along it),
+/// so covers of thousands of boxes are checked against each other in about `(n + m) log m`.
+fn any_meet(x: &[[Interval; 6]], y: &[[Interval; 6]]) -> bool {
+    if x.is_empty() || y.is_empty() {
+        return false;
+    }
+    let widest = |d: usize| y.iter().map(|b| b[d].wid()).fold(0.0, f64::max);
+    let all = hull(y);
+    let narrowness = |d: usize| widest(d) / all[d].wid().max(f64::MIN_POSITIVE);
+    let d = (0..6).min_by(|&i, &j| narrowness(i).total_cmp(&narrowness(j))).unwrap_or(0);
+    let mut sorted: Vec<&[Interval; 6]> = y.iter().collect();
+    sorted.sort_by(|a, b| a[d].inf().total_cmp(&b[d].inf()));
+    // A box of `y` starting more than its width below `a` ends below it; twice the widest
+    // width and a hair keep rounding in the subtraction from skipping one that meets.
+    let reach = 2.0 * widest(d) + f64::MIN_POSITIVE;
+    x.iter().any(|a| {
+        let from = sorted.partition_point(|b| b[d].inf() < a[d].inf() - reach - a[d].inf().abs() * f64::EPSILON);
+        sorted[from..].iter().take_while(|b| b[d].inf() <= a[d].sup()).any(|b| meets(a, b))
+    })
 }
 
 /// The hull of boxes (not empty).

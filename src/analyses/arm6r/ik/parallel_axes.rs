@@ -29,15 +29,26 @@
 //! to two roots), joint 2 turns the one vector onto the other, and joint 4 turns axis 5 onto
 //! its place in `A` (subproblem 1). At most eight branches.
 //!
+//! # The wrist singularity
+//!
+//! Where axis 6 lies along `u` (joint 5's equation has a double root), joint 6 no longer moves
+//! the tip out of the plane: it turns freely, joints 2, 3, 4 following in the plane, so a
+//! branch of joints 1 and 5 is a curve parametrised by joint 6 (`aligned_wrist`), both elbows
+//! on it, ending where the elbow stretches out. Joint 5's roots are enclosed about the double
+//! root (`singular_curves::double_root`), joint 6 is taken in pieces over its range, and the
+//! rest is solved for each piece; the cover holds every solution of the branch, whether the
+//! pose is exactly singular (the curve) or just off it (isolated solutions beside it).
+//!
 //! Each step is interval arithmetic on enclosures of exact quantities, each branch count is
-//! proven by a discriminant's sign, and anything undecided is a `Degeneracy` that hands the
+//! proven by a discriminant's sign, and anything else undecided is a `Degeneracy` that hands the
 //! whole pose to the search: the guarantees of `closed_form` (candidates, copies in the joint
 //! ranges, Krawczyk certificates, disjoint boxes) carry over unchanged.
 
 // Matrix and joint indices read as the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
-use super::closed_form::{add, cos_sin, cos_sin_roots, cross, dot, exact_zero, nonzero, rotate, rotation, sub, turn, Degeneracy, M3, V3};
+use super::closed_form::{add, cos_sin, cos_sin_roots, cross, dot, exact_zero, nonzero, rotate, rotation, sub, turn, Branches, Degeneracy, M3, V3};
+use super::singular_curves::{self, CurveKind};
 use crate::analyses::arm6r::chain::{Chain6R, IAffine};
 use crate::formulate::stated;
 use crate::kernel::interval::{point, Interval};
@@ -115,8 +126,10 @@ fn transpose(m: &M3) -> M3 {
     [0, 1, 2].map(|i| [0, 1, 2].map(|j| m[j][i]))
 }
 
-/// Every solution's angles modulo a turn (module doc), at most eight.
-pub(crate) fn branches(chain: &Chain6R, arm: &ParallelAxes, g: &IAffine) -> Result<SmallVec<[[Interval; 6]; 8]>, Degeneracy> {
+/// Every solution's angles modulo a turn (module doc), at most eight; at a wrist-singular
+/// pose the curve of each branch of joints 1 and 5 whose joint 5 has a double root, as a cover
+/// (`aligned_wrist`).
+pub(super) fn branches(chain: &Chain6R, arm: &ParallelAxes, g: &IAffine) -> Result<Branches, Degeneracy> {
     let (a, pre) = (&chain.axes, &chain.pre);
     let w = add(&stated::apply(&g.r, &arm.w6), &g.t);
     let p = stated::apply_transposed(&pre[0].r, &sub(&w, &pre[0].t));
@@ -126,37 +139,90 @@ pub(crate) fn branches(chain: &Chain6R, arm: &ParallelAxes, g: &IAffine) -> Resu
     let d6 = stated::apply(&pre[5].r, &a[5]);
     let (e, a5) = (&arm.e, &a[4]);
     let k5 = dot(e, a5) * dot(a5, &d6);
-    let mut out = SmallVec::new();
+    let mut out = Branches::default();
     for t1 in cos_sin_roots(dot(u, &p) - ua * pa, dot(&cross(&a[0], u), &p), arm.h - ua * pa)? {
         let (c1, s1) = cos_sin(t1);
         let f1 = stated::mul(&pre[0].r, &rotation(&a[0], c1, s1));
-        let m = stated::mul(&transpose(&f1), &g.r);
-        let w1 = rotate(&a[0], c1, -s1, &p);
-        let ma6 = stated::apply(&m, &a[5]);
-        let mtu = stated::apply_transposed(&m, u);
-        for t5 in cos_sin_roots(dot(e, &d6) - k5, dot(e, &cross(a5, &d6)), dot(u, &ma6) - k5)? {
-            let (c5, s5) = cos_sin(t5);
-            let t6 = turn(&a[5], &mtu, &stated::apply_transposed(&pre[5].r, &rotate(a5, c5, -s5, e)))?;
-            let (c6, s6) = cos_sin(t6);
-            let n = stated::mul(&stated::mul(&stated::mul(&pre[4].r, &rotation(a5, c5, s5)), &pre[5].r), &rotation(&a[5], c6, s6));
-            let link4 = stated::mul(&m, &transpose(&n));
-            let z = sub(&sub(&w1, &stated::apply(&link4, &arm.w4)), &pre[1].t);
-            // Axis 5 in link 4, and where `A` puts it.
-            let x = stated::apply(&pre[4].r, a5);
-            let ax = stated::apply(&link4, &x);
-            for t3 in cos_sin_roots(arm.alpha3, arm.beta3, dot(&z, &z) - arm.k3)? {
-                let (c3, s3) = cos_sin(t3);
-                let y = add(&pre[2].t, &stated::apply(&pre[2].r, &rotate(&a[2], c3, s3, &arm.v)));
-                let t2 = turn(&a[1], &y, &stated::apply_transposed(&pre[1].r, &z))?;
-                let (c2, s2) = cos_sin(t2);
-                // B = Pre₂.r R₂ Pre₃.r R₃ Pre₄.r, and R₄ x = Bᵀ A x.
-                let b = stated::mul(&stated::mul(&stated::mul(&pre[1].r, &rotation(&a[1], c2, s2)), &pre[2].r), &stated::mul(&rotation(&a[2], c3, s3), &pre[3].r));
-                let t4 = turn(&a[3], &x, &stated::apply_transposed(&b, &ax))?;
-                out.push([t1, t2, t3, t4, t5, t6]);
+        let wrist = Wrist { m: stated::mul(&transpose(&f1), &g.r), w1: rotate(&a[0], c1, -s1, &p), t1 };
+        let mtu = stated::apply_transposed(&wrist.m, u);
+        let (a5c, b5c, c5c) = (dot(e, &d6) - k5, dot(e, &cross(a5, &d6)), dot(u, &stated::apply(&wrist.m, &a[5])) - k5);
+        match cos_sin_roots(a5c, b5c, c5c) {
+            Ok(roots) => {
+                for t5 in roots {
+                    let (c5, s5) = cos_sin(t5);
+                    let t6 = turn(&a[5], &mtu, &stated::apply_transposed(&pre[5].r, &rotate(a5, c5, -s5, e)))?;
+                    position(chain, arm, &wrist, t5, t6, false, &mut out.points)?;
+                }
             }
+            Err(Degeneracy::Discriminant) => {
+                if let Some(t5) = singular_curves::double_root(a5c, b5c, c5c)? {
+                    let cover = aligned_wrist(chain, arm, &wrist, t5)?;
+                    if !cover.is_empty() {
+                        out.covers.push((CurveKind::WristAligned, cover));
+                    }
+                }
+            }
+            Err(why) => return Err(why),
         }
     }
     Ok(out)
+}
+
+/// Joint 1's root `t1`, the wrist's matrix `M = F₁ᵀ·G.r` and `W` in joint 1's frame after
+/// its turn.
+struct Wrist {
+    m: M3,
+    w1: V3,
+    t1: Interval,
+}
+
+/// Joints 3, 2, 4 for joints 5 and 6 at `t5`, `t6` (module doc), into `out`. Along a curve
+/// (`along`), where the elbow's two roots meet within `t6`'s piece, one enclosure holds both
+/// (`singular_curves::double_root`).
+fn position(chain: &Chain6R, arm: &ParallelAxes, wrist: &Wrist, t5: Interval, t6: Interval, along: bool, out: &mut SmallVec<[[Interval; 6]; 8]>) -> Result<(), Degeneracy> {
+    let (a, pre, a5) = (&chain.axes, &chain.pre, &chain.axes[4]);
+    let ((c5, s5), (c6, s6)) = (cos_sin(t5), cos_sin(t6));
+    let n = stated::mul(&stated::mul(&stated::mul(&pre[4].r, &rotation(a5, c5, s5)), &pre[5].r), &rotation(&a[5], c6, s6));
+    let link4 = stated::mul(&wrist.m, &transpose(&n));
+    let z = sub(&sub(&wrist.w1, &stated::apply(&link4, &arm.w4)), &pre[1].t);
+    // Axis 5 in link 4, and where `A` puts it.
+    let x = stated::apply(&pre[4].r, a5);
+    let ax = stated::apply(&link4, &x);
+    let (alpha, beta, gamma) = (arm.alpha3, arm.beta3, dot(&z, &z) - arm.k3);
+    let elbows: SmallVec<[Interval; 2]> = match cos_sin_roots(alpha, beta, gamma) {
+        Err(Degeneracy::Discriminant) if along => singular_curves::double_root(alpha, beta, gamma)?.into_iter().collect(),
+        roots => roots?,
+    };
+    for t3 in elbows {
+        let (c3, s3) = cos_sin(t3);
+        let y = add(&pre[2].t, &stated::apply(&pre[2].r, &rotate(&a[2], c3, s3, &arm.v)));
+        let t2 = turn(&a[1], &y, &stated::apply_transposed(&pre[1].r, &z))?;
+        let (c2, s2) = cos_sin(t2);
+        // B = Pre₂.r R₂ Pre₃.r R₃ Pre₄.r, and R₄ x = Bᵀ A x.
+        let b = stated::mul(&stated::mul(&stated::mul(&pre[1].r, &rotation(&a[1], c2, s2)), &pre[2].r), &stated::mul(&rotation(&a[2], c3, s3), &pre[3].r));
+        let t4 = turn(&a[3], &x, &stated::apply_transposed(&b, &ax))?;
+        out.push([wrist.t1, t2, t3, t4, t5, t6]);
+    }
+    Ok(())
+}
+
+/// The cover of a branch whose axis 6 lies along `u` as far as the enclosures tell: joint 6 in
+/// pieces over its whole range, joint 5 in its double root's enclosure `t5`, the rest solved for
+/// each piece in interval arithmetic (`position`), every other angle's copies within its range.
+/// Every exact solution of the branch with joint 6 in a piece lies in one of the piece's boxes:
+/// the equation joint 6 solves off the singularity is dropped, the others hold, so the boxes
+/// hold the curve (an exactly singular pose) or the isolated solutions beside it (a pose just
+/// off it).
+fn aligned_wrist(chain: &Chain6R, arm: &ParallelAxes, wrist: &Wrist, t5: Interval) -> Result<Vec<[Interval; 6]>, Degeneracy> {
+    let mut cover = Vec::new();
+    for t6 in singular_curves::pieces(chain.ranges[5]) {
+        let mut found = SmallVec::new();
+        position(chain, arm, wrist, t5, t6, true, &mut found)?;
+        for b in &found {
+            cover.extend(singular_curves::copies_within(chain, b, 5));
+        }
+    }
+    Ok(cover)
 }
 
 #[cfg(test)]
@@ -197,7 +263,7 @@ mod tests {
                 let r = 1e-13;
                 let target = IAffine { r: pose.r.map(|row| row.map(|x| crate::kernel::interval::interval(x - r, x + r))), t: pose.t.map(|x| crate::kernel::interval::interval(x - r, x + r)) };
                 let g = target.then(&c.post.inverse());
-                let found = branches(&c, &arm, &g).expect("a generic pose");
+                let found = branches(&c, &arm, &g).expect("a generic pose").points;
                 let holds = |b: &[Interval; 6]| (0..6).all(|k| {
                     let turns = ((b[k].mid() - q[k]) / std::f64::consts::TAU).round();
                     b[k].contains(q[k] + turns * std::f64::consts::TAU)

@@ -9,7 +9,7 @@
 //! solves `A cos θ₅ + B sin θ₅ = C` (`closed_form::joint5_equation`); when the discriminant
 //! `A² + B² − C²` holds 0, `cos(θ₅ − φ) = C/ρ` (with `φ` the angle of `(A, B)` and
 //! `ρ² = A² + B²`) lies within `[C/ρ]` near 1 (or −1), so every root lies within
-//! `φ ± arccos(inf C/ρ)` (or about `φ + π`): `joint5`. Whether the pose is exactly singular
+//! `φ ± arccos(inf C/ρ)` (or about `φ + π`): `double_root`. Whether the pose is exactly singular
 //! (a curve of solutions) or just off it (two isolated solutions, a wrist flip apart, both
 //! near the curve) the enclosures cannot tell; either way every solution of the branch lies
 //! in the cover `cover` builds: joint 4 in pieces over its whole range; for `θ₄` in a piece and
@@ -47,7 +47,7 @@ pub(crate) struct SingularWrist {
 /// discriminant holds 0 (module doc); `Ok(None)` when there is none; `Discriminant` when
 /// the enclosures leave both double roots possible (`C/ρ` reaching both 1 and −1), or two
 /// separate roots, or `ρ` may vanish.
-pub(crate) fn joint5(a: Interval, b: Interval, c: Interval) -> Result<Option<Interval>, Degeneracy> {
+pub(crate) fn double_root(a: Interval, b: Interval, c: Interval) -> Result<Option<Interval>, Degeneracy> {
     let r2 = a.sqr() + b.sqr();
     if !(r2.inf() > 0.0) {
         return Err(Degeneracy::Discriminant);
@@ -129,7 +129,7 @@ pub(crate) fn shoulder(chain: &Chain6R, mut branches: impl FnMut(Interval, &mut 
         let mut found = Branches::default();
         branches(t1, &mut found)?;
         for b in found.points {
-            out.extend(copies_within(chain, &b));
+            out.extend(copies_within(chain, &b, 0));
         }
         // Where the curve meets a wrist singularity, the piece's wrist is covered whole.
         for s in &found.singular {
@@ -141,17 +141,18 @@ pub(crate) fn shoulder(chain: &Chain6R, mut branches: impl FnMut(Interval, &mut 
 
 /// `[lo, hi]` in pieces at most `PIECE` wide sharing their ends, the first starting at `lo`
 /// and the last ending at `hi`: together the whole range.
-fn pieces((lo, hi): (f64, f64)) -> Vec<Interval> {
+pub(super) fn pieces((lo, hi): (f64, f64)) -> Vec<Interval> {
     let n = ((hi - lo) / PIECE).ceil().max(1.0) as usize;
     let end = |i: usize| if i == n { hi } else { lo + (hi - lo) * (i as f64 / n as f64) };
     (0..n).map(|i| interval(end(i), end(i + 1))).collect()
 }
 
 /// The copies of the box `b` (angles modulo a turn) within the ranges, each angle's copies
-/// clipped to its range.
-fn copies_within(chain: &Chain6R, b: &[Interval; 6]) -> Vec<[Interval; 6]> {
+/// clipped to its range, but the curve's parameter `along`, already a piece of its range
+/// (whose copies are other pieces).
+pub(super) fn copies_within(chain: &Chain6R, b: &[Interval; 6], along: usize) -> Vec<[Interval; 6]> {
     let mut out = vec![*b];
-    for k in 0..6 {
+    for k in (0..6).filter(|&k| k != along) {
         let each = copies_in(b[k], chain.ranges[k].0, chain.ranges[k].1);
         out = out.iter().flat_map(|x| each.iter().map(move |r| {
             let mut x = *x;
@@ -170,8 +171,9 @@ fn copies_within(chain: &Chain6R, b: &[Interval; 6]) -> Vec<[Interval; 6]> {
 pub struct Ik6Curve {
     /// Which singularity.
     pub kind: CurveKind,
-    /// Boxes, the curve's parameter (joint 4 at the wrist, joint 1 at the shoulder) in pieces
-    /// at most 1/32 rad wide, the joints that move with it following.
+    /// Boxes, the curve's parameter (joint 4 at a spherical wrist, joint 6 at a wrist aligned
+    /// with three parallel axes, joint 1 at the shoulder) in pieces at most 1/32 rad wide, the
+    /// joints that move with it following.
     pub cover: Vec<[Interval; 6]>,
     /// The cover's hull: the joints' ranges along the curve.
     pub hull: [Interval; 6],
@@ -185,13 +187,17 @@ pub enum CurveKind {
     /// The wrist centre on axis 1: joint 1 turns freely, joints 4–6 following (joints 2 and 3
     /// fixed); the boxes of every branch.
     Shoulder,
+    /// Joint 5 lines axis 6 up with axes 2, 3, 4 (all four parallel, as in the UR family):
+    /// joint 6 turns freely, joints 2, 3, 4 following in the plane (one branch of joints 1
+    /// and 5, both elbows).
+    WristAligned,
 }
 
 impl CurveKind {
     /// As reports write it.
     pub fn name(self) -> &'static str {
         match self {
-            CurveKind::Wrist => "wrist_singular",
+            CurveKind::Wrist | CurveKind::WristAligned => "wrist_singular",
             CurveKind::Shoulder => "shoulder_singular",
         }
     }
@@ -201,6 +207,7 @@ impl CurveKind {
         match self {
             CurveKind::Wrist => &[3, 5],
             CurveKind::Shoulder => &[0, 3, 4, 5],
+            CurveKind::WristAligned => &[1, 2, 3, 5],
         }
     }
 }
@@ -225,7 +232,7 @@ mod tests {
     /// A double root θ of `a cos θ + b sin θ = c` (`c = ±ρ`), and roots a hair either side of
     /// it (`c` just inside): one enclosure holds them all; beyond `ρ` there is none.
     #[test]
-    fn joint5_encloses_the_roots_about_a_double_root() {
+    fn double_root_encloses_the_roots_about_a_double_root() {
         let mut rng = Rng(1989);
         for _ in 0..2000 {
             let (a, b, sign) = (rng.uniform(-2.0, 2.0), rng.uniform(-2.0, 2.0), if rng.uniform(0.0, 1.0) < 0.5 { 1.0 } else { -1.0 });
@@ -234,14 +241,14 @@ mod tests {
             for off in [0.0, 1e-9, -1e-9] {
                 let theta = phi + off;
                 let c = a * theta.cos() + b * theta.sin();
-                let Ok(Some(t5)) = joint5(near(a), near(b), near(c)) else { panic!("{a} {b} {c}") };
+                let Ok(Some(t5)) = double_root(near(a), near(b), near(c)) else { panic!("{a} {b} {c}") };
                 let turns = ((t5.mid() - theta) / std::f64::consts::TAU).round();
                 assert!(t5.contains(theta + turns * std::f64::consts::TAU), "{a} {b} {theta}: {t5:?}");
                 // About the square root of the data's width relative to ρ.
                 assert!(t5.wid() < 1e-6 / rho.sqrt(), "{rho}: {t5:?}");
             }
-            assert_eq!(joint5(near(a), near(b), near(sign * 1.001 * rho)), Ok(None));
+            assert_eq!(double_root(near(a), near(b), near(sign * 1.001 * rho)), Ok(None));
         }
-        assert_eq!(joint5(point(0.0), point(0.0), point(0.0)), Err(Degeneracy::Discriminant));
+        assert_eq!(double_root(point(0.0), point(0.0), point(0.0)), Err(Degeneracy::Discriminant));
     }
 }
