@@ -336,7 +336,7 @@ fn skew_wrist_ur5_pose(q: [f64; 6]) -> Vec<f64> {
 
 /// That arm with joint 5 at 0, where axis 6 is parallel to axes 2, 3 and 4 and the solutions form
 /// a curve the search must cover on its own: stopped on time, the configuration inside a
-/// reported box.
+/// reported box, and the work done counted (the pairs of the first traversal with the cells).
 #[test]
 fn a_singular_pose_only_the_search_answers_stops_on_time() {
     let urdf = std::fs::read_to_string(repo("urdf/ur5.urdf")).expect("ur5");
@@ -353,6 +353,7 @@ fn a_singular_pose_only_the_search_answers_stops_on_time() {
     let unique = report["unique"].as_array().expect("unique");
     let clusters = report["clusters"].as_array().expect("clusters");
     assert!(unique.iter().chain(clusters).any(held), "the configuration is in no box: {report}");
+    assert!(report["processed"].as_u64().expect("processed") > 1000, "{}", report["processed"]);
 }
 
 /// The node search of the type-II image names the limit that stopped it, in text and JSON.

@@ -59,6 +59,7 @@ pub use self::singular_curves::{CurveKind, Ik6Curve};
 use self::invariants::{first_phase, invariants, INNER};
 pub(super) use self::invariants::{Axis4Sides, Half};
 use smallvec::{smallvec, SmallVec};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// The tip pose sought: an enclosure of one rigid transform (base frame).
 #[derive(Clone, Copy, Debug)]
@@ -220,6 +221,9 @@ struct Ik6Prune<'a> {
     /// Cells this narrow that Krawczyk cannot decide are tried once more, inflated
     /// (`INFLATE_WIDTH`, or wider for a chain whose coefficients span a range: `solve_over`).
     inflate: f64,
+    /// Pairs the start cell's traversal examined, on every thread: work the kernel counts as
+    /// one cell.
+    pairs: &'a AtomicU64,
 }
 
 /// The twelve residuals `L − R` (rotation row-major, then translation).
@@ -344,6 +348,7 @@ impl Ik6Prune<'_> {
     fn start(&self, cell: Ik6Cell, stop: &dyn Fn() -> bool) -> Step<Ik6Cell, ([Interval; 6], [Interval; 6]), Ik6Discard> {
         let b = cell.b;
         let found = invariant_pairs::pairs(self.sides, [b[1], b[2]], [b[5], b[4]], FIRST_WIDTH, PAIR_BUDGET, stop);
+        self.pairs.fetch_add(found.examined, Ordering::Relaxed);
         let cells: SmallVec<[Ik6Cell; 4]> = found
             .leaves
             .iter()
@@ -617,12 +622,15 @@ fn solve_inflating(chain: &Chain6R, target: &PoseTarget, precision: f64, inflate
     Ok(answer(chain, run, Ik6Method::Search))
 }
 
-/// Every solution of the pose within `start` (a box within the ranges), by the search.
+/// Every solution of the pose within `start` (a box within the ranges), by the search; its
+/// processed count is the cells and the pairs of the start cell's traversal.
 fn search_within(chain: &Chain6R, target: &PoseTarget, precision: f64, inflate: f64, start: [[f64; 2]; 6], control: &Control, progress: &mut dyn FnMut(&Progress)) -> Searched {
     let splits: Vec<Split> = (0..SPLITS).map(|f| chain.split(&target.0, f)).collect();
     let start = Ik6Cell { b: start, level: 0, aligned: false };
     let sides = Axis4Sides::new(&splits[0]);
-    let run = drive(|| Ik6Prune { splits: &splits, sides: &sides, precision, inflate }, start, control, progress);
+    let pairs = AtomicU64::new(0);
+    let mut run = drive(|| Ik6Prune { splits: &splits, sides: &sides, precision, inflate, pairs: &pairs }, start, control, progress);
+    run.stats.processed += pairs.load(Ordering::Relaxed);
     let undecided = run.undecided.iter().map(|(c, _)| c.b.map(|x| interval(x[0], x[1]))).collect();
     Searched { found: run.found, undecided, status: run.status, stats: run.stats }
 }
@@ -648,7 +656,8 @@ mod tests {
                 let target = PoseTarget::around(&c.pose(&q), 1e-12).expect("finite");
                 let splits = vec![c.split(&target.0, 0)];
                 let sides = Axis4Sides::new(&splits[0]);
-                let prune = Ik6Prune { splits: &splits, sides: &sides, precision: 1e-10, inflate: INFLATE_WIDTH };
+                let pairs = AtomicU64::new(0);
+                let prune = Ik6Prune { splits: &splits, sides: &sides, precision: 1e-10, inflate: INFLATE_WIDTH, pairs: &pairs };
                 let mut b = c.ranges.map(|(lo, hi)| [lo, hi]);
                 for k in INNER {
                     b[k] = [q[k] - 0.004, q[k] + 0.006];
