@@ -48,6 +48,7 @@ use super::invariant_pairs;
 mod closed_form;
 pub use self::closed_form::Degeneracy;
 mod answer;
+mod boxes;
 mod fallback;
 use self::answer::{answer, Searched};
 mod invariants;

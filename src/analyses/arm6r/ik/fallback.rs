@@ -9,7 +9,8 @@
 //! left overlapping without that proof leave the count unproven: the caller then searches the
 //! whole pose.
 
-use super::closed_form::{overlapping, Degeneracy, Partly};
+use super::boxes::overlapping;
+use super::closed_form::{Degeneracy, Partly};
 use super::answer::{answer, Searched};
 use super::{search_within, Ik6Curve, Ik6Method, Ik6Solutions, PoseTarget, INFLATE_WIDTH};
 use crate::analyses::arm6r::chain::Chain6R;

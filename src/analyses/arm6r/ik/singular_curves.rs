@@ -214,7 +214,7 @@ impl CurveKind {
 
 impl Ik6Curve {
     pub(super) fn all(covers: Vec<(CurveKind, Vec<[Interval; 6]>)>) -> Vec<Ik6Curve> {
-        covers.into_iter().map(|(kind, cover)| Ik6Curve { kind, hull: super::closed_form::hull(&cover), cover }).collect()
+        covers.into_iter().map(|(kind, cover)| Ik6Curve { kind, hull: super::boxes::hull(&cover), cover }).collect()
     }
 }
 
