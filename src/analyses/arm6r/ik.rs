@@ -109,8 +109,9 @@ pub struct Ik6Solutions {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Ik6Method {
     /// The closed form of a recognised geometry (`closed_form`: a spherical wrist, or axes
-    /// 2, 3, 4 parallel with axes 5 and 6 meeting), every candidate certified by Krawczyk;
-    /// its counters are the candidates.
+    /// 2, 3, 4 parallel with axes 5 and 6 meeting), every candidate certified by Krawczyk but
+    /// those of an elbow's double root (left undecided) and singular curves (covered); its
+    /// counters are the boxes it reported.
     ClosedForm,
     /// The branch-and-prune search.
     Search,

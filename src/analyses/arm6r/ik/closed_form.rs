@@ -35,8 +35,10 @@
 //! Anything the enclosures cannot decide is a `Degeneracy`. A candidate Krawczyk does not
 //! certify, or a copy meeting a joint limit, still encloses its branch's one solution: the
 //! search answers for a box about it alone (`Partly`), the other candidates keep their
-//! certificates. A discriminant holding 0 or a turn's vector on its axis (at or near a singular
-//! pose) leaves the branches themselves unknown, and two certified boxes overlapping leaves
+//! certificates. Joint 3's discriminant holding 0 (the elbow stretched out or folded, or nearly)
+//! is enclosed about its double root: the branch's box holds none, one or two solutions, and is
+//! reported undecided (`Branches::double`). Another discriminant holding 0 or a turn's vector on
+//! its axis (at or near a singular pose) leaves the branches themselves unknown, and two certified boxes overlapping leaves
 //! their count unproven: then the search answers the whole pose. Either way nothing is lost
 //! near singular poses.
 
@@ -155,6 +157,9 @@ pub(crate) struct Partly {
     pub why: Degeneracy,
     /// The covers of singular branches (`singular_curves`), disjoint from the other boxes.
     pub curves: Vec<(CurveKind, Vec<[Interval; 6]>)>,
+    /// Boxes about an elbow's double root (`Branches::double`), each holding none, one or two
+    /// solutions, disjoint from the certified boxes: left undecided.
+    pub undecided: Vec<[Interval; 6]>,
 }
 
 /// What `recognise` proved (module doc): the wrist centre and the constants of the position
@@ -304,6 +309,11 @@ pub(super) struct Branches {
     pub shoulder: Vec<[Interval; 6]>,
     /// Covers built whole by the geometry's own module (`parallel_axes`).
     pub covers: Vec<(CurveKind, Vec<[Interval; 6]>)>,
+    /// Branches whose elbow (joint 3's law of cosines) has a double root as far as the
+    /// enclosures tell (the elbow stretched out or folded, or nearly): joint 3 enclosed about it
+    /// (`singular_curves::double_root`), the box holding the branch's solutions, none, one or
+    /// two, which no certificate can tell apart.
+    pub double: SmallVec<[[Interval; 6]; 4]>,
 }
 
 /// The branches of the pose `g` (module doc): joint 1's roots, each followed by
@@ -338,7 +348,8 @@ fn after_joint1(chain: &Chain6R, wrist: &SphericalWrist, g: &IAffine, p: &V3, t1
     let (a, pre) = (&chain.axes, &chain.pre);
     let (c1, s1) = cos_sin(t1);
     let z = sub(&rotate(&a[0], c1, -s1, p), &pre[1].t);
-    for t3 in cos_sin_roots(wrist.alpha3, wrist.beta3, dot(&z, &z) - wrist.k3)? {
+    let (elbows, double) = elbow(wrist.alpha3, wrist.beta3, dot(&z, &z) - wrist.k3)?;
+    for t3 in elbows {
         let (c3, s3) = cos_sin(t3);
         let y = add(&pre[2].t, &stated::apply(&pre[2].r, &rotate(&a[2], c3, s3, &wrist.v)));
         let t2 = turn(&a[1], &y, &stated::apply_transposed(&pre[1].r, &z))?;
@@ -351,7 +362,14 @@ fn after_joint1(chain: &Chain6R, wrist: &SphericalWrist, g: &IAffine, p: &V3, t1
         // M = R₀₄ᵀ·G.r = R₄·Pre₅.r·R₅·Pre₆.r·R₆.
         let m = stated::mul(&[0, 1, 2].map(|i| [0, 1, 2].map(|j| r[j][i])), &g.r);
         match wrist_branches(chain, wrist, &m) {
-            Ok(wrists) => found.points.extend(wrists.into_iter().map(|(t4, t5, t6)| [t1, t2, t3, t4, t5, t6])),
+            Ok(wrists) => {
+                let all = wrists.into_iter().map(|(t4, t5, t6)| [t1, t2, t3, t4, t5, t6]);
+                if double {
+                    found.double.extend(all);
+                } else {
+                    found.points.extend(all);
+                }
+            }
             Err(Degeneracy::Discriminant) => {
                 let (a5, b5, c5) = joint5_equation(chain, wrist, &m);
                 if let Some(t5) = singular_curves::double_root(a5, b5, c5)? {
@@ -362,6 +380,15 @@ fn after_joint1(chain: &Chain6R, wrist: &SphericalWrist, g: &IAffine, p: &V3, t1
         }
     }
     Ok(())
+}
+
+/// Joint 3's roots of `α cos θ₃ + β sin θ₃ = γ` (the law of cosines), and whether they are one
+/// enclosure about a double root (`Branches::double`).
+pub(super) fn elbow(alpha: Interval, beta: Interval, gamma: Interval) -> Result<(SmallVec<[Interval; 2]>, bool), Degeneracy> {
+    match cos_sin_roots(alpha, beta, gamma) {
+        Err(Degeneracy::Discriminant) => Ok((singular_curves::double_root(alpha, beta, gamma)?.into_iter().collect(), true)),
+        roots => Ok((roots?, false)),
+    }
 }
 
 /// `A cos θ₅ + B sin θ₅ = C`, joint 5's equation `a₄·M a₆ = e₄·R₅ d₆` written out (Rodrigues).
@@ -444,7 +471,7 @@ fn moved(k: &[Interval; 6], region: &[Interval; 6], turns: &[f64; 6]) -> Option<
 /// candidates left to the search; or why the search must answer the whole pose.
 pub(crate) fn solve(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget, precision: f64) -> ClosedForm {
     match solve_or_degenerate(chain, geometry, target, precision) {
-        Ok(Partly { certified, search, curves, .. }) if search.is_empty() => ClosedForm::Solved { unique: certified.into_iter().map(|(k, _)| k).collect(), curves },
+        Ok(Partly { certified, search, curves, undecided, .. }) if search.is_empty() && undecided.is_empty() => ClosedForm::Solved { unique: certified.into_iter().map(|(k, _)| k).collect(), curves },
         Ok(partly) => ClosedForm::Partly(partly),
         Err(why) => ClosedForm::Degenerate(why),
     }
@@ -462,7 +489,7 @@ fn search_box(chain: &Chain6R, c: &[Interval; 6]) -> [[f64; 2]; 6] {
 
 fn solve_or_degenerate(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget, precision: f64) -> Result<Partly, Degeneracy> {
     let g = target.0.then(&chain.post.inverse());
-    let Branches { points: all, singular, shoulder, covers } = match geometry {
+    let Branches { points: all, singular, shoulder, covers, double } = match geometry {
         Geometry::SphericalWrist(wrist) => branches(chain, wrist, &g)?,
         Geometry::ParallelAxes(arm) => parallel_axes::branches(chain, arm, &g)?,
     };
@@ -505,7 +532,9 @@ fn solve_or_degenerate(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget
             }
         }
     }
-    if overlapping(found.iter().map(|f| &f.0)) {
+    let undecided: Vec<[Interval; 6]> = double.iter().flat_map(|b| singular_curves::copies_within(chain, b, None)).collect();
+    let certified: Vec<[Interval; 6]> = found.iter().map(|f| f.0).collect();
+    if overlapping(certified.iter()) || any_meet(&undecided, &certified) {
         return Err(Degeneracy::Overlap);
     }
     if let Some(split) = split.as_ref().filter(|_| !left.is_empty()) {
@@ -514,18 +543,18 @@ fn solve_or_degenerate(chain: &Chain6R, geometry: &Geometry, target: &PoseTarget
         }
     }
     found.sort_by(|a, b| a.0.iter().map(|x| x.inf()).partial_cmp(b.0.iter().map(|x| x.inf())).unwrap_or(std::cmp::Ordering::Equal));
-    let why = left.first().map_or(Degeneracy::Uncertified, |l| l.1);
+    let why = left.first().map_or(if undecided.is_empty() { Degeneracy::Uncertified } else { Degeneracy::Discriminant }, |l| l.1);
     let search = merged(left.iter().map(|(c, _)| search_box(chain, c)).collect());
     let wrists = singular.iter().map(|s| (CurveKind::Wrist, singular_curves::cover(chain, s)));
     let curves: Vec<(CurveKind, Vec<[Interval; 6]>)> = wrists.chain([(CurveKind::Shoulder, shoulder)]).chain(covers).filter(|c| !c.1.is_empty()).collect();
     // A box of a cover meeting another box: one solution may be counted in both.
-    let boxes: Vec<[Interval; 6]> = found.iter().map(|f| f.0).chain(search.iter().map(|b| b.map(|x| interval(x[0], x[1])))).collect();
+    let boxes: Vec<[Interval; 6]> = found.iter().map(|f| f.0).chain(search.iter().map(|b| b.map(|x| interval(x[0], x[1])))).chain(undecided.iter().copied()).collect();
     for (i, c) in curves.iter().enumerate() {
         if any_meet(&c.1, &boxes) || curves[..i].iter().any(|other| any_meet(&c.1, &other.1)) {
             return Err(Degeneracy::Overlap);
         }
     }
-    Ok(Partly { certified: found, search, why, curves })
+    Ok(Partly { certified: found, search, why, curves, undecided })
 }
 
 /// Every candidate certified, counting: `found` as certified about their candidates, the

@@ -1,6 +1,7 @@
 //! A pose the closed form answered in part (`closed_form::Partly`): its certified candidates
 //! kept, the search run on the boxes about the candidates it could not certify (near an elbow
-//! or wrist singularity, or a copy meeting a joint limit), each box alone.
+//! or wrist singularity, or a copy meeting a joint limit), each box alone, and its boxes about
+//! an elbow's double root kept undecided.
 //!
 //! Why this is complete: every solution within the ranges lies in a certified box or in a box
 //! to search (the closed form's enclosures, `closed_form` module doc), and the search finds
@@ -21,7 +22,10 @@ use crate::kernel::search::{Control, Progress, Stats, Status};
 pub(super) fn finish(chain: &Chain6R, target: &PoseTarget, precision: f64, partly: Partly, control: &Control, progress: &mut dyn FnMut(&Progress)) -> Result<Ik6Solutions, Degeneracy> {
     let start = std::time::Instant::now();
     let n = partly.certified.len() as u64;
-    let mut all = Searched { found: partly.certified, undecided: Vec::new(), status: Status::Finished, stats: Stats { processed: n, found: n, ..Stats::default() } };
+    let processed = n + partly.undecided.len() as u64;
+    let mut all = Searched { found: partly.certified, undecided: partly.undecided, status: Status::Finished, stats: Stats { processed, found: n, ..Stats::default() } };
+    // Nothing searched: the closed form answered alone, its undecided boxes at double roots.
+    let method = if partly.search.is_empty() { Ik6Method::ClosedForm } else { Ik6Method::ClosedFormAndSearch(partly.why) };
     for b in partly.search {
         let left = control.limits.max_cells.saturating_sub(all.stats.processed);
         let run = search_within(chain, target, precision, INFLATE_WIDTH, b, &control.remaining_since(start).max_cells(left), progress);
@@ -31,7 +35,7 @@ pub(super) fn finish(chain: &Chain6R, target: &PoseTarget, precision: f64, partl
         all.stats.add(&run.stats);
     }
     all.stats.seconds = start.elapsed().as_secs_f64();
-    let mut found = answer(chain, all, Ik6Method::ClosedFormAndSearch(partly.why));
+    let mut found = answer(chain, all, method);
     if overlapping(found.unique.iter()) {
         return Err(Degeneracy::Overlap);
     }

@@ -47,7 +47,7 @@
 // Matrix and joint indices read as the formulas they implement.
 #![allow(clippy::needless_range_loop)]
 
-use super::closed_form::{add, cos_sin, cos_sin_roots, cross, dot, exact_zero, nonzero, rotate, rotation, sub, turn, Branches, Degeneracy, M3, V3};
+use super::closed_form::{add, cos_sin, cos_sin_roots, cross, dot, elbow, exact_zero, nonzero, rotate, rotation, sub, turn, Branches, Degeneracy, M3, V3};
 use super::singular_curves::{self, CurveKind};
 use crate::analyses::arm6r::chain::{Chain6R, IAffine};
 use crate::formulate::stated;
@@ -151,7 +151,12 @@ pub(super) fn branches(chain: &Chain6R, arm: &ParallelAxes, g: &IAffine) -> Resu
                 for t5 in roots {
                     let (c5, s5) = cos_sin(t5);
                     let t6 = turn(&a[5], &mtu, &stated::apply_transposed(&pre[5].r, &rotate(a5, c5, -s5, e)))?;
-                    position(chain, arm, &wrist, t5, t6, false, &mut out.points)?;
+                    let (found, double) = position(chain, arm, &wrist, t5, t6, false)?;
+                    if double {
+                        out.double.extend(found);
+                    } else {
+                        out.points.extend(found);
+                    }
                 }
             }
             Err(Degeneracy::Discriminant) => {
@@ -168,6 +173,9 @@ pub(super) fn branches(chain: &Chain6R, arm: &ParallelAxes, g: &IAffine) -> Resu
     Ok(out)
 }
 
+/// A position's solutions for joints 5 and 6 (both elbows).
+type Candidates = SmallVec<[[Interval; 6]; 2]>;
+
 /// Joint 1's root `t1`, the wrist's matrix `M = F₁ᵀ·G.r` and `W` in joint 1's frame after
 /// its turn.
 struct Wrist {
@@ -176,10 +184,11 @@ struct Wrist {
     t1: Interval,
 }
 
-/// Joints 3, 2, 4 for joints 5 and 6 at `t5`, `t6` (module doc), into `out`. Along a curve
-/// (`along`), where the elbow's two roots meet within `t6`'s piece, one enclosure holds both
-/// (`singular_curves::double_root`).
-fn position(chain: &Chain6R, arm: &ParallelAxes, wrist: &Wrist, t5: Interval, t6: Interval, along: bool, out: &mut SmallVec<[[Interval; 6]; 8]>) -> Result<(), Degeneracy> {
+/// Joints 3, 2, 4 for joints 5 and 6 at `t5`, `t6` (module doc), and whether the elbow's two
+/// roots meet as far as the enclosures tell, one enclosure holding both
+/// (`closed_form::elbow`): along a curve (`along`) where `t6`'s piece reaches a fold, or at an
+/// isolated solution with the elbow stretched out (`Branches::double`).
+fn position(chain: &Chain6R, arm: &ParallelAxes, wrist: &Wrist, t5: Interval, t6: Interval, along: bool) -> Result<(Candidates, bool), Degeneracy> {
     let (a, pre, a5) = (&chain.axes, &chain.pre, &chain.axes[4]);
     let ((c5, s5), (c6, s6)) = (cos_sin(t5), cos_sin(t6));
     let n = stated::mul(&stated::mul(&stated::mul(&pre[4].r, &rotation(a5, c5, s5)), &pre[5].r), &rotation(&a[5], c6, s6));
@@ -188,11 +197,8 @@ fn position(chain: &Chain6R, arm: &ParallelAxes, wrist: &Wrist, t5: Interval, t6
     // Axis 5 in link 4, and where `A` puts it.
     let x = stated::apply(&pre[4].r, a5);
     let ax = stated::apply(&link4, &x);
-    let (alpha, beta, gamma) = (arm.alpha3, arm.beta3, dot(&z, &z) - arm.k3);
-    let elbows: SmallVec<[Interval; 2]> = match cos_sin_roots(alpha, beta, gamma) {
-        Err(Degeneracy::Discriminant) if along => singular_curves::double_root(alpha, beta, gamma)?.into_iter().collect(),
-        roots => roots?,
-    };
+    let (elbows, double) = elbow(arm.alpha3, arm.beta3, dot(&z, &z) - arm.k3)?;
+    let mut out = SmallVec::new();
     for t3 in elbows {
         let (c3, s3) = cos_sin(t3);
         let y = add(&pre[2].t, &stated::apply(&pre[2].r, &rotate(&a[2], c3, s3, &arm.v)));
@@ -203,7 +209,7 @@ fn position(chain: &Chain6R, arm: &ParallelAxes, wrist: &Wrist, t5: Interval, t6
         let t4 = turn(&a[3], &x, &stated::apply_transposed(&b, &ax))?;
         out.push([wrist.t1, t2, t3, t4, t5, t6]);
     }
-    Ok(())
+    Ok((out, double && !along))
 }
 
 /// The cover of a branch whose axis 6 lies along `u` as far as the enclosures tell: joint 6 in
@@ -216,10 +222,8 @@ fn position(chain: &Chain6R, arm: &ParallelAxes, wrist: &Wrist, t5: Interval, t6
 fn aligned_wrist(chain: &Chain6R, arm: &ParallelAxes, wrist: &Wrist, t5: Interval) -> Result<Vec<[Interval; 6]>, Degeneracy> {
     let mut cover = Vec::new();
     for t6 in singular_curves::pieces(chain.ranges[5]) {
-        let mut found = SmallVec::new();
-        position(chain, arm, wrist, t5, t6, true, &mut found)?;
-        for b in &found {
-            cover.extend(singular_curves::copies_within(chain, b, 5));
+        for b in &position(chain, arm, wrist, t5, t6, true)?.0 {
+            cover.extend(singular_curves::copies_within(chain, b, Some(5)));
         }
     }
     Ok(cover)

@@ -129,7 +129,7 @@ pub(crate) fn shoulder(chain: &Chain6R, mut branches: impl FnMut(Interval, &mut 
         let mut found = Branches::default();
         branches(t1, &mut found)?;
         for b in found.points {
-            out.extend(copies_within(chain, &b, 0));
+            out.extend(copies_within(chain, &b, Some(0)));
         }
         // Where the curve meets a wrist singularity, the piece's wrist is covered whole.
         for s in &found.singular {
@@ -148,11 +148,11 @@ pub(super) fn pieces((lo, hi): (f64, f64)) -> Vec<Interval> {
 }
 
 /// The copies of the box `b` (angles modulo a turn) within the ranges, each angle's copies
-/// clipped to its range, but the curve's parameter `along`, already a piece of its range
+/// clipped to its range, but a curve's parameter `along`, already a piece of its range
 /// (whose copies are other pieces).
-pub(super) fn copies_within(chain: &Chain6R, b: &[Interval; 6], along: usize) -> Vec<[Interval; 6]> {
+pub(super) fn copies_within(chain: &Chain6R, b: &[Interval; 6], along: Option<usize>) -> Vec<[Interval; 6]> {
     let mut out = vec![*b];
-    for k in (0..6).filter(|&k| k != along) {
+    for k in (0..6).filter(|&k| Some(k) != along) {
         let each = copies_in(b[k], chain.ranges[k].0, chain.ranges[k].1);
         out = out.iter().flat_map(|x| each.iter().map(move |r| {
             let mut x = *x;
